@@ -1,0 +1,117 @@
+#include "analysis/omni_replay.h"
+
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "backends/omni_backend.h"
+#include "core/error.h"
+
+namespace twinsim {
+
+std::string OmniReplayOptions::Validate() const {
+  if (horizon < 0) return "--horizon must be 0 or more, got " + std::to_string(horizon);
+  return "";
+}
+
+int OmniReplayResult::num_predicted() const {
+  int n = 0;
+  for (bool p : predicted) n += p;
+  return n;
+}
+
+OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                               const std::function<void(int, int)>& progress) {
+  const std::string problem = options.Validate();
+  if (!problem.empty()) throw InputError(problem);
+
+  FrameTiming timing;
+  timing.frame_rate = 1.0 / log.frame_period;
+  timing.physics_substeps = DefaultPhysicsSubsteps(timing.frame_rate);
+  FieldModel field;
+  field.walls = false;  // a log's robot may be anywhere; walls are not part of a replay
+  std::unique_ptr<OmniBackend> backend = MakeOmniBackend(options.backend, {model}, field, timing);
+
+  const int delay = model.command_delay_frames + model.vision_delay_frames;
+  const int k = options.horizon;
+  const std::size_t n = log.rows.size();
+
+  // Frame index -> row, and the command in force at each frame (held over lost frames).
+  std::map<int, std::size_t> row_of_frame;
+  for (std::size_t i = 0; i < n; ++i) row_of_frame[log.FrameIndex(i)] = i;
+  const int last_frame = log.FrameIndex(n - 1);
+  std::vector<Twist2> command_at(static_cast<std::size_t>(last_frame) + 1);
+  for (int f = 0, row = 0; f <= last_frame; ++f) {
+    while (static_cast<std::size_t>(row + 1) < n && log.FrameIndex(static_cast<std::size_t>(row + 1)) <= f) ++row;
+    command_at[static_cast<std::size_t>(f)] = log.rows[static_cast<std::size_t>(row)].command;
+  }
+  auto delayed_command = [&](int frame) { return frame - delay < 0 ? Twist2{} : command_at[static_cast<std::size_t>(frame - delay)]; };
+
+  auto check = [&](std::size_t row, const Pose2& p) {
+    if (!IsFinite(p)) {
+      std::ostringstream msg;
+      msg << log.path << ":" << log.line_of[row] << ": model " << model.name << " on " << options.backend
+          << " diverged while predicting t = " << log.rows[row].t << " s";
+      throw CheckFailed(msg.str());
+    }
+  };
+
+  OmniReplayResult out;
+  out.delay_frames = delay;
+  out.t.resize(n);
+  out.pose.resize(n);
+  out.predicted.assign(n, false);
+  for (std::size_t i = 0; i < n; ++i) {
+    out.t[i] = log.rows[i].t;
+    out.pose[i] = log.rows[i].pose;
+  }
+
+  if (k == 0) {
+    // One free run from the first row; its velocity from the first two rows.
+    const OmniLogRow& a = log.rows[0];
+    const OmniLogRow& b = log.rows[1];
+    const double dt = b.t - a.t;
+    Twist2 field_v{(b.pose.x - a.pose.x) / dt, (b.pose.y - a.pose.y) / dt, (b.pose.theta - a.pose.theta) / dt};
+    backend->Reset(0, a.pose, FieldToBody(field_v, a.pose.theta));
+    double last_theta = a.pose.theta;
+    for (int f = 0; f < last_frame; ++f) {
+      backend->StepFrame({delayed_command(f)});
+      auto it = row_of_frame.find(f + 1);
+      if (it != row_of_frame.end()) {
+        Pose2 p = backend->pose(0);
+        check(it->second, p);
+        p.theta = last_theta = last_theta + WrapAngle(p.theta - last_theta);
+        out.pose[it->second] = p;
+        out.predicted[it->second] = true;
+      }
+      if (progress && f % 64 == 0) progress(f + 1, last_frame);
+    }
+    return out;
+  }
+
+  for (std::size_t i = 0; i < n; ++i) {
+    if (progress && i % 64 == 0) progress(static_cast<int>(i), static_cast<int>(n));
+    const int target = log.FrameIndex(i);
+    const int start = target - k;
+    auto it = row_of_frame.find(start);
+    if (it == row_of_frame.end() || it->second == 0 || start - delay < 0) continue;
+    const std::size_t s = it->second;
+    const OmniLogRow& prev = log.rows[s - 1];
+    const OmniLogRow& now = log.rows[s];
+    const double dt = now.t - prev.t;
+    Twist2 field_v{(now.pose.x - prev.pose.x) / dt, (now.pose.y - prev.pose.y) / dt,
+                   (now.pose.theta - prev.pose.theta) / dt};
+    backend->Reset(0, now.pose, FieldToBody(field_v, now.pose.theta));
+    for (int f = start; f < target; ++f) backend->StepFrame({delayed_command(f)});
+    Pose2 p = backend->pose(0);
+    check(i, p);
+    // Keep theta on the log's unwrapped branch.
+    p.theta = now.pose.theta + WrapAngle(p.theta - now.pose.theta);
+    out.pose[i] = p;
+    out.predicted[i] = true;
+  }
+  if (progress) progress(static_cast<int>(n), static_cast<int>(n));
+  return out;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,41 @@
+// Replaying a measured omni log through a model (`twinsim replay`, CONTRACT.md).
+//
+// Row i of the result is the model's prediction of frame i made from the measured
+// state K frames earlier (pose, and velocity by a backward difference) and the logged
+// commands since, delayed by the model's command + vision delay D: the step from frame
+// j to j+1 is driven by the command logged at frame j - D. K = 0 is one free run from
+// the first row. Rows without enough history (no row K frames earlier, no row before
+// that, or commands older than the log) hold the measured pose.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/pose.h"
+#include "io/omni_log.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+struct OmniReplayOptions {
+  std::string backend = "ode";
+  int horizon = 4;  // K, frames; 0 = free run
+
+  // Returns an empty string when valid, else what is wrong.
+  std::string Validate() const;
+};
+
+struct OmniReplayResult {
+  std::vector<double> t;             // s, one per log row
+  std::vector<Pose2> pose;           // predicted (or held measured) pose per row
+  std::vector<bool> predicted;       // false where the measured pose was held
+  int delay_frames = 0;              // D used
+  int num_predicted() const;
+};
+
+// Throws InputError for an unknown backend; CheckFailed if the model diverges.
+OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                               const std::function<void(int, int)>& progress = {});
+
+}  // namespace twinsim

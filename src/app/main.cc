@@ -1,0 +1,42 @@
+// twinsim: a simulator for robots that learns from measured data.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+
+#include "app/commands/commands.h"
+#include "core/error.h"
+
+int main(int argc, char** argv) {
+  using namespace twinsim;
+  CLI::App app{"twinsim: simulate small-size omni robots on ODE, Bullet or an analytic model,\n"
+               "with the on-board controller and the camera/command delay loop of a real game."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "twinsim 0.1.0");
+  app.footer("Run 'twinsim COMMAND --help' for a command's options. Exit codes: 0 ok, 1 a check failed,\n"
+             "2 bad input, 3 internal error.");
+  int exit_code = kExitOk;
+  AddRunCommand(app, &exit_code);
+  AddReplayCommand(app, &exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kExitBadInput;
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return kExitBadInput;
+  } catch (const CheckFailed& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return kExitCheckFailed;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+    return kExitInternal;
+  }
+  return exit_code;
+}

@@ -1,0 +1,489 @@
+#include "backends/bullet/bullet_omni_engine.h"
+
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace twinsim {
+namespace {
+
+// What a collision object is (btCollisionObject::getUserIndex()): contacts are told
+// apart by it, wheel-floor contacts getting the wheel's anisotropic friction.
+constexpr int kStaticBody = 0;
+constexpr int kChassisBody = 1;
+constexpr int kWheelBody = 2;
+
+// Collision filter groups: wheels touch only the floor, chassis only walls and chassis.
+constexpr int kFloorGroup = 1 << 0;
+constexpr int kWallGroup = 1 << 1;
+constexpr int kChassisGroup = 1 << 2;
+constexpr int kWheelGroup = 1 << 3;
+
+constexpr double kChassisFriction = 0.3;  // Coulomb coefficient, chassis-wall and chassis-chassis
+
+// Sequential-impulse iterations per step, and the Baumgarte factor of contacts and
+// hinges. The chassis is ~46 times heavier than a wheel and hangs on it by a hinge whose
+// impulses Bullet does not warm-start, so projected Gauss-Seidel needs more than the
+// default 10 sweeps to carry its weight down to the floor without the hinges sagging.
+constexpr int kSolverIterations = 30;
+constexpr double kErp = 0.2;
+
+// The Coulomb coefficients of one robot's wheels on the floor, reached from a wheel
+// body's user pointer.
+struct WheelFriction {
+  double rolling = 0;  // along the rolling direction
+  double roller = 0;   // across the wheel, along its axle
+};
+
+const WheelFriction* WheelFrictionOf(const btCollisionObject* object) {
+  if (object == nullptr || object->getUserIndex() != kWheelBody) return nullptr;
+  return static_cast<const WheelFriction*>(object->getUserPointer());
+}
+
+// Bullet's sequential-impulse solver with a second friction coefficient for wheel
+// contacts. Bullet gives both friction rows of a contact the coefficient
+// m_combinedFriction. Scaling the second row's direction by roller/wheel friction would
+// scale its force limit, but setupFrictionConstraint adds the body's unscaled inverse
+// mass to that row's effective-mass denominator, so below about 0.5 m/s of sliding the
+// roller friction would act as a weak viscous drag instead of Coulomb friction. Setting
+// the axle row's coefficient after setup keeps both rows exact.
+class WheelFrictionSolver final : public btSequentialImpulseConstraintSolver {
+ protected:
+  btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int num_bodies,
+                                        btPersistentManifold** manifolds, int num_manifolds,
+                                        btTypedConstraint** constraints, int num_constraints,
+                                        const btContactSolverInfo& info,
+                                        btIDebugDraw* debug_drawer) override {
+    const btScalar residual = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlySetup(
+        bodies, num_bodies, manifolds, num_manifolds, constraints, num_constraints, info,
+        debug_drawer);
+    if (!(info.m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS)) return residual;
+    // Each contact row names its first friction row; the second (the axle direction set
+    // by OmniWorld) follows it.
+    for (int i = 0; i < m_tmpSolverContactConstraintPool.size(); ++i) {
+      const btSolverConstraint& contact = m_tmpSolverContactConstraintPool[i];
+      const WheelFriction* friction = WheelFrictionOf(SolverBody(contact.m_solverBodyIdA));
+      if (friction == nullptr) friction = WheelFrictionOf(SolverBody(contact.m_solverBodyIdB));
+      if (friction == nullptr) continue;
+      m_tmpSolverContactFrictionConstraintPool[contact.m_frictionIndex + 1].m_friction =
+          friction->roller;
+    }
+    return residual;
+  }
+
+ private:
+  const btCollisionObject* SolverBody(int id) const {
+    return m_tmpSolverBodyPool[id].m_originalBody;  // null for static bodies
+  }
+};
+
+// A discrete dynamics world that sets the wheels' friction frame on every wheel-floor
+// contact before solving, and solves the whole world as one group in an order fixed by
+// the bodies alone. Bullet's island splitting sorts constraints with an unstable sort on
+// island ids that depend on broadphase history, and hands manifolds over in creation
+// order; either would make a run after SetState differ in the last bits from a fresh one.
+class OmniWorld final : public btDiscreteDynamicsWorld {
+ public:
+  using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+
+  void solveConstraints(btContactSolverInfo& info) override {
+    manifolds_.clear();
+    for (int m = 0; m < m_dispatcher1->getNumManifolds(); ++m) {
+      btPersistentManifold* manifold = m_dispatcher1->getManifoldByIndexInternal(m);
+      if (manifold->getNumContacts() == 0) continue;
+      const WheelFriction* friction = WheelFrictionOf(manifold->getBody0());
+      const btCollisionObject* wheel = manifold->getBody0();
+      if (friction == nullptr) {
+        friction = WheelFrictionOf(manifold->getBody1());
+        wheel = manifold->getBody1();
+      }
+      if (friction != nullptr) {
+        SetWheelFriction(*wheel, *friction, manifold);
+      } else {
+        for (int p = 0; p < manifold->getNumContacts(); ++p) {
+          btManifoldPoint& point = manifold->getContactPoint(p);
+          point.m_combinedFriction = kChassisFriction;
+          point.m_combinedRestitution = 0;
+        }
+      }
+      manifolds_.push_back(manifold);
+    }
+    std::sort(manifolds_.begin(), manifolds_.end(), [](const btPersistentManifold* a,
+                                                       const btPersistentManifold* b) {
+      return Key(a) < Key(b);
+    });
+
+    const int num_objects = m_collisionObjects.size();
+    const int num_manifolds = static_cast<int>(manifolds_.size());
+    const int num_constraints = m_constraints.size();
+    m_constraintSolver->prepareSolve(num_objects, num_manifolds);
+    m_constraintSolver->solveGroup(num_objects ? &m_collisionObjects[0] : nullptr, num_objects,
+                                   num_manifolds ? manifolds_.data() : nullptr, num_manifolds,
+                                   num_constraints ? &m_constraints[0] : nullptr,
+                                   num_constraints, info, m_debugDrawer, m_dispatcher1);
+    m_constraintSolver->allSolved(info, m_debugDrawer);
+  }
+
+ protected:
+  // Islands serve sleeping and per-island solving; neither is used here.
+  void calculateSimulationIslands() override {}
+
+ private:
+  // Orders manifolds by the two bodies' fixed places in the world.
+  static std::pair<int, int> Key(const btPersistentManifold* manifold) {
+    const int a = manifold->getBody0()->getWorldArrayIndex();
+    const int b = manifold->getBody1()->getWorldArrayIndex();
+    return {std::min(a, b), std::max(a, b)};
+  }
+
+  // Friction row 1 along the rolling direction (horizontal, across the axle), row 2
+  // along the axle projected on the floor; WheelFrictionSolver gives row 2 its own
+  // coefficient.
+  static void SetWheelFriction(const btCollisionObject& wheel, const WheelFriction& friction,
+                               btPersistentManifold* manifold) {
+    // The wheel body's local x axis is its axle.
+    const btVector3 axle = wheel.getWorldTransform().getBasis().getColumn(0);
+    btVector3 across(axle.x(), axle.y(), 0);
+    const btScalar length = across.length();
+    across = length > 1e-9 ? across / length : btVector3(1, 0, 0);
+    const btVector3 along(-across.y(), across.x(), 0);
+    for (int p = 0; p < manifold->getNumContacts(); ++p) {
+      btManifoldPoint& point = manifold->getContactPoint(p);
+      point.m_combinedFriction = friction.rolling;
+      point.m_combinedRestitution = 0;
+      point.m_lateralFrictionDir1 = along;
+      point.m_lateralFrictionDir2 = across;
+      point.m_contactPointFlags |= BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED;
+    }
+  }
+
+  std::vector<btPersistentManifold*> manifolds_;  // this step's, in solving order
+};
+
+class BulletOmniEngine final : public OmniEngine {
+ public:
+  BulletOmniEngine(const std::vector<OmniModel>& robots, const FieldModel& field);
+  ~BulletOmniEngine() override;
+
+  std::string name() const override { return "bullet"; }
+  int num_robots() const override { return static_cast<int>(robots_.size()); }
+  void SetState(int robot, const OmniBodyState& state) override;
+  OmniBodyState GetState(int robot) const override;
+  void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override;
+  void Step(double dt) override;
+
+  // For tests: the world and a robot's bodies.
+  btDiscreteDynamicsWorld* world() { return world_.get(); }
+  btRigidBody* chassis(int robot) { return robots_.at(robot)->chassis.get(); }
+  btRigidBody* wheel(int robot, int i) { return robots_.at(robot)->wheels.at(i).get(); }
+
+ private:
+  // One robot's bodies. Members are destroyed bottom-up: hinges, bodies, then shapes.
+  struct Robot {
+    OmniModel model;
+    WheelFriction friction;  // the wheel bodies point here
+    std::vector<btVector3> axles;  // a_i in the chassis frame (unit)
+    Eigen::VectorXd torques;       // n, N·m about a_i
+    std::unique_ptr<btCylinderShapeZ> chassis_cylinder;
+    std::unique_ptr<btCompoundShape> chassis_shape;
+    std::unique_ptr<btSphereShape> wheel_shape;
+    std::unique_ptr<btRigidBody> chassis;
+    std::vector<std::unique_ptr<btRigidBody>> wheels;
+    std::vector<std::unique_ptr<btHingeConstraint>> hinges;
+  };
+
+  void BuildRobot(Robot& robot);
+  void BuildWalls(const FieldModel& field);
+  Robot& CheckedRobot(int robot) const;
+
+  // Declared in the order Bullet needs them built; destroyed in reverse.
+  std::unique_ptr<btDefaultCollisionConfiguration> config_;
+  std::unique_ptr<btCollisionDispatcher> dispatcher_;
+  std::unique_ptr<btDbvtBroadphase> broadphase_;
+  std::unique_ptr<WheelFrictionSolver> solver_;
+  std::unique_ptr<OmniWorld> world_;
+  std::unique_ptr<btStaticPlaneShape> floor_shape_;
+  std::unique_ptr<btRigidBody> floor_;
+  std::vector<std::unique_ptr<btBoxShape>> wall_shapes_;
+  std::vector<std::unique_ptr<btRigidBody>> walls_;
+  std::vector<std::unique_ptr<Robot>> robots_;  // heap: bodies keep pointers into them
+};
+
+// Puts a body at `pose` moving with `velocity`/`spin` (field frame), with no forces and
+// no interpolation history.
+void PlaceBody(btRigidBody* body, const btTransform& pose, const btVector3& velocity,
+               const btVector3& spin) {
+  body->setCenterOfMassTransform(pose);
+  body->setLinearVelocity(velocity);
+  body->setAngularVelocity(spin);
+  body->setInterpolationLinearVelocity(velocity);
+  body->setInterpolationAngularVelocity(spin);
+  body->clearForces();
+}
+
+BulletOmniEngine::BulletOmniEngine(const std::vector<OmniModel>& robots,
+                                   const FieldModel& field) {
+  for (const OmniModel& m : robots) {
+    if (m.num_wheels() < 3 || m.geometry.rows() != m.num_wheels() || m.total_mass <= 0)
+      throw std::invalid_argument("bullet engine: robot model '" + m.name +
+                                  "' needs at least 3 wheels and Finalize()");
+  }
+  config_ = std::make_unique<btDefaultCollisionConfiguration>();
+  dispatcher_ = std::make_unique<btCollisionDispatcher>(config_.get());
+  broadphase_ = std::make_unique<btDbvtBroadphase>();
+  solver_ = std::make_unique<WheelFrictionSolver>();
+  world_ = std::make_unique<OmniWorld>(dispatcher_.get(), broadphase_.get(), solver_.get(),
+                                       config_.get());
+  world_->setGravity(btVector3(0, 0, -kGravity));
+
+  btContactSolverInfo& info = world_->getSolverInfo();
+  info.m_numIterations = kSolverIterations;
+  info.m_erp = kErp;
+  info.m_erp2 = kErp;
+  info.m_restitution = 0;
+  // Friction directions are set per contact (OmniWorld); warm starting carries the
+  // contact impulses from step to step and is reset with the contacts in SetState.
+  info.m_solverMode = SOLVER_USE_2_FRICTION_DIRECTIONS | SOLVER_ENABLE_FRICTION_DIRECTION_CACHING |
+                      SOLVER_USE_WARMSTARTING;
+
+  floor_shape_ = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0);
+  floor_ = std::make_unique<btRigidBody>(
+      btRigidBody::btRigidBodyConstructionInfo(0, nullptr, floor_shape_.get()));
+  floor_->setUserIndex(kStaticBody);
+  world_->addRigidBody(floor_.get(), kFloorGroup, kWheelGroup);
+  if (field.walls) BuildWalls(field);
+
+  for (const OmniModel& m : robots) {
+    robots_.push_back(std::make_unique<Robot>());
+    robots_.back()->model = m;
+    BuildRobot(*robots_.back());
+  }
+
+  // Default places: a grid of still robots along the field's x axis, clear of each other.
+  double max_radius = 0;
+  for (const OmniModel& m : robots) max_radius = std::max(max_radius, m.chassis_radius);
+  const double spacing = 2.5 * max_radius;  // m
+  const int columns = std::max(1, static_cast<int>(field.length / spacing) - 1);
+  for (int i = 0; i < num_robots(); ++i) {
+    OmniBodyState state;
+    state.pose.x = -0.5 * (columns - 1) * spacing + (i % columns) * spacing;
+    state.pose.y = (i / columns) * spacing;
+    state.wheel_speeds = Eigen::VectorXd::Zero(robots_[i]->model.num_wheels());
+    SetState(i, state);
+  }
+}
+
+BulletOmniEngine::~BulletOmniEngine() {
+  // Take everything out of the world; the members then free constraints, bodies,
+  // shapes, world, solver, broadphase, dispatcher and configuration in that order.
+  for (auto& robot : robots_)
+    for (auto& hinge : robot->hinges) world_->removeConstraint(hinge.get());
+  for (auto& robot : robots_) {
+    for (auto& wheel : robot->wheels) world_->removeRigidBody(wheel.get());
+    world_->removeRigidBody(robot->chassis.get());
+  }
+  for (auto& wall : walls_) world_->removeRigidBody(wall.get());
+  world_->removeRigidBody(floor_.get());
+}
+
+void BulletOmniEngine::BuildRobot(Robot& robot) {
+  const OmniModel& m = robot.model;
+  const int n = m.num_wheels();
+  robot.friction = {m.wheel_friction, m.roller_friction};
+  robot.torques = Eigen::VectorXd::Zero(n);
+
+  // Chassis: a solid cylinder for the tilt axes, the model's yaw inertia; the body's
+  // origin is the centre of mass, so the cylinder hangs from it as a compound child.
+  const double r_c = m.chassis_radius, h = m.chassis_height;  // m
+  const double i_tilt = m.chassis_mass * (3 * r_c * r_c + h * h) / 12;  // kg m^2
+  const double i_yaw = m.chassis_inertia_z > 0 ? m.chassis_inertia_z
+                                               : 0.5 * m.chassis_mass * r_c * r_c;  // kg m^2
+  robot.chassis_cylinder = std::make_unique<btCylinderShapeZ>(btVector3(r_c, r_c, 0.5 * h));
+  // Bullet rounds convex edges by the margin; keep the rounding small against the size.
+  robot.chassis_cylinder->setMargin(std::min(0.005, 0.25 * std::min(r_c, 0.5 * h)));
+  robot.chassis_shape = std::make_unique<btCompoundShape>(/*enableDynamicAabbTree=*/false, 1);
+  robot.chassis_shape->addChildShape(
+      btTransform(btMatrix3x3::getIdentity(),
+                  btVector3(0, 0, m.ground_clearance + 0.5 * h - m.com_height)),
+      robot.chassis_cylinder.get());
+  btRigidBody::btRigidBodyConstructionInfo chassis_info(
+      m.chassis_mass, nullptr, robot.chassis_shape.get(), btVector3(i_tilt, i_tilt, i_yaw));
+  chassis_info.m_friction = kChassisFriction;
+  chassis_info.m_restitution = 0;
+  robot.chassis = std::make_unique<btRigidBody>(chassis_info);
+  robot.chassis->setUserIndex(kChassisBody);
+  // Robots often stand still between commands; a sleeping body would ignore the next one.
+  robot.chassis->setActivationState(DISABLE_DEACTIVATION);
+  world_->addRigidBody(robot.chassis.get(), kChassisGroup, kWallGroup | kChassisGroup);
+
+  // Wheels: spheres on the floor; body x axis = axle, so the inertia is diagonal.
+  robot.wheel_shape = std::make_unique<btSphereShape>(m.wheel_radius);
+  for (int i = 0; i < n; ++i) {
+    const double c = std::cos(m.wheel_angles[i]), s = std::sin(m.wheel_angles[i]);
+    robot.axles.emplace_back(-c, -s, 0);
+
+    btRigidBody::btRigidBodyConstructionInfo wheel_info(
+        m.wheel_mass, nullptr, robot.wheel_shape.get(),
+        btVector3(m.wheel_spin_inertia, m.wheel_inertia_diametral, m.wheel_inertia_diametral));
+    wheel_info.m_restitution = 0;
+    auto wheel = std::make_unique<btRigidBody>(wheel_info);
+    wheel->setUserIndex(kWheelBody);
+    wheel->setUserPointer(&robot.friction);
+    wheel->setActivationState(DISABLE_DEACTIVATION);
+    world_->addRigidBody(wheel.get(), kWheelGroup, kFloorGroup);
+
+    // Hinge frames: z = the axle a_i, x = up. In the chassis frame y is then d_i; in the
+    // wheel's frame (x = a_i, z = up when level) the same axes read z = x_w, x = z_w.
+    btTransform in_chassis, in_wheel;
+    in_chassis.setOrigin(btVector3(m.wheel_distance * c, m.wheel_distance * s,
+                                   m.wheel_radius - m.com_height));
+    in_chassis.getBasis().setValue(0, -s, -c,  //
+                                   0, c, -s,   //
+                                   1, 0, 0);
+    in_wheel.setOrigin(btVector3(0, 0, 0));
+    in_wheel.getBasis().setValue(0, 0, 1,   //
+                                 0, -1, 0,  //
+                                 1, 0, 0);
+    auto hinge = std::make_unique<btHingeConstraint>(*robot.chassis, *wheel, in_chassis,
+                                                     in_wheel, /*useReferenceFrameA=*/false);
+    world_->addConstraint(hinge.get(), /*disableCollisionsBetweenLinkedBodies=*/true);
+    robot.wheels.push_back(std::move(wheel));
+    robot.hinges.push_back(std::move(hinge));
+  }
+}
+
+void BulletOmniEngine::BuildWalls(const FieldModel& field) {
+  const double t = field.wall_thickness, height = field.wall_height;  // m
+  const double half_l = 0.5 * field.length, half_w = 0.5 * field.width;  // m
+  struct Box {
+    btVector3 centre, half_extents;  // m
+  };
+  // The long walls reach over the corners so that no gap is left there.
+  const Box boxes[] = {
+      {{half_l + 0.5 * t, 0, 0.5 * height}, {0.5 * t, half_w + t, 0.5 * height}},
+      {{-half_l - 0.5 * t, 0, 0.5 * height}, {0.5 * t, half_w + t, 0.5 * height}},
+      {{0, half_w + 0.5 * t, 0.5 * height}, {half_l + t, 0.5 * t, 0.5 * height}},
+      {{0, -half_w - 0.5 * t, 0.5 * height}, {half_l + t, 0.5 * t, 0.5 * height}},
+  };
+  for (const Box& box : boxes) {
+    auto shape = std::make_unique<btBoxShape>(box.half_extents);
+    // The default 4 cm margin would exceed a thin wall's half thickness.
+    shape->setMargin(std::min({0.01, 0.25 * t, 0.25 * height}));
+    btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape.get());
+    info.m_startWorldTransform.setOrigin(box.centre);
+    info.m_friction = kChassisFriction;
+    info.m_restitution = 0;
+    auto wall = std::make_unique<btRigidBody>(info);
+    wall->setUserIndex(kStaticBody);
+    world_->addRigidBody(wall.get(), kWallGroup, kChassisGroup);
+    wall_shapes_.push_back(std::move(shape));
+    walls_.push_back(std::move(wall));
+  }
+}
+
+BulletOmniEngine::Robot& BulletOmniEngine::CheckedRobot(int robot) const {
+  if (robot < 0 || robot >= num_robots())
+    throw std::invalid_argument("bullet engine: robot index " + std::to_string(robot) +
+                                " out of range (" + std::to_string(num_robots()) + " robots)");
+  return *robots_[robot];
+}
+
+void BulletOmniEngine::SetState(int robot_index, const OmniBodyState& state) {
+  Robot& robot = CheckedRobot(robot_index);
+  const OmniModel& m = robot.model;
+  const int n = m.num_wheels();
+  if (state.wheel_speeds.size() != n)
+    throw std::invalid_argument("bullet engine: " + std::to_string(state.wheel_speeds.size()) +
+                                " wheel speeds for a robot with " + std::to_string(n) +
+                                " wheels");
+
+  const double theta = state.pose.theta;  // rad
+  const btTransform chassis_pose(btQuaternion(btVector3(0, 0, 1), theta),
+                                 btVector3(state.pose.x, state.pose.y, m.com_height));
+  const Twist2 v_field = BodyToField(state.velocity, theta);
+  const btVector3 velocity(v_field.vx, v_field.vy, 0);  // m/s
+  const btVector3 spin(0, 0, v_field.omega);             // rad/s
+  PlaceBody(robot.chassis.get(), chassis_pose, velocity, spin);
+
+  for (int i = 0; i < n; ++i) {
+    const double alpha = m.wheel_angles[i];  // rad
+    const btVector3 offset =
+        chassis_pose.getBasis() * btVector3(m.wheel_distance * std::cos(alpha),
+                                            m.wheel_distance * std::sin(alpha),
+                                            m.wheel_radius - m.com_height);  // m, field frame
+    const btTransform wheel_pose(btQuaternion(btVector3(0, 0, 1), theta + alpha + kPi),
+                                 chassis_pose.getOrigin() + offset);
+    const btVector3 axle = chassis_pose.getBasis() * robot.axles[i];
+    PlaceBody(robot.wheels[i].get(), wheel_pose, velocity + spin.cross(offset),
+              spin + axle * state.wheel_speeds[i]);
+  }
+
+  // Forget every contact of this robot (manifolds hold positions and warm-start
+  // impulses), so that the next step starts as in a freshly built world.
+  btOverlappingPairCache* pairs = world_->getPairCache();
+  pairs->cleanProxyFromPairs(robot.chassis->getBroadphaseHandle(), dispatcher_.get());
+  for (auto& wheel : robot.wheels)
+    pairs->cleanProxyFromPairs(wheel->getBroadphaseHandle(), dispatcher_.get());
+  solver_->reset();
+}
+
+OmniBodyState BulletOmniEngine::GetState(int robot_index) const {
+  const Robot& robot = CheckedRobot(robot_index);
+  // The world transform, not the motion state: bodies have none, and nothing is
+  // interpolated between steps.
+  const btTransform& pose = robot.chassis->getWorldTransform();
+  const btMatrix3x3& basis = pose.getBasis();
+  OmniBodyState state;
+  state.pose.x = pose.getOrigin().x();
+  state.pose.y = pose.getOrigin().y();
+  state.pose.theta = std::atan2(basis[1][0], basis[0][0]);
+  const btVector3& v = robot.chassis->getLinearVelocity();
+  const btVector3& spin = robot.chassis->getAngularVelocity();
+  state.velocity = FieldToBody(Twist2{v.x(), v.y(), spin.z()}, state.pose.theta);
+
+  const int n = robot.model.num_wheels();
+  state.wheel_speeds.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const btVector3 axle = basis * robot.axles[i];
+    state.wheel_speeds[i] = (robot.wheels[i]->getAngularVelocity() - spin).dot(axle);
+  }
+  return state;
+}
+
+void BulletOmniEngine::SetWheelTorques(int robot_index, const Eigen::VectorXd& torques) {
+  Robot& robot = CheckedRobot(robot_index);
+  if (torques.size() != robot.model.num_wheels())
+    throw std::invalid_argument("bullet engine: " + std::to_string(torques.size()) +
+                                " wheel torques for a robot with " +
+                                std::to_string(robot.model.num_wheels()) + " wheels");
+  robot.torques = torques;
+}
+
+void BulletOmniEngine::Step(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw std::invalid_argument("bullet engine: step " + std::to_string(dt) + " s must be > 0");
+  // Bullet clears forces after every step, so the held torques are applied anew.
+  for (auto& robot : robots_) {
+    const btMatrix3x3& basis = robot->chassis->getWorldTransform().getBasis();
+    for (int i = 0; i < robot->torques.size(); ++i) {
+      if (robot->torques[i] == 0) continue;
+      const btVector3 torque = (basis * robot->axles[i]) * robot->torques[i];  // N·m
+      robot->wheels[i]->applyTorque(torque);
+      robot->chassis->applyTorque(-torque);
+    }
+  }
+  // maxSubSteps = 0: one step of exactly dt, no fixed-step accumulator, no interpolation.
+  world_->stepSimulation(dt, 0);
+}
+
+}  // namespace
+
+std::unique_ptr<OmniEngine> MakeBulletOmniEngine(const std::vector<OmniModel>& robots,
+                                                 const FieldModel& field) {
+  return std::make_unique<BulletOmniEngine>(robots, field);
+}
+
+}  // namespace twinsim

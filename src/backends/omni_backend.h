@@ -1,0 +1,76 @@
+// A backend moves omni robots one camera frame at a time under commands that have
+// already been delayed by the loop (core/simulation.h owns time and delay).
+//
+// Implementations: NewtonianOmniBackend (an OmniEngine — ode, bullet, analytic — plus
+// the on-board controller and motors) and, later, the learned predictor. All of them
+// take the same calls, so the loop, the observer and the tests treat them alike.
+// MakeOmniBackend() picks one by name.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "backends/omni_engine.h"
+#include "core/pose.h"
+#include "robots/omni/omni_model.h"
+#include "robots/omni/onboard_controller.h"
+
+namespace twinsim {
+
+// How the loop slices time.
+struct FrameTiming {
+  double frame_rate = 30;    // Hz, camera frames
+  int physics_substeps = 10;  // physics steps per frame
+  double frame_dt() const { return 1.0 / frame_rate; }
+  double physics_dt() const { return frame_dt() / physics_substeps; }
+};
+
+// The physics step the loop uses when a scene does not say: the finest step of at
+// most 1/300 s that divides the frame (grSim: 5 steps per 60 fps frame).
+int DefaultPhysicsSubsteps(double frame_rate);
+
+// Everything that changes about one robot inside a backend.
+struct OmniRobotState {
+  OmniBodyState body;
+  OnboardControllerState controller;
+  int ticks_until_control = 0;  // physics steps until the next controller tick
+};
+
+// A copy of everything that changes inside a backend (see OmniBackend::Save).
+struct OmniBackendState {
+  std::vector<OmniRobotState> robots;
+};
+
+class OmniBackend {
+ public:
+  virtual ~OmniBackend() = default;
+  virtual std::string name() const = 0;
+  virtual int num_robots() const = 0;
+  virtual const FrameTiming& timing() const = 0;
+
+  // Puts robot i at `pose` moving at `velocity` (robot frame), its controller settled
+  // on that velocity.
+  virtual void Reset(int robot, const Pose2& pose, const Twist2& velocity) = 0;
+  // Advances one camera frame; commands[i] is what robot i's firmware receives now.
+  virtual void StepFrame(const std::vector<Twist2>& commands) = 0;
+
+  virtual Pose2 pose(int robot) const = 0;
+  virtual Twist2 velocity(int robot) const = 0;  // robot frame
+
+  // Saves and restores everything that changes: restoring a saved state and stepping
+  // gives the same result as stepping from where it was saved.
+  virtual OmniBackendState Save() const = 0;
+  virtual void Restore(const OmniBackendState& state) = 0;
+};
+
+// Builds the backend called `name` (analytic, ode, bullet). Throws InputError for an
+// unknown or uncompiled backend.
+std::unique_ptr<OmniBackend> MakeOmniBackend(const std::string& name,
+                                             const std::vector<OmniModel>& robots,
+                                             const FieldModel& field, const FrameTiming& timing);
+
+// The backend names a user may pass to --backend in this build.
+std::vector<std::string> AvailableOmniBackends();
+
+}  // namespace twinsim

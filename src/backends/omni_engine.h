@@ -1,0 +1,68 @@
+// A physics engine that simulates omni robots on a field at the level of wheel torques.
+//
+// This is the seam between twinsim and ODE, Bullet or the analytic rigid-body model.
+// An engine knows bodies, joints and contacts only; the on-board controller, motors,
+// encoders and the delay loop live above it (NewtonianOmniBackend, Simulation), so every
+// engine sees exactly the same torques at exactly the same times. Engines' own types
+// (dReal, btVector3) stay inside their folder.
+//
+// Frames: the field frame has z up, the floor is the plane z = 0. Robot i's pose is its
+// chassis centre projected on the floor and its yaw. Body velocities are in the robot
+// frame (x forward, y left). Wheel conventions are those of omni_model.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/pose.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+// The field: a flat floor with walls around it.
+struct FieldModel {
+  double length = 10.4;       // m, inside the walls along field x
+  double width = 7.4;         // m, inside the walls along field y
+  double wall_height = 0.1;   // m
+  double wall_thickness = 0.05;  // m
+  bool walls = true;
+};
+
+// Everything that changes about one robot's bodies, enough to put it back exactly.
+struct OmniBodyState {
+  Pose2 pose;                  // field frame
+  Twist2 velocity;             // robot frame
+  Eigen::VectorXd wheel_speeds;  // n, rad/s relative to the chassis (about a_i)
+};
+
+class OmniEngine {
+ public:
+  virtual ~OmniEngine() = default;
+  virtual std::string name() const = 0;
+  virtual int num_robots() const = 0;
+
+  // Places robot i: chassis on the floor at `state.pose`, moving with `state.velocity`
+  // (robot frame), wheels spinning at `state.wheel_speeds` and level, contact caches
+  // cleared. After SetState the engine must behave as if freshly built in that state.
+  virtual void SetState(int robot, const OmniBodyState& state) = 0;
+  virtual OmniBodyState GetState(int robot) const = 0;
+
+  // Net torque on each wheel's hinge for the next Step() (N·m, about a_i; the reaction
+  // acts on the chassis). Holds until changed.
+  virtual void SetWheelTorques(int robot, const Eigen::VectorXd& torques) = 0;
+
+  // Advances the world by dt seconds.
+  virtual void Step(double dt) = 0;
+};
+
+// Builds the engine called `name` ("analytic", "ode", "bullet") for the given robots.
+// Throws InputError when the name is unknown or the engine was not compiled in.
+std::unique_ptr<OmniEngine> MakeOmniEngine(const std::string& name,
+                                           const std::vector<OmniModel>& robots,
+                                           const FieldModel& field);
+// Names of the engines compiled into this build.
+std::vector<std::string> AvailableOmniEngines();
+
+}  // namespace twinsim

@@ -1,0 +1,55 @@
+// The errors twinsim reports to users, and the exit codes they map to (CONTRACT.md):
+// InputError -> 2 (bad file, option or schema), CheckFailed -> 1 (the job ran but its
+// own check failed, including a simulation that diverged), anything else -> 3.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace twinsim {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitCheckFailed = 1;
+inline constexpr int kExitBadInput = 2;
+inline constexpr int kExitInternal = 3;
+
+// Where in a file something is: path, 1-based line and column (0 when unknown).
+struct SourceLocation {
+  std::string path;
+  int line = 0;
+  int column = 0;
+  // "path:line:column: " (parts that are unknown are left out).
+  std::string Prefix() const;
+};
+
+// Bad user input. what() is one or more lines "PATH:LINE: what is wrong".
+class InputError : public std::runtime_error {
+ public:
+  explicit InputError(const std::string& message) : std::runtime_error(message) {}
+  InputError(const SourceLocation& where, const std::string& message)
+      : std::runtime_error(where.Prefix() + message) {}
+};
+
+// Collects input problems so that a reader can report all of them at once.
+class ErrorList {
+ public:
+  void Add(const SourceLocation& where, const std::string& message) {
+    messages_.push_back(where.Prefix() + message);
+  }
+  void Add(const std::string& message) { messages_.push_back(message); }
+  bool empty() const { return messages_.empty(); }
+  // Throws one InputError naming every problem, if there are any.
+  void ThrowIfAny() const;
+
+ private:
+  std::vector<std::string> messages_;
+};
+
+// A simulation produced a non-finite or runaway value, or a job's own check failed.
+class CheckFailed : public std::runtime_error {
+ public:
+  explicit CheckFailed(const std::string& message) : std::runtime_error(message) {}
+};
+
+}  // namespace twinsim

@@ -1,0 +1,36 @@
+// A numeric CSV table with one header row, read with the file, line and column of
+// every value kept for error messages.
+//
+//   CsvTable t = ReadCsvTable("log.csv");
+//   int x = t.RequireColumn("x");   // InputError "log.csv:1: missing column 'x' (have: ...)"
+//   double v = t.rows[i][x];        // t.line_of[i] is row i's line in the file
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace twinsim {
+
+struct CsvTable {
+  std::string path;
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+  std::vector<int> line_of;  // 1-based file line of each row
+
+  // Index of the column, or -1.
+  int Column(const std::string& name) const;
+  // Index of the column; throws InputError naming the file and the columns it has.
+  int RequireColumn(const std::string& name) const;
+};
+
+// Reads a CSV of numbers. Throws InputError "path:line:column: ..." on a missing file,
+// an empty file, a row with the wrong number of fields, text in a number, NaN or
+// infinity. Blank lines are skipped; a trailing '\r' is ignored.
+CsvTable ReadCsvTable(const std::string& path);
+CsvTable ParseCsvTable(const std::string& text, const std::string& path);
+
+// Formats a value the way every twinsim CSV does: fixed, enough digits to round-trip
+// the simulation's meaningful precision (1e-9), no locale.
+std::string FormatCsvNumber(double v);
+
+}  // namespace twinsim

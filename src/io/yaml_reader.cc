@@ -1,0 +1,223 @@
+#include "io/yaml_reader.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace twinsim {
+namespace {
+
+std::string Describe(const YAML::Node& node) {
+  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsSequence()) return "a list";
+  if (node.IsMap()) return "a mapping";
+  if (node.IsNull()) return "nothing";
+  return "an undefined value";
+}
+
+std::string FormatNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+YAML::Node LoadYamlString(const std::string& text, const std::string& name) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    SourceLocation where{name, e.mark.line + 1, e.mark.column + 1};
+    throw InputError(where, "YAML syntax error: " + e.msg);
+  }
+}
+
+YAML::Node LoadYamlFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(SourceLocation{path}, "cannot open file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  YAML::Node root = LoadYamlString(buffer.str(), path);
+  if (!root.IsMap()) {
+    throw InputError(SourceLocation{path, 1}, "expected a YAML mapping at the top level");
+  }
+  return root;
+}
+
+NumberCheck Positive() {
+  return [](double v) { return v > 0 ? std::string() : "must be positive, got " + FormatNumber(v); };
+}
+NumberCheck NonNegative() {
+  return [](double v) { return v >= 0 ? std::string() : "must not be negative, got " + FormatNumber(v); };
+}
+NumberCheck InRange(double lo, double hi) {
+  return [lo, hi](double v) {
+    return (v >= lo && v <= hi) ? std::string()
+                                : "must be in [" + FormatNumber(lo) + ", " + FormatNumber(hi) +
+                                      "], got " + FormatNumber(v);
+  };
+}
+
+std::optional<double> ReadNumber(const YAML::Node& node, const std::string& path,
+                                 const std::string& label, ErrorList* errors) {
+  SourceLocation where{path, node.Mark().line + 1, node.Mark().column + 1};
+  if (!node.IsScalar()) {
+    errors->Add(where, label + ": expected a number, got " + Describe(node));
+    return std::nullopt;
+  }
+  const std::string& s = node.Scalar();
+  char* end = nullptr;
+  double v = std::strtod(s.c_str(), &end);
+  if (s.empty() || end == s.c_str() || *end != '\0') {
+    errors->Add(where, label + ": expected a number, got " + Describe(node));
+    return std::nullopt;
+  }
+  if (!std::isfinite(v)) {
+    errors->Add(where, label + ": must be a finite number, got " + Describe(node));
+    return std::nullopt;
+  }
+  return v;
+}
+
+YamlMap::YamlMap(const YAML::Node& node, std::string path, std::string context, ErrorList* errors)
+    : node_(node), path_(std::move(path)), context_(std::move(context)), errors_(errors) {
+  if (!node_.IsMap()) {
+    errors_->Add(Where(node_), "'" + context_ + "': expected a mapping, got " + Describe(node_));
+    valid_ = false;
+  }
+}
+
+SourceLocation YamlMap::Where(const YAML::Node& node) const {
+  if (!node.IsDefined() || node.Mark().is_null()) return SourceLocation{path_};
+  return SourceLocation{path_, node.Mark().line + 1, node.Mark().column + 1};
+}
+
+std::string YamlMap::Label(const std::string& key) const {
+  return context_.empty() ? "'" + key + "'" : "'" + key + "' in '" + context_ + "'";
+}
+
+bool YamlMap::Has(const std::string& key) {
+  known_.insert(key);
+  return valid_ && node_[key].IsDefined() && !node_[key].IsNull();
+}
+
+YAML::Node YamlMap::Child(const std::string& key) {
+  known_.insert(key);
+  if (!valid_) return YAML::Node(YAML::NodeType::Undefined);
+  return node_[key];
+}
+
+void YamlMap::Error(const std::string& key, const std::string& message) {
+  YAML::Node n = valid_ ? node_[key] : YAML::Node();
+  errors_->Add(n.IsDefined() ? Where(n) : Where(node_), Label(key) + ": " + message);
+}
+
+void YamlMap::Missing(const std::string& key) {
+  errors_->Add(Where(node_), "missing required key " + Label(key));
+}
+
+bool YamlMap::Get(const std::string& key, double* out, const NumberCheck& check) {
+  if (!Has(key)) return false;
+  auto v = ReadNumber(node_[key], path_, Label(key), errors_);
+  if (!v) return false;
+  if (check) {
+    std::string problem = check(*v);
+    if (!problem.empty()) {
+      Error(key, problem);
+      return false;
+    }
+  }
+  *out = *v;
+  return true;
+}
+
+bool YamlMap::Get(const std::string& key, int* out, const NumberCheck& check) {
+  double v = *out;
+  if (!Get(key, &v, check)) return false;
+  if (v != std::floor(v) || std::abs(v) > 1e9) {
+    Error(key, "expected a whole number, got '" + node_[key].Scalar() + "'");
+    return false;
+  }
+  *out = static_cast<int>(v);
+  return true;
+}
+
+bool YamlMap::Get(const std::string& key, bool* out) {
+  if (!Has(key)) return false;
+  const YAML::Node n = node_[key];
+  if (n.IsScalar()) {
+    const std::string& s = n.Scalar();
+    if (s == "true" || s == "yes" || s == "on") { *out = true; return true; }
+    if (s == "false" || s == "no" || s == "off") { *out = false; return true; }
+  }
+  Error(key, "expected true or false, got " + Describe(n));
+  return false;
+}
+
+bool YamlMap::Get(const std::string& key, std::string* out, const std::vector<std::string>& allowed) {
+  if (!Has(key)) return false;
+  const YAML::Node n = node_[key];
+  if (!n.IsScalar()) {
+    Error(key, "expected a text value, got " + Describe(n));
+    return false;
+  }
+  if (!allowed.empty()) {
+    bool ok = false;
+    std::string list;
+    for (const auto& a : allowed) {
+      ok = ok || a == n.Scalar();
+      list += (list.empty() ? "" : ", ") + a;
+    }
+    if (!ok) {
+      Error(key, "unknown value '" + n.Scalar() + "' (known: " + list + ")");
+      return false;
+    }
+  }
+  *out = n.Scalar();
+  return true;
+}
+
+bool YamlMap::Get(const std::string& key, std::vector<double>* out, int size, const NumberCheck& check) {
+  if (!Has(key)) return false;
+  const YAML::Node n = node_[key];
+  if (!n.IsSequence()) {
+    Error(key, "expected a list of numbers, got " + Describe(n));
+    return false;
+  }
+  if (size >= 0 && static_cast<int>(n.size()) != size) {
+    Error(key, "expected " + std::to_string(size) + " numbers, got " + std::to_string(n.size()));
+    return false;
+  }
+  std::vector<double> values;
+  bool ok = true;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    auto v = ReadNumber(n[i], path_, Label(key) + "[" + std::to_string(i) + "]", errors_);
+    if (!v) { ok = false; continue; }
+    if (check) {
+      std::string problem = check(*v);
+      if (!problem.empty()) {
+        errors_->Add(Where(n[i]), Label(key) + "[" + std::to_string(i) + "]: " + problem);
+        ok = false;
+        continue;
+      }
+    }
+    values.push_back(*v);
+  }
+  if (ok) *out = values;
+  return ok;
+}
+
+void YamlMap::Finish() {
+  if (!valid_) return;
+  for (auto it = node_.begin(); it != node_.end(); ++it) {
+    const std::string key = it->first.Scalar();
+    if (known_.count(key)) continue;
+    std::string list;
+    for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
+    errors_->Add(Where(it->first), "unknown key '" + key + "'" +
+                                       (context_.empty() ? "" : " in '" + context_ + "'") +
+                                       " (known: " + list + ")");
+  }
+}
+
+}  // namespace twinsim

@@ -1,0 +1,95 @@
+#include "robots/omni/omni_model.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+
+namespace twinsim {
+
+Eigen::Matrix<double, 6, 1> PidGains::AsVector() const {
+  Eigen::Matrix<double, 6, 1> v;
+  v << kp, ki, kd, integral_limit, output_limit, slew_rate;
+  return v;
+}
+
+PidGains PidGains::FromVector(const Eigen::Matrix<double, 6, 1>& v) {
+  PidGains g;
+  g.kp = v[0];
+  g.ki = v[1];
+  g.kd = v[2];
+  g.integral_limit = v[3];
+  g.output_limit = v[4];
+  g.slew_rate = v[5];
+  return g;
+}
+
+void OmniModel::Finalize() {
+  const int n = num_wheels();
+  const double r = wheel_radius, m_w = wheel_mass;
+  total_mass = chassis_mass + n * m_w;
+  wheel_spin_inertia = 0.5 * m_w * r * r;
+  wheel_inertia_diametral = 0.25 * m_w * r * r + m_w * wheel_width * wheel_width / 12.0;
+  const double chassis_iz =
+      chassis_inertia_z > 0 ? chassis_inertia_z : 0.5 * chassis_mass * chassis_radius * chassis_radius;
+  // Each wheel spins about a horizontal axle, so its vertical axis is a diameter.
+  total_inertia_z = chassis_iz + n * (wheel_inertia_diametral + m_w * wheel_distance * wheel_distance);
+
+  geometry.resize(n, 3);
+  for (int i = 0; i < n; ++i) {
+    geometry(i, 0) = -std::sin(wheel_angles[i]);
+    geometry(i, 1) = std::cos(wheel_angles[i]);
+    geometry(i, 2) = wheel_distance;
+  }
+
+  // Static wheel loads: with equal contact stiffness under a rigid chassis, the loads
+  // are the least-norm solution of the three equilibrium equations (exact for 3 wheels).
+  wheel_load.setZero(n);
+  if (n >= 3) {
+    Eigen::MatrixXd a(3, n);
+    for (int i = 0; i < n; ++i) {
+      a(0, i) = 1;
+      a(1, i) = wheel_distance * std::cos(wheel_angles[i]);
+      a(2, i) = wheel_distance * std::sin(wheel_angles[i]);
+    }
+    Eigen::Vector3d rhs(total_mass * kGravity, 0, 0);
+    wheel_load = a.transpose() * (a * a.transpose()).ldlt().solve(rhs);
+  }
+}
+
+std::string OmniModel::Validate() const {
+  std::ostringstream out;
+  const int n = num_wheels();
+  if (n < 3) out << "an omni robot needs at least 3 wheels, got " << n << "\n";
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      if (std::abs(std::remainder(wheel_angles[i] - wheel_angles[j], 2 * M_PI)) < 1e-3)
+        out << "wheels " << i + 1 << " and " << j + 1 << " are at the same angle\n";
+    }
+  }
+  if (wheel_distance >= chassis_radius + wheel_width)
+    out << "wheel_distance " << wheel_distance << " m puts the wheels outside the chassis (radius "
+        << chassis_radius << " m)\n";
+  if (ground_clearance >= 2 * wheel_radius)
+    out << "ground_clearance must be below the wheel diameter\n";
+  if (com_height <= ground_clearance || com_height >= ground_clearance + chassis_height)
+    out << "com_height must lie inside the chassis (between " << ground_clearance << " and "
+        << ground_clearance + chassis_height << " m)\n";
+  if (n >= 3) {
+    // The wheels must span all three body velocities, and hold the robot up.
+    Eigen::MatrixXd g(n, 3);
+    for (int i = 0; i < n; ++i)
+      g.row(i) << -std::sin(wheel_angles[i]), std::cos(wheel_angles[i]), wheel_distance;
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(g);
+    if (svd.singularValues()(2) < 1e-3 * svd.singularValues()(0))
+      out << "the wheel layout cannot produce every body velocity (wheel angles are degenerate)\n";
+    OmniModel copy = *this;
+    copy.Finalize();
+    if (copy.wheel_load.minCoeff() <= 0)
+      out << "the wheels do not surround the centre of mass: a wheel would carry no load\n";
+  }
+  std::string s = out.str();
+  if (!s.empty()) s.pop_back();
+  return s;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,108 @@
+// The static description of a small-size (RoboCup SSL) omnidirectional robot.
+//
+// An OmniModel is loaded once from YAML (LoadOmniModel, documented field by field in
+// docs/models.md), validated once, and never changed by a simulation step. Derived
+// quantities that every backend needs (total mass and inertia, wheel geometry, the
+// static load on each wheel) are computed once by Finalize() so that ODE, Bullet and
+// the analytic model are built from exactly the same numbers.
+//
+// Wheel convention (all backends): wheel i sits at angle alpha_i around the centre, at
+// distance b. Its axle points to the centre: a_i = -(cos alpha_i, sin alpha_i, 0) in the
+// robot frame. A positive wheel speed is a spin about a_i; it drives the robot along
+// d_i = (-sin alpha_i, cos alpha_i), so the rolling speed is
+//   wheel_speed_i = (1/r) [-sin alpha_i, cos alpha_i, b] . (vx, vy, omega).
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace twinsim {
+
+// The six parameters of one on-board velocity controller (forward, sideways or
+// rotation). Units are for the translational axes; the rotation axis uses rad for m
+// and N·m for N.
+struct PidGains {
+  double kp = 0;              // N per m/s of velocity error
+  double ki = 0;              // N per m of integrated error
+  double kd = 0;              // N per m/s^2 of error rate
+  double integral_limit = 0;  // N, the integral term is clamped to +-this (anti-windup)
+  double output_limit = 0;    // N, the controller's output is clamped to +-this
+  double slew_rate = 0;       // m/s^2, the set-point follows the command at most this fast
+
+  static constexpr int kNumParameters = 6;
+  // The parameters in the order above (the order PID learning uses).
+  Eigen::Matrix<double, 6, 1> AsVector() const;
+  static PidGains FromVector(const Eigen::Matrix<double, 6, 1>& v);
+};
+
+// The hand-tuned defaults (docs/models.md): a 60 ms velocity time constant for a
+// 2.5 kg robot, an output limit just under the wheels' traction, 4 m/s^2 ramps.
+struct OmniControllerModel {
+  double rate_hz = 300;  // Hz, the micro-controller's loop rate
+  PidGains forward{40, 200, 0, 4, 18, 4};      // robot x
+  PidGains sideways{40, 200, 0, 4, 18, 4};     // robot y
+  PidGains rotation{0.5, 3, 0, 0.3, 1.5, 30};  // yaw (N·m, rad)
+};
+
+struct OmniModel {
+  std::string name;
+  std::string source_path;  // file it was loaded from ("" when built in code)
+
+  // Chassis (everything but the wheels).
+  double chassis_mass = 2.3;        // kg
+  double chassis_radius = 0.089;    // m
+  double chassis_height = 0.14;     // m
+  double chassis_inertia_z = 0;     // kg m^2 about the vertical axis; 0 = solid cylinder
+  double com_height = 0.045;        // m above the floor
+  double ground_clearance = 0.008;  // m between the floor and the chassis' underside
+
+  // Wheels (all alike).
+  std::vector<double> wheel_angles;  // rad, alpha_i of each wheel around the centre
+  double wheel_distance = 0.081;     // m, b: centre to wheel contact, in the floor plane
+  double wheel_radius = 0.027;       // m
+  double wheel_width = 0.012;        // m
+  double wheel_mass = 0.05;          // kg per wheel
+  double wheel_friction = 0.8;       // Coulomb coefficient along the rolling direction
+  double roller_friction = 0.02;     // Coulomb coefficient across the wheel (rollers)
+  double bearing_damping = 2e-5;     // N·m per rad/s on each wheel's spin
+
+  // Motors, seen at the wheel (gear included).
+  double motor_stall_torque = 0.5;  // N·m at zero speed
+  double motor_no_load_speed = 160;  // rad/s where the available torque reaches zero
+  double encoder_counts_per_rev = 0;  // counts per wheel turn; 0 = ideal encoder
+
+  OmniControllerModel controller;
+
+  // The delay loop, in camera frames (the scene sets the frame rate).
+  int command_delay_frames = 2;  // frames from sending a command to the robot acting on it
+  int vision_delay_frames = 2;   // frames from the camera's exposure to the observer
+
+  // Vision (the observation model).
+  double vision_noise_xy = 0.0;      // m, standard deviation of x and y
+  double vision_noise_theta = 0.0;   // rad, standard deviation of theta
+  double vision_drop_probability = 0;  // probability that a frame is lost
+
+  // ---- Derived by Finalize() ----
+  double total_mass = 0;          // kg, chassis and wheels
+  double total_inertia_z = 0;     // kg m^2 about the vertical axis through the centre
+  double wheel_spin_inertia = 0;  // kg m^2, one wheel about its axle
+  double wheel_inertia_diametral = 0;  // kg m^2, one wheel about a diameter
+  Eigen::MatrixXd geometry;       // n x 3, rows [-sin a_i, cos a_i, b] (m for the last)
+  Eigen::VectorXd wheel_load;     // n, N, static normal force on each wheel
+
+  int num_wheels() const { return static_cast<int>(wheel_angles.size()); }
+  // Fills the derived fields; call after changing any parameter.
+  void Finalize();
+  // Returns an empty string when the model is physically consistent, else every problem.
+  std::string Validate() const;
+};
+
+// Loads and validates an omni model; throws InputError with "path:line:col: ..." lines.
+OmniModel LoadOmniModel(const std::string& path);
+// As LoadOmniModel, from YAML text; `name` stands for the file in messages.
+OmniModel LoadOmniModelFromString(const std::string& yaml, const std::string& name);
+
+inline constexpr double kGravity = 9.81;  // m/s^2
+
+}  // namespace twinsim

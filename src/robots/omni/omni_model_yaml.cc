@@ -1,0 +1,126 @@
+// Reading OmniModel from YAML; the schema is documented in docs/models.md.
+#include <cmath>
+
+#include "core/error.h"
+#include "io/yaml_reader.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+namespace {
+
+void ReadPid(YamlMap& parent, const std::string& key, PidGains* g) {
+  if (!parent.Has(key)) return;
+  YamlMap m(parent.Child(key), parent.path(), "controller." + key, parent.errors());
+  m.Get("kp", &g->kp, NonNegative());
+  m.Get("ki", &g->ki, NonNegative());
+  m.Get("kd", &g->kd, NonNegative());
+  m.Get("integral_limit", &g->integral_limit, NonNegative());
+  m.Get("output_limit", &g->output_limit, NonNegative());
+  m.Get("slew_rate", &g->slew_rate, NonNegative());
+  m.Finish();
+}
+
+OmniModel ReadOmniModel(const YAML::Node& root, const std::string& path) {
+  ErrorList errors;
+  OmniModel model;
+  model.source_path = path;
+  YamlMap top(root, path, "", &errors);
+  std::string kind = "omni";
+  top.Get("robot", &kind, {"omni"});
+  top.Require("name", &model.name);
+
+  if (top.Has("chassis")) {
+    YamlMap c(top.Child("chassis"), path, "chassis", &errors);
+    c.Get("mass", &model.chassis_mass, Positive());
+    c.Get("radius", &model.chassis_radius, Positive());
+    c.Get("height", &model.chassis_height, Positive());
+    c.Get("inertia_z", &model.chassis_inertia_z, NonNegative());
+    c.Get("com_height", &model.com_height, Positive());
+    c.Get("ground_clearance", &model.ground_clearance, NonNegative());
+    c.Finish();
+  } else {
+    top.Missing("chassis");
+  }
+
+  if (top.Has("wheels")) {
+    YamlMap w(top.Child("wheels"), path, "wheels", &errors);
+    std::vector<double> angles_deg;
+    if (w.Require("angles_deg", &angles_deg, -1, InRange(-360, 360))) {
+      model.wheel_angles.clear();
+      for (double a : angles_deg) model.wheel_angles.push_back(a * M_PI / 180.0);
+      if (angles_deg.size() < 3 || angles_deg.size() > 8)
+        w.Error("angles_deg", "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
+    }
+    w.Get("distance", &model.wheel_distance, Positive());
+    w.Get("radius", &model.wheel_radius, Positive());
+    w.Get("width", &model.wheel_width, Positive());
+    w.Get("mass", &model.wheel_mass, Positive());
+    w.Get("friction", &model.wheel_friction, Positive());
+    w.Get("roller_friction", &model.roller_friction, NonNegative());
+    w.Get("bearing_damping", &model.bearing_damping, NonNegative());
+    w.Finish();
+  } else {
+    top.Missing("wheels");
+  }
+
+  if (top.Has("motor")) {
+    YamlMap m(top.Child("motor"), path, "motor", &errors);
+    m.Get("stall_torque", &model.motor_stall_torque, Positive());
+    m.Get("no_load_speed", &model.motor_no_load_speed, Positive());
+    m.Get("encoder_counts_per_rev", &model.encoder_counts_per_rev, NonNegative());
+    m.Finish();
+  }
+
+  if (top.Has("controller")) {
+    YamlMap c(top.Child("controller"), path, "controller", &errors);
+    c.Get("rate_hz", &model.controller.rate_hz, InRange(1, 100000));
+    ReadPid(c, "forward", &model.controller.forward);
+    ReadPid(c, "sideways", &model.controller.sideways);
+    ReadPid(c, "rotation", &model.controller.rotation);
+    c.Finish();
+  }
+
+  if (top.Has("delay")) {
+    YamlMap d(top.Child("delay"), path, "delay", &errors);
+    d.Get("command_frames", &model.command_delay_frames, InRange(0, 100));
+    d.Get("vision_frames", &model.vision_delay_frames, InRange(0, 100));
+    d.Finish();
+  }
+
+  if (top.Has("vision")) {
+    YamlMap v(top.Child("vision"), path, "vision", &errors);
+    v.Get("noise_xy", &model.vision_noise_xy, NonNegative());
+    v.Get("noise_theta", &model.vision_noise_theta, NonNegative());
+    v.Get("drop_probability", &model.vision_drop_probability, InRange(0, 0.9));
+    v.Finish();
+  }
+  top.Finish();
+  errors.ThrowIfAny();
+
+  model.Finalize();
+  const std::string problems = model.Validate();
+  if (!problems.empty()) {
+    std::string all;
+    std::size_t start = 0;
+    while (start <= problems.size()) {
+      std::size_t end = problems.find('\n', start);
+      if (end == std::string::npos) end = problems.size();
+      errors.Add(SourceLocation{path}, problems.substr(start, end - start));
+      start = end + 1;
+    }
+    errors.ThrowIfAny();
+  }
+  return model;
+}
+
+}  // namespace
+
+OmniModel LoadOmniModel(const std::string& path) { return ReadOmniModel(LoadYamlFile(path), path); }
+
+OmniModel LoadOmniModelFromString(const std::string& yaml, const std::string& name) {
+  YAML::Node root = LoadYamlString(yaml, name);
+  if (!root.IsMap()) throw InputError(SourceLocation{name, 1}, "expected a YAML mapping at the top level");
+  return ReadOmniModel(root, name);
+}
+
+}  // namespace twinsim

@@ -1,0 +1,65 @@
+#include "robots/omni/onboard_controller.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace twinsim {
+
+const PidGains& AxisGains(const OmniControllerModel& c, int axis) {
+  return axis == 0 ? c.forward : axis == 1 ? c.sideways : c.rotation;
+}
+
+OnboardControllerState InitialControllerState(const OmniModel& model, const Twist2& v) {
+  OnboardControllerState s;
+  const int n = model.num_wheels();
+  s.axes[0].setpoint = v.vx;
+  s.axes[1].setpoint = v.vy;
+  s.axes[2].setpoint = v.omega;
+  s.wheel_angle.setZero(n);
+  s.last_reading.setZero(n);
+  s.torque_command.setZero(n);
+  s.measured = v;
+  return s;
+}
+
+void AccumulateEncoders(const Eigen::VectorXd& wheel_speeds, double dt, OnboardControllerState* s) {
+  s->wheel_angle += wheel_speeds * dt;
+}
+
+double EncoderReading(const OmniModel& model, double wheel_angle) {
+  if (model.encoder_counts_per_rev <= 0) return wheel_angle;
+  const double per_count = 2 * M_PI / model.encoder_counts_per_rev;
+  return std::floor(wheel_angle / per_count) * per_count;
+}
+
+const Eigen::VectorXd& ControllerTick(const OmniModel& model, const OmniKinematics& kin,
+                                      const Twist2& command, double dt,
+                                      OnboardControllerState* s) {
+  const int n = model.num_wheels();
+  Eigen::VectorXd speeds(n);
+  for (int i = 0; i < n; ++i) {
+    const double reading = EncoderReading(model, s->wheel_angle[i]);
+    speeds[i] = (reading - s->last_reading[i]) / dt;
+    s->last_reading[i] = reading;
+  }
+  s->measured = kin.BodyVelocity(speeds);
+
+  const double cmd[3] = {command.vx, command.vy, command.omega};
+  const double meas[3] = {s->measured.vx, s->measured.vy, s->measured.omega};
+  Eigen::Vector3d wrench;
+  for (int a = 0; a < 3; ++a) {
+    const PidGains& g = AxisGains(model.controller, a);
+    PidAxisState& st = s->axes[a];
+    const double max_step = g.slew_rate * dt;
+    st.setpoint += std::clamp(cmd[a] - st.setpoint, -max_step, max_step);
+    const double error = st.setpoint - meas[a];
+    st.integral = std::clamp(st.integral + g.ki * error * dt, -g.integral_limit, g.integral_limit);
+    const double derivative = g.kd * (error - st.last_error) / dt;
+    st.last_error = error;
+    wrench[a] = std::clamp(g.kp * error + st.integral + derivative, -g.output_limit, g.output_limit);
+  }
+  s->torque_command = kin.WheelTorques(wrench);
+  return s->torque_command;
+}
+
+}  // namespace twinsim

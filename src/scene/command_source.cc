@@ -1,0 +1,142 @@
+#include "scene/command_source.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/rng.h"
+
+namespace twinsim {
+namespace {
+
+Twist2 Lerp(const Twist2& a, const Twist2& b, double s) {
+  return Twist2{a.vx + s * (b.vx - a.vx), a.vy + s * (b.vy - a.vy), a.omega + s * (b.omega - a.omega)};
+}
+
+// A piecewise command: hold or ramp segments, zero after the last one.
+class SegmentSource final : public CommandSource {
+ public:
+  SegmentSource(std::vector<CommandSpec::Segment> segments, int repeat)
+      : segments_(std::move(segments)), repeat_(repeat) {
+    for (const auto& s : segments_) period_ += s.duration;
+  }
+  Twist2 Command(const BehaviourInput& in) override {
+    if (period_ <= 0) return Twist2{};
+    double t = in.t;
+    if (t >= period_ * repeat_) return Twist2{};
+    t = std::fmod(t, period_);
+    Twist2 previous{};
+    for (const auto& s : segments_) {
+      if (t < s.duration) return s.ramp ? Lerp(previous, s.command, t / s.duration) : s.command;
+      t -= s.duration;
+      previous = s.command;
+    }
+    return Twist2{};
+  }
+  std::unique_ptr<CommandSource> Clone() const override { return std::make_unique<SegmentSource>(*this); }
+
+ private:
+  std::vector<CommandSpec::Segment> segments_;
+  int repeat_ = 1;
+  double period_ = 0;
+};
+
+// A lemniscate x = A sin(w t), y = A/2 sin(2 w t) driven open loop without turning:
+// the field velocity is turned into the robot frame with the start heading.
+class FigureEightSource final : public CommandSource {
+ public:
+  FigureEightSource(const CommandSpec& spec, const Pose2& start) : spec_(spec), heading_(start.theta) {}
+  Twist2 Command(const BehaviourInput& in) override {
+    const double t = in.t - spec_.start;
+    if (t < 0 || t >= spec_.period * spec_.laps) return Twist2{};
+    const double w = 2 * M_PI / spec_.period, a = spec_.size;
+    Twist2 field{a * w * std::cos(w * t), a * w * std::cos(2 * w * t), 0};
+    return FieldToBody(field, heading_);
+  }
+  std::unique_ptr<CommandSource> Clone() const override { return std::make_unique<FigureEightSource>(*this); }
+
+ private:
+  CommandSpec spec_;
+  double heading_;
+};
+
+// Drives to each target in turn on the delayed observations: speed limited by the
+// braking distance, heading by a proportional law, both capped.
+class GoToPoseSource final : public CommandSource {
+ public:
+  explicit GoToPoseSource(const CommandSpec& spec) : spec_(spec) {}
+  Twist2 Command(const BehaviourInput& in) override {
+    if (!in.observations || in.observations->empty() || target_ >= spec_.targets.size()) return Twist2{};
+    const Pose2& seen = in.observations->back().pose;
+    const Pose2& goal = spec_.targets[target_];
+    const double dx = goal.x - seen.x, dy = goal.y - seen.y;
+    const double distance = std::hypot(dx, dy);
+    const double dtheta = WrapAngle(goal.theta - seen.theta);
+
+    if (distance < spec_.position_tolerance && std::abs(dtheta) < spec_.angle_tolerance) {
+      if (!inside_since_) inside_since_ = in.t;
+      if (in.t - *inside_since_ >= spec_.hold && target_ + 1 < spec_.targets.size()) {
+        ++target_;
+        inside_since_.reset();
+      }
+    } else {
+      inside_since_.reset();
+    }
+
+    double speed = std::min({spec_.max_speed, std::sqrt(2 * spec_.max_accel * distance), spec_.gain * distance});
+    Twist2 field{0, 0, std::clamp(spec_.gain * dtheta, -spec_.max_omega, spec_.max_omega)};
+    if (distance > 1e-9) {
+      field.vx = speed * dx / distance;
+      field.vy = speed * dy / distance;
+    }
+    return FieldToBody(field, seen.theta);
+  }
+  std::unique_ptr<CommandSource> Clone() const override { return std::make_unique<GoToPoseSource>(*this); }
+
+ private:
+  CommandSpec spec_;
+  std::size_t target_ = 0;
+  std::optional<double> inside_since_;
+};
+
+std::vector<CommandSpec::Segment> RandomPlan(const CommandSpec& spec, std::uint64_t seed, int robot,
+                                             double duration) {
+  Rng rng = Rng::Derived(seed, 1000 + static_cast<std::uint64_t>(robot));
+  std::vector<CommandSpec::Segment> plan;
+  double t = 0;
+  while (t < duration) {
+    CommandSpec::Segment s;
+    s.duration = rng.Uniform(spec.min_segment, spec.max_segment);
+    if (rng.Uniform() >= spec.rest_probability) {
+      const double direction = rng.Uniform(-M_PI, M_PI);
+      const double speed = spec.max_speed * std::sqrt(rng.Uniform());  // fills the disc evenly
+      s.command.vx = speed * std::cos(direction);
+      s.command.vy = speed * std::sin(direction);
+      if (rng.Uniform() < spec.rotate_probability) s.command.omega = rng.Uniform(-spec.max_omega, spec.max_omega);
+    }
+    s.ramp = rng.Uniform() < spec.ramp_probability;
+    plan.push_back(s);
+    t += s.duration;
+  }
+  return plan;
+}
+
+}  // namespace
+
+std::unique_ptr<CommandSource> MakeCommandSource(const CommandSpec& spec, std::uint64_t seed,
+                                                 int robot_index, double duration,
+                                                 const Pose2& start) {
+  if (spec.type == "sequence") return std::make_unique<SegmentSource>(spec.segments, spec.repeat);
+  if (spec.type == "test_drive") {
+    const double a = spec.direction_deg * M_PI / 180.0;
+    std::vector<CommandSpec::Segment> s = {
+        {spec.start, Twist2{}, false},
+        {spec.drive_time, Twist2{spec.speed * std::cos(a), spec.speed * std::sin(a), 0}, false}};
+    return std::make_unique<SegmentSource>(s, 1);
+  }
+  if (spec.type == "figure_eight") return std::make_unique<FigureEightSource>(spec, start);
+  if (spec.type == "random")
+    return std::make_unique<SegmentSource>(RandomPlan(spec, seed, robot_index, duration), 1);
+  return std::make_unique<GoToPoseSource>(spec);
+}
+
+}  // namespace twinsim

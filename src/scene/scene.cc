@@ -1,0 +1,207 @@
+#include "scene/scene.h"
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "core/error.h"
+#include "io/yaml_reader.h"
+
+namespace twinsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool ReadTwist(YamlMap& m, const std::string& key, Twist2* out) {
+  std::vector<double> v;
+  if (!m.Get(key, &v, 3)) return false;
+  *out = Twist2{v[0], v[1], v[2]};
+  return true;
+}
+
+void ReadCommands(const YAML::Node& node, const std::string& path, const std::string& context,
+                  ErrorList* errors, CommandSpec* spec) {
+  YamlMap m(node, path, context, errors);
+  m.Require("type", &spec->type, std::vector<std::string>{"sequence", "test_drive", "figure_eight", "random", "go_to_pose"});
+  const std::string& type = spec->type;
+  if (type == "sequence") {
+    m.Get("repeat", &spec->repeat, InRange(1, 1000000));
+    YAML::Node segs = m.Child("segments");
+    if (!segs.IsDefined()) {
+      m.Missing("segments");
+    } else if (!segs.IsSequence() || segs.size() == 0) {
+      m.Error("segments", "expected a non-empty list of segments");
+    } else {
+      for (std::size_t i = 0; i < segs.size(); ++i) {
+        YamlMap s(segs[i], path, context + ".segments[" + std::to_string(i) + "]", errors);
+        CommandSpec::Segment seg;
+        s.Require("duration", &seg.duration, Positive());
+        const bool hold = s.Has("command"), ramp = s.Has("ramp_to");
+        if (hold == ramp) s.Error("command", "give exactly one of 'command' (hold) or 'ramp_to' (ramp)");
+        if (hold) ReadTwist(s, "command", &seg.command);
+        if (ramp) seg.ramp = ReadTwist(s, "ramp_to", &seg.command);
+        s.Finish();
+        spec->segments.push_back(seg);
+      }
+    }
+  } else if (type == "test_drive") {
+    m.Get("start", &spec->start, NonNegative());
+    m.Get("speed", &spec->speed, Positive());
+    m.Get("direction_deg", &spec->direction_deg, InRange(-360, 360));
+    m.Get("drive_time", &spec->drive_time, Positive());
+  } else if (type == "figure_eight") {
+    m.Get("start", &spec->start, NonNegative());
+    m.Get("size", &spec->size, Positive());
+    m.Get("period", &spec->period, Positive());
+    m.Get("laps", &spec->laps, InRange(1, 1000));
+  } else if (type == "random") {
+    m.Get("max_speed", &spec->max_speed, Positive());
+    m.Get("max_omega", &spec->max_omega, NonNegative());
+    m.Get("min_segment", &spec->min_segment, Positive());
+    m.Get("max_segment", &spec->max_segment, Positive());
+    m.Get("rest_probability", &spec->rest_probability, InRange(0, 1));
+    m.Get("ramp_probability", &spec->ramp_probability, InRange(0, 1));
+    m.Get("rotate_probability", &spec->rotate_probability, InRange(0, 1));
+    if (spec->max_segment < spec->min_segment) m.Error("max_segment", "must not be below min_segment");
+  } else if (type == "go_to_pose") {
+    m.Get("max_speed", &spec->max_speed, Positive());
+    m.Get("max_omega", &spec->max_omega, Positive());
+    m.Get("max_accel", &spec->max_accel, Positive());
+    m.Get("gain", &spec->gain, Positive());
+    m.Get("position_tolerance", &spec->position_tolerance, Positive());
+    double angle_tolerance_deg = spec->angle_tolerance * 180 / M_PI;
+    if (m.Get("angle_tolerance_deg", &angle_tolerance_deg, Positive()))
+      spec->angle_tolerance = angle_tolerance_deg * M_PI / 180;
+    m.Get("hold", &spec->hold, NonNegative());
+    YAML::Node targets = m.Child("targets");
+    if (!targets.IsDefined()) {
+      m.Missing("targets");
+    } else if (!targets.IsSequence() || targets.size() == 0) {
+      m.Error("targets", "expected a non-empty list of {x, y, theta_deg}");
+    } else {
+      for (std::size_t i = 0; i < targets.size(); ++i) {
+        YamlMap t(targets[i], path, context + ".targets[" + std::to_string(i) + "]", errors);
+        Pose2 p;
+        double theta_deg = 0;
+        t.Require("x", &p.x);
+        t.Require("y", &p.y);
+        t.Get("theta_deg", &theta_deg);
+        p.theta = theta_deg * M_PI / 180;
+        t.Finish();
+        spec->targets.push_back(p);
+      }
+    }
+  }
+  m.Finish();
+}
+
+Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir) {
+  ErrorList errors;
+  Scene scene;
+  scene.path = path;
+  YamlMap top(root, path, "", &errors);
+  top.Require("name", &scene.name);
+  top.Get("backend", &scene.backend, {"analytic", "ode", "bullet"});
+  top.Get("frame_rate", &scene.frame_rate, InRange(1, 1000));
+  top.Get("physics_substeps", &scene.physics_substeps, InRange(0, 1000));
+  top.Require("duration", &scene.duration, InRange(1e-3, 24 * 3600));
+  double seed = 1;
+  if (top.Get("seed", &seed, InRange(0, 9007199254740992.0))) scene.seed = static_cast<std::uint64_t>(seed);
+  top.Child("plots");  // reserved for the renderer; read by the rendering module
+
+  if (top.Has("field")) {
+    YamlMap f(top.Child("field"), path, "field", &errors);
+    f.Get("length", &scene.field.length, Positive());
+    f.Get("width", &scene.field.width, Positive());
+    f.Get("wall_height", &scene.field.wall_height, Positive());
+    f.Get("walls", &scene.field.walls);
+    f.Finish();
+  }
+
+  YAML::Node robots = top.Child("robots");
+  if (!robots.IsDefined()) {
+    top.Missing("robots");
+  } else if (!robots.IsSequence() || robots.size() == 0) {
+    top.Error("robots", "expected a non-empty list of robots");
+  } else {
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < robots.size(); ++i) {
+      const std::string context = "robots[" + std::to_string(i) + "]";
+      YamlMap r(robots[i], path, context, &errors);
+      SceneRobot robot;
+      robot.name = "robot" + std::to_string(i);
+      r.Get("name", &robot.name);
+      if (!names.insert(robot.name).second) r.Error("name", "duplicate robot name '" + robot.name + "'");
+      if (r.Require("model", &robot.model_path)) {
+        fs::path p(robot.model_path);
+        if (p.is_relative()) p = base_dir / p;
+        robot.model_path = p.lexically_normal().string();
+        try {
+          robot.model = LoadOmniModel(robot.model_path);
+        } catch (const InputError& e) {
+          errors.Add(e.what());
+        }
+      }
+      if (r.Has("start")) {
+        YamlMap s(r.Child("start"), path, context + ".start", &errors);
+        double theta_deg = 0;
+        s.Get("x", &robot.start.x);
+        s.Get("y", &robot.start.y);
+        s.Get("theta_deg", &theta_deg);
+        robot.start.theta = WrapAngle(theta_deg * M_PI / 180);
+        s.Finish();
+      }
+      if (r.Has("commands")) {
+        ReadCommands(r.Child("commands"), path, context + ".commands", &errors, &robot.commands);
+      } else {
+        r.Missing("commands");
+      }
+      r.Finish();
+      scene.robots.push_back(std::move(robot));
+    }
+  }
+  top.Finish();
+  errors.ThrowIfAny();
+
+  for (const auto& r : scene.robots) {
+    if (std::abs(r.start.x) > scene.field.length / 2 || std::abs(r.start.y) > scene.field.width / 2)
+      errors.Add(SourceLocation{path}, "robot '" + r.name + "' starts outside the field");
+  }
+  errors.ThrowIfAny();
+  return scene;
+}
+
+}  // namespace
+
+FrameTiming Scene::timing() const {
+  FrameTiming t;
+  t.frame_rate = frame_rate;
+  t.physics_substeps = physics_substeps > 0 ? physics_substeps : DefaultPhysicsSubsteps(frame_rate);
+  return t;
+}
+
+int Scene::num_frames() const { return static_cast<int>(std::floor(duration * frame_rate + 1e-9)) + 1; }
+
+Scene LoadScene(const std::string& path) {
+  return ReadScene(LoadYamlFile(path), path, fs::path(path).parent_path());
+}
+
+Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir) {
+  YAML::Node root = LoadYamlString(yaml, name);
+  if (!root.IsMap()) throw InputError(SourceLocation{name, 1}, "expected a YAML mapping at the top level");
+  return ReadScene(root, name, base_dir);
+}
+
+Simulation MakeSimulation(const Scene& scene, const std::string& backend) {
+  std::vector<OmniModel> models;
+  std::vector<SimRobot> robots;
+  for (std::size_t i = 0; i < scene.robots.size(); ++i) {
+    const SceneRobot& r = scene.robots[i];
+    models.push_back(r.model);
+    robots.push_back(SimRobot{r.name, r.model, r.start,
+                              MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start)});
+  }
+  return Simulation(std::move(robots), MakeOmniBackend(backend, models, scene.field, scene.timing()), scene.seed);
+}
+
+}  // namespace twinsim

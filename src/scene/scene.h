@@ -1,0 +1,49 @@
+// A scene: which robots, on which field, driven by what, for how long, at which camera
+// rate, on which backend, with which seed. Loaded from YAML (docs/scenes.md) into plain
+// structs, validated as a whole, and turned into a Simulation by MakeSimulation().
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "backends/omni_backend.h"
+#include "core/simulation.h"
+#include "scene/command_source.h"
+
+namespace twinsim {
+
+struct SceneRobot {
+  std::string name;
+  std::string model_path;  // as resolved (relative paths are relative to the scene file)
+  OmniModel model;
+  Pose2 start;
+  CommandSpec commands;
+};
+
+struct Scene {
+  std::string path;
+  std::string name;
+  std::string backend = "ode";   // default; `twinsim run --backend` overrides
+  double frame_rate = 30;        // Hz
+  int physics_substeps = 0;      // per frame; 0 = DefaultPhysicsSubsteps(frame_rate)
+  double duration = 5;           // s
+  std::uint64_t seed = 1;
+  FieldModel field;
+  std::vector<SceneRobot> robots;
+
+  FrameTiming timing() const;
+  // Number of frames from t = 0 to `duration` inclusive.
+  int num_frames() const;
+};
+
+// Loads and validates a scene and the models it names; throws InputError listing every
+// problem as "path:line:column: ...".
+Scene LoadScene(const std::string& path);
+Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
+
+// Builds the simulation of a scene on the named backend.
+Simulation MakeSimulation(const Scene& scene, const std::string& backend);
+
+}  // namespace twinsim
