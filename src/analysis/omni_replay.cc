@@ -71,7 +71,7 @@ OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const
     const OmniLogRow& a = log.rows[0];
     const OmniLogRow& b = log.rows[1];
     const double dt = b.t - a.t;
-    Twist2 field_v{(b.pose.x - a.pose.x) / dt, (b.pose.y - a.pose.y) / dt, (b.pose.theta - a.pose.theta) / dt};
+    const Twist2 field_v{(b.pose.x - a.pose.x) / dt, (b.pose.y - a.pose.y) / dt, (b.pose.theta - a.pose.theta) / dt};
     backend->Reset(0, a.pose, FieldToBody(field_v, a.pose.theta));
     double last_theta = a.pose.theta;
     for (int f = 0; f < last_frame; ++f) {
@@ -89,24 +89,34 @@ OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const
     return out;
   }
 
+  auto estimated_velocity = [&](std::size_t row) {
+    const OmniLogRow& prev = log.rows[row - 1];
+    const OmniLogRow& now = log.rows[row];
+    const double dt = now.t - prev.t;
+    Twist2 field_v{(now.pose.x - prev.pose.x) / dt, (now.pose.y - prev.pose.y) / dt,
+                   (now.pose.theta - prev.pose.theta) / dt};
+    return FieldToBody(field_v, now.pose.theta);
+  };
+
   for (std::size_t i = 0; i < n; ++i) {
     if (progress && i % 64 == 0) progress(static_cast<int>(i), static_cast<int>(n));
     const int target = log.FrameIndex(i);
     const int start = target - k;
     auto it = row_of_frame.find(start);
-    if (it == row_of_frame.end() || it->second == 0 || start - delay < 0) continue;
+    if (it == row_of_frame.end() || start - delay < 0) continue;
+    // The warm-up start: the earliest row within kWarmUpFrames before S that has a row
+    // before it (for its velocity) and known commands.
+    auto w = row_of_frame.lower_bound(std::max({start - kWarmUpFrames, delay, log.FrameIndex(1)}));
+    if (w == row_of_frame.end() || w->first > start) continue;
     const std::size_t s = it->second;
-    const OmniLogRow& prev = log.rows[s - 1];
-    const OmniLogRow& now = log.rows[s];
-    const double dt = now.t - prev.t;
-    Twist2 field_v{(now.pose.x - prev.pose.x) / dt, (now.pose.y - prev.pose.y) / dt,
-                   (now.pose.theta - prev.pose.theta) / dt};
-    backend->Reset(0, now.pose, FieldToBody(field_v, now.pose.theta));
+    backend->Reset(0, log.rows[w->second].pose, estimated_velocity(w->second));
+    for (int f = w->first; f < start; ++f) backend->StepFrame({delayed_command(f)});
+    backend->MoveBody(0, log.rows[s].pose);
     for (int f = start; f < target; ++f) backend->StepFrame({delayed_command(f)});
     Pose2 p = backend->pose(0);
     check(i, p);
     // Keep theta on the log's unwrapped branch.
-    p.theta = now.pose.theta + WrapAngle(p.theta - now.pose.theta);
+    p.theta = log.rows[s].pose.theta + WrapAngle(p.theta - log.rows[s].pose.theta);
     out.pose[i] = p;
     out.predicted[i] = true;
   }

@@ -1,11 +1,17 @@
 // Replaying a measured omni log through a model (`twinsim replay`, CONTRACT.md).
 //
 // Row i of the result is the model's prediction of frame i made from the measured
-// state K frames earlier (pose, and velocity by a backward difference) and the logged
-// commands since, delayed by the model's command + vision delay D: the step from frame
-// j to j+1 is driven by the command logged at frame j - D. K = 0 is one free run from
-// the first row. Rows without enough history (no row K frames earlier, no row before
-// that, or commands older than the log) hold the measured pose.
+// state K frames earlier and the logged commands since, delayed by the model's command
+// + vision delay D: the step from frame j to j+1 is driven by the command logged at
+// frame j - D. K = 0 is one free run from the first row.
+//
+// The state at the start frame S = i - K: the measured pose at S. Velocity and the
+// on-board controller's state (set-points, integrals) are not measured; they come from
+// running the model over the up to kWarmUpFrames frames before S, started from the
+// measurement there (pose, velocity by a backward difference). So vision noise enters
+// through poses only, as it does for a learned predictor that sees the last frames.
+// Rows without enough history (no row at S, or commands older than the log) hold the
+// measured pose.
 #pragma once
 
 #include <functional>
@@ -17,6 +23,8 @@
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
+
+inline constexpr int kWarmUpFrames = 8;
 
 struct OmniReplayOptions {
   std::string backend = "ode";

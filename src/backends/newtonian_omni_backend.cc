@@ -40,6 +40,12 @@ void NewtonianOmniBackend::Reset(int robot, const Pose2& pose, const Twist2& vel
   engine_->SetWheelTorques(robot, Eigen::VectorXd::Zero(r.model.num_wheels()));
 }
 
+void NewtonianOmniBackend::MoveBody(int robot, const Pose2& pose) {
+  OmniBodyState body = engine_->GetState(robot);
+  body.pose = pose;
+  engine_->SetState(robot, body);
+}
+
 void NewtonianOmniBackend::StepFrame(const std::vector<Twist2>& commands) {
   if (static_cast<int>(commands.size()) != num_robots())
     throw std::invalid_argument("StepFrame: one command per robot expected");

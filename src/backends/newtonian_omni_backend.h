@@ -25,6 +25,7 @@ class NewtonianOmniBackend final : public OmniBackend {
   const FrameTiming& timing() const override { return timing_; }
 
   void Reset(int robot, const Pose2& pose, const Twist2& velocity) override;
+  void MoveBody(int robot, const Pose2& pose) override;
   void StepFrame(const std::vector<Twist2>& commands) override;
   Pose2 pose(int robot) const override;
   Twist2 velocity(int robot) const override;

@@ -52,6 +52,9 @@ class OmniBackend {
   // Puts robot i at `pose` moving at `velocity` (robot frame), its controller settled
   // on that velocity.
   virtual void Reset(int robot, const Pose2& pose, const Twist2& velocity) = 0;
+  // Moves robot i's body to `pose`, keeping its velocity (robot frame) and everything
+  // internal (controller, history): a correction from a measurement.
+  virtual void MoveBody(int robot, const Pose2& pose) = 0;
   // Advances one camera frame; commands[i] is what robot i's firmware receives now.
   virtual void StepFrame(const std::vector<Twist2>& commands) = 0;
 

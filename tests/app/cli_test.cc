@@ -1,0 +1,94 @@
+// The command line as users and scripts see it: exit codes, messages, files.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "io/omni_log.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+using testing::ReadText;
+using testing::RunTwinsim;
+using testing::SourcePath;
+using testing::TempDir;
+using testing::WriteText;
+namespace fs = std::filesystem;
+
+TEST(Cli, HelpDescribesEveryCommand) {
+  auto r = RunTwinsim("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("run"), std::string::npos);
+  EXPECT_NE(r.out.find("replay"), std::string::npos);
+  for (const char* cmd : {"run", "replay"}) {
+    auto c = RunTwinsim(std::string(cmd) + " --help");
+    EXPECT_EQ(c.exit_code, 0) << cmd;
+    EXPECT_NE(c.out.find("--out"), std::string::npos) << cmd;
+  }
+}
+
+TEST(Cli, UnknownOptionIsBadInput) {
+  EXPECT_EQ(RunTwinsim("run --frobnicate x").exit_code, 2);
+  EXPECT_EQ(RunTwinsim("").exit_code, 2);
+}
+
+TEST(Cli, RunWritesTheContractLogAndIsDeterministic) {
+  const std::string a = TempDir("run_a"), b = TempDir("run_b");
+  const std::string scene = SourcePath("scenes/drive45.yaml");
+  auto r1 = RunTwinsim("run " + scene + " --backend analytic --out " + a + " --seed 5");
+  ASSERT_EQ(r1.exit_code, 0) << r1.err;
+  EXPECT_NE(r1.out.find(a + "/trajectory.csv"), std::string::npos) << r1.out;
+  auto r2 = RunTwinsim("run " + scene + " --backend analytic --out " + b + " --seed 5 --quiet");
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  const std::string log = ReadText(a + "/trajectory.csv");
+  EXPECT_EQ(log.rfind("t,x,y,theta,vx_cmd,vy_cmd,omega_cmd\n", 0), 0u);
+  EXPECT_EQ(log, ReadText(b + "/trajectory.csv"));
+  const OmniLog parsed = ReadOmniLog(a + "/trajectory.csv");
+  EXPECT_EQ(parsed.rows.size(), 121u);
+}
+
+TEST(Cli, BadSceneIsExitTwoWithFileAndLine) {
+  const std::string dir = TempDir("bad_scene");
+  const std::string scene = WriteText(dir + "/s.yaml", "name: s\nduration: 1\nrobots: []\nfoo: 1\n");
+  auto r = RunTwinsim("run " + scene + " --out " + dir + "/out");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(scene + ":3:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(scene + ":4:1: unknown key 'foo'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+}
+
+TEST(Cli, UncompiledOrUnknownBackendIsBadInput) {
+  const std::string dir = TempDir("bad_backend");
+  auto r = RunTwinsim("run " + SourcePath("scenes/drive45.yaml") + " --backend warp --out " + dir + "/o");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown physics backend 'warp'"), std::string::npos) << r.err;
+}
+
+TEST(Cli, ReplayWithBadLogLeavesNothingBehind) {
+  const std::string dir = TempDir("bad_replay");
+  const std::string log = WriteText(dir + "/bad.csv", "t,x\n0,abc\n");
+  auto r = RunTwinsim("replay --model " + SourcePath("models/omni4.yaml") + " --log " + log + " --out " + dir + "/o.csv");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(log + ":2:3: column 'x': expected a number, got 'abc'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "/o.csv"));
+  auto missing = RunTwinsim("replay --model " + dir + "/missing.yaml --log " + log + " --out " + dir + "/o.csv");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find(dir + "/missing.yaml: cannot open file"), std::string::npos) << missing.err;
+  EXPECT_FALSE(fs::exists(dir + "/o.csv"));
+}
+
+TEST(Cli, ReplayWritesOneRowPerInputRow) {
+  const std::string dir = TempDir("replay");
+  ASSERT_EQ(RunTwinsim("run " + SourcePath("scenes/steps.yaml") + " --backend analytic --quiet --out " + dir).exit_code, 0);
+  auto r = RunTwinsim("replay --model " + SourcePath("models/omni4.yaml") + " --log " + dir +
+                      "/trajectory.csv --backend analytic --out " + dir + "/replay.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string out = ReadText(dir + "/replay.csv");
+  EXPECT_EQ(out.rfind("t,x,y,theta\n", 0), 0u);
+  const OmniLog in = ReadOmniLog(dir + "/trajectory.csv");
+  EXPECT_EQ(static_cast<std::size_t>(std::count(out.begin(), out.end(), '\n')), in.rows.size() + 1);
+}
+
+}  // namespace
+}  // namespace twinsim

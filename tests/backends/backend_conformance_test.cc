@@ -1,0 +1,225 @@
+// One conformance suite over every backend built into this binary.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "backends/newtonian_omni_backend.h"
+#include "backends/omni_backend.h"
+#include "core/simulation.h"
+#include "io/omni_log.h"
+#include "robots/omni/omni_kinematics.h"
+#include "scene/command_source.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+using testing::Omni4;
+
+class BackendConformance : public ::testing::TestWithParam<std::string> {};
+
+// A model without delay and noise, for physics checks.
+OmniModel Quiet(OmniModel m) {
+  m.command_delay_frames = 0;
+  m.vision_delay_frames = 0;
+  m.vision_noise_xy = 0;
+  m.vision_noise_theta = 0;
+  return m;
+}
+
+CommandSpec Steps(std::vector<CommandSpec::Segment> segments) {
+  CommandSpec spec;
+  spec.type = "sequence";
+  spec.segments = std::move(segments);
+  return spec;
+}
+
+SimulationResult Drive(const std::string& backend, const OmniModel& model, const CommandSpec& spec,
+                       double seconds, std::uint64_t seed = 1, double frame_rate = 30) {
+  FrameTiming timing;
+  timing.frame_rate = frame_rate;
+  timing.physics_substeps = DefaultPhysicsSubsteps(frame_rate);
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", model, Pose2{0, 0, 0}, MakeCommandSource(spec, seed, 0, seconds, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, timing), seed);
+  return sim.Run(static_cast<int>(std::lround(seconds * frame_rate)) + 1);
+}
+
+TEST_P(BackendConformance, RestStaysAtRest) {
+  const SimulationResult r = Drive(GetParam(), Quiet(Omni4()), Steps({{3.0, Twist2{}, false}}), 3.0);
+  const FrameRecord& last = r.frames[0].back();
+  EXPECT_LT(std::hypot(last.truth.x, last.truth.y), 1e-3) << "drifted in 3 s";
+  EXPECT_LT(std::abs(last.truth.theta), 1e-3);
+  EXPECT_LT(std::hypot(last.truth_velocity.vx, last.truth_velocity.vy), 1e-3);
+}
+
+struct AxisCase {
+  Twist2 command;
+  const char* label;
+};
+
+TEST_P(BackendConformance, ReachesCommandedVelocityOnEveryAxis) {
+  for (const AxisCase& c : {AxisCase{{1.0, 0, 0}, "forward"}, AxisCase{{0, 1.0, 0}, "sideways"},
+                            AxisCase{{0, 0, 3.0}, "rotation"}, AxisCase{{1.2, 1.2, 0}, "45 degrees"}}) {
+    const SimulationResult r = Drive(GetParam(), Quiet(Omni4()), Steps({{2.0, c.command, false}}), 1.9);
+    const Twist2& v = r.frames[0].back().truth_velocity;
+    EXPECT_NEAR(v.vx, c.command.vx, 0.02 + 0.02 * std::abs(c.command.vx)) << c.label;
+    EXPECT_NEAR(v.vy, c.command.vy, 0.02 + 0.02 * std::abs(c.command.vy)) << c.label;
+    EXPECT_NEAR(v.omega, c.command.omega, 0.05 + 0.02 * std::abs(c.command.omega)) << c.label;
+  }
+}
+
+TEST_P(BackendConformance, AgreesWithTheAnalyticModelOnSimpleDrives) {
+  // Tolerances: the engines' contacts are compliant and their rollers slide with Coulomb
+  // friction, the analytic wheels are rigid; over 2-3 m of driving they must stay
+  // within 2 cm and 1 degree of each other.
+  if (GetParam() == "analytic") GTEST_SKIP() << "the reference itself";
+  const OmniModel model = Quiet(Omni4());
+  struct Case {
+    const char* label;
+    CommandSpec spec;
+  };
+  CommandSpec drive45;
+  drive45.type = "test_drive";
+  drive45.start = 0.2;
+  drive45.speed = 1.5;
+  drive45.direction_deg = 45;
+  drive45.drive_time = 1.5;
+  for (const Case& c : {Case{"forward", Steps({{2.0, {1.5, 0, 0}, false}})},
+                        Case{"sideways", Steps({{2.0, {0, 1.5, 0}, false}})},
+                        Case{"rotation", Steps({{2.0, {0, 0, 4.0}, false}})},
+                        Case{"45 degree test drive", drive45}}) {
+    const SimulationResult engine = Drive(GetParam(), model, c.spec, 3.0);
+    const SimulationResult reference = Drive("analytic", model, c.spec, 3.0);
+    double max_position = 0, max_heading = 0;
+    for (std::size_t k = 0; k < engine.frames[0].size(); ++k) {
+      const Pose2& a = engine.frames[0][k].truth;
+      const Pose2& b = reference.frames[0][k].truth;
+      max_position = std::max(max_position, std::hypot(a.x - b.x, a.y - b.y));
+      max_heading = std::max(max_heading, std::abs(WrapAngle(a.theta - b.theta)));
+    }
+    EXPECT_LT(max_position, 0.02) << c.label;
+    EXPECT_LT(max_heading, 1.0 * M_PI / 180) << c.label;
+  }
+}
+
+TEST_P(BackendConformance, OpenLoopWrenchMatchesRigidBodyAcceleration) {
+  // Torques for a constant body wrench from rest: v(t) = M_eff^{-1} (F + F_r) t, while
+  // the wheels roll without slipping (forces well under the friction limit) and the
+  // rollers slide radially against Coulomb friction F_r = -sum mu_r N_i sign(s_i) e_i.
+  const OmniModel m = Quiet(Omni4());
+  OmniKinematics kin(m);
+  Eigen::Matrix3d mass = Eigen::Vector3d(m.total_mass, m.total_mass, m.total_inertia_z).asDiagonal();
+  mass += m.wheel_spin_inertia * kin.wheels_from_body().transpose() * kin.wheels_from_body();
+  for (const Eigen::Vector3d& wrench : {Eigen::Vector3d(5, 0, 0), Eigen::Vector3d(0, 5, 0), Eigen::Vector3d(0, 0, 0.15)}) {
+    std::unique_ptr<OmniEngine> engine = MakeOmniEngine(GetParam(), {m}, FieldModel{});
+    OmniBodyState s;
+    s.wheel_speeds = Eigen::VectorXd::Zero(m.num_wheels());
+    engine->SetState(0, s);
+    const double dt = 1.0 / 300;
+    for (int i = 0; i < 60; ++i) {  // let the contacts settle
+      engine->SetWheelTorques(0, Eigen::VectorXd::Zero(m.num_wheels()));
+      engine->Step(dt);
+    }
+    s = engine->GetState(0);
+    const Twist2 v0 = s.velocity;
+    engine->SetWheelTorques(0, kin.WheelTorques(wrench));
+    const int steps = 90;
+    for (int i = 0; i < steps; ++i) engine->Step(dt);
+    const Twist2 v = engine->GetState(0).velocity;
+    const Eigen::Vector3d direction = mass.inverse() * wrench;
+    Eigen::Vector3d roller = Eigen::Vector3d::Zero();
+    for (int i = 0; i < m.num_wheels(); ++i) {
+      const Eigen::Vector3d e(std::cos(m.wheel_angles[i]), std::sin(m.wheel_angles[i]), 0);
+      const double slip = e.dot(direction);
+      if (std::abs(slip) > 1e-6 * direction.norm()) roller -= m.roller_friction * m.wheel_load[i] * (slip > 0 ? 1 : -1) * e;
+    }
+    const Eigen::Vector3d expected = mass.inverse() * (wrench + roller) * (steps * dt);
+    const Eigen::Vector3d got(v.vx - v0.vx, v.vy - v0.vy, v.omega - v0.omega);
+    // Rotate the translational part: the robot may have turned a little.
+    EXPECT_LT((got - expected).norm(), 0.03 * expected.norm() + 1e-3)
+        << "wrench " << wrench.transpose() << ": expected " << expected.transpose() << ", got " << got.transpose();
+  }
+}
+
+TEST_P(BackendConformance, StepCommandAppearsExactlyAfterTheModelsDelay) {
+  for (auto [cmd_delay, vision_delay] : {std::pair{2, 2}, std::pair{0, 0}, std::pair{1, 3}, std::pair{3, 0}}) {
+    OmniModel m = Quiet(Omni4());
+    m.command_delay_frames = cmd_delay;
+    m.vision_delay_frames = vision_delay;
+    const int step_frame = 10;
+    const SimulationResult r = Drive(GetParam(), m, Steps({{step_frame / 30.0 - 1e-9, {}, false}, {1.0, {1.0, 0, 0}, false}}), 1.0);
+    const auto& f = r.frames[0];
+    ASSERT_EQ(f[step_frame].command.vx, 1.0);
+    ASSERT_EQ(f[step_frame - 1].command.vx, 0.0);
+    int first_moved = -1;
+    for (std::size_t k = 0; k < f.size() && first_moved < 0; ++k)
+      if (std::abs(f[k].seen.x - f[0].seen.x) > 1e-5) first_moved = static_cast<int>(k);
+    EXPECT_EQ(first_moved, step_frame + cmd_delay + vision_delay + 1)
+        << "command delay " << cmd_delay << ", vision delay " << vision_delay;
+  }
+}
+
+TEST_P(BackendConformance, SameSeedGivesByteIdenticalLogs) {
+  OmniModel m = Omni4();
+  m.vision_drop_probability = 0.05;
+  CommandSpec random;
+  random.type = "random";
+  auto log = [&](std::uint64_t seed) {
+    const SimulationResult r = Drive(GetParam(), m, random, 4.0, seed);
+    std::vector<OmniLogRow> rows;
+    for (const auto& f : r.frames[0])
+      if (f.observed) rows.push_back({f.t, f.seen, f.command});
+    return FormatOmniLog(rows);
+  };
+  const std::string a = log(3), b = log(3), c = log(4);
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+}
+
+TEST_P(BackendConformance, RestoringASavedStateReplaysExactly) {
+  FrameTiming timing;
+  const OmniModel m = Omni4();
+  CommandSpec random;
+  random.type = "random";
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", m, Pose2{}, MakeCommandSource(random, 9, 0, 10, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend(GetParam(), {m}, FieldModel{}, timing), 9);
+  for (int k = 0; k < 40; ++k) sim.Step();
+  const SimulationState saved = sim.Save();
+  std::vector<FrameRecord> first;
+  for (int k = 0; k < 30; ++k) first = sim.Step();
+  sim.Restore(saved);
+  std::vector<FrameRecord> second;
+  for (int k = 0; k < 30; ++k) second = sim.Step();
+  EXPECT_EQ(first[0].truth.x, second[0].truth.x);
+  EXPECT_EQ(first[0].truth.y, second[0].truth.y);
+  EXPECT_EQ(first[0].truth.theta, second[0].truth.theta);
+  EXPECT_EQ(first[0].seen.x, second[0].seen.x);
+}
+
+TEST_P(BackendConformance, ManyRobotsRunSideBySide) {
+  FrameTiming timing;
+  const OmniModel m = Quiet(Omni4());
+  std::vector<SimRobot> robots;
+  std::vector<OmniModel> models;
+  for (int i = 0; i < 11; ++i) {
+    robots.push_back(SimRobot{"r" + std::to_string(i), m, Pose2{-3.0 + 0.5 * i, 0, 0},
+                              MakeCommandSource(Steps({{1.0, {0, 1.0, 0}, false}}), 1, i, 1, Pose2{})});
+    models.push_back(m);
+  }
+  Simulation sim(std::move(robots), MakeOmniBackend(GetParam(), models, FieldModel{}, timing), 1);
+  SimulationResult r = sim.Run(31);
+  for (int i = 0; i < 11; ++i) {
+    // All robots moved alike along +y; none disturbed another.
+    EXPECT_NEAR(r.frames[i].back().truth.y, r.frames[0].back().truth.y, 1e-3);
+    EXPECT_NEAR(r.frames[i].back().truth.x, -3.0 + 0.5 * i, 2e-3);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllBuilt, BackendConformance, ::testing::ValuesIn(AvailableOmniBackends()),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace twinsim

@@ -1,0 +1,67 @@
+#include "scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+using testing::SourcePath;
+
+std::string ErrorOf(const std::string& yaml) {
+  try {
+    LoadSceneFromString(yaml, "s.yaml", SourcePath("scenes"));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scene, ShippedScenesLoad) {
+  for (const char* name : {"drive45", "steps", "figure_eight", "go_to_pose", "random_excitation"}) {
+    Scene s = LoadScene(SourcePath(std::string("scenes/") + name + ".yaml"));
+    EXPECT_EQ(s.name, name);
+    EXPECT_FALSE(s.robots.empty());
+  }
+}
+
+TEST(Scene, TimingDefaultsToAtLeast300HzPhysics) {
+  Scene s = LoadSceneFromString(
+      "name: t\nframe_rate: 60\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands: {type: random}\n",
+      "s.yaml", SourcePath("scenes"));
+  EXPECT_EQ(s.timing().physics_substeps, 5);  // grSim: 5 steps per 60 fps frame
+  EXPECT_EQ(s.num_frames(), 61);
+}
+
+TEST(Scene, UnknownKeyWrongTypeMissingFieldAndBadModel) {
+  const std::string e = ErrorOf(
+      "name: t\n"
+      "duration: long\n"
+      "robots:\n"
+      "  - model: ../models/nope.yaml\n"
+      "    commands: {type: test_drive, sped: 2}\n"
+      "  - model: ../models/omni4.yaml\n");
+  EXPECT_NE(e.find("s.yaml:2:11: 'duration': expected a number, got 'long'"), std::string::npos) << e;
+  EXPECT_NE(e.find("nope.yaml: cannot open file"), std::string::npos) << e;
+  EXPECT_NE(e.find("s.yaml:5:34: unknown key 'sped' in 'robots[0].commands'"), std::string::npos) << e;
+  EXPECT_NE(e.find("missing required key 'commands' in 'robots[1]'"), std::string::npos) << e;
+}
+
+TEST(Scene, UnknownCommandTypeListsKnownOnes) {
+  const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands: {type: dance}\n");
+  EXPECT_NE(e.find("unknown value 'dance' (known: sequence, test_drive, figure_eight, random, go_to_pose)"),
+            std::string::npos)
+      << e;
+}
+
+TEST(Scene, SegmentNeedsExactlyOneOfCommandOrRamp) {
+  const std::string e = ErrorOf(
+      "name: t\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands:\n      type: sequence\n"
+      "      segments:\n        - {duration: 1}\n");
+  EXPECT_NE(e.find("give exactly one of 'command' (hold) or 'ramp_to' (ramp)"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace twinsim
