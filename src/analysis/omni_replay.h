@@ -7,7 +7,8 @@
 //
 // The state at the start frame S = i - K: the measured pose at S. Velocity and the
 // on-board controller's state (set-points, integrals) are not measured; they come from
-// running the model over the up to kWarmUpFrames frames before S, started from the
+// running the model over the up to kWarmUpFrames (0.5 s at 30 fps) frames before S,
+// started from the
 // measurement there (pose, velocity by a backward difference). So vision noise enters
 // through poses only, as it does for a learned predictor that sees the last frames.
 // Rows without enough history (no row at S, or commands older than the log) hold the
@@ -24,7 +25,7 @@
 
 namespace twinsim {
 
-inline constexpr int kWarmUpFrames = 8;
+inline constexpr int kWarmUpFrames = 15;
 
 struct OmniReplayOptions {
   std::string backend = "ode";

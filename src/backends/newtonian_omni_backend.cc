@@ -81,6 +81,7 @@ OmniBackendState NewtonianOmniBackend::Save() const {
   for (int i = 0; i < num_robots(); ++i) {
     OmniRobotState r = robots_[static_cast<std::size_t>(i)].state;
     r.body = engine_->GetState(i);
+    r.engine_snapshot = engine_->SaveExact(i);
     s.robots.push_back(std::move(r));
   }
   return s;
@@ -93,6 +94,7 @@ void NewtonianOmniBackend::Restore(const OmniBackendState& state) {
     Robot& r = robots_[static_cast<std::size_t>(i)];
     r.state = state.robots[static_cast<std::size_t>(i)];
     engine_->SetState(i, r.state.body);
+    if (!r.state.engine_snapshot.empty()) engine_->RestoreExact(i, r.state.engine_snapshot);
   }
 }
 

@@ -33,6 +33,7 @@ int DefaultPhysicsSubsteps(double frame_rate);
 // Everything that changes about one robot inside a backend.
 struct OmniRobotState {
   OmniBodyState body;
+  std::vector<double> engine_snapshot;  // OmniEngine::SaveExact(), when the engine has one
   OnboardControllerState controller;
   int ticks_until_control = 0;  // physics steps until the next controller tick
 };

@@ -49,6 +49,14 @@ class OmniEngine {
   virtual void SetState(int robot, const OmniBodyState& state) = 0;
   virtual OmniBodyState GetState(int robot) const = 0;
 
+  // Every number of robot i's bodies (3D poses and velocities of chassis and wheels),
+  // opaque to callers, so that RestoreExact() puts the robot back bit for bit where
+  // SetState() would only level it on the floor. Engines whose planar state is the
+  // whole state return an empty vector.
+  virtual std::vector<double> SaveExact(int robot) const { return {}; }
+  // Restores what SaveExact() returned (after a SetState() to the same planar state).
+  virtual void RestoreExact(int robot, const std::vector<double>& snapshot) {}
+
   // Net torque on each wheel's hinge for the next Step() (N·m, about a_i; the reaction
   // acts on the chassis). Holds until changed.
   virtual void SetWheelTorques(int robot, const Eigen::VectorXd& torques) = 0;

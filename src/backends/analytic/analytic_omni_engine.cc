@@ -16,23 +16,24 @@ constexpr double kRollerSlipScale = 1e-3;
 struct AnalyticRobot {
   OmniModel model;
   OmniKinematics kin;
+  Eigen::Matrix3d rigid_mass;    // M, about the centre
   Eigen::Matrix3d inverse_mass;  // (M + J^T I_w J)^{-1}
   Eigen::Matrix<double, 6, 1> x;  // x, y, theta, vx, vy, omega
   Eigen::VectorXd torques;        // n, N·m
 
   explicit AnalyticRobot(const OmniModel& m) : model(m), kin(m) {
-    Eigen::Matrix3d mass = Eigen::Vector3d(m.total_mass, m.total_mass, m.total_inertia_z).asDiagonal();
-    mass += m.wheel_spin_inertia * kin.wheels_from_body().transpose() * kin.wheels_from_body();
+    rigid_mass = m.RigidBodyMass();
+    const Eigen::Matrix3d mass =
+        rigid_mass + m.wheel_spin_inertia * kin.wheels_from_body().transpose() * kin.wheels_from_body();
     inverse_mass = mass.inverse();
     x.setZero();
-    x[2] = 0;
     torques.setZero(m.num_wheels());
   }
 
   Eigen::Matrix<double, 6, 1> Derivative(const Eigen::Matrix<double, 6, 1>& s) const {
     const double th = s[2], vx = s[3], vy = s[4], w = s[5];
-    const double m = model.total_mass;
-    Eigen::Vector3d force(m * w * vy, -m * w * vx, 0);
+    const Eigen::Vector3d p = rigid_mass * Eigen::Vector3d(vx, vy, w);
+    Eigen::Vector3d force(w * p[1], -w * p[0], vy * p[0] - vx * p[1]);
     force += kin.Wrench(torques);
     // Rollers: each wheel slides radially at (cos a, sin a) . v; the friction acts
     // along the axle, through the centre, so it makes no torque.

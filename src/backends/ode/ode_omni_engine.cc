@@ -18,15 +18,25 @@ namespace {
 // of the robot's mass that rests on one wheel. 1e5 N/m sinks a 2.5 kg robot on four
 // wheels by about 0.06 mm, far below anything the analytic model would notice, and ODE's
 // implicit soft constraint stays stable at any step. Equal springs under a rigid chassis
-// share the weight exactly as OmniModel::wheel_load says (its least-norm solution).
+// share the weight as the least-norm solution of OmniModel::wheel_load, taken about the
+// true centre of mass (the wheels' own masses move it slightly off a lopsided layout).
 constexpr double kContactStiffness = 1e5;   // N/m
 constexpr double kContactDampingRatio = 1.0;
 
-// Chassis against walls and other chassis: a hard plastic bumper.
+// Chassis against walls and other chassis: a hard bumper (a 20 N push dents it 0.02 mm),
+// critically damped for the lighter robot so that the restitution below is the only
+// bounce.
+constexpr double kBumperStiffness = 1e6;  // N/m
 constexpr double kBumperFriction = 0.3;
 constexpr double kBumperRestitution = 0.1;
 constexpr double kBumperBounceVelocity = 0.1;  // m/s, slower impacts do not bounce
 constexpr int kMaxContactsPerPair = 4;
+// At 1/300 s a robot at 2.5 m/s is found 8 mm inside a wall; pushing that out at the
+// full ERP rate would throw it back at 0.4 m/s whatever the restitution. The wheels'
+// own spring correction stays below 0.01 m/s, so the cap never touches them at rest.
+constexpr double kMaxCorrectingSpeed = 0.1;  // m/s
+
+constexpr double kHingeErp = 0.8;  // fraction of a hinge's position error fixed per step
 
 // The robot's vertical axis is body z; a wheel's axle never has a vertical part while
 // the robot is level, so a projection shorter than this means the robot lies on its side.
@@ -56,9 +66,9 @@ std::pair<double, double> SpringErpCfm(double k, double c, double dt) {
   return {dt * k / denom, 1.0 / denom};
 }
 
-// Critical-ish damping c = 2 zeta sqrt(k m) for a mass m kg on the contact spring.
-double ContactDamping(double mass) {
-  return 2.0 * kContactDampingRatio * std::sqrt(kContactStiffness * mass);
+// Damping c = 2 zeta sqrt(k m), N s/m, for a mass m kg on a spring of k N/m.
+double ContactDamping(double stiffness, double mass) {
+  return 2.0 * kContactDampingRatio * std::sqrt(stiffness * mass);
 }
 
 struct OdeRobot {
@@ -68,7 +78,7 @@ struct OdeRobot {
   std::vector<dBodyID> wheels;
   std::vector<dGeomID> wheel_geoms;
   std::vector<dJointID> hinges;
-  std::vector<Eigen::Vector3d> wheel_offsets;  // m, wheel centre from the chassis COM, robot frame
+  std::vector<Eigen::Vector3d> wheel_offsets;  // m, wheel centre from chassis COM, robot frame
   std::vector<Eigen::Vector3d> axles;          // unit a_i, robot frame
   Eigen::VectorXd torques;                     // n, N·m about a_i
   double wheel_contact_mass = 0;               // kg, the static share of one wheel
@@ -94,6 +104,8 @@ class OdeOmniEngine : public OmniEngine {
   int num_robots() const override { return static_cast<int>(robots_.size()); }
   void SetState(int robot, const OmniBodyState& state) override;
   OmniBodyState GetState(int robot) const override;
+  std::vector<double> SaveExact(int robot) const override;
+  void RestoreExact(int robot, const std::vector<double>& snapshot) override;
   void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override;
   void Step(double dt) override;
 
@@ -106,9 +118,8 @@ class OdeOmniEngine : public OmniEngine {
   static void NearCallback(void* data, dGeomID o1, dGeomID o2);
 
   dWorldID world_ = nullptr;
-  dSpaceID space_ = nullptr;  // chassis and walls
+  dSpaceID space_ = nullptr;  // chassis and walls, which it owns
   dGeomID floor_ = nullptr;   // plane z = 0, tested against the wheels only
-  std::vector<dGeomID> walls_;
   dJointGroupID contact_group_ = nullptr;
   std::vector<OdeRobot> robots_;
   std::vector<BumperContact> bumper_contacts_;  // scratch, refilled every Step
@@ -133,6 +144,12 @@ OdeOmniEngine::OdeOmniEngine(const std::vector<OmniModel>& robots, const FieldMo
   dWorldSetGravity(world_, 0, 0, -kGravity);
   // Robots often stand still between commands; a sleeping body would ignore the next one.
   dWorldSetAutoDisableFlag(world_, 0);
+  // The world ERP only drives the hinges (contacts bring their own). Explicit Euler lets a
+  // wheel centre drift outwards by b (omega dt)^2 / 2 per step on a spinning robot; at
+  // ODE's default 0.2 that settles 2% of b out at 26 rad/s and 1/300 s, and the wheels
+  // then spin 2% too fast. 0.8 leaves 0.3%; the direct solver takes it without jitter.
+  dWorldSetERP(world_, kHingeErp);
+  dWorldSetContactMaxCorrectingVel(world_, kMaxCorrectingSpeed);
   // A hash space keeps the broad phase near-linear when 22 robots share the field.
   space_ = dHashSpaceCreate(nullptr);
   floor_ = dCreatePlane(nullptr, 0, 0, 1, 0);
@@ -211,6 +228,11 @@ void OdeOmniEngine::BuildRobot(int index, const OmniModel& model) {
                        inertia(2, 2), inertia(0, 1), inertia(0, 2), inertia(1, 2));
     dBodySetMass(wheel, &mass);
     dBodySetPosition(wheel, offset.x(), offset.y(), r);
+    // ODE's explicit gyroscopic term on a wheel spinning at ~100 rad/s on a yawing chassis
+    // drains spin each step, an O(dt) error: 3% of the yaw acceleration at 1/300 s. The
+    // true term is a horizontal torque that shifts ~0.2 N of load between wheels and
+    // cannot change the spin, so a planar drive loses nothing by leaving it out.
+    dBodySetGyroscopicMode(wheel, 0);
 
     // A sphere touches the floor right under the wheel centre however the chassis rolls.
     dGeomID sphere = dCreateSphere(nullptr, r);
@@ -247,7 +269,6 @@ void OdeOmniEngine::BuildWalls(const FieldModel& field) {
     dGeomSetCategoryBits(wall, kWallCategory);
     dGeomSetCollideBits(wall, kChassisCategory);
     SetGeomKey(wall, num_robots() + j);
-    walls_.push_back(wall);
   }
 }
 
@@ -267,7 +288,8 @@ void OdeOmniEngine::SetState(int index, const OmniBodyState& state) {
                                 " wheels");
 
   const double theta = state.pose.theta;
-  const Eigen::Matrix3d rot = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d rot =
+      Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   dQuaternion q = {std::cos(0.5 * theta), 0, 0, std::sin(0.5 * theta)};
   const Twist2 v_field = BodyToField(state.velocity, theta);
   const Eigen::Vector3d com(state.pose.x, state.pose.y, robot.model.com_height);
@@ -321,6 +343,44 @@ OmniBodyState OdeOmniEngine::GetState(int index) const {
   return state;
 }
 
+// Per body: position (3), quaternion (4), linear (3) and angular velocity (3).
+constexpr int kBodySnapshotSize = 13;
+
+std::vector<double> OdeOmniEngine::SaveExact(int index) const {
+  CheckRobot(index);
+  const OdeRobot& robot = robots_[index];
+  std::vector<double> out;
+  out.reserve(kBodySnapshotSize * (1 + robot.wheels.size()));
+  auto save = [&out](dBodyID body) {
+    for (const dReal* values : {dBodyGetPosition(body), dBodyGetQuaternion(body), dBodyGetLinearVel(body),
+                                dBodyGetAngularVel(body)}) {
+      const int count = values == dBodyGetQuaternion(body) ? 4 : 3;
+      out.insert(out.end(), values, values + count);
+    }
+  };
+  save(robot.chassis);
+  for (dBodyID wheel : robot.wheels) save(wheel);
+  return out;
+}
+
+void OdeOmniEngine::RestoreExact(int index, const std::vector<double>& snapshot) {
+  CheckRobot(index);
+  OdeRobot& robot = robots_[index];
+  if (snapshot.size() != kBodySnapshotSize * (1 + robot.wheels.size()))
+    throw std::invalid_argument("ode engine: snapshot of the wrong size");
+  const double* v = snapshot.data();
+  auto restore = [&v](dBodyID body) {
+    dBodySetPosition(body, v[0], v[1], v[2]);
+    dQuaternion q = {v[3], v[4], v[5], v[6]};
+    dBodySetQuaternion(body, q);
+    dBodySetLinearVel(body, v[7], v[8], v[9]);
+    dBodySetAngularVel(body, v[10], v[11], v[12]);
+    v += kBodySnapshotSize;
+  };
+  restore(robot.chassis);
+  for (dBodyID wheel : robot.wheels) restore(wheel);
+}
+
 void OdeOmniEngine::SetWheelTorques(int index, const Eigen::VectorXd& torques) {
   CheckRobot(index);
   OdeRobot& robot = robots_[index];
@@ -333,8 +393,8 @@ void OdeOmniEngine::SetWheelTorques(int index, const Eigen::VectorXd& torques) {
 
 void OdeOmniEngine::AddWheelContacts(double dt) {
   for (OdeRobot& robot : robots_) {
-    const auto [erp, cfm] = SpringErpCfm(kContactStiffness,
-                                         ContactDamping(robot.wheel_contact_mass), dt);
+    const auto [erp, cfm] = SpringErpCfm(
+        kContactStiffness, ContactDamping(kContactStiffness, robot.wheel_contact_mass), dt);
     const dReal* rot = dBodyGetRotation(robot.chassis);
     for (int i = 0; i < robot.model.num_wheels(); ++i) {
       dContact contact{};
@@ -387,7 +447,8 @@ void OdeOmniEngine::AddBumperContacts(double dt) {
     // Damped for the lighter robot of the pair (a wall counts as infinitely heavy).
     double mass = robots_[pair.key_a].model.total_mass;
     if (pair.key_b < num_robots()) mass = std::min(mass, robots_[pair.key_b].model.total_mass);
-    const auto [erp, cfm] = SpringErpCfm(kContactStiffness, ContactDamping(mass), dt);
+    const auto [erp, cfm] =
+        SpringErpCfm(kBumperStiffness, ContactDamping(kBumperStiffness, mass), dt);
     dBodyID body_a = robots_[pair.key_a].chassis;
     dBodyID body_b = pair.key_b < num_robots() ? robots_[pair.key_b].chassis : nullptr;
     for (int k = 0; k < pair.count; ++k) {

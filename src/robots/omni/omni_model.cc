@@ -34,6 +34,12 @@ void OmniModel::Finalize() {
   // Each wheel spins about a horizontal axle, so its vertical axis is a diameter.
   total_inertia_z = chassis_iz + n * (wheel_inertia_diametral + m_w * wheel_distance * wheel_distance);
 
+  // The wheels sit off the centre unless the layout is symmetric front to back.
+  com_offset.setZero();
+  for (int i = 0; i < n; ++i)
+    com_offset += m_w * wheel_distance * Eigen::Vector2d(std::cos(wheel_angles[i]), std::sin(wheel_angles[i]));
+  com_offset /= total_mass;
+
   geometry.resize(n, 3);
   for (int i = 0; i < n; ++i) {
     geometry(i, 0) = -std::sin(wheel_angles[i]);
@@ -42,7 +48,8 @@ void OmniModel::Finalize() {
   }
 
   // Static wheel loads: with equal contact stiffness under a rigid chassis, the loads
-  // are the least-norm solution of the three equilibrium equations (exact for 3 wheels).
+  // are the least-norm solution of the three equilibrium equations (exact for 3 wheels):
+  // sum N = m g, and their moments balance the weight at the centre of mass.
   wheel_load.setZero(n);
   if (n >= 3) {
     Eigen::MatrixXd a(3, n);
@@ -51,9 +58,17 @@ void OmniModel::Finalize() {
       a(1, i) = wheel_distance * std::cos(wheel_angles[i]);
       a(2, i) = wheel_distance * std::sin(wheel_angles[i]);
     }
-    Eigen::Vector3d rhs(total_mass * kGravity, 0, 0);
+    const Eigen::Vector3d rhs =
+        total_mass * kGravity * Eigen::Vector3d(1, com_offset.x(), com_offset.y());
     wheel_load = a.transpose() * (a * a.transpose()).ldlt().solve(rhs);
   }
+}
+
+Eigen::Matrix3d OmniModel::RigidBodyMass() const {
+  const double m = total_mass, xc = com_offset.x(), yc = com_offset.y();
+  Eigen::Matrix3d mass;
+  mass << m, 0, -m * yc, 0, m, m * xc, -m * yc, m * xc, total_inertia_z;
+  return mass;
 }
 
 std::string OmniModel::Validate() const {

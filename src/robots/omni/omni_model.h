@@ -37,11 +37,11 @@ struct PidGains {
 };
 
 // The hand-tuned defaults (docs/models.md): a 60 ms velocity time constant for a
-// 2.5 kg robot, an output limit just under the wheels' traction, 4 m/s^2 ramps.
+// 2.5 kg robot, an output limit under the wheels' sideways traction, 2 m/s^2 ramps.
 struct OmniControllerModel {
   double rate_hz = 300;  // Hz, the micro-controller's loop rate
-  PidGains forward{40, 200, 0, 4, 18, 4};      // robot x
-  PidGains sideways{40, 200, 0, 4, 18, 4};     // robot y
+  PidGains forward{40, 200, 0, 4, 11, 2};      // robot x
+  PidGains sideways{40, 200, 0, 4, 11, 2};     // robot y
   PidGains rotation{0.5, 3, 0, 0.3, 1.5, 30};  // yaw (N·m, rad)
 };
 
@@ -86,6 +86,7 @@ struct OmniModel {
   // ---- Derived by Finalize() ----
   double total_mass = 0;          // kg, chassis and wheels
   double total_inertia_z = 0;     // kg m^2 about the vertical axis through the centre
+  Eigen::Vector2d com_offset = Eigen::Vector2d::Zero();  // m, whole robot's centre of mass (robot frame)
   double wheel_spin_inertia = 0;  // kg m^2, one wheel about its axle
   double wheel_inertia_diametral = 0;  // kg m^2, one wheel about a diameter
   Eigen::MatrixXd geometry;       // n x 3, rows [-sin a_i, cos a_i, b] (m for the last)
@@ -94,6 +95,9 @@ struct OmniModel {
   int num_wheels() const { return static_cast<int>(wheel_angles.size()); }
   // Fills the derived fields; call after changing any parameter.
   void Finalize();
+  // The 3 x 3 rigid-body mass matrix about the robot's centre for (vx, vy, omega):
+  // [[m, 0, -m yc], [0, m, m xc], [-m yc, m xc, Iz]] (chassis and wheels, no spin).
+  Eigen::Matrix3d RigidBodyMass() const;
   // Returns an empty string when the model is physically consistent, else every problem.
   std::string Validate() const;
 };
