@@ -8,8 +8,7 @@
 // The state at the start frame S = i - K: the measured pose at S. Velocity and the
 // on-board controller's state (set-points, integrals) are not measured; they come from
 // running the model over the up to kWarmUpFrames (0.5 s at 30 fps) frames before S,
-// started from the
-// measurement there (pose, velocity by a backward difference). So vision noise enters
+// started from the measurement there (pose, velocity by a backward difference). So vision noise enters
 // through poses only, as it does for a learned predictor that sees the last frames.
 // Rows without enough history (no row at S, or commands older than the log) hold the
 // measured pose.

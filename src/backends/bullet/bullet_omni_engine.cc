@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace twinsim {
 namespace {
@@ -24,32 +27,45 @@ constexpr int kWheelGroup = 1 << 3;
 
 constexpr double kChassisFriction = 0.3;  // Coulomb coefficient, chassis-wall and chassis-chassis
 
-// Sequential-impulse iterations per step, and the Baumgarte factor of contacts and
-// hinges. The chassis is ~46 times heavier than a wheel and hangs on it by a hinge whose
-// impulses Bullet does not warm-start, so projected Gauss-Seidel needs more than the
-// default 10 sweeps to carry its weight down to the floor without the hinges sagging.
-constexpr int kSolverIterations = 30;
-constexpr double kErp = 0.2;
+// Sequential-impulse sweeps per step. The chassis is ~46 times heavier than a wheel and
+// hangs on it by a hinge whose impulses Bullet does not warm-start; with 20 sweeps the
+// chassis tilts by < 4e-5 rad under a 2 m/s^2 drive, and more buy nothing measurable.
+constexpr int kSolverIterations = 20;
+// Baumgarte factor of the hinges. Integrating chassis and wheel separately moves a wheel
+// outwards by b (omega dt)^2 / 2 per step while the robot turns; at the default 0.2 the
+// hinge let it drift 2 mm out at 36 rad/s (4% less yaw acceleration), at 0.8 0.7 mm.
+constexpr double kJointErp = 0.8;
+// Baumgarte factor of contacts. Floor contacts barely penetrate either way; the default
+// keeps colliding robots from being pushed apart faster than they came (no restitution).
+constexpr double kContactErp = 0.2;
 
-// The Coulomb coefficients of one robot's wheels on the floor, reached from a wheel
-// body's user pointer.
-struct WheelFriction {
-  double rolling = 0;  // along the rolling direction
-  double roller = 0;   // across the wheel, along its axle
+// One wheel's floor contact: its friction and, for warm starting, the impulses the
+// solver found in the step before. Reached from the wheel body's user pointer.
+struct WheelContact {
+  double rolling_friction = 0;  // Coulomb coefficient along the rolling direction
+  double roller_friction = 0;   // Coulomb coefficient across the wheel, along its axle
+  btScalar normal_impulse = 0;   // N s
+  btScalar rolling_impulse = 0;  // N s, along friction direction 1
+  btScalar roller_impulse = 0;   // N s, along friction direction 2
+  long step = -1;                // OmniWorld step that stored the impulses; -1: none
 };
 
-const WheelFriction* WheelFrictionOf(const btCollisionObject* object) {
+WheelContact* WheelContactOf(const btCollisionObject* object) {
   if (object == nullptr || object->getUserIndex() != kWheelBody) return nullptr;
-  return static_cast<const WheelFriction*>(object->getUserPointer());
+  return static_cast<WheelContact*>(object->getUserPointer());
 }
 
-// Bullet's sequential-impulse solver with a second friction coefficient for wheel
-// contacts. Bullet gives both friction rows of a contact the coefficient
-// m_combinedFriction. Scaling the second row's direction by roller/wheel friction would
-// scale its force limit, but setupFrictionConstraint adds the body's unscaled inverse
-// mass to that row's effective-mass denominator, so below about 0.5 m/s of sliding the
-// roller friction would act as a weak viscous drag instead of Coulomb friction. Setting
-// the axle row's coefficient after setup keeps both rows exact.
+// Bullet's sequential-impulse solver with two corrections to the friction rows that
+// setupFrictionConstraint (Bullet 3.24) builds:
+// - Its target velocity leaves out the external torque impulse of the step (contact and
+//   joint rows include it), so a wheel torque would spin the wheel up unresisted for one
+//   step, every step: a steady slip of tau dt / I_spin (0.23 m/s at 1/300 s) and ~7% of
+//   the drive lost. The missing term is added back to every friction row.
+// - Both friction rows of a contact get m_combinedFriction. Scaling the second row's
+//   direction by roller/wheel friction would scale its force limit, but the row's
+//   effective mass adds the body's unscaled inverse mass, so below ~0.5 m/s of sliding
+//   roller friction would act as a weak viscous drag. The axle row of a wheel contact
+//   gets the roller coefficient here instead.
 class WheelFrictionSolver final : public btSequentialImpulseConstraintSolver {
  protected:
   btScalar solveGroupCacheFriendlySetup(btCollisionObject** bodies, int num_bodies,
@@ -60,16 +76,24 @@ class WheelFrictionSolver final : public btSequentialImpulseConstraintSolver {
     const btScalar residual = btSequentialImpulseConstraintSolver::solveGroupCacheFriendlySetup(
         bodies, num_bodies, manifolds, num_manifolds, constraints, num_constraints, info,
         debug_drawer);
+    for (int i = 0; i < m_tmpSolverContactFrictionConstraintPool.size(); ++i) {
+      btSolverConstraint& row = m_tmpSolverContactFrictionConstraintPool[i];
+      const btSolverBody& a = m_tmpSolverBodyPool[row.m_solverBodyIdA];
+      const btSolverBody& b = m_tmpSolverBodyPool[row.m_solverBodyIdB];
+      const btScalar missing = row.m_relpos1CrossNormal.dot(a.m_externalTorqueImpulse) +
+                               row.m_relpos2CrossNormal.dot(b.m_externalTorqueImpulse);
+      row.m_rhs -= missing * row.m_jacDiagABInv;
+    }
     if (!(info.m_solverMode & SOLVER_USE_2_FRICTION_DIRECTIONS)) return residual;
     // Each contact row names its first friction row; the second (the axle direction set
     // by OmniWorld) follows it.
     for (int i = 0; i < m_tmpSolverContactConstraintPool.size(); ++i) {
       const btSolverConstraint& contact = m_tmpSolverContactConstraintPool[i];
-      const WheelFriction* friction = WheelFrictionOf(SolverBody(contact.m_solverBodyIdA));
-      if (friction == nullptr) friction = WheelFrictionOf(SolverBody(contact.m_solverBodyIdB));
-      if (friction == nullptr) continue;
+      const WheelContact* wheel = WheelContactOf(SolverBody(contact.m_solverBodyIdA));
+      if (wheel == nullptr) wheel = WheelContactOf(SolverBody(contact.m_solverBodyIdB));
+      if (wheel == nullptr) continue;
       m_tmpSolverContactFrictionConstraintPool[contact.m_frictionIndex + 1].m_friction =
-          friction->roller;
+          wheel->roller_friction;
     }
     return residual;
   }
@@ -80,28 +104,32 @@ class WheelFrictionSolver final : public btSequentialImpulseConstraintSolver {
   }
 };
 
-// A discrete dynamics world that sets the wheels' friction frame on every wheel-floor
-// contact before solving, and solves the whole world as one group in an order fixed by
-// the bodies alone. Bullet's island splitting sorts constraints with an unstable sort on
-// island ids that depend on broadphase history, and hands manifolds over in creation
-// order; either would make a run after SetState differ in the last bits from a fresh one.
+// A discrete dynamics world that prepares every wheel-floor contact before solving
+// (one point, the wheel's friction frame, warm start from the step before), and solves
+// the whole world as one group in an order fixed by the bodies alone. Bullet's island
+// splitting sorts constraints with an unstable sort on island ids that depend on
+// broadphase history, and hands manifolds over in creation order; either would make a
+// run after SetState differ in the last bits from one in a freshly built world.
 class OmniWorld final : public btDiscreteDynamicsWorld {
  public:
   using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
 
   void solveConstraints(btContactSolverInfo& info) override {
+    ++step_;
     manifolds_.clear();
+    wheel_manifolds_.clear();
     for (int m = 0; m < m_dispatcher1->getNumManifolds(); ++m) {
       btPersistentManifold* manifold = m_dispatcher1->getManifoldByIndexInternal(m);
       if (manifold->getNumContacts() == 0) continue;
-      const WheelFriction* friction = WheelFrictionOf(manifold->getBody0());
       const btCollisionObject* wheel = manifold->getBody0();
-      if (friction == nullptr) {
-        friction = WheelFrictionOf(manifold->getBody1());
+      WheelContact* contact = WheelContactOf(wheel);
+      if (contact == nullptr) {
         wheel = manifold->getBody1();
+        contact = WheelContactOf(wheel);
       }
-      if (friction != nullptr) {
-        SetWheelFriction(*wheel, *friction, manifold);
+      if (contact != nullptr) {
+        PrepareWheelContact(*wheel, *contact, manifold);
+        wheel_manifolds_.push_back(manifold);
       } else {
         for (int p = 0; p < manifold->getNumContacts(); ++p) {
           btManifoldPoint& point = manifold->getContactPoint(p);
@@ -111,10 +139,10 @@ class OmniWorld final : public btDiscreteDynamicsWorld {
       }
       manifolds_.push_back(manifold);
     }
-    std::sort(manifolds_.begin(), manifolds_.end(), [](const btPersistentManifold* a,
-                                                       const btPersistentManifold* b) {
-      return Key(a) < Key(b);
-    });
+    std::sort(manifolds_.begin(), manifolds_.end(),
+              [](const btPersistentManifold* a, const btPersistentManifold* b) {
+                return Key(a) < Key(b);
+              });
 
     const int num_objects = m_collisionObjects.size();
     const int num_manifolds = static_cast<int>(manifolds_.size());
@@ -125,6 +153,16 @@ class OmniWorld final : public btDiscreteDynamicsWorld {
                                    num_constraints ? &m_constraints[0] : nullptr,
                                    num_constraints, info, m_debugDrawer, m_dispatcher1);
     m_constraintSolver->allSolved(info, m_debugDrawer);
+
+    for (btPersistentManifold* manifold : wheel_manifolds_) {
+      WheelContact* contact = WheelContactOf(manifold->getBody0());
+      if (contact == nullptr) contact = WheelContactOf(manifold->getBody1());
+      const btManifoldPoint& point = manifold->getContactPoint(0);
+      contact->normal_impulse = point.m_appliedImpulse;
+      contact->rolling_impulse = point.m_appliedImpulseLateral1;
+      contact->roller_impulse = point.m_appliedImpulseLateral2;
+      contact->step = step_;
+    }
   }
 
  protected:
@@ -139,28 +177,49 @@ class OmniWorld final : public btDiscreteDynamicsWorld {
     return {std::min(a, b), std::max(a, b)};
   }
 
-  // Friction row 1 along the rolling direction (horizontal, across the axle), row 2
-  // along the axle projected on the floor; WheelFrictionSolver gives row 2 its own
-  // coefficient.
-  static void SetWheelFriction(const btCollisionObject& wheel, const WheelFriction& friction,
-                               btPersistentManifold* manifold) {
+  // A sphere touches a plane at one point, its lowest; older points that Bullet keeps
+  // in the manifold are lifted copies and go. Bullet matches a new point to a cached one
+  // by its place on the wheel, which spin moves by more than the breaking threshold
+  // (0.02 r = 0.5 mm) per step above ~20 rad/s at 1 ms, and drops points that slid
+  // sideways as far: the warm-start impulse would then restart from zero, and the
+  // statically indeterminate wheel loads wander until a wheel skids. So each wheel's
+  // impulses are carried from step to step here instead.
+  // Friction direction 1 is the rolling direction (horizontal, across the axle),
+  // direction 2 the axle projected on the floor; WheelFrictionSolver gives direction 2
+  // its own coefficient.
+  void PrepareWheelContact(const btCollisionObject& wheel, const WheelContact& contact,
+                           btPersistentManifold* manifold) const {
+    int lowest = 0;
+    for (int p = 1; p < manifold->getNumContacts(); ++p)
+      if (manifold->getContactPoint(p).getDistance() <
+          manifold->getContactPoint(lowest).getDistance())
+        lowest = p;
+    if (manifold->getNumContacts() > 1) {
+      const btManifoldPoint kept = manifold->getContactPoint(lowest);
+      manifold->clearManifold();
+      manifold->addManifoldPoint(kept);
+    }
+    btManifoldPoint& point = manifold->getContactPoint(0);
+    const bool warm = contact.step == step_ - 1;
+    point.m_appliedImpulse = warm ? contact.normal_impulse : 0;
+    point.m_appliedImpulseLateral1 = warm ? contact.rolling_impulse : 0;
+    point.m_appliedImpulseLateral2 = warm ? contact.roller_impulse : 0;
+
     // The wheel body's local x axis is its axle.
     const btVector3 axle = wheel.getWorldTransform().getBasis().getColumn(0);
     btVector3 across(axle.x(), axle.y(), 0);
     const btScalar length = across.length();
     across = length > 1e-9 ? across / length : btVector3(1, 0, 0);
-    const btVector3 along(-across.y(), across.x(), 0);
-    for (int p = 0; p < manifold->getNumContacts(); ++p) {
-      btManifoldPoint& point = manifold->getContactPoint(p);
-      point.m_combinedFriction = friction.rolling;
-      point.m_combinedRestitution = 0;
-      point.m_lateralFrictionDir1 = along;
-      point.m_lateralFrictionDir2 = across;
-      point.m_contactPointFlags |= BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED;
-    }
+    point.m_combinedFriction = contact.rolling_friction;
+    point.m_combinedRestitution = 0;
+    point.m_lateralFrictionDir1 = btVector3(-across.y(), across.x(), 0);
+    point.m_lateralFrictionDir2 = across;
+    point.m_contactPointFlags |= BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED;
   }
 
-  std::vector<btPersistentManifold*> manifolds_;  // this step's, in solving order
+  long step_ = 0;  // solver calls so far
+  std::vector<btPersistentManifold*> manifolds_;        // this step's, in solving order
+  std::vector<btPersistentManifold*> wheel_manifolds_;  // this step's wheel-floor ones
 };
 
 class BulletOmniEngine final : public OmniEngine {
@@ -184,7 +243,7 @@ class BulletOmniEngine final : public OmniEngine {
   // One robot's bodies. Members are destroyed bottom-up: hinges, bodies, then shapes.
   struct Robot {
     OmniModel model;
-    WheelFriction friction;  // the wheel bodies point here
+    std::vector<WheelContact> contacts;  // n, one per wheel; the wheel bodies point here
     std::vector<btVector3> axles;  // a_i in the chassis frame (unit)
     Eigen::VectorXd torques;       // n, N·m about a_i
     std::unique_ptr<btCylinderShapeZ> chassis_cylinder;
@@ -241,8 +300,8 @@ BulletOmniEngine::BulletOmniEngine(const std::vector<OmniModel>& robots,
 
   btContactSolverInfo& info = world_->getSolverInfo();
   info.m_numIterations = kSolverIterations;
-  info.m_erp = kErp;
-  info.m_erp2 = kErp;
+  info.m_erp = kJointErp;
+  info.m_erp2 = kContactErp;
   info.m_restitution = 0;
   // Friction directions are set per contact (OmniWorld); warm starting carries the
   // contact impulses from step to step and is reset with the contacts in SetState.
@@ -292,7 +351,8 @@ BulletOmniEngine::~BulletOmniEngine() {
 void BulletOmniEngine::BuildRobot(Robot& robot) {
   const OmniModel& m = robot.model;
   const int n = m.num_wheels();
-  robot.friction = {m.wheel_friction, m.roller_friction};
+  // Sized once: the wheel bodies keep pointers to the elements.
+  robot.contacts.assign(n, WheelContact{m.wheel_friction, m.roller_friction});
   robot.torques = Eigen::VectorXd::Zero(n);
 
   // Chassis: a solid cylinder for the tilt axes, the model's yaw inertia; the body's
@@ -331,8 +391,12 @@ void BulletOmniEngine::BuildRobot(Robot& robot) {
     wheel_info.m_restitution = 0;
     auto wheel = std::make_unique<btRigidBody>(wheel_info);
     wheel->setUserIndex(kWheelBody);
-    wheel->setUserPointer(&robot.friction);
+    wheel->setUserPointer(&robot.contacts[i]);
     wheel->setActivationState(DISABLE_DEACTIVATION);
+    // Bullet's implicit gyroscopic step damps the yaw a wheel shares with the chassis
+    // once it spins fast (6% less yaw acceleration at 36 rad/s); the term it models only
+    // shifts hinge torques about horizontal axes, so it is left out for wheels.
+    wheel->setFlags(wheel->getFlags() & ~BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY);
     world_->addRigidBody(wheel.get(), kWheelGroup, kFloorGroup);
 
     // Hinge frames: z = the axle a_i, x = up. In the chassis frame y is then d_i; in the
@@ -427,6 +491,7 @@ void BulletOmniEngine::SetState(int robot_index, const OmniBodyState& state) {
   pairs->cleanProxyFromPairs(robot.chassis->getBroadphaseHandle(), dispatcher_.get());
   for (auto& wheel : robot.wheels)
     pairs->cleanProxyFromPairs(wheel->getBroadphaseHandle(), dispatcher_.get());
+  for (WheelContact& contact : robot.contacts) contact.step = -1;
   solver_->reset();
 }
 
