@@ -4,8 +4,9 @@
 //
 // BM_Loop: the whole pipeline a `twinsim run` does: delay lines, camera noise, the
 // on-board controller, motors, encoders, the engine, and formatting the CSV log.
-// BM_RawEngine: the same engine stepping the same bodies with fixed wheel torques and
-// nothing else. Both step physics at 300 Hz (60 fps, 5 sub-steps: grSim's rate); the
+// BM_RawEngine: the same engine stepping the same bodies with precomputed wheel
+// torques and nothing else (a constant wrench whose sign flips every half second, so
+// the robots shuttle at about 1 m/s on all their wheels like the loop's robots do). Both step physics at 300 Hz (60 fps, 5 sub-steps: grSim's rate); the
 // counter `x_real_time` is simulated seconds per wall second.
 #include <benchmark/benchmark.h>
 
@@ -72,7 +73,8 @@ void BM_RawEngine(benchmark::State& state) {
   const int n = static_cast<int>(state.range(1));
   const OmniModel model = BenchModel();
   OmniKinematics kin(model);
-  const Eigen::VectorXd torques = kin.WheelTorques(Eigen::Vector3d(2.0, 1.0, 0.05));
+  const Eigen::VectorXd torques = kin.WheelTorques(Eigen::Vector3d(4.0, 2.0, 0.05));
+  const int flip_every = static_cast<int>(kFrameRate * kSubsteps / 2);
   const int steps = static_cast<int>(kSeconds * kFrameRate) * kSubsteps;
   const double dt = 1.0 / (kFrameRate * kSubsteps);
   for (auto _ : state) {
@@ -88,12 +90,20 @@ void BM_RawEngine(benchmark::State& state) {
       s.pose = StartOf(i);
       s.wheel_speeds = Eigen::VectorXd::Zero(model.num_wheels());
       engine->SetState(i, s);
-      engine->SetWheelTorques(i, torques);
     }
-    for (int k = 0; k < steps; ++k) engine->Step(dt);
+    for (int k = 0; k < steps; ++k) {
+      if (k % flip_every == 0) {
+        const double sign = (k / flip_every) % 2 == 0 ? 1.0 : -1.0;
+        // Start with half a swing so that the robots shuttle about their start.
+        const double scale = k == 0 ? 0.5 : 1.0;
+        for (int i = 0; i < n; ++i) engine->SetWheelTorques(i, sign * scale * torques);
+      }
+      engine->Step(dt);
+    }
     benchmark::DoNotOptimize(engine->GetState(0));
   }
   state.counters["x_real_time"] = benchmark::Counter(kSeconds, benchmark::Counter::kIsIterationInvariantRate);
+  // Microseconds per engine step (shown with Google Benchmark's "s" suffix).
   state.counters["us_per_step"] = benchmark::Counter(steps * 1e-6, benchmark::Counter::kIsIterationInvariantRate |
                                                                           benchmark::Counter::kInvert);
 }

@@ -19,7 +19,8 @@ NewtonianOmniBackend::NewtonianOmniBackend(std::unique_ptr<OmniEngine> engine,
     : engine_(std::move(engine)), timing_(timing) {
   const double physics_rate = 1.0 / timing_.physics_dt();
   for (const auto& m : robots) {
-    Robot r{m, OmniKinematics(m), 1, {}};
+    Robot r{m, OmniKinematics(m), 1, {}, Eigen::VectorXd::Zero(m.num_wheels()),
+            Eigen::VectorXd::Zero(m.num_wheels())};
     const double ratio = physics_rate / m.controller.rate_hz;
     r.ticks_per_control = std::max(1, static_cast<int>(std::lround(ratio)));
     robots_.push_back(std::move(r));
@@ -37,6 +38,7 @@ void NewtonianOmniBackend::Reset(int robot, const Pose2& pose, const Twist2& vel
   r.state.body = body;
   r.state.controller = InitialControllerState(r.model, velocity);
   r.state.ticks_until_control = 0;
+  r.state.encoders_pending = false;
   engine_->SetWheelTorques(robot, Eigen::VectorXd::Zero(r.model.num_wheels()));
 }
 
@@ -54,22 +56,21 @@ void NewtonianOmniBackend::StepFrame(const std::vector<Twist2>& commands) {
     for (int i = 0; i < num_robots(); ++i) {
       Robot& r = robots_[static_cast<std::size_t>(i)];
       OnboardControllerState& c = r.state.controller;
-      const Eigen::VectorXd speeds = engine_->GetState(i).wheel_speeds;
+      // One read per step: the encoders count the turn of the step just taken.
+      engine_->GetWheelSpeeds(i, &r.speeds);
+      if (r.state.encoders_pending) AccumulateEncoders(r.speeds, dt, &c);
+      r.state.encoders_pending = true;
       if (r.state.ticks_until_control <= 0) {
         ControllerTick(r.model, r.kin, commands[static_cast<std::size_t>(i)],
                        dt * r.ticks_per_control, &c);
         r.state.ticks_until_control = r.ticks_per_control;
       }
       --r.state.ticks_until_control;
-      Eigen::VectorXd net(speeds.size());
-      for (int w = 0; w < speeds.size(); ++w)
-        net[w] = WheelMotorTorque(r.model, c.torque_command[w], speeds[w]);
-      engine_->SetWheelTorques(i, net);
+      for (int w = 0; w < r.speeds.size(); ++w)
+        r.net[w] = WheelMotorTorque(r.model, c.torque_command[w], r.speeds[w]);
+      engine_->SetWheelTorques(i, r.net);
     }
     engine_->Step(dt);
-    // The encoders see the wheels turn during the step just taken.
-    for (int i = 0; i < num_robots(); ++i)
-      AccumulateEncoders(engine_->GetState(i).wheel_speeds, dt, &robots_[static_cast<std::size_t>(i)].state.controller);
   }
 }
 

@@ -42,6 +42,8 @@ class NewtonianOmniBackend final : public OmniBackend {
     OmniKinematics kin;
     int ticks_per_control = 1;  // physics steps per controller tick
     OmniRobotState state;       // controller part; body part refreshed on Save()
+    Eigen::VectorXd speeds;     // n, scratch: wheel speeds read this step
+    Eigen::VectorXd net;        // n, scratch: net wheel torques
   };
 
   std::unique_ptr<OmniEngine> engine_;

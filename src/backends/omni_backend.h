@@ -36,6 +36,7 @@ struct OmniRobotState {
   std::vector<double> engine_snapshot;  // OmniEngine::SaveExact(), when the engine has one
   OnboardControllerState controller;
   int ticks_until_control = 0;  // physics steps until the next controller tick
+  bool encoders_pending = false;  // the last physics step's wheel turn is not counted yet
 };
 
 // A copy of everything that changes inside a backend (see OmniBackend::Save).

@@ -49,6 +49,10 @@ class OmniEngine {
   virtual void SetState(int robot, const OmniBodyState& state) = 0;
   virtual OmniBodyState GetState(int robot) const = 0;
 
+  // Robot i's wheel speeds (rad/s about a_i, relative to the chassis) into *out (n):
+  // what GetState() returns, without the rest, for the per-step encoder read.
+  virtual void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const { *out = GetState(robot).wheel_speeds; }
+
   // Every number of robot i's bodies (3D poses and velocities of chassis and wheels),
   // opaque to callers, so that RestoreExact() puts the robot back bit for bit where
   // SetState() would only level it on the floor. Engines whose planar state is the

@@ -104,6 +104,7 @@ class OdeOmniEngine : public OmniEngine {
   int num_robots() const override { return static_cast<int>(robots_.size()); }
   void SetState(int robot, const OmniBodyState& state) override;
   OmniBodyState GetState(int robot) const override;
+  void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const override;
   std::vector<double> SaveExact(int robot) const override;
   void RestoreExact(int robot, const std::vector<double>& snapshot) override;
   void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override;
@@ -329,18 +330,24 @@ OmniBodyState OdeOmniEngine::GetState(int index) const {
   const Twist2 v_field{v[0], v[1], w[2]};
   state.velocity = FieldToBody(v_field, state.pose.theta);
 
+  GetWheelSpeeds(index, &state.wheel_speeds);
+  return state;
+}
+
+void OdeOmniEngine::GetWheelSpeeds(int index, Eigen::VectorXd* out) const {
+  CheckRobot(index);
+  const OdeRobot& robot = robots_[index];
+  const dReal* rot = dBodyGetRotation(robot.chassis);  // 3x4, row-major
+  const dReal* w = dBodyGetAngularVel(robot.chassis);
   const int n = robot.model.num_wheels();
-  state.wheel_speeds.resize(n);
+  out->resize(n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d& a = robot.axles[i];
-    const Eigen::Vector3d a_world(rot[0] * a.x() + rot[1] * a.y() + rot[2] * a.z(),
-                                  rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z(),
-                                  rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z());
     const dReal* ww = dBodyGetAngularVel(robot.wheels[i]);
-    state.wheel_speeds[i] = (ww[0] - w[0]) * a_world.x() + (ww[1] - w[1]) * a_world.y() +
-                            (ww[2] - w[2]) * a_world.z();
+    (*out)[i] = (ww[0] - w[0]) * (rot[0] * a.x() + rot[1] * a.y() + rot[2] * a.z()) +
+                (ww[1] - w[1]) * (rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z()) +
+                (ww[2] - w[2]) * (rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z());
   }
-  return state;
 }
 
 // Per body: position (3), quaternion (4), linear (3) and angular velocity (3).
