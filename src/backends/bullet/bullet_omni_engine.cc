@@ -29,21 +29,35 @@ constexpr double kChassisFriction = 0.3;  // Coulomb coefficient, chassis-wall a
 
 // Sequential-impulse sweeps per step. The chassis is ~46 times heavier than a wheel and
 // hangs on it by a hinge whose impulses Bullet does not warm-start; with 20 sweeps the
-// chassis tilts by < 4e-5 rad under a 2 m/s^2 drive, and more buy nothing measurable.
+// chassis stays within 3e-4 rad of level under 2 m/s^2 drives, and more sweeps change
+// the drive results by less than 1e-4.
 constexpr int kSolverIterations = 20;
 // Baumgarte factor of the hinges. Integrating chassis and wheel separately moves a wheel
 // outwards by b (omega dt)^2 / 2 per step while the robot turns; at the default 0.2 the
-// hinge let it drift 2 mm out at 36 rad/s (4% less yaw acceleration), at 0.8 0.7 mm.
+// hinge let it drift 2 mm out at 36 rad/s (2% less yaw speed after a 1 s spin-up at
+// 1/300 s), at 0.8 0.7 mm (0.4%).
 constexpr double kJointErp = 0.8;
-// Baumgarte factor of contacts. Floor contacts barely penetrate either way; the default
-// keeps colliding robots from being pushed apart faster than they came (no restitution).
+// Baumgarte factor of chassis contacts (walls, other robots; wheel contacts bring their
+// spring's own). Bullet's default keeps colliding robots from being pushed apart faster
+// than they came: 0.8 threw two robots meeting at 2 m/s each apart at 0.5 m/s.
 constexpr double kContactErp = 0.2;
 
-// One wheel's floor contact: its friction and, for warm starting, the impulses the
-// solver found in the step before. Reached from the wheel body's user pointer.
+// Wheel-floor contacts are springs of this stiffness, critically damped for the share
+// of the robot's mass that rests on one wheel (as in the ODE engine). 1e5 N/m sinks a
+// 2.5 kg robot on four wheels by about 0.06 mm. Equal springs under a rigid chassis share
+// the weight as the least-norm solution (OmniModel::wheel_load); perfectly rigid contacts
+// would leave four wheels' loads statically indeterminate, to wherever the solver's
+// sweep order and warm start put them.
+constexpr double kContactStiffness = 1e5;  // N/m
+constexpr double kContactDampingRatio = 1.0;
+
+// One wheel's floor contact: its friction and spring and, for warm starting, the
+// impulses the solver found in the step before. Reached from the wheel body's user
+// pointer.
 struct WheelContact {
   double rolling_friction = 0;  // Coulomb coefficient along the rolling direction
   double roller_friction = 0;   // Coulomb coefficient across the wheel, along its axle
+  double damping = 0;           // N s/m, of the contact spring (kContactStiffness)
   btScalar normal_impulse = 0;   // N s
   btScalar rolling_impulse = 0;  // N s, along friction direction 1
   btScalar roller_impulse = 0;   // N s, along friction direction 2
@@ -59,8 +73,9 @@ WheelContact* WheelContactOf(const btCollisionObject* object) {
 // setupFrictionConstraint (Bullet 3.24) builds:
 // - Its target velocity leaves out the external torque impulse of the step (contact and
 //   joint rows include it), so a wheel torque would spin the wheel up unresisted for one
-//   step, every step: a steady slip of tau dt / I_spin (0.23 m/s at 1/300 s) and ~7% of
-//   the drive lost. The missing term is added back to every friction row.
+//   step, every step: a standing rolling slip of r tau dt / I_spin (0.23 m/s for
+//   0.047 N m at 1/300 s) that wheel speeds would show. The missing term is added back
+//   to every friction row.
 // - Both friction rows of a contact get m_combinedFriction. Scaling the second row's
 //   direction by roller/wheel friction would scale its force limit, but the row's
 //   effective mass adds the body's unscaled inverse mass, so below ~0.5 m/s of sliding
@@ -113,6 +128,9 @@ class WheelFrictionSolver final : public btSequentialImpulseConstraintSolver {
 class OmniWorld final : public btDiscreteDynamicsWorld {
  public:
   using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+
+  // Solver calls so far; WheelContact::step refers to it.
+  long step() const { return step_; }
 
   void solveConstraints(btContactSolverInfo& info) override {
     ++step_;
@@ -181,9 +199,10 @@ class OmniWorld final : public btDiscreteDynamicsWorld {
   // in the manifold are lifted copies and go. Bullet matches a new point to a cached one
   // by its place on the wheel, which spin moves by more than the breaking threshold
   // (0.02 r = 0.5 mm) per step above ~20 rad/s at 1 ms, and drops points that slid
-  // sideways as far: the warm-start impulse would then restart from zero, and the
-  // statically indeterminate wheel loads wander until a wheel skids. So each wheel's
-  // impulses are carried from step to step here instead.
+  // sideways as far: the warm-start impulse would then restart from zero, and the wheel
+  // loads, which the solver settles only over many steps, wander until a wheel skids
+  // (seen at 1 ms in a sideways drive). So each wheel's impulses are carried from step
+  // to step here instead.
   // Friction direction 1 is the rolling direction (horizontal, across the axle),
   // direction 2 the axle projected on the floor; WheelFrictionSolver gives direction 2
   // its own coefficient.
@@ -214,7 +233,10 @@ class OmniWorld final : public btDiscreteDynamicsWorld {
     point.m_combinedRestitution = 0;
     point.m_lateralFrictionDir1 = btVector3(-across.y(), across.x(), 0);
     point.m_lateralFrictionDir2 = across;
-    point.m_contactPointFlags |= BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED;
+    point.m_combinedContactStiffness1 = kContactStiffness;
+    point.m_combinedContactDamping1 = contact.damping;
+    point.m_contactPointFlags |=
+        BT_CONTACT_FLAG_LATERAL_FRICTION_INITIALIZED | BT_CONTACT_FLAG_CONTACT_STIFFNESS_DAMPING;
   }
 
   long step_ = 0;  // solver calls so far
@@ -231,6 +253,9 @@ class BulletOmniEngine final : public OmniEngine {
   int num_robots() const override { return static_cast<int>(robots_.size()); }
   void SetState(int robot, const OmniBodyState& state) override;
   OmniBodyState GetState(int robot) const override;
+  void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const override;
+  std::vector<double> SaveExact(int robot) const override;
+  void RestoreExact(int robot, const std::vector<double>& snapshot) override;
   void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override;
   void Step(double dt) override;
 
@@ -257,6 +282,7 @@ class BulletOmniEngine final : public OmniEngine {
   void BuildRobot(Robot& robot);
   void BuildWalls(const FieldModel& field);
   Robot& CheckedRobot(int robot) const;
+  void ForgetContacts(Robot& robot);
 
   // Declared in the order Bullet needs them built; destroyed in reverse.
   std::unique_ptr<btDefaultCollisionConfiguration> config_;
@@ -352,7 +378,9 @@ void BulletOmniEngine::BuildRobot(Robot& robot) {
   const OmniModel& m = robot.model;
   const int n = m.num_wheels();
   // Sized once: the wheel bodies keep pointers to the elements.
-  robot.contacts.assign(n, WheelContact{m.wheel_friction, m.roller_friction});
+  const double damping =
+      2 * kContactDampingRatio * std::sqrt(kContactStiffness * m.total_mass / n);  // N s/m
+  robot.contacts.assign(n, WheelContact{m.wheel_friction, m.roller_friction, damping});
   robot.torques = Eigen::VectorXd::Zero(n);
 
   // Chassis: a solid cylinder for the tilt axes, the model's yaw inertia; the body's
@@ -394,8 +422,8 @@ void BulletOmniEngine::BuildRobot(Robot& robot) {
     wheel->setUserPointer(&robot.contacts[i]);
     wheel->setActivationState(DISABLE_DEACTIVATION);
     // Bullet's implicit gyroscopic step damps the yaw a wheel shares with the chassis
-    // once it spins fast (6% less yaw acceleration at 36 rad/s); the term it models only
-    // shifts hinge torques about horizontal axes, so it is left out for wheels.
+    // once it spins fast (4% less yaw speed after a 1 s spin-up to 36 rad/s); the term it
+    // models only shifts hinge torques about horizontal axes, so wheels go without it.
     wheel->setFlags(wheel->getFlags() & ~BT_ENABLE_GYROSCOPIC_FORCE_IMPLICIT_BODY);
     world_->addRigidBody(wheel.get(), kWheelGroup, kFloorGroup);
 
@@ -485,14 +513,71 @@ void BulletOmniEngine::SetState(int robot_index, const OmniBodyState& state) {
               spin + axle * state.wheel_speeds[i]);
   }
 
-  // Forget every contact of this robot (manifolds hold positions and warm-start
-  // impulses), so that the next step starts as in a freshly built world.
+  ForgetContacts(robot);
+}
+
+void BulletOmniEngine::ForgetContacts(Robot& robot) {
+  // Manifolds hold contact points and warm-start impulses; without them the next step
+  // starts as in a freshly built world.
   btOverlappingPairCache* pairs = world_->getPairCache();
   pairs->cleanProxyFromPairs(robot.chassis->getBroadphaseHandle(), dispatcher_.get());
   for (auto& wheel : robot.wheels)
     pairs->cleanProxyFromPairs(wheel->getBroadphaseHandle(), dispatcher_.get());
   for (WheelContact& contact : robot.contacts) contact.step = -1;
   solver_->reset();
+}
+
+// Snapshot layout: per body (chassis, then wheels) the origin (3), the basis row by row
+// (9; a quaternion would not round-trip bit for bit) and the linear and angular
+// velocities (3 + 3); then per wheel its floor contact's warm-start impulses (3) and
+// whether they are current (1). Contacts with walls and other robots are not kept.
+constexpr int kBodySnapshotSize = 18;
+constexpr int kWheelContactSnapshotSize = 4;
+
+std::vector<double> BulletOmniEngine::SaveExact(int robot_index) const {
+  const Robot& robot = CheckedRobot(robot_index);
+  std::vector<double> out;
+  out.reserve(robot.wheels.size() * (kBodySnapshotSize + kWheelContactSnapshotSize) +
+              kBodySnapshotSize);
+  auto save = [&out](const btRigidBody& body) {
+    const btTransform& pose = body.getWorldTransform();
+    for (int i = 0; i < 3; ++i) out.push_back(pose.getOrigin()[i]);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out.push_back(pose.getBasis()[r][c]);
+    for (int i = 0; i < 3; ++i) out.push_back(body.getLinearVelocity()[i]);
+    for (int i = 0; i < 3; ++i) out.push_back(body.getAngularVelocity()[i]);
+  };
+  save(*robot.chassis);
+  for (const auto& wheel : robot.wheels) save(*wheel);
+  for (const WheelContact& contact : robot.contacts) {
+    out.insert(out.end(), {contact.normal_impulse, contact.rolling_impulse,
+                           contact.roller_impulse, contact.step == world_->step() ? 1.0 : 0.0});
+  }
+  return out;
+}
+
+void BulletOmniEngine::RestoreExact(int robot_index, const std::vector<double>& snapshot) {
+  Robot& robot = CheckedRobot(robot_index);
+  if (snapshot.size() != robot.wheels.size() * (kBodySnapshotSize + kWheelContactSnapshotSize) +
+                              kBodySnapshotSize)
+    throw std::invalid_argument("bullet engine: snapshot of the wrong size");
+  const double* v = snapshot.data();
+  auto restore = [&v](btRigidBody* body) {
+    const btTransform pose(btMatrix3x3(v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10], v[11]),
+                           btVector3(v[0], v[1], v[2]));
+    PlaceBody(body, pose, btVector3(v[12], v[13], v[14]), btVector3(v[15], v[16], v[17]));
+    v += kBodySnapshotSize;
+  };
+  restore(robot.chassis.get());
+  for (auto& wheel : robot.wheels) restore(wheel.get());
+  ForgetContacts(robot);
+  for (WheelContact& contact : robot.contacts) {
+    contact.normal_impulse = v[0];
+    contact.rolling_impulse = v[1];
+    contact.roller_impulse = v[2];
+    contact.step = v[3] != 0 ? world_->step() : -1;
+    v += kWheelContactSnapshotSize;
+  }
 }
 
 OmniBodyState BulletOmniEngine::GetState(int robot_index) const {
@@ -509,13 +594,20 @@ OmniBodyState BulletOmniEngine::GetState(int robot_index) const {
   const btVector3& spin = robot.chassis->getAngularVelocity();
   state.velocity = FieldToBody(Twist2{v.x(), v.y(), spin.z()}, state.pose.theta);
 
+  GetWheelSpeeds(robot_index, &state.wheel_speeds);
+  return state;
+}
+
+void BulletOmniEngine::GetWheelSpeeds(int robot_index, Eigen::VectorXd* out) const {
+  const Robot& robot = CheckedRobot(robot_index);
+  const btMatrix3x3& basis = robot.chassis->getWorldTransform().getBasis();
+  const btVector3& spin = robot.chassis->getAngularVelocity();
   const int n = robot.model.num_wheels();
-  state.wheel_speeds.resize(n);
+  out->resize(n);
   for (int i = 0; i < n; ++i) {
     const btVector3 axle = basis * robot.axles[i];
-    state.wheel_speeds[i] = (robot.wheels[i]->getAngularVelocity() - spin).dot(axle);
+    (*out)[i] = (robot.wheels[i]->getAngularVelocity() - spin).dot(axle);
   }
-  return state;
 }
 
 void BulletOmniEngine::SetWheelTorques(int robot_index, const Eigen::VectorXd& torques) {
