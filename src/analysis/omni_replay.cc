@@ -20,6 +20,17 @@ int OmniReplayResult::num_predicted() const {
   return n;
 }
 
+double PositionRmse(const OmniLog& log, const OmniReplayResult& result) {
+  double sum = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < result.t.size(); ++i) {
+    if (!result.predicted[i]) continue;
+    sum += std::pow(result.pose[i].x - log.rows[i].pose.x, 2) + std::pow(result.pose[i].y - log.rows[i].pose.y, 2);
+    ++n;
+  }
+  return n ? std::sqrt(sum / n) : 0.0;
+}
+
 OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                                const std::function<void(int, int)>& progress) {
   const std::string problem = options.Validate();

@@ -42,6 +42,9 @@ struct OmniReplayResult {
   int num_predicted() const;
 };
 
+// Root-mean-square distance (m) between the predicted rows and the log's poses.
+double PositionRmse(const OmniLog& log, const OmniReplayResult& result);
+
 // Throws InputError for an unknown backend; CheckFailed if the model diverges.
 OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                                const std::function<void(int, int)>& progress = {});

@@ -26,17 +26,6 @@ OmniLog RecordLog(const OmniModel& model, double seconds) {
   return ParseOmniLog(FormatOmniLog(rows), "recorded.csv");
 }
 
-double PositionRmse(const OmniLog& log, const OmniReplayResult& r) {
-  double sum = 0;
-  int n = 0;
-  for (std::size_t i = 0; i < log.rows.size(); ++i) {
-    if (!r.predicted[i]) continue;
-    sum += std::pow(r.pose[i].x - log.rows[i].pose.x, 2) + std::pow(r.pose[i].y - log.rows[i].pose.y, 2);
-    ++n;
-  }
-  return std::sqrt(sum / n);
-}
-
 TEST(OmniReplay, SameModelPredictsItsOwnLogFourFramesAhead) {
   OmniModel m = testing::Omni4();
   m.vision_noise_xy = m.vision_noise_theta = 0;

@@ -41,16 +41,9 @@ int Replay(const ReplayOptions& options) {
   WritePoseCsv(options.out, result.t, result.pose);
 
   if (!options.quiet) {
-    double sum = 0;
-    int n = 0;
-    for (std::size_t i = 0; i < result.t.size(); ++i) {
-      if (!result.predicted[i]) continue;
-      sum += std::pow(result.pose[i].x - log.rows[i].pose.x, 2) + std::pow(result.pose[i].y - log.rows[i].pose.y, 2);
-      ++n;
-    }
     std::printf("replayed %zu rows of %s through %s on %s (K = %d, delay %d frames): %d predicted, position RMSE %.4f m\n",
                 log.rows.size(), options.log.c_str(), model.name.c_str(), options.backend.c_str(), options.horizon,
-                result.delay_frames, n, n ? std::sqrt(sum / n) : 0.0);
+                result.delay_frames, result.num_predicted(), PositionRmse(log, result));
     std::printf("wrote:\n  %s\n", options.out.c_str());
   }
   return kExitOk;
