@@ -98,6 +98,35 @@ class GoToPoseSource final : public CommandSource {
   std::optional<double> inside_since_;
 };
 
+// Keeps a drive near its start as seen through the delayed observations: outside the
+// leash the translational command keeps its speed but points back to the start.
+class LeashedSource final : public CommandSource {
+ public:
+  LeashedSource(std::unique_ptr<CommandSource> inner, const Pose2& start, double leash)
+      : inner_(std::move(inner)), start_(start), leash_(leash) {}
+  LeashedSource(const LeashedSource& other)
+      : inner_(other.inner_->Clone()), start_(other.start_), leash_(other.leash_) {}
+  Twist2 Command(const BehaviourInput& in) override {
+    Twist2 cmd = inner_->Command(in);
+    if (!in.observations || in.observations->empty()) return cmd;
+    const Pose2& seen = in.observations->back().pose;
+    const double dx = start_.x - seen.x, dy = start_.y - seen.y;
+    const double distance = std::hypot(dx, dy);
+    if (distance <= leash_) return cmd;
+    const double speed = std::hypot(cmd.vx, cmd.vy);
+    const Twist2 back = FieldToBody(Twist2{speed * dx / distance, speed * dy / distance, 0}, seen.theta);
+    cmd.vx = back.vx;
+    cmd.vy = back.vy;
+    return cmd;
+  }
+  std::unique_ptr<CommandSource> Clone() const override { return std::make_unique<LeashedSource>(*this); }
+
+ private:
+  std::unique_ptr<CommandSource> inner_;
+  Pose2 start_;
+  double leash_;
+};
+
 std::vector<CommandSpec::Segment> RandomPlan(const CommandSpec& spec, std::uint64_t seed, int robot,
                                              double duration) {
   Rng rng = Rng::Derived(seed, 1000 + static_cast<std::uint64_t>(robot));
@@ -134,8 +163,11 @@ std::unique_ptr<CommandSource> MakeCommandSource(const CommandSpec& spec, std::u
     return std::make_unique<SegmentSource>(s, 1);
   }
   if (spec.type == "figure_eight") return std::make_unique<FigureEightSource>(spec, start);
-  if (spec.type == "random")
-    return std::make_unique<SegmentSource>(RandomPlan(spec, seed, robot_index, duration), 1);
+  if (spec.type == "random") {
+    auto plan = std::make_unique<SegmentSource>(RandomPlan(spec, seed, robot_index, duration), 1);
+    if (spec.leash <= 0) return plan;
+    return std::make_unique<LeashedSource>(std::move(plan), start, spec.leash);
+  }
   return std::make_unique<GoToPoseSource>(spec);
 }
 

@@ -48,6 +48,8 @@ struct CommandSpec {
   double rest_probability = 0.15;
   double ramp_probability = 0.5;
   double rotate_probability = 0.5;
+  double leash = 0;               // m; > 0: beyond this distance from the start (as last
+                                  // observed), translation is turned back towards it
 
   // go_to_pose
   std::vector<Pose2> targets;          // field frame

@@ -62,6 +62,7 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     m.Get("rest_probability", &spec->rest_probability, InRange(0, 1));
     m.Get("ramp_probability", &spec->ramp_probability, InRange(0, 1));
     m.Get("rotate_probability", &spec->rotate_probability, InRange(0, 1));
+    m.Get("leash", &spec->leash, NonNegative());
     if (spec->max_segment < spec->min_segment) m.Error("max_segment", "must not be below min_segment");
   } else if (type == "go_to_pose") {
     m.Get("max_speed", &spec->max_speed, Positive());
