@@ -108,7 +108,6 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
   top.Require("duration", &scene.duration, InRange(1e-3, 24 * 3600));
   double seed = 1;
   if (top.Get("seed", &seed, InRange(0, 9007199254740992.0))) scene.seed = static_cast<std::uint64_t>(seed);
-  top.Child("plots");  // reserved for the renderer; read by the rendering module
 
   if (top.Has("field")) {
     YamlMap f(top.Child("field"), path, "field", &errors);
