@@ -26,43 +26,42 @@ OmniLog RecordLog(const OmniModel& model, double seconds) {
   return ParseOmniLog(FormatOmniLog(rows), "recorded.csv");
 }
 
-TEST(OmniReplay, SameModelPredictsItsOwnLogFourFramesAhead) {
-  OmniModel m = testing::Omni4();
-  m.vision_noise_xy = m.vision_noise_theta = 0;
-  const OmniLog log = RecordLog(m, 20);
+// Replays through the analytic backend a log recorded from the same model, no noise.
+class OmniReplayTest : public ::testing::Test {
+ protected:
+  OmniReplayTest() {
+    model.vision_noise_xy = model.vision_noise_theta = 0;
+    options.backend = "analytic";
+  }
+  OmniModel model = testing::Omni4();
   OmniReplayOptions options;
-  options.backend = "analytic";
-  const OmniReplayResult r = ReplayOmniLog(m, log, options);
+};
+
+TEST_F(OmniReplayTest, SameModelPredictsItsOwnLogFourFramesAhead) {
+  const OmniLog log = RecordLog(model, 20);
+  const OmniReplayResult r = ReplayOmniLog(model, log, options);
   // Rows 0..K+D-1 lack history; all others are predicted.
   EXPECT_EQ(r.num_predicted(), static_cast<int>(log.rows.size()) - 8);
   EXPECT_FALSE(r.predicted[7]);
   EXPECT_TRUE(r.predicted[8]);
-  // Only the start state is estimated (velocity by a backward difference, the
-  // controller's integral unknown), so four frames ahead stay within millimetres.
+  // Velocity and controller state are estimated by the warm-up from a measurement up
+  // to half a second earlier, so four frames ahead stay within millimetres.
   EXPECT_LT(PositionRmse(log, r), 0.005);
 }
 
-TEST(OmniReplay, TheRightDelayPredictsBetterThanNone) {
-  OmniModel m = testing::Omni4();
-  m.vision_noise_xy = m.vision_noise_theta = 0;
-  const OmniLog log = RecordLog(m, 20);
-  OmniReplayOptions options;
-  options.backend = "analytic";
-  OmniModel no_delay = m;
+TEST_F(OmniReplayTest, TheRightDelayPredictsBetterThanNone) {
+  const OmniLog log = RecordLog(model, 20);
+  OmniModel no_delay = model;
   no_delay.command_delay_frames = no_delay.vision_delay_frames = 0;
-  const double right = PositionRmse(log, ReplayOmniLog(m, log, options));
+  const double right = PositionRmse(log, ReplayOmniLog(model, log, options));
   const double wrong = PositionRmse(log, ReplayOmniLog(no_delay, log, options));
   EXPECT_LT(3 * right, wrong) << "delay 4: " << right << " m, delay 0: " << wrong << " m";
 }
 
-TEST(OmniReplay, FreeRunFromTheFirstRowFollowsTheSameModel) {
-  OmniModel m = testing::Omni4();
-  m.vision_noise_xy = m.vision_noise_theta = 0;
-  const OmniLog log = RecordLog(m, 10);
-  OmniReplayOptions options;
-  options.backend = "analytic";
+TEST_F(OmniReplayTest, FreeRunFromTheFirstRowFollowsTheSameModel) {
+  const OmniLog log = RecordLog(model, 10);
   options.horizon = 0;
-  const OmniReplayResult r = ReplayOmniLog(m, log, options);
+  const OmniReplayResult r = ReplayOmniLog(model, log, options);
   EXPECT_EQ(r.num_predicted(), static_cast<int>(log.rows.size()) - 1);
   EXPECT_LT(PositionRmse(log, r), 0.01);
 }
