@@ -11,16 +11,21 @@
 namespace twinsim {
 namespace {
 
-std::vector<std::string> SplitFields(const std::string& line) {
-  std::vector<std::string> out;
+struct Field {
+  std::string text;  // trimmed
+  int column = 1;    // 1-based character column where the text starts
+};
+
+std::vector<Field> SplitFields(const std::string& line) {
+  std::vector<Field> out;
   std::size_t start = 0;
   while (true) {
-    std::size_t comma = line.find(',', start);
-    std::string f = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    // Trim spaces around the field.
-    const std::size_t a = f.find_first_not_of(" \t");
-    const std::size_t b = f.find_last_not_of(" \t");
-    out.push_back(a == std::string::npos ? std::string() : f.substr(a, b - a + 1));
+    const std::size_t comma = line.find(',', start);
+    const std::size_t stop = comma == std::string::npos ? line.size() : comma;
+    std::size_t a = start, b = stop;
+    while (a < b && (line[a] == ' ' || line[a] == '\t')) ++a;
+    while (b > a && (line[b - 1] == ' ' || line[b - 1] == '\t')) --b;
+    out.push_back(Field{line.substr(a, b - a), static_cast<int>(a) + 1});
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -54,12 +59,12 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
-    std::vector<std::string> fields = SplitFields(line);
+    const std::vector<Field> fields = SplitFields(line);
     if (!have_header) {
-      t.header = fields;
-      for (std::size_t i = 0; i < fields.size(); ++i) {
-        if (fields[i].empty())
-          throw InputError(SourceLocation{path, line_no, 0}, "empty column name in the header (column " + std::to_string(i + 1) + ")");
+      for (const Field& f : fields) {
+        if (f.text.empty())
+          throw InputError(SourceLocation{path, line_no, f.column}, "empty column name in the header");
+        t.header.push_back(f.text);
       }
       have_header = true;
       continue;
@@ -70,9 +75,9 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
                            std::to_string(fields.size()));
     }
     std::vector<double> row(fields.size());
-    int column = 1;
     for (std::size_t i = 0; i < fields.size(); ++i) {
-      const std::string& f = fields[i];
+      const std::string& f = fields[i].text;
+      const int column = fields[i].column;
       double v = 0;
       const char* begin = f.data();
       const char* end = f.data() + f.size();
@@ -87,7 +92,6 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
                          "column '" + t.header[i] + "': value is " + f + ", not a finite number");
       }
       row[i] = v;
-      column += static_cast<int>(f.size()) + 1;
     }
     t.rows.push_back(std::move(row));
     t.line_of.push_back(line_no);

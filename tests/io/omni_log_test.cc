@@ -44,6 +44,11 @@ TEST(OmniLog, TextInANumber) {
   EXPECT_NE(e.find("log.csv:3:5: column 'x': expected a number, got 'abc'"), std::string::npos) << e;
 }
 
+TEST(OmniLog, ColumnCountsCharactersIncludingSpaces) {
+  const std::string e = ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,  0.5 , x1,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:3:13: column 'y': expected a number, got 'x1'"), std::string::npos) << e;
+}
+
 TEST(OmniLog, NaN) {
   const std::string e = ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,nan,0,0,0,0\n");
   EXPECT_NE(e.find("log.csv:3:"), std::string::npos) << e;
