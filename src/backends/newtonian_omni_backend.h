@@ -41,10 +41,20 @@ class NewtonianOmniBackend final : public OmniBackend {
     OmniModel model;
     OmniKinematics kin;
     int ticks_per_control = 1;  // physics steps per controller tick
+    bool effects_on = false;    // the model has effects (omni_effects.h)
     OmniRobotState state;       // controller part; body part refreshed on Save()
     Eigen::VectorXd speeds;     // n, scratch: wheel speeds read this step
+    Eigen::VectorXd seen;       // n, scratch: wheel speeds as the firmware believes them
     Eigen::VectorXd net;        // n, scratch: net wheel torques
   };
+
+  // The command the firmware acts on at this physics step, after time_delay,
+  // velocity_saturation and motor_lag.
+  Twist2 EffectiveCommand(Robot& r, const Twist2& received, bool new_frame, double dt);
+  // The encoder speeds the firmware believes (velocity_scale, rotation_drift).
+  void SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const;
+  // Net wheel torques after traction_limit and the motors.
+  void NetTorques(Robot& r);
 
   std::unique_ptr<OmniEngine> engine_;
   std::vector<Robot> robots_;

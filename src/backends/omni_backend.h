@@ -8,6 +8,7 @@
 #pragma once
 
 #include <memory>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,16 @@ struct OmniRobotState {
   OnboardControllerState controller;
   int ticks_until_control = 0;  // physics steps until the next controller tick
   bool encoders_pending = false;  // the last physics step's wheel turn is not counted yet
+
+  // Effects (robots/omni/omni_effects.h).
+  double clock = 0;                                  // s since Reset
+  std::vector<std::pair<double, Twist2>> received;   // (s, command) not yet acting (time_delay)
+  Twist2 acting;                                     // the command the firmware acts on
+  Twist2 lagged;                                     // after motor_lag
+
+  // The learned backend's window: the newest last.
+  std::vector<Pose2> pose_history;
+  std::vector<Twist2> command_history;
 };
 
 // A copy of everything that changes inside a backend (see OmniBackend::Save).

@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "robots/omni/omni_effects.h"
+
 namespace twinsim {
 
 // The six parameters of one on-board velocity controller (forward, sideways or
@@ -77,6 +79,9 @@ struct OmniModel {
   // The delay loop, in camera frames (the scene sets the frame rate).
   int command_delay_frames = 2;  // frames from sending a command to the robot acting on it
   int vision_delay_frames = 2;   // frames from the camera's exposure to the observer
+
+  // What a real robot does that the Newtonian model does not (omni_effects.h).
+  OmniEffects effects;
 
   // Vision (the observation model).
   double vision_noise_xy = 0.0;      // m, standard deviation of x and y

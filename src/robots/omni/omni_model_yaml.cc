@@ -1,5 +1,6 @@
 // Reading OmniModel from YAML; the schema is documented in docs/models.md.
 #include <cmath>
+#include <filesystem>
 
 #include "core/error.h"
 #include "io/yaml_reader.h"
@@ -20,13 +21,49 @@ void ReadPid(YamlMap& parent, const std::string& key, PidGains* g) {
   m.Finish();
 }
 
-OmniModel ReadOmniModel(const YAML::Node& root, const std::string& path) {
+// Overlays `over` onto `base` in place: mappings merge key by key, anything else
+// replaces. Nodes keep their marks, so messages still point into the right file.
+void Overlay(YAML::Node base, const YAML::Node& over) {
+  for (auto it = over.begin(); it != over.end(); ++it) {
+    const std::string key = it->first.Scalar();
+    if (base[key].IsMap() && it->second.IsMap()) {
+      Overlay(base[key], it->second);
+    } else {
+      base[key] = it->second;
+    }
+  }
+}
+
+// Resolves `extends: BASE.yaml` (relative to the file): the base model, checked on its
+// own first, with this file's keys laid over it.
+OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, int depth);
+
+YAML::Node Resolve(const YAML::Node& root, const std::string& path, int depth) {
+  if (!root["extends"]) return root;
+  const YAML::Node ext = root["extends"];
+  const SourceLocation where{path, ext.Mark().line + 1, ext.Mark().column + 1};
+  if (!ext.IsScalar()) throw InputError(where, "'extends': expected the path of a model file");
+  if (depth > 8) throw InputError(where, "'extends' nested more than 8 deep (a cycle?)");
+  std::filesystem::path base_path(ext.Scalar());
+  if (base_path.is_relative()) base_path = std::filesystem::path(path).parent_path() / base_path;
+  const std::string base_file = base_path.lexically_normal().string();
+  // Report the base's own problems against the base file.
+  ReadOmniModel(LoadYamlFile(base_file), base_file, depth + 1);
+  YAML::Node base = Resolve(LoadYamlFile(base_file), base_file, depth + 1);
+  Overlay(base, root);
+  base.remove("extends");
+  return base;
+}
+
+OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, int depth) {
   ErrorList errors;
   OmniModel model;
   model.source_path = path;
+  const YAML::Node root = Resolve(file_root, path, depth);
   YamlMap top(root, path, "", &errors);
   std::string kind = "omni";
   top.Get("robot", &kind, {"omni"});
+  top.Has("extends");  // resolved above
   top.Require("name", &model.name);
 
   if (top.Has("chassis")) {
@@ -87,6 +124,28 @@ OmniModel ReadOmniModel(const YAML::Node& root, const std::string& path) {
     d.Finish();
   }
 
+  if (top.Has("effects")) {
+    YamlMap e(top.Child("effects"), path, "effects", &errors);
+    OmniEffects& fx = model.effects;
+    auto effect = [&](const char* name, auto&& read) {
+      if (!e.Has(name)) return;
+      YamlMap m(e.Child(name), path, std::string("effects.") + name, &errors);
+      read(m);
+      m.Finish();
+    };
+    effect("time_delay", [&](YamlMap& m) { m.Require("delay", &fx.time_delay, InRange(0, 1)); });
+    effect("velocity_saturation", [&](YamlMap& m) {
+      m.Get("v_max", &fx.v_max, Positive());
+      m.Get("w_max", &fx.w_max, Positive());
+      if (!m.Has("v_max") && !m.Has("w_max")) m.Missing("v_max");
+    });
+    effect("motor_lag", [&](YamlMap& m) { m.Require("time_constant", &fx.motor_lag, InRange(0, 10)); });
+    effect("traction_limit", [&](YamlMap& m) { m.Require("a_max", &fx.a_max, Positive()); });
+    effect("velocity_scale", [&](YamlMap& m) { m.Require("scale", &fx.velocity_scale, InRange(0.2, 5)); });
+    effect("rotation_drift", [&](YamlMap& m) { m.Require("rate", &fx.rotation_drift, InRange(-10, 10)); });
+    e.Finish();
+  }
+
   if (top.Has("vision")) {
     YamlMap v(top.Child("vision"), path, "vision", &errors);
     v.Get("noise_xy", &model.vision_noise_xy, NonNegative());
@@ -115,12 +174,12 @@ OmniModel ReadOmniModel(const YAML::Node& root, const std::string& path) {
 
 }  // namespace
 
-OmniModel LoadOmniModel(const std::string& path) { return ReadOmniModel(LoadYamlFile(path), path); }
+OmniModel LoadOmniModel(const std::string& path) { return ReadOmniModel(LoadYamlFile(path), path, 0); }
 
 OmniModel LoadOmniModelFromString(const std::string& yaml, const std::string& name) {
   YAML::Node root = LoadYamlString(yaml, name);
   if (!root.IsMap()) throw InputError(SourceLocation{name, 1}, "expected a YAML mapping at the top level");
-  return ReadOmniModel(root, name);
+  return ReadOmniModel(root, name, 0);
 }
 
 }  // namespace twinsim

@@ -1,0 +1,118 @@
+// Each effect of the contract's omni vocabulary does what its name says, on a plain
+// forward step command, against the same robot without it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "core/simulation.h"
+#include "scene/command_source.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+// True poses and velocities of `model` commanded 1 m/s forward for 2 s (no delay loop,
+// no camera noise), on the analytic backend.
+std::vector<FrameRecord> ForwardStep(OmniModel model, double speed = 1.0) {
+  model.command_delay_frames = model.vision_delay_frames = 0;
+  model.vision_noise_xy = model.vision_noise_theta = 0;
+  CommandSpec spec;
+  spec.type = "sequence";
+  spec.segments = {{2.0, Twist2{speed, 0, 0}, false}};
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(spec, 1, 0, 3, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend("analytic", {model}, FieldModel{}, FrameTiming{}), 1);
+  return sim.Run(91).frames.at(0);
+}
+
+OmniModel With(const std::string& effects) {
+  return LoadOmniModelFromString("extends: " + testing::SourcePath("models/omni4.yaml") +
+                                     "\nname: fx\neffects: {" + effects + "}\n",
+                                 "fx.yaml");
+}
+
+TEST(OmniEffects, NoneByDefault) {
+  EXPECT_FALSE(testing::Omni4().effects.any());
+  const auto f = ForwardStep(testing::Omni4());
+  EXPECT_NEAR(f[59].truth_velocity.vx, 1.0, 0.01);
+}
+
+TEST(OmniEffects, VelocityScaleMovesScaleTimesAsFast) {
+  const OmniModel m = With("velocity_scale: {scale: 1.2}");
+  EXPECT_EQ(m.effects.Active(), std::vector<std::string>{"velocity_scale"});
+  EXPECT_NEAR(ForwardStep(m)[59].truth_velocity.vx, 1.2, 0.012);
+}
+
+TEST(OmniEffects, RotationDriftTurnsRatePerMetre) {
+  const auto f = ForwardStep(With("rotation_drift: {rate: 0.3}"));
+  // Heading gained over the steady part of the drive, per metre travelled.
+  double distance = 0;
+  for (int k = 31; k <= 59; ++k) distance += std::hypot(f[k].truth.x - f[k - 1].truth.x, f[k].truth.y - f[k - 1].truth.y);
+  EXPECT_NEAR((f[59].truth.theta - f[30].truth.theta) / distance, 0.3, 0.03);
+}
+
+TEST(OmniEffects, VelocitySaturationClipsTheCommand) {
+  const auto f = ForwardStep(With("velocity_saturation: {v_max: 0.6}"));
+  EXPECT_NEAR(f[59].truth_velocity.vx, 0.6, 0.006);
+}
+
+TEST(OmniEffects, TractionLimitCapsTheAcceleration) {
+  const auto plain = ForwardStep(testing::Omni4());
+  const auto f = ForwardStep(With("traction_limit: {a_max: 0.5}"));
+  double max_accel = 0;
+  for (int k = 1; k < 60; ++k) max_accel = std::max(max_accel, (f[k].truth_velocity.vx - f[k - 1].truth_velocity.vx) * 30);
+  EXPECT_LE(max_accel, 0.5 + 1e-6);
+  EXPECT_LT(f[30].truth_velocity.vx, 0.6 * plain[30].truth_velocity.vx);
+}
+
+TEST(OmniEffects, MotorLagSlowsTheResponse) {
+  const auto plain = ForwardStep(testing::Omni4(), 0.2);  // small step: the slew limit does not mask the lag
+  const auto lag = ForwardStep(With("motor_lag: {time_constant: 0.3}"), 0.2);
+  EXPECT_LT(lag[9].truth_velocity.vx, 0.75 * plain[9].truth_velocity.vx);
+  EXPECT_NEAR(lag[59].truth_velocity.vx, 0.2, 0.004);
+}
+
+TEST(OmniEffects, TimeDelayShiftsTheResponse) {
+  const auto plain = ForwardStep(testing::Omni4());
+  const auto late = ForwardStep(With("time_delay: {delay: 0.2}"));  // six frames at 30 fps
+  for (int k = 10; k < 40; ++k) EXPECT_NEAR(late[k + 6].truth.x, plain[k].truth.x, 2e-3) << "frame " << k;
+}
+
+TEST(OmniEffects, UnknownEffectOrParameterIsReported) {
+  try {
+    With("time_delay: {seconds: 0.1}, friction_creep: {x: 1}");
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("unknown key 'seconds' in 'effects.time_delay'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("missing required key 'delay'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("unknown key 'friction_creep' in 'effects'"), std::string::npos) << msg;
+  }
+}
+
+TEST(OmniModelExtends, ThePlantIsOmni4WithEffects) {
+  const OmniModel plant = LoadOmniModel(testing::SourcePath("models/omni4_plant.yaml"));
+  const OmniModel base = testing::Omni4();
+  EXPECT_EQ(plant.name, "omni4_plant");
+  EXPECT_EQ(plant.total_mass, base.total_mass);
+  EXPECT_EQ(plant.controller.forward.kp, base.controller.forward.kp);
+  EXPECT_GE(plant.effects.Active().size(), 2u);
+}
+
+TEST(OmniModelExtends, ProblemsNameTheFileTheyAreIn) {
+  const std::string dir = testing::TempDir("extends");
+  testing::WriteText(dir + "/base.yaml", "name: b\nchassis: {mass: heavy}\nwheels: {angles_deg: [60, 180, 300]}\n");
+  testing::WriteText(dir + "/child.yaml", "extends: base.yaml\nname: c\n");
+  try {
+    LoadOmniModel(dir + "/child.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir + "/base.yaml:2:"), std::string::npos) << e.what();
+  }
+  testing::WriteText(dir + "/loop.yaml", "extends: loop.yaml\nname: l\n");
+  EXPECT_THROW(LoadOmniModel(dir + "/loop.yaml"), InputError);
+}
+
+}  // namespace
+}  // namespace twinsim
