@@ -41,7 +41,7 @@ OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const
   timing.physics_substeps = DefaultPhysicsSubsteps(timing.frame_rate);
   FieldModel field;
   field.walls = false;  // a log's robot may be anywhere; walls are not part of a replay
-  std::unique_ptr<OmniBackend> backend = MakeOmniBackend(options.backend, {model}, field, timing);
+  std::unique_ptr<OmniBackend> backend = MakeOmniBackend(options.backend, {model}, field, timing, options.backend_options);
 
   const int delay = model.command_delay_frames + model.vision_delay_frames;
   const int k = options.horizon;
@@ -100,36 +100,35 @@ OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const
     return out;
   }
 
-  auto estimated_velocity = [&](std::size_t row) {
-    const OmniLogRow& prev = log.rows[row - 1];
-    const OmniLogRow& now = log.rows[row];
-    const double dt = now.t - prev.t;
-    Twist2 field_v{(now.pose.x - prev.pose.x) / dt, (now.pose.y - prev.pose.y) / dt,
-                   (now.pose.theta - prev.pose.theta) / dt};
-    return FieldToBody(field_v, now.pose.theta);
-  };
+  // The tracker starts at the first row at or after frame D that has a row before it.
+  auto first = row_of_frame.lower_bound(std::max(delay, log.FrameIndex(1)));
+  if (first == row_of_frame.end()) return out;
+  const std::size_t r0 = first->second;
+  const OmniLogRow& prev = log.rows[r0 - 1];
+  const OmniLogRow& now = log.rows[r0];
+  const double dt = now.t - prev.t;
+  const Twist2 field_v{(now.pose.x - prev.pose.x) / dt, (now.pose.y - prev.pose.y) / dt,
+                       (now.pose.theta - prev.pose.theta) / dt};
+  backend->Reset(0, now.pose, FieldToBody(field_v, now.pose.theta));
 
-  for (std::size_t i = 0; i < n; ++i) {
-    if (progress && i % 64 == 0) progress(static_cast<int>(i), static_cast<int>(n));
-    const int target = log.FrameIndex(i);
-    const int start = target - k;
-    auto it = row_of_frame.find(start);
-    if (it == row_of_frame.end() || start - delay < 0) continue;
-    // The warm-up start: the earliest row within kWarmUpFrames before S that has a row
-    // before it (for its velocity) and known commands.
-    auto w = row_of_frame.lower_bound(std::max({start - kWarmUpFrames, delay, log.FrameIndex(1)}));
-    if (w == row_of_frame.end() || w->first > start) continue;
-    const std::size_t s = it->second;
-    backend->Reset(0, log.rows[w->second].pose, estimated_velocity(w->second));
-    for (int f = w->first; f < start; ++f) backend->StepFrame({delayed_command(f)});
-    backend->MoveBody(0, log.rows[s].pose);
-    for (int f = start; f < target; ++f) backend->StepFrame({delayed_command(f)});
-    Pose2 p = backend->pose(0);
-    check(i, p);
-    // Keep theta on the log's unwrapped branch.
-    p.theta = log.rows[s].pose.theta + WrapAngle(p.theta - log.rows[s].pose.theta);
-    out.pose[i] = p;
-    out.predicted[i] = true;
+  for (int f = first->first; f <= last_frame; ++f) {
+    if (progress && f % 64 == 0) progress(f, last_frame);
+    auto measured = row_of_frame.find(f);
+    if (measured != row_of_frame.end()) backend->MoveBody(0, log.rows[measured->second].pose);
+    auto target = row_of_frame.find(f + k);
+    if (measured != row_of_frame.end() && target != row_of_frame.end() && f - first->first >= kWarmUpFrames) {
+      const OmniBackendState saved = backend->Save();
+      for (int j = f; j < f + k; ++j) backend->StepFrame({delayed_command(j)});
+      Pose2 p = backend->pose(0);
+      check(target->second, p);
+      // Keep theta on the log's unwrapped branch.
+      const double from = log.rows[measured->second].pose.theta;
+      p.theta = from + WrapAngle(p.theta - from);
+      out.pose[target->second] = p;
+      out.predicted[target->second] = true;
+      backend->Restore(saved);
+    }
+    if (f < last_frame) backend->StepFrame({delayed_command(f)});
   }
   if (progress) progress(static_cast<int>(n), static_cast<int>(n));
   return out;

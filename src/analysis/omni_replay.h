@@ -5,19 +5,22 @@
 // + vision delay D: the step from frame j to j+1 is driven by the command logged at
 // frame j - D. K = 0 is one free run from the first row.
 //
-// The state at the start frame S = i - K: the measured pose at S. Velocity and the
-// on-board controller's state (set-points, integrals) are not measured; they come from
-// running the model over the up to kWarmUpFrames (0.5 s at 30 fps) frames before S,
-// started from the measurement there (pose, velocity by a backward difference). So vision noise enters
-// through poses only, as it does for a learned predictor that sees the last frames.
-// Rows without enough history (no row at S, or commands older than the log) hold the
-// measured pose.
+// The state at the start frame S = i - K comes from a tracker: the model runs along the
+// whole log under the logged commands, and its pose is corrected to the measurement at
+// every row (OmniBackend::MoveBody). Velocity and internal state (the on-board
+// controller's set-points and integrals, a learned model's window) are the tracker's,
+// so vision noise enters through poses only, as it does for a learned predictor. Each
+// prediction runs K frames from a saved tracker state, which is then restored. The
+// tracker starts at frame D (older commands are not in the log) and predicts once it
+// has run kWarmUpFrames; earlier rows, and rows without a row at S, hold the measured
+// pose.
 #pragma once
 
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "backends/omni_backend.h"
 #include "core/pose.h"
 #include "io/omni_log.h"
 #include "robots/omni/omni_model.h"
@@ -28,6 +31,7 @@ inline constexpr int kWarmUpFrames = 15;
 
 struct OmniReplayOptions {
   std::string backend = "ode";
+  BackendOptions backend_options;  // the predictor, for the learned backend
   int horizon = 4;  // K, frames; 0 = free run
 
   // Returns an empty string when valid, else what is wrong.

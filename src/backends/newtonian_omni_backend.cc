@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "backends/learned/learned_omni_backend.h"
 #include "core/error.h"
 #include "robots/omni/wheel_motor.h"
 
@@ -46,11 +47,7 @@ void NewtonianOmniBackend::Reset(int robot, const Pose2& pose, const Twist2& vel
   engine_->SetWheelTorques(robot, Eigen::VectorXd::Zero(r.model.num_wheels()));
 }
 
-void NewtonianOmniBackend::MoveBody(int robot, const Pose2& pose) {
-  OmniBodyState body = engine_->GetState(robot);
-  body.pose = pose;
-  engine_->SetState(robot, body);
-}
+void NewtonianOmniBackend::MoveBody(int robot, const Pose2& pose) { engine_->MoveRobot(robot, pose); }
 
 void NewtonianOmniBackend::StepFrame(const std::vector<Twist2>& commands) {
   if (static_cast<int>(commands.size()) != num_robots())
@@ -169,11 +166,17 @@ void NewtonianOmniBackend::Restore(const OmniBackendState& state) {
   }
 }
 
-std::vector<std::string> AvailableOmniBackends() { return AvailableOmniEngines(); }
+std::vector<std::string> AvailableOmniBackends() {
+  std::vector<std::string> names = AvailableOmniEngines();
+  names.push_back("learned");
+  return names;
+}
 
 std::unique_ptr<OmniBackend> MakeOmniBackend(const std::string& name,
                                              const std::vector<OmniModel>& robots,
-                                             const FieldModel& field, const FrameTiming& timing) {
+                                             const FieldModel& field, const FrameTiming& timing,
+                                             const BackendOptions& options) {
+  if (name == "learned") return MakeLearnedOmniBackend(robots, timing, options.predictor);
   return std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(name, robots, field), robots, timing);
 }
 

@@ -65,8 +65,9 @@ class OmniBackend {
   // Puts robot i at `pose` moving at `velocity` (robot frame), its controller settled
   // on that velocity.
   virtual void Reset(int robot, const Pose2& pose, const Twist2& velocity) = 0;
-  // Moves robot i's body to `pose`, keeping its velocity (robot frame) and everything
-  // internal (controller, history): a correction from a measurement.
+  // Corrects robot i's current pose to a measurement, keeping its velocity (robot frame)
+  // and everything internal (the controller's state; a learned backend keeps its older
+  // poses, so a window corrected every frame holds measured poses).
   virtual void MoveBody(int robot, const Pose2& pose) = 0;
   // Advances one camera frame; commands[i] is what robot i's firmware receives now.
   virtual void StepFrame(const std::vector<Twist2>& commands) = 0;
@@ -80,11 +81,19 @@ class OmniBackend {
   virtual void Restore(const OmniBackendState& state) = 0;
 };
 
-// Builds the backend called `name` (analytic, ode, bullet). Throws InputError for an
-// unknown or uncompiled backend.
+class OmniPredictor;
+
+// What some backends need besides the models.
+struct BackendOptions {
+  std::shared_ptr<const OmniPredictor> predictor;  // the learned backend's 1-frame predictor
+};
+
+// Builds the backend called `name` (analytic, ode, bullet, learned). Throws InputError
+// for an unknown or uncompiled backend, or a learned one without a fitting predictor.
 std::unique_ptr<OmniBackend> MakeOmniBackend(const std::string& name,
                                              const std::vector<OmniModel>& robots,
-                                             const FieldModel& field, const FrameTiming& timing);
+                                             const FieldModel& field, const FrameTiming& timing,
+                                             const BackendOptions& options = {});
 
 // The backend names a user may pass to --backend in this build.
 std::vector<std::string> AvailableOmniBackends();

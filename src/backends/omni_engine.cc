@@ -40,7 +40,7 @@ std::unique_ptr<OmniEngine> MakeOmniEngine(const std::string& name,
     throw InputError("bullet backend not compiled; rebuild with -DTWINSIM_WITH_BULLET=ON");
 #endif
   }
-  throw InputError("unknown physics backend '" + name + "' (known: analytic, ode, bullet)");
+  throw InputError("unknown physics backend '" + name + "' (known: analytic, ode, bullet, learned)");
 }
 
 }  // namespace twinsim

@@ -53,6 +53,15 @@ class OmniEngine {
   // what GetState() returns, without the rest, for the per-step encoder read.
   virtual void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const { *out = GetState(robot).wheel_speeds; }
 
+  // Moves robot i rigidly in the plane so that its pose becomes `pose`: every body keeps
+  // its height, tilt, spin and contact state, velocities turn with it. (The default
+  // levels the robot through SetState; engines with 3D state override it.)
+  virtual void MoveRobot(int robot, const Pose2& pose) {
+    OmniBodyState s = GetState(robot);
+    s.pose = pose;
+    SetState(robot, s);
+  }
+
   // Every number of robot i's bodies (3D poses and velocities of chassis and wheels),
   // opaque to callers, so that RestoreExact() puts the robot back bit for bit where
   // SetState() would only level it on the floor. Engines whose planar state is the

@@ -102,7 +102,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
   scene.path = path;
   YamlMap top(root, path, "", &errors);
   top.Require("name", &scene.name);
-  top.Get("backend", &scene.backend, {"analytic", "ode", "bullet"});
+  top.Get("backend", &scene.backend, {"analytic", "ode", "bullet", "learned"});
   top.Get("frame_rate", &scene.frame_rate, InRange(1, 1000));
   top.Get("physics_substeps", &scene.physics_substeps, InRange(0, 1000));
   top.Require("duration", &scene.duration, InRange(1e-3, 24 * 3600));
@@ -192,7 +192,7 @@ Scene LoadSceneFromString(const std::string& yaml, const std::string& name, cons
   return ReadScene(root, name, base_dir);
 }
 
-Simulation MakeSimulation(const Scene& scene, const std::string& backend) {
+Simulation MakeSimulation(const Scene& scene, const std::string& backend, const BackendOptions& options) {
   std::vector<OmniModel> models;
   std::vector<SimRobot> robots;
   for (std::size_t i = 0; i < scene.robots.size(); ++i) {
@@ -201,7 +201,8 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend) {
     robots.push_back(SimRobot{r.name, r.model, r.start,
                               MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start)});
   }
-  return Simulation(std::move(robots), MakeOmniBackend(backend, models, scene.field, scene.timing()), scene.seed);
+  return Simulation(std::move(robots), MakeOmniBackend(backend, models, scene.field, scene.timing(), options),
+                    scene.seed);
 }
 
 }  // namespace twinsim

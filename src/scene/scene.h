@@ -44,6 +44,6 @@ Scene LoadScene(const std::string& path);
 Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
 
 // Builds the simulation of a scene on the named backend.
-Simulation MakeSimulation(const Scene& scene, const std::string& backend);
+Simulation MakeSimulation(const Scene& scene, const std::string& backend, const BackendOptions& options = {});
 
 }  // namespace twinsim

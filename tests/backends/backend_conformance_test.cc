@@ -1,4 +1,5 @@
-// One conformance suite over every backend built into this binary.
+// One conformance suite over every physics engine built into this binary (the learned
+// backend, which needs a trained predictor, has its own tests in learned_backend_test.cc).
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -233,7 +234,7 @@ TEST_P(BackendConformance, ManyRobotsRunSideBySide) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(AllBuilt, BackendConformance, ::testing::ValuesIn(AvailableOmniBackends()),
+INSTANTIATE_TEST_SUITE_P(AllBuilt, BackendConformance, ::testing::ValuesIn(AvailableOmniEngines()),
                          [](const auto& info) { return info.param; });
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include "backends/omni_backend.h"
 #include "core/error.h"
 #include "io/omni_log.h"
+#include "learning/omni_predictor.h"
 #include "io/yaml_reader.h"
 
 namespace twinsim {
@@ -19,6 +20,7 @@ struct ReplayOptions {
   std::string out;
   std::string backend = "ode";
   int horizon = 4;
+  std::string predictor;
   bool quiet = false;
 };
 
@@ -34,6 +36,8 @@ int Replay(const ReplayOptions& options) {
   OmniReplayOptions replay;
   replay.backend = options.backend;
   replay.horizon = options.horizon;
+  if (!options.predictor.empty())
+    replay.backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
 
   Progress progress("replay", !options.quiet);
   OmniReplayResult result = ReplayOmniLog(model, log, replay, [&](int done, int total) { progress.Update(done, total); });
@@ -61,7 +65,8 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--model", options->model, "Model file (YAML)")->required();
   cmd->add_option("--log", options->log, "Measured log (CSV: t,x,y,theta,vx_cmd,vy_cmd,omega_cmd)")->required();
   cmd->add_option("--out", options->out, "Output CSV")->required();
-  cmd->add_option("--backend", options->backend, "Physics backend: ode, bullet or analytic")->capture_default_str();
+  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned")->capture_default_str();
+  cmd->add_option("--predictor", options->predictor, "1-frame predictor for --backend learned (from twinsim train)");
   cmd->add_option("--horizon", options->horizon, "K, frames predicted ahead (0: free run)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);

@@ -11,6 +11,7 @@
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
 #include "io/omni_log.h"
+#include "learning/omni_predictor.h"
 #include "scene/scene.h"
 
 namespace twinsim {
@@ -21,6 +22,7 @@ struct RunOptions {
   std::string backend;  // empty: the scene's
   std::string out;      // empty: out/<scene name>
   long long seed = -1;  // -1: the scene's
+  std::string predictor;  // for --backend learned
   bool quiet = false;
 };
 
@@ -53,7 +55,10 @@ int Run(const RunOptions& options) {
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
 
-  Simulation sim = MakeSimulation(scene, backend);
+  BackendOptions backend_options;
+  if (!options.predictor.empty())
+    backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
+  Simulation sim = MakeSimulation(scene, backend, backend_options);
   const int frames = scene.num_frames();
   Progress progress("run " + scene.name, !options.quiet);
   const auto start = std::chrono::steady_clock::now();
@@ -97,7 +102,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
       "observer saw it, four frames late by default, lost frames left out), DIR/truth.csv (the\n"
       "true pose and velocity every frame), and the same with _NAME for every further robot.");
   cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
-  cmd->add_option("--backend", options->backend, "Physics backend: ode, bullet or analytic (default: the scene's)");
+  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
+  cmd->add_option("--predictor", options->predictor, "1-frame predictor for --backend learned (from twinsim train)");
   cmd->add_option("--out", options->out, "Output folder (default: out/<scene name>)");
   cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(CLI::NonNegativeNumber);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");

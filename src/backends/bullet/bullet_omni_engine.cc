@@ -254,6 +254,7 @@ class BulletOmniEngine final : public OmniEngine {
   void SetState(int robot, const OmniBodyState& state) override;
   OmniBodyState GetState(int robot) const override;
   void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const override;
+  void MoveRobot(int robot, const Pose2& pose) override;
   std::vector<double> SaveExact(int robot) const override;
   void RestoreExact(int robot, const std::vector<double>& snapshot) override;
   void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override;
@@ -533,6 +534,20 @@ void BulletOmniEngine::ForgetContacts(Robot& robot) {
 // whether they are current (1). Contacts with walls and other robots are not kept.
 constexpr int kBodySnapshotSize = 18;
 constexpr int kWheelContactSnapshotSize = 4;
+
+void BulletOmniEngine::MoveRobot(int robot_index, const Pose2& pose) {
+  Robot& robot = CheckedRobot(robot_index);
+  const Pose2 from = GetState(robot_index).pose;
+  const btMatrix3x3 turn(btQuaternion(btVector3(0, 0, 1), pose.theta - from.theta));
+  const btVector3 old_centre(from.x, from.y, 0), new_centre(pose.x, pose.y, 0);
+  auto move = [&](btRigidBody* body) {
+    const btTransform& t = body->getWorldTransform();
+    const btTransform moved(turn * t.getBasis(), new_centre + turn * (t.getOrigin() - old_centre));
+    PlaceBody(body, moved, turn * body->getLinearVelocity(), turn * body->getAngularVelocity());
+  };
+  move(robot.chassis.get());
+  for (auto& wheel : robot.wheels) move(wheel.get());
+}
 
 std::vector<double> BulletOmniEngine::SaveExact(int robot_index) const {
   const Robot& robot = CheckedRobot(robot_index);

@@ -105,6 +105,7 @@ class OdeOmniEngine : public OmniEngine {
   void SetState(int robot, const OmniBodyState& state) override;
   OmniBodyState GetState(int robot) const override;
   void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const override;
+  void MoveRobot(int robot, const Pose2& pose) override;
   std::vector<double> SaveExact(int robot) const override;
   void RestoreExact(int robot, const std::vector<double>& snapshot) override;
   void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override;
@@ -348,6 +349,29 @@ void OdeOmniEngine::GetWheelSpeeds(int index, Eigen::VectorXd* out) const {
                 (ww[1] - w[1]) * (rot[4] * a.x() + rot[5] * a.y() + rot[6] * a.z()) +
                 (ww[2] - w[2]) * (rot[8] * a.x() + rot[9] * a.y() + rot[10] * a.z());
   }
+}
+
+void OdeOmniEngine::MoveRobot(int index, const Pose2& pose) {
+  CheckRobot(index);
+  OdeRobot& robot = robots_[index];
+  const Pose2 from = GetState(index).pose;
+  const double turn = pose.theta - from.theta;
+  const double c = std::cos(turn), s = std::sin(turn);
+  const dQuaternion q_turn = {std::cos(0.5 * turn), 0, 0, std::sin(0.5 * turn)};
+  auto move = [&](dBodyID body) {
+    const dReal* p = dBodyGetPosition(body);
+    const double rx = p[0] - from.x, ry = p[1] - from.y;
+    dBodySetPosition(body, pose.x + c * rx - s * ry, pose.y + s * rx + c * ry, p[2]);
+    dQuaternion q;
+    dQMultiply0(q, q_turn, dBodyGetQuaternion(body));
+    dBodySetQuaternion(body, q);
+    const dReal* v = dBodyGetLinearVel(body);
+    dBodySetLinearVel(body, c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]);
+    const dReal* w = dBodyGetAngularVel(body);
+    dBodySetAngularVel(body, c * w[0] - s * w[1], s * w[0] + c * w[1], w[2]);
+  };
+  move(robot.chassis);
+  for (dBodyID wheel : robot.wheels) move(wheel);
 }
 
 // Per body: position (3), quaternion (4), linear (3) and angular velocity (3).

@@ -1,0 +1,73 @@
+// `twinsim train --model MODEL --log LOG.csv [--log ...] --kind linear|mlp --horizon H --out P`
+#include <cstdio>
+#include <memory>
+
+#include "app/commands/commands.h"
+#include "app/progress.h"
+#include "core/error.h"
+#include "io/omni_log.h"
+#include "learning/omni_predictor.h"
+
+namespace twinsim {
+namespace {
+
+struct TrainCliOptions {
+  std::string model;
+  std::vector<std::string> logs;
+  std::string out;
+  OmniTrainOptions train;
+  bool quiet = false;
+};
+
+int Train(const TrainCliOptions& options) {
+  // Read and check everything before training or writing.
+  const OmniModel model = LoadOmniModel(options.model);
+  std::vector<OmniLog> logs;
+  for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path));
+  const std::string problem = options.train.Validate();
+  if (!problem.empty()) throw InputError(problem);
+
+  Progress progress("train " + options.train.kind, !options.quiet);
+  OmniTrainSummary summary;
+  const OmniPredictor predictor = TrainOmniPredictor(
+      model, logs, options.train, &summary, [&](int epoch, int epochs, double validation_mse) {
+        char detail[64];
+        std::snprintf(detail, sizeof detail, "epoch %d, validation mse %.4f", epoch, validation_mse);
+        progress.Update(epoch, epochs, detail);
+      });
+  progress.Finish();
+  predictor.Save(options.out);
+  if (!options.quiet) {
+    std::printf("%s predictor of %s, %d frame(s) ahead at %g fps: %s\n", options.train.kind.c_str(),
+                model.name.c_str(), options.train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
+    std::printf("wrote:\n  %s\n", options.out.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddTrainCommand(CLI::App& app, int* exit_code) {
+  auto options = std::make_shared<TrainCliOptions>();
+  CLI::App* cmd = app.add_subcommand("train", "Learn a predictor of a robot's motion from measured logs.");
+  cmd->footer(
+      "Inputs: the last 6 frames (pose relative to the newest in its robot frame, heading as sin and\n"
+      "cos, the command acting then: 42 numbers), plus the commands acting during the horizon when\n"
+      "H > 1. Output: the pose H frames ahead. The last 20 % of every log is held out for validation.\n"
+      "Use the result with 'run --backend learned --predictor P' (H = 1), or in a go_to_pose scene.");
+  cmd->add_option("--model", options->model, "The robot's model file (its name and delay go into the predictor)")
+      ->required();
+  cmd->add_option("--log", options->logs, "Measured log(s) in the contract's format (repeat --log)")->required();
+  cmd->add_option("--kind", options->train.kind, "linear (ridge regression) or mlp (neural net)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"linear", "mlp"}));
+  cmd->add_option("--horizon", options->train.horizon, "H, frames ahead")->capture_default_str();
+  cmd->add_option("--out", options->out, "Predictor file to write")->required();
+  cmd->add_option("--seed", options->train.mlp.seed, "Seed of the neural net's initialisation and batches")
+      ->capture_default_str();
+  cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training")->capture_default_str();
+  cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
+  cmd->callback([options, exit_code] { *exit_code = Train(*options); });
+}
+
+}  // namespace twinsim

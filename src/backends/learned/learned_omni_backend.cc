@@ -1,0 +1,94 @@
+#include "backends/learned/learned_omni_backend.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "core/error.h"
+
+namespace twinsim {
+namespace {
+
+class LearnedOmniBackend final : public OmniBackend {
+ public:
+  LearnedOmniBackend(const std::vector<OmniModel>& robots, const FrameTiming& timing,
+                     std::shared_ptr<const OmniPredictor> predictor)
+      : timing_(timing), predictor_(std::move(predictor)), layout_(predictor_->info().layout) {
+    robots_.resize(robots.size());
+    for (std::size_t i = 0; i < robots.size(); ++i) {
+      predictor_->CheckUse(robots[i], timing.frame_rate, 1, "the learned backend");
+      Reset(static_cast<int>(i), Pose2{}, Twist2{});
+    }
+  }
+
+  std::string name() const override { return "learned"; }
+  int num_robots() const override { return static_cast<int>(robots_.size()); }
+  const FrameTiming& timing() const override { return timing_; }
+
+  void Reset(int robot, const Pose2& pose, const Twist2& velocity) override {
+    OmniRobotState& s = At(robot);
+    const int h = layout_.history;
+    s.pose_history.assign(static_cast<std::size_t>(h), pose);
+    s.command_history.assign(static_cast<std::size_t>(h), velocity);
+    // A robot that has moved steadily at `velocity` (robot frame) until now.
+    const double dt = timing_.frame_dt();
+    for (int j = 0; j < h; ++j) {
+      const double back = (h - 1 - j) * dt;
+      const double theta = pose.theta - velocity.omega * back;
+      const Twist2 field = BodyToField(velocity, 0.5 * (theta + pose.theta));
+      s.pose_history[static_cast<std::size_t>(j)] = Pose2{pose.x - field.vx * back, pose.y - field.vy * back, theta};
+    }
+  }
+
+  void MoveBody(int robot, const Pose2& pose) override { At(robot).pose_history.back() = pose; }
+
+  void StepFrame(const std::vector<Twist2>& commands) override {
+    if (static_cast<int>(commands.size()) != num_robots())
+      throw std::invalid_argument("StepFrame: one command per robot expected");
+    for (int i = 0; i < num_robots(); ++i) {
+      OmniRobotState& s = At(i);
+      s.command_history.erase(s.command_history.begin());
+      s.command_history.push_back(commands[static_cast<std::size_t>(i)]);
+      const Pose2 next = predictor_->Predict(s.pose_history.data(), s.command_history.data());
+      s.pose_history.erase(s.pose_history.begin());
+      s.pose_history.push_back(next);
+    }
+  }
+
+  Pose2 pose(int robot) const override { return robots_.at(static_cast<std::size_t>(robot)).pose_history.back(); }
+
+  Twist2 velocity(int robot) const override {
+    const OmniRobotState& s = robots_.at(static_cast<std::size_t>(robot));
+    const Eigen::Vector3d d = EncodeDelta(s.pose_history[s.pose_history.size() - 2], s.pose_history.back());
+    const double dt = timing_.frame_dt();
+    // The last frame's motion, in the robot frame of the newest pose.
+    const Twist2 v{d[0] / dt, d[1] / dt, d[2] / dt};
+    Twist2 out = v;
+    Rotate(-d[2], v.vx, v.vy, &out.vx, &out.vy);
+    return out;
+  }
+
+  OmniBackendState Save() const override { return OmniBackendState{robots_}; }
+  void Restore(const OmniBackendState& state) override {
+    if (state.robots.size() != robots_.size())
+      throw std::invalid_argument("Restore: state has the wrong number of robots");
+    robots_ = state.robots;
+  }
+
+ private:
+  OmniRobotState& At(int robot) { return robots_.at(static_cast<std::size_t>(robot)); }
+
+  FrameTiming timing_;
+  std::shared_ptr<const OmniPredictor> predictor_;
+  FeatureLayout layout_;
+  std::vector<OmniRobotState> robots_;
+};
+
+}  // namespace
+
+std::unique_ptr<OmniBackend> MakeLearnedOmniBackend(const std::vector<OmniModel>& robots, const FrameTiming& timing,
+                                                    std::shared_ptr<const OmniPredictor> predictor) {
+  if (!predictor) throw InputError("the learned backend needs a predictor: pass --predictor FILE");
+  return std::make_unique<LearnedOmniBackend>(robots, timing, std::move(predictor));
+}
+
+}  // namespace twinsim

@@ -1,0 +1,59 @@
+// The learned model's inputs and outputs (seed 000, section 4).
+//
+// Inputs at frame i: the last `history` = 6 frames j = i-5..i, each as 7 numbers:
+//   the pose of frame j relative to frame i, in the robot frame of frame i (dx, dy, m),
+//   the heading difference as sin and cos, and the command acting at frame j (vx, vy,
+//   omega in the robot's frame at the time it was sent).
+// 6 x 7 = 42 inputs, as the seed has. The command "at" a frame is the one that acts on
+// the robot then: the one logged D = command + vision delay frames earlier (the model's
+// delay, stored in the layout). So a predictor learns the robot's dynamics, and the
+// loop adds the delay exactly as for ODE and Bullet. For a horizon H > 1 the commands
+// acting at frames i+1..i+H-1 follow (3 more numbers each): when H <= D they were all
+// sent by frame i, so a behaviour can "predict away the delay" with what it knows.
+//
+// Output: the pose of frame i+H relative to frame i in the robot frame of frame i
+// (dx m, dy m, dtheta rad).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/pose.h"
+#include "io/omni_log.h"
+
+namespace twinsim {
+
+struct FeatureLayout {
+  int history = 6;      // frames of history
+  int horizon = 1;      // H, frames ahead
+  int command_lag = 4;  // D, frames from logging a command to it acting
+
+  static constexpr int kPerFrame = 7;
+  static constexpr int kNumOutputs = 3;
+  int num_inputs() const { return kPerFrame * history + 3 * (horizon - 1); }
+  int num_commands() const { return history + horizon - 1; }
+};
+
+// Writes the inputs into out (num_inputs()). poses: `history` poses, oldest first, the
+// last is frame i. commands: num_commands() commands acting at frames i-history+1 ..
+// i+H-1.
+void EncodeInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2* commands, double* out);
+
+// The pose change from `now` to `later` in the robot frame of `now` (dx, dy, dtheta).
+Eigen::Vector3d EncodeDelta(const Pose2& now, const Pose2& later);
+// The pose `delta` (robot frame of `now`) away from `now`.
+Pose2 ApplyDelta(const Pose2& now, const Eigen::Vector3d& delta);
+
+// Training samples: x (N x num_inputs), y (N x 3), in time order.
+struct OmniDataset {
+  Eigen::MatrixXd x;
+  Eigen::MatrixXd y;
+  int rows() const { return static_cast<int>(x.rows()); }
+};
+
+// Every complete window of a log: frames i-history+1..i and i+H present (lost frames
+// break windows), commands from frame 0 on (earlier ones are unknown). Appends to *data.
+// Returns the number of samples added.
+int AppendSamples(const OmniLog& log, const FeatureLayout& layout, OmniDataset* data);
+
+}  // namespace twinsim

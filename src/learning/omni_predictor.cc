@@ -1,0 +1,369 @@
+#include "learning/omni_predictor.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Dense>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+#include "io/atomic_file.h"
+#include "io/yaml_reader.h"
+
+namespace twinsim {
+
+OmniPredictor MakeLinearPredictor(OmniPredictorInfo info, Eigen::VectorXd mean, Eigen::VectorXd scale,
+                                  Eigen::MatrixXd weights, Eigen::Vector3d bias) {
+  OmniPredictor p;
+  p.info_ = std::move(info);
+  p.input_mean_ = std::move(mean);
+  p.input_scale_ = std::move(scale);
+  p.weights_ = std::move(weights);
+  p.bias_ = bias;
+  p.scratch_.resize(p.input_mean_.size());
+  return p;
+}
+
+OmniPredictor MakeMlpPredictor(OmniPredictorInfo info, Mlp mlp) {
+  OmniPredictor p;
+  p.info_ = std::move(info);
+  p.mlp_ = std::move(mlp);
+  return p;
+}
+
+namespace {
+
+double PositionRmse(const Eigen::MatrixXd& predicted, const Eigen::MatrixXd& truth) {
+  if (truth.rows() == 0) return 0;
+  return std::sqrt((predicted.leftCols(2) - truth.leftCols(2)).rowwise().squaredNorm().mean());
+}
+
+Eigen::VectorXd ReadVector(YamlMap& m, const std::string& key, int size) {
+  std::vector<double> v;
+  if (!m.Require(key, &v, size)) return Eigen::VectorXd::Zero(std::max(size, 0));
+  return Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<long>(v.size()));
+}
+
+Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int cols) {
+  std::vector<double> v;
+  if (!m.Require(key, &v, rows * cols)) return Eigen::MatrixXd::Zero(rows, cols);
+  // Stored row by row.
+  return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(v.data(), rows, cols);
+}
+
+void EmitVector(YAML::Emitter& out, const std::string& key, const double* data, long size) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (long i = 0; i < size; ++i) out << data[i];
+  out << YAML::EndSeq;
+}
+
+void EmitMatrix(YAML::Emitter& out, const std::string& key, const Eigen::MatrixXd& m) {
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = m;
+  EmitVector(out, key, rows.data(), rows.size());
+}
+
+}  // namespace
+
+Eigen::Vector3d OmniPredictor::PredictDelta(const double* inputs) const {
+  const long n = info_.layout.num_inputs();
+  const Eigen::Map<const Eigen::VectorXd> x(inputs, n);
+  if (info_.kind == "mlp") return mlp_.Predict(x);
+  scratch_ = (x - input_mean_).cwiseQuotient(input_scale_);
+  return weights_ * scratch_ + bias_;
+}
+
+Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands) const {
+  double inputs[256];
+  std::vector<double> big;
+  double* x = inputs;
+  if (info_.layout.num_inputs() > 256) {
+    big.resize(static_cast<std::size_t>(info_.layout.num_inputs()));
+    x = big.data();
+  }
+  EncodeInputs(info_.layout, poses, commands, x);
+  return ApplyDelta(poses[info_.layout.history - 1], PredictDelta(x));
+}
+
+void OmniPredictor::CheckUse(const OmniModel& model, double frame_rate, int horizon, const std::string& use) const {
+  const SourceLocation where{path_};
+  if (info_.model_name != model.name)
+    throw InputError(where, "predictor was trained for model '" + info_.model_name + "', not '" + model.name +
+                                "' (" + use + ")");
+  if (std::abs(info_.frame_rate - frame_rate) > 0.01 * frame_rate) {
+    std::ostringstream msg;
+    msg << "predictor was trained at " << info_.frame_rate << " fps, " << use << " runs at " << frame_rate << " fps";
+    throw InputError(where, msg.str());
+  }
+  if (info_.layout.horizon != horizon)
+    throw InputError(where, "predictor predicts " + std::to_string(info_.layout.horizon) + " frame(s) ahead, " + use +
+                                " needs " + std::to_string(horizon));
+  const int delay = model.command_delay_frames + model.vision_delay_frames;
+  if (info_.layout.command_lag != delay)
+    throw InputError(where, "predictor assumes a delay of " + std::to_string(info_.layout.command_lag) +
+                                " frames, model '" + model.name + "' has " + std::to_string(delay));
+}
+
+void OmniPredictor::Save(const std::string& path) const {
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << YAML::BeginMap;
+  out << YAML::Key << "twinsim_predictor" << YAML::Value << kPredictorFormatVersion;
+  out << YAML::Key << "kind" << YAML::Value << info_.kind;
+  out << YAML::Key << "model" << YAML::Value << info_.model_name;
+  out << YAML::Key << "frame_rate" << YAML::Value << info_.frame_rate;
+  out << YAML::Key << "layout" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "history" << YAML::Value << info_.layout.history;
+  out << YAML::Key << "horizon" << YAML::Value << info_.layout.horizon;
+  out << YAML::Key << "command_lag" << YAML::Value << info_.layout.command_lag;
+  out << YAML::Key << "inputs" << YAML::Value << info_.layout.num_inputs();
+  out << YAML::Key << "outputs" << YAML::Value << FeatureLayout::kNumOutputs;
+  out << YAML::EndMap;
+  out << YAML::Key << "trained_on" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "logs" << YAML::Value << YAML::BeginSeq;
+  for (const auto& l : info_.logs) out << l;
+  out << YAML::EndSeq;
+  out << YAML::Key << "samples" << YAML::Value << info_.samples;
+  out << YAML::Key << "train_rmse" << YAML::Value << info_.train_rmse;
+  out << YAML::Key << "validation_rmse" << YAML::Value << info_.validation_rmse;
+  out << YAML::EndMap;
+  if (info_.kind == "linear") {
+    out << YAML::Key << "linear" << YAML::Value << YAML::BeginMap;
+    EmitVector(out, "input_mean", input_mean_.data(), input_mean_.size());
+    EmitVector(out, "input_scale", input_scale_.data(), input_scale_.size());
+    EmitMatrix(out, "weights", weights_);
+    EmitVector(out, "bias", bias_.data(), 3);
+    out << YAML::EndMap;
+  } else {
+    const Mlp::Parameters& p = mlp_.parameters();
+    out << YAML::Key << "mlp" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "layers" << YAML::Value << YAML::Flow << p.layer_sizes;
+    EmitVector(out, "input_mean", p.input_mean.data(), p.input_mean.size());
+    EmitVector(out, "input_scale", p.input_scale.data(), p.input_scale.size());
+    EmitVector(out, "output_mean", p.output_mean.data(), p.output_mean.size());
+    EmitVector(out, "output_scale", p.output_scale.data(), p.output_scale.size());
+    for (std::size_t l = 0; l < p.weights.size(); ++l) {
+      EmitMatrix(out, "weights" + std::to_string(l), p.weights[l]);
+      EmitVector(out, "biases" + std::to_string(l), p.biases[l].data(), p.biases[l].size());
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  WriteFileAtomically(path, std::string(out.c_str()) + "\n");
+}
+
+OmniPredictor OmniPredictor::Load(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  ErrorList errors;
+  YamlMap top(root, path, "", &errors);
+  int version = 0;
+  if (!top.Require("twinsim_predictor", &version)) errors.ThrowIfAny();
+  if (version != kPredictorFormatVersion) {
+    top.Error("twinsim_predictor", "predictor format version " + std::to_string(version) +
+                                       " is not supported (this build reads version " +
+                                       std::to_string(kPredictorFormatVersion) + ")");
+    errors.ThrowIfAny();
+  }
+  OmniPredictorInfo info;
+  top.Require("kind", &info.kind, std::vector<std::string>{"linear", "mlp"});
+  top.Require("model", &info.model_name);
+  top.Require("frame_rate", &info.frame_rate, Positive());
+  if (top.Has("layout")) {
+    YamlMap l(top.Child("layout"), path, "layout", &errors);
+    l.Require("history", &info.layout.history, InRange(1, 100));
+    l.Require("horizon", &info.layout.horizon, InRange(1, 100));
+    l.Require("command_lag", &info.layout.command_lag, InRange(0, 100));
+    int inputs = 0, outputs = 0;
+    if (l.Require("inputs", &inputs) && inputs != info.layout.num_inputs())
+      l.Error("inputs", "does not match history and horizon (expected " + std::to_string(info.layout.num_inputs()) + ")");
+    if (l.Require("outputs", &outputs) && outputs != FeatureLayout::kNumOutputs)
+      l.Error("outputs", "expected 3");
+    l.Finish();
+  } else {
+    top.Missing("layout");
+  }
+  if (top.Has("trained_on")) {
+    YamlMap t(top.Child("trained_on"), path, "trained_on", &errors);
+    YAML::Node logs = t.Child("logs");
+    if (logs.IsSequence())
+      for (const auto& l : logs) info.logs.push_back(l.Scalar());
+    t.Get("samples", &info.samples);
+    t.Get("train_rmse", &info.train_rmse);
+    t.Get("validation_rmse", &info.validation_rmse);
+    t.Finish();
+  }
+  errors.ThrowIfAny();
+
+  const int in = info.layout.num_inputs();
+  OmniPredictor p;
+  if (info.kind == "linear") {
+    top.Child("mlp");
+    YamlMap m(top.Child("linear"), path, "linear", &errors);
+    Eigen::VectorXd mean = ReadVector(m, "input_mean", in);
+    Eigen::VectorXd scale = ReadVector(m, "input_scale", in);
+    Eigen::MatrixXd weights = ReadMatrix(m, "weights", 3, in);
+    Eigen::VectorXd bias = ReadVector(m, "bias", 3);
+    m.Finish();
+    if (errors.empty() && (scale.array() <= 0).any()) m.Error("input_scale", "must be positive");
+    top.Finish();
+    errors.ThrowIfAny();
+    p = MakeLinearPredictor(info, mean, scale, weights, bias);
+  } else {
+    top.Child("linear");
+    YamlMap m(top.Child("mlp"), path, "mlp", &errors);
+    Mlp::Parameters params;
+    std::vector<double> layers;
+    if (m.Require("layers", &layers)) {
+      for (double s : layers) params.layer_sizes.push_back(static_cast<int>(s));
+      if (params.layer_sizes.size() < 2 || params.layer_sizes.front() != in || params.layer_sizes.back() != 3)
+        m.Error("layers", "must run from " + std::to_string(in) + " inputs to 3 outputs");
+    }
+    errors.ThrowIfAny();
+    const auto& sizes = params.layer_sizes;
+    params.input_mean = ReadVector(m, "input_mean", in);
+    params.input_scale = ReadVector(m, "input_scale", in);
+    params.output_mean = ReadVector(m, "output_mean", 3);
+    params.output_scale = ReadVector(m, "output_scale", 3);
+    for (std::size_t l = 0; l + 1 < sizes.size(); ++l) {
+      params.weights.push_back(ReadMatrix(m, "weights" + std::to_string(l), sizes[l + 1], sizes[l]));
+      params.biases.push_back(ReadVector(m, "biases" + std::to_string(l), sizes[l + 1]));
+    }
+    m.Finish();
+    top.Finish();
+    errors.ThrowIfAny();
+    try {
+      p = MakeMlpPredictor(info, Mlp::FromParameters(std::move(params)));
+    } catch (const std::invalid_argument& e) {
+      throw InputError(SourceLocation{path}, std::string("corrupt neural network: ") + e.what());
+    }
+  }
+  p.path_ = path;
+  return p;
+}
+
+std::string OmniTrainOptions::Validate() const {
+  if (kind != "linear" && kind != "mlp") return "--kind must be linear or mlp, got '" + kind + "'";
+  if (horizon < 1 || horizon > 30) return "--horizon must be 1 to 30 frames, got " + std::to_string(horizon);
+  if (ridge < 0) return "ridge must not be negative";
+  if (validation_fraction <= 0 || validation_fraction >= 0.9) return "validation fraction must be in (0, 0.9)";
+  if (kind == "mlp") return mlp.Validate();
+  return "";
+}
+
+std::string OmniTrainSummary::BriefReport() const {
+  std::ostringstream s;
+  s << samples << " samples (" << train_samples << " for training), position RMSE " << train_rmse * 1000
+    << " mm on training, " << validation_rmse * 1000 << " mm held out, " << seconds << " s";
+  if (!mlp_report.empty()) s << "; " << mlp_report;
+  return s.str();
+}
+
+OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
+                                 const OmniTrainOptions& options, OmniTrainSummary* summary,
+                                 const std::function<void(int, int, double)>& progress) {
+  const std::string problem = options.Validate();
+  if (!problem.empty()) throw InputError(problem);
+  if (logs.empty()) throw InputError("no logs to train on");
+
+  OmniPredictorInfo info;
+  info.kind = options.kind;
+  info.model_name = model.name;
+  info.frame_rate = 1.0 / logs[0].frame_period;
+  info.layout.horizon = options.horizon;
+  info.layout.command_lag = model.command_delay_frames + model.vision_delay_frames;
+
+  // Per log: the first part trains, the last part validates (time order kept).
+  OmniDataset train, validation;
+  for (const OmniLog& log : logs) {
+    if (std::abs(1.0 / log.frame_period - info.frame_rate) > 0.01 * info.frame_rate) {
+      std::ostringstream msg;
+      msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info.frame_rate << " fps";
+      throw InputError(SourceLocation{log.path}, msg.str());
+    }
+    OmniDataset d;
+    const int added = AppendSamples(log, info.layout, &d);
+    const int needed = info.layout.history + info.layout.command_lag + info.layout.horizon + 1;
+    if (added < 10)
+      throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows.size()) +
+                                                     " rows give " + std::to_string(added) +
+                                                     " complete windows (each needs " + std::to_string(needed) +
+                                                     " consecutive frames; at least 10 windows wanted)");
+    const int n_val = std::max(1, static_cast<int>(std::round(added * options.validation_fraction)));
+    const int n_train = added - n_val;
+    auto append = [](OmniDataset* to, const Eigen::MatrixXd& x, const Eigen::MatrixXd& y) {
+      const long r = to->x.rows();
+      to->x.conservativeResize(r + x.rows(), x.cols());
+      to->y.conservativeResize(r + y.rows(), y.cols());
+      to->x.bottomRows(x.rows()) = x;
+      to->y.bottomRows(y.rows()) = y;
+    };
+    if (train.x.cols() == 0) {
+      train.x.resize(0, d.x.cols());
+      train.y.resize(0, 3);
+      validation.x.resize(0, d.x.cols());
+      validation.y.resize(0, 3);
+    }
+    append(&train, d.x.topRows(n_train), d.y.topRows(n_train));
+    append(&validation, d.x.bottomRows(n_val), d.y.bottomRows(n_val));
+    info.logs.push_back(log.path);
+  }
+  info.samples = train.rows() + validation.rows();
+
+  const auto start = std::chrono::steady_clock::now();
+  OmniPredictor predictor;
+  std::string mlp_report;
+  if (options.kind == "linear") {
+    // Ridge regression on standardised inputs, closed form.
+    const Eigen::RowVectorXd mean = train.x.colwise().mean();
+    Eigen::VectorXd scale = ((train.x.rowwise() - mean).array().square().colwise().mean()).sqrt().transpose();
+    for (long i = 0; i < scale.size(); ++i)
+      if (scale[i] < 1e-12) scale[i] = 1;
+    const Eigen::MatrixXd z = (train.x.rowwise() - mean).array().rowwise() / scale.transpose().array();
+    const Eigen::RowVector3d y_mean = train.y.colwise().mean();
+    Eigen::MatrixXd gram = z.transpose() * z;
+    gram.diagonal().array() += options.ridge * static_cast<double>(z.rows());
+    const Eigen::MatrixXd w = gram.ldlt().solve(z.transpose() * (train.y.rowwise() - y_mean));  // in x 3
+    predictor = MakeLinearPredictor(info, mean.transpose(), scale, w.transpose(), y_mean.transpose());
+  } else {
+    Eigen::MatrixXd x(train.rows() + validation.rows(), train.x.cols());
+    Eigen::MatrixXd y(x.rows(), 3);
+    x << train.x, validation.x;
+    y << train.y, validation.y;
+    MlpOptions mlp = options.mlp;
+    mlp.validation_fraction = static_cast<double>(validation.rows()) / static_cast<double>(x.rows());
+    MlpTrainSummary s;
+    Mlp net;
+    try {
+      net = TrainMlp(x, y, mlp, &s, progress);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("cannot train the neural net: ") + e.what());
+    }
+    mlp_report = s.BriefReport();
+    predictor = MakeMlpPredictor(info, std::move(net));
+  }
+
+  auto predict_all = [&](const OmniDataset& d) {
+    Eigen::MatrixXd out(d.rows(), 3);
+    for (int i = 0; i < d.rows(); ++i) {
+      const Eigen::VectorXd row = d.x.row(i).transpose();
+      out.row(i) = predictor.PredictDelta(row.data()).transpose();
+    }
+    return out;
+  };
+  OmniPredictorInfo final_info = info;
+  final_info.train_rmse = PositionRmse(predict_all(train), train.y);
+  final_info.validation_rmse = PositionRmse(predict_all(validation), validation.y);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  predictor.info_ = final_info;
+  if (summary) {
+    summary->samples = info.samples;
+    summary->train_samples = train.rows();
+    summary->train_rmse = final_info.train_rmse;
+    summary->validation_rmse = final_info.validation_rmse;
+    summary->seconds = seconds;
+    summary->mlp_report = mlp_report;
+  }
+  return predictor;
+}
+
+}  // namespace twinsim
