@@ -116,11 +116,12 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
 void NewtonianOmniBackend::SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const {
   const OmniEffects& fx = r.model.effects;
   if (fx.velocity_scale == 1 && fx.rotation_drift == 0) return;
-  // The firmware's kinematics is off by `scale` (a wrong wheel radius), and its yaw
-  // estimate is biased by `rate` per metre, so it drives the robot that much off.
+  // The firmware's wheel radius is off by `scale`, so every body velocity it measures is
+  // `scale` times too small; and its yaw estimate is biased by `rate` per metre
+  // travelled, so it drives the robot that much off.
   const Twist2 v = r.kin.BodyVelocity(*speeds);
   const double s = fx.velocity_scale;
-  *speeds = r.kin.WheelSpeeds(Twist2{v.vx / s, v.vy / s, v.omega - fx.rotation_drift * std::hypot(v.vx, v.vy)});
+  *speeds = r.kin.WheelSpeeds(Twist2{v.vx / s, v.vy / s, (v.omega - fx.rotation_drift * std::hypot(v.vx, v.vy)) / s});
 }
 
 void NewtonianOmniBackend::NetTorques(Robot& r) {

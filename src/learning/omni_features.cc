@@ -1,7 +1,7 @@
 #include "learning/omni_features.h"
 
 #include <cmath>
-#include <map>
+#include <algorithm>
 
 namespace twinsim {
 
@@ -37,52 +37,76 @@ Pose2 ApplyDelta(const Pose2& now, const Eigen::Vector3d& delta) {
   return Pose2{now.x + c * delta[0] - s * delta[1], now.y + s * delta[0] + c * delta[1], now.theta + delta[2]};
 }
 
-int AppendSamples(const OmniLog& log, const FeatureLayout& layout, OmniDataset* data) {
+bool FrameSequence::Complete(int from, int to) const {
+  if (from < 0 || to >= frames()) return false;
+  for (int f = from; f <= to; ++f)
+    if (!observed[static_cast<std::size_t>(f)]) return false;
+  return true;
+}
+
+FrameSequence ToFrameSequence(const OmniLog& log, const FeatureLayout& layout) {
   const std::size_t n = log.rows.size();
-  std::map<int, std::size_t> row_of_frame;
-  for (std::size_t i = 0; i < n; ++i) row_of_frame[log.FrameIndex(i)] = i;
-  const int last = log.FrameIndex(n - 1);
-  // The command logged at each frame, held over lost frames.
-  std::vector<Twist2> logged(static_cast<std::size_t>(last) + 1);
-  for (int f = 0, row = 0; f <= last; ++f) {
+  const int frames = log.FrameIndex(n - 1) + 1;
+  FrameSequence seq;
+  seq.pose.resize(static_cast<std::size_t>(frames));
+  seq.observed.assign(static_cast<std::size_t>(frames), false);
+  seq.acting.resize(static_cast<std::size_t>(frames));
+  seq.first_known_command = layout.command_lag;
+  std::vector<Twist2> logged(static_cast<std::size_t>(frames));
+  for (int f = 0, row = 0; f < frames; ++f) {
+    // The command logged at each frame, held over lost frames.
     while (static_cast<std::size_t>(row + 1) < n && log.FrameIndex(static_cast<std::size_t>(row + 1)) <= f) ++row;
     logged[static_cast<std::size_t>(f)] = log.rows[static_cast<std::size_t>(row)].command;
   }
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto f = static_cast<std::size_t>(log.FrameIndex(i));
+    seq.pose[f] = log.rows[i].pose;
+    seq.observed[f] = true;
+  }
+  for (int f = layout.command_lag; f < frames; ++f)
+    seq.acting[static_cast<std::size_t>(f)] = logged[static_cast<std::size_t>(f - layout.command_lag)];
+  return seq;
+}
 
-  std::vector<Pose2> poses(static_cast<std::size_t>(layout.history));
-  std::vector<Twist2> commands(static_cast<std::size_t>(layout.num_commands()));
-  std::vector<Eigen::VectorXd> xs;
-  std::vector<Eigen::Vector3d> ys;
-  for (int i = layout.history - 1; i + layout.horizon <= last; ++i) {
-    const int first = i - layout.history + 1;
-    if (first - layout.command_lag < 0) continue;
-    bool complete = row_of_frame.count(i + layout.horizon) > 0;
-    for (int j = 0; j < layout.history && complete; ++j) {
-      auto it = row_of_frame.find(first + j);
-      if (it == row_of_frame.end()) complete = false;
-      else poses[static_cast<std::size_t>(j)] = log.rows[it->second].pose;
-    }
-    if (!complete) continue;
-    for (int j = 0; j < layout.num_commands(); ++j)
-      commands[static_cast<std::size_t>(j)] = logged[static_cast<std::size_t>(first + j - layout.command_lag)];
-    Eigen::VectorXd x(layout.num_inputs());
-    EncodeInputs(layout, poses.data(), commands.data(), x.data());
-    xs.push_back(std::move(x));
-    ys.push_back(EncodeDelta(poses.back(), log.rows[row_of_frame[i + layout.horizon]].pose));
+void AppendRows(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, OmniDataset* data) {
+  if (data->x.cols() == 0 && data->x.rows() == 0) {
+    data->x.resize(0, x.cols());
+    data->y.resize(0, y.cols());
   }
-  const int old_rows = data->rows();
-  const int added = static_cast<int>(xs.size());
-  if (old_rows == 0) {
-    data->x.resize(0, layout.num_inputs());
-    data->y.resize(0, FeatureLayout::kNumOutputs);
+  const long r = data->x.rows();
+  data->x.conservativeResize(r + x.rows(), x.cols());
+  data->y.conservativeResize(r + y.rows(), y.cols());
+  data->x.bottomRows(x.rows()) = x;
+  data->y.bottomRows(y.rows()) = y;
+}
+
+int AppendSamples(const FrameSequence& seq, const FeatureLayout& layout, int first, int last, OmniDataset* data) {
+  std::vector<int> ends;
+  for (int i = std::max(first, layout.history - 1); i <= last && i + layout.horizon < seq.frames(); ++i) {
+    const int start = i - layout.history + 1;
+    if (start < seq.first_known_command) continue;
+    if (!seq.Complete(start, i) || !seq.observed[static_cast<std::size_t>(i + layout.horizon)]) continue;
+    ends.push_back(i);
   }
-  data->x.conservativeResize(old_rows + added, layout.num_inputs());
-  data->y.conservativeResize(old_rows + added, FeatureLayout::kNumOutputs);
-  for (int k = 0; k < added; ++k) {
-    data->x.row(old_rows + k) = xs[static_cast<std::size_t>(k)].transpose();
-    data->y.row(old_rows + k) = ys[static_cast<std::size_t>(k)].transpose();
+  Eigen::MatrixXd x(static_cast<long>(ends.size()), layout.num_inputs());
+  Eigen::MatrixXd y(static_cast<long>(ends.size()), FeatureLayout::kNumOutputs);
+  for (std::size_t k = 0; k < ends.size(); ++k) {
+    const int start = ends[k] - layout.history + 1;
+    Eigen::VectorXd row(layout.num_inputs());
+    EncodeInputs(layout, &seq.pose[static_cast<std::size_t>(start)], &seq.acting[static_cast<std::size_t>(start)],
+                 row.data());
+    x.row(static_cast<long>(k)) = row.transpose();
+    y.row(static_cast<long>(k)) = EncodeDelta(seq.pose[static_cast<std::size_t>(ends[k])],
+                                              seq.pose[static_cast<std::size_t>(ends[k] + layout.horizon)])
+                                      .transpose();
   }
-  return added;
+  AppendRows(x, y, data);
+  return static_cast<int>(ends.size());
+}
+
+int AppendSamples(const OmniLog& log, const FeatureLayout& layout, OmniDataset* data) {
+  const FrameSequence seq = ToFrameSequence(log, layout);
+  return AppendSamples(seq, layout, 0, seq.frames() - 1, data);
 }
 
 }  // namespace twinsim

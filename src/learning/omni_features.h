@@ -51,9 +51,27 @@ struct OmniDataset {
   int rows() const { return static_cast<int>(x.rows()); }
 };
 
+// A log laid out by frame index: poses (where a frame was observed) and the command
+// acting at each frame (logged `command_lag` frames earlier; unknown before that).
+struct FrameSequence {
+  std::vector<Pose2> pose;
+  std::vector<bool> observed;
+  std::vector<Twist2> acting;
+  int first_known_command = 0;  // the first frame whose acting command is in the log
+  int frames() const { return static_cast<int>(pose.size()); }
+  // True when frames [from, to] are all observed.
+  bool Complete(int from, int to) const;
+};
+FrameSequence ToFrameSequence(const OmniLog& log, const FeatureLayout& layout);
+
 // Every complete window of a log: frames i-history+1..i and i+H present (lost frames
 // break windows), commands from frame 0 on (earlier ones are unknown). Appends to *data.
 // Returns the number of samples added.
 int AppendSamples(const OmniLog& log, const FeatureLayout& layout, OmniDataset* data);
+// The same from a FrameSequence, for windows whose newest frame lies in [first, last].
+int AppendSamples(const FrameSequence& seq, const FeatureLayout& layout, int first, int last, OmniDataset* data);
+
+// Appends rows (x, y) to a dataset.
+void AppendRows(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, OmniDataset* data);
 
 }  // namespace twinsim

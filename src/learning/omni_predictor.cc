@@ -126,6 +126,7 @@ void OmniPredictor::Save(const std::string& path) const {
   out << YAML::Key << "samples" << YAML::Value << info_.samples;
   out << YAML::Key << "train_rmse" << YAML::Value << info_.train_rmse;
   out << YAML::Key << "validation_rmse" << YAML::Value << info_.validation_rmse;
+  out << YAML::Key << "validation_rollout_rmse" << YAML::Value << info_.validation_rollout_rmse;
   out << YAML::EndMap;
   if (info_.kind == "linear") {
     out << YAML::Key << "linear" << YAML::Value << YAML::BeginMap;
@@ -190,6 +191,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
     t.Get("samples", &info.samples);
     t.Get("train_rmse", &info.train_rmse);
     t.Get("validation_rmse", &info.validation_rmse);
+    t.Get("validation_rollout_rmse", &info.validation_rollout_rmse);
     t.Finish();
   }
   errors.ThrowIfAny();
@@ -254,9 +256,49 @@ std::string OmniTrainSummary::BriefReport() const {
   std::ostringstream s;
   s << samples << " samples (" << train_samples << " for training), position RMSE " << train_rmse * 1000
     << " mm on training, " << validation_rmse * 1000 << " mm held out, " << seconds << " s";
+  if (validation_rollout_rmse > 0)
+    s << "; on its own for 1 s: " << validation_rollout_rmse * 1000 << " mm held out";
   if (!mlp_report.empty()) s << "; " << mlp_report;
   return s.str();
 }
+
+namespace {
+
+// One log's frames, split in time: windows ending before `cut` train, the rest validate.
+struct SplitLog {
+  FrameSequence seq;
+  int cut = 0;
+};
+
+// Runs the 1-frame model on its own from every window ending in [first, last - frames],
+// `frames` steps under the logged acting commands; returns the summed squared position
+// error over all steps and their count.
+std::pair<double, long> Rollouts(const OmniPredictor& model, const FrameSequence& seq, int first, int last,
+                                 int frames) {
+  const FeatureLayout& layout = model.info().layout;
+  const int h = layout.history;
+  std::vector<Pose2> window(static_cast<std::size_t>(h));
+  Eigen::VectorXd x(layout.num_inputs());
+  double sum = 0;
+  long count = 0;
+  for (int s = std::max(first, seq.first_known_command + h - 1); s + frames <= last; ++s) {
+    if (!seq.Complete(s - h + 1, s + frames)) continue;
+    for (int j = 0; j < h; ++j) window[static_cast<std::size_t>(j)] = seq.pose[static_cast<std::size_t>(s - h + 1 + j)];
+    for (int t = 0; t < frames; ++t) {
+      const int i = s + t;
+      EncodeInputs(layout, window.data(), &seq.acting[static_cast<std::size_t>(i - h + 1)], x.data());
+      const Pose2& truth = seq.pose[static_cast<std::size_t>(i + 1)];
+      const Pose2 next = ApplyDelta(window.back(), model.PredictDelta(x.data()));
+      window.erase(window.begin());
+      window.push_back(next);
+      sum += std::pow(next.x - truth.x, 2) + std::pow(next.y - truth.y, 2);
+      ++count;
+    }
+  }
+  return {sum, count};
+}
+
+}  // namespace
 
 OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
                                  const OmniTrainOptions& options, OmniTrainSummary* summary,
@@ -274,73 +316,75 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
 
   // Per log: the first part trains, the last part validates (time order kept).
   OmniDataset train, validation;
+  std::vector<SplitLog> split;
   for (const OmniLog& log : logs) {
     if (std::abs(1.0 / log.frame_period - info.frame_rate) > 0.01 * info.frame_rate) {
       std::ostringstream msg;
       msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info.frame_rate << " fps";
       throw InputError(SourceLocation{log.path}, msg.str());
     }
-    OmniDataset d;
-    const int added = AppendSamples(log, info.layout, &d);
-    const int needed = info.layout.history + info.layout.command_lag + info.layout.horizon + 1;
-    if (added < 10)
+    SplitLog part{ToFrameSequence(log, info.layout), 0};
+    part.cut = static_cast<int>(std::round(part.seq.frames() * (1 - options.validation_fraction)));
+    const int n_train = AppendSamples(part.seq, info.layout, 0, part.cut - 1 - info.layout.horizon, &train);
+    const int n_val = AppendSamples(part.seq, info.layout, part.cut, part.seq.frames() - 1, &validation);
+    const int needed = info.layout.history + info.layout.command_lag + info.layout.horizon;
+    if (n_train < 10 || n_val < 1)
       throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows.size()) +
-                                                     " rows give " + std::to_string(added) +
+                                                     " rows give " + std::to_string(n_train + n_val) +
                                                      " complete windows (each needs " + std::to_string(needed) +
-                                                     " consecutive frames; at least 10 windows wanted)");
-    const int n_val = std::max(1, static_cast<int>(std::round(added * options.validation_fraction)));
-    const int n_train = added - n_val;
-    auto append = [](OmniDataset* to, const Eigen::MatrixXd& x, const Eigen::MatrixXd& y) {
-      const long r = to->x.rows();
-      to->x.conservativeResize(r + x.rows(), x.cols());
-      to->y.conservativeResize(r + y.rows(), y.cols());
-      to->x.bottomRows(x.rows()) = x;
-      to->y.bottomRows(y.rows()) = y;
-    };
-    if (train.x.cols() == 0) {
-      train.x.resize(0, d.x.cols());
-      train.y.resize(0, 3);
-      validation.x.resize(0, d.x.cols());
-      validation.y.resize(0, 3);
-    }
-    append(&train, d.x.topRows(n_train), d.y.topRows(n_train));
-    append(&validation, d.x.bottomRows(n_val), d.y.bottomRows(n_val));
+                                                     " consecutive frames; at least 13 windows wanted)");
     info.logs.push_back(log.path);
+    split.push_back(std::move(part));
   }
   info.samples = train.rows() + validation.rows();
 
   const auto start = std::chrono::steady_clock::now();
-  OmniPredictor predictor;
   std::string mlp_report;
-  if (options.kind == "linear") {
-    // Ridge regression on standardised inputs, closed form.
-    const Eigen::RowVectorXd mean = train.x.colwise().mean();
-    Eigen::VectorXd scale = ((train.x.rowwise() - mean).array().square().colwise().mean()).sqrt().transpose();
-    for (long i = 0; i < scale.size(); ++i)
-      if (scale[i] < 1e-12) scale[i] = 1;
-    const Eigen::MatrixXd z = (train.x.rowwise() - mean).array().rowwise() / scale.transpose().array();
-    const Eigen::RowVector3d y_mean = train.y.colwise().mean();
-    Eigen::MatrixXd gram = z.transpose() * z;
-    gram.diagonal().array() += options.ridge * static_cast<double>(z.rows());
-    const Eigen::MatrixXd w = gram.ldlt().solve(z.transpose() * (train.y.rowwise() - y_mean));  // in x 3
-    predictor = MakeLinearPredictor(info, mean.transpose(), scale, w.transpose(), y_mean.transpose());
-  } else {
-    Eigen::MatrixXd x(train.rows() + validation.rows(), train.x.cols());
+  auto fit = [&](const OmniDataset& data) {
+    if (options.kind == "linear") {
+      // Ridge regression on standardised inputs, closed form.
+      const Eigen::RowVectorXd mean = data.x.colwise().mean();
+      Eigen::VectorXd scale = ((data.x.rowwise() - mean).array().square().colwise().mean()).sqrt().transpose();
+      for (long i = 0; i < scale.size(); ++i)
+        if (scale[i] < 1e-12) scale[i] = 1;
+      const Eigen::MatrixXd z = (data.x.rowwise() - mean).array().rowwise() / scale.transpose().array();
+      const Eigen::RowVector3d y_mean = data.y.colwise().mean();
+      Eigen::MatrixXd gram = z.transpose() * z;
+      gram.diagonal().array() += options.ridge * static_cast<double>(z.rows());
+      const Eigen::MatrixXd w = gram.ldlt().solve(z.transpose() * (data.y.rowwise() - y_mean));  // in x 3
+      return MakeLinearPredictor(info, mean.transpose(), scale, w.transpose(), y_mean.transpose());
+    }
+    // The network early-stops on the held-out one-step windows, placed last.
+    Eigen::MatrixXd x(data.rows() + validation.rows(), data.x.cols());
     Eigen::MatrixXd y(x.rows(), 3);
-    x << train.x, validation.x;
-    y << train.y, validation.y;
+    x << data.x, validation.x;
+    y << data.y, validation.y;
     MlpOptions mlp = options.mlp;
     mlp.validation_fraction = static_cast<double>(validation.rows()) / static_cast<double>(x.rows());
     MlpTrainSummary s;
     Mlp net;
     try {
       net = TrainMlp(x, y, mlp, &s, progress);
-    } catch (const std::invalid_argument& e) {
+    } catch (const std::exception& e) {
       throw InputError(std::string("cannot train the neural net: ") + e.what());
     }
     mlp_report = s.BriefReport();
-    predictor = MakeMlpPredictor(info, std::move(net));
-  }
+    return MakeMlpPredictor(info, std::move(net));
+  };
+  const int rollout_frames = static_cast<int>(std::lround(info.frame_rate));  // 1 s
+  auto rollout_rmse = [&](const OmniPredictor& model) {
+    double sum = 0;
+    long count = 0;
+    for (const SplitLog& part : split) {
+      auto [s, c] = Rollouts(model, part.seq, part.cut, part.seq.frames() - 1, rollout_frames);
+      sum += s;
+      count += c;
+    }
+    return count ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+  };
+
+  OmniPredictor predictor = fit(train);
+  const double rollout = info.layout.horizon == 1 ? rollout_rmse(predictor) : 0.0;
 
   auto predict_all = [&](const OmniDataset& d) {
     Eigen::MatrixXd out(d.rows(), 3);
@@ -351,6 +395,7 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     return out;
   };
   OmniPredictorInfo final_info = info;
+  final_info.validation_rollout_rmse = rollout;
   final_info.train_rmse = PositionRmse(predict_all(train), train.y);
   final_info.validation_rmse = PositionRmse(predict_all(validation), validation.y);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -362,6 +407,7 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     summary->validation_rmse = final_info.validation_rmse;
     summary->seconds = seconds;
     summary->mlp_report = mlp_report;
+    summary->validation_rollout_rmse = rollout;
   }
   return predictor;
 }

@@ -36,6 +36,7 @@ struct OmniPredictorInfo {
   int samples = 0;                // training + validation samples
   double train_rmse = 0;          // m, position part of the fit on the training split
   double validation_rmse = 0;     // m, on the held-out split (last 20 % of each log)
+  double validation_rollout_rmse = 0;  // m, H = 1: the model run on its own for 1 s, held out
 };
 
 class OmniPredictor {
@@ -90,6 +91,7 @@ struct OmniTrainSummary {
   int train_samples = 0;
   double train_rmse = 0;       // m
   double validation_rmse = 0;  // m
+  double validation_rollout_rmse = 0;  // m, H = 1: the model on its own for 1 s, held out
   double seconds = 0;          // wall time of the fit
   std::string mlp_report;
   std::string BriefReport() const;

@@ -141,6 +141,9 @@ std::vector<CommandSpec::Segment> RandomPlan(const CommandSpec& spec, std::uint6
       s.command.vx = speed * std::cos(direction);
       s.command.vy = speed * std::sin(direction);
       if (rng.Uniform() < spec.rotate_probability) s.command.omega = rng.Uniform(-spec.max_omega, spec.max_omega);
+      // Driving a curve at speed v and turn rate omega takes v * omega of sideways grip.
+      if (spec.max_centripetal > 0 && speed * std::abs(s.command.omega) > spec.max_centripetal)
+        s.command.omega = std::copysign(spec.max_centripetal / speed, s.command.omega);
     }
     s.ramp = rng.Uniform() < spec.ramp_probability;
     plan.push_back(s);

@@ -48,6 +48,7 @@ struct CommandSpec {
   double rest_probability = 0.15;
   double ramp_probability = 0.5;
   double rotate_probability = 0.5;
+  double max_centripetal = 0;     // m/s^2; > 0: turn rate capped so |v| |omega| stays below
   double leash = 0;               // m; > 0: beyond this distance from the start (as last
                                   // observed), translation is turned back towards it
 

@@ -63,6 +63,7 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     m.Get("ramp_probability", &spec->ramp_probability, InRange(0, 1));
     m.Get("rotate_probability", &spec->rotate_probability, InRange(0, 1));
     m.Get("leash", &spec->leash, NonNegative());
+    m.Get("max_centripetal", &spec->max_centripetal, NonNegative());
     if (spec->max_segment < spec->min_segment) m.Error("max_segment", "must not be below min_segment");
   } else if (type == "go_to_pose") {
     m.Get("max_speed", &spec->max_speed, Positive());
