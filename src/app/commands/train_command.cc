@@ -66,6 +66,11 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--seed", options->train.mlp.seed, "Seed of the neural net's initialisation and batches")
       ->capture_default_str();
   cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training")->capture_default_str();
+  cmd->add_option("--hidden", options->train.mlp.hidden, "Hidden layer widths of the neural net (e.g. --hidden 64 64)")
+      ->capture_default_str()
+      ->expected(1, 8);
+  cmd->add_option("--patience", options->train.mlp.patience, "Epochs without held-out improvement before stopping")
+      ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Train(*options); });
 }
