@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   AddRunCommand(app, &exit_code);
   AddReplayCommand(app, &exit_code);
   AddTrainCommand(app, &exit_code);
+  AddCompareCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -16,8 +16,9 @@ inline constexpr int kObservationWindow = 32;
 
 // One observation as delivered to the behaviour.
 struct Observation {
-  int frame = 0;   // camera frame it was captured in
-  double t = 0;    // s, capture time
+  int frame = 0;      // camera frame it was captured in
+  int delivered = 0;  // frame it reached the behaviour (its row in the log)
+  double t = 0;       // s, capture time
   Pose2 pose;      // field frame, with the camera's noise
 };
 

@@ -70,7 +70,8 @@ std::vector<FrameRecord> Simulation::Step() {
     auto& delivered = state_.delivered[k];
     if (arrived) {
       const int captured_frame = state_.frame - m.vision_delay_frames;
-      delivered.push_back(Observation{captured_frame, captured_frame * backend_->timing().frame_dt(), *arrived});
+      delivered.push_back(
+          Observation{captured_frame, state_.frame, captured_frame * backend_->timing().frame_dt(), *arrived});
       if (static_cast<int>(delivered.size()) > kObservationWindow) delivered.erase(delivered.begin());
       rec.observed = true;
       rec.seen = *arrived;

@@ -65,8 +65,48 @@ class GoToPoseSource final : public CommandSource {
  public:
   explicit GoToPoseSource(const CommandSpec& spec) : spec_(spec) {}
   Twist2 Command(const BehaviourInput& in) override {
+    Twist2 cmd = Decide(in);
+    sent_.push_back(cmd);
+    if (sent_.size() > 64) sent_.erase(sent_.begin());
+    return cmd;
+  }
+  std::unique_ptr<CommandSource> Clone() const override { return std::make_unique<GoToPoseSource>(*this); }
+
+ private:
+  // The pose to act on: the newest observation, or with a predictor, where the robot
+  // will be D frames after it, from the last observations and the commands already sent.
+  Pose2 Believed(const BehaviourInput& in) const {
+    const std::vector<Observation>& seen = *in.observations;
+    if (!spec_.predictor) return seen.back().pose;
+    const FeatureLayout& layout = spec_.predictor->info().layout;
+    const int h = layout.history, lag = layout.command_lag;
+    // The window: observations delivered in rows k - h + 1 .. k, k = now.
+    if (static_cast<int>(seen.size()) < h || seen.back().delivered != in.frame) return seen.back().pose;
+    const int newest_row = in.frame;
+    std::vector<Pose2> poses(static_cast<std::size_t>(h));
+    for (int j = 0; j < h; ++j) {
+      const Observation& o = seen[seen.size() - static_cast<std::size_t>(h - j)];
+      if (o.delivered != newest_row - (h - 1 - j)) return seen.back().pose;  // a lost frame
+      poses[static_cast<std::size_t>(j)] = o.pose;
+    }
+    // Commands acting at rows k-h+1 .. k+H-1 were sent `lag` frames earlier; the newest
+    // needed was sent at k+H-1-lag, which is before now when H <= lag.
+    std::vector<Twist2> commands(static_cast<std::size_t>(layout.num_commands()));
+    const int first_sent = newest_row - h + 1 - lag;
+    const int sent_end = newest_row;  // sent_ holds frames sent_end - sent_.size() .. sent_end - 1
+    for (int j = 0; j < layout.num_commands(); ++j) {
+      const int frame = first_sent + j;
+      const int back = sent_end - frame;  // 1 = the previous frame's command
+      if (frame < 0) continue;            // before the run: the robot stood still
+      if (back < 1 || back > static_cast<int>(sent_.size())) return seen.back().pose;
+      commands[static_cast<std::size_t>(j)] = sent_[sent_.size() - static_cast<std::size_t>(back)];
+    }
+    return spec_.predictor->Predict(poses.data(), commands.data());
+  }
+
+  Twist2 Decide(const BehaviourInput& in) {
     if (!in.observations || in.observations->empty() || target_ >= spec_.targets.size()) return Twist2{};
-    const Pose2& seen = in.observations->back().pose;
+    const Pose2 seen = Believed(in);
     const Pose2& goal = spec_.targets[target_];
     const double dx = goal.x - seen.x, dy = goal.y - seen.y;
     const double distance = std::hypot(dx, dy);
@@ -90,12 +130,11 @@ class GoToPoseSource final : public CommandSource {
     }
     return FieldToBody(field, seen.theta);
   }
-  std::unique_ptr<CommandSource> Clone() const override { return std::make_unique<GoToPoseSource>(*this); }
 
- private:
   CommandSpec spec_;
   std::size_t target_ = 0;
   std::optional<double> inside_since_;
+  std::vector<Twist2> sent_;  // the commands sent so far (recent window), oldest first
 };
 
 // Keeps a drive near its start as seen through the delayed observations: outside the

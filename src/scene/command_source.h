@@ -15,6 +15,7 @@
 
 #include "core/behaviour.h"
 #include "core/pose.h"
+#include "learning/omni_predictor.h"
 
 namespace twinsim {
 
@@ -59,6 +60,11 @@ struct CommandSpec {
   double position_tolerance = 0.02;    // m
   double angle_tolerance = 0.05;       // rad
   double hold = 0.5;                   // s inside the tolerance before the next target
+  // "Predicting away the delay" (seed 000, section 4.1): with a predictor whose horizon
+  // is the model's delay D, the behaviour acts on where the robot will be when the
+  // command it sends now takes effect, not on the D-frame-old observation.
+  std::string predictor_path;
+  std::shared_ptr<const OmniPredictor> predictor;
 };
 
 // Builds the source. `seed` and `robot_index` seed random plans; `duration` (s) is how

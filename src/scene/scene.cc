@@ -75,6 +75,16 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     if (m.Get("angle_tolerance_deg", &angle_tolerance_deg, Positive()))
       spec->angle_tolerance = angle_tolerance_deg * M_PI / 180;
     m.Get("hold", &spec->hold, NonNegative());
+    if (m.Get("predictor", &spec->predictor_path)) {
+      std::filesystem::path p(spec->predictor_path);
+      if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
+      spec->predictor_path = p.lexically_normal().string();
+      try {
+        spec->predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(spec->predictor_path));
+      } catch (const InputError& e) {
+        errors->Add(e.what());
+      }
+    }
     YAML::Node targets = m.Child("targets");
     if (!targets.IsDefined()) {
       m.Missing("targets");
@@ -165,6 +175,14 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
   errors.ThrowIfAny();
 
   for (const auto& r : scene.robots) {
+    if (r.commands.predictor) {
+      const int delay = r.model.command_delay_frames + r.model.vision_delay_frames;
+      try {
+        r.commands.predictor->CheckUse(r.model, scene.frame_rate, delay, "go_to_pose of robot '" + r.name + "'");
+      } catch (const InputError& e) {
+        errors.Add(e.what());
+      }
+    }
     if (std::abs(r.start.x) > scene.field.length / 2 || std::abs(r.start.y) > scene.field.width / 2)
       errors.Add(SourceLocation{path}, "robot '" + r.name + "' starts outside the field");
   }

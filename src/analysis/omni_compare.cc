@@ -1,0 +1,220 @@
+#include "analysis/omni_compare.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <sstream>
+
+#include "core/error.h"
+#include "io/csv_table.h"
+
+namespace twinsim {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / kPi;
+
+bool IsLabelChar(char c) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
+         c == '.';
+}
+
+// Replay work of one run, in frames stepped: the tracker plus K frames per prediction.
+long RunWeight(const OmniLog& log, int horizon) {
+  const long frames = log.FrameIndex(log.rows.size() - 1) + 1;
+  return frames * (horizon + 1);
+}
+
+}  // namespace
+
+std::string OmniCompareOptions::Validate() const {
+  std::ostringstream problems;
+  if (sources.empty()) problems << "no source to compare\n";
+  std::set<std::string> labels;
+  for (const CompareSource& s : sources) {
+    if (s.label.empty() || !std::all_of(s.label.begin(), s.label.end(), IsLabelChar))
+      problems << "source label '" << s.label << "' must be letters, digits, '_', '-' or '.'\n";
+    else if (s.label == "measured" || s.label == "t")
+      problems << "source label '" << s.label << "' is taken by the measured columns\n";
+    else if (!labels.insert(s.label).second)
+      problems << "source '" << s.label << "' given twice\n";
+  }
+  if (horizons.empty()) problems << "no horizon to compare at\n";
+  std::set<int> seen;
+  for (int k : horizons) {
+    if (k < 0) problems << "horizon must be 0 (free run) or more frames, got " << k << "\n";
+    else if (!seen.insert(k).second) problems << "horizon " << k << " given twice\n";
+  }
+  std::string out = problems.str();
+  if (!out.empty()) out.pop_back();
+  return out;
+}
+
+const CompareErrorRow* OmniCompareResult::Find(const std::string& source, int horizon_frames) const {
+  for (const CompareErrorRow& r : rows)
+    if (r.source == source && r.horizon_frames == horizon_frames) return &r;
+  return nullptr;
+}
+
+std::string OmniCompareResult::Report() const {
+  // Sources down, horizons across; a cell is "RMSE mm / RMSE deg".
+  std::vector<std::string> sources;
+  for (const CompareErrorRow& r : rows)
+    if (std::find(sources.begin(), sources.end(), r.source) == sources.end()) sources.push_back(r.source);
+  std::size_t first_width = std::string("source").size();
+  for (const auto& s : sources) first_width = std::max(first_width, s.size());
+  std::vector<std::vector<std::string>> cells(sources.size(), std::vector<std::string>(horizons.size(), "-"));
+  std::vector<std::size_t> widths(horizons.size());
+  for (std::size_t h = 0; h < horizons.size(); ++h) {
+    widths[h] = HorizonLabel(horizons[h], frame_rate).size();
+    for (std::size_t s = 0; s < sources.size(); ++s) {
+      const CompareErrorRow* r = Find(sources[s], horizons[h]);
+      if (r && r->predicted > 0) {
+        char cell[64];
+        std::snprintf(cell, sizeof cell, "%.1f / %.2f", r->position_rmse * 1000, r->heading_rmse * kRadToDeg);
+        cells[s][h] = cell;
+      }
+      widths[h] = std::max(widths[h], cells[s][h].size());
+    }
+  }
+  std::ostringstream out;
+  out << "position RMSE (mm) / heading RMSE (deg) of the predicted rows, by prediction horizon\n";
+  auto pad = [](const std::string& s, std::size_t w) { return s + std::string(w - s.size(), ' '); };
+  auto lpad = [](const std::string& s, std::size_t w) { return std::string(w - s.size(), ' ') + s; };
+  out << pad("source", first_width);
+  for (std::size_t h = 0; h < horizons.size(); ++h) out << "   " << lpad(HorizonLabel(horizons[h], frame_rate), widths[h]);
+  out << "\n";
+  for (std::size_t s = 0; s < sources.size(); ++s) {
+    out << pad(sources[s], first_width);
+    for (std::size_t h = 0; h < horizons.size(); ++h) out << "   " << lpad(cells[s][h], widths[h]);
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::vector<int> DefaultCompareHorizons(double frame_rate) {
+  std::vector<int> out;
+  for (int k : {1, 4, static_cast<int>(std::lround(frame_rate)), 0})
+    if (k >= 0 && std::find(out.begin(), out.end(), k) == out.end()) out.push_back(k);
+  return out;
+}
+
+std::string HorizonLabel(int frames, double frame_rate) {
+  if (frames == 0) return "free run";
+  if (frames == 1) return "1 frame";
+  if (frames == std::lround(frame_rate)) return "1 s";
+  return std::to_string(frames) + " frames";
+}
+
+CompareErrorRow MeasurePredictionErrors(const OmniLog& log, const OmniReplayResult& result) {
+  CompareErrorRow out;
+  double sum_position = 0, sum_heading = 0;
+  for (std::size_t i = 0; i < result.t.size(); ++i) {
+    if (!result.predicted[i]) continue;
+    const Pose2& p = result.pose[i];
+    const Pose2& m = log.rows[i].pose;
+    const double d2 = (p.x - m.x) * (p.x - m.x) + (p.y - m.y) * (p.y - m.y);
+    const double dtheta = WrapAngle(p.theta - m.theta);
+    sum_position += d2;
+    sum_heading += dtheta * dtheta;
+    out.position_max = std::max(out.position_max, std::sqrt(d2));
+    ++out.predicted;
+  }
+  if (out.predicted > 0) {
+    out.position_rmse = std::sqrt(sum_position / out.predicted);
+    out.heading_rmse = std::sqrt(sum_heading / out.predicted);
+  }
+  return out;
+}
+
+OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options,
+                                 const std::function<void(long, long, const std::string&)>& progress) {
+  const std::string problem = options.Validate();
+  if (!problem.empty()) throw InputError(problem);
+  const double frame_rate = 1.0 / log.frame_period;
+
+  // Every source must build before any runs: a bad name or predictor fails at once.
+  FrameTiming timing;
+  timing.frame_rate = frame_rate;
+  timing.physics_substeps = DefaultPhysicsSubsteps(frame_rate);
+  FieldModel field;
+  field.walls = false;
+  for (const CompareSource& s : options.sources) MakeOmniBackend(s.backend, {model}, field, timing, s.backend_options);
+
+  // A horizon no row can be predicted at would report nothing; say so instead. The
+  // replay's tracker starts at frame D (or the second row) and predicts K frames ahead
+  // once it has run kWarmUpFrames.
+  const int delay = model.command_delay_frames + model.vision_delay_frames;
+  const int last_frame = log.FrameIndex(log.rows.size() - 1);
+  const int longest = *std::max_element(options.horizons.begin(), options.horizons.end());
+  const int needed = std::max(delay, log.FrameIndex(1)) + kWarmUpFrames + longest;
+  if (longest > 0 && last_frame < needed) {
+    std::ostringstream msg;
+    msg << "log of " << last_frame + 1 << " frames is too short to compare at the " << HorizonLabel(longest, frame_rate)
+        << " horizon (" << longest << " frames): needs at least " << needed + 1 << " frames (delay " << delay
+        << ", warm-up " << kWarmUpFrames << ", horizon " << longest << ")";
+    throw InputError(SourceLocation{log.path}, msg.str());
+  }
+
+  long total = 0;
+  for (std::size_t s = 0; s < options.sources.size(); ++s)
+    for (int k : options.horizons) total += RunWeight(log, k);
+
+  OmniCompareResult out;
+  out.horizons = options.horizons;
+  out.frame_rate = frame_rate;
+  long done = 0;
+  for (const CompareSource& source : options.sources) {
+    for (int k : options.horizons) {
+      OmniReplayOptions replay;
+      replay.backend = source.backend;
+      replay.backend_options = source.backend_options;
+      replay.horizon = k;
+      const long weight = RunWeight(log, k);
+      const std::string what = source.label + ", " + HorizonLabel(k, frame_rate);
+      const OmniReplayResult result = ReplayOmniLog(model, log, replay, [&](int d, int t) {
+        if (progress && t > 0) progress(done + weight * std::min(d, t) / t, total, what);
+      });
+      done += weight;
+
+      CompareErrorRow row = MeasurePredictionErrors(log, result);
+      row.source = source.label;
+      row.backend = source.backend;
+      row.horizon = HorizonLabel(k, frame_rate);
+      row.horizon_frames = k;
+      out.rows.push_back(row);
+      if (k == 0) out.free_runs.push_back({source.label, result.t, result.pose});
+    }
+  }
+  if (progress) progress(total, total, "");
+  return out;
+}
+
+std::string FormatCompareErrorsCsv(const OmniCompareResult& result) {
+  std::ostringstream out;
+  out << "source,backend,horizon,horizon_frames,predicted,position_rmse,position_max,heading_rmse\n";
+  for (const CompareErrorRow& r : result.rows)
+    out << r.source << "," << r.backend << "," << r.horizon << "," << r.horizon_frames << "," << r.predicted << ","
+        << FormatCsvNumber(r.position_rmse) << "," << FormatCsvNumber(r.position_max) << ","
+        << FormatCsvNumber(r.heading_rmse) << "\n";
+  return out.str();
+}
+
+std::string FormatComparePathsCsv(const OmniLog& log, const OmniCompareResult& result) {
+  std::ostringstream out;
+  out << "t,measured_x,measured_y,measured_theta";
+  for (const ComparePath& p : result.free_runs) out << "," << p.source << "_x," << p.source << "_y," << p.source << "_theta";
+  out << "\n";
+  for (std::size_t i = 0; i < log.rows.size(); ++i) {
+    const OmniLogRow& m = log.rows[i];
+    out << FormatCsvNumber(m.t) << "," << FormatCsvNumber(m.pose.x) << "," << FormatCsvNumber(m.pose.y) << ","
+        << FormatCsvNumber(m.pose.theta);
+    for (const ComparePath& p : result.free_runs)
+      out << "," << FormatCsvNumber(p.pose[i].x) << "," << FormatCsvNumber(p.pose[i].y) << ","
+          << FormatCsvNumber(p.pose[i].theta);
+    out << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace twinsim

@@ -1,0 +1,99 @@
+// Comparing sources of prediction (physics backends, a learned predictor) on one
+// measured omni log (`twinsim compare`).
+//
+// Every source replays the log (omni_replay.h) at every horizon: K = 1 frame, 4 frames
+// (the model's usual delay), 1 s (round(frame rate) frames) and a free run from the
+// first row (K = 0). Each (source, horizon) gives the errors of the predicted rows
+// against the measured poses; each source's free run is kept as a path to plot.
+//
+//   OmniCompareOptions options;
+//   options.sources = {{"ode", "ode", {}}, {"analytic", "analytic", {}}};
+//   options.horizons = DefaultCompareHorizons(1.0 / log.frame_period);
+//   OmniCompareResult r = CompareOmniLog(model, log, options);
+//   std::puts(r.Report().c_str());
+//   WriteFileAtomically("errors.csv", FormatCompareErrorsCsv(r));
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "analysis/omni_replay.h"
+#include "backends/omni_backend.h"
+#include "core/pose.h"
+#include "io/omni_log.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+// One thing that predicts: a backend, with its options.
+struct CompareSource {
+  std::string label;               // names the source in the outputs (letters, digits, '_', '-', '.')
+  std::string backend;             // ode, bullet, analytic or learned
+  BackendOptions backend_options;  // the 1-frame predictor, for learned
+};
+
+struct OmniCompareOptions {
+  std::vector<CompareSource> sources;
+  std::vector<int> horizons;  // frames; 0 = free run
+
+  // Returns an empty string when valid, else every problem (one per line).
+  std::string Validate() const;
+};
+
+// The errors of one source's predictions at one horizon, over the predicted rows.
+struct CompareErrorRow {
+  std::string source;         // the source's label
+  std::string backend;
+  std::string horizon;        // "1 frame", "4 frames", "1 s", "free run"
+  int horizon_frames = 0;     // K; 0 = free run
+  int predicted = 0;          // rows predicted (the others held the measurement)
+  double position_rmse = 0;   // m
+  double position_max = 0;    // m
+  double heading_rmse = 0;    // rad, differences wrapped to [-pi, pi)
+};
+
+// One source's free run: the predicted pose at every log row (row 0 is the measurement).
+struct ComparePath {
+  std::string source;
+  std::vector<double> t;    // s, one per log row
+  std::vector<Pose2> pose;  // theta on the log's unwrapped branch
+};
+
+struct OmniCompareResult {
+  std::vector<CompareErrorRow> rows;   // per source, per horizon, in the options' order
+  std::vector<ComparePath> free_runs;  // per source, when the horizons include 0
+  std::vector<int> horizons;           // as given
+  double frame_rate = 0;               // Hz, of the log
+
+  // The row of `source` at `horizon_frames`; nullptr when there is none.
+  const CompareErrorRow* Find(const std::string& source, int horizon_frames) const;
+  // A table: sources down, horizons across, position RMSE in mm and heading RMSE in
+  // degrees.
+  std::string Report() const;
+};
+
+// 1 frame, 4 frames, 1 s (round(frame_rate) frames) and free run (0), without repeats.
+std::vector<int> DefaultCompareHorizons(double frame_rate);
+// "free run", "1 frame", "1 s" (when frames == round(frame_rate)) or "K frames".
+std::string HorizonLabel(int frames, double frame_rate);
+
+// The errors of a replay's predicted rows against the log's poses (horizon fields left
+// empty).
+CompareErrorRow MeasurePredictionErrors(const OmniLog& log, const OmniReplayResult& result);
+
+// Replays `log` through `model` on every source at every horizon. Checks every source
+// first (builds its backend once) and throws InputError for invalid options, an
+// unknown or uncompiled backend, a learned source without a fitting predictor, or a log
+// too short for the longest horizon; CheckFailed when a model diverges. `progress`
+// gets (done, total) in arbitrary units and what is running ("ode, 1 s").
+OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options,
+                                 const std::function<void(long, long, const std::string&)>& progress = {});
+
+// errors.csv: `source,backend,horizon,horizon_frames,predicted,position_rmse,position_max,heading_rmse`.
+std::string FormatCompareErrorsCsv(const OmniCompareResult& result);
+// paths.csv: `t,measured_x,measured_y,measured_theta,<label>_x,<label>_y,<label>_theta,...`,
+// one row per log row, the free run of every source.
+std::string FormatComparePathsCsv(const OmniLog& log, const OmniCompareResult& result);
+
+}  // namespace twinsim

@@ -1,0 +1,216 @@
+#include "analysis/omni_compare.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/simulation.h"
+#include "io/csv_table.h"
+#include "learning/omni_predictor.h"
+#include "scene/command_source.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A log recorded from `model` on the analytic backend, without camera noise.
+OmniLog RecordLog(OmniModel model, double seconds) {
+  model.vision_noise_xy = model.vision_noise_theta = 0;
+  CommandSpec random;
+  random.type = "random";
+  random.max_speed = 1.5;
+  FrameTiming timing;
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(random, 21, 0, seconds, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend("analytic", {model}, FieldModel{}, timing), 21);
+  SimulationResult r = sim.Run(static_cast<int>(seconds * 30) + 1);
+  std::vector<OmniLogRow> rows;
+  for (const auto& f : r.frames[0]) rows.push_back({f.t, f.seen, f.command});
+  return ParseOmniLog(FormatOmniLog(rows), "recorded.csv");
+}
+
+OmniCompareOptions AnalyticAtDefaultHorizons() {
+  OmniCompareOptions options;
+  options.sources = {{"analytic", "analytic", {}}};
+  options.horizons = DefaultCompareHorizons(30);
+  return options;
+}
+
+std::string InputErrorOf(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options) {
+  try {
+    CompareOmniLog(model, log, options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no InputError)";
+}
+
+TEST(OmniCompare, DefaultHorizonsAreOneFrameFourFramesOneSecondAndFreeRun) {
+  EXPECT_EQ(DefaultCompareHorizons(30), (std::vector<int>{1, 4, 30, 0}));
+  EXPECT_EQ(DefaultCompareHorizons(59.94), (std::vector<int>{1, 4, 60, 0}));
+  EXPECT_EQ(HorizonLabel(1, 30), "1 frame");
+  EXPECT_EQ(HorizonLabel(4, 30), "4 frames");
+  EXPECT_EQ(HorizonLabel(30, 30), "1 s");
+  EXPECT_EQ(HorizonLabel(0, 30), "free run");
+}
+
+TEST(OmniCompare, TheRecordingModelPredictsItsOwnLogAtEveryHorizon) {
+  // An ideal encoder: with counts, the CSV's rounding (1e-9) of the measured poses
+  // flips a count now and then, and the controller's reaction to it shows as ~1e-6 m.
+  OmniModel model = testing::Omni4();
+  model.encoder_counts_per_rev = 0;
+  const OmniLog log = RecordLog(model, 8);
+  const OmniCompareResult r = CompareOmniLog(model, log, AnalyticAtDefaultHorizons());
+  ASSERT_EQ(r.rows.size(), 4u);
+  for (const CompareErrorRow& row : r.rows) {
+    EXPECT_EQ(row.source, "analytic");
+    EXPECT_GT(row.predicted, 100) << row.horizon;
+    // Only the CSV's rounding (1e-9) separates the replay from the recording; a free
+    // run carries it along without correction.
+    const double tolerance = row.horizon_frames == 0 ? 1e-3 : 1e-6;
+    EXPECT_LT(row.position_rmse, tolerance) << row.horizon;
+    EXPECT_LT(row.position_max, tolerance) << row.horizon;
+    EXPECT_LT(row.heading_rmse, tolerance) << row.horizon;
+  }
+  EXPECT_EQ(r.Find("analytic", 0)->predicted, static_cast<int>(log.rows.size()) - 1);
+
+  // The wrong delay shows at 4 frames: the commands act 4 frames early.
+  OmniModel no_delay = model;
+  no_delay.command_delay_frames = no_delay.vision_delay_frames = 0;
+  OmniCompareOptions four = AnalyticAtDefaultHorizons();
+  four.horizons = {4};
+  const CompareErrorRow wrong = CompareOmniLog(no_delay, log, four).rows.at(0);
+  EXPECT_GT(wrong.position_rmse, 1e-3) << "delay 0 predicts 4 frames ahead to " << wrong.position_rmse << " m";
+  EXPECT_GT(wrong.position_rmse, 1000 * r.Find("analytic", 4)->position_rmse);
+}
+
+TEST(OmniCompare, ErrorsGrowWithTheHorizonForAMismatchedModel) {
+  // The plant has effects (delay, lag, scale, drift, saturation) the model lacks.
+  const OmniLog log = RecordLog(LoadOmniModel(testing::SourcePath("models/omni4_plant.yaml")), 8);
+  const OmniCompareResult r = CompareOmniLog(testing::Omni4(), log, AnalyticAtDefaultHorizons());
+  const double one = r.Find("analytic", 1)->position_rmse;
+  const double four = r.Find("analytic", 4)->position_rmse;
+  const double second = r.Find("analytic", 30)->position_rmse;
+  EXPECT_LT(one, four);
+  EXPECT_LT(four, second);
+  EXPECT_GT(second, 0.01) << "1 s ahead, a 15 % speed error alone is centimetres";
+  EXPECT_LT(r.Find("analytic", 1)->heading_rmse, r.Find("analytic", 30)->heading_rmse);
+  for (const CompareErrorRow& row : r.rows) EXPECT_LE(row.position_rmse, row.position_max) << row.horizon;
+}
+
+TEST(OmniCompare, CsvsHaveOneRowPerSourceAndHorizonAndOnePathRowPerLogRow) {
+  const OmniModel model = testing::Omni4();
+  const OmniLog log = RecordLog(model, 3);
+  OmniCompareOptions options = AnalyticAtDefaultHorizons();
+  options.sources.push_back({"again", "analytic", {}});
+  const OmniCompareResult r = CompareOmniLog(model, log, options);
+
+  std::istringstream errors(FormatCompareErrorsCsv(r));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(errors, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 1u + 2 * 4);
+  EXPECT_EQ(lines[0], "source,backend,horizon,horizon_frames,predicted,position_rmse,position_max,heading_rmse");
+  EXPECT_EQ(lines[1].rfind("analytic,analytic,1 frame,1,", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[7].rfind("again,analytic,1 s,30,", 0), 0u) << lines[7];
+  EXPECT_EQ(lines[8].rfind("again,analytic,free run,0,", 0), 0u) << lines[8];
+
+  const CsvTable paths = ParseCsvTable(FormatComparePathsCsv(log, r), "paths.csv");
+  EXPECT_EQ(paths.header, (std::vector<std::string>{"t", "measured_x", "measured_y", "measured_theta", "analytic_x",
+                                                    "analytic_y", "analytic_theta", "again_x", "again_y",
+                                                    "again_theta"}));
+  ASSERT_EQ(paths.rows.size(), log.rows.size());
+  EXPECT_NEAR(paths.rows.back()[4], log.rows.back().pose.x, 1e-3);
+
+  const std::string report = r.Report();
+  EXPECT_NE(report.find("free run"), std::string::npos) << report;
+  EXPECT_NE(report.find("again"), std::string::npos) << report;
+}
+
+TEST(OmniCompare, BadOptionsAreInputErrorsNamingTheProblem) {
+  const OmniModel model = testing::Omni4();
+  const OmniLog log = RecordLog(model, 1.5);
+  OmniCompareOptions options = AnalyticAtDefaultHorizons();
+  options.sources = {{"warp", "warp", {}}};
+  options.horizons = {1};
+  EXPECT_NE(InputErrorOf(model, log, options).find("unknown physics backend 'warp'"), std::string::npos);
+  options.sources = {{"a", "analytic", {}}, {"a", "analytic", {}}};
+  EXPECT_NE(InputErrorOf(model, log, options).find("source 'a' given twice"), std::string::npos);
+  options.sources = {{"learned", "learned", {}}};
+  EXPECT_NE(InputErrorOf(model, log, options).find("needs a predictor"), std::string::npos);
+  // 46 frames cannot hold delay 4 + warm-up 15 + 30 frames ahead.
+  options.sources = {{"analytic", "analytic", {}}};
+  options.horizons = {30};
+  EXPECT_NE(InputErrorOf(model, log, options).find("recorded.csv: log of 46 frames is too short to compare at the 1 s"),
+            std::string::npos)
+      << InputErrorOf(model, log, options);
+}
+
+// The command line: files, rows, exit codes.
+class CompareCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = testing::TempDir("compare_cli");
+    log_path = dir + "/log.csv";
+    const OmniLog log = RecordLog(testing::Omni4(), 4);
+    WriteOmniLog(log_path, log.rows);
+  }
+  std::string Predictor(const std::string& model_name) {
+    OmniModel model = testing::Omni4();
+    model.name = model_name;
+    const std::string path = dir + "/" + model_name + ".pred";
+    TrainOmniPredictor(model, {ReadOmniLog(log_path)}, OmniTrainOptions{}).Save(path);
+    return path;
+  }
+  std::string Args(const std::string& out) const {
+    return "compare --model " + testing::SourcePath("models/omni4.yaml") + " --log " + log_path + " --out " + out;
+  }
+  std::string dir, log_path;
+};
+
+TEST_F(CompareCli, WritesErrorsForEveryBackendAndHorizonAndThePaths) {
+  const std::string out = dir + "/out";
+  auto r = testing::RunTwinsim(Args(out) + " --backend analytic --backend learned --predictor " + Predictor("omni4"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string errors = testing::ReadText(out + "/errors.csv");
+  EXPECT_EQ(errors.rfind("source,backend,horizon,horizon_frames,predicted,position_rmse,position_max,heading_rmse\n", 0),
+            0u)
+      << errors;
+  EXPECT_EQ(std::count(errors.begin(), errors.end(), '\n'), 1 + 2 * 4) << errors;
+  EXPECT_NE(errors.find("\nlearned,learned,free run,0,"), std::string::npos) << errors;
+  const std::string paths = testing::ReadText(out + "/paths.csv");
+  EXPECT_EQ(paths.rfind("t,measured_x,measured_y,measured_theta,analytic_x,analytic_y,analytic_theta,learned_x,", 0), 0u);
+  EXPECT_NE(r.out.find("free run"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(out + "/errors.csv"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(out + "/paths.csv"), std::string::npos) << r.out;
+
+  auto help = testing::RunTwinsim("compare --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("free run"), std::string::npos) << help.out;
+  EXPECT_NE(help.out.find("paths.csv"), std::string::npos) << help.out;
+}
+
+TEST_F(CompareCli, BadBackendIsBadInputAndWritesNothing) {
+  const std::string out = dir + "/out";
+  auto r = testing::RunTwinsim(Args(out) + " --backend analytic --backend warp");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown physics backend 'warp'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(CompareCli, PredictorForAnotherModelIsBadInputAndWritesNothing) {
+  const std::string out = dir + "/out";
+  const std::string predictor = Predictor("omni4_other");
+  auto r = testing::RunTwinsim(Args(out) + " --backend analytic --predictor " + predictor);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(predictor + ": predictor was trained for model 'omni4_other', not 'omni4'"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace twinsim
