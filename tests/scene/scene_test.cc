@@ -20,7 +20,8 @@ std::string ErrorOf(const std::string& yaml) {
 }
 
 TEST(Scene, ShippedScenesLoad) {
-  for (const char* name : {"drive45", "steps", "figure_eight", "go_to_pose", "random_excitation"}) {
+  for (const char* name : {"drive45", "steps", "figure_eight", "go_to_pose", "random_excitation", "record_plant",
+                           "go_to_pose_straight", "go_to_pose_predicted"}) {
     Scene s = LoadScene(SourcePath(std::string("scenes/") + name + ".yaml"));
     EXPECT_EQ(s.name, name);
     EXPECT_FALSE(s.robots.empty());
