@@ -14,7 +14,7 @@ void EncodeInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2*
     *out++ = c * dx + s * dy;
     *out++ = -s * dx + c * dy;
     *out++ = std::sin(dtheta);
-    *out++ = std::cos(dtheta);
+    *out++ = std::cos(dtheta) - 1;  // so that a robot at rest has all-zero inputs
     *out++ = commands[j].vx;
     *out++ = commands[j].vy;
     *out++ = commands[j].omega;

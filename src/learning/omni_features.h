@@ -2,8 +2,9 @@
 //
 // Inputs at frame i: the last `history` = 6 frames j = i-5..i, each as 7 numbers:
 //   the pose of frame j relative to frame i, in the robot frame of frame i (dx, dy, m),
-//   the heading difference as sin and cos, and the command acting at frame j (vx, vy,
-//   omega in the robot's frame at the time it was sent).
+//   the heading difference as sin and cos (stored as cos - 1, so that a robot standing
+//   still with zero commands has all-zero inputs), and the command acting at frame j
+//   (vx, vy, omega in the robot's frame at the time it was sent).
 // 6 x 7 = 42 inputs, as the seed has. The command "at" a frame is the one that acts on
 // the robot then: the one logged D = command + vision delay frames earlier (the model's
 // delay, stored in the layout). So a predictor learns the robot's dynamics, and the

@@ -29,6 +29,9 @@ OmniPredictor MakeMlpPredictor(OmniPredictorInfo info, Mlp mlp) {
   OmniPredictor p;
   p.info_ = std::move(info);
   p.mlp_ = std::move(mlp);
+  // A robot at rest with zero commands stays at rest: the network's answer there is
+  // subtracted everywhere (training puts it near zero already).
+  p.mlp_at_rest_ = p.mlp_.Predict(Eigen::VectorXd::Zero(p.info_.layout.num_inputs()));
   return p;
 }
 
@@ -68,7 +71,7 @@ void EmitMatrix(YAML::Emitter& out, const std::string& key, const Eigen::MatrixX
 Eigen::Vector3d OmniPredictor::PredictDelta(const double* inputs) const {
   const long n = info_.layout.num_inputs();
   const Eigen::Map<const Eigen::VectorXd> x(inputs, n);
-  if (info_.kind == "mlp") return mlp_.Predict(x);
+  if (info_.kind == "mlp") return mlp_.Predict(x) - mlp_at_rest_;
   scratch_ = (x - input_mean_).cwiseQuotient(input_scale_);
   return weights_ * scratch_ + bias_;
 }
@@ -342,23 +345,25 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
   std::string mlp_report;
   auto fit = [&](const OmniDataset& data) {
     if (options.kind == "linear") {
-      // Ridge regression on standardised inputs, closed form.
-      const Eigen::RowVectorXd mean = data.x.colwise().mean();
-      Eigen::VectorXd scale = ((data.x.rowwise() - mean).array().square().colwise().mean()).sqrt().transpose();
+      // Ridge regression on scaled inputs, closed form, through the origin: all-zero
+      // inputs are a robot at rest with zero commands, which must stay at rest.
+      Eigen::VectorXd scale = data.x.array().square().colwise().mean().sqrt().transpose();
       for (long i = 0; i < scale.size(); ++i)
         if (scale[i] < 1e-12) scale[i] = 1;
-      const Eigen::MatrixXd z = (data.x.rowwise() - mean).array().rowwise() / scale.transpose().array();
-      const Eigen::RowVector3d y_mean = data.y.colwise().mean();
+      const Eigen::MatrixXd z = data.x.array().rowwise() / scale.transpose().array();
       Eigen::MatrixXd gram = z.transpose() * z;
       gram.diagonal().array() += options.ridge * static_cast<double>(z.rows());
-      const Eigen::MatrixXd w = gram.ldlt().solve(z.transpose() * (data.y.rowwise() - y_mean));  // in x 3
-      return MakeLinearPredictor(info, mean.transpose(), scale, w.transpose(), y_mean.transpose());
+      const Eigen::MatrixXd w = gram.ldlt().solve(z.transpose() * data.y);  // in x 3
+      return MakeLinearPredictor(info, Eigen::VectorXd::Zero(z.cols()), scale, w.transpose(), Eigen::Vector3d::Zero());
     }
-    // The network early-stops on the held-out one-step windows, placed last.
-    Eigen::MatrixXd x(data.rows() + validation.rows(), data.x.cols());
+    // The network early-stops on the held-out one-step windows, placed last. Standing
+    // still (all-zero inputs, no motion) is added to what it learns: real logs hold rest
+    // only under camera noise.
+    const long rest = std::max<long>(1, data.rows() / 50);
+    Eigen::MatrixXd x(data.rows() + rest + validation.rows(), data.x.cols());
     Eigen::MatrixXd y(x.rows(), 3);
-    x << data.x, validation.x;
-    y << data.y, validation.y;
+    x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols()), validation.x;
+    y << data.y, Eigen::MatrixXd::Zero(rest, 3), validation.y;
     MlpOptions mlp = options.mlp;
     mlp.validation_fraction = static_cast<double>(validation.rows()) / static_cast<double>(x.rows());
     MlpTrainSummary s;

@@ -73,6 +73,7 @@ class OmniPredictor {
   Eigen::MatrixXd weights_;                   // 3 x in
   Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();
   Mlp mlp_;
+  Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs
   mutable Eigen::VectorXd scratch_;           // in, normalised inputs (linear)
 };
 

@@ -92,3 +92,50 @@ TEST(Cli, ReplayWritesOneRowPerInputRow) {
 
 }  // namespace
 }  // namespace twinsim
+
+namespace twinsim {
+namespace {
+
+TEST(CliLearning, TrainRefusesALogTooShortAndWritesNothing) {
+  const std::string dir = testing::TempDir("train_short");
+  ASSERT_EQ(testing::RunTwinsim("run " + testing::SourcePath("scenes/drive45.yaml") +
+                                " --backend analytic --quiet --out " + dir)
+                .exit_code,
+            0);
+  // drive45 is 4 s: enough rows, but cut it to half a second.
+  std::string log = testing::ReadText(dir + "/trajectory.csv");
+  std::string cut;
+  int lines = 0;
+  for (std::size_t i = 0; i < log.size() && lines < 16; ++i) {
+    cut += log[i];
+    if (log[i] == '\n') ++lines;
+  }
+  testing::WriteText(dir + "/short.csv", cut);
+  auto r = testing::RunTwinsim("train --model " + testing::SourcePath("models/omni4.yaml") + " --log " + dir +
+                               "/short.csv --kind linear --horizon 1 --out " + dir + "/p.pred");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(dir + "/short.csv: log too short"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/p.pred"));
+  auto bad_kind = testing::RunTwinsim("train --model " + testing::SourcePath("models/omni4.yaml") + " --log " + dir +
+                                      "/trajectory.csv --kind forest --out " + dir + "/p.pred");
+  EXPECT_EQ(bad_kind.exit_code, 2);
+}
+
+TEST(CliLearning, LearnedBackendRefusesAPredictorForAnotherRobot) {
+  const std::string dir = testing::TempDir("learned_mismatch");
+  auto r = testing::RunTwinsim("run " + testing::SourcePath("scenes/figure_eight.yaml") +
+                               " --backend learned --predictor " +
+                               testing::SourcePath("models/predictors/omni4_h4.pred") + " --out " + dir + "/o");
+  EXPECT_EQ(r.exit_code, 2);
+  // figure_eight drives omni3 at 60 fps; the shipped predictor is omni4's at 30 fps.
+  EXPECT_NE(r.err.find("predictor was trained for model 'omni4', not 'omni3'"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/o"));
+  auto none = testing::RunTwinsim("run " + testing::SourcePath("scenes/drive45.yaml") + " --backend learned --out " +
+                                  dir + "/o");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("the learned backend needs a predictor: pass --predictor FILE"), std::string::npos)
+      << none.err;
+}
+
+}  // namespace
+}  // namespace twinsim
