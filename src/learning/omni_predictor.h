@@ -25,7 +25,7 @@
 
 namespace twinsim {
 
-inline constexpr int kPredictorFormatVersion = 1;
+inline constexpr int kPredictorFormatVersion = 2;  // 2: heading as (sin, cos - 1)
 
 struct OmniPredictorInfo {
   std::string kind;           // "linear" or "mlp"

@@ -161,7 +161,7 @@ TEST(OmniPredictorFile, CorruptFilesAreInputErrors) {
   EXPECT_NE(error_of("twinsim_predictor: 7\n").find("format version 7 is not supported"), std::string::npos);
   EXPECT_NE(error_of("kind: linear\n").find("missing required key 'twinsim_predictor'"), std::string::npos);
   const std::string header =
-      "twinsim_predictor: 1\nkind: linear\nmodel: omni4\nframe_rate: 30\n"
+      "twinsim_predictor: 2\nkind: linear\nmodel: omni4\nframe_rate: 30\n"
       "layout: {history: 6, horizon: 1, command_lag: 4, inputs: 42, outputs: 3}\n";
   EXPECT_NE(error_of(header + "linear: {input_mean: [1, 2], input_scale: [1], weights: [], bias: [0, 0, 0]}\n")
                 .find("'input_mean' in 'linear': expected 42 numbers, got 2"),
