@@ -2,9 +2,12 @@
 // running the twinsim binary.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
+#include "io/omni_log.h"
 #include "robots/omni/omni_model.h"
+#include "scene/command_source.h"
 
 namespace twinsim::testing {
 
@@ -19,6 +22,14 @@ std::string ReadText(const std::string& path);
 // The shipped four- and three-wheel models.
 OmniModel Omni4();
 OmniModel Omni3();
+
+// Seeded random excitation; with a grip cap (m/s^2) and a leash (m) as in
+// scenes/record_plant.yaml, or without (0).
+CommandSpec RandomDrive(double max_speed, double max_centripetal, double leash);
+// Drives `model` from the origin with `commands` for `seconds` on `backend` (30 fps) and
+// returns what its observer logged, as if read from a file called `name`.
+OmniLog RecordLog(const OmniModel& model, const CommandSpec& commands, double seconds, std::uint64_t seed,
+                  const std::string& backend = "analytic", const std::string& name = "recorded.csv");
 
 struct CommandResult {
   int exit_code = -1;

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/simulation.h"
 #include "test_util.h"
 
 namespace twinsim::testing {
@@ -34,6 +35,27 @@ std::string ReadText(const std::string& path) {
 
 OmniModel Omni4() { return LoadOmniModel(SourcePath("models/omni4.yaml")); }
 OmniModel Omni3() { return LoadOmniModel(SourcePath("models/omni3.yaml")); }
+
+CommandSpec RandomDrive(double max_speed, double max_centripetal, double leash) {
+  CommandSpec spec;
+  spec.type = "random";
+  spec.max_speed = max_speed;
+  spec.max_centripetal = max_centripetal;
+  spec.leash = leash;
+  return spec;
+}
+
+OmniLog RecordLog(const OmniModel& model, const CommandSpec& commands, double seconds, std::uint64_t seed,
+                  const std::string& backend, const std::string& name) {
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(commands, seed, 0, seconds, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, FrameTiming{}), seed);
+  const SimulationResult r = sim.Run(static_cast<int>(seconds * 30) + 1);
+  std::vector<OmniLogRow> rows;
+  for (const auto& f : r.frames[0])
+    if (f.observed) rows.push_back({f.t, f.seen, f.command});
+  return ParseOmniLog(FormatOmniLog(rows), name);
+}
 
 CommandResult RunTwinsim(const std::string& args) {
   const std::string dir = TempDir("cmd");

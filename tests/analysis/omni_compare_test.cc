@@ -21,17 +21,7 @@ namespace fs = std::filesystem;
 // A log recorded from `model` on the analytic backend, without camera noise.
 OmniLog RecordLog(OmniModel model, double seconds) {
   model.vision_noise_xy = model.vision_noise_theta = 0;
-  CommandSpec random;
-  random.type = "random";
-  random.max_speed = 1.5;
-  FrameTiming timing;
-  std::vector<SimRobot> robots;
-  robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(random, 21, 0, seconds, Pose2{})});
-  Simulation sim(std::move(robots), MakeOmniBackend("analytic", {model}, FieldModel{}, timing), 21);
-  SimulationResult r = sim.Run(static_cast<int>(seconds * 30) + 1);
-  std::vector<OmniLogRow> rows;
-  for (const auto& f : r.frames[0]) rows.push_back({f.t, f.seen, f.command});
-  return ParseOmniLog(FormatOmniLog(rows), "recorded.csv");
+  return testing::RecordLog(model, testing::RandomDrive(1.5, 0, 0), seconds, 21);
 }
 
 OmniCompareOptions AnalyticAtDefaultHorizons() {

@@ -19,21 +19,11 @@ class LearnedBackend : public ::testing::TestWithParam<std::string> {
     static std::map<std::string, std::shared_ptr<const OmniPredictor>> cache;
     if (cache.count(kind)) return cache[kind];
     const OmniModel m = testing::Omni4();
-    CommandSpec random;
-    random.type = "random";
-    random.max_centripetal = 2.0;
-    random.leash = 2.0;
-    std::vector<SimRobot> robots;
-    robots.push_back(SimRobot{"r", m, Pose2{}, MakeCommandSource(random, 3, 0, 180, Pose2{})});
-    Simulation sim(std::move(robots), MakeOmniBackend("analytic", {m}, FieldModel{}, FrameTiming{}), 3);
-    const SimulationResult r = sim.Run(5401);
-    std::vector<OmniLogRow> rows;
-    for (const auto& f : r.frames[0]) rows.push_back({f.t, f.seen, f.command});
+    const OmniLog drive = testing::RecordLog(m, testing::RandomDrive(2.0, 2.0, 2.0), 180, 3, "analytic", "drive.csv");
     OmniTrainOptions options;
     options.kind = kind;
     options.mlp.max_epochs = 60;
-    cache[kind] = std::make_shared<OmniPredictor>(
-        TrainOmniPredictor(m, {ParseOmniLog(FormatOmniLog(rows), "drive.csv")}, options));
+    cache[kind] = std::make_shared<OmniPredictor>(TrainOmniPredictor(m, {drive}, options));
     return cache[kind];
   }
 

@@ -19,18 +19,7 @@ namespace {
 // observer saw it.
 OmniLog Record(const OmniModel& model, double seconds, std::uint64_t seed, const std::string& name,
                const std::string& backend = "analytic") {
-  CommandSpec random;
-  random.type = "random";
-  random.max_centripetal = 2.0;
-  random.leash = 2.0;
-  std::vector<SimRobot> robots;
-  robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(random, seed, 0, seconds, Pose2{})});
-  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, FrameTiming{}), seed);
-  const SimulationResult r = sim.Run(static_cast<int>(seconds * 30) + 1);
-  std::vector<OmniLogRow> rows;
-  for (const auto& f : r.frames[0])
-    if (f.observed) rows.push_back({f.t, f.seen, f.command});
-  return ParseOmniLog(FormatOmniLog(rows), name);
+  return testing::RecordLog(model, testing::RandomDrive(2.0, 2.0, 2.0), seconds, seed, backend, name);
 }
 
 TEST(OmniFeatures, DeltaRoundTrip) {

@@ -40,20 +40,11 @@ Approach DriveToTarget(const OmniModel& model, std::shared_ptr<const OmniPredict
 TEST(GoToPose, PredictingAwayTheDelayRemovesTheOvershoot) {
   const OmniModel model = testing::Omni4();
   // A 4-frame predictor learned from five minutes of random driving of the same robot.
-  CommandSpec random;
-  random.type = "random";
-  random.max_centripetal = 2.0;
-  random.leash = 2.0;
-  std::vector<SimRobot> robots;
-  robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(random, 7, 0, 300, Pose2{})});
-  Simulation recorder(std::move(robots), MakeOmniBackend("analytic", {model}, FieldModel{}, FrameTiming{}), 7);
-  const SimulationResult drive = recorder.Run(9001);
-  std::vector<OmniLogRow> rows;
-  for (const auto& f : drive.frames[0]) rows.push_back({f.t, f.seen, f.command});
+  const OmniLog drive = testing::RecordLog(model, testing::RandomDrive(2.0, 2.0, 2.0), 300, 7, "analytic", "drive.csv");
   OmniTrainOptions options;
   options.horizon = 4;
   auto predictor = std::make_shared<OmniPredictor>(
-      TrainOmniPredictor(model, {ParseOmniLog(FormatOmniLog(rows), "drive.csv")}, options));
+      TrainOmniPredictor(model, {drive}, options));
 
   const Approach plain = DriveToTarget(model, nullptr);
   const Approach predicted = DriveToTarget(model, predictor);
