@@ -334,8 +334,9 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     if (n_train < 10 || n_val < 1)
       throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows.size()) +
                                                      " rows give " + std::to_string(n_train + n_val) +
-                                                     " complete windows (each needs " + std::to_string(needed) +
-                                                     " consecutive frames; at least 13 windows wanted)");
+                                                     " complete windows (" + std::to_string(needed) +
+                                                     " consecutive frames each; at least 10 to train on and 1 "
+                                                     "held out are needed)");
     info.logs.push_back(log.path);
     split.push_back(std::move(part));
   }
