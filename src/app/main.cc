@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   AddReplayCommand(app, &exit_code);
   AddTrainCommand(app, &exit_code);
   AddCompareCommand(app, &exit_code);
+  AddRegressCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -171,6 +171,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       scene.robots.push_back(std::move(robot));
     }
   }
+  scene.plots = ReadPlotSpecs(top, "plots");
   top.Finish();
   errors.ThrowIfAny();
 

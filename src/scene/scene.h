@@ -1,6 +1,7 @@
 // A scene: which robots, on which field, driven by what, for how long, at which camera
-// rate, on which backend, with which seed. Loaded from YAML (docs/scenes.md) into plain
-// structs, validated as a whole, and turned into a Simulation by MakeSimulation().
+// rate, on which backend, with which seed, and which plots `twinsim run` draws. Loaded
+// from YAML (docs/scenes.md, docs/rendering.md) into plain structs, validated as a
+// whole, and turned into a Simulation by MakeSimulation().
 #pragma once
 
 #include <cstdint>
@@ -10,6 +11,7 @@
 
 #include "backends/omni_backend.h"
 #include "core/simulation.h"
+#include "render/plot_spec.h"
 #include "scene/command_source.h"
 
 namespace twinsim {
@@ -32,6 +34,7 @@ struct Scene {
   std::uint64_t seed = 1;
   FieldModel field;
   std::vector<SceneRobot> robots;
+  std::vector<PlotSpec> plots;   // PNGs `twinsim run` draws (docs/rendering.md)
 
   FrameTiming timing() const;
   // Number of frames from t = 0 to `duration` inclusive.

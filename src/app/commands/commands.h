@@ -11,5 +11,6 @@ void AddRunCommand(CLI::App& app, int* exit_code);
 void AddReplayCommand(CLI::App& app, int* exit_code);
 void AddTrainCommand(CLI::App& app, int* exit_code);
 void AddCompareCommand(CLI::App& app, int* exit_code);
+void AddRegressCommand(CLI::App& app, int* exit_code);
 
 }  // namespace twinsim
