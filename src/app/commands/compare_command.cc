@@ -1,4 +1,5 @@
 // `twinsim compare --model MODEL --log LOG.csv --out DIR [--backend B ...] [--predictor P]`
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -11,10 +12,57 @@
 #include "io/atomic_file.h"
 #include "io/omni_log.h"
 #include "io/yaml_reader.h"
+#include "io/png_image.h"
 #include "learning/omni_predictor.h"
+#include "render/plot.h"
+#include "render/renderer.h"
 
 namespace twinsim {
 namespace {
+
+// Seed 000 Fig. 4: the measured path and every model's free run from the same start
+// under the same commands, over the first `seconds` of the log.
+PathPlot FreeRunPlot(const OmniLog& log, const OmniCompareResult& result, const std::string& model, double seconds) {
+  PathPlot plot;
+  plot.title = "The first " + std::to_string(static_cast<int>(seconds)) + " s of " + log.path +
+               ": measured and simulated (" + model + ")";
+  const double t_end = log.rows.front().t + seconds;
+  PlotPath measured{"measured", {}, {}};
+  for (std::size_t i = 0; i < log.rows.size() && log.rows[i].t <= t_end; ++i) {
+    measured.poses.push_back(log.rows[i].pose);
+    measured.frames.push_back(log.FrameIndex(i));
+  }
+  plot.paths.push_back(std::move(measured));
+  for (const ComparePath& run : result.free_runs) {
+    PlotPath path{run.source, {}, {}};
+    for (std::size_t i = 0; i < run.t.size() && run.t[i] <= t_end; ++i) {
+      path.poses.push_back(run.pose[i]);
+      path.frames.push_back(log.FrameIndex(i));
+    }
+    plot.paths.push_back(std::move(path));
+  }
+  return plot;
+}
+
+// Position error against the prediction horizon, one line per source.
+SeriesPlot ErrorPlot(const OmniCompareResult& result, double frame_rate) {
+  SeriesPlot plot;
+  plot.title = "Prediction error against horizon";
+  plot.x_label = "horizon [s]";
+  plot.y_label = "position RMSE [mm]";
+  plot.height = 700;
+  for (const CompareErrorRow& row : result.rows) {
+    if (row.horizon_frames == 0) continue;  // the free run has no fixed horizon
+    auto it = std::find_if(plot.series.begin(), plot.series.end(), [&](const PlotSeries& s) { return s.name == row.source; });
+    if (it == plot.series.end()) {
+      plot.series.push_back(PlotSeries{row.source, {}, {}});
+      it = plot.series.end() - 1;
+    }
+    it->x.push_back(row.horizon_frames / frame_rate);
+    it->y.push_back(row.position_rmse * 1000);
+  }
+  return plot;
+}
 
 struct CompareCliOptions {
   std::string model;
@@ -22,6 +70,7 @@ struct CompareCliOptions {
   std::string out;
   std::vector<std::string> backends;  // empty: every physics backend built, and learned with --predictor
   std::string predictor;
+  double plot_seconds = 8;  // s of the log drawn in paths.png
   bool quiet = false;
 };
 
@@ -60,12 +109,24 @@ int Compare(const CompareCliOptions& options) {
   const std::string paths_path = options.out + "/paths.csv";
   WriteFileAtomically(errors_path, FormatCompareErrorsCsv(result));
   WriteFileAtomically(paths_path, FormatComparePathsCsv(log, result));
+  std::vector<std::string> written = {errors_path, paths_path};
+  if (RenderingCompiled()) {
+    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
+    const std::string path_png = options.out + "/paths.png", error_png = options.out + "/errors.png";
+    WritePng(path_png, RenderPathPlot(FreeRunPlot(log, result, model.name, options.plot_seconds), *renderer));
+    WritePng(error_png, RenderSeriesPlot(ErrorPlot(result, frame_rate), *renderer));
+    written.push_back(path_png);
+    written.push_back(error_png);
+  } else {
+    std::fprintf(stderr, "compare: warning: plots not drawn: %s\n", kRenderingNotCompiled);
+  }
 
   if (!options.quiet) {
     std::printf("compared %zu rows of %s (%g fps) through %s, delay %d frames\n\n%s\n", log.rows.size(),
                 options.log.c_str(), frame_rate, model.name.c_str(),
                 model.command_delay_frames + model.vision_delay_frames, result.Report().c_str());
-    std::printf("wrote:\n  %s\n  %s\n", errors_path.c_str(), paths_path.c_str());
+    std::printf("wrote:\n");
+    for (const auto& w : written) std::printf("  %s\n", w.c_str());
   }
   return kExitOk;
 }
@@ -95,6 +156,9 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--backend", options->backends,
                   "Backend to compare (repeat --backend): ode, bullet, analytic or learned");
   cmd->add_option("--predictor", options->predictor, "1-frame predictor for the learned backend (from twinsim train)");
+  cmd->add_option("--plot-seconds", options->plot_seconds, "Seconds of the log drawn in paths.png")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Compare(*options); });
 }
