@@ -6,23 +6,6 @@
 namespace twinsim {
 namespace {
 
-// Link i's frame relative to link i-1 at joint position q.
-Eigen::Isometry3d JointTransform(const ArmJoint& j, double q) {
-  Eigen::Isometry3d t = j.origin;
-  if (j.type == JointType::kRevolute) {
-    t.rotate(Eigen::AngleAxisd(q, j.axis));
-  } else {
-    t.translate(j.axis * q);
-  }
-  return t;
-}
-
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
-
 double Sign(double v) { return v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0; }
 
 // RNEA with gravity scaled by `g_scale` (0 drops gravity, for the mass matrix).
@@ -80,6 +63,16 @@ Eigen::VectorXd Rnea(const ArmModel& model, const Eigen::VectorXd& q, const Eige
 }
 
 }  // namespace
+
+Eigen::Isometry3d JointTransform(const ArmJoint& j, double q) {
+  Eigen::Isometry3d t = j.origin;
+  if (j.type == JointType::kRevolute) {
+    t.rotate(Eigen::AngleAxisd(q, j.axis));
+  } else {
+    t.translate(j.axis * q);
+  }
+  return t;
+}
 
 std::vector<Eigen::Isometry3d> ForwardKinematics(const ArmModel& model, const Eigen::VectorXd& q) {
   std::vector<Eigen::Isometry3d> poses;

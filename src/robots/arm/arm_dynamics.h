@@ -17,6 +17,9 @@
 
 namespace twinsim {
 
+// Link i's frame relative to link i-1 at joint position q (rad or m).
+Eigen::Isometry3d JointTransform(const ArmJoint& joint, double q);
+
 // The pose of each link frame in the base frame (dof() entries).
 std::vector<Eigen::Isometry3d> ForwardKinematics(const ArmModel& model, const Eigen::VectorXd& q);
 

@@ -11,7 +11,7 @@
 // frame unless the model says otherwise.
 //
 // Loaded once (LoadArmModel: URDF through urdfdom, or the project's YAML with a DH
-// table, docs/models.md), validated once, never changed by a step.
+// table, docs/arm_models.md), validated once, never changed by a step.
 #pragma once
 
 #include <Eigen/Core>

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
+#include "robots/arm/arm_dynamics.h"
 
 namespace twinsim {
 namespace {
@@ -23,13 +24,6 @@ Eigen::Matrix<double, 3, 6> InertiaMap(const Eigen::Vector3d& v) {
        0, v.x(), 0, v.y(), v.z(), 0,
        0, 0, v.x(), 0, v.y(), v.z();
   return l;
-}
-
-Eigen::Isometry3d JointTransform(const ArmJoint& j, double q) {
-  Eigen::Isometry3d t = j.origin;
-  if (j.type == JointType::kRevolute) t.rotate(Eigen::AngleAxisd(q, j.axis));
-  else t.translate(j.axis * q);
-  return t;
 }
 
 double Sign(double v) { return v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0; }

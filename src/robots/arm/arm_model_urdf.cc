@@ -1,0 +1,256 @@
+// Reading an ArmModel from URDF through urdfdom. The chain is walked from the root link:
+// the root is the fixed base; each revolute, continuous or prismatic joint adds one
+// ArmJoint; fixed joints are lumped into the link before them (the lumped link keeps
+// that link's frame). What urdfdom does not report (branches, loops, floating joints,
+// missing inertials) is found here and reported with the line of the offending element.
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <regex>
+#include <sstream>
+
+#include "core/error.h"
+#include "robots/arm/arm_model.h"
+#include "robots/arm/arm_model_internal.h"
+
+namespace twinsim {
+namespace {
+
+using arm_internal::AddBody;
+using arm_internal::TransformBody;
+
+// urdfdom reports its own parse errors through console_bridge; collect them instead of
+// letting them reach the terminal. console_bridge's handler is global, hence the lock.
+class ConsoleCapture : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors += (errors.empty() ? "" : "; ") + text;
+  }
+  std::string errors;
+};
+
+urdf::ModelInterfaceSharedPtr ParseQuietly(const std::string& xml, std::string* console) {
+  static std::mutex mutex;
+  std::lock_guard<std::mutex> lock(mutex);
+  ConsoleCapture capture;
+  console_bridge::useOutputHandler(&capture);
+  urdf::ModelInterfaceSharedPtr model;
+  try {
+    model = urdf::parseURDF(xml);
+  } catch (const std::exception& e) {
+    capture.errors += (capture.errors.empty() ? "" : "; ") + std::string(e.what());
+  }
+  console_bridge::restorePreviousOutputHandler();
+  *console = capture.errors;
+  return model;
+}
+
+// Finds where elements are defined, since urdfdom keeps no line numbers.
+class LineFinder {
+ public:
+  explicit LineFinder(const std::string& xml) : text_(xml) {
+    // Blank out comments (keeping line breaks) so that commented-out elements never match.
+    for (std::size_t at = text_.find("<!--"); at != std::string::npos; at = text_.find("<!--", at)) {
+      std::size_t end = text_.find("-->", at);
+      end = end == std::string::npos ? text_.size() : end + 3;
+      for (std::size_t k = at; k < end; ++k)
+        if (text_[k] != '\n') text_[k] = ' ';
+      at = end;
+    }
+  }
+
+  // The 1-based line of `<tag ... name="name"`; for joints the definition (with a type
+  // attribute) is preferred over references in transmissions. 0 when not found.
+  int Line(const std::string& tag, const std::string& name) const {
+    static const std::regex kName(R"re(\bname\s*=\s*(["'])(.*?)\1)re");
+    static const std::regex kType(R"re(\btype\s*=)re");
+    std::size_t fallback = std::string::npos;
+    const std::string open = "<" + tag;
+    for (std::size_t at = text_.find(open); at != std::string::npos; at = text_.find(open, at + 1)) {
+      const std::size_t after = at + open.size();
+      if (after >= text_.size() || !std::isspace(static_cast<unsigned char>(text_[after]))) continue;
+      const std::size_t close = text_.find('>', after);
+      const std::string element = text_.substr(after, close == std::string::npos ? std::string::npos : close - after);
+      std::smatch m;
+      if (!std::regex_search(element, m, kName) || m[2].str() != name) continue;
+      if (tag != "joint" || std::regex_search(element, kType)) return LineOf(at);
+      if (fallback == std::string::npos) fallback = at;
+    }
+    return fallback == std::string::npos ? 0 : LineOf(fallback);
+  }
+
+ private:
+  int LineOf(std::size_t offset) const {
+    return 1 + static_cast<int>(std::count(text_.begin(), text_.begin() + offset, '\n'));
+  }
+  std::string text_;
+};
+
+Eigen::Isometry3d ToEigen(const urdf::Pose& pose) {
+  double x, y, z, w;
+  pose.rotation.getQuaternion(x, y, z, w);
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = Eigen::Quaterniond(w, x, y, z).normalized().toRotationMatrix();
+  t.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  return t;
+}
+
+// A link's <inertial> expressed in the link's own frame.
+ArmLink ReadInertial(const urdf::Link& link) {
+  const urdf::Inertial& in = *link.inertial;
+  ArmLink body;
+  body.name = link.name;
+  body.mass = in.mass;
+  body.inertia << in.ixx, in.ixy, in.ixz,
+                  in.ixy, in.iyy, in.iyz,
+                  in.ixz, in.iyz, in.izz;
+  body.com = Eigen::Vector3d::Zero();
+  body = TransformBody(body, ToEigen(in.origin));
+  return body;
+}
+
+std::string JointTypeName(int type) {
+  switch (type) {
+    case urdf::Joint::REVOLUTE: return "revolute";
+    case urdf::Joint::CONTINUOUS: return "continuous";
+    case urdf::Joint::PRISMATIC: return "prismatic";
+    case urdf::Joint::FLOATING: return "floating";
+    case urdf::Joint::PLANAR: return "planar";
+    case urdf::Joint::FIXED: return "fixed";
+    default: return "unknown";
+  }
+}
+
+ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
+  std::string console;
+  const urdf::ModelInterfaceSharedPtr urdf = ParseQuietly(xml, &console);
+  if (!urdf) {
+    std::string message = "not a valid URDF";
+    if (!console.empty()) message += ": " + console;
+    if (console.find("root") != std::string::npos)
+      message += " (a closed loop of joints has no root link; an arm must be a serial chain)";
+    throw InputError(SourceLocation{path}, message);
+  }
+  const LineFinder lines(xml);
+  auto at_joint = [&](const std::string& name) { return SourceLocation{path, lines.Line("joint", name)}; };
+  auto at_link = [&](const std::string& name) { return SourceLocation{path, lines.Line("link", name)}; };
+
+  // Problems anywhere in the file, whether or not the walk below would reach them.
+  ErrorList errors;
+  std::map<std::string, std::vector<std::string>> parents;  // child link -> joints naming it
+  for (const auto& [name, joint] : urdf->joints_) {
+    parents[joint->child_link_name].push_back(name);
+    const int type = joint->type;
+    if (type != urdf::Joint::REVOLUTE && type != urdf::Joint::CONTINUOUS && type != urdf::Joint::PRISMATIC &&
+        type != urdf::Joint::FIXED) {
+      errors.Add(at_joint(name), "joint '" + name + "' is " + JointTypeName(type) +
+                                     "; an arm is a fixed-base serial chain of revolute, continuous, "
+                                     "prismatic and fixed joints");
+    }
+    if (joint->mimic) errors.Add(at_joint(name), "joint '" + name + "' mimics another joint; mimic joints are not supported");
+  }
+  for (const auto& [child, joints] : parents) {
+    if (joints.size() < 2) continue;
+    std::string list;
+    for (const auto& j : joints) list += (list.empty() ? "'" : ", '") + j + "'";
+    errors.Add(at_link(child), "link '" + child + "' is the child of " + std::to_string(joints.size()) +
+                                   " joints (" + list + "): a closed loop, which a serial chain cannot express");
+  }
+  errors.ThrowIfAny();
+
+  ArmModel model;
+  model.name = urdf->getName();
+  model.source_path = path;
+  // From the frame of the last moving link (or the base) to the current URDF link.
+  Eigen::Isometry3d pending = Eigen::Isometry3d::Identity();
+  urdf::LinkConstSharedPtr link = urdf->getRoot();
+  while (link && !link->child_joints.empty()) {
+    if (link->child_joints.size() > 1) {
+      std::string list;
+      for (const auto& j : link->child_joints) list += (list.empty() ? "'" : ", '") + j->name + "'";
+      errors.Add(at_link(link->name), "link '" + link->name + "' has " + std::to_string(link->child_joints.size()) +
+                                          " child joints (" + list + "): a branch; an arm must be a single serial chain");
+      break;
+    }
+    const urdf::JointSharedPtr joint = link->child_joints.front();
+    const urdf::LinkConstSharedPtr child = urdf->getLink(joint->child_link_name);
+    const Eigen::Isometry3d to_joint = pending * ToEigen(joint->parent_to_joint_origin_transform);
+
+    if (joint->type == urdf::Joint::FIXED) {
+      // Rigidly attached: lump its mass into the moving link before it (the base's
+      // attachments carry no load the joints feel). A massless attachment, such as a
+      // flange or tool frame at the tip, is fine.
+      if (!model.joints.empty() && child->inertial) {
+        AddBody(&model.joints.back().child, TransformBody(ReadInertial(*child), to_joint));
+      }
+      pending = to_joint;
+      link = child;
+      continue;
+    }
+
+    ArmJoint j;
+    j.name = joint->name;
+    j.type = joint->type == urdf::Joint::PRISMATIC ? JointType::kPrismatic : JointType::kRevolute;
+    j.origin = to_joint;
+    const Eigen::Vector3d axis(joint->axis.x, joint->axis.y, joint->axis.z);
+    if (axis.norm() < 1e-9) {
+      errors.Add(at_joint(joint->name), "joint '" + joint->name + "' has a zero axis");
+    } else {
+      j.axis = axis.normalized();
+    }
+    if (joint->limits) {
+      if (joint->type != urdf::Joint::CONTINUOUS) {
+        j.lower = joint->limits->lower;
+        j.upper = joint->limits->upper;
+        if (!(j.lower < j.upper)) {
+          std::ostringstream s;
+          s << "joint '" << joint->name << "': lower limit " << j.lower << " must be below upper limit " << j.upper;
+          errors.Add(at_joint(joint->name), s.str());
+        }
+      }
+      j.velocity_limit = joint->limits->velocity;
+      j.effort_limit = joint->limits->effort;
+    }
+    if (joint->dynamics) {
+      j.viscous = joint->dynamics->damping;
+      j.coulomb = joint->dynamics->friction;
+    }
+    if (child->inertial) {
+      j.child = ReadInertial(*child);
+    } else {
+      errors.Add(at_link(child->name), "link '" + child->name + "', moved by joint '" + joint->name +
+                                           "', has no <inertial>; every moving link needs a mass and inertia");
+    }
+    j.child.name = child->name;
+    model.joints.push_back(j);
+    pending = Eigen::Isometry3d::Identity();
+    link = child;
+  }
+  errors.ThrowIfAny();
+  if (model.joints.empty()) throw InputError(SourceLocation{path}, "the URDF has no revolute, continuous or prismatic joint");
+  arm_internal::ThrowIfInvalid(model, path);
+  return model;
+}
+
+}  // namespace
+
+namespace arm_internal {
+
+ArmModel LoadArmUrdfFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(SourceLocation{path}, "cannot open file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return ReadUrdf(buffer.str(), path);
+}
+
+}  // namespace arm_internal
+
+ArmModel LoadArmModelFromUrdfString(const std::string& xml, const std::string& name) { return ReadUrdf(xml, name); }
+
+}  // namespace twinsim

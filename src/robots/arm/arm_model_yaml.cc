@@ -1,0 +1,217 @@
+// Reading an ArmModel from the project's YAML (a DH table with inertial parameters,
+// limits and friction); the schema is documented in docs/arm_models.md.
+//
+// DH rows are converted to the struct's `origin * Rot(z, q)` form. Standard DH,
+//   T_i = RotZ(theta_i + q) TransZ(d_i) TransX(a_i) RotX(alpha_i),
+// splits into Pre_i = RotZ(theta_i) TransZ(d_i), the motion RotZ(q) (or TransZ(q)), and
+// Post_i = TransX(a_i) RotX(alpha_i); the motion commutes with TransZ(d_i), so
+// origin_i = Post_{i-1} Pre_i, and the DH frame i (where the YAML gives link i's
+// inertials) sits at Post_i in the struct's link frame. Modified DH (Craig),
+//   T_i = RotX(alpha_{i-1}) TransX(a_{i-1}) RotZ(theta_i + q) TransZ(d_i),
+// gives origin_i = RotX(alpha_{i-1}) TransX(a_{i-1}) RotZ(theta_i) TransZ(d_i) directly,
+// and its frame i is the struct's link frame.
+#include <cmath>
+#include <filesystem>
+
+#include "core/error.h"
+#include "io/yaml_reader.h"
+#include "robots/arm/arm_model.h"
+#include "robots/arm/arm_model_internal.h"
+
+namespace twinsim {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+Eigen::Isometry3d RotZ(double angle) { return Eigen::Isometry3d(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ())); }
+Eigen::Isometry3d RotX(double angle) { return Eigen::Isometry3d(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())); }
+Eigen::Isometry3d TransZ(double d) { return Eigen::Isometry3d(Eigen::Translation3d(0, 0, d)); }
+Eigen::Isometry3d TransX(double a) { return Eigen::Isometry3d(Eigen::Translation3d(a, 0, 0)); }
+
+struct DhRow {
+  double a = 0;      // m
+  double alpha = 0;  // rad
+  double d = 0;      // m
+  double theta = 0;  // rad, offset added to a revolute joint's q
+};
+
+// Overlays `over` onto `base` in place: mappings merge key by key, anything else
+// (lists included) replaces. Nodes keep their marks, so messages point into the right file.
+void Overlay(YAML::Node base, const YAML::Node& over) {
+  for (auto it = over.begin(); it != over.end(); ++it) {
+    const std::string key = it->first.Scalar();
+    if (base[key].IsMap() && it->second.IsMap()) {
+      Overlay(base[key], it->second);
+    } else {
+      base[key] = it->second;
+    }
+  }
+}
+
+ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int depth);
+
+// Resolves `extends: BASE.yaml` (relative to the file): the base model, checked on its
+// own first, with this file's keys laid over it.
+YAML::Node Resolve(const YAML::Node& root, const std::string& path, int depth) {
+  if (!root["extends"]) return root;
+  const YAML::Node ext = root["extends"];
+  const SourceLocation where{path, ext.Mark().line + 1, ext.Mark().column + 1};
+  if (!ext.IsScalar()) throw InputError(where, "'extends': expected the path of a model file");
+  if (depth > 8) throw InputError(where, "'extends' nested more than 8 deep (a cycle?)");
+  std::filesystem::path base_path(ext.Scalar());
+  if (base_path.is_relative()) base_path = std::filesystem::path(path).parent_path() / base_path;
+  const std::string base_file = base_path.lexically_normal().string();
+  ReadArmModel(LoadYamlFile(base_file), base_file, depth + 1);
+  YAML::Node base = Resolve(LoadYamlFile(base_file), base_file, depth + 1);
+  Overlay(base, root);
+  base.remove("extends");
+  return base;
+}
+
+// Reads mass, centre of mass and inertia [ixx, iyy, izz, ixy, ixz, iyz] (about the
+// centre of mass) of a link or a load.
+void ReadBody(YamlMap& m, ArmLink* body) {
+  m.Require("mass", &body->mass, Positive());
+  std::vector<double> com;
+  if (m.Get("com", &com, 3)) body->com = Eigen::Vector3d(com[0], com[1], com[2]);
+  std::vector<double> i;
+  if (m.Require("inertia", &i, 6)) {
+    body->inertia << i[0], i[3], i[4],
+                     i[3], i[1], i[5],
+                     i[4], i[5], i[2];
+  }
+}
+
+ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int depth) {
+  ErrorList errors;
+  ArmModel model;
+  model.source_path = path;
+  const YAML::Node root = Resolve(file_root, path, depth);
+  YamlMap top(root, path, "", &errors);
+  std::string kind = "arm";
+  top.Get("robot", &kind, {"arm"});
+  top.Has("extends");  // resolved above
+  top.Require("name", &model.name);
+  std::vector<double> gravity;
+  if (top.Get("gravity", &gravity, 3)) model.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
+  top.Get("sample_time", &model.sample_time, Positive());
+  top.Get("delay_samples", &model.delay_samples, InRange(0, 100000));
+  std::string convention;
+  top.Require("dh", &convention, std::vector<std::string>{"standard", "modified"});
+
+  // Link inertials as written: in the DH frame i of the chosen convention.
+  std::vector<DhRow> rows;
+  if (top.Has("joints")) {
+    const YAML::Node list = top.Child("joints");
+    if (!list.IsSequence() || list.size() == 0) {
+      top.Error("joints", "expected a list of joints");
+    } else {
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        const std::string label = "joint " + std::to_string(k + 1);
+        YamlMap jm(list[k], path, label, &errors);
+        ArmJoint j;
+        DhRow row;
+        j.name = "joint" + std::to_string(k + 1);
+        jm.Get("name", &j.name);
+        std::string type = "revolute";
+        jm.Require("type", &type, std::vector<std::string>{"revolute", "prismatic"});
+        j.type = type == "prismatic" ? JointType::kPrismatic : JointType::kRevolute;
+        jm.Require("a", &row.a);
+        if (jm.Require("alpha_deg", &row.alpha)) row.alpha *= kDegToRad;
+        jm.Require("d", &row.d);
+        if (jm.Require("theta_deg", &row.theta)) row.theta *= kDegToRad;
+
+        // Position limits in the joint's natural unit: degrees or metres.
+        const bool revolute = j.type == JointType::kRevolute;
+        const std::string lower_key = revolute ? "lower_deg" : "lower";
+        const std::string upper_key = revolute ? "upper_deg" : "upper";
+        for (const std::string wrong : {revolute ? "lower" : "lower_deg", revolute ? "upper" : "upper_deg"}) {
+          if (jm.Has(wrong)) {
+            jm.Error(wrong, std::string("a ") + type + " joint's limits are '" + lower_key + "' and '" + upper_key + "'");
+          }
+        }
+        const double unit = revolute ? kDegToRad : 1.0;
+        if (jm.Get(lower_key, &j.lower)) j.lower *= unit;
+        if (jm.Get(upper_key, &j.upper)) j.upper *= unit;
+        if (jm.Has(lower_key) && jm.Has(upper_key) && !(j.lower < j.upper)) {
+          jm.Error(upper_key, "must be above '" + lower_key + "'");
+        }
+        jm.Get("velocity_limit", &j.velocity_limit, NonNegative());
+        jm.Get("effort_limit", &j.effort_limit, NonNegative());
+        jm.Get("viscous", &j.viscous, NonNegative());
+        jm.Get("coulomb", &j.coulomb, NonNegative());
+
+        if (jm.Has("link")) {
+          YamlMap lm(jm.Child("link"), path, label + ".link", &errors);
+          j.child.name = "link" + std::to_string(k + 1);
+          lm.Get("name", &j.child.name);
+          ReadBody(lm, &j.child);
+          lm.Finish();
+        } else {
+          jm.Missing("link");
+        }
+        jm.Finish();
+        model.joints.push_back(j);
+        rows.push_back(row);
+      }
+    }
+  } else {
+    top.Missing("joints");
+  }
+
+  // Loads clamped to a link (a rod, a tip mass), in the same frame as that link's inertials.
+  if (top.Has("loads")) {
+    const YAML::Node list = top.Child("loads");
+    if (!list.IsSequence()) {
+      top.Error("loads", "expected a list of loads");
+    } else {
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        YamlMap lm(list[k], path, "load " + std::to_string(k + 1), &errors);
+        ArmLink load;
+        lm.Get("name", &load.name);
+        int on = 0;
+        const int n = static_cast<int>(model.joints.size());
+        const bool where = lm.Require("link", &on, InRange(1, std::max(1, n)));
+        ReadBody(lm, &load);
+        lm.Finish();
+        if (where && on <= n) arm_internal::AddBody(&model.joints[on - 1].child, load);
+      }
+    }
+  }
+  top.Finish();
+  errors.ThrowIfAny();
+
+  const bool standard = convention == "standard";
+  Eigen::Isometry3d previous_post = Eigen::Isometry3d::Identity();
+  for (std::size_t k = 0; k < model.joints.size(); ++k) {
+    ArmJoint& j = model.joints[k];
+    const DhRow& r = rows[k];
+    j.axis = Eigen::Vector3d::UnitZ();
+    if (standard) {
+      const Eigen::Isometry3d post = TransX(r.a) * RotX(r.alpha);
+      j.origin = previous_post * RotZ(r.theta) * TransZ(r.d);
+      j.child = arm_internal::TransformBody(j.child, post);
+      previous_post = post;
+    } else {
+      j.origin = RotX(r.alpha) * TransX(r.a) * RotZ(r.theta) * TransZ(r.d);
+    }
+  }
+  arm_internal::ThrowIfInvalid(model, path);
+  return model;
+}
+
+}  // namespace
+
+namespace arm_internal {
+
+ArmModel LoadArmYamlFile(const std::string& path) { return ReadArmModel(LoadYamlFile(path), path, 0); }
+
+}  // namespace arm_internal
+
+ArmModel LoadArmModelFromYamlString(const std::string& yaml, const std::string& name) {
+  YAML::Node root = LoadYamlString(yaml, name);
+  if (!root.IsMap()) throw InputError(SourceLocation{name, 1}, "expected a YAML mapping at the top level");
+  return ReadArmModel(root, name, 0);
+}
+
+}  // namespace twinsim
