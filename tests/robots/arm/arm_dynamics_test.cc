@@ -9,6 +9,7 @@
 
 #include "core/rng.h"
 #include "robots/arm/arm_regressor.h"
+#include "robots/arm/arm_model.h"
 
 namespace twinsim {
 namespace {
@@ -149,6 +150,30 @@ TEST(ArmBaseParameters, PlanarTwoLinkArmInAVerticalPlaneHasSixInertialBaseParame
     const Eigen::MatrixXd y = Regressor(m, q, qd, qdd);
     EXPECT_LT((base.Reduce(y) * beta - y * pi).norm(), 1e-9);
   }
+}
+
+}  // namespace
+}  // namespace twinsim
+
+namespace twinsim {
+namespace {
+
+TEST(ArmBaseParameters, TheRrrArmHasFifteenInertialBaseParameters) {
+  // Seed 001 section III: the RRR arm's dynamics depend on 15 combinations of its
+  // inertial parameters; with viscous and Coulomb friction on each joint, 21 in all.
+  const ArmModel m = LoadArmModel(std::string(TWINSIM_SOURCE_DIR) + "/models/rrr.yaml");
+  const BaseParameters base = FindBaseParameters(m);
+  EXPECT_EQ(base.rank(), 15 + 6);
+  // Three parallel-axis regroupings of the textbook (Khalil & Dombre) with a2 = 0.4 m:
+  // m3 joins the shoulder's first moment and, times a2^2, its inertias.
+  const Eigen::VectorXd beta = base.from_standard * StandardParameters(m);
+  bool found = false;
+  for (int k = 0; k < base.rank(); ++k)
+    if (base.names[static_cast<std::size_t>(k)].rfind("mcx2 + 0.4 m3", 0) == 0) {
+      found = true;
+      EXPECT_NEAR(beta[k], m.joints[1].child.mass * m.joints[1].child.com.x() + 0.4 * m.joints[2].child.mass, 1e-9);
+    }
+  EXPECT_TRUE(found);
 }
 
 }  // namespace
