@@ -14,6 +14,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "robots/arm/arm_model.h"
 #include "robots/arm/arm_model_internal.h"
@@ -35,37 +36,12 @@ struct DhRow {
   double theta = 0;  // rad, offset added to a revolute joint's q
 };
 
-// Overlays `over` onto `base` in place: mappings merge key by key, anything else
-// (lists included) replaces. Nodes keep their marks, so messages point into the right file.
-void Overlay(YAML::Node base, const YAML::Node& over) {
-  for (auto it = over.begin(); it != over.end(); ++it) {
-    const std::string key = it->first.Scalar();
-    if (base[key].IsMap() && it->second.IsMap()) {
-      Overlay(base[key], it->second);
-    } else {
-      base[key] = it->second;
-    }
-  }
-}
-
 ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int depth);
 
-// Resolves `extends: BASE.yaml` (relative to the file): the base model, checked on its
-// own first, with this file's keys laid over it.
 YAML::Node Resolve(const YAML::Node& root, const std::string& path, int depth) {
-  if (!root["extends"]) return root;
-  const YAML::Node ext = root["extends"];
-  const SourceLocation where{path, ext.Mark().line + 1, ext.Mark().column + 1};
-  if (!ext.IsScalar()) throw InputError(where, "'extends': expected the path of a model file");
-  if (depth > 8) throw InputError(where, "'extends' nested more than 8 deep (a cycle?)");
-  std::filesystem::path base_path(ext.Scalar());
-  if (base_path.is_relative()) base_path = std::filesystem::path(path).parent_path() / base_path;
-  const std::string base_file = base_path.lexically_normal().string();
-  ReadArmModel(LoadYamlFile(base_file), base_file, depth + 1);
-  YAML::Node base = Resolve(LoadYamlFile(base_file), base_file, depth + 1);
-  Overlay(base, root);
-  base.remove("extends");
-  return base;
+  return ResolveExtends(root, path, depth, [](const YAML::Node& base, const std::string& base_path, int d) {
+    ReadArmModel(base, base_path, d);
+  });
 }
 
 // Reads mass, centre of mass and inertia [ixx, iyy, izz, ixy, ixz, iyz] (about the

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "robots/omni/omni_model.h"
 
@@ -21,38 +22,12 @@ void ReadPid(YamlMap& parent, const std::string& key, PidGains* g) {
   m.Finish();
 }
 
-// Overlays `over` onto `base` in place: mappings merge key by key, anything else
-// replaces. Nodes keep their marks, so messages still point into the right file.
-void Overlay(YAML::Node base, const YAML::Node& over) {
-  for (auto it = over.begin(); it != over.end(); ++it) {
-    const std::string key = it->first.Scalar();
-    if (base[key].IsMap() && it->second.IsMap()) {
-      Overlay(base[key], it->second);
-    } else {
-      base[key] = it->second;
-    }
-  }
-}
-
-// Resolves `extends: BASE.yaml` (relative to the file): the base model, checked on its
-// own first, with this file's keys laid over it.
 OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, int depth);
 
 YAML::Node Resolve(const YAML::Node& root, const std::string& path, int depth) {
-  if (!root["extends"]) return root;
-  const YAML::Node ext = root["extends"];
-  const SourceLocation where{path, ext.Mark().line + 1, ext.Mark().column + 1};
-  if (!ext.IsScalar()) throw InputError(where, "'extends': expected the path of a model file");
-  if (depth > 8) throw InputError(where, "'extends' nested more than 8 deep (a cycle?)");
-  std::filesystem::path base_path(ext.Scalar());
-  if (base_path.is_relative()) base_path = std::filesystem::path(path).parent_path() / base_path;
-  const std::string base_file = base_path.lexically_normal().string();
-  // Report the base's own problems against the base file.
-  ReadOmniModel(LoadYamlFile(base_file), base_file, depth + 1);
-  YAML::Node base = Resolve(LoadYamlFile(base_file), base_file, depth + 1);
-  Overlay(base, root);
-  base.remove("extends");
-  return base;
+  return ResolveExtends(root, path, depth, [](const YAML::Node& base, const std::string& base_path, int d) {
+    ReadOmniModel(base, base_path, d);
+  });
 }
 
 OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, int depth) {
