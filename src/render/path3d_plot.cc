@@ -8,68 +8,24 @@
 
 #include "core/error.h"
 #include "render/plot.h"
+#include "render/plot_style.h"
 
 namespace twinsim {
 namespace {
 
+using namespace plot_style;
+
 constexpr double kPi3 = 3.14159265358979323846;
 
-// The look of plot.cc (same sizes, colours and fonts), tuned on 1200 x 900 pictures.
-constexpr double kOuterPad = 18;      // around everything
-constexpr double kTitleGap = 14;      // title to plot area
-constexpr double kTickLength = 5;     // outward from the box edge
-constexpr double kTickGap = 4;        // tick to tick label
-constexpr double kLabelGap = 9;       // tick labels to axis label
+// Beyond the shared look (plot_style.h): what only the 3D view has.
 constexpr double kTickSpacing = 70;   // px, at least, between ticks along a projected edge
-constexpr double kLegendInset = 10;   // legend to the plot area's edges
-constexpr double kLegendGap = 16;     // plot area to a legend outside on the right
-constexpr double kLegendPad = 10;     // inside the legend box
-constexpr double kLegendRow = 22;     // height of a legend row
-constexpr double kLegendSample = 36;  // length of a legend's line sample
-constexpr double kDataWidth = 2.0;    // data lines
 constexpr double kShadowWidth = 1.5;  // the paths' shadows on the floor
-constexpr double kMarkerRadius = 5.5; // start circle; the end square has the same area
-constexpr double kMarkerRing = 1.6;   // white ring around markers
-constexpr double kMarkerStep = 3.6;   // larger radius per later marker at the same place
 
-constexpr Color kTitleColor = Color::Hex(0x111111);
-constexpr Color kLabelColor = Color::Hex(0x222222);
-constexpr Color kTickLabelColor = Color::Hex(0x333333);
 constexpr Color kTickColor = Color::Hex(0x3a3a3a);
-constexpr Color kGridColor = Color::Hex(0xe6e6e6);
 constexpr Color kBoxColor = Color::Hex(0xb4b4b4);
 constexpr Color kShadowColor = Color::Hex(0xc8c8c8);
-constexpr Color kLegendBorder = Color::Hex(0xcccccc);
-constexpr Color kMarkerKeyColor = Color::Hex(0x555555);
-
-TextStyle TitleStyle() { return TextStyle{19, FontWeight::kBold, kTitleColor, HAlign::kCenter, VAlign::kTop}; }
-TextStyle LabelStyle() { return TextStyle{15, FontWeight::kRegular, kLabelColor, HAlign::kCenter, VAlign::kMiddle}; }
-TextStyle TickStyle() { return TextStyle{13, FontWeight::kRegular, kTickLabelColor, HAlign::kCenter, VAlign::kMiddle}; }
-TextStyle LegendStyle() { return TextStyle{14, FontWeight::kRegular, kLabelColor, HAlign::kLeft, VAlign::kMiddle}; }
 
 bool Finite(const Eigen::Vector3d& p) { return p.allFinite(); }
-
-std::string FormatTick(double v, double step) {
-  const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
-  const double rounded = std::round(v / step) * step;
-  if (std::abs(rounded) < step * 1e-6) return "0";
-  char buf[64];
-  if (std::abs(rounded) >= 1e7 || decimals > 6)
-    std::snprintf(buf, sizeof buf, "%g", std::abs(rounded));
-  else
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, std::abs(rounded));
-  return (rounded < 0 ? "\u2212" : "") + std::string(buf);
-}
-
-std::vector<double> Ticks(double lo, double hi, double step) {
-  std::vector<double> out;
-  const double eps = step * 1e-6;
-  for (long long k = static_cast<long long>(std::ceil((lo - eps) / step)); k * step <= hi + eps; ++k) {
-    out.push_back(k * step);
-    if (out.size() > 1000) break;
-  }
-  return out;
-}
 
 // A legend row: a path's line sample and name, or the key to the start and end markers.
 struct LegendEntry {
@@ -260,22 +216,22 @@ Decorations Decorate(const Path3DLayout& L) {
       const Point2d p = L.ToPixel(base);
       const Point2d q{p.x + kTickLength * out.x, p.y + kTickLength * out.y};
       const std::string text = FormatTick(t, L.step[axis]);
-      const Rect size = MeasureText(text, {}, TickStyle());
+      const Rect size = MeasureText(text, {}, TickStyle(VAlign::kMiddle));
       const double h = HalfExtent(size, out);
       const Point2d anchor{std::round(q.x + out.x * (kTickGap + h)), std::round(q.y + out.y * (kTickGap + h))};
-      const Rect r = MeasureText(text, anchor, TickStyle());
+      const Rect r = MeasureText(text, anchor, TickStyle(VAlign::kMiddle));
       bool clash = false;
       for (const Rect& o : placed) clash = clash || o.Inflated(3).Intersects(r);
       D.ticks.insert(D.ticks.end(), {p, q});
       if (clash) continue;
       placed.push_back(r);
-      D.labels.push_back(Label{text, anchor, TickStyle(), r});
+      D.labels.push_back(Label{text, anchor, TickStyle(VAlign::kMiddle), r});
       reach = std::max(reach, kTickGap + 2 * h);
     }
     Eigen::Vector3d mid = base;
     mid[axis] = (L.box_min[axis] + L.box_max[axis]) / 2;
     const Point2d p = L.ToPixel(mid);
-    TextStyle s = LabelStyle();
+    TextStyle s = LabelStyle(VAlign::kMiddle);
     s.vertical = vertical_label;
     const Rect size = MeasureText(name, {}, s);
     const double d = kTickLength + reach + kLabelGap + HalfExtent(size, out);

@@ -7,43 +7,21 @@
 #include <limits>
 
 #include "core/error.h"
+#include "render/plot_style.h"
 
 namespace twinsim {
 namespace {
 
-// The look, in pixels, tuned on 1200 x 900 pictures.
-constexpr double kOuterPad = 18;     // around everything
-constexpr double kTickLength = 5;    // outward from the frame
-constexpr double kTickGap = 4;       // tick to tick label
-constexpr double kLabelGap = 9;      // tick labels to axis label
-constexpr double kTitleGap = 14;     // title to plot area
+using namespace plot_style;
+
+// Beyond the shared look (plot_style.h): what only the 2D plots have.
 constexpr double kDataPad = 16;      // room around fitted data for markers and ticks
-constexpr double kLegendInset = 10;  // legend to the plot area's edges
-constexpr double kLegendGap = 16;    // plot area to a legend outside on the right
-constexpr double kLegendPad = 10;    // inside the legend box
-constexpr double kLegendRow = 22;    // height of a legend row
-constexpr double kLegendSample = 36; // length of a legend's line sample
-constexpr double kDataWidth = 2.0;   // data lines
 constexpr double kHeadingTick = 11;  // length of a heading tick
 constexpr double kHeadingWidth = 1.3;
 constexpr double kHeadingSpacing = 30;  // automatic heading ticks: about this far apart along a path
-constexpr double kMarkerRadius = 5.5;   // start circle; the end square has the same area
-constexpr double kMarkerRing = 1.6;     // white ring around markers
-constexpr double kMarkerStep = 3.6;     // larger radius per later marker at the same place
 
-constexpr Color kTitleColor = Color::Hex(0x111111);
-constexpr Color kLabelColor = Color::Hex(0x222222);
-constexpr Color kTickLabelColor = Color::Hex(0x333333);
 constexpr Color kFrameColor = Color::Hex(0x3a3a3a);
-constexpr Color kGridColor = Color::Hex(0xe6e6e6);
 constexpr Color kFieldColor = Color::Hex(0x9a9a9a);
-constexpr Color kLegendBorder = Color::Hex(0xcccccc);
-constexpr Color kMarkerKeyColor = Color::Hex(0x555555);
-
-TextStyle TitleStyle() { return TextStyle{19, FontWeight::kBold, kTitleColor, HAlign::kCenter, VAlign::kTop}; }
-TextStyle LabelStyle() { return TextStyle{15, FontWeight::kRegular, kLabelColor, HAlign::kCenter, VAlign::kTop}; }
-TextStyle TickStyle() { return TextStyle{13, FontWeight::kRegular, kTickLabelColor, HAlign::kCenter, VAlign::kTop}; }
-TextStyle LegendStyle() { return TextStyle{14, FontWeight::kRegular, kLabelColor, HAlign::kLeft, VAlign::kMiddle}; }
 
 // Okabe & Ito (2008), "Color Universal Design": blue, vermillion, bluish green, reddish
 // purple, orange, sky blue, black; yellow last, it is faint on white.
@@ -70,27 +48,6 @@ struct Chart {
   std::vector<std::pair<Pose2, double>> occupied_discs;  // world centre, radius in px
 };
 
-std::string FormatTick(double v, double step) {
-  const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
-  const double rounded = std::round(v / step) * step;
-  if (std::abs(rounded) < step * 1e-6) return "0";
-  char buf[64];
-  if (std::abs(rounded) >= 1e7 || decimals > 6)
-    std::snprintf(buf, sizeof buf, "%g", std::abs(rounded));
-  else
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, std::abs(rounded));
-  return (rounded < 0 ? "\u2212" : "") + std::string(buf);
-}
-
-std::vector<double> Ticks(double lo, double hi, double step) {
-  std::vector<double> out;
-  const double eps = step * 1e-6;
-  for (long long k = static_cast<long long>(std::ceil((lo - eps) / step)); k * step <= hi + eps; ++k) {
-    out.push_back(k * step);
-    if (out.size() > 1000) break;
-  }
-  return out;
-}
 
 // The centre of the pixel a 1 px line at coordinate v should light.
 double Snap(double v) { return std::floor(v) + 0.5; }
