@@ -2,6 +2,13 @@
 // running the twinsim binary.
 #pragma once
 
+// Skips a rendering test in builds without OSMesa.
+#ifdef TWINSIM_HAVE_OSMESA
+#define SKIP_WITHOUT_OSMESA()
+#else
+#define SKIP_WITHOUT_OSMESA() GTEST_SKIP() << "built without OSMesa"
+#endif
+
 #include <cstdint>
 #include <string>
 

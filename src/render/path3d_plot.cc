@@ -15,7 +15,6 @@ namespace {
 
 using namespace plot_style;
 
-constexpr double kPi3 = 3.14159265358979323846;
 
 // Beyond the shared look (plot_style.h): what only the 3D view has.
 constexpr double kTickSpacing = 70;   // px, at least, between ticks along a projected edge
@@ -39,7 +38,7 @@ struct MarkerKeyRow {
   double circle, start_text, square, end_text, width;
 };
 MarkerKeyRow MarkerKey() {
-  const double h = kMarkerRadius * std::sqrt(kPi3) / 2;
+  const double h = kMarkerRadius * std::sqrt(kPi) / 2;
   MarkerKeyRow k;
   k.circle = kMarkerRadius + 2;
   k.start_text = k.circle + kMarkerRadius + 6;
@@ -315,8 +314,8 @@ Path3DLayout Layout(const Path3DPlot& plot, bool legend_outside) {
   Path3DLayout L;
   L.width = plot.width;
   L.height = plot.height;
-  L.azimuth = plot.azimuth_deg * kPi3 / 180;
-  L.elevation = plot.elevation_deg * kPi3 / 180;
+  L.azimuth = plot.azimuth_deg * kPi / 180;
+  L.elevation = plot.elevation_deg * kPi / 180;
   DataBox(plot, &L.box_min, &L.box_max);
   const std::vector<LegendEntry> legend_entries = Legend(plot);
   const Point2d legend = MeasureLegend(legend_entries);
@@ -400,7 +399,7 @@ void DrawLegend(const std::vector<LegendEntry>& entries, const Rect& box, Render
     const double yc = std::floor(y) + 0.5;
     if (e.marker_key) {
       const MarkerKeyRow k = MarkerKey();
-      const double h = kMarkerRadius * std::sqrt(kPi3) / 2;
+      const double h = kMarkerRadius * std::sqrt(kPi) / 2;
       r.FillCircle({x + k.circle, yc}, kMarkerRadius, kMarkerKeyColor);
       r.DrawText("start", {x + k.start_text, yc}, LegendStyle());
       r.FillRect(Rect{x + k.square - h, yc - h, x + k.square + h, yc + h}, kMarkerKeyColor);
@@ -466,24 +465,8 @@ RgbaImage RenderPath3DPlot(const Path3DPlot& plot, Renderer& renderer, Path3DLay
     }
     r.DrawPolyline(px, style);
   }
-  // Markers on top of every line; where paths start or end at the same place, earlier
-  // paths' markers are larger, so that each shows as a ring around the later ones.
-  auto radius = [&](const std::vector<std::optional<Point2d>>& at, int k) {
-    int covered_by = 0;
-    for (int j = k + 1; j < n; ++j)
-      covered_by += at[j] && std::hypot(at[j]->x - at[k]->x, at[j]->y - at[k]->y) < kMarkerRadius;
-    return kMarkerRadius + kMarkerStep * covered_by;
-  };
-  for (int k = 0; k < n; ++k) {
-    if (!starts[k]) continue;
-    const Point2d s = *starts[k], e = *ends[k];
-    const double rs = radius(starts, k);
-    r.FillCircle(s, rs + kMarkerRing, kWhite);
-    r.FillCircle(s, rs, PlotColor(k));
-    const double h = radius(ends, k) * std::sqrt(kPi3) / 2;  // the square's half side: same area as a circle
-    r.FillRect(Rect{e.x - h - kMarkerRing, e.y - h - kMarkerRing, e.x + h + kMarkerRing, e.y + h + kMarkerRing}, kWhite);
-    r.FillRect(Rect{e.x - h, e.y - h, e.x + h, e.y + h}, PlotColor(k));
-  }
+  // Markers on top of every line.
+  DrawStartEndMarkers(r, starts, ends);
 
   for (const Label& l : D.labels) r.DrawText(l.text, l.anchor, l.style);
   if (!plot.title.empty())

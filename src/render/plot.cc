@@ -538,23 +538,7 @@ RgbaImage RenderPathPlot(const PathPlot& plot, Renderer& renderer, PlotLayout* l
           if (!starts[k]) starts[k] = L.ToPixel(q.x, q.y);
           ends[k] = L.ToPixel(q.x, q.y);
         }
-    auto radius = [&](const std::vector<std::optional<Point2d>>& at, int k) {
-      int covered_by = 0;
-      for (int j = k + 1; j < n; ++j)
-        covered_by += at[j] && std::hypot(at[j]->x - at[k]->x, at[j]->y - at[k]->y) < kMarkerRadius;
-      return kMarkerRadius + kMarkerStep * covered_by;
-    };
-    for (int k = 0; k < n; ++k) {
-      if (!starts[k]) continue;
-      const Point2d s = *starts[k], e = *ends[k];
-      const double r = radius(starts, k);
-      renderer.FillCircle(s, r + kMarkerRing, kWhite);
-      renderer.FillCircle(s, r, PlotColor(k));
-      const double h = radius(ends, k) * std::sqrt(kPi) / 2;  // the square's half side: same area as a circle
-      renderer.FillRect(Rect{e.x - h - kMarkerRing, e.y - h - kMarkerRing, e.x + h + kMarkerRing, e.y + h + kMarkerRing},
-                        kWhite);
-      renderer.FillRect(Rect{e.x - h, e.y - h, e.x + h, e.y + h}, PlotColor(k));
-    }
+    DrawStartEndMarkers(renderer, starts, ends);
   });
 }
 

@@ -2,6 +2,7 @@
 // pixels tuned on 1200 x 900 pictures, colours, text styles, and tick labels.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,12 @@ inline TextStyle TickStyle(VAlign v = VAlign::kTop) {
   return TextStyle{13, FontWeight::kRegular, kTickLabelColor, HAlign::kCenter, v};
 }
 inline TextStyle LegendStyle() { return TextStyle{14, FontWeight::kRegular, kLabelColor, HAlign::kLeft, VAlign::kMiddle}; }
+
+// Start (circle) and end (square of the same area) markers of paths k = 0, 1, ... in
+// PlotColor(k), ringed in white; where paths start or end at the same place, earlier
+// paths' markers are larger, so that each shows as a ring around the later ones.
+void DrawStartEndMarkers(Renderer& r, const std::vector<std::optional<Point2d>>& starts,
+                         const std::vector<std::optional<Point2d>>& ends);
 
 // A tick label for v on a grid of `step`: as many decimals as the step needs, a true
 // minus sign, "0" for zero.

@@ -48,7 +48,9 @@ TEST_P(Golden, RunMatchesTheGoldenSet) {
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err
                             << "\nIf this change is meant to move the golden set, run scripts/update-golden and "
                                "review the diff (docs/regression.md).";
-  if (r.exit_code == 0) EXPECT_NE(r.out.find("\nok: "), std::string::npos) << r.out;
+  if (r.exit_code == 0) {
+    EXPECT_NE(r.out.find("\nok: "), std::string::npos) << r.out;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(ShippedScenes, Golden, ::testing::ValuesIn(kGoldenScenes),

@@ -9,15 +9,10 @@
 
 #include "core/error.h"
 #include "io/png_image.h"
+#include "test_util.h"
 
 namespace twinsim {
 namespace {
-
-#ifdef TWINSIM_HAVE_OSMESA
-#define SKIP_WITHOUT_OSMESA()
-#else
-#define SKIP_WITHOUT_OSMESA() GTEST_SKIP() << "built without OSMesa"
-#endif
 
 // A straight path from (x0, y0) to (x1, y1) in `n` poses, heading along it.
 PlotPath Line(const std::string& name, double x0, double y0, double x1, double y1, int n = 200) {

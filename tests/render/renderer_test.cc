@@ -9,15 +9,10 @@
 
 #include "core/error.h"
 #include "io/png_image.h"
+#include "test_util.h"
 
 namespace twinsim {
 namespace {
-
-#ifdef TWINSIM_HAVE_OSMESA
-#define SKIP_WITHOUT_OSMESA()
-#else
-#define SKIP_WITHOUT_OSMESA() GTEST_SKIP() << "built without OSMesa"
-#endif
 
 // Grey level of a pixel (0 black .. 255 white) on a white background drawn in black.
 int Grey(const RgbaImage& image, int x, int y) {
