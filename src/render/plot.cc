@@ -27,7 +27,9 @@ constexpr Color kFieldColor = Color::Hex(0x9a9a9a);
 // purple, orange, sky blue, black; yellow last, it is faint on white.
 constexpr std::uint32_t kPalette[] = {0x0072b2, 0xd55e00, 0x009e73, 0xcc79a7, 0xe69f00, 0x56b4e9, 0x000000, 0xf0e442};
 
-enum class Marker { kNone, kStartEnd };
+enum class Marker { kNone, kStartEnd, kDot };
+
+constexpr double kDotRadius = 3.0;  // px, a scatter series' dots
 
 struct LegendEntry {
   std::string name;
@@ -276,6 +278,9 @@ void DrawLegend(const Chart& c, const PlotLayout& L, Renderer& r) {
       r.DrawText("start", {x + k.start_text, yc}, LegendStyle());
       r.FillRect(Rect{x + k.square - h, yc - h, x + k.square + h, yc + h}, kMarkerKeyColor);
       r.DrawText("end", {x + k.end_text, yc}, LegendStyle());
+    } else if (e.marker == Marker::kDot) {
+      r.FillCircle({x + kLegendSample / 2, yc}, kDotRadius, e.line.color);
+      r.DrawText(e.name, {x + kLegendSample + 9, yc}, LegendStyle());
     } else {
       r.DrawPolyline({{x, yc}, {x + kLegendSample, yc}}, e.line);
       r.DrawText(e.name, {x + kLegendSample + 9, yc}, LegendStyle());
@@ -427,7 +432,7 @@ Chart SeriesChart(const SeriesPlot& plot) {
     c.occupied_lines.push_back(std::move(line));
     LineStyle style = PlotLineStyle(static_cast<int>(k), kDataWidth);
     style.color = PlotColor(static_cast<int>(k));
-    c.legend.push_back(LegendEntry{s.name, style});
+    c.legend.push_back(LegendEntry{s.name, style, s.points ? Marker::kDot : Marker::kNone});
   }
   if (plot.range) {
     c.view = *plot.range;
@@ -554,7 +559,12 @@ RgbaImage RenderSeriesPlot(const SeriesPlot& plot, Renderer& renderer, PlotLayou
       std::vector<Point2d> px;
       for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
         px.push_back(std::isfinite(s.x[i]) && std::isfinite(s.y[i]) ? L.ToPixel(s.x[i], s.y[i]) : Point2d{NAN, NAN});
-      renderer.DrawPolyline(px, style);
+      if (!s.points) {
+        renderer.DrawPolyline(px, style);
+        continue;
+      }
+      for (const Point2d& p : px)
+        if (std::isfinite(p.x)) renderer.FillCircle(p, kDotRadius, style.color);
     }
   });
 }

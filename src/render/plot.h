@@ -57,6 +57,7 @@ struct PlotSeries {
   std::string name;        // legend entry
   std::vector<double> x;   // e.g. s
   std::vector<double> y;   // same length as x
+  bool points = false;     // true: a dot at every sample, no line (a scatter)
 };
 
 struct SeriesPlot {

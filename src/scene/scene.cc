@@ -172,6 +172,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
     }
   }
   scene.plots = ReadPlotSpecs(top, "plots");
+  if (top.Has("tune_pid")) scene.tune_pid = top.Child("tune_pid");
   top.Finish();
   errors.ThrowIfAny();
 

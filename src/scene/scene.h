@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
+
 #include "backends/omni_backend.h"
 #include "core/simulation.h"
 #include "render/plot_spec.h"
@@ -35,6 +37,7 @@ struct Scene {
   FieldModel field;
   std::vector<SceneRobot> robots;
   std::vector<PlotSpec> plots;   // PNGs `twinsim run` draws (docs/rendering.md)
+  YAML::Node tune_pid;           // the `tune_pid:` block, read by ReadPidTuningOptions (learning/pid_tuning.h)
 
   FrameTiming timing() const;
   // Number of frames from t = 0 to `duration` inclusive.

@@ -120,6 +120,7 @@ class OdeOmniEngine : public OmniEngine {
   static void NearCallback(void* data, dGeomID o1, dGeomID o2);
 
   dWorldID world_ = nullptr;
+  dThreadingImplementationID threading_ = nullptr;  // this world's own step scheduler
   dSpaceID space_ = nullptr;  // chassis and walls, which it owns
   dGeomID floor_ = nullptr;   // plane z = 0, tested against the wheels only
   dJointGroupID contact_group_ = nullptr;
@@ -143,6 +144,10 @@ OdeOmniEngine::OdeOmniEngine(const std::vector<OmniModel>& robots, const FieldMo
   }
   EnsureOdeInitialized();
   world_ = dWorldCreate();
+  // Each world gets its own (single-threaded) step scheduler: ODE's default one is a
+  // process-wide object, and two worlds stepping on two threads trip over it.
+  threading_ = dThreadingAllocateSelfThreadedImplementation();
+  dWorldSetStepThreadingImplementation(world_, dThreadingImplementationGetFunctions(threading_), threading_);
   dWorldSetGravity(world_, 0, 0, -kGravity);
   // Robots often stand still between commands; a sleeping body would ignore the next one.
   dWorldSetAutoDisableFlag(world_, 0);
@@ -183,7 +188,9 @@ OdeOmniEngine::~OdeOmniEngine() {
   }
   dGeomDestroy(floor_);
   dSpaceDestroy(space_);  // destroys the chassis and wall geoms it holds
+  dWorldSetStepThreadingImplementation(world_, nullptr, nullptr);
   dWorldDestroy(world_);  // destroys every body and hinge
+  dThreadingFreeImplementation(threading_);
 }
 
 void OdeOmniEngine::BuildRobot(int index, const OmniModel& model) {

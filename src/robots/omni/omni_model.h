@@ -28,9 +28,9 @@ struct PidGains {
   double kp = 0;              // N per m/s of velocity error
   double ki = 0;              // N per m of integrated error
   double kd = 0;              // N per m/s^2 of error rate
-  double integral_limit = 0;  // N, the integral term is clamped to +-this (anti-windup)
-  double output_limit = 0;    // N, the controller's output is clamped to +-this
-  double slew_rate = 0;       // m/s^2, the set-point follows the command at most this fast
+  double integral_limit = 0;  // N, the integral term is clamped to +-this (anti-windup); 0: no limit
+  double output_limit = 0;    // N, the controller's output is clamped to +-this; 0: no limit
+  double slew_rate = 0;       // m/s^2, the set-point follows the command at most this fast; 0: no limit
 
   static constexpr int kNumParameters = 6;
   // The parameters in the order above (the order PID learning uses).

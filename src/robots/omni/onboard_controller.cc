@@ -5,6 +5,8 @@
 
 namespace twinsim {
 
+constexpr double kUnlimited = 1e300;
+
 const PidGains& AxisGains(const OmniControllerModel& c, int axis) {
   return axis == 0 ? c.forward : axis == 1 ? c.sideways : c.rotation;
 }
@@ -50,13 +52,17 @@ const Eigen::VectorXd& ControllerTick(const OmniModel& model, const OmniKinemati
   for (int a = 0; a < 3; ++a) {
     const PidGains& g = AxisGains(model.controller, a);
     PidAxisState& st = s->axes[a];
-    const double max_step = g.slew_rate * dt;
+    // A limit of 0 is no limit, as in the firmware: all zeros is a controller that does
+    // nothing, not one that is frozen.
+    const double max_step = g.slew_rate > 0 ? g.slew_rate * dt : kUnlimited;
     st.setpoint += std::clamp(cmd[a] - st.setpoint, -max_step, max_step);
     const double error = st.setpoint - meas[a];
-    st.integral = std::clamp(st.integral + g.ki * error * dt, -g.integral_limit, g.integral_limit);
+    const double integral_limit = g.integral_limit > 0 ? g.integral_limit : kUnlimited;
+    st.integral = std::clamp(st.integral + g.ki * error * dt, -integral_limit, integral_limit);
     const double derivative = g.kd * (error - st.last_error) / dt;
     st.last_error = error;
-    wrench[a] = std::clamp(g.kp * error + st.integral + derivative, -g.output_limit, g.output_limit);
+    const double output_limit = g.output_limit > 0 ? g.output_limit : kUnlimited;
+    wrench[a] = std::clamp(g.kp * error + st.integral + derivative, -output_limit, output_limit);
   }
   s->torque_command = kin.WheelTorques(wrench);
   return s->torque_command;
