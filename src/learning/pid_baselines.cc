@@ -36,8 +36,9 @@ std::vector<double> StepExperiment(const TestRunEvaluator& evaluator, const Eige
   (axis == 0 ? step.vx : axis == 1 ? step.vy : step.omega) = kStepSize[axis];
   robot.commands.segments = {{0.05, Twist2{}, false}, {1.0, step, false}};
   Simulation sim = MakeSimulation(scene, evaluator.backend());
+  const SimulationResult result = sim.Run(scene.num_frames());
   std::vector<double> v;
-  for (const FrameRecord& f : sim.Run(scene.num_frames()).frames[0]) {
+  for (const FrameRecord& f : result.frames[0]) {
     const Twist2& t = f.truth_velocity;
     v.push_back(axis == 0 ? t.vx : axis == 1 ? t.vy : t.omega);
   }

@@ -118,15 +118,10 @@ PolicyGradientSummary PolicyGradientSearch(const Eigen::VectorXd& initial, const
       record.step[i] = options.eta[i] > 0 ? PolicyGradientStep(a_plus, a_zero, a_minus) : 0;
     }
     p = Clamp(p + (record.step.cast<double>().array() * options.eta.array()).matrix(), options);
-    const bool moved = (p - record.parameters).norm() > 0;
     summary.iterations.push_back(record);
     if (on_iteration) on_iteration(summary.iterations.back());
     if (options.patience > 0 && since_best >= options.patience) {
       summary.termination = "no better current set for " + std::to_string(options.patience) + " iterations";
-      break;
-    }
-    if (!moved) {
-      summary.termination = "no parameter moved";
       break;
     }
   }

@@ -11,8 +11,8 @@
 //   p_i += 0                       if A0 > A+ and A0 > A-,
 //   p_i += eta_i * sign(A+ - A-)   otherwise,
 // and clamps p_i into [lower_i, upper_i]. Search stops after max_iterations, or
-// earlier when the current set has not improved for `patience` iterations or no
-// parameter moved.
+// earlier when the current set has not improved for `patience` iterations (an
+// iteration where no parameter moves is no reason to stop: the next draws new sets).
 //
 //   PolicyGradientOptions o;  o.epsilon = ...;  o.eta = ...;
 //   PolicyGradientSummary s = PolicyGradientSearch(p0, o, evaluate);
