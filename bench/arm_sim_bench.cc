@@ -33,7 +33,7 @@ ArmModel WithEffects(ArmModel m) {
   AddArmEffect(ArmEffect{"time_delay", 0, {{"delay", 0.002}}}, m.dof(), &m.effects);
   AddArmEffect(ArmEffect{"torque_saturation", 1, {{"limit", 40}}}, m.dof(), &m.effects);
   AddArmEffect(ArmEffect{"stribeck_friction", 1, {{"c", 0.5}, {"s", 1.0}, {"vs", 0.05}}}, m.dof(), &m.effects);
-  AddArmEffect(ArmEffect{"joint_flexibility", 2, {{"k", 600}, {"damping", 0.05}, {"motor_inertia", 0.03}}}, m.dof(),
+  AddArmEffect(ArmEffect{"joint_flexibility", 2, {{"k", 600}, {"damping", 0.5}, {"motor_inertia", 0.03}}}, m.dof(),
                &m.effects);
   return m;
 }
@@ -44,7 +44,7 @@ ArmController Tracker(const ArmModel& m) {
     const Eigen::Vector3d ref_d(1.5 * std::cos(3 * t), 1.2 * std::cos(4 * t), 2.0 * std::cos(5 * t));
     const Eigen::VectorXd g = InverseDynamics(m, q, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), false);
     return Eigen::VectorXd(g + Eigen::Vector3d(200, 300, 100).cwiseProduct(ref - q) +
-                           Eigen::Vector3d(20, 20, 5).cwiseProduct(ref_d - qd));
+                           Eigen::Vector3d(20, 20, 1).cwiseProduct(ref_d - qd));
   };
 }
 
