@@ -95,6 +95,7 @@ class ArmSimulation {
   // options.
   ArmSimulation(const ArmModel& model, std::unique_ptr<ArmBackend> backend, const ArmSimulationOptions& options = {});
 
+  // The plant simulated: the model given, its payload lumped into the last link.
   const ArmModel& model() const { return model_; }
   const ArmBackend& backend() const { return *backend_; }
   int physics_substeps() const { return substeps_; }

@@ -1,8 +1,6 @@
 #include "backends/arm/analytic_arm_backend.h"
 
-#include <cmath>
 #include <stdexcept>
-#include <string>
 
 #include "robots/arm/arm_dynamics.h"
 
@@ -66,29 +64,6 @@ class AnalyticArmBackend final : public ArmBackend {
 };
 
 }  // namespace
-
-int ArmSubsteps(double dt, double max_step) {
-  return std::max(1, static_cast<int>(std::ceil(dt / max_step - 1e-9)));
-}
-
-void CheckArmState(const std::string& backend, int dof, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-  if (q.size() != dof || qd.size() != dof) {
-    throw std::invalid_argument(backend + " arm backend: " + std::to_string(q.size()) + " positions and " +
-                                std::to_string(qd.size()) + " velocities for an arm with " + std::to_string(dof) +
-                                " joints");
-  }
-  if (!q.allFinite() || !qd.allFinite()) throw std::invalid_argument(backend + " arm backend: non-finite state");
-}
-
-void CheckArmStep(const std::string& backend, int dof, const Eigen::VectorXd& tau, double dt) {
-  if (tau.size() != dof) {
-    throw std::invalid_argument(backend + " arm backend: " + std::to_string(tau.size()) +
-                                " torques for an arm with " + std::to_string(dof) + " joints");
-  }
-  if (!(dt > 0) || !std::isfinite(dt)) {
-    throw std::invalid_argument(backend + " arm backend: step " + std::to_string(dt) + " s must be > 0");
-  }
-}
 
 std::unique_ptr<ArmBackend> MakeAnalyticArmBackend(const ArmModel& plant, const ArmBackendOptions& options) {
   const double max_step = options.max_step > 0 ? options.max_step : DefaultArmMaxStep("analytic");

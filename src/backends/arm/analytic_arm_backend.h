@@ -14,12 +14,4 @@ namespace twinsim {
 // Builds it for `plant` (already ArmPlantModel()); `options` must be valid.
 std::unique_ptr<ArmBackend> MakeAnalyticArmBackend(const ArmModel& plant, const ArmBackendOptions& options);
 
-// Internal steps for one Step of dt seconds with steps of at most max_step (>= 1).
-int ArmSubsteps(double dt, double max_step);
-
-// Throws std::invalid_argument unless q and qd have `dof` finite entries.
-void CheckArmState(const std::string& backend, int dof, const Eigen::VectorXd& q, const Eigen::VectorXd& qd);
-// Throws std::invalid_argument unless tau has `dof` entries and dt > 0 is finite.
-void CheckArmStep(const std::string& backend, int dof, const Eigen::VectorXd& tau, double dt);
-
 }  // namespace twinsim

@@ -1,7 +1,9 @@
 #include "backends/arm/arm_backend.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "backends/arm/analytic_arm_backend.h"
 #include "core/error.h"
@@ -31,6 +33,29 @@ double DefaultArmMaxStep(const std::string& backend) {
   if (backend == "bullet") return 1e-3;
   if (backend == "ode") return 1.25e-4;
   return 1e-3;
+}
+
+int ArmSubsteps(double dt, double max_step) {
+  return std::max(1, static_cast<int>(std::ceil(dt / max_step - 1e-9)));
+}
+
+void CheckArmState(const std::string& backend, int dof, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+  if (q.size() != dof || qd.size() != dof) {
+    throw std::invalid_argument(backend + " arm backend: " + std::to_string(q.size()) + " positions and " +
+                                std::to_string(qd.size()) + " velocities for an arm with " + std::to_string(dof) +
+                                " joints");
+  }
+  if (!q.allFinite() || !qd.allFinite()) throw std::invalid_argument(backend + " arm backend: non-finite state");
+}
+
+void CheckArmStep(const std::string& backend, int dof, const Eigen::VectorXd& tau, double dt) {
+  if (tau.size() != dof) {
+    throw std::invalid_argument(backend + " arm backend: " + std::to_string(tau.size()) +
+                                " torques for an arm with " + std::to_string(dof) + " joints");
+  }
+  if (!(dt > 0) || !std::isfinite(dt)) {
+    throw std::invalid_argument(backend + " arm backend: step " + std::to_string(dt) + " s must be > 0");
+  }
 }
 
 std::vector<std::string> AvailableArmBackends() {

@@ -77,4 +77,12 @@ std::unique_ptr<ArmBackend> MakeArmBackend(const std::string& name, const ArmMod
 // The arm backends compiled into this build.
 std::vector<std::string> AvailableArmBackends();
 
+// For the implementations: internal steps for one Step of dt seconds with steps of at
+// most max_step (at least 1).
+int ArmSubsteps(double dt, double max_step);
+// Throws std::invalid_argument unless q and qd have `dof` finite entries.
+void CheckArmState(const std::string& backend, int dof, const Eigen::VectorXd& q, const Eigen::VectorXd& qd);
+// Throws std::invalid_argument unless tau has `dof` entries and dt > 0 is finite.
+void CheckArmStep(const std::string& backend, int dof, const Eigen::VectorXd& tau, double dt);
+
 }  // namespace twinsim

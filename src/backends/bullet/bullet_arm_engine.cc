@@ -10,7 +10,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "backends/arm/analytic_arm_backend.h"
 
 namespace twinsim {
 namespace {

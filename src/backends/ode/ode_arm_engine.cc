@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "backends/arm/analytic_arm_backend.h"
 #include "robots/arm/arm_dynamics.h"
 
 namespace twinsim {
