@@ -7,7 +7,7 @@
 // 2 simulated seconds per iteration. BM_ArmLoop: the whole loop (delay line, effects,
 // the velocity-level friction solve, the backend at its default internal step).
 // BM_ArmLoopEffects: the same with time_delay, saturation, Stribeck friction and a
-// 28 Hz joint_flexibility on the elbow (2 physics steps per sample). BM_ArmBackend:
+// 30 Hz joint_flexibility on the elbow (3 physics steps per sample). BM_ArmBackend:
 // the backend alone, stepping 1 ms at a time with precomputed torques. The counter
 // `x_real_time` is simulated seconds per wall second.
 #include <benchmark/benchmark.h>

@@ -1,6 +1,7 @@
 #include "core/arm_simulation.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -90,9 +91,10 @@ ArmSimulation::ArmSimulation(const ArmModel& model, std::unique_ptr<ArmBackend> 
   const int n = model_.dof();
   const double ts = model_.sample_time;
   // The automatic physics step: fine enough for the stiffest flexible joint, whose
-  // link side is taken at q = 0 (J_eff = J_m M_jj / (J_m + M_jj)).
+  // link side is taken at q = 0 with the other joints free, the lightest it gets:
+  // J_l = 1 / (M^-1)_jj, J_eff = J_m J_l / (J_m + J_l).
   int substeps = 1;
-  const Eigen::MatrixXd mass = MassMatrix(model_, Eigen::VectorXd::Zero(n));
+  const Eigen::MatrixXd mobility = MassMatrix(model_, Eigen::VectorXd::Zero(n)).inverse();
   for (int j = 0; j < n; ++j) {
     const JointEffects e = model_.effects.joint(j);
     effects_.push_back(e);
@@ -100,7 +102,8 @@ ArmSimulation::ArmSimulation(const ArmModel& model, std::unique_ptr<ArmBackend> 
     if (e.friction() || nominal.viscous > 0 || nominal.coulomb > 0) friction_joints_.push_back(j);
     if (e.flexible()) {
       flexible_ = true;
-      const double j_eff = e.motor_inertia * mass(j, j) / (e.motor_inertia + mass(j, j));
+      const double link = 1 / mobility(j, j);
+      const double j_eff = e.motor_inertia * link / (e.motor_inertia + link);
       const double omega = std::sqrt(e.stiffness / j_eff);
       substeps = std::max(substeps, static_cast<int>(std::ceil(ts * omega / kMaxSpringPhasePerStep)));
       if (e.flex_damping > 0) {

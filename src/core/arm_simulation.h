@@ -43,7 +43,8 @@ namespace twinsim {
 struct ArmSimulationOptions {
   // Physics steps per sample, at each of which the effects are evaluated and the
   // backend steps once. 0 = automatic: 1, or as many as a stiff joint_flexibility needs
-  // (h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5).
+  // (h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5, the link's inertia taken at
+  // q = 0 with the other joints free).
   int physics_substeps = 0;
   double max_speed = 1e3;  // rad/s or m/s: a joint faster than this has run away
 
