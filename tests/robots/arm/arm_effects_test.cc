@@ -148,6 +148,17 @@ TEST_P(ArmEffectsOnBackend, TimeDelayShiftsTheResponseByD) {
   const double q_tolerance = GetParam() == "ode" ? 1e-4 : 1e-6;
   for (double t : {0.2, 0.6}) EXPECT_NEAR(frac.q(Row(t, 1e-3), 0), 0.5 * std::pow(t - 0.1025, 2), q_tolerance) << t;
   EXPECT_NEAR(frac.qd(Row(0.6, 1e-3), 0), 0.6 - 0.1025, 1e-8);
+  // The same with four physics steps per sample: the delay then falls inside a step.
+  ArmSimulationOptions fine;
+  fine.physics_substeps = 4;
+  const ArmModel m = Turntable("  - {name: time_delay, joint: 1, delay: 0.0023}\n");
+  ArmSimulation sim(m, MakeArmBackend(GetParam(), m), fine);
+  EXPECT_EQ(sim.physics_substeps(), 4);
+  const ArmTrajectory quarter = sim.Run(601, [&](double t, const Eigen::VectorXd&, const Eigen::VectorXd&) {
+    return Eigen::VectorXd::Constant(1, step(t));
+  });
+  EXPECT_NEAR(quarter.qd(600, 0), 0.6 - 0.1023, 1e-8);
+  EXPECT_NEAR(quarter.q(600, 0), 0.5 * std::pow(0.6 - 0.1023, 2), q_tolerance);
 }
 
 TEST_P(ArmEffectsOnBackend, JointFlexibilityResonatesAtSqrtKOverJeff) {
