@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "robots/arm/arm_effects.h"
+
 namespace twinsim {
 
 enum class JointType { kRevolute, kPrismatic };
@@ -50,6 +52,7 @@ struct ArmModel {
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.81);  // m/s^2, in the base frame
   double sample_time = 0.001;                            // s, the controller's sampling period
   int delay_samples = 0;                                 // samples of delay from command to joint
+  ArmEffects effects;                                    // what the rigid model lacks (arm_effects.h)
 
   int dof() const { return static_cast<int>(joints.size()); }
   // Empty when consistent (positive masses, positive definite inertias satisfying the

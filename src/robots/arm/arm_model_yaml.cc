@@ -154,6 +154,7 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
       }
     }
   }
+  if (top.Has("effects")) ReadArmEffects(top.Child("effects"), path, &model, &errors);
   top.Finish();
   errors.ThrowIfAny();
 

@@ -1,0 +1,322 @@
+#include "robots/arm/arm_effects.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+
+#include "core/error.h"
+#include "io/yaml_reader.h"
+#include "robots/arm/arm_model.h"
+#include "robots/arm/arm_model_internal.h"
+
+namespace twinsim {
+namespace {
+
+constexpr double kMaxTimeDelay = 10;  // s; longer is surely a unit mistake (ms for s)
+
+// One parameter of an effect: its key, whether it must be given and what it may be.
+struct ParameterSpec {
+  const char* key;
+  bool required;
+  std::function<std::string(double)> check;
+};
+
+std::string Number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+NumberCheck Finite() {
+  return [](double v) { return std::isfinite(v) ? std::string() : "must be finite, got " + Number(v); };
+}
+
+// The parameter table of the vocabulary; the order is the documentation's.
+const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
+  static const std::map<std::string, std::vector<ParameterSpec>> specs = {
+      {"viscous_friction", {{"b", true, NonNegative()}}},
+      {"coulomb_friction", {{"c", false, NonNegative()}, {"c_pos", false, NonNegative()}, {"c_neg", false, NonNegative()}}},
+      {"stribeck_friction", {{"c", true, NonNegative()}, {"s", true, Positive()}, {"vs", true, Positive()}}},
+      {"torque_offset", {{"tau0", true, Finite()}}},
+      {"torque_saturation", {{"limit", true, Positive()}}},
+      {"time_delay", {{"delay", true, InRange(0, kMaxTimeDelay)}}},
+      {"joint_flexibility", {{"k", true, Positive()}, {"damping", false, NonNegative()}, {"motor_inertia", true, Positive()}}},
+      {"payload", {{"mass", true, Positive()}, {"x", false, Finite()}, {"y", false, Finite()}, {"z", false, Finite()}}},
+  };
+  const auto it = specs.find(name);
+  return it == specs.end() ? nullptr : &it->second;
+}
+
+std::string KnownNames() {
+  std::string list;
+  for (const std::string& n : ArmEffectNames()) list += (list.empty() ? "" : ", ") + n;
+  return list;
+}
+
+std::string JointLabel(int joint) { return "joint " + std::to_string(joint + 1); }
+
+// Sets `effect` (whose keys and ranges were checked) into `effects`; every problem of
+// the combination (missing alternatives, s <= c, a duplicate) goes to `problems`.
+void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<std::string>* problems) {
+  const auto& p = effect.parameters;
+  auto has = [&p](const char* key) { return p.count(key) > 0; };
+  auto get = [&p](const char* key, double fallback = 0) {
+    const auto it = p.find(key);
+    return it == p.end() ? fallback : it->second;
+  };
+  const std::string label = "effect '" + effect.name + "'";
+  if (effect.name == "payload") {
+    if (effect.joint != -1) {
+      problems->push_back(label + " acts on the last link: its joint must be null");
+      return;
+    }
+    if (effects->payload_mass > 0) {
+      problems->push_back(label + " given twice");
+      return;
+    }
+    effects->payload_mass = get("mass");
+    effects->payload_position = Eigen::Vector3d(get("x"), get("y"), get("z"));
+    return;
+  }
+  if (effect.joint < 0 || effect.joint >= dof) {
+    problems->push_back(label + " needs a joint in 1.." + std::to_string(dof) +
+                        (effect.joint == -1 ? " (got null)" : " (got " + std::to_string(effect.joint + 1) + ")"));
+    return;
+  }
+  if (effects->joints.empty()) effects->joints.assign(static_cast<std::size_t>(dof), JointEffects{});
+  JointEffects& j = effects->joints[static_cast<std::size_t>(effect.joint)];
+  const std::string twice = label + " given twice for " + JointLabel(effect.joint);
+  if (effect.name == "viscous_friction") {
+    if (j.viscous > 0) problems->push_back(twice);
+    j.viscous = get("b");
+  } else if (effect.name == "coulomb_friction") {
+    if (j.coulomb_positive > 0 || j.coulomb_negative > 0) problems->push_back(twice);
+    if (has("c") && (has("c_pos") || has("c_neg"))) {
+      problems->push_back(label + ": give either 'c' or both 'c_pos' and 'c_neg'");
+    } else if (has("c")) {
+      j.coulomb_positive = j.coulomb_negative = get("c");
+    } else if (has("c_pos") && has("c_neg")) {
+      j.coulomb_positive = get("c_pos");
+      j.coulomb_negative = get("c_neg");
+    } else {
+      problems->push_back(label + ": needs 'c' (both directions) or both 'c_pos' and 'c_neg'");
+    }
+  } else if (effect.name == "stribeck_friction") {
+    if (j.stribeck()) problems->push_back(twice);
+    if (!(get("s") > get("c"))) {
+      problems->push_back(label + ": the static level s = " + Number(get("s")) +
+                          " must exceed the sliding level c = " + Number(get("c")));
+    }
+    j.stribeck_coulomb = get("c");
+    j.stribeck_static = get("s");
+    j.stribeck_velocity = get("vs");
+  } else if (effect.name == "torque_offset") {
+    if (j.torque_offset != 0) problems->push_back(twice);
+    j.torque_offset = get("tau0");
+  } else if (effect.name == "torque_saturation") {
+    if (j.saturation > 0) problems->push_back(twice);
+    j.saturation = get("limit");
+  } else if (effect.name == "time_delay") {
+    if (j.time_delay > 0) problems->push_back(twice);
+    j.time_delay = get("delay");
+  } else if (effect.name == "joint_flexibility") {
+    if (j.flexible()) problems->push_back(twice);
+    j.stiffness = get("k");
+    j.flex_damping = get("damping");
+    j.motor_inertia = get("motor_inertia");
+  }
+}
+
+void ThrowProblems(const std::vector<std::string>& problems) {
+  ErrorList errors;
+  for (const std::string& p : problems) errors.Add(p);
+  errors.ThrowIfAny();
+}
+
+}  // namespace
+
+JointEffects ArmEffects::joint(int j) const {
+  if (j < 0 || j >= static_cast<int>(joints.size())) return JointEffects{};
+  return joints[static_cast<std::size_t>(j)];
+}
+
+bool ArmEffects::any() const { return payload_mass > 0 || !ListArmEffects(*this).empty(); }
+
+const std::vector<std::string>& ArmEffectNames() {
+  static const std::vector<std::string> names = {"viscous_friction",  "coulomb_friction", "stribeck_friction",
+                                                 "torque_offset",     "torque_saturation", "time_delay",
+                                                 "joint_flexibility", "payload"};
+  return names;
+}
+
+std::vector<std::string> ArmEffectParameters(const std::string& name) {
+  std::vector<std::string> keys;
+  if (const auto* specs = SpecsOf(name)) {
+    for (const ParameterSpec& s : *specs) keys.push_back(s.key);
+  }
+  return keys;
+}
+
+void AddArmEffect(const ArmEffect& effect, int dof, ArmEffects* effects) {
+  const auto* specs = SpecsOf(effect.name);
+  if (specs == nullptr) throw InputError("unknown arm effect '" + effect.name + "' (known: " + KnownNames() + ")");
+  std::vector<std::string> problems;
+  const std::string label = "effect '" + effect.name + "'";
+  std::string known;
+  for (const ParameterSpec& s : *specs) known += (known.empty() ? "" : ", ") + std::string(s.key);
+  for (const auto& [key, value] : effect.parameters) {
+    const ParameterSpec* spec = nullptr;
+    for (const ParameterSpec& s : *specs) {
+      if (key == s.key) spec = &s;
+    }
+    if (spec == nullptr) {
+      problems.push_back(label + ": unknown parameter '" + key + "' (known: " + known + ")");
+    } else if (const std::string bad = spec->check(value); !bad.empty()) {
+      problems.push_back(label + ": '" + key + "' " + bad);
+    }
+  }
+  for (const ParameterSpec& s : *specs) {
+    if (s.required && effect.parameters.count(s.key) == 0) {
+      problems.push_back(label + ": missing parameter '" + std::string(s.key) + "'");
+    }
+  }
+  if (problems.empty()) {
+    ArmEffects updated = *effects;
+    Apply(effect, dof, &updated, &problems);
+    if (problems.empty()) *effects = updated;
+  }
+  ThrowProblems(problems);
+}
+
+std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects) {
+  std::vector<ArmEffect> out;
+  for (int i = 0; i < static_cast<int>(effects.joints.size()); ++i) {
+    const JointEffects& j = effects.joints[static_cast<std::size_t>(i)];
+    if (j.viscous > 0) out.push_back({"viscous_friction", i, {{"b", j.viscous}}});
+    if (j.coulomb_positive > 0 || j.coulomb_negative > 0) {
+      if (j.coulomb_positive == j.coulomb_negative) {
+        out.push_back({"coulomb_friction", i, {{"c", j.coulomb_positive}}});
+      } else {
+        out.push_back({"coulomb_friction", i, {{"c_pos", j.coulomb_positive}, {"c_neg", j.coulomb_negative}}});
+      }
+    }
+    if (j.stribeck()) {
+      out.push_back({"stribeck_friction", i,
+                     {{"c", j.stribeck_coulomb}, {"s", j.stribeck_static}, {"vs", j.stribeck_velocity}}});
+    }
+    if (j.torque_offset != 0) out.push_back({"torque_offset", i, {{"tau0", j.torque_offset}}});
+    if (j.saturation > 0) out.push_back({"torque_saturation", i, {{"limit", j.saturation}}});
+    if (j.time_delay > 0) out.push_back({"time_delay", i, {{"delay", j.time_delay}}});
+    if (j.flexible()) {
+      out.push_back({"joint_flexibility", i,
+                     {{"k", j.stiffness}, {"damping", j.flex_damping}, {"motor_inertia", j.motor_inertia}}});
+    }
+  }
+  if (effects.payload_mass > 0) {
+    const Eigen::Vector3d& p = effects.payload_position;
+    out.push_back({"payload", -1, {{"mass", effects.payload_mass}, {"x", p.x()}, {"y", p.y()}, {"z", p.z()}}});
+  }
+  return out;
+}
+
+void ReadArmEffects(const YAML::Node& list, const std::string& path, ArmModel* model, ErrorList* errors) {
+  auto where = [&path](const YAML::Node& node) {
+    return SourceLocation{path, node.Mark().line + 1, node.Mark().column + 1};
+  };
+  if (!list.IsSequence()) {
+    errors->Add(where(list), "'effects': expected a list of effects, each with a 'name'");
+    return;
+  }
+  const int dof = model->dof();
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    const YAML::Node node = list[k];
+    const std::string context = "effect " + std::to_string(k + 1);
+    YamlMap m(node, path, context, errors);
+    if (!m.valid()) continue;
+    ArmEffect effect;
+    // Without a usable name its keys cannot be checked: report only the name.
+    if (!m.Require("name", &effect.name, ArmEffectNames())) continue;
+    bool ok = true;
+    // joint: null, a 1-based number or a joint's name.
+    if (m.Has("joint")) {
+      const YAML::Node j = m.Child("joint");
+      if (j.IsNull()) {
+        effect.joint = -1;
+      } else if (!j.IsScalar()) {
+        m.Error("joint", "expected a joint number (1.." + std::to_string(dof) + "), a joint name or null");
+        ok = false;
+      } else {
+        int index = -1;
+        for (int i = 0; i < dof; ++i) {
+          if (model->joints[static_cast<std::size_t>(i)].name == j.Scalar()) index = i;
+        }
+        if (index < 0) {
+          try {
+            std::size_t used = 0;
+            const int number = std::stoi(j.Scalar(), &used);
+            if (used == j.Scalar().size() && number >= 1 && number <= dof) index = number - 1;
+          } catch (const std::exception&) {
+          }
+        }
+        if (index < 0) {
+          std::string names;
+          for (const ArmJoint& aj : model->joints) names += (names.empty() ? "" : ", ") + aj.name;
+          m.Error("joint", "no joint '" + j.Scalar() + "' (known: 1.." + std::to_string(dof) + " or " + names + ")");
+          ok = false;
+        }
+        effect.joint = index;
+      }
+    } else if (effect.name != "payload") {
+      m.Missing("joint");
+      ok = false;
+    }
+    for (const ParameterSpec& s : *SpecsOf(effect.name)) {
+      double value = 0;
+      if (s.required && !m.Has(s.key)) {
+        m.Missing(s.key);
+        ok = false;
+      } else if (m.Has(s.key)) {
+        if (m.Get(s.key, &value, s.check)) {
+          effect.parameters[s.key] = value;
+        } else {
+          ok = false;
+        }
+      }
+    }
+    m.Finish();
+    if (!ok) continue;
+    std::vector<std::string> problems;
+    Apply(effect, dof, &model->effects, &problems);
+    for (const std::string& p : problems) errors->Add(where(node), context + ": " + p);
+  }
+}
+
+double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
+  if (qd == 0) return 0;
+  const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
+  const JointEffects e = model.effects.joint(joint);
+  double level = nominal.coulomb + (qd > 0 ? e.coulomb_positive : e.coulomb_negative);
+  if (e.stribeck()) {
+    const double r = qd / e.stribeck_velocity;
+    level += e.stribeck_coulomb + (e.stribeck_static - e.stribeck_coulomb) * std::exp(-r * r);
+  }
+  return (nominal.viscous + e.viscous) * qd + (qd > 0 ? level : -level);
+}
+
+ArmModel ArmPlantModel(const ArmModel& model) {
+  ArmModel plant = model;
+  if (model.effects.payload_mass > 0 && model.dof() > 0) {
+    ArmLink point;
+    point.name = "payload";
+    point.mass = model.effects.payload_mass;
+    point.com = model.effects.payload_position;
+    arm_internal::AddBody(&plant.joints.back().child, point);
+    plant.effects.payload_mass = 0;
+  }
+  return plant;
+}
+
+}  // namespace twinsim

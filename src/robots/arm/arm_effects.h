@@ -1,0 +1,111 @@
+// The arm effect vocabulary of CONTRACT.md: behaviour a real arm has and the rigid-body
+// model with its nominal friction lacks. A model file switches effects on with an
+// `effects:` list (docs/arm_backends.md), the diagnosis workflow names and adds them,
+// and the arm simulation loop (core/arm_simulation.h) makes them act, above the physics
+// engines, so that ODE, Bullet and the analytic model all feel them alike.
+//
+// Per joint j (the command u is what the controller sent, after the model's delay):
+//   time_delay          the joint receives u(t - delay)
+//   torque_saturation   it receives clip(u, -limit, +limit)
+//   torque_offset       plus a constant tau0
+//   joint_flexibility   that torque drives a motor inertia J_m joined to the link by a
+//                       spring k with damping d: J_m thm'' = u - tau_s,
+//                       tau_s = k (thm - q) + d (thm' - qd) drives the link
+//   viscous_friction    tau_f = b qd
+//   coulomb_friction    tau_f = c_pos (qd > 0), -c_neg (qd < 0), sticking in between
+//   stribeck_friction   tau_f = (c + (s - c) exp(-(qd/vs)^2)) sign(qd), breaking away at s
+// and for the arm (joint: null):
+//   payload             a point mass m at (x, y, z) in the last link's frame (default its
+//                       origin; the struct's frame, see arm_model.h: on the last joint's
+//                       axis for a DH table, so a mass at a DH arm's tool needs x = a_n)
+// Friction torques oppose the motion and add to the joints' nominal viscous and Coulomb
+// friction (ArmJoint::viscous, ::coulomb).
+//
+// Use: ArmModel::effects holds them; AddArmEffect() adds one by name and parameters
+// (as report.json lists them), ListArmEffects() gives them back in that form.
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace YAML {
+class Node;
+}
+
+namespace twinsim {
+
+struct ArmModel;
+class ErrorList;
+
+// The effects of one joint; all off by default. Units: N·m for revolute joints, N for
+// prismatic ones (and rad or m for positions accordingly).
+struct JointEffects {
+  double viscous = 0;            // N·m·s/rad: viscous_friction b
+  double coulomb_positive = 0;   // N·m: coulomb_friction while qd > 0 (c_pos)
+  double coulomb_negative = 0;   // N·m: coulomb_friction while qd < 0 (c_neg), a magnitude
+  double stribeck_coulomb = 0;   // N·m: stribeck_friction c, the sliding level
+  double stribeck_static = 0;    // N·m: stribeck_friction s > c, the break-away level
+  double stribeck_velocity = 0;  // rad/s: stribeck_friction vs; 0 = off
+  double torque_offset = 0;      // N·m: torque_offset tau0
+  double saturation = 0;         // N·m: torque_saturation limit; 0 = off
+  double time_delay = 0;         // s: time_delay delay
+  double stiffness = 0;          // N·m/rad: joint_flexibility k; 0 = rigid
+  double flex_damping = 0;       // N·m·s/rad: joint_flexibility damping
+  double motor_inertia = 0;      // kg m^2: joint_flexibility motor_inertia, on the joint side
+
+  bool stribeck() const { return stribeck_velocity > 0; }
+  bool flexible() const { return stiffness > 0; }
+  // True when the joint has some friction effect.
+  bool friction() const {
+    return viscous > 0 || coulomb_positive > 0 || coulomb_negative > 0 || stribeck();
+  }
+};
+
+struct ArmEffects {
+  std::vector<JointEffects> joints;  // one per joint once any joint effect is on, else empty
+  double payload_mass = 0;           // kg; 0 = off
+  Eigen::Vector3d payload_position = Eigen::Vector3d::Zero();  // m, in the last link's frame
+
+  // The effects of joint j (0-based); all off when none were set.
+  JointEffects joint(int j) const;
+  bool any() const;
+};
+
+// One effect as a model file and report.json name it.
+struct ArmEffect {
+  std::string name;                          // from ArmEffectNames()
+  int joint = -1;                            // 0-based; -1 for payload (joint: null)
+  std::map<std::string, double> parameters;  // keys as in the model file, SI units
+};
+
+// The arm effect vocabulary, in the contract's order.
+const std::vector<std::string>& ArmEffectNames();
+
+// The parameter keys an effect takes (empty for an unknown name).
+std::vector<std::string> ArmEffectParameters(const std::string& name);
+
+// Adds `effect` to a model with `dof` joints. Throws InputError naming what is wrong:
+// an unknown name or key (listing the known ones), a missing or out-of-range value,
+// a bad joint, or the same effect twice on one joint.
+void AddArmEffect(const ArmEffect& effect, int dof, ArmEffects* effects);
+
+// Every effect that is on, one entry per effect and joint, joints in order.
+std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects);
+
+// Reads a model file's `effects:` list for the joints already read into `model`
+// (joints named by their 1-based number or their name) into model->effects. Every
+// problem goes into `errors` as "path:line:col: ...".
+void ReadArmEffects(const YAML::Node& list, const std::string& path, ArmModel* model, ErrorList* errors);
+
+// The friction torque (N·m or N, opposing positive qd when positive) of joint j moving
+// at qd: the joint's nominal viscous and Coulomb friction plus its friction effects.
+// At qd = 0 it is 0 (sticking is the simulation loop's business).
+double ArmFrictionTorque(const ArmModel& model, int joint, double qd);
+
+// The rigid bodies the physics engines simulate: `model` with its payload lumped into
+// the last link. The result has no payload effect left.
+ArmModel ArmPlantModel(const ArmModel& model);
+
+}  // namespace twinsim
