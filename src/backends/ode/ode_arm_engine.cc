@@ -1,6 +1,9 @@
 #include "backends/ode/ode_arm_engine.h"
 
+#include <memory>
 #include <ode/ode.h>
+
+#include "backends/ode/ode_world.h"
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -23,23 +26,12 @@ constexpr double kJointCfm = 1e-10;
 // Per body in a snapshot: position (3), quaternion (4), linear and angular velocity (3 + 3).
 constexpr int kBodySnapshotSize = 13;
 
-// dInitODE2 once per process and ODE's per-thread data once per thread that steps.
-void EnsureOdeInitialized() {
-  static std::once_flag once;
-  std::call_once(once, [] { dInitODE2(0); });
-  thread_local bool allocated = false;
-  if (!allocated) {
-    dAllocateODEDataForThread(dAllocateMaskAll);
-    allocated = true;
-  }
-}
-
 double WrapToPi(double a) { return std::remainder(a, 2 * M_PI); }
 
 class OdeArmBackend final : public ArmBackend {
  public:
   OdeArmBackend(const ArmModel& plant, double max_step);
-  ~OdeArmBackend() override { dWorldDestroy(world_); }  // destroys bodies and joints
+  ~OdeArmBackend() override = default;  // ode_world_ destroys the world, bodies and joints
   OdeArmBackend(const OdeArmBackend&) = delete;
   OdeArmBackend& operator=(const OdeArmBackend&) = delete;
 
@@ -59,7 +51,8 @@ class OdeArmBackend final : public ArmBackend {
 
   ArmModel plant_;
   double max_step_;  // s
-  dWorldID world_ = nullptr;
+  std::unique_ptr<OdeWorld> ode_world_;
+  dWorldID world_ = nullptr;  // ode_world_'s
   std::vector<dBodyID> bodies_;   // per link
   std::vector<dJointID> joints_;  // per joint
   Eigen::VectorXd q_, qd_;        // q unwrapped
@@ -67,8 +60,8 @@ class OdeArmBackend final : public ArmBackend {
 
 OdeArmBackend::OdeArmBackend(const ArmModel& plant, double max_step)
     : plant_(plant), max_step_(max_step), q_(Eigen::VectorXd::Zero(plant.dof())), qd_(q_) {
-  EnsureOdeInitialized();
-  world_ = dWorldCreate();
+  ode_world_ = std::make_unique<OdeWorld>();
+  world_ = ode_world_->id();
   const Eigen::Vector3d& g = plant_.gravity;
   dWorldSetGravity(world_, g.x(), g.y(), g.z());
   dWorldSetERP(world_, kJointErp);

@@ -9,7 +9,10 @@
 #include <utility>
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <ode/ode.h>
+
+#include "backends/ode/ode_world.h"
 
 namespace twinsim {
 namespace {
@@ -46,18 +49,6 @@ constexpr double kMinAxleProjection = 1e-6;
 // are tested against the floor directly), so these bits keep wall-wall pairs out.
 constexpr unsigned long kChassisCategory = 1u << 0;
 constexpr unsigned long kWallCategory = 1u << 1;
-
-// dInitODE2 once per process, and ODE's per-thread collision data once per thread that
-// builds or steps an engine. dCloseODE is never called: engines may outlive main().
-void EnsureOdeInitialized() {
-  static std::once_flag once;
-  std::call_once(once, [] { dInitODE2(0); });
-  thread_local bool allocated = false;
-  if (!allocated) {
-    dAllocateODEDataForThread(dAllocateMaskAll);
-    allocated = true;
-  }
-}
 
 // ERP and CFM of a spring-damper constraint for one step of dt seconds (ODE manual,
 // "How do I simulate a spring"): stiffness k N/m, damping c N s/m.
@@ -119,8 +110,8 @@ class OdeOmniEngine : public OmniEngine {
   void AddBumperContacts(double dt);
   static void NearCallback(void* data, dGeomID o1, dGeomID o2);
 
-  dWorldID world_ = nullptr;
-  dThreadingImplementationID threading_ = nullptr;  // this world's own step scheduler
+  std::unique_ptr<OdeWorld> ode_world_;
+  dWorldID world_ = nullptr;  // ode_world_'s
   dSpaceID space_ = nullptr;  // chassis and walls, which it owns
   dGeomID floor_ = nullptr;   // plane z = 0, tested against the wheels only
   dJointGroupID contact_group_ = nullptr;
@@ -143,11 +134,8 @@ OdeOmniEngine::OdeOmniEngine(const std::vector<OmniModel>& robots, const FieldMo
                                   "' needs at least 3 wheels and Finalize()");
   }
   EnsureOdeInitialized();
-  world_ = dWorldCreate();
-  // Each world gets its own (single-threaded) step scheduler: ODE's default one is a
-  // process-wide object, and two worlds stepping on two threads trip over it.
-  threading_ = dThreadingAllocateSelfThreadedImplementation();
-  dWorldSetStepThreadingImplementation(world_, dThreadingImplementationGetFunctions(threading_), threading_);
+  ode_world_ = std::make_unique<OdeWorld>();
+  world_ = ode_world_->id();
   dWorldSetGravity(world_, 0, 0, -kGravity);
   // Robots often stand still between commands; a sleeping body would ignore the next one.
   dWorldSetAutoDisableFlag(world_, 0);
@@ -188,9 +176,7 @@ OdeOmniEngine::~OdeOmniEngine() {
   }
   dGeomDestroy(floor_);
   dSpaceDestroy(space_);  // destroys the chassis and wall geoms it holds
-  dWorldSetStepThreadingImplementation(world_, nullptr, nullptr);
-  dWorldDestroy(world_);  // destroys every body and hinge
-  dThreadingFreeImplementation(threading_);
+  // ode_world_ then destroys the world with every body and hinge.
 }
 
 void OdeOmniEngine::BuildRobot(int index, const OmniModel& model) {

@@ -1,0 +1,35 @@
+// What every ODE engine of the project needs from ODE's process-wide state, in one
+// place: ODE initialised once per process, its per-thread data allocated once per
+// thread, and worlds that can step on several threads at once.
+//
+//   OdeWorld world;                // dWorldCreate() with its own step scheduler
+//   dWorldSetGravity(world.id(), 0, 0, -9.81);
+//   ... EnsureOdeInitialized() at the top of every function that steps or builds ...
+#pragma once
+
+#include <ode/ode.h>
+
+namespace twinsim {
+
+// dInitODE2 once per process (dCloseODE is never called: engines may outlive main()),
+// and dAllocateODEDataForThread once per calling thread.
+void EnsureOdeInitialized();
+
+// A dWorldID that owns its own single-threaded step scheduler: ODE's default scheduler
+// is one process-wide object, and two worlds stepping on two threads trip over it.
+// Destroying it destroys the world with every body and joint in it.
+class OdeWorld {
+ public:
+  OdeWorld();
+  ~OdeWorld();
+  OdeWorld(const OdeWorld&) = delete;
+  OdeWorld& operator=(const OdeWorld&) = delete;
+
+  dWorldID id() const { return world_; }
+
+ private:
+  dWorldID world_ = nullptr;
+  dThreadingImplementationID threading_ = nullptr;
+};
+
+}  // namespace twinsim
