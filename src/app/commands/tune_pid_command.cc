@@ -202,9 +202,9 @@ int TunePidCommand(const TunePidCliOptions& options) {
     write("baselines.csv", csv);
     char line[256];
     for (const auto& x : b) {
-      std::snprintf(line, sizeof line, "  %-22s %5d runs  quality %7.3f  %.2f m/s  end deviation %5.1f %%\n",
+      std::snprintf(line, sizeof line, "  %-22s %5d runs  quality %7.3f  %.2f m/s  end deviation %5.1f %%",
                     x.method.c_str(), x.test_runs, x.score.quality, x.score.avg_speed, x.score.end_deviation_pct);
-      baselines_table += line;
+      baselines_table += line + (x.detail.empty() ? "" : "  (" + x.detail + ")") + "\n";
     }
   }
 
