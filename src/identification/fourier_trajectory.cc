@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include "core/error.h"
@@ -14,11 +15,14 @@
 namespace twinsim {
 namespace {
 
-// 17 significant digits: every double round-trips through the text.
+// The shortest of 15, 16 or 17 significant digits that reads back as the same double.
 std::string Exact(double v) {
   if (v == 0) v = 0;  // no "-0"
   char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
   return buf;
 }
 

@@ -71,8 +71,8 @@ JointMotion EvaluateFourier(const FourierTrajectory& trajectory, double t);
 // InputError for a non-positive sample time or duration.
 SampledMotion SampleFourier(const FourierTrajectory& trajectory, double sample_time, double duration);
 
-// The file text (the schema above); numbers with 17 significant digits, so loading
-// gives back the same doubles.
+// The file text (the schema above); numbers with as many significant digits (15 to
+// 17) as loading needs to give back the same doubles.
 std::string FormatFourierTrajectoryYaml(const FourierTrajectory& trajectory);
 // Writes the file atomically; throws InputError when it cannot be written.
 void SaveFourierTrajectory(const FourierTrajectory& trajectory, const std::string& path);

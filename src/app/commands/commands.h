@@ -12,5 +12,6 @@ void AddReplayCommand(CLI::App& app, int* exit_code);
 void AddTrainCommand(CLI::App& app, int* exit_code);
 void AddCompareCommand(CLI::App& app, int* exit_code);
 void AddRegressCommand(CLI::App& app, int* exit_code);
+void AddExciteCommand(CLI::App& app, int* exit_code);
 
 }  // namespace twinsim
