@@ -83,6 +83,7 @@ struct ExcitationJointMargins {
   double torque_peak = 0, torque_limit = 0;                // N·m or N, nominal model
   // rad or m: the closest approach to the design's position limits (negative: outside).
   double position_margin() const { return std::min(q_min - lower, upper - q_max); }
+  // True when every peak is within its limit and the range within the position limits.
   bool feasible() const;
 };
 
