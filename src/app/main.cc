@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   AddCompareCommand(app, &exit_code);
   AddRegressCommand(app, &exit_code);
   AddTunePidCommand(app, &exit_code);
+  AddExciteCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -13,5 +13,6 @@ void AddTrainCommand(CLI::App& app, int* exit_code);
 void AddCompareCommand(CLI::App& app, int* exit_code);
 void AddRegressCommand(CLI::App& app, int* exit_code);
 void AddTunePidCommand(CLI::App& app, int* exit_code);
+void AddExciteCommand(CLI::App& app, int* exit_code);
 
 }  // namespace twinsim
