@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   AddTrainCommand(app, &exit_code);
   AddCompareCommand(app, &exit_code);
   AddRegressCommand(app, &exit_code);
+  AddIdentifyCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
