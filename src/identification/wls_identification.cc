@@ -126,9 +126,18 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   const int r = base.rank();
   const Eigen::MatrixXd& k_matrix = base.from_standard;  // r x 12n
   const Eigen::VectorXd pi0 = StandardParameters(a_priori);
+  // Estimated: the r base parameters, then (optionally) one torque offset per joint.
+  const int offsets = options.torque_offsets ? n : 0;
+  const int cols_total = r + offsets;
+  summary.base_parameters = r;
   summary.names = base.names;
   for (int k = 0; k < r; ++k) summary.descriptions.push_back(DescribeBaseParameter(a_priori, base, k));
-  summary.a_priori = k_matrix * pi0;
+  for (int j = 0; j < offsets; ++j) {
+    summary.names.push_back("offset" + std::to_string(j + 1));
+    summary.descriptions.push_back("torque offset of joint " + std::to_string(j + 1));
+  }
+  summary.a_priori = Eigen::VectorXd::Zero(cols_total);
+  summary.a_priori.head(r) = k_matrix * pi0;
 
   // Joints that never move: their velocity and acceleration are exactly zero, so the
   // parameters only their motion reveals show up as unexcited instead of as noise.
@@ -158,6 +167,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
       if (link || friction) columns[static_cast<std::size_t>(j)].push_back(k);
     }
   }
+  for (int j = 0; j < offsets; ++j) columns[static_cast<std::size_t>(j)].push_back(r + j);
   std::vector<TriangularAccumulator> factors;
   for (int j = 0; j < n; ++j) factors.emplace_back(static_cast<int>(columns[static_cast<std::size_t>(j)].size()) + 1, 1024);
 
@@ -177,8 +187,10 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
       for (int j = 0; j < n; ++j) {
         const auto& cols = columns[static_cast<std::size_t>(j)];
         auto next = factors[static_cast<std::size_t>(j)].Next();
-        for (std::size_t c = 0; c < cols.size(); ++c)
-          next[static_cast<Eigen::Index>(c)] = y(j, base.independent[static_cast<std::size_t>(cols[c])]);
+        for (std::size_t c = 0; c < cols.size(); ++c) {
+          const int k = cols[c];
+          next[static_cast<Eigen::Index>(c)] = k < r ? y(j, base.independent[static_cast<std::size_t>(k)]) : 1.0;
+        }
         next[static_cast<Eigen::Index>(cols.size())] = log.tau(row, j);
         factors[static_cast<std::size_t>(j)].Commit();
         torque_square[j] += log.tau(row, j) * log.tau(row, j);
@@ -187,9 +199,9 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
     }
   }
   summary.samples = samples;
-  if (samples * n < 2 * r) {
-    throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(r) +
-                                                " base parameters: " + std::to_string(samples) + " samples of " +
+  if (samples * n < 2 * cols_total) {
+    throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(cols_total) +
+                                                " parameters: " + std::to_string(samples) + " samples of " +
                                                 std::to_string(n) + " joints");
   }
   summary.torque_rms = (torque_square / samples).cwiseSqrt();
@@ -205,7 +217,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
     f.Flush();
     const auto& cols = columns[static_cast<std::size_t>(j)];
     const int m = static_cast<int>(cols.size());
-    Eigen::MatrixXd rj = Eigen::MatrixXd::Zero(m, r);
+    Eigen::MatrixXd rj = Eigen::MatrixXd::Zero(m, cols_total);
     for (int c = 0; c < m; ++c) rj.col(cols[static_cast<std::size_t>(c)]) = f.r().col(c).head(m);
     r_of[static_cast<std::size_t>(j)] = rj;
     z_of[static_cast<std::size_t>(j)] = f.r().col(m).head(m);
@@ -213,7 +225,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
     stacked += m;
   }
   auto stack = [&](const Eigen::VectorXd& weight, Eigen::MatrixXd* a, Eigen::VectorXd* b) {
-    a->resize(stacked, r);
+    a->resize(stacked, cols_total);
     b->resize(stacked);
     int at = 0;
     for (int j = 0; j < n; ++j) {
@@ -241,34 +253,36 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   {
     Eigen::VectorXd norms = a.colwise().norm().transpose();
     const double largest = norms.maxCoeff();
-    for (int k = 0; k < r; ++k)
+    for (int k = 0; k < cols_total; ++k)
       if (!(norms[k] > 1e-14 * largest)) norms[k] = 0;
     const Eigen::MatrixXd scaled = a * norms.unaryExpr([](double v) { return v > 0 ? 1 / v : 0.0; }).asDiagonal();
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinV);
     const Eigen::VectorXd s = svd.singularValues();
     const double limit = s[0] / options.max_condition_number;
     std::vector<int> weak;
-    for (int k = 0; k < r; ++k)
+    for (int k = 0; k < cols_total; ++k)
       if (!(s[k] > limit)) weak.push_back(k);
     if (!weak.empty()) {
-      Eigen::VectorXd share = Eigen::VectorXd::Zero(r);
+      Eigen::VectorXd share = Eigen::VectorXd::Zero(cols_total);
       for (int w : weak) share += svd.matrixV().col(w).cwiseAbs2();
       share = share.cwiseSqrt();
       std::vector<int> named;
-      for (int k = 0; k < r; ++k)
+      for (int k = 0; k < cols_total; ++k)
         if (share[k] > 0.3) named.push_back(k);
       std::stable_sort(named.begin(), named.end(), [&](int x, int y) { return share[x] > share[y]; });
-      if (named.empty()) named.push_back(static_cast<int>(std::max_element(share.data(), share.data() + r) - share.data()));
+      if (named.empty()) named.push_back(static_cast<int>(std::max_element(share.data(), share.data() + cols_total) - share.data()));
       std::string still_list;
       for (int j : summary.still_joints) still_list += (still_list.empty() ? "" : ", ") + std::to_string(j);
       std::ostringstream msg;
       msg << "the data does not excite base parameter" << (named.size() > 1 ? "s " : " ");
       for (std::size_t i = 0; i < named.size(); ++i) {
         const int k = named[i];
-        const int sidx = base.independent[static_cast<std::size_t>(k)];
-        msg << (i == 0 ? "" : i + 1 == named.size() ? " and " : ", ") << base.names[static_cast<std::size_t>(k)]
+        const int sidx = k < r ? base.independent[static_cast<std::size_t>(k)] : -1;
+        msg << (i == 0 ? "" : i + 1 == named.size() ? " and " : ", ") << summary.names[static_cast<std::size_t>(k)]
             << " (" << summary.descriptions[static_cast<std::size_t>(k)];
-        if (sidx >= kParametersPerLink * n) {
+        if (sidx < 0) {
+          // A torque offset is only unexcited together with something constant.
+        } else if (sidx >= kParametersPerLink * n) {
           const int joint = (sidx - kParametersPerLink * n) / kFrictionPerJoint;
           if (still[static_cast<std::size_t>(joint)]) msg << ": it never moves";
         } else if (!still_list.empty()) {
@@ -285,7 +299,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
             << Format(options.still_range) << ")";
       }
       msg << ". Move every joint in both directions with varied speeds and accelerations (the condition number is "
-          << (s[r - 1] > 0 ? Format(s[0] / s[r - 1]) : std::string("infinite")) << ", the limit "
+          << (s[cols_total - 1] > 0 ? Format(s[0] / s[cols_total - 1]) : std::string("infinite")) << ", the limit "
           << Format(options.max_condition_number) << ")";
       throw InputError(SourceLocation{where}, msg.str());
     }
@@ -294,7 +308,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   // Ordinary least squares, then each joint weighted by its residual's standard deviation.
   summary.ordinary = a.householderQr().solve(b);
   summary.joint_sigma.resize(n);
-  const double dof_per_joint = std::max(1.0, samples - static_cast<double>(r) / n);
+  const double dof_per_joint = std::max(1.0, samples - static_cast<double>(cols_total) / n);
   for (int j = 0; j < n; ++j) {
     const double floor = 1e-12 * std::max(summary.torque_rms[j], 1e-12);
     summary.joint_sigma[j] = std::max(floor, std::sqrt(std::max(0.0, rss(j, summary.ordinary)) / dof_per_joint));
@@ -306,19 +320,20 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   stack(weights, &aw, &bw);
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(aw);
   summary.identified = qr.solve(bw);
-  const Eigen::MatrixXd rw = qr.matrixQR().topRows(r).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd rw = qr.matrixQR().topRows(cols_total).triangularView<Eigen::Upper>();
   {
     Eigen::VectorXd norms = aw.colwise().norm().transpose();
     const Eigen::VectorXd sv = (aw * norms.cwiseInverse().asDiagonal()).jacobiSvd().singularValues();
-    summary.condition_number = sv[0] / sv[r - 1];
+    summary.condition_number = sv[0] / sv[cols_total - 1];
   }
   double weighted_rss = 0;
   for (int j = 0; j < n; ++j) weighted_rss += weights[j] * weights[j] * rss(j, summary.identified);
-  const double variance = weighted_rss / std::max(1, samples * n - r);
-  const Eigen::MatrixXd rinv = rw.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(r, r));
+  const double variance = weighted_rss / std::max(1, samples * n - cols_total);
+  const Eigen::MatrixXd rinv =
+      rw.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(cols_total, cols_total));
   const Eigen::VectorXd std_dev = (variance * rinv.rowwise().squaredNorm()).cwiseSqrt();
-  summary.relative_std.resize(r);
-  for (int k = 0; k < r; ++k) {
+  summary.relative_std.resize(cols_total);
+  for (int k = 0; k < cols_total; ++k) {
     const double v = std::abs(summary.identified[k]);
     summary.relative_std[k] = v > 0 ? 100 * std_dev[k] / v : std::numeric_limits<double>::infinity();
   }
@@ -326,7 +341,19 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   // Back to standard parameters: the a-priori model moved by the least amount that
   // gives the identified base parameters (K has full row rank), and if that is not a
   // real arm, the physically consistent parameters that fit the torques best.
-  const Eigen::VectorXd pi_mn = NearestStandardParameters(a_priori, k_matrix, summary.identified);
+  // The offsets are free: with them first in a QR of the weighted system, R = [[R_oo,
+  // R_ob], [0, R_bb]] and R_bb is the weighted metric of beta with the offsets refitted.
+  const Eigen::VectorXd beta = summary.identified.head(r);
+  Eigen::MatrixXd r_beta = rw.topLeftCorner(r, r), r_oo, r_ob;
+  if (offsets > 0) {
+    Eigen::MatrixXd permuted(aw.rows(), cols_total);
+    permuted << aw.rightCols(offsets), aw.leftCols(r);
+    const Eigen::MatrixXd rp = permuted.householderQr().matrixQR().topRows(cols_total).triangularView<Eigen::Upper>();
+    r_oo = rp.topLeftCorner(offsets, offsets);
+    r_ob = rp.topRightCorner(offsets, r);
+    r_beta = rp.bottomRightCorner(r, r);
+  }
+  const Eigen::VectorXd pi_mn = NearestStandardParameters(a_priori, k_matrix, beta);
   ArmModel result;
   bool consistent = false;
   try {
@@ -342,7 +369,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   Eigen::VectorXd pi_final = pi_mn;
   if (!consistent) {
     summary.consistency_fixed = true;
-    const ConsistentFit fit = FitConsistentParameters(a_priori, k_matrix, rw, summary.identified);
+    const ConsistentFit fit = FitConsistentParameters(a_priori, k_matrix, r_beta, beta);
     summary.consistency_iterations = fit.iterations;
     pi_final = fit.pi;
     result = WithStandardParameters(a_priori, pi_final);
@@ -351,9 +378,16 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
       throw std::runtime_error("identification: the physically consistent fit still fails validation: " + problems);
     }
   }
-  summary.consistent = k_matrix * pi_final;
+  summary.consistent = summary.identified;
+  summary.consistent.head(r) = k_matrix * pi_final;
+  if (offsets > 0) {
+    // The offsets that go best with the consistent base parameters.
+    summary.consistent.tail(offsets) -=
+        r_oo.triangularView<Eigen::Upper>().solve(r_ob * (summary.consistent.head(r) - beta));
+  }
+  summary.offsets = summary.consistent.tail(offsets);
   summary.consistency_shift_max_std = 0;
-  for (int k = 0; k < r; ++k) {
+  for (int k = 0; k < cols_total; ++k) {
     if (std_dev[k] > 0)
       summary.consistency_shift_max_std =
           std::max(summary.consistency_shift_max_std, std::abs(summary.consistent[k] - summary.identified[k]) / std_dev[k]);
@@ -371,7 +405,7 @@ std::string WlsIdentificationSummary::BriefReport() const {
   std::ostringstream s;
   const double before = error_rms_a_priori.size() ? (error_rms_a_priori.cwiseQuotient(torque_rms)).mean() : 0;
   const double after = error_rms_model.size() ? (error_rms_model.cwiseQuotient(torque_rms)).mean() : 0;
-  s << names.size() << " base parameters from " << samples << " samples of " << logs << " log" << (logs == 1 ? "" : "s")
+  s << base_parameters << " base parameters" << (names.size() > static_cast<std::size_t>(base_parameters) ? " and torque offsets" : "") << " from " << samples << " samples of " << logs << " log" << (logs == 1 ? "" : "s")
     << ", condition number " << Format(condition_number) << ", torque error " << Format(100 * before) << " % -> "
     << Format(100 * after) << " % of the torque RMS (mean over joints)"
     << (consistency_fixed ? ", made physically consistent" : "");

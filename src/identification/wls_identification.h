@@ -41,6 +41,9 @@ struct WlsIdentificationOptions {
   int decimate = 1;                  // use every k-th row of each log
   bool skip_filter_edges = true;     // leave out each log's edge_samples rows at both ends (derived qd/qdd)
   bool weighted = true;              // weight each joint by 1 / its OLS residual std dev (false: OLS only)
+  // Also estimate a constant offset per joint: measured torque = model torque + offset
+  // (a torque sensor's bias; the contract's torque_offset effect is minus this).
+  bool torque_offsets = false;
   double still_range = 1e-3;         // rad or m: a joint whose q spans less than this never moves
   double max_condition_number = 1e5; // of the column-scaled stacked regressor; above: parameters not excited
   int base_samples = 200;            // random states for finding the base parameters
@@ -53,13 +56,15 @@ struct WlsIdentificationSummary {
   int dof = 0;
   int logs = 0;
   int samples = 0;                     // samples used (all logs, after trimming and decimation)
-  std::vector<std::string> names;      // base parameters, each as its standard combination
+  int base_parameters = 0;             // r; the vectors below hold r base parameters, then the offsets
+  std::vector<std::string> names;      // base parameters, each as its standard combination; "offset<j>"
   std::vector<std::string> descriptions;  // the same in words ("Coulomb friction of joint 3")
   Eigen::VectorXd a_priori;            // K pi of the a-priori model
   Eigen::VectorXd ordinary;            // OLS estimate
   Eigen::VectorXd identified;          // WLS estimate (OLS when not weighted)
   Eigen::VectorXd relative_std;        // %, 100 sigma(beta_k) / |beta_k|
   Eigen::VectorXd consistent;          // K pi of the returned model
+  Eigen::VectorXd offsets;             // N·m or N per joint (empty without torque_offsets): measured - model at rest
   Eigen::VectorXd joint_sigma;         // N·m or N per joint, the OLS residual std dev (the weights' inverse)
   Eigen::VectorXd torque_rms;          // N·m or N per joint, measured torque RMS over the samples used
   Eigen::VectorXd error_rms_a_priori;  // N·m or N per joint, torque error RMS of the a-priori model
@@ -79,7 +84,8 @@ struct WlsIdentificationSummary {
 };
 
 // Identifies `a_priori`'s base parameters and friction from `logs` and returns the
-// model with them (kinematics, limits and names unchanged). Throws InputError for
+// model with them (kinematics, limits and names unchanged; torque offsets, when
+// estimated, are in the summary only). Throws InputError for
 // invalid options, a log whose joint count differs from the model's, too few samples,
 // or data that does not excite some base parameter (named in words).
 ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,

@@ -113,7 +113,10 @@ ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
   if (log.qd_logged) log.qd = Columns(table, "qd", nq);
   if (log.qdd_logged) log.qdd = Columns(table, "qdd", nq);
   if (!log.qd_logged || !log.qdd_logged) {
-    const double rate = 1 / log.sample_period;
+    // Stamps jitter around a fixed rate (the controller's); differentiate on the uniform
+    // grid of the log's average step rather than on the stamps (signal/butterworth.h).
+    const double step = (log.t[rows - 1] - log.t[0]) / (rows - 1);
+    const double rate = 1 / step;
     log.derive_cutoff_hz = std::min(options.cutoff_hz, 0.25 * rate);
     const ButterworthFilter filter = DesignButterworthLowPass(options.filter_order, log.derive_cutoff_hz, rate);
     // Odd reflection keeps value and slope at the ends, not curvature: qdd is off there
@@ -124,10 +127,10 @@ ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
     for (int j = 0; j < nq; ++j) {
       if (log.qd_logged) {
         // Differentiate the logged velocity once rather than the position twice.
-        log.qdd.col(j) = FilteredDerivatives(filter, log.t, log.qd.col(j)).first;
+        log.qdd.col(j) = FilteredDerivatives(filter, step, log.qd.col(j)).first;
         continue;
       }
-      const SignalDerivatives d = FilteredDerivatives(filter, log.t, log.q.col(j));
+      const SignalDerivatives d = FilteredDerivatives(filter, step, log.q.col(j));
       log.qd.col(j) = d.first;
       if (!log.qdd_logged) log.qdd.col(j) = d.second;
     }

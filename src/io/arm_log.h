@@ -7,8 +7,8 @@
 // median step: real controllers jitter, the KUKA logs by ±36 %). Where qd or qdd are
 // absent they are derived from q by zero-phase filtered differentiation
 // (signal/butterworth.h): a 4th-order Butterworth low-pass run forwards and backwards at
-// the cut-off of ArmLogOptions, then three-point central differences on the sample
-// times. Choose the cut-off well above the motion's bandwidth (the highest harmonic of
+// the cut-off of ArmLogOptions, then central differences on the uniform grid of the
+// log's average step (time stamps jitter, the controller's clock does not). Choose the cut-off well above the motion's bandwidth (the highest harmonic of
 // an excitation, usually a few Hz) and well below where encoder quantisation and
 // vibration live; docs/identification.md says more. The first and last
 // `edge_samples` rows of derived values are less accurate (the filter's reach).

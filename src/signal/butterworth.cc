@@ -200,4 +200,15 @@ SignalDerivatives FilteredDerivatives(const ButterworthFilter& filter, const Eig
   return ThreePointDerivatives(t, FiltFilt(filter, x));
 }
 
+SignalDerivatives FilteredDerivatives(const ButterworthFilter& filter, double sample_period, const Eigen::VectorXd& x) {
+  if (!(sample_period > 0) || !std::isfinite(sample_period)) {
+    std::ostringstream s;
+    s << "derivatives: the sample period must be positive, got " << sample_period << " s";
+    throw InputError(s.str());
+  }
+  if (x.size() < 3) throw InputError("derivatives need at least 3 samples, got " + std::to_string(x.size()));
+  return ThreePointDerivatives(Eigen::VectorXd::LinSpaced(x.size(), 0.0, sample_period * (x.size() - 1)),
+                               FiltFilt(filter, x));
+}
+
 }  // namespace twinsim

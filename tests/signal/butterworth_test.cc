@@ -105,6 +105,30 @@ TEST(Butterworth, FilteredDerivativesOfASinusoid) {
   EXPECT_LT(second_ends, 0.3);
 }
 
+TEST(Butterworth, UniformGridDerivativesIgnoreStampJitter) {
+  // Samples of sin(w t) taken every 5 ms; the uniform-grid version on the sampling
+  // period matches the time-stamp version on exact stamps, and is what stays right when
+  // the stamps jitter (the KUKA logs' do, by up to 1.5 ms).
+  const double fs = 200, w = 2 * M_PI * 0.4;
+  const ButterworthFilter f = DesignButterworthLowPass(4, 5, fs);
+  const Eigen::VectorXd t = Times(2000, fs);
+  const Eigen::VectorXd x = (w * t).array().sin();
+  const SignalDerivatives uniform = FilteredDerivatives(f, 1 / fs, x);
+  const SignalDerivatives stamped = FilteredDerivatives(f, t, x);
+  EXPECT_LT((uniform.second - stamped.second).cwiseAbs().maxCoeff(), 1e-9);
+  Eigen::VectorXd jittered = t;
+  for (int k = 1; k < 1999; k += 7) jittered[k] += 0.0005;
+  const SignalDerivatives wrong = FilteredDerivatives(f, jittered, x);
+  double error_uniform = 0, error_stamped = 0;
+  for (int k = 200; k < 1800; ++k) {
+    error_uniform = std::max(error_uniform, std::abs(uniform.second[k] + w * w * std::sin(w * t[k])));
+    error_stamped = std::max(error_stamped, std::abs(wrong.second[k] + w * w * std::sin(w * t[k])));
+  }
+  EXPECT_LT(error_uniform, 1e-3 * w * w);
+  EXPECT_GT(error_stamped, 0.5 * w * w);
+  EXPECT_THROW(FilteredDerivatives(f, 0.0, x), InputError);
+}
+
 TEST(Butterworth, ThreePointDerivativesAreExactForParabolasOnUnevenTimes) {
   Eigen::VectorXd t(6);
   t << 0, 0.004, 0.011, 0.015, 0.021, 0.024;

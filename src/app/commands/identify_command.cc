@@ -24,11 +24,13 @@ namespace {
 struct IdentifyCliOptions {
   std::string model;
   std::vector<std::string> logs;
+  std::vector<std::string> validate;
   std::string out;
   std::string report;
   ArmLogOptions log;
   WlsIdentificationOptions identification;
   bool unweighted = false;
+  bool offsets = false;
   bool quiet = false;
 };
 
@@ -68,6 +70,7 @@ int Identify(const IdentifyCliOptions& options) {
     throw InputError(SourceLocation{options.model}, "identify estimates an arm's parameters; this is not an arm model");
   WlsIdentificationOptions identification = options.identification;
   identification.weighted = !options.unweighted;
+  identification.torque_offsets = options.offsets;
   std::string why;
   if (!identification.IsValid(&why)) throw InputError(why);
   const ArmModel model = LoadArmModel(options.model);
@@ -77,8 +80,44 @@ int Identify(const IdentifyCliOptions& options) {
     CheckArmLogMatchesModel(logs.back(), model);
   }
 
+  std::vector<ArmLog> held_out;
+  for (const auto& path : options.validate) {
+    held_out.push_back(ReadArmLog(path, options.log));
+    CheckArmLogMatchesModel(held_out.back(), model);
+  }
+
   WlsIdentificationSummary summary;
   const ArmModel identified = IdentifyArm(model, logs, identification, &summary);
+
+  // Held-out logs: the a-priori and the identified model's torque errors (with the
+  // identified offsets, when estimated), away from the derived derivatives' edges.
+  std::string validation_csv =
+      "log,joint,torque_rms,error_a_priori,error_identified,relative_a_priori,relative_identified\n";
+  std::string validation_text;
+  for (const ArmLog& log : held_out) {
+    Eigen::MatrixXd tau = PredictArmTorques(identified, log);
+    if (summary.offsets.size() == log.dof) tau.rowwise() += summary.offsets.transpose();
+    const int first = log.edge_samples, last = log.rows() - log.edge_samples;
+    const TorqueErrors before = CompareArmTorques(model, log, first, last);
+    const TorqueErrors after = CompareArmTorques(identified, log, tau, first, last);
+    char line[256];
+    validation_text += "\nheld out: " + log.path + " (" + std::to_string(after.rows) + " rows)\n";
+    std::snprintf(line, sizeof line, "%-6s %11s %21s %21s\n", "joint", "torque RMS", "a-priori error", "identified error");
+    validation_text += line;
+    for (int j = 0; j < log.dof; ++j) {
+      std::snprintf(line, sizeof line, "%-6d %11.4g %11.4g (%6.2f%%) %11.4g (%6.2f%%)\n", j + 1, after.torque_rms[j],
+                    before.error_rms[j], 100 * before.relative[j], after.error_rms[j], 100 * after.relative[j]);
+      validation_text += line;
+      validation_csv += log.path + "," + std::to_string(j + 1) + "," + FormatCsvNumber(after.torque_rms[j]) + "," +
+                        FormatCsvNumber(before.error_rms[j]) + "," + FormatCsvNumber(after.error_rms[j]) + "," +
+                        FormatCsvNumber(before.relative[j]) + "," + FormatCsvNumber(after.relative[j]) + "\n";
+    }
+    std::snprintf(line, sizeof line,
+                  "mean relative error %.2f%% -> %.2f%%; normalised (error / twice the effort limit) %.3f%% -> %.3f%%\n",
+                  100 * before.relative.mean(), 100 * after.relative.mean(), 100 * before.normalised,
+                  100 * after.normalised);
+    validation_text += line;
+  }
 
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs.size()) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
@@ -98,15 +137,21 @@ int Identify(const IdentifyCliOptions& options) {
     const std::string parameters = options.report + "/parameters.csv";
     WriteFileAtomically(parameters, csv);
     written.push_back(parameters);
-    std::string joints = "joint,torque_rms,error_rms_a_priori,error_rms_identified,error_rms_model\n";
+    std::string joints = "joint,torque_rms,error_rms_a_priori,error_rms_identified,error_rms_model,offset\n";
     for (int j = 0; j < summary.dof; ++j) {
       joints += std::to_string(j + 1) + "," + FormatCsvNumber(summary.torque_rms[j]) + "," +
                 FormatCsvNumber(summary.error_rms_a_priori[j]) + "," + FormatCsvNumber(summary.error_rms_identified[j]) +
-                "," + FormatCsvNumber(summary.error_rms_model[j]) + "\n";
+                "," + FormatCsvNumber(summary.error_rms_model[j]) + "," +
+                FormatCsvNumber(summary.offsets.size() ? summary.offsets[j] : 0.0) + "\n";
     }
     const std::string joints_path = options.report + "/joints.csv";
     WriteFileAtomically(joints_path, joints);
     written.push_back(joints_path);
+    if (!held_out.empty()) {
+      const std::string validation_path = options.report + "/validation.csv";
+      WriteFileAtomically(validation_path, validation_csv);
+      written.push_back(validation_path);
+    }
     if (RenderingCompiled()) {
       std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
       const Eigen::MatrixXd before = PredictArmTorques(model, logs[0]);
@@ -122,8 +167,14 @@ int Identify(const IdentifyCliOptions& options) {
   }
 
   if (!options.quiet) {
-    std::printf("identified %s (%d joints) from %zu log(s)\n\n%s\n", model.name.c_str(), model.dof(), logs.size(),
+    std::printf("identified %s (%d joints) from %zu log(s)\n\n%s", model.name.c_str(), model.dof(), logs.size(),
                 summary.FullReport().c_str());
+    if (summary.offsets.size() > 0) {
+      std::printf("torque offsets (measured - model; not part of the written model):");
+      for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
+      std::printf(" N·m or N\n");
+    }
+    std::printf("%s\n", validation_text.c_str());
     std::printf("wrote:\n");
     for (const auto& w : written) std::printf("  %s\n", w.c_str());
   }
@@ -154,6 +205,10 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                   "Largest condition number of the scaled regressor before parameters count as not excited")
       ->capture_default_str();
   cmd->add_flag("--unweighted", options->unweighted, "Ordinary least squares only (no per-joint weights)");
+  cmd->add_flag("--offsets", options->offsets,
+                "Also estimate a constant torque offset per joint (a torque sensor's bias); reported, not written");
+  cmd->add_option("--validate", options->validate,
+                  "Held-out log(s): print the a-priori and identified models' torque errors on them");
   cmd->add_option("--report", options->report,
                   "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
   cmd->add_flag("--quiet,-q", options->quiet, "No tables and no summary");
