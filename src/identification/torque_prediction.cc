@@ -18,6 +18,18 @@ Eigen::MatrixXd PredictArmTorques(const ArmModel& model, const ArmLog& log) {
   return tau;
 }
 
+Eigen::MatrixXd PredictBaseTorques(const ArmModel& model, const BaseParameters& base, const Eigen::VectorXd& beta,
+                                   const ArmLog& log) {
+  CheckArmLogMatchesModel(log, model);
+  Eigen::MatrixXd tau(log.rows(), log.dof);
+  for (int r = 0; r < log.rows(); ++r) {
+    const Eigen::MatrixXd y = Regressor(model, log.q.row(r).transpose(), log.qd.row(r).transpose(),
+                                        log.qdd.row(r).transpose());
+    tau.row(r) = (base.Reduce(y) * beta).transpose();
+  }
+  return tau;
+}
+
 TorqueErrors CompareArmTorques(const ArmModel& model, const ArmLog& log, int first, int last) {
   return CompareArmTorques(model, log, PredictArmTorques(model, log), first, last);
 }

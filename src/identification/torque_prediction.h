@@ -10,12 +10,19 @@
 
 #include "io/arm_log.h"
 #include "robots/arm/arm_model.h"
+#include "robots/arm/arm_regressor.h"
 
 namespace twinsim {
 
 // The model's torques (inverse dynamics with friction) at every row of `log` (N x n),
 // from its q, qd and qdd (logged or derived). Throws InputError when the joint counts differ.
 Eigen::MatrixXd PredictArmTorques(const ArmModel& model, const ArmLog& log);
+
+// Torques Y_b(q, qd, qdd) beta at every row of `log` (N x n) straight from base
+// parameters (r of `base`), which need not belong to a real arm: how an unconstrained
+// estimate would predict. Throws InputError when the joint counts differ.
+Eigen::MatrixXd PredictBaseTorques(const ArmModel& model, const BaseParameters& base, const Eigen::VectorXd& beta,
+                                   const ArmLog& log);
 
 struct TorqueErrors {
   Eigen::VectorXd error_rms;    // N·m or N per joint: RMS of measured - model

@@ -94,6 +94,19 @@ TEST(IdentifyCli, IdentifiesWritesALoadableModelAndReplaysIt) {
   }
 }
 
+TEST(IdentifyCli, OffsetsAndHeldOutValidation) {
+  const std::string dir = testing::TempDir("identify_validate");
+  const std::string log = WriteLog(dir, "run.csv");
+  auto r = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir +
+                      "/m.yaml --offsets --validate " + log + " --report " + dir + "/report");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("torque offsets (measured - model; not part of the written model):"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("held out: " + log), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("normalised (error / twice the effort limit)"), std::string::npos) << r.out;
+  const std::string csv = testing::ReadText(dir + "/report/validation.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);  // header and 3 joints
+}
+
 TEST(IdentifyCli, ReplayOfTheUrdfWritesTheModelsTorques) {
   const std::string dir = testing::TempDir("replay_arm_cli");
   const std::string log = WriteLog(dir, "run.csv");

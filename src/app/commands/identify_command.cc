@@ -56,7 +56,7 @@ SeriesPlot TorquePlot(const ArmLog& log, int j, const Eigen::MatrixXd& a_priori,
   };
   series("measured", log.tau);
   series("a-priori model", a_priori);
-  series("identified model", identified);
+  series("identified model", identified);  // with the offsets, when estimated
   return plot;
 }
 
@@ -91,31 +91,43 @@ int Identify(const IdentifyCliOptions& options) {
 
   // Held-out logs: the a-priori and the identified model's torque errors (with the
   // identified offsets, when estimated), away from the derived derivatives' edges.
+  // The unconstrained estimate predicts from the base parameters directly.
   std::string validation_csv =
-      "log,joint,torque_rms,error_a_priori,error_identified,relative_a_priori,relative_identified\n";
+      "log,joint,torque_rms,error_a_priori,error_identified,error_unconstrained,relative_a_priori,"
+      "relative_identified,relative_unconstrained\n";
   std::string validation_text;
+  const BaseParameters base = held_out.empty() ? BaseParameters{} : IdentificationBase(model, identification);
   for (const ArmLog& log : held_out) {
     Eigen::MatrixXd tau = PredictArmTorques(identified, log);
-    if (summary.offsets.size() == log.dof) tau.rowwise() += summary.offsets.transpose();
+    Eigen::MatrixXd free = PredictBaseTorques(model, base, summary.identified.head(summary.base_parameters), log);
+    if (summary.offsets.size() == log.dof) {
+      tau.rowwise() += summary.offsets.transpose();
+      free.rowwise() += summary.identified.tail(log.dof).transpose();
+    }
     const int first = log.edge_samples, last = log.rows() - log.edge_samples;
     const TorqueErrors before = CompareArmTorques(model, log, first, last);
     const TorqueErrors after = CompareArmTorques(identified, log, tau, first, last);
+    const TorqueErrors unconstrained = CompareArmTorques(identified, log, free, first, last);
     char line[256];
     validation_text += "\nheld out: " + log.path + " (" + std::to_string(after.rows) + " rows)\n";
-    std::snprintf(line, sizeof line, "%-6s %11s %21s %21s\n", "joint", "torque RMS", "a-priori error", "identified error");
+    std::snprintf(line, sizeof line, "%-6s %11s %21s %21s %21s\n", "joint", "torque RMS", "a-priori error",
+                  "identified error", "(unconstrained)");
     validation_text += line;
     for (int j = 0; j < log.dof; ++j) {
-      std::snprintf(line, sizeof line, "%-6d %11.4g %11.4g (%6.2f%%) %11.4g (%6.2f%%)\n", j + 1, after.torque_rms[j],
-                    before.error_rms[j], 100 * before.relative[j], after.error_rms[j], 100 * after.relative[j]);
+      std::snprintf(line, sizeof line, "%-6d %11.4g %11.4g (%6.2f%%) %11.4g (%6.2f%%) %11.4g (%6.2f%%)\n", j + 1,
+                    after.torque_rms[j], before.error_rms[j], 100 * before.relative[j], after.error_rms[j],
+                    100 * after.relative[j], unconstrained.error_rms[j], 100 * unconstrained.relative[j]);
       validation_text += line;
       validation_csv += log.path + "," + std::to_string(j + 1) + "," + FormatCsvNumber(after.torque_rms[j]) + "," +
                         FormatCsvNumber(before.error_rms[j]) + "," + FormatCsvNumber(after.error_rms[j]) + "," +
-                        FormatCsvNumber(before.relative[j]) + "," + FormatCsvNumber(after.relative[j]) + "\n";
+                        FormatCsvNumber(unconstrained.error_rms[j]) + "," + FormatCsvNumber(before.relative[j]) + "," +
+                        FormatCsvNumber(after.relative[j]) + "," + FormatCsvNumber(unconstrained.relative[j]) + "\n";
     }
     std::snprintf(line, sizeof line,
-                  "mean relative error %.2f%% -> %.2f%%; normalised (error / twice the effort limit) %.3f%% -> %.3f%%\n",
-                  100 * before.relative.mean(), 100 * after.relative.mean(), 100 * before.normalised,
-                  100 * after.normalised);
+                  "mean relative error %.2f%% -> %.2f%% (unconstrained %.2f%%); normalised (error / twice the effort "
+                  "limit) %.3f%% -> %.3f%% (%.3f%%)\n",
+                  100 * before.relative.mean(), 100 * after.relative.mean(), 100 * unconstrained.relative.mean(),
+                  100 * before.normalised, 100 * after.normalised, 100 * unconstrained.normalised);
     validation_text += line;
   }
 
@@ -155,7 +167,8 @@ int Identify(const IdentifyCliOptions& options) {
     if (RenderingCompiled()) {
       std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
       const Eigen::MatrixXd before = PredictArmTorques(model, logs[0]);
-      const Eigen::MatrixXd after = PredictArmTorques(identified, logs[0]);
+      Eigen::MatrixXd after = PredictArmTorques(identified, logs[0]);
+      if (summary.offsets.size() == model.dof()) after.rowwise() += summary.offsets.transpose();
       for (int j = 0; j < model.dof(); ++j) {
         const std::string png = options.report + "/torque_joint" + std::to_string(j + 1) + ".png";
         WritePng(png, RenderSeriesPlot(TorquePlot(logs[0], j, before, after, model.name), *renderer));
