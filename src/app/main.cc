@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   AddRegressCommand(app, &exit_code);
   AddTunePidCommand(app, &exit_code);
   AddExciteCommand(app, &exit_code);
+  AddIdentifyCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace twinsim {
 
@@ -14,5 +15,11 @@ void AddCompareCommand(CLI::App& app, int* exit_code);
 void AddRegressCommand(CLI::App& app, int* exit_code);
 void AddTunePidCommand(CLI::App& app, int* exit_code);
 void AddExciteCommand(CLI::App& app, int* exit_code);
+void AddIdentifyCommand(CLI::App& app, int* exit_code);
+
+// The kind of robot a model file describes: "arm" for URDF (.urdf) and for YAML with
+// `robot: arm`, else the YAML's `robot` value ("omni" when absent). Throws InputError
+// when a YAML file cannot be read.
+std::string ModelFileRobotKind(const std::string& path);
 
 }  // namespace twinsim

@@ -1,5 +1,8 @@
 // `twinsim replay --model MODEL --log LOG.csv --out OUT.csv [--backend B] [--horizon K]`
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "analysis/omni_replay.h"
@@ -7,9 +10,12 @@
 #include "app/progress.h"
 #include "backends/omni_backend.h"
 #include "core/error.h"
+#include "identification/torque_prediction.h"
+#include "io/arm_log.h"
 #include "io/omni_log.h"
 #include "learning/omni_predictor.h"
 #include "io/yaml_reader.h"
+#include "robots/arm/arm_model.h"
 
 namespace twinsim {
 namespace {
@@ -21,16 +27,39 @@ struct ReplayOptions {
   std::string backend = "ode";
   int horizon = 4;
   std::string predictor;
+  double cutoff_hz = ArmLogOptions{}.cutoff_hz;
   bool quiet = false;
 };
 
+// An arm: the model's torques (inverse dynamics with friction) for the logged motion.
+int ReplayArm(const ReplayOptions& options) {
+  const ArmModel model = LoadArmModel(options.model);
+  ArmLogOptions log_options;
+  log_options.cutoff_hz = options.cutoff_hz;
+  const ArmLog log = ReadArmLog(options.log, log_options);
+  CheckArmLogMatchesModel(log, model);
+  const Eigen::MatrixXd tau = PredictArmTorques(model, log);
+  WriteArmTorqueCsv(options.out, log.t, tau);
+  if (!options.quiet) {
+    const TorqueErrors e = CompareArmTorques(model, log, tau);
+    std::printf("replayed %d rows of %s through %s (inverse dynamics with friction%s)\n", log.rows(),
+                options.log.c_str(), model.name.c_str(),
+                log.qd_logged && log.qdd_logged ? "" : ", qd/qdd derived from q");
+    std::printf("joint  torque RMS  error RMS  relative\n");
+    for (int j = 0; j < log.dof; ++j)
+      std::printf("%5d  %10.4g  %9.4g  %7.2f %%\n", j + 1, e.torque_rms[j], e.error_rms[j], 100 * e.relative[j]);
+    std::printf("wrote:\n  %s\n", options.out.c_str());
+  }
+  return kExitOk;
+}
+
 int Replay(const ReplayOptions& options) {
   // Check everything before writing anything.
-  const YAML::Node root = LoadYamlFile(options.model);
-  const std::string kind = root["robot"] && root["robot"].IsScalar() ? root["robot"].Scalar() : "omni";
+  const std::string kind = ModelFileRobotKind(options.model);
+  if (kind == "arm") return ReplayArm(options);
   if (kind != "omni")
-    throw InputError(SourceLocation{options.model, root["robot"].Mark().line + 1},
-                     "replay of '" + kind + "' models is not available in this build (known: omni)");
+    throw InputError(SourceLocation{options.model},
+                     "replay of '" + kind + "' models is not available in this build (known: omni, arm)");
   const OmniModel model = LoadOmniModel(options.model);
   const OmniLog log = ReadOmniLog(options.log);
   OmniReplayOptions replay;
@@ -55,21 +84,37 @@ int Replay(const ReplayOptions& options) {
 
 }  // namespace
 
+std::string ModelFileRobotKind(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".urdf") return "arm";
+  const YAML::Node root = LoadYamlFile(path);
+  return root.IsMap() && root["robot"] && root["robot"].IsScalar() ? root["robot"].Scalar() : "omni";
+}
+
 void AddReplayCommand(CLI::App& app, int* exit_code) {
   auto options = std::make_shared<ReplayOptions>();
   CLI::App* cmd = app.add_subcommand("replay", "Replay a measured log through a model.");
   cmd->footer(
       "Omni robots: row i of OUT.csv (t,x,y,theta) is the model's prediction of frame i from the\n"
       "measured state K frames earlier and the logged commands since, with the model's delay.\n"
-      "K = 0: one free run from the first row. Rows without enough history hold the measured pose.");
-  cmd->add_option("--model", options->model, "Model file (YAML)")->required();
-  cmd->add_option("--log", options->log, "Measured log (CSV: t,x,y,theta,vx_cmd,vy_cmd,omega_cmd)")->required();
+      "K = 0: one free run from the first row. Rows without enough history hold the measured pose.\n"
+      "Arms (URDF, or YAML with 'robot: arm'): OUT.csv (t,tau1..taun) holds the model's torques for\n"
+      "the logged motion (inverse dynamics with friction), one row per input row; qd/qdd are\n"
+      "derived from q (zero-phase filter at --cutoff) where the log lacks them. --backend,\n"
+      "--predictor and --horizon do not apply to arms.");
+  cmd->add_option("--model", options->model, "Model file (omni: YAML; arm: URDF or YAML)")->required();
+  cmd->add_option("--log", options->log,
+                  "Measured log (omni: t,x,y,theta,vx_cmd,vy_cmd,omega_cmd; arm: t,q1..qn,tau1..taun[,qd..,qdd..])")
+      ->required();
   cmd->add_option("--out", options->out, "Output CSV")->required();
   cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned")->capture_default_str();
   cmd->add_option("--predictor", options->predictor, "1-frame predictor for --backend learned (from twinsim train)");
   cmd->add_option("--horizon", options->horizon, "K, frames predicted ahead (0: free run)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--cutoff", options->cutoff_hz, "Hz, arms: low-pass cut-off for qd/qdd derived from q")
+      ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Replay(*options); });
 }

@@ -1,5 +1,7 @@
-// Reading an ArmModel from the project's YAML (a DH table with inertial parameters,
-// limits and friction); the schema is documented in docs/arm_models.md.
+// Reading an ArmModel from the project's YAML: a DH table (`dh: standard|modified`) or,
+// without `dh`, a URDF-style joint table (each joint's origin xyz + rpy and axis in the
+// parent link's frame), with inertial parameters, limits and friction; the schema is
+// documented in docs/arm_models.md.
 //
 // DH rows are converted to the struct's `origin * Rot(z, q)` form. Standard DH,
 //   T_i = RotZ(theta_i + q) TransZ(d_i) TransX(a_i) RotX(alpha_i),
@@ -58,6 +60,80 @@ void ReadBody(YamlMap& m, ArmLink* body) {
   }
 }
 
+// The keys of the other joint table, for a hint when a file mixes the two.
+const char* kDhKeys[] = {"a", "alpha_deg", "d", "theta_deg"};
+const char* kUrdfKeys[] = {"origin", "axis"};
+
+void ReadDhRow(YamlMap& jm, DhRow* row) {
+  for (const char* key : kUrdfKeys) {
+    if (jm.Has(key)) {
+      jm.Error(key, std::string("'") + key + "' belongs to a URDF-style joint table; a DH table ('dh: ...') gives "
+                                            "a, alpha_deg, d and theta_deg");
+    }
+  }
+  jm.Require("a", &row->a);
+  if (jm.Require("alpha_deg", &row->alpha)) row->alpha *= kDegToRad;
+  jm.Require("d", &row->d);
+  if (jm.Require("theta_deg", &row->theta)) row->theta *= kDegToRad;
+}
+
+// A URDF-style joint: `origin: {xyz: [x, y, z], rpy: [roll, pitch, yaw]}` (m, rad; the
+// rotation is Rz(yaw) Ry(pitch) Rx(roll), as in URDF) places the joint frame on the
+// parent link; `axis: [x, y, z]` (normalised) is the motion's axis in that frame.
+void ReadUrdfPlacement(YamlMap& jm, ArmJoint* j) {
+  for (const char* key : kDhKeys) {
+    if (jm.Has(key)) {
+      jm.Error(key, std::string("'") + key + "' is a DH parameter; give 'dh: standard' or 'dh: modified' at the top "
+                                            "level, or place the joint with 'origin' and 'axis'");
+    }
+  }
+  if (jm.Has("origin")) {
+    YamlMap om(jm.Child("origin"), jm.path(), jm.context() + ".origin", jm.errors());
+    std::vector<double> xyz{0, 0, 0}, rpy{0, 0, 0};
+    om.Get("xyz", &xyz, 3);
+    om.Get("rpy", &rpy, 3);
+    om.Finish();
+    if (xyz.size() == 3 && rpy.size() == 3) {
+      j->origin = Eigen::Isometry3d::Identity();
+      j->origin.translation() = Eigen::Vector3d(xyz[0], xyz[1], xyz[2]);
+      j->origin.linear() = (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
+                               .toRotationMatrix();
+    }
+  }
+  std::vector<double> axis;
+  if (jm.Require("axis", &axis, 3)) {
+    const Eigen::Vector3d a(axis[0], axis[1], axis[2]);
+    if (!(a.norm() > 1e-9)) {
+      jm.Error("axis", "must not be zero");
+    } else {
+      j->axis = a.normalized();
+    }
+  }
+}
+
+// Position limits: a DH table gives revolute ones in degrees (lower_deg, upper_deg), a
+// URDF-style table in radians like URDF (lower, upper); prismatic ones are in metres.
+void ReadLimits(YamlMap& jm, bool dh, const std::string& type, ArmJoint* j) {
+  const bool degrees = dh && j->type == JointType::kRevolute;
+  const std::string lower_key = degrees ? "lower_deg" : "lower";
+  const std::string upper_key = degrees ? "upper_deg" : "upper";
+  for (const std::string wrong : {degrees ? "lower" : "lower_deg", degrees ? "upper" : "upper_deg"}) {
+    if (jm.Has(wrong)) {
+      const std::string table = dh ? "" : " in a URDF-style table (radians or metres, as in URDF)";
+      jm.Error(wrong, std::string("a ") + type + " joint's limits are '" + lower_key + "' and '" + upper_key + "'" +
+                          table);
+    }
+  }
+  const double unit = degrees ? kDegToRad : 1.0;
+  if (jm.Get(lower_key, &j->lower)) j->lower *= unit;
+  if (jm.Get(upper_key, &j->upper)) j->upper *= unit;
+  if (jm.Has(lower_key) && jm.Has(upper_key) && !(j->lower < j->upper)) {
+    jm.Error(upper_key, "must be above '" + lower_key + "'");
+  }
+}
+
 ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int depth) {
   ErrorList errors;
   ArmModel model;
@@ -72,8 +148,10 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
   if (top.Get("gravity", &gravity, 3)) model.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
   top.Get("sample_time", &model.sample_time, Positive());
   top.Get("delay_samples", &model.delay_samples, InRange(0, 100000));
+  // With `dh` the joints are DH rows; without it they are URDF-style (origin and axis).
   std::string convention;
-  top.Require("dh", &convention, std::vector<std::string>{"standard", "modified"});
+  const bool dh = top.Has("dh");
+  if (dh) top.Get("dh", &convention, std::vector<std::string>{"standard", "modified"});
 
   // Link inertials as written: in the DH frame i of the chosen convention.
   std::vector<DhRow> rows;
@@ -92,26 +170,13 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
         std::string type = "revolute";
         jm.Require("type", &type, std::vector<std::string>{"revolute", "prismatic"});
         j.type = type == "prismatic" ? JointType::kPrismatic : JointType::kRevolute;
-        jm.Require("a", &row.a);
-        if (jm.Require("alpha_deg", &row.alpha)) row.alpha *= kDegToRad;
-        jm.Require("d", &row.d);
-        if (jm.Require("theta_deg", &row.theta)) row.theta *= kDegToRad;
+        if (dh) {
+          ReadDhRow(jm, &row);
+        } else {
+          ReadUrdfPlacement(jm, &j);
+        }
 
-        // Position limits in the joint's natural unit: degrees or metres.
-        const bool revolute = j.type == JointType::kRevolute;
-        const std::string lower_key = revolute ? "lower_deg" : "lower";
-        const std::string upper_key = revolute ? "upper_deg" : "upper";
-        for (const std::string wrong : {revolute ? "lower" : "lower_deg", revolute ? "upper" : "upper_deg"}) {
-          if (jm.Has(wrong)) {
-            jm.Error(wrong, std::string("a ") + type + " joint's limits are '" + lower_key + "' and '" + upper_key + "'");
-          }
-        }
-        const double unit = revolute ? kDegToRad : 1.0;
-        if (jm.Get(lower_key, &j.lower)) j.lower *= unit;
-        if (jm.Get(upper_key, &j.upper)) j.upper *= unit;
-        if (jm.Has(lower_key) && jm.Has(upper_key) && !(j.lower < j.upper)) {
-          jm.Error(upper_key, "must be above '" + lower_key + "'");
-        }
+        ReadLimits(jm, dh, type, &j);
         jm.Get("velocity_limit", &j.velocity_limit, NonNegative());
         jm.Get("effort_limit", &j.effort_limit, NonNegative());
         jm.Get("viscous", &j.viscous, NonNegative());
@@ -158,6 +223,10 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
   top.Finish();
   errors.ThrowIfAny();
 
+  if (!dh) {
+    arm_internal::ThrowIfInvalid(model, path);
+    return model;
+  }
   const bool standard = convention == "standard";
   Eigen::Isometry3d previous_post = Eigen::Isometry3d::Identity();
   for (std::size_t k = 0; k < model.joints.size(); ++k) {

@@ -1,0 +1,457 @@
+#include "identification/wls_identification.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include "core/error.h"
+#include "identification/physical_consistency.h"
+#include "robots/arm/arm_dynamics.h"
+
+namespace twinsim {
+namespace {
+
+// Folds rows into an upper-triangular factor R with R^T R = A^T A for all rows A added
+// (QR of [R; new rows] block by block), so that a tall system is never stored.
+class TriangularAccumulator {
+ public:
+  TriangularAccumulator(int cols, int block)
+      : cols_(cols), block_(block), r_(Eigen::MatrixXd::Zero(cols, cols)), buffer_(cols + block, cols) {}
+
+  // The next row to fill (a row of the buffer); call Commit() after filling it.
+  Eigen::MatrixXd::RowXpr Next() { return buffer_.row(cols_ + fill_); }
+  void Commit() {
+    if (++fill_ == block_) Flush();
+  }
+  void Flush() {
+    if (fill_ == 0) return;
+    const int rows = cols_ + fill_;
+    buffer_.topRows(cols_) = r_;
+    Eigen::Ref<Eigen::MatrixXd> stacked(buffer_.topRows(rows));
+    Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(stacked);  // in place
+    const int keep = std::min(rows, cols_);
+    r_.setZero();
+    r_.topRows(keep) = qr.matrixQR().topRows(keep).triangularView<Eigen::Upper>();
+    fill_ = 0;
+  }
+  const Eigen::MatrixXd& r() const { return r_; }
+
+ private:
+  int cols_;
+  int block_;
+  int fill_ = 0;
+  Eigen::MatrixXd r_;       // cols x cols
+  Eigen::MatrixXd buffer_;  // (cols + block) x cols: R on top, new rows below
+};
+
+// The log paths for messages: "a.csv" or "a.csv, b.csv".
+std::string LogPaths(const std::vector<ArmLog>& logs) {
+  std::string s;
+  for (const auto& l : logs) s += (s.empty() ? "" : ", ") + l.path;
+  return s;
+}
+
+std::string Format(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+}  // namespace
+
+bool WlsIdentificationOptions::IsValid(std::string* why) const {
+  std::ostringstream s;
+  if (decimate < 1) {
+    s << "decimate must be at least 1, got " << decimate;
+  } else if (!(still_range >= 0) || !std::isfinite(still_range)) {
+    s << "still_range must not be negative, got " << still_range;
+  } else if (!(max_condition_number > 1)) {
+    s << "max_condition_number must be above 1, got " << max_condition_number;
+  } else if (base_samples < 10) {
+    s << "base_samples must be at least 10, got " << base_samples;
+  }
+  if (why) *why = s.str();
+  return s.str().empty();
+}
+
+BaseParameters IdentificationBase(const ArmModel& model, const WlsIdentificationOptions& options) {
+  return FindBaseParameters(model, options.base_samples, options.base_seed);
+}
+
+std::string DescribeBaseParameter(const ArmModel& model, const BaseParameters& base, int k) {
+  const int n = model.dof();
+  const int s = base.independent[static_cast<std::size_t>(k)];
+  std::string text;
+  if (s >= kParametersPerLink * n) {
+    const int f = s - kParametersPerLink * n;
+    text = std::string(f % 2 == 0 ? "viscous" : "Coulomb") + " friction of joint " + std::to_string(f / 2 + 1);
+  } else {
+    static const char* kWhat[] = {"mass",
+                                  "first moment m cx",
+                                  "first moment m cy",
+                                  "first moment m cz",
+                                  "inertia Ixx about its frame's origin",
+                                  "product of inertia Ixy",
+                                  "product of inertia Ixz",
+                                  "inertia Iyy about its frame's origin",
+                                  "product of inertia Iyz",
+                                  "inertia Izz about its frame's origin"};
+    text = std::string(kWhat[s % kParametersPerLink]) + " of link " + std::to_string(s / kParametersPerLink + 1);
+  }
+  int others = 0;
+  for (Eigen::Index c = 0; c < base.from_standard.cols(); ++c)
+    if (c != s && base.from_standard(k, c) != 0) ++others;
+  if (others > 0) text += ", regrouped with " + std::to_string(others) + (others == 1 ? " other" : " others");
+  return text;
+}
+
+ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
+                     const WlsIdentificationOptions& options, WlsIdentificationSummary* summary_out) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("identification options: " + why);
+  if (logs.empty()) throw InputError("identification needs at least one log");
+  for (const ArmLog& log : logs) CheckArmLogMatchesModel(log, a_priori);
+  const std::string where = LogPaths(logs);
+
+  WlsIdentificationSummary summary;
+  const int n = a_priori.dof();
+  summary.dof = n;
+  summary.logs = static_cast<int>(logs.size());
+  const BaseParameters base = IdentificationBase(a_priori, options);
+  const int r = base.rank();
+  const Eigen::MatrixXd& k_matrix = base.from_standard;  // r x 12n
+  const Eigen::VectorXd pi0 = StandardParameters(a_priori);
+  // Estimated: the r base parameters, then (optionally) one torque offset per joint.
+  const int offsets = options.torque_offsets ? n : 0;
+  const int cols_total = r + offsets;
+  summary.base_parameters = r;
+  summary.names = base.names;
+  for (int k = 0; k < r; ++k) summary.descriptions.push_back(DescribeBaseParameter(a_priori, base, k));
+  for (int j = 0; j < offsets; ++j) {
+    summary.names.push_back("offset" + std::to_string(j + 1));
+    summary.descriptions.push_back("torque offset of joint " + std::to_string(j + 1));
+  }
+  summary.a_priori = Eigen::VectorXd::Zero(cols_total);
+  summary.a_priori.head(r) = k_matrix * pi0;
+
+  // Joints that never move: their velocity and acceleration are exactly zero, so the
+  // parameters only their motion reveals show up as unexcited instead of as noise.
+  std::vector<bool> still(static_cast<std::size_t>(n), false);
+  std::vector<double> span(static_cast<std::size_t>(n), 0.0);
+  for (int j = 0; j < n; ++j) {
+    double lo = 1e300, hi = -1e300;
+    for (const ArmLog& log : logs) {
+      lo = std::min(lo, log.q.col(j).minCoeff());
+      hi = std::max(hi, log.q.col(j).maxCoeff());
+    }
+    span[static_cast<std::size_t>(j)] = hi - lo;
+    if (hi - lo < options.still_range) {
+      still[static_cast<std::size_t>(j)] = true;
+      summary.still_joints.push_back(j + 1);
+    }
+  }
+
+  // Joint j's torque depends only on links j..n and its own friction: its rows are folded
+  // into a factor over those base columns alone.
+  std::vector<std::vector<int>> columns(static_cast<std::size_t>(n));
+  for (int k = 0; k < r; ++k) {
+    const int s = base.independent[static_cast<std::size_t>(k)];
+    for (int j = 0; j < n; ++j) {
+      const bool link = s < kParametersPerLink * n && s / kParametersPerLink >= j;
+      const bool friction = s >= kParametersPerLink * n && (s - kParametersPerLink * n) / kFrictionPerJoint == j;
+      if (link || friction) columns[static_cast<std::size_t>(j)].push_back(k);
+    }
+  }
+  for (int j = 0; j < offsets; ++j) columns[static_cast<std::size_t>(j)].push_back(r + j);
+  std::vector<TriangularAccumulator> factors;
+  for (int j = 0; j < n; ++j) factors.emplace_back(static_cast<int>(columns[static_cast<std::size_t>(j)].size()) + 1, 1024);
+
+  Eigen::VectorXd torque_square = Eigen::VectorXd::Zero(n);
+  int samples = 0;
+  Eigen::VectorXd q(n), qd(n), qdd(n);
+  for (const ArmLog& log : logs) {
+    const int edge = options.skip_filter_edges ? log.edge_samples : 0;
+    for (int row = edge; row < log.rows() - edge; row += options.decimate) {
+      q = log.q.row(row).transpose();
+      qd = log.qd.row(row).transpose();
+      qdd = log.qdd.row(row).transpose();
+      for (int j = 0; j < n; ++j) {
+        if (still[static_cast<std::size_t>(j)]) qd[j] = qdd[j] = 0;
+      }
+      const Eigen::MatrixXd y = Regressor(a_priori, q, qd, qdd);
+      for (int j = 0; j < n; ++j) {
+        const auto& cols = columns[static_cast<std::size_t>(j)];
+        auto next = factors[static_cast<std::size_t>(j)].Next();
+        for (std::size_t c = 0; c < cols.size(); ++c) {
+          const int k = cols[c];
+          next[static_cast<Eigen::Index>(c)] = k < r ? y(j, base.independent[static_cast<std::size_t>(k)]) : 1.0;
+        }
+        next[static_cast<Eigen::Index>(cols.size())] = log.tau(row, j);
+        factors[static_cast<std::size_t>(j)].Commit();
+        torque_square[j] += log.tau(row, j) * log.tau(row, j);
+      }
+      ++samples;
+    }
+  }
+  summary.samples = samples;
+  if (samples * n < 2 * cols_total) {
+    throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(cols_total) +
+                                                " parameters: " + std::to_string(samples) + " samples of " +
+                                                std::to_string(n) + " joints");
+  }
+  summary.torque_rms = (torque_square / samples).cwiseSqrt();
+
+  // Per joint: R_j (m_j x r, scattered to all base columns), z_j and the part of tau_j no
+  // base column can reach (rho_j^2).
+  std::vector<Eigen::MatrixXd> r_of(static_cast<std::size_t>(n));
+  std::vector<Eigen::VectorXd> z_of(static_cast<std::size_t>(n));
+  Eigen::VectorXd rho2(n);
+  int stacked = 0;
+  for (int j = 0; j < n; ++j) {
+    auto& f = factors[static_cast<std::size_t>(j)];
+    f.Flush();
+    const auto& cols = columns[static_cast<std::size_t>(j)];
+    const int m = static_cast<int>(cols.size());
+    Eigen::MatrixXd rj = Eigen::MatrixXd::Zero(m, cols_total);
+    for (int c = 0; c < m; ++c) rj.col(cols[static_cast<std::size_t>(c)]) = f.r().col(c).head(m);
+    r_of[static_cast<std::size_t>(j)] = rj;
+    z_of[static_cast<std::size_t>(j)] = f.r().col(m).head(m);
+    rho2[j] = f.r()(m, m) * f.r()(m, m);
+    stacked += m;
+  }
+  auto stack = [&](const Eigen::VectorXd& weight, Eigen::MatrixXd* a, Eigen::VectorXd* b) {
+    a->resize(stacked, cols_total);
+    b->resize(stacked);
+    int at = 0;
+    for (int j = 0; j < n; ++j) {
+      const int m = static_cast<int>(r_of[static_cast<std::size_t>(j)].rows());
+      a->middleRows(at, m) = weight[j] * r_of[static_cast<std::size_t>(j)];
+      b->segment(at, m) = weight[j] * z_of[static_cast<std::size_t>(j)];
+      at += m;
+    }
+  };
+  // Residual sum of squares of joint j for base parameters beta.
+  auto rss = [&](int j, const Eigen::VectorXd& beta) {
+    return rho2[j] + (z_of[static_cast<std::size_t>(j)] - r_of[static_cast<std::size_t>(j)] * beta).squaredNorm();
+  };
+  auto error_rms = [&](const Eigen::VectorXd& beta) {
+    Eigen::VectorXd e(n);
+    for (int j = 0; j < n; ++j) e[j] = std::sqrt(std::max(0.0, rss(j, beta)) / samples);
+    return e;
+  };
+
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b;
+  stack(Eigen::VectorXd::Ones(n), &a, &b);
+
+  // Excitation: every direction of the column-scaled regressor must carry weight.
+  {
+    Eigen::VectorXd norms = a.colwise().norm().transpose();
+    const double largest = norms.maxCoeff();
+    for (int k = 0; k < cols_total; ++k)
+      if (!(norms[k] > 1e-14 * largest)) norms[k] = 0;
+    const Eigen::MatrixXd scaled = a * norms.unaryExpr([](double v) { return v > 0 ? 1 / v : 0.0; }).asDiagonal();
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinV);
+    const Eigen::VectorXd s = svd.singularValues();
+    const double limit = s[0] / options.max_condition_number;
+    std::vector<int> weak;
+    for (int k = 0; k < cols_total; ++k)
+      if (!(s[k] > limit)) weak.push_back(k);
+    if (!weak.empty()) {
+      Eigen::VectorXd share = Eigen::VectorXd::Zero(cols_total);
+      for (int w : weak) share += svd.matrixV().col(w).cwiseAbs2();
+      share = share.cwiseSqrt();
+      std::vector<int> named;
+      for (int k = 0; k < cols_total; ++k)
+        if (share[k] > 0.3) named.push_back(k);
+      std::stable_sort(named.begin(), named.end(), [&](int x, int y) { return share[x] > share[y]; });
+      if (named.empty()) named.push_back(static_cast<int>(std::max_element(share.data(), share.data() + cols_total) - share.data()));
+      std::string still_list;
+      for (int j : summary.still_joints) still_list += (still_list.empty() ? "" : ", ") + std::to_string(j);
+      std::ostringstream msg;
+      msg << "the data does not excite base parameter" << (named.size() > 1 ? "s " : " ");
+      for (std::size_t i = 0; i < named.size(); ++i) {
+        const int k = named[i];
+        const int sidx = k < r ? base.independent[static_cast<std::size_t>(k)] : -1;
+        msg << (i == 0 ? "" : i + 1 == named.size() ? " and " : ", ") << summary.names[static_cast<std::size_t>(k)]
+            << " (" << summary.descriptions[static_cast<std::size_t>(k)];
+        if (sidx < 0) {
+          // A torque offset is only unexcited together with something constant.
+        } else if (sidx >= kParametersPerLink * n) {
+          const int joint = (sidx - kParametersPerLink * n) / kFrictionPerJoint;
+          if (still[static_cast<std::size_t>(joint)]) msg << ": it never moves";
+        } else if (!still_list.empty()) {
+          msg << "; joint" << (summary.still_joints.size() > 1 ? "s " : " ") << still_list << " never move"
+              << (summary.still_joints.size() > 1 ? "" : "s");
+        }
+        msg << ")";
+      }
+      if (weak.size() < named.size() && weak.size() > 0)
+        msg << "; together they leave " << weak.size() << " combination" << (weak.size() > 1 ? "s" : "")
+            << " undetermined";
+      for (int j : summary.still_joints) {
+        msg << "; q" << j << " spans only " << Format(span[static_cast<std::size_t>(j - 1)]) << " (below "
+            << Format(options.still_range) << ")";
+      }
+      msg << ". Move every joint in both directions with varied speeds and accelerations (the condition number is "
+          << (s[cols_total - 1] > 0 ? Format(s[0] / s[cols_total - 1]) : std::string("infinite")) << ", the limit "
+          << Format(options.max_condition_number) << ")";
+      throw InputError(SourceLocation{where}, msg.str());
+    }
+  }
+
+  // Ordinary least squares, then each joint weighted by its residual's standard deviation.
+  summary.ordinary = a.householderQr().solve(b);
+  summary.joint_sigma.resize(n);
+  const double dof_per_joint = std::max(1.0, samples - static_cast<double>(cols_total) / n);
+  for (int j = 0; j < n; ++j) {
+    const double floor = 1e-12 * std::max(summary.torque_rms[j], 1e-12);
+    summary.joint_sigma[j] = std::max(floor, std::sqrt(std::max(0.0, rss(j, summary.ordinary)) / dof_per_joint));
+  }
+  const Eigen::VectorXd weights =
+      options.weighted ? Eigen::VectorXd(summary.joint_sigma.cwiseInverse()) : Eigen::VectorXd::Ones(n);
+  Eigen::MatrixXd aw;
+  Eigen::VectorXd bw;
+  stack(weights, &aw, &bw);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(aw);
+  summary.identified = qr.solve(bw);
+  const Eigen::MatrixXd rw = qr.matrixQR().topRows(cols_total).triangularView<Eigen::Upper>();
+  {
+    Eigen::VectorXd norms = aw.colwise().norm().transpose();
+    const Eigen::VectorXd sv = (aw * norms.cwiseInverse().asDiagonal()).jacobiSvd().singularValues();
+    summary.condition_number = sv[0] / sv[cols_total - 1];
+  }
+  double weighted_rss = 0;
+  for (int j = 0; j < n; ++j) weighted_rss += weights[j] * weights[j] * rss(j, summary.identified);
+  const double variance = weighted_rss / std::max(1, samples * n - cols_total);
+  const Eigen::MatrixXd rinv =
+      rw.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(cols_total, cols_total));
+  const Eigen::VectorXd std_dev = (variance * rinv.rowwise().squaredNorm()).cwiseSqrt();
+  summary.relative_std.resize(cols_total);
+  for (int k = 0; k < cols_total; ++k) {
+    const double v = std::abs(summary.identified[k]);
+    summary.relative_std[k] = v > 0 ? 100 * std_dev[k] / v : std::numeric_limits<double>::infinity();
+  }
+
+  // Back to standard parameters: the a-priori model moved by the least amount that
+  // gives the identified base parameters (K has full row rank), and if that is not a
+  // real arm, the physically consistent parameters that fit the torques best.
+  // The offsets are free: with them first in a QR of the weighted system, R = [[R_oo,
+  // R_ob], [0, R_bb]] and R_bb is the weighted metric of beta with the offsets refitted.
+  const Eigen::VectorXd beta = summary.identified.head(r);
+  Eigen::MatrixXd r_beta = rw.topLeftCorner(r, r), r_oo, r_ob;
+  if (offsets > 0) {
+    Eigen::MatrixXd permuted(aw.rows(), cols_total);
+    permuted << aw.rightCols(offsets), aw.leftCols(r);
+    const Eigen::MatrixXd rp = permuted.householderQr().matrixQR().topRows(cols_total).triangularView<Eigen::Upper>();
+    r_oo = rp.topLeftCorner(offsets, offsets);
+    r_ob = rp.topRightCorner(offsets, r);
+    r_beta = rp.bottomRightCorner(r, r);
+  }
+  const Eigen::VectorXd pi_mn = NearestStandardParameters(a_priori, k_matrix, beta);
+  ArmModel result;
+  bool consistent = false;
+  try {
+    result = WithStandardParameters(a_priori, pi_mn);
+    const std::string problems = result.Validate();
+    consistent = problems.empty();
+    std::istringstream lines(problems);
+    std::string line;
+    while (std::getline(lines, line)) summary.consistency_notes.push_back(line);
+  } catch (const InputError& e) {
+    summary.consistency_notes.push_back(e.what());
+  }
+  Eigen::VectorXd pi_final = pi_mn;
+  if (!consistent) {
+    summary.consistency_fixed = true;
+    const ConsistentFit fit = FitConsistentParameters(a_priori, k_matrix, r_beta, beta);
+    summary.consistency_iterations = fit.iterations;
+    pi_final = fit.pi;
+    result = WithStandardParameters(a_priori, pi_final);
+    const std::string problems = result.Validate();
+    if (!problems.empty()) {
+      throw std::runtime_error("identification: the physically consistent fit still fails validation: " + problems);
+    }
+  }
+  summary.consistent = summary.identified;
+  summary.consistent.head(r) = k_matrix * pi_final;
+  if (offsets > 0) {
+    // The offsets that go best with the consistent base parameters.
+    summary.consistent.tail(offsets) -=
+        r_oo.triangularView<Eigen::Upper>().solve(r_ob * (summary.consistent.head(r) - beta));
+  }
+  summary.offsets = summary.consistent.tail(offsets);
+  summary.consistency_shift_max_std = 0;
+  for (int k = 0; k < cols_total; ++k) {
+    if (std_dev[k] > 0)
+      summary.consistency_shift_max_std =
+          std::max(summary.consistency_shift_max_std, std::abs(summary.consistent[k] - summary.identified[k]) / std_dev[k]);
+  }
+  summary.error_rms_a_priori = error_rms(summary.a_priori);
+  summary.error_rms_identified = error_rms(summary.identified);
+  summary.error_rms_model = error_rms(summary.consistent);
+  result.source_path.clear();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (summary_out) *summary_out = summary;
+  return result;
+}
+
+std::string WlsIdentificationSummary::BriefReport() const {
+  std::ostringstream s;
+  const double before = error_rms_a_priori.size() ? (error_rms_a_priori.cwiseQuotient(torque_rms)).mean() : 0;
+  const double after = error_rms_model.size() ? (error_rms_model.cwiseQuotient(torque_rms)).mean() : 0;
+  s << base_parameters << " base parameters" << (names.size() > static_cast<std::size_t>(base_parameters) ? " and torque offsets" : "") << " from " << samples << " samples of " << logs << " log" << (logs == 1 ? "" : "s")
+    << ", condition number " << Format(condition_number) << ", torque error " << Format(100 * before) << " % -> "
+    << Format(100 * after) << " % of the torque RMS (mean over joints)"
+    << (consistency_fixed ? ", made physically consistent" : "");
+  return s.str();
+}
+
+std::string WlsIdentificationSummary::FullReport() const {
+  std::ostringstream s;
+  char line[512];
+  s << BriefReport() << " (" << Format(seconds) << " s)\n\n";
+  std::size_t width = 9;
+  for (const auto& name : names) width = std::max(width, std::min<std::size_t>(name.size(), 60));
+  std::snprintf(line, sizeof line, "%-*s %13s %13s %9s %13s\n", static_cast<int>(width), "parameter", "a priori",
+                "identified", "rel. std", "model");
+  s << line;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    std::string name = names[k];
+    if (name.size() > width) name = name.substr(0, width - 3) + "...";
+    char rel[32];
+    if (std::isfinite(relative_std[static_cast<Eigen::Index>(k)]) && relative_std[static_cast<Eigen::Index>(k)] < 1e4)
+      std::snprintf(rel, sizeof rel, "%8.2f%%", relative_std[static_cast<Eigen::Index>(k)]);
+    else
+      std::snprintf(rel, sizeof rel, "%9s", "-");
+    const auto i = static_cast<Eigen::Index>(k);
+    std::snprintf(line, sizeof line, "%-*s %13.6g %13.6g %s %13.6g\n", static_cast<int>(width), name.c_str(),
+                  a_priori[i], identified[i], rel, consistent[i]);
+    s << line;
+  }
+  s << "\n";
+  std::snprintf(line, sizeof line, "%-6s %12s %12s %12s %12s %12s\n", "joint", "torque RMS", "sigma", "a priori",
+                "identified", "model");
+  s << line;
+  for (int j = 0; j < dof; ++j) {
+    std::snprintf(line, sizeof line, "%-6d %12.5g %12.5g %12.5g %12.5g %12.5g\n", j + 1, torque_rms[j], joint_sigma[j],
+                  error_rms_a_priori[j], error_rms_identified[j], error_rms_model[j]);
+    s << line;
+  }
+  s << "(torque RMS error per joint in N·m or N over the samples used; sigma: the weight's standard deviation)\n";
+  if (consistency_fixed) {
+    s << "\nThe minimum-norm standard parameters were not physical:\n";
+    for (const auto& note : consistency_notes) s << "  " << note << "\n";
+    s << "made consistent (log-det barrier, " << consistency_iterations
+      << " Newton steps), moving the base parameters by at most "
+      << Format(consistency_shift_max_std) << " standard deviations\n";
+  }
+  return s.str();
+}
+
+}  // namespace twinsim

@@ -1,0 +1,100 @@
+// Identification of an arm's base parameters and friction from measured motion and
+// torques by weighted least squares (seed 001, section IV; Gautier's method).
+//
+// The torques are linear in the base parameters beta = K pi (robots/arm/arm_regressor.h):
+//   tau(k) = Y_b(q(k), qd(k), qdd(k)) beta + noise.
+// Stacking the samples of every log gives an overdetermined system W beta = tau. It is
+// solved first by ordinary least squares; then joint j's rows are weighted by 1 / sigma_j,
+// the standard deviation of that joint's residual, and solved again (weighted least
+// squares, which is what makes joints with large and small torques count alike), by QR
+// throughout. The stacked system is never stored: each joint's rows are folded into a
+// small triangular factor as they are computed, so 100 000 samples of a 7-joint arm
+// take a fraction of the memory of W. The relative standard deviation of each estimate
+// comes from (W_w^T W_w)^-1, scaled by the weighted residual's variance.
+//
+// Data that does not excite some base parameter (a joint that never moves, or a motion
+// too poor to tell combinations apart) is refused with an InputError naming them. The
+// base parameters are then mapped back to a full standard parameter vector close to the
+// a-priori model's (the minimum-norm correction with K pi = beta), and, if that gives a
+// link with non-positive mass or an inertia that no real body has, or negative
+// friction, to the physically consistent one that fits the weighted torques best
+// (identification/physical_consistency.h), with the shift reported.
+// The result passes ArmModel::Validate().
+//
+//   WlsIdentificationSummary summary;
+//   ArmModel identified = IdentifyArm(a_priori, {ReadArmLog("run1.csv")}, {}, &summary);
+//   std::puts(summary.FullReport().c_str());
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "io/arm_log.h"
+#include "robots/arm/arm_model.h"
+#include "robots/arm/arm_regressor.h"
+
+namespace twinsim {
+
+struct WlsIdentificationOptions {
+  int decimate = 1;                  // use every k-th row of each log
+  bool skip_filter_edges = true;     // leave out each log's edge_samples rows at both ends (derived qd/qdd)
+  bool weighted = true;              // weight each joint by 1 / its OLS residual std dev (false: OLS only)
+  // Also estimate a constant offset per joint: measured torque = model torque + offset
+  // (a torque sensor's bias; the contract's torque_offset effect is minus this).
+  bool torque_offsets = false;
+  double still_range = 1e-3;         // rad or m: a joint whose q spans less than this never moves
+  double max_condition_number = 1e5; // of the column-scaled stacked regressor; above: parameters not excited
+  int base_samples = 200;            // random states for finding the base parameters
+  std::uint64_t base_seed = 1;
+  // True when usable; otherwise *why says what is wrong.
+  bool IsValid(std::string* why) const;
+};
+
+struct WlsIdentificationSummary {
+  int dof = 0;
+  int logs = 0;
+  int samples = 0;                     // samples used (all logs, after trimming and decimation)
+  int base_parameters = 0;             // r; the vectors below hold r base parameters, then the offsets
+  std::vector<std::string> names;      // base parameters, each as its standard combination; "offset<j>"
+  std::vector<std::string> descriptions;  // the same in words ("Coulomb friction of joint 3")
+  Eigen::VectorXd a_priori;            // K pi of the a-priori model
+  Eigen::VectorXd ordinary;            // OLS estimate
+  Eigen::VectorXd identified;          // WLS estimate (OLS when not weighted)
+  Eigen::VectorXd relative_std;        // %, 100 sigma(beta_k) / |beta_k|
+  Eigen::VectorXd consistent;          // K pi of the returned model
+  Eigen::VectorXd offsets;             // N·m or N per joint (empty without torque_offsets): measured - model at rest
+  Eigen::VectorXd joint_sigma;         // N·m or N per joint, the OLS residual std dev (the weights' inverse)
+  Eigen::VectorXd torque_rms;          // N·m or N per joint, measured torque RMS over the samples used
+  Eigen::VectorXd error_rms_a_priori;  // N·m or N per joint, torque error RMS of the a-priori model
+  Eigen::VectorXd error_rms_identified;  // ... of the WLS estimate
+  Eigen::VectorXd error_rms_model;     // ... of the returned (consistent) model
+  double condition_number = 0;         // of the column-scaled weighted stacked regressor
+  bool consistency_fixed = false;      // the minimum-norm mapping was not physical and was fixed
+  double consistency_shift_max_std = 0;  // largest |consistent - identified| in standard deviations
+  std::vector<std::string> consistency_notes;  // what was not physical before the fix
+  int consistency_iterations = 0;      // of the consistent fit (0: not needed)
+  std::vector<int> still_joints;       // 1-based joints that never move
+  double seconds = 0;                  // wall time
+
+  // One line without the wall time (deterministic), and the tables (with it).
+  std::string BriefReport() const;
+  std::string FullReport() const;
+};
+
+// Identifies `a_priori`'s base parameters and friction from `logs` and returns the
+// model with them (kinematics, limits and names unchanged; torque offsets, when
+// estimated, are in the summary only). Throws InputError for
+// invalid options, a log whose joint count differs from the model's, too few samples,
+// or data that does not excite some base parameter (named in words).
+ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
+                     const WlsIdentificationOptions& options, WlsIdentificationSummary* summary = nullptr);
+
+// The identification's base parameters of `model` (FindBaseParameters with the options' samples and seed).
+BaseParameters IdentificationBase(const ArmModel& model, const WlsIdentificationOptions& options);
+
+// A base parameter in words: "Coulomb friction of joint 3", "mass of link 2 (regrouped with 2 others)".
+std::string DescribeBaseParameter(const ArmModel& model, const BaseParameters& base, int k);
+
+}  // namespace twinsim

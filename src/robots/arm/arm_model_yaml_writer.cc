@@ -1,0 +1,106 @@
+#include "robots/arm/arm_model_yaml_writer.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include "io/atomic_file.h"
+
+namespace twinsim {
+namespace {
+
+// Shortest text that reads back as the same double.
+std::string Number(double v) {
+  if (v == 0) return "0";
+  char buf[40];
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  return buf;
+}
+
+std::string Vector(const Eigen::Vector3d& v) { return "[" + Number(v.x()) + ", " + Number(v.y()) + ", " + Number(v.z()) + "]"; }
+
+// A YAML scalar for a name: plain when safe, else double-quoted.
+std::string Text(const std::string& s) {
+  bool plain = !s.empty();
+  for (char c : s) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) plain = false;
+  }
+  if (plain && (std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '-' || s[0] == '.')) plain = false;
+  for (const char* word : {"true", "false", "yes", "no", "on", "off", "null", "y", "n"}) {
+    std::string lower;
+    for (char c : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (lower == word) plain = false;
+  }
+  if (plain) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+// URDF's roll, pitch, yaw with R = Rz(yaw) Ry(pitch) Rx(roll).
+Eigen::Vector3d RollPitchYaw(const Eigen::Matrix3d& r) {
+  const double pitch = std::atan2(-r(2, 0), std::hypot(r(0, 0), r(1, 0)));
+  if (std::hypot(r(0, 0), r(1, 0)) < 1e-10) {
+    // Gimbal lock: only roll - yaw (or roll + yaw) is defined; put it all in roll.
+    return Eigen::Vector3d(std::atan2(-r(1, 2), r(1, 1)), pitch, 0);
+  }
+  return Eigen::Vector3d(std::atan2(r(2, 1), r(2, 2)), pitch, std::atan2(r(1, 0), r(0, 0)));
+}
+
+}  // namespace
+
+std::string FormatArmModelYaml(const ArmModel& model, const std::string& comment) {
+  std::ostringstream s;
+  if (!comment.empty()) {
+    std::istringstream lines(comment);
+    std::string line;
+    while (std::getline(lines, line)) s << "# " << line << "\n";
+  }
+  s << "robot: arm\n";
+  s << "name: " << Text(model.name) << "\n";
+  s << "gravity: " << Vector(model.gravity) << "   # m/s^2, base frame\n";
+  s << "sample_time: " << Number(model.sample_time) << "   # s\n";
+  s << "delay_samples: " << model.delay_samples << "\n";
+  s << "# URDF-style joint table (no 'dh' key): origin and axis in the parent link's frame,\n"
+       "# limits in rad (revolute) or m (prismatic), link inertials in the link frame about\n"
+       "# the centre of mass, inertia as [ixx, iyy, izz, ixy, ixz, iyz] in kg m^2.\n";
+  s << "joints:\n";
+  for (const ArmJoint& j : model.joints) {
+    const Eigen::Vector3d rpy = RollPitchYaw(j.origin.linear());
+    s << "  - name: " << Text(j.name) << "\n";
+    s << "    type: " << (j.type == JointType::kPrismatic ? "prismatic" : "revolute") << "\n";
+    s << "    origin: {xyz: " << Vector(j.origin.translation()) << ", rpy: " << Vector(rpy) << "}\n";
+    s << "    axis: " << Vector(j.axis) << "\n";
+    const ArmJoint defaults;
+    if (j.lower != defaults.lower) s << "    lower: " << Number(j.lower) << "\n";
+    if (j.upper != defaults.upper) s << "    upper: " << Number(j.upper) << "\n";
+    s << "    velocity_limit: " << Number(j.velocity_limit) << "\n";
+    s << "    effort_limit: " << Number(j.effort_limit) << "\n";
+    s << "    viscous: " << Number(j.viscous) << "\n";
+    s << "    coulomb: " << Number(j.coulomb) << "\n";
+    const ArmLink& l = j.child;
+    s << "    link:\n";
+    s << "      name: " << Text(l.name.empty() ? j.name + "_link" : l.name) << "\n";
+    s << "      mass: " << Number(l.mass) << "\n";
+    s << "      com: " << Vector(l.com) << "\n";
+    const Eigen::Matrix3d& i = l.inertia;
+    s << "      inertia: [" << Number(i(0, 0)) << ", " << Number(i(1, 1)) << ", " << Number(i(2, 2)) << ", "
+      << Number(0.5 * (i(0, 1) + i(1, 0))) << ", " << Number(0.5 * (i(0, 2) + i(2, 0))) << ", "
+      << Number(0.5 * (i(1, 2) + i(2, 1))) << "]\n";
+  }
+  return s.str();
+}
+
+void WriteArmModelYaml(const std::string& path, const ArmModel& model, const std::string& comment) {
+  WriteFileAtomically(path, FormatArmModelYaml(model, comment));
+}
+
+}  // namespace twinsim

@@ -1,0 +1,172 @@
+// `twinsim identify` and the arm part of `twinsim replay` through the binary.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "identification/synthetic_arm_data.h"
+#include "identification/torque_prediction.h"
+#include "io/arm_log.h"
+#include "io/csv_table.h"
+#include "robots/arm/arm_model.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+using testing::RunTwinsim;
+using testing::SourcePath;
+
+// The RRR arm with heavier links and more friction than models/rrr.yaml says.
+ArmModel HeavierRrr() {
+  ArmModel m = LoadArmModel(SourcePath("models/rrr.yaml"));
+  for (auto& j : m.joints) {
+    j.child.mass *= 1.15;
+    j.child.com *= 1.1;
+    j.viscous *= 1.3;
+    j.coulomb *= 0.8;
+  }
+  return m;
+}
+
+std::string WriteLog(const std::string& dir, const std::string& name, int still_joint = -1) {
+  const ArmModel truth = HeavierRrr();
+  testing::SensorNoise noise;
+  noise.counts_per_rev = 1 << 18;
+  noise.torque_fraction = 0.01;
+  const ArmLog log =
+      testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 21), 8.0, 500.0, noise, still_joint);
+  WriteArmLog(dir + "/" + name, log, false);
+  return dir + "/" + name;
+}
+
+TEST(IdentifyCli, IdentifiesWritesALoadableModelAndReplaysIt) {
+  const std::string dir = testing::TempDir("identify_cli");
+  const std::string log = WriteLog(dir, "run.csv");
+  const std::string out = dir + "/out/rrr_identified.yaml";
+  auto r = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + out +
+                      " --cutoff 15 --report " + dir + "/report");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("parameter"), std::string::npos);
+  EXPECT_NE(r.out.find("a priori"), std::string::npos);
+  EXPECT_NE(r.out.find("rel. std"), std::string::npos);
+  EXPECT_NE(r.out.find("fc3"), std::string::npos);
+  EXPECT_NE(r.out.find(out), std::string::npos);
+  // The same inputs give the same bytes.
+  const std::string again = dir + "/again.yaml";
+  ASSERT_EQ(RunTwinsim("identify --quiet --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + again +
+                       " --cutoff 15")
+                .exit_code,
+            0);
+  std::string first = testing::ReadText(out), second = testing::ReadText(again);
+  EXPECT_EQ(first.substr(first.find("robot:")), second.substr(second.find("robot:")));
+  const ArmModel identified = LoadArmModel(out);
+  EXPECT_EQ(identified.Validate(), "");
+  EXPECT_EQ(identified.dof(), 3);
+  EXPECT_NEAR(identified.joints[2].coulomb, 0.8 * 0.5, 0.02);
+  EXPECT_NEAR(identified.joints[1].viscous, 1.3 * 0.3, 0.02);
+  const std::string parameters = testing::ReadText(dir + "/report/parameters.csv");
+  EXPECT_EQ(std::count(parameters.begin(), parameters.end(), '\n'), 22);  // header and 21 base parameters
+  EXPECT_EQ(parameters.substr(0, parameters.find('\n')),
+            "index,parameter,description,a_priori,identified,relative_std_pct,model");
+  EXPECT_NE(parameters.find(",fc3,Coulomb friction of joint 3,0.5,"), std::string::npos) << parameters;
+  EXPECT_EQ(ReadCsvTable(dir + "/report/joints.csv").rows.size(), 3u);
+#ifdef TWINSIM_HAVE_OSMESA
+  EXPECT_TRUE(std::filesystem::exists(dir + "/report/torque_joint3.png"));
+#endif
+
+  // Replay: one row of model torques per input row, close to the measured ones.
+  const std::string torques = dir + "/tau.csv";
+  auto replay = RunTwinsim("replay --model " + out + " --log " + log + " --out " + torques + " --cutoff 15");
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  const CsvTable t = ReadCsvTable(torques);
+  const ArmLog measured = ReadArmLog(log);
+  ASSERT_EQ(t.header, (std::vector<std::string>{"t", "tau1", "tau2", "tau3"}));
+  ASSERT_EQ(static_cast<int>(t.rows.size()), measured.rows());
+  for (int j = 0; j < 3; ++j) {
+    double error = 0, rms = 0;
+    for (int r = measured.edge_samples; r < measured.rows() - measured.edge_samples; ++r) {
+      error += std::pow(t.rows[static_cast<std::size_t>(r)][static_cast<std::size_t>(j + 1)] - measured.tau(r, j), 2);
+      rms += std::pow(measured.tau(r, j), 2);
+    }
+    // The 1 % torque noise and little else.
+    EXPECT_LT(std::sqrt(error / rms), 0.03) << "joint " << j + 1;
+  }
+}
+
+TEST(IdentifyCli, OffsetsAndHeldOutValidation) {
+  const std::string dir = testing::TempDir("identify_validate");
+  const std::string log = WriteLog(dir, "run.csv");
+  auto r = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir +
+                      "/m.yaml --offsets --validate " + log + " --report " + dir + "/report");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("torque offsets (measured - model; not part of the written model):"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("held out: " + log), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("normalised (error / twice the effort limit)"), std::string::npos) << r.out;
+  const std::string csv = testing::ReadText(dir + "/report/validation.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);  // header and 3 joints
+}
+
+TEST(IdentifyCli, ReplayOfTheUrdfWritesTheModelsTorques) {
+  const std::string dir = testing::TempDir("replay_arm_cli");
+  const std::string log = WriteLog(dir, "run.csv");
+  const std::string out = dir + "/tau.csv";
+  auto r = RunTwinsim("replay --quiet --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const ArmModel model = LoadArmModel(SourcePath("models/rrr.yaml"));
+  const ArmLog measured = ReadArmLog(log);
+  const Eigen::MatrixXd expected = PredictArmTorques(model, measured);
+  const CsvTable t = ReadCsvTable(out);
+  ASSERT_EQ(static_cast<int>(t.rows.size()), measured.rows());
+  for (int row : {0, 100, measured.rows() - 1})
+    for (int j = 0; j < 3; ++j)
+      EXPECT_NEAR(t.rows[static_cast<std::size_t>(row)][static_cast<std::size_t>(j + 1)], expected(row, j), 1e-9);
+}
+
+TEST(IdentifyCli, JointCountMismatchIsExitTwoNamingBothCounts) {
+  const std::string dir = testing::TempDir("identify_mismatch");
+  const std::string log = testing::WriteText(dir + "/two.csv", "t,q1,q2,tau1,tau2\n0,0,0,0,0\n0.01,0,0,0,0\n0.02,0,0,0,0\n");
+  const std::string model = SourcePath("models/rrr.yaml");
+  auto r = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/m.yaml");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(log + ":1: the log has 2 joints (q1..q2, tau1..tau2) but the model 'rrr' (" + model + ") has 3"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
+  auto replay = RunTwinsim("replay --model " + model + " --log " + log + " --out " + dir + "/t.csv");
+  EXPECT_EQ(replay.exit_code, 2);
+  EXPECT_NE(replay.err.find("the log has 2 joints"), std::string::npos) << replay.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/t.csv"));
+}
+
+TEST(IdentifyCli, AJointThatNeverMovesIsExitTwoNamingTheParameter) {
+  const std::string dir = testing::TempDir("identify_still");
+  const std::string log = WriteLog(dir, "still.csv", 2);
+  auto r = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir + "/m.yaml");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(log + ": the data does not excite base parameters"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("fc3 (Coulomb friction of joint 3: it never moves)"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
+}
+
+TEST(IdentifyCli, BadOptionsAreExitTwo) {
+  const std::string dir = testing::TempDir("identify_options");
+  const std::string log = WriteLog(dir, "run.csv");
+  const std::string model = SourcePath("models/rrr.yaml");
+  auto urdf = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/m.urdf");
+  EXPECT_EQ(urdf.exit_code, 2);
+  EXPECT_NE(urdf.err.find("give a .yaml or .yml path"), std::string::npos) << urdf.err;
+  auto decimate = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/m.yaml --decimate 0");
+  EXPECT_EQ(decimate.exit_code, 2);
+  EXPECT_NE(decimate.err.find("decimate must be at least 1"), std::string::npos) << decimate.err;
+  auto cutoff = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/m.yaml --cutoff 0");
+  EXPECT_EQ(cutoff.exit_code, 2);
+  auto omni = RunTwinsim("identify --model " + SourcePath("models/omni4.yaml") + " --log " + log + " --out " + dir +
+                         "/m.yaml");
+  EXPECT_EQ(omni.exit_code, 2);
+  EXPECT_NE(omni.err.find("not an arm model"), std::string::npos) << omni.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
+}
+
+}  // namespace
+}  // namespace twinsim

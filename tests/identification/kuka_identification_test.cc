@@ -1,0 +1,60 @@
+// Identification on real measurements: the KUKA LWR4+ logs of ../shared/realdata (skipped
+// where that folder is absent). Identified on run1, judged on the held-out run2 and run3.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "identification/torque_prediction.h"
+#include "identification/wls_identification.h"
+#include "io/arm_log.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+std::string KukaDir() { return testing::SourcePath("../shared/realdata/kuka_lwr4"); }
+
+TEST(KukaIdentification, HeldOutTorquesAreFarCloserThanTheUrdfs) {
+  if (!std::filesystem::exists(KukaDir() + "/run1.csv")) GTEST_SKIP() << "no real data at " << KukaDir();
+  const ArmModel urdf = LoadArmModel(KukaDir() + "/kuka_lwr4.urdf");
+  const ArmLog run1 = ReadArmLog(KukaDir() + "/run1.csv");
+  WlsIdentificationOptions options;
+  options.torque_offsets = true;  // the torque sensors' biases, up to 0.86 N·m on joint 1
+  WlsIdentificationSummary summary;
+  const ArmModel identified = IdentifyArm(urdf, {run1}, options, &summary);
+  EXPECT_EQ(identified.Validate(), "");
+  EXPECT_EQ(summary.base_parameters, 57);
+  EXPECT_LT(summary.condition_number, 200);
+  for (const char* name : {"run2.csv", "run3.csv"}) {
+    SCOPED_TRACE(name);
+    const ArmLog log = ReadArmLog(KukaDir() + "/" + name);
+    Eigen::MatrixXd tau = PredictArmTorques(identified, log);
+    tau.rowwise() += summary.offsets.transpose();
+    const TorqueErrors before = CompareArmTorques(urdf, log);
+    const TorqueErrors after = CompareArmTorques(identified, log, tau);
+    // Every joint closer than the URDF's CAD values, and on average by more than 40 %
+    // (measured: 59 % -> 25 % of the torque RMS on run2, 70 % -> 38 % on run3); the
+    // normalised error (RMS / twice the effort limit) below 0.2 % on run2 (0.158 %) and
+    // 0.3 % on run3 (0.262 %), against the reference project's 0.18 %.
+    for (int j = 0; j < 7; ++j) EXPECT_LT(after.error_rms[j], before.error_rms[j]) << "joint " << j + 1;
+    EXPECT_LT(after.relative.mean(), 0.6 * before.relative.mean());
+    EXPECT_LT(after.normalised, std::string(name) == "run2.csv" ? 0.002 : 0.003);
+    std::printf("%s: mean relative error %.1f %% -> %.1f %%, normalised %.3f %% -> %.3f %%\n", name,
+                100 * before.relative.mean(), 100 * after.relative.mean(), 100 * before.normalised,
+                100 * after.normalised);
+  }
+}
+
+TEST(KukaIdentification, WithoutOffsetsStillBeatsTheUrdfOnHeldOutData) {
+  if (!std::filesystem::exists(KukaDir() + "/run1.csv")) GTEST_SKIP() << "no real data at " << KukaDir();
+  const ArmModel urdf = LoadArmModel(KukaDir() + "/kuka_lwr4.urdf");
+  const ArmModel identified = IdentifyArm(urdf, {ReadArmLog(KukaDir() + "/run1.csv")}, {});
+  const ArmLog run2 = ReadArmLog(KukaDir() + "/run2.csv");
+  const TorqueErrors before = CompareArmTorques(urdf, run2);
+  const TorqueErrors after = CompareArmTorques(identified, run2);
+  // Measured 0.489 % -> 0.233 %: the offsets the model cannot hold remain in the error.
+  EXPECT_LT(after.normalised, 0.6 * before.normalised);
+}
+
+}  // namespace
+}  // namespace twinsim

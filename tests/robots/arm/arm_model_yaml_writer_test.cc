@@ -1,0 +1,198 @@
+// The URDF-style YAML joint table and the writer: any model written and loaded back is
+// the same model.
+#include "robots/arm/arm_model_yaml_writer.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/error.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+// A chain with turned joint frames (all three rpy angles), a prismatic joint, a
+// continuous joint (no limits), products of inertia and a tool link lumped by a fixed joint.
+const char* kUrdf = R"(<?xml version="1.0"?>
+<robot name="odd arm">
+  <link name="base"/>
+  <joint name="j1" type="revolute">
+    <parent link="base"/><child link="l1"/>
+    <origin xyz="0.1 -0.2 0.3" rpy="0.3 -0.7 1.9"/>
+    <axis xyz="0 0.6 0.8"/>
+    <limit lower="-2.5" upper="2.0" effort="40" velocity="3"/>
+    <dynamics damping="0.4" friction="1.1"/>
+  </joint>
+  <link name="l1">
+    <inertial><origin xyz="0.01 0.02 0.15" rpy="0.2 0.1 -0.4"/><mass value="3.1"/>
+      <inertia ixx="0.03" ixy="0.001" ixz="-0.002" iyy="0.025" iyz="0.0015" izz="0.012"/></inertial>
+  </link>
+  <joint name="slide" type="prismatic">
+    <parent link="l1"/><child link="l2"/>
+    <origin xyz="0 0 0.4" rpy="1.5707963267948966 0 0"/>
+    <axis xyz="1 0 0"/>
+    <limit lower="-0.1" upper="0.25" effort="200" velocity="0.5"/>
+  </joint>
+  <link name="l2">
+    <inertial><origin xyz="0.05 0 0"/><mass value="1.2"/>
+      <inertia ixx="0.002" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
+  </link>
+  <joint name="spin" type="continuous">
+    <parent link="l2"/><child link="l3"/>
+    <origin xyz="0.2 0.01 0" rpy="0 1.5707963267948966 0"/>
+    <axis xyz="0 0 1"/>
+    <limit effort="5" velocity="8"/>
+  </joint>
+  <link name="l3">
+    <inertial><origin xyz="0 0.01 0.03"/><mass value="0.4"/>
+      <inertia ixx="0.0004" ixy="0" ixz="0" iyy="0.0004" iyz="0" izz="0.0002"/></inertial>
+  </link>
+  <joint name="tool_joint" type="fixed">
+    <parent link="l3"/><child link="tool"/>
+    <origin xyz="0 0 0.08"/>
+  </joint>
+  <link name="tool">
+    <inertial><mass value="0.3"/><inertia ixx="0.0001" ixy="0" ixz="0" iyy="0.0001" iyz="0" izz="0.0001"/></inertial>
+  </link>
+</robot>
+)";
+
+void ExpectSameModel(const ArmModel& a, const ArmModel& b, double tol) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_LE((a.gravity - b.gravity).cwiseAbs().maxCoeff(), tol);
+  EXPECT_EQ(a.sample_time, b.sample_time);
+  EXPECT_EQ(a.delay_samples, b.delay_samples);
+  ASSERT_EQ(a.dof(), b.dof());
+  for (int i = 0; i < a.dof(); ++i) {
+    const ArmJoint& x = a.joints[static_cast<std::size_t>(i)];
+    const ArmJoint& y = b.joints[static_cast<std::size_t>(i)];
+    SCOPED_TRACE(x.name);
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.type, y.type);
+    EXPECT_LE((x.origin.matrix() - y.origin.matrix()).cwiseAbs().maxCoeff(), tol);
+    EXPECT_LE((x.axis - y.axis).cwiseAbs().maxCoeff(), tol);
+    EXPECT_EQ(x.lower, y.lower);
+    EXPECT_EQ(x.upper, y.upper);
+    EXPECT_EQ(x.velocity_limit, y.velocity_limit);
+    EXPECT_EQ(x.effort_limit, y.effort_limit);
+    EXPECT_EQ(x.viscous, y.viscous);
+    EXPECT_EQ(x.coulomb, y.coulomb);
+    EXPECT_EQ(x.child.name, y.child.name);
+    EXPECT_EQ(x.child.mass, y.child.mass);
+    EXPECT_LE((x.child.com - y.child.com).cwiseAbs().maxCoeff(), tol);
+    EXPECT_LE((x.child.inertia - y.child.inertia).cwiseAbs().maxCoeff(), tol);
+  }
+}
+
+TEST(ArmModelYamlWriter, UrdfWrittenAsYamlLoadsBackAsTheSameModel) {
+  const ArmModel urdf = LoadArmModelFromUrdfString(kUrdf, "odd.urdf");
+  ASSERT_EQ(urdf.dof(), 3);
+  const std::string dir = testing::TempDir("arm_yaml_writer");
+  WriteArmModelYaml(dir + "/odd.yaml", urdf, "round trip\nof odd.urdf");
+  const std::string text = testing::ReadText(dir + "/odd.yaml");
+  EXPECT_EQ(text.rfind("# round trip\n# of odd.urdf\nrobot: arm\nname: \"odd arm\"\n", 0), 0u) << text;
+  EXPECT_EQ(text.find("dh:"), std::string::npos);
+  const ArmModel back = LoadArmModel(dir + "/odd.yaml");
+  // Numbers are exact; the rotations pass through roll, pitch and yaw.
+  ExpectSameModel(urdf, back, 1e-12);
+}
+
+TEST(ArmModelYamlWriter, DhModelsAndTheKukaRoundTrip) {
+  for (const char* rel : {"models/rrr.yaml", "models/rrr_rod_tip.yaml", "../shared/realdata/kuka_lwr4/kuka_lwr4.urdf"}) {
+    const std::string path = testing::SourcePath(rel);
+    if (!std::filesystem::exists(path)) continue;
+    SCOPED_TRACE(rel);
+    const ArmModel m = LoadArmModel(path);
+    ExpectSameModel(m, LoadArmModelFromYamlString(FormatArmModelYaml(m), "again.yaml"), 1e-12);
+  }
+}
+
+TEST(ArmModelYamlWriter, UrdfStyleTableRejectsDhKeysUnknownKeysAndZeroAxes) {
+  auto error = [](const std::string& yaml) {
+    try {
+      LoadArmModelFromYamlString(yaml, "t.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  const std::string e = error(R"(robot: arm
+name: t
+joints:
+  - type: revolute
+    origin: {xyz: [0, 0, 0.1], rpy: [0, 0, 0], rotation: 1}
+    axis: [0, 0, 0]
+    a: 0.3
+    lower_deg: -90
+    link: {mass: 1, inertia: [0.1, 0.1, 0.1, 0, 0, 0]}
+  - type: prismatic
+    link: {mass: 1, inertia: [0.1, 0.1, 0.1, 0, 0, 0]}
+)");
+  EXPECT_NE(e.find("t.yaml:5:48: unknown key 'rotation' in 'joint 1.origin' (known: rpy, xyz)"), std::string::npos) << e;
+  EXPECT_NE(e.find("t.yaml:6:11: 'axis' in 'joint 1': must not be zero"), std::string::npos) << e;
+  EXPECT_NE(e.find("t.yaml:7:8: 'a' in 'joint 1': 'a' is a DH parameter; give 'dh: standard' or 'dh: modified'"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("'lower_deg' in 'joint 1': a revolute joint's limits are 'lower' and 'upper' in a URDF-style table"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("missing required key 'axis' in 'joint 2'"), std::string::npos) << e;
+  const std::string mixed = error(R"(robot: arm
+name: t
+dh: standard
+joints:
+  - {type: revolute, a: 0, alpha_deg: 0, d: 0, theta_deg: 0, axis: [0, 0, 1],
+     link: {mass: 1, inertia: [0.1, 0.1, 0.1, 0, 0, 0]}}
+)");
+  EXPECT_NE(mixed.find("'axis' in 'joint 1': 'axis' belongs to a URDF-style joint table"), std::string::npos) << mixed;
+}
+
+TEST(ArmModelYamlWriter, UrdfStyleTableMatchesTheDhTableOfTheRrrArm) {
+  // The RRR arm written by hand as a URDF-style table: the same physics as models/rrr.yaml.
+  const ArmModel dh = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
+  const ArmModel table = LoadArmModelFromYamlString(R"(robot: arm
+name: rrr
+sample_time: 0.001
+delay_samples: 1
+joints:
+  - name: waist
+    type: revolute
+    origin: {xyz: [0, 0, 0.30]}
+    axis: [0, 0, 1]
+    lower: -2.9670597283903604
+    upper: 2.9670597283903604
+    velocity_limit: 6
+    effort_limit: 60
+    viscous: 0.5
+    coulomb: 1.5
+    link: {name: column, mass: 4.0, com: [0, 0, -0.10], inertia: [0.03, 0.03, 0.02, 0, 0, 0]}
+  - name: shoulder
+    type: revolute
+    origin: {rpy: [1.5707963267948966, 0, 0]}
+    axis: [0, 0, 1]
+    lower: -1.9198621771937625
+    upper: 1.9198621771937625
+    velocity_limit: 6
+    effort_limit: 30
+    viscous: 0.3
+    coulomb: 1.0
+    link: {name: upper_arm, mass: 3.2, com: [0.24, 0, 0], inertia: [0.006, 0.045, 0.045, 0, 0, 0]}
+  - name: elbow
+    type: revolute
+    origin: {xyz: [0.40, 0, 0]}
+    axis: [0, 0, 1]
+    lower: -2.6179938779914944
+    upper: 2.6179938779914944
+    velocity_limit: 6
+    effort_limit: 15
+    viscous: 0.1
+    coulomb: 0.5
+    link: {name: forearm, mass: 1.3, com: [0.15, 0, 0], inertia: [0.002, 0.016, 0.016, 0, 0, 0]}
+)",
+                                                    "rrr_table.yaml");
+  ExpectSameModel(dh, table, 1e-12);
+}
+
+}  // namespace
+}  // namespace twinsim
