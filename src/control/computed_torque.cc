@@ -31,6 +31,9 @@ void CheckAll(const ArmModel& hat, const TrackingGains& gains, const Eigen::Vect
   CheckSize("q", q, n), CheckSize("qd", qd, n);
 }
 
+// rad/s: a joint slower than this at both ends of a sample is taken as stuck.
+constexpr double kStuckSpeed = 1e-6;
+
 Eigen::VectorXd Rms(const Eigen::MatrixXd& m) {
   if (m.rows() == 0) return Eigen::VectorXd::Zero(m.cols());
   return (m.array().square().colwise().sum() / static_cast<double>(m.rows())).sqrt().transpose();
@@ -182,7 +185,19 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
     const Eigen::VectorXd qm = 0.5 * (run.q.row(i) + run.q.row(i + 1)).transpose();
     const Eigen::VectorXd qdm = 0.5 * (run.qd.row(i) + run.qd.row(i + 1)).transpose();
     const Eigen::VectorXd acc = (run.qd.row(i + 1) - run.qd.row(i)).transpose() / plant.sample_time;
-    trial.needed.row(i) = InverseDynamics(body, qm, qdm, acc, true).transpose();
+    // Rigid bodies plus friction; a joint that does not move over the interval sticks,
+    // and then any torque within its Coulomb band holds it: the closest to the applied.
+    Eigen::VectorXd needed = InverseDynamics(body, qm, qdm, acc, false);
+    for (int j = 0; j < n; ++j) {
+      const bool stuck = std::abs(run.qd(i, j)) < kStuckSpeed && std::abs(run.qd(i + 1, j)) < kStuckSpeed;
+      if (stuck) {
+        const double band = std::abs(body.joints[j].coulomb);
+        needed(j) += std::clamp(run.applied(i, j) - needed(j), -band, band);
+      } else {
+        needed(j) += ArmFrictionTorque(body, j, qdm(j));
+      }
+    }
+    trial.needed.row(i) = needed.transpose();
   }
   trial.needed.row(samples - 1) = trial.needed.row(samples - 2);
 

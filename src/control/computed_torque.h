@@ -100,9 +100,11 @@ struct TrackingTrial {
   Eigen::MatrixXd command;       // N x dof, N·m: sent (clamped to the effort limits when saturate)
   Eigen::MatrixXd model_torque;  // N x dof, N·m: the model-based part of the output
   Eigen::MatrixXd applied;       // N x dof, N·m: the drive torque over [t, t + Ts) (late by the delay)
-  // N x dof, N·m: the plant's inverse dynamics (with its nominal friction) over
-  // [t, t + Ts), at the interval's mean state with the mean acceleration
-  // (qd(t + Ts) - qd(t)) / Ts; the last row repeats the one before.
+  // N x dof, N·m: the plant's inverse dynamics (with its friction) over [t, t + Ts),
+  // at the interval's mean state with the mean acceleration (qd(t + Ts) - qd(t)) / Ts; a
+  // joint below 1e-6 rad/s at both ends sticks, and then its friction is whatever in
+  // [-coulomb, coulomb] comes closest to the applied torque. The last row repeats the
+  // one before.
   Eigen::MatrixXd needed;
   Eigen::VectorXd error_rms, error_max;         // dof, rad: q_ref - q over the run
   Eigen::VectorXd saturated_fraction;           // dof: share of samples with |demand| >= effort_limit

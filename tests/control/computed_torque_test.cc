@@ -143,12 +143,12 @@ TEST(ComputedTorque, RodWithTipMassSaturatesTheShoulder) {
 
 TEST(ComputedTorque, RealisedMotionNeedsTheAppliedTorque) {
   // The plant's inverse dynamics along the realised motion gives back the torque that
-  // was applied, up to friction at the corners where the joints stop (the simulation
-  // sticks them, the inverse dynamics only sees sign(qd)): the shoulder's and elbow's
-  // RMS difference is below 2% and 8% of their command RMS (measured 1.4%, 5.4%).
+  // was applied: below 4% of each joint's command RMS (measured 2.5% on the waist,
+  // whose Coulomb friction meets the joint's reversals, 0.5% and 0.4% on the others).
+  // Without the sticking rule in `needed` the waist's difference was 54%: it stands
+  // still through every vertical stroke.
   const TrackingTrial t = Trial("rrr", "rrr");
-  EXPECT_LT(t.needed_vs_applied_rms(1), 0.02 * t.command_rms(1));
-  EXPECT_LT(t.needed_vs_applied_rms(2), 0.08 * t.command_rms(2));
+  for (int j = 0; j < 3; ++j) EXPECT_LT(t.needed_vs_applied_rms(j), 0.04 * t.command_rms(j)) << j;
 }
 
 TEST(ComputedTorque, OdeAndBulletTrackLikeTheAnalyticBackend) {
