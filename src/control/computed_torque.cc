@@ -163,7 +163,10 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
     // The feedforward acts `preview` samples from now: take the reference then, but
     // keep the feedback on the error measured now.
     const Eigen::VectorXd q_a = reference.q.row(ahead).transpose(), qd_a = reference.qd.row(ahead).transpose();
-    const Eigen::VectorXd qdd_a = reference.qdd.row(ahead).transpose();
+    Eigen::VectorXd qdd_a = reference.qdd.row(ahead).transpose();
+    if (options.interval_acceleration && ahead + 1 < samples) {
+      qdd_a = (reference.qd.row(ahead + 1) - reference.qd.row(ahead)).transpose() / reference.sample_time;
+    }
     Eigen::VectorXd model_part, tau;
     if (options.controller == TrackingController::kComputedTorque) {
       tau = ComputedTorque(hat, gains, options.friction, options.friction_from_reference ? qd_a : qd, q_r, qd_r,

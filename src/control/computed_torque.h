@@ -58,6 +58,11 @@ struct TrackingOptions {
   // stops, and the Coulomb term's sign(qd) of a measured qd ~ 0 flips from sample to
   // sample; the reference's sign does not (docs/writing_task.md gives the numbers).
   bool friction_from_reference = true;
+  // Feed forward the reference's mean acceleration over the sample the torque is held
+  // for, (qd_r(k+1) - qd_r(k)) / Ts, instead of its value qdd_r(k) at the sample: the
+  // held torque then produces the reference's velocity change even where the path's
+  // acceleration jumps in between samples (docs/writing_task.md gives the numbers).
+  bool interval_acceleration = false;
   bool saturate = true;       // clamp the command to each joint's effort_limit (where given)
   std::string backend = "analytic";  // the plant's physics (MakeArmBackend)
 
