@@ -63,9 +63,9 @@ TEST(WritingTask, IkRoundTripHitsThePointsWithin1e9) {
 }
 
 TEST(WritingTask, IkMatchesAKnownPosture) {
-  // Stretched along +x at the shoulder's height: q = 0. Tool straight above the
-  // shoulder with the forearm horizontal pointing to -y... instead: upper arm up
-  // (q2 = pi/2), forearm level (q3 = -pi/2), waist at 30 degrees.
+  // Stretched along +x at the shoulder's height: q = 0 (acos near 1 loses half the
+  // digits: 1e-7). Upper arm straight up (q2 = pi/2), forearm level (q3 = -pi/2), waist
+  // at 30 degrees: the tool 0.35 m out from the waist axis at z = 0.30 + 0.40 m.
   const ArmModel arm = Rrr();
   const Eigen::Vector3d tool(0.35, 0, 0);
   EXPECT_LT(WaistShoulderElbowIk(arm, Eigen::Vector3d(0.75, 0, 0.30), tool).norm(), 1e-7);
