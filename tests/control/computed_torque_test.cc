@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "backends/arm/arm_backend.h"
+#include "core/error.h"
 #include "robots/arm/arm_dynamics.h"
 #include "test_util.h"
 
@@ -75,6 +76,16 @@ TEST(ComputedTorque, RejectsBadInput) {
   ArmReference bad = Reference();
   bad.sample_time = 0.002;
   EXPECT_THROW(RunTrackingTrial(Load("rrr"), Load("rrr"), bad, TrackingOptions{}), std::invalid_argument);
+  TrackingOptions unknown;
+  unknown.backend = "mujoco";
+  try {
+    RunTrackingTrial(Load("rrr"), Load("rrr"), Reference(), unknown);
+    FAIL() << "no throw";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown arm backend 'mujoco' (known: analytic, ode, bullet)"),
+              std::string::npos)
+        << e.what();
+  }
   const ArmModel arm = Load("rrr");
   EXPECT_THROW(ComputedTorque(arm, ComputedTorqueGains(3, 10, 1), true, Eigen::Vector2d::Zero(), Eigen::Vector3d::Zero(),
                               Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
@@ -166,6 +177,25 @@ TEST(ComputedTorque, RodWithTipMassSaturatesTheShoulder) {
   // the true model, 9.2e-3 rad with the bare one.
   EXPECT_LT(exact.error_max(0), 1.5e-4);
   EXPECT_GT(bare.error_max(0), 50 * exact.error_max(0));
+}
+
+TEST(ComputedTorque, WithoutTheLimitTheTipArmTracksLikeTheOthers) {
+  // Unclamped (as if the shoulder's motor were stronger) the true model tracks the tip
+  // arm as well as the bare one (measured 6.8e-5 rad, peak shoulder demand 32.7 N·m):
+  // the error of the saturating trial is the limit's.
+  TrackingOptions o;
+  o.saturate = false;
+  const TrackingTrial t = RunTrackingTrial(Load("rrr_rod_tip"), Load("rrr_rod_tip"), Reference(), o);
+  EXPECT_LT(t.error_max.maxCoeff(), 1.5e-4) << t.Brief();
+  EXPECT_GT(t.demand.col(1).cwiseAbs().maxCoeff(), 30.0);  // it would need more than 30 N·m
+  EXPECT_GT(t.saturated_fraction(1), 0.10);                // counted though not clamped
+}
+
+TEST(ComputedTorque, TrialsAreRepeatable) {
+  const TrackingTrial a = Trial("rrr_rod", "rrr"), b = Trial("rrr_rod", "rrr");
+  EXPECT_EQ(a.q, b.q);
+  EXPECT_EQ(a.command, b.command);
+  EXPECT_EQ(a.needed, b.needed);
 }
 
 TEST(ComputedTorque, RealisedMotionNeedsTheAppliedTorque) {
