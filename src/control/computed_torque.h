@@ -12,8 +12,9 @@
 //                     (N·m/rad, N·m·s/rad): the same bandwidth at the start posture.
 // h_hat is C qd + g and f_hat the viscous and Coulomb friction of the model's joints.
 // The arm's command reaches the joints D = model.delay_samples samples late, so the
-// reference's acceleration and velocity feedforward are taken `preview` samples ahead
-// (D by default), while the feedback acts on the error sampled now.
+// feedforward (computed torque: q̈_r and the friction's velocity; PD + feedforward: the
+// whole InverseDynamics_hat term) takes the reference `preview` samples ahead (D by
+// default), while the feedback acts on the error sampled now.
 //
 // RunTrackingTrial builds an ArmSimulation of the plant on a backend, starts it on the
 // reference at rest, runs the controller along the reference and returns, per sample,
