@@ -5,12 +5,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <sstream>
 
 #include "core/error.h"
 #include "identification/physical_consistency.h"
-#include "robots/arm/arm_dynamics.h"
 
 namespace twinsim {
 namespace {
@@ -90,17 +88,12 @@ std::string DescribeBaseParameter(const ArmModel& model, const BaseParameters& b
     const int f = s - kParametersPerLink * n;
     text = std::string(f % 2 == 0 ? "viscous" : "Coulomb") + " friction of joint " + std::to_string(f / 2 + 1);
   } else {
-    static const char* kWhat[] = {"mass",
-                                  "first moment m cx",
-                                  "first moment m cy",
-                                  "first moment m cz",
-                                  "inertia Ixx about its frame's origin",
-                                  "product of inertia Ixy",
-                                  "product of inertia Ixz",
-                                  "inertia Iyy about its frame's origin",
-                                  "product of inertia Iyz",
-                                  "inertia Izz about its frame's origin"};
-    text = std::string(kWhat[s % kParametersPerLink]) + " of link " + std::to_string(s / kParametersPerLink + 1);
+    static const char* kWhat[] = {"mass",        "first moment m cx", "first moment m cy", "first moment m cz",
+                                  "inertia Ixx", "inertia Ixy",       "inertia Ixz",       "inertia Iyy",
+                                  "inertia Iyz", "inertia Izz"};
+    const int p = s % kParametersPerLink;
+    text = std::string(kWhat[p]) + " of link " + std::to_string(s / kParametersPerLink + 1) +
+           (p >= 4 ? " about its frame's origin" : "");
   }
   int others = 0;
   for (Eigen::Index c = 0; c < base.from_standard.cols(); ++c)

@@ -10,7 +10,8 @@
 // throughout. The stacked system is never stored: each joint's rows are folded into a
 // small triangular factor as they are computed, so 100 000 samples of a 7-joint arm
 // take a fraction of the memory of W. The relative standard deviation of each estimate
-// comes from (W_w^T W_w)^-1, scaled by the weighted residual's variance.
+// comes from (W_w^T W_w)^-1, scaled by the weighted residual's variance. Optionally a
+// constant torque offset per joint (a torque sensor's bias) is estimated alongside.
 //
 // Data that does not excite some base parameter (a joint that never moves, or a motion
 // too poor to tell combinations apart) is refused with an InputError naming them. The
@@ -59,11 +60,11 @@ struct WlsIdentificationSummary {
   int base_parameters = 0;             // r; the vectors below hold r base parameters, then the offsets
   std::vector<std::string> names;      // base parameters, each as its standard combination; "offset<j>"
   std::vector<std::string> descriptions;  // the same in words ("Coulomb friction of joint 3")
-  Eigen::VectorXd a_priori;            // K pi of the a-priori model
+  Eigen::VectorXd a_priori;            // K pi of the a-priori model (offsets 0)
   Eigen::VectorXd ordinary;            // OLS estimate
   Eigen::VectorXd identified;          // WLS estimate (OLS when not weighted)
   Eigen::VectorXd relative_std;        // %, 100 sigma(beta_k) / |beta_k|
-  Eigen::VectorXd consistent;          // K pi of the returned model
+  Eigen::VectorXd consistent;          // K pi of the returned model (and the offsets refitted to it)
   Eigen::VectorXd offsets;             // N·m or N per joint (empty without torque_offsets): measured - model at rest
   Eigen::VectorXd joint_sigma;         // N·m or N per joint, the OLS residual std dev (the weights' inverse)
   Eigen::VectorXd torque_rms;          // N·m or N per joint, measured torque RMS over the samples used
@@ -85,16 +86,16 @@ struct WlsIdentificationSummary {
 
 // Identifies `a_priori`'s base parameters and friction from `logs` and returns the
 // model with them (kinematics, limits and names unchanged; torque offsets, when
-// estimated, are in the summary only). Throws InputError for
-// invalid options, a log whose joint count differs from the model's, too few samples,
-// or data that does not excite some base parameter (named in words).
+// estimated, are in the summary only). Throws InputError for invalid options, a log
+// whose joint count differs from the model's, too few samples, data that does not
+// excite some parameter (named in words), or an a-priori model that is not physical.
 ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
                      const WlsIdentificationOptions& options, WlsIdentificationSummary* summary = nullptr);
 
 // The identification's base parameters of `model` (FindBaseParameters with the options' samples and seed).
 BaseParameters IdentificationBase(const ArmModel& model, const WlsIdentificationOptions& options);
 
-// A base parameter in words: "Coulomb friction of joint 3", "mass of link 2 (regrouped with 2 others)".
+// A base parameter in words: "Coulomb friction of joint 3", "mass of link 2, regrouped with 2 others".
 std::string DescribeBaseParameter(const ArmModel& model, const BaseParameters& base, int k);
 
 }  // namespace twinsim

@@ -174,7 +174,11 @@ std::string FormatArmLog(const ArmLog& log, bool with_derivatives) {
   const bool qref = log.qref.rows() == log.rows() && log.qref.cols() == n && n > 0;
   std::string out = "t";
   auto header = [&](const std::string& prefix) {
-    for (int j = 1; j <= n; ++j) out += "," + prefix + std::to_string(j);
+    for (int j = 1; j <= n; ++j) {
+      out += ',';
+      out += prefix;
+      out += std::to_string(j);
+    }
   };
   header("q");
   if (with_derivatives) {
@@ -187,7 +191,10 @@ std::string FormatArmLog(const ArmLog& log, bool with_derivatives) {
   for (int r = 0; r < log.rows(); ++r) {
     out += FormatCsvNumber(log.t[r]);
     auto row = [&](const Eigen::MatrixXd& m) {
-      for (int j = 0; j < n; ++j) out += "," + FormatCsvNumber(m(r, j));
+      for (int j = 0; j < n; ++j) {
+        out += ',';
+        out += FormatCsvNumber(m(r, j));
+      }
     };
     row(log.q);
     if (with_derivatives) {
@@ -207,11 +214,17 @@ void WriteArmLog(const std::string& path, const ArmLog& log, bool with_derivativ
 
 void WriteArmTorqueCsv(const std::string& path, const Eigen::VectorXd& t, const Eigen::MatrixXd& tau) {
   std::string out = "t";
-  for (Eigen::Index j = 1; j <= tau.cols(); ++j) out += ",tau" + std::to_string(j);
+  for (Eigen::Index j = 1; j <= tau.cols(); ++j) {
+    out += ",tau";
+    out += std::to_string(j);
+  }
   out += '\n';
   for (Eigen::Index r = 0; r < t.size(); ++r) {
     out += FormatCsvNumber(t[r]);
-    for (Eigen::Index j = 0; j < tau.cols(); ++j) out += "," + FormatCsvNumber(tau(r, j));
+    for (Eigen::Index j = 0; j < tau.cols(); ++j) {
+      out += ',';
+      out += FormatCsvNumber(tau(r, j));
+    }
     out += '\n';
   }
   WriteFileAtomically(path, out);

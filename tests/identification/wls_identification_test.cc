@@ -223,7 +223,7 @@ TEST(WlsIdentification, DescribesParametersInWords) {
       friction = true;
     }
     if (base.names[static_cast<std::size_t>(k)].rfind("Izz1 + ", 0) == 0) {
-      EXPECT_EQ(DescribeBaseParameter(m, base, k).rfind("inertia Izz about its frame's origin of link 1, regrouped with", 0),
+      EXPECT_EQ(DescribeBaseParameter(m, base, k).rfind("inertia Izz of link 1 about its frame's origin, regrouped with", 0),
                 0u);
     }
   }

@@ -49,6 +49,10 @@ TEST(ArmLog, ReadsJointColumnsAndIgnoresExtraOnes) {
   EXPECT_NEAR(log.tau(3, 0), 1.03, 1e-12);
   EXPECT_EQ(log.qref.size(), 0);
   EXPECT_EQ(log.line_of[0], 2);
+  const ArmLog with_reference = ParseArmLog("t,q1,tau1,qref1\n0,0,1,0.5\n0.01,0,1,0.25\n0.02,0,1,0\n", "ref.csv");
+  ASSERT_EQ(with_reference.qref.rows(), 3);
+  EXPECT_EQ(with_reference.qref(1, 0), 0.25);
+  EXPECT_EQ(FormatArmLog(with_reference, false).substr(0, 16), "t,q1,tau1,qref1\n");
 }
 
 TEST(ArmLog, DerivesVelocityAndAccelerationFromPositions) {
