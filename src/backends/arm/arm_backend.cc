@@ -1,4 +1,5 @@
 #include "backends/arm/arm_backend.h"
+#include "backends/omni_engine.h"
 
 #include <algorithm>
 #include <cmath>
@@ -58,16 +59,8 @@ void CheckArmStep(const std::string& backend, int dof, const Eigen::VectorXd& ta
   }
 }
 
-std::vector<std::string> AvailableArmBackends() {
-  std::vector<std::string> names = {"analytic"};
-#ifdef TWINSIM_HAVE_ODE
-  names.push_back("ode");
-#endif
-#ifdef TWINSIM_HAVE_BULLET
-  names.push_back("bullet");
-#endif
-  return names;
-}
+// Every engine that is built simulates both robots: the lists are the same.
+std::vector<std::string> AvailableArmBackends() { return AvailableOmniEngines(); }
 
 std::unique_ptr<ArmBackend> MakeArmBackend(const std::string& name, const ArmModel& model,
                                            const ArmBackendOptions& options) {
