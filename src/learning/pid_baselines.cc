@@ -84,8 +84,9 @@ UltimateGain FindUltimateGain(const TestRunEvaluator& evaluator, const Eigen::Ve
   };
   // Bracket by doubling from the hand-tuned size, then bisect (geometrically).
   double lo = 0, hi = DefaultPidScale()[6 * axis];
-  while (u.experiments < max_experiments && !oscillates(hi)) lo = hi, hi *= 2;
-  if (u.experiments >= max_experiments && lo == hi / 2) return u;  // never oscillated
+  bool found = false;
+  while (u.experiments < max_experiments && !(found = oscillates(hi))) lo = hi, hi *= 2;
+  if (!found) return u;  // never oscillated within the budget: no ultimate gain
   double hi_period = period;
   while (u.experiments < max_experiments) {
     const double mid = lo > 0 ? std::sqrt(lo * hi) : hi / 2;
