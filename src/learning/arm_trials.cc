@@ -91,6 +91,58 @@ ArmReference SampledReference(const FourierTrajectory& trajectory, double sample
   return ref;
 }
 
+ArmReference RandomStopAndGoReference(const ArmModel& model, const TrainingTrialOptions& options, std::uint64_t seed) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("TrainingTrialOptions: " + why);
+  if (!(options.stroke_speed > 0) || !(options.stroke_acceleration > 0))
+    throw std::invalid_argument("TrainingTrialOptions: stroke speed and acceleration must be positive");
+  const int n = model.dof();
+  const Eigen::VectorXd center = OrDefault(options.center, n, {0.0, 0.35, -1.1}, "center");
+  const Eigen::VectorXd amplitude = OrDefault(options.amplitude, n, {0.7, 0.45, 0.6}, "amplitude");
+  const double ts = model.sample_time;
+  const int samples = static_cast<int>(std::lround(options.seconds / ts));
+  Rng rng = Rng::Derived(seed, 0x737467);  // "stg"
+  ArmReference ref;
+  ref.sample_time = ts;
+  ref.t.resize(samples);
+  ref.q.resize(samples, n), ref.qd.resize(samples, n), ref.qdd.resize(samples, n);
+  Eigen::VectorXd from = center;
+  int k = 0;
+  while (k < samples) {
+    Eigen::VectorXd to(n);
+    for (int j = 0; j < n; ++j) to[j] = center[j] + amplitude[j] * rng.Uniform(-1, 1);
+    const Eigen::VectorXd delta = to - from;
+    const double dist = delta.cwiseAbs().maxCoeff();
+    // The path parameter s in [0, dist] on a trapezoid (a triangle for short moves).
+    const double v = options.stroke_speed, a = options.stroke_acceleration;
+    const double ramp = std::min(v / a, std::sqrt(dist / a));
+    const double peak = a * ramp;
+    const double cruise = peak > 0 ? (dist - peak * ramp) / peak : 0;
+    const double duration = 2 * ramp + cruise;
+    const double pause = rng.Uniform(0, 0.2);
+    const Eigen::VectorXd dir = dist > 0 ? Eigen::VectorXd(delta / dist) : Eigen::VectorXd::Zero(n);
+    const int move_samples = static_cast<int>(std::ceil((duration + pause) / ts));
+    for (int i = 0; i < move_samples && k < samples; ++i, ++k) {
+      const double t = i * ts;
+      double s = dist, sd = 0, sdd = 0;
+      if (t < ramp) {
+        s = 0.5 * a * t * t, sd = a * t, sdd = a;
+      } else if (t < ramp + cruise) {
+        s = 0.5 * a * ramp * ramp + peak * (t - ramp), sd = peak;
+      } else if (t < duration) {
+        const double r = duration - t;
+        s = dist - 0.5 * a * r * r, sd = a * r, sdd = -a;
+      }
+      ref.t[k] = k * ts;
+      ref.q.row(k) = (from + s * dir).transpose();
+      ref.qd.row(k) = (sd * dir).transpose();
+      ref.qdd.row(k) = (sdd * dir).transpose();
+    }
+    from = to;
+  }
+  return ref;
+}
+
 ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                       const TrainingTrialOptions& options, std::uint64_t seed) {
   std::string why;
@@ -156,8 +208,11 @@ std::vector<ArmLog> RecordTrainingTrials(const ArmModel& plant, const ArmModel& 
   std::vector<ArmLog> logs;
   for (int i = 0; i < count; ++i) {
     const std::uint64_t seed = first_seed + static_cast<std::uint64_t>(i);
-    const FourierTrajectory traj = RandomTrainingTrajectory(hat, options, seed);
-    logs.push_back(RecordArmTrial(plant, hat, SampledReference(traj, plant.sample_time, options.seconds), options, seed));
+    const int multisine = static_cast<int>(std::lround(count * (1 - options.stop_and_go)));
+    const ArmReference ref =
+        i < multisine ? SampledReference(RandomTrainingTrajectory(hat, options, seed), plant.sample_time, options.seconds)
+                      : RandomStopAndGoReference(hat, options, seed);
+    logs.push_back(RecordArmTrial(plant, hat, ref, options, seed));
     logs.back().path = "trial" + std::to_string(seed);
   }
   return logs;

@@ -41,6 +41,9 @@ struct TrainingTrialOptions {
   int dither_hold = 10;           // samples each dither value is held
   double bandwidth = 10;          // Hz, the computed-torque controller's
   std::string backend = "analytic";  // the plant's physics
+  double stop_and_go = 0.5;       // share of RecordTrainingTrials' trials that are stop-and-go
+  double stroke_speed = 1.5;      // rad/s, stop-and-go peak joint speed (the fastest joint)
+  double stroke_acceleration = 8; // rad/s^2, stop-and-go acceleration (the fastest joint)
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -55,6 +58,14 @@ FourierTrajectory RandomTrainingTrajectory(const ArmModel& model, const Training
 // (the tool path p, pd, pdd is left empty).
 ArmReference SampledReference(const FourierTrajectory& trajectory, double sample_time, double seconds);
 
+// A random stop-and-go reference of trial `seed`: moves between random postures within
+// centre +- amplitude, every joint on the same trapezoidal velocity profile (joint
+// speed up to `stroke_speed`, acceleration `stroke_acceleration`, so the acceleration
+// jumps at the ends of each phase), each followed by a random pause of 0 to 0.2 s, for
+// options.seconds. Stops and sharp accelerations are where friction and delay show.
+// Throws std::invalid_argument for invalid options.
+ArmReference RandomStopAndGoReference(const ArmModel& model, const TrainingTrialOptions& options, std::uint64_t seed);
+
 // Runs the computed-torque controller over `hat` with the dither on `plant` along
 // `reference` from its first sample, and returns the log a controller would write:
 // t, q, qd (sampled), tau (the command sent at t, dither included), qref; path "".
@@ -63,8 +74,9 @@ ArmReference SampledReference(const FourierTrajectory& trajectory, double sample
 ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                       const TrainingTrialOptions& options, std::uint64_t seed);
 
-// `count` trials with seeds first_seed, first_seed + 1, ... (RandomTrainingTrajectory
-// then RecordArmTrial).
+// `count` trials with seeds first_seed, first_seed + 1, ...: the first
+// round(count * (1 - stop_and_go)) multi-sine (RandomTrainingTrajectory), the rest
+// stop-and-go (RandomStopAndGoReference), each run by RecordArmTrial.
 std::vector<ArmLog> RecordTrainingTrials(const ArmModel& plant, const ArmModel& hat, const TrainingTrialOptions& options,
                                          int count, std::uint64_t first_seed);
 
