@@ -29,8 +29,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 #include <string>
 
+#include "backends/arm/arm_backend.h"
 #include "control/writing_task.h"
 #include "robots/arm/arm_model.h"
 
@@ -131,5 +133,10 @@ struct TrackingTrial {
 // InputError for an unknown backend; CheckFailed when the arm runs away.
 TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                                const TrackingOptions& options);
+
+// The same on a backend already built for `plant` (e.g. MakeLearnedArmBackend);
+// options.backend is then not used. Throws as above.
+TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,
+                               const ArmReference& reference, const TrackingOptions& options);
 
 }  // namespace twinsim

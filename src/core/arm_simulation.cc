@@ -90,16 +90,23 @@ ArmSimulation::ArmSimulation(const ArmModel& model, std::unique_ptr<ArmBackend> 
   }
   const int n = model_.dof();
   const double ts = model_.sample_time;
+  // A learned backend has learned the real arm's friction and effects: none are added
+  // on top, and it steps whole samples.
+  const bool learned = backend_->includes_plant_effects();
+  if (learned && options_.physics_substeps > 1) {
+    throw InputError("arm simulation options: the " + backend_->name() +
+                     " backend steps one whole sample at a time; physics_substeps must be 0 or 1");
+  }
   // The automatic physics step: fine enough for the stiffest flexible joint, whose
   // link side is taken at q = 0 with the other joints free, the lightest it gets:
   // J_l = 1 / (M^-1)_jj, J_eff = J_m J_l / (J_m + J_l).
   int substeps = 1;
   const Eigen::MatrixXd mobility = MassMatrix(model_, Eigen::VectorXd::Zero(n)).inverse();
   for (int j = 0; j < n; ++j) {
-    const JointEffects e = model_.effects.joint(j);
+    const JointEffects e = learned ? JointEffects{} : model_.effects.joint(j);
     effects_.push_back(e);
     const ArmJoint& nominal = model_.joints[static_cast<std::size_t>(j)];
-    if (e.friction() || nominal.viscous > 0 || nominal.coulomb > 0) friction_joints_.push_back(j);
+    if (!learned && (e.friction() || nominal.viscous > 0 || nominal.coulomb > 0)) friction_joints_.push_back(j);
     if (e.flexible()) {
       flexible_ = true;
       const double link = 1 / mobility(j, j);

@@ -17,6 +17,11 @@
 // k + D + 1 are the first that show it, on every backend. The payload is in the
 // bodies the backend was built with (MakeArmBackend uses ArmPlantModel).
 //
+// A backend whose includes_plant_effects() is true (the learned backend: a model of the
+// real arm with its friction and effects) gets step 4 without effects and friction: the
+// delayed command u_{k-D} itself for one whole sample (physics_substeps 0 or 1 only).
+// The delay line stays, as for every backend.
+//
 // The model is fixed at construction; ArmSimulationState holds all that changes, and
 // Save()/Restore() make a run repeatable from any sample, bit for bit.
 //
@@ -93,7 +98,7 @@ class ArmSimulation {
  public:
   // Takes a backend built for `model` (MakeArmBackend) and resets it to q = 0 at rest.
   // Throws std::invalid_argument for a backend of another arm, and InputError for bad
-  // options.
+  // options (physics_substeps > 1 with a backend that includes the plant's effects).
   ArmSimulation(const ArmModel& model, std::unique_ptr<ArmBackend> backend, const ArmSimulationOptions& options = {});
 
   // The plant simulated: the model given, its payload lumped into the last link.

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/yaml_reader.h"
+#include "learning/predictor_file.h"
 
 namespace twinsim {
 
@@ -40,30 +41,6 @@ namespace {
 double PositionRmse(const Eigen::MatrixXd& predicted, const Eigen::MatrixXd& truth) {
   if (truth.rows() == 0) return 0;
   return std::sqrt((predicted.leftCols(2) - truth.leftCols(2)).rowwise().squaredNorm().mean());
-}
-
-Eigen::VectorXd ReadVector(YamlMap& m, const std::string& key, int size) {
-  std::vector<double> v;
-  if (!m.Require(key, &v, size)) return Eigen::VectorXd::Zero(std::max(size, 0));
-  return Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<long>(v.size()));
-}
-
-Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int cols) {
-  std::vector<double> v;
-  if (!m.Require(key, &v, rows * cols)) return Eigen::MatrixXd::Zero(rows, cols);
-  // Stored row by row.
-  return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(v.data(), rows, cols);
-}
-
-void EmitVector(YAML::Emitter& out, const std::string& key, const double* data, long size) {
-  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (long i = 0; i < size; ++i) out << data[i];
-  out << YAML::EndSeq;
-}
-
-void EmitMatrix(YAML::Emitter& out, const std::string& key, const Eigen::MatrixXd& m) {
-  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = m;
-  EmitVector(out, key, rows.data(), rows.size());
 }
 
 }  // namespace
@@ -139,17 +116,8 @@ void OmniPredictor::Save(const std::string& path) const {
     EmitVector(out, "bias", bias_.data(), 3);
     out << YAML::EndMap;
   } else {
-    const Mlp::Parameters& p = mlp_.parameters();
     out << YAML::Key << "mlp" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "layers" << YAML::Value << YAML::Flow << p.layer_sizes;
-    EmitVector(out, "input_mean", p.input_mean.data(), p.input_mean.size());
-    EmitVector(out, "input_scale", p.input_scale.data(), p.input_scale.size());
-    EmitVector(out, "output_mean", p.output_mean.data(), p.output_mean.size());
-    EmitVector(out, "output_scale", p.output_scale.data(), p.output_scale.size());
-    for (std::size_t l = 0; l < p.weights.size(); ++l) {
-      EmitMatrix(out, "weights" + std::to_string(l), p.weights[l]);
-      EmitVector(out, "biases" + std::to_string(l), p.biases[l].data(), p.biases[l].size());
-    }
+    EmitMlp(out, mlp_);
     out << YAML::EndMap;
   }
   out << YAML::EndMap;
@@ -158,8 +126,10 @@ void OmniPredictor::Save(const std::string& path) const {
 
 OmniPredictor OmniPredictor::Load(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path);
+  CheckPredictorRobot(root, path, "omni");
   ErrorList errors;
   YamlMap top(root, path, "", &errors);
+  if (top.Has("robot")) top.Child("robot");
   int version = 0;
   if (!top.Require("twinsim_predictor", &version)) errors.ThrowIfAny();
   if (version != kPredictorFormatVersion) {
@@ -216,31 +186,9 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   } else {
     top.Child("linear");
     YamlMap m(top.Child("mlp"), path, "mlp", &errors);
-    Mlp::Parameters params;
-    std::vector<double> layers;
-    if (m.Require("layers", &layers)) {
-      for (double s : layers) params.layer_sizes.push_back(static_cast<int>(s));
-      if (params.layer_sizes.size() < 2 || params.layer_sizes.front() != in || params.layer_sizes.back() != 3)
-        m.Error("layers", "must run from " + std::to_string(in) + " inputs to 3 outputs");
-    }
-    errors.ThrowIfAny();
-    const auto& sizes = params.layer_sizes;
-    params.input_mean = ReadVector(m, "input_mean", in);
-    params.input_scale = ReadVector(m, "input_scale", in);
-    params.output_mean = ReadVector(m, "output_mean", 3);
-    params.output_scale = ReadVector(m, "output_scale", 3);
-    for (std::size_t l = 0; l + 1 < sizes.size(); ++l) {
-      params.weights.push_back(ReadMatrix(m, "weights" + std::to_string(l), sizes[l + 1], sizes[l]));
-      params.biases.push_back(ReadVector(m, "biases" + std::to_string(l), sizes[l + 1]));
-    }
-    m.Finish();
     top.Finish();
-    errors.ThrowIfAny();
-    try {
-      p = MakeMlpPredictor(info, Mlp::FromParameters(std::move(params)));
-    } catch (const std::invalid_argument& e) {
-      throw InputError(SourceLocation{path}, std::string("corrupt neural network: ") + e.what());
-    }
+    Mlp net = ReadMlp(m, in, 3, path, &errors);
+    p = MakeMlpPredictor(info, std::move(net));
   }
   p.path_ = path;
   return p;
@@ -348,14 +296,9 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     if (options.kind == "linear") {
       // Ridge regression on scaled inputs, closed form, through the origin: all-zero
       // inputs are a robot at rest with zero commands, which must stay at rest.
-      Eigen::VectorXd scale = data.x.array().square().colwise().mean().sqrt().transpose();
-      for (long i = 0; i < scale.size(); ++i)
-        if (scale[i] < 1e-12) scale[i] = 1;
-      const Eigen::MatrixXd z = data.x.array().rowwise() / scale.transpose().array();
-      Eigen::MatrixXd gram = z.transpose() * z;
-      gram.diagonal().array() += options.ridge * static_cast<double>(z.rows());
-      const Eigen::MatrixXd w = gram.ldlt().solve(z.transpose() * data.y);  // in x 3
-      return MakeLinearPredictor(info, Eigen::VectorXd::Zero(z.cols()), scale, w.transpose(), Eigen::Vector3d::Zero());
+      Eigen::VectorXd scale;
+      const Eigen::MatrixXd w = FitRidge(data.x, data.y, options.ridge, &scale);  // in x 3
+      return MakeLinearPredictor(info, Eigen::VectorXd::Zero(w.rows()), scale, w.transpose(), Eigen::Vector3d::Zero());
     }
     // The network early-stops on the held-out one-step windows, placed last. Standing
     // still (all-zero inputs, no motion) is added to what it learns: real logs hold rest

@@ -5,8 +5,11 @@
 #include "app/commands/commands.h"
 #include "app/progress.h"
 #include "core/error.h"
+#include "io/arm_log.h"
 #include "io/omni_log.h"
+#include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
+#include "robots/arm/arm_model.h"
 
 namespace twinsim {
 namespace {
@@ -16,10 +19,48 @@ struct TrainCliOptions {
   std::vector<std::string> logs;
   std::string out;
   OmniTrainOptions train;
+  int history = 4;     // arm only: samples of history
+  bool history_given = false;
   bool quiet = false;
 };
 
+int TrainArm(const TrainCliOptions& options) {
+  // Read and check everything before training or writing.
+  const ArmModel model = LoadArmModel(options.model);
+  std::vector<ArmLog> logs;
+  for (const auto& path : options.logs) {
+    logs.push_back(ReadArmLog(path));
+    CheckArmLogMatchesModel(logs.back(), model);
+  }
+  ArmTrainOptions train;
+  train.kind = options.train.kind;
+  train.horizon = options.train.horizon;
+  train.history = options.history;
+  train.mlp = options.train.mlp;
+  const std::string problem = train.Validate();
+  if (!problem.empty()) throw InputError(problem);
+
+  Progress progress("train arm " + train.kind, !options.quiet);
+  ArmTrainSummary summary;
+  const ArmPredictor predictor =
+      TrainArmPredictor(model, logs, train, &summary, [&](int epoch, int epochs, double validation_mse) {
+        char detail[64];
+        std::snprintf(detail, sizeof detail, "epoch %d, validation mse %.4g", epoch, validation_mse);
+        progress.Update(epoch, epochs, detail);
+      });
+  progress.Finish();
+  predictor.Save(options.out);
+  if (!options.quiet) {
+    std::printf("%s predictor of arm %s (%d joints), %d sample(s) ahead at %g s: %s\n", train.kind.c_str(),
+                model.name.c_str(), model.dof(), train.horizon, model.sample_time, summary.BriefReport().c_str());
+    std::printf("wrote:\n  %s\n", options.out.c_str());
+  }
+  return kExitOk;
+}
+
 int Train(const TrainCliOptions& options) {
+  if (ModelFileRobotKind(options.model) == "arm") return TrainArm(options);
+  if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
   // Read and check everything before training or writing.
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs;
@@ -54,7 +95,11 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       "Inputs: the last 6 frames (pose relative to the newest in its robot frame, heading as sin and\n"
       "cos, the command acting then: 42 numbers), plus the commands acting during the horizon when\n"
       "H > 1. Output: the pose H frames ahead. The last 20 % of every log is held out for validation.\n"
-      "Use the result with 'run --backend learned --predictor P' (H = 1), or in a go_to_pose scene.");
+      "Use the result with 'run --backend learned --predictor P' (H = 1), or in a go_to_pose scene.\n"
+      "Arms (URDF, or YAML with 'robot: arm'; logs t,q1..qn,tau1..taun[,qd..]): the last --history\n"
+      "samples of joint positions (sin, cos for revolute joints), velocities and the torques acting\n"
+      "then (the logged command, delay_samples later); output: the joint state H samples ahead.\n"
+      "See docs/arm_learning.md.");
   cmd->add_option("--model", options->model, "The robot's model file (its name and delay go into the predictor)")
       ->required();
   cmd->add_option("--log", options->logs, "Measured log(s) in the contract's format (repeat --log)")->required();
@@ -63,6 +108,9 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::IsMember({"linear", "mlp"}));
   cmd->add_option("--horizon", options->train.horizon, "H, frames ahead")->capture_default_str();
   cmd->add_option("--out", options->out, "Predictor file to write")->required();
+  cmd->add_option("--history", options->history, "Arms only: samples of history in the inputs")
+      ->capture_default_str()
+      ->each([options](const std::string&) { options->history_given = true; });
   cmd->add_option("--seed", options->train.mlp.seed, "Seed of the neural net's initialisation and batches")
       ->capture_default_str();
   cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training")->capture_default_str();

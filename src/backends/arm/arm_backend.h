@@ -1,4 +1,4 @@
-// A physics backend for a fixed-base serial arm: it integrates the rigid-body dynamics
+// A backend for a fixed-base serial arm: it integrates the rigid-body dynamics
 // of the arm's links under joint torques that the simulation loop (core/arm_simulation.h)
 // has already delayed and passed through the arm's effects.
 //
@@ -8,6 +8,12 @@
 // coordinates). A backend knows bodies and joints only: no friction, no limits, no
 // collisions; friction, delays and every other effect act above it, so all backends
 // feel exactly the same torques at the same times. MakeArmBackend() picks one by name.
+//
+// The "learned" backend (backends/learned/learned_arm_backend.h) is different: it steps
+// a predictor learned from a real arm's logs, which has learned that arm's friction and
+// effects with its bodies. It says so with includes_plant_effects(), and the simulation
+// loop then hands it the delayed command as it is (no effects, no friction) and steps it
+// exactly one sample at a time.
 //
 //   std::unique_ptr<ArmBackend> b = MakeArmBackend("bullet", model);
 //   b->Reset(q0, qd0);
@@ -45,6 +51,11 @@ class ArmBackend {
   virtual ~ArmBackend() = default;
   virtual std::string name() const = 0;
   virtual int dof() const = 0;
+
+  // True when the backend's dynamics already contain the arm's friction and effects
+  // (a learned model of the real arm): the loop then adds none of them and steps it one
+  // whole sample at a time. False for the physics engines (bodies and joints only).
+  virtual bool includes_plant_effects() const { return false; }
 
   // Puts the arm at joint positions q moving at qd, as if freshly built there.
   // Throws std::invalid_argument for vectors of the wrong size or non-finite values.

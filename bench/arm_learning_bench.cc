@@ -1,0 +1,129 @@
+// Speed and accuracy of the learned arm model (issue 5, last section):
+//   training on 60 s of 1 kHz trials (linear, neural), one prediction, the learned
+//   backend's real-time factor in the whole loop, and the writing-task comparison with
+//   the full-size network (printed; docs/arm_learning.md records it).
+//
+//   build/arm_learning_bench --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <map>
+#include <memory>
+
+#include "backends/learned/learned_arm_backend.h"
+#include "control/writing_task.h"
+#include "core/arm_simulation.h"
+#include "learning/arm_model_comparison.h"
+#include "learning/arm_trials.h"
+
+namespace twinsim {
+namespace {
+
+const ArmModel& Plant() {
+  static const ArmModel m = LoadArmModel(std::string(TWINSIM_SOURCE_DIR) + "/models/rrr_plant.yaml");
+  return m;
+}
+const ArmModel& Hat() {
+  static const ArmModel m = LoadArmModel(std::string(TWINSIM_SOURCE_DIR) + "/models/rrr.yaml");
+  return m;
+}
+
+// 60 s of trials on the plant at 1 kHz: three 20 s trials (two multi-sine, one stop-and-go).
+const std::vector<ArmLog>& Trials() {
+  static const std::vector<ArmLog> logs = RecordTrainingTrials(Plant(), Hat(), TrainingTrialOptions{}, 3, 1);
+  return logs;
+}
+
+const ArmPredictor& Trained(const std::string& kind) {
+  static std::map<std::string, ArmPredictor> cache;
+  auto it = cache.find(kind);
+  if (it == cache.end()) {
+    ArmTrainOptions options;
+    options.kind = kind;
+    ArmTrainSummary summary;
+    it = cache.emplace(kind, TrainArmPredictor(Hat(), Trials(), options, &summary)).first;
+    std::fprintf(stderr, "[%s] %s\n", kind.c_str(), summary.BriefReport().c_str());
+  }
+  return it->second;
+}
+
+void BM_ArmTrain(benchmark::State& state) {
+  const std::string kind = state.range(0) == 0 ? "linear" : "mlp";
+  state.SetLabel(kind + ", 60 s at 1 kHz, history 4 (48 inputs)");
+  Trials();
+  for (auto _ : state) {
+    ArmTrainOptions options;
+    options.kind = kind;
+    ArmTrainSummary summary;
+    benchmark::DoNotOptimize(TrainArmPredictor(Hat(), Trials(), options, &summary));
+    std::fprintf(stderr, "[%s] %s\n", kind.c_str(), summary.BriefReport().c_str());
+  }
+}
+BENCHMARK(BM_ArmTrain)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+void BM_ArmPredict(benchmark::State& state) {
+  const std::string kind = state.range(0) == 0 ? "linear" : "mlp";
+  state.SetLabel(kind);
+  const ArmPredictor& p = Trained(kind);
+  double q[12], qd[12], tau[12], qn[3], qdn[3];
+  for (int i = 0; i < 12; ++i) q[i] = 0.1 * i, qd[i] = 0.2, tau[i] = 1;
+  for (auto _ : state) {
+    p.Predict(q, qd, tau, qn, qdn);
+    benchmark::DoNotOptimize(qn);
+  }
+}
+BENCHMARK(BM_ArmPredict)->Arg(0)->Arg(1);
+
+// The whole loop (delay line, controller, backend) for 1 s of simulated time.
+void BM_ArmLoop(benchmark::State& state) {
+  const int which = static_cast<int>(state.range(0));
+  const std::string name = which == 0 ? "learned linear" : which == 1 ? "learned mlp" : "physical analytic";
+  state.SetLabel(name);
+  const ArmModel& hat = Hat();
+  auto backend = which == 2 ? MakeArmBackend("analytic", hat) : MakeLearnedArmBackend(hat, Trained(which ? "mlp" : "linear"));
+  ArmSimulation sim(hat, std::move(backend));
+  const Eigen::VectorXd q0 = Eigen::Vector3d(0, 0.35, -1.1);
+  const ArmController pd = [&](double t, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    return Eigen::VectorXd(60 * (q0 + Eigen::Vector3d::Constant(0.2 * std::sin(3 * t)) - q) - 6 * qd +
+                           Eigen::Vector3d(0, 10, 2));
+  };
+  for (auto _ : state) {
+    sim.Reset(q0, Eigen::VectorXd::Zero(3));
+    benchmark::DoNotOptimize(sim.Run(1000, pd));
+  }
+  state.counters["real_time_factor"] =
+      benchmark::Counter(1.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ArmLoop)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+// The issue's comparison with the full-size network, printed once.
+void BM_WritingComparison(benchmark::State& state) {
+  const ArmModel& hat = Hat();
+  const ArmReference ref = WritingTaskReference(hat, WritingTaskOptions{});
+  std::vector<ArmCandidate> candidates;
+  for (const std::string& b : AvailableArmBackends())
+    candidates.push_back({"physical nominal (" + b + ")", hat, [&, b] { return MakeArmBackend(b, hat); }});
+  candidates.push_back({"learned linear", hat, [&] { return MakeLearnedArmBackend(hat, Trained("linear")); }});
+  candidates.push_back({"learned mlp", hat, [&] { return MakeLearnedArmBackend(hat, Trained("mlp")); }});
+  for (auto _ : state) {
+    const WritingComparison c = CompareOnReference(Plant(), hat, ref, candidates, TrackingOptions{});
+    std::fprintf(stderr, "writing task against the plant:\n%s", c.Report().c_str());
+  }
+  // Open loop on a held-out trial (seed 100, stop-and-go), 100 ms.
+  TrainingTrialOptions held;
+  const ArmLog test = RecordTrainingTrials(Plant(), hat, held, 2, 100)[1];
+  auto row = [](const char* name, const RolloutStats& s) {
+    std::fprintf(stderr, "open loop %-18s one step (urad) %.3f %.3f %.3f | 100 ms RMS (mrad) %.3f %.3f %.3f\n", name,
+                 s.one_step_rms[0] * 1e6, s.one_step_rms[1] * 1e6, s.one_step_rms[2] * 1e6, s.final_rms[0] * 1e3,
+                 s.final_rms[1] * 1e3, s.final_rms[2] * 1e3);
+  };
+  row("learned linear", PredictorRolloutStats(Trained("linear"), test, 10, test.rows() - 1, 100, 250));
+  row("learned mlp", PredictorRolloutStats(Trained("mlp"), test, 10, test.rows() - 1, 100, 250));
+  row("physical nominal", PhysicalRolloutStats(hat, "analytic", test, 10, test.rows() - 1, 100, 250));
+}
+BENCHMARK(BM_WritingComparison)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+}  // namespace
+}  // namespace twinsim
+
+BENCHMARK_MAIN();

@@ -1,0 +1,113 @@
+#include "learning/arm_features.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace twinsim {
+
+int ArmFeatureLayout::per_sample() const {
+  int n = 0;
+  for (char c : joints) n += c == 'R' ? 2 : 1;
+  return n + 2 * dof();
+}
+
+ArmFeatureLayout ArmLayoutFor(const ArmModel& model, int history, int horizon) {
+  ArmFeatureLayout layout;
+  for (const ArmJoint& j : model.joints) layout.joints += j.type == JointType::kRevolute ? 'R' : 'P';
+  layout.history = history;
+  layout.horizon = horizon;
+  layout.command_lag = model.delay_samples;
+  layout.sample_time = model.sample_time;
+  return layout;
+}
+
+void EncodeArmInputs(const ArmFeatureLayout& layout, const double* q, const double* qd, const double* tau,
+                     double* out) {
+  const int n = layout.dof();
+  for (int j = 0; j < layout.history; ++j) {
+    const double* qj = q + j * n;
+    for (int i = 0; i < n; ++i) {
+      if (layout.joints[static_cast<std::size_t>(i)] == 'R') {
+        *out++ = std::sin(qj[i]);
+        *out++ = std::cos(qj[i]);
+      } else {
+        *out++ = qj[i];
+      }
+    }
+    for (int i = 0; i < n; ++i) *out++ = qd[j * n + i];
+    for (int i = 0; i < n; ++i) *out++ = tau[j * n + i];
+  }
+  for (int j = layout.history; j < layout.num_torques(); ++j)
+    for (int i = 0; i < n; ++i) *out++ = tau[j * n + i];
+}
+
+void EncodeArmOutputs(const ArmFeatureLayout& layout, const double* q_i, const double* qd_i, const double* q_later,
+                      const double* qd_later, double* out) {
+  const int n = layout.dof();
+  const double span = layout.horizon * layout.sample_time;
+  for (int i = 0; i < n; ++i) out[i] = q_later[i] - q_i[i] - span * qd_i[i];
+  for (int i = 0; i < n; ++i) out[n + i] = qd_later[i] - qd_i[i];
+}
+
+void DecodeArmOutputs(const ArmFeatureLayout& layout, const double* y, const double* q_i, const double* qd_i,
+                      double* q_later, double* qd_later) {
+  const int n = layout.dof();
+  const double span = layout.horizon * layout.sample_time;
+  for (int i = 0; i < n; ++i) {
+    q_later[i] = q_i[i] + span * qd_i[i] + y[i];
+    qd_later[i] = qd_i[i] + y[n + i];
+  }
+}
+
+void ArmDataset::Append(const Eigen::MatrixXd& more_x, const Eigen::MatrixXd& more_y) {
+  if (x.rows() == 0) {
+    x.resize(0, more_x.cols());
+    y.resize(0, more_y.cols());
+  }
+  const long r = x.rows();
+  x.conservativeResize(r + more_x.rows(), more_x.cols());
+  y.conservativeResize(r + more_y.rows(), more_y.cols());
+  x.bottomRows(more_x.rows()) = more_x;
+  y.bottomRows(more_y.rows()) = more_y;
+}
+
+ArmSequence ToArmSequence(const ArmLog& log, const ArmFeatureLayout& layout) {
+  ArmSequence seq;
+  const int n = log.dof, rows = log.rows();
+  seq.dof = n;
+  seq.q.resize(static_cast<std::size_t>(rows * n));
+  seq.qd.resize(seq.q.size());
+  seq.acting.assign(seq.q.size(), 0.0);
+  for (int k = 0; k < rows; ++k) {
+    for (int i = 0; i < n; ++i) {
+      seq.q[static_cast<std::size_t>(k * n + i)] = log.q(k, i);
+      seq.qd[static_cast<std::size_t>(k * n + i)] = log.qd(k, i);
+      if (k >= layout.command_lag) seq.acting[static_cast<std::size_t>(k * n + i)] = log.tau(k - layout.command_lag, i);
+    }
+  }
+  seq.first_known_torque = layout.command_lag;
+  return seq;
+}
+
+int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data) {
+  const int n = layout.dof(), h = layout.history, hz = layout.horizon;
+  const int begin = std::max(first, seq.first_known_torque + h - 1);
+  const int end = std::min(last, seq.rows() - 1 - hz);  // inclusive
+  const int count = std::max(0, end - begin + 1);
+  Eigen::MatrixXd x(count, layout.num_inputs());
+  Eigen::MatrixXd y(count, layout.num_outputs());
+  Eigen::VectorXd row_x(layout.num_inputs()), row_y(layout.num_outputs());
+  for (int k = 0; k < count; ++k) {
+    const int i = begin + k;
+    const std::size_t start = static_cast<std::size_t>((i - h + 1) * n);
+    EncodeArmInputs(layout, &seq.q[start], &seq.qd[start], &seq.acting[start], row_x.data());
+    const std::size_t now = static_cast<std::size_t>(i * n), later = static_cast<std::size_t>((i + hz) * n);
+    EncodeArmOutputs(layout, &seq.q[now], &seq.qd[now], &seq.q[later], &seq.qd[later], row_y.data());
+    x.row(k) = row_x.transpose();
+    y.row(k) = row_y.transpose();
+  }
+  if (count > 0) data->Append(x, y);
+  return count;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,110 @@
+#include "learning/predictor_file.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Dense>
+#include <stdexcept>
+#include <vector>
+
+#include "core/error.h"
+
+namespace twinsim {
+
+std::string PredictorFileRobot(const YAML::Node& root) {
+  if (root.IsMap() && root["robot"] && root["robot"].IsScalar()) return root["robot"].Scalar();
+  return "omni";
+}
+
+void CheckPredictorRobot(const YAML::Node& root, const std::string& path, const std::string& expected) {
+  const std::string robot = PredictorFileRobot(root);
+  if (robot == expected) return;
+  SourceLocation where{path};
+  if (root.IsMap() && root["robot"]) where.line = root["robot"].Mark().line + 1;
+  else if (root.IsMap() && root["twinsim_predictor"]) where.line = root["twinsim_predictor"].Mark().line + 1;
+  const std::string hint = expected == "arm"
+                               ? "train one for the arm with 'twinsim train --model ARM_MODEL --log ARM_LOG ...'"
+                               : "train one for the omni robot with 'twinsim train --model OMNI_MODEL --log OMNI_LOG ...'";
+  const std::string what = robot == "arm" ? "an arm" : robot == "omni" ? "an omni robot" : "a robot of kind '" + robot + "'";
+  throw InputError(where, "this is a predictor for " + what +
+                              ", not for " + (expected == "arm" ? "an arm" : "an omni robot") + "; " + hint);
+}
+
+Eigen::VectorXd ReadVector(YamlMap& m, const std::string& key, int size) {
+  std::vector<double> v;
+  if (!m.Require(key, &v, size)) return Eigen::VectorXd::Zero(std::max(size, 0));
+  return Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<long>(v.size()));
+}
+
+Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int cols) {
+  std::vector<double> v;
+  if (!m.Require(key, &v, rows * cols)) return Eigen::MatrixXd::Zero(rows, cols);
+  // Stored row by row.
+  return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(v.data(), rows, cols);
+}
+
+void EmitVector(YAML::Emitter& out, const std::string& key, const double* data, long size) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (long i = 0; i < size; ++i) out << data[i];
+  out << YAML::EndSeq;
+}
+
+void EmitMatrix(YAML::Emitter& out, const std::string& key, const Eigen::MatrixXd& m) {
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = m;
+  EmitVector(out, key, rows.data(), rows.size());
+}
+
+void EmitMlp(YAML::Emitter& out, const Mlp& net) {
+  const Mlp::Parameters& p = net.parameters();
+  out << YAML::Key << "layers" << YAML::Value << YAML::Flow << p.layer_sizes;
+  EmitVector(out, "input_mean", p.input_mean.data(), p.input_mean.size());
+  EmitVector(out, "input_scale", p.input_scale.data(), p.input_scale.size());
+  EmitVector(out, "output_mean", p.output_mean.data(), p.output_mean.size());
+  EmitVector(out, "output_scale", p.output_scale.data(), p.output_scale.size());
+  for (std::size_t l = 0; l < p.weights.size(); ++l) {
+    EmitMatrix(out, "weights" + std::to_string(l), p.weights[l]);
+    EmitVector(out, "biases" + std::to_string(l), p.biases[l].data(), p.biases[l].size());
+  }
+}
+
+Mlp ReadMlp(YamlMap& m, int inputs, int outputs, const std::string& path, ErrorList* errors) {
+  Mlp::Parameters params;
+  std::vector<double> layers;
+  if (m.Require("layers", &layers)) {
+    for (double s : layers) params.layer_sizes.push_back(static_cast<int>(s));
+    if (params.layer_sizes.size() < 2 || params.layer_sizes.front() != inputs || params.layer_sizes.back() != outputs)
+      m.Error("layers", "must run from " + std::to_string(inputs) + " inputs to " + std::to_string(outputs) +
+                            " outputs");
+    for (int s : params.layer_sizes)
+      if (s < 1 || s > 100000) m.Error("layers", "layer sizes must be 1 to 100000");
+  }
+  errors->ThrowIfAny();
+  const auto& sizes = params.layer_sizes;
+  params.input_mean = ReadVector(m, "input_mean", inputs);
+  params.input_scale = ReadVector(m, "input_scale", inputs);
+  params.output_mean = ReadVector(m, "output_mean", outputs);
+  params.output_scale = ReadVector(m, "output_scale", outputs);
+  for (std::size_t l = 0; l + 1 < sizes.size(); ++l) {
+    params.weights.push_back(ReadMatrix(m, "weights" + std::to_string(l), sizes[l + 1], sizes[l]));
+    params.biases.push_back(ReadVector(m, "biases" + std::to_string(l), sizes[l + 1]));
+  }
+  m.Finish();
+  errors->ThrowIfAny();
+  try {
+    return Mlp::FromParameters(std::move(params));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(SourceLocation{path}, std::string("corrupt neural network: ") + e.what());
+  }
+}
+
+Eigen::MatrixXd FitRidge(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, double ridge, Eigen::VectorXd* scale) {
+  Eigen::VectorXd s = x.array().square().colwise().mean().sqrt().transpose();
+  for (long i = 0; i < s.size(); ++i)
+    if (s[i] < 1e-12) s[i] = 1;
+  const Eigen::MatrixXd z = x.array().rowwise() / s.transpose().array();
+  Eigen::MatrixXd gram = z.transpose() * z;
+  gram.diagonal().array() += ridge * static_cast<double>(z.rows());
+  if (scale) *scale = s;
+  return gram.ldlt().solve(z.transpose() * y);
+}
+
+}  // namespace twinsim

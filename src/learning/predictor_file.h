@@ -1,0 +1,62 @@
+// What the learned predictors of every robot share: the pieces of the versioned
+// predictor file (YAML) and the closed-form ridge regression.
+//
+// A predictor file starts with `twinsim_predictor: VERSION`; an arm predictor then says
+// `robot: arm` (omni files of format 2 carry no `robot` key and are omni). Each kind of
+// predictor reads its own file (OmniPredictor::Load, ArmPredictor::Load) and uses
+// CheckPredictorRobot() first, so that a file of the other robot is refused with a
+// message naming the file and what it is, not a list of missing keys. Vectors and
+// matrices are written as flow sequences of doubles with 17 significant digits
+// (matrices row by row), so that a file read back gives the same doubles.
+//
+//   Eigen::MatrixXd w = FitRidge(x, y, 1e-3, &scale);   // y ~ ((x / scale) w)
+//   EmitMatrix(out, "weights", w.transpose());
+//   Eigen::MatrixXd back = ReadMatrix(map, "weights", rows, cols);
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+
+#include "io/yaml_reader.h"
+#include "learning/mlp.h"
+
+namespace YAML {
+class Emitter;
+class Node;
+}  // namespace YAML
+
+namespace twinsim {
+
+// The robot a predictor file's root says it is for: its `robot` value, or "omni" when
+// absent (the omni format predates the key).
+std::string PredictorFileRobot(const YAML::Node& root);
+
+// Throws InputError "path:line: this is an omni predictor ... (use)" when the file's
+// robot is not `expected` ("arm" or "omni"); `use` says who wanted it.
+void CheckPredictorRobot(const YAML::Node& root, const std::string& path, const std::string& expected);
+
+// Reads a flow sequence of exactly `size` numbers under `key` (zeros after an error,
+// which goes into the map's error list).
+Eigen::VectorXd ReadVector(YamlMap& m, const std::string& key, int size);
+// Reads a rows x cols matrix stored row by row under `key`.
+Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int cols);
+
+// Writes `key: [numbers]` (flow sequence).
+void EmitVector(YAML::Emitter& out, const std::string& key, const double* data, long size);
+// Writes a matrix row by row as one flow sequence.
+void EmitMatrix(YAML::Emitter& out, const std::string& key, const Eigen::MatrixXd& m);
+
+// Writes a network's parameters (layers, normalisation, weights and biases) as the
+// entries of the current map.
+void EmitMlp(YAML::Emitter& out, const Mlp& net);
+// Reads what EmitMlp wrote, checking that the layers run from `inputs` to `outputs`.
+// Throws InputError (every problem collected in `errors` first) for a corrupt file.
+Mlp ReadMlp(YamlMap& m, int inputs, int outputs, const std::string& path, ErrorList* errors);
+
+// Ridge regression through the origin on columns scaled to unit RMS: returns W
+// (in x out) minimising |Z W - y|^2 + ridge N |W|^2 with Z = x / scale (column-wise),
+// and the scales (in; columns that are all zero get 1) in *scale. x: N x in, y: N x out.
+// Predict with y = ((x / scale) W). Closed form (LDLT of the normal equations).
+Eigen::MatrixXd FitRidge(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, double ridge, Eigen::VectorXd* scale);
+
+}  // namespace twinsim
