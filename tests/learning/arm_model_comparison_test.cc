@@ -118,7 +118,9 @@ TEST_F(ArmLearningComparison, FreeRunStaysBounded) {
     std::printf("[measured] free run %s: max |qd| %.2f rad/s (plant %.2f), |q - q_plant| after 0.2 s %.4f rad, max %.3f rad\n",
                 pred->info().kind.c_str(), l.qd.cwiseAbs().maxCoeff(), p.qd.cwiseAbs().maxCoeff(),
                 (l.q.row(200) - p.q.row(200)).cwiseAbs().maxCoeff(), (l.q - p.q).cwiseAbs().maxCoeff());
-    if (pred == mlp_) EXPECT_LT(l.qd.cwiseAbs().maxCoeff(), 1.5 * p.qd.cwiseAbs().maxCoeff());
+    if (pred == mlp_) {
+      EXPECT_LT(l.qd.cwiseAbs().maxCoeff(), 1.5 * p.qd.cwiseAbs().maxCoeff());
+    }
   }
 }
 
