@@ -126,6 +126,14 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
                                const TrackingOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("TrackingOptions: " + why);
+  return RunTrackingTrial(plant, MakeArmBackend(options.backend, plant), hat, reference, options);
+}
+
+TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,
+                               const ArmReference& reference, const TrackingOptions& options) {
+  if (!backend) throw std::invalid_argument("RunTrackingTrial: no backend");
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("TrackingOptions: " + why);
   const int n = hat.dof();
   if (plant.dof() != n) throw std::invalid_argument("RunTrackingTrial: the model and the plant differ in dof");
   const Eigen::Index samples = reference.t.size();
@@ -137,7 +145,8 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
     throw std::invalid_argument("RunTrackingTrial: the reference's sample time differs from the plant's");
   }
 
-  ArmSimulation sim(plant, MakeArmBackend(options.backend, plant));
+  const std::string backend_name = backend->name();
+  ArmSimulation sim(plant, std::move(backend));
   const ArmModel& body = sim.model();  // the plant with its payload lumped
   const int preview = options.preview >= 0 ? options.preview : plant.delay_samples;
   const Eigen::VectorXd q0 = reference.q.row(0).transpose();
@@ -151,7 +160,7 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
   sim.Reset(q0, Eigen::VectorXd::Zero(n), InverseDynamics(hat, q0, Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), false));
 
   TrackingTrial trial;
-  trial.backend = options.backend;
+  trial.backend = backend_name;
   trial.controller = TrackingControllerName(options.controller);
   trial.sample_time = plant.sample_time;
   trial.q_ref = reference.q;

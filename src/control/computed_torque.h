@@ -29,8 +29,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 #include <string>
 
+#include "backends/arm/arm_backend.h"
 #include "control/writing_task.h"
 #include "robots/arm/arm_model.h"
 
@@ -131,5 +133,12 @@ struct TrackingTrial {
 // InputError for an unknown backend; CheckFailed when the arm runs away.
 TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                                const TrackingOptions& options);
+
+// The same on a backend already built for `plant` (MakeArmBackend or any other
+// ArmBackend of the plant's bodies); options.backend is then not used, and the trial's
+// backend is the backend's name(). Throws as above, and std::invalid_argument for a
+// null backend or one of another arm.
+TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,
+                               const ArmReference& reference, const TrackingOptions& options);
 
 }  // namespace twinsim
