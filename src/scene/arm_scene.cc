@@ -165,7 +165,7 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
   YamlMap top(root, path, "", &errors);
   top.Require("name", &scene.name);
   std::string robot;
-  top.Require("robot", &robot, {"arm"});
+  top.Require("robot", &robot, std::vector<std::string>{"arm"});
   top.Get("backend", &scene.backend, {"analytic", "ode", "bullet", "learned"});
   double seed = 1;
   if (top.Get("seed", &seed, InRange(0, 9007199254740992.0))) scene.seed = static_cast<std::uint64_t>(seed);

@@ -194,8 +194,6 @@ joints:
   ExpectSameModel(dh, table, 1e-12);
 }
 
-}  // namespace
-}  // namespace twinsim
 
 void ExpectSameEffects(const ArmEffects& a, const ArmEffects& b) {
   ASSERT_EQ(a.joints.size(), b.joints.size());
@@ -247,3 +245,6 @@ TEST(ArmModelYamlWriter, EveryEffectKindRoundTripsExactly) {
   // A model without effects writes no effects list.
   EXPECT_EQ(FormatArmModelYaml(LoadArmModel(testing::SourcePath("models/rrr.yaml"))).find("effects:"), std::string::npos);
 }
+
+}  // namespace
+}  // namespace twinsim
