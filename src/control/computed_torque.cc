@@ -131,6 +131,7 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
 
 TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,
                                const ArmReference& reference, const TrackingOptions& options) {
+  if (!backend) throw std::invalid_argument("RunTrackingTrial: no backend");
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("TrackingOptions: " + why);
   const int n = hat.dof();
@@ -144,6 +145,7 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
     throw std::invalid_argument("RunTrackingTrial: the reference's sample time differs from the plant's");
   }
 
+  const std::string backend_name = backend->name();
   ArmSimulation sim(plant, std::move(backend));
   const ArmModel& body = sim.model();  // the plant with its payload lumped
   const int preview = options.preview >= 0 ? options.preview : plant.delay_samples;

@@ -134,8 +134,10 @@ struct TrackingTrial {
 TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                                const TrackingOptions& options);
 
-// The same on a backend already built for `plant` (e.g. MakeLearnedArmBackend);
-// options.backend is then not used. Throws as above.
+// The same on a backend already built for `plant` (MakeArmBackend or any other
+// ArmBackend of the plant's bodies); options.backend is then not used, and the trial's
+// backend is the backend's name(). Throws as above, and std::invalid_argument for a
+// null backend or one of another arm.
 TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,
                                const ArmReference& reference, const TrackingOptions& options);
 

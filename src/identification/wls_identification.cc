@@ -1,5 +1,7 @@
 #include "identification/wls_identification.h"
 
+#include "robots/arm/arm_effects.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
@@ -388,6 +390,21 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   summary.error_rms_a_priori = error_rms(summary.a_priori);
   summary.error_rms_identified = error_rms(summary.identified);
   summary.error_rms_model = error_rms(summary.consistent);
+  // Effects: those whose torques the identified parameters now hold are dropped (the
+  // friction effects and the payload, absorbed into the joints' viscous and Coulomb
+  // friction and the last link; an old torque_offset, which the fit did not see); the
+  // estimated offsets become torque_offset effects, tau0 = -offset (the joint receives
+  // the command plus tau0, so the log's torque is the model's minus tau0). What the fit
+  // cannot estimate (time_delay, torque_saturation, joint_flexibility) is kept.
+  ArmEffects effects;
+  for (const ArmEffect& e : ListArmEffects(a_priori.effects)) {
+    if (e.name == "time_delay" || e.name == "torque_saturation" || e.name == "joint_flexibility")
+      AddArmEffect(e, n, &effects);
+  }
+  for (int j = 0; j < offsets; ++j) {
+    if (summary.offsets[j] != 0) AddArmEffect({"torque_offset", j, {{"tau0", -summary.offsets[j]}}}, n, &effects);
+  }
+  result.effects = effects;
   result.source_path.clear();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary_out) *summary_out = summary;

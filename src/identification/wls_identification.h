@@ -85,8 +85,10 @@ struct WlsIdentificationSummary {
 };
 
 // Identifies `a_priori`'s base parameters and friction from `logs` and returns the
-// model with them (kinematics, limits and names unchanged; torque offsets, when
-// estimated, are in the summary only). Throws InputError for invalid options, a log
+// model with them (kinematics, limits and names unchanged). Its effects: the estimated
+// torque offsets as torque_offset effects (tau0 = -offset); the a-priori model's
+// time_delay, torque_saturation and joint_flexibility kept; its friction effects,
+// payload and torque offsets dropped (the identified parameters hold their torques). Throws InputError for invalid options, a log
 // whose joint count differs from the model's, too few samples, data that does not
 // excite some parameter (named in words), or an a-priori model that is not physical.
 ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "identification/synthetic_arm_data.h"
@@ -100,7 +101,13 @@ TEST(IdentifyCli, OffsetsAndHeldOutValidation) {
   auto r = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir +
                       "/m.yaml --offsets --validate " + log + " --report " + dir + "/report");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("torque offsets (measured - model; not part of the written model):"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("torque offsets (measured - model), written as torque_offset effects with tau0 = -offset:"),
+            std::string::npos)
+      << r.out;
+  // The data has no offsets: the written effects are small (1 % torque noise).
+  const ArmModel written = LoadArmModel(dir + "/m.yaml");
+  EXPECT_EQ(ListArmEffects(written.effects).size(), 3u);
+  for (int j = 0; j < 3; ++j) EXPECT_LT(std::abs(written.effects.joint(j).torque_offset), 0.1) << "joint " << j + 1;
   EXPECT_NE(r.out.find("held out: " + log), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("normalised (error / twice the effort limit)"), std::string::npos) << r.out;
   const std::string csv = testing::ReadText(dir + "/report/validation.csv");
@@ -115,7 +122,8 @@ TEST(IdentifyCli, ReplayOfTheUrdfWritesTheModelsTorques) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const ArmModel model = LoadArmModel(SourcePath("models/rrr.yaml"));
   const ArmLog measured = ReadArmLog(log);
-  const Eigen::MatrixXd expected = PredictArmTorques(model, measured);
+  // The model's commands: its rigid torques sent one sample (delay_samples) ahead.
+  const Eigen::MatrixXd expected = PredictArmCommands(model, measured);
   const CsvTable t = ReadCsvTable(out);
   ASSERT_EQ(static_cast<int>(t.rows.size()), measured.rows());
   for (int row : {0, 100, measured.rows() - 1})

@@ -56,7 +56,7 @@ SeriesPlot TorquePlot(const ArmLog& log, int j, const Eigen::MatrixXd& a_priori,
   };
   series("measured", log.tau);
   series("a-priori model", a_priori);
-  series("identified model", identified);  // with the offsets, when estimated
+  series("identified model", identified);  // its commands: with the offsets, when estimated
   return plot;
 }
 
@@ -98,12 +98,11 @@ int Identify(const IdentifyCliOptions& options) {
   std::string validation_text;
   const BaseParameters base = held_out.empty() ? BaseParameters{} : IdentificationBase(model, identification);
   for (const ArmLog& log : held_out) {
-    Eigen::MatrixXd tau = PredictArmTorques(identified, log);
+    // The identified model's commands: its offsets (torque_offset effects) and the
+    // a-priori model's delays and other kept effects included, as replay gives them.
+    const Eigen::MatrixXd tau = PredictArmCommands(identified, log);
     Eigen::MatrixXd free = PredictBaseTorques(model, base, summary.identified.head(summary.base_parameters), log);
-    if (summary.offsets.size() == log.dof) {
-      tau.rowwise() += summary.offsets.transpose();
-      free.rowwise() += summary.identified.tail(log.dof).transpose();
-    }
+    if (summary.offsets.size() == log.dof) free.rowwise() += summary.identified.tail(log.dof).transpose();
     const int first = log.edge_samples, last = log.rows() - log.edge_samples;
     const TorqueErrors before = CompareArmTorques(model, log, first, last);
     const TorqueErrors after = CompareArmTorques(identified, log, tau, first, last);
@@ -166,9 +165,8 @@ int Identify(const IdentifyCliOptions& options) {
     }
     if (RenderingCompiled()) {
       std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-      const Eigen::MatrixXd before = PredictArmTorques(model, logs[0]);
-      Eigen::MatrixXd after = PredictArmTorques(identified, logs[0]);
-      if (summary.offsets.size() == model.dof()) after.rowwise() += summary.offsets.transpose();
+      const Eigen::MatrixXd before = PredictArmCommands(model, logs[0]);
+      const Eigen::MatrixXd after = PredictArmCommands(identified, logs[0]);
       for (int j = 0; j < model.dof(); ++j) {
         const std::string png = options.report + "/torque_joint" + std::to_string(j + 1) + ".png";
         WritePng(png, RenderSeriesPlot(TorquePlot(logs[0], j, before, after, model.name), *renderer));
@@ -183,7 +181,7 @@ int Identify(const IdentifyCliOptions& options) {
     std::printf("identified %s (%d joints) from %zu log(s)\n\n%s", model.name.c_str(), model.dof(), logs.size(),
                 summary.FullReport().c_str());
     if (summary.offsets.size() > 0) {
-      std::printf("torque offsets (measured - model; not part of the written model):");
+      std::printf("torque offsets (measured - model), written as torque_offset effects with tau0 = -offset:");
       for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
       std::printf(" N·m or N\n");
     }
@@ -206,7 +204,10 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
       "differentiation where absent). Prints the a-priori and identified parameters with their\n"
       "relative standard deviations and the torque RMS error per joint before and after. The\n"
       "written model (YAML, URDF-style joint table) is physically consistent and loads anywhere a\n"
-      "model does. Data that does not excite a parameter is refused (exit 2) naming it.");
+      "model does. With --offsets the offsets are written as torque_offset effects (tau0 = -offset).\n"
+      "The input model's friction effects, payload and torque offsets are dropped (the identified\n"
+      "parameters hold their torques); its time_delay, torque_saturation and joint_flexibility are\n"
+      "kept. Data that does not excite a parameter is refused (exit 2) naming it.");
   cmd->add_option("--model", options->model, "A-priori arm model (URDF or YAML)")->required();
   cmd->add_option("--log", options->logs, "Measured arm log(s) (repeat --log)")->required();
   cmd->add_option("--out", options->out, "Identified model to write (.yaml)")->required();
@@ -219,7 +220,7 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   cmd->add_flag("--unweighted", options->unweighted, "Ordinary least squares only (no per-joint weights)");
   cmd->add_flag("--offsets", options->offsets,
-                "Also estimate a constant torque offset per joint (a torque sensor's bias); reported, not written");
+                "Also estimate a constant torque offset per joint (a torque sensor's bias), written as torque_offset effects");
   cmd->add_option("--validate", options->validate,
                   "Held-out log(s): print the a-priori and identified models' torque errors on them");
   cmd->add_option("--report", options->report,

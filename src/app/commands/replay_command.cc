@@ -31,20 +31,29 @@ struct ReplayOptions {
   bool quiet = false;
 };
 
-// An arm: the model's torques (inverse dynamics with friction) for the logged motion.
+// An arm: the commands the model needs for the logged motion (inverse dynamics with
+// friction, the effects inverted, the delays shifted: PredictArmCommands).
 int ReplayArm(const ReplayOptions& options) {
   const ArmModel model = LoadArmModel(options.model);
   ArmLogOptions log_options;
   log_options.cutoff_hz = options.cutoff_hz;
   const ArmLog log = ReadArmLog(options.log, log_options);
   CheckArmLogMatchesModel(log, model);
-  const Eigen::MatrixXd tau = PredictArmTorques(model, log);
+  ArmCommandSummary what;
+  const Eigen::MatrixXd tau = PredictArmCommands(model, log, &what);
   WriteArmTorqueCsv(options.out, log.t, tau);
   if (!options.quiet) {
     const TorqueErrors e = CompareArmTorques(model, log, tau);
-    std::printf("replayed %d rows of %s through %s (inverse dynamics with friction%s)\n", log.rows(),
-                options.log.c_str(), model.name.c_str(),
+    const int effects = static_cast<int>(ListArmEffects(model.effects).size());
+    std::printf("replayed %d rows of %s through %s (inverse dynamics with friction, %d effect(s)%s%s)\n", log.rows(),
+                options.log.c_str(), model.name.c_str(), effects,
+                what.shift.maxCoeff() > 0 ? ", commands sent ahead by the delays" : "",
                 log.qd_logged && log.qdd_logged ? "" : ", qd/qdd derived from q");
+    for (int j = 0; j < log.dof; ++j) {
+      if (what.beyond_saturation[j] > 0)
+        std::printf("joint %d: %d row(s) need more than its torque_saturation limit (written unclipped)\n", j + 1,
+                    what.beyond_saturation[j]);
+    }
     std::printf("joint  torque RMS  error RMS  relative\n");
     for (int j = 0; j < log.dof; ++j)
       std::printf("%5d  %10.4g  %9.4g  %7.2f %%\n", j + 1, e.torque_rms[j], e.error_rms[j], 100 * e.relative[j]);
@@ -100,7 +109,9 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
       "measured state K frames earlier and the logged commands since, with the model's delay.\n"
       "K = 0: one free run from the first row. Rows without enough history hold the measured pose.\n"
       "Arms (URDF, or YAML with 'robot: arm'): OUT.csv (t,tau1..taun) holds the model's torques for\n"
-      "the logged motion (inverse dynamics with friction), one row per input row; qd/qdd are\n"
+      "the logged motion (inverse dynamics with friction and the model's effects inverted: offsets\n"
+      "subtracted, flexible joints' motors driven, commands sent ahead by delay_samples and\n"
+      "time_delay; saturation is not inverted), one row per input row; qd/qdd are\n"
       "derived from q (zero-phase filter at --cutoff) where the log lacks them. --backend,\n"
       "--predictor and --horizon do not apply to arms.");
   cmd->add_option("--model", options->model, "Model file (omni: YAML; arm: URDF or YAML)")->required();

@@ -6,7 +6,10 @@
 
 #include "app/commands/commands.h"
 #include "app/progress.h"
+#include "backends/arm/arm_backend.h"
 #include "backends/omni_backend.h"
+#include "control/computed_torque.h"
+#include "control/tracking_plots.h"
 #include "core/error.h"
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
@@ -14,6 +17,7 @@
 #include "learning/omni_predictor.h"
 #include "render/plot.h"
 #include "render/renderer.h"
+#include "scene/arm_scene.h"
 #include "scene/scene.h"
 
 namespace twinsim {
@@ -99,7 +103,133 @@ PathPlot MakeScenePathPlot(const PlotSpec& spec, const Scene& scene, const Simul
   return plot;
 }
 
+// The backend an arm scene's plant runs on: every arm backend is built here, so that
+// one place decides what `--backend` (and, for a learned backend, `--predictor`) means
+// for arms. Throws InputError for an unknown or uncompiled backend, for `learned`
+// (not available for arms yet), and for a predictor given to another backend.
+std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std::string& backend,
+                                                const RunOptions& options) {
+  if (backend == "learned") {
+    throw InputError(SourceLocation{options.scene},
+                     "--backend learned is not available for arm scenes yet (arm scenes run on: analytic, ode, bullet)");
+  }
+  if (!options.predictor.empty())
+    throw InputError("--predictor applies to --backend learned only; arm scene '" + scene.name + "' runs on " + backend);
+  return MakeArmBackend(backend, scene.plant);
+}
+
+// The arm log the controller's observer sees: t, q, the commands sent, qd and the
+// reference (the contract's arm log with its optional qd and qref columns).
+std::string ArmTrajectoryCsv(const TrackingTrial& trial) {
+  const auto n = trial.q.cols();
+  std::string out = "t";
+  for (const char* prefix : {"q", "tau", "qd", "qref"})
+    for (Eigen::Index j = 1; j <= n; ++j) out += "," + std::string(prefix) + std::to_string(j);
+  out += '\n';
+  for (Eigen::Index r = 0; r < trial.t.size(); ++r) {
+    out += FormatCsvNumber(trial.t[r]);
+    for (const Eigen::MatrixXd* m : {&trial.q, &trial.command, &trial.qd, &trial.q_ref})
+      for (Eigen::Index j = 0; j < n; ++j) out += "," + FormatCsvNumber((*m)(r, j));
+    out += '\n';
+  }
+  return out;
+}
+
+// What only the simulation knows, per sample and joint: the demand before clamping,
+// the controller's model-based part, the drive torque applied and the torque the plant
+// needed (TrackingTrial's columns).
+std::string ArmTrackingCsv(const TrackingTrial& trial) {
+  const auto n = trial.q.cols();
+  std::string out = "t";
+  for (const char* prefix : {"error", "demand", "model", "applied", "needed"})
+    for (Eigen::Index j = 1; j <= n; ++j) out += "," + std::string(prefix) + std::to_string(j);
+  out += '\n';
+  const Eigen::MatrixXd error = trial.q_ref - trial.q;
+  for (Eigen::Index r = 0; r < trial.t.size(); ++r) {
+    out += FormatCsvNumber(trial.t[r]);
+    for (const Eigen::MatrixXd* m : {&error, &trial.demand, &trial.model_torque, &trial.applied, &trial.needed})
+      for (Eigen::Index j = 0; j < n; ++j) out += "," + FormatCsvNumber((*m)(r, j));
+    out += '\n';
+  }
+  return out;
+}
+
+std::string ArmPlotTitle(const ArmPlotSpec& spec, const ArmScene& scene, const std::string& backend,
+                         const std::string& what) {
+  PlotSpec generic;
+  generic.title = spec.title.empty() ? "{scene} ({backend}): " + what : spec.title;
+  return PlotTitle(generic, scene.name, backend, scene.seed);
+}
+
+int RunArm(const RunOptions& options) {
+  ArmScene scene = LoadArmScene(options.scene);
+  const std::string backend = options.backend.empty() ? scene.backend : options.backend;
+  const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
+  const ArmReference reference = ArmSceneReference(scene);
+  std::unique_ptr<ArmBackend> engine = MakeArmSceneBackend(scene, backend, options);
+
+  const auto start = std::chrono::steady_clock::now();
+  TrackingOptions tracking = scene.tracking;
+  tracking.backend = backend;
+  const TrackingTrial trial = RunTrackingTrial(scene.plant, std::move(engine), scene.hat, reference, tracking);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::vector<std::string> written;
+  WriteFileAtomically(out + "/trajectory.csv", ArmTrajectoryCsv(trial));
+  written.push_back(out + "/trajectory.csv");
+  WriteFileAtomically(out + "/tracking.csv", ArmTrackingCsv(trial));
+  written.push_back(out + "/tracking.csv");
+
+  if (!scene.plots.empty() && !RenderingCompiled()) {
+    std::fprintf(stderr, "%s: warning: %zu plot(s) not drawn: %s\n", options.scene.c_str(), scene.plots.size(),
+                 kRenderingNotCompiled);
+  } else if (!scene.plots.empty()) {
+    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
+    for (const ArmPlotSpec& spec : scene.plots) {
+      if (spec.type == "tool_path") {
+        PathPlot plot = ToolPathPlot(trial, scene.plant, scene.task.writing.tool,
+                                     ArmPlotTitle(spec, scene, backend, "tool point path"));
+        plot.width = spec.width, plot.height = spec.height;
+        WritePng(out + "/" + spec.file, RenderPathPlot(plot, *renderer));
+        written.push_back(out + "/" + spec.file);
+      } else if (spec.type == "joint_torques") {
+        const std::string stem = spec.file.substr(0, spec.file.size() - 4);
+        for (int j = 0; j < scene.plant.dof(); ++j) {
+          SeriesPlot plot = JointTorquePlot(
+              trial, scene.plant, j,
+              ArmPlotTitle(spec, scene, backend, "joint " + std::to_string(j + 1) + " torque"));
+          plot.width = spec.width, plot.height = spec.height;
+          const std::string path = out + "/" + stem + "_joint" + std::to_string(j + 1) + ".png";
+          WritePng(path, RenderSeriesPlot(plot, *renderer));
+          written.push_back(path);
+        }
+      } else {
+        SeriesPlot plot = TrackingErrorPlot(trial, scene.plant, ArmPlotTitle(spec, scene, backend, "tracking error"));
+        plot.width = spec.width, plot.height = spec.height;
+        WritePng(out + "/" + spec.file, RenderSeriesPlot(plot, *renderer));
+        written.push_back(out + "/" + spec.file);
+      }
+    }
+  }
+
+  if (!options.quiet) {
+    const double simulated = trial.t.size() > 0 ? trial.t[trial.t.size() - 1] : 0.0;
+    std::printf("scene %s: arm %s with %s (model %s) on %s, %lld samples at %g s (%.2f s simulated) in %.2f s wall\n",
+                scene.name.c_str(), scene.plant.name.c_str(), trial.controller.c_str(), scene.hat.name.c_str(),
+                backend.c_str(), static_cast<long long>(trial.t.size()), trial.sample_time, simulated, wall);
+    std::printf("joint  max error [mrad]  RMS error [mrad]  saturated [%%]  command RMS [N m]\n");
+    for (Eigen::Index j = 0; j < trial.error_max.size(); ++j) {
+      std::printf("%5lld  %16.4g  %16.4g  %13.2f  %17.4g\n", static_cast<long long>(j + 1), 1e3 * trial.error_max[j],
+                  1e3 * trial.error_rms[j], 100 * trial.saturated_fraction[j], trial.command_rms[j]);
+    }
+    std::printf("wrote:\n");
+    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+  }
+  return kExitOk;
+}
+
 int Run(const RunOptions& options) {
+  if (SceneRobotKind(options.scene) == "arm") return RunArm(options);
   Scene scene = LoadScene(options.scene);
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
@@ -164,9 +294,15 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
       "Writes DIR/trajectory.csv (t,x,y,theta,vx_cmd,vy_cmd,omega_cmd: the first robot as its\n"
       "observer saw it, four frames late by default, lost frames left out), DIR/truth.csv (the\n"
       "true pose and velocity every frame), and the same with _NAME for every further robot;\n"
-      "and the PNG plots the scene's `plots:` list asks for (docs/rendering.md).");
+      "and the PNG plots the scene's `plots:` list asks for (docs/rendering.md).\n"
+      "Arm scenes (`robot: arm`, docs/scenes.md) run a tracking controller along a task (the\n"
+      "writing task of seed 001, a hold, a step or a sinusoid) and write DIR/trajectory.csv\n"
+      "(t,q1..qn,tau1..taun,qd1..qdn,qref1..qrefn: the arm log, tau the commands sent),\n"
+      "DIR/tracking.csv (error, demand, model torque, applied and needed torque per joint) and\n"
+      "the plots asked for (tool_path, joint_torques, tracking_error). --seed does not change an\n"
+      "arm scene (it has no randomness).");
   cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
-  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
+  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (omni only for now) (default: the scene's)");
   cmd->add_option("--predictor", options->predictor, "1-frame predictor for --backend learned (from twinsim train)");
   cmd->add_option("--out", options->out, "Output folder (default: out/<scene name>)");
   cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(CLI::NonNegativeNumber);

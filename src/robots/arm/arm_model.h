@@ -10,8 +10,11 @@
 // the rotational inertia about the centre of mass. Gravity acts along -z of the base
 // frame unless the model says otherwise.
 //
-// Loaded once (LoadArmModel: URDF through urdfdom, or the project's YAML with a DH
-// table, docs/arm_models.md), validated once, never changed by a step.
+// Loaded once, validated once, never changed by a step. LoadArmModel reads URDF
+// (through urdfdom) or the project's YAML (docs/arm_models.md), whose joints are either
+// a DH table (`dh: standard` or `modified`, converted to the joint table when loaded) or
+// a URDF-style joint table (origin xyz/rpy and axis per joint, no `dh` key: what
+// WriteArmModelYaml writes), with an optional `effects:` list (arm_effects.h).
 #pragma once
 
 #include <Eigen/Core>

@@ -96,6 +96,20 @@ std::string FormatArmModelYaml(const ArmModel& model, const std::string& comment
       << Number(0.5 * (i(0, 1) + i(1, 0))) << ", " << Number(0.5 * (i(0, 2) + i(2, 0))) << ", "
       << Number(0.5 * (i(1, 2) + i(2, 1))) << "]\n";
   }
+  const std::vector<ArmEffect> effects = ListArmEffects(model.effects);
+  if (!effects.empty()) {
+    s << "# What the rigid model lacks (docs/arm_backends.md); joints by 1-based number.\n";
+    s << "effects:\n";
+    for (const ArmEffect& e : effects) {
+      s << "  - {name: " << e.name << ", joint: " << (e.joint < 0 ? std::string("null") : std::to_string(e.joint + 1));
+      // In the vocabulary's parameter order, as the documentation lists them.
+      for (const std::string& key : ArmEffectParameters(e.name)) {
+        const auto it = e.parameters.find(key);
+        if (it != e.parameters.end()) s << ", " << key << ": " << Number(it->second);
+      }
+      s << "}\n";
+    }
+  }
   return s.str();
 }
 

@@ -1,6 +1,7 @@
 // Writing any ArmModel as the project's YAML with a URDF-style joint table (each joint's
 // origin xyz + rpy and axis in its parent link's frame; link inertials in the link frame
-// about the centre of mass), so that identified models load anywhere a model does
+// about the centre of mass) and its effects (an `effects:` list with every effect that is
+// on, joints by 1-based number), so that identified models load anywhere a model does
 // (LoadArmModel). Numbers are written with 17 significant digits: loading the file gives
 // back the same doubles, and the same rotation to within 1e-15 (rpy angles). The schema
 // is in docs/arm_models.md.

@@ -194,5 +194,58 @@ joints:
   ExpectSameModel(dh, table, 1e-12);
 }
 
+
+void ExpectSameEffects(const ArmEffects& a, const ArmEffects& b) {
+  ASSERT_EQ(a.joints.size(), b.joints.size());
+  for (std::size_t j = 0; j < a.joints.size(); ++j) {
+    SCOPED_TRACE("joint " + std::to_string(j + 1));
+    const JointEffects& x = a.joints[j];
+    const JointEffects& y = b.joints[j];
+    EXPECT_EQ(x.viscous, y.viscous);
+    EXPECT_EQ(x.coulomb_positive, y.coulomb_positive);
+    EXPECT_EQ(x.coulomb_negative, y.coulomb_negative);
+    EXPECT_EQ(x.stribeck_coulomb, y.stribeck_coulomb);
+    EXPECT_EQ(x.stribeck_static, y.stribeck_static);
+    EXPECT_EQ(x.stribeck_velocity, y.stribeck_velocity);
+    EXPECT_EQ(x.torque_offset, y.torque_offset);
+    EXPECT_EQ(x.saturation, y.saturation);
+    EXPECT_EQ(x.time_delay, y.time_delay);
+    EXPECT_EQ(x.stiffness, y.stiffness);
+    EXPECT_EQ(x.flex_damping, y.flex_damping);
+    EXPECT_EQ(x.motor_inertia, y.motor_inertia);
+  }
+  EXPECT_EQ(a.payload_mass, b.payload_mass);
+  EXPECT_EQ(a.payload_position, b.payload_position);
+}
+
+TEST(ArmModelYamlWriter, EveryEffectKindRoundTripsExactly) {
+  ArmModel m = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
+  // Every kind, awkward numbers (no short decimal form), both Coulomb forms, a negative offset.
+  AddArmEffect({"viscous_friction", 0, {{"b", 0.1 / 3}}}, 3, &m.effects);
+  AddArmEffect({"coulomb_friction", 0, {{"c_pos", 0.4}, {"c_neg", 0.6 + 1e-13}}}, 3, &m.effects);
+  AddArmEffect({"coulomb_friction", 1, {{"c", 2.0 / 7}}}, 3, &m.effects);
+  AddArmEffect({"stribeck_friction", 1, {{"c", 0.3}, {"s", 0.8}, {"vs", 0.05}}}, 3, &m.effects);
+  AddArmEffect({"torque_offset", 1, {{"tau0", -0.123456789012345678}}}, 3, &m.effects);
+  AddArmEffect({"torque_saturation", 2, {{"limit", 14.5}}}, 3, &m.effects);
+  AddArmEffect({"time_delay", 2, {{"delay", 0.0021}}}, 3, &m.effects);
+  AddArmEffect({"joint_flexibility", 2, {{"k", 253}, {"damping", 0.2}, {"motor_inertia", 0.01}}}, 3, &m.effects);
+  AddArmEffect({"joint_flexibility", 0, {{"k", 1e4}, {"motor_inertia", 0.02}}}, 3, &m.effects);  // no damping
+  AddArmEffect({"payload", -1, {{"mass", 0.45}, {"x", 0.35}, {"z", -1.0 / 3}}}, 3, &m.effects);
+  const std::string text = FormatArmModelYaml(m);
+  EXPECT_NE(text.find("  - {name: torque_offset, joint: 2, tau0: -0.12345678901234568}\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("  - {name: payload, joint: null, mass: 0.45, x: 0.35, y: 0, z: -0.3333333333333333}\n"),
+            std::string::npos)
+      << text;
+  const ArmModel back = LoadArmModelFromYamlString(text, "effects.yaml");
+  ExpectSameModel(m, back, 1e-12);
+  ExpectSameEffects(m.effects, back.effects);
+  EXPECT_EQ(ListArmEffects(back.effects).size(), 10u);
+  // And again: the effects' text is a fixed point (the rpy angles are exact to 1e-15 only).
+  const std::string again = FormatArmModelYaml(back);
+  EXPECT_EQ(again.substr(again.find("effects:")), text.substr(text.find("effects:")));
+  // A model without effects writes no effects list.
+  EXPECT_EQ(FormatArmModelYaml(LoadArmModel(testing::SourcePath("models/rrr.yaml"))).find("effects:"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace twinsim

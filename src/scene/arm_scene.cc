@@ -1,0 +1,288 @@
+#include "scene/arm_scene.h"
+
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "io/yaml_reader.h"
+
+namespace twinsim {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::vector<std::string> kPlotTypes = {"tool_path", "joint_torques", "tracking_error"};
+const std::vector<std::string> kTaskTypes = {"writing", "hold", "step", "sinusoid"};
+
+// A plain file name: letters, digits, '.', '_', '-', not starting with '.', ending in .png.
+bool PlainPngName(const std::string& name) {
+  if (name.size() < 5 || name.front() == '.' || name.compare(name.size() - 4, 4, ".png") != 0) return false;
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) return false;
+  return true;
+}
+
+std::string Resolve(const std::string& file, const fs::path& base_dir) {
+  fs::path p(file);
+  if (p.is_relative()) p = base_dir / p;
+  return p.lexically_normal().string();
+}
+
+// Loads the arm model at `key` of `m` into *model (resolved path into *path).
+bool ReadModel(YamlMap& m, const std::string& key, bool required, const fs::path& base_dir, std::string* path,
+               ArmModel* model) {
+  std::string file;
+  if (!(required ? m.Require(key, &file) : m.Get(key, &file))) return false;
+  *path = Resolve(file, base_dir);
+  try {
+    *model = LoadArmModel(*path);
+    return true;
+  } catch (const InputError& e) {
+    m.errors()->Add(e.what());
+  } catch (const std::exception& e) {
+    m.Error(key, std::string("cannot load the arm model: ") + e.what());
+  }
+  return false;
+}
+
+bool ReadJointVector(YamlMap& m, const std::string& key, int dof, bool required, Eigen::VectorXd* out) {
+  std::vector<double> v;
+  if (required && !m.Has(key)) {
+    m.Missing(key);
+    return false;
+  }
+  if (!m.Get(key, &v, dof)) return false;
+  *out = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+  return true;
+}
+
+// Positions within the plant's joint limits.
+void CheckWithinLimits(YamlMap& m, const std::string& key, const ArmModel& plant, const Eigen::VectorXd& q) {
+  for (int j = 0; j < plant.dof() && j < q.size(); ++j) {
+    const ArmJoint& joint = plant.joints[static_cast<std::size_t>(j)];
+    if (q[j] < joint.lower || q[j] > joint.upper) {
+      m.Error(key, "joint " + std::to_string(j + 1) + " ('" + joint.name + "') at " + std::to_string(q[j]) +
+                       " is beyond its limits [" + std::to_string(joint.lower) + ", " + std::to_string(joint.upper) +
+                       "]");
+    }
+  }
+}
+
+void ReadTask(const YAML::Node& node, const std::string& path, const ArmModel& plant, bool models_ok,
+              ErrorList* errors, ArmTaskSpec* task) {
+  YamlMap m(node, path, "task", errors);
+  if (!m.valid()) return;
+  m.Get("type", &task->type, kTaskTypes);
+  std::vector<double> tool;
+  if (m.Get("tool", &tool, 3)) task->writing.tool = Eigen::Vector3d(tool[0], tool[1], tool[2]);
+  if (task->type == "writing") {
+    WritingTaskOptions& w = task->writing;
+    if (m.Get("letters", &w.letters)) {
+      for (char c : w.letters) {
+        if (WritingTaskLetters().find(c) == std::string::npos) {
+          m.Error("letters", std::string("no strokes for '") + c + "' (known: \"" + WritingTaskLetters() + "\")");
+          break;
+        }
+      }
+    }
+    m.Get("height", &w.height, Positive());
+    m.Get("width_ratio", &w.width_ratio, Positive());
+    m.Get("gap_ratio", &w.gap_ratio, NonNegative());
+    m.Get("plane_x", &w.plane_x);
+    m.Get("center_y", &w.center_y);
+    m.Get("center_z", &w.center_z);
+    m.Get("speed", &w.speed, Positive());
+    m.Get("acceleration", &w.acceleration, Positive());
+    m.Get("hold_before", &w.hold_before, NonNegative());
+    m.Get("hold_after", &w.hold_after, NonNegative());
+    std::string why;
+    if (!w.IsValid(&why)) m.Error("type", "writing task: " + why);
+  } else {
+    const int dof = plant.dof();
+    m.Require("duration", &task->duration, InRange(1e-3, 24 * 3600));
+    if (models_ok) {
+      if (ReadJointVector(m, "q", dof, true, &task->q)) CheckWithinLimits(m, "q", plant, task->q);
+      if (task->type == "step") {
+        if (ReadJointVector(m, "to", dof, true, &task->to)) CheckWithinLimits(m, "to", plant, task->to);
+        m.Get("at", &task->at, NonNegative());
+      } else if (task->type == "sinusoid") {
+        if (ReadJointVector(m, "amplitude", dof, true, &task->amplitude) && task->q.size() == dof) {
+          CheckWithinLimits(m, "amplitude", plant, task->q + task->amplitude.cwiseAbs());
+          CheckWithinLimits(m, "amplitude", plant, task->q - task->amplitude.cwiseAbs());
+        }
+        m.Get("frequency", &task->frequency, Positive());
+      }
+    } else {
+      // Without the models the joint count is unknown: only mark the keys as known.
+      for (const char* key : {"q", "to", "at", "amplitude", "frequency"}) m.Child(key);
+    }
+  }
+  m.Finish();
+}
+
+std::vector<ArmPlotSpec> ReadArmPlots(YamlMap& top) {
+  std::vector<ArmPlotSpec> specs;
+  const YAML::Node list = top.Child("plots");
+  if (!list.IsDefined() || list.IsNull()) return specs;
+  if (!list.IsSequence()) {
+    top.Error("plots", "expected a list of plots, e.g. [{type: tool_path, file: path.png}]");
+    return specs;
+  }
+  std::set<std::string> files;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    YamlMap m(list[i], top.path(), "plots[" + std::to_string(i) + "]", top.errors());
+    if (!m.valid()) continue;
+    ArmPlotSpec spec;
+    bool ok = m.Require("type", &spec.type, kPlotTypes);
+    if (m.Require("file", &spec.file)) {
+      if (!PlainPngName(spec.file)) {
+        m.Error("file", "expected a plain file name ending in .png (letters, digits, '.', '_', '-'; no folders), got '" +
+                            spec.file + "'");
+        ok = false;
+      } else if (!files.insert(spec.file).second) {
+        m.Error("file", "another plot already writes '" + spec.file + "'");
+        ok = false;
+      }
+    } else {
+      ok = false;
+    }
+    m.Get("width", &spec.width, InRange(240, 8192));
+    m.Get("height", &spec.height, InRange(180, 8192));
+    m.Get("title", &spec.title);
+    m.Finish();
+    if (ok) specs.push_back(spec);
+  }
+  return specs;
+}
+
+ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir) {
+  ErrorList errors;
+  ArmScene scene;
+  scene.path = path;
+  YamlMap top(root, path, "", &errors);
+  top.Require("name", &scene.name);
+  std::string robot;
+  top.Require("robot", &robot, std::vector<std::string>{"arm"});
+  top.Get("backend", &scene.backend, {"analytic", "ode", "bullet", "learned"});
+  double seed = 1;
+  if (top.Get("seed", &seed, InRange(0, 9007199254740992.0))) scene.seed = static_cast<std::uint64_t>(seed);
+
+  bool models_ok = ReadModel(top, "model", true, base_dir, &scene.plant_path, &scene.plant);
+  scene.hat_path = scene.plant_path;
+  scene.hat = scene.plant;
+
+  if (top.Has("controller")) {
+    YamlMap c(top.Child("controller"), path, "controller", &errors);
+    if (c.valid()) {
+      std::string type = TrackingControllerName(scene.tracking.controller);
+      if (c.Get("type", &type, {"computed_torque", "pd_feedforward"})) {
+        scene.tracking.controller =
+            type == "computed_torque" ? TrackingController::kComputedTorque : TrackingController::kPdFeedforward;
+      }
+      if (c.Has("model")) models_ok = ReadModel(c, "model", false, base_dir, &scene.hat_path, &scene.hat) && models_ok;
+      c.Get("bandwidth", &scene.tracking.bandwidth, Positive());
+      c.Get("damping", &scene.tracking.damping, Positive());
+      c.Get("preview", &scene.tracking.preview, InRange(-1, 1000000));
+      c.Get("friction", &scene.tracking.friction);
+      c.Get("friction_from_reference", &scene.tracking.friction_from_reference);
+      c.Get("interval_acceleration", &scene.tracking.interval_acceleration);
+      c.Get("saturate", &scene.tracking.saturate);
+      c.Finish();
+    }
+  }
+
+  if (models_ok) {
+    if (scene.hat.dof() != scene.plant.dof()) {
+      top.Error("controller", "the controller's model '" + scene.hat.name + "' has " + std::to_string(scene.hat.dof()) +
+                                  " joints but the plant '" + scene.plant.name + "' has " +
+                                  std::to_string(scene.plant.dof()));
+      models_ok = false;
+    } else if (std::abs(scene.hat.sample_time - scene.plant.sample_time) > 1e-12 * scene.plant.sample_time) {
+      top.Error("controller", "the controller's model samples every " + std::to_string(scene.hat.sample_time) +
+                                  " s but the plant every " + std::to_string(scene.plant.sample_time) +
+                                  " s; they must agree");
+    }
+  }
+
+  if (top.Has("task")) {
+    ReadTask(top.Child("task"), path, scene.plant, models_ok, &errors, &scene.task);
+  } else {
+    top.Missing("task");
+  }
+  scene.plots = ReadArmPlots(top);
+  top.Finish();
+  errors.ThrowIfAny();
+  return scene;
+}
+
+}  // namespace
+
+std::string SceneRobotKind(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  if (!root.IsMap() || !root["robot"]) return "omni";
+  const YAML::Node robot = root["robot"];
+  if (robot.IsScalar() && (robot.Scalar() == "arm" || robot.Scalar() == "omni")) return robot.Scalar();
+  throw InputError(SourceLocation{path, robot.Mark().line + 1, robot.Mark().column + 1},
+                   "'robot': expected arm (an arm scene) or omni (the default), got '" +
+                       (robot.IsScalar() ? robot.Scalar() : std::string("a non-scalar")) + "'");
+}
+
+ArmScene LoadArmScene(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  if (!root.IsMap()) throw InputError(SourceLocation{path, 1}, "expected a YAML mapping at the top level");
+  return ReadArmScene(root, path, fs::path(path).parent_path());
+}
+
+ArmScene LoadArmSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir) {
+  const YAML::Node root = LoadYamlString(yaml, name);
+  if (!root.IsMap()) throw InputError(SourceLocation{name, 1}, "expected a YAML mapping at the top level");
+  return ReadArmScene(root, name, base_dir);
+}
+
+ArmReference ArmSceneReference(const ArmScene& scene) {
+  const ArmTaskSpec& task = scene.task;
+  const ArmModel& hat = scene.hat;
+  if (task.type == "writing") {
+    WritingTaskOptions options = task.writing;
+    options.sample_time = scene.plant.sample_time;
+    try {
+      return WritingTaskReference(hat, options);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(SourceLocation{scene.path}, "the writing task cannot be drawn by '" + hat.name + "': " + e.what());
+    }
+  }
+  const int n = hat.dof();
+  const double ts = scene.plant.sample_time;
+  const auto samples = static_cast<Eigen::Index>(std::floor(task.duration / ts + 1e-9)) + 1;
+  ArmReference ref;
+  ref.sample_time = ts;
+  ref.t.resize(samples);
+  ref.q.resize(samples, n), ref.qd.setZero(samples, n), ref.qdd.setZero(samples, n);
+  ref.p.resize(samples, 3), ref.pd.resize(samples, 3), ref.pdd.resize(samples, 3);
+  const double w = 2 * M_PI * task.frequency;
+  for (Eigen::Index k = 0; k < samples; ++k) {
+    const double t = static_cast<double>(k) * ts;
+    ref.t[k] = t;
+    if (task.type == "hold") {
+      ref.q.row(k) = task.q.transpose();
+    } else if (task.type == "step") {
+      ref.q.row(k) = (t < task.at - 1e-12 ? task.q : task.to).transpose();
+    } else {  // sinusoid
+      ref.q.row(k) = (task.q + task.amplitude * std::sin(w * t)).transpose();
+      ref.qd.row(k) = (task.amplitude * w * std::cos(w * t)).transpose();
+      ref.qdd.row(k) = (-task.amplitude * w * w * std::sin(w * t)).transpose();
+    }
+    const Eigen::VectorXd q = ref.q.row(k).transpose(), qd = ref.qd.row(k).transpose(),
+                          qdd = ref.qdd.row(k).transpose();
+    const Eigen::MatrixXd jac = ToolJacobian(hat, q, task.writing.tool);
+    ref.p.row(k) = ToolPoint(hat, q, task.writing.tool).transpose();
+    ref.pd.row(k) = (jac * qd).transpose();
+    ref.pdd.row(k) = (jac * qdd + ToolBiasAcceleration(hat, q, qd, task.writing.tool)).transpose();
+  }
+  return ref;
+}
+
+}  // namespace twinsim

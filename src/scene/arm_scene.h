@@ -1,0 +1,81 @@
+// An arm scene: a plant arm (a model file with its effects), a task that gives the joint
+// reference (the writing task of seed 001, or a hold, a step or a sinusoid), a tracking
+// controller with its own model "hat" (which may differ from the plant), the default
+// backend, and the plots `twinsim run` draws. A scene file is an arm scene when its top
+// level says `robot: arm` (SceneRobotKind); the schema is in docs/scenes.md.
+//
+// Loaded from YAML into plain structs and validated as a whole (unknown keys, types,
+// ranges, both models, joint counts and sample times), every problem reported as
+// "path:line:column: ..." at once. ArmSceneReference() then gives the joint reference
+// and RunTrackingTrial (control/computed_torque.h) runs it:
+//
+//   ArmScene scene = LoadArmScene("scenes/rrr_writing.yaml");
+//   ArmReference ref = ArmSceneReference(scene);
+//   TrackingTrial trial = RunTrackingTrial(scene.plant, scene.hat, ref, scene.tracking);
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "control/computed_torque.h"
+#include "control/writing_task.h"
+#include "robots/arm/arm_model.h"
+
+namespace twinsim {
+
+// Where the joint reference comes from.
+struct ArmTaskSpec {
+  std::string type = "writing";  // writing | hold | step | sinusoid
+  WritingTaskOptions writing;    // type writing (its `tool` is also the plots' tool point)
+  // hold, step, sinusoid: the reference starts at q (rad or m, one per joint) and lasts
+  // `duration`; step jumps to `to` at `at`; sinusoid adds amplitude * sin(2 pi f t).
+  Eigen::VectorXd q, to, amplitude;
+  double duration = 2;     // s
+  double at = 0.5;         // s, the step's time
+  double frequency = 1;    // Hz, the sinusoid's
+};
+
+// One PNG `twinsim run` draws for an arm scene.
+struct ArmPlotSpec {
+  // tool_path: the tool point's path in the writing plane (base y-z, seen from behind
+  //   the arm), reference vs realised;
+  // joint_torques: per joint, the controller's output beside the model's torque and the
+  //   effort limit over time (one PNG per joint, `_joint<j>` before .png);
+  // tracking_error: q_ref - q of every joint over time.
+  std::string type;
+  std::string file;   // a plain file name ending in .png
+  int width = 1200;   // px
+  int height = 700;   // px
+  std::string title;  // "{scene}", "{backend}" replaced; empty: a title naming the plot
+};
+
+struct ArmScene {
+  std::string path;
+  std::string name;
+  std::string backend = "analytic";  // analytic | ode | bullet | learned; `twinsim run --backend` overrides
+  std::uint64_t seed = 1;            // recorded only: an arm scene has no randomness
+  std::string plant_path, hat_path;  // as resolved (relative to the scene file)
+  ArmModel plant;                    // the arm simulated, with its effects
+  ArmModel hat;                      // the controller's model (default: the plant's file)
+  ArmTaskSpec task;
+  TrackingOptions tracking;          // controller, gains, compensation; backend set by run
+  std::vector<ArmPlotSpec> plots;
+};
+
+// "arm" when the scene file's top level has `robot: arm`, else "omni". Throws InputError
+// when the file cannot be read or `robot` names another kind.
+std::string SceneRobotKind(const std::string& path);
+
+// Loads and validates an arm scene and the models it names; throws InputError listing
+// every problem as "path:line:column: ...".
+ArmScene LoadArmScene(const std::string& path);
+ArmScene LoadArmSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
+
+// The scene's joint reference at the plant's sample time. Throws InputError (naming
+// the scene) when the writing task cannot be drawn by the hat model's arm (out of
+// reach, beyond a limit, not a waist-shoulder-elbow arm).
+ArmReference ArmSceneReference(const ArmScene& scene);
+
+}  // namespace twinsim
