@@ -9,6 +9,7 @@
 
 #include "backends/arm/arm_backend.h"
 #include "core/arm_simulation.h"
+#include "core/rng.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_effects.h"
 
@@ -54,6 +55,8 @@ bool TrackingOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(damping) && damping > 0)) return fail("damping must be > 0");
   if (preview < -1) return fail("preview must be >= 0 samples, or -1 for the model's delay");
   if (backend.empty()) return fail("backend is empty");
+  if (!(std::isfinite(dither) && dither >= 0)) return fail("dither must be >= 0 (a fraction of the effort limit)");
+  if (dither_hold < 1) return fail("dither_hold must be >= 1 sample");
   return true;
 }
 
@@ -145,7 +148,6 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
     throw std::invalid_argument("RunTrackingTrial: the reference's sample time differs from the plant's");
   }
 
-  const std::string backend_name = backend->name();
   ArmSimulation sim(plant, std::move(backend));
   const ArmModel& body = sim.model();  // the plant with its payload lumped
   const int preview = options.preview >= 0 ? options.preview : plant.delay_samples;
@@ -153,10 +155,14 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
   const TrackingGains gains = options.controller == TrackingController::kComputedTorque
                                   ? ComputedTorqueGains(n, options.bandwidth, options.damping)
                                   : PdFeedforwardGains(hat, q0, options.bandwidth, options.damping);
-  Eigen::VectorXd limit(n);
+  Eigen::VectorXd limit(n), dither_sigma(n);
   for (int j = 0; j < n; ++j) {
-    limit(j) = plant.joints[j].effort_limit > 0 ? plant.joints[j].effort_limit : INFINITY;
+    const double effort = plant.joints[j].effort_limit;
+    limit(j) = effort > 0 ? effort : INFINITY;
+    dither_sigma(j) = options.dither * (effort > 0 ? effort : 1.0);
   }
+  Rng dither_rng = Rng::Derived(options.dither_seed, 0x646974);  // "dit"
+  Eigen::VectorXd dither = Eigen::VectorXd::Zero(n);
   sim.Reset(q0, Eigen::VectorXd::Zero(n), InverseDynamics(hat, q0, Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), false));
 
   TrackingTrial trial;
@@ -183,6 +189,11 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
     } else {
       tau = PdFeedforwardTorque(hat, gains, options.friction, q_a, qd_a, qdd_a, q, qd, &model_part);
       tau += gains.kp.cwiseProduct(q_r - q_a) + gains.kd.cwiseProduct(qd_r - qd_a);  // feedback on the error now
+    }
+    if (options.dither > 0) {
+      if (k % options.dither_hold == 0)
+        for (int j = 0; j < n; ++j) dither(j) = dither_rng.Gaussian(dither_sigma(j));
+      tau += dither;
     }
     trial.demand.row(k) = tau.transpose();
     trial.model_torque.row(k) = model_part.transpose();

@@ -29,6 +29,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -68,6 +69,13 @@ struct TrackingOptions {
   bool interval_acceleration = false;
   bool saturate = true;       // clamp the command to each joint's effort_limit (where given)
   std::string backend = "analytic";  // the plant's physics (MakeArmBackend)
+  // Excitation for recording data to learn from: a seeded Gaussian torque added to the
+  // controller's output before clamping, sigma = dither * the joint's effort_limit
+  // (1 N·m where none is given), each value held for `dither_hold` samples, so that the
+  // torques are not a function of the state alone. 0 = none.
+  double dither = 0;
+  int dither_hold = 10;             // samples
+  std::uint64_t dither_seed = 1;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;

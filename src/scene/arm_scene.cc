@@ -15,7 +15,7 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::vector<std::string> kPlotTypes = {"tool_path", "joint_torques", "tracking_error"};
-const std::vector<std::string> kTaskTypes = {"writing", "hold", "step", "sinusoid"};
+const std::vector<std::string> kTaskTypes = {"writing", "hold", "step", "sinusoid", "random"};
 
 // A plain file name: letters, digits, '.', '_', '-', not starting with '.', ending in .png.
 bool PlainPngName(const std::string& name) {
@@ -100,6 +100,24 @@ void ReadTask(const YAML::Node& node, const std::string& path, const ArmModel& p
     m.Get("hold_after", &w.hold_after, NonNegative());
     std::string why;
     if (!w.IsValid(&why)) m.Error("type", "writing task: " + why);
+  } else if (task->type == "random") {
+    TrainingTrialOptions& r = task->training;
+    m.Get("motion", &task->motion, {"multisine", "stop_and_go"});
+    m.Get("duration", &r.seconds, InRange(0.1, 24 * 3600));
+    m.Get("fundamental", &r.fundamental, Positive());
+    m.Get("harmonics", &r.harmonics, InRange(1, 1000));
+    m.Get("stroke_speed", &r.stroke_speed, Positive());
+    m.Get("stroke_acceleration", &r.stroke_acceleration, Positive());
+    if (models_ok) {
+      if (ReadJointVector(m, "center", plant.dof(), false, &r.center)) CheckWithinLimits(m, "center", plant, r.center);
+      ReadJointVector(m, "amplitude", plant.dof(), false, &r.amplitude);
+      if (r.center.size() == 0 && plant.dof() != 3) m.Missing("center");
+      if (r.amplitude.size() == 0 && plant.dof() != 3) m.Missing("amplitude");
+    } else {
+      for (const char* key : {"center", "amplitude"}) m.Child(key);
+    }
+    std::string why;
+    if (!r.IsValid(&why)) m.Error("type", "random task: " + why);
   } else {
     const int dof = plant.dof();
     m.Require("duration", &task->duration, InRange(1e-3, 24 * 3600));
@@ -190,6 +208,8 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
       c.Get("friction_from_reference", &scene.tracking.friction_from_reference);
       c.Get("interval_acceleration", &scene.tracking.interval_acceleration);
       c.Get("saturate", &scene.tracking.saturate);
+      c.Get("dither", &scene.tracking.dither, InRange(0, 1));
+      c.Get("dither_hold", &scene.tracking.dither_hold, InRange(1, 1000000));
       c.Finish();
     }
   }
@@ -242,6 +262,24 @@ ArmScene LoadArmSceneFromString(const std::string& yaml, const std::string& name
   return ReadArmScene(root, name, base_dir);
 }
 
+namespace {
+
+// The tool point's path (p, pd, pdd) along the joint reference, for the plots.
+void FillToolPath(const ArmModel& hat, const Eigen::Vector3d& tool, ArmReference* ref) {
+  const Eigen::Index samples = ref->q.rows();
+  ref->p.resize(samples, 3), ref->pd.resize(samples, 3), ref->pdd.resize(samples, 3);
+  for (Eigen::Index k = 0; k < samples; ++k) {
+    const Eigen::VectorXd q = ref->q.row(k).transpose(), qd = ref->qd.row(k).transpose(),
+                          qdd = ref->qdd.row(k).transpose();
+    const Eigen::MatrixXd jac = ToolJacobian(hat, q, tool);
+    ref->p.row(k) = ToolPoint(hat, q, tool).transpose();
+    ref->pd.row(k) = (jac * qd).transpose();
+    ref->pdd.row(k) = (jac * qdd + ToolBiasAcceleration(hat, q, qd, tool)).transpose();
+  }
+}
+
+}  // namespace
+
 ArmReference ArmSceneReference(const ArmScene& scene) {
   const ArmTaskSpec& task = scene.task;
   const ArmModel& hat = scene.hat;
@@ -256,12 +294,23 @@ ArmReference ArmSceneReference(const ArmScene& scene) {
   }
   const int n = hat.dof();
   const double ts = scene.plant.sample_time;
+  if (task.type == "random") {
+    ArmReference ref;
+    try {
+      ref = task.motion == "multisine"
+                ? SampledReference(RandomTrainingTrajectory(hat, task.training, scene.seed), ts, task.training.seconds)
+                : RandomStopAndGoReference(hat, task.training, scene.seed);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(SourceLocation{scene.path}, "the random task cannot be drawn for '" + hat.name + "': " + e.what());
+    }
+    FillToolPath(hat, task.writing.tool, &ref);
+    return ref;
+  }
   const auto samples = static_cast<Eigen::Index>(std::floor(task.duration / ts + 1e-9)) + 1;
   ArmReference ref;
   ref.sample_time = ts;
   ref.t.resize(samples);
   ref.q.resize(samples, n), ref.qd.setZero(samples, n), ref.qdd.setZero(samples, n);
-  ref.p.resize(samples, 3), ref.pd.resize(samples, 3), ref.pdd.resize(samples, 3);
   const double w = 2 * M_PI * task.frequency;
   for (Eigen::Index k = 0; k < samples; ++k) {
     const double t = static_cast<double>(k) * ts;
@@ -275,13 +324,8 @@ ArmReference ArmSceneReference(const ArmScene& scene) {
       ref.qd.row(k) = (task.amplitude * w * std::cos(w * t)).transpose();
       ref.qdd.row(k) = (-task.amplitude * w * w * std::sin(w * t)).transpose();
     }
-    const Eigen::VectorXd q = ref.q.row(k).transpose(), qd = ref.qd.row(k).transpose(),
-                          qdd = ref.qdd.row(k).transpose();
-    const Eigen::MatrixXd jac = ToolJacobian(hat, q, task.writing.tool);
-    ref.p.row(k) = ToolPoint(hat, q, task.writing.tool).transpose();
-    ref.pd.row(k) = (jac * qd).transpose();
-    ref.pdd.row(k) = (jac * qdd + ToolBiasAcceleration(hat, q, qd, task.writing.tool)).transpose();
   }
+  FillToolPath(hat, task.writing.tool, &ref);
   return ref;
 }
 

@@ -1,5 +1,6 @@
 // An arm scene: a plant arm (a model file with its effects), a task that gives the joint
-// reference (the writing task of seed 001, or a hold, a step or a sinusoid), a tracking
+// reference (the writing task of seed 001, a hold, a step, a sinusoid, or seeded random
+// motion to record training data), a tracking
 // controller with its own model "hat" (which may differ from the plant), the default
 // backend, and the plots `twinsim run` draws. A scene file is an arm scene when its top
 // level says `robot: arm` (SceneRobotKind); the schema is in docs/scenes.md.
@@ -21,14 +22,20 @@
 
 #include "control/computed_torque.h"
 #include "control/writing_task.h"
+#include "learning/arm_trials.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim {
 
 // Where the joint reference comes from.
 struct ArmTaskSpec {
-  std::string type = "writing";  // writing | hold | step | sinusoid
+  std::string type = "writing";  // writing | hold | step | sinusoid | random
   WritingTaskOptions writing;    // type writing (its `tool` is also the plots' tool point)
+  // type random: seeded random motion to learn from (learning/arm_trials.h), a multi-sine
+  // or stop-and-go moves around training.center +- training.amplitude for `duration`
+  // (training.seconds); the scene's seed picks the motion and the controller's dither.
+  std::string motion = "stop_and_go";  // multisine | stop_and_go
+  TrainingTrialOptions training;
   // hold, step, sinusoid: the reference starts at q (rad or m, one per joint) and lasts
   // `duration`; step jumps to `to` at `at`; sinusoid adds amplitude * sin(2 pi f t).
   Eigen::VectorXd q, to, amplitude;
@@ -55,7 +62,7 @@ struct ArmScene {
   std::string path;
   std::string name;
   std::string backend = "analytic";  // analytic | ode | bullet | learned; `twinsim run --backend` overrides
-  std::uint64_t seed = 1;            // recorded only: an arm scene has no randomness
+  std::uint64_t seed = 1;            // the random task's motion and the controller's dither
   std::string plant_path, hat_path;  // as resolved (relative to the scene file)
   ArmModel plant;                    // the arm simulated, with its effects
   ArmModel hat;                      // the controller's model (default: the plant's file)

@@ -7,6 +7,7 @@
 #include "app/commands/commands.h"
 #include "app/progress.h"
 #include "backends/arm/arm_backend.h"
+#include "backends/learned/learned_arm_backend.h"
 #include "backends/omni_backend.h"
 #include "control/computed_torque.h"
 #include "control/tracking_plots.h"
@@ -14,6 +15,7 @@
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
 #include "io/omni_log.h"
+#include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
 #include "render/plot.h"
 #include "render/renderer.h"
@@ -105,53 +107,64 @@ PathPlot MakeScenePathPlot(const PlotSpec& spec, const Scene& scene, const Simul
 
 // The backend an arm scene's plant runs on: every arm backend is built here, so that
 // one place decides what `--backend` (and, for a learned backend, `--predictor`) means
-// for arms. Throws InputError for an unknown or uncompiled backend, for `learned`
-// (not available for arms yet), and for a predictor given to another backend.
+// for arms. `learned` steps the arm with a predictor (twinsim train) trained for the
+// scene's model: it replaces the plant's bodies, friction and effects. Throws InputError
+// for an unknown or uncompiled backend, a missing, unreadable or mismatched predictor,
+// and a predictor given to another backend.
 std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std::string& backend,
                                                 const RunOptions& options) {
   if (backend == "learned") {
-    throw InputError(SourceLocation{options.scene},
-                     "--backend learned is not available for arm scenes yet (arm scenes run on: analytic, ode, bullet)");
+    if (options.predictor.empty()) {
+      throw InputError(SourceLocation{options.scene},
+                       "--backend learned needs --predictor P (an arm predictor from 'twinsim train')");
+    }
+    const ArmPredictor predictor = ArmPredictor::Load(options.predictor);
+    return MakeLearnedArmBackend(scene.plant, predictor);
   }
   if (!options.predictor.empty())
     throw InputError("--predictor applies to --backend learned only; arm scene '" + scene.name + "' runs on " + backend);
   return MakeArmBackend(backend, scene.plant);
 }
 
-// The arm log the controller's observer sees: t, q, the commands sent, qd and the
-// reference (the contract's arm log with its optional qd and qref columns).
-std::string ArmTrajectoryCsv(const TrackingTrial& trial) {
-  const auto n = trial.q.cols();
+// A CSV with a time column and, per matrix, one column per joint named prefix1..prefixn.
+std::string JointColumnsCsv(const Eigen::VectorXd& t, const std::vector<const char*>& prefixes,
+                            const std::vector<const Eigen::MatrixXd*>& columns) {
+  const Eigen::Index n = columns.front()->cols();
   std::string out = "t";
-  for (const char* prefix : {"q", "tau", "qd", "qref"})
-    for (Eigen::Index j = 1; j <= n; ++j) out += "," + std::string(prefix) + std::to_string(j);
+  for (const char* prefix : prefixes) {
+    for (Eigen::Index j = 1; j <= n; ++j) {
+      out += ',';
+      out += prefix;
+      out += std::to_string(j);
+    }
+  }
   out += '\n';
-  for (Eigen::Index r = 0; r < trial.t.size(); ++r) {
-    out += FormatCsvNumber(trial.t[r]);
-    for (const Eigen::MatrixXd* m : {&trial.q, &trial.command, &trial.qd, &trial.q_ref})
-      for (Eigen::Index j = 0; j < n; ++j) out += "," + FormatCsvNumber((*m)(r, j));
+  for (Eigen::Index r = 0; r < t.size(); ++r) {
+    out += FormatCsvNumber(t[r]);
+    for (const Eigen::MatrixXd* m : columns) {
+      for (Eigen::Index j = 0; j < n; ++j) {
+        out += ',';
+        out += FormatCsvNumber((*m)(r, j));
+      }
+    }
     out += '\n';
   }
   return out;
 }
 
-// What only the simulation knows, per sample and joint: the demand before clamping,
-// the controller's model-based part, the drive torque applied and the torque the plant
-// needed (TrackingTrial's columns).
+// The arm log the controller's observer sees: t, q, the commands sent, qd and the
+// reference (the contract's arm log with its optional qd and qref columns).
+std::string ArmTrajectoryCsv(const TrackingTrial& trial) {
+  return JointColumnsCsv(trial.t, {"q", "tau", "qd", "qref"}, {&trial.q, &trial.command, &trial.qd, &trial.q_ref});
+}
+
+// What only the simulation knows, per sample and joint: the tracking error, the demand
+// before clamping, the controller's model-based part, the drive torque applied and the
+// torque the plant needed (TrackingTrial's columns).
 std::string ArmTrackingCsv(const TrackingTrial& trial) {
-  const auto n = trial.q.cols();
-  std::string out = "t";
-  for (const char* prefix : {"error", "demand", "model", "applied", "needed"})
-    for (Eigen::Index j = 1; j <= n; ++j) out += "," + std::string(prefix) + std::to_string(j);
-  out += '\n';
   const Eigen::MatrixXd error = trial.q_ref - trial.q;
-  for (Eigen::Index r = 0; r < trial.t.size(); ++r) {
-    out += FormatCsvNumber(trial.t[r]);
-    for (const Eigen::MatrixXd* m : {&error, &trial.demand, &trial.model_torque, &trial.applied, &trial.needed})
-      for (Eigen::Index j = 0; j < n; ++j) out += "," + FormatCsvNumber((*m)(r, j));
-    out += '\n';
-  }
-  return out;
+  return JointColumnsCsv(trial.t, {"error", "demand", "model", "applied", "needed"},
+                         {&error, &trial.demand, &trial.model_torque, &trial.applied, &trial.needed});
 }
 
 std::string ArmPlotTitle(const ArmPlotSpec& spec, const ArmScene& scene, const std::string& backend,
@@ -163,6 +176,7 @@ std::string ArmPlotTitle(const ArmPlotSpec& spec, const ArmScene& scene, const s
 
 int RunArm(const RunOptions& options) {
   ArmScene scene = LoadArmScene(options.scene);
+  if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
   const ArmReference reference = ArmSceneReference(scene);
@@ -171,6 +185,7 @@ int RunArm(const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   TrackingOptions tracking = scene.tracking;
   tracking.backend = backend;
+  tracking.dither_seed = scene.seed;
   const TrackingTrial trial = RunTrackingTrial(scene.plant, std::move(engine), scene.hat, reference, tracking);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -296,14 +311,15 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
       "true pose and velocity every frame), and the same with _NAME for every further robot;\n"
       "and the PNG plots the scene's `plots:` list asks for (docs/rendering.md).\n"
       "Arm scenes (`robot: arm`, docs/scenes.md) run a tracking controller along a task (the\n"
-      "writing task of seed 001, a hold, a step or a sinusoid) and write DIR/trajectory.csv\n"
-      "(t,q1..qn,tau1..taun,qd1..qdn,qref1..qrefn: the arm log, tau the commands sent),\n"
-      "DIR/tracking.csv (error, demand, model torque, applied and needed torque per joint) and\n"
-      "the plots asked for (tool_path, joint_torques, tracking_error). --seed does not change an\n"
-      "arm scene (it has no randomness).");
+      "writing task of seed 001, a hold, a step, a sinusoid, or seeded random motion to learn\n"
+      "from) and write DIR/trajectory.csv (t,q1..qn,tau1..taun,qd1..qdn,qref1..qrefn: the arm\n"
+      "log, tau the commands sent), DIR/tracking.csv (error, demand, model torque, applied and\n"
+      "needed torque per joint) and the plots asked for (tool_path, joint_torques,\n"
+      "tracking_error). --seed picks the random task's motion and the controller's dither.\n"
+      "--backend learned --predictor P runs an arm scene on a predictor trained for its model.");
   cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
-  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (omni only for now) (default: the scene's)");
-  cmd->add_option("--predictor", options->predictor, "1-frame predictor for --backend learned (from twinsim train)");
+  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
+  cmd->add_option("--predictor", options->predictor, "1-step predictor for --backend learned (from twinsim train)");
   cmd->add_option("--out", options->out, "Output folder (default: out/<scene name>)");
   cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(CLI::NonNegativeNumber);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
