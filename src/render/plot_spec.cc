@@ -20,6 +20,20 @@ void Replace(std::string* s, const std::string& from, const std::string& to) {
 
 }  // namespace
 
+bool ReadPlotFile(YamlMap& m, std::set<std::string>* taken, std::string* file) {
+  if (!m.Require("file", file)) return false;
+  if (!PlainPngName(*file)) {
+    m.Error("file", "expected a plain file name ending in .png (letters, digits, '.', '_', '-'; no folders), got '" +
+                        *file + "'");
+    return false;
+  }
+  if (!taken->insert(*file).second) {
+    m.Error("file", "another plot already writes '" + *file + "'");
+    return false;
+  }
+  return true;
+}
+
 std::vector<PlotSpec> ReadPlotSpecs(YamlMap& parent, const std::string& key) {
   std::vector<PlotSpec> specs;
   const YAML::Node list = parent.Child(key);
@@ -35,18 +49,7 @@ std::vector<PlotSpec> ReadPlotSpecs(YamlMap& parent, const std::string& key) {
     if (!m.valid()) continue;
     PlotSpec spec;
     bool ok = m.Require("type", &spec.type, std::vector<std::string>{"path"});
-    if (m.Require("file", &spec.file)) {
-      if (!PlainPngName(spec.file)) {
-        m.Error("file", "expected a plain file name ending in .png (letters, digits, '.', '_', '-'; no folders), got '" +
-                            spec.file + "'");
-        ok = false;
-      } else if (!files.insert(spec.file).second) {
-        m.Error("file", "another plot already writes '" + spec.file + "'");
-        ok = false;
-      }
-    } else {
-      ok = false;
-    }
+    ok = ReadPlotFile(m, &files, &spec.file) && ok;
     m.Get("source", &spec.source, std::vector<std::string>{"truth", "seen", "both"});
     m.Get("width", &spec.width, InRange(240, 8192));
     m.Get("height", &spec.height, InRange(180, 8192));

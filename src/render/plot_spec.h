@@ -8,6 +8,7 @@
 #pragma once
 
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,11 @@ struct PlotSpec {
 // Reads the list under `key` of `parent` (absent: no plots). Every problem goes into
 // parent's error list with its file:line:column; the result holds the valid entries.
 std::vector<PlotSpec> ReadPlotSpecs(YamlMap& parent, const std::string& key);
+
+// Reads a plot entry's required `file` into *file: a plain file name ending in .png
+// (letters, digits, '.', '_', '-'; no folders) that no earlier plot of the same list
+// (`taken`) writes. False, with the problem in m's error list, otherwise.
+bool ReadPlotFile(YamlMap& m, std::set<std::string>* taken, std::string* file);
 
 // The title with its placeholders filled in.
 std::string PlotTitle(const PlotSpec& spec, const std::string& scene, const std::string& backend,

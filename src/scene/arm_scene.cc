@@ -1,6 +1,5 @@
 #include "scene/arm_scene.h"
 
-#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -8,6 +7,7 @@
 
 #include "core/error.h"
 #include "io/yaml_reader.h"
+#include "render/plot_spec.h"
 
 namespace twinsim {
 namespace {
@@ -16,14 +16,6 @@ namespace fs = std::filesystem;
 
 const std::vector<std::string> kPlotTypes = {"tool_path", "joint_torques", "tracking_error"};
 const std::vector<std::string> kTaskTypes = {"writing", "hold", "step", "sinusoid", "random"};
-
-// A plain file name: letters, digits, '.', '_', '-', not starting with '.', ending in .png.
-bool PlainPngName(const std::string& name) {
-  if (name.size() < 5 || name.front() == '.' || name.compare(name.size() - 4, 4, ".png") != 0) return false;
-  for (char c : name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) return false;
-  return true;
-}
 
 std::string Resolve(const std::string& file, const fs::path& base_dir) {
   fs::path p(file);
@@ -155,18 +147,7 @@ std::vector<ArmPlotSpec> ReadArmPlots(YamlMap& top) {
     if (!m.valid()) continue;
     ArmPlotSpec spec;
     bool ok = m.Require("type", &spec.type, kPlotTypes);
-    if (m.Require("file", &spec.file)) {
-      if (!PlainPngName(spec.file)) {
-        m.Error("file", "expected a plain file name ending in .png (letters, digits, '.', '_', '-'; no folders), got '" +
-                            spec.file + "'");
-        ok = false;
-      } else if (!files.insert(spec.file).second) {
-        m.Error("file", "another plot already writes '" + spec.file + "'");
-        ok = false;
-      }
-    } else {
-      ok = false;
-    }
+    ok = ReadPlotFile(m, &files, &spec.file) && ok;
     m.Get("width", &spec.width, InRange(240, 8192));
     m.Get("height", &spec.height, InRange(180, 8192));
     m.Get("title", &spec.title);
