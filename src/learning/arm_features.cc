@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "learning/arm_nominal_step.h"
+
 namespace twinsim {
 
 int ArmFeatureLayout::per_sample() const {
@@ -89,20 +91,27 @@ ArmSequence ToArmSequence(const ArmLog& log, const ArmFeatureLayout& layout) {
   return seq;
 }
 
-int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data) {
+int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data,
+                     ArmNominalStep* nominal) {
   const int n = layout.dof(), h = layout.history, hz = layout.horizon;
   const int begin = std::max(first, seq.first_known_torque + h - 1);
   const int end = std::min(last, seq.rows() - 1 - hz);  // inclusive
   const int count = std::max(0, end - begin + 1);
   Eigen::MatrixXd x(count, layout.num_inputs());
   Eigen::MatrixXd y(count, layout.num_outputs());
-  Eigen::VectorXd row_x(layout.num_inputs()), row_y(layout.num_outputs());
+  Eigen::VectorXd row_x(layout.num_inputs()), row_y(layout.num_outputs()), row_nominal(layout.num_outputs());
+  std::vector<double> q_nominal(static_cast<std::size_t>(n)), qd_nominal(q_nominal.size());
   for (int k = 0; k < count; ++k) {
     const int i = begin + k;
     const std::size_t start = static_cast<std::size_t>((i - h + 1) * n);
     EncodeArmInputs(layout, &seq.q[start], &seq.qd[start], &seq.acting[start], row_x.data());
     const std::size_t now = static_cast<std::size_t>(i * n), later = static_cast<std::size_t>((i + hz) * n);
     EncodeArmOutputs(layout, &seq.q[now], &seq.qd[now], &seq.q[later], &seq.qd[later], row_y.data());
+    if (nominal) {
+      nominal->Step(&seq.q[now], &seq.qd[now], &seq.acting[now], hz, q_nominal.data(), qd_nominal.data());
+      EncodeArmOutputs(layout, &seq.q[now], &seq.qd[now], q_nominal.data(), qd_nominal.data(), row_nominal.data());
+      row_y -= row_nominal;
+    }
     x.row(k) = row_x.transpose();
     y.row(k) = row_y.transpose();
   }

@@ -30,6 +30,8 @@
 
 namespace twinsim {
 
+class ArmNominalStep;  // arm_nominal_step.h
+
 struct ArmFeatureLayout {
   std::string joints;       // one letter per joint: 'R' revolute (sin, cos), 'P' prismatic (q)
   int history = 4;          // samples of history
@@ -84,7 +86,10 @@ ArmSequence ToArmSequence(const ArmLog& log, const ArmFeatureLayout& layout);
 
 // Every window of a sequence whose newest sample lies in [first, last] (with its H-ahead
 // sample in the sequence and every acting torque known); appends to *data and returns
-// the number added.
-int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data);
+// the number added. With `nominal` (a residual predictor's base, arm_nominal_step.h) the
+// outputs are what remains after the nominal model's step: the measured outputs minus
+// the nominal model's (its state H samples after sample i under the acting torques).
+int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data,
+                     ArmNominalStep* nominal = nullptr);
 
 }  // namespace twinsim

@@ -35,15 +35,20 @@ class ArmLearningComparison : public ::testing::Test {
     mlp.mlp.max_epochs = 60;
     mlp.mlp.patience = 15;
     mlp_ = new ArmPredictor(TrainArmPredictor(*hat_, *logs_, mlp, &mlp_summary_));
+    linear.residual = true;
+    residual_linear_ = new ArmPredictor(TrainArmPredictor(*hat_, *logs_, linear, &residual_linear_summary_));
+    mlp.residual = true;
+    residual_mlp_ = new ArmPredictor(TrainArmPredictor(*hat_, *logs_, mlp, &residual_mlp_summary_));
   }
   static void TearDownTestSuite() {
     delete plant_, delete hat_, delete logs_, delete held_out_, delete linear_, delete mlp_;
+    delete residual_linear_, delete residual_mlp_;
   }
   static ArmModel *plant_, *hat_;
   static std::vector<ArmLog>* logs_;
   static ArmLog* held_out_;
-  static ArmPredictor *linear_, *mlp_;
-  static ArmTrainSummary linear_summary_, mlp_summary_;
+  static ArmPredictor *linear_, *mlp_, *residual_linear_, *residual_mlp_;
+  static ArmTrainSummary linear_summary_, mlp_summary_, residual_linear_summary_, residual_mlp_summary_;
 };
 ArmModel* ArmLearningComparison::plant_ = nullptr;
 ArmModel* ArmLearningComparison::hat_ = nullptr;
@@ -51,15 +56,24 @@ std::vector<ArmLog>* ArmLearningComparison::logs_ = nullptr;
 ArmLog* ArmLearningComparison::held_out_ = nullptr;
 ArmPredictor* ArmLearningComparison::linear_ = nullptr;
 ArmPredictor* ArmLearningComparison::mlp_ = nullptr;
+ArmPredictor* ArmLearningComparison::residual_linear_ = nullptr;
+ArmPredictor* ArmLearningComparison::residual_mlp_ = nullptr;
+ArmTrainSummary ArmLearningComparison::residual_linear_summary_;
+ArmTrainSummary ArmLearningComparison::residual_mlp_summary_;
 ArmTrainSummary ArmLearningComparison::linear_summary_;
 ArmTrainSummary ArmLearningComparison::mlp_summary_;
 
 TEST_F(ArmLearningComparison, OpenLoopPredictionOnHeldOutTrials) {
   std::printf("[measured] linear: %s\n[measured] mlp: %s\n", linear_summary_.BriefReport().c_str(),
               mlp_summary_.BriefReport().c_str());
+  std::printf("[measured] residual linear: %s\n[measured] residual mlp: %s\n",
+              residual_linear_summary_.BriefReport().c_str(), residual_mlp_summary_.BriefReport().c_str());
   const int steps = 100;  // 100 ms
   const RolloutStats lin = PredictorRolloutStats(*linear_, *held_out_, 10, held_out_->rows() - 1, steps, 500);
   const RolloutStats mlp = PredictorRolloutStats(*mlp_, *held_out_, 10, held_out_->rows() - 1, steps, 500);
+  const RolloutStats rlin =
+      PredictorRolloutStats(*residual_linear_, *held_out_, 10, held_out_->rows() - 1, steps, 500);
+  const RolloutStats rmlp = PredictorRolloutStats(*residual_mlp_, *held_out_, 10, held_out_->rows() - 1, steps, 500);
   const RolloutStats phys = PhysicalRolloutStats(*hat_, "analytic", *held_out_, 10, held_out_->rows() - 1, steps, 500);
   auto row = [](const char* name, const RolloutStats& s) {
     std::printf("[measured] open loop %-22s one step RMS (urad) %8.3f %8.3f %8.3f | 100 ms RMS (mrad) %8.3f %8.3f %8.3f (%d runs)\n",
@@ -68,6 +82,8 @@ TEST_F(ArmLearningComparison, OpenLoopPredictionOnHeldOutTrials) {
   };
   row("learned linear", lin);
   row("learned mlp", mlp);
+  row("residual linear", rlin);
+  row("residual mlp", rmlp);
   row("physical nominal", phys);
   ASSERT_GT(lin.runs, 10);
   // Measured: linear 3.1 / 4.6 / 18.8 mrad after 100 ms, nominal physical 9.1 / 13 / 108.
@@ -84,12 +100,14 @@ TEST_F(ArmLearningComparison, LearnedBeatsTheNominalModelOnTheWritingTask) {
     candidates.push_back({"physical nominal (" + b + ")", *hat_, [&, b] { return MakeArmBackend(b, *hat_); }});
   candidates.push_back({"learned linear", *hat_, [&] { return MakeLearnedArmBackend(*hat_, *linear_); }});
   candidates.push_back({"learned mlp", *hat_, [&] { return MakeLearnedArmBackend(*hat_, *mlp_); }});
+  candidates.push_back({"residual linear", *hat_, [&] { return MakeLearnedArmBackend(*hat_, *residual_linear_); }});
+  candidates.push_back({"residual mlp", *hat_, [&] { return MakeLearnedArmBackend(*hat_, *residual_mlp_); }});
   const WritingComparison c = CompareOnReference(*plant_, *hat_, ref, candidates, options);
   std::printf("[measured] writing task, %g s, candidates against the plant:\n%s", ref.t.size() * hat_->sample_time,
               c.Report().c_str());
   const ModelGap& nominal = c.gaps[0];  // analytic
-  const ModelGap& linear = c.gaps[c.gaps.size() - 2];
-  const ModelGap& mlp = c.gaps.back();
+  const ModelGap& linear = c.gaps[c.gaps.size() - 4];
+  const ModelGap& mlp = c.gaps[c.gaps.size() - 3];
   ASSERT_TRUE(nominal.finite);
   ASSERT_TRUE(linear.finite);
   ASSERT_TRUE(mlp.finite);
