@@ -69,26 +69,29 @@ void ArmPredictor::Predict(const double* q, const double* qd, const double* tau,
   if (l.num_inputs() > 512) x_big.resize(static_cast<std::size_t>(l.num_inputs())), x = x_big.data();
   if (l.num_outputs() > 128) y_big.resize(static_cast<std::size_t>(l.num_outputs())), y = y_big.data();
   EncodeArmInputs(l, q, qd, tau, x);
-  PredictOutputs(x, y);
   const std::size_t newest = static_cast<std::size_t>((l.history - 1) * l.dof());
-  if (info_.residual) {
-    // The nominal model's step from the newest state under the torques acting from it on
-    // (rows history-1 .. history+H-2), then the learned correction on top.
-    {
-      const std::lock_guard<std::mutex> lock(nominal_.mutex);
-      if (!nominal_.step)
-        throw std::logic_error("residual arm predictor" + (path_.empty() ? std::string() : " " + path_) +
-                               ": no nominal model attached (ArmPredictor::AttachModel)");
-      nominal_.step->Step(q + newest, qd + newest, tau + newest, l.horizon, q_next, qd_next);
-    }
-    const int n = l.dof();
-    for (int i = 0; i < n; ++i) {
-      q_next[i] += y[i];
-      qd_next[i] += y[n + i];
-    }
+  if (!info_.residual) {
+    PredictOutputs(x, y);
+    DecodeArmOutputs(l, y, q + newest, qd + newest, q_next, qd_next);
     return;
   }
-  DecodeArmOutputs(l, y, q + newest, qd + newest, q_next, qd_next);
+  {
+    // The nominal model's recent errors (inputs) and its step from the newest state under
+    // the torques acting from it on (rows history-1 .. history+H-2).
+    const std::lock_guard<std::mutex> lock(nominal_.mutex);
+    if (!nominal_.step)
+      throw std::logic_error("residual arm predictor" + (path_.empty() ? std::string() : " " + path_) +
+                             ": no nominal model attached (ArmPredictor::AttachModel)");
+    if (l.nominal_errors) EncodeNominalErrors(l, *nominal_.step, q, qd, tau, x + l.num_base_inputs());
+    nominal_.step->Step(q + newest, qd + newest, tau + newest, l.horizon, q_next, qd_next);
+  }
+  // The learned correction on top.
+  PredictOutputs(x, y);
+  const int n = l.dof();
+  for (int i = 0; i < n; ++i) {
+    q_next[i] += y[i];
+    qd_next[i] += y[n + i];
+  }
 }
 
 void ArmPredictor::AttachModel(const ArmModel& model, const std::string& use) {
@@ -164,6 +167,7 @@ void ArmPredictor::Save(const std::string& path) const {
   out << YAML::Key << "history" << YAML::Value << l.history;
   out << YAML::Key << "horizon" << YAML::Value << l.horizon;
   out << YAML::Key << "command_lag" << YAML::Value << l.command_lag;
+  if (info_.residual) out << YAML::Key << "nominal_errors" << YAML::Value << l.nominal_errors;
   out << YAML::Key << "inputs" << YAML::Value << l.num_inputs();
   out << YAML::Key << "outputs" << YAML::Value << l.num_outputs();
   out << YAML::EndMap;
@@ -239,6 +243,10 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
     m.Require("history", &l.history, InRange(1, 100));
     m.Require("horizon", &l.horizon, InRange(1, 100));
     m.Require("command_lag", &l.command_lag, InRange(0, 1000));
+    if (info.residual)
+      m.Require("nominal_errors", &l.nominal_errors);
+    else if (m.Has("nominal_errors"))
+      m.Error("nominal_errors", "only a residual predictor (residual: true) has the nominal model's errors as inputs");
     errors.ThrowIfAny();
     int inputs = 0, outputs = 0;
     if (m.Require("inputs", &inputs) && inputs != l.num_inputs())
@@ -291,7 +299,7 @@ std::string ArmTrainOptions::Validate() const {
   if (kind != "linear" && kind != "mlp") return "--kind must be linear or mlp, got '" + kind + "'";
   if (history < 1 || history > 50) return "--history must be 1 to 50 samples, got " + std::to_string(history);
   if (horizon < 1 || horizon > 100) return "--horizon must be 1 to 100 samples, got " + std::to_string(horizon);
-  if (!(ridge >= 0)) return "ridge must not be negative";
+  if (!(ridge >= 0) || !(residual_ridge >= 0)) return "ridge must not be negative";
   if (!(validation_fraction > 0 && validation_fraction < 0.9)) return "validation fraction must be in (0, 0.9)";
   if (!(rollout_seconds >= 0)) return "rollout seconds must not be negative";
   if (kind == "mlp") return mlp.Validate();
@@ -352,6 +360,7 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
   info.residual = options.residual;
   info.model_name = model.name;
   info.layout = ArmLayoutFor(model, options.history, options.horizon);
+  info.layout.nominal_errors = options.residual && options.nominal_errors.value_or(options.kind == "linear");
   const ArmFeatureLayout& l = info.layout;
   const int n = l.dof();
   // A residual predictor learns what remains after the nominal model's step.
@@ -402,7 +411,7 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     const Eigen::RowVectorXd x_mean = train.x.colwise().mean(), y_mean = train.y.colwise().mean();
     Eigen::VectorXd scale;
     const Eigen::MatrixXd w =
-        FitRidge(train.x.rowwise() - x_mean, train.y.rowwise() - y_mean, options.ridge, &scale);  // in x out
+        FitRidge(train.x.rowwise() - x_mean, train.y.rowwise() - y_mean, options.residual ? options.residual_ridge : options.ridge, &scale);  // in x out
     predictor = MakeLinearArmPredictor(info, x_mean.transpose(), scale, w.transpose(), y_mean.transpose());
   } else {
     // The network early-stops on the held-out windows, placed last.

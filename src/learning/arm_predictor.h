@@ -24,6 +24,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -117,9 +118,14 @@ class ArmPredictor {
 struct ArmTrainOptions {
   std::string kind = "linear";       // linear | mlp
   bool residual = false;             // learn the correction to the nominal model's step
+  // Residual only: the nominal model's errors over the history as further inputs
+  // (arm_features.h). Unset: on for linear, off for mlp (measured, docs/arm_learning.md).
+  std::optional<bool> nominal_errors;
   int history = 4;                   // samples of history (docs/arm_learning.md: chosen by measurement)
   int horizon = 1;                   // H, samples
   double ridge = 1e-9;               // linear: L2 weight on standardised inputs, per sample
+  double residual_ridge = 1e-6;      // the same for a residual linear predictor (measured,
+                                     // docs/arm_learning.md: damps the gains on the nominal errors)
   double validation_fraction = 0.2;  // held out from the end of every log
   double rollout_seconds = 0.1;      // s, the held-out free-run check (H = 1)
   MlpOptions mlp;
