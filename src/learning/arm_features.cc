@@ -51,7 +51,12 @@ void EncodeNominalErrors(const ArmFeatureLayout& layout, ArmNominalStep& nominal
   std::vector<double> big_q, big_qd;
   double* qn = q_nominal;
   double* qdn = qd_nominal;
-  if (n > 64) big_q.resize(static_cast<std::size_t>(n)), big_qd.resize(big_q.size()), qn = big_q.data(), qdn = big_qd.data();
+  if (n > 64) {
+    big_q.resize(static_cast<std::size_t>(n));
+    big_qd.resize(big_q.size());
+    qn = big_q.data();
+    qdn = big_qd.data();
+  }
   for (int j = 0; j + 1 < layout.history; ++j) {
     nominal.Step(q + j * n, qd + j * n, tau + j * n, 1, qn, qdn);
     for (int i = 0; i < n; ++i) *out++ = q[(j + 1) * n + i] - qn[i];

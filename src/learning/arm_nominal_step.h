@@ -15,11 +15,16 @@
 // joint_flexibility's motor state) start afresh at every call: the step is then an
 // approximation of the loop's, still deterministic.
 //
+// One-sample steps are remembered for the last few (q, qd, tau) asked: a residual
+// predictor with the nominal errors as inputs asks for the same transitions again as its
+// window slides, and the answer is the same bits either way.
+//
 //   ArmNominalStep nominal(model);
 //   nominal.Step(q, qd, tau, 1, q_next, qd_next);
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "core/arm_simulation.h"
 #include "robots/arm/arm_model.h"
@@ -43,6 +48,9 @@ class ArmNominalStep {
   ArmModel model_;
   std::unique_ptr<ArmSimulation> sim_;  // over the model without its command delay
   Eigen::VectorXd q_, qd_, tau_;        // dof, scratch
+  // The last one-sample steps: key (q, qd, tau) and value (q_later, qd_later), a ring.
+  std::vector<std::vector<double>> keys_, values_;
+  std::size_t next_ = 0;
 };
 
 }  // namespace twinsim

@@ -410,8 +410,8 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     // output (gravity and torque offsets make a constant part).
     const Eigen::RowVectorXd x_mean = train.x.colwise().mean(), y_mean = train.y.colwise().mean();
     Eigen::VectorXd scale;
-    const Eigen::MatrixXd w =
-        FitRidge(train.x.rowwise() - x_mean, train.y.rowwise() - y_mean, options.residual ? options.residual_ridge : options.ridge, &scale);  // in x out
+    const double ridge = options.residual ? options.residual_ridge : options.ridge;
+    const Eigen::MatrixXd w = FitRidge(train.x.rowwise() - x_mean, train.y.rowwise() - y_mean, ridge, &scale);  // in x out
     predictor = MakeLinearArmPredictor(info, x_mean.transpose(), scale, w.transpose(), y_mean.transpose());
   } else {
     // The network early-stops on the held-out windows, placed last.

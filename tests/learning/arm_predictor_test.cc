@@ -9,6 +9,7 @@
 #include "core/arm_simulation.h"
 #include "core/error.h"
 #include "core/rng.h"
+#include "learning/arm_nominal_step.h"
 #include "learning/arm_trials.h"
 #include "learning/omni_predictor.h"
 #include "robots/arm/arm_dynamics.h"
@@ -277,6 +278,45 @@ TEST(ArmPredictor, TrainingIsDeterministic) {
   TrainArmPredictor(model, logs, options).Save(dir + "/a.pred");
   TrainArmPredictor(model, logs, options).Save(dir + "/b.pred");
   EXPECT_EQ(testing::ReadText(dir + "/a.pred"), testing::ReadText(dir + "/b.pred"));
+}
+
+// The nominal step is the loop's step over the model (delay taken out): bit for bit, for
+// one sample and for several, and a remembered step gives the same bits.
+TEST(ArmNominalStep, IsTheLoopsStepBitForBit) {
+  const ArmModel rrr = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
+  const Eigen::Vector3d q(0.1, 0.4, -1.0), qd(0.3, 0.0, -0.5);  // the shoulder at rest: Coulomb holds it
+  // The shoulder's torque within 0.3 N·m of what holds it still: its Coulomb friction (1 N·m) does.
+  const Eigen::Vector3d hold = InverseDynamics(rrr, q, qd, Eigen::VectorXd::Zero(3), false);
+  const Eigen::Vector3d tau0 = hold + Eigen::Vector3d(2, 0.3, 0), tau1 = hold + Eigen::Vector3d(-1, 5, 1),
+                        tau2 = hold + Eigen::Vector3d(0.5, -4, 2);
+  ArmSimulation sim(rrr, MakeArmBackend("analytic", rrr));  // delay 1: the Reset torque acts first
+  sim.Reset(q, qd, tau0);
+  int k = 0;
+  const Eigen::Vector3d sent[3] = {tau1, tau2, tau2};
+  const ArmController controller = [&](double, const Eigen::VectorXd&, const Eigen::VectorXd&) {
+    return Eigen::VectorXd(sent[k++]);
+  };
+  sim.Step(controller);
+  const Eigen::VectorXd q1 = sim.backend().q(), qd1 = sim.backend().qd();
+  sim.Step(controller);
+  sim.Step(controller);
+  ArmNominalStep nominal(rrr);
+  double taus[9], qa[3], qda[3], qb[3], qdb[3];
+  for (int i = 0; i < 3; ++i) taus[i] = tau0[i], taus[3 + i] = tau1[i], taus[6 + i] = tau2[i];
+  nominal.Step(q.data(), qd.data(), taus, 1, qa, qda);
+  nominal.Step(q.data(), qd.data(), taus, 1, qb, qdb);  // remembered
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(qa[i], q1[i]);
+    EXPECT_EQ(qda[i], qd1[i]);
+    EXPECT_EQ(qb[i], qa[i]);
+    EXPECT_EQ(qdb[i], qda[i]);
+  }
+  EXPECT_LT(std::abs(qda[1]), 1e-5);  // the shoulder sticks (to the friction solve's tolerance)
+  nominal.Step(q.data(), qd.data(), taus, 3, qa, qda);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(qa[i], sim.backend().q()[i]);
+    EXPECT_EQ(qda[i], sim.backend().qd()[i]);
+  }
 }
 
 // A residual predictor trained on an arm that is exactly its nominal model has nothing
