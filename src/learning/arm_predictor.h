@@ -124,7 +124,7 @@ struct ArmTrainOptions {
   int history = 4;                   // samples of history (docs/arm_learning.md: chosen by measurement)
   int horizon = 1;                   // H, samples
   double ridge = 1e-9;               // linear: L2 weight on standardised inputs, per sample
-  double residual_ridge = 1e-6;      // the same for a residual linear predictor (measured,
+  double residual_ridge = 1e-5;      // the same for a residual linear predictor (measured,
                                      // docs/arm_learning.md: damps the gains on the nominal errors)
   double validation_fraction = 0.2;  // held out from the end of every log
   double rollout_seconds = 0.1;      // s, the held-out free-run check (H = 1)

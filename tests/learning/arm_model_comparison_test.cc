@@ -91,8 +91,8 @@ TEST_F(ArmLearningComparison, OpenLoopPredictionOnHeldOutTrials) {
   for (int j = 0; j < 3; ++j) EXPECT_LT(lin.final_rms[j], 0.7 * phys.final_rms[j]) << "joint " << j + 1;
   EXPECT_TRUE(mlp.final_rms.allFinite());
   EXPECT_LT(mlp.final_rms.maxCoeff(), phys.final_rms.maxCoeff());
-  // The residual models over the nominal one. Measured: residual linear 1.5 / 2.3 / 8.2
-  // mrad (0.16 / 0.18 / 0.08 of the nominal model's, about half the pure linear model's);
+  // The residual models over the nominal one. Measured: residual linear 1.5 / 2.3 / 8.1
+  // mrad (0.17 / 0.18 / 0.07 of the nominal model's, about half the pure linear model's);
   // residual MLP 2.0 / 2.5 / 11.4.
   for (int j = 0; j < 3; ++j) {
     EXPECT_LT(rlin.final_rms[j], 0.3 * phys.final_rms[j]) << "joint " << j + 1;
@@ -126,8 +126,8 @@ TEST_F(ArmLearningComparison, LearnedBeatsTheNominalModelOnTheWritingTask) {
   EXPECT_LT(linear.q_rms.maxCoeff(), 0.9 * nominal.q_rms.maxCoeff());
   EXPECT_LT(mlp.q_rms.maxCoeff(), 0.03);
   // The residual models beat the nominal model on every joint. Measured (waist, shoulder,
-  // elbow, mrad RMS): nominal 0.84 / 0.63 / 6.11, residual linear 0.58 / 0.49 / 2.84
-  // (0.69 / 0.79 / 0.46 of it), residual MLP 0.53 / 0.43 / 2.40 (0.62 / 0.69 / 0.39;
+  // elbow, mrad RMS): nominal 0.84 / 0.63 / 6.11, residual linear 0.65 / 0.46 / 2.82
+  // (0.76 / 0.74 / 0.46 of it), residual MLP 0.53 / 0.43 / 2.40 (0.62 / 0.69 / 0.39;
   // other seeds of the small network 0.52-0.71 / 0.58-0.65 / 0.47-0.54).
   const ModelGap& residual_linear = c.gaps[c.gaps.size() - 2];
   const ModelGap& residual_mlp = c.gaps.back();
