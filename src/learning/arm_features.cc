@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+
+#include "learning/arm_nominal_step.h"
 
 namespace twinsim {
 
@@ -39,6 +42,26 @@ void EncodeArmInputs(const ArmFeatureLayout& layout, const double* q, const doub
   }
   for (int j = layout.history; j < layout.num_torques(); ++j)
     for (int i = 0; i < n; ++i) *out++ = tau[j * n + i];
+}
+
+void EncodeNominalErrors(const ArmFeatureLayout& layout, ArmNominalStep& nominal, const double* q, const double* qd,
+                         const double* tau, double* out) {
+  const int n = layout.dof();
+  double q_nominal[64], qd_nominal[64];  // dof <= 64 (ArmPredictor::Load)
+  std::vector<double> big_q, big_qd;
+  double* qn = q_nominal;
+  double* qdn = qd_nominal;
+  if (n > 64) {
+    big_q.resize(static_cast<std::size_t>(n));
+    big_qd.resize(big_q.size());
+    qn = big_q.data();
+    qdn = big_qd.data();
+  }
+  for (int j = 0; j + 1 < layout.history; ++j) {
+    nominal.Step(q + j * n, qd + j * n, tau + j * n, 1, qn, qdn);
+    for (int i = 0; i < n; ++i) *out++ = q[(j + 1) * n + i] - qn[i];
+    for (int i = 0; i < n; ++i) *out++ = qd[(j + 1) * n + i] - qdn[i];
+  }
 }
 
 void EncodeArmOutputs(const ArmFeatureLayout& layout, const double* q_i, const double* qd_i, const double* q_later,
@@ -89,20 +112,32 @@ ArmSequence ToArmSequence(const ArmLog& log, const ArmFeatureLayout& layout) {
   return seq;
 }
 
-int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data) {
+int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data,
+                     ArmNominalStep* nominal) {
   const int n = layout.dof(), h = layout.history, hz = layout.horizon;
   const int begin = std::max(first, seq.first_known_torque + h - 1);
   const int end = std::min(last, seq.rows() - 1 - hz);  // inclusive
   const int count = std::max(0, end - begin + 1);
+  if (layout.nominal_errors && !nominal)
+    throw std::invalid_argument("AppendArmSamples: the layout's nominal errors need the nominal model's step");
   Eigen::MatrixXd x(count, layout.num_inputs());
   Eigen::MatrixXd y(count, layout.num_outputs());
-  Eigen::VectorXd row_x(layout.num_inputs()), row_y(layout.num_outputs());
+  Eigen::VectorXd row_x(layout.num_inputs()), row_y(layout.num_outputs()), row_nominal(layout.num_outputs());
+  std::vector<double> q_nominal(static_cast<std::size_t>(n)), qd_nominal(q_nominal.size());
   for (int k = 0; k < count; ++k) {
     const int i = begin + k;
     const std::size_t start = static_cast<std::size_t>((i - h + 1) * n);
     EncodeArmInputs(layout, &seq.q[start], &seq.qd[start], &seq.acting[start], row_x.data());
+    if (layout.nominal_errors)
+      EncodeNominalErrors(layout, *nominal, &seq.q[start], &seq.qd[start], &seq.acting[start],
+                          row_x.data() + layout.num_base_inputs());
     const std::size_t now = static_cast<std::size_t>(i * n), later = static_cast<std::size_t>((i + hz) * n);
     EncodeArmOutputs(layout, &seq.q[now], &seq.qd[now], &seq.q[later], &seq.qd[later], row_y.data());
+    if (nominal) {
+      nominal->Step(&seq.q[now], &seq.qd[now], &seq.acting[now], hz, q_nominal.data(), qd_nominal.data());
+      EncodeArmOutputs(layout, &seq.q[now], &seq.qd[now], q_nominal.data(), qd_nominal.data(), row_nominal.data());
+      row_y -= row_nominal;
+    }
     x.row(k) = row_x.transpose();
     y.row(k) = row_y.transpose();
   }

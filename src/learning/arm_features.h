@@ -30,6 +30,8 @@
 
 namespace twinsim {
 
+class ArmNominalStep;  // arm_nominal_step.h
+
 struct ArmFeatureLayout {
   std::string joints;       // one letter per joint: 'R' revolute (sin, cos), 'P' prismatic (q)
   int history = 4;          // samples of history
@@ -37,10 +39,16 @@ struct ArmFeatureLayout {
   int command_lag = 1;      // D, samples from logging a command to it acting
   double sample_time = 0;   // s, Ts
 
+  // Residual predictors only: the nominal model's one-sample errors over the history's
+  // history - 1 transitions follow the inputs above (EncodeNominalErrors).
+  bool nominal_errors = false;
+
   int dof() const { return static_cast<int>(joints.size()); }
   // Numbers per history sample: positions (2 per revolute joint), velocities, torques.
   int per_sample() const;
-  int num_inputs() const { return per_sample() * history + dof() * (horizon - 1); }
+  // The states and torques (EncodeArmInputs).
+  int num_base_inputs() const { return per_sample() * history + dof() * (horizon - 1); }
+  int num_inputs() const { return num_base_inputs() + (nominal_errors ? 2 * dof() * (history - 1) : 0); }
   int num_outputs() const { return 2 * dof(); }
   // Torque rows the inputs need: history + H - 1.
   int num_torques() const { return history + horizon - 1; }
@@ -49,11 +57,20 @@ struct ArmFeatureLayout {
 // The layout for `model`'s joints and delay at its sample time.
 ArmFeatureLayout ArmLayoutFor(const ArmModel& model, int history, int horizon);
 
-// Writes the inputs into out (num_inputs()). q, qd: `history` rows of dof numbers,
-// oldest first, row-major; tau: num_torques() rows of dof torques acting over samples
-// i-history+1 .. i+H-1.
+// Writes the state and torque inputs into out (num_base_inputs()). q, qd: `history`
+// rows of dof numbers, oldest first, row-major; tau: num_torques() rows of dof torques
+// acting over samples i-history+1 .. i+H-1.
 void EncodeArmInputs(const ArmFeatureLayout& layout, const double* q, const double* qd, const double* tau,
                      double* out);
+
+// The nominal model's errors over the window's transitions, the inputs that follow the
+// base ones when layout.nominal_errors: for j = 0 .. history-2, the measured state
+// j + 1 minus the nominal model's step from state j under tau_j, as (q (dof), qd (dof)).
+// What the nominal model has lately missed (friction it lacks, a payload, an offset)
+// mostly persists for the next sample, so this tells a residual predictor much of its
+// next correction. Writes 2 dof (history - 1) numbers; arguments as EncodeArmInputs.
+void EncodeNominalErrors(const ArmFeatureLayout& layout, ArmNominalStep& nominal, const double* q, const double* qd,
+                         const double* tau, double* out);
 
 // The outputs (num_outputs()) for the state (q_i, qd_i) -> (q_{i+H}, qd_{i+H}).
 void EncodeArmOutputs(const ArmFeatureLayout& layout, const double* q_i, const double* qd_i, const double* q_later,
@@ -84,7 +101,11 @@ ArmSequence ToArmSequence(const ArmLog& log, const ArmFeatureLayout& layout);
 
 // Every window of a sequence whose newest sample lies in [first, last] (with its H-ahead
 // sample in the sequence and every acting torque known); appends to *data and returns
-// the number added.
-int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data);
+// the number added. With `nominal` (a residual predictor's base, arm_nominal_step.h) the
+// outputs are what remains after the nominal model's step: the measured outputs minus
+// the nominal model's (its state H samples after sample i under the acting torques).
+// A layout with nominal_errors needs `nominal` (else std::invalid_argument).
+int AppendArmSamples(const ArmSequence& seq, const ArmFeatureLayout& layout, int first, int last, ArmDataset* data,
+                     ArmNominalStep* nominal = nullptr);
 
 }  // namespace twinsim

@@ -3,8 +3,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -12,6 +14,7 @@
 #include "io/atomic_file.h"
 #include "io/yaml_reader.h"
 #include "learning/predictor_file.h"
+#include "robots/arm/arm_regressor.h"
 
 namespace twinsim {
 
@@ -31,6 +34,18 @@ ArmPredictor MakeMlpArmPredictor(ArmPredictorInfo info, Mlp mlp) {
   p.info_ = std::move(info);
   p.mlp_ = std::move(mlp);
   return p;
+}
+
+ArmPredictor::NominalSlot& ArmPredictor::NominalSlot::operator=(const NominalSlot& other) {
+  if (this == &other) return *this;
+  std::unique_ptr<ArmNominalStep> fresh;
+  {
+    const std::lock_guard<std::mutex> lock(other.mutex);
+    if (other.step) fresh = std::make_unique<ArmNominalStep>(other.step->model());
+  }
+  const std::lock_guard<std::mutex> lock(mutex);
+  step = std::move(fresh);
+  return *this;
 }
 
 void ArmPredictor::PredictOutputs(const double* inputs, double* outputs) const {
@@ -54,9 +69,34 @@ void ArmPredictor::Predict(const double* q, const double* qd, const double* tau,
   if (l.num_inputs() > 512) x_big.resize(static_cast<std::size_t>(l.num_inputs())), x = x_big.data();
   if (l.num_outputs() > 128) y_big.resize(static_cast<std::size_t>(l.num_outputs())), y = y_big.data();
   EncodeArmInputs(l, q, qd, tau, x);
-  PredictOutputs(x, y);
   const std::size_t newest = static_cast<std::size_t>((l.history - 1) * l.dof());
-  DecodeArmOutputs(l, y, q + newest, qd + newest, q_next, qd_next);
+  if (!info_.residual) {
+    PredictOutputs(x, y);
+    DecodeArmOutputs(l, y, q + newest, qd + newest, q_next, qd_next);
+    return;
+  }
+  {
+    // The nominal model's recent errors (inputs) and its step from the newest state under
+    // the torques acting from it on (rows history-1 .. history+H-2).
+    const std::lock_guard<std::mutex> lock(nominal_.mutex);
+    if (!nominal_.step)
+      throw std::logic_error("residual arm predictor" + (path_.empty() ? std::string() : " " + path_) +
+                             ": no nominal model attached (ArmPredictor::AttachModel)");
+    if (l.nominal_errors) EncodeNominalErrors(l, *nominal_.step, q, qd, tau, x + l.num_base_inputs());
+    nominal_.step->Step(q + newest, qd + newest, tau + newest, l.horizon, q_next, qd_next);
+  }
+  // The learned correction on top.
+  PredictOutputs(x, y);
+  const int n = l.dof();
+  for (int i = 0; i < n; ++i) {
+    q_next[i] += y[i];
+    qd_next[i] += y[n + i];
+  }
+}
+
+void ArmPredictor::AttachModel(const ArmModel& model, const std::string& use) {
+  CheckUse(model, info_.layout.horizon, use);
+  if (info_.residual) nominal_.Set(model);
 }
 
 void ArmPredictor::CheckUse(const ArmModel& model, int horizon, const std::string& use) const {
@@ -82,6 +122,25 @@ void ArmPredictor::CheckUse(const ArmModel& model, int horizon, const std::strin
   if (l.horizon != horizon)
     throw InputError(where, "predictor predicts " + std::to_string(l.horizon) + " sample(s) ahead, " + use +
                                 " needs " + std::to_string(horizon));
+  if (info_.residual) {
+    // The correction was learned on top of these parameters' nominal step.
+    const Eigen::VectorXd pi = StandardParameters(model);
+    const std::vector<std::string> names = StandardParameterNames(model);
+    if (pi.size() != info_.nominal_parameters.size())
+      throw InputError(where, "residual predictor holds " + std::to_string(info_.nominal_parameters.size()) +
+                                  " nominal parameters, model '" + model.name + "' has " + std::to_string(pi.size()) +
+                                  " (" + use + ")");
+    for (Eigen::Index k = 0; k < pi.size(); ++k) {
+      const double a = info_.nominal_parameters[k], b = pi[k];
+      if (std::abs(a - b) > 1e-9 * std::max({1.0, std::abs(a), std::abs(b)})) {
+        std::ostringstream msg;
+        msg << std::setprecision(17) << "residual predictor corrects model '" << info_.model_name
+            << "' with parameter " << names[static_cast<std::size_t>(k)] << " = " << a << ", this model file has "
+            << b << "; retrain it for this model (" << use << ")";
+        throw InputError(where, msg.str());
+      }
+    }
+  }
 }
 
 void ArmPredictor::Save(const std::string& path) const {
@@ -92,7 +151,15 @@ void ArmPredictor::Save(const std::string& path) const {
   out << YAML::Key << "twinsim_predictor" << YAML::Value << kArmPredictorFormatVersion;
   out << YAML::Key << "robot" << YAML::Value << "arm";
   out << YAML::Key << "kind" << YAML::Value << info_.kind;
+  out << YAML::Key << "residual" << YAML::Value << info_.residual;
   out << YAML::Key << "model" << YAML::Value << info_.model_name;
+  if (info_.residual) {
+    // What the nominal step was: this model's standard parameters (12 per joint).
+    out << YAML::Key << "nominal" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "step" << YAML::Value << "analytic";
+    EmitVector(out, "parameters", info_.nominal_parameters.data(), info_.nominal_parameters.size());
+    out << YAML::EndMap;
+  }
   out << YAML::Key << "dof" << YAML::Value << l.dof();
   out << YAML::Key << "sample_time" << YAML::Value << l.sample_time;
   out << YAML::Key << "layout" << YAML::Value << YAML::Flow << YAML::BeginMap;
@@ -100,6 +167,7 @@ void ArmPredictor::Save(const std::string& path) const {
   out << YAML::Key << "history" << YAML::Value << l.history;
   out << YAML::Key << "horizon" << YAML::Value << l.horizon;
   out << YAML::Key << "command_lag" << YAML::Value << l.command_lag;
+  if (info_.residual) out << YAML::Key << "nominal_errors" << YAML::Value << l.nominal_errors;
   out << YAML::Key << "inputs" << YAML::Value << l.num_inputs();
   out << YAML::Key << "outputs" << YAML::Value << l.num_outputs();
   out << YAML::EndMap;
@@ -136,9 +204,9 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
   YamlMap top(root, path, "", &errors);
   int version = 0;
   if (!top.Require("twinsim_predictor", &version)) errors.ThrowIfAny();
-  if (version != kArmPredictorFormatVersion) {
+  if (version < 1 || version > kArmPredictorFormatVersion) {
     top.Error("twinsim_predictor", "arm predictor format version " + std::to_string(version) +
-                                       " is not supported (this build reads version " +
+                                       " is not supported (this build reads versions 1 to " +
                                        std::to_string(kArmPredictorFormatVersion) + ")");
     errors.ThrowIfAny();
   }
@@ -146,9 +214,23 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
   ArmPredictorInfo info;
   ArmFeatureLayout& l = info.layout;
   top.Require("kind", &info.kind, std::vector<std::string>{"linear", "mlp"});
+  if (version >= 2) top.Require("residual", &info.residual);  // version 1 knew no residual predictors
   top.Require("model", &info.model_name);
   int dof = 0;
   top.Require("dof", &dof, InRange(1, 64));
+  if (info.residual) {
+    if (top.Has("nominal")) {
+      YamlMap m(top.Child("nominal"), path, "nominal", &errors);
+      std::string step;
+      m.Require("step", &step, std::vector<std::string>{"analytic"});
+      if (dof > 0) info.nominal_parameters = ReadVector(m, "parameters", 12 * dof);
+      m.Finish();
+    } else {
+      top.Missing("nominal");
+    }
+  } else if (top.Has("nominal")) {
+    top.Error("nominal", "only a residual predictor (residual: true) has a nominal model");
+  }
   top.Require("sample_time", &l.sample_time, Positive());
   if (top.Has("layout")) {
     YamlMap m(top.Child("layout"), path, "layout", &errors);
@@ -161,6 +243,10 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
     m.Require("history", &l.history, InRange(1, 100));
     m.Require("horizon", &l.horizon, InRange(1, 100));
     m.Require("command_lag", &l.command_lag, InRange(0, 1000));
+    if (info.residual)
+      m.Require("nominal_errors", &l.nominal_errors);
+    else if (m.Has("nominal_errors"))
+      m.Error("nominal_errors", "only a residual predictor (residual: true) has the nominal model's errors as inputs");
     errors.ThrowIfAny();
     int inputs = 0, outputs = 0;
     if (m.Require("inputs", &inputs) && inputs != l.num_inputs())
@@ -213,7 +299,7 @@ std::string ArmTrainOptions::Validate() const {
   if (kind != "linear" && kind != "mlp") return "--kind must be linear or mlp, got '" + kind + "'";
   if (history < 1 || history > 50) return "--history must be 1 to 50 samples, got " + std::to_string(history);
   if (horizon < 1 || horizon > 100) return "--horizon must be 1 to 100 samples, got " + std::to_string(horizon);
-  if (!(ridge >= 0)) return "ridge must not be negative";
+  if (!(ridge >= 0) || !(residual_ridge >= 0)) return "ridge must not be negative";
   if (!(validation_fraction > 0 && validation_fraction < 0.9)) return "validation fraction must be in (0, 0.9)";
   if (!(rollout_seconds >= 0)) return "rollout seconds must not be negative";
   if (kind == "mlp") return mlp.Validate();
@@ -271,10 +357,18 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
 
   ArmPredictorInfo info;
   info.kind = options.kind;
+  info.residual = options.residual;
   info.model_name = model.name;
   info.layout = ArmLayoutFor(model, options.history, options.horizon);
+  info.layout.nominal_errors = options.residual && options.nominal_errors.value_or(options.kind == "linear");
   const ArmFeatureLayout& l = info.layout;
   const int n = l.dof();
+  // A residual predictor learns what remains after the nominal model's step.
+  std::unique_ptr<ArmNominalStep> nominal;
+  if (options.residual) {
+    info.nominal_parameters = StandardParameters(model);
+    nominal = std::make_unique<ArmNominalStep>(model);
+  }
 
   // Per log: the first part trains, the last part validates (time order kept).
   ArmDataset train, validation;
@@ -289,8 +383,8 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     }
     ArmSequence seq = ToArmSequence(log, l);
     const int cut = static_cast<int>(std::round(seq.rows() * (1 - options.validation_fraction)));
-    const int n_train = AppendArmSamples(seq, l, 0, cut - 1 - l.horizon, &train);
-    const int n_val = AppendArmSamples(seq, l, cut, seq.rows() - 1, &validation);
+    const int n_train = AppendArmSamples(seq, l, 0, cut - 1 - l.horizon, &train, nominal.get());
+    const int n_val = AppendArmSamples(seq, l, cut, seq.rows() - 1, &validation, nominal.get());
     if (n_train < 10 || n_val < 1) {
       const int needed = l.command_lag + l.history + l.horizon;
       throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows()) + " rows give " +
@@ -316,8 +410,8 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     // output (gravity and torque offsets make a constant part).
     const Eigen::RowVectorXd x_mean = train.x.colwise().mean(), y_mean = train.y.colwise().mean();
     Eigen::VectorXd scale;
-    const Eigen::MatrixXd w =
-        FitRidge(train.x.rowwise() - x_mean, train.y.rowwise() - y_mean, options.ridge, &scale);  // in x out
+    const double ridge = options.residual ? options.residual_ridge : options.ridge;
+    const Eigen::MatrixXd w = FitRidge(train.x.rowwise() - x_mean, train.y.rowwise() - y_mean, ridge, &scale);  // in x out
     predictor = MakeLinearArmPredictor(info, x_mean.transpose(), scale, w.transpose(), y_mean.transpose());
   } else {
     // The network early-stops on the held-out windows, placed last.
@@ -337,6 +431,7 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     mlp_report = s.BriefReport();
     predictor = MakeMlpArmPredictor(info, std::move(net));
   }
+  if (options.residual) predictor.nominal_.Set(model);
 
   auto predict_all = [&](const ArmDataset& d) {
     Eigen::MatrixXd out(d.rows(), l.num_outputs());
@@ -375,6 +470,7 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   predictor.info_ = info;
+  predictor.path_.clear();
   if (summary) {
     summary->samples = info.samples;
     summary->train_samples = train.rows();

@@ -1,6 +1,9 @@
 // A learned arm model: predicts the joint state H samples ahead from the last samples
 // of joint states and drive torques (arm_features.h), by ridge regression or a small
-// neural net (learning/mlp.h). The learned arm backend (backends/learned/
+// neural net (learning/mlp.h). A residual ("hybrid") predictor learns only what the
+// nominal physical model of the arm misses: its prediction is the nominal model's step
+// (learning/arm_nominal_step.h) plus the learned correction, so it needs that model
+// attached (AttachModel; training attaches it) before it predicts. The learned arm backend (backends/learned/
 // learned_arm_backend.h) steps an arm with it inside the usual simulation loop.
 //
 // A predictor file (YAML, versioned, `robot: arm`) says what it was trained on: the arm
@@ -13,26 +16,36 @@
 //   p.Save("rrr.pred");
 //   ArmPredictor q = ArmPredictor::Load("rrr.pred");
 //   q.CheckUse(model, 1, "the learned arm backend");
+//   q.AttachModel(model, "my use");   // a residual predictor needs its nominal model
 //   q.Predict(qs, qds, taus, q_next.data(), qd_next.data());
 #pragma once
 
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "io/arm_log.h"
 #include "learning/arm_features.h"
+#include "learning/arm_nominal_step.h"
 #include "learning/mlp.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim {
 
-inline constexpr int kArmPredictorFormatVersion = 1;
+// Version 2 added `residual` (and the nominal model's parameters of a residual
+// predictor); version 1 files are read as non-residual predictors.
+inline constexpr int kArmPredictorFormatVersion = 2;
 
 struct ArmPredictorInfo {
   std::string kind;               // "linear" or "mlp"
+  bool residual = false;          // true: the output corrects the nominal model's step
   std::string model_name;         // the arm model it was trained for
+  Eigen::VectorXd nominal_parameters;  // residual only: the model's standard parameters (12 per
+                                       // joint, arm_regressor.h) that its nominal step used
   ArmFeatureLayout layout;        // its dof, sample time, history, horizon, command lag
   std::vector<std::string> logs;  // paths of the training logs
   int samples = 0;                // training + validation samples
@@ -47,17 +60,26 @@ class ArmPredictor {
   const ArmPredictorInfo& info() const { return info_; }
   const ArmFeatureLayout& layout() const { return info_.layout; }
 
-  // The outputs (num_outputs(), arm_features.h) for inputs laid out as layout() says.
+  bool residual() const { return info_.residual; }
+
+  // The learned outputs (num_outputs(), arm_features.h) for inputs laid out as layout()
+  // says; for a residual predictor, the correction to the nominal model's outputs.
   void PredictOutputs(const double* inputs, double* outputs) const;
   // The state H samples after the newest of `history` states q, qd (row-major history x
   // dof, oldest first) under the torques tau (num_torques() x dof): into q_next, qd_next
-  // (dof each).
+  // (dof each). Throws std::logic_error for a residual predictor without an attached
+  // model, CheckFailed when its nominal model runs away. One predictor object is safe to
+  // use from several threads (its nominal step is guarded); copies are independent.
   void Predict(const double* q, const double* qd, const double* tau, double* q_next, double* qd_next) const;
 
   // Throws InputError naming the file when the predictor was trained for another arm
   // model (name, joint count or kinds), sample time (more than 0.1 % off), delay or
-  // horizon; `use` names the user.
+  // horizon, or (residual) for a model whose dynamic or friction parameters differ from
+  // the ones its nominal step was trained with; `use` names the user.
   void CheckUse(const ArmModel& model, int horizon, const std::string& use) const;
+  // CheckUse(model, layout().horizon, use), then, for a residual predictor, builds its
+  // nominal step over `model`. Throws as CheckUse does.
+  void AttachModel(const ArmModel& model, const std::string& use);
 
   // Writes the file atomically.
   void Save(const std::string& path) const;
@@ -72,8 +94,20 @@ class ArmPredictor {
   friend ArmPredictor TrainArmPredictor(const ArmModel&, const std::vector<ArmLog>&, const struct ArmTrainOptions&,
                                         struct ArmTrainSummary*, const std::function<void(int, int, double)>&);
 
+  // A residual predictor's nominal step; a copy builds its own.
+  class NominalSlot {
+   public:
+    NominalSlot() = default;
+    NominalSlot(const NominalSlot& other) { *this = other; }
+    NominalSlot& operator=(const NominalSlot& other);
+    void Set(const ArmModel& model) { step = std::make_unique<ArmNominalStep>(model); }
+    std::unique_ptr<ArmNominalStep> step;
+    mutable std::mutex mutex;
+  };
+
   ArmPredictorInfo info_;
   std::string path_;  // where it was loaded from, for messages
+  NominalSlot nominal_;
   // linear: y = weights * ((x - mean) / scale) + bias
   Eigen::VectorXd input_mean_, input_scale_;  // in
   Eigen::MatrixXd weights_;                   // out x in
@@ -83,9 +117,15 @@ class ArmPredictor {
 
 struct ArmTrainOptions {
   std::string kind = "linear";       // linear | mlp
+  bool residual = false;             // learn the correction to the nominal model's step
+  // Residual only: the nominal model's errors over the history as further inputs
+  // (arm_features.h). Unset: on for linear, off for mlp (measured, docs/arm_learning.md).
+  std::optional<bool> nominal_errors;
   int history = 4;                   // samples of history (docs/arm_learning.md: chosen by measurement)
   int horizon = 1;                   // H, samples
   double ridge = 1e-9;               // linear: L2 weight on standardised inputs, per sample
+  double residual_ridge = 1e-5;      // the same for a residual linear predictor (measured,
+                                     // docs/arm_learning.md: damps the gains on the nominal errors)
   double validation_fraction = 0.2;  // held out from the end of every log
   double rollout_seconds = 0.1;      // s, the held-out free-run check (H = 1)
   MlpOptions mlp;

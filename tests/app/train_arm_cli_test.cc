@@ -31,9 +31,30 @@ TEST(TrainArmCli, TrainsAndRefusesBadInput) {
     EXPECT_EQ(p.layout().history, 4);
     EXPECT_EQ(p.layout().command_lag, 1);
   }
+  // Residual (hybrid) predictors, with and without the nominal model's errors as inputs.
+  for (const std::string extra : {"--kind linear", "--kind mlp --nominal-errors on"}) {
+    const auto r = testing::RunTwinsim("train --model " + model + " --log " + dir + "/trial.csv " + extra +
+                                       " --residual --epochs 3 --hidden 8 --out " + dir + "/residual.pred");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find(" predictor of arm rrr (3 joints), over its nominal model, with its recent errors"),
+              std::string::npos)
+        << r.out;
+    const ArmPredictor p = ArmPredictor::Load(dir + "/residual.pred");
+    EXPECT_TRUE(p.residual());
+    EXPECT_TRUE(p.layout().nominal_errors);
+    EXPECT_NO_THROW(p.CheckUse(hat, 1, "the test"));
+  }
+  auto r = testing::RunTwinsim("train --model " + model + " --log " + dir +
+                               "/trial.csv --nominal-errors off --out " + dir + "/x.pred");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--nominal-errors is for residual predictors only (add --residual)"), std::string::npos) << r.err;
+  r = testing::RunTwinsim("train --model " + testing::SourcePath("models/omni4.yaml") + " --log " + dir +
+                          "/trial.csv --residual --out " + dir + "/x.pred");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--residual and --nominal-errors are for arm models only"), std::string::npos) << r.err;
   // A log of another joint count.
   testing::WriteText(dir + "/two.csv", "t,q1,q2,tau1,tau2\n0,0,0,0,0\n0.001,0,0,0,0\n0.002,0,0,0,0\n0.003,0,0,0,0\n");
-  auto r = testing::RunTwinsim("train --model " + model + " --log " + dir + "/two.csv --kind linear --out " + dir + "/x.pred");
+  r = testing::RunTwinsim("train --model " + model + " --log " + dir + "/two.csv --kind linear --out " + dir + "/x.pred");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("two.csv:1: the log has 2 joints"), std::string::npos) << r.err;
   // Too short for the history.

@@ -5,9 +5,11 @@
 #include <cmath>
 
 #include "backends/arm/arm_backend.h"
+#include "backends/learned/learned_arm_backend.h"
 #include "core/arm_simulation.h"
 #include "core/error.h"
 #include "core/rng.h"
+#include "learning/arm_nominal_step.h"
 #include "learning/arm_trials.h"
 #include "learning/omni_predictor.h"
 #include "robots/arm/arm_dynamics.h"
@@ -276,6 +278,193 @@ TEST(ArmPredictor, TrainingIsDeterministic) {
   TrainArmPredictor(model, logs, options).Save(dir + "/a.pred");
   TrainArmPredictor(model, logs, options).Save(dir + "/b.pred");
   EXPECT_EQ(testing::ReadText(dir + "/a.pred"), testing::ReadText(dir + "/b.pred"));
+}
+
+// The nominal step is the loop's step over the model (delay taken out): bit for bit, for
+// one sample and for several, and a remembered step gives the same bits.
+TEST(ArmNominalStep, IsTheLoopsStepBitForBit) {
+  const ArmModel rrr = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
+  const Eigen::Vector3d q(0.1, 0.4, -1.0), qd(0.3, 0.0, -0.5);  // the shoulder at rest: Coulomb holds it
+  // The shoulder's torque within 0.3 N·m of what holds it still: its Coulomb friction (1 N·m) does.
+  const Eigen::Vector3d hold = InverseDynamics(rrr, q, qd, Eigen::VectorXd::Zero(3), false);
+  const Eigen::Vector3d tau0 = hold + Eigen::Vector3d(2, 0.3, 0), tau1 = hold + Eigen::Vector3d(-1, 5, 1),
+                        tau2 = hold + Eigen::Vector3d(0.5, -4, 2);
+  ArmSimulation sim(rrr, MakeArmBackend("analytic", rrr));  // delay 1: the Reset torque acts first
+  sim.Reset(q, qd, tau0);
+  int k = 0;
+  const Eigen::Vector3d sent[3] = {tau1, tau2, tau2};
+  const ArmController controller = [&](double, const Eigen::VectorXd&, const Eigen::VectorXd&) {
+    return Eigen::VectorXd(sent[k++]);
+  };
+  sim.Step(controller);
+  const Eigen::VectorXd q1 = sim.backend().q(), qd1 = sim.backend().qd();
+  sim.Step(controller);
+  sim.Step(controller);
+  ArmNominalStep nominal(rrr);
+  double taus[9], qa[3], qda[3], qb[3], qdb[3];
+  for (int i = 0; i < 3; ++i) taus[i] = tau0[i], taus[3 + i] = tau1[i], taus[6 + i] = tau2[i];
+  nominal.Step(q.data(), qd.data(), taus, 1, qa, qda);
+  nominal.Step(q.data(), qd.data(), taus, 1, qb, qdb);  // remembered
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(qa[i], q1[i]);
+    EXPECT_EQ(qda[i], qd1[i]);
+    EXPECT_EQ(qb[i], qa[i]);
+    EXPECT_EQ(qdb[i], qda[i]);
+  }
+  EXPECT_LT(std::abs(qda[1]), 1e-5);  // the shoulder sticks (to the friction solve's tolerance)
+  nominal.Step(q.data(), qd.data(), taus, 3, qa, qda);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(qa[i], sim.backend().q()[i]);
+    EXPECT_EQ(qda[i], sim.backend().qd()[i]);
+  }
+}
+
+// A residual predictor trained on an arm that is exactly its nominal model has nothing
+// to correct: every target is zero, so it must move exactly as the nominal model's loop
+// did, Coulomb sticking included (the same deterministic step in training and in use).
+TEST(ArmResidualPredictor, OverAnExactModelIsThatModel) {
+  const ArmModel rrr = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
+  TrainingTrialOptions trials;
+  trials.seconds = 2;
+  trials.stop_and_go = 1;  // stops: Coulomb friction sticks
+  const std::vector<ArmLog> logs = RecordTrainingTrials(rrr, rrr, trials, 1, 21);
+  ArmTrainOptions options;
+  options.residual = true;
+  ArmTrainSummary summary;
+  const ArmPredictor p = TrainArmPredictor(rrr, logs, options, &summary);
+  EXPECT_TRUE(p.residual());
+  EXPECT_TRUE(p.layout().nominal_errors);
+  EXPECT_EQ(p.layout().num_inputs(), 48 + 2 * 3 * 3);
+  const ArmSequence seq = ToArmSequence(logs[0], p.layout());
+  double worst = 0;
+  for (int start = 10; start + 200 < seq.rows(); start += 300)
+    worst = std::max(worst, ArmRolloutError(p, seq, start, 200).cwiseAbs().maxCoeff());
+  std::printf("[measured] residual over an exact model: train RMSE %.3g rad, 200-step rollout error %.3g rad\n",
+              summary.train_rmse, worst);
+  EXPECT_LT(summary.train_rmse, 1e-15);
+  EXPECT_LT(worst, 1e-12);
+}
+
+TEST(ArmResidualPredictor, FileRoundTripAttachAndChecks) {
+  const ArmModel model = Pendulum();
+  const std::vector<ArmLog> logs = {PendulumLog(model, 3, 2)};
+  const std::string dir = testing::TempDir("arm_residual_roundtrip");
+  for (const std::string kind : {"linear", "mlp"}) {
+    ArmTrainOptions options;
+    options.kind = kind;
+    options.residual = true;
+    options.nominal_errors = true;
+    options.mlp.hidden = {8};
+    options.mlp.max_epochs = 5;
+    const ArmPredictor p = TrainArmPredictor(model, logs, options);
+    const std::string path = dir + "/r_" + kind + ".pred";
+    p.Save(path);
+    const std::string text = testing::ReadText(path);
+    EXPECT_NE(text.find("twinsim_predictor: 2\n"), std::string::npos);
+    EXPECT_NE(text.find("residual: true\n"), std::string::npos);
+    EXPECT_NE(text.find("nominal_errors: true"), std::string::npos);
+    ArmPredictor back = ArmPredictor::Load(path);
+    EXPECT_TRUE(back.residual());
+    EXPECT_EQ(back.info().nominal_parameters, p.info().nominal_parameters);
+    const double q[4] = {0.1, 0.2, 0.3, 0.4}, qd[4] = {1, 1.5, 2, 2.5}, tau[4] = {1, 2, 3, 4};
+    double a[2], b[2];
+    p.Predict(q, qd, tau, a, a + 1);
+    // Loaded, it needs its nominal model before it can predict.
+    EXPECT_THROW(back.Predict(q, qd, tau, b, b + 1), std::logic_error);
+    back.AttachModel(model, "the test");
+    back.Predict(q, qd, tau, b, b + 1);
+    EXPECT_EQ(a[0], b[0]) << kind;
+    EXPECT_EQ(a[1], b[1]) << kind;
+    back.Save(path + "2");
+    EXPECT_EQ(text, testing::ReadText(path + "2"));
+    // The learned backend attaches the model itself: same steps from the loaded file.
+    auto from_file = MakeLearnedArmBackend(model, ArmPredictor::Load(path));
+    auto trained = MakeLearnedArmBackend(model, p);
+    for (auto* backend : {from_file.get(), trained.get()}) {
+      backend->Reset(Eigen::VectorXd::Constant(1, 0.3), Eigen::VectorXd::Constant(1, 0.5));
+      for (int k = 0; k < 50; ++k) backend->Step(Eigen::VectorXd::Constant(1, 2.0), model.sample_time);
+    }
+    EXPECT_EQ(from_file->q()[0], trained->q()[0]) << kind;
+    EXPECT_EQ(from_file->qd()[0], trained->qd()[0]) << kind;
+  }
+  // A model file with other dynamic parameters under the same name is refused.
+  const ArmPredictor p = ArmPredictor::Load(dir + "/r_linear.pred");
+  ArmModel heavier = model;
+  heavier.joints[0].child.mass = 1.1;
+  try {
+    p.CheckUse(heavier, 1, "the test");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("r_linear.pred: residual predictor corrects model 'pendulum' with parameter m1 = 1, "
+                                         "this model file has 1.1000000000000001; retrain it for this model (the test)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ArmResidualPredictor, ReadsVersion1AndRefusesInconsistentFiles) {
+  const ArmModel model = Pendulum();
+  const std::string dir = testing::TempDir("arm_residual_versions");
+  const ArmPredictor p = TrainArmPredictor(model, {PendulumLog(model, 2, 6)}, ArmTrainOptions{});
+  p.Save(dir + "/v2.pred");
+  const std::string v2 = testing::ReadText(dir + "/v2.pred");
+  ASSERT_NE(v2.find("twinsim_predictor: 2\nrobot: arm\nkind: linear\nresidual: false\n"), std::string::npos) << v2;
+  // The same predictor as version 1 wrote it: no `residual` key.
+  std::string v1 = v2;
+  v1.replace(v1.find("twinsim_predictor: 2\n"), 21, "twinsim_predictor: 1\n");
+  v1.erase(v1.find("residual: false\n"), 16);
+  const ArmPredictor old = ArmPredictor::Load(testing::WriteText(dir + "/v1.pred", v1));
+  EXPECT_FALSE(old.residual());
+  const double q[4] = {0.1, 0.2, 0.3, 0.4}, qd[4] = {1, 1.5, 2, 2.5}, tau[4] = {1, 2, 3, 4};
+  double a[2], b[2];
+  p.Predict(q, qd, tau, a, a + 1);
+  old.Predict(q, qd, tau, b, b + 1);
+  EXPECT_EQ(a[0], b[0]);
+  EXPECT_EQ(a[1], b[1]);
+  auto error_of = [&](const std::string& text) {
+    try {
+      ArmPredictor::Load(testing::WriteText(dir + "/bad.pred", text));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  // Version 1 knew no residual predictors.
+  std::string v1_residual = v1;
+  v1_residual.insert(v1_residual.find("model: pendulum"), "residual: true\n");
+  const std::string e1 = error_of(v1_residual);
+  EXPECT_NE(e1.find("bad.pred:4:1: unknown key 'residual'"), std::string::npos) << e1;
+  // A residual file without its nominal model, and a nominal model in a plain one.
+  std::string no_nominal = v2;
+  no_nominal.replace(no_nominal.find("residual: false"), 15, "residual: true");
+  const std::string e2 = error_of(no_nominal);
+  EXPECT_NE(e2.find("missing required key 'nominal'"), std::string::npos) << e2;
+  std::string stray = v2;
+  stray.insert(stray.find("dof: 1"), "nominal: {step: analytic, parameters: [1]}\n");
+  const std::string e3 = error_of(stray);
+  EXPECT_NE(e3.find("bad.pred:6:10: 'nominal': only a residual predictor (residual: true) has a nominal model"), std::string::npos)
+      << e3;
+  const std::string e4 = error_of("twinsim_predictor: 3\nrobot: arm\n");
+  EXPECT_NE(e4.find("bad.pred:1:20: 'twinsim_predictor': arm predictor format version 3 is not supported (this build reads "
+                   "versions 1 to 2)"),
+            std::string::npos)
+      << e4;
+}
+
+TEST(ArmResidualPredictor, TrainingIsDeterministic) {
+  const ArmModel model = Pendulum();
+  const std::vector<ArmLog> logs = {PendulumLog(model, 2, 7)};
+  const std::string dir = testing::TempDir("arm_residual_determinism");
+  for (const std::string kind : {"linear", "mlp"}) {
+    ArmTrainOptions options;
+    options.kind = kind;
+    options.residual = true;
+    options.mlp.hidden = {8, 8};
+    options.mlp.max_epochs = 5;
+    TrainArmPredictor(model, logs, options).Save(dir + "/a.pred");
+    TrainArmPredictor(model, logs, options).Save(dir + "/b.pred");
+    EXPECT_EQ(testing::ReadText(dir + "/a.pred"), testing::ReadText(dir + "/b.pred")) << kind;
+  }
 }
 
 TEST(ArmTrials, RecordingIsDeterministicAndCoversTheWorkspace) {

@@ -1,6 +1,8 @@
 // `twinsim train --model MODEL --log LOG.csv [--log ...] --kind linear|mlp --horizon H --out P`
+// (arms also: --history N, --residual [--nominal-errors on|off])
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "app/commands/commands.h"
 #include "app/progress.h"
@@ -21,6 +23,8 @@ struct TrainCliOptions {
   OmniTrainOptions train;
   int history = 4;     // arm only: samples of history
   bool history_given = false;
+  bool residual = false;                // arm only: learn the correction to the nominal model
+  std::optional<bool> nominal_errors;   // arm residual only
   bool quiet = false;
 };
 
@@ -37,10 +41,15 @@ int TrainArm(const TrainCliOptions& options) {
   train.horizon = options.train.horizon;
   train.history = options.history;
   train.mlp = options.train.mlp;
+  train.residual = options.residual;
+  if (options.nominal_errors && !options.residual)
+    throw InputError("--nominal-errors is for residual predictors only (add --residual)");
+  train.nominal_errors = options.nominal_errors;
   const std::string problem = train.Validate();
   if (!problem.empty()) throw InputError(problem);
 
-  Progress progress("train arm " + train.kind, !options.quiet);
+  const std::string what = (train.residual ? "residual " : "") + train.kind;
+  Progress progress("train arm " + what, !options.quiet);
   ArmTrainSummary summary;
   const ArmPredictor predictor =
       TrainArmPredictor(model, logs, train, &summary, [&](int epoch, int epochs, double validation_mse) {
@@ -51,8 +60,12 @@ int TrainArm(const TrainCliOptions& options) {
   progress.Finish();
   predictor.Save(options.out);
   if (!options.quiet) {
-    std::printf("%s predictor of arm %s (%d joints), %d sample(s) ahead at %g s: %s\n", train.kind.c_str(),
-                model.name.c_str(), model.dof(), train.horizon, model.sample_time, summary.BriefReport().c_str());
+    std::printf("%s predictor of arm %s (%d joints)%s, %d sample(s) ahead at %g s: %s\n", what.c_str(),
+                model.name.c_str(), model.dof(),
+                train.residual ? (predictor.layout().nominal_errors ? ", over its nominal model, with its recent errors"
+                                                                    : ", over its nominal model")
+                               : "",
+                train.horizon, model.sample_time, summary.BriefReport().c_str());
     std::printf("wrote:\n  %s\n", options.out.c_str());
   }
   return kExitOk;
@@ -61,6 +74,8 @@ int TrainArm(const TrainCliOptions& options) {
 int Train(const TrainCliOptions& options) {
   if (ModelFileRobotKind(options.model) == "arm") return TrainArm(options);
   if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
+  if (options.residual || options.nominal_errors)
+    throw InputError("--residual and --nominal-errors are for arm models only");
   // Read and check everything before training or writing.
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs;
@@ -99,6 +114,9 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       "Arms (URDF, or YAML with 'robot: arm'; logs t,q1..qn,tau1..taun[,qd..]): the last --history\n"
       "samples of joint positions (sin, cos for revolute joints), velocities and the torques acting\n"
       "then (the logged command, delay_samples later); output: the joint state H samples ahead.\n"
+      "--residual: learn only the correction to the model file's own one-sample step (rigid-body\n"
+      "dynamics with its friction); --nominal-errors on|off adds that model's errors over the\n"
+      "history to the inputs (default on for linear, off for mlp).\n"
       "See docs/arm_learning.md.");
   cmd->add_option("--model", options->model, "The robot's model file (its name and delay go into the predictor)")
       ->required();
@@ -111,6 +129,13 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--history", options->history, "Arms only: samples of history in the inputs")
       ->capture_default_str()
       ->each([options](const std::string&) { options->history_given = true; });
+  cmd->add_flag("--residual", options->residual,
+                "Arms only: predict the model's own step plus a learned correction (hybrid)");
+  cmd->add_option_function<std::string>(
+         "--nominal-errors",
+         [options](const std::string& v) { options->nominal_errors = v == "on"; },
+         "Arms, with --residual: the nominal model's recent errors as inputs (on|off)")
+      ->check(CLI::IsMember({"on", "off"}));
   cmd->add_option("--seed", options->train.mlp.seed, "Seed of the neural net's initialisation and batches")
       ->capture_default_str();
   cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training")->capture_default_str();

@@ -14,6 +14,8 @@ class LearnedArmBackend final : public ArmBackend {
  public:
   LearnedArmBackend(const ArmModel& model, const ArmPredictor& predictor)
       : model_(model), predictor_(predictor), layout_(predictor.layout()), n_(model.dof()) {
+    // A residual predictor steps the nominal model of `model` under its correction.
+    predictor_.AttachModel(model, "the learned arm backend");
     const std::size_t size = static_cast<std::size_t>(layout_.history * n_);
     q_hist_.resize(size);
     qd_hist_.resize(size);

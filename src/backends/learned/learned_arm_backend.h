@@ -3,7 +3,9 @@
 // the physics backends (core/arm_simulation.h): the loop delays the commands by the
 // model's delay_samples as always and hands it the drive torque acting over each sample.
 // The predictor has learned the arm's friction and effects with its bodies, so the
-// backend reports includes_plant_effects() and the loop adds none of them on top.
+// backend reports includes_plant_effects() and the loop adds none of them on top. A
+// residual predictor (the nominal model's step plus a learned correction) is used the
+// same way: the backend attaches `model` to it as its nominal model.
 //
 // Its state is the predictor's window: the last `history` joint states and the torques
 // that acted over them (ArmBackendState::exact holds the window, so Save/Restore are
