@@ -272,25 +272,12 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
   errors.ThrowIfAny();
 
   const int in = l.num_inputs(), out = l.num_outputs();
-  ArmPredictor p;
-  if (info.kind == "linear") {
-    top.Child("mlp");
-    YamlMap m(top.Child("linear"), path, "linear", &errors);
-    Eigen::VectorXd mean = ReadVector(m, "input_mean", in);
-    Eigen::VectorXd scale = ReadVector(m, "input_scale", in);
-    Eigen::MatrixXd weights = ReadMatrix(m, "weights", out, in);
-    Eigen::VectorXd bias = ReadVector(m, "bias", out);
-    m.Finish();
-    if (errors.empty() && (scale.array() <= 0).any()) m.Error("input_scale", "must be positive");
-    top.Finish();
-    errors.ThrowIfAny();
-    p = MakeLinearArmPredictor(info, mean, scale, weights, bias);
-  } else {
-    top.Child("linear");
-    YamlMap m(top.Child("mlp"), path, "mlp", &errors);
-    top.Finish();
-    p = MakeMlpArmPredictor(info, ReadMlp(m, in, out, path, &errors));
-  }
+  LinearPredictorParameters linear;
+  Mlp mlp;
+  ReadPredictorModel(top, info.kind, in, out, path, &errors, &linear, &mlp);
+  ArmPredictor p = info.kind == "linear" ? MakeLinearArmPredictor(info, linear.input_mean, linear.input_scale,
+                                                                  linear.weights, linear.bias)
+                                         : MakeMlpArmPredictor(info, std::move(mlp));
   p.path_ = path;
   return p;
 }

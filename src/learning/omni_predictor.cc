@@ -170,26 +170,13 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();
-  OmniPredictor p;
-  if (info.kind == "linear") {
-    top.Child("mlp");
-    YamlMap m(top.Child("linear"), path, "linear", &errors);
-    Eigen::VectorXd mean = ReadVector(m, "input_mean", in);
-    Eigen::VectorXd scale = ReadVector(m, "input_scale", in);
-    Eigen::MatrixXd weights = ReadMatrix(m, "weights", 3, in);
-    Eigen::VectorXd bias = ReadVector(m, "bias", 3);
-    m.Finish();
-    if (errors.empty() && (scale.array() <= 0).any()) m.Error("input_scale", "must be positive");
-    top.Finish();
-    errors.ThrowIfAny();
-    p = MakeLinearPredictor(info, mean, scale, weights, bias);
-  } else {
-    top.Child("linear");
-    YamlMap m(top.Child("mlp"), path, "mlp", &errors);
-    top.Finish();
-    Mlp net = ReadMlp(m, in, 3, path, &errors);
-    p = MakeMlpPredictor(info, std::move(net));
-  }
+  LinearPredictorParameters linear;
+  Mlp mlp;
+  ReadPredictorModel(top, info.kind, in, FeatureLayout::kNumOutputs, path, &errors, &linear, &mlp);
+  OmniPredictor p = info.kind == "linear"
+                        ? MakeLinearPredictor(info, linear.input_mean, linear.input_scale, linear.weights,
+                                              Eigen::Vector3d(linear.bias))
+                        : MakeMlpPredictor(info, std::move(mlp));
   p.path_ = path;
   return p;
 }

@@ -96,6 +96,27 @@ Mlp ReadMlp(YamlMap& m, int inputs, int outputs, const std::string& path, ErrorL
   }
 }
 
+void ReadPredictorModel(YamlMap& top, const std::string& kind, int inputs, int outputs, const std::string& path,
+                        ErrorList* errors, LinearPredictorParameters* linear, Mlp* mlp) {
+  if (kind == "linear") {
+    top.Child("mlp");
+    YamlMap m(top.Child("linear"), path, "linear", errors);
+    linear->input_mean = ReadVector(m, "input_mean", inputs);
+    linear->input_scale = ReadVector(m, "input_scale", inputs);
+    linear->weights = ReadMatrix(m, "weights", outputs, inputs);
+    linear->bias = ReadVector(m, "bias", outputs);
+    m.Finish();
+    if (errors->empty() && (linear->input_scale.array() <= 0).any()) m.Error("input_scale", "must be positive");
+    top.Finish();
+    errors->ThrowIfAny();
+  } else {
+    top.Child("linear");
+    YamlMap m(top.Child("mlp"), path, "mlp", errors);
+    top.Finish();
+    *mlp = ReadMlp(m, inputs, outputs, path, errors);
+  }
+}
+
 Eigen::MatrixXd FitRidge(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, double ridge, Eigen::VectorXd* scale) {
   Eigen::VectorXd s = x.array().square().colwise().mean().sqrt().transpose();
   for (long i = 0; i < s.size(); ++i)

@@ -53,6 +53,20 @@ void EmitMlp(YAML::Emitter& out, const Mlp& net);
 // Throws InputError (every problem collected in `errors` first) for a corrupt file.
 Mlp ReadMlp(YamlMap& m, int inputs, int outputs, const std::string& path, ErrorList* errors);
 
+// A linear predictor's numbers: outputs = weights ((x - input_mean) / input_scale) + bias.
+struct LinearPredictorParameters {
+  Eigen::VectorXd input_mean, input_scale;  // in
+  Eigen::MatrixXd weights;                  // out x in
+  Eigen::VectorXd bias;                     // out
+};
+
+// Reads the model block of a predictor file of `kind` ("linear" into *linear, "mlp" into
+// *mlp) for `inputs` -> `outputs`, refusing the other kind's block, and finishes `top`
+// (unknown keys are errors). Throws InputError listing every problem collected in
+// `errors` (a wrong size, a non-positive input scale, a corrupt network).
+void ReadPredictorModel(YamlMap& top, const std::string& kind, int inputs, int outputs, const std::string& path,
+                        ErrorList* errors, LinearPredictorParameters* linear, Mlp* mlp);
+
 // Ridge regression through the origin on columns scaled to unit RMS: returns W
 // (in x out) minimising |Z W - y|^2 + ridge N |W|^2 with Z = x / scale (column-wise),
 // and the scales (in; columns that are all zero get 1) in *scale. x: N x in, y: N x out.
