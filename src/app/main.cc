@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   AddTunePidCommand(app, &exit_code);
   AddExciteCommand(app, &exit_code);
   AddIdentifyCommand(app, &exit_code);
+  AddIlcCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -147,6 +147,12 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
   if (std::abs(reference.sample_time - plant.sample_time) > 1e-12 * plant.sample_time) {
     throw std::invalid_argument("RunTrackingTrial: the reference's sample time differs from the plant's");
   }
+  const Eigen::MatrixXd* feedforward = options.feedforward;
+  if (feedforward && (feedforward->rows() != samples || feedforward->cols() != n)) {
+    throw std::invalid_argument("RunTrackingTrial: the feedforward is " + std::to_string(feedforward->rows()) + " x " +
+                                std::to_string(feedforward->cols()) + ", the reference needs " +
+                                std::to_string(samples) + " x " + std::to_string(n));
+  }
 
   ArmSimulation sim(plant, std::move(backend));
   const ArmModel& body = sim.model();  // the plant with its payload lumped
@@ -190,6 +196,7 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
       tau = PdFeedforwardTorque(hat, gains, options.friction, q_a, qd_a, qdd_a, q, qd, &model_part);
       tau += gains.kp.cwiseProduct(q_r - q_a) + gains.kd.cwiseProduct(qd_r - qd_a);  // feedback on the error now
     }
+    if (feedforward) tau += feedforward->row(k).transpose();
     if (options.dither > 0) {
       if (k % options.dither_hold == 0)
         for (int j = 0; j < n; ++j) dither(j) = dither_rng.Gaussian(dither_sigma(j));

@@ -76,6 +76,13 @@ struct TrackingOptions {
   double dither = 0;
   int dither_hold = 10;             // samples
   std::uint64_t dither_seed = 1;
+  // An extra feedforward torque (N x dof, N·m or N; not owned, may be null), row k added
+  // to the controller's output at sample k, before the dither and the clamp: the learned
+  // signal of iterative learning control (control/iterative_learning.h) or an injected
+  // test signal for measuring a closed-loop frequency response. Like every command it
+  // reaches the joints the model's delay_samples later. It must have one row per
+  // reference sample and one column per joint (RunTrackingTrial checks).
+  const Eigen::MatrixXd* feedforward = nullptr;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -137,7 +144,8 @@ struct TrackingTrial {
 // Runs `options.controller` with model `hat` on `plant` (simulated on options.backend)
 // along `reference`, from rest at its first sample with the model's gravity torque as
 // every command before t = 0. Throws std::invalid_argument for invalid options, a model
-// and plant of different dof, a reference of the wrong width or sample time, and
+// and plant of different dof, a reference of the wrong width or sample time, a
+// feedforward of another shape than the reference's q, and
 // InputError for an unknown backend; CheckFailed when the arm runs away.
 TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                                const TrackingOptions& options);

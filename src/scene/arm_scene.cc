@@ -157,6 +157,85 @@ std::vector<ArmPlotSpec> ReadArmPlots(YamlMap& top) {
   return specs;
 }
 
+// The `ilc:` block (IlcSpec).
+void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& plant, bool models_ok,
+             ErrorList* errors, IlcSpec* ilc) {
+  YamlMap m(node, path, "ilc", errors);
+  if (!m.valid()) return;
+  ilc->present = true;
+  IlcOptions& o = ilc->options;
+  m.Get("trials", &o.trials, InRange(0, 1000));
+  m.Get("gain", &o.gain, InRange(1e-6, 2));
+  m.Get("learning_filter", &ilc->learning_filter, {"fitted", "model"});
+  m.Get("q_order", &o.q_order, InRange(0, 16));
+  if (m.Get("q_cutoff", &o.q_cutoff, Positive()) && plant.sample_time > 0 && o.q_cutoff >= 0.5 / plant.sample_time) {
+    m.Error("q_cutoff", "must lie below the Nyquist frequency " + std::to_string(0.5 / plant.sample_time) + " Hz");
+  }
+  if (m.Has("frf")) {
+    YamlMap f(m.Child("frf"), path, "ilc.frf", errors);
+    if (f.valid()) {
+      FrfOptions& frf = ilc->frf;
+      f.Get("period", &frf.period, InRange(1e-3, 3600));
+      f.Get("periods", &frf.periods, InRange(1, 1000));
+      f.Get("amplitude", &frf.amplitude, InRange(1e-6, 1));
+      std::vector<double> band;
+      if (f.Get("band", &band, 2, Positive())) {
+        if (band[1] <= band[0]) {
+          f.Error("band", "expected [low, high] Hz with low < high");
+        } else {
+          frf.f_min = band[0], frf.f_max = band[1];
+        }
+      }
+      if (f.Get("fit_band", &band, 2, Positive())) {
+        if (band[1] <= band[0]) {
+          f.Error("fit_band", "expected [low, high] Hz with low < high");
+        } else {
+          ilc->fit_min = band[0], ilc->fit_max = band[1];
+        }
+      }
+      f.Get("max_shift", &ilc->max_shift, InRange(0, 100));
+      const YAML::Node list = f.Child("postures");
+      if (list.IsDefined() && !list.IsNull()) {
+        if (!list.IsSequence() || list.size() == 0) {
+          f.Error("postures", "expected a list of joint positions, e.g. [[0, 0.6, -1.7], [0.3, 0.9, -1.5]]");
+        } else if (models_ok) {
+          for (std::size_t i = 0; i < list.size(); ++i) {
+            const YAML::Node item = list[i];
+            const SourceLocation where = f.Where(item);
+            if (!item.IsSequence() || static_cast<int>(item.size()) != plant.dof()) {
+              errors->Add(where, "'ilc.frf.postures[" + std::to_string(i) + "]': expected " +
+                                     std::to_string(plant.dof()) + " joint positions");
+              continue;
+            }
+            Eigen::VectorXd q(plant.dof());
+            bool ok = true;
+            for (int j = 0; j < plant.dof(); ++j) {
+              const auto v = ReadNumber(item[static_cast<std::size_t>(j)], path,
+                                        "ilc.frf.postures[" + std::to_string(i) + "]", errors);
+              ok = ok && v.has_value();
+              if (v) q[j] = *v;
+            }
+            if (!ok) continue;
+            for (int j = 0; j < plant.dof(); ++j) {
+              const ArmJoint& joint = plant.joints[static_cast<std::size_t>(j)];
+              if (q[j] < joint.lower || q[j] > joint.upper) {
+                errors->Add(where, "'ilc.frf.postures[" + std::to_string(i) + "]': joint " + std::to_string(j + 1) +
+                                       " ('" + joint.name + "') is beyond its limits");
+                ok = false;
+              }
+            }
+            if (ok) ilc->postures.push_back(q);
+          }
+        }
+      }
+      std::string why;
+      if (!frf.IsValid(&why)) f.Error("band", why);
+      f.Finish();
+    }
+  }
+  m.Finish();
+}
+
 ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir) {
   ErrorList errors;
   ArmScene scene;
@@ -214,6 +293,8 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
     top.Missing("task");
   }
   scene.plots = ReadArmPlots(top);
+  if (top.Has("ilc")) ReadIlc(top.Child("ilc"), path, scene.plant, models_ok, &errors, &scene.ilc);
+  scene.ilc.frf.seed = scene.seed;
   top.Finish();
   errors.ThrowIfAny();
   return scene;
@@ -308,6 +389,14 @@ ArmReference ArmSceneReference(const ArmScene& scene) {
   }
   FillToolPath(hat, task.writing.tool, &ref);
   return ref;
+}
+
+std::vector<Eigen::VectorXd> IlcPostures(const ArmScene& scene, const ArmReference& reference) {
+  if (!scene.ilc.postures.empty()) return scene.ilc.postures;
+  std::vector<Eigen::VectorXd> postures;
+  const Eigen::Index last = reference.q.rows() - 1;
+  for (Eigen::Index i = 0; i < 4; ++i) postures.push_back(reference.q.row(last * i / 3).transpose());
+  return postures;
 }
 
 }  // namespace twinsim

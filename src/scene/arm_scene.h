@@ -21,6 +21,8 @@
 #include <Eigen/Core>
 
 #include "control/computed_torque.h"
+#include "control/iterative_learning.h"
+#include "identification/closed_loop_frf.h"
 #include "control/writing_task.h"
 #include "learning/arm_trials.h"
 #include "robots/arm/arm_model.h"
@@ -58,6 +60,21 @@ struct ArmPlotSpec {
   std::string title;  // "{scene}", "{backend}" replaced; empty: a title naming the plot
 };
 
+// The `ilc:` block: iterative learning control trials (`twinsim ilc`,
+// control/iterative_learning.h) and how the process sensitivity is measured for the
+// learning filter (identification/closed_loop_frf.h).
+struct IlcSpec {
+  bool present = false;               // the scene has an `ilc:` block
+  IlcOptions options;                 // trials, gain, q_order, q_cutoff
+  std::string learning_filter = "fitted";  // fitted (to the measured FRF) | model (the controller's model)
+  FrfOptions frf;                     // period, periods, band, amplitude (seed: the scene's)
+  // rad or m, one per joint each; empty: 4 postures along the task's reference (its
+  // first and last sample and two in between).
+  std::vector<Eigen::VectorXd> postures;
+  double fit_min = 2, fit_max = 80;   // Hz, the band the learning filter is fitted over
+  int max_shift = 5;                  // samples, the largest delay tau tried by the fit
+};
+
 struct ArmScene {
   std::string path;
   std::string name;
@@ -69,6 +86,7 @@ struct ArmScene {
   ArmTaskSpec task;
   TrackingOptions tracking;          // controller, gains, compensation; backend set by run
   std::vector<ArmPlotSpec> plots;
+  IlcSpec ilc;
 };
 
 // "arm" when the scene file's top level has `robot: arm`, else "omni". Throws InputError
@@ -84,5 +102,9 @@ ArmScene LoadArmSceneFromString(const std::string& yaml, const std::string& name
 // the scene) when the writing task cannot be drawn by the hat model's arm (out of
 // reach, beyond a limit, not a waist-shoulder-elbow arm).
 ArmReference ArmSceneReference(const ArmScene& scene);
+
+// The postures the ILC's frequency responses are measured at: scene.ilc.postures, or
+// 4 along `reference` (its first and last sample and two evenly in between).
+std::vector<Eigen::VectorXd> IlcPostures(const ArmScene& scene, const ArmReference& reference);
 
 }  // namespace twinsim

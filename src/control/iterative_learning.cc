@@ -1,0 +1,244 @@
+// Iterative learning control: learning filters, the update and the trials; see
+// iterative_learning.h.
+#include "control/iterative_learning.h"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "robots/arm/arm_dynamics.h"
+#include "signal/butterworth.h"
+
+namespace twinsim {
+namespace {
+
+// The basis responses of L at z = e^{j w Ts}: the inertia at z^shift and at
+// z^(shift+1), the damping (the stiffness's is 1).
+void Basis(double frequency_hz, double ts, int shift, std::complex<double>* b2, std::complex<double>* b2_early,
+           std::complex<double>* b1) {
+  const std::complex<double> z = std::polar(1.0, 2 * M_PI * frequency_hz * ts);
+  *b2 = std::pow(z, shift) * (z - 2.0 + 1.0 / z) / (ts * ts);
+  *b2_early = z * *b2;
+  *b1 = (z - 1.0 / z) / (2 * ts);
+}
+
+void CheckJoint(const ClosedLoopFrf& frf, int joint) {
+  if (joint < 0 || joint >= static_cast<int>(frf.response.size())) {
+    throw std::invalid_argument("ILC: joint " + std::to_string(joint + 1) + " is not in the frequency response");
+  }
+}
+
+}  // namespace
+
+std::complex<double> LearningFilter::Response(double frequency_hz, double sample_time) const {
+  std::complex<double> b2, b2e, b1;
+  Basis(frequency_hz, sample_time, shift, &b2, &b2e, &b1);
+  return inertia * b2 + inertia_early * b2e + damping * b1 + stiffness;
+}
+
+Eigen::VectorXd LearningFilter::Apply(const Eigen::VectorXd& e, double sample_time) const {
+  const Eigen::Index n = e.size();
+  Eigen::VectorXd out(n);
+  if (n == 0) return out;
+  auto at = [&](Eigen::Index i) { return e[std::clamp<Eigen::Index>(i, 0, n - 1)]; };
+  const double h = sample_time;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::Index c = k + shift;
+    out[k] = (inertia * (at(c + 1) - 2 * at(c) + at(c - 1)) + inertia_early * (at(c + 2) - 2 * at(c + 1) + at(c))) /
+                 (h * h) +
+             damping * (at(k + 1) - at(k - 1)) / (2 * h) + stiffness * at(k);
+  }
+  return out;
+}
+
+std::string LearningFilter::Summary() const {
+  std::ostringstream out;
+  out.precision(4);
+  out << "tau " << shift << " samples, inertia " << inertia + inertia_early << " kg m^2 (" << inertia << " at tau, "
+      << inertia_early << " at tau + 1), damping " << damping << " N m s/rad, stiffness " << stiffness << " N m/rad";
+  if (residual > 0) out << " (fit residual RMS |PS L - 1| = " << residual << ")";
+  return out.str();
+}
+
+LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_min, double f_max, int max_shift) {
+  CheckJoint(frf, joint);
+  if (max_shift < 0) throw std::invalid_argument("FitLearningFilter: max_shift must be >= 0");
+  std::vector<Eigen::Index> lines;
+  for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
+    if (frf.frequency[i] >= f_min - 1e-9 && frf.frequency[i] <= f_max + 1e-9) lines.push_back(i);
+  }
+  if (lines.size() < 2) {
+    throw std::invalid_argument("FitLearningFilter: fewer than 2 measured lines in [" + std::to_string(f_min) + ", " +
+                                std::to_string(f_max) + "] Hz");
+  }
+  const auto& responses = frf.response[static_cast<std::size_t>(joint)];
+  const auto rows = static_cast<Eigen::Index>(2 * lines.size() * responses.size());
+  LearningFilter best;
+  best.residual = std::numeric_limits<double>::infinity();
+  for (int shift = 0; shift <= max_shift; ++shift) {
+    // PS (a2 B2 + a1 B1 + a0) = 1, real and imaginary parts, each column scaled to unit
+    // norm so that the inertia (~1) and the stiffness (~1e3) are solved alike.
+    Eigen::MatrixXd a(rows, 4);
+    Eigen::VectorXd b(rows);
+    Eigen::Index r = 0;
+    for (const Eigen::VectorXcd& ps : responses) {
+      for (Eigen::Index i : lines) {
+        std::complex<double> b2, b2e, b1;
+        Basis(frf.frequency[i], frf.sample_time, shift, &b2, &b2e, &b1);
+        const std::complex<double> c[4] = {ps[i] * b2, ps[i] * b2e, ps[i] * b1, ps[i]};
+        for (int k = 0; k < 4; ++k) a(r, k) = c[k].real(), a(r + 1, k) = c[k].imag();
+        b[r] = 1, b[r + 1] = 0;
+        r += 2;
+      }
+    }
+    const Eigen::Vector4d scale = a.colwise().norm().transpose().cwiseMax(1e-300);
+    const Eigen::Vector4d x = (a * scale.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(b).cwiseQuotient(scale);
+    LearningFilter f;
+    f.shift = shift, f.inertia = x[0], f.inertia_early = x[1], f.damping = x[2], f.stiffness = x[3];
+    double sum = 0;
+    for (const Eigen::VectorXcd& ps : responses) {
+      for (Eigen::Index i : lines) sum += std::norm(ps[i] * f.Response(frf.frequency[i], frf.sample_time) - 1.0);
+    }
+    f.residual = std::sqrt(sum / static_cast<double>(rows / 2));
+    if (f.residual < best.residual) best = f;
+  }
+  return best;
+}
+
+LearningFilter ModelLearningFilter(const ArmModel& hat, const TrackingOptions& tracking, const Eigen::VectorXd& q,
+                                   const Eigen::VectorXd& q_start, int joint) {
+  if (joint < 0 || joint >= hat.dof()) throw std::invalid_argument("ModelLearningFilter: no such joint");
+  if (q.size() != hat.dof() || q_start.size() != hat.dof()) throw std::invalid_argument("ModelLearningFilter: bad posture size");
+  const double m = MassMatrix(hat, q)(joint, joint);
+  LearningFilter f;
+  f.shift = hat.delay_samples;
+  f.inertia = f.inertia_early = m / 2;
+  if (tracking.controller == TrackingController::kPdFeedforward) {
+    const TrackingGains g = PdFeedforwardGains(hat, q_start, tracking.bandwidth, tracking.damping);
+    f.damping = g.kd[joint], f.stiffness = g.kp[joint];
+  } else {
+    const TrackingGains g = ComputedTorqueGains(hat.dof(), tracking.bandwidth, tracking.damping);
+    f.damping = m * g.kd[joint], f.stiffness = m * g.kp[joint];
+  }
+  return f;
+}
+
+bool IlcOptions::IsValid(double sample_time, std::string* why) const {
+  auto fail = [&](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (trials < 0) return fail("trials must be >= 0");
+  if (!(std::isfinite(gain) && gain > 0)) return fail("gain must be > 0");
+  if (q_order < 0 || q_order > 16) return fail("q_order must be 0 (no robustness filter) to 16");
+  if (q_order > 0 && !(q_cutoff > 0 && q_cutoff < 0.5 / sample_time)) {
+    return fail("q_cutoff must lie between 0 and the Nyquist frequency " + std::to_string(0.5 / sample_time) + " Hz");
+  }
+  return true;
+}
+
+Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
+                                  const IlcOptions& options) {
+  CheckJoint(frf, joint);
+  std::string why;
+  if (!options.IsValid(frf.sample_time, &why)) throw std::invalid_argument("IlcOptions: " + why);
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(frf.frequency.size());
+  for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
+    double q = 1;
+    if (options.q_order > 0) {
+      const ButterworthFilter bw = DesignButterworthLowPass(options.q_order, options.q_cutoff, 1 / frf.sample_time);
+      q = std::norm(FrequencyResponse(bw, frf.frequency[i]));
+    }
+    const std::complex<double> l = filter.Response(frf.frequency[i], frf.sample_time);
+    for (const Eigen::VectorXcd& ps : frf.response[static_cast<std::size_t>(joint)]) {
+      out[i] = std::max(out[i], q * std::abs(1.0 - options.gain * ps[i] * l));
+    }
+  }
+  return out;
+}
+
+double LearningLimitFrequency(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, double gain) {
+  CheckJoint(frf, joint);
+  for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
+    const std::complex<double> l = filter.Response(frf.frequency[i], frf.sample_time);
+    for (const Eigen::VectorXcd& ps : frf.response[static_cast<std::size_t>(joint)]) {
+      if (std::abs(1.0 - gain * ps[i] * l) >= 1) return frf.frequency[i];
+    }
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, const std::vector<LearningFilter>& filters,
+                          const IlcOptions& options, double sample_time) {
+  std::string why;
+  if (!options.IsValid(sample_time, &why)) throw std::invalid_argument("IlcOptions: " + why);
+  if (f.rows() != e.rows() || f.cols() != e.cols() || static_cast<Eigen::Index>(filters.size()) != f.cols()) {
+    throw std::invalid_argument("IlcUpdate: f, e and the filters must agree in samples and joints");
+  }
+  Eigen::MatrixXd next = f;
+  for (Eigen::Index j = 0; j < f.cols(); ++j) {
+    next.col(j) += options.gain * filters[static_cast<std::size_t>(j)].Apply(e.col(j), sample_time);
+  }
+  if (options.q_order > 0) {
+    next = FiltFiltColumns(DesignButterworthLowPass(options.q_order, options.q_cutoff, 1 / sample_time), next);
+  }
+  return next;
+}
+
+std::string IlcResult::Brief() const {
+  std::ostringstream out;
+  out.precision(4);
+  const int last = static_cast<int>(error_rms.size()) - 1;
+  out << "ILC: " << last << " learning trials, worst joint RMS error " << WorstRms(0) << " -> " << WorstRms(last)
+      << " rad (" << Reduction() << "x) in " << wall_seconds << " s";
+  return out.str();
+}
+
+std::string IlcResult::FullReport() const {
+  std::ostringstream out;
+  out.precision(4);
+  out << Brief() << "\n";
+  for (std::size_t k = 0; k < error_rms.size(); ++k) {
+    out << "  trial " << k << ": RMS";
+    for (Eigen::Index j = 0; j < error_rms[k].size(); ++j) out << " " << error_rms[k][j];
+    out << " max";
+    for (Eigen::Index j = 0; j < error_max[k].size(); ++j) out << " " << error_max[k][j];
+    out << " rad\n";
+  }
+  return out.str();
+}
+
+IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
+                 const TrackingOptions& tracking, const std::vector<LearningFilter>& filters, const IlcOptions& options,
+                 const std::function<void(int, const TrackingTrial&)>& on_trial) {
+  std::string why;
+  if (!options.IsValid(plant.sample_time, &why)) throw std::invalid_argument("IlcOptions: " + why);
+  if (static_cast<int>(filters.size()) != plant.dof()) throw std::invalid_argument("RunIlc: one learning filter per joint needed");
+  const auto start = std::chrono::steady_clock::now();
+  IlcResult result;
+  Eigen::MatrixXd f = Eigen::MatrixXd::Zero(reference.q.rows(), plant.dof());
+  TrackingOptions o = tracking;
+  for (int trial = 0; trial <= options.trials; ++trial) {
+    o.feedforward = &f;
+    TrackingTrial run = RunTrackingTrial(plant, hat, reference, o);
+    result.error_rms.push_back(run.error_rms);
+    result.error_max.push_back(run.error_max);
+    if (on_trial) on_trial(trial, run);
+    const Eigen::MatrixXd error = reference.q - run.q;
+    if (trial == 0) result.first = run;
+    if (trial == options.trials) {
+      result.feedforward = f;
+      result.last = std::move(run);
+    } else {
+      f = IlcUpdate(f, error, filters, options, plant.sample_time);
+    }
+  }
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace twinsim

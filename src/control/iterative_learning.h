@@ -1,0 +1,133 @@
+// Iterative learning control (ILC) of an arm (seed 001, Bukkems et al., sections V and
+// VII-B): the arm runs the same reference from the same initial state trial after
+// trial; between trials, offline, a feedforward torque f is learned per joint from the
+// last trial's tracking error e = q_ref - q and added to the controller's output in the
+// next trial (TrackingOptions::feedforward):
+//
+//   f_{k+1} = Q (f_k + alpha L e_k),   f_0 = 0,
+//
+// with L the learning filter, ideally the inverse of the process sensitivity PS (the
+// closed-loop response from f to q, identification/closed_loop_frf.h), so that one
+// trial would remove the whole repeating error, and Q a zero-phase Butterworth low-pass
+// (FiltFilt, signal/butterworth.h, magnitude |H|^2) that stops learning where L is
+// wrong. In the frequency domain e_{k+1} = Q (1 - alpha PS L) e_k + (1 - Q) e_0-terms:
+// the learning converges where |Q|^2 |1 - alpha PS L| < 1 (ConvergenceFactor).
+//
+// The learning filter is non-causal (it runs offline on a whole trial) and has the
+// structure of a rigid joint's inverse PS under PD feedback with a command delay:
+//
+//   L(z) = (a2 z^tau + a2' z^(tau+1)) (z - 2 + z^-1) / Ts^2 + a1 (z - z^-1) / (2 Ts) + a0,
+//
+// an inertia a2 + a2' (kg m^2) acting tau to tau + 1 samples early (the command delay
+// plus the half sample by which a torque held over a sample acts late: the exact
+// sampled inverse has (z^D (z - 1)^2 / Ts^2) 2z / (z + 1), and 2z / (z + 1) ~ (1 + z) / 2
+// to second order in w Ts, so a2 = a2' = J/2, tau = D), a damping a1 and a stiffness a0
+// (the feedback's D through a central difference, for the same reason, and its P).
+// FitLearningFilter fits (a2, a2', a1, a0) for each tau by linear least squares on
+// sum |PS_measured L - 1|^2 over a band and all postures, and keeps the best tau;
+// ModelLearningFilter takes them a priori from the controller's model and gains.
+//
+//   ClosedLoopFrf frf = MeasureProcessSensitivity(plant, hat, postures, tracking, {});
+//   std::vector<LearningFilter> l;
+//   for (int j = 0; j < 3; ++j) l.push_back(FitLearningFilter(frf, j, 2, 80, 5));
+//   IlcResult r = RunIlc(plant, hat, reference, tracking, l, IlcOptions{});
+#pragma once
+
+#include <Eigen/Core>
+#include <complex>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "control/computed_torque.h"
+#include "control/writing_task.h"
+#include "identification/closed_loop_frf.h"
+#include "robots/arm/arm_model.h"
+
+namespace twinsim {
+
+// L(z) = (inertia z^shift + inertia_early z^(shift+1)) (z - 2 + 1/z) / Ts^2
+//        + damping (z - 1/z) / (2 Ts) + stiffness.
+struct LearningFilter {
+  int shift = 0;             // samples the inertia term acts early (tau)
+  double inertia = 0;        // kg m^2 (kg for a prismatic joint): a2, at z^tau
+  double inertia_early = 0;  // kg m^2: a2', at z^(tau+1)
+  double damping = 0;        // N·m·s/rad: a1
+  double stiffness = 0;   // N·m/rad: a0
+  double residual = 0;    // RMS |PS L - 1| over the fitted lines (0 when not fitted)
+
+  // L(e^{j 2 pi f Ts}) (N·m/rad) at `frequency_hz`.
+  std::complex<double> Response(double frequency_hz, double sample_time) const;
+  // L applied to a whole trial's error e (N samples, rad), non-causally; beyond the ends
+  // e holds its first and last value. Returns N samples, N·m.
+  Eigen::VectorXd Apply(const Eigen::VectorXd& e, double sample_time) const;
+  // "tau 1 samples, inertia 0.51 kg m^2, damping 64 N m s/rad, stiffness 2e3 N m/rad".
+  std::string Summary() const;
+};
+
+// Fits joint `joint`'s learning filter to the measured process sensitivity over the
+// lines in [f_min, f_max] (Hz) at every posture, trying shifts 0..max_shift and keeping
+// the one with the smallest residual. Throws std::invalid_argument for a joint that
+// does not exist, max_shift < 0, or fewer than 2 lines in the band.
+LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_min, double f_max, int max_shift);
+
+// The learning filter the controller's model predicts for joint `joint` at posture q:
+// inertia M_hat_jj(q) split evenly over shifts delay_samples and delay_samples + 1, and the feedback gains of
+// `tracking` (PD + feedforward: Kp', Kd' at the reference's start q_start; computed
+// torque: M_hat_jj(q) Kp, M_hat_jj(q) Kd). Throws std::invalid_argument for bad sizes.
+LearningFilter ModelLearningFilter(const ArmModel& hat, const TrackingOptions& tracking, const Eigen::VectorXd& q,
+                                   const Eigen::VectorXd& q_start, int joint);
+
+struct IlcOptions {
+  int trials = 10;        // learning trials after trial 0 (which runs without learning)
+  double gain = 1;        // alpha
+  int q_order = 4;        // the robustness filter's Butterworth order; 0 = no filter Q
+  double q_cutoff = 40;   // Hz, its -3 dB frequency per pass (-6 dB after FiltFilt)
+
+  // True when usable for sample time `sample_time` (s); else says why in *why.
+  bool IsValid(double sample_time, std::string* why) const;
+};
+
+// |Q(f)|^2 |1 - gain PS(f) L(f)| at every line of `frf` for joint `joint`, the worst over
+// the postures: < 1 where learning converges. Throws std::invalid_argument for invalid
+// options or a joint that does not exist.
+Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
+                                  const IlcOptions& options);
+
+// The lowest measured frequency (Hz) at which |1 - gain PS L| reaches 1 at some posture,
+// without Q: learning above it must be cut off. Infinity when it stays below 1.
+double LearningLimitFrequency(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, double gain);
+
+// One ILC update for all joints: Q(f + gain L e) column by column (f, e: N x dof).
+// Throws std::invalid_argument for mismatched sizes or filters, or invalid options.
+Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, const std::vector<LearningFilter>& filters,
+                          const IlcOptions& options, double sample_time);
+
+struct IlcResult {
+  std::vector<Eigen::VectorXd> error_rms, error_max;  // per trial 0..trials, dof each, rad or m
+  TrackingTrial first, last;                          // trial 0 and the last trial
+  Eigen::MatrixXd feedforward;                        // N x dof, N·m: f of the last trial
+  double wall_seconds = 0;                            // s, all trials with their updates
+
+  // max_j RMS of trial `trial` (rad or m).
+  double WorstRms(int trial) const { return error_rms[static_cast<std::size_t>(trial)].maxCoeff(); }
+  // WorstRms(0) / WorstRms(last).
+  double Reduction() const { return WorstRms(0) / WorstRms(static_cast<int>(error_rms.size()) - 1); }
+  // True when the last trial's worst RMS is above trial 0's: learning made it worse.
+  bool Diverged() const { return WorstRms(static_cast<int>(error_rms.size()) - 1) > WorstRms(0); }
+  // One line: trials, the worst RMS before and after, the reduction.
+  std::string Brief() const;
+  // One line per trial.
+  std::string FullReport() const;
+};
+
+// Runs trial 0 with no learned feedforward, then `options.trials` trials each with the
+// feedforward learned from all before (IlcUpdate), every one from the same initial
+// state along `reference` with `tracking` (its feedforward is replaced).
+// on_trial(trial, result) is called after every trial. Throws std::invalid_argument for
+// invalid options or one filter per joint missing; what RunTrackingTrial throws.
+IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
+                 const TrackingOptions& tracking, const std::vector<LearningFilter>& filters, const IlcOptions& options,
+                 const std::function<void(int, const TrackingTrial&)>& on_trial = {});
+
+}  // namespace twinsim

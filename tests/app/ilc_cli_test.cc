@@ -1,0 +1,88 @@
+// `twinsim ilc` through the binary: trials.csv with the contract's columns, the other
+// outputs, divergence as exit 1, and bad scene keys as exit 2.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <sstream>
+
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+using testing::RunTwinsim;
+using testing::SourcePath;
+
+// The letter T on the stand-in arm, learning with the fitted filter.
+std::string IlcScene(const std::string& dir, const std::string& plant, const std::string& ilc) {
+  return testing::WriteText(dir + "/t.yaml",
+                            "name: short_ilc\n"
+                            "robot: arm\n"
+                            "model: " + SourcePath(plant) + "\n"
+                            "task: {type: writing, letters: T}\n"
+                            "controller: {type: pd_feedforward, model: " + SourcePath("models/rrr.yaml") + "}\n"
+                            "ilc:\n" + ilc);
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+TEST(IlcCli, WritesTrialsCsvWithTheContractColumnsAndTheReport) {
+  const std::string dir = testing::TempDir("ilc_cli");
+  const std::string scene = IlcScene(dir, "models/rrr_plant.yaml",
+                                     "  trials: 4\n  gain: 0.5\n  frf: {periods: 2, amplitude: 0.3, postures: "
+                                     "[[0.3, 0.9, -1.6], [-0.3, 0.6, -1.7]]}\n");
+  auto r = RunTwinsim("ilc " + scene + " --out " + dir + "/out --trials 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("trial  3: RMS error"), std::string::npos) << r.out;
+  const std::vector<std::string> lines = Lines(testing::ReadText(dir + "/out/trials.csv"));
+  ASSERT_EQ(lines.size(), 5u);  // the header and trials 0..3 (--trials overrides the scene's 4)
+  EXPECT_EQ(lines[0], "trial,rms1,rms2,rms3,max1,max2,max3");
+  for (int k = 0; k <= 3; ++k) EXPECT_EQ(lines[static_cast<std::size_t>(k) + 1].rfind(std::to_string(k) + ",", 0), 0u);
+  const std::vector<std::string> frf = Lines(testing::ReadText(dir + "/out/frf.csv"));
+  EXPECT_EQ(frf[0], "joint,posture,frequency,magnitude,phase,filter_magnitude,filter_phase");
+  EXPECT_EQ(frf.size(), 1u + 3 * 2 * 100);  // 3 joints x 2 postures x the lines 2..200 Hz
+  for (const char* file : {"filters.csv", "feedforward.csv", "report.html"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir + "/out/" + file)) << file;
+  }
+  const std::string html = testing::ReadText(dir + "/out/report.html");
+  EXPECT_EQ(html.find("http"), std::string::npos);  // nothing to fetch
+  // Same inputs, same bytes.
+  auto again = RunTwinsim("ilc " + scene + " --out " + dir + "/again --trials 3 --quiet");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.out, "");
+  EXPECT_EQ(testing::ReadText(dir + "/again/trials.csv"), testing::ReadText(dir + "/out/trials.csv"));
+  EXPECT_EQ(testing::ReadText(dir + "/again/feedforward.csv"), testing::ReadText(dir + "/out/feedforward.csv"));
+}
+
+TEST(IlcCli, DivergingLearningExitsOne) {
+  const std::string dir = testing::TempDir("ilc_cli_diverge");
+  // The flexible elbow without a robustness filter.
+  const std::string scene =
+      IlcScene(dir, "models/rrr_plant_flex.yaml", "  trials: 5\n  gain: 0.5\n  q_order: 0\n  frf: {periods: 2, amplitude: 0.3}\n");
+  auto r = RunTwinsim("ilc " + scene + " --out " + dir + "/out --quiet");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("ILC diverged"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/out/trials.csv"));
+}
+
+TEST(IlcCli, BadIlcKeysExitTwoWithFileLineColumn) {
+  const std::string dir = testing::TempDir("ilc_cli_bad");
+  const std::string scene = IlcScene(dir, "models/rrr_plant.yaml",
+                                     "  trials: 4\n  gian: 0.5\n  learning_filter: magic\n  frf: {band: [50, 10], postures: [[1, 2]]}\n");
+  auto r = RunTwinsim("ilc " + scene + " --out " + dir + "/out");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(scene + ":8:3: "), std::string::npos) << r.err;   // gian
+  EXPECT_NE(r.err.find("unknown key 'gian'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("magic"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("low < high"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("expected 3 joint positions"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out/trials.csv"));
+}
+
+}  // namespace
+}  // namespace twinsim
