@@ -60,7 +60,9 @@ TEST(Butterworth, FiltFiltHasZeroPhaseAndSquaredGainOnASinusoid) {
     for (int k = 1000; k < 5000; ++k) worst = std::max(worst, std::abs(y[k] - gain * x[k]));
     // In phase (a lag of even 1 sample would leave 2 pi f / fs = 0.0126 at 2 Hz).
     EXPECT_LT(worst, 1e-9) << freq << " Hz";
-    if (freq == fc) EXPECT_NEAR(gain, 0.5, 1e-12);  // -6 dB at the cut-off after two passes
+    if (freq == fc) {
+      EXPECT_NEAR(gain, 0.5, 1e-12);  // -6 dB at the cut-off after two passes
+    }
   }
 }
 
