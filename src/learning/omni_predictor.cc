@@ -108,18 +108,7 @@ void OmniPredictor::Save(const std::string& path) const {
   out << YAML::Key << "validation_rmse" << YAML::Value << info_.validation_rmse;
   out << YAML::Key << "validation_rollout_rmse" << YAML::Value << info_.validation_rollout_rmse;
   out << YAML::EndMap;
-  if (info_.kind == "linear") {
-    out << YAML::Key << "linear" << YAML::Value << YAML::BeginMap;
-    EmitVector(out, "input_mean", input_mean_.data(), input_mean_.size());
-    EmitVector(out, "input_scale", input_scale_.data(), input_scale_.size());
-    EmitMatrix(out, "weights", weights_);
-    EmitVector(out, "bias", bias_.data(), 3);
-    out << YAML::EndMap;
-  } else {
-    out << YAML::Key << "mlp" << YAML::Value << YAML::BeginMap;
-    EmitMlp(out, mlp_);
-    out << YAML::EndMap;
-  }
+  EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
   out << YAML::EndMap;
   WriteFileAtomically(path, std::string(out.c_str()) + "\n");
 }

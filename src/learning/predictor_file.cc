@@ -96,6 +96,23 @@ Mlp ReadMlp(YamlMap& m, int inputs, int outputs, const std::string& path, ErrorL
   }
 }
 
+void EmitPredictorModel(YAML::Emitter& out, const std::string& kind, const Eigen::VectorXd& input_mean,
+                        const Eigen::VectorXd& input_scale, const Eigen::MatrixXd& weights, const Eigen::VectorXd& bias,
+                        const Mlp& mlp) {
+  if (kind == "linear") {
+    out << YAML::Key << "linear" << YAML::Value << YAML::BeginMap;
+    EmitVector(out, "input_mean", input_mean.data(), input_mean.size());
+    EmitVector(out, "input_scale", input_scale.data(), input_scale.size());
+    EmitMatrix(out, "weights", weights);
+    EmitVector(out, "bias", bias.data(), bias.size());
+    out << YAML::EndMap;
+  } else {
+    out << YAML::Key << "mlp" << YAML::Value << YAML::BeginMap;
+    EmitMlp(out, mlp);
+    out << YAML::EndMap;
+  }
+}
+
 void ReadPredictorModel(YamlMap& top, const std::string& kind, int inputs, int outputs, const std::string& path,
                         ErrorList* errors, LinearPredictorParameters* linear, Mlp* mlp) {
   if (kind == "linear") {

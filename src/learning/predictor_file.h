@@ -60,6 +60,12 @@ struct LinearPredictorParameters {
   Eigen::VectorXd bias;                     // out
 };
 
+// Writes the model block of a predictor file of `kind`: `linear:` with the ridge fit's
+// numbers, or `mlp:` with the network (what ReadPredictorModel reads back exactly).
+void EmitPredictorModel(YAML::Emitter& out, const std::string& kind, const Eigen::VectorXd& input_mean,
+                        const Eigen::VectorXd& input_scale, const Eigen::MatrixXd& weights, const Eigen::VectorXd& bias,
+                        const Mlp& mlp);
+
 // Reads the model block of a predictor file of `kind` ("linear" into *linear, "mlp" into
 // *mlp) for `inputs` -> `outputs`, refusing the other kind's block, and finishes `top`
 // (unknown keys are errors). Throws InputError listing every problem collected in
