@@ -124,4 +124,29 @@ std::string FormatCsvNumber(double v) {
   return s;
 }
 
+std::string JointColumnsCsv(const Eigen::VectorXd& t, const std::vector<const char*>& prefixes,
+                            const std::vector<const Eigen::MatrixXd*>& columns) {
+  const Eigen::Index n = columns.front()->cols();
+  std::string out = "t";
+  for (const char* prefix : prefixes) {
+    for (Eigen::Index j = 1; j <= n; ++j) {
+      out += ',';
+      out += prefix;
+      out += std::to_string(j);
+    }
+  }
+  out += '\n';
+  for (Eigen::Index r = 0; r < t.size(); ++r) {
+    out += FormatCsvNumber(t[r]);
+    for (const Eigen::MatrixXd* m : columns) {
+      for (Eigen::Index j = 0; j < n; ++j) {
+        out += ',';
+        out += FormatCsvNumber((*m)(r, j));
+      }
+    }
+    out += '\n';
+  }
+  return out;
+}
+
 }  // namespace twinsim

@@ -6,6 +6,7 @@
 //   double v = t.rows[i][x];        // t.line_of[i] is row i's line in the file
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -32,5 +33,11 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path);
 // Formats a value the way every twinsim CSV does: fixed, enough digits to round-trip
 // the simulation's meaningful precision (1e-9), no locale.
 std::string FormatCsvNumber(double v);
+
+// A CSV of time series per joint: a `t` column, then for each matrix (rows x joints,
+// one row per time) one column per joint named prefix1..prefixn, numbers by
+// FormatCsvNumber. All matrices have t.size() rows and the same number of columns.
+std::string JointColumnsCsv(const Eigen::VectorXd& t, const std::vector<const char*>& prefixes,
+                            const std::vector<const Eigen::MatrixXd*>& columns);
 
 }  // namespace twinsim

@@ -87,18 +87,6 @@ std::string FiltersCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilte
   return out;
 }
 
-std::string FeedforwardCsv(const Eigen::VectorXd& t, const Eigen::MatrixXd& f) {
-  std::string out = "t";
-  for (Eigen::Index j = 1; j <= f.cols(); ++j) out += ",f" + std::to_string(j);
-  out += '\n';
-  for (Eigen::Index k = 0; k < f.rows(); ++k) {
-    out += Num(t[k]);
-    for (Eigen::Index j = 0; j < f.cols(); ++j) out += ',' + Num(f(k, j));
-    out += '\n';
-  }
-  return out;
-}
-
 // Two images one above the other (the wider sets the width; white around the narrower).
 RgbaImage Stack(const RgbaImage& top, const RgbaImage& bottom) {
   RgbaImage out(std::max(top.width, bottom.width), top.height + bottom.height);
@@ -275,7 +263,7 @@ int RunIlcCommand(const IlcCommandOptions& options) {
   write("trials.csv", TrialsCsv(result));
   write("frf.csv", FrfCsv(frf, filters));
   write("filters.csv", FiltersCsv(frf, filters, spec.options));
-  write("feedforward.csv", FeedforwardCsv(reference.t, result.feedforward));
+  write("feedforward.csv", JointColumnsCsv(reference.t, {"f"}, {&result.feedforward}));
 
   std::vector<std::pair<std::string, std::string>> images;  // file, PNG bytes
   if (!RenderingCompiled()) {

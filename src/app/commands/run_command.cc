@@ -126,32 +126,6 @@ std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std
   return MakeArmBackend(backend, scene.plant);
 }
 
-// A CSV with a time column and, per matrix, one column per joint named prefix1..prefixn.
-std::string JointColumnsCsv(const Eigen::VectorXd& t, const std::vector<const char*>& prefixes,
-                            const std::vector<const Eigen::MatrixXd*>& columns) {
-  const Eigen::Index n = columns.front()->cols();
-  std::string out = "t";
-  for (const char* prefix : prefixes) {
-    for (Eigen::Index j = 1; j <= n; ++j) {
-      out += ',';
-      out += prefix;
-      out += std::to_string(j);
-    }
-  }
-  out += '\n';
-  for (Eigen::Index r = 0; r < t.size(); ++r) {
-    out += FormatCsvNumber(t[r]);
-    for (const Eigen::MatrixXd* m : columns) {
-      for (Eigen::Index j = 0; j < n; ++j) {
-        out += ',';
-        out += FormatCsvNumber((*m)(r, j));
-      }
-    }
-    out += '\n';
-  }
-  return out;
-}
-
 // The arm log the controller's observer sees: t, q, the commands sent, qd and the
 // reference (the contract's arm log with its optional qd and qref columns).
 std::string ArmTrajectoryCsv(const TrackingTrial& trial) {
