@@ -11,6 +11,7 @@ namespace twinsim {
 
 std::string OmniReplayOptions::Validate() const {
   if (horizon < 0) return "--horizon must be 0 or more, got " + std::to_string(horizon);
+  if (stride < 1) return "stride must be 1 or more, got " + std::to_string(stride);
   return "";
 }
 
@@ -31,8 +32,12 @@ double PositionRmse(const OmniLog& log, const OmniReplayResult& result) {
   return n ? std::sqrt(sum / n) : 0.0;
 }
 
-OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
-                               const std::function<void(int, int)>& progress) {
+namespace {
+
+// ReplayOmniLog, or with stretch_first < stretch_last the free run of ReplayOmniStretch.
+OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                        const std::function<void(int, int)>& progress, std::size_t stretch_first,
+                        std::size_t stretch_last) {
   const std::string problem = options.Validate();
   if (!problem.empty()) throw InputError(problem);
 
@@ -111,12 +116,36 @@ OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const
                        (now.pose.theta - prev.pose.theta) / dt};
   backend->Reset(0, now.pose, FieldToBody(field_v, now.pose.theta));
 
+  const bool stretch = stretch_first < stretch_last;
+  if (stretch && log.FrameIndex(stretch_first) - first->first < kWarmUpFrames) {
+    throw InputError(log.path + ":" + std::to_string(log.line_of[stretch_first]) +
+                     ": a free run must start after the tracker's warm-up of " + std::to_string(kWarmUpFrames) +
+                     " frames");
+  }
   for (int f = first->first; f <= last_frame; ++f) {
     if (progress && f % 64 == 0) progress(f, last_frame);
     auto measured = row_of_frame.find(f);
     if (measured != row_of_frame.end()) backend->MoveBody(0, log.rows[measured->second].pose);
+    if (stretch && measured != row_of_frame.end() && measured->second == stretch_first) {
+      // The free run: no more corrections from the measurement.
+      double last_theta = log.rows[stretch_first].pose.theta;
+      const int end_frame = log.FrameIndex(stretch_last - 1);
+      for (int j = f; j < end_frame; ++j) {
+        backend->StepFrame({delayed_command(j)});
+        auto it = row_of_frame.find(j + 1);
+        if (it == row_of_frame.end()) continue;
+        Pose2 p = backend->pose(0);
+        check(it->second, p);
+        p.theta = last_theta = last_theta + WrapAngle(p.theta - last_theta);
+        out.pose[it->second] = p;
+        out.predicted[it->second] = true;
+      }
+      return out;
+    }
     auto target = row_of_frame.find(f + k);
-    if (measured != row_of_frame.end() && target != row_of_frame.end() && f - first->first >= kWarmUpFrames) {
+    const int since = f - first->first - kWarmUpFrames;
+    if (!stretch && measured != row_of_frame.end() && target != row_of_frame.end() && since >= 0 &&
+        since % options.stride == 0) {
       const OmniBackendState saved = backend->Save();
       for (int j = f; j < f + k; ++j) backend->StepFrame({delayed_command(j)});
       Pose2 p = backend->pose(0);
@@ -132,6 +161,24 @@ OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const
   }
   if (progress) progress(static_cast<int>(n), static_cast<int>(n));
   return out;
+}
+
+}  // namespace
+
+OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                               const std::function<void(int, int)>& progress) {
+  return Replay(model, log, options, progress, 0, 0);
+}
+
+OmniReplayResult ReplayOmniStretch(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                                   std::size_t first_row, std::size_t last_row) {
+  if (!(first_row < last_row && last_row <= log.rows.size())) {
+    throw InputError(log.path + ": rows [" + std::to_string(first_row) + ", " + std::to_string(last_row) +
+                     ") are not a stretch of the log's " + std::to_string(log.rows.size()) + " rows");
+  }
+  OmniReplayOptions o = options;
+  o.horizon = std::max(o.horizon, 1);  // the tracker's mode
+  return Replay(model, log, o, {}, first_row, last_row);
 }
 
 }  // namespace twinsim

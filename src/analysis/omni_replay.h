@@ -33,6 +33,7 @@ struct OmniReplayOptions {
   std::string backend = "ode";
   BackendOptions backend_options;  // the predictor, for the learned backend
   int horizon = 4;  // K, frames; 0 = free run
+  int stride = 1;   // predict from every stride-th frame only (1: every row), for fits that need speed
 
   // Returns an empty string when valid, else what is wrong.
   std::string Validate() const;
@@ -52,5 +53,13 @@ double PositionRmse(const OmniLog& log, const OmniReplayResult& result);
 // Throws InputError for an unknown backend; CheckFailed if the model diverges.
 OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                                const std::function<void(int, int)>& progress = {});
+
+// The model's free run over the rows [first_row, last_row) of `log`, started from the
+// tracker's state at first_row (the tracker runs from the log's start as above, so the
+// velocity and internal state at first_row are the model's own). Rows outside the
+// stretch hold the measured pose and are not marked predicted. Throws as ReplayOmniLog;
+// InputError when first_row is before the tracker's warm-up ends.
+OmniReplayResult ReplayOmniStretch(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                                   std::size_t first_row, std::size_t last_row);
 
 }  // namespace twinsim

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   AddExciteCommand(app, &exit_code);
   AddIdentifyCommand(app, &exit_code);
   AddIlcCommand(app, &exit_code);
+  AddDiagnoseCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

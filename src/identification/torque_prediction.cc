@@ -56,6 +56,34 @@ Eigen::MatrixXd PredictArmTorques(const ArmModel& model, const ArmLog& log) {
   return tau;
 }
 
+Eigen::VectorXd JointCommandFromNeeded(const ArmModel& model, int joint, const Eigen::VectorXd& t,
+                                       const Eigen::VectorXd& qdd, Eigen::VectorXd drive, int* beyond_saturation) {
+  const JointEffects e = model.effects.joint(joint);
+  const Eigen::Index rows = drive.size();
+  // 2. A flexible joint: the spring carries `needed`; the motor must also accelerate.
+  if (e.flexible() && rows > 0) {
+    Eigen::VectorXd deflection(rows);
+    deflection[0] = drive[0] / e.stiffness;
+    for (Eigen::Index r = 1; r < rows; ++r) {
+      if (e.flex_damping > 0) {
+        const double h = t[r] - t[r - 1];
+        deflection[r] = (deflection[r - 1] + h / e.flex_damping * drive[r]) / (1 + h * e.stiffness / e.flex_damping);
+      } else {
+        deflection[r] = drive[r] / e.stiffness;
+      }
+    }
+    drive += e.motor_inertia * (qdd + SecondDerivative(t, deflection));
+  }
+  // 3. The joint receives the command plus the offset.
+  drive.array() -= e.torque_offset;
+  // 4. Saturation cannot be inverted: count what no command within the limit gives.
+  if (beyond_saturation) {
+    *beyond_saturation = e.saturation > 0 ? static_cast<int>((drive.array().abs() > e.saturation).count()) : 0;
+  }
+  // 5. Sent `shift` seconds before the joint gets it.
+  return ShiftEarlier(t, drive, model.delay_samples * model.sample_time + e.time_delay);
+}
+
 Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, ArmCommandSummary* summary) {
   CheckArmLogMatchesModel(log, model);
   const int n = log.dof;
@@ -73,30 +101,9 @@ Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, Arm
   s.beyond_saturation = Eigen::VectorXi::Zero(n);
   Eigen::MatrixXd command(log.rows(), n);
   for (int j = 0; j < n; ++j) {
-    const JointEffects e = model.effects.joint(j);
-    Eigen::VectorXd drive = needed.col(j);
-    // 2. A flexible joint: the spring carries `needed`; the motor must also accelerate.
-    if (e.flexible() && log.rows() > 0) {
-      s.flexible = true;
-      Eigen::VectorXd deflection(log.rows());
-      deflection[0] = drive[0] / e.stiffness;
-      for (int r = 1; r < log.rows(); ++r) {
-        if (e.flex_damping > 0) {
-          const double h = log.t[r] - log.t[r - 1];
-          deflection[r] = (deflection[r - 1] + h / e.flex_damping * drive[r]) / (1 + h * e.stiffness / e.flex_damping);
-        } else {
-          deflection[r] = drive[r] / e.stiffness;
-        }
-      }
-      drive += e.motor_inertia * (log.qdd.col(j) + SecondDerivative(log.t, deflection));
-    }
-    // 3. The joint receives the command plus the offset.
-    drive.array() -= e.torque_offset;
-    // 4. Saturation cannot be inverted: count what no command within the limit gives.
-    if (e.saturation > 0) s.beyond_saturation[j] = static_cast<int>((drive.array().abs() > e.saturation).count());
-    // 5. Sent `shift` seconds before the joint gets it.
-    s.shift[j] = model.delay_samples * model.sample_time + e.time_delay;
-    command.col(j) = ShiftEarlier(log.t, drive, s.shift[j]);
+    command.col(j) = JointCommandFromNeeded(model, j, log.t, log.qdd.col(j), needed.col(j), &s.beyond_saturation[j]);
+    s.shift[j] = model.delay_samples * model.sample_time + model.effects.joint(j).time_delay;
+    s.flexible = s.flexible || model.effects.joint(j).flexible();
   }
   if (summary) *summary = s;
   return command;

@@ -46,6 +46,13 @@ struct ArmCommandSummary {
 // Throws InputError when the joint counts differ.
 Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, ArmCommandSummary* summary = nullptr);
 
+// Steps 2-5 for joint `joint` alone: the command (N) that makes it receive `needed`
+// (N, the link side's torque: step 1's column), given the log's times t (N) and the
+// joint's qdd (N). *beyond_saturation (if given) counts the rows beyond its limit.
+Eigen::VectorXd JointCommandFromNeeded(const ArmModel& model, int joint, const Eigen::VectorXd& t,
+                                       const Eigen::VectorXd& qdd, Eigen::VectorXd needed,
+                                       int* beyond_saturation = nullptr);
+
 // Torques Y_b(q, qd, qdd) beta at every row of `log` (N x n) straight from base
 // parameters (r of `base`), which need not belong to a real arm: how an unconstrained
 // estimate would predict. Throws InputError when the joint counts differ.

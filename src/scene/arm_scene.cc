@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/error.h"
@@ -236,6 +237,115 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
   m.Finish();
 }
 
+std::string Number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// A count per revolution: a whole number, 0 (exact) up to what a 30-bit encoder gives.
+NumberCheck CountsPerRev() {
+  return [](double v) {
+    if (v < 0 || v > 1e9) return InRange(0, 1e9)(v);
+    return v == std::floor(v) ? std::string() : "expected a whole number of counts, got " + Number(v);
+  };
+}
+
+// A linear encoder's step: 0 (exact) or between 1 nm (the log's 9 decimals) and 1 m.
+NumberCheck LinearResolution() {
+  return [](double v) {
+    return v == 0 || (v >= 1e-9 && v <= 1) ? std::string()
+                                           : "must be 0 (exact) or in [1e-9, 1] m, got " + Number(v);
+  };
+}
+
+// `key` of `m` as one value per joint: a number for every joint or a list of `dof`
+// numbers. Leaves *out unchanged (and returns false) when absent or invalid; *listed
+// tells which form was given.
+bool ReadPerJoint(YamlMap& m, const std::string& key, int dof, const NumberCheck& check, Eigen::VectorXd* out,
+                  bool* listed) {
+  const YAML::Node node = m.Child(key);
+  if (!node.IsDefined() || node.IsNull()) return false;
+  *listed = node.IsSequence();
+  if (*listed) {
+    std::vector<double> v;
+    if (!m.Get(key, &v, dof, check)) return false;
+    *out = Eigen::Map<const Eigen::VectorXd>(v.data(), dof);
+    return true;
+  }
+  if (!node.IsScalar()) {
+    m.Error(key, "expected a number or a list of " + std::to_string(dof) + " numbers (one per joint)");
+    return false;
+  }
+  double v = 0;
+  if (!m.Get(key, &v, check)) return false;
+  *out = Eigen::VectorXd::Constant(dof, v);
+  return true;
+}
+
+// The `sensors:` block (ArmSensorSpec): revolute joints are quantised by
+// encoder_counts_per_rev, prismatic ones by encoder_resolution (m). A single number
+// applies to every joint of its kind; in a list, the other kind's entries must be 0.
+void ReadSensors(const YAML::Node& node, const std::string& path, const ArmModel& plant, bool models_ok,
+                 ErrorList* errors, ArmSensorSpec* sensors) {
+  YamlMap m(node, path, "sensors", errors);
+  if (!m.valid()) return;
+  m.Get("log_velocities", &sensors->log_velocities);
+  if (!models_ok) {
+    // Without the plant the joint count and kinds are unknown: only mark the keys as known.
+    for (const char* key : {"encoder_counts_per_rev", "encoder_resolution", "torque_noise"}) m.Child(key);
+    m.Finish();
+    return;
+  }
+  const int dof = plant.dof();
+  auto is_revolute = [&](int j) { return plant.joints[static_cast<std::size_t>(j)].type == JointType::kRevolute; };
+  // Reports entries of a list given for joints of the other kind (`other_key` is theirs),
+  // and a single number for an arm without joints of this kind.
+  auto check_kind = [&](const std::string& key, const Eigen::VectorXd& v, bool listed, bool revolute,
+                        const std::string& other_key) {
+    const YAML::Node list = m.Child(key);
+    bool any_of_kind = false, ok = true;
+    for (int j = 0; j < dof; ++j) {
+      if (is_revolute(j) == revolute) {
+        any_of_kind = true;
+      } else if (listed && v[j] != 0) {
+        const ArmJoint& joint = plant.joints[static_cast<std::size_t>(j)];
+        errors->Add(m.Where(list[static_cast<std::size_t>(j)]),
+                    "'" + key + "[" + std::to_string(j) + "]' in 'sensors': joint " + std::to_string(j + 1) + " ('" +
+                        joint.name + "') is " + (revolute ? "prismatic" : "revolute") + ": its encoder is given by " +
+                        other_key + "; give 0 here");
+        ok = false;
+      }
+    }
+    if (!listed && !any_of_kind && v.size() > 0 && v[0] != 0) {
+      m.Error(key, "'" + plant.name + "' has no " + (revolute ? "revolute" : "prismatic") + " joint; its " +
+                       (revolute ? "prismatic" : "revolute") + " joints take " + other_key);
+      ok = false;
+    }
+    return ok;
+  };
+
+  Eigen::VectorXd counts = Eigen::VectorXd::Zero(dof), resolution = Eigen::VectorXd::Zero(dof);
+  bool listed = false;
+  const bool counts_ok = ReadPerJoint(m, "encoder_counts_per_rev", dof, CountsPerRev(), &counts, &listed) &&
+                         check_kind("encoder_counts_per_rev", counts, listed, true, "encoder_resolution (m per count)");
+  const bool resolution_ok = ReadPerJoint(m, "encoder_resolution", dof, LinearResolution(), &resolution, &listed) &&
+                             check_kind("encoder_resolution", resolution, listed, false, "encoder_counts_per_rev");
+  if (counts_ok || resolution_ok) {
+    sensors->count_step = Eigen::VectorXd::Zero(dof);
+    for (int j = 0; j < dof; ++j) {
+      if (is_revolute(j)) {
+        if (counts_ok && counts[j] > 0) sensors->count_step[j] = 2 * M_PI / counts[j];
+      } else if (resolution_ok) {
+        sensors->count_step[j] = resolution[j];
+      }
+    }
+  }
+  Eigen::VectorXd noise;
+  if (ReadPerJoint(m, "torque_noise", dof, NonNegative(), &noise, &listed)) sensors->torque_noise = noise;
+  m.Finish();
+}
+
 ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir) {
   ErrorList errors;
   ArmScene scene;
@@ -295,6 +405,7 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
   scene.plots = ReadArmPlots(top);
   if (top.Has("ilc")) ReadIlc(top.Child("ilc"), path, scene.plant, models_ok, &errors, &scene.ilc);
   scene.ilc.frf.seed = scene.seed;
+  if (top.Has("sensors")) ReadSensors(top.Child("sensors"), path, scene.plant, models_ok, &errors, &scene.sensors);
   top.Finish();
   errors.ThrowIfAny();
   return scene;
@@ -389,6 +500,10 @@ ArmReference ArmSceneReference(const ArmScene& scene) {
   }
   FillToolPath(hat, task.writing.tool, &ref);
   return ref;
+}
+
+std::string ArmSceneTrajectoryCsv(const ArmScene& scene, const TrackingTrial& trial) {
+  return FormatSensedArmLog(SensedArmLog(scene.sensors, trial, scene.seed));
 }
 
 std::vector<Eigen::VectorXd> IlcPostures(const ArmScene& scene, const ArmReference& reference) {

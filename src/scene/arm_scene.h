@@ -13,6 +13,7 @@
 //   ArmScene scene = LoadArmScene("scenes/rrr_writing.yaml");
 //   ArmReference ref = ArmSceneReference(scene);
 //   TrackingTrial trial = RunTrackingTrial(scene.plant, scene.hat, ref, scene.tracking);
+//   std::string csv = ArmSceneTrajectoryCsv(scene, trial);  // as the `sensors:` record it
 #pragma once
 
 #include <string>
@@ -26,6 +27,7 @@
 #include "control/writing_task.h"
 #include "learning/arm_trials.h"
 #include "robots/arm/arm_model.h"
+#include "scene/arm_sensors.h"
 
 namespace twinsim {
 
@@ -87,6 +89,7 @@ struct ArmScene {
   TrackingOptions tracking;          // controller, gains, compensation; backend set by run
   std::vector<ArmPlotSpec> plots;
   IlcSpec ilc;
+  ArmSensorSpec sensors;             // what trajectory.csv records (default: exact q, qd, command)
 };
 
 // "arm" when the scene file's top level has `robot: arm`, else "omni". Throws InputError
@@ -102,6 +105,12 @@ ArmScene LoadArmSceneFromString(const std::string& yaml, const std::string& name
 // the scene) when the writing task cannot be drawn by the hat model's arm (out of
 // reach, beyond a limit, not a waist-shoulder-elbow arm).
 ArmReference ArmSceneReference(const ArmScene& scene);
+
+// The text of `trajectory.csv` for a trial of the scene: the contract's arm log as the
+// scene's `sensors:` record it (SensedArmLog with scene.seed), byte for byte the exact
+// `t,q,tau,qd,qref` log when the block is absent. Throws std::invalid_argument when the
+// block's per-joint values do not match the trial's joint count.
+std::string ArmSceneTrajectoryCsv(const ArmScene& scene, const TrackingTrial& trial);
 
 // The postures the ILC's frequency responses are measured at: scene.ilc.postures, or
 // 4 along `reference` (its first and last sample and two evenly in between).

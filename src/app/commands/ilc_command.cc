@@ -18,6 +18,7 @@
 #include "identification/closed_loop_frf.h"
 #include "io/atomic_file.h"
 #include "io/base64.h"
+#include "io/html_text.h"
 #include "io/csv_table.h"
 #include "io/png_image.h"
 #include "render/plot.h"
@@ -169,17 +170,6 @@ RgbaImage BodePng(const ClosedLoopFrf& frf, const LearningFilter& filter, int j,
     phase.series.push_back(ph);
   }
   return Stack(RenderSeriesPlot(mag, renderer), RenderSeriesPlot(phase, renderer));
-}
-
-std::string HtmlEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else out += c;
-  }
-  return out;
 }
 
 int RunIlcCommand(const IlcCommandOptions& options) {

@@ -126,12 +126,6 @@ std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std
   return MakeArmBackend(backend, scene.plant);
 }
 
-// The arm log the controller's observer sees: t, q, the commands sent, qd and the
-// reference (the contract's arm log with its optional qd and qref columns).
-std::string ArmTrajectoryCsv(const TrackingTrial& trial) {
-  return JointColumnsCsv(trial.t, {"q", "tau", "qd", "qref"}, {&trial.q, &trial.command, &trial.qd, &trial.q_ref});
-}
-
 // What only the simulation knows, per sample and joint: the tracking error, the demand
 // before clamping, the controller's model-based part, the drive torque applied and the
 // torque the plant needed (TrackingTrial's columns).
@@ -164,7 +158,7 @@ int RunArm(const RunOptions& options) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::vector<std::string> written;
-  WriteFileAtomically(out + "/trajectory.csv", ArmTrajectoryCsv(trial));
+  WriteFileAtomically(out + "/trajectory.csv", ArmSceneTrajectoryCsv(scene, trial));
   written.push_back(out + "/trajectory.csv");
   WriteFileAtomically(out + "/tracking.csv", ArmTrackingCsv(trial));
   written.push_back(out + "/tracking.csv");

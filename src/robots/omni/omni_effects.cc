@@ -1,5 +1,12 @@
 #include "robots/omni/omni_effects.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "core/error.h"
+
 namespace twinsim {
 
 std::vector<std::string> OmniEffects::Active() const {
@@ -11,6 +18,84 @@ std::vector<std::string> OmniEffects::Active() const {
   if (velocity_scale != 1) names.push_back("velocity_scale");
   if (rotation_drift != 0) names.push_back("rotation_drift");
   return names;
+}
+
+
+const std::vector<std::string>& OmniEffectNames() {
+  static const std::vector<std::string> names = {"time_delay",    "velocity_saturation", "traction_limit",
+                                                 "motor_lag",     "velocity_scale",      "rotation_drift"};
+  return names;
+}
+
+std::vector<std::string> OmniEffectParameters(const std::string& name) {
+  if (name == "time_delay") return {"delay"};
+  if (name == "velocity_saturation") return {"v_max", "w_max"};
+  if (name == "traction_limit") return {"a_max"};
+  if (name == "motor_lag") return {"time_constant"};
+  if (name == "velocity_scale") return {"scale"};
+  if (name == "rotation_drift") return {"rate"};
+  return {};
+}
+
+void SetOmniEffect(const std::string& name, const std::map<std::string, double>& parameters, OmniEffects* effects) {
+  const std::vector<std::string> keys = OmniEffectParameters(name);
+  if (keys.empty()) {
+    std::string known;
+    for (const auto& n : OmniEffectNames()) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("unknown omni effect '" + name + "' (known: " + known + ")");
+  }
+  std::string known;
+  for (const auto& k : keys) known += (known.empty() ? "" : ", ") + k;
+  for (const auto& [key, value] : parameters) {
+    if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
+      throw InputError("effect '" + name + "': unknown parameter '" + key + "' (known: " + known + ")");
+    }
+    if (!std::isfinite(value)) throw InputError("effect '" + name + "': '" + key + "' is not a finite number");
+  }
+  auto get = [&](const std::string& key, double lo, double hi, bool lo_open) {
+    auto it = parameters.find(key);
+    if (it == parameters.end()) throw InputError("effect '" + name + "': missing parameter '" + key + "'");
+    const double v = it->second;
+    if (v < lo || v > hi || (lo_open && v == lo)) {
+      std::ostringstream msg;
+      msg << "effect '" << name << "': '" << key << "' = " << v << " is out of range " << (lo_open ? "(" : "[") << lo
+          << ", " << hi << "]";
+      throw InputError(msg.str());
+    }
+    return v;
+  };
+  const double inf = std::numeric_limits<double>::infinity();
+  if (name == "time_delay") {
+    effects->time_delay = get("delay", 0, 1, false);
+  } else if (name == "velocity_saturation") {
+    if (parameters.empty()) throw InputError("effect 'velocity_saturation': needs v_max, w_max or both");
+    effects->v_max = parameters.count("v_max") ? get("v_max", 0, inf, true) : 0;
+    effects->w_max = parameters.count("w_max") ? get("w_max", 0, inf, true) : 0;
+  } else if (name == "traction_limit") {
+    effects->a_max = get("a_max", 0, inf, true);
+  } else if (name == "motor_lag") {
+    effects->motor_lag = get("time_constant", 0, 10, false);
+  } else if (name == "velocity_scale") {
+    effects->velocity_scale = get("scale", 0.2, 5, false);
+  } else if (name == "rotation_drift") {
+    effects->rotation_drift = get("rate", -10, 10, false);
+  }
+}
+
+std::vector<std::pair<std::string, std::map<std::string, double>>> ListOmniEffects(const OmniEffects& e) {
+  std::vector<std::pair<std::string, std::map<std::string, double>>> out;
+  if (e.time_delay > 0) out.push_back({"time_delay", {{"delay", e.time_delay}}});
+  if (e.v_max > 0 || e.w_max > 0) {
+    std::map<std::string, double> p;
+    if (e.v_max > 0) p["v_max"] = e.v_max;
+    if (e.w_max > 0) p["w_max"] = e.w_max;
+    out.push_back({"velocity_saturation", p});
+  }
+  if (e.a_max > 0) out.push_back({"traction_limit", {{"a_max", e.a_max}}});
+  if (e.motor_lag > 0) out.push_back({"motor_lag", {{"time_constant", e.motor_lag}}});
+  if (e.velocity_scale != 1) out.push_back({"velocity_scale", {{"scale", e.velocity_scale}}});
+  if (e.rotation_drift != 0) out.push_back({"rotation_drift", {{"rate", e.rotation_drift}}});
+  return out;
 }
 
 }  // namespace twinsim

@@ -14,7 +14,9 @@
 //   rotation_drift      the robot turns at `rate` rad per metre travelled while translating
 #pragma once
 
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace twinsim {
@@ -32,5 +34,19 @@ struct OmniEffects {
   std::vector<std::string> Active() const;
   bool any() const { return !Active().empty(); }
 };
+
+// The omni effect vocabulary (CONTRACT.md), in its order.
+const std::vector<std::string>& OmniEffectNames();
+
+// The parameter keys of an omni effect (model-file keys; empty for an unknown name).
+std::vector<std::string> OmniEffectParameters(const std::string& name);
+
+// Sets effect `name` with `parameters` (model-file keys, SI units) on `effects`,
+// replacing its earlier values. Throws InputError for an unknown name or key (listing
+// the known ones), a missing value, or a value outside the model file's range.
+void SetOmniEffect(const std::string& name, const std::map<std::string, double>& parameters, OmniEffects* effects);
+
+// The effects that are on, in the vocabulary's order, with their parameters.
+std::vector<std::pair<std::string, std::map<std::string, double>>> ListOmniEffects(const OmniEffects& effects);
 
 }  // namespace twinsim

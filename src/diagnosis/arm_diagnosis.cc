@@ -1,0 +1,798 @@
+#include "diagnosis/arm_diagnosis.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <set>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "diagnosis/forward_selection.h"
+#include "identification/torque_prediction.h"
+#include "robots/arm/arm_dynamics.h"
+#include "robots/arm/arm_effects.h"
+#include "robots/arm/arm_regressor.h"
+#include "signal/butterworth.h"
+
+namespace twinsim {
+namespace {
+
+constexpr double kReversalWindow = 0.1;   // s either side of a velocity reversal
+constexpr double kMaxLag = 0.1;           // s, the cross-correlation's reach
+constexpr int kMaxFitRows = 20000;        // residual rows per joint a Ceres fit uses at most
+constexpr int kPlotPoints = 4000;
+
+// One log with what every evaluation reuses.
+struct LogData {
+  const ArmLog* log = nullptr;
+  int first = 0, last = 0;                  // rows used, [first, last)
+  Eigen::MatrixXd rigid;                    // rows x n, N·m: inverse dynamics of the bodies, no friction
+  std::array<Eigen::MatrixXd, 10> payload;  // rows x n each: the last link's regressor columns
+  std::vector<char> held;                   // per row: in a held-out block
+};
+
+// How an effect's parameters map to the optimiser's variables.
+struct ParameterMap {
+  std::vector<double> x;      // initial values
+  std::vector<double> lower;  // bounds (-inf/inf: none)
+  std::vector<double> upper;
+};
+
+const double kInf = std::numeric_limits<double>::infinity();
+
+double Get(const TrialEffect& e, const char* key, double fallback = 0) {
+  auto it = e.parameters.find(key);
+  return it == e.parameters.end() ? fallback : it->second;
+}
+
+// Encodes an effect's parameters as variables (log scale where a parameter spans decades).
+ParameterMap Encode(const TrialEffect& e) {
+  ParameterMap m;
+  auto add = [&](double x, double lo, double hi) {
+    m.x.push_back(std::clamp(x, lo, hi));
+    m.lower.push_back(lo);
+    m.upper.push_back(hi);
+  };
+  if (e.name == "viscous_friction") {
+    add(Get(e, "b"), 0, kInf);
+  } else if (e.name == "coulomb_friction") {
+    add(Get(e, "c_pos"), 0, kInf);
+    add(Get(e, "c_neg"), 0, kInf);
+  } else if (e.name == "stribeck_friction") {
+    add(Get(e, "c"), 0, kInf);
+    add(std::max(Get(e, "s") - Get(e, "c"), 1e-6), 1e-6, kInf);
+    add(std::log(std::max(Get(e, "vs"), 1e-4)), std::log(1e-4), std::log(100.0));
+  } else if (e.name == "torque_offset") {
+    add(Get(e, "tau0"), -kInf, kInf);
+  } else if (e.name == "torque_saturation") {
+    add(Get(e, "limit"), 1e-6, kInf);
+  } else if (e.name == "time_delay") {
+    add(Get(e, "delay"), 0, 1.0);
+  } else if (e.name == "joint_flexibility") {
+    add(std::log(std::max(Get(e, "k"), 1e-3)), std::log(1e-3), std::log(1e9));
+    add(Get(e, "damping"), 0, kInf);
+    add(std::log(std::max(Get(e, "motor_inertia"), 1e-9)), std::log(1e-9), std::log(1e3));
+  } else if (e.name == "payload") {
+    add(std::max(Get(e, "mass"), 1e-6), 1e-6, kInf);
+    add(Get(e, "x"), -3, 3);
+    add(Get(e, "y"), -3, 3);
+    add(Get(e, "z"), -3, 3);
+  }
+  return m;
+}
+
+void Decode(const double* x, TrialEffect* e) {
+  auto& p = e->parameters;
+  p.clear();
+  if (e->name == "viscous_friction") {
+    p["b"] = x[0];
+  } else if (e->name == "coulomb_friction") {
+    p["c_pos"] = x[0];
+    p["c_neg"] = x[1];
+  } else if (e->name == "stribeck_friction") {
+    p["c"] = x[0];
+    p["s"] = x[0] + x[1];
+    p["vs"] = std::exp(x[2]);
+  } else if (e->name == "torque_offset") {
+    p["tau0"] = x[0];
+  } else if (e->name == "torque_saturation") {
+    p["limit"] = x[0];
+  } else if (e->name == "time_delay") {
+    p["delay"] = x[0];
+  } else if (e->name == "joint_flexibility") {
+    p["k"] = std::exp(x[0]);
+    p["damping"] = x[1];
+    p["motor_inertia"] = std::exp(x[2]);
+  } else if (e->name == "payload") {
+    p["mass"] = x[0];
+    p["x"] = x[1];
+    p["y"] = x[2];
+    p["z"] = x[3];
+  }
+}
+
+// Least squares x = argmin |A x - b| with columns of A given as vectors (small systems).
+Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
+  return a.colPivHouseholderQr().solve(b);
+}
+
+class ArmProblem : public DiagnosisProblem {
+ public:
+  ArmProblem(const ArmModel& nominal, const std::vector<ArmLog>& logs, double block_seconds, double held_out,
+             double standstill)
+      : nominal_(nominal), n_(nominal.dof()), standstill_(standstill) {
+    const ArmModel bodies = ArmPlantModel(nominal);
+    payload_candidate_ = nominal.effects.payload_mass <= 0;
+    for (const ArmLog& log : logs) {
+      LogData d;
+      d.log = &log;
+      d.first = log.edge_samples;
+      d.last = log.rows() - log.edge_samples;
+      const int rows = log.rows();
+      d.rigid.resize(rows, n_);
+      if (payload_candidate_) {
+        for (auto& b : d.payload) b.resize(rows, n_);
+      }
+      for (int r = 0; r < rows; ++r) {
+        const Eigen::VectorXd q = log.q.row(r).transpose(), qd = log.qd.row(r).transpose(),
+                              qdd = log.qdd.row(r).transpose();
+        d.rigid.row(r) = InverseDynamics(bodies, q, qd, qdd, false).transpose();
+        if (payload_candidate_) {
+          const Eigen::MatrixXd y = Regressor(bodies, q, qd, qdd);
+          for (int k = 0; k < 10; ++k) d.payload[static_cast<std::size_t>(k)].row(r) = y.col(kParametersPerLink * (n_ - 1) + k).transpose();
+        }
+      }
+      d.held.assign(static_cast<std::size_t>(rows), 0);
+      for (int r = 0; r < rows; ++r) d.held[static_cast<std::size_t>(r)] = InHeldOutBlock(log.t[r] - log.t[0], block_seconds, held_out);
+      data_.push_back(std::move(d));
+    }
+    chunk_rows_ = std::max(1, static_cast<int>(std::lround(1.0 / logs.front().sample_period)));
+    sample_period_ = logs.front().sample_period;
+    bandwidth_ = kInf;
+    for (const ArmLog& log : logs) {
+      bandwidth_ = std::min(bandwidth_, log.derive_cutoff_hz > 0 ? log.derive_cutoff_hz : 0.25 / log.sample_period);
+    }
+  }
+
+  int dof() const { return n_; }
+  const std::vector<LogData>& data() const { return data_; }
+  double Gap(double mean_squared) const override { return std::sqrt(mean_squared / n_); }
+  int ChunkRows() const override { return chunk_rows_; }
+
+  // The nominal model with `effects` added. Throws InputError for invalid parameters.
+  ArmModel Build(const std::vector<TrialEffect>& effects) const {
+    ArmModel m = nominal_;
+    for (const TrialEffect& e : effects) AddArmEffect({e.name, e.joint, e.parameters}, n_, &m.effects);
+    return m;
+  }
+
+  // Torque of the trial model's payload effect on log d (rows x n), or empty.
+  Eigen::MatrixXd PayloadTorque(const ArmModel& trial, const LogData& d) const {
+    if (!payload_candidate_ || trial.effects.payload_mass <= 0) return {};
+    const auto pi = PointMassParameters(trial.effects.payload_mass, trial.effects.payload_position);
+    Eigen::MatrixXd tau = Eigen::MatrixXd::Zero(d.log->rows(), n_);
+    for (int k = 0; k < 10; ++k) tau += pi[k] * d.payload[static_cast<std::size_t>(k)];
+    return tau;
+  }
+
+  // What the links of joint j need: rigid bodies, payload and all friction (rows). A
+  // joint at a standstill gets no friction here: it sticks, and its friction is then
+  // whatever holds it (Residual() allows for that).
+  Eigen::VectorXd Needed(const ArmModel& trial, const LogData& d, int j, const Eigen::MatrixXd& payload) const {
+    Eigen::VectorXd needed = d.rigid.col(j);
+    if (payload.size()) needed += payload.col(j);
+    const auto& qd = d.log->qd;
+    for (int r = 0; r < d.log->rows(); ++r) {
+      if (std::abs(qd(r, j)) >= standstill_) needed[r] += ArmFrictionTorque(trial, j, qd(r, j));
+    }
+    return needed;
+  }
+
+  // The model's command for joint j (rows).
+  Eigen::VectorXd Command(const ArmModel& trial, const LogData& d, int j, const Eigen::MatrixXd& payload) const {
+    return JointCommandFromNeeded(trial, j, d.log->t, d.log->qdd.col(j), Needed(trial, d, j, payload));
+  }
+
+  // Measured minus model for joint j (rows). With a torque_saturation limit the joint
+  // received the logged command clipped: that is compared with what the motion needs.
+  // At a standstill the joint's friction takes any value up to its static level, so
+  // only what exceeds that level counts.
+  Eigen::VectorXd Residual(const ArmModel& trial, const LogData& d, int j, const Eigen::MatrixXd& payload) const {
+    const Eigen::VectorXd cmd = Command(trial, d, j, payload);
+    const JointEffects e = trial.effects.joint(j);
+    const Eigen::VectorXd u = d.log->tau.col(j);
+    Eigen::VectorXd r = e.saturation > 0 ? Eigen::VectorXd(u.cwiseMax(-e.saturation).cwiseMin(e.saturation) - cmd)
+                                         : Eigen::VectorXd(u - cmd);
+    const double coulomb = trial.joints[static_cast<std::size_t>(j)].coulomb + (e.stribeck() ? e.stribeck_static : 0.0);
+    for (int row = 0; row < d.log->rows(); ++row) {
+      if (std::abs(d.log->qd(row, j)) >= standstill_) continue;
+      const double level = coulomb + (r[row] > 0 ? e.coulomb_positive : e.coulomb_negative);
+      r[row] = r[row] > 0 ? std::max(0.0, r[row] - level) : std::min(0.0, r[row] + level);
+    }
+    return r;
+  }
+
+  SquaredResiduals Evaluate(const std::vector<TrialEffect>& effects) const override {
+    const ArmModel trial = Build(effects);
+    SquaredResiduals out;
+    for (const LogData& d : data_) {
+      const Eigen::MatrixXd payload = PayloadTorque(trial, d);
+      Eigen::VectorXd sum = Eigen::VectorXd::Zero(d.log->rows());
+      for (int j = 0; j < n_; ++j) sum += Residual(trial, d, j, payload).cwiseAbs2();
+      for (int r = d.first; r < d.last; ++r) (d.held[static_cast<std::size_t>(r)] ? out.held_out : out.fit).push_back(sum[r]);
+    }
+    return out;
+  }
+
+  std::vector<TrialEffect> Candidates(const std::vector<TrialEffect>& current) const override {
+    std::set<std::pair<std::string, int>> taken;
+    for (const ArmEffect& e : ListArmEffects(nominal_.effects)) taken.insert({e.name, e.joint});
+    for (const TrialEffect& e : current) taken.insert({e.name, e.joint});
+    std::vector<TrialEffect> out;
+    for (int j = 0; j < n_; ++j) {
+      for (const std::string& name : ArmEffectNames()) {
+        if (name == "payload" || taken.count({name, j})) continue;
+        out.push_back({name, j, {}});
+      }
+    }
+    if (payload_candidate_ && !taken.count({"payload", -1})) out.push_back({"payload", -1, {}});
+    return out;
+  }
+
+  std::vector<TrialEffect> Fit(std::vector<TrialEffect> effects, const std::vector<int>& free) const override {
+    for (int i : free) {
+      if (effects[static_cast<std::size_t>(i)].parameters.empty()) InitialGuess(&effects, i);
+    }
+    Refine(&effects, free);
+    if (free.size() == 1) CheckResolved(effects[static_cast<std::size_t>(free.front())]);
+    return effects;
+  }
+
+  std::string Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const override;
+
+  // Throws std::runtime_error when a fitted effect lies where the logs cannot see it:
+  // what it then explains is something else (the derivative filter's error, noise).
+  void CheckResolved(const TrialEffect& e) const {
+    char msg[200];
+    if (e.name == "joint_flexibility") {
+      const double f = std::sqrt(e.parameters.at("k") / e.parameters.at("motor_inertia")) / (2 * M_PI);
+      if (f > bandwidth_) {
+        std::snprintf(msg, sizeof msg, "its resonance (%.3g Hz) lies above the %.3g Hz the logs' motion resolves", f, bandwidth_);
+        throw std::runtime_error(msg);
+      }
+    } else if (e.name == "time_delay") {
+      if (e.parameters.at("delay") < 0.5 * sample_period_) {
+        std::snprintf(msg, sizeof msg, "%.3g ms is below half a sample", 1000 * e.parameters.at("delay"));
+        throw std::runtime_error(msg);
+      }
+    } else if (e.name == "stribeck_friction") {
+      if (e.parameters.at("vs") < standstill_) {
+        std::snprintf(msg, sizeof msg, "vs = %.3g rad/s is below the standstill speed %.3g: Coulomb friction by another name",
+                      e.parameters.at("vs"), standstill_);
+        throw std::runtime_error(msg);
+      }
+    } else if (e.name == "torque_saturation") {
+      long beyond = 0, total = 0;
+      for (const LogData& d : data_) {
+        for (int r = d.first; r < d.last; ++r) {
+          beyond += std::abs(d.log->tau(r, e.joint)) > e.parameters.at("limit");
+          ++total;
+        }
+      }
+      if (beyond < std::max(10L, total / 200)) throw std::runtime_error("fewer than 0.5 % of the commands reach the limit");
+    }
+  }
+
+  // The fit rows' residual of the joints `joints` under `effects`, concatenated.
+  Eigen::VectorXd FitResidual(const std::vector<TrialEffect>& effects, const std::vector<int>& joints) const {
+    const ArmModel trial = Build(effects);
+    std::vector<double> out;
+    for (const LogData& d : data_) {
+      const Eigen::MatrixXd payload = PayloadTorque(trial, d);
+      for (int j : joints) {
+        const Eigen::VectorXd r = Residual(trial, d, j, payload);
+        for (int row = d.first; row < d.last; row += stride_) {
+          if (!d.held[static_cast<std::size_t>(row)]) out.push_back(r[row]);
+        }
+      }
+    }
+    return Eigen::Map<Eigen::VectorXd>(out.data(), static_cast<Eigen::Index>(out.size()));
+  }
+
+  void SetStride() {
+    int rows = 0;
+    for (const LogData& d : data_) rows += d.last - d.first;
+    stride_ = std::max(1, rows / kMaxFitRows);
+  }
+
+ private:
+  std::vector<int> TouchedJoints(const std::vector<TrialEffect>& effects, const std::vector<int>& free) const {
+    std::set<int> joints;
+    for (int i : free) {
+      const TrialEffect& e = effects[static_cast<std::size_t>(i)];
+      if (e.joint < 0) {
+        for (int j = 0; j < n_; ++j) joints.insert(j);
+      } else {
+        joints.insert(e.joint);
+      }
+    }
+    return {joints.begin(), joints.end()};
+  }
+
+  double Cost(const std::vector<TrialEffect>& effects, const std::vector<int>& joints) const {
+    try {
+      return FitResidual(effects, joints).squaredNorm();
+    } catch (const InputError&) {
+      return kInf;
+    }
+  }
+
+  // Starting parameters for effects[i] from the residual the others leave.
+  void InitialGuess(std::vector<TrialEffect>* effects, int i) const;
+  // Ceres over every free effect's variables.
+  void Refine(std::vector<TrialEffect>* effects, const std::vector<int>& free) const;
+
+  ArmModel nominal_;
+  int n_;
+  double standstill_;  // rad/s or m/s: slower counts as standing still
+  double bandwidth_ = 0;       // Hz: the motion the logs resolve (derivative cut-off, or a quarter of the rate)
+  double sample_period_ = 0;   // s, the logs' median
+  bool payload_candidate_ = true;
+  std::vector<LogData> data_;
+  int chunk_rows_ = 1;
+  int stride_ = 1;
+};
+
+void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
+  TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+  std::vector<TrialEffect> others = *effects;
+  others.erase(others.begin() + i);
+  const ArmModel base = Build(others);
+  const int j = e.joint;
+  // Fit rows of the residual the others leave, with the per-row features the linear
+  // friction laws and the offset need.
+  std::vector<double> r, qd, qdd, needed_dd;
+  std::vector<std::array<double, 4>> payload_rows;  // per joint row: m, mcx, mcy, mcz columns
+  std::vector<double> payload_r;
+  for (const LogData& d : data_) {
+    const Eigen::MatrixXd payload = PayloadTorque(base, d);
+    if (j >= 0) {
+      const Eigen::VectorXd res = Residual(base, d, j, payload);
+      Eigen::VectorXd ndd;
+      if (e.name == "joint_flexibility") {
+        const Eigen::VectorXd needed = Needed(base, d, j, payload);
+        ndd = ThreePointDerivatives(d.log->t, needed).second;
+      }
+      for (int row = d.first; row < d.last; row += stride_) {
+        if (d.held[static_cast<std::size_t>(row)]) continue;
+        r.push_back(res[row]);
+        qd.push_back(d.log->qd(row, j));
+        qdd.push_back(d.log->qdd(row, j));
+        if (ndd.size()) needed_dd.push_back(ndd[row]);
+      }
+    } else {
+      for (int jj = 0; jj < n_; ++jj) {
+        const Eigen::VectorXd res = Residual(base, d, jj, payload);
+        for (int row = d.first; row < d.last; row += stride_) {
+          if (d.held[static_cast<std::size_t>(row)]) continue;
+          payload_r.push_back(res[row]);
+          payload_rows.push_back({d.payload[0](row, jj), d.payload[1](row, jj), d.payload[2](row, jj), d.payload[3](row, jj)});
+        }
+      }
+    }
+  }
+  const auto rows = static_cast<Eigen::Index>(r.size());
+  const Eigen::Map<const Eigen::VectorXd> rv(r.data(), rows);
+  auto& p = e.parameters;
+  if (e.name == "viscous_friction") {
+    // The command rises by b qd: the residual falls by it.
+    const Eigen::Map<const Eigen::VectorXd> v(qd.data(), rows);
+    p["b"] = std::max(0.0, v.squaredNorm() > 0 ? rv.dot(v) / v.squaredNorm() : 0.0);
+  } else if (e.name == "coulomb_friction") {
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, 2);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      a(k, 0) = qd[static_cast<std::size_t>(k)] > 0 ? 1 : 0;
+      a(k, 1) = qd[static_cast<std::size_t>(k)] < 0 ? -1 : 0;
+    }
+    const Eigen::VectorXd c = SolveLeastSquares(a, rv);
+    p["c_pos"] = std::max(0.0, c[0]);
+    p["c_neg"] = std::max(0.0, c[1]);
+  } else if (e.name == "stribeck_friction") {
+    double best = kInf;
+    for (double vs : {0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0}) {
+      Eigen::MatrixXd a(rows, 2);
+      for (Eigen::Index k = 0; k < rows; ++k) {
+        const double v = qd[static_cast<std::size_t>(k)], s = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+        a(k, 0) = s;
+        a(k, 1) = s * std::exp(-(v / vs) * (v / vs));
+      }
+      Eigen::VectorXd c = SolveLeastSquares(a, rv);
+      c[0] = std::max(0.0, c[0]);
+      c[1] = std::max(1e-6, c[1]);
+      const double sse = (rv - a * c).squaredNorm();
+      if (sse < best) {
+        best = sse;
+        p = {{"c", c[0]}, {"s", c[0] + c[1]}, {"vs", vs}};
+      }
+    }
+  } else if (e.name == "torque_offset") {
+    // The joint receives the command plus tau0: the residual rises by it.
+    p["tau0"] = rows ? -rv.mean() : 0.0;
+  } else if (e.name == "torque_saturation" || e.name == "time_delay") {
+    // A grid on the residual's cost: quantiles of the commands, or delays.
+    std::vector<double> grid;
+    const char* key = e.name == "time_delay" ? "delay" : "limit";
+    if (e.name == "time_delay") {
+      grid = {0.0005, 0.001, 0.002, 0.003, 0.005, 0.007, 0.01, 0.015, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15};
+    } else {
+      std::vector<double> u;
+      for (const LogData& d : data_) {
+        for (int row = d.first; row < d.last; ++row) u.push_back(std::abs(d.log->tau(row, j)));
+      }
+      std::sort(u.begin(), u.end());
+      for (double q : {0.5, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995}) {
+        grid.push_back(u[std::min(u.size() - 1, static_cast<std::size_t>(q * static_cast<double>(u.size())))]);
+      }
+    }
+    double best = kInf;
+    for (double g : grid) {
+      if (!(g > 0)) continue;
+      std::vector<TrialEffect> trial = *effects;
+      trial[static_cast<std::size_t>(i)].parameters = {{key, g}};
+      const double c = Cost(trial, {j});
+      if (c < best) {
+        best = c;
+        p = {{key, g}};
+      }
+    }
+    if (p.empty()) throw std::runtime_error("no usable starting value");
+  } else if (e.name == "joint_flexibility") {
+    // Rigid-spring expansion: command = needed + J_m qdd + (J_m / k) needed''.
+    Eigen::MatrixXd a(rows, 2);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      a(k, 0) = qdd[static_cast<std::size_t>(k)];
+      a(k, 1) = needed_dd[static_cast<std::size_t>(k)];
+    }
+    const Eigen::VectorXd c = SolveLeastSquares(a, -rv);
+    const double jm = c[0] > 1e-6 ? c[0] : 1e-3;
+    const double k = c[1] > 0 ? jm / c[1] : jm * std::pow(2 * M_PI * 20, 2);
+    p = {{"k", k}, {"damping", 0.0}, {"motor_inertia", jm}};
+  } else if (e.name == "payload") {
+    // First moments only (the second moments of a point mass follow from them).
+    const auto m = static_cast<Eigen::Index>(payload_r.size());
+    Eigen::MatrixXd a(m, 4);
+    for (Eigen::Index k = 0; k < m; ++k) {
+      for (int c = 0; c < 4; ++c) a(k, c) = payload_rows[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)];
+    }
+    const Eigen::VectorXd c = SolveLeastSquares(a, Eigen::Map<const Eigen::VectorXd>(payload_r.data(), m));
+    const double mass = std::max(c[0], 1e-3);
+    Eigen::Vector3d pos = c.tail<3>() / mass;
+    pos = pos.cwiseMax(-2.0).cwiseMin(2.0);
+    p = {{"mass", mass}, {"x", pos.x()}, {"y", pos.y()}, {"z", pos.z()}};
+  }
+}
+
+// The residual of the free effects' joints as a function of their variables.
+class FitFunctor {
+ public:
+  FitFunctor(const ArmProblem* problem, std::vector<TrialEffect> effects, std::vector<int> free,
+             std::vector<int> sizes, std::vector<int> joints)
+      : problem_(problem), effects_(std::move(effects)), free_(std::move(free)), sizes_(std::move(sizes)),
+        joints_(std::move(joints)) {}
+
+  bool operator()(double const* const* x, double* residual) const {
+    std::vector<TrialEffect> trial = effects_;
+    for (std::size_t k = 0; k < free_.size(); ++k) Decode(x[k], &trial[static_cast<std::size_t>(free_[k])]);
+    Eigen::VectorXd r;
+    try {
+      r = problem_->FitResidual(trial, joints_);
+    } catch (const InputError&) {
+      return false;  // outside the effect's valid range: Ceres steps back
+    }
+    std::copy(r.data(), r.data() + r.size(), residual);
+    return true;
+  }
+
+ private:
+  const ArmProblem* problem_;
+  std::vector<TrialEffect> effects_;
+  std::vector<int> free_;
+  std::vector<int> sizes_;
+  std::vector<int> joints_;
+};
+
+void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int>& free) const {
+  const std::vector<int> joints = TouchedJoints(*effects, free);
+  const Eigen::Index rows = FitResidual(*effects, joints).size();
+  if (rows == 0) throw std::runtime_error("no fit rows");
+  std::vector<ParameterMap> maps;
+  std::vector<int> sizes;
+  for (int i : free) {
+    maps.push_back(Encode((*effects)[static_cast<std::size_t>(i)]));
+    sizes.push_back(static_cast<int>(maps.back().x.size()));
+  }
+  ceres::NumericDiffOptions diff;
+  diff.relative_step_size = 1e-4;
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<FitFunctor, ceres::CENTRAL>(
+      new FitFunctor(this, *effects, free, sizes, joints), ceres::TAKE_OWNERSHIP, diff);
+  for (int s : sizes) cost->AddParameterBlock(s);
+  cost->SetNumResiduals(static_cast<int>(rows));
+  ceres::Problem problem;
+  std::vector<double*> blocks;
+  for (auto& m : maps) blocks.push_back(m.x.data());
+  problem.AddResidualBlock(cost, nullptr, blocks);
+  for (std::size_t b = 0; b < maps.size(); ++b) {
+    for (std::size_t k = 0; k < maps[b].x.size(); ++k) {
+      if (std::isfinite(maps[b].lower[k])) problem.SetParameterLowerBound(blocks[b], static_cast<int>(k), maps[b].lower[k]);
+      if (std::isfinite(maps[b].upper[k])) problem.SetParameterUpperBound(blocks[b], static_cast<int>(k), maps[b].upper[k]);
+    }
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 30;
+  options.function_tolerance = 1e-8;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  for (std::size_t k = 0; k < free.size(); ++k) Decode(maps[k].x.data(), &(*effects)[static_cast<std::size_t>(free[k])]);
+  Build(*effects);  // throws InputError when Ceres left the valid range
+}
+
+// The residual's lag (s) against the model: the shift of the model's command that best
+// matches the measured one (positive: the measured command leads the model's).
+double CommandLag(const Eigen::VectorXd& t, const Eigen::VectorXd& measured, const Eigen::VectorXd& model, int first, int last) {
+  const double dt = (t[last - 1] - t[first]) / std::max(1, last - first - 1);
+  const int max_shift = std::min(200, static_cast<int>(kMaxLag / dt));
+  double best = -kInf;
+  int best_shift = 0;
+  for (int s = -max_shift; s <= max_shift; ++s) {
+    std::vector<double> a, b;
+    for (int r = std::max(first, first - s); r < std::min(last, last - s); ++r) {
+      a.push_back(measured[r]);
+      b.push_back(model[r + s]);
+    }
+    const double c = Correlation(a, b);
+    if (c > best) {
+      best = c;
+      best_shift = s;
+    }
+  }
+  return best_shift * dt;
+}
+
+std::string ArmProblem::Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const {
+  char buf[256];
+  const auto& p = e.parameters;
+  if (e.name == "viscous_friction") {
+    std::snprintf(buf, sizeof buf, "the torque it adds grows with the joint's speed, b = %s N·m·s/rad",
+                  FormatParameter(p.at("b")).c_str());
+  } else if (e.name == "coulomb_friction") {
+    std::snprintf(buf, sizeof buf, "the residual steps where the joint reverses, by %s N·m moving up and %s N·m down, whatever the speed",
+                  FormatParameter(p.at("c_pos")).c_str(), FormatParameter(p.at("c_neg")).c_str());
+  } else if (e.name == "stribeck_friction") {
+    std::snprintf(buf, sizeof buf, "friction breaks away at %s N·m and falls to %s N·m within %s rad/s of standstill",
+                  FormatParameter(p.at("s")).c_str(), FormatParameter(p.at("c")).c_str(), FormatParameter(p.at("vs")).c_str());
+  } else if (e.name == "torque_offset") {
+    std::snprintf(buf, sizeof buf, "a constant %s N·m at every posture, speed and acceleration, where a payload's torque would follow gravity",
+                  FormatParameter(p.at("tau0")).c_str());
+  } else if (e.name == "torque_saturation") {
+    int beyond = 0, total = 0;
+    for (const LogData& d : data_) {
+      for (int r = d.first; r < d.last; ++r) {
+        beyond += std::abs(d.log->tau(r, e.joint)) > p.at("limit");
+        ++total;
+      }
+    }
+    std::snprintf(buf, sizeof buf, "%.1f %% of the commands exceed %s N·m and move the joint no more than the limit would",
+                  100.0 * beyond / std::max(total, 1), FormatParameter(p.at("limit")).c_str());
+  } else if (e.name == "time_delay") {
+    std::snprintf(buf, sizeof buf, "the logged commands lead the torques the motion needs by %s ms",
+                  FormatParameter(1000 * p.at("delay")).c_str());
+  } else if (e.name == "joint_flexibility") {
+    std::snprintf(buf, sizeof buf, "a motor inertia of %s kg·m² on a spring of %s N·m/rad, a resonance near %s Hz",
+                  FormatParameter(p.at("motor_inertia")).c_str(), FormatParameter(p.at("k")).c_str(),
+                  FormatParameter(std::sqrt(p.at("k") / p.at("motor_inertia")) / (2 * M_PI)).c_str());
+  } else if (e.name == "payload") {
+    // How much of the payload's torque a constant offset per joint could carry.
+    const ArmModel trial = Build({e});
+    double total = 0, constant = 0;
+    for (const LogData& d : data_) {
+      const Eigen::MatrixXd tau = PayloadTorque(trial, d).middleRows(d.first, d.last - d.first);
+      for (int j = 0; j < n_; ++j) {
+        const double mean = tau.col(j).mean();
+        total += tau.col(j).squaredNorm();
+        constant += mean * mean * static_cast<double>(tau.rows());
+      }
+    }
+    std::snprintf(buf, sizeof buf,
+                  "%s kg at (%s, %s, %s) m in the last link's frame; its torque follows gravity and acceleration on every "
+                  "joint, and constant offsets could carry only %.0f %% of it",
+                  FormatParameter(p.at("mass")).c_str(), FormatParameter(p.at("x")).c_str(),
+                  FormatParameter(p.at("y")).c_str(), FormatParameter(p.at("z")).c_str(),
+                  100 * (total > 0 ? constant / total : 0.0));
+  } else {
+    return "";
+  }
+  return buf;
+}
+
+// Per-joint noise: the residual's part above `cutoff_hz`, scaled to the whole band (white).
+double HighFrequencySigma(const Eigen::VectorXd& residual, double rate, double cutoff_hz) {
+  const double nyquist = rate / 2;
+  if (cutoff_hz >= 0.8 * nyquist || residual.size() < 64) return 0;
+  const ButterworthFilter low = DesignButterworthLowPass(4, cutoff_hz, rate);
+  const Eigen::VectorXd high = residual - FiltFilt(low, residual);
+  const Eigen::Index skip = std::min<Eigen::Index>(high.size() / 4, static_cast<Eigen::Index>(rate * 0.2));
+  const Eigen::VectorXd mid = high.segment(skip, high.size() - 2 * skip);
+  const double var = (mid.array() - mid.mean()).square().mean();
+  return std::sqrt(var * nyquist / (nyquist - cutoff_hz));
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 10, 1> PointMassParameters(double mass, const Eigen::Vector3d& p) {
+  const Eigen::Matrix3d io = mass * (p.squaredNorm() * Eigen::Matrix3d::Identity() - p * p.transpose());
+  Eigen::Matrix<double, 10, 1> pi;
+  pi << mass, mass * p.x(), mass * p.y(), mass * p.z(), io(0, 0), io(0, 1), io(0, 2), io(1, 1), io(1, 2), io(2, 2);
+  return pi;
+}
+
+DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& logs, const DiagnosisOptions& options,
+                            ArmModel* repaired, const std::function<void(const std::string&)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  if (model.dof() == 0) throw InputError(SourceLocation{model.source_path}, "the model has no joints: nothing to diagnose");
+  if (logs.empty()) throw InputError("diagnose needs at least one --log");
+  std::vector<double> durations;
+  for (const ArmLog& log : logs) {
+    CheckArmLogMatchesModel(log, model);
+    for (Eigen::Index r = 0; r < log.rows(); ++r) {
+      for (int j = 0; j < log.dof; ++j) {
+        if (!std::isfinite(log.q(r, j)) || !std::isfinite(log.qd(r, j)) || !std::isfinite(log.qdd(r, j)) ||
+            !std::isfinite(log.tau(r, j))) {
+          throw InputError(SourceLocation{log.path, log.line_of[static_cast<std::size_t>(r)]},
+                           "joint " + std::to_string(j + 1) + " holds a value that is not a finite number");
+        }
+      }
+    }
+    durations.push_back(log.t[log.rows() - 1] - log.t[0]);
+  }
+  const double block = DiagnosisBlockSeconds(options, durations);
+  // Every log must hold at least one held-out block and a fit block beside it.
+  for (std::size_t k = 0; k < logs.size(); ++k) {
+    const ArmLog& log = logs[k];
+    int held = 0, fit = 0;
+    for (int r = log.edge_samples; r < log.rows() - log.edge_samples; ++r) {
+      (InHeldOutBlock(log.t[r] - log.t[0], block, options.held_out) ? held : fit)++;
+    }
+    if (held < 10 || fit < 10) {
+      char msg[256];
+      std::snprintf(msg, sizeof msg,
+                    "the log is %.3g s long: too short to hold a %.3g s block out for checking (give a longer log, "
+                    "or a shorter --block)",
+                    durations[k], block);
+      throw InputError(SourceLocation{log.path, 1}, msg);
+    }
+  }
+
+  ArmProblem problem(model, logs, block, options.held_out, options.standstill);
+  problem.SetStride();
+  const SelectionResult selection = SelectEffects(problem, options, progress);
+
+  DiagnosisReport report;
+  report.robot = "arm";
+  report.model_name = model.name;
+  report.metric = "RMS over joints and held-out samples of the measured command minus the model's (N·m or N)";
+  report.block_seconds = block;
+  report.held_out_share = options.held_out;
+  for (const ArmLog& log : logs) report.logs.push_back(log.path);
+  report.gap_before = problem.Gap(Mean(selection.before.held_out));
+  report.gap_after = problem.Gap(Mean(selection.after.held_out));
+  report.fit_gap_before = problem.Gap(Mean(selection.before.fit));
+  report.fit_gap_after = problem.Gap(Mean(selection.after.fit));
+  report.fit_rows = static_cast<int>(selection.before.fit.size());
+  report.held_out_rows = static_cast<int>(selection.before.held_out.size());
+  report.candidates = selection.candidates;
+  for (std::size_t k = 0; k < selection.effects.size(); ++k) {
+    const TrialEffect& e = selection.effects[k];
+    report.effects.push_back({e.name, e.joint, e.parameters, selection.gap_reductions[k], selection.evidence[k]});
+  }
+
+  // Find: per joint, the nominal and the repaired model's residuals.
+  const ArmModel nominal_model = problem.Build({});
+  const ArmModel repaired_model = problem.Build(selection.effects);
+  const auto& data = problem.data();
+  double noise_sq = 0;
+  for (int j = 0; j < model.dof(); ++j) {
+    ChannelFinding f;
+    ChannelSeries s;
+    f.channel = "joint " + std::to_string(j + 1);
+    f.unit = model.joints[static_cast<std::size_t>(j)].type == JointType::kPrismatic ? "N" : "N·m";
+    std::vector<double> before, after, velocity, acceleration, near, moving;
+    double lag_sum = 0, noise_joint = 0;
+    for (std::size_t k = 0; k < data.size(); ++k) {
+      const LogData& d = data[k];
+      const ArmLog& log = *d.log;
+      const Eigen::VectorXd rb = problem.Residual(nominal_model, d, j, problem.PayloadTorque(nominal_model, d));
+      const Eigen::VectorXd ra = problem.Residual(repaired_model, d, j, problem.PayloadTorque(repaired_model, d));
+      const Eigen::VectorXd cmd = problem.Command(nominal_model, d, j, problem.PayloadTorque(nominal_model, d));
+      lag_sum += CommandLag(log.t, log.tau.col(j), cmd, d.first, d.last);
+      const double rate = 1.0 / log.sample_period;
+      const double cutoff = log.derive_cutoff_hz > 0 ? 2 * log.derive_cutoff_hz : rate / 8;
+      const double sigma = HighFrequencySigma(rb.segment(d.first, d.last - d.first), rate, cutoff);
+      noise_joint += sigma * sigma;
+      // Reversals: where the velocity changes sign or the joint stands.
+      const double vmax = log.qd.col(j).segment(d.first, d.last - d.first).cwiseAbs().maxCoeff();
+      std::vector<double> reversal_times;
+      for (int r = d.first + 1; r < d.last; ++r) {
+        if ((log.qd(r, j) > 0) != (log.qd(r - 1, j) > 0) || std::abs(log.qd(r, j)) < 0.02 * vmax) reversal_times.push_back(log.t[r]);
+      }
+      std::size_t next = 0;
+      for (int r = d.first; r < d.last; ++r) {
+        before.push_back(rb[r]);
+        after.push_back(ra[r]);
+        velocity.push_back(log.qd(r, j));
+        acceleration.push_back(log.qdd(r, j));
+        while (next < reversal_times.size() && reversal_times[next] < log.t[r] - kReversalWindow) ++next;
+        const bool close = next < reversal_times.size() && reversal_times[next] <= log.t[r] + kReversalWindow;
+        (close ? near : moving).push_back(rb[r]);
+      }
+      if (k == 0) {
+        // Plots: the first log, subsampled.
+        const int step = std::max(1, (d.last - d.first) / kPlotPoints);
+        for (int r = d.first; r < d.last; r += step) {
+          s.t.push_back(log.t[r]);
+          s.before.push_back(rb[r]);
+          s.after.push_back(ra[r]);
+          s.velocity.push_back(log.qd(r, j));
+          s.held_out.push_back(d.held[static_cast<std::size_t>(r)]);
+        }
+        std::vector<double> xb(rb.data() + d.first, rb.data() + d.last), xa(ra.data() + d.first, ra.data() + d.last);
+        const int segment = static_cast<int>(std::min<double>(4096, std::pow(2, std::floor(std::log2(std::max(8.0, xb.size() / 4.0))))));
+        WelchPsd(xb, rate, segment, &s.frequency, &s.psd_before);
+        std::vector<double> unused;
+        WelchPsd(xa, rate, segment, &unused, &s.psd_after);
+      }
+    }
+    auto rms = [](const std::vector<double>& v) {
+      double sum = 0;
+      for (double x : v) sum += x * x;
+      return v.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(v.size()));
+    };
+    f.rms = rms(before);
+    f.rms_after = rms(after);
+    f.rms_near_reversal = rms(near);
+    f.rms_moving = rms(moving);
+    f.velocity_correlation = Correlation(before, velocity);
+    f.acceleration_correlation = Correlation(before, acceleration);
+    f.lag = lag_sum / static_cast<double>(data.size());
+    f.noise = std::sqrt(noise_joint / static_cast<double>(data.size()));
+    noise_sq += f.noise * f.noise;
+    std::size_t peak = 1;
+    for (std::size_t b = 1; b < s.psd_before.size(); ++b) {
+      if (s.psd_before[b] > s.psd_before[peak]) peak = b;
+    }
+    f.dominant_frequency = s.frequency.size() > peak ? s.frequency[peak] : 0.0;
+    report.findings.push_back(f);
+    report.series.push_back(std::move(s));
+  }
+  report.noise_floor = std::sqrt(noise_sq / model.dof());
+  if (model.effects.payload_mass > 0) report.notes.push_back("the model already has a payload: no payload candidate was tried");
+  for (const ArmEffect& e : ListArmEffects(model.effects)) {
+    report.notes.push_back("the model's own " + EffectLabel(e.name, e.joint) + " was trusted, not refitted");
+  }
+  if (repaired) {
+    *repaired = repaired_model;
+  }
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,157 @@
+#include "diagnosis/diagnosis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <unsupported/Eigen/FFT>
+
+namespace twinsim {
+
+bool DiagnosisOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& s) {
+    if (why) *why = s;
+    return false;
+  };
+  if (!(held_out > 0 && held_out < 1)) return fail("--held-out must be between 0 and 1 (exclusive), got " + FormatParameter(held_out));
+  if (!(block_seconds >= 0) || !std::isfinite(block_seconds)) return fail("--block must be 0 (automatic) or a positive number of seconds");
+  if (max_effects < 0) return fail("--max-effects must be 0 or more, got " + std::to_string(max_effects));
+  if (!(min_improvement >= 0 && min_improvement < 1)) return fail("--min-improvement must be in [0, 1)");
+  if (!(significance >= 0) || !std::isfinite(significance)) return fail("--significance must be a non-negative number");
+  if (horizon < 1) return fail("--horizon must be 1 or more frames, got " + std::to_string(horizon));
+  if (!(standstill >= 0) || !std::isfinite(standstill)) return fail("--standstill must be a non-negative speed");
+  if (threads < 0) return fail("--threads must be 0 (one per core) or more");
+  return true;
+}
+
+double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<double>& durations) {
+  if (options.block_seconds > 0) return options.block_seconds;
+  double longest = 0;
+  for (double d : durations) longest = std::max(longest, d);
+  return std::clamp(longest / 20, 0.5, 10.0);
+}
+
+bool InHeldOutBlock(double t, double block_seconds, double held_out) {
+  const double k = std::floor(t / block_seconds);
+  if (k < 1) return false;
+  return std::floor((k + 1) * held_out) > std::floor(k * held_out);
+}
+
+double ChunkedTStatistic(const std::vector<double>& gain, int chunk) {
+  chunk = std::max(chunk, 1);
+  std::vector<double> means;
+  for (std::size_t start = 0; start + static_cast<std::size_t>(chunk) <= gain.size(); start += static_cast<std::size_t>(chunk)) {
+    double s = 0;
+    for (int i = 0; i < chunk; ++i) s += gain[start + static_cast<std::size_t>(i)];
+    means.push_back(s / chunk);
+  }
+  if (means.size() < 3) return 0;
+  double mean = 0;
+  for (double m : means) mean += m;
+  mean /= static_cast<double>(means.size());
+  double var = 0;
+  for (double m : means) var += (m - mean) * (m - mean);
+  var /= static_cast<double>(means.size() - 1);
+  const double se = std::sqrt(var / static_cast<double>(means.size()));
+  if (se <= 0) return mean > 0 ? 1e9 : 0.0;
+  return mean / se;
+}
+
+int CorrelationLength(const std::vector<double>& x, int max_lag) {
+  const std::size_t n = x.size();
+  if (n < 4) return 1;
+  double mean = 0;
+  for (double v : x) mean += v;
+  mean /= static_cast<double>(n);
+  double c0 = 0;
+  for (double v : x) c0 += (v - mean) * (v - mean);
+  if (c0 <= 0) return 1;
+  for (int lag = 1; lag <= max_lag && static_cast<std::size_t>(lag) < n; ++lag) {
+    double c = 0;
+    for (std::size_t i = static_cast<std::size_t>(lag); i < n; ++i) c += (x[i] - mean) * (x[i - static_cast<std::size_t>(lag)] - mean);
+    if (c / c0 < std::exp(-1.0)) return lag;
+  }
+  return max_lag;
+}
+
+void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vector<double>* frequency,
+              std::vector<double>* psd) {
+  frequency->clear();
+  psd->clear();
+  segment = std::min<int>(segment, static_cast<int>(x.size()));
+  segment -= segment % 2;
+  if (segment < 8) return;
+  std::vector<double> window(static_cast<std::size_t>(segment));
+  double window_power = 0;
+  for (int i = 0; i < segment; ++i) {
+    window[static_cast<std::size_t>(i)] = 0.5 - 0.5 * std::cos(2 * M_PI * i / segment);
+    window_power += window[static_cast<std::size_t>(i)] * window[static_cast<std::size_t>(i)];
+  }
+  Eigen::FFT<double> fft;
+  std::vector<double> buffer(static_cast<std::size_t>(segment));
+  std::vector<std::complex<double>> spectrum;
+  const int bins = segment / 2 + 1;
+  psd->assign(static_cast<std::size_t>(bins), 0.0);
+  int count = 0;
+  for (std::size_t start = 0; start + static_cast<std::size_t>(segment) <= x.size(); start += static_cast<std::size_t>(segment / 2)) {
+    double mean = 0;
+    for (int i = 0; i < segment; ++i) mean += x[start + static_cast<std::size_t>(i)];
+    mean /= segment;
+    for (int i = 0; i < segment; ++i) {
+      buffer[static_cast<std::size_t>(i)] = (x[start + static_cast<std::size_t>(i)] - mean) * window[static_cast<std::size_t>(i)];
+    }
+    fft.fwd(spectrum, buffer);
+    for (int b = 0; b < bins; ++b) {
+      const double scale = (b == 0 || b == segment / 2) ? 1.0 : 2.0;
+      (*psd)[static_cast<std::size_t>(b)] += scale * std::norm(spectrum[static_cast<std::size_t>(b)]) / (rate * window_power);
+    }
+    ++count;
+  }
+  for (double& p : *psd) p /= std::max(count, 1);
+  frequency->resize(static_cast<std::size_t>(bins));
+  for (int b = 0; b < bins; ++b) (*frequency)[static_cast<std::size_t>(b)] = b * rate / segment;
+}
+
+double RobustSigma(std::vector<double> x) {
+  if (x.empty()) return 0;
+  auto median = [](std::vector<double>& v) {
+    const std::size_t mid = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+    return v[mid];
+  };
+  const double m = median(x);
+  for (double& v : x) v = std::abs(v - m);
+  return 1.4826 * median(x);
+}
+
+double Correlation(const std::vector<double>& a, const std::vector<double>& b) {
+  const std::size_t n = std::min(a.size(), b.size());
+  if (n < 2) return 0;
+  double ma = 0, mb = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    ma += a[i];
+    mb += b[i];
+  }
+  ma /= static_cast<double>(n);
+  mb /= static_cast<double>(n);
+  double sab = 0, saa = 0, sbb = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    sab += (a[i] - ma) * (b[i] - mb);
+    saa += (a[i] - ma) * (a[i] - ma);
+    sbb += (b[i] - mb) * (b[i] - mb);
+  }
+  if (saa <= 0 || sbb <= 0) return 0;
+  return sab / std::sqrt(saa * sbb);
+}
+
+std::string FormatParameter(double value) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", value);
+  return buf;
+}
+
+std::string EffectLabel(const std::string& name, int joint) {
+  return joint >= 0 ? name + " (joint " + std::to_string(joint + 1) + ")" : name;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,159 @@
+// The diagnosis workflow (`twinsim diagnose`, CONTRACT.md): find where a model and
+// measured logs disagree, name the missing effects from the contract's vocabulary,
+// add them to the model with fitted parameters, and show the gap shrink on data the
+// fit never saw. One method for both robots (docs/diagnose.md):
+//
+//   1. Find: replay the nominal model over the logs (arm: the commands its inverse
+//      dynamics needs; omni: the 4-frame prediction of `replay`) and describe the
+//      residual per joint or axis (over time, against velocity, near reversals, its
+//      lag against the command, its spectrum) and the noise floor the data allow.
+//   2. Name: every effect of the vocabulary is a candidate; each is fitted on the fit
+//      blocks of the logs and scored on the held-out blocks.
+//   3. Add: forward selection; the best candidate is added and all added ones refitted
+//      together while the held-out gap drops significantly (DiagnosisOptions).
+//   4. Show: a DiagnosisReport, written as report.json, report.html and model.yaml
+//      (diagnosis_report.h).
+//
+// This header holds what both robots share: options, the held-out split in time
+// blocks, the significance test, and the report's plain structs. The robots' own
+// halves are arm_diagnosis.h and omni_diagnosis.h.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace twinsim {
+
+struct DiagnosisOptions {
+  double held_out = 0.3;      // share of each log's time blocks held out from every fit
+  double block_seconds = 0;   // s, length of a time block; 0 = automatic (a 20th of the log, 0.5 to 10 s)
+  int max_effects = 3;        // the most effects added
+  // An effect is added only when it lowers the held-out mean squared error by at least
+  // this share of it (a floor against effects too small to matter) ...
+  double min_improvement = 0.05;
+  // ... and the reduction is significant: its mean over held-out chunks (each chunk as
+  // long as the correlation of the residual, 1 s or more) is at least `significance`
+  // standard errors above zero (a one-sided t test, docs/diagnose.md).
+  double significance = 3;
+  std::string backend = "analytic";  // omni: the physics that replays the model
+  int horizon = 4;                   // omni: frames predicted ahead (the contract's replay K)
+  // Arm: rad/s (m/s) below which a joint counts as standing still, where its friction
+  // is anything up to the static level (stiction) rather than the friction law's value.
+  double standstill = 0.02;
+  int threads = 0;                   // 0 = one per core; results do not depend on it
+
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
+};
+
+// One candidate effect as it was tried: its fitted parameters and scores.
+struct DiagnosisCandidate {
+  int round = 0;                             // selection round, 1-based
+  std::string name;                          // contract vocabulary
+  int joint = -1;                            // 0-based; -1 for whole-robot effects
+  std::map<std::string, double> parameters;  // model-file keys, SI units
+  double fit_gap = 0;                        // metric on the fit rows with it added
+  double held_out_gap = 0;                   // metric on the held-out rows with it added
+  double reduction = 0;                      // share of the round's held-out MSE it removed
+  double t_statistic = 0;                    // of that reduction over held-out chunks
+  bool selected = false;
+  std::string note;                          // why it could not be fitted, when it could not
+};
+
+// An effect the diagnosis added, as report.json lists it.
+struct DiagnosedEffect {
+  std::string name;
+  int joint = -1;                            // 0-based; -1 for whole-robot effects (null)
+  std::map<std::string, double> parameters;  // after the final joint refit
+  double gap_reduction = 0;                  // share of the held-out gap before it was added that it removed
+  std::string evidence;                      // one sentence: what decided it
+};
+
+// The "find" step for one joint (arm) or axis (omni: forward, sideways, rotation).
+struct ChannelFinding {
+  std::string channel;           // "joint 2", "forward", ...
+  std::string unit;              // of the residual: "N m", "m", ...
+  double rms = 0;                // of the nominal model's residual, held-out and fit rows
+  double rms_after = 0;          // of the repaired model's residual
+  double rms_near_reversal = 0;  // within 0.1 s of a velocity reversal or stop
+  double rms_moving = 0;         // elsewhere
+  double velocity_correlation = 0;      // of the residual with the velocity
+  double acceleration_correlation = 0;  // ... with the acceleration
+  double lag = 0;                // s, the shift that best aligns the measured command (or motion) with the model's
+  double dominant_frequency = 0; // Hz, the residual spectrum's peak
+  double noise = 0;              // the noise floor's share on this channel (same unit)
+};
+
+// Series for the report's plots, per channel.
+struct ChannelSeries {
+  std::vector<double> t;          // s, subsampled for plotting
+  std::vector<double> before;     // residual of the nominal model
+  std::vector<double> after;      // residual of the repaired model
+  std::vector<double> velocity;   // of the joint or axis, same rows
+  std::vector<double> frequency;  // Hz
+  std::vector<double> psd_before, psd_after;  // unit^2/Hz
+  std::vector<bool> held_out;     // per plotted row
+};
+
+// A path for the report's side-by-side plot (omni, seed 000 Fig. 4 style).
+struct DiagnosisPath {
+  std::string name;
+  std::vector<double> t, x, y, theta;  // s, m, m, rad
+};
+
+struct DiagnosisReport {
+  std::string robot;                    // "omni" or "arm"
+  std::string model_name;
+  std::string metric;                   // what the gaps measure, with its unit
+  double gap_before = 0;                // metric of the nominal model on the held-out rows
+  double gap_after = 0;                 // ... of the repaired model
+  double noise_floor = 0;               // the metric a perfect model would reach, estimated from the data
+  double fit_gap_before = 0, fit_gap_after = 0;  // the same on the fit rows
+  int fit_rows = 0, held_out_rows = 0;  // residual rows of each kind
+  double held_out_share = 0;
+  double block_seconds = 0;
+  std::vector<std::string> logs;
+  std::vector<DiagnosedEffect> effects;
+  std::vector<DiagnosisCandidate> candidates;
+  std::vector<ChannelFinding> findings;
+  std::vector<ChannelSeries> series;    // one per finding
+  std::vector<DiagnosisPath> paths;    // omni: measured, nominal and repaired over one held-out stretch
+  std::vector<std::string> notes;       // what the user should know (skipped candidates, limits)
+  double seconds = 0;                   // s, wall time
+};
+
+// ---- Shared machinery (used by arm_diagnosis.cc and omni_diagnosis.cc) ----
+
+// The block length for logs of these durations (s) under `options`.
+double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<double>& durations);
+
+// Whether the sample at time t (s from the log's start) lies in a held-out block:
+// blocks k = floor(t / block) are held out where floor((k + 1) h) > floor(k h), which
+// spreads a share h of them evenly over the log, the first block always kept for fitting.
+bool InHeldOutBlock(double t, double block_seconds, double held_out);
+
+// The one-sided t statistic of the mean of `gain` (per-row reductions of the squared
+// residual, held-out rows in time order) over chunks of `chunk` consecutive rows.
+double ChunkedTStatistic(const std::vector<double>& gain, int chunk);
+
+// The first lag (rows) where the autocorrelation of x falls below 1/e, at most max_lag.
+int CorrelationLength(const std::vector<double>& x, int max_lag);
+
+// Welch's power spectral density of x sampled at `rate` Hz (Hann windows of `segment`
+// samples, half overlapping); fills frequency (Hz) and psd (unit^2/Hz).
+void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vector<double>* frequency,
+              std::vector<double>* psd);
+
+// The median absolute deviation scaled to a Gaussian's standard deviation.
+double RobustSigma(std::vector<double> x);
+
+// Pearson correlation of a and b (0 when either is constant).
+double Correlation(const std::vector<double>& a, const std::vector<double>& b);
+
+// "0.12", "1.5e-05": a parameter as the report prints it.
+std::string FormatParameter(double value);
+// "viscous_friction (joint 2)" or "traction_limit".
+std::string EffectLabel(const std::string& name, int joint);
+
+}  // namespace twinsim

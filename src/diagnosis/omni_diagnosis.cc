@@ -1,0 +1,660 @@
+#include "diagnosis/omni_diagnosis.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <stdexcept>
+
+#include "analysis/omni_replay.h"
+#include "backends/omni_backend.h"
+#include "core/error.h"
+#include "diagnosis/forward_selection.h"
+
+namespace twinsim {
+namespace {
+
+constexpr int kFitStride = 4;     // fits predict from every fourth frame (consecutive predictions overlap)
+constexpr int kMaxCeresIterations = 8;
+constexpr double kReversalWindow = 0.1;  // s
+const double kInf = std::numeric_limits<double>::infinity();
+
+// One optimiser variable of an omni effect.
+struct Variable {
+  const char* key;
+  double lower, upper;
+  bool log_scale;
+};
+
+std::vector<Variable> VariablesOf(const std::string& name) {
+  if (name == "time_delay") return {{"delay", 0, 1, false}};
+  if (name == "velocity_saturation") return {{"v_max", 0.02, 20, true}, {"w_max", 0.05, 100, true}};
+  if (name == "traction_limit") return {{"a_max", 0.02, 100, true}};
+  if (name == "motor_lag") return {{"time_constant", 1e-3, 5, true}};
+  if (name == "velocity_scale") return {{"scale", 0.2, 5, false}};
+  if (name == "rotation_drift") return {{"rate", -10, 10, false}};
+  return {};
+}
+
+struct LogData {
+  const OmniLog* log = nullptr;
+  std::vector<char> held;  // per row
+};
+
+// The residual of one replay: per predicted row (forward, sideways, r * dtheta), m.
+struct ReplayResidual {
+  std::vector<std::size_t> rows;
+  std::vector<std::array<double, 3>> e;
+};
+
+class OmniProblem : public DiagnosisProblem {
+ public:
+  OmniProblem(const OmniModel& nominal, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
+              double block_seconds)
+      : nominal_(nominal), options_(options) {
+    for (const OmniLog& log : logs) {
+      LogData d;
+      d.log = &log;
+      d.held.resize(log.rows.size());
+      for (std::size_t i = 0; i < log.rows.size(); ++i) {
+        d.held[i] = InHeldOutBlock(log.rows[i].t - log.rows[0].t, block_seconds, options.held_out);
+      }
+      data_.push_back(std::move(d));
+    }
+    frame_period_ = logs.front().frame_period;
+    chunk_rows_ = std::max(1, static_cast<int>(std::lround(1.0 / frame_period_)));
+    FrameTiming timing;
+    timing.frame_rate = 1.0 / frame_period_;
+    physics_dt_ = timing.frame_dt() / DefaultPhysicsSubsteps(timing.frame_rate);
+    for (const OmniLog& log : logs) {
+      for (const OmniLogRow& r : log.rows) {
+        speeds_.push_back(std::hypot(r.command.vx, r.command.vy));
+        turn_rates_.push_back(std::abs(r.command.omega));
+      }
+    }
+    std::sort(speeds_.begin(), speeds_.end());
+    std::sort(turn_rates_.begin(), turn_rates_.end());
+  }
+
+  double Gap(double mean_squared) const override { return std::sqrt(mean_squared); }
+  int ChunkRows() const override { return chunk_rows_; }
+  const std::vector<LogData>& data() const { return data_; }
+
+  OmniModel Build(const std::vector<TrialEffect>& effects) const {
+    OmniModel m = nominal_;
+    for (const TrialEffect& e : effects) SetOmniEffect(e.name, e.parameters, &m.effects);
+    return m;
+  }
+
+  ReplayResidual Residual(const OmniModel& model, const LogData& d, int stride, int horizon) const {
+    OmniReplayOptions o;
+    o.backend = options_.backend;
+    o.horizon = horizon;
+    o.stride = stride;
+    const OmniReplayResult r = ReplayOmniLog(model, *d.log, o);
+    ReplayResidual out;
+    const double radius = nominal_.chassis_radius;
+    for (std::size_t i = 0; i < r.pose.size(); ++i) {
+      if (!r.predicted[i]) continue;
+      const Pose2& m = d.log->rows[i].pose;
+      const double dx = r.pose[i].x - m.x, dy = r.pose[i].y - m.y;
+      const double c = std::cos(m.theta), s = std::sin(m.theta);
+      out.rows.push_back(i);
+      out.e.push_back({c * dx + s * dy, -s * dx + c * dy, radius * (r.pose[i].theta - m.theta)});
+    }
+    return out;
+  }
+
+  SquaredResiduals Evaluate(const std::vector<TrialEffect>& effects) const override {
+    const OmniModel model = Build(effects);
+    SquaredResiduals out;
+    for (const LogData& d : data_) {
+      const ReplayResidual r = Residual(model, d, 1, options_.horizon);
+      for (std::size_t k = 0; k < r.rows.size(); ++k) {
+        const auto& e = r.e[k];
+        (d.held[r.rows[k]] ? out.held_out : out.fit).push_back(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+      }
+    }
+    return out;
+  }
+
+  // The fit rows' residual components, concatenated (fixed length for a given log set).
+  std::vector<double> FitResidual(const std::vector<TrialEffect>& effects) const {
+    const OmniModel model = Build(effects);
+    std::vector<double> out;
+    for (const LogData& d : data_) {
+      const ReplayResidual r = Residual(model, d, kFitStride, options_.horizon);
+      for (std::size_t k = 0; k < r.rows.size(); ++k) {
+        if (d.held[r.rows[k]]) continue;
+        out.insert(out.end(), r.e[k].begin(), r.e[k].end());
+      }
+    }
+    return out;
+  }
+
+  double Cost(const std::vector<TrialEffect>& effects) const {
+    try {
+      double s = 0;
+      for (double v : FitResidual(effects)) s += v * v;
+      return s;
+    } catch (const InputError&) {
+      return kInf;
+    } catch (const CheckFailed&) {
+      return kInf;
+    }
+  }
+
+  std::vector<TrialEffect> Candidates(const std::vector<TrialEffect>& current) const override {
+    std::set<std::string> taken;
+    for (const auto& [name, p] : ListOmniEffects(nominal_.effects)) taken.insert(name);
+    for (const TrialEffect& e : current) taken.insert(e.name);
+    std::vector<TrialEffect> out;
+    for (const std::string& name : OmniEffectNames()) {
+      if (!taken.count(name)) out.push_back({name, -1, {}});
+    }
+    return out;
+  }
+
+  std::vector<TrialEffect> Fit(std::vector<TrialEffect> effects, const std::vector<int>& free) const override {
+    for (int i : free) {
+      if (effects[static_cast<std::size_t>(i)].parameters.empty()) InitialGuess(&effects, i);
+    }
+    Refine(&effects, free);
+    for (int i : free) StepDelay(&effects, i);
+    return effects;
+  }
+
+  std::string Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const override;
+
+ private:
+  double Quantile(const std::vector<double>& sorted, double q) const {
+    if (sorted.empty()) return 0;
+    return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
+  }
+
+  void InitialGuess(std::vector<TrialEffect>* effects, int i) const;
+  void Refine(std::vector<TrialEffect>* effects, const std::vector<int>& free) const;
+  // time_delay moves in physics steps: walk one step at a time while the cost falls.
+  void StepDelay(std::vector<TrialEffect>* effects, int i) const;
+
+  OmniModel nominal_;
+  DiagnosisOptions options_;
+  std::vector<LogData> data_;
+  double frame_period_ = 1.0 / 30;
+  double physics_dt_ = 1.0 / 300;
+  int chunk_rows_ = 30;
+  std::vector<double> speeds_, turn_rates_;  // commanded, sorted
+};
+
+void OmniProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
+  TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+  std::vector<std::map<std::string, double>> grid;
+  if (e.name == "time_delay") {
+    for (double d : {0.005, 0.01, 0.02, 0.033, 0.05, 0.067, 0.1, 0.15, 0.2}) grid.push_back({{"delay", d}});
+  } else if (e.name == "velocity_saturation") {
+    for (double q : {0.5, 0.7, 0.8, 0.9, 0.95}) {
+      const double v = Quantile(speeds_, q);
+      if (v > 0.02) grid.push_back({{"v_max", v}});
+    }
+    for (double q : {0.5, 0.7, 0.8, 0.9, 0.95}) {
+      const double w = Quantile(turn_rates_, q);
+      if (w > 0.05) grid.push_back({{"w_max", w}});
+    }
+  } else if (e.name == "traction_limit") {
+    for (double a : {0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 5.0}) grid.push_back({{"a_max", a}});
+  } else if (e.name == "motor_lag") {
+    for (double tc : {0.01, 0.02, 0.04, 0.08, 0.16, 0.3}) grid.push_back({{"time_constant", tc}});
+  } else if (e.name == "velocity_scale") {
+    for (double s : {0.8, 0.9, 0.95, 1.05, 1.1, 1.25}) grid.push_back({{"scale", s}});
+  } else if (e.name == "rotation_drift") {
+    for (double r : {-1.0, -0.4, -0.15, 0.15, 0.4, 1.0}) grid.push_back({{"rate", r}});
+  }
+  double best = kInf;
+  for (const auto& p : grid) {
+    std::vector<TrialEffect> trial = *effects;
+    trial[static_cast<std::size_t>(i)].parameters = p;
+    const double c = Cost(trial);
+    if (c < best) {
+      best = c;
+      e.parameters = p;
+    }
+  }
+  if (e.name == "velocity_saturation" && e.parameters.count("v_max")) {
+    // With the speed limit found, try a turn-rate limit beside it.
+    for (double q : {0.7, 0.9}) {
+      const double w = Quantile(turn_rates_, q);
+      if (w <= 0.05) continue;
+      std::vector<TrialEffect> trial = *effects;
+      trial[static_cast<std::size_t>(i)].parameters = {{"v_max", e.parameters.at("v_max")}, {"w_max", w}};
+      const double c = Cost(trial);
+      if (c < best) {
+        best = c;
+        e.parameters = trial[static_cast<std::size_t>(i)].parameters;
+      }
+    }
+  }
+  if (!std::isfinite(best)) throw std::runtime_error("the model diverged at every starting value");
+}
+
+class OmniFitFunctor {
+ public:
+  struct Slot {
+    int effect;
+    std::string key;
+    bool log_scale;
+  };
+  OmniFitFunctor(const OmniProblem* problem, std::vector<TrialEffect> effects, std::vector<Slot> slots)
+      : problem_(problem), effects_(std::move(effects)), slots_(std::move(slots)) {}
+
+  std::vector<TrialEffect> Apply(const double* x) const {
+    std::vector<TrialEffect> trial = effects_;
+    for (std::size_t k = 0; k < slots_.size(); ++k) {
+      trial[static_cast<std::size_t>(slots_[k].effect)].parameters[slots_[k].key] =
+          slots_[k].log_scale ? std::exp(x[k]) : x[k];
+    }
+    return trial;
+  }
+
+  bool operator()(double const* const* x, double* residual) const {
+    try {
+      const std::vector<double> r = problem_->FitResidual(Apply(x[0]));
+      std::copy(r.begin(), r.end(), residual);
+      return true;
+    } catch (const InputError&) {
+      return false;
+    } catch (const CheckFailed&) {
+      return false;
+    }
+  }
+
+ private:
+  const OmniProblem* problem_;
+  std::vector<TrialEffect> effects_;
+  std::vector<Slot> slots_;
+};
+
+void OmniProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int>& free) const {
+  std::vector<OmniFitFunctor::Slot> slots;
+  std::vector<double> x, lower, upper;
+  for (int i : free) {
+    const TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+    if (e.name == "time_delay") continue;  // StepDelay
+    for (const Variable& v : VariablesOf(e.name)) {
+      auto it = e.parameters.find(v.key);
+      if (it == e.parameters.end()) continue;
+      slots.push_back({i, v.key, v.log_scale});
+      const double value = std::clamp(it->second, v.lower, v.upper);
+      x.push_back(v.log_scale ? std::log(value) : value);
+      lower.push_back(v.log_scale ? std::log(v.lower) : v.lower);
+      upper.push_back(v.log_scale ? std::log(v.upper) : v.upper);
+    }
+  }
+  if (slots.empty()) return;
+  const std::size_t rows = FitResidual(*effects).size();
+  if (rows == 0) throw std::runtime_error("no fit rows");
+  ceres::NumericDiffOptions diff;
+  // Wide steps: the replay's cost is jagged at fine scales (encoder counts, the controller's
+  // ticks); at 1e-3 Ceres stalled on a traction limit 20 % off (measured).
+  diff.relative_step_size = 2e-2;
+  auto* functor = new OmniFitFunctor(this, *effects, slots);
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<OmniFitFunctor, ceres::CENTRAL>(functor, ceres::TAKE_OWNERSHIP, diff);
+  cost->AddParameterBlock(static_cast<int>(x.size()));
+  cost->SetNumResiduals(static_cast<int>(rows));
+  ceres::Problem problem;
+  problem.AddResidualBlock(cost, nullptr, x.data());
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    problem.SetParameterLowerBound(x.data(), static_cast<int>(k), lower[k]);
+    problem.SetParameterUpperBound(x.data(), static_cast<int>(k), upper[k]);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = kMaxCeresIterations;
+  options.function_tolerance = 1e-5;
+  options.parameter_tolerance = 1e-4;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  *effects = functor->Apply(x.data());
+}
+
+void OmniProblem::StepDelay(std::vector<TrialEffect>* effects, int i) const {
+  TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+  if (e.name != "time_delay") return;
+  double delay = std::round(e.parameters.at("delay") / physics_dt_) * physics_dt_;
+  auto cost_at = [&](double d) {
+    std::vector<TrialEffect> trial = *effects;
+    trial[static_cast<std::size_t>(i)].parameters = {{"delay", d}};
+    return d < 0 || d > 1 ? kInf : Cost(trial);
+  };
+  double best = cost_at(delay);
+  for (double direction : {-1.0, 1.0}) {
+    for (;;) {
+      const double next = delay + direction * physics_dt_;
+      const double c = cost_at(next);
+      if (!(c < best)) break;
+      best = c;
+      delay = next;
+    }
+  }
+  e.parameters = {{"delay", delay}};
+}
+
+std::string OmniProblem::Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const {
+  char buf[256];
+  const auto& p = e.parameters;
+  auto ms = [](double s) { return FormatParameter(1000 * s); };
+  if (e.name == "time_delay") {
+    std::snprintf(buf, sizeof buf, "the robot answers every command %s ms later than the model's %d frames, with its response's shape unchanged",
+                  ms(p.at("delay")).c_str(), nominal_.command_delay_frames + nominal_.vision_delay_frames);
+  } else if (e.name == "motor_lag") {
+    std::snprintf(buf, sizeof buf, "steps in the command are followed with a time constant of %s ms, rounded rather than shifted",
+                  ms(p.at("time_constant")).c_str());
+  } else if (e.name == "traction_limit") {
+    std::snprintf(buf, sizeof buf, "the robot accelerates at most %s m/s² where the controller's slew allows %s m/s²: the wheels slip",
+                  FormatParameter(p.at("a_max")).c_str(), FormatParameter(nominal_.controller.forward.slew_rate).c_str());
+  } else if (e.name == "velocity_saturation") {
+    std::string limits;
+    if (p.count("v_max")) limits += FormatParameter(p.at("v_max")) + " m/s";
+    if (p.count("w_max")) limits += (limits.empty() ? "" : " and ") + FormatParameter(p.at("w_max")) + " rad/s";
+    std::snprintf(buf, sizeof buf, "the robot never goes faster than %s although commanded up to %s m/s and %s rad/s",
+                  limits.c_str(), FormatParameter(speeds_.empty() ? 0.0 : speeds_.back()).c_str(),
+                  FormatParameter(turn_rates_.empty() ? 0.0 : turn_rates_.back()).c_str());
+  } else if (e.name == "velocity_scale") {
+    std::snprintf(buf, sizeof buf, "the error grows with speed along the direction of travel: the robot moves %s times as fast as commanded",
+                  FormatParameter(p.at("scale")).c_str());
+  } else if (e.name == "rotation_drift") {
+    std::snprintf(buf, sizeof buf, "the heading error grows with the distance driven, %s rad per metre, and not while turning on the spot",
+                  FormatParameter(p.at("rate")).c_str());
+  } else {
+    return "";
+  }
+  return buf;
+}
+
+// The shift (s) that best aligns a command series with a velocity series (velocity
+// lagging positive), over [0, max_lag].
+double ResponseLag(const std::vector<double>& command, const std::vector<double>& velocity, double dt, int max_shift) {
+  double best = -kInf;
+  int best_shift = 0;
+  for (int s = 0; s <= max_shift; ++s) {
+    std::vector<double> a(command.begin(), command.end() - s), b(velocity.begin() + s, velocity.end());
+    const double c = Correlation(a, b);
+    if (c > best) {
+      best = c;
+      best_shift = s;
+    }
+  }
+  return best_shift * dt;
+}
+
+}  // namespace
+
+DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
+                             OmniModel* repaired, const std::function<void(const std::string&)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  if (logs.empty()) throw InputError("diagnose needs at least one --log");
+  {
+    // Fails early, with the list of backends, for an unknown one.
+    const auto names = AvailableOmniBackends();
+    if (options.backend == "learned") throw InputError("--backend: diagnose replays a physical model (analytic, ode or bullet), not a learned one");
+    if (std::find(names.begin(), names.end(), options.backend) == names.end()) {
+      std::string known;
+      for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+      throw InputError("--backend " + options.backend + ": unknown or not compiled (available: " + known + ")");
+    }
+  }
+  std::vector<double> durations;
+  for (const OmniLog& log : logs) {
+    for (std::size_t i = 0; i < log.rows.size(); ++i) {
+      const OmniLogRow& r = log.rows[i];
+      if (!std::isfinite(r.pose.x) || !std::isfinite(r.pose.y) || !std::isfinite(r.pose.theta) ||
+          !std::isfinite(r.command.vx) || !std::isfinite(r.command.vy) || !std::isfinite(r.command.omega)) {
+        throw InputError(SourceLocation{log.path, log.line_of[i]}, "a value is not a finite number");
+      }
+    }
+    durations.push_back(log.rows.back().t - log.rows.front().t);
+  }
+  for (const OmniLog& log : logs) {
+    if (std::abs(log.frame_period - logs.front().frame_period) > 0.01 * logs.front().frame_period) {
+      throw InputError(SourceLocation{log.path, 1}, "the log's frame period differs from the first log's: diagnose logs of one camera rate together");
+    }
+  }
+  const double block = DiagnosisBlockSeconds(options, durations);
+  const int first_predicted = model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + options.horizon;
+  for (std::size_t k = 0; k < logs.size(); ++k) {
+    const OmniLog& log = logs[k];
+    int held = 0, fit = 0;
+    for (std::size_t i = static_cast<std::size_t>(std::max(first_predicted, 0)); i < log.rows.size(); ++i) {
+      (InHeldOutBlock(log.rows[i].t - log.rows[0].t, block, options.held_out) ? held : fit)++;
+    }
+    if (held < 10 || fit < 10) {
+      char msg[256];
+      std::snprintf(msg, sizeof msg,
+                    "the log is %.3g s long: too short to hold a %.3g s block out for checking (give a longer log, "
+                    "or a shorter --block)",
+                    durations[k], block);
+      throw InputError(SourceLocation{log.path, 1}, msg);
+    }
+  }
+
+  OmniProblem problem(model, logs, options, block);
+  const SelectionResult selection = SelectEffects(problem, options, progress);
+
+  DiagnosisReport report;
+  report.robot = "omni";
+  report.model_name = model.name;
+  report.metric = "RMS over held-out frames of the " + std::to_string(options.horizon) +
+                  "-frame prediction's pose error, sqrt(dx^2 + dy^2 + (r dtheta)^2) with r the chassis radius (m)";
+  report.block_seconds = block;
+  report.held_out_share = options.held_out;
+  for (const OmniLog& log : logs) report.logs.push_back(log.path);
+  report.gap_before = problem.Gap(Mean(selection.before.held_out));
+  report.gap_after = problem.Gap(Mean(selection.after.held_out));
+  report.fit_gap_before = problem.Gap(Mean(selection.before.fit));
+  report.fit_gap_after = problem.Gap(Mean(selection.after.fit));
+  report.fit_rows = static_cast<int>(selection.before.fit.size());
+  report.held_out_rows = static_cast<int>(selection.before.held_out.size());
+  report.candidates = selection.candidates;
+  for (std::size_t k = 0; k < selection.effects.size(); ++k) {
+    const TrialEffect& e = selection.effects[k];
+    report.effects.push_back({e.name, -1, e.parameters, selection.gap_reductions[k], selection.evidence[k]});
+  }
+
+  // Find: the residual per axis in the robot's frame, before and after.
+  const OmniModel nominal_model = problem.Build({});
+  const OmniModel repaired_model = problem.Build(selection.effects);
+  const char* names[3] = {"forward", "sideways", "rotation (at the rim)"};
+  const double dt = logs.front().frame_period;
+  double var_xy = 0, var_theta = 0;
+  for (const OmniLog& log : logs) {
+    // Camera noise from third differences (a smooth path's are tiny): var = E[d3^2] / 20.
+    std::vector<double> d3x, d3y, d3t;
+    for (std::size_t i = 3; i < log.rows.size(); ++i) {
+      auto third = [&](auto get) {
+        return get(log.rows[i]) - 3 * get(log.rows[i - 1]) + 3 * get(log.rows[i - 2]) - get(log.rows[i - 3]);
+      };
+      d3x.push_back(third([](const OmniLogRow& r) { return r.pose.x; }));
+      d3y.push_back(third([](const OmniLogRow& r) { return r.pose.y; }));
+      d3t.push_back(third([](const OmniLogRow& r) { return r.pose.theta; }));
+    }
+    const double sx = RobustSigma(d3x), sy = RobustSigma(d3y), st = RobustSigma(d3t);
+    var_xy += (sx * sx + sy * sy) / 2 / 20;
+    var_theta += st * st / 20;
+  }
+  var_xy /= static_cast<double>(logs.size());
+  var_theta /= static_cast<double>(logs.size());
+  const double radius = model.chassis_radius;
+  // Start and end poses both carry the camera's noise.
+  report.noise_floor = std::sqrt(4 * var_xy + 2 * radius * radius * var_theta);
+
+  std::vector<ChannelFinding> findings(3);
+  std::vector<ChannelSeries> series(3);
+  std::vector<std::vector<double>> before(3), after(3), velocity(3), acceleration(3), near(3), moving(3);
+  std::vector<double> lag_sum(3, 0.0);
+  for (std::size_t li = 0; li < problem.data().size(); ++li) {
+    const LogData& d = problem.data()[li];
+    const OmniLog& log = *d.log;
+    const ReplayResidual rb = problem.Residual(nominal_model, d, 1, options.horizon);
+    const ReplayResidual ra = problem.Residual(repaired_model, d, 1, options.horizon);
+    // Measured velocity in the robot frame (central differences), the command acting.
+    const std::size_t n = log.rows.size();
+    std::vector<std::array<double, 3>> v(n, {0, 0, 0}), a(n, {0, 0, 0});
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      const double h = log.rows[i + 1].t - log.rows[i - 1].t;
+      const Twist2 field{(log.rows[i + 1].pose.x - log.rows[i - 1].pose.x) / h, (log.rows[i + 1].pose.y - log.rows[i - 1].pose.y) / h,
+                         (log.rows[i + 1].pose.theta - log.rows[i - 1].pose.theta) / h};
+      const Twist2 body = FieldToBody(field, log.rows[i].pose.theta);
+      v[i] = {body.vx, body.vy, body.omega};
+    }
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      const double h = log.rows[i + 1].t - log.rows[i - 1].t;
+      for (int c = 0; c < 3; ++c) a[i][static_cast<std::size_t>(c)] = (v[i + 1][static_cast<std::size_t>(c)] - v[i - 1][static_cast<std::size_t>(c)]) / h;
+    }
+    // Lag of the measured velocity behind the command, less the nominal model's own
+    // (its delay and controller): what the model misses in timing.
+    const int delay = model.command_delay_frames + model.vision_delay_frames;
+    OmniReplayOptions free_run;
+    free_run.backend = options.backend;
+    free_run.horizon = 1;
+    const OmniReplayResult one = ReplayOmniLog(nominal_model, log, free_run);
+    for (int c = 0; c < 3; ++c) {
+      std::vector<double> cmd, measured, modelled;
+      for (std::size_t i = 1; i + 1 < n; ++i) {
+        if (!one.predicted[i]) continue;
+        const Twist2& u = log.rows[i].command;
+        cmd.push_back(c == 0 ? u.vx : (c == 1 ? u.vy : u.omega));
+        measured.push_back(v[i][static_cast<std::size_t>(c)]);
+        const double h = log.rows[i].t - log.rows[i - 1].t;
+        const Twist2 field{(one.pose[i].x - log.rows[i - 1].pose.x) / h, (one.pose[i].y - log.rows[i - 1].pose.y) / h,
+                           (one.pose[i].theta - log.rows[i - 1].pose.theta) / h};
+        const Twist2 body = FieldToBody(field, log.rows[i - 1].pose.theta);
+        modelled.push_back(c == 0 ? body.vx : (c == 1 ? body.vy : body.omega));
+      }
+      const int max_shift = delay + static_cast<int>(std::lround(0.3 / dt));
+      if (cmd.size() > static_cast<std::size_t>(2 * max_shift)) {
+        lag_sum[static_cast<std::size_t>(c)] += ResponseLag(cmd, measured, dt, max_shift) - ResponseLag(cmd, modelled, dt, max_shift);
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const auto cc = static_cast<std::size_t>(c);
+      double vmax = 0;
+      for (std::size_t i = 0; i < n; ++i) vmax = std::max(vmax, std::abs(v[i][cc]));
+      std::vector<double> reversal_times;
+      for (std::size_t i = 1; i < n; ++i) {
+        if ((v[i][cc] > 0) != (v[i - 1][cc] > 0) || std::abs(v[i][cc]) < 0.05 * vmax) reversal_times.push_back(log.rows[i].t);
+      }
+      std::size_t next = 0;
+      std::vector<double> xb, xa;
+      for (std::size_t k = 0; k < rb.rows.size(); ++k) {
+        const std::size_t i = rb.rows[k];
+        const double e = rb.e[k][cc];
+        before[cc].push_back(e);
+        velocity[cc].push_back(v[i][cc]);
+        acceleration[cc].push_back(a[i][cc]);
+        xb.push_back(e);
+        const double t = log.rows[i].t;
+        while (next < reversal_times.size() && reversal_times[next] < t - kReversalWindow) ++next;
+        const bool close = next < reversal_times.size() && reversal_times[next] <= t + kReversalWindow;
+        (close ? near : moving)[cc].push_back(e);
+        if (li == 0) {
+          series[cc].t.push_back(t);
+          series[cc].before.push_back(e);
+          series[cc].velocity.push_back(v[i][cc]);
+          series[cc].held_out.push_back(d.held[i]);
+        }
+      }
+      for (std::size_t k = 0; k < ra.rows.size(); ++k) {
+        after[cc].push_back(ra.e[k][cc]);
+        xa.push_back(ra.e[k][cc]);
+        if (li == 0) series[cc].after.push_back(ra.e[k][cc]);
+      }
+      if (li == 0) {
+        const int segment = static_cast<int>(std::min<double>(256, std::pow(2, std::floor(std::log2(std::max(8.0, xb.size() / 4.0))))));
+        WelchPsd(xb, 1.0 / dt, segment, &series[cc].frequency, &series[cc].psd_before);
+        std::vector<double> unused;
+        WelchPsd(xa, 1.0 / dt, segment, &unused, &series[cc].psd_after);
+      }
+    }
+  }
+  auto rms = [](const std::vector<double>& v) {
+    double sum = 0;
+    for (double x : v) sum += x * x;
+    return v.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(v.size()));
+  };
+  for (int c = 0; c < 3; ++c) {
+    const auto cc = static_cast<std::size_t>(c);
+    ChannelFinding& f = findings[cc];
+    f.channel = names[c];
+    f.unit = "m";
+    f.rms = rms(before[cc]);
+    f.rms_after = rms(after[cc]);
+    f.rms_near_reversal = rms(near[cc]);
+    f.rms_moving = rms(moving[cc]);
+    f.velocity_correlation = Correlation(before[cc], velocity[cc]);
+    f.acceleration_correlation = Correlation(before[cc], acceleration[cc]);
+    f.lag = lag_sum[cc] / static_cast<double>(logs.size());
+    f.noise = c < 2 ? std::sqrt(2 * var_xy) : radius * std::sqrt(2 * var_theta);
+    std::size_t peak = 1;
+    for (std::size_t b = 1; b < series[cc].psd_before.size(); ++b) {
+      if (series[cc].psd_before[b] > series[cc].psd_before[peak]) peak = b;
+    }
+    f.dominant_frequency = series[cc].frequency.size() > peak ? series[cc].frequency[peak] : 0.0;
+  }
+  report.findings = findings;
+  report.series = series;
+
+  // Paths: the longest held-out stretch of the first log, run freely from its start.
+  {
+    const LogData& d = problem.data().front();
+    const OmniLog& log = *d.log;
+    std::size_t best_first = 0, best_len = 0;
+    for (std::size_t i = static_cast<std::size_t>(first_predicted); i < log.rows.size();) {
+      if (!d.held[i]) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      while (j < log.rows.size() && d.held[j]) ++j;
+      if (j - i > best_len) {
+        best_first = i;
+        best_len = j - i;
+      }
+      i = j;
+    }
+    if (best_len > 2) {
+      OmniReplayOptions o;
+      o.backend = options.backend;
+      DiagnosisPath measured{"measured", {}, {}, {}, {}};
+      DiagnosisPath nominal_path{"nominal model", {}, {}, {}, {}};
+      DiagnosisPath repaired_path{"repaired model", {}, {}, {}, {}};
+      const OmniReplayResult rn = ReplayOmniStretch(nominal_model, log, o, best_first, best_first + best_len);
+      const OmniReplayResult rr = ReplayOmniStretch(repaired_model, log, o, best_first, best_first + best_len);
+      for (std::size_t i = best_first; i < best_first + best_len; ++i) {
+        auto push = [&](DiagnosisPath& p, const Pose2& pose) {
+          p.t.push_back(log.rows[i].t);
+          p.x.push_back(pose.x);
+          p.y.push_back(pose.y);
+          p.theta.push_back(pose.theta);
+        };
+        push(measured, log.rows[i].pose);
+        push(nominal_path, rn.pose[i]);
+        push(repaired_path, rr.pose[i]);
+      }
+      report.paths = {measured, nominal_path, repaired_path};
+    }
+  }
+  for (const auto& [name, p] : ListOmniEffects(model.effects)) {
+    report.notes.push_back("the model's own " + name + " was trusted, not refitted");
+  }
+  if (repaired) *repaired = repaired_model;
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,52 @@
+#include "diagnosis/diagnosis_plants.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+
+#include "learning/arm_trials.h"
+#include "scene/command_source.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace testing {
+
+ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t seed, double seconds,
+                      const ArmSensorNoise& noise) {
+  TrainingTrialOptions options;
+  options.seconds = seconds;
+  options.dither = 0;  // a dither's fast response is lost to the derivative filter: it would read as noise
+  const ArmReference reference = seed % 2 == 0 ? RandomStopAndGoReference(hat, options, seed)
+                                               : SampledReference(RandomTrainingTrajectory(hat, options, seed),
+                                                                  hat.sample_time, seconds);
+  ArmLog log = RecordArmTrial(plant, hat, reference, options, seed);
+  std::mt19937_64 rng(seed * 7919 + 17);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const double count = noise.counts_per_rev > 0 ? 2 * M_PI / noise.counts_per_rev : 0;
+  for (int r = 0; r < log.rows(); ++r) {
+    for (int j = 0; j < log.dof; ++j) {
+      if (count > 0) log.q(r, j) = std::round(log.q(r, j) / count) * count;
+      log.tau(r, j) += noise.torque_noise * gauss(rng);
+    }
+  }
+  ArmLogOptions read;
+  if (const char* c = std::getenv("CUTOFF")) read.cutoff_hz = std::atof(c);
+  return ParseArmLog(FormatArmLog(log, noise.log_velocities), "plant_" + std::to_string(seed) + ".csv", read);
+}
+
+ArmModel RrrWith(const std::string& effects_yaml) {
+  std::string yaml = "extends: " + SourcePath("models/rrr.yaml") + "\nname: rrr_hidden\n";
+  if (!effects_yaml.empty()) yaml += "effects:\n" + effects_yaml;
+  return LoadArmModelFromYamlString(yaml, "hidden.yaml");
+}
+
+OmniLog RecordOmniPlant(const OmniModel& plant, double seconds, std::uint64_t seed) {
+  OmniModel m = plant;
+  m.vision_noise_xy = 0.001;
+  m.vision_noise_theta = 0.005;
+  CommandSpec drive = RandomDrive(1.5, 3, 1.5);
+  return RecordLog(m, drive, seconds, seed, "analytic", "omni_plant_" + std::to_string(seed) + ".csv");
+}
+
+}  // namespace testing
+}  // namespace twinsim

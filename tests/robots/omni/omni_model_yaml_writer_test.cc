@@ -1,0 +1,156 @@
+// The omni model writer: any model written and loaded back is the same model, bit for bit.
+#include "robots/omni/omni_model_yaml_writer.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/error.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+void ExpectSamePid(const PidGains& a, const PidGains& b) {
+  EXPECT_EQ(a.AsVector(), b.AsVector());
+}
+
+// Every field with ==: the numbers must come back as the same doubles.
+void ExpectSameModel(const OmniModel& a, const OmniModel& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.chassis_mass, b.chassis_mass);
+  EXPECT_EQ(a.chassis_radius, b.chassis_radius);
+  EXPECT_EQ(a.chassis_height, b.chassis_height);
+  EXPECT_EQ(a.chassis_inertia_z, b.chassis_inertia_z);
+  EXPECT_EQ(a.com_height, b.com_height);
+  EXPECT_EQ(a.ground_clearance, b.ground_clearance);
+  EXPECT_EQ(a.wheel_angles, b.wheel_angles);
+  EXPECT_EQ(a.wheel_distance, b.wheel_distance);
+  EXPECT_EQ(a.wheel_radius, b.wheel_radius);
+  EXPECT_EQ(a.wheel_width, b.wheel_width);
+  EXPECT_EQ(a.wheel_mass, b.wheel_mass);
+  EXPECT_EQ(a.wheel_friction, b.wheel_friction);
+  EXPECT_EQ(a.roller_friction, b.roller_friction);
+  EXPECT_EQ(a.bearing_damping, b.bearing_damping);
+  EXPECT_EQ(a.motor_stall_torque, b.motor_stall_torque);
+  EXPECT_EQ(a.motor_no_load_speed, b.motor_no_load_speed);
+  EXPECT_EQ(a.encoder_counts_per_rev, b.encoder_counts_per_rev);
+  EXPECT_EQ(a.controller.rate_hz, b.controller.rate_hz);
+  ExpectSamePid(a.controller.forward, b.controller.forward);
+  ExpectSamePid(a.controller.sideways, b.controller.sideways);
+  ExpectSamePid(a.controller.rotation, b.controller.rotation);
+  EXPECT_EQ(a.command_delay_frames, b.command_delay_frames);
+  EXPECT_EQ(a.vision_delay_frames, b.vision_delay_frames);
+  EXPECT_EQ(a.effects.time_delay, b.effects.time_delay);
+  EXPECT_EQ(a.effects.v_max, b.effects.v_max);
+  EXPECT_EQ(a.effects.w_max, b.effects.w_max);
+  EXPECT_EQ(a.effects.motor_lag, b.effects.motor_lag);
+  EXPECT_EQ(a.effects.a_max, b.effects.a_max);
+  EXPECT_EQ(a.effects.velocity_scale, b.effects.velocity_scale);
+  EXPECT_EQ(a.effects.rotation_drift, b.effects.rotation_drift);
+  EXPECT_EQ(a.vision_noise_xy, b.vision_noise_xy);
+  EXPECT_EQ(a.vision_noise_theta, b.vision_noise_theta);
+  EXPECT_EQ(a.vision_drop_probability, b.vision_drop_probability);
+  // Derived by Finalize() from the same inputs.
+  EXPECT_EQ(a.total_mass, b.total_mass);
+  EXPECT_EQ(a.total_inertia_z, b.total_inertia_z);
+  EXPECT_EQ(a.com_offset, b.com_offset);
+  EXPECT_EQ(a.wheel_spin_inertia, b.wheel_spin_inertia);
+  EXPECT_EQ(a.wheel_inertia_diametral, b.wheel_inertia_diametral);
+  EXPECT_EQ(a.geometry, b.geometry);
+  EXPECT_EQ(a.wheel_load, b.wheel_load);
+}
+
+OmniModel RoundTrip(const OmniModel& m) { return LoadOmniModelFromString(FormatOmniModelYaml(m), "again.yaml"); }
+
+TEST(OmniModelYamlWriter, ShippedModelsRoundTripBitForBit) {
+  for (const char* rel : {"models/omni4.yaml", "models/omni3.yaml", "models/omni4_plant.yaml"}) {
+    SCOPED_TRACE(rel);
+    const OmniModel m = LoadOmniModel(testing::SourcePath(rel));
+    const std::string text = FormatOmniModelYaml(m);
+    EXPECT_EQ(text.find("extends:"), std::string::npos) << text;
+    ExpectSameModel(m, LoadOmniModelFromString(text, "again.yaml"));
+    // The text is a fixed point.
+    EXPECT_EQ(FormatOmniModelYaml(RoundTrip(m)), text);
+  }
+  // The plant's effects in the reader's syntax, in docs/models.md's order.
+  const std::string plant = FormatOmniModelYaml(LoadOmniModel(testing::SourcePath("models/omni4_plant.yaml")));
+  const std::size_t delay = plant.find("effects:\n  time_delay: {delay: 0.02}   ");
+  EXPECT_NE(delay, std::string::npos) << plant;
+  EXPECT_GT(plant.find("\n  velocity_saturation: {v_max: 1.7, w_max: 5}"), delay) << plant;
+  EXPECT_NE(plant.find("angles_deg: [57, 135, 225, 303]"), std::string::npos) << plant;
+}
+
+TEST(OmniModelYamlWriter, AwkwardNumbersAndGivenChassisInertiaRoundTrip) {
+  OmniModel m = testing::Omni4();
+  m.name = "odd: name";
+  m.chassis_inertia_z = 0.1 / 3;  // kg m^2, written as given, not the derived total
+  m.chassis_mass = 2.3 + 1e-13;   // kg
+  m.wheel_angles = {0.1, 2 * M_PI / 3, M_PI, 5.0};  // rad, not from degrees
+  m.controller.rotation.kp = 1.0 / 7;
+  m.vision_noise_xy = 1.2345678901234567e-5;  // m
+  m.command_delay_frames = 0;
+  m.Finalize();
+  const std::string text = FormatOmniModelYaml(m);
+  EXPECT_NE(text.find("inertia_z: 0.03333333333333333 "), std::string::npos) << text;
+  const OmniModel back = LoadOmniModelFromString(text, "odd.yaml");
+  // Angles in rad need not be exact in degrees; allow one ulp, and check the rest with them.
+  ASSERT_EQ(back.wheel_angles.size(), m.wheel_angles.size());
+  for (std::size_t i = 0; i < m.wheel_angles.size(); ++i) EXPECT_NEAR(back.wheel_angles[i], m.wheel_angles[i], 1e-15);
+  m.wheel_angles = back.wheel_angles;
+  m.Finalize();
+  ExpectSameModel(m, back);
+}
+
+TEST(OmniModelYamlWriter, EachEffectAloneRoundTripsAndNoneWritesNoBlock) {
+  const OmniModel base = testing::Omni4();
+  EXPECT_EQ(FormatOmniModelYaml(base).find("effects:"), std::string::npos);
+  struct Case {
+    const char* line;
+    void (*set)(OmniEffects*);
+  };
+  const Case cases[] = {
+      {"  time_delay: {delay: 0.0123}", [](OmniEffects* e) { e->time_delay = 0.0123; }},
+      {"  velocity_saturation: {v_max: 1.7}", [](OmniEffects* e) { e->v_max = 1.7; }},
+      {"  velocity_saturation: {w_max: 0.3333333333333333}", [](OmniEffects* e) { e->w_max = 1.0 / 3; }},
+      {"  motor_lag: {time_constant: 0.08}", [](OmniEffects* e) { e->motor_lag = 0.08; }},
+      {"  traction_limit: {a_max: 2.5}", [](OmniEffects* e) { e->a_max = 2.5; }},
+      {"  velocity_scale: {scale: 0.9}", [](OmniEffects* e) { e->velocity_scale = 0.9; }},
+      {"  rotation_drift: {rate: -0.2}", [](OmniEffects* e) { e->rotation_drift = -0.2; }},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.line);
+    OmniModel m = base;
+    c.set(&m.effects);
+    ASSERT_EQ(m.effects.Active().size(), 1u);
+    const std::string text = FormatOmniModelYaml(m);
+    const std::string block = text.substr(text.find("effects:\n"));
+    EXPECT_EQ(block.rfind(std::string("effects:\n") + c.line, 0), 0u) << block;
+    EXPECT_EQ(std::count(block.begin(), block.end(), '\n'), 2) << block;  // the effect alone
+    const OmniModel back = RoundTrip(m);
+    EXPECT_EQ(back.effects.Active(), m.effects.Active());
+    ExpectSameModel(m, back);
+  }
+}
+
+TEST(OmniModelYamlWriter, WritesAtomicallyWithCommentHeader) {
+  const std::string dir = testing::TempDir("omni_yaml_writer");
+  const std::string path = dir + "/sub/omni4_copy.yaml";
+  const OmniModel m = LoadOmniModel(testing::SourcePath("models/omni4_plant.yaml"));
+  WriteOmniModelYaml(path, m, "diagnosed from run1.csv\nby twinsim diagnose");
+  EXPECT_EQ(testing::ReadText(path).rfind("# diagnosed from run1.csv\n# by twinsim diagnose\nrobot: omni\nname: omni4_plant\n", 0),
+            0u);
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir + "/sub")) {
+    EXPECT_EQ(entry.path().filename(), "omni4_copy.yaml");  // no temporary left behind
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+  ExpectSameModel(m, LoadOmniModel(path));
+  // A folder that cannot be made (a file stands in its place).
+  EXPECT_THROW(WriteOmniModelYaml(path + "/nested.yaml", m), InputError);
+}
+
+}  // namespace
+}  // namespace twinsim
