@@ -4,6 +4,9 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <set>
+
+#include "core/error.h"
 #include <unsupported/Eigen/FFT>
 
 namespace twinsim {
@@ -35,6 +38,23 @@ bool InHeldOutBlock(double t, double block_seconds, double held_out) {
   const double k = std::floor(t / block_seconds);
   if (k < 1) return false;
   return std::floor((k + 1) * held_out) > std::floor(k * held_out);
+}
+
+void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double block_seconds, double held_out,
+                      const std::string& path) {
+  std::set<long> held, fit;
+  for (std::size_t i = first; i < t.size(); ++i) {
+    const long k = static_cast<long>(std::floor((t[i] - t.front()) / block_seconds));
+    (InHeldOutBlock(t[i] - t.front(), block_seconds, held_out) ? held : fit).insert(k);
+  }
+  if (held.size() < 2 || fit.size() < 2) {
+    char msg[256];
+    std::snprintf(msg, sizeof msg,
+                  "the log is %.3g s long: too short to hold out two %.3g s blocks for checking beside two for fitting "
+                  "(give a longer log, or a shorter --block)",
+                  t.empty() ? 0.0 : t.back() - t.front(), block_seconds);
+    throw InputError(SourceLocation{path, 1}, msg);
+  }
 }
 
 double ChunkedTStatistic(const std::vector<double>& gain, int chunk) {

@@ -35,7 +35,7 @@ struct DiagnosisOptions {
   // ... and the reduction is significant: its mean over held-out chunks (each chunk as
   // long as the correlation of the residual, 1 s or more) is at least `significance`
   // standard errors above zero (a one-sided t test, docs/diagnose.md).
-  double significance = 3;
+  double significance = 2;
   std::string backend = "analytic";  // omni: the physics that replays the model
   int horizon = 4;                   // omni: frames predicted ahead (the contract's replay K)
   // Arm: rad/s (m/s) below which a joint counts as standing still, where its friction
@@ -132,6 +132,11 @@ double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<
 // blocks k = floor(t / block) are held out where floor((k + 1) h) > floor(k h), which
 // spreads a share h of them evenly over the log, the first block always kept for fitting.
 bool InHeldOutBlock(double t, double block_seconds, double held_out);
+
+// Throws InputError "path:1: ..." unless the times `t` (s, from `first` on; the rows a
+// residual exists for) span at least two held-out and two fit blocks.
+void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double block_seconds, double held_out,
+                      const std::string& path);
 
 // The one-sided t statistic of the mean of `gain` (per-row reductions of the squared
 // residual, held-out rows in time order) over chunks of `chunk` consecutive rows.

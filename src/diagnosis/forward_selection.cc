@@ -11,8 +11,13 @@
 namespace twinsim {
 namespace {
 
+// A share of the squared residual removed on fit and held-out rows alike that counts
+// as significant whatever the t statistic.
+constexpr double kStrongReduction = 0.25;
+
 struct Score {
-  double reduction = 0;  // share of the held-out MSE removed
+  double reduction = 0;      // share of the held-out MSE removed
+  double fit_reduction = 0;  // share of the fit rows' MSE removed
   double t = 0;
 };
 
@@ -24,6 +29,8 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
   for (std::size_t i = 0; i < gain.size(); ++i) gain[i] = before.held_out[i] - after.held_out[i];
   s.reduction = Mean(gain) / mse;
   s.t = ChunkedTStatistic(gain, chunk);
+  const double fit_mse = Mean(before.fit);
+  if (fit_mse > 0) s.fit_reduction = (fit_mse - Mean(after.fit)) / fit_mse;
   return s;
 }
 
@@ -77,6 +84,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
       progress("round " + std::to_string(round) + ": fitting " + std::to_string(candidates.size()) + " candidates");
     }
     std::vector<DiagnosisCandidate> tried(candidates.size());
+    std::vector<double> fit_reduction(candidates.size(), 0.0);
     std::vector<std::vector<TrialEffect>> fitted(candidates.size());
     ParallelFor(static_cast<int>(candidates.size()), options.threads, [&](int i) {
       const auto k = static_cast<std::size_t>(i);
@@ -95,6 +103,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         c.held_out_gap = problem.Gap(Mean(r.held_out));
         c.reduction = s.reduction;
         c.t_statistic = s.t;
+        fit_reduction[k] = s.fit_reduction;
         fitted[k] = std::move(trial);
       } catch (const std::exception& e) {
         c.note = e.what();
@@ -107,8 +116,13 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
       if (tried[k].reduction > tried[best].reduction) best = k;
     }
     DiagnosisCandidate& winner = tried[best];
+    // Significant by the t test, or so large on both the fit and the held-out rows that
+    // chance is out of the question even where the effect shows only in a few events
+    // (a speed limit reached now and then leaves most chunks unchanged: t stays small).
+    const bool strong = winner.reduction >= kStrongReduction && fit_reduction[best] >= kStrongReduction &&
+                        winner.t_statistic > 0;
     const bool passes = winner.note.empty() && winner.reduction >= options.min_improvement &&
-                        winner.t_statistic >= options.significance;
+                        (winner.t_statistic >= options.significance || strong);
     if (passes) {
       winner.selected = true;
       const std::string evidence = RoundEvidence(tried, winner);

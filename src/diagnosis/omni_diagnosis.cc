@@ -100,10 +100,11 @@ class OmniProblem : public DiagnosisProblem {
     for (std::size_t i = 0; i < r.pose.size(); ++i) {
       if (!r.predicted[i]) continue;
       const Pose2& m = d.log->rows[i].pose;
-      const double dx = r.pose[i].x - m.x, dy = r.pose[i].y - m.y;
+      // Measured minus predicted, in the robot's frame.
+      const double dx = m.x - r.pose[i].x, dy = m.y - r.pose[i].y;
       const double c = std::cos(m.theta), s = std::sin(m.theta);
       out.rows.push_back(i);
-      out.e.push_back({c * dx + s * dy, -s * dx + c * dy, radius * (r.pose[i].theta - m.theta)});
+      out.e.push_back({c * dx + s * dy, -s * dx + c * dy, radius * (m.theta - r.pose[i].theta)});
     }
     return out;
   }
@@ -427,20 +428,10 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   }
   const double block = DiagnosisBlockSeconds(options, durations);
   const int first_predicted = model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + options.horizon;
-  for (std::size_t k = 0; k < logs.size(); ++k) {
-    const OmniLog& log = logs[k];
-    int held = 0, fit = 0;
-    for (std::size_t i = static_cast<std::size_t>(std::max(first_predicted, 0)); i < log.rows.size(); ++i) {
-      (InHeldOutBlock(log.rows[i].t - log.rows[0].t, block, options.held_out) ? held : fit)++;
-    }
-    if (held < 10 || fit < 10) {
-      char msg[256];
-      std::snprintf(msg, sizeof msg,
-                    "the log is %.3g s long: too short to hold a %.3g s block out for checking (give a longer log, "
-                    "or a shorter --block)",
-                    durations[k], block);
-      throw InputError(SourceLocation{log.path, 1}, msg);
-    }
+  for (const OmniLog& log : logs) {
+    std::vector<double> t;
+    for (const OmniLogRow& r : log.rows) t.push_back(r.t);
+    CheckLogHoldsOut(t, static_cast<std::size_t>(std::max(first_predicted, 0)), block, options.held_out, log.path);
   }
 
   OmniProblem problem(model, logs, options, block);

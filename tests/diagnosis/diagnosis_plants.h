@@ -14,16 +14,18 @@
 namespace twinsim {
 namespace testing {
 
-struct ArmSensorNoise {
+struct ArmRecording {
   double counts_per_rev = 2e5;  // encoder counts per joint revolution (q quantised); 0: exact
   double torque_noise = 0.02;   // N·m, standard deviation on the logged command
   bool log_velocities = false;  // false: the log holds q and tau only, qd and qdd are derived
+  double cutoff_hz = 10;        // Hz, the reader's cut-off for derived qd, qdd
+  double bandwidth = 10;        // Hz, the computed-torque controller's
 };
 
 // A stop-and-go (even seeds) or multi-sine (odd seeds) tracking run of `plant` under
 // computed torque over `hat` with a torque dither, as a real arm's controller logs it.
 ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t seed, double seconds,
-                      const ArmSensorNoise& noise = {});
+                      const ArmRecording& noise = {});
 
 // The RRR arm of seed 001 (models/rrr.yaml) with `effects` (YAML list items, e.g.
 // "{name: viscous_friction, joint: 2, b: 0.5}") added.

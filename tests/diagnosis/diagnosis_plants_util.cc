@@ -1,7 +1,6 @@
 #include "diagnosis/diagnosis_plants.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <random>
 
 #include "learning/arm_trials.h"
@@ -12,9 +11,10 @@ namespace twinsim {
 namespace testing {
 
 ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t seed, double seconds,
-                      const ArmSensorNoise& noise) {
+                      const ArmRecording& noise) {
   TrainingTrialOptions options;
   options.seconds = seconds;
+  options.bandwidth = noise.bandwidth;
   options.dither = 0;  // a dither's fast response is lost to the derivative filter: it would read as noise
   const ArmReference reference = seed % 2 == 0 ? RandomStopAndGoReference(hat, options, seed)
                                                : SampledReference(RandomTrainingTrajectory(hat, options, seed),
@@ -30,7 +30,7 @@ ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t 
     }
   }
   ArmLogOptions read;
-  if (const char* c = std::getenv("CUTOFF")) read.cutoff_hz = std::atof(c);
+  read.cutoff_hz = noise.cutoff_hz;
   return ParseArmLog(FormatArmLog(log, noise.log_velocities), "plant_" + std::to_string(seed) + ".csv", read);
 }
 
