@@ -689,17 +689,7 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   report.block_seconds = block;
   report.held_out_share = options.held_out;
   for (const ArmLog& log : logs) report.logs.push_back(log.path);
-  report.gap_before = problem.Gap(Mean(selection.before.held_out));
-  report.gap_after = problem.Gap(Mean(selection.after.held_out));
-  report.fit_gap_before = problem.Gap(Mean(selection.before.fit));
-  report.fit_gap_after = problem.Gap(Mean(selection.after.fit));
-  report.fit_rows = static_cast<int>(selection.before.fit.size());
-  report.held_out_rows = static_cast<int>(selection.before.held_out.size());
-  report.candidates = selection.candidates;
-  for (std::size_t k = 0; k < selection.effects.size(); ++k) {
-    const TrialEffect& e = selection.effects[k];
-    report.effects.push_back({e.name, e.joint, e.parameters, selection.gap_reductions[k], selection.evidence[k]});
-  }
+  ReportSelection(problem, selection, &report);
 
   // Find: per joint, the nominal and the repaired model's residuals.
   const ArmModel nominal_model = problem.Build({});

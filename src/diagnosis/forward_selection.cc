@@ -154,4 +154,18 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
   return out;
 }
 
+void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, DiagnosisReport* report) {
+  report->gap_before = problem.Gap(Mean(selection.before.held_out));
+  report->gap_after = problem.Gap(Mean(selection.after.held_out));
+  report->fit_gap_before = problem.Gap(Mean(selection.before.fit));
+  report->fit_gap_after = problem.Gap(Mean(selection.after.fit));
+  report->fit_rows = static_cast<int>(selection.before.fit.size());
+  report->held_out_rows = static_cast<int>(selection.before.held_out.size());
+  report->candidates = selection.candidates;
+  for (std::size_t k = 0; k < selection.effects.size(); ++k) {
+    const TrialEffect& e = selection.effects[k];
+    report->effects.push_back({e.name, e.joint, e.parameters, selection.gap_reductions[k], selection.evidence[k]});
+  }
+}
+
 }  // namespace twinsim

@@ -67,6 +67,10 @@ struct SelectionResult {
 SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOptions& options,
                               const std::function<void(const std::string&)>& progress = {});
 
+// Fills the report's gaps (held-out and fit, before and after), row counts, candidates
+// and effects (joint as the problem gave it) from a selection.
+void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, DiagnosisReport* report);
+
 // The mean of v (0 when empty).
 double Mean(const std::vector<double>& v);
 

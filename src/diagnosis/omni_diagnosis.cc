@@ -205,9 +205,9 @@ void OmniProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
       if (w > 0.05) grid.push_back({{"w_max", w}});
     }
   } else if (e.name == "traction_limit") {
-    for (double a : {0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 5.0}) grid.push_back({{"a_max", a}});
+    for (double a : {0.4, 0.5, 0.63, 0.8, 1.0, 1.25, 1.6, 2.0, 2.5, 3.2, 5.0}) grid.push_back({{"a_max", a}});
   } else if (e.name == "motor_lag") {
-    for (double tc : {0.01, 0.02, 0.04, 0.08, 0.16, 0.3}) grid.push_back({{"time_constant", tc}});
+    for (double tc : {0.01, 0.015, 0.02, 0.03, 0.04, 0.06, 0.08, 0.12, 0.16, 0.24, 0.35}) grid.push_back({{"time_constant", tc}});
   } else if (e.name == "velocity_scale") {
     for (double s : {0.8, 0.9, 0.95, 1.05, 1.1, 1.25}) grid.push_back({{"scale", s}});
   } else if (e.name == "rotation_drift") {
@@ -294,6 +294,39 @@ void OmniProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<in
     }
   }
   if (slots.empty()) return;
+  if (slots.size() == 1) {
+    // One variable: a golden-section search within 25 % of the start (in the variable's
+    // scale) is robust where the cost is jagged and Ceres' numeric derivatives stall.
+    const double span = slots[0].log_scale ? std::log(1.25) : 0.25 * std::max(std::abs(x[0]), 0.05);
+    double a = std::max(lower[0], x[0] - span), b = std::min(upper[0], x[0] + span);
+    OmniFitFunctor f(this, *effects, slots);
+    auto cost = [&](double v) {
+      const double c = Cost(f.Apply(&v));
+      return c;
+    };
+    const double ratio = (std::sqrt(5.0) - 1) / 2;
+    double c1 = b - ratio * (b - a), c2 = a + ratio * (b - a);
+    double f1 = cost(c1), f2 = cost(c2);
+    for (int k = 0; k < 12; ++k) {
+      if (f1 <= f2) {
+        b = c2;
+        c2 = c1;
+        f2 = f1;
+        c1 = b - ratio * (b - a);
+        f1 = cost(c1);
+      } else {
+        a = c1;
+        c1 = c2;
+        f1 = f2;
+        c2 = a + ratio * (b - a);
+        f2 = cost(c2);
+      }
+    }
+    double best = f1 <= f2 ? c1 : c2;
+    if (std::min(f1, f2) > cost(x[0])) best = x[0];
+    *effects = f.Apply(&best);
+    return;
+  }
   const std::size_t rows = FitResidual(*effects).size();
   if (rows == 0) throw std::runtime_error("no fit rows");
   ceres::NumericDiffOptions diff;
@@ -445,17 +478,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   report.block_seconds = block;
   report.held_out_share = options.held_out;
   for (const OmniLog& log : logs) report.logs.push_back(log.path);
-  report.gap_before = problem.Gap(Mean(selection.before.held_out));
-  report.gap_after = problem.Gap(Mean(selection.after.held_out));
-  report.fit_gap_before = problem.Gap(Mean(selection.before.fit));
-  report.fit_gap_after = problem.Gap(Mean(selection.after.fit));
-  report.fit_rows = static_cast<int>(selection.before.fit.size());
-  report.held_out_rows = static_cast<int>(selection.before.held_out.size());
-  report.candidates = selection.candidates;
-  for (std::size_t k = 0; k < selection.effects.size(); ++k) {
-    const TrialEffect& e = selection.effects[k];
-    report.effects.push_back({e.name, -1, e.parameters, selection.gap_reductions[k], selection.evidence[k]});
-  }
+  ReportSelection(problem, selection, &report);
 
   // Find: the residual per axis in the robot's frame, before and after.
   const OmniModel nominal_model = problem.Build({});
