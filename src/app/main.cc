@@ -2,12 +2,16 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <glog/logging.h>
 
 #include "app/commands/commands.h"
 #include "core/error.h"
 
 int main(int argc, char** argv) {
   using namespace twinsim;
+  // Ceres logs through glog; a fit that steps outside an effect's range is handled (and
+  // reported) by twinsim, so its solver's own complaints stay off the terminal.
+  FLAGS_minloglevel = google::GLOG_FATAL;
   CLI::App app{"twinsim: simulate small-size omni robots on ODE, Bullet or an analytic model,\n"
                "with the on-board controller and the camera/command delay loop of a real game."};
   app.require_subcommand(1);
