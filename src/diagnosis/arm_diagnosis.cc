@@ -26,6 +26,7 @@ constexpr double kReversalWindow = 0.1;   // s either side of a velocity reversa
 constexpr double kMaxLag = 0.1;           // s, the cross-correlation's reach
 constexpr int kMaxFitRows = 20000;        // residual rows per joint a Ceres fit uses at most
 constexpr int kPlotPoints = 4000;
+constexpr double kPayloadReach = 2;      // m: a payload's position is searched within this of the last link's frame
 // Held-out rows per chunk of the significance test: a quarter second holds a motion's
 // stop or reversal (the events where friction and delays show) without splitting it.
 constexpr double kChunkSeconds = 0.25;
@@ -82,37 +83,42 @@ ParameterMap Encode(const TrialEffect& e) {
     add(std::log(std::max(Get(e, "motor_inertia"), 1e-9)), std::log(1e-9), std::log(1e3));
   } else if (e.name == "payload") {
     add(std::max(Get(e, "mass"), 1e-6), 1e-6, kInf);
-    add(Get(e, "x"), -3, 3);
-    add(Get(e, "y"), -3, 3);
-    add(Get(e, "z"), -3, 3);
+    add(Get(e, "x"), -kPayloadReach, kPayloadReach);
+    add(Get(e, "y"), -kPayloadReach, kPayloadReach);
+    add(Get(e, "z"), -kPayloadReach, kPayloadReach);
   }
   return m;
 }
 
+// Decodes variables into parameters, projected onto each parameter's valid range: Ceres
+// keeps its iterates within the bounds, but its numeric derivatives step across them
+// (a friction level starting at 0 is tried at -1e-4), and an evaluation the effect's
+// checks refuse would end the fit at its start.
 void Decode(const double* x, TrialEffect* e) {
   auto& p = e->parameters;
+  auto positive = [](double v, double least) { return std::max(v, least); };
   p.clear();
   if (e->name == "viscous_friction") {
-    p["b"] = x[0];
+    p["b"] = positive(x[0], 0);
   } else if (e->name == "coulomb_friction") {
-    p["c_pos"] = x[0];
-    p["c_neg"] = x[1];
+    p["c_pos"] = positive(x[0], 0);
+    p["c_neg"] = positive(x[1], 0);
   } else if (e->name == "stribeck_friction") {
-    p["c"] = x[0];
-    p["s"] = x[0] + x[1];
+    p["c"] = positive(x[0], 0);
+    p["s"] = p["c"] + positive(x[1], 1e-6);
     p["vs"] = std::exp(x[2]);
   } else if (e->name == "torque_offset") {
     p["tau0"] = x[0];
   } else if (e->name == "torque_saturation") {
-    p["limit"] = x[0];
+    p["limit"] = positive(x[0], 1e-6);
   } else if (e->name == "time_delay") {
-    p["delay"] = x[0];
+    p["delay"] = std::clamp(x[0], 0.0, 1.0);
   } else if (e->name == "joint_flexibility") {
     p["k"] = std::exp(x[0]);
-    p["damping"] = x[1];
+    p["damping"] = positive(x[1], 0);
     p["motor_inertia"] = std::exp(x[2]);
   } else if (e->name == "payload") {
-    p["mass"] = x[0];
+    p["mass"] = positive(x[0], 1e-6);
     p["x"] = x[1];
     p["y"] = x[2];
     p["z"] = x[3];
@@ -288,6 +294,12 @@ class ArmProblem : public DiagnosisProblem {
         }
       }
       if (beyond < std::max(10L, total / 200)) throw std::runtime_error("fewer than 0.5 % of the commands reach the limit");
+    } else if (e.name == "payload") {
+      for (const char* key : {"x", "y", "z"}) {
+        if (std::abs(e.parameters.at(key)) > 0.99 * kPayloadReach) {
+          throw std::runtime_error(std::string("its position's ") + key + " ends at the search bound: not determined by the logs");
+        }
+      }
     }
   }
 
@@ -480,7 +492,7 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
     const Eigen::VectorXd c = SolveLeastSquares(a, Eigen::Map<const Eigen::VectorXd>(payload_r.data(), m));
     const double mass = std::max(c[0], 1e-3);
     Eigen::Vector3d pos = c.tail<3>() / mass;
-    pos = pos.cwiseMax(-2.0).cwiseMin(2.0);
+    pos = pos.cwiseMax(-kPayloadReach).cwiseMin(kPayloadReach);
     p = {{"mass", mass}, {"x", pos.x()}, {"y", pos.y()}, {"z", pos.z()}};
   }
 }

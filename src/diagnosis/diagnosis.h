@@ -32,9 +32,10 @@ struct DiagnosisOptions {
   // An effect is added only when it lowers the held-out mean squared error by at least
   // this share of it (a floor against effects too small to matter) ...
   double min_improvement = 0.05;
-  // ... and the reduction is significant: its mean over held-out chunks (each chunk as
-  // long as the correlation of the residual, 1 s or more) is at least `significance`
-  // standard errors above zero (a one-sided t test, docs/diagnose.md).
+  // ... and the reduction is significant: its mean over held-out chunks (each as long as
+  // the nominal residual stays correlated, and at least 0.25 s for arms, 1 s for omni
+  // robots) is at least `significance` standard errors above zero (a one-sided t test),
+  // or it removes at least a quarter on fit and held-out rows alike (docs/diagnose.md).
   double significance = 2;
   std::string backend = "analytic";  // omni: the physics that replays the model
   int horizon = 4;                   // omni: frames predicted ahead (the contract's replay K)

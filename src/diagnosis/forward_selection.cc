@@ -73,8 +73,10 @@ double Mean(const std::vector<double>& v) {
 SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOptions& options,
                               const std::function<void(const std::string&)>& progress) {
   SelectionResult out;
-  const int chunk = problem.ChunkRows();
   out.before = problem.Evaluate({});
+  // Chunks at least as long as the nominal residual stays correlated: rows closer than
+  // that are not independent evidence.
+  const int chunk = std::max(problem.ChunkRows(), CorrelationLength(out.before.held_out, 20 * problem.ChunkRows()));
   SquaredResiduals current_residuals = out.before;
   std::vector<TrialEffect> current;
   for (int round = 1; round <= options.max_effects; ++round) {
@@ -110,20 +112,24 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         c.reduction = -std::numeric_limits<double>::infinity();
       }
     });
-    // The best held-out reduction; ties (to the last bit) go to the earlier candidate.
-    std::size_t best = 0;
-    for (std::size_t k = 1; k < tried.size(); ++k) {
-      if (tried[k].reduction > tried[best].reduction) best = k;
-    }
-    DiagnosisCandidate& winner = tried[best];
     // Significant by the t test, or so large on both the fit and the held-out rows that
     // chance is out of the question even where the effect shows only in a few events
     // (a speed limit reached now and then leaves most chunks unchanged: t stays small).
-    const bool strong = winner.reduction >= kStrongReduction && fit_reduction[best] >= kStrongReduction &&
-                        winner.t_statistic > 0;
-    const bool passes = winner.note.empty() && winner.reduction >= options.min_improvement &&
-                        (winner.t_statistic >= options.significance || strong);
+    auto passes_test = [&](std::size_t k) {
+      const DiagnosisCandidate& c = tried[k];
+      const bool strong = c.reduction >= kStrongReduction && fit_reduction[k] >= kStrongReduction && c.t_statistic > 0;
+      return c.note.empty() && c.reduction >= options.min_improvement &&
+             (c.t_statistic >= options.significance || strong);
+    };
+    // The largest held-out reduction among the candidates that pass (one that fails the
+    // test must not hide another that passes); ties go to the earlier candidate.
+    std::size_t best = tried.size();
+    for (std::size_t k = 0; k < tried.size(); ++k) {
+      if (passes_test(k) && (best == tried.size() || tried[k].reduction > tried[best].reduction)) best = k;
+    }
+    const bool passes = best < tried.size();
     if (passes) {
+      DiagnosisCandidate& winner = tried[best];
       winner.selected = true;
       const std::string evidence = RoundEvidence(tried, winner);
       std::vector<TrialEffect> next = fitted[best];

@@ -49,7 +49,8 @@ class DiagnosisProblem {
   // the others held. Throws std::runtime_error when a fit fails; the candidate is then
   // reported with the message.
   virtual std::vector<TrialEffect> Fit(std::vector<TrialEffect> effects, const std::vector<int>& free) const = 0;
-  // Held-out rows per chunk for the significance test.
+  // The fewest held-out rows per chunk of the significance test (longer where the
+  // residual stays correlated longer).
   virtual int ChunkRows() const = 0;
   // A clause of evidence particular to this effect (its signature in the data), or "".
   virtual std::string Signature(const TrialEffect& effect, const std::vector<TrialEffect>& others) const { return ""; }
