@@ -475,10 +475,13 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
       const Eigen::VectorXd x = a + ndd / k;
       const double jm = x.squaredNorm() > 0 ? -rv.dot(x) / x.squaredNorm() : 0.0;
       if (!(jm > 0)) continue;
-      const double sse = (rv + jm * x).squaredNorm();
-      if (sse < best) {
-        best = sse;
-        p = {{"k", k}, {"damping", 0.0}, {"motor_inertia", jm}};
+      // Scored on the model itself: the linearisation misleads where the spring is soft.
+      std::vector<TrialEffect> trial = *effects;
+      trial[static_cast<std::size_t>(i)].parameters = {{"k", k}, {"damping", 0.0}, {"motor_inertia", jm}};
+      const double cost = Cost(trial, {j});
+      if (cost < best) {
+        best = cost;
+        p = trial[static_cast<std::size_t>(i)].parameters;
       }
     }
     if (p.empty()) throw std::runtime_error("no motor inertia explains the residual");
@@ -724,7 +727,9 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
       lag_sum += CommandLag(log.t, log.tau.col(j), cmd, d.first, d.last);
       const double rate = 1.0 / log.sample_period;
       const double cutoff = log.derive_cutoff_hz > 0 ? 2 * log.derive_cutoff_hz : rate / 8;
-      const double sigma = HighFrequencySigma(rb.segment(d.first, d.last - d.first), rate, cutoff);
+      // The repaired model's residual: fast content an added effect explains (a
+      // resonance) is not noise.
+      const double sigma = HighFrequencySigma(ra.segment(d.first, d.last - d.first), rate, cutoff);
       noise_joint += sigma * sigma;
       // Reversals: where the velocity changes sign or the joint stands.
       const double vmax = log.qd.col(j).segment(d.first, d.last - d.first).cwiseAbs().maxCoeff();
