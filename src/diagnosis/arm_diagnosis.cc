@@ -26,6 +26,9 @@ constexpr double kReversalWindow = 0.1;   // s either side of a velocity reversa
 constexpr double kMaxLag = 0.1;           // s, the cross-correlation's reach
 constexpr int kMaxFitRows = 20000;        // residual rows per joint a Ceres fit uses at most
 constexpr int kPlotPoints = 4000;
+constexpr double kMaxDeflection = 0.5;     // rad: the most a flexible joint's spring deflects
+constexpr double kMinStiffness = 1e-3;     // N·m/rad: joint_flexibility's search bounds
+constexpr double kMinMotorInertia = 1e-9;  // kg m^2
 constexpr double kPayloadReach = 2;      // m: a payload's position is searched within this of the last link's frame
 // Held-out rows per chunk of the significance test: a quarter second holds a motion's
 // stop or reversal (the events where friction and delays show) without splitting it.
@@ -78,9 +81,9 @@ ParameterMap Encode(const TrialEffect& e) {
   } else if (e.name == "time_delay") {
     add(Get(e, "delay"), 0, 1.0);
   } else if (e.name == "joint_flexibility") {
-    add(std::log(std::max(Get(e, "k"), 1e-3)), std::log(1e-3), std::log(1e9));
+    add(std::log(std::max(Get(e, "k"), kMinStiffness)), std::log(kMinStiffness), std::log(1e9));
     add(Get(e, "damping"), 0, kInf);
-    add(std::log(std::max(Get(e, "motor_inertia"), 1e-9)), std::log(1e-9), std::log(1e3));
+    add(std::log(std::max(Get(e, "motor_inertia"), kMinMotorInertia)), std::log(kMinMotorInertia), std::log(1e3));
   } else if (e.name == "payload") {
     add(std::max(Get(e, "mass"), 1e-6), 1e-6, kInf);
     add(Get(e, "x"), -kPayloadReach, kPayloadReach);
@@ -258,7 +261,7 @@ class ArmProblem : public DiagnosisProblem {
       if (effects[static_cast<std::size_t>(i)].parameters.empty()) InitialGuess(&effects, i);
     }
     Refine(&effects, free);
-    if (free.size() == 1) CheckResolved(effects[static_cast<std::size_t>(free.front())]);
+    for (int i : free) CheckResolved(effects[static_cast<std::size_t>(i)]);  // a joint refit too
     return effects;
   }
 
@@ -269,6 +272,19 @@ class ArmProblem : public DiagnosisProblem {
   void CheckResolved(const TrialEffect& e) const {
     char msg[200];
     if (e.name == "joint_flexibility") {
+      // A spring or motor at the search's bound is no spring: a damper, or nothing.
+      if (e.parameters.at("k") < 1.01 * kMinStiffness || e.parameters.at("motor_inertia") < 1.01 * kMinMotorInertia) {
+        throw std::runtime_error("its stiffness or motor inertia ends at the search bound: no spring the logs determine");
+      }
+      // The spring carries the joint's torque: a spring that would deflect by more than
+      // kMaxDeflection under it is a filter fitted to something else, not a joint.
+      double peak = 0;
+      for (const LogData& d : data_) peak = std::max(peak, d.rigid.col(e.joint).segment(d.first, d.last - d.first).cwiseAbs().maxCoeff());
+      if (peak / e.parameters.at("k") > kMaxDeflection) {
+        std::snprintf(msg, sizeof msg, "its spring would deflect %.3g rad under the joint's %.3g N·m: no joint is that soft",
+                      peak / e.parameters.at("k"), peak);
+        throw std::runtime_error(msg);
+      }
       const double f = std::sqrt(e.parameters.at("k") / e.parameters.at("motor_inertia")) / (2 * M_PI);
       if (f > bandwidth_) {
         std::snprintf(msg, sizeof msg, "its resonance (%.3g Hz) lies above the %.3g Hz the logs' motion resolves", f, bandwidth_);
