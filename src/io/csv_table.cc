@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "core/error.h"
@@ -42,7 +43,10 @@ int CsvTable::Column(const std::string& name) const {
 
 int CsvTable::RequireColumn(const std::string& name) const {
   const int c = Column(name);
-  if (c >= 0) return c;
+  if (c >= 0) {
+    if (!problem[static_cast<std::size_t>(c)].empty()) throw InputError(problem[static_cast<std::size_t>(c)]);
+    return c;
+  }
   std::string have;
   for (const auto& h : header) have += (have.empty() ? "" : ", ") + h;
   throw InputError(SourceLocation{path, 1}, "missing column '" + name + "' (have: " + have + ")");
@@ -66,6 +70,7 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
           throw InputError(SourceLocation{path, line_no, f.column}, "empty column name in the header");
         t.header.push_back(f.text);
       }
+      t.problem.assign(t.header.size(), "");
       have_header = true;
       continue;
     }
@@ -83,13 +88,19 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
       const char* end = f.data() + f.size();
       if (!f.empty() && *begin == '+') ++begin;
       auto [ptr, ec] = std::from_chars(begin, end, v);
+      std::string& problem = t.problem[i];
       if (f.empty() || ec != std::errc() || ptr != end) {
-        throw InputError(SourceLocation{path, line_no, column},
-                         "column '" + t.header[i] + "': expected a number, got '" + f + "'");
-      }
-      if (!std::isfinite(v)) {
-        throw InputError(SourceLocation{path, line_no, column},
-                         "column '" + t.header[i] + "': value is " + f + ", not a finite number");
+        if (problem.empty()) {
+          problem = SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] +
+                    "': expected a number, got '" + f + "'";
+        }
+        v = std::numeric_limits<double>::quiet_NaN();
+      } else if (!std::isfinite(v)) {
+        if (problem.empty()) {
+          problem = SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] + "': value is " + f +
+                    ", not a finite number";
+        }
+        v = std::numeric_limits<double>::quiet_NaN();
       }
       row[i] = v;
     }

@@ -1,5 +1,8 @@
-// A numeric CSV table with one header row, read with the file, line and column of
-// every value kept for error messages.
+// A CSV table with one header row, read with the file, line and column of every value
+// kept for error messages. Values are numbers; a column may hold anything else (a robot
+// id, a note) as long as nobody asks for it: the first value of each column that is
+// not a finite number is remembered, and RequireColumn() reports it. So extra columns,
+// numeric or not, are ignored, as CONTRACT.md says of logs.
 //
 //   CsvTable t = ReadCsvTable("log.csv");
 //   int x = t.RequireColumn("x");   // InputError "log.csv:1: missing column 'x' (have: ...)"
@@ -15,18 +18,21 @@ namespace twinsim {
 struct CsvTable {
   std::string path;
   std::vector<std::string> header;
-  std::vector<std::vector<double>> rows;
+  std::vector<std::vector<double>> rows;  // NaN where a value is not a finite number
   std::vector<int> line_of;  // 1-based file line of each row
+  std::vector<std::string> problem;  // per column: "path:line:col: ..." of its first bad value, or ""
 
-  // Index of the column, or -1.
+  // Index of the column, or -1 (its values unchecked).
   int Column(const std::string& name) const;
-  // Index of the column; throws InputError naming the file and the columns it has.
+  // Index of the column, all of whose values are finite numbers. Throws InputError
+  // naming the file and the columns it has, or the first value that is not a number.
   int RequireColumn(const std::string& name) const;
 };
 
-// Reads a CSV of numbers. Throws InputError "path:line:column: ..." on a missing file,
-// an empty file, a row with the wrong number of fields, text in a number, NaN or
-// infinity. Blank lines are skipped; a trailing '\r' is ignored.
+// Reads a CSV table. Throws InputError "path:line:column: ..." on a missing file, an
+// empty file, or a row with the wrong number of fields; text, NaN or infinity where a
+// number belongs is reported by RequireColumn(). Blank lines are skipped; a trailing
+// '\r' is ignored.
 CsvTable ReadCsvTable(const std::string& path);
 CsvTable ParseCsvTable(const std::string& text, const std::string& path);
 

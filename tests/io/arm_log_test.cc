@@ -53,6 +53,9 @@ TEST(ArmLog, ReadsJointColumnsAndIgnoresExtraOnes) {
   ASSERT_EQ(with_reference.qref.rows(), 3);
   EXPECT_EQ(with_reference.qref(1, 0), 0.25);
   EXPECT_EQ(FormatArmLog(with_reference, false).substr(0, 16), "t,q1,tau1,qref1\n");
+  // Extra columns, numeric or not, are ignored (CONTRACT.md).
+  const ArmLog with_text = ParseArmLog("t,q1,tau1,arm,note\n0,0,1,kuka,\n0.01,0,1,kuka,nan\n0.02,0,2,kuka,x\n", "text.csv");
+  EXPECT_EQ(with_text.tau(2, 0), 2);
 }
 
 TEST(ArmLog, DerivesVelocityAndAccelerationFromPositions) {

@@ -34,6 +34,19 @@ TEST(OmniLog, ExtraColumnsAndDroppedFramesAreFine) {
   EXPECT_EQ(log.FrameIndex(2), 3);
 }
 
+TEST(OmniLog, ExtraTextColumnsAreIgnored) {
+  // CONTRACT.md: extra columns, numeric or not (a robot id, a note), are ignored.
+  const std::string csv = "robot,t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,note\nblue0,0,0,0,0,0,0,0,start\n"
+                          "blue0,0.0333333,0.01,0,0,0,0,0,\nblue0,0.0666667,0.02,0,0,1,0,0,go fast\n";
+  const OmniLog log = ParseOmniLog(csv, "log.csv");
+  ASSERT_EQ(log.rows.size(), 3u);
+  EXPECT_EQ(log.rows[2].pose.x, 0.02);
+  EXPECT_EQ(log.rows[2].command.vx, 1);
+  // Text in a column the log needs is still an error with its place.
+  EXPECT_EQ(ErrorOf("t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,note\n0,0,0,0,0,0,0,a\n0.03,0,zero,0,0,0,0,b\n"),
+            "log.csv:3:8: column 'y': expected a number, got 'zero'");
+}
+
 TEST(OmniLog, MissingColumn) {
   const std::string e = ErrorOf("t,x,y,theta,vx_cmd,vy_cmd\n0,0,0,0,0,0\n0.1,0,0,0,0,0\n");
   EXPECT_NE(e.find("log.csv:1: missing column 'omega_cmd' (have: t, x, y, theta, vx_cmd, vy_cmd)"), std::string::npos) << e;
