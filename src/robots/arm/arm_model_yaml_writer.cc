@@ -7,22 +7,14 @@
 #include <sstream>
 
 #include "io/atomic_file.h"
+#include "io/yaml_number.h"
 
 namespace twinsim {
 namespace {
 
-// Shortest text that reads back as the same double.
-std::string Number(double v) {
-  if (v == 0) return "0";
-  char buf[40];
-  for (int digits = 15; digits <= 17; ++digits) {
-    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
-  return buf;
+std::string Vector(const Eigen::Vector3d& v) {
+  return "[" + YamlNumber(v.x()) + ", " + YamlNumber(v.y()) + ", " + YamlNumber(v.z()) + "]";
 }
-
-std::string Vector(const Eigen::Vector3d& v) { return "[" + Number(v.x()) + ", " + Number(v.y()) + ", " + Number(v.z()) + "]"; }
 
 // A YAML scalar for a name: plain when safe, else double-quoted.
 std::string Text(const std::string& s) {
@@ -67,7 +59,7 @@ std::string FormatArmModelYaml(const ArmModel& model, const std::string& comment
   s << "robot: arm\n";
   s << "name: " << Text(model.name) << "\n";
   s << "gravity: " << Vector(model.gravity) << "   # m/s^2, base frame\n";
-  s << "sample_time: " << Number(model.sample_time) << "   # s\n";
+  s << "sample_time: " << YamlNumber(model.sample_time) << "   # s\n";
   s << "delay_samples: " << model.delay_samples << "\n";
   s << "# URDF-style joint table (no 'dh' key): origin and axis in the parent link's frame,\n"
        "# limits in rad (revolute) or m (prismatic), link inertials in the link frame about\n"
@@ -80,21 +72,21 @@ std::string FormatArmModelYaml(const ArmModel& model, const std::string& comment
     s << "    origin: {xyz: " << Vector(j.origin.translation()) << ", rpy: " << Vector(rpy) << "}\n";
     s << "    axis: " << Vector(j.axis) << "\n";
     const ArmJoint defaults;
-    if (j.lower != defaults.lower) s << "    lower: " << Number(j.lower) << "\n";
-    if (j.upper != defaults.upper) s << "    upper: " << Number(j.upper) << "\n";
-    s << "    velocity_limit: " << Number(j.velocity_limit) << "\n";
-    s << "    effort_limit: " << Number(j.effort_limit) << "\n";
-    s << "    viscous: " << Number(j.viscous) << "\n";
-    s << "    coulomb: " << Number(j.coulomb) << "\n";
+    if (j.lower != defaults.lower) s << "    lower: " << YamlNumber(j.lower) << "\n";
+    if (j.upper != defaults.upper) s << "    upper: " << YamlNumber(j.upper) << "\n";
+    s << "    velocity_limit: " << YamlNumber(j.velocity_limit) << "\n";
+    s << "    effort_limit: " << YamlNumber(j.effort_limit) << "\n";
+    s << "    viscous: " << YamlNumber(j.viscous) << "\n";
+    s << "    coulomb: " << YamlNumber(j.coulomb) << "\n";
     const ArmLink& l = j.child;
     s << "    link:\n";
     s << "      name: " << Text(l.name.empty() ? j.name + "_link" : l.name) << "\n";
-    s << "      mass: " << Number(l.mass) << "\n";
+    s << "      mass: " << YamlNumber(l.mass) << "\n";
     s << "      com: " << Vector(l.com) << "\n";
     const Eigen::Matrix3d& i = l.inertia;
-    s << "      inertia: [" << Number(i(0, 0)) << ", " << Number(i(1, 1)) << ", " << Number(i(2, 2)) << ", "
-      << Number(0.5 * (i(0, 1) + i(1, 0))) << ", " << Number(0.5 * (i(0, 2) + i(2, 0))) << ", "
-      << Number(0.5 * (i(1, 2) + i(2, 1))) << "]\n";
+    s << "      inertia: [" << YamlNumber(i(0, 0)) << ", " << YamlNumber(i(1, 1)) << ", " << YamlNumber(i(2, 2)) << ", "
+      << YamlNumber(0.5 * (i(0, 1) + i(1, 0))) << ", " << YamlNumber(0.5 * (i(0, 2) + i(2, 0))) << ", "
+      << YamlNumber(0.5 * (i(1, 2) + i(2, 1))) << "]\n";
   }
   const std::vector<ArmEffect> effects = ListArmEffects(model.effects);
   if (!effects.empty()) {
@@ -105,7 +97,7 @@ std::string FormatArmModelYaml(const ArmModel& model, const std::string& comment
       // In the vocabulary's parameter order, as the documentation lists them.
       for (const std::string& key : ArmEffectParameters(e.name)) {
         const auto it = e.parameters.find(key);
-        if (it != e.parameters.end()) s << ", " << key << ": " << Number(it->second);
+        if (it != e.parameters.end()) s << ", " << key << ": " << YamlNumber(it->second);
       }
       s << "}\n";
     }
