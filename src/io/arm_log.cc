@@ -76,6 +76,15 @@ ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
   log.qd_logged = optional_group("qd");
   log.qdd_logged = optional_group("qdd");
   const bool has_qref = optional_group("qref");
+  // Every column the log uses holds numbers (the first bad one in the file is named);
+  // any other column is ignored, whatever it holds.
+  std::vector<std::string> used = {"t"};
+  for (const char* prefix : {"q", "tau", "qd", "qdd", "qref"}) {
+    const std::string p = prefix;
+    if ((p == "qd" && !log.qd_logged) || (p == "qdd" && !log.qdd_logged) || (p == "qref" && !has_qref)) continue;
+    for (int j = 1; j <= nq; ++j) used.push_back(p + std::to_string(j));
+  }
+  table.RequireColumns(used);
 
   const int rows = static_cast<int>(table.rows.size());
   if (rows < 3) {

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <tuple>
 
 #include "core/error.h"
 
@@ -44,12 +45,33 @@ int CsvTable::Column(const std::string& name) const {
 int CsvTable::RequireColumn(const std::string& name) const {
   const int c = Column(name);
   if (c >= 0) {
-    if (!problem[static_cast<std::size_t>(c)].empty()) throw InputError(problem[static_cast<std::size_t>(c)]);
+    const Problem& p = problem[static_cast<std::size_t>(c)];
+    if (p.line > 0) throw InputError(p.message);
     return c;
   }
   std::string have;
   for (const auto& h : header) have += (have.empty() ? "" : ", ") + h;
   throw InputError(SourceLocation{path, 1}, "missing column '" + name + "' (have: " + have + ")");
+}
+
+std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names) const {
+  std::vector<int> columns;
+  const Problem* first = nullptr;
+  const std::string* missing = nullptr;
+  for (const std::string& name : names) {
+    const int c = Column(name);
+    columns.push_back(c);
+    if (c < 0) {
+      if (!missing) missing = &name;
+      continue;
+    }
+    const Problem& p = problem[static_cast<std::size_t>(c)];
+    if (p.line > 0 && (!first || std::tie(p.line, p.column) < std::tie(first->line, first->column))) first = &p;
+  }
+  // A bad value is named before a missing column, as a reader going row by row would.
+  if (first) throw InputError(first->message);
+  if (missing) RequireColumn(*missing);  // throws, listing the columns there are
+  return columns;
 }
 
 CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
@@ -70,7 +92,7 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
           throw InputError(SourceLocation{path, line_no, f.column}, "empty column name in the header");
         t.header.push_back(f.text);
       }
-      t.problem.assign(t.header.size(), "");
+      t.problem.assign(t.header.size(), {});
       have_header = true;
       continue;
     }
@@ -88,17 +110,13 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
       const char* end = f.data() + f.size();
       if (!f.empty() && *begin == '+') ++begin;
       auto [ptr, ec] = std::from_chars(begin, end, v);
-      std::string& problem = t.problem[i];
-      if (f.empty() || ec != std::errc() || ptr != end) {
-        if (problem.empty()) {
-          problem = SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] +
-                    "': expected a number, got '" + f + "'";
-        }
-        v = std::numeric_limits<double>::quiet_NaN();
-      } else if (!std::isfinite(v)) {
-        if (problem.empty()) {
-          problem = SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] + "': value is " + f +
-                    ", not a finite number";
+      CsvTable::Problem& problem = t.problem[i];
+      const bool text = f.empty() || ec != std::errc() || ptr != end;
+      if (text || !std::isfinite(v)) {
+        if (problem.line == 0) {
+          problem = {line_no, column,
+                     SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] + "': " +
+                         (text ? "expected a number, got '" + f + "'" : "value is " + f + ", not a finite number")};
         }
         v = std::numeric_limits<double>::quiet_NaN();
       }

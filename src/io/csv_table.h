@@ -20,13 +20,21 @@ struct CsvTable {
   std::vector<std::string> header;
   std::vector<std::vector<double>> rows;  // NaN where a value is not a finite number
   std::vector<int> line_of;  // 1-based file line of each row
-  std::vector<std::string> problem;  // per column: "path:line:col: ..." of its first bad value, or ""
+  // Per column, its first value that is not a finite number (line 0: none).
+  struct Problem {
+    int line = 0, column = 0;
+    std::string message;  // "path:line:col: ..."
+  };
+  std::vector<Problem> problem;
 
   // Index of the column, or -1 (its values unchecked).
   int Column(const std::string& name) const;
   // Index of the column, all of whose values are finite numbers. Throws InputError
   // naming the file and the columns it has, or the first value that is not a number.
   int RequireColumn(const std::string& name) const;
+  // RequireColumn() for each name; of bad values in the columns there are, the first in
+  // the file is reported, before a missing column (as a reader going row by row would).
+  std::vector<int> RequireColumns(const std::vector<std::string>& names) const;
 };
 
 // Reads a CSV table. Throws InputError "path:line:column: ..." on a missing file, an

@@ -15,9 +15,8 @@ namespace {
 constexpr double kFrameJitter = 0.3;
 
 OmniLog FromTable(const CsvTable& table) {
-  const char* names[] = {"t", "x", "y", "theta", "vx_cmd", "vy_cmd", "omega_cmd"};
-  int col[7];
-  for (int i = 0; i < 7; ++i) col[i] = table.RequireColumn(names[i]);
+  // The first bad value in these columns is named; other columns are ignored.
+  const std::vector<int> col = table.RequireColumns({"t", "x", "y", "theta", "vx_cmd", "vy_cmd", "omega_cmd"});
 
   OmniLog log;
   log.path = table.path;
