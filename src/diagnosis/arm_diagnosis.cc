@@ -265,7 +265,7 @@ class ArmProblem : public DiagnosisProblem {
     return effects;
   }
 
-  std::string Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const override;
+  std::string Signature(const TrialEffect& e) const override;
 
   // Throws std::runtime_error when a fitted effect lies where the logs cannot see it:
   // what it then explains is something else (the derivative filter's error, noise).
@@ -520,9 +520,8 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
 class FitFunctor {
  public:
   FitFunctor(const ArmProblem* problem, std::vector<TrialEffect> effects, std::vector<int> free,
-             std::vector<int> sizes, std::vector<int> joints)
-      : problem_(problem), effects_(std::move(effects)), free_(std::move(free)), sizes_(std::move(sizes)),
-        joints_(std::move(joints)) {}
+             std::vector<int> joints)
+      : problem_(problem), effects_(std::move(effects)), free_(std::move(free)), joints_(std::move(joints)) {}
 
   bool operator()(double const* const* x, double* residual) const {
     std::vector<TrialEffect> trial = effects_;
@@ -541,7 +540,6 @@ class FitFunctor {
   const ArmProblem* problem_;
   std::vector<TrialEffect> effects_;
   std::vector<int> free_;
-  std::vector<int> sizes_;
   std::vector<int> joints_;
 };
 
@@ -558,7 +556,7 @@ void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int
   ceres::NumericDiffOptions diff;
   diff.relative_step_size = 1e-4;
   auto* cost = new ceres::DynamicNumericDiffCostFunction<FitFunctor, ceres::CENTRAL>(
-      new FitFunctor(this, *effects, free, sizes, joints), ceres::TAKE_OWNERSHIP, diff);
+      new FitFunctor(this, *effects, free, joints), ceres::TAKE_OWNERSHIP, diff);
   for (int s : sizes) cost->AddParameterBlock(s);
   cost->SetNumResiduals(static_cast<int>(rows));
   ceres::Problem problem;
@@ -605,7 +603,7 @@ double CommandLag(const Eigen::VectorXd& t, const Eigen::VectorXd& measured, con
   return best_shift * dt;
 }
 
-std::string ArmProblem::Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const {
+std::string ArmProblem::Signature(const TrialEffect& e) const {
   char buf[256];
   const auto& p = e.parameters;
   if (e.name == "viscous_friction") {
@@ -726,20 +724,25 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   const ArmModel nominal_model = problem.Build({});
   const ArmModel repaired_model = problem.Build(selection.effects);
   const auto& data = problem.data();
+  std::vector<Eigen::MatrixXd> nominal_payload, repaired_payload;  // per log
+  for (const LogData& d : data) {
+    nominal_payload.push_back(problem.PayloadTorque(nominal_model, d));
+    repaired_payload.push_back(problem.PayloadTorque(repaired_model, d));
+  }
   double noise_sq = 0;
   for (int j = 0; j < model.dof(); ++j) {
     ChannelFinding f;
     ChannelSeries s;
     f.channel = "joint " + std::to_string(j + 1);
     f.unit = model.joints[static_cast<std::size_t>(j)].type == JointType::kPrismatic ? "N" : "N·m";
-    std::vector<double> before, after, velocity, acceleration, near, moving;
+    ChannelSamples x;
     double lag_sum = 0, noise_joint = 0;
     for (std::size_t k = 0; k < data.size(); ++k) {
       const LogData& d = data[k];
       const ArmLog& log = *d.log;
-      const Eigen::VectorXd rb = problem.Residual(nominal_model, d, j, problem.PayloadTorque(nominal_model, d));
-      const Eigen::VectorXd ra = problem.Residual(repaired_model, d, j, problem.PayloadTorque(repaired_model, d));
-      const Eigen::VectorXd cmd = problem.Command(nominal_model, d, j, problem.PayloadTorque(nominal_model, d));
+      const Eigen::VectorXd rb = problem.Residual(nominal_model, d, j, nominal_payload[k]);
+      const Eigen::VectorXd ra = problem.Residual(repaired_model, d, j, repaired_payload[k]);
+      const Eigen::VectorXd cmd = problem.Command(nominal_model, d, j, nominal_payload[k]);
       lag_sum += CommandLag(log.t, log.tau.col(j), cmd, d.first, d.last);
       const double rate = 1.0 / log.sample_period;
       const double cutoff = log.derive_cutoff_hz > 0 ? 2 * log.derive_cutoff_hz : rate / 8;
@@ -755,13 +758,13 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
       }
       std::size_t next = 0;
       for (int r = d.first; r < d.last; ++r) {
-        before.push_back(rb[r]);
-        after.push_back(ra[r]);
-        velocity.push_back(log.qd(r, j));
-        acceleration.push_back(log.qdd(r, j));
+        x.before.push_back(rb[r]);
+        x.after.push_back(ra[r]);
+        x.velocity.push_back(log.qd(r, j));
+        x.acceleration.push_back(log.qdd(r, j));
         while (next < reversal_times.size() && reversal_times[next] < log.t[r] - kReversalWindow) ++next;
         const bool close = next < reversal_times.size() && reversal_times[next] <= log.t[r] + kReversalWindow;
-        (close ? near : moving).push_back(rb[r]);
+        (close ? x.near_reversal : x.moving).push_back(rb[r]);
       }
       if (k == 0) {
         // Plots: the first log, subsampled.
@@ -771,7 +774,6 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
           s.before.push_back(rb[r]);
           s.after.push_back(ra[r]);
           s.velocity.push_back(log.qd(r, j));
-          s.held_out.push_back(d.held[static_cast<std::size_t>(r)]);
         }
         std::vector<double> xb(rb.data() + d.first, rb.data() + d.last), xa(ra.data() + d.first, ra.data() + d.last);
         const int segment = static_cast<int>(std::min<double>(4096, std::pow(2, std::floor(std::log2(std::max(8.0, xb.size() / 4.0))))));
@@ -780,25 +782,10 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
         WelchPsd(xa, rate, segment, &unused, &s.psd_after);
       }
     }
-    auto rms = [](const std::vector<double>& v) {
-      double sum = 0;
-      for (double x : v) sum += x * x;
-      return v.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(v.size()));
-    };
-    f.rms = rms(before);
-    f.rms_after = rms(after);
-    f.rms_near_reversal = rms(near);
-    f.rms_moving = rms(moving);
-    f.velocity_correlation = Correlation(before, velocity);
-    f.acceleration_correlation = Correlation(before, acceleration);
+    DescribeChannel(x, s, &f);
     f.lag = lag_sum / static_cast<double>(data.size());
     f.noise = std::sqrt(noise_joint / static_cast<double>(data.size()));
     noise_sq += f.noise * f.noise;
-    std::size_t peak = 1;
-    for (std::size_t b = 1; b < s.psd_before.size(); ++b) {
-      if (s.psd_before[b] > s.psd_before[peak]) peak = b;
-    }
-    f.dominant_frequency = s.frequency.size() > peak ? s.frequency[peak] : 0.0;
     report.findings.push_back(f);
     report.series.push_back(std::move(s));
   }

@@ -164,6 +164,26 @@ double Correlation(const std::vector<double>& a, const std::vector<double>& b) {
   return sab / std::sqrt(saa * sbb);
 }
 
+double Rms(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x * x;
+  return v.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(v.size()));
+}
+
+void DescribeChannel(const ChannelSamples& x, const ChannelSeries& s, ChannelFinding* f) {
+  f->rms = Rms(x.before);
+  f->rms_after = Rms(x.after);
+  f->rms_near_reversal = Rms(x.near_reversal);
+  f->rms_moving = Rms(x.moving);
+  f->velocity_correlation = Correlation(x.before, x.velocity);
+  f->acceleration_correlation = Correlation(x.before, x.acceleration);
+  std::size_t peak = 1;  // above DC
+  for (std::size_t b = 1; b < s.psd_before.size(); ++b) {
+    if (s.psd_before[b] > s.psd_before[peak]) peak = b;
+  }
+  f->dominant_frequency = s.frequency.size() > peak ? s.frequency[peak] : 0.0;
+}
+
 std::string FormatParameter(double value) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.4g", value);

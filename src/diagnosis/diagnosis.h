@@ -94,7 +94,6 @@ struct ChannelSeries {
   std::vector<double> velocity;   // of the joint or axis, same rows
   std::vector<double> frequency;  // Hz
   std::vector<double> psd_before, psd_after;  // unit^2/Hz
-  std::vector<bool> held_out;     // per plotted row
 };
 
 // A path for the report's side-by-side plot (omni, seed 000 Fig. 4 style).
@@ -125,6 +124,19 @@ struct DiagnosisReport {
 };
 
 // ---- Shared machinery (used by arm_diagnosis.cc and omni_diagnosis.cc) ----
+
+// One channel's residual rows over every log, for its ChannelFinding.
+struct ChannelSamples {
+  std::vector<double> before, after;            // residual of the nominal and the repaired model
+  std::vector<double> velocity, acceleration;   // of the joint or axis, the rows of `before`
+  std::vector<double> near_reversal, moving;    // `before` split by closeness to a reversal or stop
+};
+
+// Sets f's RMS values, correlations and dominant frequency (the peak of s.psd_before).
+void DescribeChannel(const ChannelSamples& x, const ChannelSeries& s, ChannelFinding* f);
+
+// Root mean square of v (0 when empty).
+double Rms(const std::vector<double>& v);
 
 // The block length for logs of these durations (s) under `options`.
 double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<double>& durations);

@@ -164,29 +164,31 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
 
 namespace {
 
-SeriesPlot ResidualPlot(const DiagnosisReport& r, std::size_t c) {
+// The nominal and the repaired model's residual of channel c against `x` (time or
+// velocity), as lines or as dots.
+SeriesPlot BeforeAfterPlot(const DiagnosisReport& r, std::size_t c, const std::vector<double>& x, bool points) {
   const ChannelFinding& f = r.findings[c];
   const ChannelSeries& s = r.series[c];
   SeriesPlot plot;
-  plot.title = "Residual, " + f.channel + ": nominal vs repaired model";
   plot.y_label = "measured - model [" + f.unit + "]";
+  plot.series.push_back({"nominal model", x, s.before, points});
+  plot.series.push_back({"repaired model", x, s.after, points});
+  return plot;
+}
+
+SeriesPlot ResidualPlot(const DiagnosisReport& r, std::size_t c) {
+  SeriesPlot plot = BeforeAfterPlot(r, c, r.series[c].t, false);
+  plot.title = "Residual, " + r.findings[c].channel + ": nominal vs repaired model";
   plot.height = 420;
-  plot.series.push_back({"nominal model", s.t, s.before, false});
-  plot.series.push_back({"repaired model", s.t, s.after, false});
   return plot;
 }
 
 SeriesPlot VelocityPlot(const DiagnosisReport& r, std::size_t c) {
-  const ChannelFinding& f = r.findings[c];
-  const ChannelSeries& s = r.series[c];
-  SeriesPlot plot;
-  plot.title = "Residual against velocity, " + f.channel;
+  SeriesPlot plot = BeforeAfterPlot(r, c, r.series[c].velocity, true);
+  plot.title = "Residual against velocity, " + r.findings[c].channel;
   plot.x_label = r.robot == "arm" ? "joint velocity" : (c == 2 ? "turn rate [rad/s]" : "velocity [m/s]");
-  plot.y_label = "measured - model [" + f.unit + "]";
   plot.width = 700;
   plot.height = 520;
-  plot.series.push_back({"nominal model", s.velocity, s.before, true});
-  plot.series.push_back({"repaired model", s.velocity, s.after, true});
   return plot;
 }
 

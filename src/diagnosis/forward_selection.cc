@@ -148,7 +148,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
       current = next;
       current_residuals = r;
       out.gap_reductions.push_back(gap_before > 0 ? (gap_before - gap_after) / gap_before : 0.0);
-      std::string signature = problem.Signature(current.back(), current);
+      std::string signature = problem.Signature(current.back());
       out.evidence.push_back(EffectLabel(winner.name, winner.joint) + ": " + evidence +
                              (signature.empty() ? "" : "; " + signature) + ".");
     }

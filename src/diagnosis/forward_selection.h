@@ -53,7 +53,7 @@ class DiagnosisProblem {
   // residual stays correlated longer).
   virtual int ChunkRows() const = 0;
   // A clause of evidence particular to this effect (its signature in the data), or "".
-  virtual std::string Signature(const TrialEffect& effect, const std::vector<TrialEffect>& others) const { return ""; }
+  virtual std::string Signature(const TrialEffect& effect) const { return ""; }
 };
 
 struct SelectionResult {

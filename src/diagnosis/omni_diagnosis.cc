@@ -168,7 +168,7 @@ class OmniProblem : public DiagnosisProblem {
     return effects;
   }
 
-  std::string Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const override;
+  std::string Signature(const TrialEffect& e) const override;
 
  private:
   double Quantile(const std::vector<double>& sorted, double q) const {
@@ -300,10 +300,7 @@ void OmniProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<in
     const double span = slots[0].log_scale ? std::log(1.25) : 0.25 * std::max(std::abs(x[0]), 0.05);
     double a = std::max(lower[0], x[0] - span), b = std::min(upper[0], x[0] + span);
     OmniFitFunctor f(this, *effects, slots);
-    auto cost = [&](double v) {
-      const double c = Cost(f.Apply(&v));
-      return c;
-    };
+    auto cost = [&](double v) { return Cost(f.Apply(&v)); };
     const double ratio = (std::sqrt(5.0) - 1) / 2;
     double c1 = b - ratio * (b - a), c2 = a + ratio * (b - a);
     double f1 = cost(c1), f2 = cost(c2);
@@ -377,7 +374,7 @@ void OmniProblem::StepDelay(std::vector<TrialEffect>* effects, int i) const {
   e.parameters = {{"delay", delay}};
 }
 
-std::string OmniProblem::Signature(const TrialEffect& e, const std::vector<TrialEffect>& others) const {
+std::string OmniProblem::Signature(const TrialEffect& e) const {
   char buf[256];
   const auto& p = e.parameters;
   auto ms = [](double s) { return FormatParameter(1000 * s); };
@@ -509,7 +506,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
 
   std::vector<ChannelFinding> findings(3);
   std::vector<ChannelSeries> series(3);
-  std::vector<std::vector<double>> before(3), after(3), velocity(3), acceleration(3), near(3), moving(3);
+  std::vector<ChannelSamples> samples(3);
   std::vector<double> lag_sum(3, 0.0);
   for (std::size_t li = 0; li < problem.data().size(); ++li) {
     const LogData& d = problem.data()[li];
@@ -568,23 +565,22 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
       for (std::size_t k = 0; k < rb.rows.size(); ++k) {
         const std::size_t i = rb.rows[k];
         const double e = rb.e[k][cc];
-        before[cc].push_back(e);
-        velocity[cc].push_back(v[i][cc]);
-        acceleration[cc].push_back(a[i][cc]);
+        samples[cc].before.push_back(e);
+        samples[cc].velocity.push_back(v[i][cc]);
+        samples[cc].acceleration.push_back(a[i][cc]);
         xb.push_back(e);
         const double t = log.rows[i].t;
         while (next < reversal_times.size() && reversal_times[next] < t - kReversalWindow) ++next;
         const bool close = next < reversal_times.size() && reversal_times[next] <= t + kReversalWindow;
-        (close ? near : moving)[cc].push_back(e);
+        (close ? samples[cc].near_reversal : samples[cc].moving).push_back(e);
         if (li == 0) {
           series[cc].t.push_back(t);
           series[cc].before.push_back(e);
           series[cc].velocity.push_back(v[i][cc]);
-          series[cc].held_out.push_back(d.held[i]);
         }
       }
       for (std::size_t k = 0; k < ra.rows.size(); ++k) {
-        after[cc].push_back(ra.e[k][cc]);
+        samples[cc].after.push_back(ra.e[k][cc]);
         xa.push_back(ra.e[k][cc]);
         if (li == 0) series[cc].after.push_back(ra.e[k][cc]);
       }
@@ -596,29 +592,14 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
       }
     }
   }
-  auto rms = [](const std::vector<double>& v) {
-    double sum = 0;
-    for (double x : v) sum += x * x;
-    return v.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(v.size()));
-  };
   for (int c = 0; c < 3; ++c) {
     const auto cc = static_cast<std::size_t>(c);
     ChannelFinding& f = findings[cc];
     f.channel = names[c];
     f.unit = "m";
-    f.rms = rms(before[cc]);
-    f.rms_after = rms(after[cc]);
-    f.rms_near_reversal = rms(near[cc]);
-    f.rms_moving = rms(moving[cc]);
-    f.velocity_correlation = Correlation(before[cc], velocity[cc]);
-    f.acceleration_correlation = Correlation(before[cc], acceleration[cc]);
+    DescribeChannel(samples[cc], series[cc], &f);
     f.lag = lag_sum[cc] / static_cast<double>(logs.size());
     f.noise = c < 2 ? std::sqrt(2 * var_xy) : radius * std::sqrt(2 * var_theta);
-    std::size_t peak = 1;
-    for (std::size_t b = 1; b < series[cc].psd_before.size(); ++b) {
-      if (series[cc].psd_before[b] > series[cc].psd_before[peak]) peak = b;
-    }
-    f.dominant_frequency = series[cc].frequency.size() > peak ? series[cc].frequency[peak] : 0.0;
   }
   report.findings = findings;
   report.series = series;

@@ -2,12 +2,13 @@
 // docs/diagnose.md).
 //
 // The residual is the contract's `replay`: each frame predicted from the measured state
-// `horizon` frames earlier (4 by default) through the model and its delay, minus the
-// measured pose, per row as (forward, sideways) in the robot's frame and the heading
+// `horizon` frames earlier (4 by default) through the model and its delay, the measured
+// pose minus the predicted one, per row as (forward, sideways) in the robot's frame and the heading
 // error times the chassis radius (a point on the robot's rim), all in metres. The gap
 // is the RMS of its length over held-out rows. Every candidate effect of the omni
-// vocabulary is fitted on the replay itself: a grid first, then Ceres (or, for the
-// time delay, whose effect moves in physics steps, a search step by step).
+// vocabulary is fitted on the replay itself: a grid first, then a golden-section search
+// for one parameter or Ceres for several (and, for the time delay, whose effect moves in
+// physics steps, a search step by step).
 //
 //   DiagnosisOptions options;           // options.backend: analytic (default), ode or bullet
 //   OmniModel repaired;
