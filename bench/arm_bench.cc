@@ -3,6 +3,7 @@
 //   build/arm_bench
 #include <benchmark/benchmark.h>
 
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_regressor.h"
@@ -17,7 +18,7 @@ ArmModel SevenJoints() {
     ArmJoint j;
     j.origin = Eigen::Isometry3d::Identity();
     j.origin.translate(Eigen::Vector3d(0, 0, i % 2 ? 0.2 : 0.0));
-    j.origin.rotate(Eigen::AngleAxisd(i % 2 ? M_PI / 2 : -M_PI / 2, Eigen::Vector3d::UnitX()));
+    j.origin.rotate(Eigen::AngleAxisd(i % 2 ? kPi / 2 : -kPi / 2, Eigen::Vector3d::UnitX()));
     j.child.mass = 2.0;
     j.child.com = Eigen::Vector3d(0, 0.02, 0.1);
     j.child.inertia = Eigen::Vector3d(0.02, 0.02, 0.005).asDiagonal();

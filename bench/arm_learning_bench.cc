@@ -11,11 +11,12 @@
 #include <map>
 #include <memory>
 
+#include "analysis/arm_model_comparison.h"
+#include "backends/arm_backend_factory.h"
 #include "backends/learned/learned_arm_backend.h"
+#include "control/arm_trials.h"
 #include "control/writing_task.h"
-#include "core/arm_simulation.h"
-#include "learning/arm_model_comparison.h"
-#include "learning/arm_trials.h"
+#include "sim/arm_simulation.h"
 
 namespace twinsim {
 namespace {
@@ -141,13 +142,13 @@ void BM_WritingComparison(benchmark::State& state) {
   const ArmModel& hat = Hat();
   const ArmReference ref = WritingTaskReference(hat, WritingTaskOptions{});
   std::vector<ArmCandidate> candidates;
-  for (const std::string& b : AvailableArmBackends())
+  for (const std::string& b : AvailableArmEngines())
     candidates.push_back({"physical nominal (" + b + ")", hat, [&, b] { return MakeArmBackend(b, hat); }});
   for (const std::string& name : kLearned)
     candidates.push_back({"learned " + name, hat, [&, name] { return MakeLearnedArmBackend(hat, Trained(name)); }});
   for (auto _ : state) {
     const WritingComparison c = CompareOnReference(Plant(), hat, ref, candidates, TrackingOptions{});
-    std::fprintf(stderr, "writing task against the plant:\n%s", c.Report().c_str());
+    std::fprintf(stderr, "writing task against the plant:\n%s", c.FullReport().c_str());
   }
   // Open loop on a held-out trial (seed 100, stop-and-go), 100 ms.
   TrainingTrialOptions held;

@@ -7,8 +7,8 @@
 // 2 simulated seconds per iteration. BM_ArmLoop: the whole loop (delay line, effects,
 // the velocity-level friction solve, the backend at its default internal step).
 // BM_ArmLoopEffects: the same with time_delay, saturation, Stribeck friction and a
-// 30 Hz joint_flexibility on the elbow (3 physics steps per sample). BM_ArmBackend:
-// the backend alone, stepping 1 ms at a time with precomputed torques. The counter
+// 30 Hz joint_flexibility on the elbow (3 physics steps per sample). BM_ArmEngine:
+// the engine alone, stepping 1 ms at a time with precomputed torques. The counter
 // `x_real_time` is simulated seconds per wall second.
 #include <benchmark/benchmark.h>
 
@@ -16,10 +16,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "backends/arm/arm_backend.h"
-#include "core/arm_simulation.h"
+#include "backends/arm_backend_factory.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_effects.h"
+#include "sim/arm_simulation.h"
 
 namespace twinsim {
 namespace {
@@ -49,7 +49,7 @@ ArmController Tracker(const ArmModel& m) {
 }
 
 bool Built(const std::string& backend) {
-  const std::vector<std::string> built = AvailableArmBackends();
+  const std::vector<std::string> built = AvailableArmEngines();
   return std::find(built.begin(), built.end(), backend) != built.end();
 }
 
@@ -74,7 +74,7 @@ BENCHMARK(BM_ArmLoop)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 void BM_ArmLoopEffects(benchmark::State& state) { RunLoop(state, WithEffects(Rrr())); }
 BENCHMARK(BM_ArmLoopEffects)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 
-void BM_ArmBackend(benchmark::State& state) {
+void BM_ArmEngine(benchmark::State& state) {
   const std::string backend = kBackends[state.range(0)];
   state.SetLabel(backend);
   if (!Built(backend)) return state.SkipWithError("backend not compiled");
@@ -84,7 +84,7 @@ void BM_ArmBackend(benchmark::State& state) {
   ArmSimulation sim(model, MakeArmBackend("analytic", model));
   sim.Reset(Eigen::Vector3d(0, 0.4, -0.6), Eigen::Vector3d::Zero());
   const ArmTrajectory run = sim.Run(samples, Tracker(model));
-  auto b = MakeArmBackend(backend, model);
+  auto b = MakeArmEngine(backend, model);
   std::vector<Eigen::VectorXd> torques;
   for (int k = 0; k < samples; ++k) torques.push_back(run.applied.row(k).transpose());
   for (auto _ : state) {
@@ -94,7 +94,7 @@ void BM_ArmBackend(benchmark::State& state) {
   }
   state.counters["x_real_time"] = benchmark::Counter(kSeconds, benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_ArmBackend)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ArmEngine)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace twinsim

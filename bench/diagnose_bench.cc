@@ -24,17 +24,18 @@
 #include <string>
 #include <vector>
 
-#include "backends/omni_backend.h"
-#include "core/simulation.h"
+#include "backends/omni_backend_factory.h"
+#include "control/arm_trials.h"
+#include "core/math_constants.h"
 #include "diagnosis/arm_diagnosis.h"
 #include "diagnosis/omni_diagnosis.h"
-#include "io/arm_log.h"
-#include "io/omni_log.h"
-#include "learning/arm_trials.h"
 #include "robots/arm/arm_effects.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 
 namespace twinsim {
 namespace {
@@ -83,7 +84,7 @@ const ArmLog& ArmBenchLog(const ArmModel& hat) {
 
     std::mt19937_64 rng(seed);
     std::normal_distribution<double> gauss(0.0, 1.0);
-    const double count = 2 * M_PI / 2e5;  // rad, one encoder count
+    const double count = 2 * kPi / 2e5;  // rad, one encoder count
     for (int r = 0; r < raw.rows(); ++r) {
       for (int j = 0; j < raw.dof; ++j) {
         raw.q(r, j) = std::round(raw.q(r, j) / count) * count;

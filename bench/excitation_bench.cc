@@ -4,6 +4,7 @@
 //   build/excitation_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
+#include "core/math_constants.h"
 #include "identification/batch_adaptive.h"
 #include "identification/excitation_design.h"
 #include "robots/arm/arm_model.h"
@@ -69,7 +70,7 @@ void BM_BatchAdaptiveRecovery(benchmark::State& state) {
   BatchAdaptiveOptions o;
   o.tolerance = 1e-5;
   if (noisy) {
-    p.encoder_resolution = 2 * M_PI / 65536;
+    p.encoder_resolution = 2 * kPi / 65536;
     p.torque_noise = Eigen::VectorXd::Constant(3, 0.1);
     o.tolerance = 2e-3;
   }

@@ -11,7 +11,7 @@
 
 #include "../tests/identification/synthetic_arm_data.h"
 #include "identification/wls_identification.h"
-#include "io/arm_log.h"
+#include "robots/arm/arm_log.h"
 #include "signal/butterworth.h"
 
 namespace twinsim {

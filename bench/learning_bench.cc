@@ -7,10 +7,10 @@
 
 #include <memory>
 
-#include "backends/omni_backend.h"
-#include "core/simulation.h"
+#include "backends/omni_backend_factory.h"
 #include "learning/omni_predictor.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 
 namespace twinsim {
 namespace {
@@ -72,7 +72,7 @@ void BM_LearnedBackend(benchmark::State& state) {
   const std::string kind = state.range(0) == 0 ? "linear" : "mlp";
   state.SetLabel(kind + ", 1 robot, full loop");
   const OmniModel m = Model();
-  BackendOptions options;
+  OmniBackendOptions options;
   options.predictor = Trained(kind);
   CommandSpec random;
   random.type = "random";

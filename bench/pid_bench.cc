@@ -4,7 +4,7 @@
 //   build/pid_bench --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 
-#include "learning/pid_tuning.h"
+#include "tuning/pid_tuning.h"
 
 namespace twinsim {
 namespace {

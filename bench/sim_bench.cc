@@ -12,11 +12,11 @@
 
 #include <Eigen/Core>
 
-#include "backends/omni_backend.h"
-#include "core/simulation.h"
-#include "io/omni_log.h"
+#include "backends/omni_backend_factory.h"
 #include "robots/omni/omni_kinematics.h"
+#include "robots/omni/omni_log.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 
 namespace twinsim {
 namespace {

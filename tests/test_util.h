@@ -12,7 +12,7 @@
 #include <cstdint>
 #include <string>
 
-#include "io/omni_log.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 #include "scene/command_source.h"
 

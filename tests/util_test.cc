@@ -6,7 +6,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/simulation.h"
+#include "backends/omni_backend_factory.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim::testing {

@@ -6,6 +6,7 @@
 #include <set>
 #include <sstream>
 
+#include "backends/omni_backend_factory.h"
 #include "core/error.h"
 #include "io/csv_table.h"
 
@@ -27,7 +28,7 @@ long RunWeight(const OmniLog& log, int horizon) {
 
 }  // namespace
 
-std::string OmniCompareOptions::Validate() const {
+bool OmniCompareOptions::IsValid(std::string* why) const {
   std::ostringstream problems;
   if (sources.empty()) problems << "no source to compare\n";
   std::set<std::string> labels;
@@ -46,8 +47,10 @@ std::string OmniCompareOptions::Validate() const {
     else if (!seen.insert(k).second) problems << "horizon " << k << " given twice\n";
   }
   std::string out = problems.str();
-  if (!out.empty()) out.pop_back();
-  return out;
+  if (out.empty()) return true;
+  out.pop_back();
+  if (why) *why = out;
+  return false;
 }
 
 const CompareErrorRow* OmniCompareResult::Find(const std::string& source, int horizon_frames) const {
@@ -56,7 +59,7 @@ const CompareErrorRow* OmniCompareResult::Find(const std::string& source, int ho
   return nullptr;
 }
 
-std::string OmniCompareResult::Report() const {
+std::string OmniCompareResult::FullReport() const {
   // Sources down, horizons across; a cell is "RMSE mm / RMSE deg".
   std::vector<std::string> sources;
   for (const CompareErrorRow& r : rows)
@@ -129,8 +132,7 @@ CompareErrorRow MeasurePredictionErrors(const OmniLog& log, const OmniReplayResu
 
 OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options,
                                  const std::function<void(long, long, const std::string&)>& progress) {
-  const std::string problem = options.Validate();
-  if (!problem.empty()) throw InputError(problem);
+  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
   const double frame_rate = 1.0 / log.frame_period;
 
   // Every source must build before any runs: a bad name or predictor fails at once.

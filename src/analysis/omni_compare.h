@@ -10,7 +10,7 @@
 //   options.sources = {{"ode", "ode", {}}, {"analytic", "analytic", {}}};
 //   options.horizons = DefaultCompareHorizons(1.0 / log.frame_period);
 //   OmniCompareResult r = CompareOmniLog(model, log, options);
-//   std::puts(r.Report().c_str());
+//   std::puts(r.FullReport().c_str());
 //   WriteFileAtomically("errors.csv", FormatCompareErrorsCsv(r));
 #pragma once
 
@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "analysis/omni_replay.h"
-#include "backends/omni_backend.h"
+#include "backends/omni_backend_factory.h"
 #include "core/pose.h"
-#include "io/omni_log.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
@@ -30,15 +30,15 @@ namespace twinsim {
 struct CompareSource {
   std::string label;               // names the source in the outputs (letters, digits, '_', '-', '.')
   std::string backend;             // ode, bullet, analytic or learned
-  BackendOptions backend_options;  // the 1-frame predictor, for learned
+  OmniBackendOptions backend_options;  // the 1-frame predictor, for learned
 };
 
 struct OmniCompareOptions {
   std::vector<CompareSource> sources;
   std::vector<int> horizons;  // frames; 0 = free run
 
-  // Returns an empty string when valid, else every problem (one per line).
-  std::string Validate() const;
+  // True when usable; else says why in *why (every problem, one per line).
+  bool IsValid(std::string* why) const;
 };
 
 // The errors of one source's predictions at one horizon, over the predicted rows.
@@ -70,7 +70,7 @@ struct OmniCompareResult {
   const CompareErrorRow* Find(const std::string& source, int horizon_frames) const;
   // A table: sources down, horizons across, position RMSE in mm and heading RMSE in
   // degrees.
-  std::string Report() const;
+  std::string FullReport() const;
 };
 
 // 1 frame, 4 frames, 1 s (round(frame_rate) frames) and free run (0), without repeats.

@@ -4,15 +4,19 @@
 #include <map>
 #include <sstream>
 
-#include "backends/omni_backend.h"
+#include "backends/omni_backend_factory.h"
 #include "core/error.h"
 
 namespace twinsim {
 
-std::string OmniReplayOptions::Validate() const {
-  if (horizon < 0) return "--horizon must be 0 or more, got " + std::to_string(horizon);
-  if (stride < 1) return "stride must be 1 or more, got " + std::to_string(stride);
-  return "";
+bool OmniReplayOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& s) {
+    if (why) *why = s;
+    return false;
+  };
+  if (horizon < 0) return fail("--horizon must be 0 or more, got " + std::to_string(horizon));
+  if (stride < 1) return fail("stride must be 1 or more, got " + std::to_string(stride));
+  return true;
 }
 
 int OmniReplayResult::num_predicted() const {
@@ -38,8 +42,7 @@ namespace {
 OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                         const std::function<void(int, int)>& progress, std::size_t stretch_first,
                         std::size_t stretch_last) {
-  const std::string problem = options.Validate();
-  if (!problem.empty()) throw InputError(problem);
+  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
 
   FrameTiming timing;
   timing.frame_rate = 1.0 / log.frame_period;

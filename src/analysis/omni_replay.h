@@ -20,9 +20,9 @@
 #include <string>
 #include <vector>
 
-#include "backends/omni_backend.h"
+#include "backends/omni_backend_factory.h"
 #include "core/pose.h"
-#include "io/omni_log.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
@@ -31,12 +31,12 @@ inline constexpr int kWarmUpFrames = 15;
 
 struct OmniReplayOptions {
   std::string backend = "ode";
-  BackendOptions backend_options;  // the predictor, for the learned backend
+  OmniBackendOptions backend_options;  // the predictor, for the learned backend
   int horizon = 4;  // K, frames; 0 = free run
   int stride = 1;   // predict from every stride-th frame only (1: every row), for fits that need speed
 
-  // Returns an empty string when valid, else what is wrong.
-  std::string Validate() const;
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
 };
 
 struct OmniReplayResult {

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "render/raster.h"
 
 namespace twinsim {
 namespace {
@@ -79,60 +80,6 @@ void CheckFolder(const std::string& dir, const std::string& option, ErrorList* e
 }
 
 std::string Join(const std::string& dir, const std::string& name) { return (fs::path(dir) / name).string(); }
-
-// ---- drawing with plain pixel operations ------------------------------------------
-
-void Put(RgbaImage& image, int x, int y, std::uint32_t rgba) {
-  if (x < 0 || y < 0 || x >= image.width || y >= image.height) return;
-  std::uint8_t* p = image.at(x, y);
-  p[0] = static_cast<std::uint8_t>(rgba >> 24);
-  p[1] = static_cast<std::uint8_t>(rgba >> 16);
-  p[2] = static_cast<std::uint8_t>(rgba >> 8);
-  p[3] = static_cast<std::uint8_t>(rgba);
-}
-
-void Dot(RgbaImage& image, int x, int y, int radius, std::uint32_t rgba) {
-  for (int dy = -radius; dy <= radius; ++dy)
-    for (int dx = -radius; dx <= radius; ++dx)
-      if (dx * dx + dy * dy <= radius * radius + radius) Put(image, x + dx, y + dy, rgba);
-}
-
-// A line of square brush `radius` (0: one pixel wide); every `dash`-th run of pixels
-// left out when dash > 0.
-void Line(RgbaImage& image, double x0, double y0, double x1, double y1, int radius, std::uint32_t rgba, int dash = 0) {
-  const int steps = std::max(1, static_cast<int>(std::ceil(std::max(std::abs(x1 - x0), std::abs(y1 - y0)))));
-  for (int i = 0; i <= steps; ++i) {
-    if (dash > 0 && (i / dash) % 2 == 1) continue;
-    const double s = static_cast<double>(i) / steps;
-    const int x = static_cast<int>(std::lround(x0 + s * (x1 - x0)));
-    const int y = static_cast<int>(std::lround(y0 + s * (y1 - y0)));
-    for (int dy = -radius; dy <= radius; ++dy)
-      for (int dx = -radius; dx <= radius; ++dx) Put(image, x + dx, y + dy, rgba);
-  }
-}
-
-void Ring(RgbaImage& image, double cx, double cy, double r, int radius, std::uint32_t rgba) {
-  const int n = std::max(16, static_cast<int>(2 * kPi * r));
-  for (int i = 0; i < n; ++i) {
-    const double a0 = 2 * kPi * i / n, a1 = 2 * kPi * (i + 1) / n;
-    Line(image, cx + r * std::cos(a0), cy + r * std::sin(a0), cx + r * std::cos(a1), cy + r * std::sin(a1), radius,
-         rgba);
-  }
-}
-
-void Rect(RgbaImage& image, int x0, int y0, int x1, int y1, std::uint32_t rgba) {
-  Line(image, x0, y0, x1, y0, 0, rgba);
-  Line(image, x1, y0, x1, y1, 0, rgba);
-  Line(image, x1, y1, x0, y1, 0, rgba);
-  Line(image, x0, y1, x0, y0, 0, rgba);
-}
-
-// The pixel at (x, y), or opaque white outside the image.
-const std::uint8_t* PixelOrWhite(const RgbaImage& image, int x, int y) {
-  static const std::uint8_t kWhitePixel[4] = {255, 255, 255, 255};
-  if (x >= image.width || y >= image.height) return kWhitePixel;
-  return image.at(x, y);
-}
 
 bool Inside(const RgbaImage& image, int x, int y) { return x < image.width && y < image.height; }
 
@@ -332,18 +279,8 @@ ImageDiff CompareImages(const std::string& name, const RgbaImage& golden, const 
 
 RgbaImage HighlightDifferences(const RgbaImage& golden, const RgbaImage& candidate, const RegressOptions& options) {
   const int w = std::max(golden.width, candidate.width), h = std::max(golden.height, candidate.height);
-  RgbaImage out(w, h, kWhite);
   // The candidate as light grey, so that any colour on top stands out.
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const std::uint8_t* c = PixelOrWhite(candidate, x, y);
-      const double alpha = c[3] / 255.0;
-      const double lum = alpha * (0.299 * c[0] + 0.587 * c[1] + 0.114 * c[2]) + (1 - alpha) * 255;
-      const auto grey = static_cast<std::uint8_t>(std::lround(255 - (255 - lum) * 0.3));
-      std::uint8_t* p = out.at(x, y);
-      p[0] = p[1] = p[2] = grey;
-      p[3] = 255;
-    }
+  RgbaImage out = raster::FadedGrey(candidate, w, h, 0.3);
   // A box around the differing pixels helps to find a few of them in a large plot.
   int x0 = w, y0 = h, x1 = -1, y1 = -1;
   for (int y = 0; y < h; ++y)
@@ -354,10 +291,10 @@ RgbaImage HighlightDifferences(const RgbaImage& golden, const RgbaImage& candida
         x1 = std::max(x1, x);
         y1 = std::max(y1, y);
       }
-  if (x1 >= 0) Rect(out, x0 - 4, y0 - 4, x1 + 4, y1 + 4, kCandidateBlue);
+  if (x1 >= 0) raster::Outline(out, x0 - 4, y0 - 4, x1 + 4, y1 + 4, kCandidateBlue);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
-      if (PixelDifference(golden, candidate, x, y) > options.pixel_threshold) Put(out, x, y, kRegressHighlight);
+      if (PixelDifference(golden, candidate, x, y) > options.pixel_threshold) raster::Put(out, x, y, kRegressHighlight);
   return out;
 }
 
@@ -383,31 +320,25 @@ RgbaImage DrawMovedPaths(const OmniLog& golden, const OmniLog& candidate, const 
     auto py = [&](double y) { return height / 2.0 - (y - cy) * scale; };
     auto draw = [&](const OmniLog& log, int radius, std::uint32_t colour) {
       for (std::size_t i = 1; i < log.rows.size(); ++i)
-        Line(panel, px(log.rows[i - 1].pose.x), py(log.rows[i - 1].pose.y), px(log.rows[i].pose.x),
-             py(log.rows[i].pose.y), radius, colour);
+        raster::Line(panel, px(log.rows[i - 1].pose.x), py(log.rows[i - 1].pose.y), px(log.rows[i].pose.x),
+                     py(log.rows[i].pose.y), radius, colour);
       if (!log.rows.empty())
-        Dot(panel, static_cast<int>(std::lround(px(log.rows[0].pose.x))),
-            static_cast<int>(std::lround(py(log.rows[0].pose.y))), radius + 3, colour);
+        raster::Dot(panel, static_cast<int>(std::lround(px(log.rows[0].pose.x))),
+                    static_cast<int>(std::lround(py(log.rows[0].pose.y))), radius + 3, colour);
     };
     draw(golden, 2, kGoldenGrey);
     draw(candidate, 0, kCandidateBlue);
     // Frames beyond the tolerance: the golden and the candidate pose joined.
     for (const auto& [g, c] : matched)
       if (std::hypot(c->pose.x - g->pose.x, c->pose.y - g->pose.y) > options.tolerance) {
-        Line(panel, px(g->pose.x), py(g->pose.y), px(c->pose.x), py(c->pose.y), 0, kRegressHighlight);
-        Dot(panel, static_cast<int>(std::lround(px(c->pose.x))), static_cast<int>(std::lround(py(c->pose.y))), 2,
-            kRegressHighlight);
+        raster::Line(panel, px(g->pose.x), py(g->pose.y), px(c->pose.x), py(c->pose.y), 0, kRegressHighlight);
+        raster::Dot(panel, static_cast<int>(std::lround(px(c->pose.x))), static_cast<int>(std::lround(py(c->pose.y))),
+                    2, kRegressHighlight);
       }
-    Ring(panel, px(diff.candidate_at_max.x), py(diff.candidate_at_max.y), std::min(14.0, width / 8.0), 1,
-         kRegressHighlight);
-    Rect(panel, 0, 0, width - 1, height - 1, kFrameGrey);
+    raster::Ring(panel, px(diff.candidate_at_max.x), py(diff.candidate_at_max.y), std::min(14.0, width / 8.0), 1,
+                 kRegressHighlight);
+    raster::Outline(panel, 0, 0, width - 1, height - 1, kFrameGrey);
     return panel;
-  };
-  auto paste = [](RgbaImage& into, const RgbaImage& from, int left, int top) {
-    for (int y = 0; y < from.height; ++y)
-      for (int x = 0; x < from.width; ++x)
-        if (left + x < into.width && top + y < into.height)
-          std::copy(from.at(x, y), from.at(x, y) + 4, into.at(left + x, top + y));
   };
 
   RgbaImage image(kWidth, kPathHeight + kStripHeight, kWhite);
@@ -422,7 +353,7 @@ RgbaImage DrawMovedPaths(const OmniLog& golden, const OmniLog& candidate, const 
   const double span_x = std::max(max_x - min_x, 0.1), span_y = std::max(max_y - min_y, 0.1);             // m
   const double scale = std::min((kWidth - 2 * kMargin) / span_x, (kPathHeight - 2 * kMargin) / span_y);  // px/m
   const double cx = 0.5 * (min_x + max_x), cy = 0.5 * (min_y + max_y);
-  paste(image, draw_paths(kWidth, kPathHeight, cx, cy, scale), 0, 0);
+  raster::Paste(image, draw_paths(kWidth, kPathHeight, cx, cy, scale), 0, 0);
 
   // A move of millimetres is invisible at field scale: an inset magnifies the
   // neighbourhood of the max, in the corner the paths cross least.
@@ -451,28 +382,28 @@ RgbaImage DrawMovedPaths(const OmniLog& golden, const OmniLog& candidate, const 
     const Pose2 centre{0.5 * (diff.golden_at_max.x + diff.candidate_at_max.x),
                        0.5 * (diff.golden_at_max.y + diff.candidate_at_max.y), 0};
     RgbaImage inset = draw_paths(kInset, kInset, centre.x, centre.y, zoom_scale);
-    Rect(inset, 0, 0, kInset - 1, kInset - 1, kGoldenGrey);
-    paste(image, inset, corners[best][0], corners[best][1]);
+    raster::Outline(inset, 0, 0, kInset - 1, kInset - 1, kGoldenGrey);
+    raster::Paste(image, inset, corners[best][0], corners[best][1]);
   }
 
   // Bottom: distance against time, the tolerance dashed.
   const int top = kPathHeight + 8, bottom = kPathHeight + kStripHeight - 8;
-  Rect(image, 0, kPathHeight, kWidth - 1, kPathHeight + kStripHeight - 1, kFrameGrey);
+  raster::Outline(image, 0, kPathHeight, kWidth - 1, kPathHeight + kStripHeight - 1, kFrameGrey);
   const double t0 = golden.rows.front().t, t1 = std::max(golden.rows.back().t, t0 + 1e-9);  // s
   const double d_top = 1.1 * std::max({diff.max_distance, options.tolerance, 1e-6});        // m
   auto sx = [&](double t) { return kMargin + (t - t0) / (t1 - t0) * (kWidth - 2 * kMargin); };
   auto sy = [&](double d) { return bottom - std::min(d, d_top) / d_top * (bottom - top); };
-  Line(image, kMargin, bottom, kWidth - kMargin, bottom, 0, kGoldenGrey);
-  Line(image, kMargin, sy(options.tolerance), kWidth - kMargin, sy(options.tolerance), 0, kToleranceOrange, 6);
+  raster::Line(image, kMargin, bottom, kWidth - kMargin, bottom, 0, kGoldenGrey);
+  raster::Line(image, kMargin, sy(options.tolerance), kWidth - kMargin, sy(options.tolerance), 0, kToleranceOrange, 6);
   double prev_t = 0, prev_d = 0;
   for (std::size_t k = 0; k < matched.size(); ++k) {
     const auto [g, c] = matched[k];
     const double d = std::hypot(c->pose.x - g->pose.x, c->pose.y - g->pose.y);
     const std::uint32_t colour = d > options.tolerance ? kRegressHighlight : kCandidateBlue;
     if (k > 0)
-      Line(image, sx(prev_t), sy(prev_d), sx(g->t), sy(d), 1, colour);
+      raster::Line(image, sx(prev_t), sy(prev_d), sx(g->t), sy(d), 1, colour);
     else
-      Dot(image, static_cast<int>(sx(g->t)), static_cast<int>(sy(d)), 1, colour);
+      raster::Dot(image, static_cast<int>(sx(g->t)), static_cast<int>(sy(d)), 1, colour);
     prev_t = g->t;
     prev_d = d;
   }

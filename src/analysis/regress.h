@@ -42,8 +42,8 @@
 #include <vector>
 
 #include "core/pose.h"
-#include "io/omni_log.h"
 #include "io/png_image.h"
+#include "robots/omni/omni_log.h"
 
 namespace twinsim {
 

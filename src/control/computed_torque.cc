@@ -7,11 +7,13 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "backends/arm/arm_backend.h"
-#include "core/arm_simulation.h"
+#include "backends/arm_backend_factory.h"
+#include "core/error.h"
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_effects.h"
+#include "sim/arm_simulation.h"
 
 namespace twinsim {
 namespace {
@@ -64,7 +66,7 @@ TrackingGains ComputedTorqueGains(int dof, double bandwidth, double damping) {
   if (!(std::isfinite(bandwidth) && bandwidth > 0) || !(std::isfinite(damping) && damping > 0) || dof < 1) {
     throw std::invalid_argument("ComputedTorqueGains: bandwidth and damping must be > 0 and dof >= 1");
   }
-  const double w = 2 * M_PI * bandwidth;
+  const double w = 2 * kPi * bandwidth;
   return TrackingGains{Eigen::VectorXd::Constant(dof, w * w), Eigen::VectorXd::Constant(dof, 2 * damping * w)};
 }
 
@@ -103,7 +105,7 @@ Eigen::VectorXd PdFeedforwardTorque(const ArmModel& hat, const TrackingGains& ga
   return ff + gains.kp.cwiseProduct(q_r - q) + gains.kd.cwiseProduct(qd_r - qd);
 }
 
-std::string TrackingTrial::Brief() const {
+std::string TrackingTrial::BriefReport() const {
   std::ostringstream out;
   Eigen::Index worst = 0;
   const double e = error_max.size() ? error_max.maxCoeff(&worst) : 0;
@@ -116,7 +118,7 @@ std::string TrackingTrial::Brief() const {
 
 std::string TrackingTrial::FullReport() const {
   std::ostringstream out;
-  out << Brief() << "\n";
+  out << BriefReport() << "\n";
   for (Eigen::Index j = 0; j < error_rms.size(); ++j) {
     out << "  joint " << j + 1 << ": error rms " << error_rms(j) << " max " << error_max(j) << " rad; command rms "
         << command_rms(j) << " N·m; model vs command rms " << model_vs_command_rms(j) << " N·m; needed vs applied rms "
@@ -128,7 +130,7 @@ std::string TrackingTrial::FullReport() const {
 TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                                const TrackingOptions& options) {
   std::string why;
-  if (!options.IsValid(&why)) throw std::invalid_argument("TrackingOptions: " + why);
+  if (!options.IsValid(&why)) throw InputError("TrackingOptions: " + why);
   return RunTrackingTrial(plant, MakeArmBackend(options.backend, plant), hat, reference, options);
 }
 
@@ -136,7 +138,7 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
                                const ArmReference& reference, const TrackingOptions& options) {
   if (!backend) throw std::invalid_argument("RunTrackingTrial: no backend");
   std::string why;
-  if (!options.IsValid(&why)) throw std::invalid_argument("TrackingOptions: " + why);
+  if (!options.IsValid(&why)) throw InputError("TrackingOptions: " + why);
   const int n = hat.dof();
   if (plant.dof() != n) throw std::invalid_argument("RunTrackingTrial: the model and the plant differ in dof");
   const Eigen::Index samples = reference.t.size();

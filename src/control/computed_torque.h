@@ -25,7 +25,7 @@
 //   ArmModel plant = LoadArmModel("models/rrr_rod_tip.yaml"), hat = LoadArmModel("models/rrr.yaml");
 //   ArmReference ref = WritingTaskReference(hat, {});
 //   TrackingTrial trial = RunTrackingTrial(plant, "analytic", hat, ref, {});
-//   std::cout << trial.Brief() << "\n";
+//   std::cout << trial.BriefReport() << "\n";
 #pragma once
 
 #include <Eigen/Core>
@@ -33,7 +33,7 @@
 #include <memory>
 #include <string>
 
-#include "backends/arm/arm_backend.h"
+#include "backends/arm_backend_factory.h"
 #include "control/writing_task.h"
 #include "robots/arm/arm_model.h"
 
@@ -136,17 +136,17 @@ struct TrackingTrial {
   Eigen::VectorXd command_rms;                  // dof, N·m: RMS(command)
 
   // One line: controller, backend, the worst joint's max error, saturation.
-  std::string Brief() const;
+  std::string BriefReport() const;
   // Several lines: every joint's numbers.
   std::string FullReport() const;
 };
 
 // Runs `options.controller` with model `hat` on `plant` (simulated on options.backend)
 // along `reference`, from rest at its first sample with the model's gravity torque as
-// every command before t = 0. Throws std::invalid_argument for invalid options, a model
-// and plant of different dof, a reference of the wrong width or sample time, a
-// feedforward of another shape than the reference's q, and
-// InputError for an unknown backend; CheckFailed when the arm runs away.
+// every command before t = 0. Throws InputError for invalid options or an unknown
+// backend, std::invalid_argument for a model and plant of different dof, a reference of
+// the wrong width or sample time, a feedforward of another shape than the reference's q;
+// CheckFailed when the arm runs away.
 TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                                const TrackingOptions& options);
 

@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/error.h"
+#include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "signal/butterworth.h"
 
@@ -20,7 +22,7 @@ namespace {
 // z^(shift+1), the damping (the stiffness's is 1).
 void Basis(double frequency_hz, double ts, int shift, std::complex<double>* b2, std::complex<double>* b2_early,
            std::complex<double>* b1) {
-  const std::complex<double> z = std::polar(1.0, 2 * M_PI * frequency_hz * ts);
+  const std::complex<double> z = std::polar(1.0, 2 * kPi * frequency_hz * ts);
   *b2 = std::pow(z, shift) * (z - 2.0 + 1.0 / z) / (ts * ts);
   *b2_early = z * *b2;
   *b1 = (z - 1.0 / z) / (2 * ts);
@@ -66,14 +68,14 @@ std::string LearningFilter::Summary() const {
 
 LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_min, double f_max, int max_shift) {
   CheckJoint(frf, joint);
-  if (max_shift < 0) throw std::invalid_argument("FitLearningFilter: max_shift must be >= 0");
+  if (max_shift < 0) throw InputError("FitLearningFilter: max_shift must be >= 0");
   std::vector<Eigen::Index> lines;
   for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
     if (frf.frequency[i] >= f_min - 1e-9 && frf.frequency[i] <= f_max + 1e-9) lines.push_back(i);
   }
   if (lines.size() < 2) {
-    throw std::invalid_argument("FitLearningFilter: fewer than 2 measured lines in [" + std::to_string(f_min) + ", " +
-                                std::to_string(f_max) + "] Hz");
+    throw InputError("FitLearningFilter: fewer than 2 measured lines in [" + std::to_string(f_min) + ", " +
+                     std::to_string(f_max) + "] Hz");
   }
   const auto& responses = frf.response[static_cast<std::size_t>(joint)];
   const auto rows = static_cast<Eigen::Index>(2 * lines.size() * responses.size());
@@ -145,7 +147,7 @@ Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const Lea
                                   const IlcOptions& options) {
   CheckJoint(frf, joint);
   std::string why;
-  if (!options.IsValid(frf.sample_time, &why)) throw std::invalid_argument("IlcOptions: " + why);
+  if (!options.IsValid(frf.sample_time, &why)) throw InputError("IlcOptions: " + why);
   Eigen::VectorXd out = Eigen::VectorXd::Zero(frf.frequency.size());
   for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
     double q = 1;
@@ -175,7 +177,7 @@ double LearningLimitFrequency(const ClosedLoopFrf& frf, int joint, const Learnin
 Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, const std::vector<LearningFilter>& filters,
                           const IlcOptions& options, double sample_time) {
   std::string why;
-  if (!options.IsValid(sample_time, &why)) throw std::invalid_argument("IlcOptions: " + why);
+  if (!options.IsValid(sample_time, &why)) throw InputError("IlcOptions: " + why);
   if (f.rows() != e.rows() || f.cols() != e.cols() || static_cast<Eigen::Index>(filters.size()) != f.cols()) {
     throw std::invalid_argument("IlcUpdate: f, e and the filters must agree in samples and joints");
   }
@@ -189,7 +191,7 @@ Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, co
   return next;
 }
 
-std::string IlcResult::Brief() const {
+std::string IlcResult::BriefReport() const {
   std::ostringstream out;
   out.precision(4);
   const int last = static_cast<int>(error_rms.size()) - 1;
@@ -201,7 +203,7 @@ std::string IlcResult::Brief() const {
 std::string IlcResult::FullReport() const {
   std::ostringstream out;
   out.precision(4);
-  out << Brief() << "\n";
+  out << BriefReport() << "\n";
   for (std::size_t k = 0; k < error_rms.size(); ++k) {
     out << "  trial " << k << ": RMS";
     for (Eigen::Index j = 0; j < error_rms[k].size(); ++j) out << " " << error_rms[k][j];
@@ -216,7 +218,7 @@ IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference&
                  const TrackingOptions& tracking, const std::vector<LearningFilter>& filters, const IlcOptions& options,
                  const std::function<void(int, const TrackingTrial&)>& on_trial) {
   std::string why;
-  if (!options.IsValid(plant.sample_time, &why)) throw std::invalid_argument("IlcOptions: " + why);
+  if (!options.IsValid(plant.sample_time, &why)) throw InputError("IlcOptions: " + why);
   if (static_cast<int>(filters.size()) != plant.dof()) throw std::invalid_argument("RunIlc: one learning filter per joint needed");
   const auto start = std::chrono::steady_clock::now();
   IlcResult result;

@@ -7,7 +7,7 @@
 //   f_{k+1} = Q (f_k + alpha L e_k),   f_0 = 0,
 //
 // with L the learning filter, ideally the inverse of the process sensitivity PS (the
-// closed-loop response from f to q, identification/closed_loop_frf.h), so that one
+// closed-loop response from f to q, control/closed_loop_frf.h), so that one
 // trial would remove the whole repeating error, and Q a zero-phase Butterworth low-pass
 // (FiltFilt, signal/butterworth.h, magnitude |H|^2) that stops learning where L is
 // wrong. In the frequency domain e_{k+1} = Q (1 - alpha PS L) e_k + (1 - Q) e_0-terms:
@@ -39,9 +39,9 @@
 #include <string>
 #include <vector>
 
+#include "control/closed_loop_frf.h"
 #include "control/computed_torque.h"
 #include "control/writing_task.h"
-#include "identification/closed_loop_frf.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim {
@@ -67,8 +67,8 @@ struct LearningFilter {
 
 // Fits joint `joint`'s learning filter to the measured process sensitivity over the
 // lines in [f_min, f_max] (Hz) at every posture, trying shifts 0..max_shift and keeping
-// the one with the smallest residual. Throws std::invalid_argument for a joint that
-// does not exist, max_shift < 0, or fewer than 2 lines in the band.
+// the one with the smallest residual. Throws InputError for max_shift < 0 or fewer
+// than 2 lines in the band, std::invalid_argument for a joint that does not exist.
 LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_min, double f_max, int max_shift);
 
 // The learning filter the controller's model predicts for joint `joint` at posture q:
@@ -89,8 +89,8 @@ struct IlcOptions {
 };
 
 // |Q(f)|^2 |1 - gain PS(f) L(f)| at every line of `frf` for joint `joint`, the worst over
-// the postures: < 1 where learning converges. Throws std::invalid_argument for invalid
-// options or a joint that does not exist.
+// the postures: < 1 where learning converges. Throws InputError for invalid options,
+// std::invalid_argument for a joint that does not exist.
 Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
                                   const IlcOptions& options);
 
@@ -99,7 +99,8 @@ Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const Lea
 double LearningLimitFrequency(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, double gain);
 
 // One ILC update for all joints: Q(f + gain L e) column by column (f, e: N x dof).
-// Throws std::invalid_argument for mismatched sizes or filters, or invalid options.
+// Throws InputError for invalid options, std::invalid_argument for mismatched sizes or
+// filters.
 Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, const std::vector<LearningFilter>& filters,
                           const IlcOptions& options, double sample_time);
 
@@ -116,7 +117,7 @@ struct IlcResult {
   // True when the last trial's worst RMS is above trial 0's: learning made it worse.
   bool Diverged() const { return WorstRms(static_cast<int>(error_rms.size()) - 1) > WorstRms(0); }
   // One line: trials, the worst RMS before and after, the reduction.
-  std::string Brief() const;
+  std::string BriefReport() const;
   // One line per trial.
   std::string FullReport() const;
 };
@@ -124,8 +125,9 @@ struct IlcResult {
 // Runs trial 0 with no learned feedforward, then `options.trials` trials each with the
 // feedforward learned from all before (IlcUpdate), every one from the same initial
 // state along `reference` with `tracking` (its feedforward is replaced).
-// on_trial(trial, result) is called after every trial. Throws std::invalid_argument for
-// invalid options or one filter per joint missing; what RunTrackingTrial throws.
+// on_trial(trial, result) is called after every trial. Throws InputError for invalid
+// options, std::invalid_argument for one filter per joint missing; what RunTrackingTrial
+// throws.
 IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                  const TrackingOptions& tracking, const std::vector<LearningFilter>& filters, const IlcOptions& options,
                  const std::function<void(int, const TrackingTrial&)>& on_trial = {});

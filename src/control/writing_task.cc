@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/error.h"
 #include "robots/arm/arm_dynamics.h"
 
 namespace twinsim {
@@ -95,13 +96,13 @@ struct ArmGeometry {
 
 ArmGeometry Geometry(const ArmModel& model, const Eigen::Vector3d& tool) {
   if (model.dof() != 3) {
-    throw std::invalid_argument("WaistShoulderElbowIk: '" + model.name + "' has " + std::to_string(model.dof()) +
-                                " joints, a waist-shoulder-elbow arm has 3");
+    throw InputError("WaistShoulderElbowIk: '" + model.name + "' has " + std::to_string(model.dof()) +
+                     " joints, a waist-shoulder-elbow arm has 3");
   }
   for (const ArmJoint& j : model.joints) {
     if (j.type != JointType::kRevolute) {
-      throw std::invalid_argument("WaistShoulderElbowIk: joint '" + j.name + "' of '" + model.name +
-                                  "' is not revolute");
+      throw InputError("WaistShoulderElbowIk: joint '" + j.name + "' of '" + model.name +
+                       "' is not revolute");
     }
   }
   const std::vector<Eigen::Isometry3d> frames = ForwardKinematics(model, Eigen::VectorXd::Zero(3));
@@ -111,7 +112,7 @@ ArmGeometry Geometry(const ArmModel& model, const Eigen::Vector3d& tool) {
   g.l1 = (elbow - g.shoulder).norm();
   g.l2 = (frames[2] * tool - elbow).norm();
   if (g.l1 <= 0 || g.l2 <= 0) {
-    throw std::invalid_argument("WaistShoulderElbowIk: '" + model.name + "' has a zero-length upper arm or forearm");
+    throw InputError("WaistShoulderElbowIk: '" + model.name + "' has a zero-length upper arm or forearm");
   }
   return g;
 }
@@ -162,7 +163,7 @@ std::string WritingTaskLetters() {
 
 Eigen::Matrix3Xd WritingTaskCorners(const WritingTaskOptions& options) {
   std::string why;
-  if (!options.IsValid(&why)) throw std::invalid_argument("WritingTaskOptions: " + why);
+  if (!options.IsValid(&why)) throw InputError("WritingTaskOptions: " + why);
   const double h = options.height, w = options.width_ratio * h, gap = options.gap_ratio * h;
   const double n = static_cast<double>(options.letters.size());
   const double total_width = n * w + (n - 1) * gap;
@@ -240,7 +241,7 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
   const ArmGeometry g = Geometry(model, tool);
   const double r = std::hypot(point.x(), point.y());
   if (r < 1e-9) {
-    throw std::invalid_argument("WaistShoulderElbowIk: point " + Vec(point) + " is on the waist axis (singular)");
+    throw InputError("WaistShoulderElbowIk: point " + Vec(point) + " is on the waist axis (singular)");
   }
   const double zp = point.z() - g.shoulder.z();
   const double c = (r * r + zp * zp - g.l1 * g.l1 - g.l2 * g.l2) / (2 * g.l1 * g.l2);
@@ -249,7 +250,7 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
     out << "WaistShoulderElbowIk: point " << Vec(point) << " is out of reach of '" << model.name << "' (distance "
         << std::hypot(r, zp) << " m from the shoulder, reach " << std::abs(g.l1 - g.l2) << " to " << g.l1 + g.l2
         << " m)";
-    throw std::invalid_argument(out.str());
+    throw InputError(out.str());
   }
   Eigen::VectorXd q(3);
   q(0) = std::atan2(point.y(), point.x());
@@ -257,9 +258,9 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
   q(1) = std::atan2(zp, r) - std::atan2(g.l2 * std::sin(q(2)), g.l1 + g.l2 * std::cos(q(2)));
   const Eigen::Vector3d reached = ToolPoint(model, q, tool);
   if ((reached - point).norm() > 1e-9) {
-    throw std::invalid_argument("WaistShoulderElbowIk: '" + model.name +
-                                "' is not a waist-shoulder-elbow arm stretched along +x at q = 0 (the closed form "
-                                "reaches " + Vec(reached) + " instead of " + Vec(point) + ")");
+    throw InputError("WaistShoulderElbowIk: '" + model.name +
+                     "' is not a waist-shoulder-elbow arm stretched along +x at q = 0 (the closed form "
+                     "reaches " + Vec(reached) + " instead of " + Vec(point) + ")");
   }
   for (int i = 0; i < 3; ++i) {
     const ArmJoint& j = model.joints[i];
@@ -267,7 +268,7 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
       std::ostringstream out;
       out << "WaistShoulderElbowIk: point " << Vec(point) << " needs joint '" << j.name << "' at " << q(i)
           << " rad, beyond its limits [" << j.lower << ", " << j.upper << "]";
-      throw std::invalid_argument(out.str());
+      throw InputError(out.str());
     }
   }
   return q;
@@ -276,7 +277,7 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
 ArmReference WritingTaskReference(const ArmModel& model, const WritingTaskOptions& options) {
   const Eigen::Matrix3Xd corners = WritingTaskCorners(options);  // validates the options
   const double ts = options.sample_time > 0 ? options.sample_time : model.sample_time;
-  if (!PositiveFinite(ts)) throw std::invalid_argument("WritingTaskReference: the sample time must be > 0");
+  if (!PositiveFinite(ts)) throw InputError("WritingTaskReference: the sample time must be > 0");
   std::vector<Stroke> strokes;
   for (Eigen::Index k = 1; k < corners.cols(); ++k) {
     strokes.push_back(MakeStroke(corners.col(k - 1), corners.col(k), options.speed, options.acceleration));
@@ -315,7 +316,7 @@ ArmReference WritingTaskReference(const ArmModel& model, const WritingTaskOption
     const Eigen::MatrixXd jac = ToolJacobian(model, q, options.tool);
     const Eigen::PartialPivLU<Eigen::MatrixXd> lu(jac);
     if (!(std::abs(lu.determinant()) > 1e-9)) {
-      throw std::invalid_argument("WritingTaskReference: the arm is singular at " + Vec(p));
+      throw InputError("WritingTaskReference: the arm is singular at " + Vec(p));
     }
     const Eigen::VectorXd qd = lu.solve(pd);
     const Eigen::VectorXd qdd = lu.solve(pdd - ToolBiasAcceleration(model, q, qd, options.tool));

@@ -71,7 +71,7 @@ struct WritingTaskOptions {
 std::string WritingTaskLetters();
 
 // The corners of the path in the base frame (3 x n, m), first to last, for `options`.
-// Throws std::invalid_argument for invalid options.
+// Throws InputError for invalid options.
 Eigen::Matrix3Xd WritingTaskCorners(const WritingTaskOptions& options);
 
 // The tool point of `model` at q (base frame, m), `tool` in the last link's frame.
@@ -85,13 +85,13 @@ Eigen::Vector3d ToolBiasAcceleration(const ArmModel& model, const Eigen::VectorX
                                      const Eigen::Vector3d& tool);
 
 // Closed-form elbow-up inverse kinematics of a waist-shoulder-elbow arm: the joint
-// angles (rad) putting `tool` at `point` (base frame, m). Throws std::invalid_argument
+// angles (rad) putting `tool` at `point` (base frame, m). Throws InputError
 // when the model is not such an arm (checked by forward kinematics) or the point is out
 // of reach or needs a joint beyond its limits.
 Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3d& point,
                                      const Eigen::Vector3d& tool);
 
-// The writing task's joint reference for `model`. Throws std::invalid_argument for
+// The writing task's joint reference for `model`. Throws InputError for
 // invalid options, an arm that is not waist-shoulder-elbow, or a path point out of
 // reach or beyond a joint's limits.
 ArmReference WritingTaskReference(const ArmModel& model, const WritingTaskOptions& options);

@@ -1,6 +1,23 @@
 // The errors twinsim reports to users, and the exit codes they map to (CONTRACT.md):
 // InputError -> 2 (bad file, option or schema), CheckFailed -> 1 (the job ran but its
 // own check failed, including a simulation that diverged), anything else -> 3.
+//
+// Which one to throw:
+// - InputError for anything a user can get wrong: a file (model, log, scene, predictor,
+//   trajectory), a command-line option, an options struct that fails IsValid(), a model
+//   that fails Validate(), a task the model cannot do (a point out of reach), data too
+//   short or too poor for the job. Give the file and line where they are known
+//   (SourceLocation); a library function without them throws the bare message, and a
+//   caller that knows the file may catch InputError and throw a new one with the
+//   location and context added (never another type).
+// - CheckFailed where the job ran and its own check failed: a diverged simulation, a
+//   regression beyond tolerance, a candidate effect that fails diagnosis' plausibility
+//   checks.
+// - std::invalid_argument / std::logic_error only for programming errors that no input
+//   can cause: vectors or states of the wrong size passed by our own code, an index out
+//   of range, a call in the wrong order. They end as exit 3, "internal error".
+// Only src/app/main.cc turns these into exit codes; no other layer converts one type
+// into another.
 #pragma once
 
 #include <stdexcept>

@@ -7,9 +7,9 @@
 
 #include <cmath>
 
-namespace twinsim {
+#include "core/math_constants.h"
 
-inline constexpr double kPi = 3.14159265358979323846;
+namespace twinsim {
 
 struct Pose2 {
   double x = 0;      // m

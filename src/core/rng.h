@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <random>
 
+#include "core/math_constants.h"
+
 namespace twinsim {
 
 class Rng {
@@ -29,9 +31,9 @@ class Rng {
     while (u1 <= 0) u1 = Uniform();
     const double u2 = Uniform();
     const double r = std::sqrt(-2.0 * std::log(u1));
-    spare_ = r * std::sin(2 * M_PI * u2);
+    spare_ = r * std::sin(2 * kPi * u2);
     has_spare_ = true;
-    return r * std::cos(2 * M_PI * u2);
+    return r * std::cos(2 * kPi * u2);
   }
   double Gaussian(double sigma) { return sigma * Gaussian(); }
 

@@ -11,9 +11,10 @@
 #include <set>
 #include <stdexcept>
 
+#include "analysis/arm_replay.h"
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "diagnosis/forward_selection.h"
-#include "identification/torque_prediction.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_effects.h"
 #include "robots/arm/arm_regressor.h"
@@ -267,14 +268,14 @@ class ArmProblem : public DiagnosisProblem {
 
   std::string Signature(const TrialEffect& e) const override;
 
-  // Throws std::runtime_error when a fitted effect lies where the logs cannot see it:
+  // Throws CheckFailed when a fitted effect lies where the logs cannot see it:
   // what it then explains is something else (the derivative filter's error, noise).
   void CheckResolved(const TrialEffect& e) const {
     char msg[200];
     if (e.name == "joint_flexibility") {
       // A spring or motor at the search's bound is no spring: a damper, or nothing.
       if (e.parameters.at("k") < 1.01 * kMinStiffness || e.parameters.at("motor_inertia") < 1.01 * kMinMotorInertia) {
-        throw std::runtime_error("its stiffness or motor inertia ends at the search bound: no spring the logs determine");
+        throw CheckFailed("its stiffness or motor inertia ends at the search bound: no spring the logs determine");
       }
       // The spring carries the joint's torque: a spring that would deflect by more than
       // kMaxDeflection under it is a filter fitted to something else, not a joint.
@@ -283,23 +284,23 @@ class ArmProblem : public DiagnosisProblem {
       if (peak / e.parameters.at("k") > kMaxDeflection) {
         std::snprintf(msg, sizeof msg, "its spring would deflect %.3g rad under the joint's %.3g N·m: no joint is that soft",
                       peak / e.parameters.at("k"), peak);
-        throw std::runtime_error(msg);
+        throw CheckFailed(msg);
       }
-      const double f = std::sqrt(e.parameters.at("k") / e.parameters.at("motor_inertia")) / (2 * M_PI);
+      const double f = std::sqrt(e.parameters.at("k") / e.parameters.at("motor_inertia")) / (2 * kPi);
       if (f > bandwidth_) {
         std::snprintf(msg, sizeof msg, "its resonance (%.3g Hz) lies above the %.3g Hz the logs' motion resolves", f, bandwidth_);
-        throw std::runtime_error(msg);
+        throw CheckFailed(msg);
       }
     } else if (e.name == "time_delay") {
       if (e.parameters.at("delay") < 0.5 * sample_period_) {
         std::snprintf(msg, sizeof msg, "%.3g ms is below half a sample", 1000 * e.parameters.at("delay"));
-        throw std::runtime_error(msg);
+        throw CheckFailed(msg);
       }
     } else if (e.name == "stribeck_friction") {
       if (e.parameters.at("vs") < standstill_) {
         std::snprintf(msg, sizeof msg, "vs = %.3g rad/s is below the standstill speed %.3g: Coulomb friction by another name",
                       e.parameters.at("vs"), standstill_);
-        throw std::runtime_error(msg);
+        throw CheckFailed(msg);
       }
     } else if (e.name == "torque_saturation") {
       long beyond = 0, total = 0;
@@ -309,11 +310,11 @@ class ArmProblem : public DiagnosisProblem {
           ++total;
         }
       }
-      if (beyond < std::max(10L, total / 200)) throw std::runtime_error("fewer than 0.5 % of the commands reach the limit");
+      if (beyond < std::max(10L, total / 200)) throw CheckFailed("fewer than 0.5 % of the commands reach the limit");
     } else if (e.name == "payload") {
       for (const char* key : {"x", "y", "z"}) {
         if (std::abs(e.parameters.at(key)) > 0.99 * kPayloadReach) {
-          throw std::runtime_error(std::string("its position's ") + key + " ends at the search bound: not determined by the logs");
+          throw CheckFailed(std::string("its position's ") + key + " ends at the search bound: not determined by the logs");
         }
       }
     }
@@ -481,7 +482,7 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
         p = {{key, g}};
       }
     }
-    if (p.empty()) throw std::runtime_error("no usable starting value");
+    if (p.empty()) throw CheckFailed("no usable starting value");
   } else if (e.name == "joint_flexibility") {
     // Without damping the spring's deflection is needed / k, so the command rises by
     // J_m (qdd + needed'' / k): linear in J_m for each k. A grid over k picks the best.
@@ -500,7 +501,7 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
         p = trial[static_cast<std::size_t>(i)].parameters;
       }
     }
-    if (p.empty()) throw std::runtime_error("no motor inertia explains the residual");
+    if (p.empty()) throw CheckFailed("no motor inertia explains the residual");
   } else if (e.name == "payload") {
     // First moments only (the second moments of a point mass follow from them).
     const auto m = static_cast<Eigen::Index>(payload_r.size());
@@ -546,7 +547,7 @@ class FitFunctor {
 void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int>& free) const {
   const std::vector<int> joints = TouchedJoints(*effects, free);
   const Eigen::Index rows = FitResidual(*effects, joints).size();
-  if (rows == 0) throw std::runtime_error("no fit rows");
+  if (rows == 0) throw CheckFailed("no fit rows");
   std::vector<ParameterMap> maps;
   std::vector<int> sizes;
   for (int i : free) {
@@ -634,7 +635,7 @@ std::string ArmProblem::Signature(const TrialEffect& e) const {
   } else if (e.name == "joint_flexibility") {
     std::snprintf(buf, sizeof buf, "a motor inertia of %s kg·m² on a spring of %s N·m/rad, a resonance near %s Hz",
                   FormatParameter(p.at("motor_inertia")).c_str(), FormatParameter(p.at("k")).c_str(),
-                  FormatParameter(std::sqrt(p.at("k") / p.at("motor_inertia")) / (2 * M_PI)).c_str());
+                  FormatParameter(std::sqrt(p.at("k") / p.at("motor_inertia")) / (2 * kPi)).c_str());
   } else if (e.name == "payload") {
     // How much of the payload's torque a constant offset per joint could carry.
     const ArmModel trial = Build({e});

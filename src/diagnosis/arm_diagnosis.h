@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "diagnosis/diagnosis.h"
-#include "io/arm_log.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim {

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include <unsupported/Eigen/FFT>
 
 namespace twinsim {
@@ -104,7 +105,7 @@ void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vecto
   std::vector<double> window(static_cast<std::size_t>(segment));
   double window_power = 0;
   for (int i = 0; i < segment; ++i) {
-    window[static_cast<std::size_t>(i)] = 0.5 - 0.5 * std::cos(2 * M_PI * i / segment);
+    window[static_cast<std::size_t>(i)] = 0.5 - 0.5 * std::cos(2 * kPi * i / segment);
     window_power += window[static_cast<std::size_t>(i)] * window[static_cast<std::size_t>(i)];
   }
   Eigen::FFT<double> fft;

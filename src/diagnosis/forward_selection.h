@@ -46,7 +46,7 @@ class DiagnosisProblem {
   // The effects that may be added to `current`, parameters unset.
   virtual std::vector<TrialEffect> Candidates(const std::vector<TrialEffect>& current) const = 0;
   // `effects` with the parameters of those at `free` (indices) fitted on the fit rows,
-  // the others held. Throws std::runtime_error when a fit fails; the candidate is then
+  // the others held. Throws CheckFailed when a fit fails; the candidate is then
   // reported with the message.
   virtual std::vector<TrialEffect> Fit(std::vector<TrialEffect> effects, const std::vector<int>& free) const = 0;
   // The fewest held-out rows per chunk of the significance test (longer where the

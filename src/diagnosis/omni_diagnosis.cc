@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "analysis/omni_replay.h"
-#include "backends/omni_backend.h"
+#include "backends/omni_backend_factory.h"
 #include "core/error.h"
 #include "diagnosis/forward_selection.h"
 
@@ -237,7 +237,7 @@ void OmniProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
       }
     }
   }
-  if (!std::isfinite(best)) throw std::runtime_error("the model diverged at every starting value");
+  if (!std::isfinite(best)) throw CheckFailed("the model diverged at every starting value");
 }
 
 class OmniFitFunctor {
@@ -325,7 +325,7 @@ void OmniProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<in
     return;
   }
   const std::size_t rows = FitResidual(*effects).size();
-  if (rows == 0) throw std::runtime_error("no fit rows");
+  if (rows == 0) throw CheckFailed("no fit rows");
   ceres::NumericDiffOptions diff;
   // Wide steps: the replay's cost is jagged at fine scales (encoder counts, the controller's
   // ticks); at 1e-3 Ceres stalled on a traction limit 20 % off (measured).

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "diagnosis/diagnosis.h"
-#include "io/omni_log.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {

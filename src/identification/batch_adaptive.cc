@@ -6,8 +6,10 @@
 #include <cstdio>
 #include <deque>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "io/csv_table.h"
 #include "robots/arm/arm_dynamics.h"
@@ -56,9 +58,9 @@ double Quantise(double v, double resolution) { return resolution > 0 ? resolutio
 
 }  // namespace
 
-bool ArmTrialOptions::IsValid(std::string* error) const {
+bool ArmTrialOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& what) {
-    if (error) *error = what;
+    if (why) *why = what;
     return false;
   };
   if (!(encoder_resolution >= 0)) return fail("encoder resolution must not be negative");
@@ -76,7 +78,7 @@ ArmTrial RunTrial(const ArmModel& plant, const ArmTrialInput& input, const ArmTr
   if (input.q_ref.cols() != n || input.qd_ref.cols() != n || input.feedforward.cols() != n ||
       input.qd_ref.rows() != samples || input.feedforward.rows() != samples || input.hold_command.size() != n ||
       input.kp.size() != n || input.kd.size() != n || samples < 1)
-    throw InputError("trial input: shapes do not match the plant's " + std::to_string(n) + " joints");
+    throw std::invalid_argument("trial input: shapes do not match the plant's " + std::to_string(n) + " joints");
   if (options.torque_noise.size() != 0 && options.torque_noise.size() != n)
     throw InputError("trial options: torque noise needs " + std::to_string(n) + " values");
   if (!(input.sample_time > 0)) throw InputError("trial input: sample time must be positive");
@@ -121,9 +123,9 @@ ArmTrialRunner SimulatedTrials(const ArmModel& plant, const ArmTrialOptions& opt
   return [plant, options](const ArmTrialInput& input, int trial) { return RunTrial(plant, input, options, trial); };
 }
 
-bool BatchAdaptiveOptions::IsValid(std::string* error) const {
+bool BatchAdaptiveOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& what) {
-    if (error) *error = what;
+    if (why) *why = what;
     return false;
   };
   if (max_trials < 1) return fail("max_trials must be at least 1");
@@ -228,7 +230,7 @@ BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTraject
     for (int s = 0; s < kInertiaSamples; ++s)
       inertia += MassMatrix(model, EvaluateFourier(trajectory, s * trajectory.period() / kInertiaSamples).q).diagonal();
     inertia /= kInertiaSamples;
-    const double w = 2 * M_PI * options.feedback_bandwidth;
+    const double w = 2 * kPi * options.feedback_bandwidth;
     result.kp = inertia * w * w;
     result.kd = inertia * 2 * options.feedback_damping * w;
   }
@@ -252,7 +254,8 @@ BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTraject
     const ArmTrial trial = run_trial(input, k);
     if (trial.feedback.rows() != samples || trial.feedback.cols() != n || trial.q_measured.rows() != samples ||
         trial.q_measured.cols() != n)
-      throw InputError("batch-adaptive: trial " + std::to_string(k) + " returned a record of the wrong shape");
+      throw std::invalid_argument("batch-adaptive: trial " + std::to_string(k) +
+                                  " returned a record of the wrong shape");
 
     BatchAdaptiveTrial record;
     record.trial = k;

@@ -66,15 +66,16 @@ struct ArmTrialOptions {
   int substeps = 1;               // RK4 steps per sample
   std::uint64_t seed = 1;         // of the noise (each trial draws its own stream)
 
-  bool IsValid(std::string* error) const;
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
 };
 
 // Runs one trial on a simulated plant: starts at q_ref(0) with velocity
 // qd_ref(0), measures positions at t_k (quantised), computes u_fb from the error and
 // its backward difference, and applies the command `plant.delay_samples` samples late,
 // held over each sample (plus noise), integrating ForwardDynamics of `plant` by RK4.
-// `trial` selects the noise stream. Throws InputError for inconsistent shapes or
-// options, CheckFailed when the simulation diverges.
+// `trial` selects the noise stream. Throws InputError for invalid options,
+// std::invalid_argument for inconsistent shapes, CheckFailed when the simulation diverges.
 ArmTrial RunTrial(const ArmModel& plant, const ArmTrialInput& input, const ArmTrialOptions& options, int trial = 0);
 
 // Runs one trial (1-based number) and returns what the controller recorded.
@@ -97,7 +98,8 @@ struct BatchAdaptiveOptions {
                                     // either end of an interval are left out of the fit (the arm may stick)
   Eigen::VectorXd initial;          // r, beta_0; empty: the nominal model's base parameters
 
-  bool IsValid(std::string* error) const;
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
 };
 
 struct BatchAdaptiveTrial {
@@ -134,7 +136,8 @@ struct BatchAdaptiveResult {
 using BatchAdaptiveProgress = std::function<void(int, int, double)>;
 
 // Runs trials until converged or max_trials. Throws InputError for invalid options or
-// a trajectory that does not fit the model, and whatever `run_trial` throws.
+// a trajectory that does not fit the model, std::invalid_argument when `run_trial`
+// returns a record of the wrong shape, and whatever `run_trial` throws.
 BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTrajectory& trajectory,
                                      const BatchAdaptiveOptions& options, const ArmTrialRunner& run_trial,
                                      const BatchAdaptiveProgress& progress = {});

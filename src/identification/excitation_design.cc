@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "robots/arm/arm_dynamics.h"
 
@@ -345,7 +346,7 @@ DesignSetup MakeSetup(const ArmModel& model, const ExcitationOptions& options) {
   s.samples = options.samples_per_period;
   s.first_free = options.start_at_rest ? 1 : 0;
   s.fundamental = options.fundamental;
-  s.omega = 2 * M_PI * options.fundamental;
+  s.omega = 2 * kPi * options.fundamental;
   s.smoothing = options.coulomb_smoothing;
   s.sin_table.resize(s.samples, s.harmonics);
   s.cos_table.resize(s.samples, s.harmonics);
@@ -361,9 +362,9 @@ DesignSetup MakeSetup(const ArmModel& model, const ExcitationOptions& options) {
 
 }  // namespace
 
-bool ExcitationOptions::IsValid(std::string* error) const {
+bool ExcitationOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& what) {
-    if (error) *error = what;
+    if (why) *why = what;
     return false;
   };
   if (harmonics < 1) return fail("harmonics must be at least 1, got " + std::to_string(harmonics));
@@ -405,8 +406,8 @@ ExcitationLimits ResolveExcitationLimits(const ArmModel& model, const Excitation
   for (int i = 0; i < n; ++i) {
     const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
     const bool unlimited = j.lower <= -1e8 && j.upper >= 1e8;
-    l.lower[i] = (unlimited ? -M_PI : j.lower) + options.position_margin;
-    l.upper[i] = (unlimited ? M_PI : j.upper) - options.position_margin;
+    l.lower[i] = (unlimited ? -kPi : j.lower) + options.position_margin;
+    l.upper[i] = (unlimited ? kPi : j.upper) - options.position_margin;
     if (!(l.lower[i] < l.upper[i]))
       throw InputError("joint '" + j.name + "': a position margin of " + std::to_string(options.position_margin) +
                        " leaves no room between its limits");

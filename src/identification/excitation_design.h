@@ -62,8 +62,8 @@ struct ExcitationOptions {
   std::uint64_t seed = 1;
   int threads = 2;
 
-  // True when usable; otherwise false with the first problem in *error.
-  bool IsValid(std::string* error) const;
+  // True when usable; otherwise false with the first problem in *why.
+  bool IsValid(std::string* why) const;
 };
 
 // The limits a design must respect, per joint (infinity where there is none).

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
 #include "io/yaml_reader.h"
@@ -48,7 +49,7 @@ std::string YamlText(const std::string& s) {
 
 }  // namespace
 
-double FourierTrajectory::omega() const { return 2 * M_PI * fundamental; }
+double FourierTrajectory::omega() const { return 2 * kPi * fundamental; }
 
 std::string FourierTrajectory::Validate() const {
   std::ostringstream problems;

@@ -104,53 +104,96 @@ std::string DescribeBaseParameter(const ArmModel& model, const BaseParameters& b
   return text;
 }
 
-ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
-                     const WlsIdentificationOptions& options, WlsIdentificationSummary* summary_out) {
-  const auto start = std::chrono::steady_clock::now();
-  std::string why;
-  if (!options.IsValid(&why)) throw InputError("identification options: " + why);
-  if (logs.empty()) throw InputError("identification needs at least one log");
-  for (const ArmLog& log : logs) CheckArmLogMatchesModel(log, a_priori);
-  const std::string where = LogPaths(logs);
+namespace {
 
-  WlsIdentificationSummary summary;
-  const int n = a_priori.dof();
-  summary.dof = n;
-  summary.logs = static_cast<int>(logs.size());
-  const BaseParameters base = IdentificationBase(a_priori, options);
+// Names the unknowns in *summary (the r base parameters, then `offsets` torque offsets)
+// with the a-priori model's values.
+void DescribeUnknowns(const ArmModel& a_priori, const BaseParameters& base, int offsets,
+                      WlsIdentificationSummary* summary) {
   const int r = base.rank();
-  const Eigen::MatrixXd& k_matrix = base.from_standard;  // r x 12n
-  const Eigen::VectorXd pi0 = StandardParameters(a_priori);
-  // Estimated: the r base parameters, then (optionally) one torque offset per joint.
-  const int offsets = options.torque_offsets ? n : 0;
-  const int cols_total = r + offsets;
-  summary.base_parameters = r;
-  summary.names = base.names;
-  for (int k = 0; k < r; ++k) summary.descriptions.push_back(DescribeBaseParameter(a_priori, base, k));
+  summary->base_parameters = r;
+  summary->names = base.names;
+  for (int k = 0; k < r; ++k) summary->descriptions.push_back(DescribeBaseParameter(a_priori, base, k));
   for (int j = 0; j < offsets; ++j) {
-    summary.names.push_back("offset" + std::to_string(j + 1));
-    summary.descriptions.push_back("torque offset of joint " + std::to_string(j + 1));
+    summary->names.push_back("offset" + std::to_string(j + 1));
+    summary->descriptions.push_back("torque offset of joint " + std::to_string(j + 1));
   }
-  summary.a_priori = Eigen::VectorXd::Zero(cols_total);
-  summary.a_priori.head(r) = k_matrix * pi0;
+  summary->a_priori = Eigen::VectorXd::Zero(r + offsets);
+  summary->a_priori.head(r) = base.from_standard * StandardParameters(a_priori);
+}
 
-  // Joints that never move: their velocity and acceleration are exactly zero, so the
-  // parameters only their motion reveals show up as unexcited instead of as noise.
-  std::vector<bool> still(static_cast<std::size_t>(n), false);
-  std::vector<double> span(static_cast<std::size_t>(n), 0.0);
+// How far each joint moves over all logs, and which never do.
+struct JointSpans {
+  std::vector<double> span;  // rad or m, max - min of q per joint
+  std::vector<bool> still;   // span below the options' still_range
+};
+
+// Finds the joints that never move (listed 1-based in summary->still_joints): their
+// velocity and acceleration are then taken as exactly zero, so that the parameters only
+// their motion reveals show up as unexcited instead of as noise.
+JointSpans FindStillJoints(const std::vector<ArmLog>& logs, int n, double still_range,
+                           WlsIdentificationSummary* summary) {
+  JointSpans s;
+  s.span.assign(static_cast<std::size_t>(n), 0.0);
+  s.still.assign(static_cast<std::size_t>(n), false);
   for (int j = 0; j < n; ++j) {
     double lo = 1e300, hi = -1e300;
     for (const ArmLog& log : logs) {
       lo = std::min(lo, log.q.col(j).minCoeff());
       hi = std::max(hi, log.q.col(j).maxCoeff());
     }
-    span[static_cast<std::size_t>(j)] = hi - lo;
-    if (hi - lo < options.still_range) {
-      still[static_cast<std::size_t>(j)] = true;
-      summary.still_joints.push_back(j + 1);
+    s.span[static_cast<std::size_t>(j)] = hi - lo;
+    if (hi - lo < still_range) {
+      s.still[static_cast<std::size_t>(j)] = true;
+      summary->still_joints.push_back(j + 1);
     }
   }
+  return s;
+}
 
+// The stacked system W beta = tau, reduced joint by joint to R_j (m_j x cols, scattered
+// to all unknowns' columns), z_j and the part of tau_j no column can reach (rho_j^2):
+// ||W_j beta - tau_j||^2 = rho_j^2 + ||z_j - R_j beta||^2.
+struct JointSystems {
+  std::vector<Eigen::MatrixXd> r_of;
+  std::vector<Eigen::VectorXd> z_of;
+  Eigen::VectorXd rho2;
+  int rows = 0;     // sum of m_j
+  int samples = 0;  // samples per joint
+
+  int dof() const { return static_cast<int>(r_of.size()); }
+  // Joint j's rows weighted by weight[j], stacked: *a (rows x cols) and *b (rows).
+  void Stack(const Eigen::VectorXd& weight, Eigen::MatrixXd* a, Eigen::VectorXd* b) const {
+    a->resize(rows, r_of.front().cols());
+    b->resize(rows);
+    int at = 0;
+    for (int j = 0; j < dof(); ++j) {
+      const int m = static_cast<int>(r_of[static_cast<std::size_t>(j)].rows());
+      a->middleRows(at, m) = weight[j] * r_of[static_cast<std::size_t>(j)];
+      b->segment(at, m) = weight[j] * z_of[static_cast<std::size_t>(j)];
+      at += m;
+    }
+  }
+  // Residual sum of squares of joint j for the unknowns x.
+  double Rss(int j, const Eigen::VectorXd& x) const {
+    return rho2[j] + (z_of[static_cast<std::size_t>(j)] - r_of[static_cast<std::size_t>(j)] * x).squaredNorm();
+  }
+  // Torque error RMS per joint (N·m or N) for the unknowns x.
+  Eigen::VectorXd ErrorRms(const Eigen::VectorXd& x) const {
+    Eigen::VectorXd e(dof());
+    for (int j = 0; j < dof(); ++j) e[j] = std::sqrt(std::max(0.0, Rss(j, x)) / samples);
+    return e;
+  }
+};
+
+// Accumulates the regressor rows of every log sample, joint by joint, into JointSystems
+// and sets summary->samples and torque_rms; throws InputError for too few samples.
+JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base, int offsets,
+                            const std::vector<ArmLog>& logs, const WlsIdentificationOptions& options,
+                            const JointSpans& spans, const std::string& where, WlsIdentificationSummary* summary) {
+  const int n = a_priori.dof();
+  const int r = base.rank();
+  const int cols_total = r + offsets;
   // Joint j's torque depends only on links j..n and its own friction: its rows are folded
   // into a factor over those base columns alone.
   std::vector<std::vector<int>> columns(static_cast<std::size_t>(n));
@@ -176,7 +219,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
       qd = log.qd.row(row).transpose();
       qdd = log.qdd.row(row).transpose();
       for (int j = 0; j < n; ++j) {
-        if (still[static_cast<std::size_t>(j)]) qd[j] = qdd[j] = 0;
+        if (spans.still[static_cast<std::size_t>(j)]) qd[j] = qdd[j] = 0;
       }
       const Eigen::MatrixXd y = Regressor(a_priori, q, qd, qdd);
       for (int j = 0; j < n; ++j) {
@@ -193,20 +236,19 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
       ++samples;
     }
   }
-  summary.samples = samples;
+  summary->samples = samples;
   if (samples * n < 2 * cols_total) {
     throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(cols_total) +
                                                 " parameters: " + std::to_string(samples) + " samples of " +
                                                 std::to_string(n) + " joints");
   }
-  summary.torque_rms = (torque_square / samples).cwiseSqrt();
+  summary->torque_rms = (torque_square / samples).cwiseSqrt();
 
-  // Per joint: R_j (m_j x r, scattered to all base columns), z_j and the part of tau_j no
-  // base column can reach (rho_j^2).
-  std::vector<Eigen::MatrixXd> r_of(static_cast<std::size_t>(n));
-  std::vector<Eigen::VectorXd> z_of(static_cast<std::size_t>(n));
-  Eigen::VectorXd rho2(n);
-  int stacked = 0;
+  JointSystems systems;
+  systems.r_of.resize(static_cast<std::size_t>(n));
+  systems.z_of.resize(static_cast<std::size_t>(n));
+  systems.rho2.resize(n);
+  systems.samples = samples;
   for (int j = 0; j < n; ++j) {
     auto& f = factors[static_cast<std::size_t>(j)];
     f.Flush();
@@ -214,132 +256,140 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
     const int m = static_cast<int>(cols.size());
     Eigen::MatrixXd rj = Eigen::MatrixXd::Zero(m, cols_total);
     for (int c = 0; c < m; ++c) rj.col(cols[static_cast<std::size_t>(c)]) = f.r().col(c).head(m);
-    r_of[static_cast<std::size_t>(j)] = rj;
-    z_of[static_cast<std::size_t>(j)] = f.r().col(m).head(m);
-    rho2[j] = f.r()(m, m) * f.r()(m, m);
-    stacked += m;
+    systems.r_of[static_cast<std::size_t>(j)] = rj;
+    systems.z_of[static_cast<std::size_t>(j)] = f.r().col(m).head(m);
+    systems.rho2[j] = f.r()(m, m) * f.r()(m, m);
+    systems.rows += m;
   }
-  auto stack = [&](const Eigen::VectorXd& weight, Eigen::MatrixXd* a, Eigen::VectorXd* b) {
-    a->resize(stacked, cols_total);
-    b->resize(stacked);
-    int at = 0;
-    for (int j = 0; j < n; ++j) {
-      const int m = static_cast<int>(r_of[static_cast<std::size_t>(j)].rows());
-      a->middleRows(at, m) = weight[j] * r_of[static_cast<std::size_t>(j)];
-      b->segment(at, m) = weight[j] * z_of[static_cast<std::size_t>(j)];
-      at += m;
-    }
-  };
-  // Residual sum of squares of joint j for base parameters beta.
-  auto rss = [&](int j, const Eigen::VectorXd& beta) {
-    return rho2[j] + (z_of[static_cast<std::size_t>(j)] - r_of[static_cast<std::size_t>(j)] * beta).squaredNorm();
-  };
-  auto error_rms = [&](const Eigen::VectorXd& beta) {
-    Eigen::VectorXd e(n);
-    for (int j = 0; j < n; ++j) e[j] = std::sqrt(std::max(0.0, rss(j, beta)) / samples);
-    return e;
-  };
+  return systems;
+}
 
-  Eigen::MatrixXd a;
-  Eigen::VectorXd b;
-  stack(Eigen::VectorXd::Ones(n), &a, &b);
-
-  // Excitation: every direction of the column-scaled regressor must carry weight.
-  {
-    Eigen::VectorXd norms = a.colwise().norm().transpose();
-    const double largest = norms.maxCoeff();
-    for (int k = 0; k < cols_total; ++k)
-      if (!(norms[k] > 1e-14 * largest)) norms[k] = 0;
-    const Eigen::MatrixXd scaled = a * norms.unaryExpr([](double v) { return v > 0 ? 1 / v : 0.0; }).asDiagonal();
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinV);
-    const Eigen::VectorXd s = svd.singularValues();
-    const double limit = s[0] / options.max_condition_number;
-    std::vector<int> weak;
-    for (int k = 0; k < cols_total; ++k)
-      if (!(s[k] > limit)) weak.push_back(k);
-    if (!weak.empty()) {
-      Eigen::VectorXd share = Eigen::VectorXd::Zero(cols_total);
-      for (int w : weak) share += svd.matrixV().col(w).cwiseAbs2();
-      share = share.cwiseSqrt();
-      std::vector<int> named;
-      for (int k = 0; k < cols_total; ++k)
-        if (share[k] > 0.3) named.push_back(k);
-      std::stable_sort(named.begin(), named.end(), [&](int x, int y) { return share[x] > share[y]; });
-      if (named.empty()) named.push_back(static_cast<int>(std::max_element(share.data(), share.data() + cols_total) - share.data()));
-      std::string still_list;
-      for (int j : summary.still_joints) still_list += (still_list.empty() ? "" : ", ") + std::to_string(j);
-      std::ostringstream msg;
-      msg << "the data does not excite base parameter" << (named.size() > 1 ? "s " : " ");
-      for (std::size_t i = 0; i < named.size(); ++i) {
-        const int k = named[i];
-        const int sidx = k < r ? base.independent[static_cast<std::size_t>(k)] : -1;
-        msg << (i == 0 ? "" : i + 1 == named.size() ? " and " : ", ") << summary.names[static_cast<std::size_t>(k)]
-            << " (" << summary.descriptions[static_cast<std::size_t>(k)];
-        if (sidx < 0) {
-          // A torque offset is only unexcited together with something constant.
-        } else if (sidx >= kParametersPerLink * n) {
-          const int joint = (sidx - kParametersPerLink * n) / kFrictionPerJoint;
-          if (still[static_cast<std::size_t>(joint)]) msg << ": it never moves";
-        } else if (!still_list.empty()) {
-          msg << "; joint" << (summary.still_joints.size() > 1 ? "s " : " ") << still_list << " never move"
-              << (summary.still_joints.size() > 1 ? "" : "s");
-        }
-        msg << ")";
-      }
-      if (weak.size() < named.size() && weak.size() > 0)
-        msg << "; together they leave " << weak.size() << " combination" << (weak.size() > 1 ? "s" : "")
-            << " undetermined";
-      for (int j : summary.still_joints) {
-        msg << "; q" << j << " spans only " << Format(span[static_cast<std::size_t>(j - 1)]) << " (below "
-            << Format(options.still_range) << ")";
-      }
-      msg << ". Move every joint in both directions with varied speeds and accelerations (the condition number is "
-          << (s[cols_total - 1] > 0 ? Format(s[0] / s[cols_total - 1]) : std::string("infinite")) << ", the limit "
-          << Format(options.max_condition_number) << ")";
-      throw InputError(SourceLocation{where}, msg.str());
+// Refuses data that leaves some direction of the column-scaled regressor `a` without
+// weight, with an InputError naming the unknowns involved and the joints that never move.
+void CheckExcitation(const Eigen::MatrixXd& a, const BaseParameters& base, const JointSpans& spans,
+                     const WlsIdentificationOptions& options, const std::string& where,
+                     const WlsIdentificationSummary& summary) {
+  const int n = summary.dof;
+  const int r = base.rank();
+  const int cols_total = static_cast<int>(a.cols());
+  Eigen::VectorXd norms = a.colwise().norm().transpose();
+  const double largest = norms.maxCoeff();
+  for (int k = 0; k < cols_total; ++k)
+    if (!(norms[k] > 1e-14 * largest)) norms[k] = 0;
+  const Eigen::MatrixXd scaled = a * norms.unaryExpr([](double v) { return v > 0 ? 1 / v : 0.0; }).asDiagonal();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeThinV);
+  const Eigen::VectorXd s = svd.singularValues();
+  const double limit = s[0] / options.max_condition_number;
+  std::vector<int> weak;
+  for (int k = 0; k < cols_total; ++k)
+    if (!(s[k] > limit)) weak.push_back(k);
+  if (weak.empty()) return;
+  Eigen::VectorXd share = Eigen::VectorXd::Zero(cols_total);
+  for (int w : weak) share += svd.matrixV().col(w).cwiseAbs2();
+  share = share.cwiseSqrt();
+  std::vector<int> named;
+  for (int k = 0; k < cols_total; ++k)
+    if (share[k] > 0.3) named.push_back(k);
+  std::stable_sort(named.begin(), named.end(), [&](int x, int y) { return share[x] > share[y]; });
+  if (named.empty()) named.push_back(static_cast<int>(std::max_element(share.data(), share.data() + cols_total) - share.data()));
+  std::string still_list;
+  for (int j : summary.still_joints) still_list += (still_list.empty() ? "" : ", ") + std::to_string(j);
+  std::ostringstream msg;
+  msg << "the data does not excite base parameter" << (named.size() > 1 ? "s " : " ");
+  for (std::size_t i = 0; i < named.size(); ++i) {
+    const int k = named[i];
+    const int sidx = k < r ? base.independent[static_cast<std::size_t>(k)] : -1;
+    msg << (i == 0 ? "" : i + 1 == named.size() ? " and " : ", ") << summary.names[static_cast<std::size_t>(k)]
+        << " (" << summary.descriptions[static_cast<std::size_t>(k)];
+    if (sidx < 0) {
+      // A torque offset is only unexcited together with something constant.
+    } else if (sidx >= kParametersPerLink * n) {
+      const int joint = (sidx - kParametersPerLink * n) / kFrictionPerJoint;
+      if (spans.still[static_cast<std::size_t>(joint)]) msg << ": it never moves";
+    } else if (!still_list.empty()) {
+      msg << "; joint" << (summary.still_joints.size() > 1 ? "s " : " ") << still_list << " never move"
+          << (summary.still_joints.size() > 1 ? "" : "s");
     }
+    msg << ")";
   }
+  if (weak.size() < named.size() && weak.size() > 0)
+    msg << "; together they leave " << weak.size() << " combination" << (weak.size() > 1 ? "s" : "")
+        << " undetermined";
+  for (int j : summary.still_joints) {
+    msg << "; q" << j << " spans only " << Format(spans.span[static_cast<std::size_t>(j - 1)]) << " (below "
+        << Format(options.still_range) << ")";
+  }
+  msg << ". Move every joint in both directions with varied speeds and accelerations (the condition number is "
+      << (s[cols_total - 1] > 0 ? Format(s[0] / s[cols_total - 1]) : std::string("infinite")) << ", the limit "
+      << Format(options.max_condition_number) << ")";
+  throw InputError(SourceLocation{where}, msg.str());
+}
 
-  // Ordinary least squares, then each joint weighted by its residual's standard deviation.
-  summary.ordinary = a.householderQr().solve(b);
-  summary.joint_sigma.resize(n);
+// The weighted system and what the consistency projection needs of its solution.
+struct WeightedSolution {
+  Eigen::MatrixXd aw;       // rows x cols, the stacked rows weighted by joint
+  Eigen::MatrixXd rw;       // cols x cols, upper triangular: R of aw's QR
+  Eigen::VectorXd std_dev;  // cols, the standard deviation of each estimate
+};
+
+// Solves by ordinary least squares (a, b: the unweighted stacked system), then again
+// with each joint weighted by its residual's standard deviation; fills the summary's
+// estimates, sigmas, condition number and relative standard deviations.
+WeightedSolution Solve(const JointSystems& systems, const Eigen::MatrixXd& a, const Eigen::VectorXd& b,
+                       const WlsIdentificationOptions& options, WlsIdentificationSummary* summary) {
+  const int n = systems.dof();
+  const int samples = systems.samples;
+  const int cols_total = static_cast<int>(a.cols());
+  summary->ordinary = a.householderQr().solve(b);
+  summary->joint_sigma.resize(n);
   const double dof_per_joint = std::max(1.0, samples - static_cast<double>(cols_total) / n);
   for (int j = 0; j < n; ++j) {
-    const double floor = 1e-12 * std::max(summary.torque_rms[j], 1e-12);
-    summary.joint_sigma[j] = std::max(floor, std::sqrt(std::max(0.0, rss(j, summary.ordinary)) / dof_per_joint));
+    const double floor = 1e-12 * std::max(summary->torque_rms[j], 1e-12);
+    summary->joint_sigma[j] =
+        std::max(floor, std::sqrt(std::max(0.0, systems.Rss(j, summary->ordinary)) / dof_per_joint));
   }
   const Eigen::VectorXd weights =
-      options.weighted ? Eigen::VectorXd(summary.joint_sigma.cwiseInverse()) : Eigen::VectorXd::Ones(n);
-  Eigen::MatrixXd aw;
+      options.weighted ? Eigen::VectorXd(summary->joint_sigma.cwiseInverse()) : Eigen::VectorXd::Ones(n);
+  WeightedSolution solution;
   Eigen::VectorXd bw;
-  stack(weights, &aw, &bw);
+  systems.Stack(weights, &solution.aw, &bw);
+  const Eigen::MatrixXd& aw = solution.aw;
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(aw);
-  summary.identified = qr.solve(bw);
-  const Eigen::MatrixXd rw = qr.matrixQR().topRows(cols_total).triangularView<Eigen::Upper>();
+  summary->identified = qr.solve(bw);
+  solution.rw = qr.matrixQR().topRows(cols_total).triangularView<Eigen::Upper>();
   {
     Eigen::VectorXd norms = aw.colwise().norm().transpose();
     const Eigen::VectorXd sv = (aw * norms.cwiseInverse().asDiagonal()).jacobiSvd().singularValues();
-    summary.condition_number = sv[0] / sv[cols_total - 1];
+    summary->condition_number = sv[0] / sv[cols_total - 1];
   }
   double weighted_rss = 0;
-  for (int j = 0; j < n; ++j) weighted_rss += weights[j] * weights[j] * rss(j, summary.identified);
+  for (int j = 0; j < n; ++j) weighted_rss += weights[j] * weights[j] * systems.Rss(j, summary->identified);
   const double variance = weighted_rss / std::max(1, samples * n - cols_total);
   const Eigen::MatrixXd rinv =
-      rw.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(cols_total, cols_total));
-  const Eigen::VectorXd std_dev = (variance * rinv.rowwise().squaredNorm()).cwiseSqrt();
-  summary.relative_std.resize(cols_total);
+      solution.rw.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(cols_total, cols_total));
+  solution.std_dev = (variance * rinv.rowwise().squaredNorm()).cwiseSqrt();
+  summary->relative_std.resize(cols_total);
   for (int k = 0; k < cols_total; ++k) {
-    const double v = std::abs(summary.identified[k]);
-    summary.relative_std[k] = v > 0 ? 100 * std_dev[k] / v : std::numeric_limits<double>::infinity();
+    const double v = std::abs(summary->identified[k]);
+    summary->relative_std[k] = v > 0 ? 100 * solution.std_dev[k] / v : std::numeric_limits<double>::infinity();
   }
+  return solution;
+}
 
-  // Back to standard parameters: the a-priori model moved by the least amount that
-  // gives the identified base parameters (K has full row rank), and if that is not a
-  // real arm, the physically consistent parameters that fit the torques best.
+// Returns the a-priori model with standard parameters that give the identified base
+// parameters (the least change, K having full row rank) or, if that is no real arm, the
+// physically consistent ones that fit the torques best, and fills summary->consistent,
+// offsets and the consistency fields; throws InputError when even those are no valid arm.
+ArmModel ProjectConsistent(const ArmModel& a_priori, const Eigen::MatrixXd& k_matrix, int offsets,
+                           const WeightedSolution& solution, const std::string& where,
+                           WlsIdentificationSummary* summary) {
+  const int r = static_cast<int>(k_matrix.rows());
+  const int cols_total = r + offsets;
+  const Eigen::MatrixXd& aw = solution.aw;
   // The offsets are free: with them first in a QR of the weighted system, R = [[R_oo,
   // R_ob], [0, R_bb]] and R_bb is the weighted metric of beta with the offsets refitted.
-  const Eigen::VectorXd beta = summary.identified.head(r);
-  Eigen::MatrixXd r_beta = rw.topLeftCorner(r, r), r_oo, r_ob;
+  const Eigen::VectorXd beta = summary->identified.head(r);
+  Eigen::MatrixXd r_beta = solution.rw.topLeftCorner(r, r), r_oo, r_ob;
   if (offsets > 0) {
     Eigen::MatrixXd permuted(aw.rows(), cols_total);
     permuted << aw.rightCols(offsets), aw.leftCols(r);
@@ -357,54 +407,98 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
     consistent = problems.empty();
     std::istringstream lines(problems);
     std::string line;
-    while (std::getline(lines, line)) summary.consistency_notes.push_back(line);
+    while (std::getline(lines, line)) summary->consistency_notes.push_back(line);
   } catch (const InputError& e) {
-    summary.consistency_notes.push_back(e.what());
+    summary->consistency_notes.push_back(e.what());
   }
   Eigen::VectorXd pi_final = pi_mn;
   if (!consistent) {
-    summary.consistency_fixed = true;
+    summary->consistency_fixed = true;
     const ConsistentFit fit = FitConsistentParameters(a_priori, k_matrix, r_beta, beta);
-    summary.consistency_iterations = fit.iterations;
+    summary->consistency_iterations = fit.iterations;
     pi_final = fit.pi;
     result = WithStandardParameters(a_priori, pi_final);
     const std::string problems = result.Validate();
     if (!problems.empty()) {
-      throw std::runtime_error("identification: the physically consistent fit still fails validation: " + problems);
+      std::string list;
+      std::istringstream lines(problems);
+      for (std::string line; std::getline(lines, line);) list += (list.empty() ? "" : "; ") + line;
+      throw InputError(SourceLocation{where},
+                       "the data does not determine a real arm: even the physically consistent fit of the identified "
+                       "parameters fails validation (" + list + "). Check the torques' units, and move every joint "
+                       "in both directions with varied speeds and accelerations");
     }
   }
-  summary.consistent = summary.identified;
-  summary.consistent.head(r) = k_matrix * pi_final;
+  summary->consistent = summary->identified;
+  summary->consistent.head(r) = k_matrix * pi_final;
   if (offsets > 0) {
     // The offsets that go best with the consistent base parameters.
-    summary.consistent.tail(offsets) -=
-        r_oo.triangularView<Eigen::Upper>().solve(r_ob * (summary.consistent.head(r) - beta));
+    summary->consistent.tail(offsets) -=
+        r_oo.triangularView<Eigen::Upper>().solve(r_ob * (summary->consistent.head(r) - beta));
   }
-  summary.offsets = summary.consistent.tail(offsets);
-  summary.consistency_shift_max_std = 0;
+  summary->offsets = summary->consistent.tail(offsets);
+  summary->consistency_shift_max_std = 0;
   for (int k = 0; k < cols_total; ++k) {
-    if (std_dev[k] > 0)
-      summary.consistency_shift_max_std =
-          std::max(summary.consistency_shift_max_std, std::abs(summary.consistent[k] - summary.identified[k]) / std_dev[k]);
+    if (solution.std_dev[k] > 0)
+      summary->consistency_shift_max_std =
+          std::max(summary->consistency_shift_max_std,
+                   std::abs(summary->consistent[k] - summary->identified[k]) / solution.std_dev[k]);
   }
-  summary.error_rms_a_priori = error_rms(summary.a_priori);
-  summary.error_rms_identified = error_rms(summary.identified);
-  summary.error_rms_model = error_rms(summary.consistent);
-  // Effects: those whose torques the identified parameters now hold are dropped (the
-  // friction effects and the payload, absorbed into the joints' viscous and Coulomb
-  // friction and the last link; an old torque_offset, which the fit did not see); the
-  // estimated offsets become torque_offset effects, tau0 = -offset (the joint receives
-  // the command plus tau0, so the log's torque is the model's minus tau0). What the fit
-  // cannot estimate (time_delay, torque_saturation, joint_flexibility) is kept.
+  return result;
+}
+
+// The identified model's effects: the a-priori ones the fit cannot estimate, and the
+// estimated offsets as torque_offset effects.
+ArmEffects IdentifiedEffects(const ArmModel& a_priori, const Eigen::VectorXd& offsets) {
+  const int n = a_priori.dof();
+  // Dropped: those whose torques the identified parameters now hold (the friction
+  // effects and the payload, absorbed into the joints' viscous and Coulomb friction and
+  // the last link; an old torque_offset, which the fit did not see). Kept: what the fit
+  // cannot estimate (time_delay, torque_saturation, joint_flexibility).
   ArmEffects effects;
   for (const ArmEffect& e : ListArmEffects(a_priori.effects)) {
     if (e.name == "time_delay" || e.name == "torque_saturation" || e.name == "joint_flexibility")
       AddArmEffect(e, n, &effects);
   }
-  for (int j = 0; j < offsets; ++j) {
-    if (summary.offsets[j] != 0) AddArmEffect({"torque_offset", j, {{"tau0", -summary.offsets[j]}}}, n, &effects);
+  // tau0 = -offset: the joint receives the command plus tau0, so the log's torque is the
+  // model's minus tau0.
+  for (int j = 0; j < offsets.size(); ++j) {
+    if (offsets[j] != 0) AddArmEffect({"torque_offset", j, {{"tau0", -offsets[j]}}}, n, &effects);
   }
-  result.effects = effects;
+  return effects;
+}
+
+}  // namespace
+
+ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
+                     const WlsIdentificationOptions& options, WlsIdentificationSummary* summary_out) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("identification options: " + why);
+  if (logs.empty()) throw InputError("identification needs at least one log");
+  for (const ArmLog& log : logs) CheckArmLogMatchesModel(log, a_priori);
+  const std::string where = LogPaths(logs);
+
+  WlsIdentificationSummary summary;
+  const int n = a_priori.dof();
+  summary.dof = n;
+  summary.logs = static_cast<int>(logs.size());
+  const BaseParameters base = IdentificationBase(a_priori, options);
+  // Estimated: the r base parameters, then (optionally) one torque offset per joint.
+  const int offsets = options.torque_offsets ? n : 0;
+  DescribeUnknowns(a_priori, base, offsets, &summary);
+  const JointSpans spans = FindStillJoints(logs, n, options.still_range, &summary);
+  const JointSystems systems = AccumulateRows(a_priori, base, offsets, logs, options, spans, where, &summary);
+  Eigen::MatrixXd a;
+  Eigen::VectorXd b;
+  systems.Stack(Eigen::VectorXd::Ones(n), &a, &b);
+  CheckExcitation(a, base, spans, options, where, summary);
+  const WeightedSolution solution = Solve(systems, a, b, options, &summary);
+  ArmModel result = ProjectConsistent(a_priori, base.from_standard, offsets, solution, where, &summary);
+  summary.error_rms_a_priori = systems.ErrorRms(summary.a_priori);
+  summary.error_rms_identified = systems.ErrorRms(summary.identified);
+  summary.error_rms_model = systems.ErrorRms(summary.consistent);
+  result.effects = IdentifiedEffects(a_priori, summary.offsets);
   result.source_path.clear();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary_out) *summary_out = summary;

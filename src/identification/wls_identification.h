@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "io/arm_log.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 #include "robots/arm/arm_regressor.h"
 
@@ -90,7 +90,8 @@ struct WlsIdentificationSummary {
 // time_delay, torque_saturation and joint_flexibility kept; its friction effects,
 // payload and torque offsets dropped (the identified parameters hold their torques). Throws InputError for invalid options, a log
 // whose joint count differs from the model's, too few samples, data that does not
-// excite some parameter (named in words), or an a-priori model that is not physical.
+// excite some parameter (named in words), data whose physically consistent fit still is
+// no valid arm, or an a-priori model that is not physical.
 ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
                      const WlsIdentificationOptions& options, WlsIdentificationSummary* summary = nullptr);
 

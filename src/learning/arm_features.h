@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "io/arm_log.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim {

@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "backends/arm/arm_backend.h"
+#include "core/error.h"
+#include "sim/newtonian_arm_backend.h"
 
 namespace twinsim {
 namespace {
@@ -14,10 +15,10 @@ constexpr std::size_t kRememberedSteps = 8;
 
 ArmNominalStep::ArmNominalStep(const ArmModel& model) : model_(model) {
   if (const std::string problems = model.Validate(); !problems.empty())
-    throw std::invalid_argument("arm model '" + model.name + "': " + problems);
+    throw InputError("arm model '" + model.name + "': " + problems);
   ArmModel undelayed = model;
   undelayed.delay_samples = 0;  // the torques passed in already act
-  sim_ = std::make_unique<ArmSimulation>(undelayed, MakeArmBackend("analytic", undelayed));
+  sim_ = std::make_unique<ArmSimulation>(undelayed, MakeNewtonianArmBackend("analytic", undelayed));
   const int n = model.dof();
   q_.resize(n);
   qd_.resize(n);

@@ -3,7 +3,7 @@
 // correction.
 //
 // It is exactly the step of the physical nominal candidate of the arm-learning
-// comparison: the arm simulation loop (core/arm_simulation.h) over the model on the
+// comparison: the arm simulation loop (sim/arm_simulation.h) over the model on the
 // analytic backend (rigid-body forward dynamics by RK4 at the backend's default step),
 // with the model's nominal viscous and Coulomb friction solved at velocity level (a
 // joint sticks exactly when Coulomb friction can hold it within the sample; viscous
@@ -26,14 +26,14 @@
 #include <memory>
 #include <vector>
 
-#include "core/arm_simulation.h"
 #include "robots/arm/arm_model.h"
+#include "sim/arm_simulation.h"
 
 namespace twinsim {
 
 class ArmNominalStep {
  public:
-  // Throws std::invalid_argument for a model that does not Validate().
+  // Throws InputError for a model that does not Validate().
   explicit ArmNominalStep(const ArmModel& model);
 
   // The model given (with its delay; the step itself runs without it).

@@ -11,7 +11,6 @@
 #include <stdexcept>
 
 #include "core/error.h"
-#include "io/atomic_file.h"
 #include "io/yaml_reader.h"
 #include "learning/predictor_file.h"
 #include "robots/arm/arm_regressor.h"
@@ -146,9 +145,7 @@ void ArmPredictor::CheckUse(const ArmModel& model, int horizon, const std::strin
 void ArmPredictor::Save(const std::string& path) const {
   const ArmFeatureLayout& l = info_.layout;
   YAML::Emitter out;
-  out.SetDoublePrecision(17);
-  out << YAML::BeginMap;
-  out << YAML::Key << "twinsim_predictor" << YAML::Value << kArmPredictorFormatVersion;
+  BeginPredictorFile(out, kArmPredictorFormatVersion);
   out << YAML::Key << "robot" << YAML::Value << "arm";
   out << YAML::Key << "kind" << YAML::Value << info_.kind;
   out << YAML::Key << "residual" << YAML::Value << info_.residual;
@@ -171,19 +168,13 @@ void ArmPredictor::Save(const std::string& path) const {
   out << YAML::Key << "inputs" << YAML::Value << l.num_inputs();
   out << YAML::Key << "outputs" << YAML::Value << l.num_outputs();
   out << YAML::EndMap;
-  out << YAML::Key << "trained_on" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "logs" << YAML::Value << YAML::BeginSeq;
-  for (const auto& log : info_.logs) out << log;
-  out << YAML::EndSeq;
-  out << YAML::Key << "samples" << YAML::Value << info_.samples;
-  out << YAML::Key << "train_rmse" << YAML::Value << info_.train_rmse;
-  out << YAML::Key << "validation_rmse" << YAML::Value << info_.validation_rmse;
-  out << YAML::Key << "validation_qd_rmse" << YAML::Value << info_.validation_qd_rmse;
-  out << YAML::Key << "validation_rollout_rmse" << YAML::Value << info_.validation_rollout_rmse;
-  out << YAML::EndMap;
+  EmitTrainedOn(out, info_.logs, info_.samples,
+                {{"train_rmse", info_.train_rmse},
+                 {"validation_rmse", info_.validation_rmse},
+                 {"validation_qd_rmse", info_.validation_qd_rmse},
+                 {"validation_rollout_rmse", info_.validation_rollout_rmse}});
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
-  out << YAML::EndMap;
-  WriteFileAtomically(path, std::string(out.c_str()) + "\n");
+  WritePredictorFile(out, path);
 }
 
 ArmPredictor ArmPredictor::Load(const std::string& path) {
@@ -191,15 +182,7 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
   CheckPredictorRobot(root, path, "arm");
   ErrorList errors;
   YamlMap top(root, path, "", &errors);
-  int version = 0;
-  if (!top.Require("twinsim_predictor", &version)) errors.ThrowIfAny();
-  if (version < 1 || version > kArmPredictorFormatVersion) {
-    top.Error("twinsim_predictor", "arm predictor format version " + std::to_string(version) +
-                                       " is not supported (this build reads versions 1 to " +
-                                       std::to_string(kArmPredictorFormatVersion) + ")");
-    errors.ThrowIfAny();
-  }
-  top.Child("robot");
+  const int version = ReadPredictorVersion(top, "arm predictor", 1, kArmPredictorFormatVersion);
   ArmPredictorInfo info;
   ArmFeatureLayout& l = info.layout;
   top.Require("kind", &info.kind, std::vector<std::string>{"linear", "mlp"});
@@ -246,18 +229,11 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
   } else {
     top.Missing("layout");
   }
-  if (top.Has("trained_on")) {
-    YamlMap t(top.Child("trained_on"), path, "trained_on", &errors);
-    YAML::Node logs = t.Child("logs");
-    if (logs.IsSequence())
-      for (const auto& log : logs) info.logs.push_back(log.Scalar());
-    t.Get("samples", &info.samples);
-    t.Get("train_rmse", &info.train_rmse);
-    t.Get("validation_rmse", &info.validation_rmse);
-    t.Get("validation_qd_rmse", &info.validation_qd_rmse);
-    t.Get("validation_rollout_rmse", &info.validation_rollout_rmse);
-    t.Finish();
-  }
+  ReadTrainedOn(top, &info.logs, &info.samples,
+                {{"train_rmse", &info.train_rmse},
+                 {"validation_rmse", &info.validation_rmse},
+                 {"validation_qd_rmse", &info.validation_qd_rmse},
+                 {"validation_rollout_rmse", &info.validation_rollout_rmse}});
   errors.ThrowIfAny();
 
   const int in = l.num_inputs(), out = l.num_outputs();
@@ -271,15 +247,19 @@ ArmPredictor ArmPredictor::Load(const std::string& path) {
   return p;
 }
 
-std::string ArmTrainOptions::Validate() const {
-  if (kind != "linear" && kind != "mlp") return "--kind must be linear or mlp, got '" + kind + "'";
-  if (history < 1 || history > 50) return "--history must be 1 to 50 samples, got " + std::to_string(history);
-  if (horizon < 1 || horizon > 100) return "--horizon must be 1 to 100 samples, got " + std::to_string(horizon);
-  if (!(ridge >= 0) || !(residual_ridge >= 0)) return "ridge must not be negative";
-  if (!(validation_fraction > 0 && validation_fraction < 0.9)) return "validation fraction must be in (0, 0.9)";
-  if (!(rollout_seconds >= 0)) return "rollout seconds must not be negative";
-  if (kind == "mlp") return mlp.Validate();
-  return "";
+bool ArmTrainOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& s) {
+    if (why) *why = s;
+    return false;
+  };
+  if (kind != "linear" && kind != "mlp") return fail("--kind must be linear or mlp, got '" + kind + "'");
+  if (history < 1 || history > 50) return fail("--history must be 1 to 50 samples, got " + std::to_string(history));
+  if (horizon < 1 || horizon > 100) return fail("--horizon must be 1 to 100 samples, got " + std::to_string(horizon));
+  if (!(ridge >= 0) || !(residual_ridge >= 0)) return fail("ridge must not be negative");
+  if (!(validation_fraction > 0 && validation_fraction < 0.9)) return fail("validation fraction must be in (0, 0.9)");
+  if (!(rollout_seconds >= 0)) return fail("rollout seconds must not be negative");
+  if (kind == "mlp") return mlp.IsValid(why);
+  return true;
 }
 
 std::string ArmTrainSummary::BriefReport() const {
@@ -327,8 +307,7 @@ double QRmse(const Eigen::MatrixXd& predicted, const Eigen::MatrixXd& truth, int
 
 ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>& logs, const ArmTrainOptions& options,
                                ArmTrainSummary* summary, const std::function<void(int, int, double)>& progress) {
-  const std::string problem = options.Validate();
-  if (!problem.empty()) throw InputError(problem);
+  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
   if (logs.empty()) throw InputError("no logs to train on");
 
   ArmPredictorInfo info;
@@ -401,7 +380,7 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     Mlp net;
     try {
       net = TrainMlp(x, y, mlp, &s, progress);
-    } catch (const std::exception& e) {
+    } catch (const InputError& e) {
       throw InputError(std::string("cannot train the neural net: ") + e.what());
     }
     mlp_report = s.BriefReport();

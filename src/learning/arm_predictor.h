@@ -28,10 +28,10 @@
 #include <string>
 #include <vector>
 
-#include "io/arm_log.h"
 #include "learning/arm_features.h"
 #include "learning/arm_nominal_step.h"
 #include "learning/mlp.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim {
@@ -130,7 +130,8 @@ struct ArmTrainOptions {
   double rollout_seconds = 0.1;      // s, the held-out free-run check (H = 1)
   MlpOptions mlp;
 
-  std::string Validate() const;
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
 };
 
 struct ArmTrainSummary {

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/error.h"
 #include "core/rng.h"
 
 namespace twinsim {
@@ -200,9 +201,9 @@ Mlp Mlp::FromParameters(Parameters p) {
   std::vector<std::string> problems;
   const std::vector<int>& sizes = p.layer_sizes;
   if (sizes.size() < 2) {
-    throw std::invalid_argument("Mlp::FromParameters: layer_sizes has " +
-                                std::to_string(sizes.size()) +
-                                " entries, need at least 2 (inputs and outputs)");
+    throw InputError("Mlp::FromParameters: layer_sizes has " +
+                     std::to_string(sizes.size()) +
+                     " entries, need at least 2 (inputs and outputs)");
   }
   for (std::size_t i = 0; i < sizes.size(); ++i) {
     if (sizes[i] < 1) {
@@ -211,7 +212,7 @@ Mlp Mlp::FromParameters(Parameters p) {
     }
   }
   if (!problems.empty())
-    throw std::invalid_argument("Mlp::FromParameters: " + Join(problems, "; "));
+    throw InputError("Mlp::FromParameters: " + Join(problems, "; "));
 
   const auto check_vector = [&problems](const Eigen::VectorXd& v, int expected,
                                         const std::string& name, bool positive) {
@@ -249,7 +250,7 @@ Mlp Mlp::FromParameters(Parameters p) {
     }
   }
   if (!problems.empty())
-    throw std::invalid_argument("Mlp::FromParameters: " + Join(problems, "; "));
+    throw InputError("Mlp::FromParameters: " + Join(problems, "; "));
 
   Mlp net;
   net.hidden_.assign(sizes.begin() + 1, sizes.end() - 1);
@@ -257,7 +258,7 @@ Mlp Mlp::FromParameters(Parameters p) {
   return net;
 }
 
-std::string MlpOptions::Validate() const {
+bool MlpOptions::IsValid(std::string* why) const {
   std::vector<std::string> problems;
   for (std::size_t i = 0; i < hidden.size(); ++i) {
     if (hidden[i] < 1) {
@@ -283,7 +284,8 @@ std::string MlpOptions::Validate() const {
   }
   if (patience < 1)
     problems.push_back("patience is " + std::to_string(patience) + " (must be >= 1)");
-  return Join(problems, "; ");
+  if (why && !problems.empty()) *why = Join(problems, "; ");
+  return problems.empty();
 }
 
 std::string MlpTrainSummary::BriefReport() const {
@@ -299,8 +301,8 @@ std::string MlpTrainSummary::BriefReport() const {
 
 Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options,
              MlpTrainSummary* summary, const std::function<void(int, int, double)>& progress) {
-  if (const std::string problems = options.Validate(); !problems.empty()) {
-    throw std::invalid_argument("TrainMlp: invalid options: " + problems);
+  if (std::string problems; !options.IsValid(&problems)) {
+    throw InputError("TrainMlp: invalid options: " + problems);
   }
   if (x.rows() != y.rows()) {
     throw std::invalid_argument("TrainMlp: x has " + std::to_string(x.rows()) + " rows but y has " +
@@ -313,7 +315,7 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
                                 std::to_string(y.cols()) + ")");
   }
   for (const std::string& bad : {FirstNonFinite(x, "x"), FirstNonFinite(y, "y")}) {
-    if (!bad.empty()) throw std::invalid_argument("TrainMlp: " + bad);
+    if (!bad.empty()) throw InputError("TrainMlp: " + bad);
   }
 
   // The validation rows are the last ones, so that with time-ordered data the network is
@@ -324,10 +326,10 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
   if (options.validation_fraction > 0 && n_val == 0) n_val = 1;
   const Eigen::Index n_train = n_rows - n_val;
   if (n_train < kMinTrainingRows) {
-    throw std::invalid_argument("TrainMlp: " + std::to_string(n_train) + " training rows (" +
-                                std::to_string(n_rows) + " rows minus " + std::to_string(n_val) +
-                                " for validation); need at least " +
-                                std::to_string(kMinTrainingRows));
+    throw InputError("TrainMlp: " + std::to_string(n_train) + " training rows (" +
+                     std::to_string(n_rows) + " rows minus " + std::to_string(n_val) +
+                     " for validation); need at least " +
+                     std::to_string(kMinTrainingRows));
   }
 
   // Normalisation from the training rows only, so nothing of the validation split leaks in.
@@ -448,9 +450,9 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
 
   const Eigen::VectorXd& kept = has_validation ? best_theta : theta;
   if (kept.size() != layout.total || !kept.allFinite() || (diverged && !has_validation)) {
-    throw std::runtime_error("TrainMlp: training diverged (non-finite loss at epoch " +
-                             std::to_string(epoch) + "); lower learning_rate (now " +
-                             Number(options.learning_rate) + ")");
+    throw InputError("TrainMlp: training diverged (non-finite loss at epoch " +
+                     std::to_string(epoch) + "); lower learning_rate (now " +
+                     Number(options.learning_rate) + ")");
   }
   for (int l = 0; l < n_layers; ++l) {
     params.weights.emplace_back(layout.Weights(kept, l));

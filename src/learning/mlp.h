@@ -45,7 +45,8 @@ class Mlp {
     std::vector<Eigen::VectorXd> biases;   // layer l: sizes[l+1]
   };
   const Parameters& parameters() const { return p_; }
-  // Rebuilds a network; throws std::invalid_argument when the shapes disagree.
+  // Rebuilds a network; throws InputError when the shapes disagree (the parameters
+  // come from a predictor file).
   static Mlp FromParameters(Parameters p);
 
  private:
@@ -63,8 +64,8 @@ struct MlpOptions {
   int patience = 30;                   // epochs without validation improvement before stopping
   std::uint64_t seed = 1;              // initialisation and batch shuffling
 
-  // Empty when valid, else what is wrong.
-  std::string Validate() const;
+  // True when usable; else says why in *why (every problem, separated by "; ").
+  bool IsValid(std::string* why) const;
 };
 
 struct MlpTrainSummary {
@@ -77,7 +78,8 @@ struct MlpTrainSummary {
 };
 
 // Trains on x (N x in) -> y (N x out); the validation split is the last rows. Throws
-// std::invalid_argument for inconsistent shapes, too few rows, or invalid options.
+// InputError for invalid options, non-finite data, too few rows, or a training that
+// diverged (lower the learning rate), std::invalid_argument for inconsistent shapes.
 // `progress(epoch, max_epochs, validation_mse)` is called once per epoch (without a validation
 // split it gets the epoch's mean training batch loss instead).
 Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options,

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "core/pose.h"
-#include "io/omni_log.h"
+#include "robots/omni/omni_log.h"
 
 namespace twinsim {
 

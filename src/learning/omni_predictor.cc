@@ -8,7 +8,6 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "io/atomic_file.h"
 #include "io/yaml_reader.h"
 #include "learning/predictor_file.h"
 
@@ -86,9 +85,7 @@ void OmniPredictor::CheckUse(const OmniModel& model, double frame_rate, int hori
 
 void OmniPredictor::Save(const std::string& path) const {
   YAML::Emitter out;
-  out.SetDoublePrecision(17);
-  out << YAML::BeginMap;
-  out << YAML::Key << "twinsim_predictor" << YAML::Value << kPredictorFormatVersion;
+  BeginPredictorFile(out, kPredictorFormatVersion);
   out << YAML::Key << "kind" << YAML::Value << info_.kind;
   out << YAML::Key << "model" << YAML::Value << info_.model_name;
   out << YAML::Key << "frame_rate" << YAML::Value << info_.frame_rate;
@@ -99,18 +96,12 @@ void OmniPredictor::Save(const std::string& path) const {
   out << YAML::Key << "inputs" << YAML::Value << info_.layout.num_inputs();
   out << YAML::Key << "outputs" << YAML::Value << FeatureLayout::kNumOutputs;
   out << YAML::EndMap;
-  out << YAML::Key << "trained_on" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "logs" << YAML::Value << YAML::BeginSeq;
-  for (const auto& l : info_.logs) out << l;
-  out << YAML::EndSeq;
-  out << YAML::Key << "samples" << YAML::Value << info_.samples;
-  out << YAML::Key << "train_rmse" << YAML::Value << info_.train_rmse;
-  out << YAML::Key << "validation_rmse" << YAML::Value << info_.validation_rmse;
-  out << YAML::Key << "validation_rollout_rmse" << YAML::Value << info_.validation_rollout_rmse;
-  out << YAML::EndMap;
+  EmitTrainedOn(out, info_.logs, info_.samples,
+                {{"train_rmse", info_.train_rmse},
+                 {"validation_rmse", info_.validation_rmse},
+                 {"validation_rollout_rmse", info_.validation_rollout_rmse}});
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
-  out << YAML::EndMap;
-  WriteFileAtomically(path, std::string(out.c_str()) + "\n");
+  WritePredictorFile(out, path);
 }
 
 OmniPredictor OmniPredictor::Load(const std::string& path) {
@@ -118,15 +109,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   CheckPredictorRobot(root, path, "omni");
   ErrorList errors;
   YamlMap top(root, path, "", &errors);
-  if (top.Has("robot")) top.Child("robot");
-  int version = 0;
-  if (!top.Require("twinsim_predictor", &version)) errors.ThrowIfAny();
-  if (version != kPredictorFormatVersion) {
-    top.Error("twinsim_predictor", "predictor format version " + std::to_string(version) +
-                                       " is not supported (this build reads version " +
-                                       std::to_string(kPredictorFormatVersion) + ")");
-    errors.ThrowIfAny();
-  }
+  ReadPredictorVersion(top, "predictor", kPredictorFormatVersion, kPredictorFormatVersion);
   OmniPredictorInfo info;
   top.Require("kind", &info.kind, std::vector<std::string>{"linear", "mlp"});
   top.Require("model", &info.model_name);
@@ -145,17 +128,10 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   } else {
     top.Missing("layout");
   }
-  if (top.Has("trained_on")) {
-    YamlMap t(top.Child("trained_on"), path, "trained_on", &errors);
-    YAML::Node logs = t.Child("logs");
-    if (logs.IsSequence())
-      for (const auto& l : logs) info.logs.push_back(l.Scalar());
-    t.Get("samples", &info.samples);
-    t.Get("train_rmse", &info.train_rmse);
-    t.Get("validation_rmse", &info.validation_rmse);
-    t.Get("validation_rollout_rmse", &info.validation_rollout_rmse);
-    t.Finish();
-  }
+  ReadTrainedOn(top, &info.logs, &info.samples,
+                {{"train_rmse", &info.train_rmse},
+                 {"validation_rmse", &info.validation_rmse},
+                 {"validation_rollout_rmse", &info.validation_rollout_rmse}});
   errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();
@@ -170,13 +146,17 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   return p;
 }
 
-std::string OmniTrainOptions::Validate() const {
-  if (kind != "linear" && kind != "mlp") return "--kind must be linear or mlp, got '" + kind + "'";
-  if (horizon < 1 || horizon > 30) return "--horizon must be 1 to 30 frames, got " + std::to_string(horizon);
-  if (ridge < 0) return "ridge must not be negative";
-  if (validation_fraction <= 0 || validation_fraction >= 0.9) return "validation fraction must be in (0, 0.9)";
-  if (kind == "mlp") return mlp.Validate();
-  return "";
+bool OmniTrainOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& s) {
+    if (why) *why = s;
+    return false;
+  };
+  if (kind != "linear" && kind != "mlp") return fail("--kind must be linear or mlp, got '" + kind + "'");
+  if (horizon < 1 || horizon > 30) return fail("--horizon must be 1 to 30 frames, got " + std::to_string(horizon));
+  if (ridge < 0) return fail("ridge must not be negative");
+  if (validation_fraction <= 0 || validation_fraction >= 0.9) return fail("validation fraction must be in (0, 0.9)");
+  if (kind == "mlp") return mlp.IsValid(why);
+  return true;
 }
 
 std::string OmniTrainSummary::BriefReport() const {
@@ -230,8 +210,7 @@ std::pair<double, long> Rollouts(const OmniPredictor& model, const FrameSequence
 OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
                                  const OmniTrainOptions& options, OmniTrainSummary* summary,
                                  const std::function<void(int, int, double)>& progress) {
-  const std::string problem = options.Validate();
-  if (!problem.empty()) throw InputError(problem);
+  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
   if (logs.empty()) throw InputError("no logs to train on");
 
   OmniPredictorInfo info;
@@ -290,7 +269,7 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     Mlp net;
     try {
       net = TrainMlp(x, y, mlp, &s, progress);
-    } catch (const std::exception& e) {
+    } catch (const InputError& e) {
       throw InputError(std::string("cannot train the neural net: ") + e.what());
     }
     mlp_report = s.BriefReport();

@@ -18,9 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "io/omni_log.h"
 #include "learning/mlp.h"
 #include "learning/omni_features.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
@@ -84,7 +84,8 @@ struct OmniTrainOptions {
   double validation_fraction = 0.2;  // held out from the end of every log
   MlpOptions mlp;
 
-  std::string Validate() const;
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
 };
 
 struct OmniTrainSummary {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "io/atomic_file.h"
 
 namespace twinsim {
 
@@ -27,6 +28,55 @@ void CheckPredictorRobot(const YAML::Node& root, const std::string& path, const 
   const std::string what = robot == "arm" ? "an arm" : robot == "omni" ? "an omni robot" : "a robot of kind '" + robot + "'";
   throw InputError(where, "this is a predictor for " + what +
                               ", not for " + (expected == "arm" ? "an arm" : "an omni robot") + "; " + hint);
+}
+
+int ReadPredictorVersion(YamlMap& top, const std::string& what, int oldest, int newest) {
+  top.Child("robot");
+  int version = 0;
+  if (!top.Require("twinsim_predictor", &version)) top.errors()->ThrowIfAny();
+  if (version < oldest || version > newest) {
+    const std::string reads = oldest == newest
+                                  ? "version " + std::to_string(newest)
+                                  : "versions " + std::to_string(oldest) + " to " + std::to_string(newest);
+    top.Error("twinsim_predictor", what + " format version " + std::to_string(version) +
+                                       " is not supported (this build reads " + reads + ")");
+    top.errors()->ThrowIfAny();
+  }
+  return version;
+}
+
+void ReadTrainedOn(YamlMap& top, std::vector<std::string>* logs, int* samples,
+                   std::initializer_list<std::pair<const char*, double*>> fields) {
+  if (!top.Has("trained_on")) return;
+  YamlMap t(top.Child("trained_on"), top.path(), "trained_on", top.errors());
+  const YAML::Node list = t.Child("logs");
+  if (list.IsSequence())
+    for (const auto& log : list) logs->push_back(log.Scalar());
+  t.Get("samples", samples);
+  for (const auto& [key, value] : fields) t.Get(key, value);
+  t.Finish();
+}
+
+void BeginPredictorFile(YAML::Emitter& out, int version) {
+  out.SetDoublePrecision(17);
+  out << YAML::BeginMap;
+  out << YAML::Key << "twinsim_predictor" << YAML::Value << version;
+}
+
+void EmitTrainedOn(YAML::Emitter& out, const std::vector<std::string>& logs, int samples,
+                   std::initializer_list<std::pair<const char*, double>> fields) {
+  out << YAML::Key << "trained_on" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "logs" << YAML::Value << YAML::BeginSeq;
+  for (const auto& log : logs) out << log;
+  out << YAML::EndSeq;
+  out << YAML::Key << "samples" << YAML::Value << samples;
+  for (const auto& [key, value] : fields) out << YAML::Key << key << YAML::Value << value;
+  out << YAML::EndMap;
+}
+
+void WritePredictorFile(YAML::Emitter& out, const std::string& path) {
+  out << YAML::EndMap;
+  WriteFileAtomically(path, std::string(out.c_str()) + "\n");
 }
 
 Eigen::VectorXd ReadVector(YamlMap& m, const std::string& key, int size) {
@@ -91,7 +141,7 @@ Mlp ReadMlp(YamlMap& m, int inputs, int outputs, const std::string& path, ErrorL
   errors->ThrowIfAny();
   try {
     return Mlp::FromParameters(std::move(params));
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {  // add the file to the message
     throw InputError(SourceLocation{path}, std::string("corrupt neural network: ") + e.what());
   }
 }

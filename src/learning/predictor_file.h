@@ -15,7 +15,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <initializer_list>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "io/yaml_reader.h"
 #include "learning/mlp.h"
@@ -34,6 +37,26 @@ std::string PredictorFileRobot(const YAML::Node& root);
 // Throws InputError "path:line: this is an omni predictor ... (use)" when the file's
 // robot is not `expected` ("arm" or "omni"); `use` says who wanted it.
 void CheckPredictorRobot(const YAML::Node& root, const std::string& path, const std::string& expected);
+
+// Reads the root's `twinsim_predictor` version (and marks `robot`, which
+// CheckPredictorRobot() checked, as known). Throws InputError "WHAT format version V is
+// not supported (this build reads version NEWEST)" (or "versions OLDEST to NEWEST")
+// outside oldest..newest, and for a missing version (with the problems collected so far).
+int ReadPredictorVersion(YamlMap& top, const std::string& what, int oldest, int newest);
+
+// Reads the optional `trained_on` block: the training logs, the sample count and the
+// numbers `fields` names (each into its double; unknown keys are errors).
+void ReadTrainedOn(YamlMap& top, std::vector<std::string>* logs, int* samples,
+                   std::initializer_list<std::pair<const char*, double*>> fields);
+
+// Starts a predictor file: the root map, numbers with 17 significant digits, and
+// `twinsim_predictor: version` first.
+void BeginPredictorFile(YAML::Emitter& out, int version);
+// Writes the `trained_on` block: the logs, the sample count, then `fields` in order.
+void EmitTrainedOn(YAML::Emitter& out, const std::vector<std::string>& logs, int samples,
+                   std::initializer_list<std::pair<const char*, double>> fields);
+// Ends the root map and writes the file atomically; throws InputError when it cannot.
+void WritePredictorFile(YAML::Emitter& out, const std::string& path);
 
 // Reads a flow sequence of exactly `size` numbers under `key` (zeros after an error,
 // which goes into the map's error list).

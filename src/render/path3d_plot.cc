@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <optional>
 
 #include "core/error.h"
+#include "render/legend.h"
 #include "render/plot.h"
 #include "render/plot_style.h"
 
@@ -26,28 +26,8 @@ constexpr Color kShadowColor = Color::Hex(0xc8c8c8);
 
 bool Finite(const Eigen::Vector3d& p) { return p.allFinite(); }
 
-// A legend row: a path's line sample and name, or the key to the start and end markers.
-struct LegendEntry {
-  std::string name;
-  LineStyle line;
-  bool marker_key = false;
-};
-
-// The start/end key's row: circle, "start", square, "end"; x offsets from the row's left.
-struct MarkerKeyRow {
-  double circle, start_text, square, end_text, width;
-};
-MarkerKeyRow MarkerKey() {
-  const double h = kMarkerRadius * std::sqrt(kPi) / 2;
-  MarkerKeyRow k;
-  k.circle = kMarkerRadius + 2;
-  k.start_text = k.circle + kMarkerRadius + 6;
-  k.square = k.start_text + MeasureText("start", {}, LegendStyle()).width() + 18 + h;
-  k.end_text = k.square + h + 6;
-  k.width = k.end_text + MeasureText("end", {}, LegendStyle()).width();
-  return k;
-}
-
+// The legend rows: each path's line sample and name, the shadows' when drawn, and the
+// key to the start and end markers.
 std::vector<LegendEntry> Legend(const Path3DPlot& plot) {
   std::vector<LegendEntry> out;
   bool any = false;
@@ -59,57 +39,9 @@ std::vector<LegendEntry> Legend(const Path3DPlot& plot) {
   }
   if (any && plot.show_projection)
     out.push_back(LegendEntry{"shadow on the floor", LineStyle{kShadowColor, kShadowWidth, {}, LineCap::kRound}});
-  if (any) out.push_back(LegendEntry{"", {}, true});
+  if (any) out.push_back(LegendEntry{"", {}, LegendMarker::kStartEnd});
   return out;
 }
-
-Point2d MeasureLegend(const std::vector<LegendEntry>& entries) {
-  if (entries.empty()) return {0, 0};
-  double row = 0;
-  for (const auto& e : entries)
-    row = std::max(row, e.marker_key ? MarkerKey().width
-                                     : kLegendSample + 9 + MeasureText(e.name, {}, LegendStyle()).width());
-  return Point2d{2 * kLegendPad + row + 2, 2 * (kLegendPad - 4) + entries.size() * kLegendRow};
-}
-
-// Which 4 px cells of a rectangle hold something.
-class Occupancy {
- public:
-  explicit Occupancy(const Rect& area) : area_(area) {
-    nx_ = std::max(1, static_cast<int>(std::ceil(area.width() / kCell)));
-    ny_ = std::max(1, static_cast<int>(std::ceil(area.height() / kCell)));
-    cells_.assign(static_cast<std::size_t>(nx_) * ny_, 0);
-  }
-  void MarkRect(const Rect& r) {
-    for (int j = std::max(Cell(r.y0 - area_.y0), 0); j <= std::min(Cell(r.y1 - area_.y0), ny_ - 1); ++j)
-      for (int i = std::max(Cell(r.x0 - area_.x0), 0); i <= std::min(Cell(r.x1 - area_.x0), nx_ - 1); ++i)
-        cells_[static_cast<std::size_t>(j) * nx_ + i] = 1;
-  }
-  void MarkSegment(Point2d a, Point2d b, double r) {
-    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y)) return;
-    const double len = std::hypot(b.x - a.x, b.y - a.y);
-    const int n = std::min(100000, static_cast<int>(std::ceil(len / (kCell / 2))));
-    for (int k = 0; k <= n; ++k) {
-      const double s = n ? static_cast<double>(k) / n : 0;
-      const Point2d p{a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)};
-      MarkRect(Rect{p.x - r, p.y - r, p.x + r, p.y + r});
-    }
-  }
-  int Count(const Rect& r) const {
-    int count = 0;
-    for (int j = std::max(Cell(r.y0 - area_.y0), 0); j <= std::min(Cell(r.y1 - area_.y0), ny_ - 1); ++j)
-      for (int i = std::max(Cell(r.x0 - area_.x0), 0); i <= std::min(Cell(r.x1 - area_.x0), nx_ - 1); ++i)
-        count += cells_[static_cast<std::size_t>(j) * nx_ + i];
-    return count;
-  }
-
- private:
-  static constexpr double kCell = 4;
-  static int Cell(double v) { return static_cast<int>(std::floor(v / kCell)); }
-  Rect area_;
-  int nx_ = 1, ny_ = 1;
-  std::vector<std::uint8_t> cells_;
-};
 
 // The paths' box: every finite point with a margin of 5 % of the largest side (at
 // least 2 cm); no side shorter than 30 % of the largest, so that flat paths (letters
@@ -318,12 +250,12 @@ Path3DLayout Layout(const Path3DPlot& plot, bool legend_outside) {
   L.elevation = plot.elevation_deg * kPi / 180;
   DataBox(plot, &L.box_min, &L.box_max);
   const std::vector<LegendEntry> legend_entries = Legend(plot);
-  const Point2d legend = MeasureLegend(legend_entries);
+  const LegendSize legend = MeasureLegend(legend_entries);
   const double title_h = plot.title.empty() ? 0 : MeasureText(plot.title, {}, TitleStyle()).height();
 
   Rect& a = L.plot_area;
   a.x0 = kOuterPad;
-  a.x1 = plot.width - kOuterPad - (legend_outside ? legend.x + kLegendGap : 0);
+  a.x1 = plot.width - kOuterPad - (legend_outside ? legend.width + kLegendGap : 0);
   a.y0 = std::round(kOuterPad + (title_h > 0 ? title_h + kTitleGap : 6));
   a.y1 = plot.height - kOuterPad;
   if (a.width() < 80 || a.height() < 80) throw InputError("plot too small for its labels");
@@ -362,7 +294,7 @@ Path3DLayout Layout(const Path3DPlot& plot, bool legend_outside) {
   if (legend_entries.empty()) return L;
   if (legend_outside) {
     L.legend_inside = false;
-    L.legend = Rect{a.x1 + kLegendGap, a.y0, a.x1 + kLegendGap + legend.x, a.y0 + legend.y};
+    L.legend = LegendRight(a, legend);
     return L;
   }
   // The corner with no data under it and the fewest box edges and labels; top right,
@@ -371,45 +303,10 @@ Path3DLayout Layout(const Path3DPlot& plot, bool legend_outside) {
   MarkData(plot, L, &data);
   for (const auto& [i, j] : D.edges) decoration.MarkSegment(L.ToPixel(Corner(L, i)), L.ToPixel(Corner(L, j)), 1);
   for (const Label& l : D.labels) decoration.MarkRect(l.rect);
-  const Rect corners[4] = {
-      {a.x1 - kLegendInset - legend.x, a.y0 + kLegendInset, a.x1 - kLegendInset, a.y0 + kLegendInset + legend.y},
-      {a.x0 + kLegendInset, a.y0 + kLegendInset, a.x0 + kLegendInset + legend.x, a.y0 + kLegendInset + legend.y},
-      {a.x1 - kLegendInset - legend.x, a.y1 - kLegendInset - legend.y, a.x1 - kLegendInset, a.y1 - kLegendInset},
-      {a.x0 + kLegendInset, a.y1 - kLegendInset - legend.y, a.x0 + kLegendInset + legend.x, a.y1 - kLegendInset}};
-  int best = -1;
-  std::pair<int, int> best_score{std::numeric_limits<int>::max(), 0};
-  for (int k = 0; k < 4; ++k) {
-    const Rect& r = corners[k];
-    if (r.x0 < a.x0 || r.x1 > a.x1 || r.y0 < a.y0 || r.y1 > a.y1) continue;
-    const std::pair<int, int> score{data.Count(r.Inflated(4)), decoration.Count(r.Inflated(4))};
-    if (score < best_score) best = k, best_score = score;
-  }
-  if (best < 0 || best_score.first > 0) return Layout(plot, true);
-  L.legend = corners[best];
+  const std::optional<Rect> corner = LegendCorner(a, legend, data, &decoration);
+  if (!corner) return Layout(plot, true);
+  L.legend = *corner;
   return L;
-}
-
-void DrawLegend(const std::vector<LegendEntry>& entries, const Rect& box, Renderer& r) {
-  if (entries.empty()) return;
-  r.FillRect(box, kLegendBorder);
-  r.FillRect(box.Inflated(-1), kWhite);
-  double y = box.y0 + kLegendPad - 4 + kLegendRow / 2;
-  for (const auto& e : entries) {
-    const double x = box.x0 + kLegendPad;
-    const double yc = std::floor(y) + 0.5;
-    if (e.marker_key) {
-      const MarkerKeyRow k = MarkerKey();
-      const double h = kMarkerRadius * std::sqrt(kPi) / 2;
-      r.FillCircle({x + k.circle, yc}, kMarkerRadius, kMarkerKeyColor);
-      r.DrawText("start", {x + k.start_text, yc}, LegendStyle());
-      r.FillRect(Rect{x + k.square - h, yc - h, x + k.square + h, yc + h}, kMarkerKeyColor);
-      r.DrawText("end", {x + k.end_text, yc}, LegendStyle());
-    } else {
-      r.DrawPolyline({{x, yc}, {x + kLegendSample, yc}}, e.line);
-      r.DrawText(e.name, {x + kLegendSample + 9, yc}, LegendStyle());
-    }
-    y += kLegendRow;
-  }
 }
 
 }  // namespace
@@ -471,7 +368,7 @@ RgbaImage RenderPath3DPlot(const Path3DPlot& plot, Renderer& renderer, Path3DLay
   for (const Label& l : D.labels) r.DrawText(l.text, l.anchor, l.style);
   if (!plot.title.empty())
     r.DrawText(plot.title, {(L.plot_area.x0 + L.plot_area.x1) / 2, L.title.y0}, TitleStyle());
-  DrawLegend(Legend(plot), L.legend, r);
+  DrawLegend(r, Legend(plot), L.legend);
   return r.Finish();
 }
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <limits>
 
 #include "core/error.h"
+#include "render/legend.h"
 #include "render/plot_style.h"
 
 namespace twinsim {
@@ -27,16 +27,6 @@ constexpr Color kFieldColor = Color::Hex(0x9a9a9a);
 // purple, orange, sky blue, black; yellow last, it is faint on white.
 constexpr std::uint32_t kPalette[] = {0x0072b2, 0xd55e00, 0x009e73, 0xcc79a7, 0xe69f00, 0x56b4e9, 0x000000, 0xf0e442};
 
-enum class Marker { kNone, kStartEnd, kDot };
-
-constexpr double kDotRadius = 3.0;  // px, a scatter series' dots
-
-struct LegendEntry {
-  std::string name;
-  LineStyle line;
-  Marker marker = Marker::kNone;  // kStartEnd: the key to the start and end markers
-};
-
 // What both kinds of plot share: text, the range to show, the legend, and where the
 // data lies (in world units) so that the legend can avoid it.
 struct Chart {
@@ -53,79 +43,6 @@ struct Chart {
 
 // The centre of the pixel a 1 px line at coordinate v should light.
 double Snap(double v) { return std::floor(v) + 0.5; }
-
-// Which 4 px cells of the plot area hold data.
-class Occupancy {
- public:
-  explicit Occupancy(const Rect& area) : area_(area) {
-    nx_ = std::max(1, static_cast<int>(std::ceil(area.width() / kCell)));
-    ny_ = std::max(1, static_cast<int>(std::ceil(area.height() / kCell)));
-    cells_.assign(static_cast<std::size_t>(nx_) * ny_, 0);
-  }
-  void MarkDisc(Point2d p, double r) {
-    if (!std::isfinite(p.x) || !std::isfinite(p.y)) return;
-    const int i0 = Cell(p.x - r - area_.x0), i1 = Cell(p.x + r - area_.x0);
-    const int j0 = Cell(p.y - r - area_.y0), j1 = Cell(p.y + r - area_.y0);
-    for (int j = std::max(j0, 0); j <= std::min(j1, ny_ - 1); ++j)
-      for (int i = std::max(i0, 0); i <= std::min(i1, nx_ - 1); ++i) cells_[static_cast<std::size_t>(j) * nx_ + i] = 1;
-  }
-  void MarkSegment(Point2d a, Point2d b, double r) {
-    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y)) return;
-    // Clip roughly: skip segments wholly outside.
-    if (std::max(a.x, b.x) < area_.x0 - r || std::min(a.x, b.x) > area_.x1 + r || std::max(a.y, b.y) < area_.y0 - r ||
-        std::min(a.y, b.y) > area_.y1 + r)
-      return;
-    const double len = std::hypot(b.x - a.x, b.y - a.y);
-    const int n = std::min(100000, static_cast<int>(std::ceil(len / (kCell / 2))));
-    for (int k = 0; k <= n; ++k) {
-      const double s = n ? static_cast<double>(k) / n : 0;
-      MarkDisc(Point2d{a.x + s * (b.x - a.x), a.y + s * (b.y - a.y)}, r);
-    }
-  }
-  int Count(const Rect& r) const {
-    int count = 0;
-    const int i0 = Cell(r.x0 - area_.x0), i1 = Cell(r.x1 - area_.x0);
-    const int j0 = Cell(r.y0 - area_.y0), j1 = Cell(r.y1 - area_.y0);
-    for (int j = std::max(j0, 0); j <= std::min(j1, ny_ - 1); ++j)
-      for (int i = std::max(i0, 0); i <= std::min(i1, nx_ - 1); ++i) count += cells_[static_cast<std::size_t>(j) * nx_ + i];
-    return count;
-  }
-
- private:
-  static constexpr double kCell = 4;
-  static int Cell(double v) { return static_cast<int>(std::floor(v / kCell)); }
-  Rect area_;
-  int nx_ = 1, ny_ = 1;
-  std::vector<std::uint8_t> cells_;
-};
-
-struct LegendSize {
-  double width = 0, height = 0;
-};
-
-// The start/end key's row: circle, "start", square, "end"; x offsets from the row's left.
-struct MarkerKeyRow {
-  double circle, start_text, square, end_text, width;
-};
-MarkerKeyRow MarkerKey() {
-  const double h = kMarkerRadius * std::sqrt(kPi) / 2;  // the square's half side: same area as the circle
-  MarkerKeyRow k;
-  k.circle = kMarkerRadius + 2;
-  k.start_text = k.circle + kMarkerRadius + 6;
-  k.square = k.start_text + MeasureText("start", {}, LegendStyle()).width() + 18 + h;
-  k.end_text = k.square + h + 6;
-  k.width = k.end_text + MeasureText("end", {}, LegendStyle()).width();
-  return k;
-}
-
-LegendSize MeasureLegend(const std::vector<LegendEntry>& entries) {
-  if (entries.empty()) return {};
-  double row = 0;
-  for (const auto& e : entries)
-    row = std::max(row, e.marker == Marker::kStartEnd ? MarkerKey().width
-                                                      : kLegendSample + 9 + MeasureText(e.name, {}, LegendStyle()).width());
-  return LegendSize{2 * kLegendPad + row + 2, 2 * (kLegendPad - 4) + entries.size() * kLegendRow};
-}
 
 void CheckSize(int width, int height) {
   if (width < 240 || height < 180 || width > 8192 || height > 8192)
@@ -207,10 +124,10 @@ PlotLayout LayoutChart(const Chart& c, bool legend_outside) {
   if (c.legend.empty()) return L;
   if (legend_outside) {
     L.legend_inside = false;
-    L.legend = Rect{a.x1 + kLegendGap, a.y0, a.x1 + kLegendGap + legend.width, a.y0 + legend.height};
+    L.legend = LegendRight(a, legend);
     return L;
   }
-  // The emptiest corner, preferring top right, top left, bottom right, bottom left.
+  // A corner free of data (LegendCorner), else outside on the right.
   Occupancy occ(a);
   for (const auto& line : c.occupied_lines) {
     for (std::size_t i = 0; i + 1 < line.size(); ++i)
@@ -227,23 +144,9 @@ PlotLayout LayoutChart(const Chart& c, bool legend_outside) {
     previous = q;
     previous_r = r;
   }
-  const Rect corners[4] = {
-      {a.x1 - kLegendInset - legend.width, a.y0 + kLegendInset, a.x1 - kLegendInset, a.y0 + kLegendInset + legend.height},
-      {a.x0 + kLegendInset, a.y0 + kLegendInset, a.x0 + kLegendInset + legend.width, a.y0 + kLegendInset + legend.height},
-      {a.x1 - kLegendInset - legend.width, a.y1 - kLegendInset - legend.height, a.x1 - kLegendInset, a.y1 - kLegendInset},
-      {a.x0 + kLegendInset, a.y1 - kLegendInset - legend.height, a.x0 + kLegendInset + legend.width, a.y1 - kLegendInset}};
-  int best = -1, best_count = std::numeric_limits<int>::max();
-  for (int k = 0; k < 4; ++k) {
-    const Rect r = corners[k];
-    if (r.x0 < a.x0 || r.x1 > a.x1 || r.y0 < a.y0 || r.y1 > a.y1) continue;
-    const int count = occ.Count(r.Inflated(4));
-    if (count < best_count) {
-      best = k;
-      best_count = count;
-    }
-  }
-  if (best < 0 || best_count > 0) return LayoutChart(c, true);
-  L.legend = corners[best];
+  const std::optional<Rect> corner = LegendCorner(a, legend, occ);
+  if (!corner) return LayoutChart(c, true);
+  L.legend = *corner;
   return L;
 }
 
@@ -260,33 +163,6 @@ void DrawGrid(const PlotLayout& L, Renderer& r) {
     if (y > a.y0 + 1 && y < a.y1 - 1) grid.insert(grid.end(), {{a.x0, y}, {a.x1, y}});
   }
   r.DrawSegments(grid, LineStyle{kGridColor, 1.0, {}, LineCap::kButt});
-}
-
-void DrawLegend(const Chart& c, const PlotLayout& L, Renderer& r) {
-  if (c.legend.empty()) return;
-  const Rect& box = L.legend;
-  r.FillRect(box, kLegendBorder);
-  r.FillRect(box.Inflated(-1), kWhite);
-  double y = box.y0 + kLegendPad - 4 + kLegendRow / 2;
-  for (const auto& e : c.legend) {
-    const double x = box.x0 + kLegendPad;
-    const double yc = std::floor(y) + 0.5;
-    if (e.marker == Marker::kStartEnd) {
-      const MarkerKeyRow k = MarkerKey();
-      const double h = kMarkerRadius * std::sqrt(kPi) / 2;
-      r.FillCircle({x + k.circle, yc}, kMarkerRadius, kMarkerKeyColor);
-      r.DrawText("start", {x + k.start_text, yc}, LegendStyle());
-      r.FillRect(Rect{x + k.square - h, yc - h, x + k.square + h, yc + h}, kMarkerKeyColor);
-      r.DrawText("end", {x + k.end_text, yc}, LegendStyle());
-    } else if (e.marker == Marker::kDot) {
-      r.FillCircle({x + kLegendSample / 2, yc}, kDotRadius, e.line.color);
-      r.DrawText(e.name, {x + kLegendSample + 9, yc}, LegendStyle());
-    } else {
-      r.DrawPolyline({{x, yc}, {x + kLegendSample, yc}}, e.line);
-      r.DrawText(e.name, {x + kLegendSample + 9, yc}, LegendStyle());
-    }
-    y += kLegendRow;
-  }
 }
 
 void DrawAxes(const Chart& c, const PlotLayout& L, Renderer& r) {
@@ -332,7 +208,7 @@ RgbaImage DrawChart(const Chart& c, const PlotLayout& L, Renderer& r, const std:
   draw_data();
   r.ResetClip();
   DrawAxes(c, L, r);
-  DrawLegend(c, L, r);
+  DrawLegend(r, c.legend, L.legend);
   return r.Finish();
 }
 
@@ -406,7 +282,7 @@ Chart PathChart(const PathPlot& plot) {
   }
   bool any = false;
   for (const auto& p : plot.paths) any = any || !p.poses.empty();
-  if (any) c.legend.push_back(LegendEntry{"", {}, Marker::kStartEnd});
+  if (any) c.legend.push_back(LegendEntry{"", {}, LegendMarker::kStartEnd});
   return c;
 }
 
@@ -432,7 +308,7 @@ Chart SeriesChart(const SeriesPlot& plot) {
     c.occupied_lines.push_back(std::move(line));
     LineStyle style = PlotLineStyle(static_cast<int>(k), kDataWidth);
     style.color = PlotColor(static_cast<int>(k));
-    c.legend.push_back(LegendEntry{s.name, style, s.points ? Marker::kDot : Marker::kNone});
+    c.legend.push_back(LegendEntry{s.name, style, s.points ? LegendMarker::kDot : LegendMarker::kLine});
   }
   if (plot.range) {
     c.view = *plot.range;

@@ -24,6 +24,7 @@ inline constexpr double kDataWidth = 2.0;     // data lines
 inline constexpr double kMarkerRadius = 5.5;  // start circle; the end square has the same area
 inline constexpr double kMarkerRing = 1.6;    // white ring around markers
 inline constexpr double kMarkerStep = 3.6;    // larger radius per later marker at the same place
+inline constexpr double kDotRadius = 3.0;     // a scatter series' dots
 
 inline constexpr Color kTitleColor = Color::Hex(0x111111);
 inline constexpr Color kLabelColor = Color::Hex(0x222222);

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "io/yaml_reader.h"
 #include "render/plot_spec.h"
 
@@ -35,8 +36,6 @@ bool ReadModel(YamlMap& m, const std::string& key, bool required, const fs::path
     return true;
   } catch (const InputError& e) {
     m.errors()->Add(e.what());
-  } catch (const std::exception& e) {
-    m.Error(key, std::string("cannot load the arm model: ") + e.what());
   }
   return false;
 }
@@ -335,7 +334,7 @@ void ReadSensors(const YAML::Node& node, const std::string& path, const ArmModel
     sensors->count_step = Eigen::VectorXd::Zero(dof);
     for (int j = 0; j < dof; ++j) {
       if (is_revolute(j)) {
-        if (counts_ok && counts[j] > 0) sensors->count_step[j] = 2 * M_PI / counts[j];
+        if (counts_ok && counts[j] > 0) sensors->count_step[j] = 2 * kPi / counts[j];
       } else if (resolution_ok) {
         sensors->count_step[j] = resolution[j];
       }
@@ -461,7 +460,7 @@ ArmReference ArmSceneReference(const ArmScene& scene) {
     options.sample_time = scene.plant.sample_time;
     try {
       return WritingTaskReference(hat, options);
-    } catch (const std::invalid_argument& e) {
+    } catch (const InputError& e) {
       throw InputError(SourceLocation{scene.path}, "the writing task cannot be drawn by '" + hat.name + "': " + e.what());
     }
   }
@@ -473,7 +472,7 @@ ArmReference ArmSceneReference(const ArmScene& scene) {
       ref = task.motion == "multisine"
                 ? SampledReference(RandomTrainingTrajectory(hat, task.training, scene.seed), ts, task.training.seconds)
                 : RandomStopAndGoReference(hat, task.training, scene.seed);
-    } catch (const std::invalid_argument& e) {
+    } catch (const InputError& e) {
       throw InputError(SourceLocation{scene.path}, "the random task cannot be drawn for '" + hat.name + "': " + e.what());
     }
     FillToolPath(hat, task.writing.tool, &ref);
@@ -484,7 +483,7 @@ ArmReference ArmSceneReference(const ArmScene& scene) {
   ref.sample_time = ts;
   ref.t.resize(samples);
   ref.q.resize(samples, n), ref.qd.setZero(samples, n), ref.qdd.setZero(samples, n);
-  const double w = 2 * M_PI * task.frequency;
+  const double w = 2 * kPi * task.frequency;
   for (Eigen::Index k = 0; k < samples; ++k) {
     const double t = static_cast<double>(k) * ts;
     ref.t[k] = t;

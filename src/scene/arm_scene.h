@@ -21,11 +21,11 @@
 
 #include <Eigen/Core>
 
+#include "control/arm_trials.h"
+#include "control/closed_loop_frf.h"
 #include "control/computed_torque.h"
 #include "control/iterative_learning.h"
-#include "identification/closed_loop_frf.h"
 #include "control/writing_task.h"
-#include "learning/arm_trials.h"
 #include "robots/arm/arm_model.h"
 #include "scene/arm_sensors.h"
 
@@ -35,7 +35,7 @@ namespace twinsim {
 struct ArmTaskSpec {
   std::string type = "writing";  // writing | hold | step | sinusoid | random
   WritingTaskOptions writing;    // type writing (its `tool` is also the plots' tool point)
-  // type random: seeded random motion to learn from (learning/arm_trials.h), a multi-sine
+  // type random: seeded random motion to learn from (control/arm_trials.h), a multi-sine
   // or stop-and-go moves around training.center +- training.amplitude for `duration`
   // (training.seconds); the scene's seed picks the motion and the controller's dither.
   std::string motion = "stop_and_go";  // multisine | stop_and_go
@@ -64,7 +64,7 @@ struct ArmPlotSpec {
 
 // The `ilc:` block: iterative learning control trials (`twinsim ilc`,
 // control/iterative_learning.h) and how the process sensitivity is measured for the
-// learning filter (identification/closed_loop_frf.h).
+// learning filter (control/closed_loop_frf.h).
 struct IlcSpec {
   bool present = false;               // the scene has an `ilc:` block
   IlcOptions options;                 // trials, gain, q_order, q_cutoff
@@ -108,7 +108,7 @@ ArmReference ArmSceneReference(const ArmScene& scene);
 
 // The text of `trajectory.csv` for a trial of the scene: the contract's arm log as the
 // scene's `sensors:` record it (SensedArmLog with scene.seed), byte for byte the exact
-// `t,q,tau,qd,qref` log when the block is absent. Throws std::invalid_argument when the
+// `t,q,tau,qd,qref` log when the block is absent. Throws InputError when the
 // block's per-joint values do not match the trial's joint count.
 std::string ArmSceneTrajectoryCsv(const ArmScene& scene, const TrackingTrial& trial);
 

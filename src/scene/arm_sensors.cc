@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/error.h"
 #include "core/rng.h"
 #include "io/csv_table.h"
 
@@ -44,7 +45,7 @@ bool ArmSensorSpec::IsValid(int dof, std::string* why) const {
 ArmLog SensedArmLog(const ArmSensorSpec& sensors, const TrackingTrial& trial, std::uint64_t seed) {
   const int dof = static_cast<int>(trial.q.cols());
   std::string why;
-  if (!sensors.IsValid(dof, &why)) throw std::invalid_argument("SensedArmLog: " + why);
+  if (!sensors.IsValid(dof, &why)) throw InputError("SensedArmLog: " + why);
   ArmLog log;
   log.dof = dof;
   log.t = trial.t;

@@ -19,7 +19,7 @@
 #include <Eigen/Core>
 
 #include "control/computed_torque.h"
-#include "io/arm_log.h"
+#include "robots/arm/arm_log.h"
 
 namespace twinsim {
 
@@ -43,8 +43,8 @@ struct ArmSensorSpec {
 // The log the controller would have written with these sensors: t, q (in whole counts),
 // tau (the command sent, plus noise), qd (the realised velocity; absent when
 // !log_velocities) and qref, as an ArmLog with sample_period the trial's sample time.
-// Noise comes from Rng::Derived(seed, ...), one stream per joint. Throws
-// std::invalid_argument when the spec is not valid for the trial's joint count.
+// Noise comes from Rng::Derived(seed, ...), one stream per joint. Throws InputError
+// when the spec is not valid for the trial's joint count.
 ArmLog SensedArmLog(const ArmSensorSpec& sensors, const TrackingTrial& trial, std::uint64_t seed);
 
 // The CSV text of such a log in the contract's arm log format:

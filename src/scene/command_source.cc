@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/math_constants.h"
 #include "core/rng.h"
 
 namespace twinsim {
@@ -48,7 +49,7 @@ class FigureEightSource final : public CommandSource {
   Twist2 Command(const BehaviourInput& in) override {
     const double t = in.t - spec_.start;
     if (t < 0 || t >= spec_.period * spec_.laps) return Twist2{};
-    const double w = 2 * M_PI / spec_.period, a = spec_.size;
+    const double w = 2 * kPi / spec_.period, a = spec_.size;
     Twist2 field{a * w * std::cos(w * t), a * w * std::cos(2 * w * t), 0};
     return FieldToBody(field, heading_);
   }
@@ -175,7 +176,7 @@ std::vector<CommandSpec::Segment> RandomPlan(const CommandSpec& spec, std::uint6
     CommandSpec::Segment s;
     s.duration = rng.Uniform(spec.min_segment, spec.max_segment);
     if (rng.Uniform() >= spec.rest_probability) {
-      const double direction = rng.Uniform(-M_PI, M_PI);
+      const double direction = rng.Uniform(-kPi, kPi);
       const double speed = spec.max_speed * std::sqrt(rng.Uniform());  // fills the disc evenly
       s.command.vx = speed * std::cos(direction);
       s.command.vy = speed * std::sin(direction);
@@ -198,7 +199,7 @@ std::unique_ptr<CommandSource> MakeCommandSource(const CommandSpec& spec, std::u
                                                  const Pose2& start) {
   if (spec.type == "sequence") return std::make_unique<SegmentSource>(spec.segments, spec.repeat);
   if (spec.type == "test_drive") {
-    const double a = spec.direction_deg * M_PI / 180.0;
+    const double a = spec.direction_deg * kPi / 180.0;
     std::vector<CommandSpec::Segment> s = {
         {spec.start, Twist2{}, false},
         {spec.drive_time, Twist2{spec.speed * std::cos(a), spec.speed * std::sin(a), 0}, false}};

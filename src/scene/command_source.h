@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "core/behaviour.h"
 #include "core/pose.h"
 #include "learning/omni_predictor.h"
+#include "sim/behaviour.h"
 
 namespace twinsim {
 

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "io/yaml_reader.h"
 
 namespace twinsim {
@@ -71,9 +72,9 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     m.Get("max_accel", &spec->max_accel, Positive());
     m.Get("gain", &spec->gain, Positive());
     m.Get("position_tolerance", &spec->position_tolerance, Positive());
-    double angle_tolerance_deg = spec->angle_tolerance * 180 / M_PI;
+    double angle_tolerance_deg = spec->angle_tolerance * 180 / kPi;
     if (m.Get("angle_tolerance_deg", &angle_tolerance_deg, Positive()))
-      spec->angle_tolerance = angle_tolerance_deg * M_PI / 180;
+      spec->angle_tolerance = angle_tolerance_deg * kPi / 180;
     m.Get("hold", &spec->hold, NonNegative());
     if (m.Get("predictor", &spec->predictor_path)) {
       std::filesystem::path p(spec->predictor_path);
@@ -98,7 +99,7 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
         t.Require("x", &p.x);
         t.Require("y", &p.y);
         t.Get("theta_deg", &theta_deg);
-        p.theta = theta_deg * M_PI / 180;
+        p.theta = theta_deg * kPi / 180;
         t.Finish();
         spec->targets.push_back(p);
       }
@@ -159,7 +160,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
         s.Get("x", &robot.start.x);
         s.Get("y", &robot.start.y);
         s.Get("theta_deg", &theta_deg);
-        robot.start.theta = WrapAngle(theta_deg * M_PI / 180);
+        robot.start.theta = WrapAngle(theta_deg * kPi / 180);
         s.Finish();
       }
       if (r.Has("commands")) {
@@ -213,7 +214,7 @@ Scene LoadSceneFromString(const std::string& yaml, const std::string& name, cons
   return ReadScene(root, name, base_dir);
 }
 
-Simulation MakeSimulation(const Scene& scene, const std::string& backend, const BackendOptions& options) {
+Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options) {
   std::vector<OmniModel> models;
   std::vector<SimRobot> robots;
   for (std::size_t i = 0; i < scene.robots.size(); ++i) {

@@ -11,10 +11,10 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "backends/omni_backend.h"
-#include "core/simulation.h"
+#include "backends/omni_backend_factory.h"
 #include "render/plot_spec.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 
 namespace twinsim {
 
@@ -37,7 +37,7 @@ struct Scene {
   FieldModel field;
   std::vector<SceneRobot> robots;
   std::vector<PlotSpec> plots;   // PNGs `twinsim run` draws (docs/rendering.md)
-  YAML::Node tune_pid;           // the `tune_pid:` block, read by ReadPidTuningOptions (learning/pid_tuning.h)
+  YAML::Node tune_pid;           // the `tune_pid:` block, read by ReadPidTuningOptions (tuning/pid_tuning.h)
 
   FrameTiming timing() const;
   // Number of frames from t = 0 to `duration` inclusive.
@@ -50,6 +50,6 @@ Scene LoadScene(const std::string& path);
 Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
 
 // Builds the simulation of a scene on the named backend.
-Simulation MakeSimulation(const Scene& scene, const std::string& backend, const BackendOptions& options = {});
+Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options = {});
 
 }  // namespace twinsim

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 
 namespace twinsim {
 namespace {
@@ -60,8 +62,8 @@ void RunCascade(const ButterworthFilter& filter, bool steady, Eigen::VectorXd* x
 
 void CheckSamples(const Eigen::VectorXd& t, const Eigen::VectorXd& x) {
   if (t.size() != x.size()) {
-    throw InputError("derivatives: " + std::to_string(t.size()) + " sample times but " + std::to_string(x.size()) +
-                     " samples");
+    throw std::invalid_argument("derivatives: " + std::to_string(t.size()) + " sample times but " +
+                                std::to_string(x.size()) + " samples");
   }
   if (t.size() < 3) throw InputError("derivatives need at least 3 samples, got " + std::to_string(t.size()));
   for (Eigen::Index k = 1; k < t.size(); ++k) {
@@ -96,10 +98,10 @@ ButterworthFilter DesignButterworthLowPass(int order, double cutoff_hz, double s
   // Bilinear transform s = k (1 - 1/z) / (1 + 1/z), k = 2 fs, with the analog cut-off
   // prewarped so that the digital -3 dB point lands exactly on cutoff_hz.
   const double k = 2 * sample_rate_hz;
-  const double wc = k * std::tan(M_PI * cutoff_hz / sample_rate_hz);  // rad/s
+  const double wc = k * std::tan(kPi * cutoff_hz / sample_rate_hz);  // rad/s
   // Conjugate pole pairs of the prototype: s^2 + 2 sin(theta) wc s + wc^2.
   for (int p = 1; p <= order / 2; ++p) {
-    const double zeta2 = 2 * std::sin(M_PI * (2 * p - 1) / (2.0 * order));
+    const double zeta2 = 2 * std::sin(kPi * (2 * p - 1) / (2.0 * order));
     const double a1 = zeta2 * wc, a0 = wc * wc;
     const double d0 = k * k + a1 * k + a0;
     Biquad s;
@@ -123,7 +125,7 @@ ButterworthFilter DesignButterworthLowPass(int order, double cutoff_hz, double s
 }
 
 std::complex<double> FrequencyResponse(const ButterworthFilter& filter, double frequency_hz) {
-  const std::complex<double> zi = std::polar(1.0, -2 * M_PI * frequency_hz / filter.sample_rate_hz);  // z^-1
+  const std::complex<double> zi = std::polar(1.0, -2 * kPi * frequency_hz / filter.sample_rate_hz);  // z^-1
   std::complex<double> h = 1.0;
   for (const Biquad& s : filter.sections) {
     h *= (s.b0 + zi * (s.b1 + zi * s.b2)) / (1.0 + zi * (s.a1 + zi * s.a2));

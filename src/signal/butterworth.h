@@ -70,7 +70,8 @@ struct SignalDerivatives {
 // Filters `x` (sampled at times `t`, s, strictly increasing) with FiltFilt(), then
 // differentiates the filtered samples by three-point central differences on the actual
 // sample times (one-sided three-point formulas at the two ends). Throws InputError when
-// t and x differ in length, fewer than 3 samples are given or t does not increase.
+// fewer than 3 samples are given or t does not increase, std::invalid_argument when t
+// and x differ in length.
 SignalDerivatives FilteredDerivatives(const ButterworthFilter& filter, const Eigen::VectorXd& t,
                                       const Eigen::VectorXd& x);
 

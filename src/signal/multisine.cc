@@ -5,6 +5,8 @@
 #include <complex>
 #include <stdexcept>
 
+#include "core/error.h"
+#include "core/math_constants.h"
 #include "core/rng.h"
 
 namespace twinsim {
@@ -17,9 +19,9 @@ Eigen::VectorXd Multisine::Repeat(int periods) const {
 
 Multisine RandomPhaseMultisine(int period_samples, double sample_time, double f_min, double f_max, double rms,
                                std::uint64_t seed) {
-  if (period_samples < 4) throw std::invalid_argument("multisine: a period needs >= 4 samples");
-  if (!(sample_time > 0)) throw std::invalid_argument("multisine: the sample time must be > 0");
-  if (!(rms >= 0)) throw std::invalid_argument("multisine: the RMS value must be >= 0");
+  if (period_samples < 4) throw InputError("multisine: a period needs >= 4 samples");
+  if (!(sample_time > 0)) throw InputError("multisine: the sample time must be > 0");
+  if (!(rms >= 0)) throw InputError("multisine: the RMS value must be >= 0");
   Multisine m;
   m.period_samples = period_samples;
   m.sample_time = sample_time;
@@ -28,18 +30,18 @@ Multisine RandomPhaseMultisine(int period_samples, double sample_time, double f_
     if (f >= f_min - 1e-9 && f <= f_max + 1e-9) m.lines.push_back(k);
   }
   if (m.lines.empty()) {
-    throw std::invalid_argument("multisine: no harmonic of " + std::to_string(m.Frequency(1)) + " Hz lies in [" +
-                                std::to_string(f_min) + ", " + std::to_string(f_max) +
-                                "] Hz below the Nyquist frequency");
+    throw InputError("multisine: no harmonic of " + std::to_string(m.Frequency(1)) + " Hz lies in [" +
+                     std::to_string(f_min) + ", " + std::to_string(f_max) +
+                     "] Hz below the Nyquist frequency");
   }
   Rng rng = Rng::Derived(seed, 0x6d73);  // "ms"
   // Each line contributes amplitude^2 / 2 to the mean square.
   const double amplitude = rms * std::sqrt(2.0 / static_cast<double>(m.lines.size()));
   m.one_period = Eigen::VectorXd::Zero(period_samples);
   for (int k : m.lines) {
-    const double phase = rng.Uniform(0, 2 * M_PI);
+    const double phase = rng.Uniform(0, 2 * kPi);
     for (int n = 0; n < period_samples; ++n) {
-      m.one_period[n] += amplitude * std::cos(2 * M_PI * k * n / period_samples + phase);
+      m.one_period[n] += amplitude * std::cos(2 * kPi * k * n / period_samples + phase);
     }
   }
   return m;
@@ -52,7 +54,7 @@ Eigen::VectorXcd DftAtLines(const Eigen::VectorXd& x, const std::vector<int>& li
     std::complex<double> sum = 0;
     // The exact angle per sample (k n mod P), so long periods keep full precision.
     for (Eigen::Index n = 0; n < p; ++n) {
-      const double angle = -2 * M_PI * static_cast<double>((static_cast<long long>(lines[i]) * n) % p) /
+      const double angle = -2 * kPi * static_cast<double>((static_cast<long long>(lines[i]) * n) % p) /
                            static_cast<double>(p);
       sum += x[n] * std::polar(1.0, angle);
     }

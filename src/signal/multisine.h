@@ -30,7 +30,7 @@ struct Multisine {
 
 // A multisine of `period_samples` samples every `sample_time` s with every harmonic in
 // [f_min, f_max] (Hz) excited at equal amplitude and random phase (from `seed`), scaled
-// to the RMS value `rms`. Throws std::invalid_argument when period_samples < 4,
+// to the RMS value `rms`. Throws InputError when period_samples < 4,
 // sample_time <= 0, rms < 0, or the band holds no harmonic below the Nyquist frequency.
 Multisine RandomPhaseMultisine(int period_samples, double sample_time, double f_min, double f_max, double rms,
                                std::uint64_t seed);

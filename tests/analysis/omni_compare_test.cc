@@ -7,10 +7,10 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "core/simulation.h"
 #include "io/csv_table.h"
 #include "learning/omni_predictor.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -116,7 +116,7 @@ TEST(OmniCompare, CsvsHaveOneRowPerSourceAndHorizonAndOnePathRowPerLogRow) {
   ASSERT_EQ(paths.rows.size(), log.rows.size());
   EXPECT_NEAR(paths.rows.back()[4], log.rows.back().pose.x, 1e-3);
 
-  const std::string report = r.Report();
+  const std::string report = r.FullReport();
   EXPECT_NE(report.find("free run"), std::string::npos) << report;
   EXPECT_NE(report.find("again"), std::string::npos) << report;
 }

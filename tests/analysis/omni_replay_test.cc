@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "core/simulation.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {

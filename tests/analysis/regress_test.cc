@@ -9,8 +9,8 @@
 #include <functional>
 
 #include "core/error.h"
-#include "io/omni_log.h"
 #include "io/png_image.h"
+#include "robots/omni/omni_log.h"
 #include "test_util.h"
 
 namespace twinsim {

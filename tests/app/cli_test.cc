@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "io/omni_log.h"
+#include "robots/omni/omni_log.h"
 #include "test_util.h"
 
 namespace twinsim {

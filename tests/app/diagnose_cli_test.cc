@@ -6,9 +6,9 @@
 #include <nlohmann/json.hpp>
 
 #include "diagnosis/diagnosis_plants.h"
-#include "io/arm_log.h"
-#include "io/omni_log.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 #include "test_util.h"
 

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <filesystem>
 
+#include "analysis/arm_replay.h"
 #include "identification/synthetic_arm_data.h"
-#include "identification/torque_prediction.h"
-#include "io/arm_log.h"
 #include "io/csv_table.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 #include "test_util.h"
 
@@ -154,6 +154,40 @@ TEST(IdentifyCli, AJointThatNeverMovesIsExitTwoNamingTheParameter) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find(log + ": the data does not excite base parameters"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("fc3 (Coulomb friction of joint 3: it never moves)"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
+}
+
+TEST(IdentifyCli, PoorlyExcitedDataIsExitTwoSayingHowToMove) {
+  // Every joint moves, but along one slow sine for a second: too little to tell the
+  // parameters apart. That is bad input (exit 2), not an internal error (3).
+  const std::string dir = testing::TempDir("identify_poor");
+  const ArmModel truth = HeavierRrr();
+  const std::string log = dir + "/poor.csv";
+  WriteArmLog(log, testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 21, 1, 0.05), 1.0, 500.0, {}),
+              false);
+  auto r = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir + "/m.yaml");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(log + ": the data does not excite base parameter"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("Move every joint in both directions with varied speeds and accelerations"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
+}
+
+TEST(IdentifyCli, TorquesNoRealArmFitsAreExitTwo) {
+  // Torques in absurd units: even the physically consistent fit is no valid arm. That is
+  // the data's fault (exit 2), not an internal error (3).
+  const std::string dir = testing::TempDir("identify_units");
+  const ArmModel truth = HeavierRrr();
+  ArmLog absurd = testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 21), 8.0, 500.0, {});
+  absurd.tau *= 1e150;
+  const std::string log = dir + "/absurd.csv";
+  WriteArmLog(log, absurd, false);
+  auto r = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir + "/m.yaml");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(log + ": the data does not determine a real arm: even the physically consistent fit"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("Check the torques' units"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
 }
 

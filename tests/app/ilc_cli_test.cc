@@ -84,5 +84,25 @@ TEST(IlcCli, BadIlcKeysExitTwoWithFileLineColumn) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/out/trials.csv"));
 }
 
+TEST(IlcCli, FrequencyResponsesThatCannotBeMeasuredExitTwo) {
+  // Scene values the reader cannot judge alone (they need the model's sample time) are
+  // bad input too: exit 2 with the reason, not an internal error.
+  const std::string dir = testing::TempDir("ilc_cli_frf");
+  struct Case {
+    std::string frf, expected;
+  };
+  const std::vector<Case> cases = {
+      {"{period: 0.002}", "MeasureProcessSensitivity: the period is shorter than 4 samples"},
+      {"{band: [600, 900]}", "Hz lies in [600.000000, 900.000000] Hz below the Nyquist frequency"},
+  };
+  for (const Case& c : cases) {
+    const std::string scene = IlcScene(dir, "models/rrr_plant.yaml", "  trials: 1\n  frf: " + c.frf + "\n");
+    auto r = RunTwinsim("ilc " + scene + " --out " + dir + "/out --quiet");
+    EXPECT_EQ(r.exit_code, 2) << c.frf << ": " << r.err;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace twinsim

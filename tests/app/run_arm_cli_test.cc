@@ -6,8 +6,8 @@
 #include <filesystem>
 
 #include "control/computed_torque.h"
-#include "io/arm_log.h"
 #include "io/csv_table.h"
+#include "robots/arm/arm_log.h"
 #include "scene/arm_scene.h"
 #include "test_util.h"
 

@@ -3,9 +3,9 @@
 
 #include <filesystem>
 
-#include "io/arm_log.h"
+#include "control/arm_trials.h"
 #include "learning/arm_predictor.h"
-#include "learning/arm_trials.h"
+#include "robots/arm/arm_log.h"
 #include "test_util.h"
 
 namespace twinsim {

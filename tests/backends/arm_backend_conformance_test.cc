@@ -1,19 +1,20 @@
 // One conformance suite over every arm backend built into this binary: free swinging,
 // energy, a computed-torque trajectory, the delay convention and save/restore, all
-// through the arm simulation loop (core/arm_simulation.h). The tolerances are a few
+// through the arm simulation loop (sim/arm_simulation.h). The tolerances are a few
 // times the agreement measured (docs/arm_backends.md gives the numbers).
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <algorithm>
 #include <iostream>
 
-#include "backends/arm/arm_backend.h"
-#include "core/arm_simulation.h"
+#include "backends/arm_backend_factory.h"
 #include "core/error.h"
 #include "core/rng.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_model.h"
+#include "sim/arm_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -45,7 +46,7 @@ class ArmBackendConformance : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(ArmBackendConformance, ReadsBackTheStateItWasResetTo) {
   const ArmModel m = Rrr();
-  auto b = MakeArmBackend(GetParam(), m);
+  auto b = MakeArmEngine(GetParam(), m);
   EXPECT_EQ(b->name(), GetParam());
   EXPECT_EQ(b->dof(), 3);
   const Eigen::Vector3d q(2.5, -1.0, 3.0), qd(0.3, -0.2, 0.1);
@@ -280,7 +281,7 @@ TEST_P(ArmBackendConformance, ReportsADivergenceWithJointTimeAndValue) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Built, ArmBackendConformance, ::testing::ValuesIn(AvailableArmBackends()),
+INSTANTIATE_TEST_SUITE_P(Built, ArmBackendConformance, ::testing::ValuesIn(AvailableArmEngines()),
                          [](const auto& info) { return info.param; });
 
 TEST(ArmBackendFactory, RefusesUnknownNamesAndBadOptions) {
@@ -289,19 +290,35 @@ TEST(ArmBackendFactory, RefusesUnknownNamesAndBadOptions) {
     MakeArmBackend("mujoco", m);
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "unknown arm backend 'mujoco' (known: analytic, ode, bullet)");
+    EXPECT_STREQ(e.what(), "unknown arm backend 'mujoco' (known: analytic, ode, bullet, learned)");
   }
   ArmBackendOptions bad;
   bad.max_step = -1;
   EXPECT_THROW(MakeArmBackend("analytic", m, bad), InputError);
-#ifndef TWINSIM_HAVE_BULLET
-  try {
-    MakeArmBackend("bullet", m);
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "bullet backend not compiled; rebuild with -DTWINSIM_WITH_BULLET=ON");
+  // A model that does not Validate() is bad input wherever it is caught, for every backend.
+  ArmModel heavy = m;
+  heavy.joints[1].child.mass = -1;
+  for (const std::string& name : AvailableArmEngines()) {
+    try {
+      MakeArmBackend(name, heavy);
+      ADD_FAILURE() << name << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("mass must be positive"), std::string::npos) << name << ": " << e.what();
+    }
   }
-#endif
+  const std::vector<std::string> built = AvailableArmEngines();
+  if (std::find(built.begin(), built.end(), "bullet") == built.end()) {
+    try {
+      MakeArmBackend("bullet", m);
+      FAIL();
+    } catch (const InputError& e) {
+      EXPECT_STREQ(e.what(), "bullet backend not compiled; rebuild with -DTWINSIM_WITH_BULLET=ON");
+    }
+  }
+  // The factory knows the learned backend too; it needs a predictor.
+  const std::vector<std::string> names = AvailableArmBackends();
+  EXPECT_EQ(names.back(), "learned");
+  EXPECT_THROW(MakeArmBackend("learned", m), InputError);
 }
 
 }  // namespace

@@ -5,12 +5,13 @@
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "backends/newtonian_omni_backend.h"
-#include "backends/omni_backend.h"
-#include "core/simulation.h"
-#include "io/omni_log.h"
+#include "backends/omni_backend_factory.h"
+#include "core/math_constants.h"
 #include "robots/omni/omni_kinematics.h"
+#include "robots/omni/omni_log.h"
 #include "scene/command_source.h"
+#include "sim/newtonian_omni_backend.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -101,7 +102,7 @@ TEST_P(BackendConformance, AgreesWithTheAnalyticModelOnSimpleDrives) {
       max_heading = std::max(max_heading, std::abs(WrapAngle(a.theta - b.theta)));
     }
     EXPECT_LT(max_position, 0.02) << c.label;
-    EXPECT_LT(max_heading, 1.0 * M_PI / 180) << c.label;
+    EXPECT_LT(max_heading, 1.0 * kPi / 180) << c.label;
   }
 }
 

@@ -1,10 +1,11 @@
+#include "backends/arm_backend_factory.h"
 #include "backends/learned/learned_arm_backend.h"
 
 #include <gtest/gtest.h>
 
-#include "core/arm_simulation.h"
+#include "control/arm_trials.h"
 #include "core/error.h"
-#include "learning/arm_trials.h"
+#include "sim/arm_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -26,7 +27,7 @@ TEST(LearnedArmBackend, SaveRestoreIsBitExactAndStepsOneSample) {
   for (const std::string kind : {"linear", "mlp"}) {
     const ArmPredictor p = SmallPredictor(plant, hat, kind);
     ArmSimulation sim(hat, MakeLearnedArmBackend(hat, p));
-    EXPECT_TRUE(sim.backend().includes_plant_effects());
+    EXPECT_EQ(sim.backend().name(), "learned");
     EXPECT_EQ(sim.physics_substeps(), 1);
     const Eigen::VectorXd q0 = Eigen::Vector3d(0.1, 0.4, -1.0);
     sim.Reset(q0, Eigen::VectorXd::Zero(3));
@@ -44,24 +45,19 @@ TEST(LearnedArmBackend, SaveRestoreIsBitExactAndStepsOneSample) {
     EXPECT_EQ(a.qd, b.qd) << kind;
     EXPECT_GT((a.q.row(99) - a.q.row(0)).norm(), 1e-3) << kind;  // it moves
   }
-  // Other steps are refused, and so are physics substeps in the loop.
+  // Physics substeps are refused: it steps whole samples. The factory builds it by name.
   const ArmPredictor p = SmallPredictor(plant, hat, "linear");
-  auto backend = MakeLearnedArmBackend(hat, p);
-  try {
-    backend->Step(Eigen::VectorXd::Zero(3), 0.0005);
-    ADD_FAILURE() << "no error";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("steps exactly one sample of 0.001 s, asked for 0.0005 s"), std::string::npos)
-        << e.what();
-  }
-  ArmSimulationOptions options;
+  ArmBackendOptions options;
   options.physics_substeps = 2;
+  options.predictor = std::make_shared<ArmPredictor>(p);
   try {
-    ArmSimulation sim(hat, MakeLearnedArmBackend(hat, p), options);
+    MakeArmBackend("learned", hat, options);
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("steps one whole sample at a time"), std::string::npos) << e.what();
   }
+  options.physics_substeps = 0;
+  EXPECT_EQ(MakeArmBackend("learned", hat, options)->name(), "learned");
   // A predictor for another arm is refused by the factory.
   EXPECT_THROW(MakeLearnedArmBackend(plant, p), InputError);  // trained for 'rrr', not 'rrr_plant'
 }

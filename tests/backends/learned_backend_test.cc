@@ -5,9 +5,10 @@
 #include <cmath>
 #include <map>
 
-#include "core/simulation.h"
+#include "backends/omni_backend_factory.h"
 #include "learning/omni_predictor.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -32,7 +33,7 @@ class LearnedBackend : public ::testing::TestWithParam<std::string> {
     m.vision_noise_xy = m.vision_noise_theta = 0;
     CommandSpec spec;
     spec.segments = std::move(segments);
-    BackendOptions options;
+    OmniBackendOptions options;
     options.predictor = Predictor(GetParam());
     std::vector<SimRobot> robots;
     robots.push_back(SimRobot{"r", m, Pose2{1, 2, 0.5}, MakeCommandSource(spec, 1, 0, seconds, Pose2{})});
@@ -74,7 +75,7 @@ TEST_P(LearnedBackend, RestoringASavedStateReplaysExactly) {
   OmniModel m = testing::Omni4();
   CommandSpec random;
   random.type = "random";
-  BackendOptions options;
+  OmniBackendOptions options;
   options.predictor = Predictor(GetParam());
   std::vector<SimRobot> robots;
   robots.push_back(SimRobot{"r", m, Pose2{}, MakeCommandSource(random, 9, 0, 10, Pose2{})});

@@ -9,8 +9,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "backends/arm/arm_backend.h"
+#include "backends/arm_backend_factory.h"
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "test_util.h"
 
@@ -34,7 +35,7 @@ TrackingTrial Trial(const std::string& plant, const std::string& model,
 
 TEST(ComputedTorque, GainsFromTheBandwidth) {
   const TrackingGains g = ComputedTorqueGains(3, 10, 1);
-  const double w = 2 * M_PI * 10;
+  const double w = 2 * kPi * 10;
   EXPECT_NEAR(g.kp(1), w * w, 1e-9);  // 3947.8 1/s^2
   EXPECT_NEAR(g.kd(2), 2 * w, 1e-12);  // 125.7 1/s
   const ArmModel arm = Load("rrr");
@@ -62,7 +63,7 @@ TEST(ComputedTorque, LawsAgreeWithTheModelWhenOnTheReference) {
   // Off the reference the computed-torque feedback is M (Kp e): 1 mrad on the elbow.
   const Eigen::Vector3d e(0, 0, 1e-3);
   const Eigen::VectorXd off = ComputedTorque(arm, ComputedTorqueGains(3, 10, 1), true, qd, q + e, qd, qdd, q, qd, nullptr);
-  const double w = 2 * M_PI * 10;
+  const double w = 2 * kPi * 10;
   EXPECT_LT((off - id - MassMatrix(arm, q) * e * w * w).norm(), 1e-9);
 }
 
@@ -72,7 +73,7 @@ TEST(ComputedTorque, RejectsBadInput) {
   o.bandwidth = 0;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_EQ(why, "bandwidth must be > 0 (Hz)");
-  EXPECT_THROW(RunTrackingTrial(Load("rrr"), Load("rrr"), Reference(), o), std::invalid_argument);
+  EXPECT_THROW(RunTrackingTrial(Load("rrr"), Load("rrr"), Reference(), o), InputError);
   ArmReference bad = Reference();
   bad.sample_time = 0.002;
   EXPECT_THROW(RunTrackingTrial(Load("rrr"), Load("rrr"), bad, TrackingOptions{}), std::invalid_argument);
@@ -82,7 +83,7 @@ TEST(ComputedTorque, RejectsBadInput) {
     RunTrackingTrial(Load("rrr"), Load("rrr"), Reference(), unknown);
     FAIL() << "no throw";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("unknown arm backend 'mujoco' (known: analytic, ode, bullet)"),
+    EXPECT_NE(std::string(e.what()).find("unknown arm backend 'mujoco' (known: analytic, ode, bullet, learned)"),
               std::string::npos)
         << e.what();
   }
@@ -104,9 +105,9 @@ TEST(ComputedTorque, ExactModelTracksTheWritingTaskWithinTheSamplingBound) {
   for (const std::string name : {"rrr", "rrr_rod"}) {
     for (auto c : {TrackingController::kComputedTorque, TrackingController::kPdFeedforward}) {
       const TrackingTrial t = Trial(name, name, c);
-      EXPECT_LT(t.error_max.maxCoeff(), 1.5e-4) << name << " " << t.Brief();
-      EXPECT_LT(t.error_rms.maxCoeff(), 3e-5) << name << " " << t.Brief();
-      EXPECT_EQ(t.saturated_fraction.maxCoeff(), 0) << name << " " << t.Brief();
+      EXPECT_LT(t.error_max.maxCoeff(), 1.5e-4) << name << " " << t.BriefReport();
+      EXPECT_LT(t.error_rms.maxCoeff(), 3e-5) << name << " " << t.BriefReport();
+      EXPECT_EQ(t.saturated_fraction.maxCoeff(), 0) << name << " " << t.BriefReport();
       // The model's torque is nearly all of the command: the feedback's RMS is below 2%
       // of the command's RMS on every joint (measured 0.3% to 1.4%).
       for (int j = 0; j < 3; ++j) {
@@ -163,10 +164,10 @@ TEST(ComputedTorque, RodWithTipMassSaturatesTheShoulder) {
   const TrackingTrial exact = Trial("rrr_rod_tip", "rrr_rod_tip");
   const TrackingTrial bare = Trial("rrr_rod_tip", "rrr");
   for (const TrackingTrial* t : {&exact, &bare}) {
-    EXPECT_EQ(t->saturated_fraction(0), 0) << t->Brief();
-    EXPECT_GT(t->saturated_fraction(1), 0.10) << t->Brief();
-    EXPECT_LT(t->saturated_fraction(1), 0.30) << t->Brief();
-    EXPECT_LT(t->saturated_fraction(2), 0.01) << t->Brief();
+    EXPECT_EQ(t->saturated_fraction(0), 0) << t->BriefReport();
+    EXPECT_GT(t->saturated_fraction(1), 0.10) << t->BriefReport();
+    EXPECT_LT(t->saturated_fraction(1), 0.30) << t->BriefReport();
+    EXPECT_LT(t->saturated_fraction(2), 0.01) << t->BriefReport();
     EXPECT_LE(t->command.col(1).cwiseAbs().maxCoeff(), 30.0);  // clamped to the limit
   }
   // Saturation spoils tracking even with the true model: max error 0.17 rad against
@@ -186,7 +187,7 @@ TEST(ComputedTorque, WithoutTheLimitTheTipArmTracksLikeTheOthers) {
   TrackingOptions o;
   o.saturate = false;
   const TrackingTrial t = RunTrackingTrial(Load("rrr_rod_tip"), Load("rrr_rod_tip"), Reference(), o);
-  EXPECT_LT(t.error_max.maxCoeff(), 1.5e-4) << t.Brief();
+  EXPECT_LT(t.error_max.maxCoeff(), 1.5e-4) << t.BriefReport();
   EXPECT_GT(t.demand.col(1).cwiseAbs().maxCoeff(), 30.0);  // it would need more than 30 N·m
   EXPECT_GT(t.saturated_fraction(1), 0.10);                // counted though not clamped
 }
@@ -211,12 +212,12 @@ TEST(ComputedTorque, RealisedMotionNeedsTheAppliedTorque) {
 TEST(ComputedTorque, OdeAndBulletTrackLikeTheAnalyticBackend) {
   for (const std::string backend : {"ode", "bullet"}) {
     bool built = false;
-    for (const std::string& b : AvailableArmBackends()) built = built || b == backend;
+    for (const std::string& b : AvailableArmEngines()) built = built || b == backend;
     if (!built) continue;
     TrackingOptions o;
     o.backend = backend;
     const TrackingTrial t = RunTrackingTrial(Load("rrr_rod"), Load("rrr_rod"), Reference(), o);
-    EXPECT_LT(t.error_max.maxCoeff(), 5e-4) << t.Brief();
+    EXPECT_LT(t.error_max.maxCoeff(), 5e-4) << t.BriefReport();
   }
 }
 

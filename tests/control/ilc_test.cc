@@ -6,10 +6,11 @@
 #include <cmath>
 #include <complex>
 
+#include "control/closed_loop_frf.h"
 #include "control/computed_torque.h"
 #include "control/iterative_learning.h"
 #include "control/writing_task.h"
-#include "identification/closed_loop_frf.h"
+#include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "signal/multisine.h"
 #include "test_util.h"
@@ -54,7 +55,7 @@ TrackingOptions Pd() {
 // u = f - Kp q - Kd qd, which acts D samples later:
 //   PS(z) = z^-D G / (1 + z^-D (Kp G + Kd Gv)).
 std::complex<double> TurntablePs(double f, double ts, double kp, double kd, int delay) {
-  const std::complex<double> z = std::polar(1.0, 2 * M_PI * f * ts);
+  const std::complex<double> z = std::polar(1.0, 2 * kPi * f * ts);
   const std::complex<double> g = ts * ts * (z + 1.0) / (2 * kJ * (z - 1.0) * (z - 1.0));
   const std::complex<double> gv = ts / (kJ * (z - 1.0));
   const std::complex<double> zd = std::pow(z, -delay);
@@ -134,11 +135,11 @@ TEST(IlcLearningFilter, ApplyIsTheFilterResponseOnASinusoid) {
   l.shift = 2, l.inertia = 0.3, l.inertia_early = 0.1, l.damping = 20, l.stiffness = 500;
   const double ts = 0.001, f = 25;  // an integer number of periods in 400 samples
   Eigen::VectorXd e(400);
-  for (int k = 0; k < 400; ++k) e[k] = std::sin(2 * M_PI * f * k * ts);
+  for (int k = 0; k < 400; ++k) e[k] = std::sin(2 * kPi * f * k * ts);
   const Eigen::VectorXd y = l.Apply(e, ts);
   const std::complex<double> h = l.Response(f, ts);
   for (int k = 10; k < 390; ++k) {
-    EXPECT_NEAR(y[k], std::abs(h) * std::sin(2 * M_PI * f * k * ts + std::arg(h)), 1e-6 * std::abs(h));
+    EXPECT_NEAR(y[k], std::abs(h) * std::sin(2 * kPi * f * k * ts + std::arg(h)), 1e-6 * std::abs(h));
   }
 }
 

@@ -4,8 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <stdexcept>
 
+#include "core/error.h"
+#include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "test_util.h"
 
@@ -44,7 +45,7 @@ TEST(WritingTask, RejectsBadOptions) {
   o = {};
   o.letters = "  ";
   EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_THROW(WritingTaskReference(Rrr(), o), std::invalid_argument);
+  EXPECT_THROW(WritingTaskReference(Rrr(), o), InputError);
 }
 
 TEST(WritingTask, IkRoundTripHitsThePointsWithin1e9) {
@@ -69,12 +70,12 @@ TEST(WritingTask, IkMatchesAKnownPosture) {
   const ArmModel arm = Rrr();
   const Eigen::Vector3d tool(0.35, 0, 0);
   EXPECT_LT(WaistShoulderElbowIk(arm, Eigen::Vector3d(0.75, 0, 0.30), tool).norm(), 1e-7);
-  const double a = M_PI / 6;
+  const double a = kPi / 6;
   const Eigen::Vector3d p(0.35 * std::cos(a), 0.35 * std::sin(a), 0.70);
   const Eigen::VectorXd q = WaistShoulderElbowIk(arm, p, tool);
   EXPECT_NEAR(q(0), a, 1e-12);
-  EXPECT_NEAR(q(1), M_PI / 2, 1e-12);
-  EXPECT_NEAR(q(2), -M_PI / 2, 1e-12);
+  EXPECT_NEAR(q(1), kPi / 2, 1e-12);
+  EXPECT_NEAR(q(2), -kPi / 2, 1e-12);
 }
 
 TEST(WritingTask, IkRejectsUnreachablePoints) {
@@ -83,17 +84,17 @@ TEST(WritingTask, IkRejectsUnreachablePoints) {
   try {
     WaistShoulderElbowIk(arm, Eigen::Vector3d(0.9, 0, 0.3), tool);
     FAIL() << "no throw";
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("out of reach of 'rrr' (distance 0.9 m from the shoulder, reach 0.05 to 0.75 m)"),
               std::string::npos)
         << e.what();
   }
-  EXPECT_THROW(WaistShoulderElbowIk(arm, Eigen::Vector3d(0, 0, 0.5), tool), std::invalid_argument);  // on the axis
+  EXPECT_THROW(WaistShoulderElbowIk(arm, Eigen::Vector3d(0, 0, 0.5), tool), InputError);  // on the axis
   // Behind the arm: waist beyond its 170 degree limit.
-  EXPECT_THROW(WaistShoulderElbowIk(arm, Eigen::Vector3d(-0.5, 0.01, 0.3), tool), std::invalid_argument);
+  EXPECT_THROW(WaistShoulderElbowIk(arm, Eigen::Vector3d(-0.5, 0.01, 0.3), tool), InputError);
   WritingTaskOptions o;
   o.plane_x = 0.8;  // the letters beyond reach
-  EXPECT_THROW(WritingTaskReference(arm, o), std::invalid_argument);
+  EXPECT_THROW(WritingTaskReference(arm, o), InputError);
 }
 
 TEST(WritingTask, JacobianBiasMatchesFiniteDifferences) {

@@ -6,9 +6,9 @@
 #include <cstdint>
 #include <string>
 
-#include "io/arm_log.h"
-#include "io/omni_log.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {

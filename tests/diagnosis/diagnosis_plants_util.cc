@@ -3,7 +3,8 @@
 #include <cmath>
 #include <random>
 
-#include "learning/arm_trials.h"
+#include "control/arm_trials.h"
+#include "core/math_constants.h"
 #include "scene/command_source.h"
 #include "test_util.h"
 
@@ -22,7 +23,7 @@ ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t 
   ArmLog log = RecordArmTrial(plant, hat, reference, options, seed);
   std::mt19937_64 rng(seed * 7919 + 17);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  const double count = noise.counts_per_rev > 0 ? 2 * M_PI / noise.counts_per_rev : 0;
+  const double count = noise.counts_per_rev > 0 ? 2 * kPi / noise.counts_per_rev : 0;
   for (int r = 0; r < log.rows(); ++r) {
     for (int j = 0; j < log.dof; ++j) {
       if (count > 0) log.q(r, j) = std::round(log.q(r, j) / count) * count;

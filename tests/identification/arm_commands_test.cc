@@ -6,13 +6,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "analysis/arm_replay.h"
 #include "control/computed_torque.h"
 #include "identification/synthetic_arm_data.h"
-#include "identification/torque_prediction.h"
 #include "identification/wls_identification.h"
-#include "io/arm_log.h"
 #include "io/csv_table.h"
 #include "robots/arm/arm_dynamics.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model_yaml_writer.h"
 #include "test_util.h"
 

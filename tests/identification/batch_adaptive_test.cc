@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "identification/excitation_design.h"
 #include "io/csv_table.h"
 #include "test_util.h"
@@ -66,7 +67,7 @@ double WorstError(const BatchAdaptiveResult& r, std::string* which) {
 
 ArmTrialOptions NoisyPlant() {
   ArmTrialOptions plant;
-  plant.encoder_resolution = 2 * M_PI / 65536;            // 16 bit per turn
+  plant.encoder_resolution = 2 * kPi / 65536;            // 16 bit per turn
   plant.torque_noise = Eigen::VectorXd::Constant(3, 0.1);  // N·m
   plant.seed = 7;
   return plant;
@@ -157,6 +158,9 @@ TEST(BatchAdaptive, TrialsAreSeededAndQuantised) {
   // PD only, the arm sags under gravity: the shoulder's error is what Kp needs to hold it.
   EXPECT_GT(a.q_measured.col(1).minCoeff(), in.q_ref.col(1).minCoeff() - 0.1);
   in.kp.resize(2);
+  EXPECT_THROW(RunTrial(Plant(), in, o), std::invalid_argument);  // our own bug, not the user's
+  in.kp = Eigen::VectorXd::Constant(3, 500);
+  o.torque_noise = Eigen::VectorXd::Constant(2, 0.5);
   EXPECT_THROW(RunTrial(Plant(), in, o), InputError);
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -92,7 +93,7 @@ TEST(ExcitationDesign, OptimisedTrajectoryIsBetterConditionedAndInsideTheLimits)
     EXPECT_LE(j.velocity_peak, 6.0);
     EXPECT_LE(j.acceleration_peak, 20.0);
     EXPECT_LE(j.torque_peak, j.torque_limit);
-    EXPECT_GE(j.lower, -M_PI);
+    EXPECT_GE(j.lower, -kPi);
   }
   const JointMotion m0 = EvaluateFourier(t, 0);
   EXPECT_LT(m0.qd.cwiseAbs().maxCoeff(), 1e-12);

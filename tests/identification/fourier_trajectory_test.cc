@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "io/csv_table.h"
 #include "robots/arm/arm_dynamics.h"
@@ -43,7 +44,7 @@ TEST(FourierTrajectory, OneHarmonicMatchesTheClosedForm) {
   t.q0[0] = 0.2;
   t.a(0, 1) = 0.6;
   t.b(0, 1) = -0.3;
-  const double w = M_PI;
+  const double w = kPi;
   for (double time : {0.0, 0.3, 1.7, 3.9}) {
     const JointMotion m = EvaluateFourier(t, time);
     EXPECT_NEAR(m.q[0], 0.2 + 0.6 / w * std::sin(w * time) + 0.3 / w * std::cos(w * time), 1e-15);

@@ -4,9 +4,9 @@
 
 #include <filesystem>
 
-#include "identification/torque_prediction.h"
+#include "analysis/arm_replay.h"
 #include "identification/wls_identification.h"
-#include "io/arm_log.h"
+#include "robots/arm/arm_log.h"
 #include "test_util.h"
 
 namespace twinsim {

@@ -8,9 +8,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/math_constants.h"
 #include "core/rng.h"
-#include "io/arm_log.h"
 #include "robots/arm/arm_dynamics.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim::testing {
@@ -32,7 +33,7 @@ struct MultiSine {
     for (int j = 0; j < n; ++j) {
       double p = centre[j], v = 0, a = 0;
       for (int k = 0; k < amplitude.cols(); ++k) {
-        const double w = 2 * M_PI * (k + 1) * f0, arg = w * t + phase(j, k);
+        const double w = 2 * kPi * (k + 1) * f0, arg = w * t + phase(j, k);
         p += amplitude(j, k) * std::sin(arg);
         v += amplitude(j, k) * w * std::cos(arg);
         a -= amplitude(j, k) * w * w * std::sin(arg);
@@ -59,7 +60,7 @@ inline MultiSine MakeMultiSine(const ArmModel& model, std::uint64_t seed, int ha
     m.centre[j] = 0.5 * (lo + hi);
     for (int k = 0; k < harmonics; ++k) {
       m.amplitude(j, k) = rng.Uniform(0.4, 1.0) / (k + 1);
-      m.phase(j, k) = rng.Uniform(-M_PI, M_PI);
+      m.phase(j, k) = rng.Uniform(-kPi, kPi);
     }
     // Scale to the range and speed limits over one period.
     double peak = 0, speed = 0;
@@ -67,7 +68,7 @@ inline MultiSine MakeMultiSine(const ArmModel& model, std::uint64_t seed, int ha
       const double t = s / (2000 * f0);
       double p = 0, v = 0;
       for (int k = 0; k < harmonics; ++k) {
-        const double w = 2 * M_PI * (k + 1) * f0;
+        const double w = 2 * kPi * (k + 1) * f0;
         p += m.amplitude(j, k) * std::sin(w * t + m.phase(j, k));
         v += m.amplitude(j, k) * w * std::cos(w * t + m.phase(j, k));
       }
@@ -109,7 +110,7 @@ inline ArmLog MakeSyntheticLog(const ArmModel& truth, const MultiSine& motion, d
     }
     log.tau.row(r) = InverseDynamics(truth, q, qd, qdd, true).transpose();
     if (noise.counts_per_rev > 0) {
-      const double step = 2 * M_PI / noise.counts_per_rev;
+      const double step = 2 * kPi / noise.counts_per_rev;
       for (int j = 0; j < n; ++j) q[j] = step * std::round(q[j] / step);
     }
     log.q.row(r) = q.transpose();

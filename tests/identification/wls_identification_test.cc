@@ -8,9 +8,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "analysis/arm_replay.h"
 #include "core/error.h"
 #include "identification/synthetic_arm_data.h"
-#include "identification/torque_prediction.h"
 #include "robots/arm/arm_regressor.h"
 #include "test_util.h"
 
@@ -145,6 +145,21 @@ TEST(WlsIdentification, AJointThatNeverMovesIsNamed) {
     EXPECT_NE(what.find("fc3 (Coulomb friction of joint 3: it never moves)"), std::string::npos) << what;
     EXPECT_NE(what.find("q3 spans only 0"), std::string::npos) << what;
   }
+}
+
+TEST(WlsIdentification, DataThatNoRealArmFitsIsAnInputError) {
+  // Torques in absurd units: not even the physically consistent fit is a valid arm.
+  const ArmModel truth = TrueRrr();
+  ArmLog absurd = MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 6.0, 500.0, SensorNoise{});
+  absurd.tau *= 1e150;
+  std::string what;  // stays empty unless an InputError is thrown
+  try {
+    IdentifyArm(Rrr(), {ThroughCsv(absurd)}, {});
+  } catch (const InputError& e) {
+    what = e.what();
+  }
+  EXPECT_EQ(what.rfind("synthetic.csv: the data does not determine a real arm", 0), 0u) << what;
+  EXPECT_NE(what.find("must be positive definite"), std::string::npos) << what;
 }
 
 TEST(WlsIdentification, NegativeFrictionInTheDataIsClippedAndTheShiftReported) {

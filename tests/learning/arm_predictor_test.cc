@@ -4,15 +4,15 @@
 
 #include <cmath>
 
-#include "backends/arm/arm_backend.h"
+#include "backends/arm_backend_factory.h"
 #include "backends/learned/learned_arm_backend.h"
-#include "core/arm_simulation.h"
+#include "control/arm_trials.h"
 #include "core/error.h"
 #include "core/rng.h"
 #include "learning/arm_nominal_step.h"
-#include "learning/arm_trials.h"
 #include "learning/omni_predictor.h"
 #include "robots/arm/arm_dynamics.h"
+#include "sim/arm_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -192,6 +192,18 @@ TEST(ArmPredictor, BadFilesNameFileAndLine) {
   EXPECT_NE(e3.find("R (revolute) or P (prismatic)"), std::string::npos) << e3;
   const std::string e4 = error_of(head + layout + linear + "colour: blue\n");
   EXPECT_NE(e4.find("unknown key 'colour'"), std::string::npos) << e4;
+  // A network whose numbers read but cannot be used: an InputError naming the file.
+  const std::string mlp_head =
+      "twinsim_predictor: 1\nrobot: arm\nkind: mlp\nmodel: pendulum\ndof: 1\nsample_time: 0.001\n";
+  auto mlp = [](const std::string& output_scale) {
+    return "mlp:\n  layers: [4, 2]\n  input_mean: [0, 0, 0, 0]\n  input_scale: [1, 1, 1, 1]\n  output_mean: [0, 0]\n"
+           "  output_scale: " + output_scale + "\n  weights0: [0, 0, 0, 0, 0, 0, 0, 0]\n  biases0: [0, 0]\n";
+  };
+  EXPECT_EQ(error_of(mlp_head + layout + mlp("[1, 1]")), "no error");
+  const std::string e5 = error_of(mlp_head + layout + mlp("[0, 1]"));
+  EXPECT_NE(e5.find("bad.pred: corrupt neural network: Mlp::FromParameters: output_scale has values <= 0"),
+            std::string::npos)
+      << e5;
   // An omni robot's predictor is refused as such, and an arm's by the omni reader.
   try {
     ArmPredictor::Load(testing::SourcePath("models/predictors/omni4_h4.pred"));
@@ -381,8 +393,9 @@ TEST(ArmResidualPredictor, FileRoundTripAttachAndChecks) {
     auto from_file = MakeLearnedArmBackend(model, ArmPredictor::Load(path));
     auto trained = MakeLearnedArmBackend(model, p);
     for (auto* backend : {from_file.get(), trained.get()}) {
-      backend->Reset(Eigen::VectorXd::Constant(1, 0.3), Eigen::VectorXd::Constant(1, 0.5));
-      for (int k = 0; k < 50; ++k) backend->Step(Eigen::VectorXd::Constant(1, 2.0), model.sample_time);
+      backend->Reset(Eigen::VectorXd::Constant(1, 0.3), Eigen::VectorXd::Constant(1, 0.5), Eigen::VectorXd::Zero(1));
+      Eigen::VectorXd applied;
+      for (int k = 0; k < 50; ++k) backend->Step(Eigen::VectorXd::Constant(1, 2.0), &applied);
     }
     EXPECT_EQ(from_file->q()[0], trained->q()[0]) << kind;
     EXPECT_EQ(from_file->qd()[0], trained->qd()[0]) << kind;

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "core/rng.h"
 
 namespace twinsim {
@@ -50,12 +51,13 @@ MlpOptions QuickOptions() {
   return options;
 }
 
-// The message of the std::invalid_argument that f throws, or "" when it throws none.
-template <class F>
-std::string InvalidArgumentMessage(F f) {
+// The message of the E that f throws, or "" when it throws none (another exception
+// escapes and fails the test).
+template <class E, class F>
+std::string ThrownMessage(F f) {
   try {
     f();
-  } catch (const std::invalid_argument& e) {
+  } catch (const E& e) {
     return e.what();
   }
   return "";
@@ -122,9 +124,9 @@ TEST(Mlp, PredictMatchesPredictBatch) {
     EXPECT_LT((one - batch.row(i).transpose()).cwiseAbs().maxCoeff(), 1e-12) << "row " << i;
   }
   const std::string message =
-      InvalidArgumentMessage([&] { net.Predict(Eigen::VectorXd::Zero(3)); });
+      ThrownMessage<std::invalid_argument>([&] { net.Predict(Eigen::VectorXd::Zero(3)); });
   EXPECT_TRUE(Contains(message, "input has 3 values, the network takes 2")) << message;
-  EXPECT_TRUE(Contains(InvalidArgumentMessage([] { Mlp().Predict(Eigen::VectorXd::Zero(2)); }),
+  EXPECT_TRUE(Contains(ThrownMessage<std::invalid_argument>([] { Mlp().Predict(Eigen::VectorXd::Zero(2)); }),
                        "the network is empty"));
 }
 
@@ -280,7 +282,7 @@ TEST(Mlp, FromParametersRoundTripsAndChecksShapes) {
   const auto message_for = [&net](const std::function<void(Mlp::Parameters&)>& spoil) {
     Mlp::Parameters p = net.parameters();
     spoil(p);
-    return InvalidArgumentMessage([&p] { Mlp::FromParameters(p); });
+    return ThrownMessage<InputError>([&p] { Mlp::FromParameters(p); });
   };
   struct Case {
     std::function<void(Mlp::Parameters&)> spoil;
@@ -307,7 +309,9 @@ TEST(Mlp, FromParametersRoundTripsAndChecksShapes) {
 }
 
 TEST(Mlp, InvalidOptionsThrow) {
-  EXPECT_EQ(MlpOptions().Validate(), "");
+  std::string why;
+  EXPECT_TRUE(MlpOptions().IsValid(&why));
+  EXPECT_EQ(why, "");
   Eigen::MatrixXd x, y;
   MakeNonlinearData(100, 29, &x, &y);
   struct Case {
@@ -332,15 +336,18 @@ TEST(Mlp, InvalidOptionsThrow) {
   for (const Case& c : cases) {
     MlpOptions options;
     c.spoil(options);
-    EXPECT_TRUE(Contains(options.Validate(), c.expected)) << options.Validate();
-    const std::string message = InvalidArgumentMessage([&] { TrainMlp(x, y, options); });
+    std::string problems;
+    EXPECT_FALSE(options.IsValid(&problems));
+    EXPECT_TRUE(Contains(problems, c.expected)) << problems;
+    const std::string message = ThrownMessage<InputError>([&] { TrainMlp(x, y, options); });
     EXPECT_TRUE(Contains(message, "TrainMlp: invalid options: " + c.expected)) << message;
   }
   // Every problem is named at once.
   MlpOptions two;
   two.max_epochs = 0;
   two.patience = 0;
-  EXPECT_EQ(two.Validate(), "max_epochs is 0 (must be >= 1); patience is 0 (must be >= 1)");
+  EXPECT_FALSE(two.IsValid(&why));
+  EXPECT_EQ(why, "max_epochs is 0 (must be >= 1); patience is 0 (must be >= 1)");
 }
 
 TEST(Mlp, BadDataThrows) {
@@ -348,7 +355,7 @@ TEST(Mlp, BadDataThrows) {
   MakeNonlinearData(100, 31, &x, &y);
   const MlpOptions options = QuickOptions();
   const auto message_for = [&options](const Eigen::MatrixXd& xs, const Eigen::MatrixXd& ys) {
-    return InvalidArgumentMessage([&] { TrainMlp(xs, ys, options); });
+    return ThrownMessage<InputError>([&] { TrainMlp(xs, ys, options); });
   };
 
   Eigen::MatrixXd bad = x;
@@ -357,7 +364,9 @@ TEST(Mlp, BadDataThrows) {
   bad = y;
   bad(3, 0) = -std::numeric_limits<double>::infinity();
   EXPECT_EQ(message_for(x, bad), "TrainMlp: y row 3, column 0 (0-based) is -inf");
-  EXPECT_EQ(message_for(x, y.topRows(99)), "TrainMlp: x has 100 rows but y has 99");
+  // Shapes that disagree are the caller's bug, not the data's.
+  EXPECT_EQ(ThrownMessage<std::invalid_argument>([&] { TrainMlp(x, y.topRows(99), options); }),
+            "TrainMlp: x has 100 rows but y has 99");
   // 11 rows leave 9 for training once round(0.2 * 11) = 2 go to validation.
   EXPECT_EQ(message_for(x.topRows(11), y.topRows(11)),
             "TrainMlp: 9 training rows (11 rows minus 2 for validation); need at least 10");

@@ -8,8 +8,8 @@
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/rng.h"
-#include "core/simulation.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {

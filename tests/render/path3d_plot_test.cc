@@ -10,13 +10,14 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "io/png_image.h"
 #include "render/plot.h"
 
 namespace twinsim {
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180;
+constexpr double kDeg = kPi / 180;
 
 // A straight path from a to b in n points.
 Path3D Segment(const std::string& name, const Eigen::Vector3d& a, const Eigen::Vector3d& b, int n = 50) {

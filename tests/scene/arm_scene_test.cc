@@ -7,8 +7,9 @@
 #include <cmath>
 
 #include "core/error.h"
-#include "io/arm_log.h"
+#include "core/math_constants.h"
 #include "io/csv_table.h"
+#include "robots/arm/arm_log.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -49,7 +50,7 @@ TEST(ArmScene, TaskReferencesInClosedForm) {
       "a.yaml", SourcePath("scenes"));
   ArmReference ref = ArmSceneReference(s);
   ASSERT_EQ(ref.t.size(), 501);
-  const double w = 4 * M_PI, t = ref.t[123];
+  const double w = 4 * kPi, t = ref.t[123];
   EXPECT_NEAR(ref.q(123, 0), 0.2 * std::sin(w * t), 1e-15);
   EXPECT_NEAR(ref.qd(123, 1), 0.1 * w * std::cos(w * t), 1e-13);
   EXPECT_NEAR(ref.qdd(123, 0), -0.2 * w * w * std::sin(w * t), 1e-12);
@@ -154,7 +155,7 @@ TEST(ArmSceneSensors, EncoderCountsRoundPositionsToWholeCounts) {
   const ArmScene s = LoadSensorScene(kSine, "sensors:\n  encoder_counts_per_rev: [40000, 4096, 0]\n");
   const TrackingTrial trial = RunScene(s);
   const ArmLog log = SensedArmLog(s.sensors, trial, s.seed);
-  const double steps[] = {2 * M_PI / 40000, 2 * M_PI / 4096};  // rad per count
+  const double steps[] = {2 * kPi / 40000, 2 * kPi / 4096};  // rad per count
   for (int j = 0; j < 2; ++j) {
     EXPECT_NEAR(s.sensors.count_step[j], steps[j], 1e-18);
     double worst = 0;  // counts off a whole number
@@ -186,7 +187,7 @@ TEST(ArmSceneSensors, EncoderCountsRoundPositionsToWholeCounts) {
   // One number applies to every (revolute) joint.
   const ArmScene all = LoadSensorScene(kSine, "sensors: {encoder_counts_per_rev: 4096}\n");
   ASSERT_EQ(all.sensors.count_step.size(), 3);
-  EXPECT_EQ(all.sensors.count_step, Eigen::Vector3d::Constant(2 * M_PI / 4096));
+  EXPECT_EQ(all.sensors.count_step, Eigen::Vector3d::Constant(2 * kPi / 4096));
 }
 
 TEST(ArmSceneSensors, TorqueNoiseHasTheGivenSigmaAndComesFromTheSeed) {
@@ -267,7 +268,7 @@ TEST(ArmSceneSensors, PrismaticJointsTakeTheirResolutionInMetres) {
       head + "sensors: {encoder_counts_per_rev: 4096, encoder_resolution: 1e-5, torque_noise: [0.01, 0.5]}\n", "a.yaml",
       dir);
   ASSERT_EQ(s.sensors.count_step.size(), 2);
-  EXPECT_EQ(s.sensors.count_step[0], 2 * M_PI / 4096);  // rad
+  EXPECT_EQ(s.sensors.count_step[0], 2 * kPi / 4096);  // rad
   EXPECT_EQ(s.sensors.count_step[1], 1e-5);             // m
   // Only counts: the prismatic joint stays exact.
   const ArmScene counts_only =

@@ -4,9 +4,10 @@
 
 #include <cmath>
 
-#include "core/simulation.h"
+#include "backends/omni_backend_factory.h"
 #include "learning/omni_predictor.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {

@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <stdexcept>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 
 namespace twinsim {
 namespace {
@@ -28,7 +30,7 @@ TEST(Butterworth, MagnitudeIsTheClosedFormWithUnitDcGainAndMinus3DbAtTheCutoff) 
       for (double fr : {0.1, 0.5, 0.9, 1.5, 3.0}) {
         const double freq = fr * fc;
         if (freq >= fs / 2) continue;
-        const double ratio = std::tan(M_PI * freq / fs) / std::tan(M_PI * fc / fs);
+        const double ratio = std::tan(kPi * freq / fs) / std::tan(kPi * fc / fs);
         const double expected = 1 / std::sqrt(1 + std::pow(ratio, 2 * order));
         EXPECT_NEAR(std::abs(FrequencyResponse(f, freq)), expected, tol) << order << " " << fc << " " << freq;
       }
@@ -53,7 +55,7 @@ TEST(Butterworth, FiltFiltHasZeroPhaseAndSquaredGainOnASinusoid) {
   const ButterworthFilter f = DesignButterworthLowPass(4, fc, fs);
   for (double freq : {2.0, 10.0, 15.0}) {
     const Eigen::VectorXd t = Times(6000, fs);
-    const Eigen::VectorXd x = (2 * M_PI * freq * t).array().sin();
+    const Eigen::VectorXd x = (2 * kPi * freq * t).array().sin();
     const Eigen::VectorXd y = FiltFilt(f, x);
     const double gain = std::norm(FrequencyResponse(f, freq));  // |H|^2: forwards and backwards
     double worst = 0;
@@ -76,7 +78,7 @@ TEST(Butterworth, FiltFiltKeepsConstantsAndRampsUpToTheEnds) {
   const Eigen::VectorXd ramp = 0.3 + 2.0 * t.array();
   EXPECT_LT((FiltFilt(f, ramp) - ramp).cwiseAbs().maxCoeff(), 1e-9);
   // A sinusoid's ends move by far less than a zero-padded filter would (which starts at 0).
-  const Eigen::VectorXd s = (2 * M_PI * 0.5 * t).array().cos();  // 1 at t = 0
+  const Eigen::VectorXd s = (2 * kPi * 0.5 * t).array().cos();  // 1 at t = 0
   const Eigen::VectorXd y = FiltFilt(f, s);
   EXPECT_NEAR(y[0], s[0], 2e-3);
   EXPECT_NEAR(y[299], s[299], 2e-3);
@@ -86,7 +88,7 @@ TEST(Butterworth, FilteredDerivativesOfASinusoid) {
   // x = A sin(w t) at 1 kHz, 1.5 Hz, cut-off 20 Hz: x' = A w cos(w t), x'' = -A w^2 sin(w t).
   // Errors: the filter's gain at 1.5 Hz (1 - 1e-9) and the three-point differences'
   // (w h)^2 / 6 = 1.5e-5 relative (first) and (w h)^2 / 12 (second).
-  const double fs = 1000, freq = 1.5, a = 0.8, w = 2 * M_PI * freq;
+  const double fs = 1000, freq = 1.5, a = 0.8, w = 2 * kPi * freq;
   const ButterworthFilter f = DesignButterworthLowPass(4, 20, fs);
   const Eigen::VectorXd t = Times(4000, fs);
   const Eigen::VectorXd x = a * (w * t).array().sin();
@@ -111,7 +113,7 @@ TEST(Butterworth, UniformGridDerivativesIgnoreStampJitter) {
   // Samples of sin(w t) taken every 5 ms; the uniform-grid version on the sampling
   // period matches the time-stamp version on exact stamps, and is what stays right when
   // the stamps jitter (the KUKA logs' do, by up to 1.5 ms).
-  const double fs = 200, w = 2 * M_PI * 0.4;
+  const double fs = 200, w = 2 * kPi * 0.4;
   const ButterworthFilter f = DesignButterworthLowPass(4, 5, fs);
   const Eigen::VectorXd t = Times(2000, fs);
   const Eigen::VectorXd x = (w * t).array().sin();
@@ -155,6 +157,9 @@ TEST(Butterworth, BadDesignsAndSamplesAreInputErrors) {
   Eigen::VectorXd t(3);
   t << 0, 1, 1;
   EXPECT_THROW(ThreePointDerivatives(t, Eigen::VectorXd::Zero(3)), InputError);
+  // Times and samples of different lengths are the caller's bug, not the data's.
+  EXPECT_THROW(ThreePointDerivatives(Eigen::VectorXd::LinSpaced(4, 0, 3), Eigen::VectorXd::Zero(3)),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -5,17 +5,16 @@
 
 #include "analysis/omni_compare.h"
 #include "app/commands/commands.h"
-#include "app/progress.h"
-#include "backends/omni_backend.h"
-#include "backends/omni_engine.h"
+#include "backends/omni_backend_factory.h"
 #include "core/error.h"
-#include "io/atomic_file.h"
-#include "io/omni_log.h"
+#include "core/progress.h"
+#include "engines/omni_engine.h"
+#include "io/output_files.h"
 #include "io/yaml_reader.h"
-#include "io/png_image.h"
 #include "learning/omni_predictor.h"
 #include "render/plot.h"
 #include "render/renderer.h"
+#include "robots/omni/omni_log.h"
 
 namespace twinsim {
 namespace {
@@ -98,25 +97,20 @@ int Compare(const CompareCliOptions& options) {
   }
   OmniCompareOptions compare;
   compare.horizons = DefaultCompareHorizons(frame_rate);
-  for (const std::string& b : backends) compare.sources.push_back({b, b, BackendOptions{predictor}});
+  for (const std::string& b : backends) compare.sources.push_back({b, b, OmniBackendOptions{predictor}});
 
   Progress progress("compare", !options.quiet);
   const OmniCompareResult result = CompareOmniLog(
       model, log, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
   progress.Finish();
 
-  const std::string errors_path = options.out + "/errors.csv";
-  const std::string paths_path = options.out + "/paths.csv";
-  WriteFileAtomically(errors_path, FormatCompareErrorsCsv(result));
-  WriteFileAtomically(paths_path, FormatComparePathsCsv(log, result));
-  std::vector<std::string> written = {errors_path, paths_path};
+  OutputFiles files(options.out);
+  files.Write("errors.csv", FormatCompareErrorsCsv(result));
+  files.Write("paths.csv", FormatComparePathsCsv(log, result));
   if (RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    const std::string path_png = options.out + "/paths.png", error_png = options.out + "/errors.png";
-    WritePng(path_png, RenderPathPlot(FreeRunPlot(log, result, model.name, options.plot_seconds), *renderer));
-    WritePng(error_png, RenderSeriesPlot(ErrorPlot(result, frame_rate), *renderer));
-    written.push_back(path_png);
-    written.push_back(error_png);
+    files.WritePng("paths.png", RenderPathPlot(FreeRunPlot(log, result, model.name, options.plot_seconds), *renderer));
+    files.WritePng("errors.png", RenderSeriesPlot(ErrorPlot(result, frame_rate), *renderer));
   } else {
     std::fprintf(stderr, "compare: warning: plots not drawn: %s\n", kRenderingNotCompiled);
   }
@@ -124,9 +118,8 @@ int Compare(const CompareCliOptions& options) {
   if (!options.quiet) {
     std::printf("compared %zu rows of %s (%g fps) through %s, delay %d frames\n\n%s\n", log.rows.size(),
                 options.log.c_str(), frame_rate, model.name.c_str(),
-                model.command_delay_frames + model.vision_delay_frames, result.Report().c_str());
-    std::printf("wrote:\n");
-    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+                model.command_delay_frames + model.vision_delay_frames, result.FullReport().c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }

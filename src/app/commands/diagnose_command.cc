@@ -4,16 +4,16 @@
 #include <memory>
 
 #include "app/commands/commands.h"
-#include "app/progress.h"
 #include "core/error.h"
+#include "core/progress.h"
 #include "diagnosis/arm_diagnosis.h"
 #include "diagnosis/diagnosis_report.h"
 #include "diagnosis/omni_diagnosis.h"
-#include "io/arm_log.h"
 #include "io/atomic_file.h"
-#include "io/omni_log.h"
 #include "render/renderer.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model_yaml_writer.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model_yaml_writer.h"
 
 namespace twinsim {

@@ -6,13 +6,12 @@
 #include <memory>
 
 #include "app/commands/commands.h"
-#include "app/progress.h"
 #include "core/error.h"
+#include "core/progress.h"
 #include "identification/batch_adaptive.h"
 #include "identification/excitation_design.h"
 #include "identification/fourier_trajectory.h"
-#include "io/atomic_file.h"
-#include "io/png_image.h"
+#include "io/output_files.h"
 #include "render/plot.h"
 #include "render/renderer.h"
 #include "robots/arm/arm_model.h"
@@ -138,11 +137,10 @@ int Excite(ExciteCliOptions options) {
     CheckTrajectoryFitsModel(trajectory, model, options.trajectory);
   }
 
-  std::vector<std::string> written;
-  const std::string yaml_path = options.out + "/excitation.yaml", csv_path = options.out + "/reference.csv";
-  SaveFourierTrajectory(trajectory, yaml_path);
-  WriteFileAtomically(csv_path, FormatReferenceCsv(model, trajectory, model.sample_time, options.periods));
-  written = {yaml_path, csv_path};
+  OutputFiles files(options.out);
+  SaveFourierTrajectory(trajectory, files.Path("excitation.yaml"));
+  files.Add("excitation.yaml");
+  files.Write("reference.csv", FormatReferenceCsv(model, trajectory, model.sample_time, options.periods));
 
   std::unique_ptr<BatchAdaptiveResult> adaptive;
   if (plant) {
@@ -155,9 +153,7 @@ int Excite(ExciteCliOptions options) {
           progress.Update(trial, trials, detail);
         }));
     progress.Finish();
-    const std::string path = options.out + "/adaptive.csv";
-    WriteFileAtomically(path, FormatBatchAdaptiveCsv(*adaptive));
-    written.push_back(path);
+    files.Write("adaptive.csv", FormatBatchAdaptiveCsv(*adaptive));
   }
 
   int parameters_left_out = 0;
@@ -166,16 +162,11 @@ int Excite(ExciteCliOptions options) {
     char title[160];
     std::snprintf(title, sizeof title, "Excitation of %s: %d harmonics of %g Hz", model.name.c_str(),
                   trajectory.harmonics(), trajectory.fundamental);
-    const std::string png = options.out + "/excitation.png";
-    WritePng(png, RenderSeriesPlot(TrajectoryPlot(model, trajectory, title), *renderer));
-    written.push_back(png);
+    files.WritePng("excitation.png", RenderSeriesPlot(TrajectoryPlot(model, trajectory, title), *renderer));
     if (adaptive) {
-      const std::string parameters_png = options.out + "/adaptive_parameters.png";
-      const std::string tracking_png = options.out + "/adaptive_tracking.png";
-      WritePng(parameters_png, RenderSeriesPlot(ParameterPlot(*adaptive, &parameters_left_out), *renderer));
-      WritePng(tracking_png, RenderSeriesPlot(TrackingPlot(model, *adaptive), *renderer));
-      written.push_back(parameters_png);
-      written.push_back(tracking_png);
+      files.WritePng("adaptive_parameters.png",
+                     RenderSeriesPlot(ParameterPlot(*adaptive, &parameters_left_out), *renderer));
+      files.WritePng("adaptive_tracking.png", RenderSeriesPlot(TrackingPlot(model, *adaptive), *renderer));
     }
   } else {
     std::fprintf(stderr, "excite: warning: plots not drawn: %s\n", kRenderingNotCompiled);
@@ -199,8 +190,7 @@ int Excite(ExciteCliOptions options) {
         std::printf("(adaptive_parameters.png leaves out %d parameter(s) causing under 1 %% of the largest torque)\n",
                     parameters_left_out);
     }
-    std::printf("wrote:\n");
-    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }

@@ -4,17 +4,17 @@
 #include <filesystem>
 #include <memory>
 
+#include "analysis/arm_replay.h"
+#include "analysis/identification_validation.h"
 #include "app/commands/commands.h"
-#include "app/progress.h"
 #include "core/error.h"
-#include "identification/torque_prediction.h"
+#include "core/progress.h"
+#include "identification/identification_csv.h"
 #include "identification/wls_identification.h"
-#include "io/arm_log.h"
-#include "io/atomic_file.h"
-#include "io/csv_table.h"
-#include "io/png_image.h"
+#include "io/output_files.h"
 #include "render/plot.h"
 #include "render/renderer.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 #include "robots/arm/arm_model_yaml_writer.h"
 
@@ -33,11 +33,6 @@ struct IdentifyCliOptions {
   bool offsets = false;
   bool quiet = false;
 };
-
-std::string NoCommas(std::string s) {
-  std::replace(s.begin(), s.end(), ',', ';');
-  return s;
-}
 
 // Measured torques of joint j against the a-priori and the identified model's.
 SeriesPlot TorquePlot(const ArmLog& log, int j, const Eigen::MatrixXd& a_priori, const Eigen::MatrixXd& identified,
@@ -89,88 +84,29 @@ int Identify(const IdentifyCliOptions& options) {
   WlsIdentificationSummary summary;
   const ArmModel identified = IdentifyArm(model, logs, identification, &summary);
 
-  // Held-out logs: the a-priori and the identified model's torque errors (with the
-  // identified offsets, when estimated), away from the derived derivatives' edges.
-  // The unconstrained estimate predicts from the base parameters directly.
-  std::string validation_csv =
-      "log,joint,torque_rms,error_a_priori,error_identified,error_unconstrained,relative_a_priori,"
-      "relative_identified,relative_unconstrained\n";
-  std::string validation_text;
-  const BaseParameters base = held_out.empty() ? BaseParameters{} : IdentificationBase(model, identification);
-  for (const ArmLog& log : held_out) {
-    // The identified model's commands: its offsets (torque_offset effects) and the
-    // a-priori model's delays and other kept effects included, as replay gives them.
-    const Eigen::MatrixXd tau = PredictArmCommands(identified, log);
-    Eigen::MatrixXd free = PredictBaseTorques(model, base, summary.identified.head(summary.base_parameters), log);
-    if (summary.offsets.size() == log.dof) free.rowwise() += summary.identified.tail(log.dof).transpose();
-    const int first = log.edge_samples, last = log.rows() - log.edge_samples;
-    const TorqueErrors before = CompareArmTorques(model, log, first, last);
-    const TorqueErrors after = CompareArmTorques(identified, log, tau, first, last);
-    const TorqueErrors unconstrained = CompareArmTorques(identified, log, free, first, last);
-    char line[256];
-    validation_text += "\nheld out: " + log.path + " (" + std::to_string(after.rows) + " rows)\n";
-    std::snprintf(line, sizeof line, "%-6s %11s %21s %21s %21s\n", "joint", "torque RMS", "a-priori error",
-                  "identified error", "(unconstrained)");
-    validation_text += line;
-    for (int j = 0; j < log.dof; ++j) {
-      std::snprintf(line, sizeof line, "%-6d %11.4g %11.4g (%6.2f%%) %11.4g (%6.2f%%) %11.4g (%6.2f%%)\n", j + 1,
-                    after.torque_rms[j], before.error_rms[j], 100 * before.relative[j], after.error_rms[j],
-                    100 * after.relative[j], unconstrained.error_rms[j], 100 * unconstrained.relative[j]);
-      validation_text += line;
-      validation_csv += log.path + "," + std::to_string(j + 1) + "," + FormatCsvNumber(after.torque_rms[j]) + "," +
-                        FormatCsvNumber(before.error_rms[j]) + "," + FormatCsvNumber(after.error_rms[j]) + "," +
-                        FormatCsvNumber(unconstrained.error_rms[j]) + "," + FormatCsvNumber(before.relative[j]) + "," +
-                        FormatCsvNumber(after.relative[j]) + "," + FormatCsvNumber(unconstrained.relative[j]) + "\n";
-    }
-    std::snprintf(line, sizeof line,
-                  "mean relative error %.2f%% -> %.2f%% (unconstrained %.2f%%); normalised (error / twice the effort "
-                  "limit) %.3f%% -> %.3f%% (%.3f%%)\n",
-                  100 * before.relative.mean(), 100 * after.relative.mean(), 100 * unconstrained.relative.mean(),
-                  100 * before.normalised, 100 * after.normalised, 100 * unconstrained.normalised);
-    validation_text += line;
-  }
+  // Held-out logs: the torque errors of the a-priori, the identified and the
+  // unconstrained model.
+  const IdentificationValidation validation =
+      ValidateIdentification(model, identified, summary, identification, held_out);
 
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs.size()) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
   comment += "\nstarting from " + options.model + "; " + summary.BriefReport();
-  WriteArmModelYaml(options.out, identified, comment);
-  std::vector<std::string> written = {options.out};
+  OutputFiles files;
+  files.Write(options.out, FormatArmModelYaml(identified, comment));
 
   if (!options.report.empty()) {
-    std::string csv = "index,parameter,description,a_priori,identified,relative_std_pct,model\n";
-    for (std::size_t k = 0; k < summary.names.size(); ++k) {
-      const auto i = static_cast<Eigen::Index>(k);
-      csv += std::to_string(k + 1) + "," + NoCommas(summary.names[k]) + "," + NoCommas(summary.descriptions[k]) + "," +
-             FormatCsvNumber(summary.a_priori[i]) + "," + FormatCsvNumber(summary.identified[i]) + "," +
-             (std::isfinite(summary.relative_std[i]) ? FormatCsvNumber(summary.relative_std[i]) : "inf") + "," +
-             FormatCsvNumber(summary.consistent[i]) + "\n";
-    }
-    const std::string parameters = options.report + "/parameters.csv";
-    WriteFileAtomically(parameters, csv);
-    written.push_back(parameters);
-    std::string joints = "joint,torque_rms,error_rms_a_priori,error_rms_identified,error_rms_model,offset\n";
-    for (int j = 0; j < summary.dof; ++j) {
-      joints += std::to_string(j + 1) + "," + FormatCsvNumber(summary.torque_rms[j]) + "," +
-                FormatCsvNumber(summary.error_rms_a_priori[j]) + "," + FormatCsvNumber(summary.error_rms_identified[j]) +
-                "," + FormatCsvNumber(summary.error_rms_model[j]) + "," +
-                FormatCsvNumber(summary.offsets.size() ? summary.offsets[j] : 0.0) + "\n";
-    }
-    const std::string joints_path = options.report + "/joints.csv";
-    WriteFileAtomically(joints_path, joints);
-    written.push_back(joints_path);
-    if (!held_out.empty()) {
-      const std::string validation_path = options.report + "/validation.csv";
-      WriteFileAtomically(validation_path, validation_csv);
-      written.push_back(validation_path);
-    }
+    const std::string report = options.report + "/";
+    files.Write(report + "parameters.csv", FormatIdentifiedParametersCsv(summary));
+    files.Write(report + "joints.csv", FormatIdentifiedJointsCsv(summary));
+    if (!held_out.empty()) files.Write(report + "validation.csv", FormatIdentificationValidationCsv(validation));
     if (RenderingCompiled()) {
       std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
       const Eigen::MatrixXd before = PredictArmCommands(model, logs[0]);
       const Eigen::MatrixXd after = PredictArmCommands(identified, logs[0]);
       for (int j = 0; j < model.dof(); ++j) {
-        const std::string png = options.report + "/torque_joint" + std::to_string(j + 1) + ".png";
-        WritePng(png, RenderSeriesPlot(TorquePlot(logs[0], j, before, after, model.name), *renderer));
-        written.push_back(png);
+        files.WritePng(report + "torque_joint" + std::to_string(j + 1) + ".png",
+                       RenderSeriesPlot(TorquePlot(logs[0], j, before, after, model.name), *renderer));
       }
     } else {
       std::fprintf(stderr, "identify: warning: plots not drawn: %s\n", kRenderingNotCompiled);
@@ -185,9 +121,8 @@ int Identify(const IdentifyCliOptions& options) {
       for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
       std::printf(" N·m or N\n");
     }
-    std::printf("%s\n", validation_text.c_str());
-    std::printf("wrote:\n");
-    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+    std::printf("%s\n", validation.FullReport().c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }

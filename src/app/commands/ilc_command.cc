@@ -3,28 +3,21 @@
 // sensitivity at several postures, build a learning filter per joint (fitted to it, or
 // the controller's model), and run the task trial after trial, learning a feedforward
 // between trials.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <sstream>
 
 #include "app/commands/commands.h"
-#include "app/progress.h"
+#include "control/closed_loop_frf.h"
+#include "control/ilc_report.h"
 #include "control/iterative_learning.h"
-#include "control/tracking_plots.h"
 #include "core/error.h"
-#include "identification/closed_loop_frf.h"
-#include "io/atomic_file.h"
-#include "io/base64.h"
-#include "io/html_text.h"
+#include "core/progress.h"
 #include "io/csv_table.h"
-#include "io/png_image.h"
-#include "render/plot.h"
+#include "io/output_files.h"
 #include "render/renderer.h"
 #include "scene/arm_scene.h"
-#include "signal/butterworth.h"
 
 namespace twinsim {
 namespace {
@@ -38,139 +31,6 @@ struct IlcCommandOptions {
 };
 
 std::string Num(double v) { return FormatCsvNumber(v); }
-
-// trial,rms1..rmsn,max1..maxn (the contract's columns).
-std::string TrialsCsv(const IlcResult& r) {
-  const Eigen::Index n = r.error_rms.front().size();
-  std::string out = "trial";
-  for (Eigen::Index j = 1; j <= n; ++j) out += ",rms" + std::to_string(j);
-  for (Eigen::Index j = 1; j <= n; ++j) out += ",max" + std::to_string(j);
-  out += '\n';
-  for (std::size_t k = 0; k < r.error_rms.size(); ++k) {
-    out += std::to_string(k);
-    for (Eigen::Index j = 0; j < n; ++j) out += ',' + Num(r.error_rms[k][j]);
-    for (Eigen::Index j = 0; j < n; ++j) out += ',' + Num(r.error_max[k][j]);
-    out += '\n';
-  }
-  return out;
-}
-
-// joint,posture,frequency,magnitude,phase,filter_magnitude,filter_phase: the measured
-// PS (rad/(N·m), degrees) and 1/L of the learning filter used.
-std::string FrfCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters) {
-  std::string out = "joint,posture,frequency,magnitude,phase,filter_magnitude,filter_phase\n";
-  for (std::size_t j = 0; j < frf.response.size(); ++j) {
-    for (std::size_t p = 0; p < frf.response[j].size(); ++p) {
-      for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
-        const std::complex<double> ps = frf.response[j][p][i];
-        const std::complex<double> inv = 1.0 / filters[j].Response(frf.frequency[i], frf.sample_time);
-        out += std::to_string(j + 1) + ',' + std::to_string(p + 1) + ',' + Num(frf.frequency[i]) + ',' +
-               Num(std::abs(ps)) + ',' + Num(std::arg(ps) * 180 / M_PI) + ',' + Num(std::abs(inv)) + ',' +
-               Num(std::arg(inv) * 180 / M_PI) + '\n';
-      }
-    }
-  }
-  return out;
-}
-
-// joint,shift,inertia,inertia_early,damping,stiffness,residual,limit_hz,q_order,q_cutoff,worst_factor
-std::string FiltersCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters, const IlcOptions& o) {
-  std::string out =
-      "joint,shift,inertia,inertia_early,damping,stiffness,residual,learning_limit_hz,q_order,q_cutoff,worst_factor\n";
-  for (std::size_t j = 0; j < filters.size(); ++j) {
-    const LearningFilter& l = filters[j];
-    const double limit = LearningLimitFrequency(frf, static_cast<int>(j), l, o.gain);
-    out += std::to_string(j + 1) + ',' + std::to_string(l.shift) + ',' + Num(l.inertia) + ',' + Num(l.inertia_early) +
-           ',' + Num(l.damping) + ',' + Num(l.stiffness) + ',' + Num(l.residual) + ',' +
-           (std::isfinite(limit) ? Num(limit) : std::string("inf")) + ',' + std::to_string(o.q_order) + ',' +
-           Num(o.q_cutoff) + ',' + Num(ConvergenceFactor(frf, static_cast<int>(j), l, o).maxCoeff()) + '\n';
-  }
-  return out;
-}
-
-// Two images one above the other (the wider sets the width; white around the narrower).
-RgbaImage Stack(const RgbaImage& top, const RgbaImage& bottom) {
-  RgbaImage out(std::max(top.width, bottom.width), top.height + bottom.height);
-  for (int y = 0; y < top.height; ++y)
-    for (int x = 0; x < top.width; ++x) std::copy_n(top.at(x, y), 4, out.at(x, y));
-  for (int y = 0; y < bottom.height; ++y)
-    for (int x = 0; x < bottom.width; ++x) std::copy_n(bottom.at(x, y), 4, out.at(x, top.height + y));
-  return out;
-}
-
-// log10 of the RMS error per joint and the worst joint over the trials.
-SeriesPlot ConvergencePlot(const IlcResult& r, const std::string& title) {
-  SeriesPlot plot;
-  plot.title = title;
-  plot.x_label = "trial";
-  plot.y_label = "log10(RMS error / rad)";
-  const Eigen::Index n = r.error_rms.front().size();
-  for (Eigen::Index j = 0; j <= n; ++j) {
-    PlotSeries s;
-    s.name = j < n ? "joint " + std::to_string(j + 1) : "worst joint";
-    for (std::size_t k = 0; k < r.error_rms.size(); ++k) {
-      s.x.push_back(static_cast<double>(k));
-      s.y.push_back(std::log10(j < n ? r.error_rms[k][j] : r.WorstRms(static_cast<int>(k))));
-    }
-    plot.series.push_back(s);
-  }
-  return plot;
-}
-
-// The tracking error of every joint in trial 0 and in the last trial, mrad.
-SeriesPlot ErrorPlot(const IlcResult& r, const std::string& title) {
-  SeriesPlot plot;
-  plot.title = title;
-  plot.y_label = "q_ref - q [mrad]";
-  const int last = static_cast<int>(r.error_rms.size()) - 1;
-  for (const TrackingTrial* trial : {&r.first, &r.last}) {
-    for (Eigen::Index j = 0; j < trial->q.cols(); ++j) {
-      PlotSeries s;
-      s.name = "joint " + std::to_string(j + 1) + ", trial " + std::to_string(trial == &r.first ? 0 : last);
-      for (Eigen::Index k = 0; k < trial->q.rows(); ++k) {
-        s.x.push_back(trial->t[k]);
-        s.y.push_back(1e3 * (trial->q_ref(k, j) - trial->q(k, j)));
-      }
-      plot.series.push_back(s);
-    }
-  }
-  return plot;
-}
-
-// Bode plot of joint j: |PS| in dB and its phase against log10 f, one line per posture,
-// and 1/L of the learning filter dashed.
-RgbaImage BodePng(const ClosedLoopFrf& frf, const LearningFilter& filter, int j, const std::string& title,
-                  Renderer& renderer) {
-  SeriesPlot mag, phase;
-  mag.title = title;
-  mag.x_label = phase.x_label = "log10(f / Hz)";
-  mag.y_label = "|PS| [dB re 1 rad/(N m)]";
-  phase.y_label = "phase [deg]";
-  mag.height = phase.height = 450;
-  const auto& responses = frf.response[static_cast<std::size_t>(j)];
-  for (std::size_t p = 0; p <= responses.size(); ++p) {
-    PlotSeries m, ph;
-    m.name = ph.name = p < responses.size() ? "posture " + std::to_string(p + 1) : "1 / L (learning filter)";
-    double unwrap = 0, previous = 0;
-    for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
-      const std::complex<double> v =
-          p < responses.size() ? responses[p][i] : 1.0 / filter.Response(frf.frequency[i], frf.sample_time);
-      double a = std::arg(v) * 180 / M_PI;
-      if (i > 0) {
-        while (a + unwrap - previous > 180) unwrap -= 360;
-        while (a + unwrap - previous < -180) unwrap += 360;
-      }
-      previous = a + unwrap;
-      m.x.push_back(std::log10(frf.frequency[i]));
-      ph.x.push_back(std::log10(frf.frequency[i]));
-      m.y.push_back(20 * std::log10(std::abs(v)));
-      ph.y.push_back(previous);
-    }
-    mag.series.push_back(m);
-    phase.series.push_back(ph);
-  }
-  return Stack(RenderSeriesPlot(mag, renderer), RenderSeriesPlot(phase, renderer));
-}
 
 int RunIlcCommand(const IlcCommandOptions& options) {
   ArmScene scene = LoadArmScene(options.scene);
@@ -211,7 +71,7 @@ int RunIlcCommand(const IlcCommandOptions& options) {
     } else {
       try {
         filters.push_back(FitLearningFilter(frf, j, spec.fit_min, spec.fit_max, spec.max_shift));
-      } catch (const std::invalid_argument& e) {
+      } catch (const InputError& e) {
         throw InputError(SourceLocation{options.scene}, std::string("ilc.frf.fit_band: ") + e.what());
       }
     }
@@ -244,106 +104,30 @@ int RunIlcCommand(const IlcCommandOptions& options) {
         std::fflush(stdout);
       });
 
-  // 4. What it wrote.
-  std::vector<std::string> written;
-  auto write = [&](const std::string& name, const std::string& text) {
-    WriteFileAtomically(out + "/" + name, text);
-    written.push_back(out + "/" + name);
-  };
-  write("trials.csv", TrialsCsv(result));
-  write("frf.csv", FrfCsv(frf, filters));
-  write("filters.csv", FiltersCsv(frf, filters, spec.options));
-  write("feedforward.csv", JointColumnsCsv(reference.t, {"f"}, {&result.feedforward}));
-
-  std::vector<std::pair<std::string, std::string>> images;  // file, PNG bytes
+  // 4. The report: the tables, the plots and report.html.
   if (!RenderingCompiled()) {
     std::fprintf(stderr, "%s: warning: plots and report not drawn: %s\n", options.scene.c_str(), kRenderingNotCompiled);
-  } else {
-    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    const std::string what = scene.name + " (" + backend + ")";
-    images.emplace_back("convergence.png",
-                        EncodePng(RenderSeriesPlot(ConvergencePlot(result, what + ": tracking error per trial"), *renderer)));
-    images.emplace_back("error.png", EncodePng(RenderSeriesPlot(
-                                         ErrorPlot(result, what + ": tracking error, first and last trial"), *renderer)));
-    for (int j = 0; j < n; ++j) {
-      images.emplace_back("bode_joint" + std::to_string(j + 1) + ".png",
-                          EncodePng(BodePng(frf, filters[j], j,
-                                            what + ": process sensitivity, joint " + std::to_string(j + 1), *renderer)));
-    }
-    PathPlot path = ToolPathPlot(result.first, scene.plant, scene.task.writing.tool, what + ": tool path");
-    path.paths[1].name = "trial 0";
-    PathPlot last = ToolPathPlot(result.last, scene.plant, scene.task.writing.tool, "");
-    last.paths[1].name = "trial " + std::to_string(result.error_rms.size() - 1);
-    path.paths.push_back(last.paths[1]);
-    images.emplace_back("path.png", EncodePng(RenderPathPlot(path, *renderer)));
-    for (const auto& [file, png] : images) write(file, png);
   }
-
-  // The report: the story from the FRFs through the filters to the convergence.
-  {
-    std::ostringstream html;
-    const int last = static_cast<int>(result.error_rms.size()) - 1;
-    html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>ILC: " << HtmlEscape(scene.name)
-         << "</title>\n<style>body{font-family:sans-serif;max-width:1250px;margin:auto}"
-            "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-            "img{max-width:100%}</style></head><body>\n";
-    html << "<h1>Iterative learning control: " << HtmlEscape(scene.name) << "</h1>\n";
-    html << "<p>Plant <b>" << HtmlEscape(scene.plant.name) << "</b>, controller " << HtmlEscape(TrackingControllerName(tracking.controller))
-         << " with model <b>" << HtmlEscape(scene.hat.name) << "</b> at " << tracking.bandwidth << " Hz, backend "
-         << HtmlEscape(backend) << ". " << last << " learning trials after trial 0 (no learning): the worst joint's RMS error went from "
-         << Num(result.WorstRms(0)) << " rad to " << Num(result.WorstRms(last)) << " rad, <b>" << Num(result.Reduction())
-         << " times smaller</b>" << (result.Diverged() ? " &mdash; <b>the learning diverged</b>" : "") << ". "
-         << "All trials took " << Num(result.wall_seconds) << " s.</p>\n";
-    html << "<h2>1. Process sensitivity</h2>\n<p>PS = q / f, from a feedforward torque added to the controller's output to "
-            "the joint position with the feedback closed, measured per joint at "
-         << postures.size() << " postures by a random-phase multisine (" << Num(spec.frf.f_min) << "&ndash;"
-         << Num(spec.frf.f_max) << " Hz, " << spec.frf.periods << " periods of " << Num(spec.frf.period)
-         << " s averaged after one transient period).</p>\n";
-    for (int j = 0; j < n && !images.empty(); ++j) {
-      html << "<img src=\"data:image/png;base64," << Base64Encode(images[2 + j].second) << "\" alt=\"Bode plot joint "
-           << j + 1 << "\">\n";
-    }
-    html << "<h2>2. Filters</h2>\n<p>Learning filter L (" << HtmlEscape(spec.learning_filter)
-         << "): L(z) = (a2 z^&tau; + a2' z^(&tau;+1)) (z &minus; 2 + 1/z)/Ts&sup2; + a1 (z &minus; 1/z)/(2Ts) + a0, applied "
-            "offline (non-causal). Robustness filter Q: "
-         << (spec.options.q_order > 0 ? "zero-phase Butterworth, order " + std::to_string(spec.options.q_order) + ", cut-off " +
-                                            Num(spec.options.q_cutoff) + " Hz"
-                                      : std::string("none"))
-         << ". Update f<sub>k+1</sub> = Q(f<sub>k</sub> + " << Num(spec.options.gain) << " L e<sub>k</sub>).</p>\n<table><tr><th>joint</th><th>&tau; [samples]</th><th>a2 + a2' [kg m&sup2;]</th>"
-            "<th>a1 [N m s/rad]</th><th>a0 [N m/rad]</th><th>fit residual</th><th>|1 &minus; &alpha; PS L| &lt; 1 up to [Hz]</th>"
-            "<th>worst |Q|&sup2;|1 &minus; &alpha; PS L|</th></tr>\n";
-    for (int j = 0; j < n; ++j) {
-      const double limit = LearningLimitFrequency(frf, j, filters[j], spec.options.gain);
-      html << "<tr><td>" << j + 1 << "</td><td>" << filters[j].shift << "</td><td>"
-           << Num(filters[j].inertia + filters[j].inertia_early) << "</td><td>" << Num(filters[j].damping) << "</td><td>"
-           << Num(filters[j].stiffness) << "</td><td>" << Num(filters[j].residual) << "</td><td>"
-           << (std::isfinite(limit) ? Num(limit) : std::string("all")) << "</td><td>"
-           << Num(ConvergenceFactor(frf, j, filters[j], spec.options).maxCoeff()) << "</td></tr>\n";
-    }
-    html << "</table>\n<h2>3. Convergence</h2>\n<table><tr><th>trial</th>";
-    for (int j = 1; j <= n; ++j) html << "<th>RMS " << j << " [mrad]</th>";
-    for (int j = 1; j <= n; ++j) html << "<th>max " << j << " [mrad]</th>";
-    html << "</tr>\n";
-    for (int k = 0; k <= last; ++k) {
-      html << "<tr><td>" << k << "</td>";
-      for (int j = 0; j < n; ++j) html << "<td>" << Num(1e3 * result.error_rms[k][j]) << "</td>";
-      for (int j = 0; j < n; ++j) html << "<td>" << Num(1e3 * result.error_max[k][j]) << "</td>";
-      html << "</tr>\n";
-    }
-    html << "</table>\n";
-    for (const auto& [file, png] : images) {
-      if (file.rfind("bode", 0) == 0) continue;
-      html << "<p><img src=\"data:image/png;base64," << Base64Encode(png) << "\" alt=\"" << file << "\"></p>\n";
-    }
-    html << "</body></html>\n";
-    write("report.html", html.str());
+  const std::unique_ptr<Renderer> renderer = RenderingCompiled() ? MakeDefaultRenderer() : nullptr;
+  IlcReportSetup setup;
+  setup.name = scene.name;
+  setup.backend = backend;
+  setup.hat = scene.hat.name;
+  setup.tracking = tracking;
+  setup.frf = spec.frf;
+  setup.learning_filter = spec.learning_filter;
+  setup.options = spec.options;
+  setup.tool = scene.task.writing.tool;
+  OutputFiles files(out);
+  for (const auto& [file, bytes] :
+       MakeIlcReport(setup, scene.plant, reference.t, frf, filters, result, renderer.get())) {
+    files.Write(file, bytes);
   }
 
   const int last = static_cast<int>(result.error_rms.size()) - 1;
   if (!options.quiet) {
-    std::printf("%s\n", result.Brief().c_str());
-    std::printf("wrote:\n");
-    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+    std::printf("%s\n", result.BriefReport().c_str());
+    files.PrintWrote();
   }
   if (result.Diverged()) {
     std::fprintf(stderr,

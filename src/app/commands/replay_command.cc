@@ -5,17 +5,18 @@
 #include <filesystem>
 #include <memory>
 
+#include "analysis/arm_replay.h"
 #include "analysis/omni_replay.h"
 #include "app/commands/commands.h"
-#include "app/progress.h"
-#include "backends/omni_backend.h"
 #include "core/error.h"
-#include "identification/torque_prediction.h"
-#include "io/arm_log.h"
-#include "io/omni_log.h"
-#include "learning/omni_predictor.h"
+#include "core/progress.h"
+#include "io/output_files.h"
 #include "io/yaml_reader.h"
+#include "learning/omni_predictor.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
+#include "robots/omni/omni_log.h"
+#include "sim/omni_backend.h"
 
 namespace twinsim {
 namespace {
@@ -41,7 +42,9 @@ int ReplayArm(const ReplayOptions& options) {
   CheckArmLogMatchesModel(log, model);
   ArmCommandSummary what;
   const Eigen::MatrixXd tau = PredictArmCommands(model, log, &what);
+  OutputFiles files;
   WriteArmTorqueCsv(options.out, log.t, tau);
+  files.Add(options.out);
   if (!options.quiet) {
     const TorqueErrors e = CompareArmTorques(model, log, tau);
     const int effects = static_cast<int>(ListArmEffects(model.effects).size());
@@ -57,7 +60,7 @@ int ReplayArm(const ReplayOptions& options) {
     std::printf("joint  torque RMS  error RMS  relative\n");
     for (int j = 0; j < log.dof; ++j)
       std::printf("%5d  %10.4g  %9.4g  %7.2f %%\n", j + 1, e.torque_rms[j], e.error_rms[j], 100 * e.relative[j]);
-    std::printf("wrote:\n  %s\n", options.out.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }
@@ -80,13 +83,15 @@ int Replay(const ReplayOptions& options) {
   Progress progress("replay", !options.quiet);
   OmniReplayResult result = ReplayOmniLog(model, log, replay, [&](int done, int total) { progress.Update(done, total); });
   progress.Finish();
+  OutputFiles files;
   WritePoseCsv(options.out, result.t, result.pose);
+  files.Add(options.out);
 
   if (!options.quiet) {
     std::printf("replayed %zu rows of %s through %s on %s (K = %d, delay %d frames): %d predicted, position RMSE %.4f m\n",
                 log.rows.size(), options.log.c_str(), model.name.c_str(), options.backend.c_str(), options.horizon,
                 result.delay_frames, result.num_predicted(), PositionRmse(log, result));
-    std::printf("wrote:\n  %s\n", options.out.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }

@@ -5,22 +5,20 @@
 #include <memory>
 
 #include "app/commands/commands.h"
-#include "app/progress.h"
-#include "backends/arm/arm_backend.h"
-#include "backends/learned/learned_arm_backend.h"
-#include "backends/omni_backend.h"
+#include "backends/arm_backend_factory.h"
+#include "backends/omni_backend_factory.h"
 #include "control/computed_torque.h"
-#include "control/tracking_plots.h"
 #include "core/error.h"
-#include "io/atomic_file.h"
+#include "core/progress.h"
 #include "io/csv_table.h"
-#include "io/omni_log.h"
+#include "io/output_files.h"
 #include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
-#include "render/plot.h"
 #include "render/renderer.h"
+#include "robots/omni/omni_log.h"
 #include "scene/arm_scene.h"
 #include "scene/scene.h"
+#include "scene/scene_plots.h"
 
 namespace twinsim {
 namespace {
@@ -57,54 +55,6 @@ std::string TruthCsv(const std::vector<FrameRecord>& frames) {
   return out;
 }
 
-// The path plot a scene asks for: each robot's true path and/or what its observer saw.
-PathPlot MakeScenePathPlot(const PlotSpec& spec, const Scene& scene, const SimulationResult& result,
-                           const std::string& backend) {
-  PathPlot plot;
-  plot.title = PlotTitle(spec, scene.name, backend, scene.seed);
-  plot.width = spec.width;
-  plot.height = spec.height;
-  plot.orientation_every = spec.orientation_every;
-  const WorldRect field{-scene.field.length / 2, scene.field.length / 2, -scene.field.width / 2, scene.field.width / 2};
-  plot.field = field;
-  if (spec.region_is_field) {
-    const double m = 0.15;  // m, so that the outline is not on the frame
-    plot.region = WorldRect{field.x_min - m, field.x_max + m, field.y_min - m, field.y_max + m};
-  } else {
-    plot.region = spec.region;
-  }
-  const bool single = result.frames.size() == 1;
-  const std::string source = !spec.source.empty() ? spec.source : single ? "both" : "truth";
-  for (std::size_t i = 0; i < result.frames.size(); ++i) {
-    const std::vector<FrameRecord>& frames = result.frames[i];
-    const std::string& robot = result.robot_names[i];
-    if (source == "truth" || source == "both") {
-      PlotPath p;
-      p.name = single ? "truth" : source == "both" ? robot + " truth" : robot;
-      for (std::size_t k = 0; k < frames.size(); ++k) {
-        p.poses.push_back(frames[k].truth);
-        p.frames.push_back(static_cast<int>(k));
-      }
-      plot.paths.push_back(std::move(p));
-    }
-    if (source == "seen" || source == "both") {
-      PlotPath p;
-      const int late = i < scene.robots.size() ? scene.robots[i].model.vision_delay_frames : 0;
-      const std::string what = "seen by the observer (" + std::to_string(late) + (late == 1 ? " frame" : " frames") + " late)";
-      p.name = single ? what : source == "both" ? robot + " " + what : robot + ", " + what;
-      // Numbered by the frame the camera captured them in, so that both paths tick the
-      // same moments and the ticks differ only by what the camera got wrong.
-      for (std::size_t k = 0; k < frames.size(); ++k) {
-        if (!frames[k].observed) continue;
-        p.poses.push_back(frames[k].seen);
-        p.frames.push_back(static_cast<int>(k) - late);
-      }
-      plot.paths.push_back(std::move(p));
-    }
-  }
-  return plot;
-}
-
 // The backend an arm scene's plant runs on: every arm backend is built here, so that
 // one place decides what `--backend` (and, for a learned backend, `--predictor`) means
 // for arms. `learned` steps the arm with a predictor (twinsim train) trained for the
@@ -113,17 +63,17 @@ PathPlot MakeScenePathPlot(const PlotSpec& spec, const Scene& scene, const Simul
 // and a predictor given to another backend.
 std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std::string& backend,
                                                 const RunOptions& options) {
+  ArmBackendOptions backend_options;
   if (backend == "learned") {
     if (options.predictor.empty()) {
       throw InputError(SourceLocation{options.scene},
                        "--backend learned needs --predictor P (an arm predictor from 'twinsim train')");
     }
-    const ArmPredictor predictor = ArmPredictor::Load(options.predictor);
-    return MakeLearnedArmBackend(scene.plant, predictor);
-  }
-  if (!options.predictor.empty())
+    backend_options.predictor = std::make_shared<ArmPredictor>(ArmPredictor::Load(options.predictor));
+  } else if (!options.predictor.empty()) {
     throw InputError("--predictor applies to --backend learned only; arm scene '" + scene.name + "' runs on " + backend);
-  return MakeArmBackend(backend, scene.plant);
+  }
+  return MakeArmBackend(backend, scene.plant, backend_options);
 }
 
 // What only the simulation knows, per sample and joint: the tracking error, the demand
@@ -133,13 +83,6 @@ std::string ArmTrackingCsv(const TrackingTrial& trial) {
   const Eigen::MatrixXd error = trial.q_ref - trial.q;
   return JointColumnsCsv(trial.t, {"error", "demand", "model", "applied", "needed"},
                          {&error, &trial.demand, &trial.model_torque, &trial.applied, &trial.needed});
-}
-
-std::string ArmPlotTitle(const ArmPlotSpec& spec, const ArmScene& scene, const std::string& backend,
-                         const std::string& what) {
-  PlotSpec generic;
-  generic.title = spec.title.empty() ? "{scene} ({backend}): " + what : spec.title;
-  return PlotTitle(generic, scene.name, backend, scene.seed);
 }
 
 int RunArm(const RunOptions& options) {
@@ -157,42 +100,17 @@ int RunArm(const RunOptions& options) {
   const TrackingTrial trial = RunTrackingTrial(scene.plant, std::move(engine), scene.hat, reference, tracking);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  std::vector<std::string> written;
-  WriteFileAtomically(out + "/trajectory.csv", ArmSceneTrajectoryCsv(scene, trial));
-  written.push_back(out + "/trajectory.csv");
-  WriteFileAtomically(out + "/tracking.csv", ArmTrackingCsv(trial));
-  written.push_back(out + "/tracking.csv");
+  OutputFiles files(out);
+  files.Write("trajectory.csv", ArmSceneTrajectoryCsv(scene, trial));
+  files.Write("tracking.csv", ArmTrackingCsv(trial));
 
   if (!scene.plots.empty() && !RenderingCompiled()) {
     std::fprintf(stderr, "%s: warning: %zu plot(s) not drawn: %s\n", options.scene.c_str(), scene.plots.size(),
                  kRenderingNotCompiled);
   } else if (!scene.plots.empty()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    for (const ArmPlotSpec& spec : scene.plots) {
-      if (spec.type == "tool_path") {
-        PathPlot plot = ToolPathPlot(trial, scene.plant, scene.task.writing.tool,
-                                     ArmPlotTitle(spec, scene, backend, "tool point path"));
-        plot.width = spec.width, plot.height = spec.height;
-        WritePng(out + "/" + spec.file, RenderPathPlot(plot, *renderer));
-        written.push_back(out + "/" + spec.file);
-      } else if (spec.type == "joint_torques") {
-        const std::string stem = spec.file.substr(0, spec.file.size() - 4);
-        for (int j = 0; j < scene.plant.dof(); ++j) {
-          SeriesPlot plot = JointTorquePlot(
-              trial, scene.plant, j,
-              ArmPlotTitle(spec, scene, backend, "joint " + std::to_string(j + 1) + " torque"));
-          plot.width = spec.width, plot.height = spec.height;
-          const std::string path = out + "/" + stem + "_joint" + std::to_string(j + 1) + ".png";
-          WritePng(path, RenderSeriesPlot(plot, *renderer));
-          written.push_back(path);
-        }
-      } else {
-        SeriesPlot plot = TrackingErrorPlot(trial, scene.plant, ArmPlotTitle(spec, scene, backend, "tracking error"));
-        plot.width = spec.width, plot.height = spec.height;
-        WritePng(out + "/" + spec.file, RenderSeriesPlot(plot, *renderer));
-        written.push_back(out + "/" + spec.file);
-      }
-    }
+    for (const ScenePlot& plot : ArmScenePlots(scene, trial, backend))
+      files.WritePng(plot.file, RenderScenePlot(plot, *renderer));
   }
 
   if (!options.quiet) {
@@ -205,8 +123,7 @@ int RunArm(const RunOptions& options) {
       std::printf("%5lld  %16.4g  %16.4g  %13.2f  %17.4g\n", static_cast<long long>(j + 1), 1e3 * trial.error_max[j],
                   1e3 * trial.error_rms[j], 100 * trial.saturated_fraction[j], trial.command_rms[j]);
     }
-    std::printf("wrote:\n");
-    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }
@@ -218,7 +135,7 @@ int Run(const RunOptions& options) {
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
 
-  BackendOptions backend_options;
+  OmniBackendOptions backend_options;
   if (!options.predictor.empty())
     backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
   Simulation sim = MakeSimulation(scene, backend, backend_options);
@@ -231,14 +148,12 @@ int Run(const RunOptions& options) {
   progress.Finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  std::vector<std::string> written;
+  OutputFiles files(out);
   for (std::size_t i = 0; i < result.frames.size(); ++i) {
     const std::string suffix = i == 0 ? "" : "_" + result.robot_names[i];
-    const std::string log_path = out + "/trajectory" + suffix + ".csv";
-    WriteOmniLog(log_path, ObserverLog(result.frames[i]));
-    WriteFileAtomically(out + "/truth" + suffix + ".csv", TruthCsv(result.frames[i]));
-    written.push_back(log_path);
-    written.push_back(out + "/truth" + suffix + ".csv");
+    WriteOmniLog(files.Path("trajectory" + suffix + ".csv"), ObserverLog(result.frames[i]));
+    files.Add("trajectory" + suffix + ".csv");
+    files.Write("truth" + suffix + ".csv", TruthCsv(result.frames[i]));
   }
 
   if (!scene.plots.empty() && !RenderingCompiled()) {
@@ -247,11 +162,8 @@ int Run(const RunOptions& options) {
                  kRenderingNotCompiled);
   } else if (!scene.plots.empty()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    for (const PlotSpec& spec : scene.plots) {
-      const std::string path = out + "/" + spec.file;
-      WritePng(path, RenderPathPlot(MakeScenePathPlot(spec, scene, result, backend), *renderer));
-      written.push_back(path);
-    }
+    for (const ScenePlot& plot : ScenePlots(scene, result, backend))
+      files.WritePng(plot.file, RenderScenePlot(plot, *renderer));
   }
 
   if (!options.quiet) {
@@ -262,8 +174,7 @@ int Run(const RunOptions& options) {
     const FrameRecord& last = result.frames[0].back();
     std::printf("  %s ends at x = %.3f m, y = %.3f m, theta = %.1f deg\n", result.robot_names[0].c_str(), last.truth.x,
                 last.truth.y, last.truth.theta * 180 / kPi);
-    std::printf("wrote:\n");
-    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }

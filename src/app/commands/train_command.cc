@@ -5,13 +5,14 @@
 #include <optional>
 
 #include "app/commands/commands.h"
-#include "app/progress.h"
 #include "core/error.h"
-#include "io/arm_log.h"
-#include "io/omni_log.h"
+#include "core/progress.h"
+#include "io/output_files.h"
 #include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
+#include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
+#include "robots/omni/omni_log.h"
 
 namespace twinsim {
 namespace {
@@ -45,8 +46,7 @@ int TrainArm(const TrainCliOptions& options) {
   if (options.nominal_errors && !options.residual)
     throw InputError("--nominal-errors is for residual predictors only (add --residual)");
   train.nominal_errors = options.nominal_errors;
-  const std::string problem = train.Validate();
-  if (!problem.empty()) throw InputError(problem);
+  if (std::string problem; !train.IsValid(&problem)) throw InputError(problem);
 
   const std::string what = (train.residual ? "residual " : "") + train.kind;
   Progress progress("train arm " + what, !options.quiet);
@@ -58,7 +58,9 @@ int TrainArm(const TrainCliOptions& options) {
         progress.Update(epoch, epochs, detail);
       });
   progress.Finish();
+  OutputFiles files;
   predictor.Save(options.out);
+  files.Add(options.out);
   if (!options.quiet) {
     std::printf("%s predictor of arm %s (%d joints)%s, %d sample(s) ahead at %g s: %s\n", what.c_str(),
                 model.name.c_str(), model.dof(),
@@ -66,7 +68,7 @@ int TrainArm(const TrainCliOptions& options) {
                                                                     : ", over its nominal model")
                                : "",
                 train.horizon, model.sample_time, summary.BriefReport().c_str());
-    std::printf("wrote:\n  %s\n", options.out.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }
@@ -80,8 +82,7 @@ int Train(const TrainCliOptions& options) {
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs;
   for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path));
-  const std::string problem = options.train.Validate();
-  if (!problem.empty()) throw InputError(problem);
+  if (std::string problem; !options.train.IsValid(&problem)) throw InputError(problem);
 
   Progress progress("train " + options.train.kind, !options.quiet);
   OmniTrainSummary summary;
@@ -92,11 +93,13 @@ int Train(const TrainCliOptions& options) {
         progress.Update(epoch, epochs, detail);
       });
   progress.Finish();
+  OutputFiles files;
   predictor.Save(options.out);
+  files.Add(options.out);
   if (!options.quiet) {
     std::printf("%s predictor of %s, %d frame(s) ahead at %g fps: %s\n", options.train.kind.c_str(),
                 model.name.c_str(), options.train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
-    std::printf("wrote:\n  %s\n", options.out.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }

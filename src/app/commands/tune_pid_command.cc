@@ -2,22 +2,20 @@
 //                  [--threads N] [--seed N] [--baselines]`
 #include <chrono>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
-#include <sstream>
 
 #include "app/commands/commands.h"
-#include "app/progress.h"
 #include "core/error.h"
-#include "io/atomic_file.h"
+#include "core/progress.h"
 #include "io/csv_table.h"
-#include "learning/pid_baselines.h"
-#include "learning/pid_tuning.h"
+#include "io/output_files.h"
 #include "render/plot.h"
 #include "render/renderer.h"
+#include "tuning/pid_baselines.h"
+#include "tuning/pid_tuning.h"
+#include "tuning/tuned_pid_yaml.h"
 
 namespace twinsim {
-namespace fs = std::filesystem;
 namespace {
 
 struct TunePidCliOptions {
@@ -43,38 +41,9 @@ std::string ScoreCsvFields(const TestRunScore& s) {
 
 constexpr const char* kScoreColumns = "quality,distance,deviation,rotation,stop_distance,avg_speed,end_deviation_pct";
 
-// pid.yaml: the scene's robot with the learned controller, as a model file that
-// extends the original, so it loads anywhere a model does.
-std::string PidYaml(const TestRunEvaluator& evaluator, const PidTuningResult& r, const std::string& out_dir) {
-  const SceneRobot& robot = evaluator.scene().robots[0];
-  const OmniControllerModel c = WithPidParameters(robot.model.controller, r.best_parameters);
-  const fs::path base = fs::absolute(robot.model_path);
-  const fs::path rel = base.lexically_relative(fs::absolute(out_dir));
-  std::ostringstream y;
-  y.precision(10);
-  y << "# PID parameters learned by `twinsim tune-pid " << evaluator.scene().path << "` on " << evaluator.backend()
-    << "\n# (policy gradient, seed 000 section 3.4): iteration " << r.search.best_iteration << " of "
-    << r.iterations.size() << ", " << r.test_runs << " test runs.\n"
-    << "# Its test run: quality " << r.best_score.quality << ", distance " << r.best_score.distance
-    << " m, average speed " << r.best_score.avg_speed << " m/s, end deviation " << r.best_score.end_deviation_pct
-    << " %.\n"
-    << "extends: " << (rel.empty() ? base.string() : rel.string()) << "\n"
-    << "name: " << robot.model.name << "_tuned\n"
-    << "controller:\n";
-  const std::pair<const char*, const PidGains*> axes[] = {
-      {"forward", &c.forward}, {"sideways", &c.sideways}, {"rotation", &c.rotation}};
-  for (const auto& [name, g] : axes) {
-    y << "  " << name << ": {kp: " << g->kp << ", ki: " << g->ki << ", kd: " << g->kd
-      << ", integral_limit: " << g->integral_limit << ", output_limit: " << g->output_limit
-      << ", slew_rate: " << g->slew_rate << "}\n";
-  }
-  return y.str();
-}
-
-std::vector<std::string> WritePlots(const TestRunEvaluator& evaluator, const PidTuningResult& r,
-                                    const std::string& out) {
-  std::vector<std::string> written;
-  if (!RenderingCompiled()) return written;
+// The plots of the learning, into *files.
+void WritePlots(const TestRunEvaluator& evaluator, const PidTuningResult& r, OutputFiles* files) {
+  if (!RenderingCompiled()) return;
   std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
   const std::string& name = evaluator.scene().name;
 
@@ -89,8 +58,7 @@ std::vector<std::string> WritePlots(const TestRunEvaluator& evaluator, const Pid
     current.x.push_back(it.iteration), current.y.push_back(it.score.quality);
   }
   quality.series = {tested, current};
-  WritePng(out + "/quality.png", RenderSeriesPlot(quality, *renderer));
-  written.push_back(out + "/quality.png");
+  files->WritePng("quality.png", RenderSeriesPlot(quality, *renderer));
 
   // Seed Fig. 2: the four components of the current set's quality.
   SeriesPlot parts;
@@ -105,8 +73,7 @@ std::vector<std::string> WritePlots(const TestRunEvaluator& evaluator, const Pid
     rot.y.push_back(it.score.rotation), stop.y.push_back(it.score.stop_distance);
   }
   parts.series = {d, dev, rot, stop};
-  WritePng(out + "/components.png", RenderSeriesPlot(parts, *renderer));
-  written.push_back(out + "/components.png");
+  files->WritePng("components.png", RenderSeriesPlot(parts, *renderer));
 
   // Seed Fig. 3: the parameters over the iterations, each relative to its scale.
   const Eigen::VectorXd scale = DefaultPidScale();
@@ -125,9 +92,7 @@ std::vector<std::string> WritePlots(const TestRunEvaluator& evaluator, const Pid
       }
       params.series.push_back(s);
     }
-    const std::string file = out + "/parameters_" + axis_name + ".png";
-    WritePng(file, RenderSeriesPlot(params, *renderer));
-    written.push_back(file);
+    files->WritePng("parameters_" + axis_name + ".png", RenderSeriesPlot(params, *renderer));
   }
 
   // The test run before and after, as the camera saw it.
@@ -140,9 +105,7 @@ std::vector<std::string> WritePlots(const TestRunEvaluator& evaluator, const Pid
     for (const FrameRecord& f : evaluator.Frames(*p)) pp.poses.push_back(f.truth);
     path.paths.push_back(pp);
   }
-  WritePng(out + "/path.png", RenderPathPlot(path, *renderer));
-  written.push_back(out + "/path.png");
-  return written;
+  files->WritePng("path.png", RenderPathPlot(path, *renderer));
 }
 
 int TunePidCommand(const TunePidCliOptions& options) {
@@ -168,11 +131,7 @@ int TunePidCommand(const TunePidCliOptions& options) {
   progress.Finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  std::vector<std::string> written;
-  auto write = [&](const std::string& file, const std::string& text) {
-    WriteFileAtomically(options.out + "/" + file, text);
-    written.push_back(options.out + "/" + file);
-  };
+  OutputFiles files(options.out);
   // learning.csv (the contract): one row per iteration for the current set.
   std::string learning = std::string("iteration,") + kScoreColumns + "\n";
   std::string sets = std::string("iteration,set,") + kScoreColumns + "\n";
@@ -188,18 +147,18 @@ int TunePidCommand(const TunePidCliOptions& options) {
     for (int k = 0; k < kPidParameters; ++k) params += "," + FormatCsvNumber(it.parameters[k]);
     params += "\n";
   }
-  write("pid.yaml", PidYaml(evaluator, r, options.out));
-  write("learning.csv", learning);
-  write("sets.csv", sets);
-  write("parameters.csv", params);
-  for (const auto& p : WritePlots(evaluator, r, options.out)) written.push_back(p);
+  files.Write("pid.yaml", FormatTunedPidYaml(evaluator, r, options.out));
+  files.Write("learning.csv", learning);
+  files.Write("sets.csv", sets);
+  files.Write("parameters.csv", params);
+  WritePlots(evaluator, r, &files);
 
   std::string baselines_table;
   if (options.baselines) {
     const std::vector<BaselineResult> b = RunPidBaselines(evaluator, r, tuning, options.quiet);
     std::string csv = std::string("method,test_runs,") + kScoreColumns + "\n";
     for (const auto& x : b) csv += x.method + "," + std::to_string(x.test_runs) + ScoreCsvFields(x.score) + "\n";
-    write("baselines.csv", csv);
+    files.Write("baselines.csv", csv);
     char line[256];
     for (const auto& x : b) {
       std::snprintf(line, sizeof line, "  %-22s %5d runs  quality %7.3f  %.2f m/s  end deviation %5.1f %%",
@@ -217,8 +176,7 @@ int TunePidCommand(const TunePidCliOptions& options) {
     std::printf("  learned set: quality %7.3f, %.2f m/s, end deviation %.1f %% (iteration %d)\n", r.best_score.quality,
                 r.best_score.avg_speed, r.best_score.end_deviation_pct, r.search.best_iteration);
     if (!baselines_table.empty()) std::printf("baselines at the same number of test runs:\n%s", baselines_table.c_str());
-    std::printf("wrote:\n");
-    for (const auto& w : written) std::printf("  %s\n", w.c_str());
+    files.PrintWrote();
   }
   return kExitOk;
 }

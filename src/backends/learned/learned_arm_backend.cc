@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/error.h"
 #include "robots/arm/arm_dynamics.h"
 
 namespace twinsim {
@@ -22,14 +23,16 @@ class LearnedArmBackend final : public ArmBackend {
     tau_hist_.resize(size);
     q_.resize(n_);
     qd_.resize(n_);
-    Reset(Eigen::VectorXd::Zero(n_), Eigen::VectorXd::Zero(n_));
+    Reset(Eigen::VectorXd::Zero(n_), Eigen::VectorXd::Zero(n_), Eigen::VectorXd::Zero(n_));
   }
 
   std::string name() const override { return "learned"; }
   int dof() const override { return n_; }
-  bool includes_plant_effects() const override { return true; }
+  int physics_substeps() const override { return 1; }
 
-  void Reset(const Eigen::VectorXd& q, const Eigen::VectorXd& qd) override {
+  // The commands before t = 0 do not matter: the window starts with the torque the
+  // steady motion needs.
+  void Reset(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau_before) override {
     CheckArmState(name(), n_, q, qd);
     const int h = layout_.history;
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n_);
@@ -48,14 +51,10 @@ class LearnedArmBackend final : public ArmBackend {
     qd_ = qd;
   }
 
-  void Step(const Eigen::VectorXd& tau, double dt) override {
-    CheckArmStep(name(), n_, tau, dt);
-    if (std::abs(dt - model_.sample_time) > 1e-9 * model_.sample_time) {
-      std::ostringstream msg;
-      msg << "learned arm backend: steps exactly one sample of " << model_.sample_time << " s, asked for " << dt
-          << " s (the predictor was trained on that sample time; use one physics step per sample)";
-      throw std::invalid_argument(msg.str());
-    }
+  void Step(const Eigen::VectorXd& tau, Eigen::VectorXd* applied) override {
+    CheckArmStep(name(), n_, tau, model_.sample_time);
+    applied->setZero(n_);
+    *applied += tau;
     // Shift the window by one sample; the newest torque is the one acting now.
     Shift(&tau_hist_, tau.data());
     predictor_.Predict(q_hist_.data(), qd_hist_.data(), tau_hist_.data(), q_.data(), qd_.data());
@@ -66,27 +65,32 @@ class LearnedArmBackend final : public ArmBackend {
   const Eigen::VectorXd& q() const override { return q_; }
   const Eigen::VectorXd& qd() const override { return qd_; }
 
+  // The window travels in ArmBackendState::engine (q, qd and the three histories).
   ArmBackendState Save() const override {
-    ArmBackendState s{q_, qd_, {}};
-    s.exact.reserve(3 * q_hist_.size());
-    s.exact.insert(s.exact.end(), q_hist_.begin(), q_hist_.end());
-    s.exact.insert(s.exact.end(), qd_hist_.begin(), qd_hist_.end());
-    s.exact.insert(s.exact.end(), tau_hist_.begin(), tau_hist_.end());
+    ArmBackendState s;
+    ArmEngineState& e = s.engine;
+    e.q = q_;
+    e.qd = qd_;
+    e.exact.reserve(3 * q_hist_.size());
+    e.exact.insert(e.exact.end(), q_hist_.begin(), q_hist_.end());
+    e.exact.insert(e.exact.end(), qd_hist_.begin(), qd_hist_.end());
+    e.exact.insert(e.exact.end(), tau_hist_.begin(), tau_hist_.end());
     return s;
   }
 
   void Restore(const ArmBackendState& state) override {
-    CheckArmState(name(), n_, state.q, state.qd);
+    const ArmEngineState& e = state.engine;
+    CheckArmState(name(), n_, e.q, e.qd);
     const std::size_t size = q_hist_.size();
-    if (state.exact.size() != 3 * size)
+    if (e.exact.size() != 3 * size)
       throw std::invalid_argument("learned arm backend: state of another backend or predictor (window of " +
-                                  std::to_string(state.exact.size()) + " numbers, expected " +
+                                  std::to_string(e.exact.size()) + " numbers, expected " +
                                   std::to_string(3 * size) + ")");
-    q_hist_.assign(state.exact.begin(), state.exact.begin() + static_cast<long>(size));
-    qd_hist_.assign(state.exact.begin() + static_cast<long>(size), state.exact.begin() + static_cast<long>(2 * size));
-    tau_hist_.assign(state.exact.begin() + static_cast<long>(2 * size), state.exact.end());
-    q_ = state.q;
-    qd_ = state.qd;
+    q_hist_.assign(e.exact.begin(), e.exact.begin() + static_cast<long>(size));
+    qd_hist_.assign(e.exact.begin() + static_cast<long>(size), e.exact.begin() + static_cast<long>(2 * size));
+    tau_hist_.assign(e.exact.begin() + static_cast<long>(2 * size), e.exact.end());
+    q_ = e.q;
+    qd_ = e.qd;
   }
 
  private:
@@ -108,7 +112,7 @@ class LearnedArmBackend final : public ArmBackend {
 
 std::unique_ptr<ArmBackend> MakeLearnedArmBackend(const ArmModel& model, const ArmPredictor& predictor) {
   if (const std::string problems = model.Validate(); !problems.empty())
-    throw std::invalid_argument("arm model '" + model.name + "': " + problems);
+    throw InputError("arm model '" + model.name + "': " + problems);
   predictor.CheckUse(model, 1, "the learned arm backend");
   return std::make_unique<LearnedArmBackend>(model, predictor);
 }

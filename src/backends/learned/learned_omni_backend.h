@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "backends/omni_backend.h"
 #include "learning/omni_predictor.h"
+#include "sim/omni_backend.h"
 
 namespace twinsim {
 

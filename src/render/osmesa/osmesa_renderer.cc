@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "render/renderer.h"
 
 namespace twinsim {
@@ -368,10 +369,10 @@ class OsMesaRenderer : public Renderer {
   // A disc, or the half of it on the side `towards` points to (a round cap).
   void Disc(Vec c, const Profile& pr, Color color, const Vec* towards = nullptr) {
     // Sides enough that the polygon strays less than a tenth of a pixel from the circle.
-    const int n = std::clamp(static_cast<int>(std::ceil(M_PI * std::sqrt(pr.outer / 0.2))), 6, 128);
-    const double a_start = towards ? std::atan2(towards->y, towards->x) - M_PI / 2 : 0;
+    const int n = std::clamp(static_cast<int>(std::ceil(kPi * std::sqrt(pr.outer / 0.2))), 6, 128);
+    const double a_start = towards ? std::atan2(towards->y, towards->x) - kPi / 2 : 0;
     const int steps = towards ? (n + 1) / 2 : n;
-    const double span = towards ? M_PI : 2 * M_PI;
+    const double span = towards ? kPi : 2 * kPi;
     for (int i = 0; i < steps; ++i) {
       const double a0 = a_start + span * i / steps, a1 = a_start + span * (i + 1) / steps;
       const Vec u0{std::cos(a0), std::sin(a0)}, u1{std::cos(a1), std::sin(a1)};

@@ -1,7 +1,7 @@
 // The arm effect vocabulary of CONTRACT.md: behaviour a real arm has and the rigid-body
 // model with its nominal friction lacks. A model file switches effects on with an
 // `effects:` list (docs/arm_backends.md), the diagnosis workflow names and adds them,
-// and the arm simulation loop (core/arm_simulation.h) makes them act, above the physics
+// and the arm simulation loop (sim/arm_simulation.h) makes them act, above the physics
 // engines, so that ODE, Bullet and the analytic model all feel them alike.
 //
 // Per joint j (the command u is what the controller sent, after the model's delay):

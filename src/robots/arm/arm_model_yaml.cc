@@ -16,6 +16,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "robots/arm/arm_model.h"
@@ -24,7 +25,7 @@
 namespace twinsim {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = kPi / 180.0;
 
 Eigen::Isometry3d RotZ(double angle) { return Eigen::Isometry3d(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ())); }
 Eigen::Isometry3d RotX(double angle) { return Eigen::Isometry3d(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX())); }

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "robots/arm/arm_dynamics.h"
 
@@ -152,7 +153,7 @@ BaseParameters FindBaseParameters(const ArmModel& model, int samples, std::uint6
   for (int s = 0; s < samples; ++s) {
     for (int i = 0; i < n; ++i) {
       const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
-      const double lo = std::max(j.lower, -M_PI), hi = std::min(j.upper, M_PI);
+      const double lo = std::max(j.lower, -kPi), hi = std::min(j.upper, kPi);
       q[i] = rng.Uniform(lo, hi);
       qd[i] = rng.Uniform(-2, 2);
       qdd[i] = rng.Uniform(-5, 5);

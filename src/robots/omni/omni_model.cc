@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/math_constants.h"
+
 namespace twinsim {
 
 Eigen::Matrix<double, 6, 1> PidGains::AsVector() const {
@@ -77,7 +79,7 @@ std::string OmniModel::Validate() const {
   if (n < 3) out << "an omni robot needs at least 3 wheels, got " << n << "\n";
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
-      if (std::abs(std::remainder(wheel_angles[i] - wheel_angles[j], 2 * M_PI)) < 1e-3)
+      if (std::abs(std::remainder(wheel_angles[i] - wheel_angles[j], 2 * kPi)) < 1e-3)
         out << "wheels " << i + 1 << " and " << j + 1 << " are at the same angle\n";
     }
   }

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "robots/omni/omni_model.h"
@@ -59,7 +60,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     std::vector<double> angles_deg;
     if (w.Require("angles_deg", &angles_deg, -1, InRange(-360, 360))) {
       model.wheel_angles.clear();
-      for (double a : angles_deg) model.wheel_angles.push_back(a * M_PI / 180.0);
+      for (double a : angles_deg) model.wheel_angles.push_back(a * kPi / 180.0);
       if (angles_deg.size() < 3 || angles_deg.size() > 8)
         w.Error("angles_deg", "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
     }

@@ -8,22 +8,23 @@
 #include <map>
 #include <sstream>
 
+#include "core/math_constants.h"
 #include "io/atomic_file.h"
 #include "io/yaml_number.h"
 
 namespace twinsim {
 namespace {
 
-// An angle in degrees that the reader (deg * M_PI / 180.0) turns back into `rad`: the
+// An angle in degrees that the reader (deg * kPi / 180.0) turns back into `rad`: the
 // plain inverse can be an ulp off, so the doubles next to it are tried too, and the
 // shortest exact one wins (57, not 57.000000000000007).
 std::string Degrees(double rad) {
-  double d = rad * 180.0 / M_PI;
+  double d = rad * 180.0 / kPi;
   for (int i = 0; i < 8; ++i) d = std::nextafter(d, -INFINITY);
   std::string best;
   double best_error = INFINITY;
   for (int i = 0; i <= 16; ++i, d = std::nextafter(d, INFINITY)) {
-    const double error = std::abs(d * M_PI / 180.0 - rad);
+    const double error = std::abs(d * kPi / 180.0 - rad);
     const std::string text = YamlNumber(d);
     if (error < best_error || (error == best_error && text.size() < best.size())) {
       best = text;

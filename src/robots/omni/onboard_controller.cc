@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/math_constants.h"
+
 namespace twinsim {
 
 constexpr double kUnlimited = 1e300;
@@ -30,7 +32,7 @@ void AccumulateEncoders(const Eigen::VectorXd& wheel_speeds, double dt, OnboardC
 
 double EncoderReading(const OmniModel& model, double wheel_angle) {
   if (model.encoder_counts_per_rev <= 0) return wheel_angle;
-  const double per_count = 2 * M_PI / model.encoder_counts_per_rev;
+  const double per_count = 2 * kPi / model.encoder_counts_per_rev;
   return std::floor(wheel_angle / per_count) * per_count;
 }
 

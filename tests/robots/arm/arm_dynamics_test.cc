@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "robots/arm/arm_regressor.h"
 #include "robots/arm/arm_model.h"
@@ -132,7 +133,7 @@ TEST(ArmBaseParameters, PlanarTwoLinkArmInAVerticalPlaneHasSixInertialBaseParame
     ArmJoint j;
     j.axis = Eigen::Vector3d::UnitZ();
     j.origin = Eigen::Isometry3d::Identity();
-    if (i == 0) j.origin.rotate(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()));  // horizontal axis
+    if (i == 0) j.origin.rotate(Eigen::AngleAxisd(kPi / 2, Eigen::Vector3d::UnitX()));  // horizontal axis
     else j.origin.translate(Eigen::Vector3d(0.4, 0, 0));
     j.child.mass = 1.0 + i;
     j.child.com = Eigen::Vector3d(0.2, 0.01, 0.02);

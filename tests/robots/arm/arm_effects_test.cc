@@ -9,11 +9,12 @@
 #include <cmath>
 #include <iostream>
 
-#include "backends/arm/arm_backend.h"
-#include "core/arm_simulation.h"
+#include "backends/arm_backend_factory.h"
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_model.h"
+#include "sim/arm_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -71,9 +72,9 @@ class ArmEffectsOnBackend : public ::testing::TestWithParam<std::string> {};
 TEST_P(ArmEffectsOnBackend, PendulumSwingsWithTheSmallAnglePeriod) {
   // T = 2 pi sqrt(J / (m g l)); a 0.02 rad swing lengthens it by 2.5e-5.
   const ArmModel m = LoadArmModelFromYamlString(OneLink(90), "pendulum.yaml");
-  const ArmTrajectory r = Drive(GetParam(), m, -M_PI / 2 + 0.02, 0, 3.5, {});
+  const ArmTrajectory r = Drive(GetParam(), m, -kPi / 2 + 0.02, 0, 3.5, {});
   const double period = Period(r.t, r.q.col(0));
-  const double expected = 2 * M_PI * std::sqrt(kJ / kMgl);
+  const double expected = 2 * kPi * std::sqrt(kJ / kMgl);
   std::cout << "[measured] " << GetParam() << " pendulum period " << period << " s, closed form " << expected
             << " s\n";
   EXPECT_NEAR(period, expected, 1e-3 * expected);
@@ -149,10 +150,10 @@ TEST_P(ArmEffectsOnBackend, TimeDelayShiftsTheResponseByD) {
   for (double t : {0.2, 0.6}) EXPECT_NEAR(frac.q(Row(t, 1e-3), 0), 0.5 * std::pow(t - 0.1025, 2), q_tolerance) << t;
   EXPECT_NEAR(frac.qd(Row(0.6, 1e-3), 0), 0.6 - 0.1025, 1e-8);
   // The same with four physics steps per sample: the delay then falls inside a step.
-  ArmSimulationOptions fine;
+  ArmBackendOptions fine;
   fine.physics_substeps = 4;
   const ArmModel m = Turntable("  - {name: time_delay, joint: 1, delay: 0.0023}\n");
-  ArmSimulation sim(m, MakeArmBackend(GetParam(), m), fine);
+  ArmSimulation sim(m, MakeArmBackend(GetParam(), m, fine));
   EXPECT_EQ(sim.physics_substeps(), 4);
   const ArmTrajectory quarter = sim.Run(601, [&](double t, const Eigen::VectorXd&, const Eigen::VectorXd&) {
     return Eigen::VectorXd::Constant(1, step(t));
@@ -168,7 +169,7 @@ TEST_P(ArmEffectsOnBackend, JointFlexibilityResonatesAtSqrtKOverJeff) {
   const ArmTrajectory r = Drive(GetParam(), m, 0, 0, 0.5, [](double t) { return t < 0.001 ? 1.0 : 0.0; });
   const double f = 1 / Period(r.t.tail(450), r.qd.col(0).tail(450));
   const int window = static_cast<int>(std::lround(12 / f / 1e-3));  // 12 whole periods
-  const double expected = std::sqrt(1225 * (1 / 0.05 + 1 / kJ)) / (2 * M_PI);
+  const double expected = std::sqrt(1225 * (1 / 0.05 + 1 / kJ)) / (2 * kPi);
   std::cout << "[measured] " << GetParam() << " joint_flexibility resonance " << f << " Hz, sqrt(k/J_eff) "
             << expected << " Hz\n";
   EXPECT_NEAR(f, expected, 0.01 * expected);
@@ -198,7 +199,7 @@ TEST_P(ArmEffectsOnBackend, PayloadIsHeldByItsOwnGravityTorque) {
   EXPECT_LT((got - qdd).cwiseAbs().maxCoeff(), 0.01 * qdd.cwiseAbs().maxCoeff());
 }
 
-INSTANTIATE_TEST_SUITE_P(Built, ArmEffectsOnBackend, ::testing::ValuesIn(AvailableArmBackends()),
+INSTANTIATE_TEST_SUITE_P(Built, ArmEffectsOnBackend, ::testing::ValuesIn(AvailableArmEngines()),
                          [](const auto& info) { return info.param; });
 
 TEST(ArmEffects, PayloadChangesTheGravityTorqueByMGL) {
@@ -223,7 +224,7 @@ TEST(ArmEffects, FrictionHoldsAStuckArmExactlyStill) {
   // below those levels on top of gravity compensation: no creep, no chatter.
   const ArmModel m = LoadArmModel(SourcePath("models/rrr.yaml"));
   const Eigen::Vector3d q(0.2, 0.3, -0.4), push(1.2, -0.8, 0.4);
-  for (const std::string& backend : AvailableArmBackends()) {
+  for (const std::string& backend : AvailableArmEngines()) {
     ArmSimulation sim(m, MakeArmBackend(backend, m));
     const Eigen::VectorXd tau = InverseDynamics(m, q, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), false) + push;
     sim.Reset(q, Eigen::Vector3d::Zero(), tau);

@@ -6,12 +6,12 @@
 #include <random>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "test_util.h"
 
 namespace twinsim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180;
 
 // Base-frame pose of every link at q, from the struct's origin/axis definition.

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -87,7 +88,7 @@ TEST(OmniModelYamlWriter, AwkwardNumbersAndGivenChassisInertiaRoundTrip) {
   m.name = "odd: name";
   m.chassis_inertia_z = 0.1 / 3;  // kg m^2, written as given, not the derived total
   m.chassis_mass = 2.3 + 1e-13;   // kg
-  m.wheel_angles = {0.1, 2 * M_PI / 3, M_PI, 5.0};  // rad, not from degrees
+  m.wheel_angles = {0.1, 2 * kPi / 3, kPi, 5.0};  // rad, not from degrees
   m.controller.rotation.kp = 1.0 / 7;
   m.vision_noise_xy = 1.2345678901234567e-5;  // m
   m.command_delay_frames = 0;

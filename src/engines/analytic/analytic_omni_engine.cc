@@ -1,0 +1,114 @@
+#include "engines/analytic/analytic_omni_engine.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <stdexcept>
+
+#include "robots/omni/omni_kinematics.h"
+
+namespace twinsim {
+namespace {
+
+// Width of the regularised sign in the roller friction: below this sliding speed the
+// friction force grows linearly (m/s).
+constexpr double kRollerSlipScale = 1e-3;
+
+struct AnalyticRobot {
+  OmniModel model;
+  OmniKinematics kin;
+  Eigen::Matrix3d rigid_mass;    // M, about the centre
+  Eigen::Matrix3d inverse_mass;  // (M + J^T I_w J)^{-1}
+  Eigen::Matrix<double, 6, 1> x;  // x, y, theta, vx, vy, omega
+  Eigen::VectorXd torques;        // n, N·m
+
+  explicit AnalyticRobot(const OmniModel& m) : model(m), kin(m) {
+    rigid_mass = m.RigidBodyMass();
+    const Eigen::Matrix3d mass =
+        rigid_mass + m.wheel_spin_inertia * kin.wheels_from_body().transpose() * kin.wheels_from_body();
+    inverse_mass = mass.inverse();
+    x.setZero();
+    torques.setZero(m.num_wheels());
+  }
+
+  Eigen::Matrix<double, 6, 1> Derivative(const Eigen::Matrix<double, 6, 1>& s) const {
+    const double th = s[2], vx = s[3], vy = s[4], w = s[5];
+    const Eigen::Vector3d p = rigid_mass * Eigen::Vector3d(vx, vy, w);
+    Eigen::Vector3d force(w * p[1], -w * p[0], vy * p[0] - vx * p[1]);
+    force += kin.Wrench(torques);
+    // Rollers: each wheel slides radially at (cos a, sin a) . v; the friction acts
+    // along the axle, through the centre, so it makes no torque.
+    for (int i = 0; i < model.num_wheels(); ++i) {
+      const double c = std::cos(model.wheel_angles[i]), sn = std::sin(model.wheel_angles[i]);
+      const double slip = c * vx + sn * vy;
+      const double f = -model.roller_friction * model.wheel_load[i] *
+                       std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
+      force[0] += f * c;
+      force[1] += f * sn;
+    }
+    const Eigen::Vector3d acc = inverse_mass * force;
+    Eigen::Matrix<double, 6, 1> d;
+    d << std::cos(th) * vx - std::sin(th) * vy, std::sin(th) * vx + std::cos(th) * vy, w, acc;
+    return d;
+  }
+};
+
+class AnalyticOmniEngine final : public OmniEngine {
+ public:
+  explicit AnalyticOmniEngine(const std::vector<OmniModel>& robots) {
+    for (const auto& m : robots) robots_.emplace_back(m);
+  }
+
+  std::string name() const override { return "analytic"; }
+  int num_robots() const override { return static_cast<int>(robots_.size()); }
+
+  void SetState(int robot, const OmniBodyState& state) override {
+    AnalyticRobot& r = At(robot);
+    r.x << state.pose.x, state.pose.y, state.pose.theta, state.velocity.vx, state.velocity.vy,
+        state.velocity.omega;
+  }
+
+  OmniBodyState GetState(int robot) const override {
+    const AnalyticRobot& r = robots_.at(static_cast<std::size_t>(Check(robot)));
+    OmniBodyState s;
+    s.pose = Pose2{r.x[0], r.x[1], r.x[2]};
+    s.velocity = Twist2{r.x[3], r.x[4], r.x[5]};
+    s.wheel_speeds = r.kin.WheelSpeeds(s.velocity);
+    return s;
+  }
+
+  void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override {
+    AnalyticRobot& r = At(robot);
+    if (torques.size() != r.model.num_wheels())
+      throw std::invalid_argument("analytic engine: wrong number of wheel torques");
+    r.torques = torques;
+  }
+
+  void Step(double dt) override {
+    for (auto& r : robots_) {
+      const auto& x = r.x;
+      const auto k1 = r.Derivative(x);
+      const auto k2 = r.Derivative(x + 0.5 * dt * k1);
+      const auto k3 = r.Derivative(x + 0.5 * dt * k2);
+      const auto k4 = r.Derivative(x + dt * k3);
+      r.x += dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+  }
+
+ private:
+  int Check(int robot) const {
+    if (robot < 0 || robot >= num_robots()) throw std::invalid_argument("analytic engine: no robot " + std::to_string(robot));
+    return robot;
+  }
+  AnalyticRobot& At(int robot) { return robots_[static_cast<std::size_t>(Check(robot))]; }
+
+  std::vector<AnalyticRobot> robots_;
+};
+
+}  // namespace
+
+std::unique_ptr<OmniEngine> MakeAnalyticOmniEngine(const std::vector<OmniModel>& robots,
+                                                   const FieldModel& /*field*/) {
+  return std::make_unique<AnalyticOmniEngine>(robots);
+}
+
+}  // namespace twinsim

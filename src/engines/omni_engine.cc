@@ -1,0 +1,46 @@
+#include "engines/omni_engine.h"
+
+#include "core/error.h"
+#include "engines/analytic/analytic_omni_engine.h"
+#ifdef TWINSIM_HAVE_ODE
+#include "engines/ode/ode_omni_engine.h"
+#endif
+#ifdef TWINSIM_HAVE_BULLET
+#include "engines/bullet/bullet_omni_engine.h"
+#endif
+
+namespace twinsim {
+
+std::vector<std::string> AvailableOmniEngines() {
+  std::vector<std::string> names = {"analytic"};
+#ifdef TWINSIM_HAVE_ODE
+  names.push_back("ode");
+#endif
+#ifdef TWINSIM_HAVE_BULLET
+  names.push_back("bullet");
+#endif
+  return names;
+}
+
+std::unique_ptr<OmniEngine> MakeOmniEngine(const std::string& name,
+                                           const std::vector<OmniModel>& robots,
+                                           const FieldModel& field) {
+  if (name == "analytic") return MakeAnalyticOmniEngine(robots, field);
+  if (name == "ode") {
+#ifdef TWINSIM_HAVE_ODE
+    return MakeOdeOmniEngine(robots, field);
+#else
+    throw InputError("ode backend not compiled; rebuild with -DTWINSIM_WITH_ODE=ON");
+#endif
+  }
+  if (name == "bullet") {
+#ifdef TWINSIM_HAVE_BULLET
+    return MakeBulletOmniEngine(robots, field);
+#else
+    throw InputError("bullet backend not compiled; rebuild with -DTWINSIM_WITH_BULLET=ON");
+#endif
+  }
+  throw InputError("unknown physics backend '" + name + "' (known: analytic, ode, bullet, learned)");
+}
+
+}  // namespace twinsim

@@ -1,0 +1,233 @@
+#include "sim/newtonian_arm_backend.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "robots/arm/arm_dynamics.h"
+
+namespace twinsim {
+namespace {
+
+// joint_flexibility: the physics step keeps the spring's phase error per step and its
+// explicit damping well inside the stable range (docs/arm_backends.md).
+constexpr double kMaxSpringPhasePerStep = 0.1;    // rad: h sqrt(k / J_eff)
+constexpr double kMaxSpringDampingPerStep = 0.5;  // h d / J_eff
+// The velocity-level friction solve: projected Gauss-Seidel sweeps over the joints.
+constexpr int kFrictionSweeps = 50;
+constexpr double kFrictionTolerance = 1e-13;  // relative change of a sweep that ends it
+
+// The sliding friction level of a joint moving at `speed` >= 0 in direction `dir` (+1 or
+// -1), without viscous friction: nominal Coulomb plus the Coulomb and Stribeck effects.
+double SlidingLevel(const ArmJoint& nominal, const JointEffects& e, double speed, int dir) {
+  double level = nominal.coulomb + (dir > 0 ? e.coulomb_positive : e.coulomb_negative);
+  if (e.stribeck()) {
+    const double r = speed / e.stribeck_velocity;
+    level += e.stribeck_coulomb + (e.stribeck_static - e.stribeck_coulomb) * std::exp(-r * r);
+  }
+  return level;
+}
+
+// The friction torque of one joint for one step: `v` is the velocity the joint would
+// reach at the end of the step without its own friction, `w` (s/(kg m^2)) how much a
+// unit torque over the step changes it, `qd` its velocity at the start. The joint
+// sticks when its break-away level can stop it within the step; else it slides with
+// the Coulomb/Stribeck level of its present speed and viscous friction on the mean of
+// its start and end velocities (trapezoidal: second order, and stable for any b).
+double JointFriction(const ArmJoint& nominal, const JointEffects& e, double v, double w, double qd) {
+  const double viscous = nominal.viscous + e.viscous;
+  for (const int dir : {+1, -1}) {
+    if (dir * v <= w * SlidingLevel(nominal, e, 0, dir)) continue;
+    const double level = dir * SlidingLevel(nominal, e, std::max(dir * qd, 0.0), dir);
+    double v_end = (v - w * (level + 0.5 * viscous * qd)) / (1 + 0.5 * w * viscous);
+    // A damping so strong that the trapezoid would overshoot zero stops the joint.
+    if (dir * v_end < 0) v_end = 0;
+    return (v - v_end) / w;
+  }
+  return v / w;  // sticks: exactly the torque that stops it
+}
+
+}  // namespace
+
+NewtonianArmBackend::NewtonianArmBackend(const ArmModel& model, std::unique_ptr<ArmEngine> engine,
+                                         int physics_substeps)
+    : model_(ArmPlantModel(model)), engine_(std::move(engine)) {
+  if (physics_substeps < 0 || physics_substeps > 100000) {
+    throw InputError("arm backend options: physics_substeps must be in [0, 100000] (0 = automatic)");
+  }
+  if (!engine_ || engine_->dof() != model_.dof()) {
+    throw std::invalid_argument("arm backend: the engine was built for another arm");
+  }
+  if (const std::string problems = model_.Validate(); !problems.empty()) {
+    throw InputError("arm backend: model '" + model_.name + "': " + problems);
+  }
+  const int n = model_.dof();
+  const double ts = model_.sample_time;
+  // The automatic physics step: fine enough for the stiffest flexible joint, whose
+  // link side is taken at q = 0 with the other joints free, the lightest it gets:
+  // J_l = 1 / (M^-1)_jj, J_eff = J_m J_l / (J_m + J_l).
+  int substeps = 1;
+  const Eigen::MatrixXd mobility = MassMatrix(model_, Eigen::VectorXd::Zero(n)).inverse();
+  for (int j = 0; j < n; ++j) {
+    const JointEffects e = model_.effects.joint(j);
+    effects_.push_back(e);
+    const ArmJoint& nominal = model_.joints[static_cast<std::size_t>(j)];
+    if (e.friction() || nominal.viscous > 0 || nominal.coulomb > 0) friction_joints_.push_back(j);
+    if (e.flexible()) {
+      flexible_ = true;
+      const double link = 1 / mobility(j, j);
+      const double j_eff = e.motor_inertia * link / (e.motor_inertia + link);
+      const double omega = std::sqrt(e.stiffness / j_eff);
+      substeps = std::max(substeps, static_cast<int>(std::ceil(ts * omega / kMaxSpringPhasePerStep)));
+      if (e.flex_damping > 0) {
+        substeps = std::max(substeps,
+                            static_cast<int>(std::ceil(ts * e.flex_damping / j_eff / kMaxSpringDampingPerStep)));
+      }
+    }
+  }
+  substeps_ = physics_substeps > 0 ? physics_substeps : substeps;
+  const double h = ts / substeps_;
+  for (int j = 0; j < n; ++j) {
+    double steps = effects_[static_cast<std::size_t>(j)].time_delay / h;
+    // A delay that is a whole number of steps up to rounding is taken as exactly that.
+    if (std::abs(steps - std::round(steps)) < 1e-9 * std::max(1.0, steps)) steps = std::round(steps);
+    delay_steps_.push_back(steps);
+    max_delay_steps_ = std::max(max_delay_steps_, steps);
+  }
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+  Reset(zero, zero, zero);
+}
+
+void NewtonianArmBackend::Reset(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                const Eigen::VectorXd& tau_before) {
+  if (tau_before.size() != model_.dof() || !tau_before.allFinite()) {
+    throw std::invalid_argument("arm backend: Reset needs " + std::to_string(model_.dof()) +
+                                " finite torques before t = 0");
+  }
+  engine_->Reset(q, qd);
+  state_ = ArmBackendState{};
+  state_.held_before = tau_before;
+  state_.motor_q = q;
+  state_.motor_qd = qd;
+}
+
+void NewtonianArmBackend::DriveTorques(std::int64_t step, Eigen::VectorXd* drive) const {
+  const auto& arrived = state_.arrived;
+  for (int j = 0; j < model_.dof(); ++j) {
+    const double d = delay_steps_[static_cast<std::size_t>(j)];
+    double u = 0;
+    if (d == 0) {
+      u = arrived.back().second[j];
+    } else {
+      // The mean over this step of the arrived command signal shifted by the delay:
+      // the window [step - d, step + 1 - d) in physics steps. Piecewise constant, so the
+      // joint receives exactly the impulse it would with the delay resolved finely.
+      const double a = static_cast<double>(step) - d, b = a + 1;
+      double sum = 0;
+      double start = -std::numeric_limits<double>::infinity();
+      double value = state_.held_before[j];
+      for (const auto& [at, command] : arrived) {
+        const double end = static_cast<double>(at);
+        sum += std::max(0.0, std::min(b, end) - std::max(a, start)) * value;
+        start = end;
+        value = command[j];
+      }
+      sum += std::max(0.0, b - std::max(a, start)) * value;
+      u = sum;
+    }
+    const JointEffects& e = effects_[static_cast<std::size_t>(j)];
+    if (e.saturation > 0) u = std::clamp(u, -e.saturation, e.saturation);
+    (*drive)[j] = u + e.torque_offset;
+  }
+}
+
+void NewtonianArmBackend::FrictionTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau,
+                                    double h, Eigen::VectorXd* friction) const {
+  friction->setZero(model_.dof());
+  if (friction_joints_.empty()) return;
+  // Velocities at the end of the step without friction, and how a torque on one joint
+  // changes them: h M^-1.
+  const Eigen::LLT<Eigen::MatrixXd> llt(MassMatrix(model_, q));
+  const Eigen::VectorXd free_end = qd + h * llt.solve(tau - BiasForces(model_, q, qd));
+  const Eigen::MatrixXd response = h * llt.solve(Eigen::MatrixXd::Identity(model_.dof(), model_.dof()));
+  // Projected Gauss-Seidel: each joint's friction given the others', until it settles.
+  for (int sweep = 0; sweep < kFrictionSweeps; ++sweep) {
+    double change = 0, size = 0;
+    for (int j : friction_joints_) {
+      const double w = response(j, j);
+      const double v = free_end[j] - response.row(j).dot(*friction) + w * (*friction)[j];
+      const double f = JointFriction(model_.joints[static_cast<std::size_t>(j)], effects_[static_cast<std::size_t>(j)],
+                                     v, w, qd[j]);
+      change = std::max(change, std::abs(f - (*friction)[j]));
+      size = std::max(size, std::abs(f));
+      (*friction)[j] = f;
+    }
+    if (friction_joints_.size() == 1 || change <= kFrictionTolerance * (1 + size)) break;
+  }
+}
+
+void NewtonianArmBackend::Step(const Eigen::VectorXd& command, Eigen::VectorXd* applied) {
+  const int n = model_.dof();
+  // The time_delay history, kept as long as the longest time_delay reaches back.
+  const std::int64_t first_step = state_.sample * substeps_;
+  state_.arrived.emplace_back(first_step, command);
+  const double oldest_needed = static_cast<double>(first_step) - max_delay_steps_;
+  while (state_.arrived.size() >= 2 && static_cast<double>(state_.arrived[1].first) <= oldest_needed) {
+    state_.held_before = state_.arrived.front().second;
+    state_.arrived.erase(state_.arrived.begin());
+  }
+
+  const double h = model_.sample_time / substeps_;
+  Eigen::VectorXd drive(n), link(n), friction(n);
+  applied->setZero(n);
+  for (int s = 0; s < substeps_; ++s) {
+    DriveTorques(first_step + s, &drive);
+    *applied += drive / substeps_;
+    const Eigen::VectorXd& q = engine_->q();
+    const Eigen::VectorXd& qd = engine_->qd();
+    link = drive;
+    if (flexible_) {
+      for (int j = 0; j < n; ++j) {
+        const JointEffects& e = effects_[static_cast<std::size_t>(j)];
+        if (!e.flexible()) continue;
+        // The spring between motor and link carries the drive to the link; the motor
+        // follows by semi-implicit Euler with the spring torque of the step's start.
+        const double spring =
+            e.stiffness * (state_.motor_q[j] - q[j]) + e.flex_damping * (state_.motor_qd[j] - qd[j]);
+        link[j] = spring;
+        state_.motor_qd[j] += h * (drive[j] - spring) / e.motor_inertia;
+        state_.motor_q[j] += h * state_.motor_qd[j];
+      }
+    }
+    FrictionTorques(q, qd, link, h, &friction);
+    engine_->Step(link - friction, h);
+  }
+  ++state_.sample;
+}
+
+ArmBackendState NewtonianArmBackend::Save() const {
+  ArmBackendState s = state_;
+  s.engine = engine_->Save();
+  return s;
+}
+
+void NewtonianArmBackend::Restore(const ArmBackendState& state) {
+  const int n = model_.dof();
+  if (state.held_before.size() != n || state.motor_q.size() != n || state.motor_qd.size() != n) {
+    throw std::invalid_argument("arm backend: state of another arm");
+  }
+  engine_->Restore(state.engine);
+  state_ = state;
+  state_.engine = {};
+}
+
+std::unique_ptr<ArmBackend> MakeNewtonianArmBackend(const std::string& engine, const ArmModel& model,
+                                                    int physics_substeps, const ArmEngineOptions& options) {
+  return std::make_unique<NewtonianArmBackend>(model, MakeArmEngine(engine, model, options), physics_substeps);
+}
+
+}  // namespace twinsim

@@ -1,0 +1,71 @@
+// The Newtonian arm backend: an ArmEngine (analytic, ode or bullet: bodies and joints
+// only) with the arm's friction and effects on top, as NewtonianOmniBackend puts the omni
+// robot's firmware, motors and effects on an OmniEngine.
+//
+// Each sample of Ts (the model's sample_time) is cut into `physics_substeps` physics
+// steps of h = Ts / substeps. At every physics step, per joint: time_delay,
+// torque_saturation and torque_offset shape the received command into the drive torque;
+// joint_flexibility passes it through the motor inertia and spring; friction (the joint's
+// nominal viscous and Coulomb friction plus the friction effects) is solved at velocity
+// level, so a joint sticks exactly and viscous friction is trapezoidal; the engine steps
+// h. The payload is in the bodies the engine is built with (ArmPlantModel).
+//
+//   ArmSimulation sim(model, MakeNewtonianArmBackend("ode", model));
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engines/arm_engine.h"
+#include "robots/arm/arm_effects.h"
+#include "robots/arm/arm_model.h"
+#include "sim/arm_backend.h"
+
+namespace twinsim {
+
+class NewtonianArmBackend final : public ArmBackend {
+ public:
+  // Takes an engine built for ArmPlantModel(model). `physics_substeps`: physics steps per
+  // sample, 0 = automatic: 1, or as many as a stiff joint_flexibility needs
+  // (h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5, the link's inertia taken at q = 0
+  // with the other joints free). Throws std::invalid_argument for an engine of another
+  // arm, InputError for a model that does not Validate() or substeps out of [0, 100000].
+  NewtonianArmBackend(const ArmModel& model, std::unique_ptr<ArmEngine> engine, int physics_substeps = 0);
+
+  std::string name() const override { return engine_->name(); }
+  int dof() const override { return model_.dof(); }
+  int physics_substeps() const override { return substeps_; }
+  void Reset(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau_before) override;
+  void Step(const Eigen::VectorXd& command, Eigen::VectorXd* applied) override;
+  const Eigen::VectorXd& q() const override { return engine_->q(); }
+  const Eigen::VectorXd& qd() const override { return engine_->qd(); }
+  ArmBackendState Save() const override;
+  void Restore(const ArmBackendState& state) override;
+
+ private:
+  // The drive torque of every joint over physics step `step` (time_delay, saturation,
+  // offset), from the commands received.
+  void DriveTorques(std::int64_t step, Eigen::VectorXd* drive) const;
+  // Friction torques (opposing positive motion) for one physics step of h seconds
+  // with the other joint torques `tau`, solved at velocity level.
+  void FrictionTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau, double h,
+                       Eigen::VectorXd* friction) const;
+
+  ArmModel model_;  // the plant: payload lumped into the last link
+  std::unique_ptr<ArmEngine> engine_;
+  int substeps_ = 1;
+  std::vector<JointEffects> effects_;  // dof
+  std::vector<int> friction_joints_;   // joints with any friction
+  std::vector<double> delay_steps_;    // per joint, time_delay in physics steps
+  double max_delay_steps_ = 0;
+  bool flexible_ = false;
+  ArmBackendState state_;  // all but the engine's part
+};
+
+// A Newtonian backend over the engine called `engine` ("analytic", "ode", "bullet"),
+// built for ArmPlantModel(model). Throws as MakeArmEngine and the constructor do.
+std::unique_ptr<ArmBackend> MakeNewtonianArmBackend(const std::string& engine, const ArmModel& model,
+                                                    int physics_substeps = 0, const ArmEngineOptions& options = {});
+
+}  // namespace twinsim

@@ -1,0 +1,169 @@
+#include "sim/newtonian_omni_backend.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "robots/omni/wheel_motor.h"
+
+namespace twinsim {
+
+int DefaultPhysicsSubsteps(double frame_rate) {
+  return std::max(1, static_cast<int>(std::ceil(300.0 / frame_rate - 1e-9)));
+}
+
+NewtonianOmniBackend::NewtonianOmniBackend(std::unique_ptr<OmniEngine> engine,
+                                           const std::vector<OmniModel>& robots,
+                                           const FrameTiming& timing)
+    : engine_(std::move(engine)), timing_(timing) {
+  const double physics_rate = 1.0 / timing_.physics_dt();
+  for (const auto& m : robots) {
+    Robot r{m, OmniKinematics(m), 1, m.effects.any(), {}, Eigen::VectorXd::Zero(m.num_wheels()),
+            Eigen::VectorXd::Zero(m.num_wheels()), Eigen::VectorXd::Zero(m.num_wheels())};
+    const double ratio = physics_rate / m.controller.rate_hz;
+    r.ticks_per_control = std::max(1, static_cast<int>(std::lround(ratio)));
+    robots_.push_back(std::move(r));
+  }
+  for (int i = 0; i < num_robots(); ++i) Reset(i, Pose2{}, Twist2{});
+}
+
+void NewtonianOmniBackend::Reset(int robot, const Pose2& pose, const Twist2& velocity) {
+  Robot& r = robots_.at(static_cast<std::size_t>(robot));
+  OmniBodyState body;
+  body.pose = pose;
+  body.velocity = velocity;
+  body.wheel_speeds = r.kin.WheelSpeeds(velocity);
+  engine_->SetState(robot, body);
+  r.state.body = body;
+  r.state.controller = InitialControllerState(r.model, velocity);
+  r.state.ticks_until_control = 0;
+  r.state.encoders_pending = false;
+  r.state.clock = 0;
+  r.state.received.clear();
+  r.state.acting = velocity;
+  r.state.lagged = velocity;
+  engine_->SetWheelTorques(robot, Eigen::VectorXd::Zero(r.model.num_wheels()));
+}
+
+void NewtonianOmniBackend::MoveBody(int robot, const Pose2& pose) { engine_->MoveRobot(robot, pose); }
+
+void NewtonianOmniBackend::StepFrame(const std::vector<Twist2>& commands) {
+  if (static_cast<int>(commands.size()) != num_robots())
+    throw std::invalid_argument("StepFrame: one command per robot expected");
+  const double dt = timing_.physics_dt();
+  for (int step = 0; step < timing_.physics_substeps; ++step) {
+    for (int i = 0; i < num_robots(); ++i) {
+      Robot& r = robots_[static_cast<std::size_t>(i)];
+      OnboardControllerState& c = r.state.controller;
+      const Twist2 command = EffectiveCommand(r, commands[static_cast<std::size_t>(i)], step == 0, dt);
+      // One read per step: the encoders count the turn of the step just taken.
+      engine_->GetWheelSpeeds(i, &r.speeds);
+      if (r.state.encoders_pending) {
+        if (r.effects_on) {
+          r.seen = r.speeds;
+          SeenWheelSpeeds(r, &r.seen);
+          AccumulateEncoders(r.seen, dt, &c);
+        } else {
+          AccumulateEncoders(r.speeds, dt, &c);
+        }
+      }
+      r.state.encoders_pending = true;
+      if (r.state.ticks_until_control <= 0) {
+        ControllerTick(r.model, r.kin, command, dt * r.ticks_per_control, &c);
+        r.state.ticks_until_control = r.ticks_per_control;
+      }
+      --r.state.ticks_until_control;
+      NetTorques(r);
+      engine_->SetWheelTorques(i, r.net);
+      r.state.clock += dt;
+    }
+    engine_->Step(dt);
+  }
+}
+
+Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, bool new_frame, double dt) {
+  const OmniEffects& fx = r.model.effects;
+  OmniRobotState& s = r.state;
+  if (!r.effects_on) return received;
+  if (new_frame) s.received.emplace_back(s.clock, received);
+  // time_delay: the newest command received at least `delay` ago acts.
+  std::size_t due = 0;
+  while (due < s.received.size() && s.received[due].first + fx.time_delay <= s.clock + 1e-9) ++due;
+  if (due > 0) {
+    s.acting = s.received[due - 1].second;
+    s.received.erase(s.received.begin(), s.received.begin() + static_cast<long>(due));
+  }
+  Twist2 c = s.acting;
+  if (fx.v_max > 0) {
+    const double speed = std::hypot(c.vx, c.vy);
+    if (speed > fx.v_max) {
+      c.vx *= fx.v_max / speed;
+      c.vy *= fx.v_max / speed;
+    }
+  }
+  if (fx.w_max > 0) c.omega = std::clamp(c.omega, -fx.w_max, fx.w_max);
+  if (fx.motor_lag > 0) {
+    const double k = 1 - std::exp(-dt / fx.motor_lag);
+    s.lagged = Twist2{s.lagged.vx + k * (c.vx - s.lagged.vx), s.lagged.vy + k * (c.vy - s.lagged.vy),
+                      s.lagged.omega + k * (c.omega - s.lagged.omega)};
+    c = s.lagged;
+  }
+  return c;
+}
+
+void NewtonianOmniBackend::SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const {
+  const OmniEffects& fx = r.model.effects;
+  if (fx.velocity_scale == 1 && fx.rotation_drift == 0) return;
+  // The firmware's wheel radius is off by `scale`, so every body velocity it measures is
+  // `scale` times too small; and its yaw estimate is biased by `rate` per metre
+  // travelled, so it drives the robot that much off.
+  const Twist2 v = r.kin.BodyVelocity(*speeds);
+  const double s = fx.velocity_scale;
+  *speeds = r.kin.WheelSpeeds(Twist2{v.vx / s, v.vy / s, (v.omega - fx.rotation_drift * std::hypot(v.vx, v.vy)) / s});
+}
+
+void NewtonianOmniBackend::NetTorques(Robot& r) {
+  const OnboardControllerState& c = r.state.controller;
+  const Eigen::VectorXd* command = &c.torque_command;
+  Eigen::VectorXd limited;
+  if (r.model.effects.a_max > 0) {
+    // traction_limit: the floor takes at most m * a_max of horizontal force.
+    Eigen::Vector3d wrench = r.kin.Wrench(c.torque_command);
+    const double limit = r.model.total_mass * r.model.effects.a_max;
+    const double force = std::hypot(wrench[0], wrench[1]);
+    if (force > limit) {
+      wrench.head<2>() *= limit / force;
+      limited = r.kin.WheelTorques(wrench);
+      command = &limited;
+    }
+  }
+  for (int w = 0; w < r.speeds.size(); ++w) r.net[w] = WheelMotorTorque(r.model, (*command)[w], r.speeds[w]);
+}
+
+Pose2 NewtonianOmniBackend::pose(int robot) const { return engine_->GetState(robot).pose; }
+Twist2 NewtonianOmniBackend::velocity(int robot) const { return engine_->GetState(robot).velocity; }
+
+OmniBackendState NewtonianOmniBackend::Save() const {
+  OmniBackendState s;
+  for (int i = 0; i < num_robots(); ++i) {
+    OmniRobotState r = robots_[static_cast<std::size_t>(i)].state;
+    r.body = engine_->GetState(i);
+    r.engine_snapshot = engine_->SaveExact(i);
+    s.robots.push_back(std::move(r));
+  }
+  return s;
+}
+
+void NewtonianOmniBackend::Restore(const OmniBackendState& state) {
+  if (static_cast<int>(state.robots.size()) != num_robots())
+    throw std::invalid_argument("Restore: state has the wrong number of robots");
+  for (int i = 0; i < num_robots(); ++i) {
+    Robot& r = robots_[static_cast<std::size_t>(i)];
+    r.state = state.robots[static_cast<std::size_t>(i)];
+    engine_->SetState(i, r.state.body);
+    if (!r.state.engine_snapshot.empty()) engine_->RestoreExact(i, r.state.engine_snapshot);
+  }
+}
+
+}  // namespace twinsim

@@ -1,0 +1,89 @@
+// What the omni loop (sim/omni_simulation.h) steps, one camera frame at a time, with
+// commands it has already delayed: the robots' plant. The same seam as ArmBackend for
+// the arm.
+//
+// Two kinds implement it:
+//   - the Newtonian backend (sim/newtonian_omni_backend.h): an OmniEngine (analytic,
+//     ode, bullet: bodies, joints and contacts only) with the robots' on-board
+//     controller, encoders, motors and effects on top, cut into physics steps;
+//   - the learned backend (backends/learned/learned_omni_backend.h): a predictor learned
+//     from the real robot's logs, which has learned all of that with the bodies.
+// All of them take the same calls, so the loop, replay, the observer and the tests treat
+// them alike. MakeOmniBackend() (backends/omni_backend_factory.h) builds any by name.
+#pragma once
+
+#include <memory>
+#include <utility>
+#include <string>
+#include <vector>
+
+#include "core/pose.h"
+#include "engines/omni_engine.h"
+#include "robots/omni/omni_model.h"
+#include "robots/omni/onboard_controller.h"
+
+namespace twinsim {
+
+// How the loop slices time.
+struct FrameTiming {
+  double frame_rate = 30;    // Hz, camera frames
+  int physics_substeps = 10;  // physics steps per frame
+  double frame_dt() const { return 1.0 / frame_rate; }
+  double physics_dt() const { return frame_dt() / physics_substeps; }
+};
+
+// The physics step the loop uses when a scene does not say: the finest step of at
+// most 1/300 s that divides the frame (grSim: 5 steps per 60 fps frame).
+int DefaultPhysicsSubsteps(double frame_rate);
+
+// Everything that changes about one robot inside a backend.
+struct OmniRobotState {
+  OmniBodyState body;
+  std::vector<double> engine_snapshot;  // OmniEngine::SaveExact(), when the engine has one
+  OnboardControllerState controller;
+  int ticks_until_control = 0;  // physics steps until the next controller tick
+  bool encoders_pending = false;  // the last physics step's wheel turn is not counted yet
+
+  // Effects (robots/omni/omni_effects.h).
+  double clock = 0;                                  // s since Reset
+  std::vector<std::pair<double, Twist2>> received;   // (s, command) not yet acting (time_delay)
+  Twist2 acting;                                     // the command the firmware acts on
+  Twist2 lagged;                                     // after motor_lag
+
+  // The learned backend's window: the newest last.
+  std::vector<Pose2> pose_history;
+  std::vector<Twist2> command_history;
+};
+
+// A copy of everything that changes inside a backend (see OmniBackend::Save).
+struct OmniBackendState {
+  std::vector<OmniRobotState> robots;
+};
+
+class OmniBackend {
+ public:
+  virtual ~OmniBackend() = default;
+  virtual std::string name() const = 0;
+  virtual int num_robots() const = 0;
+  virtual const FrameTiming& timing() const = 0;
+
+  // Puts robot i at `pose` moving at `velocity` (robot frame), its controller settled
+  // on that velocity.
+  virtual void Reset(int robot, const Pose2& pose, const Twist2& velocity) = 0;
+  // Corrects robot i's current pose to a measurement, keeping its velocity (robot frame)
+  // and everything internal (the controller's state; a learned backend keeps its older
+  // poses, so a window corrected every frame holds measured poses).
+  virtual void MoveBody(int robot, const Pose2& pose) = 0;
+  // Advances one camera frame; commands[i] is what robot i's firmware receives now.
+  virtual void StepFrame(const std::vector<Twist2>& commands) = 0;
+
+  virtual Pose2 pose(int robot) const = 0;
+  virtual Twist2 velocity(int robot) const = 0;  // robot frame
+
+  // Saves and restores everything that changes: restoring a saved state and stepping
+  // gives the same result as stepping from where it was saved.
+  virtual OmniBackendState Save() const = 0;
+  virtual void Restore(const OmniBackendState& state) = 0;
+};
+
+}  // namespace twinsim

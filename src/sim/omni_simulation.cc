@@ -1,0 +1,135 @@
+#include "sim/omni_simulation.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace twinsim {
+namespace {
+
+// A robot faster than this, or this far outside any field, has diverged.
+constexpr double kMaxSpeed = 50;       // m/s
+constexpr double kMaxOmega = 1000;     // rad/s
+constexpr double kMaxDistance = 1000;  // m
+
+}  // namespace
+
+Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend> backend,
+                       std::uint64_t seed)
+    : robots_(std::move(robots)), backend_(std::move(backend)) {
+  state_.rng = Rng::Derived(seed, 0);
+  for (int i = 0; i < num_robots(); ++i) {
+    const SimRobot& r = robots_[static_cast<std::size_t>(i)];
+    backend_->Reset(i, r.start, Twist2{});
+    state_.commands_in_flight.emplace_back(r.model.command_delay_frames, Twist2{});
+    state_.captures_in_flight.emplace_back(r.model.vision_delay_frames, std::optional<Pose2>(r.start));
+    state_.delivered.emplace_back();
+  }
+}
+
+void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) const {
+  auto fail = [&](const std::string& what, double value) {
+    std::ostringstream msg;
+    msg << "simulation diverged at t = " << time() << " s (frame " << state_.frame << "), robot '"
+        << robots_[static_cast<std::size_t>(robot)].name << "' on backend " << backend_->name() << ": "
+        << what << " = " << value;
+    throw CheckFailed(msg.str());
+  };
+  if (!std::isfinite(pose.x)) fail("x", pose.x);
+  if (!std::isfinite(pose.y)) fail("y", pose.y);
+  if (!std::isfinite(pose.theta)) fail("theta", pose.theta);
+  if (!std::isfinite(v.vx) || std::abs(v.vx) > kMaxSpeed) fail("vx", v.vx);
+  if (!std::isfinite(v.vy) || std::abs(v.vy) > kMaxSpeed) fail("vy", v.vy);
+  if (!std::isfinite(v.omega) || std::abs(v.omega) > kMaxOmega) fail("omega", v.omega);
+  if (std::hypot(pose.x, pose.y) > kMaxDistance) fail("distance from the field centre", std::hypot(pose.x, pose.y));
+}
+
+std::vector<FrameRecord> Simulation::Step() {
+  const double t = time();
+  std::vector<FrameRecord> records(robots_.size());
+  std::vector<Twist2> applied(robots_.size());
+  for (int i = 0; i < num_robots(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    SimRobot& robot = robots_[k];
+    FrameRecord& rec = records[k];
+    rec.t = t;
+    rec.truth = backend_->pose(i);
+    rec.truth_velocity = backend_->velocity(i);
+    CheckFinite(i, rec.truth, rec.truth_velocity);
+
+    // The camera: noise always drawn, so that dropping frames does not shift the stream.
+    const OmniModel& m = robot.model;
+    Pose2 captured = rec.truth;
+    captured.x += state_.rng.Gaussian(m.vision_noise_xy);
+    captured.y += state_.rng.Gaussian(m.vision_noise_xy);
+    captured.theta = WrapAngle(captured.theta + state_.rng.Gaussian(m.vision_noise_theta));
+    const bool lost = state_.rng.Uniform() < m.vision_drop_probability;
+    std::optional<Pose2> arrived = state_.captures_in_flight[k].Push(lost ? std::nullopt : std::optional(captured));
+
+    auto& delivered = state_.delivered[k];
+    if (arrived) {
+      const int captured_frame = state_.frame - m.vision_delay_frames;
+      delivered.push_back(
+          Observation{captured_frame, state_.frame, captured_frame * backend_->timing().frame_dt(), *arrived});
+      if (static_cast<int>(delivered.size()) > kObservationWindow) delivered.erase(delivered.begin());
+      rec.observed = true;
+      rec.seen = *arrived;
+    }
+
+    BehaviourInput in;
+    in.frame = state_.frame;
+    in.t = t;
+    in.observations = &delivered;
+    rec.command = robot.commands ? robot.commands->Command(in) : Twist2{};
+    if (!IsFinite(rec.command)) {
+      std::ostringstream msg;
+      msg << "behaviour of robot '" << robot.name << "' sent a non-finite command at t = " << t << " s";
+      throw CheckFailed(msg.str());
+    }
+    applied[k] = state_.commands_in_flight[k].Push(rec.command);
+  }
+  backend_->StepFrame(applied);
+  ++state_.frame;
+  return records;
+}
+
+SimulationResult Simulation::Run(int frames, const std::function<void(int, int)>& progress) {
+  SimulationResult result;
+  result.backend = backend_->name();
+  result.timing = backend_->timing();
+  for (const auto& r : robots_) result.robot_names.push_back(r.name);
+  result.frames.resize(robots_.size());
+  for (auto& f : result.frames) f.reserve(static_cast<std::size_t>(frames));
+  for (int k = 0; k < frames; ++k) {
+    std::vector<FrameRecord> records = Step();
+    for (std::size_t i = 0; i < records.size(); ++i) result.frames[i].push_back(records[i]);
+    if (progress && (k % 16 == 0 || k + 1 == frames)) progress(k + 1, frames);
+  }
+  return result;
+}
+
+SimulationState Simulation::Save() const {
+  SimulationState s = state_;
+  s.backend = backend_->Save();
+  // A behaviour's copy is its state (a go-to-pose source's target and sent commands).
+  for (const SimRobot& r : robots_) {
+    s.behaviours.push_back(r.commands ? std::shared_ptr<const CommandSource>(r.commands->Clone()) : nullptr);
+  }
+  return s;
+}
+
+void Simulation::Restore(const SimulationState& state) {
+  if (state.behaviours.size() != robots_.size() || state.commands_in_flight.size() != robots_.size()) {
+    throw std::invalid_argument("Simulation::Restore: state of a simulation with another number of robots");
+  }
+  backend_->Restore(state.backend);
+  state_ = state;
+  state_.behaviours.clear();
+  for (std::size_t i = 0; i < robots_.size(); ++i) {
+    robots_[i].commands = state.behaviours[i] ? state.behaviours[i]->Clone() : nullptr;
+  }
+}
+
+}  // namespace twinsim

@@ -1,0 +1,99 @@
+// The simulation loop: it owns simulated time and the delay loop.
+//
+// Per camera frame k (t_k = k / frame_rate), for every robot:
+//   1. the camera captures the true pose (plus Gaussian noise; the frame may be lost);
+//   2. the capture enters the vision delay line and the one from frame
+//      k - vision_delay_frames comes out to the behaviour;
+//   3. the behaviour sends command c_k, which is logged with that observation;
+//   4. c_k enters the command delay line and c_{k - command_delay_frames} comes out;
+//   5. the backend advances one frame with the delayed commands.
+// So a command logged in row k first moves the observed pose in row k + D + 1, with
+// D = command + vision delay (four frames by default). Backends never see a delay.
+//
+// The model (robots, timing) is fixed at construction; SimulationState holds all that
+// changes, and Save()/Restore() make a run repeatable from any frame.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/delay_line.h"
+#include "core/rng.h"
+#include "sim/behaviour.h"
+#include "sim/omni_backend.h"
+
+namespace twinsim {
+
+struct SimRobot {
+  std::string name;
+  OmniModel model;
+  Pose2 start;
+  std::unique_ptr<CommandSource> commands;
+};
+
+// One row of what happened to one robot in one frame.
+struct FrameRecord {
+  double t = 0;            // s
+  bool observed = false;   // false: this frame's observation was lost (not logged)
+  Pose2 seen;              // what the observer received at t (captured D_v frames earlier)
+  Twist2 command;          // sent at t, robot frame
+  Pose2 truth;             // the true pose at t
+  Twist2 truth_velocity;   // robot frame, true
+};
+
+struct SimulationResult {
+  std::string backend;
+  FrameTiming timing;
+  std::vector<std::string> robot_names;
+  std::vector<std::vector<FrameRecord>> frames;  // [robot][frame]
+};
+
+struct SimulationState {
+  int frame = 0;
+  Rng rng;
+  std::vector<DelayLine<Twist2>> commands_in_flight;                // per robot
+  std::vector<DelayLine<std::optional<Pose2>>> captures_in_flight;  // per robot
+  std::vector<std::vector<Observation>> delivered;                  // per robot, recent window
+  OmniBackendState backend;
+  // Per robot, a copy of its behaviour as it was (null: none); filled by Save() only.
+  std::vector<std::shared_ptr<const CommandSource>> behaviours;
+};
+
+class Simulation {
+ public:
+  // Places every robot at rest at its start; commands before t = 0 are zero and the
+  // observer has seen the robots standing at their starts.
+  Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend> backend, std::uint64_t seed);
+
+  int frame() const { return state_.frame; }
+  double time() const { return state_.frame * backend_->timing().frame_dt(); }
+  const OmniBackend& backend() const { return *backend_; }
+  int num_robots() const { return static_cast<int>(robots_.size()); }
+
+  // Runs one frame and returns each robot's record of it. Throws CheckFailed when a
+  // robot's state becomes non-finite or runs away, naming the robot, time and value.
+  std::vector<FrameRecord> Step();
+
+  // Runs `frames` frames; `progress(done, total)` is called now and then.
+  SimulationResult Run(int frames, const std::function<void(int, int)>& progress = {});
+
+  // The whole state: the loop's, the backend's and every robot's behaviour (a copy of
+  // each command source, so a go-to-pose source's target and the commands it remembers
+  // come back too). Restoring and stepping gives what stepping from the save gave.
+  // Restore throws std::invalid_argument for a state of another simulation.
+  SimulationState Save() const;
+  void Restore(const SimulationState& state);
+
+ private:
+  void CheckFinite(int robot, const Pose2& pose, const Twist2& velocity) const;
+
+  std::vector<SimRobot> robots_;
+  std::unique_ptr<OmniBackend> backend_;
+  SimulationState state_;
+};
+
+}  // namespace twinsim

@@ -1,0 +1,102 @@
+#include "robots/omni/omni_log.h"
+
+#include <gtest/gtest.h>
+
+#include "core/error.h"
+#include "core/math_constants.h"
+
+namespace twinsim {
+namespace {
+
+std::string ErrorOf(const std::string& csv) {
+  try {
+    ParseOmniLog(csv, "log.csv");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* kHeader = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd\n";
+
+TEST(OmniLog, ReadsAndUnwrapsTheta) {
+  const std::string csv = std::string(kHeader) + "0,0,0,3.1,0,0,0\n0.0333333,0,0,-3.1,0,0,0\n0.0666667,1,2,-3.0,1,0,0\n";
+  OmniLog log = ParseOmniLog(csv, "log.csv");
+  ASSERT_EQ(log.rows.size(), 3u);
+  EXPECT_NEAR(log.rows[1].pose.theta, 2 * kPi - 3.1, 1e-9);
+  EXPECT_NEAR(log.frame_period, 1.0 / 30, 1e-6);
+  EXPECT_EQ(log.line_of[2], 4);
+}
+
+TEST(OmniLog, ExtraColumnsAndDroppedFramesAreFine) {
+  const std::string csv = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,quality\n0,0,0,0,0,0,0,1\n0.1,0,0,0,0,0,0,1\n"
+                          "0.3,0,0,0,0,0,0,1\n0.4,0,0,0,0,0,0,1\n";
+  OmniLog log = ParseOmniLog(csv, "log.csv");
+  EXPECT_EQ(log.FrameIndex(2), 3);
+}
+
+TEST(OmniLog, ExtraTextColumnsAreIgnored) {
+  // CONTRACT.md: extra columns, numeric or not (a robot id, a note), are ignored.
+  const std::string csv = "robot,t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,note\nblue0,0,0,0,0,0,0,0,start\n"
+                          "blue0,0.0333333,0.01,0,0,0,0,0,\nblue0,0.0666667,0.02,0,0,1,0,0,go fast\n";
+  const OmniLog log = ParseOmniLog(csv, "log.csv");
+  ASSERT_EQ(log.rows.size(), 3u);
+  EXPECT_EQ(log.rows[2].pose.x, 0.02);
+  EXPECT_EQ(log.rows[2].command.vx, 1);
+  // Text in a column the log needs is still an error with its place.
+  EXPECT_EQ(ErrorOf("t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,note\n0,0,0,0,0,0,0,a\n0.03,0,zero,0,0,0,0,b\n"),
+            "log.csv:3:8: column 'y': expected a number, got 'zero'");
+}
+
+TEST(OmniLog, MissingColumn) {
+  const std::string e = ErrorOf("t,x,y,theta,vx_cmd,vy_cmd\n0,0,0,0,0,0\n0.1,0,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:1: missing column 'omega_cmd' (have: t, x, y, theta, vx_cmd, vy_cmd)"), std::string::npos) << e;
+}
+
+TEST(OmniLog, TextInANumber) {
+  const std::string e = ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,abc,0,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:3:5: column 'x': expected a number, got 'abc'"), std::string::npos) << e;
+}
+
+TEST(OmniLog, ColumnCountsCharactersIncludingSpaces) {
+  const std::string e = ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,  0.5 , x1,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:3:13: column 'y': expected a number, got 'x1'"), std::string::npos) << e;
+}
+
+TEST(OmniLog, NaN) {
+  const std::string e = ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,nan,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:3:"), std::string::npos) << e;
+  EXPECT_NE(e.find("column 'y': value is nan, not a finite number"), std::string::npos) << e;
+}
+
+TEST(OmniLog, TimeGoingBackwards) {
+  const std::string e = ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0\n0.05,0,0,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:4:1: time goes backwards"), std::string::npos) << e;
+}
+
+TEST(OmniLog, WrongFieldCount) {
+  const std::string e = ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:3: expected 7 fields like the header, got 6"), std::string::npos) << e;
+}
+
+TEST(OmniLog, IrregularFrameTime) {
+  const std::string e =
+      ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0\n0.2,0,0,0,0,0,0\n0.35,0,0,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:5:1: irregular frame time"), std::string::npos) << e;
+}
+
+TEST(OmniLog, TooShortAndEmpty) {
+  EXPECT_NE(ErrorOf("").find("log.csv:1: empty file"), std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n").find("at least 2 rows"), std::string::npos);
+}
+
+TEST(OmniLog, WriteReadRoundTripIsExactToNanometres) {
+  std::vector<OmniLogRow> rows = {{0, {1.25, -0.5, 0.1}, {1, 0, 0}}, {1.0 / 30, {1.2500001, -0.5, 0.2}, {0, 1, -2}}};
+  OmniLog back = ParseOmniLog(FormatOmniLog(rows), "x.csv");
+  EXPECT_NEAR(back.rows[1].pose.x, 1.2500001, 1e-9);
+  EXPECT_NEAR(back.rows[1].command.omega, -2, 1e-12);
+  EXPECT_EQ(FormatOmniLog(rows), FormatOmniLog(rows));
+}
+
+}  // namespace
+}  // namespace twinsim
