@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   AddIdentifyCommand(app, &exit_code);
   AddIlcCommand(app, &exit_code);
   AddDiagnoseCommand(app, &exit_code);
+  AddBatchCommand(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

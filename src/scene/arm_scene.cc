@@ -27,12 +27,12 @@ std::string Resolve(const std::string& file, const fs::path& base_dir) {
 
 // Loads the arm model at `key` of `m` into *model (resolved path into *path).
 bool ReadModel(YamlMap& m, const std::string& key, bool required, const fs::path& base_dir, std::string* path,
-               ArmModel* model) {
+               ArmModel* model, const YamlOverrides& overrides = {}) {
   std::string file;
   if (!(required ? m.Require(key, &file) : m.Get(key, &file))) return false;
   *path = Resolve(file, base_dir);
   try {
-    *model = LoadArmModel(*path);
+    *model = LoadArmModel(*path, overrides);
     return true;
   } catch (const InputError& e) {
     m.errors()->Add(e.what());
@@ -345,7 +345,8 @@ void ReadSensors(const YAML::Node& node, const std::string& path, const ArmModel
   m.Finish();
 }
 
-ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir) {
+ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir,
+                      const YamlOverrides& plant = {}) {
   ErrorList errors;
   ArmScene scene;
   scene.path = path;
@@ -357,9 +358,11 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
   double seed = 1;
   if (top.Get("seed", &seed, InRange(0, 9007199254740992.0))) scene.seed = static_cast<std::uint64_t>(seed);
 
-  bool models_ok = ReadModel(top, "model", true, base_dir, &scene.plant_path, &scene.plant);
+  bool models_ok = ReadModel(top, "model", true, base_dir, &scene.plant_path, &scene.plant, plant);
   scene.hat_path = scene.plant_path;
   scene.hat = scene.plant;
+  // The controller's model is the plant's file as written, never the varied plant.
+  if (models_ok && !plant.empty()) models_ok = ReadModel(top, "model", true, base_dir, &scene.hat_path, &scene.hat);
 
   if (top.Has("controller")) {
     YamlMap c(top.Child("controller"), path, "controller", &errors);
@@ -422,10 +425,13 @@ std::string SceneRobotKind(const std::string& path) {
                        (robot.IsScalar() ? robot.Scalar() : std::string("a non-scalar")) + "'");
 }
 
-ArmScene LoadArmScene(const std::string& path) {
-  const YAML::Node root = LoadYamlFile(path);
+ArmScene LoadArmScene(const std::string& path) { return LoadArmScene(path, SceneOverrides{}); }
+
+ArmScene LoadArmScene(const std::string& path, const SceneOverrides& overrides) {
+  YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) throw InputError(SourceLocation{path, 1}, "expected a YAML mapping at the top level");
-  return ReadArmScene(root, path, fs::path(path).parent_path());
+  if (!overrides.scene.empty()) root = ApplyYamlOverrides(root, overrides.scene, path);
+  return ReadArmScene(root, path, fs::path(path).parent_path(), overrides.plant);
 }
 
 ArmScene LoadArmSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir) {

@@ -28,6 +28,7 @@
 #include "control/writing_task.h"
 #include "robots/arm/arm_model.h"
 #include "scene/arm_sensors.h"
+#include "scene/scene_overrides.h"
 
 namespace twinsim {
 
@@ -99,6 +100,8 @@ std::string SceneRobotKind(const std::string& path);
 // Loads and validates an arm scene and the models it names; throws InputError listing
 // every problem as "path:line:column: ...".
 ArmScene LoadArmScene(const std::string& path);
+// As LoadArmScene, with keys of the scene and of its plant's model set from outside.
+ArmScene LoadArmScene(const std::string& path, const SceneOverrides& overrides);
 ArmScene LoadArmSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
 
 // The scene's joint reference at the plant's sample time. Throws InputError (naming

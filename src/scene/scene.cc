@@ -108,7 +108,8 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
   m.Finish();
 }
 
-Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir) {
+Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir,
+                const YamlOverrides& plant = {}) {
   ErrorList errors;
   Scene scene;
   scene.path = path;
@@ -149,7 +150,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
         if (p.is_relative()) p = base_dir / p;
         robot.model_path = p.lexically_normal().string();
         try {
-          robot.model = LoadOmniModel(robot.model_path);
+          robot.model = LoadOmniModel(robot.model_path, plant);
         } catch (const InputError& e) {
           errors.Add(e.what());
         }
@@ -204,8 +205,12 @@ FrameTiming Scene::timing() const {
 
 int Scene::num_frames() const { return static_cast<int>(std::floor(duration * frame_rate + 1e-9)) + 1; }
 
-Scene LoadScene(const std::string& path) {
-  return ReadScene(LoadYamlFile(path), path, fs::path(path).parent_path());
+Scene LoadScene(const std::string& path) { return LoadScene(path, SceneOverrides{}); }
+
+Scene LoadScene(const std::string& path, const SceneOverrides& overrides) {
+  const YAML::Node root = LoadYamlFile(path);
+  return ReadScene(overrides.scene.empty() ? root : ApplyYamlOverrides(root, overrides.scene, path), path,
+                   fs::path(path).parent_path(), overrides.plant);
 }
 
 Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir) {

@@ -14,6 +14,7 @@
 #include "backends/omni_backend_factory.h"
 #include "render/plot_spec.h"
 #include "scene/command_source.h"
+#include "scene/scene_overrides.h"
 #include "sim/omni_simulation.h"
 
 namespace twinsim {
@@ -47,6 +48,8 @@ struct Scene {
 // Loads and validates a scene and the models it names; throws InputError listing every
 // problem as "path:line:column: ...".
 Scene LoadScene(const std::string& path);
+// As LoadScene, with keys of the scene and of its robots' models set from outside.
+Scene LoadScene(const std::string& path, const SceneOverrides& overrides);
 Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
 
 // Builds the simulation of a scene on the named backend.

@@ -18,6 +18,7 @@ void AddExciteCommand(CLI::App& app, int* exit_code);
 void AddIdentifyCommand(CLI::App& app, int* exit_code);
 void AddIlcCommand(CLI::App& app, int* exit_code);
 void AddDiagnoseCommand(CLI::App& app, int* exit_code);
+void AddBatchCommand(CLI::App& app, int* exit_code);
 
 // The kind of robot a model file describes: "arm" for URDF (.urdf) and for YAML with
 // `robot: arm`, else the YAML's `robot` value ("omni" when absent). Throws InputError

@@ -5,20 +5,14 @@
 #include <memory>
 
 #include "app/commands/commands.h"
-#include "backends/arm_backend_factory.h"
-#include "backends/omni_backend_factory.h"
-#include "control/computed_torque.h"
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "core/progress.h"
-#include "io/csv_table.h"
 #include "io/output_files.h"
-#include "learning/arm_predictor.h"
-#include "learning/omni_predictor.h"
 #include "render/renderer.h"
-#include "robots/omni/omni_log.h"
 #include "scene/arm_scene.h"
 #include "scene/scene.h"
-#include "scene/scene_plots.h"
+#include "scene/scene_run.h"
 
 namespace twinsim {
 namespace {
@@ -32,57 +26,9 @@ struct RunOptions {
   bool quiet = false;
 };
 
-// The observer's log of one robot: only frames whose observation arrived.
-std::vector<OmniLogRow> ObserverLog(const std::vector<FrameRecord>& frames) {
-  std::vector<OmniLogRow> rows;
-  for (const auto& f : frames)
-    if (f.observed) rows.push_back(OmniLogRow{f.t, f.seen, f.command});
-  return rows;
-}
-
-// The ground truth of one robot: true pose and velocity at every frame.
-std::string TruthCsv(const std::vector<FrameRecord>& frames) {
-  std::string out = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,vx,vy,omega\n";
-  for (const auto& f : frames) {
-    const double v[] = {f.t, f.truth.x, f.truth.y, f.truth.theta, f.command.vx, f.command.vy, f.command.omega,
-                        f.truth_velocity.vx, f.truth_velocity.vy, f.truth_velocity.omega};
-    for (int i = 0; i < 10; ++i) {
-      if (i) out += ',';
-      out += FormatCsvNumber(v[i]);
-    }
-    out += '\n';
-  }
-  return out;
-}
-
-// The backend an arm scene's plant runs on: every arm backend is built here, so that
-// one place decides what `--backend` (and, for a learned backend, `--predictor`) means
-// for arms. `learned` steps the arm with a predictor (twinsim train) trained for the
-// scene's model: it replaces the plant's bodies, friction and effects. Throws InputError
-// for an unknown or uncompiled backend, a missing, unreadable or mismatched predictor,
-// and a predictor given to another backend.
-std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std::string& backend,
-                                                const RunOptions& options) {
-  ArmBackendOptions backend_options;
-  if (backend == "learned") {
-    if (options.predictor.empty()) {
-      throw InputError(SourceLocation{options.scene},
-                       "--backend learned needs --predictor P (an arm predictor from 'twinsim train')");
-    }
-    backend_options.predictor = std::make_shared<ArmPredictor>(ArmPredictor::Load(options.predictor));
-  } else if (!options.predictor.empty()) {
-    throw InputError("--predictor applies to --backend learned only; arm scene '" + scene.name + "' runs on " + backend);
-  }
-  return MakeArmBackend(backend, scene.plant, backend_options);
-}
-
-// What only the simulation knows, per sample and joint: the tracking error, the demand
-// before clamping, the controller's model-based part, the drive torque applied and the
-// torque the plant needed (TrackingTrial's columns).
-std::string ArmTrackingCsv(const TrackingTrial& trial) {
-  const Eigen::MatrixXd error = trial.q_ref - trial.q;
-  return JointColumnsCsv(trial.t, {"error", "demand", "model", "applied", "needed"},
-                         {&error, &trial.demand, &trial.model_torque, &trial.applied, &trial.needed});
+void WarnPlotsNotDrawn(const std::string& scene_path, std::size_t plots) {
+  if (plots > 0 && !RenderingCompiled())
+    std::fprintf(stderr, "%s: warning: %zu plot(s) not drawn: %s\n", scene_path.c_str(), plots, kRenderingNotCompiled);
 }
 
 int RunArm(const RunOptions& options) {
@@ -90,28 +36,13 @@ int RunArm(const RunOptions& options) {
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
-  const ArmReference reference = ArmSceneReference(scene);
-  std::unique_ptr<ArmBackend> engine = MakeArmSceneBackend(scene, backend, options);
-
   const auto start = std::chrono::steady_clock::now();
-  TrackingOptions tracking = scene.tracking;
-  tracking.backend = backend;
-  tracking.dither_seed = scene.seed;
-  const TrackingTrial trial = RunTrackingTrial(scene.plant, std::move(engine), scene.hat, reference, tracking);
+  const TrackingTrial trial = RunArmScene(scene, backend, options.predictor);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   OutputFiles files(out);
-  files.Write("trajectory.csv", ArmSceneTrajectoryCsv(scene, trial));
-  files.Write("tracking.csv", ArmTrackingCsv(trial));
-
-  if (!scene.plots.empty() && !RenderingCompiled()) {
-    std::fprintf(stderr, "%s: warning: %zu plot(s) not drawn: %s\n", options.scene.c_str(), scene.plots.size(),
-                 kRenderingNotCompiled);
-  } else if (!scene.plots.empty()) {
-    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    for (const ScenePlot& plot : ArmScenePlots(scene, trial, backend))
-      files.WritePng(plot.file, RenderScenePlot(plot, *renderer));
-  }
+  WriteArmRunFiles(scene, trial, backend, /*plots=*/true, &files);
+  WarnPlotsNotDrawn(options.scene, scene.plots.size());
 
   if (!options.quiet) {
     const double simulated = trial.t.size() > 0 ? trial.t[trial.t.size() - 1] : 0.0;
@@ -135,36 +66,19 @@ int Run(const RunOptions& options) {
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
 
-  OmniBackendOptions backend_options;
-  if (!options.predictor.empty())
-    backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
-  Simulation sim = MakeSimulation(scene, backend, backend_options);
   const int frames = scene.num_frames();
   Progress progress("run " + scene.name, !options.quiet);
   const auto start = std::chrono::steady_clock::now();
-  SimulationResult result = sim.Run(frames, [&](int done, int total) {
+  SimulationResult result = RunOmniScene(scene, backend, options.predictor, [&](int done, int total) {
     progress.Update(done, total, std::to_string(done) + "/" + std::to_string(total) + " frames");
   });
   progress.Finish();
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   OutputFiles files(out);
-  for (std::size_t i = 0; i < result.frames.size(); ++i) {
-    const std::string suffix = i == 0 ? "" : "_" + result.robot_names[i];
-    WriteOmniLog(files.Path("trajectory" + suffix + ".csv"), ObserverLog(result.frames[i]));
-    files.Add("trajectory" + suffix + ".csv");
-    files.Write("truth" + suffix + ".csv", TruthCsv(result.frames[i]));
-  }
-
-  if (!scene.plots.empty() && !RenderingCompiled()) {
-    // The logs are the contract's main output: a build without a renderer still writes them.
-    std::fprintf(stderr, "%s: warning: %zu plot(s) not drawn: %s\n", options.scene.c_str(), scene.plots.size(),
-                 kRenderingNotCompiled);
-  } else if (!scene.plots.empty()) {
-    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    for (const ScenePlot& plot : ScenePlots(scene, result, backend))
-      files.WritePng(plot.file, RenderScenePlot(plot, *renderer));
-  }
+  WriteOmniRunFiles(scene, result, backend, /*plots=*/true, &files);
+  // The logs are the contract's main output: a build without a renderer still writes them.
+  WarnPlotsNotDrawn(options.scene, scene.plots.size());
 
   if (!options.quiet) {
     const double simulated = (frames - 1) / scene.frame_rate;

@@ -108,11 +108,18 @@ void ThrowIfInvalid(const ArmModel& model, const std::string& where) {
 
 }  // namespace arm_internal
 
-ArmModel LoadArmModel(const std::string& path) {
+ArmModel LoadArmModel(const std::string& path) { return LoadArmModel(path, {}); }
+
+ArmModel LoadArmModel(const std::string& path, const YamlOverrides& overrides) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext == ".urdf") return arm_internal::LoadArmUrdfFile(path);
-  if (ext == ".yaml" || ext == ".yml") return arm_internal::LoadArmYamlFile(path);
+  if (ext == ".urdf") {
+    if (!overrides.empty())
+      throw InputError(SourceLocation{path}, "cannot set '" + overrides.front().key +
+                                                 "': keys can be set in the project's YAML models, not in URDF");
+    return arm_internal::LoadArmUrdfFile(path);
+  }
+  if (ext == ".yaml" || ext == ".yml") return arm_internal::LoadArmYamlFile(path, overrides);
   throw InputError(SourceLocation{path},
                    "cannot tell the arm model's format from the extension '" + ext +
                        "' (expected .urdf, .yaml or .yml)");

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "io/yaml_overrides.h"
 #include "robots/arm/arm_effects.h"
 
 namespace twinsim {
@@ -68,6 +69,9 @@ struct ArmModel {
 // prismatic joints (a loop, a branch, a floating or planar joint, a link without an
 // inertial), or any other problem.
 ArmModel LoadArmModel(const std::string& path);
+// As LoadArmModel, with `overrides` laid over a YAML model's keys (io/yaml_overrides.h)
+// before it is read. Throws InputError as above, and for overrides of a URDF model.
+ArmModel LoadArmModel(const std::string& path, const YamlOverrides& overrides);
 ArmModel LoadArmModelFromUrdfString(const std::string& xml, const std::string& name);
 ArmModel LoadArmModelFromYamlString(const std::string& yaml, const std::string& name);
 

@@ -39,7 +39,7 @@ inline void AddBody(ArmLink* link, const ArmLink& extra) {
 
 // The loaders behind LoadArmModel(); both throw InputError naming the file.
 ArmModel LoadArmUrdfFile(const std::string& path);  // arm_model_urdf.cc
-ArmModel LoadArmYamlFile(const std::string& path);  // arm_model_yaml.cc
+ArmModel LoadArmYamlFile(const std::string& path, const YamlOverrides& overrides = {});  // arm_model_yaml.cc
 
 // Throws InputError listing every problem Validate() finds, each prefixed with `where`.
 void ThrowIfInvalid(const ArmModel& model, const std::string& where);

@@ -251,7 +251,10 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
 
 namespace arm_internal {
 
-ArmModel LoadArmYamlFile(const std::string& path) { return ReadArmModel(LoadYamlFile(path), path, 0); }
+ArmModel LoadArmYamlFile(const std::string& path, const YamlOverrides& overrides) {
+  const YAML::Node root = LoadYamlFile(path);
+  return ReadArmModel(overrides.empty() ? root : ApplyYamlOverrides(root, overrides, path), path, 0);
+}
 
 }  // namespace arm_internal
 

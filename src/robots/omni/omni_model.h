@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "io/yaml_overrides.h"
 #include "robots/omni/omni_effects.h"
 
 namespace twinsim {
@@ -109,6 +110,9 @@ struct OmniModel {
 
 // Loads and validates an omni model; throws InputError with "path:line:col: ..." lines.
 OmniModel LoadOmniModel(const std::string& path);
+// As LoadOmniModel, with `overrides` laid over the file's keys (io/yaml_overrides.h)
+// before it is read: a variant with the file's checks. Throws InputError as above.
+OmniModel LoadOmniModel(const std::string& path, const YamlOverrides& overrides);
 // As LoadOmniModel, from YAML text; `name` stands for the file in messages.
 OmniModel LoadOmniModelFromString(const std::string& yaml, const std::string& name);
 

@@ -152,6 +152,11 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
 OmniModel LoadOmniModel(const std::string& path) { return ReadOmniModel(LoadYamlFile(path), path, 0); }
 
+OmniModel LoadOmniModel(const std::string& path, const YamlOverrides& overrides) {
+  if (overrides.empty()) return LoadOmniModel(path);
+  return ReadOmniModel(ApplyYamlOverrides(LoadYamlFile(path), overrides, path), path, 0);
+}
+
 OmniModel LoadOmniModelFromString(const std::string& yaml, const std::string& name) {
   YAML::Node root = LoadYamlString(yaml, name);
   if (!root.IsMap()) throw InputError(SourceLocation{name, 1}, "expected a YAML mapping at the top level");

@@ -1,0 +1,62 @@
+// Running a scene as `twinsim run` does, for every caller (the command, a batch job, a
+// binding): build the backend `--backend`/`--predictor` name, run the whole scene, and
+// write the files `run` writes into an output folder.
+//
+//   Scene scene = LoadScene("scenes/drive45.yaml");
+//   SimulationResult result = RunOmniScene(scene, "ode", "");
+//   OutputFiles files("out/drive45");
+//   WriteOmniRunFiles(scene, result, "ode", /*plots=*/true, &files);
+//
+// Omni runs write trajectory.csv (the contract's log as the first robot's observer saw
+// it: late, lost frames left out) and truth.csv (true pose and velocity every frame),
+// and the same with _NAME for every further robot. Arm runs write trajectory.csv (the
+// arm log as the scene's sensors record it) and tracking.csv (error, demand, model,
+// applied and needed torque per joint). Plots are the scene's `plots:` list.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "control/computed_torque.h"
+#include "io/output_files.h"
+#include "scene/arm_scene.h"
+#include "scene/scene.h"
+#include "sim/arm_backend.h"
+#include "sim/omni_simulation.h"
+
+namespace twinsim {
+
+// Runs every frame of an omni scene on `backend` ("learned" with the 1-frame predictor
+// file `predictor`; empty: none). `progress(done, total)` is called as frames finish.
+// Throws InputError for an unknown or uncompiled backend or an unreadable predictor,
+// CheckFailed when the simulation diverges.
+SimulationResult RunOmniScene(const Scene& scene, const std::string& backend, const std::string& predictor,
+                              const std::function<void(int, int)>& progress = {});
+
+// The backend an arm scene's plant runs on: `learned` steps the arm with `predictor`
+// (an arm predictor from `twinsim train` for the scene's model), replacing the plant's
+// bodies, friction and effects. Throws InputError for an unknown or uncompiled backend,
+// a learned backend without a predictor or a predictor that does not fit, and a
+// predictor given to another backend.
+std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std::string& backend,
+                                                const std::string& predictor);
+
+// Runs an arm scene's task on `backend` (as MakeArmSceneBackend), the scene's seed
+// picking the random motion and the controller's dither. Throws as MakeArmSceneBackend,
+// ArmSceneReference and RunTrackingTrial.
+TrackingTrial RunArmScene(const ArmScene& scene, const std::string& backend, const std::string& predictor);
+
+// Writes what `twinsim run` writes for a finished run into `files`; the scene's PNGs
+// only when `plots` and rendering was compiled in. Throws InputError when a file cannot
+// be written.
+void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, const std::string& backend, bool plots,
+                       OutputFiles* files);
+void WriteArmRunFiles(const ArmScene& scene, const TrackingTrial& trial, const std::string& backend, bool plots,
+                      OutputFiles* files);
+
+// The path length of robot `robot`'s true path (m): the sum of the distances between
+// consecutive frames.
+double TruePathLength(const SimulationResult& result, int robot);
+
+}  // namespace twinsim
