@@ -4,6 +4,7 @@
 // forwards its workers' requests and results. Messages: a request (an int), a job
 // number in reply (-1: none left), a result ("INDEX\n" + result.json), and a last
 // "finished" from each rank.
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstdio>
@@ -56,14 +57,19 @@ void SendText(const std::string& text, int tag) {
 void Serve(int ranks, const std::function<std::optional<int>()>& next, const std::function<bool()>& local_running,
            const std::function<void(const std::string&)>& on_result) {
   int finished = 1;  // rank 0 itself: its workers are waited for separately
+  // Polling backs off while idle (requests come once per job), so that this thread does
+  // not take CPU from rank 0's own workers; a message resets it.
+  int idle_us = 20;
   while (finished < ranks || local_running()) {
     int flag = 0;
     MPI_Status status;
     MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status);
     if (!flag) {
-      std::this_thread::sleep_for(std::chrono::microseconds(100));
+      std::this_thread::sleep_for(std::chrono::microseconds(idle_us));
+      idle_us = std::min(2 * idle_us, 1000);
       continue;
     }
+    idle_us = 20;
     int count = 0;
     MPI_Get_count(&status, MPI_CHAR, &count);
     std::string buffer(static_cast<std::size_t>(count), '\0');

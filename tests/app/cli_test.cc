@@ -21,7 +21,7 @@ TEST(Cli, HelpDescribesEveryCommand) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("run"), std::string::npos);
   EXPECT_NE(r.out.find("replay"), std::string::npos);
-  for (const char* cmd : {"run", "replay"}) {
+  for (const char* cmd : {"run", "replay", "compare", "diagnose", "batch"}) {
     auto c = RunTwinsim(std::string(cmd) + " --help");
     EXPECT_EQ(c.exit_code, 0) << cmd;
     EXPECT_NE(c.out.find("--out"), std::string::npos) << cmd;
