@@ -1,5 +1,7 @@
 #include "analysis/omni_compare.h"
 
+#include "engines/omni_engine.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -217,6 +219,20 @@ std::string FormatComparePathsCsv(const OmniLog& log, const OmniCompareResult& r
     out << "\n";
   }
   return out.str();
+}
+
+OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
+                                      const std::shared_ptr<const OmniPredictor>& predictor) {
+  const double frame_rate = 1.0 / log.frame_period;
+  if (predictor) predictor->CheckUse(model, frame_rate, 1, "compare of " + log.path);
+  if (backends.empty()) {
+    backends = AvailableOmniEngines();
+    if (predictor) backends.push_back("learned");
+  }
+  OmniCompareOptions compare;
+  compare.horizons = DefaultCompareHorizons(frame_rate);
+  for (const std::string& b : backends) compare.sources.push_back({b, b, OmniBackendOptions{predictor}});
+  return compare;
 }
 
 }  // namespace twinsim

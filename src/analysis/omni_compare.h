@@ -15,10 +15,12 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "analysis/omni_replay.h"
+#include "learning/omni_predictor.h"
 #include "backends/omni_backend_factory.h"
 #include "core/pose.h"
 #include "robots/omni/omni_log.h"
@@ -75,6 +77,13 @@ struct OmniCompareResult {
 
 // 1 frame, 4 frames, 1 s (round(frame_rate) frames) and free run (0), without repeats.
 std::vector<int> DefaultCompareHorizons(double frame_rate);
+
+// What `twinsim compare` runs on `log`: every backend of `backends` (empty: every
+// physics engine built, plus learned when `predictor` is given) at
+// DefaultCompareHorizons. Throws InputError when the predictor does not fit the model
+// or the log's frame rate.
+OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
+                                      const std::shared_ptr<const OmniPredictor>& predictor);
 // "free run", "1 frame", "1 s" (when frames == round(frame_rate)) or "K frames".
 std::string HorizonLabel(int frames, double frame_rate);
 

@@ -162,19 +162,8 @@ Metrics Compare(const JobInputs& in, OutputFiles* files) {
   const OmniLog log = ReadOmniLog(JobLog(in, kind, files));
   const double frame_rate = 1.0 / log.frame_period;
   std::shared_ptr<const OmniPredictor> predictor;
-  if (!in.predictor.empty()) {
-    predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(in.predictor));
-    predictor->CheckUse(model, frame_rate, 1, "compare of " + log.path);
-  }
-  std::vector<std::string> backends = in.backends;
-  if (backends.empty()) {
-    backends = AvailableOmniEngines();
-    if (predictor) backends.push_back("learned");
-  }
-  OmniCompareOptions compare;
-  compare.horizons = DefaultCompareHorizons(frame_rate);
-  for (const std::string& b : backends) compare.sources.push_back({b, b, OmniBackendOptions{predictor}});
-  const OmniCompareResult result = CompareOmniLog(model, log, compare);
+  if (!in.predictor.empty()) predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(in.predictor));
+  const OmniCompareResult result = CompareOmniLog(model, log, MakeCompareOptions(model, log, in.backends, predictor));
   files->Write("errors.csv", FormatCompareErrorsCsv(result));
   Metrics m;
   for (const CompareErrorRow& row : result.rows)

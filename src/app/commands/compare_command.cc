@@ -85,19 +85,8 @@ int Compare(const CompareCliOptions& options) {
   const double frame_rate = 1.0 / log.frame_period;
 
   std::shared_ptr<const OmniPredictor> predictor;
-  if (!options.predictor.empty()) {
-    predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
-    predictor->CheckUse(model, frame_rate, 1, "compare of " + options.log);
-  }
-
-  std::vector<std::string> backends = options.backends;
-  if (backends.empty()) {
-    backends = AvailableOmniEngines();
-    if (predictor) backends.push_back("learned");
-  }
-  OmniCompareOptions compare;
-  compare.horizons = DefaultCompareHorizons(frame_rate);
-  for (const std::string& b : backends) compare.sources.push_back({b, b, OmniBackendOptions{predictor}});
+  if (!options.predictor.empty()) predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
+  const OmniCompareOptions compare = MakeCompareOptions(model, log, options.backends, predictor);
 
   Progress progress("compare", !options.quiet);
   const OmniCompareResult result = CompareOmniLog(
