@@ -168,8 +168,8 @@ bool RegressOptions::IsValid(std::string* error) const {
     messages.push_back("heading tolerance must be >= 0 rad, got " + Format("%g", heading_tolerance));
   if (pixel_threshold < 0 || pixel_threshold > 255)
     messages.push_back("pixel threshold must be within 0..255 channel levels, got " + std::to_string(pixel_threshold));
-  if (!(pixel_tolerance >= 0))
-    messages.push_back("pixel tolerance must be a fraction >= 0, got " + Format("%g", pixel_tolerance));
+  if (!(pixel_tolerance >= 0) || (pixel_tolerance > 1 && std::isfinite(pixel_tolerance)))  // inf: no image check
+    messages.push_back("pixel tolerance must be a fraction in [0, 1], got " + Format("%g", pixel_tolerance));
   if (error) {
     error->clear();
     for (std::size_t i = 0; i < messages.size(); ++i) *error += (i ? "\n" : "") + messages[i];

@@ -6,6 +6,9 @@
 
 #include "app/commands/commands.h"
 #include "core/error.h"
+#include "core/interrupt.h"
+#include "io/output_transaction.h"
+
 
 int main(int argc, char** argv) {
   using namespace twinsim;
@@ -30,8 +33,17 @@ int main(int argc, char** argv) {
   AddIlcCommand(app, &exit_code);
   AddDiagnoseCommand(app, &exit_code);
   AddBatchCommand(app, &exit_code);
+  CheckNumberOptions(&app);
+  InstallInterruptHandlers();
   try {
+    // A command's files appear together when it returns, or not at all (an error, Ctrl-C).
+    OutputTransaction outputs;
     app.parse(argc, argv);
+    ThrowIfInterrupted();
+    outputs.Commit();
+  } catch (const Interrupted& e) {
+    std::fprintf(stderr, "%s\n", PrintableText(e.what()).c_str());
+    return e.exit_code();
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
@@ -42,13 +54,16 @@ int main(int argc, char** argv) {
     app.exit(e);
     return kExitBadInput;
   } catch (const InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
+    std::fprintf(stderr, "%s\n", PrintableText(e.what()).c_str());
     return kExitBadInput;
   } catch (const CheckFailed& e) {
-    std::fprintf(stderr, "%s\n", e.what());
+    std::fprintf(stderr, "%s\n", PrintableText(e.what()).c_str());
     return kExitCheckFailed;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "internal error: out of memory\n");
+    return kExitInternal;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "internal error: %s\n", e.what());
+    std::fprintf(stderr, "internal error: %s\n", PrintableText(e.what()).c_str());
     return kExitInternal;
   }
   return exit_code;

@@ -10,6 +10,7 @@
 #include "analysis/omni_replay.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/math_constants.h"
 #include "engines/omni_engine.h"
 #include "io/output_files.h"
@@ -198,8 +199,19 @@ void CheckSweepJobLoads(const Sweep& sweep, const SweepJob& job) {
       }
     }
   } catch (const InputError& e) {
-    throw InputError(SourceLocation{sweep.path}, "job " + job.id + " (the first) does not load with the sweep's "
-                                                 "parameters:\n" + e.what());
+    // The files loaded alone before the sweep was accepted, so the keys it sets are to
+    // blame: point at the first of them.
+    SourceLocation where{sweep.path};
+    std::string keys;
+    for (const auto* list : {&sweep.fixed, &sweep.grid, &sweep.random}) {
+      for (const SweepParameter& p : *list) {
+        if (p.name.find('.') == std::string::npos) continue;
+        if (keys.empty()) where = p.where;
+        keys += (keys.empty() ? "" : ", ") + p.name;
+      }
+    }
+    throw InputError(where, "job " + job.id + " (the first) does not load with the sweep's parameters" +
+                                (keys.empty() ? std::string() : " (it sets " + keys + ")") + ":\n" + e.what());
   }
 }
 
@@ -222,6 +234,8 @@ JobResult RunSweepJob(const Sweep& sweep, const SweepJob& job, const std::string
     for (const auto& [name, value] : r.metrics) {
       if (!std::isfinite(value)) throw CheckFailed("metric " + name + " is not finite");
     }
+  } catch (const Interrupted&) {
+    throw;  // not the job's failure: the sweep stops, and --resume runs the job again
   } catch (const InputError& e) {
     r.status = "failed";
     r.error = "bad input: " + OneLine(e.what());

@@ -16,9 +16,11 @@
 #include "batch/batch_mpi.h"
 #include "batch/batch_summary.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "io/atomic_file.h"
+#include "io/output_transaction.h"
 
 namespace twinsim {
 namespace {
@@ -125,10 +127,19 @@ namespace batch_internal {
 std::string RunJobIntoFolder(const Sweep& sweep, const SweepJob& job, const BatchOptions& options,
                              JobResult* result) {
   const std::string folder = JobFolder(options, job);
+  // A job's folder is complete when its result.json, written last, is there; it is
+  // written at once even under the command's output transaction, so that --resume keeps
+  // the jobs that finished.
+  OutputTransactionPause direct_writes;
   std::error_code ec;
   fs::remove_all(folder, ec);  // what an interrupted run left is never taken as complete
   fs::create_directories(folder, ec);
-  *result = RunSweepJob(sweep, job, folder);
+  try {
+    *result = RunSweepJob(sweep, job, folder);
+  } catch (const Interrupted&) {
+    fs::remove_all(folder, ec);
+    throw;
+  }
   const std::string json = FormatJobResultJson(job, *result);
   WriteFileAtomically(folder + "/result.json", json);
   return json;
@@ -174,7 +185,10 @@ void RunLocalWorkers(int threads, const std::function<std::optional<int>()>& nex
   for (int w = 0; w < threads; ++w) {
     workers.emplace_back([&] {
       try {
-        while (const std::optional<int> job = next()) run(*job);
+        while (const std::optional<int> job = next()) {
+          ThrowIfInterrupted();
+          run(*job);
+        }
       } catch (...) {
         std::lock_guard<std::mutex> lock(error_mutex);
         if (!error) error = std::current_exception();

@@ -317,7 +317,7 @@ Sweep LoadSweep(const std::string& path) {
     errors.Add(SourceLocation{path}, "'random': draws given but no parameters to draw");
   if (!sweep.random.empty() && sweep.draws == 0) errors.Add(SourceLocation{path}, "'random': missing 'draws'");
   if (sweep.num_jobs() > kMaxSweepJobs)
-    errors.Add(SourceLocation{path}, "the sweep holds " + std::to_string(sweep.num_jobs()) +
+    errors.Add(sweep.grid.empty() ? SourceLocation{path} : sweep.grid.front().where, "the sweep holds " + std::to_string(sweep.num_jobs()) +
                                          " jobs or more; at most " + std::to_string(kMaxSweepJobs) +
                                          " fit in one sweep (split it)");
   errors.ThrowIfAny();

@@ -59,7 +59,7 @@ std::string FormatIlcFiltersCsv(const ClosedLoopFrf& frf, const std::vector<Lear
     const double limit = LearningLimitFrequency(frf, static_cast<int>(j), l, o.gain);
     out += std::to_string(j + 1) + ',' + std::to_string(l.shift) + ',' + Num(l.inertia) + ',' + Num(l.inertia_early) +
            ',' + Num(l.damping) + ',' + Num(l.stiffness) + ',' + Num(l.residual) + ',' +
-           (std::isfinite(limit) ? Num(limit) : std::string("inf")) + ',' + std::to_string(o.q_order) + ',' +
+           (std::isfinite(limit) ? Num(limit) : std::string()) + ',' + std::to_string(o.q_order) + ',' +
            Num(o.q_cutoff) + ',' + Num(ConvergenceFactor(frf, static_cast<int>(j), l, o).maxCoeff()) + '\n';
   }
   return out;

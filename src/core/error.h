@@ -48,6 +48,10 @@ class InputError : public std::runtime_error {
       : std::runtime_error(where.Prefix() + message) {}
 };
 
+// `text` with control characters (but newline and tab) and bytes that are not UTF-8
+// written as \xNN, so that a message quoting a binary file is readable on a terminal.
+std::string PrintableText(const std::string& text);
+
 // Collects input problems so that a reader can report all of them at once.
 class ErrorList {
  public:

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 
+#include "core/interrupt.h"
+
 namespace twinsim {
 
 Progress::Progress(std::string label, bool enabled)
@@ -12,6 +14,7 @@ Progress::Progress(std::string label, bool enabled)
 Progress::~Progress() { Finish(); }
 
 void Progress::Update(long done, long total, const std::string& detail) {
+  ThrowIfInterrupted();  // every long job reports progress: the place to notice Ctrl-C
   if (!enabled_ || total <= 0) return;
   const auto now = std::chrono::steady_clock::now();
   const double elapsed = std::chrono::duration<double>(now - start_).count();

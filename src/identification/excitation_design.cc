@@ -370,19 +370,22 @@ bool ExcitationOptions::IsValid(std::string* why) const {
   if (harmonics < 1) return fail("harmonics must be at least 1, got " + std::to_string(harmonics));
   if (start_at_rest && harmonics < 2)
     return fail("starting at rest needs at least 2 harmonics (the first one is fixed by the rest conditions)");
-  if (!(fundamental > 0) || !std::isfinite(fundamental)) return fail("fundamental must be positive (Hz)");
+  if (!(fundamental >= 1e-3 && fundamental <= 100))
+    return fail("fundamental must be 0.001 to 100 Hz (a period of 1000 s to 10 ms), got " + Format("%g", fundamental));
+  if (!(check_sample_time >= 0 && check_sample_time * fundamental <= 0.01))
+    return fail("check_sample_time must give at least 100 samples per period, got " + Format("%g", check_sample_time) +
+                " s at " + Format("%g", fundamental) + " Hz");
   if (samples_per_period < 2 * harmonics + 2)
     return fail("samples_per_period must be at least 2 harmonics + 2 = " + std::to_string(2 * harmonics + 2) +
                 ", got " + std::to_string(samples_per_period));
   if (!(position_margin >= 0)) return fail("position_margin must not be negative");
   for (double a : acceleration_limits)
-    if (!(a > 0)) return fail("acceleration limits must be positive, got " + std::to_string(a));
+    if (!(a > 0 && a <= 1e6)) return fail("acceleration limits must be positive and at most 1e6, got " + Format("%g", a));
   if (!(torque_fraction >= 0) || torque_fraction > 1) return fail("torque_fraction must be in [0, 1]");
   if (starts < 1) return fail("starts must be at least 1");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
   if (penalty_rounds < 1) return fail("penalty_rounds must be at least 1");
   if (!(coulomb_smoothing > 0)) return fail("coulomb_smoothing must be positive");
-  if (!(check_sample_time >= 0)) return fail("check_sample_time must not be negative");
   if (threads < 1) return fail("threads must be at least 1");
   return true;
 }

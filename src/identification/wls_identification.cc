@@ -295,31 +295,29 @@ void CheckExcitation(const Eigen::MatrixXd& a, const BaseParameters& base, const
   std::string still_list;
   for (int j : summary.still_joints) still_list += (still_list.empty() ? "" : ", ") + std::to_string(j);
   std::ostringstream msg;
-  msg << "the data does not excite base parameter" << (named.size() > 1 ? "s " : " ");
-  for (std::size_t i = 0; i < named.size(); ++i) {
-    const int k = named[i];
+  // One line per parameter: a log where nothing moves names dozens of them.
+  msg << "the data does not excite base parameter" << (named.size() > 1 ? "s:" : ":");
+  for (const int k : named) {
     const int sidx = k < r ? base.independent[static_cast<std::size_t>(k)] : -1;
-    msg << (i == 0 ? "" : i + 1 == named.size() ? " and " : ", ") << summary.names[static_cast<std::size_t>(k)]
-        << " (" << summary.descriptions[static_cast<std::size_t>(k)];
-    if (sidx < 0) {
-      // A torque offset is only unexcited together with something constant.
-    } else if (sidx >= kParametersPerLink * n) {
+    msg << "\n  " << summary.names[static_cast<std::size_t>(k)] << " (" << summary.descriptions[static_cast<std::size_t>(k)];
+    if (sidx >= kParametersPerLink * n) {
       const int joint = (sidx - kParametersPerLink * n) / kFrictionPerJoint;
       if (spans.still[static_cast<std::size_t>(joint)]) msg << ": it never moves";
-    } else if (!still_list.empty()) {
-      msg << "; joint" << (summary.still_joints.size() > 1 ? "s " : " ") << still_list << " never move"
-          << (summary.still_joints.size() > 1 ? "" : "s");
     }
     msg << ")";
   }
   if (weak.size() < named.size() && weak.size() > 0)
-    msg << "; together they leave " << weak.size() << " combination" << (weak.size() > 1 ? "s" : "")
+    msg << "\ntogether they leave " << weak.size() << " combination" << (weak.size() > 1 ? "s" : "")
         << " undetermined";
-  for (int j : summary.still_joints) {
-    msg << "; q" << j << " spans only " << Format(spans.span[static_cast<std::size_t>(j - 1)]) << " (below "
-        << Format(options.still_range) << ")";
+  if (!still_list.empty()) {
+    msg << "\njoint" << (summary.still_joints.size() > 1 ? "s " : " ") << still_list << " never move"
+        << (summary.still_joints.size() > 1 ? "" : "s") << ":";
+    for (int j : summary.still_joints) {
+      msg << " q" << j << " spans only " << Format(spans.span[static_cast<std::size_t>(j - 1)]) << " (below "
+          << Format(options.still_range) << ");";
+    }
   }
-  msg << ". Move every joint in both directions with varied speeds and accelerations (the condition number is "
+  msg << "\nMove every joint in both directions with varied speeds and accelerations (the condition number is "
       << (s[cols_total - 1] > 0 ? Format(s[0] / s[cols_total - 1]) : std::string("infinite")) << ", the limit "
       << Format(options.max_condition_number) << ")";
   throw InputError(SourceLocation{where}, msg.str());

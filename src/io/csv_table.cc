@@ -3,6 +3,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -34,6 +36,11 @@ std::vector<Field> SplitFields(const std::string& line) {
   return out;
 }
 
+// A field as quoted in a message: a 20,000-digit "number" is cut.
+std::string Clip(const std::string& field) {
+  return field.size() <= 40 ? field : field.substr(0, 37) + "...";
+}
+
 }  // namespace
 
 int CsvTable::Column(const std::string& name) const {
@@ -45,6 +52,13 @@ int CsvTable::Column(const std::string& name) const {
 int CsvTable::RequireColumn(const std::string& name) const {
   const int c = Column(name);
   if (c >= 0) {
+    for (std::size_t k = static_cast<std::size_t>(c) + 1; k < header.size(); ++k) {
+      if (header[k] == name) {
+        throw InputError(SourceLocation{path, 1}, "column '" + name + "' appears twice (columns " +
+                                                      std::to_string(c + 1) + " and " + std::to_string(k + 1) +
+                                                      "): which one holds the data?");
+      }
+    }
     const Problem& p = problem[static_cast<std::size_t>(c)];
     if (p.line > 0) throw InputError(p.message);
     return c;
@@ -61,6 +75,7 @@ std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names)
   for (const std::string& name : names) {
     const int c = Column(name);
     columns.push_back(c);
+    if (c >= 0) RequireColumn(name);  // throws for a column given twice
     if (c < 0) {
       if (!missing) missing = &name;
       continue;
@@ -77,7 +92,9 @@ std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names)
 CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
   CsvTable t;
   t.path = path;
-  std::istringstream in(text);
+  // A UTF-8 byte-order mark, as spreadsheet programs write it, is not part of the header.
+  const std::size_t bom = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+  std::istringstream in(text.substr(bom));
   std::string line;
   int line_no = 0;
   bool have_header = false;
@@ -90,6 +107,12 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
       for (const Field& f : fields) {
         if (f.text.empty())
           throw InputError(SourceLocation{path, line_no, f.column}, "empty column name in the header");
+        for (const char c : f.text) {
+          if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+            throw InputError(SourceLocation{path, line_no, f.column},
+                             "the header holds control characters: not a CSV text file?");
+          }
+        }
         t.header.push_back(f.text);
       }
       t.problem.assign(t.header.size(), {});
@@ -116,7 +139,7 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
         if (problem.line == 0) {
           problem = {line_no, column,
                      SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] + "': " +
-                         (text ? "expected a number, got '" + f + "'" : "value is " + f + ", not a finite number")};
+                         (text ? "expected a number, got '" + Clip(f) + "'" : "value is " + Clip(f) + ", not a finite number")};
         }
         v = std::numeric_limits<double>::quiet_NaN();
       }
@@ -130,6 +153,13 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
 }
 
 CsvTable ReadCsvTable(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(SourceLocation{path}, "is a folder, not a CSV file");
+  const auto bytes = std::filesystem::file_size(path, ec);
+  if (!ec && bytes > kMaxCsvBytes) {
+    throw InputError(SourceLocation{path}, "the file holds " + std::to_string(bytes >> 20) + " MiB; tables above " +
+                                               std::to_string(kMaxCsvBytes >> 20) + " MiB are refused (split it)");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(SourceLocation{path}, "cannot open file");
   std::stringstream buffer;
@@ -138,8 +168,17 @@ CsvTable ReadCsvTable(const std::string& path) {
 }
 
 std::string FormatCsvNumber(double v) {
+  // A NaN or infinity in an output is a bug upstream (every reader and simulation checks
+  // for them), never something to hand on to the next tool.
+  if (!std::isfinite(v)) throw std::logic_error("a non-finite number (" + std::to_string(v) + ") reached a CSV writer");
   char buf[64];
   if (v == 0) v = 0;  // no "-0.000000000"
+  // Nine decimals (nanometres, nanoseconds) for the numbers a robot produces; beyond
+  // 1e15 that would print digits that are not there, so the shortest exact form instead.
+  if (std::abs(v) >= 1e15) {
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+  }
   std::snprintf(buf, sizeof buf, "%.9f", v);
   // Trim trailing zeros to keep files small; deterministic for a given double.
   std::string s(buf);

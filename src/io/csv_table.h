@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,10 @@ struct CsvTable {
   // the file is reported, before a missing column (as a reader going row by row would).
   std::vector<int> RequireColumns(const std::vector<std::string>& names) const;
 };
+
+// The largest CSV file read (1 GiB: days of a robot at 30 fps); larger ones are refused
+// before any memory is taken.
+inline constexpr std::uintmax_t kMaxCsvBytes = std::uintmax_t{1} << 30;
 
 // Reads a CSV table. Throws InputError "path:line:column: ..." on a missing file, an
 // empty file, or a row with the wrong number of fields; text, NaN or infinity where a

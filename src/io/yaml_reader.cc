@@ -1,7 +1,11 @@
 #include "io/yaml_reader.h"
 
+#include <yaml-cpp/eventhandler.h>
+
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace twinsim {
@@ -21,19 +25,90 @@ std::string FormatNumber(double v) {
   return s.str();
 }
 
+// Finds keys that appear twice in one mapping, which yaml-cpp accepts silently (one of
+// the two values is then lost without a word). Works on the parser's events, so an alias
+// is one event and nothing is expanded.
+class DuplicateKeyFinder : public YAML::EventHandler {
+ public:
+  explicit DuplicateKeyFinder(std::string name) : name_(std::move(name)) {}
+  const std::vector<std::string>& problems() const { return problems_; }
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t) override { Node(mark, nullptr); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { Node(mark, nullptr); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t, const std::string& value) override {
+    Node(mark, &value);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    Node(mark, nullptr);
+    frames_.push_back(Frame{false, true, {}});
+  }
+  void OnSequenceEnd() override { frames_.pop_back(); }
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    Node(mark, nullptr);
+    frames_.push_back(Frame{true, true, {}});
+  }
+  void OnMapEnd() override { frames_.pop_back(); }
+
+ private:
+  struct Frame {
+    bool is_map = false;
+    bool expect_key = true;
+    std::map<std::string, int> key_lines;
+  };
+
+  // A node begins inside the innermost frame; `scalar` is its text when it is one.
+  void Node(const YAML::Mark& mark, const std::string* scalar) {
+    if (frames_.empty() || !frames_.back().is_map) return;
+    Frame& f = frames_.back();
+    if (f.expect_key && scalar != nullptr) {
+      const auto [it, fresh] = f.key_lines.emplace(*scalar, mark.line + 1);
+      if (!fresh && problems_.size() < 20) {
+        problems_.push_back(SourceLocation{name_, mark.line + 1, mark.column + 1}.Prefix() + "duplicate key '" +
+                            *scalar + "' (first on line " + std::to_string(it->second) + ")");
+      }
+    }
+    f.expect_key = !f.expect_key;
+  }
+
+  std::string name_;
+  std::vector<Frame> frames_;
+  std::vector<std::string> problems_;
+};
+
 }  // namespace
 
 YAML::Node LoadYamlString(const std::string& text, const std::string& name) {
+  YAML::Node root;
   try {
-    return YAML::Load(text);
+    root = YAML::Load(text);
+    std::istringstream in(text);
+    YAML::Parser parser(in);
+    DuplicateKeyFinder finder(name);
+    parser.HandleNextDocument(finder);
+    if (!finder.problems().empty()) {
+      ErrorList errors;
+      for (const std::string& p : finder.problems()) errors.Add(p);
+      errors.ThrowIfAny();
+    }
   } catch (const YAML::ParserException& e) {
     SourceLocation where{name, e.mark.line + 1, e.mark.column + 1};
     throw InputError(where, "YAML syntax error: " + e.msg);
   }
+  return root;
 }
 
 YAML::Node LoadYamlFile(const std::string& path) {
-  std::ifstream in(path);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(SourceLocation{path}, "is a folder, not a YAML file");
+  const auto bytes = std::filesystem::file_size(path, ec);
+  if (!ec && bytes > kMaxYamlBytes) {
+    throw InputError(SourceLocation{path}, "the file holds " + std::to_string(bytes >> 20) +
+                                               " MiB; YAML files above " + std::to_string(kMaxYamlBytes >> 20) +
+                                               " MiB are refused");
+  }
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(SourceLocation{path}, "cannot open file");
   std::stringstream buffer;
   buffer << in.rdbuf();
@@ -44,11 +119,21 @@ YAML::Node LoadYamlFile(const std::string& path) {
   return root;
 }
 
-NumberCheck Positive() {
-  return [](double v) { return v > 0 ? std::string() : "must be positive, got " + FormatNumber(v); };
+// Without a bound of its own, a positive quantity is still at most 1e12 (no quantity
+// twinsim models comes near it; 1e308 is a typo that would overflow the physics).
+NumberCheck Positive() { return Positive(1e12); }
+NumberCheck NonNegative() { return NonNegative(1e12); }
+NumberCheck Positive(double most) {
+  return [most](double v) {
+    if (!(v > 0)) return "must be positive, got " + FormatNumber(v);
+    return v <= most ? std::string() : "must be at most " + FormatNumber(most) + ", got " + FormatNumber(v);
+  };
 }
-NumberCheck NonNegative() {
-  return [](double v) { return v >= 0 ? std::string() : "must not be negative, got " + FormatNumber(v); };
+NumberCheck NonNegative(double most) {
+  return [most](double v) {
+    if (!(v >= 0)) return "must not be negative, got " + FormatNumber(v);
+    return v <= most ? std::string() : "must be at most " + FormatNumber(most) + ", got " + FormatNumber(v);
+  };
 }
 NumberCheck InRange(double lo, double hi) {
   return [lo, hi](double v) {
@@ -116,12 +201,25 @@ void YamlMap::Missing(const std::string& key) {
   errors_->Add(Where(node_), "missing required key " + Label(key));
 }
 
+namespace {
+
+// Where a reader gives no range of its own: no quantity twinsim models comes near this,
+// and a value beyond it (1e308 for a typo'd length) would overflow the physics.
+std::string PlausibleMagnitude(double v) {
+  constexpr double kMost = 1e12;
+  if (std::abs(v) <= kMost) return {};
+  return "must be within +-" + FormatNumber(kMost) + " (no quantity twinsim models comes near it), got " +
+         FormatNumber(v);
+}
+
+}  // namespace
+
 bool YamlMap::Get(const std::string& key, double* out, const NumberCheck& check) {
   if (!Has(key)) return false;
   auto v = ReadNumber(node_[key], path_, Label(key), errors_);
   if (!v) return false;
-  if (check) {
-    std::string problem = check(*v);
+  {
+    std::string problem = check ? check(*v) : PlausibleMagnitude(*v);
     if (!problem.empty()) {
       Error(key, problem);
       return false;
@@ -193,8 +291,8 @@ bool YamlMap::Get(const std::string& key, std::vector<double>* out, int size, co
   for (std::size_t i = 0; i < n.size(); ++i) {
     auto v = ReadNumber(n[i], path_, Label(key) + "[" + std::to_string(i) + "]", errors_);
     if (!v) { ok = false; continue; }
-    if (check) {
-      std::string problem = check(*v);
+    {
+      std::string problem = check ? check(*v) : PlausibleMagnitude(*v);
       if (!problem.empty()) {
         errors_->Add(Where(n[i]), Label(key) + "[" + std::to_string(i) + "]: " + problem);
         ok = false;
@@ -214,7 +312,9 @@ void YamlMap::Finish() {
     if (known_.count(key)) continue;
     std::string list;
     for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
-    errors_->Add(Where(it->first), "unknown key '" + key + "'" +
+    // A key laid over an `extends:` base has no mark of its own; its value has one.
+    const YAML::Node& at = it->first.Mark().is_null() ? it->second : it->first;
+    errors_->Add(Where(at), "unknown key '" + key + "'" +
                                        (context_.empty() ? "" : " in '" + context_ + "'") +
                                        " (known: " + list + ")");
   }

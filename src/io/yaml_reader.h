@@ -14,6 +14,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -25,7 +26,11 @@
 
 namespace twinsim {
 
-// Parses `path`; throws InputError naming the file (and line) when it cannot.
+// The largest YAML file read (models, scenes, predictors with their weights).
+inline constexpr std::uintmax_t kMaxYamlBytes = std::uintmax_t{256} << 20;
+
+// Parses `path`; throws InputError naming the file (and line) when it cannot: a syntax
+// error, a key given twice in one mapping (both lines named), a folder, a huge file.
 YAML::Node LoadYamlFile(const std::string& path);
 // Parses YAML text; `name` stands for the file in messages.
 YAML::Node LoadYamlString(const std::string& text, const std::string& name);
@@ -34,6 +39,10 @@ YAML::Node LoadYamlString(const std::string& text, const std::string& name);
 using NumberCheck = std::function<std::string(double)>;
 NumberCheck Positive();
 NumberCheck NonNegative();
+// 0 < v <= most (a physical bound: a robot of 1e308 kg is a typo, and breaks the engines).
+NumberCheck Positive(double most);
+// 0 <= v <= most.
+NumberCheck NonNegative(double most);
 NumberCheck InRange(double lo, double hi);  // lo <= v <= hi
 
 class YamlMap {

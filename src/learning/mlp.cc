@@ -261,9 +261,9 @@ Mlp Mlp::FromParameters(Parameters p) {
 bool MlpOptions::IsValid(std::string* why) const {
   std::vector<std::string> problems;
   for (std::size_t i = 0; i < hidden.size(); ++i) {
-    if (hidden[i] < 1) {
+    if (hidden[i] < 1 || hidden[i] > 4096) {
       problems.push_back("hidden[" + std::to_string(i) + "] is " + std::to_string(hidden[i]) +
-                         " (must be >= 1)");
+                         " (must be 1 to 4096)");
     }
   }
   if (max_epochs < 1)

@@ -1,5 +1,7 @@
 #include "learning/predictor_file.h"
 
+#include <cmath>
+
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Dense>
@@ -93,6 +95,14 @@ Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int col
 }
 
 void EmitVector(YAML::Emitter& out, const std::string& key, const double* data, long size) {
+  // A fit that produced NaN or infinity has failed; a file holding them would be refused
+  // by every reader, so none is written.
+  for (long i = 0; i < size; ++i) {
+    if (!std::isfinite(data[i])) {
+      throw CheckFailed("the fit produced a non-finite value in '" + key +
+                        "' (the data are too poor or ill-conditioned for it); no predictor was written");
+    }
+  }
   out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (long i = 0; i < size; ++i) out << data[i];
   out << YAML::EndSeq;

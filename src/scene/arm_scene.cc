@@ -63,6 +63,30 @@ void CheckWithinLimits(YamlMap& m, const std::string& key, const ArmModel& plant
   }
 }
 
+std::string FormatSeconds(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// The most samples one task runs (2.8 h at 1 kHz): every sample is kept for the CSVs.
+constexpr double kMaxArmSamples = 1e7;
+
+// A task's duration: at least `least` seconds, at most a day and kMaxArmSamples samples
+// of the plant's controller.
+NumberCheck DurationCheck(double least, const ArmModel& plant) {
+  const double ts = plant.sample_time;
+  return [least, ts](double v) -> std::string {
+    std::string problem = InRange(least, 24 * 3600)(v);
+    if (problem.empty() && ts > 0 && v / ts > kMaxArmSamples) {
+      std::ostringstream msg;
+      msg << "is " << v / ts << " samples of " << ts << " s; at most " << kMaxArmSamples << " are run";
+      problem = msg.str();
+    }
+    return problem;
+  };
+}
+
 void ReadTask(const YAML::Node& node, const std::string& path, const ArmModel& plant, bool models_ok,
               ErrorList* errors, ArmTaskSpec* task) {
   YamlMap m(node, path, "task", errors);
@@ -95,7 +119,7 @@ void ReadTask(const YAML::Node& node, const std::string& path, const ArmModel& p
   } else if (task->type == "random") {
     TrainingTrialOptions& r = task->training;
     m.Get("motion", &task->motion, {"multisine", "stop_and_go"});
-    m.Get("duration", &r.seconds, InRange(0.1, 24 * 3600));
+    m.Get("duration", &r.seconds, DurationCheck(0.1, plant));
     m.Get("fundamental", &r.fundamental, Positive());
     m.Get("harmonics", &r.harmonics, InRange(1, 1000));
     m.Get("stroke_speed", &r.stroke_speed, Positive());
@@ -112,7 +136,7 @@ void ReadTask(const YAML::Node& node, const std::string& path, const ArmModel& p
     if (!r.IsValid(&why)) m.Error("type", "random task: " + why);
   } else {
     const int dof = plant.dof();
-    m.Require("duration", &task->duration, InRange(1e-3, 24 * 3600));
+    m.Require("duration", &task->duration, DurationCheck(1e-3, plant));
     if (models_ok) {
       if (ReadJointVector(m, "q", dof, true, &task->q)) CheckWithinLimits(m, "q", plant, task->q);
       if (task->type == "step") {
@@ -169,7 +193,9 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
   m.Get("learning_filter", &ilc->learning_filter, {"fitted", "model"});
   m.Get("q_order", &o.q_order, InRange(0, 16));
   if (m.Get("q_cutoff", &o.q_cutoff, Positive()) && plant.sample_time > 0 && o.q_cutoff >= 0.5 / plant.sample_time) {
-    m.Error("q_cutoff", "must lie below the Nyquist frequency " + std::to_string(0.5 / plant.sample_time) + " Hz");
+    std::ostringstream msg;
+    msg << "must lie below the Nyquist frequency " << 0.5 / plant.sample_time << " Hz";
+    m.Error("q_cutoff", msg.str());
   }
   if (m.Has("frf")) {
     YamlMap f(m.Child("frf"), path, "ilc.frf", errors);
@@ -393,8 +419,8 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
                                   std::to_string(scene.plant.dof()));
       models_ok = false;
     } else if (std::abs(scene.hat.sample_time - scene.plant.sample_time) > 1e-12 * scene.plant.sample_time) {
-      top.Error("controller", "the controller's model samples every " + std::to_string(scene.hat.sample_time) +
-                                  " s but the plant every " + std::to_string(scene.plant.sample_time) +
+      top.Error("controller", "the controller's model samples every " + FormatSeconds(scene.hat.sample_time) +
+                                  " s but the plant every " + FormatSeconds(scene.plant.sample_time) +
                                   " s; they must agree");
     }
   }

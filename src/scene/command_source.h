@@ -22,6 +22,7 @@ namespace twinsim {
 // The validated `commands:` block of a scene.
 struct CommandSpec {
   std::string type = "sequence";  // sequence | test_drive | figure_eight | random | go_to_pose
+  int line = 0;                   // where the spec begins in its scene file (0: not from a file)
 
   // sequence
   struct Segment {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <set>
+#include <sstream>
 
 #include "core/error.h"
 #include "core/math_constants.h"
@@ -23,6 +24,7 @@ bool ReadTwist(YamlMap& m, const std::string& key, Twist2* out) {
 void ReadCommands(const YAML::Node& node, const std::string& path, const std::string& context,
                   ErrorList* errors, CommandSpec* spec) {
   YamlMap m(node, path, context, errors);
+  spec->line = m.Where().line;
   m.Require("type", &spec->type, std::vector<std::string>{"sequence", "test_drive", "figure_eight", "random", "go_to_pose"});
   const std::string& type = spec->type;
   if (type == "sequence") {
@@ -119,6 +121,14 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
   top.Get("frame_rate", &scene.frame_rate, InRange(1, 1000));
   top.Get("physics_substeps", &scene.physics_substeps, InRange(0, 1000));
   top.Require("duration", &scene.duration, InRange(1e-3, 24 * 3600));
+  // Every frame of every robot is kept for the CSVs and plots.
+  constexpr double kMaxFrames = 1e7;
+  if (scene.duration * scene.frame_rate > kMaxFrames) {
+    std::ostringstream msg;
+    msg << "is " << scene.duration * scene.frame_rate << " frames at " << scene.frame_rate << " Hz; at most "
+        << kMaxFrames << " are run";
+    top.Error("duration", msg.str());
+  }
   double seed = 1;
   if (top.Get("seed", &seed, InRange(0, 9007199254740992.0))) scene.seed = static_cast<std::uint64_t>(seed);
 
@@ -132,6 +142,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
   }
 
   YAML::Node robots = top.Child("robots");
+  std::vector<SourceLocation> start_at;  // per robot, where its start is given
   if (!robots.IsDefined()) {
     top.Missing("robots");
   } else if (!robots.IsSequence() || robots.size() == 0) {
@@ -155,8 +166,10 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
           errors.Add(e.what());
         }
       }
+      start_at.push_back(r.Where());
       if (r.Has("start")) {
         YamlMap s(r.Child("start"), path, context + ".start", &errors);
+        start_at.back() = s.Where();
         double theta_deg = 0;
         s.Get("x", &robot.start.x);
         s.Get("y", &robot.start.y);
@@ -178,7 +191,8 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
   top.Finish();
   errors.ThrowIfAny();
 
-  for (const auto& r : scene.robots) {
+  for (std::size_t i = 0; i < scene.robots.size(); ++i) {
+    const SceneRobot& r = scene.robots[i];
     if (r.commands.predictor) {
       const int delay = r.model.command_delay_frames + r.model.vision_delay_frames;
       try {
@@ -187,8 +201,12 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
         errors.Add(e.what());
       }
     }
-    if (std::abs(r.start.x) > scene.field.length / 2 || std::abs(r.start.y) > scene.field.width / 2)
-      errors.Add(SourceLocation{path}, "robot '" + r.name + "' starts outside the field");
+    if (std::abs(r.start.x) > scene.field.length / 2 || std::abs(r.start.y) > scene.field.width / 2) {
+      std::ostringstream msg;
+      msg << "robot '" << r.name << "' starts at (" << r.start.x << ", " << r.start.y << ") m, outside the "
+          << scene.field.length << " x " << scene.field.width << " m field";
+      errors.Add(start_at[i], msg.str());
+    }
   }
   errors.ThrowIfAny();
   return scene;

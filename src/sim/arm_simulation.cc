@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 
 namespace twinsim {
 namespace {
@@ -73,6 +74,7 @@ void ArmSimulation::CheckState() const {
 }
 
 ArmSample ArmSimulation::Step(const ArmController& controller) {
+  ThrowIfInterrupted();
   CheckState();
   const int n = model_.dof();
   ArmSample out;

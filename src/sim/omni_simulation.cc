@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 
 namespace twinsim {
 namespace {
@@ -47,6 +48,7 @@ void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) cons
 }
 
 std::vector<FrameRecord> Simulation::Step() {
+  ThrowIfInterrupted();
   const double t = time();
   std::vector<FrameRecord> records(robots_.size());
   std::vector<Twist2> applied(robots_.size());

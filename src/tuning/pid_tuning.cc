@@ -83,7 +83,7 @@ TestRunEvaluator::TestRunEvaluator(Scene scene, std::string backend, QualityWeig
                                 std::to_string(scene_.robots.size()));
   const SceneRobot& r = scene_.robots[0];
   if (r.commands.type != "test_drive")
-    throw InputError(where, "robot '" + r.name + "' must drive commands of type test_drive for a PID test run, not " +
+    throw InputError(SourceLocation{scene_.path, r.commands.line}, "robot '" + r.name + "' must drive commands of type test_drive for a PID test run, not " +
                                 r.commands.type);
   drive_.start = r.commands.start;
   drive_.drive_time = r.commands.drive_time;

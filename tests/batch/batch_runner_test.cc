@@ -184,7 +184,7 @@ TEST(BatchCli, BadSweepsExitTwoWithFileAndLineAndAFirstJobThatDoesNotLoadToo) {
       dir + "/misspelt.yaml", "fixed:\n  scene: " + SourcePath("scenes/drive45.yaml") + "\n  plant.chassis.mas: 2\n");
   r = RunTwinsim("batch " + misspelt + " --out " + dir + "/out");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find(misspelt + ": job 0000 (the first) does not load"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(misspelt + ":3:3: job 0000 (the first) does not load"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("unknown key 'mas'"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir + "/out"));
   EXPECT_EQ(RunTwinsim("batch " + misspelt + " --out " + dir + "/out --jobs -1").exit_code, 2);

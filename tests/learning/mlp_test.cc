@@ -322,7 +322,7 @@ TEST(Mlp, InvalidOptionsThrow) {
       {[](MlpOptions& o) {
          o.hidden = {16, 0};
        },
-       "hidden[1] is 0 (must be >= 1)"},
+       "hidden[1] is 0 (must be 1 to 4096)"},
       {[](MlpOptions& o) { o.max_epochs = 0; }, "max_epochs is 0 (must be >= 1)"},
       {[](MlpOptions& o) { o.batch_size = -1; }, "batch_size is -1 (must be >= 0"},
       {[](MlpOptions& o) { o.learning_rate = 0; }, "learning_rate is 0 (must be > 0)"},

@@ -8,6 +8,14 @@
 
 namespace twinsim {
 
+// Option checks with short messages (CLI11's own print the range up to 1.8e308 in full).
+// A number option's value must be a number greater than zero / not below zero.
+CLI::Validator PositiveNumber();
+CLI::Validator NonNegativeNumber();
+// Every number option is finite, and an unsigned one (a seed) is not negative; applied to
+// all options of `app` and its subcommands by main().
+void CheckNumberOptions(CLI::App* app);
+
 void AddRunCommand(CLI::App& app, int* exit_code);
 void AddReplayCommand(CLI::App& app, int* exit_code);
 void AddTrainCommand(CLI::App& app, int* exit_code);

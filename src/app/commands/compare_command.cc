@@ -140,7 +140,7 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--predictor", options->predictor, "1-frame predictor for the learned backend (from twinsim train)");
   cmd->add_option("--plot-seconds", options->plot_seconds, "Seconds of the log drawn in paths.png")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Compare(*options); });
 }

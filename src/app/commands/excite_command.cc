@@ -221,14 +221,15 @@ void AddExciteCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--harmonics", options->design.harmonics, "N, harmonics per joint")->capture_default_str();
   cmd->add_option("--fundamental", options->design.fundamental, "Fundamental frequency [Hz]; the period is 1/f")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
   cmd->add_option("--seed", options->design.seed, "Seed of the random starts (and of the plant's noise)")
       ->capture_default_str();
   cmd->add_option("--starts", options->design.starts, "Random feasible starting points")->capture_default_str();
   cmd->add_option("--iterations", options->design.max_iterations, "LBFGS iterations per penalty round")
       ->capture_default_str();
   cmd->add_option("--samples", options->design.samples_per_period, "Regressor samples per period in the criterion")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
   cmd->add_option("--threads", options->design.threads, "Threads for the starts (the result does not depend on it)")
       ->capture_default_str();
   cmd->add_option("--acceleration-limit", options->acceleration_limits,
@@ -241,21 +242,26 @@ void AddExciteCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   cmd->add_option("--periods", options->periods, "Periods written to reference.csv")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber())
+      ->check(CLI::Range(0.0, 1000.0));
   cmd->add_option("--trajectory", options->trajectory, "Use this excitation.yaml instead of designing one")
       ->check(CLI::ExistingFile);
   cmd->add_option("--plant", options->plant, "Run batch-adaptive estimation on this model as the simulated arm");
-  cmd->add_option("--trials", options->adaptive.max_trials, "Most trials")->capture_default_str();
+  cmd->add_option("--trials", options->adaptive.max_trials, "Most trials")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
   cmd->add_option("--tolerance", options->adaptive.tolerance, "Relative parameter change that ends the trials")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(PositiveNumber());
   cmd->add_option("--bandwidth", options->adaptive.feedback_bandwidth, "PD feedback bandwidth [Hz]")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(PositiveNumber());
   cmd->add_option("--torque-noise", options->torque_noise, "Plant: torque noise std on every joint [N m]")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
   cmd->add_option("--encoder-resolution", options->encoder_resolution, "Plant: encoder resolution [rad]; 0: exact")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Excite(*options); });
 }

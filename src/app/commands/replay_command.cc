@@ -128,7 +128,7 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--predictor", options->predictor, "1-frame predictor for --backend learned (from twinsim train)");
   cmd->add_option("--horizon", options->horizon, "K, frames predicted ahead (0: free run)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
   cmd->add_option("--cutoff", options->cutoff_hz, "Hz, arms: low-pass cut-off for qd/qdd derived from q")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");

@@ -114,7 +114,7 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
   cmd->add_option("--predictor", options->predictor, "1-step predictor for --backend learned (from twinsim train)");
   cmd->add_option("--out", options->out, "Output folder (default: out/<scene name>)");
-  cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(NonNegativeNumber());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Run(*options); });
 }

@@ -201,12 +201,12 @@ void AddTunePidCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--out", options->out, "Output folder")->required();
   cmd->add_option("--backend", options->backend, "Backend: ode, bullet or analytic (default: the scene's)");
   cmd->add_option("--iterations", options->iterations, "Iterations (default: the scene's tune_pid block, else 10)")
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
   cmd->add_option("--start", options->start, "Start from the model's controller or from all zeros")
       ->check(CLI::IsMember({"model", "zeros"}));
   cmd->add_option("--threads", options->threads, "Worker threads (default 0: one per core)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
+  cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(NonNegativeNumber());
   cmd->add_flag("--baselines", options->baselines, "Also tune by Ziegler-Nichols and by NLopt's Subplex");
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = TunePidCommand(*options); });

@@ -30,21 +30,24 @@ std::string Number(double v) {
   return s.str();
 }
 
-NumberCheck Finite() {
-  return [](double v) { return std::isfinite(v) ? std::string() : "must be finite, got " + Number(v); };
-}
 
 // The parameter table of the vocabulary; the order is the documentation's.
 const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
   static const std::map<std::string, std::vector<ParameterSpec>> specs = {
-      {"viscous_friction", {{"b", true, NonNegative()}}},
-      {"coulomb_friction", {{"c", false, NonNegative()}, {"c_pos", false, NonNegative()}, {"c_neg", false, NonNegative()}}},
-      {"stribeck_friction", {{"c", true, NonNegative()}, {"s", true, Positive()}, {"vs", true, Positive()}}},
-      {"torque_offset", {{"tau0", true, Finite()}}},
-      {"torque_saturation", {{"limit", true, Positive()}}},
+      // Upper bounds far above any real joint, so that a typo (1e308) is caught here
+      // and not as a NaN in the middle of a run.
+      {"viscous_friction", {{"b", true, NonNegative(1e6)}}},
+      {"coulomb_friction",
+       {{"c", false, NonNegative(1e7)}, {"c_pos", false, NonNegative(1e7)}, {"c_neg", false, NonNegative(1e7)}}},
+      {"stribeck_friction", {{"c", true, NonNegative(1e7)}, {"s", true, Positive(1e7)}, {"vs", true, Positive(1e4)}}},
+      {"torque_offset", {{"tau0", true, InRange(-1e7, 1e7)}}},
+      {"torque_saturation", {{"limit", true, Positive(1e7)}}},
       {"time_delay", {{"delay", true, InRange(0, kMaxTimeDelay)}}},
-      {"joint_flexibility", {{"k", true, Positive()}, {"damping", false, NonNegative()}, {"motor_inertia", true, Positive()}}},
-      {"payload", {{"mass", true, Positive()}, {"x", false, Finite()}, {"y", false, Finite()}, {"z", false, Finite()}}},
+      {"joint_flexibility",
+       {{"k", true, Positive(1e9)}, {"damping", false, NonNegative(1e6)}, {"motor_inertia", true, Positive(1e3)}}},
+      {"payload",
+       {{"mass", true, Positive(1e5)}, {"x", false, InRange(-100, 100)}, {"y", false, InRange(-100, 100)},
+        {"z", false, InRange(-100, 100)}}},
   };
   const auto it = specs.find(name);
   return it == specs.end() ? nullptr : &it->second;

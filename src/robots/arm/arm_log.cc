@@ -26,7 +26,12 @@ int CountColumns(const CsvTable& table, const std::string& prefix) {
   int highest = 0;
   for (const auto& h : table.header) {
     std::smatch m;
-    if (std::regex_match(h, m, pattern)) highest = std::max(highest, std::stoi(m[1].str()));
+    if (!std::regex_match(h, m, pattern)) continue;
+    if (m[1].length() > 3 || std::stoi(m[1].str()) > kMaxArmJoints) {
+      throw InputError(SourceLocation{table.path, 1}, "column '" + h + "': an arm has at most " +
+                                                          std::to_string(kMaxArmJoints) + " joints");
+    }
+    highest = std::max(highest, std::stoi(m[1].str()));
   }
   for (int k = 1; k <= highest; ++k) {
     const std::string name = prefix + std::to_string(k);
@@ -46,6 +51,21 @@ Eigen::MatrixXd Columns(const CsvTable& table, const std::string& prefix, int do
     for (std::size_t r = 0; r < table.rows.size(); ++r) m(static_cast<Eigen::Index>(r), j) = table.rows[r][c];
   }
   return m;
+}
+
+// Refuses a value no joint produces (a unit mistake, a corrupted file), which would
+// overflow the dynamics downstream: |prefixJ| <= most in every row.
+void CheckMagnitude(const CsvTable& table, const Eigen::MatrixXd& m, const std::string& prefix, double most) {
+  for (Eigen::Index j = 0; j < m.cols(); ++j) {
+    for (Eigen::Index r = 0; r < m.rows(); ++r) {
+      if (std::abs(m(r, j)) > most) {
+        std::ostringstream msg;
+        msg << "column '" << prefix << j + 1 << "': " << m(r, j) << " is beyond what a joint reports (at most "
+            << most << " in magnitude)";
+        throw InputError(SourceLocation{table.path, table.line_of[static_cast<std::size_t>(r)]}, msg.str());
+      }
+    }
+  }
 }
 
 ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
@@ -107,6 +127,12 @@ ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
   std::vector<double> sorted = steps;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
   log.sample_period = sorted[sorted.size() / 2];
+  if (!(log.sample_period >= 1e-6 && log.sample_period <= 1.0)) {
+    std::ostringstream msg;
+    msg << "column 't': the sample period (the median step) is " << log.sample_period
+        << " s; an arm log has 1e-06 to 1 s between samples (is 't' in seconds?)";
+    throw InputError(SourceLocation{table.path, table.line_of[0], 1}, msg.str());
+  }
   for (std::size_t i = 0; i < steps.size(); ++i) {
     if (std::abs(steps[i] / log.sample_period - 1) > kStepTolerance) {
       std::ostringstream msg;
@@ -117,10 +143,21 @@ ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
   }
 
   log.q = Columns(table, "q", nq);
+  CheckMagnitude(table, log.q, "q", 1e6);
   log.tau = Columns(table, "tau", nq);
-  if (has_qref) log.qref = Columns(table, "qref", nq);
-  if (log.qd_logged) log.qd = Columns(table, "qd", nq);
-  if (log.qdd_logged) log.qdd = Columns(table, "qdd", nq);
+  CheckMagnitude(table, log.tau, "tau", 1e9);
+  if (has_qref) {
+    log.qref = Columns(table, "qref", nq);
+    CheckMagnitude(table, log.qref, "qref", 1e6);
+  }
+  if (log.qd_logged) {
+    log.qd = Columns(table, "qd", nq);
+    CheckMagnitude(table, log.qd, "qd", 1e6);
+  }
+  if (log.qdd_logged) {
+    log.qdd = Columns(table, "qdd", nq);
+    CheckMagnitude(table, log.qdd, "qdd", 1e9);
+  }
   if (!log.qd_logged || !log.qdd_logged) {
     // Stamps jitter around a fixed rate (the controller's); differentiate on the uniform
     // grid of the log's average step rather than on the stamps (signal/butterworth.h).
@@ -151,8 +188,8 @@ ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
 
 bool ArmLogOptions::IsValid(std::string* why) const {
   std::ostringstream s;
-  if (!(cutoff_hz > 0) || !std::isfinite(cutoff_hz)) {
-    s << "the cut-off for derived velocities must be positive, got " << cutoff_hz << " Hz";
+  if (!(cutoff_hz > 0 && cutoff_hz <= 1e6)) {
+    s << "the cut-off for derived velocities must be positive and at most 1e6 Hz, got " << cutoff_hz << " Hz";
   } else if (filter_order < 1 || filter_order > 16) {
     s << "the filter order must be 1 to 16, got " << filter_order;
   }

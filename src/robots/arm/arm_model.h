@@ -49,6 +49,9 @@ struct ArmJoint {
   ArmLink child;                      // the link this joint moves
 };
 
+// The most joints an arm may have (a humanoid's limb has 7; a snake robot a few dozen).
+inline constexpr int kMaxArmJoints = 64;
+
 struct ArmModel {
   std::string name;
   std::string source_path;

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -62,6 +64,23 @@ class LineFinder {
         if (text_[k] != '\n') text_[k] = ' ';
       at = end;
     }
+  }
+
+  // The line of the first `<sub` after the element `<tag name="name"` (a link's <mass>),
+  // else the element's own line.
+  int SubLine(const std::string& tag, const std::string& name, const std::string& sub) const {
+    const int line = Line(tag, name);
+    if (line == 0) return 0;
+    std::size_t at = 0;
+    for (int l = 1; l < line && at != std::string::npos; ++l) at = text_.find('\n', at) + 1;
+    const std::size_t close = text_.find("</" + tag, at);
+    const std::string open = "<" + sub;
+    for (std::size_t found = text_.find(open, at); found != std::string::npos && found < close;
+         found = text_.find(open, found + 1)) {
+      const char next = found + open.size() < text_.size() ? text_[found + open.size()] : '>';
+      if (std::isspace(static_cast<unsigned char>(next)) || next == '/' || next == '>') return LineOf(found);
+    }
+    return line;
   }
 
   // The 1-based line of `<tag ... name="name"`; for joints the definition (with a type
@@ -126,7 +145,63 @@ std::string JointTypeName(int type) {
   }
 }
 
+// urdfdom reads "nan" and "inf" as numbers (or as 0 where it gives up), so they are
+// found in the text first, with their line.
+void CheckFiniteAttributes(const std::string& xml, const std::string& path) {
+  static const std::regex kBad(R"re(=\s*(["'])[^"']*?\b[-+]?(nan|inf|infinity)\b[^"']*\1)re", std::regex::icase);
+  ErrorList errors;
+  auto begin = std::sregex_iterator(xml.begin(), xml.end(), kBad);
+  int count = 0;
+  for (auto it = begin; it != std::sregex_iterator() && count < 10; ++it, ++count) {
+    const int line = 1 + static_cast<int>(std::count(xml.begin(), xml.begin() + it->position(), '\n'));
+    errors.Add(SourceLocation{path, line}, "attribute value " + it->str().substr(it->str().find_first_of("\"'")) +
+                                               " is not a finite number");
+  }
+  // urdfdom reads a mass it cannot parse ("heavy") as 0 without a word.
+  static const std::regex kMass(R"re(<mass\s+value\s*=\s*(["'])([^"']*)\1)re");
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), kMass); it != std::sregex_iterator(); ++it) {
+    const std::string text = (*it)[2].str();
+    char* end = nullptr;
+    std::strtod(text.c_str(), &end);
+    if (text.empty() || end == text.c_str() || *end != '\0') {
+      const int line = 1 + static_cast<int>(std::count(xml.begin(), xml.begin() + it->position(), '\n'));
+      errors.Add(SourceLocation{path, line}, "mass value '" + text + "' is not a number");
+    }
+  }
+  errors.ThrowIfAny();
+}
+
+// A link's mass and inertia, checked as the YAML reader checks them.
+void CheckInertial(const urdf::Link& link, const LineFinder& lines, const std::string& path, ErrorList* errors) {
+  const urdf::Inertial& in = *link.inertial;
+  if (!(in.mass > 0 && in.mass <= 1e5)) {
+    std::ostringstream s;
+    s << "link '" << link.name << "': mass must be positive and at most 1e+05 kg, got " << in.mass;
+    errors->Add(SourceLocation{path, lines.SubLine("link", link.name, "mass")}, s.str());
+  }
+  const SourceLocation where{path, lines.SubLine("link", link.name, "inertia")};
+  for (const double v : {in.ixx, in.iyy, in.izz, in.ixy, in.ixz, in.iyz}) {
+    if (!(std::abs(v) <= 1e5)) {
+      std::ostringstream s;
+      s << "link '" << link.name << "': inertia entries must be within +-1e+05 kg m^2, got " << v;
+      errors->Add(where, s.str());
+      break;
+    }
+  }
+}
+
 ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
+  // urdfdom takes seconds over a file of 100,000 joints; an arm has a few.
+  constexpr int kMaxJointElements = 1000;  // fixed ones (tool frames, sensors) included
+  int joint_elements = 0;
+  for (std::size_t at = xml.find("<joint"); at != std::string::npos; at = xml.find("<joint", at + 1)) {
+    if (++joint_elements > kMaxJointElements) {
+      throw InputError(SourceLocation{path}, "the URDF has more than " + std::to_string(kMaxJointElements) +
+                                                 " joint elements; an arm has at most " +
+                                                 std::to_string(kMaxArmJoints) + " moving joints");
+    }
+  }
+  CheckFiniteAttributes(xml, path);
   std::string console;
   const urdf::ModelInterfaceSharedPtr urdf = ParseQuietly(xml, &console);
   if (!urdf) {
@@ -160,6 +235,13 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
     for (const auto& j : joints) list += (list.empty() ? "'" : ", '") + j + "'";
     errors.Add(at_link(child), "link '" + child + "' is the child of " + std::to_string(joints.size()) +
                                    " joints (" + list + "): a closed loop, which a serial chain cannot express");
+  }
+  if (urdf->joints_.size() > static_cast<std::size_t>(kMaxArmJoints)) {
+    errors.Add(SourceLocation{path}, "the URDF has " + std::to_string(urdf->joints_.size()) + " joints; at most " +
+                                         std::to_string(kMaxArmJoints) + " are supported");
+  }
+  for (const auto& [name, link] : urdf->links_) {
+    if (link->inertial) CheckInertial(*link, lines, path, &errors);
   }
   errors.ThrowIfAny();
 
@@ -233,7 +315,24 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
   }
   errors.ThrowIfAny();
   if (model.joints.empty()) throw InputError(SourceLocation{path}, "the URDF has no revolute, continuous or prismatic joint");
-  arm_internal::ThrowIfInvalid(model, path);
+  // The model's own checks, each with the line of the link it names.
+  const std::string problems = model.Validate();
+  if (!problems.empty()) {
+    static const std::regex kLink(R"re(link '([^']*)')re");
+    std::istringstream text(problems);
+    std::string line;
+    while (std::getline(text, line)) {
+      std::smatch m;
+      if (!std::regex_search(line, m, kLink)) {
+        errors.Add(SourceLocation{path}, line);
+        continue;
+      }
+      const char* sub = line.find("inertia") != std::string::npos ? "inertia"
+                        : line.find("mass") != std::string::npos ? "mass" : "inertial";
+      errors.Add(SourceLocation{path, lines.SubLine("link", m[1].str(), sub)}, line);
+    }
+    errors.ThrowIfAny();
+  }
   return model;
 }
 
@@ -242,6 +341,14 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
 namespace arm_internal {
 
 ArmModel LoadArmUrdfFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(SourceLocation{path}, "is a folder, not a URDF file");
+  constexpr std::uintmax_t kMaxUrdfBytes = std::uintmax_t{64} << 20;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  if (!ec && bytes > kMaxUrdfBytes) {
+    throw InputError(SourceLocation{path}, "the file holds " + std::to_string(bytes >> 20) +
+                                               " MiB; URDF files above 64 MiB are refused");
+  }
   std::ifstream in(path);
   if (!in) throw InputError(SourceLocation{path}, "cannot open file");
   std::stringstream buffer;

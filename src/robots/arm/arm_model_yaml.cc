@@ -50,11 +50,11 @@ YAML::Node Resolve(const YAML::Node& root, const std::string& path, int depth) {
 // Reads mass, centre of mass and inertia [ixx, iyy, izz, ixy, ixz, iyz] (about the
 // centre of mass) of a link or a load.
 void ReadBody(YamlMap& m, ArmLink* body) {
-  m.Require("mass", &body->mass, Positive());
+  m.Require("mass", &body->mass, Positive(1e5));
   std::vector<double> com;
-  if (m.Get("com", &com, 3)) body->com = Eigen::Vector3d(com[0], com[1], com[2]);
+  if (m.Get("com", &com, 3, InRange(-100, 100))) body->com = Eigen::Vector3d(com[0], com[1], com[2]);
   std::vector<double> i;
-  if (m.Require("inertia", &i, 6)) {
+  if (m.Require("inertia", &i, 6, InRange(-1e5, 1e5))) {
     body->inertia << i[0], i[3], i[4],
                      i[3], i[1], i[5],
                      i[4], i[5], i[2];
@@ -72,9 +72,9 @@ void ReadDhRow(YamlMap& jm, DhRow* row) {
                                             "a, alpha_deg, d and theta_deg");
     }
   }
-  jm.Require("a", &row->a);
+  jm.Require("a", &row->a, InRange(-100, 100));
   if (jm.Require("alpha_deg", &row->alpha)) row->alpha *= kDegToRad;
-  jm.Require("d", &row->d);
+  jm.Require("d", &row->d, InRange(-100, 100));
   if (jm.Require("theta_deg", &row->theta)) row->theta *= kDegToRad;
 }
 
@@ -91,7 +91,7 @@ void ReadUrdfPlacement(YamlMap& jm, ArmJoint* j) {
   if (jm.Has("origin")) {
     YamlMap om(jm.Child("origin"), jm.path(), jm.context() + ".origin", jm.errors());
     std::vector<double> xyz{0, 0, 0}, rpy{0, 0, 0};
-    om.Get("xyz", &xyz, 3);
+    om.Get("xyz", &xyz, 3, InRange(-100, 100));
     om.Get("rpy", &rpy, 3);
     om.Finish();
     if (xyz.size() == 3 && rpy.size() == 3) {
@@ -147,7 +147,7 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
   top.Require("name", &model.name);
   std::vector<double> gravity;
   if (top.Get("gravity", &gravity, 3)) model.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
-  top.Get("sample_time", &model.sample_time, Positive());
+  top.Get("sample_time", &model.sample_time, Positive(10));
   top.Get("delay_samples", &model.delay_samples, InRange(0, 100000));
   // With `dh` the joints are DH rows; without it they are URDF-style (origin and axis).
   std::string convention;
@@ -160,6 +160,9 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
     const YAML::Node list = top.Child("joints");
     if (!list.IsSequence() || list.size() == 0) {
       top.Error("joints", "expected a list of joints");
+    } else if (list.size() > static_cast<std::size_t>(kMaxArmJoints)) {
+      top.Error("joints", "has " + std::to_string(list.size()) + " joints; at most " + std::to_string(kMaxArmJoints) +
+                              " are supported");
     } else {
       for (std::size_t k = 0; k < list.size(); ++k) {
         const std::string label = "joint " + std::to_string(k + 1);
@@ -178,10 +181,10 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
         }
 
         ReadLimits(jm, dh, type, &j);
-        jm.Get("velocity_limit", &j.velocity_limit, NonNegative());
-        jm.Get("effort_limit", &j.effort_limit, NonNegative());
-        jm.Get("viscous", &j.viscous, NonNegative());
-        jm.Get("coulomb", &j.coulomb, NonNegative());
+        jm.Get("velocity_limit", &j.velocity_limit, NonNegative(1e4));
+        jm.Get("effort_limit", &j.effort_limit, NonNegative(1e7));
+        jm.Get("viscous", &j.viscous, NonNegative(1e6));
+        jm.Get("coulomb", &j.coulomb, NonNegative(1e7));
 
         if (jm.Has("link")) {
           YamlMap lm(jm.Child("link"), path, label + ".link", &errors);

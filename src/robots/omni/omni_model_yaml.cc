@@ -14,12 +14,12 @@ namespace {
 void ReadPid(YamlMap& parent, const std::string& key, PidGains* g) {
   if (!parent.Has(key)) return;
   YamlMap m(parent.Child(key), parent.path(), "controller." + key, parent.errors());
-  m.Get("kp", &g->kp, NonNegative());
-  m.Get("ki", &g->ki, NonNegative());
-  m.Get("kd", &g->kd, NonNegative());
-  m.Get("integral_limit", &g->integral_limit, NonNegative());
-  m.Get("output_limit", &g->output_limit, NonNegative());
-  m.Get("slew_rate", &g->slew_rate, NonNegative());
+  m.Get("kp", &g->kp, NonNegative(1e6));
+  m.Get("ki", &g->ki, NonNegative(1e6));
+  m.Get("kd", &g->kd, NonNegative(1e6));
+  m.Get("integral_limit", &g->integral_limit, NonNegative(1e6));
+  m.Get("output_limit", &g->output_limit, NonNegative(1e6));
+  m.Get("slew_rate", &g->slew_rate, NonNegative(1e6));
   m.Finish();
 }
 
@@ -44,12 +44,12 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("chassis")) {
     YamlMap c(top.Child("chassis"), path, "chassis", &errors);
-    c.Get("mass", &model.chassis_mass, Positive());
-    c.Get("radius", &model.chassis_radius, Positive());
-    c.Get("height", &model.chassis_height, Positive());
-    c.Get("inertia_z", &model.chassis_inertia_z, NonNegative());
-    c.Get("com_height", &model.com_height, Positive());
-    c.Get("ground_clearance", &model.ground_clearance, NonNegative());
+    c.Get("mass", &model.chassis_mass, Positive(1000));
+    c.Get("radius", &model.chassis_radius, InRange(0.01, 10));
+    c.Get("height", &model.chassis_height, Positive(10));
+    c.Get("inertia_z", &model.chassis_inertia_z, NonNegative(1e4));
+    c.Get("com_height", &model.com_height, Positive(10));
+    c.Get("ground_clearance", &model.ground_clearance, NonNegative(1));
     c.Finish();
   } else {
     top.Missing("chassis");
@@ -64,13 +64,13 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
       if (angles_deg.size() < 3 || angles_deg.size() > 8)
         w.Error("angles_deg", "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
     }
-    w.Get("distance", &model.wheel_distance, Positive());
-    w.Get("radius", &model.wheel_radius, Positive());
-    w.Get("width", &model.wheel_width, Positive());
-    w.Get("mass", &model.wheel_mass, Positive());
-    w.Get("friction", &model.wheel_friction, Positive());
-    w.Get("roller_friction", &model.roller_friction, NonNegative());
-    w.Get("bearing_damping", &model.bearing_damping, NonNegative());
+    w.Get("distance", &model.wheel_distance, InRange(0.001, 10));
+    w.Get("radius", &model.wheel_radius, Positive(1));
+    w.Get("width", &model.wheel_width, Positive(1));
+    w.Get("mass", &model.wheel_mass, Positive(100));
+    w.Get("friction", &model.wheel_friction, Positive(100));
+    w.Get("roller_friction", &model.roller_friction, NonNegative(100));
+    w.Get("bearing_damping", &model.bearing_damping, NonNegative(1e3));
     w.Finish();
   } else {
     top.Missing("wheels");
@@ -78,9 +78,9 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("motor")) {
     YamlMap m(top.Child("motor"), path, "motor", &errors);
-    m.Get("stall_torque", &model.motor_stall_torque, Positive());
-    m.Get("no_load_speed", &model.motor_no_load_speed, Positive());
-    m.Get("encoder_counts_per_rev", &model.encoder_counts_per_rev, NonNegative());
+    m.Get("stall_torque", &model.motor_stall_torque, Positive(1e4));
+    m.Get("no_load_speed", &model.motor_no_load_speed, Positive(1e5));
+    m.Get("encoder_counts_per_rev", &model.encoder_counts_per_rev, NonNegative(1e9));
     m.Finish();
   }
 
@@ -111,12 +111,12 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     };
     effect("time_delay", [&](YamlMap& m) { m.Require("delay", &fx.time_delay, InRange(0, 1)); });
     effect("velocity_saturation", [&](YamlMap& m) {
-      m.Get("v_max", &fx.v_max, Positive());
-      m.Get("w_max", &fx.w_max, Positive());
+      m.Get("v_max", &fx.v_max, Positive(100));
+      m.Get("w_max", &fx.w_max, Positive(1000));
       if (!m.Has("v_max") && !m.Has("w_max")) m.Missing("v_max");
     });
     effect("motor_lag", [&](YamlMap& m) { m.Require("time_constant", &fx.motor_lag, InRange(0, 10)); });
-    effect("traction_limit", [&](YamlMap& m) { m.Require("a_max", &fx.a_max, Positive()); });
+    effect("traction_limit", [&](YamlMap& m) { m.Require("a_max", &fx.a_max, Positive(1e4)); });
     effect("velocity_scale", [&](YamlMap& m) { m.Require("scale", &fx.velocity_scale, InRange(0.2, 5)); });
     effect("rotation_drift", [&](YamlMap& m) { m.Require("rate", &fx.rotation_drift, InRange(-10, 10)); });
     e.Finish();
@@ -124,8 +124,8 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("vision")) {
     YamlMap v(top.Child("vision"), path, "vision", &errors);
-    v.Get("noise_xy", &model.vision_noise_xy, NonNegative());
-    v.Get("noise_theta", &model.vision_noise_theta, NonNegative());
+    v.Get("noise_xy", &model.vision_noise_xy, NonNegative(10));
+    v.Get("noise_theta", &model.vision_noise_theta, NonNegative(10));
     v.Get("drop_probability", &model.vision_drop_probability, InRange(0, 0.9));
     v.Finish();
   }

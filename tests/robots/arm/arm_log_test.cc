@@ -117,7 +117,7 @@ TEST(ArmLog, BadInputNamesFileLineAndColumn) {
   ArmLogOptions bad;
   bad.cutoff_hz = -1;
   EXPECT_EQ(ErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n0.02,0,0\n", bad),
-            "the cut-off for derived velocities must be positive, got -1 Hz");
+            "the cut-off for derived velocities must be positive and at most 1e6 Hz, got -1 Hz");
   try {
     ReadArmLog("/nonexistent/arm.csv");
     FAIL();
