@@ -7,8 +7,11 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const twinsim::SweepJob job = [] {
     twinsim::SweepJob j;
+    // As in the seed tests/fuzz/corpus/job_result/run_ok.json, so that inputs near it get
+    // past the identity check into the metrics.
     j.index = 0;
-    j.id = "000000";
+    j.id = "0000";
+    j.seed = 897828584;
     return j;
   }();
   return twinsim::fuzz::RunReader([&] { twinsim::ParseJobResultJson(twinsim::fuzz::AsString(data, size), job); });
