@@ -136,7 +136,8 @@ std::string LongScene(const std::string& dir) {
 TEST(Interrupt, SigintStopsARunWithNoOutputAndExit130) {
   const std::string d = TempDir("sigint_run");
   std::string err;
-  const int code = RunAndSignal("run " + LongScene(d) + " --backend analytic --out " + d + "/out", SIGINT,
+  // ODE: a 20,000 s scene takes minutes, so the signal surely lands mid-run.
+  const int code = RunAndSignal("run " + LongScene(d) + " --backend ode --out " + d + "/out", SIGINT,
                                 std::chrono::milliseconds(1500), &err);
   EXPECT_EQ(code, 130) << err;
   EXPECT_NE(err.find("interrupted by SIGINT"), std::string::npos) << err;
@@ -147,11 +148,12 @@ TEST(Interrupt, SigtermStopsABatchKeepingOnlyCompleteJobs) {
   const std::string d = TempDir("sigterm_batch");
   const std::string sweep = testing::WriteText(
       d + "/sweep.yaml", "name: long\nseed: 3\ncommand: run\nfixed:\n  scene: " + SourcePath("scenes/drive45.yaml") +
-                             "\n  backend: analytic\n  scene.duration: 900\n"
-                             "grid:\n  scene.seed: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]\n");
+                             "\n  backend: ode\n  scene.duration: 200\n"
+                             "grid:\n  scene.seed: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]\n");
+  // 12 jobs of about 1 s each on ODE, two at a time: the signal lands mid-sweep.
   std::string err;
   const int code = RunAndSignal("batch " + sweep + " --out " + d + "/out --jobs 2", SIGTERM,
-                                std::chrono::milliseconds(2500), &err);
+                                std::chrono::milliseconds(1500), &err);
   EXPECT_EQ(code, 143) << err;
   EXPECT_FALSE(fs::exists(d + "/out/summary.csv"));
   // Each job folder left is complete (its result.json is there) or gone.
