@@ -20,10 +20,9 @@ inline std::string AsString(const uint8_t* data, size_t size) {
   return std::string(reinterpret_cast<const char*>(data), size);
 }
 
-// Writes the bytes to DIR/NAME (DIR made once per process) and returns the path, for
-// readers that only take a path. DIR is under TMPDIR, one per process, so that parallel
-// fuzzing jobs do not share it.
-inline std::string WriteInput(const uint8_t* data, size_t size, const std::string& name) {
+// A folder of this process's own under TMPDIR (made when first asked for), so that
+// parallel fuzzing jobs do not share files.
+inline const std::filesystem::path& ScratchDir() {
   static const std::filesystem::path dir = [] {
     const char* tmp = std::getenv("TMPDIR");
     std::filesystem::path d = std::filesystem::path(tmp ? tmp : "/tmp") /
@@ -31,7 +30,13 @@ inline std::string WriteInput(const uint8_t* data, size_t size, const std::strin
     std::filesystem::create_directories(d);
     return d;
   }();
-  const std::filesystem::path path = dir / name;
+  return dir;
+}
+
+// Writes the bytes to ScratchDir()/NAME and returns the path, for readers that only take
+// a path.
+inline std::string WriteInput(const uint8_t* data, size_t size, const std::string& name) {
+  const std::filesystem::path path = ScratchDir() / name;
   std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data),
                                               static_cast<std::streamsize>(size));
   return path.string();

@@ -8,18 +8,17 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   namespace fs = std::filesystem;
-  static const fs::path root = [] {
-    const char* tmp = std::getenv("TMPDIR");
-    fs::path r = fs::path(tmp ? tmp : "/tmp") / ("twinsim_fuzz_sweep_" + std::to_string(::getpid()));
+  static const bool tree_made = [] {
+    const fs::path r = twinsim::fuzz::ScratchDir() / "tree";
     fs::create_directories(r / "scenes" / "sweeps");
     std::error_code ec;
-    for (const char* folder : {"models"}) fs::create_directory_symlink(fs::path(TWINSIM_SOURCE_DIR) / folder, r / folder, ec);
+    fs::create_directory_symlink(fs::path(TWINSIM_SOURCE_DIR) / "models", r / "models", ec);
     for (const auto& e : fs::directory_iterator(fs::path(TWINSIM_SOURCE_DIR) / "scenes")) {
       if (e.is_regular_file()) fs::create_symlink(e.path(), r / "scenes" / e.path().filename(), ec);
     }
-    return r;
+    return true;
   }();
-  const fs::path path = root / "scenes" / "sweeps" / "input.yaml";
-  std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
-  return twinsim::fuzz::RunReader([&] { twinsim::LoadSweep(path.string()); });
+  (void)tree_made;
+  const std::string path = twinsim::fuzz::WriteInput(data, size, "tree/scenes/sweeps/input.yaml");
+  return twinsim::fuzz::RunReader([&] { twinsim::LoadSweep(path); });
 }

@@ -3,14 +3,13 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <stdexcept>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 
 #include "core/error.h"
+#include "io/input_file.h"
 
 namespace twinsim {
 namespace {
@@ -153,18 +152,7 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
 }
 
 CsvTable ReadCsvTable(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError(SourceLocation{path}, "is a folder, not a CSV file");
-  const auto bytes = std::filesystem::file_size(path, ec);
-  if (!ec && bytes > kMaxCsvBytes) {
-    throw InputError(SourceLocation{path}, "the file holds " + std::to_string(bytes >> 20) + " MiB; tables above " +
-                                               std::to_string(kMaxCsvBytes >> 20) + " MiB are refused (split it)");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(SourceLocation{path}, "cannot open file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return ParseCsvTable(buffer.str(), path);
+  return ParseCsvTable(ReadInputFile(path, "CSV", kMaxCsvBytes), path);
 }
 
 std::string FormatCsvNumber(double v) {

@@ -3,10 +3,10 @@
 #include <yaml-cpp/eventhandler.h>
 
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <sstream>
+
+#include "io/input_file.h"
 
 namespace twinsim {
 namespace {
@@ -100,19 +100,7 @@ YAML::Node LoadYamlString(const std::string& text, const std::string& name) {
 }
 
 YAML::Node LoadYamlFile(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError(SourceLocation{path}, "is a folder, not a YAML file");
-  const auto bytes = std::filesystem::file_size(path, ec);
-  if (!ec && bytes > kMaxYamlBytes) {
-    throw InputError(SourceLocation{path}, "the file holds " + std::to_string(bytes >> 20) +
-                                               " MiB; YAML files above " + std::to_string(kMaxYamlBytes >> 20) +
-                                               " MiB are refused");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(SourceLocation{path}, "cannot open file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  YAML::Node root = LoadYamlString(buffer.str(), path);
+  YAML::Node root = LoadYamlString(ReadInputFile(path, "YAML", kMaxYamlBytes), path);
   if (!root.IsMap()) {
     throw InputError(SourceLocation{path, 1}, "expected a YAML mapping at the top level");
   }

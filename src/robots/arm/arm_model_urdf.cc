@@ -9,14 +9,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <regex>
 #include <sstream>
 
 #include "core/error.h"
+#include "io/input_file.h"
 #include "robots/arm/arm_model.h"
 #include "robots/arm/arm_model_internal.h"
 
@@ -341,19 +340,8 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
 namespace arm_internal {
 
 ArmModel LoadArmUrdfFile(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError(SourceLocation{path}, "is a folder, not a URDF file");
   constexpr std::uintmax_t kMaxUrdfBytes = std::uintmax_t{64} << 20;
-  const auto bytes = std::filesystem::file_size(path, ec);
-  if (!ec && bytes > kMaxUrdfBytes) {
-    throw InputError(SourceLocation{path}, "the file holds " + std::to_string(bytes >> 20) +
-                                               " MiB; URDF files above 64 MiB are refused");
-  }
-  std::ifstream in(path);
-  if (!in) throw InputError(SourceLocation{path}, "cannot open file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return ReadUrdf(buffer.str(), path);
+  return ReadUrdf(ReadInputFile(path, "URDF", kMaxUrdfBytes), path);
 }
 
 }  // namespace arm_internal
