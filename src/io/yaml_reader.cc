@@ -301,7 +301,8 @@ void YamlMap::Finish() {
     std::string list;
     for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
     // A key laid over an `extends:` base has no mark of its own; its value has one.
-    const YAML::Node& at = it->first.Mark().is_null() ? it->second : it->first;
+    // A copy: `it->` hands out a proxy that dies with this statement.
+    const YAML::Node at = it->first.Mark().is_null() ? it->second : it->first;
     errors_->Add(Where(at), "unknown key '" + key + "'" +
                                        (context_.empty() ? "" : " in '" + context_ + "'") +
                                        " (known: " + list + ")");

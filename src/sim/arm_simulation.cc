@@ -54,9 +54,11 @@ void ArmSimulation::Reset(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, c
   backend_->Reset(q, qd, held);
   state_ = ArmSimulationState{};
   state_.commands_in_flight = DelayLine<Eigen::VectorXd>(model_.delay_samples, held);
+  state_.last_good_q = backend_->q();
+  state_.last_good_qd = backend_->qd();
 }
 
-void ArmSimulation::CheckState() const {
+void ArmSimulation::CheckState() {
   const Eigen::VectorXd& q = backend_->q();
   const Eigen::VectorXd& qd = backend_->qd();
   for (int j = 0; j < model_.dof(); ++j) {
@@ -65,12 +67,20 @@ void ArmSimulation::CheckState() const {
       std::ostringstream msg;
       msg << "arm simulation diverged at t = " << time() << " s (sample " << state_.sample << ") on backend "
           << backend_->name() << ": " << JointName(model_, j) << " " << what << " = " << value << " "
-          << Unit(joint, velocity);
+          << Unit(joint, velocity) << "; last good state at t = " << state_.last_good_t << " s:";
+      for (int i = 0; i < model_.dof(); ++i) {
+        const ArmJoint& other = model_.joints[static_cast<std::size_t>(i)];
+        msg << (i ? "," : "") << " q" << i + 1 << " = " << state_.last_good_q[i] << " " << Unit(other, false)
+            << ", qd" << i + 1 << " = " << state_.last_good_qd[i] << " " << Unit(other, true);
+      }
       throw CheckFailed(msg.str());
     };
     if (!std::isfinite(q[j])) fail("q", q[j], false);
     if (!std::isfinite(qd[j]) || std::abs(qd[j]) > options_.max_speed) fail("qd", qd[j], true);
   }
+  state_.last_good_t = time();
+  state_.last_good_q = q;
+  state_.last_good_qd = qd;
 }
 
 ArmSample ArmSimulation::Step(const ArmController& controller) {

@@ -74,6 +74,9 @@ struct ArmSimulationState {
   std::int64_t sample = 0;
   DelayLine<Eigen::VectorXd> commands_in_flight;  // model.delay_samples long
   ArmBackendState backend;
+  // The state of the last sample that passed the divergence check (its message gives it).
+  double last_good_t = 0;
+  Eigen::VectorXd last_good_q, last_good_qd;
 };
 
 class ArmSimulation {
@@ -109,7 +112,7 @@ class ArmSimulation {
   void Restore(const ArmSimulationState& state);
 
  private:
-  void CheckState() const;
+  void CheckState();
 
   ArmModel model_;  // the plant: payload lumped into the last link
   std::unique_ptr<ArmBackend> backend_;

@@ -27,15 +27,22 @@ Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend
     state_.commands_in_flight.emplace_back(r.model.command_delay_frames, Twist2{});
     state_.captures_in_flight.emplace_back(r.model.vision_delay_frames, std::optional<Pose2>(r.start));
     state_.delivered.emplace_back();
+    FrameRecord start;
+    start.truth = r.start;
+    state_.last_good.push_back(start);
   }
 }
 
-void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) const {
+void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) {
+  FrameRecord& good = state_.last_good[static_cast<std::size_t>(robot)];
   auto fail = [&](const std::string& what, double value) {
     std::ostringstream msg;
     msg << "simulation diverged at t = " << time() << " s (frame " << state_.frame << "), robot '"
         << robots_[static_cast<std::size_t>(robot)].name << "' on backend " << backend_->name() << ": "
-        << what << " = " << value;
+        << what << " = " << value << "; last good state at t = " << good.t << " s: x = " << good.truth.x
+        << " m, y = " << good.truth.y << " m, theta = " << good.truth.theta << " rad, vx = "
+        << good.truth_velocity.vx << " m/s, vy = " << good.truth_velocity.vy << " m/s, omega = "
+        << good.truth_velocity.omega << " rad/s (robot frame)";
     throw CheckFailed(msg.str());
   };
   if (!std::isfinite(pose.x)) fail("x", pose.x);
@@ -45,6 +52,9 @@ void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) cons
   if (!std::isfinite(v.vy) || std::abs(v.vy) > kMaxSpeed) fail("vy", v.vy);
   if (!std::isfinite(v.omega) || std::abs(v.omega) > kMaxOmega) fail("omega", v.omega);
   if (std::hypot(pose.x, pose.y) > kMaxDistance) fail("distance from the field centre", std::hypot(pose.x, pose.y));
+  good.t = time();
+  good.truth = pose;
+  good.truth_velocity = v;
 }
 
 std::vector<FrameRecord> Simulation::Step() {
@@ -123,7 +133,8 @@ SimulationState Simulation::Save() const {
 }
 
 void Simulation::Restore(const SimulationState& state) {
-  if (state.behaviours.size() != robots_.size() || state.commands_in_flight.size() != robots_.size()) {
+  if (state.behaviours.size() != robots_.size() || state.commands_in_flight.size() != robots_.size() ||
+      state.last_good.size() != robots_.size()) {
     throw std::invalid_argument("Simulation::Restore: state of a simulation with another number of robots");
   }
   backend_->Restore(state.backend);

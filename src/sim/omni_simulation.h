@@ -58,6 +58,9 @@ struct SimulationState {
   std::vector<DelayLine<Twist2>> commands_in_flight;                // per robot
   std::vector<DelayLine<std::optional<Pose2>>> captures_in_flight;  // per robot
   std::vector<std::vector<Observation>> delivered;                  // per robot, recent window
+  // Per robot, the true state of the last frame that passed the divergence check
+  // (t, truth, truth_velocity only): what a divergence message reports as last good.
+  std::vector<FrameRecord> last_good;
   OmniBackendState backend;
   // Per robot, a copy of its behaviour as it was (null: none); filled by Save() only.
   std::vector<std::shared_ptr<const CommandSource>> behaviours;
@@ -75,7 +78,8 @@ class Simulation {
   int num_robots() const { return static_cast<int>(robots_.size()); }
 
   // Runs one frame and returns each robot's record of it. Throws CheckFailed when a
-  // robot's state becomes non-finite or runs away, naming the robot, time and value.
+  // robot's state becomes non-finite or runs away, naming the robot, time and value
+  // and giving the robot's last good state (the frame before).
   std::vector<FrameRecord> Step();
 
   // Runs `frames` frames; `progress(done, total)` is called now and then.
@@ -89,7 +93,7 @@ class Simulation {
   void Restore(const SimulationState& state);
 
  private:
-  void CheckFinite(int robot, const Pose2& pose, const Twist2& velocity) const;
+  void CheckFinite(int robot, const Pose2& pose, const Twist2& velocity);
 
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;

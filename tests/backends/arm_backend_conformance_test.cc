@@ -268,6 +268,9 @@ TEST_P(ArmBackendConformance, ReportsADivergenceWithJointTimeAndValue) {
     EXPECT_NE(what.find("joint 1 'waist' qd = "), std::string::npos) << what;
     EXPECT_NE(what.find(" rad/s"), std::string::npos) << what;
     EXPECT_NE(what.find("on backend " + GetParam()), std::string::npos) << what;
+    // The sample before, every joint's position and velocity.
+    EXPECT_NE(what.find("last good state at t = 0.011 s: q1 = "), std::string::npos) << what;
+    EXPECT_NE(what.find(", qd3 = "), std::string::npos) << what;
   }
   ArmSimulation nan(m, MakeArmBackend(GetParam(), m));
   try {

@@ -31,6 +31,12 @@ TEST(Simulation, DivergenceIsAnErrorThatSaysWhereAndWhen) {
     const std::string msg = e.what();
     EXPECT_NE(msg.find("simulation diverged at t = "), std::string::npos) << msg;
     EXPECT_NE(msg.find("robot 'wild' on backend analytic"), std::string::npos) << msg;
+    // The last good state is the frame before, finite and at a plausible speed.
+    const std::size_t at = msg.find("last good state at t = ");
+    ASSERT_NE(at, std::string::npos) << msg;
+    EXPECT_NE(msg.find(" vx = ", at), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("nan", at), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("inf", at), std::string::npos) << msg;
   }
 }
 
