@@ -88,6 +88,34 @@ std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names)
   return columns;
 }
 
+CsvTable TableFromRows(const std::string& name, std::vector<std::string> header, std::vector<std::vector<double>> rows) {
+  CsvTable t;
+  t.path = name;
+  t.header = std::move(header);
+  t.problem.assign(t.header.size(), {});
+  t.rows = std::move(rows);
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    const int line = static_cast<int>(r) + 1;
+    t.line_of.push_back(line);
+    if (t.rows[r].size() != t.header.size()) {
+      throw InputError(SourceLocation{name, line}, "row has " + std::to_string(t.rows[r].size()) + " values, expected " +
+                                                       std::to_string(t.header.size()));
+    }
+    for (std::size_t c = 0; c < t.header.size(); ++c) {
+      const double v = t.rows[r][c];
+      CsvTable::Problem& problem = t.problem[c];
+      if (!std::isfinite(v) && problem.line == 0) {
+        std::ostringstream value;
+        value << v;
+        problem = {line, static_cast<int>(c) + 1,
+                   SourceLocation{name, line, static_cast<int>(c) + 1}.Prefix() + "column '" + t.header[c] +
+                       "': value is " + value.str() + ", not a finite number"};
+      }
+    }
+  }
+  return t;
+}
+
 CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
   CsvTable t;
   t.path = path;

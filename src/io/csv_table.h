@@ -49,6 +49,13 @@ inline constexpr std::uintmax_t kMaxCsvBytes = std::uintmax_t{1} << 30;
 CsvTable ReadCsvTable(const std::string& path);
 CsvTable ParseCsvTable(const std::string& text, const std::string& path);
 
+// A table from numbers held in memory (a NumPy array, a log being built), checked as a
+// file would be: `name` stands for the path, row i (0-based) for line i + 1, so messages
+// read "NAME:ROW:COLUMN: ..." with 1-based rows and columns. Non-finite values are
+// reported by RequireColumn() like text in a file. Throws InputError for a row whose
+// length differs from the header's.
+CsvTable TableFromRows(const std::string& name, std::vector<std::string> header, std::vector<std::vector<double>> rows);
+
 // Formats a value the way every twinsim CSV does: fixed, enough digits to round-trip
 // the simulation's meaningful precision (1e-9), no locale.
 std::string FormatCsvNumber(double v);

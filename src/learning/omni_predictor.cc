@@ -25,6 +25,31 @@ OmniPredictor MakeLinearPredictor(OmniPredictorInfo info, Eigen::VectorXd mean, 
   return p;
 }
 
+OmniPredictor MakeLinearOmniPredictor(const OmniModel& model, double frame_rate, int horizon,
+                                      const Eigen::MatrixXd& weights, const Eigen::Vector3d& bias) {
+  if (horizon < 1 || horizon > 100) throw InputError("linear predictor: horizon must be 1 to 100 frames, got " + std::to_string(horizon));
+  if (!(frame_rate >= 1 && frame_rate <= 1e4)) {
+    std::ostringstream msg;
+    msg << "linear predictor: frame rate must be 1 to 10000 Hz, got " << frame_rate;
+    throw InputError(msg.str());
+  }
+  OmniPredictorInfo info;
+  info.kind = "linear";
+  info.model_name = model.name;
+  info.frame_rate = frame_rate;
+  info.layout.horizon = horizon;
+  info.layout.command_lag = model.command_delay_frames + model.vision_delay_frames;
+  const int inputs = info.layout.num_inputs();
+  if (weights.rows() != 3 || weights.cols() != inputs) {
+    throw InputError("linear predictor: weights must be 3 x " + std::to_string(inputs) + " for horizon " +
+                     std::to_string(horizon) + ", got " + std::to_string(weights.rows()) + " x " +
+                     std::to_string(weights.cols()));
+  }
+  if (!weights.allFinite() || !bias.allFinite()) throw InputError("linear predictor: weights and bias must be finite");
+  info.logs.push_back("(fitted outside twinsim)");
+  return MakeLinearPredictor(info, Eigen::VectorXd::Zero(inputs), Eigen::VectorXd::Ones(inputs), weights, bias);
+}
+
 OmniPredictor MakeMlpPredictor(OmniPredictorInfo info, Mlp mlp) {
   OmniPredictor p;
   p.info_ = std::move(info);

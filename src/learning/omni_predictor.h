@@ -106,4 +106,12 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
                                  const OmniTrainOptions& options, OmniTrainSummary* summary = nullptr,
                                  const std::function<void(int, int, double)>& progress = {});
 
+// A linear predictor from weights fitted elsewhere (NumPy, another tool): the pose change
+// is weights * inputs + bias, inputs laid out as FeatureLayout{6, horizon, the model's
+// command + vision delay} (omni_features.h; AppendSamples gives the training inputs).
+// weights is 3 x num_inputs. Throws InputError for another shape, a horizon outside
+// 1..100, a frame rate outside 1..10000 Hz or a number that is not finite.
+OmniPredictor MakeLinearOmniPredictor(const OmniModel& model, double frame_rate, int horizon,
+                                      const Eigen::MatrixXd& weights, const Eigen::Vector3d& bias);
+
 }  // namespace twinsim

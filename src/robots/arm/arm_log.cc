@@ -68,7 +68,9 @@ void CheckMagnitude(const CsvTable& table, const Eigen::MatrixXd& m, const std::
   }
 }
 
-ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
+}  // namespace
+
+ArmLog ArmLogFromTable(const CsvTable& table, const ArmLogOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   ArmLog log;
@@ -184,8 +186,6 @@ ArmLog FromTable(const CsvTable& table, const ArmLogOptions& options) {
   return log;
 }
 
-}  // namespace
-
 bool ArmLogOptions::IsValid(std::string* why) const {
   std::ostringstream s;
   if (!(cutoff_hz > 0 && cutoff_hz <= 1e6)) {
@@ -198,11 +198,11 @@ bool ArmLogOptions::IsValid(std::string* why) const {
 }
 
 ArmLog ReadArmLog(const std::string& path, const ArmLogOptions& options) {
-  return FromTable(ReadCsvTable(path), options);
+  return ArmLogFromTable(ReadCsvTable(path), options);
 }
 
 ArmLog ParseArmLog(const std::string& text, const std::string& path, const ArmLogOptions& options) {
-  return FromTable(ParseCsvTable(text, path), options);
+  return ArmLogFromTable(ParseCsvTable(text, path), options);
 }
 
 void CheckArmLogMatchesModel(const ArmLog& log, const ArmModel& model) {

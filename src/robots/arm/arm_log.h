@@ -33,6 +33,8 @@ struct ArmLogOptions {
   bool IsValid(std::string* why) const;
 };
 
+struct CsvTable;
+
 struct ArmLog {
   std::string path;
   int dof = 0;
@@ -56,6 +58,8 @@ struct ArmLog {
 // missing file, bad numbers, missing or incomplete joint columns, fewer than 3 rows,
 // time that does not increase or is not nearly uniform, or invalid options.
 ArmLog ReadArmLog(const std::string& path, const ArmLogOptions& options = {});
+// The same checks on a table held in memory (TableFromRows in io/csv_table.h).
+ArmLog ArmLogFromTable(const CsvTable& table, const ArmLogOptions& options = {});
 ArmLog ParseArmLog(const std::string& text, const std::string& path, const ArmLogOptions& options = {});
 
 // Throws InputError "path:1: the log has 3 joints (q1..q3, tau1..tau3) but the model

@@ -39,7 +39,9 @@ void CheckRowRange(const OmniLogRow& row, const SourceLocation& where) {
   if (std::abs(row.command.omega) > kMaxTurnCommand) refuse("omega_cmd", row.command.omega, kMaxTurnCommand, "rad/s");
 }
 
-OmniLog FromTable(const CsvTable& table) {
+}  // namespace
+
+OmniLog OmniLogFromTable(const CsvTable& table) {
   // The first bad value in these columns is named; other columns are ignored.
   const std::vector<int> col = table.RequireColumns({"t", "x", "y", "theta", "vx_cmd", "vy_cmd", "omega_cmd"});
 
@@ -103,15 +105,13 @@ OmniLog FromTable(const CsvTable& table) {
   return log;
 }
 
-}  // namespace
-
 int OmniLog::FrameIndex(std::size_t row) const {
   return static_cast<int>(std::lround((rows[row].t - rows[0].t) / frame_period));
 }
 
-OmniLog ReadOmniLog(const std::string& path) { return FromTable(ReadCsvTable(path)); }
+OmniLog ReadOmniLog(const std::string& path) { return OmniLogFromTable(ReadCsvTable(path)); }
 OmniLog ParseOmniLog(const std::string& text, const std::string& path) {
-  return FromTable(ParseCsvTable(text, path));
+  return OmniLogFromTable(ParseCsvTable(text, path));
 }
 
 std::string FormatOmniLog(const std::vector<OmniLogRow>& rows) {

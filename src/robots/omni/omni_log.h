@@ -13,6 +13,8 @@
 
 namespace twinsim {
 
+struct CsvTable;
+
 struct OmniLogRow {
   double t = 0;     // s
   Pose2 pose;       // field frame, theta unwrapped on reading
@@ -30,6 +32,8 @@ struct OmniLog {
 };
 
 // Reads and checks a log; throws InputError "path:line:column: what is wrong".
+// OmniLogFromTable checks a table held in memory (TableFromRows) the same way.
+OmniLog OmniLogFromTable(const CsvTable& table);
 OmniLog ReadOmniLog(const std::string& path);
 OmniLog ParseOmniLog(const std::string& text, const std::string& path);
 

@@ -1,0 +1,93 @@
+"""twinsim from Python: models, simulations stepped through the delay loop, and the
+commands as functions returning NumPy arrays and dicts (docs/api.md).
+
+    import twinsim
+    sim = twinsim.OmniSim(twinsim.load_omni_model("models/omni4.yaml"), backend="ode")
+    run = sim.run(commands=np.tile([1.0, 0.0, 0.5], (90, 1)))   # 3 s at 30 fps
+    plt.plot(run["truth"][:, 0, 0], run["truth"][:, 0, 1])
+
+Errors are twinsim.InputError (a ValueError) with the command line's
+"path:line: what is wrong" messages, and twinsim.CheckFailed (a RuntimeError) when a
+simulation diverges.
+"""
+import json as _json
+
+from ._twinsim import (  # noqa: F401  (the public names)
+    ArmModel,
+    ArmPredictor,
+    ArmSim,
+    CheckFailed,
+    InputError,
+    OmniModel,
+    OmniPredictor,
+    OmniSim,
+    Scene,
+    arm_model_from_urdf,
+    arm_model_from_yaml,
+    available_backends,
+    load_arm_model,
+    load_omni_model,
+    load_scene,
+    omni_model_from_yaml,
+)
+from . import _twinsim
+
+__all__ = [
+    "ArmModel", "ArmPredictor", "ArmSim", "CheckFailed", "InputError", "OmniModel", "OmniPredictor",
+    "OmniSim", "Scene", "arm_model_from_urdf", "arm_model_from_yaml", "available_backends",
+    "load_arm_model", "load_model", "load_omni_model", "load_scene", "omni_model_from_yaml",
+    "replay", "training_data", "train", "identify", "diagnose",
+]
+
+
+def load_model(path):
+    """An arm (URDF or YAML with `robot: arm`) or omni model, as the file says."""
+    if str(path).endswith(".urdf"):
+        return load_arm_model(path)
+    with open(path, encoding="utf-8", errors="replace") as f:
+        text = f.read()
+    for line in text.splitlines():
+        if line.split("#")[0].strip().replace(" ", "") in ("robot:arm",):
+            return load_arm_model(path)
+    return load_omni_model(path)
+
+
+def replay(model, log, backend="analytic", horizon=4, predictor=None):
+    """`twinsim replay` without files.
+
+    Omni: `log` is an (N, 7) array t,x,y,theta,vx_cmd,vy_cmd,omega_cmd (or a CSV path);
+    returns an (N, 4) array t,x,y,theta of the model's K-frame predictions.
+    Arm: `log` is a dict of arrays t (N), q and tau (N, n), optionally qd, qdd (or a
+    CSV path); returns the model's (N, n) torques for the logged motion.
+    """
+    if isinstance(model, ArmModel):
+        return _twinsim._replay_arm(model, log)
+    return _twinsim._replay_omni(model, log, backend, int(horizon), predictor)
+
+
+def training_data(model, logs, horizon=1):
+    """(X, Y) of the omni predictor: X (N, 42 + 3(H-1)) inputs, Y (N, 3) pose changes in
+    the robot frame (docs/learning.md), from one log or a list of logs."""
+    return _twinsim._training_data(model, logs, int(horizon))
+
+
+def train(model, logs, kind="linear", horizon=1, residual=False, seed=1, epochs=400, hidden=(32, 32)):
+    """`twinsim train` without files: an OmniPredictor or ArmPredictor (save() writes it)."""
+    if isinstance(model, ArmModel):
+        return _twinsim._train_arm(model, logs, kind, bool(residual), int(seed), int(epochs), list(hidden))
+    if residual:
+        raise InputError("residual predictors are for arms only")
+    return _twinsim._train_omni(model, logs, kind, int(horizon), int(seed), int(epochs), list(hidden))
+
+
+def identify(model, logs):
+    """`twinsim identify` without files: the arm model with identified base parameters
+    and friction."""
+    return _twinsim._identify(model, logs)
+
+
+def diagnose(model, logs, held_out=0.3, max_effects=3, backend="analytic", threads=0):
+    """`twinsim diagnose` without files: (report, repaired model); the report is the
+    dict of report.json (CONTRACT.md)."""
+    text, repaired = _twinsim._diagnose(model, logs, float(held_out), int(max_effects), backend, int(threads))
+    return _json.loads(text), repaired

@@ -1,0 +1,224 @@
+"""The Python module against the command line: the same loop, the same numbers, the same
+errors. Run by ctest (Python.pytest) with PYTHONPATH=build/python."""
+import csv
+import os
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+import twinsim
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+BINARY = os.path.join(ROOT, "build", "twinsim")
+
+
+def path(*parts):
+    return os.path.join(ROOT, *parts)
+
+
+def read_csv(file):
+    with open(file, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], np.array([[float(v) for v in r] for r in rows[1:]])
+
+
+def random_commands(frames, seed):
+    """Piecewise-constant random drive commands, (frames, 3)."""
+    rng = np.random.default_rng(seed)
+    steps = rng.uniform([-1.2, -1.2, -3], [1.2, 1.2, 3], size=(frames // 15 + 1, 3))
+    return np.repeat(steps, 15, axis=0)[:frames]
+
+
+def record(model, frames, seed):
+    """A log in the contract's columns, as the robot's observer saw it."""
+    sim = twinsim.OmniSim(model, backend="analytic", seed=seed)
+    run = sim.run(random_commands(frames, seed))
+    seen = run["seen"][:, 0]
+    log = np.column_stack([run["t"], run["observed"][:, 0], run["command"][:, 0]])
+    return log[seen]
+
+
+# ---- models ------------------------------------------------------------------------
+
+
+def test_model_keys_read_and_write_through_the_models_own_checks():
+    m = twinsim.load_omni_model(path("models/omni4.yaml"))
+    assert m.name == "omni4"
+    assert m["chassis.mass"] == pytest.approx(2.3)
+    assert m["wheels.angles_deg"] == [57, 135, 225, 303]
+    assert "chassis.mass" in m and "chassis.colour" not in m
+    m["chassis.mass"] = 3.1
+    assert m["chassis.mass"] == pytest.approx(3.1)
+    with pytest.raises(twinsim.InputError, match="mass"):
+        m["chassis.mass"] = -1.0
+    assert m["chassis.mass"] == pytest.approx(3.1), "a refused value leaves the model as it was"
+    with pytest.raises(twinsim.InputError, match="colour"):
+        m["chassis.colour"] = 2
+    with pytest.raises(KeyError):
+        m["chassis.nothing"]
+    # The YAML text loads back to the same parameters.
+    again = twinsim.omni_model_from_yaml(m.to_yaml())
+    assert again.to_dict() == m.to_dict()
+
+
+def test_arm_models_from_yaml_and_urdf():
+    rrr = twinsim.load_arm_model(path("models/rrr.yaml"))
+    assert rrr.dof == 3 and len(rrr.joint_names) == 3
+    assert isinstance(twinsim.load_model(path("models/rrr.yaml")), twinsim.ArmModel)
+    assert isinstance(twinsim.load_model(path("models/omni4.yaml")), twinsim.OmniModel)
+    with pytest.raises(twinsim.InputError, match="missing.yaml"):
+        twinsim.load_arm_model(path("models/missing.yaml"))
+
+
+# ---- stepping ----------------------------------------------------------------------
+
+
+def test_stepping_is_the_run_commands_loop():
+    """A scene stepped from Python gives the truth.csv `twinsim run` writes, byte for byte
+    up to the file's printed digits."""
+    scene = twinsim.load_scene(path("scenes/drive45.yaml"))
+    out = os.path.join(os.environ.get("TMPDIR", "/tmp"), "twinsim_pytest_run")
+    subprocess.run([BINARY, "run", path("scenes/drive45.yaml"), "--backend", "analytic", "--quiet", "--out", out],
+                   check=True)
+    header, truth = read_csv(os.path.join(out, "truth.csv"))
+    sim = twinsim.OmniSim(scene, backend="analytic", external=False)
+    run = sim.run(frames=scene.frames)
+    assert run["truth"].shape == (scene.frames, 1, 3)
+    x, y = header.index("x"), header.index("y")
+    np.testing.assert_allclose(run["truth"][:, 0, 0], truth[:, x], atol=2e-9)
+    np.testing.assert_allclose(run["truth"][:, 0, 1], truth[:, y], atol=2e-9)
+
+
+def test_step_by_step_equals_one_run_and_reset_repeats():
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    commands = random_commands(90, 3)
+    sim = twinsim.OmniSim(model, backend="analytic", seed=5)
+    stepped = []
+    for c in commands:
+        sim.step(c)
+        stepped.append(sim.truth[0].copy())
+    sim.reset(seed=5)
+    run = sim.run(commands)
+    np.testing.assert_array_equal(np.array(stepped), run["truth"][:, 0])
+    assert sim.frame == 90
+
+
+def test_the_delay_loop_holds_from_python():
+    """A command sent at frame k first moves the observed pose at frame k + D + 1."""
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    model["vision.noise_xy"] = 0.0
+    model["vision.noise_theta"] = 0.0
+    sim = twinsim.OmniSim(model, backend="analytic")
+    commands = np.zeros((20, 3))
+    commands[5:, 0] = 1.0
+    run = sim.run(commands)
+    d = model.delay_frames
+    x = run["observed"][:, 0, 0]
+    assert np.all(x[: 5 + d + 1] == 0.0)
+    assert x[5 + d + 1] > 0.0
+
+
+def test_every_backend_steps_and_divergence_is_an_exception():
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    for backend in twinsim.available_backends("omni"):
+        if backend == "learned":
+            continue
+        sim = twinsim.OmniSim(model, backend=backend)
+        run = sim.run(np.tile([1.0, 0.0, 0.0], (30, 1)))
+        assert 0.2 < run["truth"][-1, 0, 0] < 1.0, backend
+    with pytest.raises(twinsim.InputError, match="backend"):
+        twinsim.OmniSim(model, backend="warp")
+    with pytest.raises(twinsim.InputError, match="non-finite"):
+        twinsim.OmniSim(model).step([np.nan, 0, 0])
+
+
+def test_arm_falls_under_gravity_without_torque():
+    rrr = twinsim.load_arm_model(path("models/rrr.yaml"))
+    arm = twinsim.ArmSim(rrr, backend="analytic")
+    arm.reset(q=[0.0, 0.3, 0.0])
+    for _ in range(200):
+        arm.step(np.zeros(3))
+    assert arm.t == pytest.approx(200 * rrr.sample_time)
+    assert np.all(np.isfinite(arm.q))
+    assert abs(arm.q[1] - 0.3) > 1e-3, "the shoulder moved"
+
+
+# ---- the commands as functions ------------------------------------------------------
+
+
+def test_replay_of_arrays_is_the_replay_command():
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    log = record(model, 240, 7)
+    log_csv = os.path.join(os.environ.get("TMPDIR", "/tmp"), "twinsim_pytest_log.csv")
+    with open(log_csv, "w") as f:
+        f.write("t,x,y,theta,vx_cmd,vy_cmd,omega_cmd\n")
+        for row in log:
+            f.write(",".join(repr(float(v)) for v in row) + "\n")
+    predicted = twinsim.replay(model, log, backend="analytic", horizon=4)
+    assert predicted.shape == (len(log), 4)
+    from_file = twinsim.replay(model, log_csv, backend="analytic", horizon=4)
+    np.testing.assert_array_equal(predicted, from_file)
+    out = log_csv + ".replay.csv"
+    subprocess.run([BINARY, "replay", "--model", path("models/omni4.yaml"), "--log", log_csv, "--backend",
+                    "analytic", "--out", out, "--quiet"], check=True)
+    _, cli = read_csv(out)
+    np.testing.assert_allclose(predicted, cli, atol=2e-9)
+    # The model that recorded the log predicts it to within the camera's noise.
+    error = np.hypot(*(predicted[:, 1:3] - log[:, 1:3]).T)
+    assert np.sqrt(np.mean(error ** 2)) < 0.01
+
+
+def test_bad_arrays_are_input_errors_naming_row_and_column():
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    log = record(model, 60, 2)
+    log[10, 2] = np.nan
+    with pytest.raises(twinsim.InputError, match=r"log:11:3: column 'y'"):
+        twinsim.replay(model, log)
+    with pytest.raises(twinsim.InputError, match=r"shape \(N, 7\)"):
+        twinsim.replay(model, log[:, :5])
+    backwards = record(model, 60, 2)
+    backwards[20, 0] = backwards[19, 0]
+    with pytest.raises(twinsim.InputError, match="time goes backwards"):
+        twinsim.replay(model, backwards)
+
+
+def test_a_predictor_fitted_in_numpy_runs_as_the_learned_backend():
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    logs = [record(model, 900, s) for s in (1, 2)]
+    x, y = twinsim.training_data(model, logs, horizon=1)
+    assert x.shape[1] == 42 and y.shape[1] == 3 and len(x) > 1500
+    w, *_ = np.linalg.lstsq(x, y, rcond=None)
+    predictor = twinsim.OmniPredictor.linear(model, w.T, np.zeros(3), horizon=1, frame_rate=30.0)
+    np.testing.assert_allclose(predictor.predict_delta(x[:50]), x[:50] @ w, atol=1e-12)
+    # As good as twinsim's own linear fit on held-out data (4-frame replay, the contract's).
+    held_out = record(model, 900, 9)
+    own = twinsim.train(model, logs, kind="linear", horizon=1)
+
+    def error(p):
+        r = twinsim.replay(model, held_out, backend="learned", predictor=p, horizon=4)
+        return np.sqrt(np.mean(np.sum((r[:, 1:3] - held_out[:, 1:3]) ** 2, axis=1)))
+
+    assert error(predictor) < 1.2 * error(own)
+    # And it drives the learned backend: straight ahead for 1.5 s at 0.8 m/s.
+    end = twinsim.OmniSim(model, backend="learned", predictor=predictor, seed=3).run(
+        np.tile([0.8, 0.0, 0.0], (45, 1)))["truth"][-1, 0]
+    assert 0.5 < end[0] < 1.1 and abs(end[1]) < 0.2
+    # Wrong shapes are refused with the size it needs.
+    with pytest.raises(twinsim.InputError, match="3 x 42"):
+        twinsim.OmniPredictor.linear(model, w, np.zeros(3))
+
+
+def test_train_and_diagnose_return_objects_and_dicts():
+    nominal = twinsim.load_omni_model(path("models/omni4.yaml"))
+    plant = nominal.copy()
+    plant["effects.motor_lag.time_constant"] = 0.08
+    log = record(plant, 900, 4)
+    predictor = twinsim.train(nominal, log, kind="linear", horizon=1)
+    assert predictor.kind == "linear" and predictor.horizon == 1
+    report, repaired = twinsim.diagnose(nominal, log, max_effects=1)
+    assert report["robot"] == "omni"
+    assert [e["name"] for e in report["effects"]] == ["motor_lag"]
+    assert report["gap_after"] < report["gap_before"]
+    assert repaired["effects.motor_lag.time_constant"] == pytest.approx(0.08, abs=0.015)
