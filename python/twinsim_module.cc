@@ -23,6 +23,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "analysis/arm_replay.h"
+#include "analysis/omni_compare.h"
+#include "batch/batch_runner.h"
+#include "batch/sweep.h"
 #include "analysis/omni_replay.h"
 #include "backends/arm_backend_factory.h"
 #include "backends/omni_backend_factory.h"
@@ -46,6 +49,7 @@
 #include "scene/scene.h"
 #include "sim/arm_simulation.h"
 #include "sim/omni_simulation.h"
+#include "tuning/pid_tuning.h"
 
 namespace py = pybind11;
 
@@ -632,6 +636,120 @@ py::tuple Diagnose(const py::handle& model, const py::handle& logs, double held_
   return py::make_tuple(FormatDiagnosisJson(report), PyOmniModel{repaired});
 }
 
+// `twinsim compare`: the error rows as dicts and each free run as an (N, 4) array.
+py::dict Compare(const OmniModel& model, const py::handle& log, std::vector<std::string> backends,
+                 const py::handle& predictor) {
+  const OmniLog l = ToOmniLog(log, "log");
+  const OmniCompareOptions options = MakeCompareOptions(model, l, std::move(backends), OmniPredictorArg(predictor));
+  const OmniCompareResult result = CompareOmniLog(model, l, options);
+  py::list rows;
+  for (const CompareErrorRow& r : result.rows) {
+    py::dict row;
+    row["source"] = r.source;
+    row["backend"] = r.backend;
+    row["horizon"] = r.horizon;
+    row["horizon_frames"] = r.horizon_frames;
+    row["predicted"] = r.predicted;
+    row["position_rmse"] = r.position_rmse;
+    row["position_max"] = r.position_max;
+    row["heading_rmse"] = r.heading_rmse;
+    rows.append(row);
+  }
+  py::dict free_runs;
+  for (const ComparePath& path : result.free_runs) {
+    Array a = NewArray(static_cast<py::ssize_t>(path.t.size()), 4);
+    double* p = a.mutable_data();
+    for (std::size_t i = 0; i < path.t.size(); ++i) {
+      p[4 * i] = path.t[i], p[4 * i + 1] = path.pose[i].x, p[4 * i + 2] = path.pose[i].y;
+      p[4 * i + 3] = path.pose[i].theta;
+    }
+    free_runs[py::str(path.source)] = a;
+  }
+  py::dict out;
+  out["rows"] = rows;
+  out["free_runs"] = free_runs;
+  out["frame_rate"] = result.frame_rate;
+  return out;
+}
+
+py::dict Score(const TestRunScore& s) {
+  py::dict d;
+  d["quality"] = s.quality;
+  d["distance"] = s.distance;
+  d["deviation"] = s.deviation;
+  d["rotation"] = s.rotation;
+  d["stop_distance"] = s.stop_distance;
+  d["avg_speed"] = s.avg_speed;
+  d["end_deviation_pct"] = s.end_deviation_pct;
+  return d;
+}
+
+// `twinsim tune-pid`: learning.csv's rows as dicts, the parameters per iteration as an
+// (iterations, 18) array, and the best set by name.
+py::dict TunePidFunction(Scene scene, int iterations, const std::string& backend, int threads,
+                         std::optional<std::uint64_t> seed, const std::string& start) {
+  if (seed) scene.seed = *seed;
+  PidTuningOptions tuning = ReadPidTuningOptions(scene);
+  if (iterations > 0) tuning.iterations = iterations;
+  if (!start.empty()) tuning.start = start;
+  tuning.threads = threads;
+  std::string why;
+  if (!tuning.IsValid(&why)) throw InputError(SourceLocation{scene.path}, "tune_pid: " + why);
+  const TestRunEvaluator evaluator(scene, backend.empty() ? scene.backend : backend, tuning.weights);
+  const PidTuningResult r = TunePid(evaluator, tuning, {});
+  py::list learning;
+  Array parameters = NewArray(static_cast<py::ssize_t>(r.iterations.size()), kPidParameters);
+  for (std::size_t i = 0; i < r.iterations.size(); ++i) {
+    py::dict row = Score(r.iterations[i].score);
+    row["iteration"] = r.iterations[i].iteration;
+    learning.append(row);
+    for (int k = 0; k < kPidParameters; ++k) parameters.mutable_data()[i * kPidParameters + k] = r.iterations[i].parameters[k];
+  }
+  py::dict best;
+  const std::vector<std::string> names = PidParameterNames();
+  for (int k = 0; k < kPidParameters; ++k) best[py::str(names[static_cast<std::size_t>(k)])] = r.best_parameters[k];
+  py::dict out;
+  out["learning"] = learning;
+  out["parameters"] = parameters;
+  out["parameter_names"] = names;
+  out["best"] = best;
+  out["best_score"] = Score(r.best_score);
+  out["test_runs"] = r.test_runs;
+  return out;
+}
+
+// `twinsim batch`: runs the sweep into `out` (a sweep's product is its job folders) and
+// returns summary.csv as a dict of columns (numbers as arrays, text as lists).
+py::dict BatchFunction(const std::string& sweep_path, const std::string& out, int jobs, bool resume) {
+  BatchOptions options;
+  options.out = out;
+  options.jobs = jobs;
+  options.resume = resume;
+  options.progress = false;
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  const BatchSummary summary = RunBatch(LoadSweep(sweep_path), options);
+  const CsvTable table = ReadCsvTable(out + "/summary.csv");
+  py::dict columns;
+  for (std::size_t c = 0; c < table.header.size(); ++c) {
+    if (table.problem[c].line == 0) {
+      Array a({static_cast<py::ssize_t>(table.rows.size())});
+      for (std::size_t r = 0; r < table.rows.size(); ++r) a.mutable_data()[r] = table.rows[r][c];
+      columns[py::str(table.header[c])] = a;
+    } else {
+      columns[py::str(table.header[c])] = py::none();  // text: read below from the file itself
+    }
+  }
+  py::dict result;
+  result["columns"] = columns;
+  result["jobs"] = summary.jobs;
+  result["ran"] = summary.ran;
+  result["resumed"] = summary.resumed;
+  result["failed"] = summary.failed;
+  result["summary_csv"] = out + "/summary.csv";
+  return result;
+}
+
 }  // namespace
 }  // namespace twinsim
 
@@ -772,6 +890,10 @@ PYBIND11_MODULE(_twinsim, m) {
     return PyArmModel{IdentifyArm(model.model, ToArmLogs(logs), WlsIdentificationOptions{})};
   });
   m.def("_diagnose", &Diagnose);
+  m.def("_compare", [](const PyOmniModel& model, const py::handle& log, std::vector<std::string> backends,
+                       const py::handle& predictor) { return Compare(model.model, log, std::move(backends), predictor); });
+  m.def("_tune_pid", &TunePidFunction);
+  m.def("_batch", &BatchFunction);
   m.def("available_backends", [](const std::string& robot) {
     return robot == "arm" ? AvailableArmBackends() : AvailableOmniBackends();
   }, py::arg("robot") = "omni");

@@ -36,7 +36,7 @@ __all__ = [
     "ArmModel", "ArmPredictor", "ArmSim", "CheckFailed", "InputError", "OmniModel", "OmniPredictor",
     "OmniSim", "Scene", "arm_model_from_urdf", "arm_model_from_yaml", "available_backends",
     "load_arm_model", "load_model", "load_omni_model", "load_scene", "omni_model_from_yaml",
-    "replay", "training_data", "train", "identify", "diagnose",
+    "replay", "training_data", "train", "identify", "diagnose", "compare", "tune_pid", "batch",
 ]
 
 
@@ -91,3 +91,34 @@ def diagnose(model, logs, held_out=0.3, max_effects=3, backend="analytic", threa
     dict of report.json (CONTRACT.md)."""
     text, repaired = _twinsim._diagnose(model, logs, float(held_out), int(max_effects), backend, int(threads))
     return _json.loads(text), repaired
+
+
+def compare(model, log, backends=(), predictor=None):
+    """`twinsim compare` without files: {"rows": [one dict per source and horizon with
+    position_rmse (m), position_max (m), heading_rmse (rad), ...], "free_runs": {source:
+    (N, 4) array t,x,y,theta}, "frame_rate": Hz}. Default backends: every physics engine
+    built, plus learned when a predictor is given."""
+    return _twinsim._compare(model, log, list(backends), predictor)
+
+
+def tune_pid(scene, iterations=0, backend="", threads=0, seed=None, start=""):
+    """`twinsim tune-pid` without files: {"learning": rows of learning.csv as dicts,
+    "parameters": (iterations, 18) array, "parameter_names", "best": {name: value},
+    "best_score", "test_runs"}. `scene` is a Scene or a path; 0 / "" keep the scene's."""
+    if isinstance(scene, str):
+        scene = load_scene(scene)
+    return _twinsim._tune_pid(scene, int(iterations), backend, int(threads), seed, start)
+
+
+def batch(sweep, out, jobs=0, resume=False):
+    """`twinsim batch`: runs the sweep file into the folder `out` (its job folders are
+    the product) and returns summary.csv as {"columns": {name: array of numbers}, ...};
+    text columns (status, error) are read with the csv module from "summary_csv"."""
+    result = _twinsim._batch(str(sweep), str(out), int(jobs), bool(resume))
+    import csv
+    with open(result["summary_csv"], newline="") as f:
+        rows = list(csv.DictReader(f))
+    for name, values in result["columns"].items():
+        if values is None:
+            result["columns"][name] = [r[name] for r in rows]
+    return result

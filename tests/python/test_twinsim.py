@@ -222,3 +222,41 @@ def test_train_and_diagnose_return_objects_and_dicts():
     assert [e["name"] for e in report["effects"]] == ["motor_lag"]
     assert report["gap_after"] < report["gap_before"]
     assert repaired["effects.motor_lag.time_constant"] == pytest.approx(0.08, abs=0.015)
+
+
+def test_compare_tune_pid_and_batch_give_the_commands_numbers(tmp_path):
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    log = record(model, 300, 5)
+    result = twinsim.compare(model, log, backends=["analytic"])
+    horizons = [r["horizon"] for r in result["rows"]]
+    assert horizons == ["1 frame", "4 frames", "1 s", "free run"]
+    assert result["rows"][1]["position_rmse"] < 0.01
+    assert result["free_runs"]["analytic"].shape == (len(log), 4)
+    log_csv = tmp_path / "log.csv"
+    np.savetxt(log_csv, log, delimiter=",", comments="", header="t,x,y,theta,vx_cmd,vy_cmd,omega_cmd", fmt="%.17g")
+    subprocess.run([BINARY, "compare", "--model", path("models/omni4.yaml"), "--log", str(log_csv), "--backend",
+                    "analytic", "--out", str(tmp_path / "cmp"), "--quiet"], check=True)
+    with open(tmp_path / "cmp" / "errors.csv", newline="") as f:
+        cli = list(csv.DictReader(f))
+    assert [float(r["position_rmse"]) for r in cli] == pytest.approx(
+        [r["position_rmse"] for r in result["rows"]], abs=2e-9)
+
+    tuned = twinsim.tune_pid(path("scenes/tune_pid_zeros.yaml"), iterations=2, threads=1)
+    again = twinsim.tune_pid(path("scenes/tune_pid_zeros.yaml"), iterations=2, threads=2)
+    assert tuned["parameters"].shape[1] == 18 and len(tuned["best"]) == 18
+    np.testing.assert_array_equal(tuned["parameters"], again["parameters"])
+    subprocess.run([BINARY, "tune-pid", path("scenes/tune_pid_zeros.yaml"), "--iterations", "2", "--out",
+                    str(tmp_path / "pid"), "--quiet"], check=True)
+    with open(tmp_path / "pid" / "learning.csv", newline="") as f:
+        learning = list(csv.DictReader(f))
+    assert [float(r["quality"]) for r in learning] == pytest.approx(
+        [r["quality"] for r in tuned["learning"]], abs=2e-9)
+
+    sweep = tmp_path / "sweep.yaml"
+    sweep.write_text(f"name: py\nseed: 2\ncommand: run\nfixed:\n  scene: {path('scenes/drive45.yaml')}\n"
+                     "  backend: analytic\n  scene.duration: 1.0\ngrid:\n  scene.seed: [1, 2, 3]\n")
+    summary = twinsim.batch(sweep, tmp_path / "batch", jobs=2)
+    assert summary["jobs"] == 3 and summary["failed"] == 0
+    assert summary["columns"]["status"] == ["ok", "ok", "ok"]
+    with pytest.raises(twinsim.InputError):
+        twinsim.batch(tmp_path / "missing.yaml", tmp_path / "batch2")
