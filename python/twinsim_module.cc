@@ -26,6 +26,7 @@
 #include "analysis/omni_compare.h"
 #include "batch/batch_runner.h"
 #include "batch/sweep.h"
+#include "control/computed_torque.h"
 #include "analysis/omni_replay.h"
 #include "backends/arm_backend_factory.h"
 #include "backends/omni_backend_factory.h"
@@ -541,6 +542,44 @@ class PyArmSim {
     q_ = sim_->backend().q(), qd_ = sim_->backend().qd(), t_ = sim_->time();
   }
 
+  // A tracking controller over `hat` (the controller's model of the arm), run at each
+  // sample on the sampled state as in `twinsim run`'s arm scenes: "computed_torque" or
+  // "pd_feedforward" at `bandwidth` Hz with `damping`, friction compensated or not.
+  void SetController(const std::string& kind, const ArmModel& hat, double bandwidth, double damping, bool friction) {
+    if (kind != "computed_torque" && kind != "pd_feedforward") {
+      throw InputError("controller '" + kind + "': known are computed_torque and pd_feedforward");
+    }
+    if (hat.dof() != model_.dof()) throw InputError("controller: the model '" + hat.name + "' has another number of joints");
+    if (!(bandwidth > 0 && bandwidth < 1e4) || !(damping > 0 && damping < 100)) {
+      throw InputError("controller: bandwidth must be 0 to 1e4 Hz and damping 0 to 100");
+    }
+    hat_ = hat;
+    controller_ = kind;
+    friction_ = friction;
+    gains_ = kind == "computed_torque" ? ComputedTorqueGains(hat.dof(), bandwidth, damping)
+                                       : PdFeedforwardGains(hat, q_, bandwidth, damping);
+  }
+
+  // One sample tracking the reference (q_r, qd_r, qdd_r) with the controller; returns
+  // the torque it sent.
+  Eigen::VectorXd StepReference(const Eigen::VectorXd& q_r, const Eigen::VectorXd& qd_r, const Eigen::VectorXd& qdd_r) {
+    if (controller_.empty()) throw InputError("step_reference: set_controller first");
+    const int n = model_.dof();
+    if (q_r.size() != n || qd_r.size() != n || qdd_r.size() != n || !q_r.allFinite() || !qd_r.allFinite() ||
+        !qdd_r.allFinite()) {
+      throw InputError("step_reference: q_r, qd_r and qdd_r need " + std::to_string(n) + " finite numbers each");
+    }
+    Eigen::VectorXd sent;
+    sim_->Step([&](double, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+      sent = controller_ == "computed_torque"
+                 ? ComputedTorque(hat_, gains_, friction_, qd_r, q_r, qd_r, qdd_r, q, qd, nullptr)
+                 : PdFeedforwardTorque(hat_, gains_, friction_, q_r, qd_r, qdd_r, q, qd, nullptr);
+      return sent;
+    });
+    q_ = sim_->backend().q(), qd_ = sim_->backend().qd(), t_ = sim_->time();
+    return sent;
+  }
+
   const Eigen::VectorXd& q() const { return q_; }
   const Eigen::VectorXd& qd() const { return qd_; }
   double time() const { return t_; }
@@ -553,6 +592,10 @@ class PyArmSim {
   std::unique_ptr<ArmSimulation> sim_;
   Eigen::VectorXd command_, q_, qd_;
   double t_ = 0;
+  ArmModel hat_;
+  std::string controller_;  // empty: torques from Python only
+  bool friction_ = true;
+  TrackingGains gains_;
 };
 
 // ---- the command functions ---------------------------------------------------------
@@ -866,6 +909,12 @@ PYBIND11_MODULE(_twinsim, m) {
            py::arg("model"), py::arg("backend") = "analytic", py::arg("predictor") = py::none())
       .def("reset", &PyArmSim::Reset, py::arg("q") = py::none(), py::arg("qd") = py::none())
       .def("step", &PyArmSim::Step, py::arg("tau"))
+      .def("set_controller", [](PyArmSim& sim, const std::string& kind, const PyArmModel& hat, double bandwidth,
+                                double damping, bool friction) {
+        sim.SetController(kind, hat.model, bandwidth, damping, friction);
+      }, py::arg("kind"), py::arg("hat"), py::arg("bandwidth") = 10.0, py::arg("damping") = 1.0,
+         py::arg("friction") = true)
+      .def("step_reference", &PyArmSim::StepReference, py::arg("q_r"), py::arg("qd_r"), py::arg("qdd_r"))
       .def_property_readonly("q", &PyArmSim::q)
       .def_property_readonly("qd", &PyArmSim::qd)
       .def_property_readonly("t", &PyArmSim::time)
