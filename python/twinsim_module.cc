@@ -14,6 +14,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <complex>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -47,6 +48,7 @@
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 #include "robots/omni/omni_model_yaml_writer.h"
+#include "scene/ilc_scene.h"
 #include "scene/scene.h"
 #include "sim/arm_simulation.h"
 #include "sim/omni_simulation.h"
@@ -793,6 +795,42 @@ py::dict BatchFunction(const std::string& sweep_path, const std::string& out, in
   return result;
 }
 
+// `twinsim ilc`: the trials' errors, the measured process sensitivities and the filters.
+py::dict IlcFunction(const std::string& scene_path, int trials, const std::string& backend) {
+  const IlcSceneRun run = RunIlcScene(LoadArmScene(scene_path), backend, trials);
+  const IlcResult& r = run.result;
+  const int n = static_cast<int>(run.filters.size());
+  Array rms = NewArray(static_cast<py::ssize_t>(r.error_rms.size()), n);
+  Array max = NewArray(static_cast<py::ssize_t>(r.error_max.size()), n);
+  for (std::size_t k = 0; k < r.error_rms.size(); ++k) {
+    for (int j = 0; j < n; ++j) {
+      rms.mutable_data()[k * n + j] = r.error_rms[k][j];
+      max.mutable_data()[k * n + j] = r.error_max[k][j];
+    }
+  }
+  const ClosedLoopFrf& frf = run.frf;
+  const auto lines = static_cast<py::ssize_t>(frf.frequency.size());
+  const auto postures = static_cast<py::ssize_t>(frf.postures.size());
+  py::array_t<std::complex<double>> ps({static_cast<py::ssize_t>(n), postures, lines});
+  for (int j = 0; j < n; ++j)
+    for (py::ssize_t p = 0; p < postures; ++p)
+      for (py::ssize_t i = 0; i < lines; ++i)
+        ps.mutable_data()[(j * postures + p) * lines + i] = frf.response[static_cast<std::size_t>(j)][static_cast<std::size_t>(p)](i);
+  py::list filters;
+  for (const LearningFilter& f : run.filters) filters.append(f.Summary());
+  py::dict out;
+  out["rms"] = rms;
+  out["max"] = max;
+  out["frequency"] = Eigen::VectorXd(frf.frequency);
+  out["process_sensitivity"] = ps;
+  out["postures"] = frf.postures;
+  out["filters"] = filters;
+  out["reduction"] = r.Reduction();
+  out["diverged"] = r.Diverged();
+  out["backend"] = run.backend;
+  return out;
+}
+
 }  // namespace
 }  // namespace twinsim
 
@@ -943,6 +981,7 @@ PYBIND11_MODULE(_twinsim, m) {
                        const py::handle& predictor) { return Compare(model.model, log, std::move(backends), predictor); });
   m.def("_tune_pid", &TunePidFunction);
   m.def("_batch", &BatchFunction);
+  m.def("_ilc", &IlcFunction);
   m.def("available_backends", [](const std::string& robot) {
     return robot == "arm" ? AvailableArmBackends() : AvailableOmniBackends();
   }, py::arg("robot") = "omni");

@@ -36,7 +36,7 @@ __all__ = [
     "ArmModel", "ArmPredictor", "ArmSim", "CheckFailed", "InputError", "OmniModel", "OmniPredictor",
     "OmniSim", "Scene", "arm_model_from_urdf", "arm_model_from_yaml", "available_backends",
     "load_arm_model", "load_model", "load_omni_model", "load_scene", "omni_model_from_yaml",
-    "replay", "training_data", "train", "identify", "diagnose", "compare", "tune_pid", "batch",
+    "replay", "training_data", "train", "identify", "diagnose", "compare", "tune_pid", "batch", "ilc",
 ]
 
 
@@ -122,3 +122,11 @@ def batch(sweep, out, jobs=0, resume=False):
         if values is None:
             result["columns"][name] = [r[name] for r in rows]
     return result
+
+
+def ilc(scene, trials=-1, backend=""):
+    """`twinsim ilc` without files, for an arm scene file: {"rms", "max": (trials + 1, n)
+    tracking errors per trial and joint (rad or m), "frequency" (Hz) and
+    "process_sensitivity" (n, postures, lines, complex), "postures", "filters" (one line
+    per joint), "reduction", "diverged", "backend"}. -1 / "" keep the scene's."""
+    return _twinsim._ilc(str(scene), int(trials), backend)

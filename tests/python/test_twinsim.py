@@ -283,3 +283,16 @@ def test_arm_tracks_a_reference_under_computed_torque():
     assert worst < 1e-4  # 2.7e-5 rad measured
     with pytest.raises(twinsim.InputError, match="known are"):
         arm.set_controller("lqr", rrr)
+
+
+def test_ilc_gives_the_trials_csv_numbers(tmp_path):
+    scene = path("scenes/rrr_writing_ilc.yaml")
+    result = twinsim.ilc(scene, trials=2)
+    assert result["rms"].shape == (3, 3)
+    assert result["process_sensitivity"].shape[:2] == (3, len(result["postures"]))
+    assert result["rms"][-1].max() < result["rms"][0].max()
+    subprocess.run([BINARY, "ilc", scene, "--trials", "2", "--out", str(tmp_path / "ilc"), "--quiet"], check=True)
+    with open(tmp_path / "ilc" / "trials.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    cli = np.array([[float(r[f"rms{j}"]) for j in (1, 2, 3)] for r in rows])
+    np.testing.assert_allclose(result["rms"], cli, rtol=0, atol=1e-9)  # the CSV prints 9 decimals

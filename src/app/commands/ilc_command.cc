@@ -3,7 +3,6 @@
 // sensitivity at several postures, build a learning filter per joint (fitted to it, or
 // the controller's model), and run the task trial after trial, learning a feedforward
 // between trials.
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -18,6 +17,7 @@
 #include "io/output_files.h"
 #include "render/renderer.h"
 #include "scene/arm_scene.h"
+#include "scene/ilc_scene.h"
 
 namespace twinsim {
 namespace {
@@ -33,76 +33,51 @@ struct IlcCommandOptions {
 std::string Num(double v) { return FormatCsvNumber(v); }
 
 int RunIlcCommand(const IlcCommandOptions& options) {
-  ArmScene scene = LoadArmScene(options.scene);
-  if (options.trials >= 0) scene.ilc.options.trials = options.trials;
-  const std::string backend = options.backend.empty() ? scene.backend : options.backend;
-  if (backend == "learned") {
-    throw InputError(SourceLocation{options.scene}, "twinsim ilc runs on analytic, ode or bullet; the learned backend "
-                                                    "needs a predictor per trial and is not supported here");
-  }
+  const ArmScene scene = LoadArmScene(options.scene);
   const std::string out = options.out.empty() ? "out/" + scene.name + "_ilc" : options.out;
-  const ArmReference reference = ArmSceneReference(scene);
-  TrackingOptions tracking = scene.tracking;
-  tracking.backend = backend;
-  tracking.dither = 0;  // learning needs the trials to repeat
   const IlcSpec& spec = scene.ilc;
   const int n = scene.plant.dof();
-  const auto start = std::chrono::steady_clock::now();
 
-  // 1. The process sensitivity at the postures.
-  const std::vector<Eigen::VectorXd> postures = IlcPostures(scene, reference);
-  ClosedLoopFrf frf;
-  {
-    Progress progress("ilc " + scene.name + ": frequency responses", !options.quiet);
-    frf = MeasureProcessSensitivity(scene.plant, scene.hat, postures, tracking, spec.frf, [&](int done, int total) {
-      progress.Update(done, total, std::to_string(done) + "/" + std::to_string(total) + " joint-postures");
-    });
-    progress.Finish();
-  }
-  const double frf_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  // 2. The learning filters.
-  std::vector<LearningFilter> filters;
-  Eigen::VectorXd mean_posture = Eigen::VectorXd::Zero(n);
-  for (const Eigen::VectorXd& p : postures) mean_posture += p / static_cast<double>(postures.size());
-  for (int j = 0; j < n; ++j) {
-    if (spec.learning_filter == "model") {
-      filters.push_back(ModelLearningFilter(scene.hat, tracking, mean_posture, reference.q.row(0).transpose(), j));
-    } else {
-      try {
-        filters.push_back(FitLearningFilter(frf, j, spec.fit_min, spec.fit_max, spec.max_shift));
-      } catch (const InputError& e) {
-        throw InputError(SourceLocation{options.scene}, std::string("ilc.frf.fit_band: ") + e.what());
-      }
-    }
-  }
-  if (!options.quiet) {
+  Progress frf_progress("ilc " + scene.name + ": frequency responses", !options.quiet);
+  IlcSceneCallbacks callbacks;
+  callbacks.frf_progress = [&](int done, int total) {
+    frf_progress.Update(done, total, std::to_string(done) + "/" + std::to_string(total) + " joint-postures");
+  };
+  callbacks.filters_ready = [&](const IlcSceneRun& run) {
+    frf_progress.Finish();
+    if (options.quiet) return;
+    const ClosedLoopFrf& frf = run.frf;
     std::printf("ilc %s: %d postures, PS measured %g..%g Hz in %.2f s; learning filter %s, gain %g, Q %s\n",
-                scene.name.c_str(), static_cast<int>(postures.size()), frf.frequency[0],
-                frf.frequency[frf.frequency.size() - 1], frf_seconds, spec.learning_filter.c_str(), spec.options.gain,
+                scene.name.c_str(), static_cast<int>(run.postures.size()), frf.frequency[0],
+                frf.frequency[frf.frequency.size() - 1], run.frf_seconds, spec.learning_filter.c_str(),
+                spec.options.gain,
                 spec.options.q_order > 0 ? ("order " + std::to_string(spec.options.q_order) + " at " +
                                             Num(spec.options.q_cutoff) + " Hz (zero phase)")
                                                .c_str()
                                          : "none");
     for (int j = 0; j < n; ++j) {
-      const double limit = LearningLimitFrequency(frf, j, filters[j], spec.options.gain);
+      const double limit = LearningLimitFrequency(frf, j, run.filters[j], spec.options.gain);
       std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; worst |Q|^2 |1 - gain PS L| %.3g\n", j + 1,
-                  filters[j].Summary().c_str(), std::isfinite(limit) ? (Num(limit) + " Hz").c_str() : "every line",
-                  ConvergenceFactor(frf, j, filters[j], spec.options).maxCoeff());
+                  run.filters[j].Summary().c_str(), std::isfinite(limit) ? (Num(limit) + " Hz").c_str() : "every line",
+                  ConvergenceFactor(frf, j, run.filters[j], spec.options).maxCoeff());
     }
-  }
-
-  // 3. The trials.
-  const IlcResult result =
-      RunIlc(scene.plant, scene.hat, reference, tracking, filters, spec.options, [&](int trial, const TrackingTrial& t) {
-        if (options.quiet) return;
-        std::printf("  trial %2d: RMS error [mrad]", trial);
-        for (Eigen::Index j = 0; j < t.error_rms.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_rms[j]);
-        std::printf("   max [mrad]");
-        for (Eigen::Index j = 0; j < t.error_max.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_max[j]);
-        std::printf("\n");
-        std::fflush(stdout);
-      });
+  };
+  callbacks.trial_done = [&](int trial, const TrackingTrial& t) {
+    if (options.quiet) return;
+    std::printf("  trial %2d: RMS error [mrad]", trial);
+    for (Eigen::Index j = 0; j < t.error_rms.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_rms[j]);
+    std::printf("   max [mrad]");
+    for (Eigen::Index j = 0; j < t.error_max.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_max[j]);
+    std::printf("\n");
+    std::fflush(stdout);
+  };
+  const IlcSceneRun run = RunIlcScene(scene, options.backend, options.trials, callbacks);
+  const IlcResult& result = run.result;
+  const std::string& backend = run.backend;
+  const TrackingOptions& tracking = run.tracking;
+  const ClosedLoopFrf& frf = run.frf;
+  const std::vector<LearningFilter>& filters = run.filters;
+  const ArmReference& reference = run.reference;
 
   // 4. The report: the tables, the plots and report.html.
   if (!RenderingCompiled()) {
@@ -117,6 +92,7 @@ int RunIlcCommand(const IlcCommandOptions& options) {
   setup.frf = spec.frf;
   setup.learning_filter = spec.learning_filter;
   setup.options = spec.options;
+  if (options.trials >= 0) setup.options.trials = options.trials;
   setup.tool = scene.task.writing.tool;
   OutputFiles files(out);
   for (const auto& [file, bytes] :

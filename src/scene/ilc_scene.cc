@@ -1,0 +1,54 @@
+#include "scene/ilc_scene.h"
+
+#include <chrono>
+
+#include "core/error.h"
+
+namespace twinsim {
+
+IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, const IlcSceneCallbacks& callbacks) {
+  if (trials >= 0) scene.ilc.options.trials = trials;
+  IlcSceneRun run;
+  run.backend = backend.empty() ? scene.backend : backend;
+  if (run.backend == "learned") {
+    throw InputError(SourceLocation{scene.path}, "twinsim ilc runs on analytic, ode or bullet; the learned backend "
+                                                 "needs a predictor per trial and is not supported here");
+  }
+  run.reference = ArmSceneReference(scene);
+  run.tracking = scene.tracking;
+  run.tracking.backend = run.backend;
+  run.tracking.dither = 0;  // learning needs the trials to repeat
+  const IlcSpec& spec = scene.ilc;
+  const int n = scene.plant.dof();
+  const auto start = std::chrono::steady_clock::now();
+
+  // 1. The process sensitivity at the postures.
+  run.postures = IlcPostures(scene, run.reference);
+  run.frf = MeasureProcessSensitivity(scene.plant, scene.hat, run.postures, run.tracking, spec.frf,
+                                      callbacks.frf_progress);
+  run.frf_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // 2. The learning filters.
+  Eigen::VectorXd mean_posture = Eigen::VectorXd::Zero(n);
+  for (const Eigen::VectorXd& p : run.postures) mean_posture += p / static_cast<double>(run.postures.size());
+  for (int j = 0; j < n; ++j) {
+    if (spec.learning_filter == "model") {
+      run.filters.push_back(
+          ModelLearningFilter(scene.hat, run.tracking, mean_posture, run.reference.q.row(0).transpose(), j));
+    } else {
+      try {
+        run.filters.push_back(FitLearningFilter(run.frf, j, spec.fit_min, spec.fit_max, spec.max_shift));
+      } catch (const InputError& e) {
+        throw InputError(SourceLocation{scene.path}, std::string("ilc.frf.fit_band: ") + e.what());
+      }
+    }
+  }
+  if (callbacks.filters_ready) callbacks.filters_ready(run);
+
+  // 3. The trials.
+  run.result = RunIlc(scene.plant, scene.hat, run.reference, run.tracking, run.filters, spec.options,
+                      callbacks.trial_done);
+  return run;
+}
+
+}  // namespace twinsim
