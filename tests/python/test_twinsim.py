@@ -296,3 +296,19 @@ def test_ilc_gives_the_trials_csv_numbers(tmp_path):
         rows = list(csv.DictReader(f))
     cli = np.array([[float(r[f"rms{j}"]) for j in (1, 2, 3)] for r in rows])
     np.testing.assert_allclose(result["rms"], cli, rtol=0, atol=1e-9)  # the CSV prints 9 decimals
+
+
+def test_a_diverging_simulation_is_an_exception_not_a_crash():
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    # A velocity loop far too stiff for its 300 Hz rate, on motors strong enough to follow.
+    model["controller.forward.kp"] = 1e6
+    model["controller.forward.output_limit"] = 1e6
+    model["motor.stall_torque"] = 1e4
+    model["motor.no_load_speed"] = 1e5
+    with pytest.raises(twinsim.InputError, match="at most 10000"):
+        model["motor.stall_torque"] = 1e5
+    sim = twinsim.OmniSim(model, backend="analytic")
+    with pytest.raises(twinsim.CheckFailed, match="diverged.*last good state"):
+        sim.run(np.tile([1.0, 0.0, 0.0], (60, 1)))
+    with pytest.raises(twinsim.InputError):
+        twinsim.omni_model_from_yaml("robot: omni\nname: [unclosed\n")
