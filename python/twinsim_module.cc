@@ -50,6 +50,7 @@
 #include "robots/omni/omni_model_yaml_writer.h"
 #include "scene/ilc_scene.h"
 #include "scene/scene.h"
+#include "scene/scene_run.h"
 #include "sim/arm_simulation.h"
 #include "sim/omni_simulation.h"
 #include "tuning/pid_tuning.h"
@@ -831,6 +832,27 @@ py::dict IlcFunction(const std::string& scene_path, int trials, const std::strin
   return out;
 }
 
+// `twinsim run` of an arm scene without files: the task under the scene's controller on
+// `backend` (empty: the scene's), as arrays.
+py::dict RunArmSceneFunction(const std::string& path, const std::string& backend, const py::handle& predictor,
+                             std::optional<std::uint64_t> seed) {
+  ArmScene scene = LoadArmScene(path);
+  if (seed) scene.seed = *seed;
+  const std::string p = predictor.is_none() ? "" : predictor.cast<std::string>();
+  const TrackingTrial trial = RunArmScene(scene, backend.empty() ? scene.backend : backend, p);
+  py::dict out;
+  out["t"] = trial.t;
+  out["q"] = trial.q;
+  out["qd"] = trial.qd;
+  out["q_ref"] = trial.q_ref;
+  out["command"] = trial.command;
+  out["applied"] = trial.applied;
+  out["error_rms"] = trial.error_rms;
+  out["error_max"] = trial.error_max;
+  out["backend"] = trial.backend;
+  return out;
+}
+
 }  // namespace
 }  // namespace twinsim
 
@@ -883,6 +905,7 @@ PYBIND11_MODULE(_twinsim, m) {
   py::class_<Scene>(m, "Scene", "An omni scene (docs/scenes.md)")
       .def_readonly("name", &Scene::name)
       .def_readonly("path", &Scene::path)
+      .def_readonly("backend", &Scene::backend)
       .def_readonly("duration", &Scene::duration)
       .def_readonly("frame_rate", &Scene::frame_rate)
       .def_readonly("seed", &Scene::seed)
@@ -982,6 +1005,7 @@ PYBIND11_MODULE(_twinsim, m) {
   m.def("_tune_pid", &TunePidFunction);
   m.def("_batch", &BatchFunction);
   m.def("_ilc", &IlcFunction);
+  m.def("_run_arm_scene", &RunArmSceneFunction);
   m.def("available_backends", [](const std::string& robot) {
     return robot == "arm" ? AvailableArmBackends() : AvailableOmniBackends();
   }, py::arg("robot") = "omni");

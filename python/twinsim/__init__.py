@@ -36,7 +36,7 @@ __all__ = [
     "ArmModel", "ArmPredictor", "ArmSim", "CheckFailed", "InputError", "OmniModel", "OmniPredictor",
     "OmniSim", "Scene", "arm_model_from_urdf", "arm_model_from_yaml", "available_backends",
     "load_arm_model", "load_model", "load_omni_model", "load_scene", "omni_model_from_yaml",
-    "replay", "training_data", "train", "identify", "diagnose", "compare", "tune_pid", "batch", "ilc",
+    "replay", "training_data", "train", "identify", "diagnose", "compare", "tune_pid", "batch", "ilc", "run",
 ]
 
 
@@ -130,3 +130,19 @@ def ilc(scene, trials=-1, backend=""):
     "process_sensitivity" (n, postures, lines, complex), "postures", "filters" (one line
     per joint), "reduction", "diverged", "backend"}. -1 / "" keep the scene's."""
     return _twinsim._ilc(str(scene), int(trials), backend)
+
+
+def run(scene, backend="", predictor=None, seed=None):
+    """`twinsim run` without files. Omni scene: the dict of OmniSim.run (t, truth,
+    truth_velocity, observed, seen, command; frames x robots x 3). Arm scene: the task
+    under the scene's controller: t, q, qd, q_ref, command, applied (N x n), error_rms,
+    error_max. `predictor` is a file for the learned backend; "" keeps the scene's
+    backend."""
+    scene = str(scene)
+    with open(scene, encoding="utf-8", errors="replace") as f:
+        arm = any(line.split("#")[0].replace(" ", "").strip() == "robot:arm" for line in f)
+    if arm:
+        return _twinsim._run_arm_scene(scene, backend, predictor, seed)
+    s = load_scene(scene)
+    sim = OmniSim(s, backend=backend or s.backend, predictor=predictor, seed=seed, external=False)
+    return sim.run(frames=s.frames)

@@ -312,3 +312,18 @@ def test_a_diverging_simulation_is_an_exception_not_a_crash():
         sim.run(np.tile([1.0, 0.0, 0.0], (60, 1)))
     with pytest.raises(twinsim.InputError):
         twinsim.omni_model_from_yaml("robot: omni\nname: [unclosed\n")
+
+
+def test_run_gives_the_run_commands_arm_log(tmp_path):
+    scene = path("scenes/rrr_writing.yaml")
+    result = twinsim.run(scene, backend="analytic")
+    subprocess.run([BINARY, "run", scene, "--backend", "analytic", "--out", str(tmp_path / "arm"), "--quiet"],
+                   check=True)
+    header, log = read_csv(tmp_path / "arm" / "trajectory.csv")
+    assert result["q"].shape[1] == 3
+    # The log is what the scene's sensors recorded (quantised); the truth is within a count.
+    q1 = header.index("q1")
+    assert len(log) == len(result["t"])
+    assert np.max(np.abs(log[:, q1] - result["q"][:, 0])) < 1e-4
+    omni = twinsim.run(path("scenes/drive45.yaml"), backend="analytic")
+    assert omni["truth"].shape[1:] == (1, 3)
