@@ -12,6 +12,8 @@
 #include <map>
 #include <mutex>
 #include <regex>
+#include <string_view>
+#include <vector>
 #include <sstream>
 
 #include "core/error.h"
@@ -170,6 +172,70 @@ void CheckFiniteAttributes(const std::string& xml, const std::string& path) {
   errors.ThrowIfAny();
 }
 
+// urdfdom refuses a closed loop of joints only as "no root link" (and leaks the links it
+// built), so loops are found in the text first: each <joint>'s parent and child link,
+// then a walk from every link up its parents. Reported at the joint that closes the loop.
+// The value of attribute `name` in the element text `tag` ("" when absent). Plain string
+// search: std::regex recurses per character and a long attribute would exhaust the stack.
+std::string Attribute(std::string_view tag, std::string_view name) {
+  for (std::size_t at = tag.find(name); at != std::string_view::npos; at = tag.find(name, at + 1)) {
+    if (at > 0 && !std::isspace(static_cast<unsigned char>(tag[at - 1]))) continue;
+    std::size_t k = at + name.size();
+    while (k < tag.size() && std::isspace(static_cast<unsigned char>(tag[k]))) ++k;
+    if (k >= tag.size() || tag[k] != '=') continue;
+    ++k;
+    while (k < tag.size() && std::isspace(static_cast<unsigned char>(tag[k]))) ++k;
+    if (k >= tag.size() || (tag[k] != '"' && tag[k] != '\'')) continue;
+    const std::size_t end = tag.find(tag[k], k + 1);
+    if (end == std::string_view::npos) return "";
+    return std::string(tag.substr(k + 1, end - k - 1));
+  }
+  return "";
+}
+
+void CheckJointLoops(const std::string& xml, const std::string& path) {
+  struct Edge {
+    std::string joint, parent;
+    int line = 0;
+  };
+  std::map<std::string, Edge> up;  // child link -> the joint naming it and its parent
+  const std::string_view text(xml);
+  auto element = [&](std::size_t from, std::size_t until, std::string_view open) -> std::string_view {
+    const std::size_t at = text.find(open, from);
+    if (at == std::string_view::npos || at >= until) return {};
+    const std::size_t close = text.find('>', at);
+    return text.substr(at, close == std::string_view::npos ? std::string_view::npos : close - at);
+  };
+  for (std::size_t at = text.find("<joint"); at != std::string_view::npos; at = text.find("<joint", at + 1)) {
+    if (at + 6 >= text.size() || !std::isspace(static_cast<unsigned char>(text[at + 6]))) continue;
+    const std::size_t tag_end = text.find('>', at);
+    if (tag_end == std::string_view::npos) break;
+    const std::size_t end = text.find("</joint", tag_end);
+    if (end == std::string_view::npos) break;
+    const std::string parent = Attribute(element(tag_end, end, "<parent"), "link");
+    const std::string child = Attribute(element(tag_end, end, "<child"), "link");
+    if (parent.empty() || child.empty()) continue;
+    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+    up.emplace(child, Edge{Attribute(text.substr(at, tag_end - at), "name"), parent, line});
+  }
+  for (const auto& [start, first] : up) {
+    std::vector<std::string> chain{start};
+    std::string link = start;
+    for (std::size_t steps = 0; steps <= up.size(); ++steps) {
+      const auto next = up.find(link);
+      if (next == up.end()) break;
+      link = next->second.parent;
+      chain.push_back(link);
+      if (link != start) continue;
+      std::string loop;
+      for (auto l = chain.rbegin(); l != chain.rend(); ++l) loop += (loop.empty() ? "" : " -> ") + *l;
+      throw InputError(SourceLocation{path, first.line},
+                       "joint '" + first.joint + "' closes a loop of links (" + loop +
+                           "): an arm is a serial chain from a root link");
+    }
+  }
+}
+
 // A link's mass and inertia, checked as the YAML reader checks them.
 void CheckInertial(const urdf::Link& link, const LineFinder& lines, const std::string& path, ErrorList* errors) {
   const urdf::Inertial& in = *link.inertial;
@@ -201,6 +267,7 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
     }
   }
   CheckFiniteAttributes(xml, path);
+  CheckJointLoops(xml, path);
   std::string console;
   const urdf::ModelInterfaceSharedPtr urdf = ParseQuietly(xml, &console);
   if (!urdf) {
