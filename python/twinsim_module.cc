@@ -630,9 +630,7 @@ Eigen::MatrixXd ReplayArm(const ArmModel& model, const py::handle& log) {
 // (X, Y) training data of the omni predictor: X (N, inputs), Y (N, 3) pose changes.
 py::tuple OmniTrainingData(const OmniModel& model, const py::handle& logs, int horizon) {
   if (horizon < 1 || horizon > 100) throw InputError("horizon must be 1 to 100 frames");
-  FeatureLayout layout;
-  layout.horizon = horizon;
-  layout.command_lag = model.command_delay_frames + model.vision_delay_frames;
+  const FeatureLayout layout = PredictorLayout(model, horizon);
   OmniDataset data;
   for (const OmniLog& log : ToOmniLogs(logs)) AppendSamples(log, layout, &data);
   return py::make_tuple(data.x, data.y);

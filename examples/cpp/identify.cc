@@ -2,20 +2,16 @@
 // `twinsim identify` does, and print each parameter a priori and identified.
 //   example_identify models/rrr.yaml LOG.csv [LOG.csv ...]
 #include <cstdio>
-#include <exception>
 #include <vector>
 
-#include "core/error.h"
 #include "identification/wls_identification.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
+#include "example_main.h"
+
 int main(int argc, char** argv) {
-  if (argc < 3) {
-    std::fprintf(stderr, "usage: %s MODEL LOG.csv [LOG.csv ...]\n", argv[0]);
-    return 2;
-  }
-  try {
+  return RunExample(argc, argv, 3, "MODEL LOG.csv [LOG.csv ...]", [&] {
     const twinsim::ArmModel a_priori = twinsim::LoadArmModel(argv[1]);
     std::vector<twinsim::ArmLog> logs;
     for (int i = 2; i < argc; ++i) logs.push_back(twinsim::ReadArmLog(argv[i]));
@@ -26,12 +22,5 @@ int main(int argc, char** argv) {
                   summary.a_priori[k], summary.consistent[k], summary.relative_std[k]);
     }
     std::printf("identified '%s' from %d samples\n", identified.name.c_str(), summary.samples);
-    return 0;
-  } catch (const twinsim::InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
+  });
 }

@@ -2,19 +2,15 @@
 // `twinsim replay` does, and print the error.
 //   example_replay models/omni4.yaml LOG.csv [BACKEND]
 #include <cstdio>
-#include <exception>
 
 #include "analysis/omni_replay.h"
-#include "core/error.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
+#include "example_main.h"
+
 int main(int argc, char** argv) {
-  if (argc < 3) {
-    std::fprintf(stderr, "usage: %s MODEL.yaml LOG.csv [BACKEND]\n", argv[0]);
-    return 2;
-  }
-  try {
+  return RunExample(argc, argv, 3, "MODEL.yaml LOG.csv [BACKEND]", [&] {
     const twinsim::OmniModel model = twinsim::LoadOmniModel(argv[1]);
     const twinsim::OmniLog log = twinsim::ReadOmniLog(argv[2]);
     twinsim::OmniReplayOptions options;
@@ -23,12 +19,5 @@ int main(int argc, char** argv) {
     const twinsim::OmniReplayResult replay = twinsim::ReplayOmniLog(model, log, options);
     std::printf("%d of %zu frames predicted 4 frames ahead on %s: RMS position error %.4f m\n", replay.num_predicted(),
                 log.rows.size(), options.backend.c_str(), twinsim::PositionRmse(log, replay));
-    return 0;
-  } catch (const twinsim::InputError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
+  });
 }

@@ -25,6 +25,13 @@ OmniPredictor MakeLinearPredictor(OmniPredictorInfo info, Eigen::VectorXd mean, 
   return p;
 }
 
+FeatureLayout PredictorLayout(const OmniModel& model, int horizon) {
+  FeatureLayout layout;
+  layout.horizon = horizon;
+  layout.command_lag = model.command_delay_frames + model.vision_delay_frames;
+  return layout;
+}
+
 OmniPredictor MakeLinearOmniPredictor(const OmniModel& model, double frame_rate, int horizon,
                                       const Eigen::MatrixXd& weights, const Eigen::Vector3d& bias) {
   if (horizon < 1 || horizon > 100) throw InputError("linear predictor: horizon must be 1 to 100 frames, got " + std::to_string(horizon));
@@ -37,8 +44,7 @@ OmniPredictor MakeLinearOmniPredictor(const OmniModel& model, double frame_rate,
   info.kind = "linear";
   info.model_name = model.name;
   info.frame_rate = frame_rate;
-  info.layout.horizon = horizon;
-  info.layout.command_lag = model.command_delay_frames + model.vision_delay_frames;
+  info.layout = PredictorLayout(model, horizon);
   const int inputs = info.layout.num_inputs();
   if (weights.rows() != 3 || weights.cols() != inputs) {
     throw InputError("linear predictor: weights must be 3 x " + std::to_string(inputs) + " for horizon " +
@@ -242,8 +248,7 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
   info.kind = options.kind;
   info.model_name = model.name;
   info.frame_rate = 1.0 / logs[0].frame_period;
-  info.layout.horizon = options.horizon;
-  info.layout.command_lag = model.command_delay_frames + model.vision_delay_frames;
+  info.layout = PredictorLayout(model, options.horizon);
 
   // Per log: the first part trains, the last part validates (time order kept).
   OmniDataset train, validation;

@@ -106,9 +106,14 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
                                  const OmniTrainOptions& options, OmniTrainSummary* summary = nullptr,
                                  const std::function<void(int, int, double)>& progress = {});
 
+// The inputs' layout of `model`'s predictors for `horizon` frames: the default history and
+// the model's command + vision delay as the command lag. Training, MakeLinearOmniPredictor
+// and anyone building training data outside twinsim use this one layout.
+FeatureLayout PredictorLayout(const OmniModel& model, int horizon);
+
 // A linear predictor from weights fitted elsewhere (NumPy, another tool): the pose change
-// is weights * inputs + bias, inputs laid out as FeatureLayout{6, horizon, the model's
-// command + vision delay} (omni_features.h; AppendSamples gives the training inputs).
+// is weights * inputs + bias, inputs laid out as PredictorLayout(model, horizon)
+// (omni_features.h; AppendSamples gives the training inputs).
 // weights is 3 x num_inputs. Throws InputError for another shape, a horizon outside
 // 1..100, a frame rate outside 1..10000 Hz or a number that is not finite.
 OmniPredictor MakeLinearOmniPredictor(const OmniModel& model, double frame_rate, int horizon,

@@ -1094,9 +1094,12 @@ TEST_P(BadInput, RefusedCleanlyOrAccepted) {
   if (c.exit_code != 0) {
     EXPECT_TRUE(Contains(r.err, Fill(c.expect, dir))) << "stderr lacks '" << Fill(c.expect, dir) << "'\n"
                                                        << context;
-    if (!c.also.empty()) EXPECT_NE(r.err.find(c.also), std::string::npos) << "stderr lacks '" << c.also << "'\n" << context;
-    if (!out.empty() && !out_existed && r.exit_code != 0)
+    if (!c.also.empty()) {
+      EXPECT_NE(r.err.find(c.also), std::string::npos) << "stderr lacks '" << c.also << "'\n" << context;
+    }
+    if (!out.empty() && !out_existed && r.exit_code != 0) {
       EXPECT_FALSE(fs::exists(out)) << "half-written output " << out << "\n" << context;
+    }
   }
   if (r.exit_code == 0 && !out.empty() && fs::exists(out)) {
     std::vector<fs::path> files;

@@ -79,7 +79,7 @@ int RunIlcCommand(const IlcCommandOptions& options) {
   const std::vector<LearningFilter>& filters = run.filters;
   const ArmReference& reference = run.reference;
 
-  // 4. The report: the tables, the plots and report.html.
+  // The report: the tables, the plots and report.html.
   if (!RenderingCompiled()) {
     std::fprintf(stderr, "%s: warning: plots and report not drawn: %s\n", options.scene.c_str(), kRenderingNotCompiled);
   }

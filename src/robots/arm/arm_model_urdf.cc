@@ -53,6 +53,11 @@ urdf::ModelInterfaceSharedPtr ParseQuietly(const std::string& xml, std::string* 
   return model;
 }
 
+// The 1-based line of byte `offset` in `text`.
+int LineAt(std::string_view text, std::size_t offset) {
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
+}
+
 // Finds where elements are defined, since urdfdom keeps no line numbers.
 class LineFinder {
  public:
@@ -104,10 +109,11 @@ class LineFinder {
     return fallback == std::string::npos ? 0 : LineOf(fallback);
   }
 
+  // The file's text with comments blanked out (same lines and offsets).
+  const std::string& text() const { return text_; }
+
  private:
-  int LineOf(std::size_t offset) const {
-    return 1 + static_cast<int>(std::count(text_.begin(), text_.begin() + offset, '\n'));
-  }
+  int LineOf(std::size_t offset) const { return LineAt(text_, offset); }
   std::string text_;
 };
 
@@ -154,7 +160,7 @@ void CheckFiniteAttributes(const std::string& xml, const std::string& path) {
   auto begin = std::sregex_iterator(xml.begin(), xml.end(), kBad);
   int count = 0;
   for (auto it = begin; it != std::sregex_iterator() && count < 10; ++it, ++count) {
-    const int line = 1 + static_cast<int>(std::count(xml.begin(), xml.begin() + it->position(), '\n'));
+    const int line = LineAt(xml, static_cast<std::size_t>(it->position()));
     errors.Add(SourceLocation{path, line}, "attribute value " + it->str().substr(it->str().find_first_of("\"'")) +
                                                " is not a finite number");
   }
@@ -165,16 +171,13 @@ void CheckFiniteAttributes(const std::string& xml, const std::string& path) {
     char* end = nullptr;
     std::strtod(text.c_str(), &end);
     if (text.empty() || end == text.c_str() || *end != '\0') {
-      const int line = 1 + static_cast<int>(std::count(xml.begin(), xml.begin() + it->position(), '\n'));
+      const int line = LineAt(xml, static_cast<std::size_t>(it->position()));
       errors.Add(SourceLocation{path, line}, "mass value '" + text + "' is not a number");
     }
   }
   errors.ThrowIfAny();
 }
 
-// urdfdom refuses a closed loop of joints only as "no root link" (and leaks the links it
-// built), so loops are found in the text first: each <joint>'s parent and child link,
-// then a walk from every link up its parents. Reported at the joint that closes the loop.
 // The value of attribute `name` in the element text `tag` ("" when absent). Plain string
 // search: std::regex recurses per character and a long attribute would exhaust the stack.
 std::string Attribute(std::string_view tag, std::string_view name) {
@@ -193,13 +196,18 @@ std::string Attribute(std::string_view tag, std::string_view name) {
   return "";
 }
 
-void CheckJointLoops(const std::string& xml, const std::string& path) {
+// urdfdom refuses a closed loop of joints only as "no root link" (and leaks the links it
+// built), so loops are found in the text first: each <joint>'s parent and child link,
+// then a walk from every link up its parents. Reported at the joint that closes the loop.
+// `text` is the file with comments blanked (LineFinder::text()): a commented-out joint
+// closes nothing.
+void CheckJointLoops(const std::string& text_in, const std::string& path) {
   struct Edge {
     std::string joint, parent;
     int line = 0;
   };
   std::map<std::string, Edge> up;  // child link -> the joint naming it and its parent
-  const std::string_view text(xml);
+  const std::string_view text(text_in);
   auto element = [&](std::size_t from, std::size_t until, std::string_view open) -> std::string_view {
     const std::size_t at = text.find(open, from);
     if (at == std::string_view::npos || at >= until) return {};
@@ -215,7 +223,7 @@ void CheckJointLoops(const std::string& xml, const std::string& path) {
     const std::string parent = Attribute(element(tag_end, end, "<parent"), "link");
     const std::string child = Attribute(element(tag_end, end, "<child"), "link");
     if (parent.empty() || child.empty()) continue;
-    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(at), '\n'));
+    const int line = LineAt(text, at);
     up.emplace(child, Edge{Attribute(text.substr(at, tag_end - at), "name"), parent, line});
   }
   for (const auto& [start, first] : up) {
@@ -267,7 +275,8 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
     }
   }
   CheckFiniteAttributes(xml, path);
-  CheckJointLoops(xml, path);
+  const LineFinder lines(xml);
+  CheckJointLoops(lines.text(), path);
   std::string console;
   const urdf::ModelInterfaceSharedPtr urdf = ParseQuietly(xml, &console);
   if (!urdf) {
@@ -277,7 +286,6 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
       message += " (a closed loop of joints has no root link; an arm must be a serial chain)";
     throw InputError(SourceLocation{path}, message);
   }
-  const LineFinder lines(xml);
   auto at_joint = [&](const std::string& name) { return SourceLocation{path, lines.Line("joint", name)}; };
   auto at_link = [&](const std::string& name) { return SourceLocation{path, lines.Line("link", name)}; };
 

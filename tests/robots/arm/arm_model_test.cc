@@ -342,6 +342,14 @@ TEST(ArmModel, UrdfCycleWithoutRootIsRejected) {
   EXPECT_NE(e.find("bad.urdf:5: joint 'ba' closes a loop of links (a -> b -> a)"), std::string::npos) << e;
 }
 
+TEST(ArmModel, UrdfCommentedOutJointClosesNoLoop) {
+  const ArmModel m = LoadArmModelFromUrdfString(
+      Chain(R"(  <!-- <joint name="back" type="fixed"><parent link="l2"/><child link="base"/></joint> -->
+)"),
+      "ok.urdf");
+  EXPECT_EQ(m.dof(), 2);
+}
+
 TEST(ArmModel, UrdfBranchNamesTheLink) {
   const std::string e = UrdfError(Chain(R"(  <joint name="j3" type="revolute">
     <parent link="l1"/><child link="l3"/><axis xyz="0 0 1"/>
