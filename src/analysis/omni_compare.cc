@@ -1,15 +1,16 @@
 #include "analysis/omni_compare.h"
 
-#include "engines/omni_engine.h"
-
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <set>
 #include <sstream>
 
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
+#include "engines/omni_engine.h"
 #include "io/csv_table.h"
 
 namespace twinsim {
@@ -223,15 +224,44 @@ std::string FormatComparePathsCsv(const OmniLog& log, const OmniCompareResult& r
 
 OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
                                       const std::shared_ptr<const OmniPredictor>& predictor) {
+  if (!predictor) return MakeCompareOptions(model, log, std::move(backends), {}, {});
+  return MakeCompareOptions(model, log, std::move(backends), {predictor}, {""});
+}
+
+OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
+                                      const std::vector<std::shared_ptr<const OmniPredictor>>& predictors,
+                                      const std::vector<std::string>& predictor_paths) {
   const double frame_rate = 1.0 / log.frame_period;
-  if (predictor) predictor->CheckUse(model, frame_rate, 1, "compare of " + log.path);
+  for (const auto& p : predictors) p->CheckUse(model, frame_rate, 1, "compare of " + log.path);
   if (backends.empty()) {
     backends = AvailableOmniEngines();
-    if (predictor) backends.push_back("learned");
+    if (!predictors.empty()) backends.push_back("learned");
+  }
+  // One label per predictor: its kind, made unique by its file's name where needed.
+  std::vector<std::string> labels;
+  for (const auto& p : predictors) labels.push_back(p->residual() ? "residual" : "learned");
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (std::count(labels.begin(), labels.end(), labels[i]) < 2) continue;
+    const std::string base = labels[i];
+    for (std::size_t j = i; j < labels.size(); ++j) {
+      if (labels[j] != base) continue;
+      const std::string path = j < predictor_paths.size() ? predictor_paths[j] : "";
+      std::string stem = std::filesystem::path(path).stem().string();
+      for (char& c : stem)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') c = '_';
+      labels[j] = base + "-" + (stem.empty() ? "predictor" + std::to_string(j + 1) : stem);
+    }
   }
   OmniCompareOptions compare;
   compare.horizons = DefaultCompareHorizons(frame_rate);
-  for (const std::string& b : backends) compare.sources.push_back({b, b, OmniBackendOptions{predictor}});
+  for (const std::string& b : backends) {
+    if (b != "learned" || predictors.empty()) {
+      compare.sources.push_back({b, b, OmniBackendOptions{}});
+      continue;
+    }
+    for (std::size_t i = 0; i < predictors.size(); ++i)
+      compare.sources.push_back({labels[i], b, OmniBackendOptions{predictors[i]}});
+  }
   return compare;
 }
 

@@ -84,6 +84,14 @@ std::vector<int> DefaultCompareHorizons(double frame_rate);
 // or the log's frame rate.
 OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
                                       const std::shared_ptr<const OmniPredictor>& predictor);
+// The same with several 1-frame predictors (the seed's and a residual one, say): the
+// learned backend once per predictor, labelled "learned" or "residual" after its kind,
+// and where two would share a label, that followed by "-" and the file's name without
+// its folder and extension ("learned-plant_mlp"). `predictor_paths` names them (in the
+// same order; an empty path counts as "predictor").
+OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
+                                      const std::vector<std::shared_ptr<const OmniPredictor>>& predictors,
+                                      const std::vector<std::string>& predictor_paths);
 // "free run", "1 frame", "1 s" (when frames == round(frame_rate)) or "K frames".
 std::string HorizonLabel(int frames, double frame_rate);
 

@@ -26,6 +26,23 @@ void EncodeInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2*
   }
 }
 
+void EncodeNominalInputs(const FeatureLayout& layout, const Pose2& now, const Eigen::Vector3d& nominal_delta,
+                         const Twist2& nominal_velocity, const Eigen::Vector3d* errors, double* out) {
+  const double c = std::cos(now.theta), s = std::sin(now.theta);
+  *out++ = nominal_delta[0];
+  *out++ = nominal_delta[1];
+  *out++ = nominal_delta[2];
+  *out++ = nominal_velocity.vx;
+  *out++ = nominal_velocity.vy;
+  *out++ = nominal_velocity.omega;
+  for (int j = 0; j < layout.nominal_errors; ++j) {
+    const Eigen::Vector3d& e = errors[j];
+    *out++ = c * e[0] + s * e[1];
+    *out++ = -s * e[0] + c * e[1];
+    *out++ = e[2];
+  }
+}
+
 Eigen::Vector3d EncodeDelta(const Pose2& now, const Pose2& later) {
   const double c = std::cos(now.theta), s = std::sin(now.theta);
   const double dx = later.x - now.x, dy = later.y - now.y;

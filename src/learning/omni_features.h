@@ -14,6 +14,14 @@
 //
 // Output: the pose of frame i+H relative to frame i in the robot frame of frame i
 // (dx m, dy m, dtheta rad).
+//
+// A residual predictor (learning/omni_residual.h) has further inputs after those, from
+// the Newtonian model it corrects, carried along the poses: the model's own prediction
+// of the pose change over the horizon (3, robot frame of frame i), its velocity at frame
+// i (3, robot frame), and its last `nominal_errors` one-frame errors (3 each: measured
+// pose minus the model's prediction of it, dx and dy rotated into the robot frame of
+// frame i, dtheta; oldest first). Its output is the correction to the model's
+// prediction: the pose change minus the model's.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,10 +36,13 @@ struct FeatureLayout {
   int history = 6;      // frames of history
   int horizon = 1;      // H, frames ahead
   int command_lag = 4;  // D, frames from logging a command to it acting
+  bool residual = false;   // inputs from the Newtonian model follow; the output corrects it
+  int nominal_errors = 0;  // residual only: the model's recent one-frame errors in the inputs
 
   static constexpr int kPerFrame = 7;
   static constexpr int kNumOutputs = 3;
-  int num_inputs() const { return kPerFrame * history + 3 * (horizon - 1); }
+  int num_seed_inputs() const { return kPerFrame * history + 3 * (horizon - 1); }
+  int num_inputs() const { return num_seed_inputs() + (residual ? 6 + 3 * nominal_errors : 0); }
   int num_commands() const { return history + horizon - 1; }
 };
 
@@ -39,6 +50,14 @@ struct FeatureLayout {
 // last is frame i. commands: num_commands() commands acting at frames i-history+1 ..
 // i+H-1.
 void EncodeInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2* commands, double* out);
+
+// Writes a residual predictor's inputs from its nominal model into out (num_inputs() -
+// num_seed_inputs() numbers, see above): `now` is frame i's pose, `nominal_delta` the
+// model's pose change over the horizon (robot frame of `now`), `nominal_velocity` its
+// velocity (robot frame), `errors` its last nominal_errors errors (field frame, oldest
+// first).
+void EncodeNominalInputs(const FeatureLayout& layout, const Pose2& now, const Eigen::Vector3d& nominal_delta,
+                         const Twist2& nominal_velocity, const Eigen::Vector3d* errors, double* out);
 
 // The pose change from `now` to `later` in the robot frame of `now` (dx, dy, dtheta).
 Eigen::Vector3d EncodeDelta(const Pose2& now, const Pose2& later);

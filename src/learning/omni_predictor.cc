@@ -5,7 +5,9 @@
 #include <Eigen/Dense>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.h"
 #include "io/yaml_reader.h"
@@ -83,16 +85,80 @@ Eigen::Vector3d OmniPredictor::PredictDelta(const double* inputs) const {
   return weights_ * scratch_ + bias_;
 }
 
-Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands) const {
-  double inputs[256];
-  std::vector<double> big;
-  double* x = inputs;
-  if (info_.layout.num_inputs() > 256) {
-    big.resize(static_cast<std::size_t>(info_.layout.num_inputs()));
-    x = big.data();
+namespace {
+
+// Room for a predictor's inputs: on the stack for the usual sizes.
+class InputBuffer {
+ public:
+  explicit InputBuffer(int size) {
+    if (size > kOnStack) big_.resize(static_cast<std::size_t>(size));
   }
-  EncodeInputs(info_.layout, poses, commands, x);
-  return ApplyDelta(poses[info_.layout.history - 1], PredictDelta(x));
+  double* data() { return big_.empty() ? small_ : big_.data(); }
+
+ private:
+  static constexpr int kOnStack = 256;
+  double small_[kOnStack];
+  std::vector<double> big_;
+};
+
+}  // namespace
+
+Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands) const {
+  if (residual())
+    throw std::logic_error("OmniPredictor::Predict: a residual predictor needs its nominal model's track");
+  InputBuffer x(info_.layout.num_inputs());
+  EncodeInputs(info_.layout, poses, commands, x.data());
+  return ApplyDelta(poses[info_.layout.history - 1], PredictDelta(x.data()));
+}
+
+NominalOmniTrack OmniPredictor::MakeNominalTrack(const OmniModel& model) const {
+  if (!residual()) throw std::logic_error("OmniPredictor::MakeNominalTrack: not a residual predictor");
+  return NominalOmniTrack(model, info_.nominal_engine, info_.frame_rate, info_.nominal_substeps,
+                          info_.layout.nominal_errors);
+}
+
+Pose2 OmniPredictor::Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity,
+                               const Pose2& nominal_end, const std::vector<Eigen::Vector3d>& errors) const {
+  const FeatureLayout& layout = info_.layout;
+  const Pose2& now = poses[layout.history - 1];
+  InputBuffer x(layout.num_inputs());
+  EncodeInputs(layout, poses, commands, x.data());
+  const Eigen::Vector3d nominal = EncodeDelta(now, nominal_end);
+  EncodeNominalInputs(layout, now, nominal, nominal_velocity,
+                      errors.data() + errors.size() - static_cast<std::size_t>(layout.nominal_errors),
+                      x.data() + layout.num_seed_inputs());
+  return ApplyDelta(now, nominal + PredictDelta(x.data()));
+}
+
+Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const {
+  if (!residual()) return Predict(poses, commands);
+  const FeatureLayout& layout = info_.layout;
+  const Twist2 velocity = track->velocity();
+  const Pose2 end = track->Lookahead(commands + layout.history - 1, layout.horizon);
+  return Corrected(poses, commands, velocity, end, track->errors());
+}
+
+Pose2 OmniPredictor::Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const {
+  const FeatureLayout& layout = info_.layout;
+  if (layout.horizon != 1) throw std::logic_error("OmniPredictor::Step: a 1-frame predictor is needed");
+  if (!residual()) return Predict(poses, commands);
+  const Twist2 velocity = track->velocity();
+  const std::vector<Eigen::Vector3d> errors = track->errors();  // before the step shifts them
+  const Pose2 end = track->Step(commands[layout.history - 1]);
+  const Pose2 next = Corrected(poses, commands, velocity, end, errors);
+  // A prediction the nominal model cannot be put at (not finite, or faster than any
+  // robot: 50 m/s, 1000 rad/s) has run away; say so before an engine chokes on it.
+  const Pose2& now = poses[layout.history - 1];
+  const double dt = 1.0 / info_.frame_rate;
+  if (!IsFinite(next) || std::hypot(next.x - now.x, next.y - now.y) > 50 * dt || std::abs(next.theta - now.theta) > 1000 * dt) {
+    std::ostringstream msg;
+    msg << "the residual predictor ran away in one frame from x = " << now.x << " m, y = " << now.y
+        << " m, theta = " << now.theta << " rad to x = " << next.x << " m, y = " << next.y << " m, theta = " << next.theta
+        << " rad (its nominal model predicted x = " << end.x << " m, y = " << end.y << " m)";
+    throw CheckFailed(msg.str());
+  }
+  track->Correct(next);
+  return next;
 }
 
 void OmniPredictor::CheckUse(const OmniModel& model, double frame_rate, int horizon, const std::string& use) const {
@@ -112,11 +178,16 @@ void OmniPredictor::CheckUse(const OmniModel& model, double frame_rate, int hori
   if (info_.layout.command_lag != delay)
     throw InputError(where, "predictor assumes a delay of " + std::to_string(info_.layout.command_lag) +
                                 " frames, model '" + model.name + "' has " + std::to_string(delay));
+  if (residual() && NominalModelFingerprint(model) != info_.nominal_fingerprint)
+    throw InputError(where, "residual predictor was trained over another version of model '" + model.name +
+                                "' (its parameters or effects differ; fingerprint " + info_.nominal_fingerprint +
+                                ", this model's " + NominalModelFingerprint(model) + "): train it again over this one (" +
+                                use + ")");
 }
 
 void OmniPredictor::Save(const std::string& path) const {
   YAML::Emitter out;
-  BeginPredictorFile(out, kPredictorFormatVersion);
+  BeginPredictorFile(out, residual() ? kResidualPredictorFormatVersion : kPredictorFormatVersion);
   out << YAML::Key << "kind" << YAML::Value << info_.kind;
   out << YAML::Key << "model" << YAML::Value << info_.model_name;
   out << YAML::Key << "frame_rate" << YAML::Value << info_.frame_rate;
@@ -126,7 +197,18 @@ void OmniPredictor::Save(const std::string& path) const {
   out << YAML::Key << "command_lag" << YAML::Value << info_.layout.command_lag;
   out << YAML::Key << "inputs" << YAML::Value << info_.layout.num_inputs();
   out << YAML::Key << "outputs" << YAML::Value << FeatureLayout::kNumOutputs;
+  if (residual()) {
+    out << YAML::Key << "residual" << YAML::Value << true;
+    out << YAML::Key << "nominal_errors" << YAML::Value << info_.layout.nominal_errors;
+  }
   out << YAML::EndMap;
+  if (residual()) {
+    out << YAML::Key << "nominal" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "engine" << YAML::Value << info_.nominal_engine;
+    out << YAML::Key << "substeps" << YAML::Value << info_.nominal_substeps;
+    out << YAML::Key << "model_fingerprint" << YAML::Value << info_.nominal_fingerprint;
+    out << YAML::EndMap;
+  }
   EmitTrainedOn(out, info_.logs, info_.samples,
                 {{"train_rmse", info_.train_rmse},
                  {"validation_rmse", info_.validation_rmse},
@@ -140,7 +222,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   CheckPredictorRobot(root, path, "omni");
   ErrorList errors;
   YamlMap top(root, path, "", &errors);
-  ReadPredictorVersion(top, "predictor", kPredictorFormatVersion, kPredictorFormatVersion);
+  const int version = ReadPredictorVersion(top, "predictor", kPredictorFormatVersion, kResidualPredictorFormatVersion);
   OmniPredictorInfo info;
   top.Require("kind", &info.kind, std::vector<std::string>{"linear", "mlp"});
   top.Require("model", &info.model_name);
@@ -150,6 +232,10 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
     l.Require("history", &info.layout.history, InRange(1, 100));
     l.Require("horizon", &info.layout.horizon, InRange(1, 100));
     l.Require("command_lag", &info.layout.command_lag, InRange(0, 100));
+    if (version >= 3) {
+      l.Get("residual", &info.layout.residual);
+      if (info.layout.residual) l.Require("nominal_errors", &info.layout.nominal_errors, InRange(0, 100));
+    }
     int inputs = 0, outputs = 0;
     if (l.Require("inputs", &inputs) && inputs != info.layout.num_inputs())
       l.Error("inputs", "does not match history and horizon (expected " + std::to_string(info.layout.num_inputs()) + ")");
@@ -158,6 +244,17 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
     l.Finish();
   } else {
     top.Missing("layout");
+  }
+  if (info.layout.residual) {
+    if (top.Has("nominal")) {
+      YamlMap n(top.Child("nominal"), path, "nominal", &errors);
+      n.Require("engine", &info.nominal_engine, std::vector<std::string>{"analytic", "ode", "bullet"});
+      n.Require("substeps", &info.nominal_substeps, InRange(1, 1000));
+      n.Require("model_fingerprint", &info.nominal_fingerprint);
+      n.Finish();
+    } else {
+      top.Missing("nominal");
+    }
   }
   ReadTrainedOn(top, &info.logs, &info.samples,
                 {{"train_rmse", &info.train_rmse},
@@ -186,6 +283,14 @@ bool OmniTrainOptions::IsValid(std::string* why) const {
   if (horizon < 1 || horizon > 30) return fail("--horizon must be 1 to 30 frames, got " + std::to_string(horizon));
   if (ridge < 0) return fail("ridge must not be negative");
   if (validation_fraction <= 0 || validation_fraction >= 0.9) return fail("validation fraction must be in (0, 0.9)");
+  if (residual) {
+    if (nominal_engine != "analytic" && nominal_engine != "ode" && nominal_engine != "bullet")
+      return fail("--nominal-engine must be analytic, ode or bullet, got '" + nominal_engine + "'");
+    if (nominal_substeps < 0 || nominal_substeps > 1000)
+      return fail("--nominal-substeps must be 1 to 1000 (or 0 to choose), got " + std::to_string(nominal_substeps));
+    if (nominal_errors < 0 || nominal_errors > 30)
+      return fail("nominal errors must be 0 to 30 frames, got " + std::to_string(nominal_errors));
+  }
   if (kind == "mlp") return mlp.IsValid(why);
   return true;
 }
@@ -202,10 +307,17 @@ std::string OmniTrainSummary::BriefReport() const {
 
 namespace {
 
+// Where a held-out rollout of a residual predictor starts: the frame and its track's state.
+struct ResidualStart {
+  int frame = 0;
+  NominalTrackState track;
+};
+
 // One log's frames, split in time: windows ending before `cut` train, the rest validate.
 struct SplitLog {
   FrameSequence seq;
   int cut = 0;
+  std::vector<ResidualStart> residual_starts;  // residual predictors: the held-out rollouts' starts
 };
 
 // Runs the 1-frame model on its own from every window ending in [first, last - frames],
@@ -236,6 +348,101 @@ std::pair<double, long> Rollouts(const OmniPredictor& model, const FrameSequence
   return {sum, count};
 }
 
+// A residual predictor's samples from one log: the nominal model is carried along the
+// measured poses (NominalOmniTrack) from the first frame with a known command and a
+// frame before it, and a window ending at frame i is a sample once the track has run
+// kNominalWarmUpFrames: into *train when i + H < cut, into *validation when i >= cut.
+// Every `stride`-th validation window with `rollout_frames` observed frames after it is
+// a rollout start. Returns the number of samples.
+int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout, double frame_rate, int cut,
+                          NominalOmniTrack* track, OmniDataset* train, OmniDataset* validation, int rollout_frames,
+                          int stride, std::vector<ResidualStart>* starts) {
+  const int h = layout.history, horizon = layout.horizon, frames = seq.frames();
+  int f0 = std::max(seq.first_known_command, 1);
+  while (f0 < frames && !(seq.observed[static_cast<std::size_t>(f0)] && seq.observed[static_cast<std::size_t>(f0 - 1)])) ++f0;
+  if (f0 >= frames) return 0;
+  const Pose2& a = seq.pose[static_cast<std::size_t>(f0 - 1)];
+  const Pose2& b = seq.pose[static_cast<std::size_t>(f0)];
+  const Twist2 field_v{(b.x - a.x) * frame_rate, (b.y - a.y) * frame_rate, WrapAngle(b.theta - a.theta) * frame_rate};
+  track->Reset(b, FieldToBody(field_v, b.theta));
+
+  const int in = layout.num_inputs();
+  std::vector<double> train_x, train_y, val_x, val_y;
+  std::vector<double> row(static_cast<std::size_t>(in));
+  int validation_windows = 0;
+  for (int f = f0; f < frames; ++f) {
+    const auto uf = static_cast<std::size_t>(f);
+    if (seq.observed[uf]) track->Correct(seq.pose[uf]);
+    const int start = f - h + 1;
+    const bool usable = f >= f0 + kNominalWarmUpFrames && start >= seq.first_known_command && f + horizon < frames &&
+                        seq.Complete(start, f) && seq.observed[static_cast<std::size_t>(f + horizon)];
+    const bool for_training = usable && f + horizon < cut;
+    const bool for_validation = usable && f >= cut;
+    bool stepped = false;
+    if (for_training || for_validation) {
+      if (for_validation && validation_windows++ % stride == 0 && seq.Complete(start, std::min(f + rollout_frames, frames - 1)) &&
+          f + rollout_frames < frames)
+        starts->push_back({f, track->Save()});
+      const Pose2& now = seq.pose[uf];
+      const Twist2 velocity = track->velocity();
+      const std::vector<Eigen::Vector3d> errors = track->errors();
+      Pose2 end;
+      if (horizon == 1) {
+        end = track->Step(seq.acting[uf]);
+        stepped = true;
+      } else {
+        end = track->Lookahead(&seq.acting[uf], horizon);
+      }
+      EncodeInputs(layout, &seq.pose[static_cast<std::size_t>(start)], &seq.acting[static_cast<std::size_t>(start)],
+                   row.data());
+      const Eigen::Vector3d nominal = EncodeDelta(now, end);
+      EncodeNominalInputs(layout, now, nominal, velocity, errors.data() + errors.size() - layout.nominal_errors,
+                          row.data() + layout.num_seed_inputs());
+      Eigen::Vector3d y = EncodeDelta(now, seq.pose[static_cast<std::size_t>(f + horizon)]) - nominal;
+      y[2] = WrapAngle(y[2]);
+      std::vector<double>& xs = for_training ? train_x : val_x;
+      std::vector<double>& ys = for_training ? train_y : val_y;
+      xs.insert(xs.end(), row.begin(), row.end());
+      ys.insert(ys.end(), y.data(), y.data() + 3);
+    }
+    if (!stepped && f + 1 < frames) track->Step(seq.acting[uf]);
+  }
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  auto append = [&](const std::vector<double>& xs, const std::vector<double>& ys, OmniDataset* data) {
+    const long n = static_cast<long>(ys.size() / 3);
+    const Eigen::MatrixXd x = Eigen::Map<const RowMajor>(xs.data(), n, in);
+    const Eigen::MatrixXd y = Eigen::Map<const RowMajor>(ys.data(), n, 3);
+    AppendRows(x, y, data);
+    return static_cast<int>(n);
+  };
+  return append(train_x, train_y, train) + append(val_x, val_y, validation);
+}
+
+// The residual 1-frame predictor on its own for `frames` frames from each start (its
+// track restored there) under the logged acting commands: the summed squared position
+// error over all steps and their count.
+std::pair<double, long> ResidualRollouts(const OmniPredictor& model, const FrameSequence& seq,
+                                         const std::vector<ResidualStart>& starts, int frames, NominalOmniTrack* track) {
+  const int h = model.info().layout.history;
+  std::vector<Pose2> window(static_cast<std::size_t>(h));
+  double sum = 0;
+  long count = 0;
+  for (const ResidualStart& s : starts) {
+    track->Restore(s.track);
+    for (int j = 0; j < h; ++j) window[static_cast<std::size_t>(j)] = seq.pose[static_cast<std::size_t>(s.frame - h + 1 + j)];
+    for (int t = 0; t < frames; ++t) {
+      const int i = s.frame + t;
+      const Pose2 next = model.Step(window.data(), &seq.acting[static_cast<std::size_t>(i - h + 1)], track);
+      const Pose2& truth = seq.pose[static_cast<std::size_t>(i + 1)];
+      window.erase(window.begin());
+      window.push_back(next);
+      sum += std::pow(next.x - truth.x, 2) + std::pow(next.y - truth.y, 2);
+      ++count;
+    }
+  }
+  return {sum, count};
+}
+
 }  // namespace
 
 OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
@@ -249,6 +456,20 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
   info.model_name = model.name;
   info.frame_rate = 1.0 / logs[0].frame_period;
   info.layout = PredictorLayout(model, options.horizon);
+  const int rollout_frames = static_cast<int>(std::lround(info.frame_rate));  // 1 s
+  std::unique_ptr<NominalOmniTrack> track;
+  if (options.residual) {
+    info.layout.residual = true;
+    info.layout.nominal_errors = options.nominal_errors;
+    info.nominal_engine = options.nominal_engine;
+    info.nominal_fingerprint = NominalModelFingerprint(model);
+    info.nominal_substeps = options.nominal_substeps > 0 ? options.nominal_substeps
+                            : info.nominal_engine == "analytic"
+                                ? std::max(1, DefaultPhysicsSubsteps(info.frame_rate) / 5)
+                                : DefaultPhysicsSubsteps(info.frame_rate);
+    track = std::make_unique<NominalOmniTrack>(model, info.nominal_engine, info.frame_rate, info.nominal_substeps,
+                                               info.layout.nominal_errors);
+  }
 
   // Per log: the first part trains, the last part validates (time order kept).
   OmniDataset train, validation;
@@ -259,10 +480,20 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
       msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info.frame_rate << " fps";
       throw InputError(SourceLocation{log.path}, msg.str());
     }
-    SplitLog part{ToFrameSequence(log, info.layout), 0};
+    SplitLog part{ToFrameSequence(log, info.layout), 0, {}};
     part.cut = static_cast<int>(std::round(part.seq.frames() * (1 - options.validation_fraction)));
-    const int n_train = AppendSamples(part.seq, info.layout, 0, part.cut - 1 - info.layout.horizon, &train);
-    const int n_val = AppendSamples(part.seq, info.layout, part.cut, part.seq.frames() - 1, &validation);
+    int n_train = 0, n_val = 0;
+    if (track) {
+      const int before_train = train.rows(), before_val = validation.rows();
+      const int stride = std::max(1, (part.seq.frames() - part.cut) / 2000);  // bounds the rollouts' cost
+      AppendResidualSamples(part.seq, info.layout, info.frame_rate, part.cut, track.get(), &train, &validation,
+                            rollout_frames, stride, &part.residual_starts);
+      n_train = train.rows() - before_train;
+      n_val = validation.rows() - before_val;
+    } else {
+      n_train = AppendSamples(part.seq, info.layout, 0, part.cut - 1 - info.layout.horizon, &train);
+      n_val = AppendSamples(part.seq, info.layout, part.cut, part.seq.frames() - 1, &validation);
+    }
     const int needed = info.layout.history + info.layout.command_lag + info.layout.horizon;
     if (n_train < 10 || n_val < 1)
       throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows.size()) +
@@ -305,12 +536,12 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     mlp_report = s.BriefReport();
     return MakeMlpPredictor(info, std::move(net));
   };
-  const int rollout_frames = static_cast<int>(std::lround(info.frame_rate));  // 1 s
   auto rollout_rmse = [&](const OmniPredictor& model) {
     double sum = 0;
     long count = 0;
     for (const SplitLog& part : split) {
-      auto [s, c] = Rollouts(model, part.seq, part.cut, part.seq.frames() - 1, rollout_frames);
+      auto [s, c] = track ? ResidualRollouts(model, part.seq, part.residual_starts, rollout_frames, track.get())
+                          : Rollouts(model, part.seq, part.cut, part.seq.frames() - 1, rollout_frames);
       sum += s;
       count += c;
     }

@@ -1,16 +1,26 @@
 // A learned omni robot model: predicts the pose H frames ahead from the last frames
 // and the commands (omni_features.h), by ridge regression or a small neural net.
 //
+// A residual ("hybrid") predictor (`train --residual`) learns only what the Newtonian
+// model misses: its prediction is the model's own (on one of the engines, carried along
+// the poses by a NominalOmniTrack, learning/omni_residual.h) plus a learned correction,
+// with the model's state and recent errors among its inputs. Where the model is right it
+// has little to learn; where it misses an effect it learns the effect.
+//
 // A predictor file (YAML, versioned) says what it was trained on: the robot model's
 // name, the frame rate, the feature layout (history, horizon, command lag), the logs
-// and the fit. Load() checks the file; CheckUse() refuses a use that does not match
-// with a clear message (exit code 2 on the command line).
+// and the fit; a residual one also the engine and a fingerprint of the model it
+// corrects. Load() checks the file; CheckUse() refuses a use that does not match with a
+// clear message (exit code 2 on the command line).
 //
 //   OmniPredictor p = TrainOmniPredictor(model, logs, options, &summary);
 //   p.Save("blue.pred");
 //   OmniPredictor q = OmniPredictor::Load("blue.pred");
 //   q.CheckUse(model, 30.0, 1, "the learned backend");
 //   Eigen::Vector3d delta = q.PredictDelta(inputs);   // robot frame of the newest pose
+//   // a residual one, with the model it corrects carried along the poses:
+//   NominalOmniTrack track = q.MakeNominalTrack(model);
+//   Pose2 next = q.Step(poses, commands, &track);     // H = 1, the track moves along
 #pragma once
 
 #include <Eigen/Core>
@@ -20,12 +30,17 @@
 
 #include "learning/mlp.h"
 #include "learning/omni_features.h"
+#include "learning/omni_residual.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
 
-inline constexpr int kPredictorFormatVersion = 2;  // 2: heading as (sin, cos - 1)
+// 2: heading as (sin, cos - 1). 3: residual predictors (the `nominal` block and the
+// layout's `residual`, `nominal_errors`); the seed's predictors are still written as 2,
+// so that older builds keep reading them, and those refuse a residual one by its version.
+inline constexpr int kPredictorFormatVersion = 2;
+inline constexpr int kResidualPredictorFormatVersion = 3;
 
 struct OmniPredictorInfo {
   std::string kind;           // "linear" or "mlp"
@@ -37,6 +52,10 @@ struct OmniPredictorInfo {
   double train_rmse = 0;          // m, position part of the fit on the training split
   double validation_rmse = 0;     // m, on the held-out split (last 20 % of each log)
   double validation_rollout_rmse = 0;  // m, H = 1: the model run on its own for 1 s, held out
+  // Residual predictors (layout.residual) only:
+  std::string nominal_engine;       // the engine of the model it corrects: analytic, ode, bullet
+  int nominal_substeps = 0;         // that model's physics steps per frame
+  std::string nominal_fingerprint;  // NominalModelFingerprint() of that model
 };
 
 class OmniPredictor {
@@ -46,12 +65,26 @@ class OmniPredictor {
   // The pose change (robot frame of the newest pose: dx m, dy m, dtheta rad) for inputs
   // laid out as info().layout says (num_inputs() numbers).
   Eigen::Vector3d PredictDelta(const double* inputs) const;
+  bool residual() const { return info_.layout.residual; }
+
   // The pose H frames after poses.back(), from `history` poses and num_commands()
-  // acting commands (omni_features.h).
+  // acting commands (omni_features.h). Throws std::logic_error for a residual predictor,
+  // which needs its track (below).
   Pose2 Predict(const Pose2* poses, const Twist2* commands) const;
 
+  // Residual predictors: the model they correct, ready to be carried along the poses
+  // (Reset, then Step and Correct each frame). `model` must have passed CheckUse().
+  NominalOmniTrack MakeNominalTrack(const OmniModel& model) const;
+  // The pose H frames after poses.back(), `track` standing at that pose (corrected to
+  // it); the track is left as it was.
+  Pose2 Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const;
+  // H = 1 on its own: the next pose, and `track` moved on to it (stepped and corrected),
+  // ready for the next call. Throws CheckFailed when the nominal model runs away.
+  Pose2 Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const;
+
   // Throws InputError naming the file when the predictor was trained for another
-  // robot model, frame rate (more than 1 % off) or horizon; `use` names the user.
+  // robot model, frame rate (more than 1 % off) or horizon, or (residual) over a model
+  // whose parameters differ from `model`'s; `use` names the user.
   void CheckUse(const OmniModel& model, double frame_rate, int horizon, const std::string& use) const;
 
   // Writes the file atomically.
@@ -72,6 +105,12 @@ class OmniPredictor {
   Eigen::VectorXd input_mean_, input_scale_;  // in
   Eigen::MatrixXd weights_;                   // 3 x in
   Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();
+  // A residual predictor's pose: the nominal model's prediction `nominal_end` of the pose
+  // H frames after poses[history - 1], corrected; `nominal_velocity` and `errors` are the
+  // model's at poses[history - 1].
+  Pose2 Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity, const Pose2& nominal_end,
+                  const std::vector<Eigen::Vector3d>& errors) const;
+
   Mlp mlp_;
   Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs
   mutable Eigen::VectorXd scratch_;           // in, normalised inputs (linear)
@@ -80,6 +119,15 @@ class OmniPredictor {
 struct OmniTrainOptions {
   std::string kind = "linear";   // linear | mlp
   int horizon = 1;               // H, frames
+  bool residual = false;         // learn the correction to the Newtonian model's prediction
+  std::string nominal_engine = "analytic";  // residual: the engine that model runs on
+  // Residual: that model's physics steps per frame; 0 chooses: 2 on analytic (at 30 fps it
+  // predicts as well as the loop's 10 at a fifth of the cost), the loop's on ode and bullet
+  // (whose contacts need it; measured, docs/learning.md).
+  int nominal_substeps = 0;
+  // Residual: the model's last one-frame errors among the inputs. 0 by default: on logs
+  // with camera noise they made every predictor measured worse (docs/learning.md).
+  int nominal_errors = 0;
   double ridge = 1e-3;           // linear: L2 weight on standardised inputs, per sample
   double validation_fraction = 0.2;  // held out from the end of every log
   MlpOptions mlp;

@@ -76,33 +76,72 @@ class GoToPoseSource final : public CommandSource {
  private:
   // The pose to act on: the newest observation, or with a predictor, where the robot
   // will be D frames after it, from the last observations and the commands already sent.
-  Pose2 Believed(const BehaviourInput& in) const {
+  Pose2 Believed(const BehaviourInput& in) {
     const std::vector<Observation>& seen = *in.observations;
     if (!spec_.predictor) return seen.back().pose;
     const FeatureLayout& layout = spec_.predictor->info().layout;
     const int h = layout.history, lag = layout.command_lag;
+    const int newest_row = in.frame;
+    // Commands acting at row r were sent `lag` frames earlier; sent_ holds rows
+    // newest_row - sent_.size() .. newest_row - 1. Before the run the robot stood still.
+    bool known = true;
+    auto acting = [&](int row) {
+      const int frame = row - lag;
+      const int back = newest_row - frame;  // 1 = the previous frame's command
+      if (frame < 0) return Twist2{};
+      if (back < 1 || back > static_cast<int>(sent_.size())) {
+        known = false;
+        return Twist2{};
+      }
+      return sent_[sent_.size() - static_cast<std::size_t>(back)];
+    };
+    if (layout.residual) Follow(seen, newest_row, acting);
     // The window: observations delivered in rows k - h + 1 .. k, k = now.
     if (static_cast<int>(seen.size()) < h || seen.back().delivered != in.frame) return seen.back().pose;
-    const int newest_row = in.frame;
     std::vector<Pose2> poses(static_cast<std::size_t>(h));
     for (int j = 0; j < h; ++j) {
       const Observation& o = seen[seen.size() - static_cast<std::size_t>(h - j)];
       if (o.delivered != newest_row - (h - 1 - j)) return seen.back().pose;  // a lost frame
       poses[static_cast<std::size_t>(j)] = o.pose;
     }
-    // Commands acting at rows k-h+1 .. k+H-1 were sent `lag` frames earlier; the newest
-    // needed was sent at k+H-1-lag, which is before now when H <= lag.
+    // Commands acting at rows k-h+1 .. k+H-1; the newest needed was sent at k+H-1-lag,
+    // which is before now when H <= lag.
     std::vector<Twist2> commands(static_cast<std::size_t>(layout.num_commands()));
-    const int first_sent = newest_row - h + 1 - lag;
-    const int sent_end = newest_row;  // sent_ holds frames sent_end - sent_.size() .. sent_end - 1
-    for (int j = 0; j < layout.num_commands(); ++j) {
-      const int frame = first_sent + j;
-      const int back = sent_end - frame;  // 1 = the previous frame's command
-      if (frame < 0) continue;            // before the run: the robot stood still
-      if (back < 1 || back > static_cast<int>(sent_.size())) return seen.back().pose;
-      commands[static_cast<std::size_t>(j)] = sent_[sent_.size() - static_cast<std::size_t>(back)];
+    for (int j = 0; j < layout.num_commands(); ++j) commands[static_cast<std::size_t>(j)] = acting(newest_row - h + 1 + j);
+    if (!known) return seen.back().pose;
+    if (!layout.residual) return spec_.predictor->Predict(poses.data(), commands.data());
+    if (!track_ || newest_row - track_start_ < kNominalWarmUpFrames) return seen.back().pose;
+    return spec_.predictor->Predict(poses.data(), commands.data(), &*track_);
+  }
+
+  // A residual predictor's Newtonian model, carried along the observations up to row
+  // `newest_row` (as training carried it along the log): stepped a frame at a time under
+  // the commands acting then, corrected to every observation. It starts at the first two
+  // consecutive observations, with their velocity.
+  template <typename Acting>
+  void Follow(const std::vector<Observation>& seen, int newest_row, Acting& acting) {
+    auto observed = [&](int row) -> const Observation* {
+      for (auto it = seen.rbegin(); it != seen.rend() && it->delivered >= row; ++it)
+        if (it->delivered == row) return &*it;
+      return nullptr;
+    };
+    if (!track_) {
+      const Observation* now = observed(newest_row);
+      const Observation* before = observed(newest_row - 1);
+      if (!now || !before) return;
+      const double rate = spec_.predictor->info().frame_rate;
+      const Twist2 field{(now->pose.x - before->pose.x) * rate, (now->pose.y - before->pose.y) * rate,
+                         WrapAngle(now->pose.theta - before->pose.theta) * rate};
+      track_.emplace(spec_.predictor->MakeNominalTrack(*spec_.predictor_model));
+      track_->Reset(now->pose, FieldToBody(field, now->pose.theta));
+      track_row_ = track_start_ = newest_row;
+      return;
     }
-    return spec_.predictor->Predict(poses.data(), commands.data());
+    for (int row = track_row_ + 1; row <= newest_row; ++row) {
+      track_->Step(acting(row - 1));
+      if (const Observation* o = observed(row)) track_->Correct(o->pose);
+    }
+    track_row_ = std::max(track_row_, newest_row);
   }
 
   Twist2 Decide(const BehaviourInput& in) {
@@ -133,6 +172,8 @@ class GoToPoseSource final : public CommandSource {
   }
 
   CommandSpec spec_;
+  std::optional<NominalOmniTrack> track_;  // a residual predictor's model, at row track_row_
+  int track_row_ = 0, track_start_ = 0;
   std::size_t target_ = 0;
   std::optional<double> inside_since_;
   std::vector<Twist2> sent_;  // the commands sent so far (recent window), oldest first

@@ -64,8 +64,11 @@ struct CommandSpec {
   // "Predicting away the delay" (seed 000, section 4.1): with a predictor whose horizon
   // is the model's delay D, the behaviour acts on where the robot will be when the
   // command it sends now takes effect, not on the D-frame-old observation.
+  // A residual predictor carries its Newtonian model along the observations: that of
+  // `predictor_model` (the robot's, set when the scene is read).
   std::string predictor_path;
   std::shared_ptr<const OmniPredictor> predictor;
+  std::shared_ptr<const OmniModel> predictor_model;
 };
 
 // Builds the source. `seed` and `robot_index` seed random plans; `duration` (s) is how

@@ -197,6 +197,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       const int delay = r.model.command_delay_frames + r.model.vision_delay_frames;
       try {
         r.commands.predictor->CheckUse(r.model, scene.frame_rate, delay, "go_to_pose of robot '" + r.name + "'");
+        scene.robots[i].commands.predictor_model = std::make_shared<const OmniModel>(r.model);
       } catch (const InputError& e) {
         errors.Add(e.what());
       }

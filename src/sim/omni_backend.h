@@ -12,9 +12,10 @@
 // them alike. MakeOmniBackend() (backends/omni_backend_factory.h) builds any by name.
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
-#include <utility>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/pose.h"
@@ -36,6 +37,8 @@ struct FrameTiming {
 // most 1/300 s that divides the frame (grSim: 5 steps per 60 fps frame).
 int DefaultPhysicsSubsteps(double frame_rate);
 
+struct NominalTrackState;
+
 // Everything that changes about one robot inside a backend.
 struct OmniRobotState {
   OmniBodyState body;
@@ -53,6 +56,18 @@ struct OmniRobotState {
   // The learned backend's window: the newest last.
   std::vector<Pose2> pose_history;
   std::vector<Twist2> command_history;
+  // A residual predictor's nominal model carried along those poses (learning/omni_residual.h).
+  std::shared_ptr<const NominalTrackState> nominal;
+};
+
+// What changes inside the Newtonian model that a residual predictor corrects
+// (NominalOmniTrack, learning/omni_residual.h): the model's own backend state, the pose
+// it predicted for the newest frame, and its recent errors (field frame: dx, dy m,
+// dtheta rad; the newest last).
+struct NominalTrackState {
+  std::vector<OmniRobotState> backend;
+  Pose2 predicted;
+  std::vector<Eigen::Vector3d> errors;
 };
 
 // A copy of everything that changes inside a backend (see OmniBackend::Save).

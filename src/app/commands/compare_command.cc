@@ -1,4 +1,4 @@
-// `twinsim compare --model MODEL --log LOG.csv --out DIR [--backend B ...] [--predictor P]`
+// `twinsim compare --model MODEL --log LOG.csv --out DIR [--backend B ...] [--predictor P ...]`
 #include <algorithm>
 #include <cstdio>
 #include <memory>
@@ -68,7 +68,7 @@ struct CompareCliOptions {
   std::string log;
   std::string out;
   std::vector<std::string> backends;  // empty: every physics backend built, and learned with --predictor
-  std::string predictor;
+  std::vector<std::string> predictors;
   double plot_seconds = 8;  // s of the log drawn in paths.png
   bool quiet = false;
 };
@@ -84,9 +84,9 @@ int Compare(const CompareCliOptions& options) {
   const OmniLog log = ReadOmniLog(options.log);
   const double frame_rate = 1.0 / log.frame_period;
 
-  std::shared_ptr<const OmniPredictor> predictor;
-  if (!options.predictor.empty()) predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
-  const OmniCompareOptions compare = MakeCompareOptions(model, log, options.backends, predictor);
+  std::vector<std::shared_ptr<const OmniPredictor>> predictors;
+  for (const std::string& path : options.predictors) predictors.push_back(std::make_shared<OmniPredictor>(OmniPredictor::Load(path)));
+  const OmniCompareOptions compare = MakeCompareOptions(model, log, options.backends, predictors, options.predictors);
 
   Progress progress("compare", !options.quiet);
   const OmniCompareResult result = CompareOmniLog(
@@ -131,13 +131,16 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
       "              (m, m, rad; one row per backend and horizon)\n"
       "  paths.csv   t,measured_x,measured_y,measured_theta,<backend>_x,<backend>_y,<backend>_theta,...\n"
       "              (the free run of every backend, one row per log row)\n"
-      "Default backends: every physics backend built, plus learned when --predictor is given.");
+      "Default backends: every physics backend built, plus learned when --predictor is given.\n"
+      "Several --predictor files (the seed's and a residual one, say) each run on the learned backend,\n"
+      "labelled 'learned' or 'residual' after their kind (and their file's name where two share one).");
   cmd->add_option("--model", options->model, "Model file (YAML)")->required();
   cmd->add_option("--log", options->log, "Measured log (CSV: t,x,y,theta,vx_cmd,vy_cmd,omega_cmd)")->required();
   cmd->add_option("--out", options->out, "Output folder")->required();
   cmd->add_option("--backend", options->backends,
                   "Backend to compare (repeat --backend): ode, bullet, analytic or learned");
-  cmd->add_option("--predictor", options->predictor, "1-frame predictor for the learned backend (from twinsim train)");
+  cmd->add_option("--predictor", options->predictors,
+                  "1-frame predictor for the learned backend (from twinsim train; repeat for several)");
   cmd->add_option("--plot-seconds", options->plot_seconds, "Seconds of the log drawn in paths.png")
       ->capture_default_str()
       ->check(PositiveNumber());

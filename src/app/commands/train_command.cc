@@ -1,5 +1,6 @@
 // `twinsim train --model MODEL --log LOG.csv [--log ...] --kind linear|mlp --horizon H --out P`
-// (arms also: --history N, --residual [--nominal-errors on|off])
+// [--residual [--nominal-engine E] [--nominal-errors on|off]] (arms also: --history N)
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -7,6 +8,7 @@
 #include "app/commands/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "engines/omni_engine.h"
 #include "io/output_files.h"
 #include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
@@ -24,8 +26,10 @@ struct TrainCliOptions {
   OmniTrainOptions train;
   int history = 4;     // arm only: samples of history
   bool history_given = false;
-  bool residual = false;                // arm only: learn the correction to the nominal model
-  std::optional<bool> nominal_errors;   // arm residual only
+  bool residual = false;                // learn the correction to the nominal model
+  std::optional<bool> nominal_errors;   // residual only: its recent errors as inputs
+  std::optional<std::string> nominal_engine;  // omni residual only
+  std::optional<int> nominal_substeps;         // omni residual only
   bool quiet = false;
 };
 
@@ -46,6 +50,9 @@ int TrainArm(const TrainCliOptions& options) {
   if (options.nominal_errors && !options.residual)
     throw InputError("--nominal-errors is for residual predictors only (add --residual)");
   train.nominal_errors = options.nominal_errors;
+  if (options.nominal_engine || options.nominal_substeps)
+    throw InputError("--nominal-engine and --nominal-substeps are for omni robots (an arm's nominal step runs on the "
+                     "analytic model)");
   if (std::string problem; !train.IsValid(&problem)) throw InputError(problem);
 
   const std::string what = (train.residual ? "residual " : "") + train.kind;
@@ -76,18 +83,30 @@ int TrainArm(const TrainCliOptions& options) {
 int Train(const TrainCliOptions& options) {
   if (ModelFileRobotKind(options.model) == "arm") return TrainArm(options);
   if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
-  if (options.residual || options.nominal_errors)
-    throw InputError("--residual and --nominal-errors are for arm models only");
+  if ((options.nominal_errors || options.nominal_engine || options.nominal_substeps) && !options.residual)
+    throw InputError("--nominal-engine, --nominal-substeps and --nominal-errors are for residual predictors only "
+                     "(add --residual)");
   // Read and check everything before training or writing.
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs;
   for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path));
-  if (std::string problem; !options.train.IsValid(&problem)) throw InputError(problem);
+  OmniTrainOptions train = options.train;
+  train.residual = options.residual;
+  if (options.nominal_engine) train.nominal_engine = *options.nominal_engine;
+  if (options.nominal_substeps) train.nominal_substeps = *options.nominal_substeps;
+  if (options.nominal_errors) train.nominal_errors = *options.nominal_errors ? 5 : 0;
+  if (std::string problem; !train.IsValid(&problem)) throw InputError(problem);
+  if (train.residual) {
+    const std::vector<std::string> built = AvailableOmniEngines();
+    if (std::find(built.begin(), built.end(), train.nominal_engine) == built.end())
+      throw InputError("--nominal-engine " + train.nominal_engine + " is not compiled into this build");
+  }
 
-  Progress progress("train " + options.train.kind, !options.quiet);
+  const std::string what = (train.residual ? "residual " : "") + train.kind;
+  Progress progress("train " + what, !options.quiet);
   OmniTrainSummary summary;
   const OmniPredictor predictor = TrainOmniPredictor(
-      model, logs, options.train, &summary, [&](int epoch, int epochs, double validation_mse) {
+      model, logs, train, &summary, [&](int epoch, int epochs, double validation_mse) {
         char detail[64];
         std::snprintf(detail, sizeof detail, "epoch %d, validation mse %.4f", epoch, validation_mse);
         progress.Update(epoch, epochs, detail);
@@ -97,8 +116,11 @@ int Train(const TrainCliOptions& options) {
   predictor.Save(options.out);
   files.Add(options.out);
   if (!options.quiet) {
-    std::printf("%s predictor of %s, %d frame(s) ahead at %g fps: %s\n", options.train.kind.c_str(),
-                model.name.c_str(), options.train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
+    const std::string over = train.residual ? ", over its Newtonian model on " + train.nominal_engine +
+                                                  (train.nominal_errors > 0 ? " with its recent errors" : "")
+                                            : "";
+    std::printf("%s predictor of %s%s, %d frame(s) ahead at %g fps: %s\n", what.c_str(), model.name.c_str(),
+                over.c_str(), train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
     files.PrintWrote();
   }
   return kExitOk;
@@ -117,10 +139,12 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       "Arms (URDF, or YAML with 'robot: arm'; logs t,q1..qn,tau1..taun[,qd..]): the last --history\n"
       "samples of joint positions (sin, cos for revolute joints), velocities and the torques acting\n"
       "then (the logged command, delay_samples later); output: the joint state H samples ahead.\n"
-      "--residual: learn only the correction to the model file's own one-sample step (rigid-body\n"
-      "dynamics with its friction); --nominal-errors on|off adds that model's errors over the\n"
-      "history to the inputs (default on for linear, off for mlp).\n"
-      "See docs/arm_learning.md.");
+      "--residual: learn only the correction to the model file's own prediction (omni: the Newtonian\n"
+      "robot on --nominal-engine, carried along the log; arms: the one-sample step, rigid-body\n"
+      "dynamics with its friction); --nominal-errors on|off adds that model's recent errors to the\n"
+      "inputs (omni: its last 5 one-frame errors, default off; arms: over the history, default on for\n"
+      "linear, off for mlp). A residual predictor works only with the model file it was trained over.\n"
+      "See docs/learning.md and docs/arm_learning.md.");
   cmd->add_option("--model", options->model, "The robot's model file (its name and delay go into the predictor)")
       ->required();
   cmd->add_option("--log", options->logs, "Measured log(s) in the contract's format (repeat --log)")->required();
@@ -133,12 +157,20 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str()
       ->each([options](const std::string&) { options->history_given = true; });
   cmd->add_flag("--residual", options->residual,
-                "Arms only: predict the model's own step plus a learned correction (hybrid)");
+                "Predict the model's own motion plus a learned correction (hybrid)");
   cmd->add_option_function<std::string>(
          "--nominal-errors",
          [options](const std::string& v) { options->nominal_errors = v == "on"; },
-         "Arms, with --residual: the nominal model's recent errors as inputs (on|off)")
+         "With --residual: the nominal model's recent errors as inputs (on|off)")
       ->check(CLI::IsMember({"on", "off"}));
+  cmd->add_option_function<std::string>(
+         "--nominal-engine", [options](const std::string& v) { options->nominal_engine = v; },
+         "Omni, with --residual: the engine of the model it corrects (analytic, ode, bullet; default analytic)")
+      ->check(CLI::IsMember({"analytic", "ode", "bullet"}));
+  cmd->add_option_function<int>(
+      "--nominal-substeps", [options](const int& v) { options->nominal_substeps = v; },
+      "Omni, with --residual: physics steps per frame of the model it corrects (default: a fifth of the "
+      "loop's on analytic, 2 at 30 fps; the loop's on ode and bullet)");
   cmd->add_option("--seed", options->train.mlp.seed, "Seed of the neural net's initialisation and batches")
       ->capture_default_str();
   cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training")->capture_default_str();

@@ -16,6 +16,7 @@ class LearnedOmniBackend final : public OmniBackend {
     robots_.resize(robots.size());
     for (std::size_t i = 0; i < robots.size(); ++i) {
       predictor_->CheckUse(robots[i], timing.frame_rate, 1, "the learned backend");
+      if (predictor_->residual()) tracks_.push_back(predictor_->MakeNominalTrack(robots[i]));
       Reset(static_cast<int>(i), Pose2{}, Twist2{});
     }
   }
@@ -37,9 +38,13 @@ class LearnedOmniBackend final : public OmniBackend {
       const Twist2 field = BodyToField(velocity, 0.5 * (theta + pose.theta));
       s.pose_history[static_cast<std::size_t>(j)] = Pose2{pose.x - field.vx * back, pose.y - field.vy * back, theta};
     }
+    if (!tracks_.empty()) tracks_[static_cast<std::size_t>(robot)].Reset(pose, velocity);
   }
 
-  void MoveBody(int robot, const Pose2& pose) override { At(robot).pose_history.back() = pose; }
+  void MoveBody(int robot, const Pose2& pose) override {
+    At(robot).pose_history.back() = pose;
+    if (!tracks_.empty()) tracks_[static_cast<std::size_t>(robot)].Correct(pose);
+  }
 
   void StepFrame(const std::vector<Twist2>& commands) override {
     if (static_cast<int>(commands.size()) != num_robots())
@@ -48,7 +53,10 @@ class LearnedOmniBackend final : public OmniBackend {
       OmniRobotState& s = At(i);
       s.command_history.erase(s.command_history.begin());
       s.command_history.push_back(commands[static_cast<std::size_t>(i)]);
-      const Pose2 next = predictor_->Predict(s.pose_history.data(), s.command_history.data());
+      const Pose2 next =
+          tracks_.empty()
+              ? predictor_->Predict(s.pose_history.data(), s.command_history.data())
+              : predictor_->Step(s.pose_history.data(), s.command_history.data(), &tracks_[static_cast<std::size_t>(i)]);
       s.pose_history.erase(s.pose_history.begin());
       s.pose_history.push_back(next);
     }
@@ -67,11 +75,21 @@ class LearnedOmniBackend final : public OmniBackend {
     return out;
   }
 
-  OmniBackendState Save() const override { return OmniBackendState{robots_}; }
+  OmniBackendState Save() const override {
+    OmniBackendState state{robots_};
+    for (std::size_t i = 0; i < tracks_.size(); ++i)
+      state.robots[i].nominal = std::make_shared<const NominalTrackState>(tracks_[i].Save());
+    return state;
+  }
   void Restore(const OmniBackendState& state) override {
     if (state.robots.size() != robots_.size())
       throw std::invalid_argument("Restore: state has the wrong number of robots");
     robots_ = state.robots;
+    for (std::size_t i = 0; i < tracks_.size(); ++i) {
+      if (!robots_[i].nominal) throw std::invalid_argument("Restore: state lacks the residual predictor's track");
+      tracks_[i].Restore(*robots_[i].nominal);
+      robots_[i].nominal.reset();
+    }
   }
 
  private:
@@ -81,6 +99,7 @@ class LearnedOmniBackend final : public OmniBackend {
   std::shared_ptr<const OmniPredictor> predictor_;
   FeatureLayout layout_;
   std::vector<OmniRobotState> robots_;
+  std::vector<NominalOmniTrack> tracks_;  // a residual predictor's nominal model per robot; empty otherwise
 };
 
 }  // namespace

@@ -5,7 +5,9 @@
 //
 // Its state per robot is the predictor's window: the last `history` poses and the
 // commands that acted at those frames. Reset() fills the window with a steady motion at
-// the given velocity (commanded as such); MoveBody() replaces the newest pose.
+// the given velocity (commanded as such); MoveBody() replaces the newest pose. With a
+// residual predictor each robot also carries the Newtonian model it corrects
+// (NominalOmniTrack), stepped with it and moved to every pose it predicts or is given.
 #pragma once
 
 #include <memory>

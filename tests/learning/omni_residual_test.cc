@@ -1,0 +1,226 @@
+// The residual ("hybrid") omni predictor: the Newtonian model carried along the poses plus a
+// learned correction (learning/omni_residual.h, docs/learning.md).
+#include "learning/omni_residual.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "analysis/omni_replay.h"
+#include "core/error.h"
+#include "learning/omni_predictor.h"
+#include "robots/omni/omni_effects.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+OmniLog Record(const OmniModel& model, double seconds, std::uint64_t seed, const std::string& name) {
+  return testing::RecordLog(model, testing::RandomDrive(2.0, 2.0, 2.0), seconds, seed, "analytic", name);
+}
+
+OmniModel Quiet(OmniModel m) {
+  m.vision_noise_xy = 0;
+  m.vision_noise_theta = 0;
+  return m;
+}
+
+// The plant of the numbers: the four-wheel robot with a traction limit and a motor
+// lag that its Newtonian model lacks.
+OmniModel SlippingLaggingPlant() {
+  OmniModel m = testing::Omni4();
+  SetOmniEffect("traction_limit", {{"a_max", 1.2}}, &m.effects);
+  SetOmniEffect("motor_lag", {{"time_constant", 0.08}}, &m.effects);
+  return m;
+}
+
+double ReplayRmse(const OmniModel& model, const OmniLog& log, const std::string& backend, int horizon,
+                  std::shared_ptr<const OmniPredictor> predictor = nullptr) {
+  OmniReplayOptions o;
+  o.backend = backend;
+  o.horizon = horizon;
+  o.backend_options.predictor = std::move(predictor);
+  return PositionRmse(log, ReplayOmniLog(model, log, o));
+}
+
+TEST(NominalOmniTrack, FollowsALogOfItsOwnModelWithZeroErrors) {
+  // Carried along a noise-free log the model itself recorded on the same engine, the
+  // track's one-frame predictions are the log's next poses, to the rounding of the log
+  // (as replay's tracker, tests/analysis/omni_replay_test.cc).
+  const OmniModel m = Quiet(testing::Omni4());
+  const OmniLog log = Record(m, 20, 3, "own.csv");
+  const FeatureLayout layout = PredictorLayout(m, 1);
+  const FrameSequence seq = ToFrameSequence(log, layout);
+  NominalOmniTrack track(m, "analytic", 30, 0, 5);  // the loop's physics step
+  // The log starts at rest; the track starts there too.
+  track.Reset(seq.pose[0], Twist2{});
+  double worst = 0, sum = 0;
+  for (int f = 0; f + 1 < seq.frames(); ++f) {
+    track.Step(seq.acting[static_cast<std::size_t>(f)]);
+    track.Correct(seq.pose[static_cast<std::size_t>(f + 1)]);
+    const double e = track.errors().back().head<2>().norm();
+    worst = std::max(worst, e);
+    sum += e * e;
+  }
+  EXPECT_LT(std::sqrt(sum / (seq.frames() - 1)), 1e-6) << "m";
+  EXPECT_LT(worst, 1e-5) << "m";
+
+  // Lookahead leaves the track where it was.
+  const NominalTrackState before = track.Save();
+  const Twist2 go[4] = {{1, 0, 0}, {1, 0, 0}, {1, 0, 0}, {1, 0, 0}};
+  const Pose2 ahead = track.Lookahead(go, 4);
+  EXPECT_GT(std::hypot(ahead.x - track.pose().x, ahead.y - track.pose().y), 0.0);
+  const NominalTrackState after = track.Save();
+  EXPECT_EQ(before.predicted.x, after.predicted.x);
+  EXPECT_EQ(before.backend[0].body.pose.x, after.backend[0].body.pose.x);
+}
+
+class ResidualPredictor : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const OmniModel plant = SlippingLaggingPlant();
+    train_ = new OmniLog(Record(plant, 180, 11, "slip_train.csv"));
+    test_ = new OmniLog(Record(plant, 40, 12, "slip_test.csv"));
+    OmniTrainOptions options;
+    options.residual = true;
+    linear_ = std::make_shared<OmniPredictor>(TrainOmniPredictor(testing::Omni4(), {*train_}, options));
+  }
+  static void TearDownTestSuite() {
+    delete train_;
+    delete test_;
+    linear_.reset();
+  }
+  static OmniLog* train_;
+  static OmniLog* test_;
+  static std::shared_ptr<const OmniPredictor> linear_;
+};
+OmniLog* ResidualPredictor::train_ = nullptr;
+OmniLog* ResidualPredictor::test_ = nullptr;
+std::shared_ptr<const OmniPredictor> ResidualPredictor::linear_;
+
+// The claim on a plant with effects (traction limit and motor lag), here on the
+// analytic engine and three minutes of driving so that it runs in seconds: the residual
+// predictor's held-out error is at most a quarter of the Newtonian model's four frames
+// ahead and at most half at 1 s. It is told only the Newtonian model.
+TEST_F(ResidualPredictor, LearnsWhatTheNewtonianModelMisses) {
+  const OmniModel model = testing::Omni4();
+  EXPECT_TRUE(linear_->residual());
+  EXPECT_EQ(linear_->info().layout.num_inputs(), 42 + 6);  // recent errors off by default (measured)
+  const double newton4 = ReplayRmse(model, *test_, "analytic", 4);
+  const double residual4 = ReplayRmse(model, *test_, "learned", 4, linear_);
+  const double newton30 = ReplayRmse(model, *test_, "analytic", 30);
+  const double residual30 = ReplayRmse(model, *test_, "learned", 30, linear_);
+  EXPECT_LE(residual4, 0.25 * newton4) << "4 frames: residual " << residual4 << " m, Newtonian " << newton4 << " m";
+  EXPECT_LE(residual30, 0.5 * newton30) << "1 s: residual " << residual30 << " m, Newtonian " << newton30 << " m";
+}
+
+TEST_F(ResidualPredictor, IsTheNewtonianModelWhereItsCorrectionIsZero) {
+  // With every weight zero (and the loop's physics step) the residual backend moves
+  // exactly as its nominal model does: a replay through it equals the analytic backend's.
+  const OmniModel model = testing::Omni4();
+  const std::string path = testing::TempDir("residual_zero") + "/p.pred";
+  linear_->Save(path);
+  std::string text = testing::ReadText(path);
+  // Zero the weights in the file (a flow sequence of 3 x 48 numbers).
+  const std::size_t at = text.find("weights: [");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t end = text.find(']', at);
+  std::string zeros = "weights: [";
+  for (int k = 0; k < 3 * 48; ++k) zeros += k ? ", 0" : "0";
+  text.replace(at, end - at, zeros);
+  const std::size_t steps = text.find("substeps: 2");
+  ASSERT_NE(steps, std::string::npos) << "the default on analytic at 30 fps";
+  text.replace(steps, 11, "substeps: 10");
+  auto zero = std::make_shared<OmniPredictor>(OmniPredictor::Load(testing::WriteText(path, text)));
+  OmniReplayOptions o;
+  o.horizon = 4;
+  o.backend = "analytic";
+  const OmniReplayResult nominal = ReplayOmniLog(model, *test_, o);
+  o.backend = "learned";
+  o.backend_options.predictor = zero;
+  const OmniReplayResult residual = ReplayOmniLog(model, *test_, o);
+  ASSERT_EQ(nominal.num_predicted(), residual.num_predicted());
+  double worst = 0;
+  for (std::size_t i = 0; i < nominal.pose.size(); ++i)
+    worst = std::max(worst, std::hypot(nominal.pose[i].x - residual.pose[i].x, nominal.pose[i].y - residual.pose[i].y));
+  EXPECT_LT(worst, 1e-9) << "m";
+}
+
+TEST_F(ResidualPredictor, RoundTripsThroughAVersion3FileAndRefusesAnotherModel) {
+  const std::string path = testing::TempDir("residual_file") + "/p.pred";
+  linear_->Save(path);
+  const std::string text = testing::ReadText(path);
+  EXPECT_EQ(text.rfind("twinsim_predictor: 3\n", 0), 0u) << text.substr(0, 40);
+  const OmniPredictor back = OmniPredictor::Load(path);
+  EXPECT_TRUE(back.residual());
+  EXPECT_EQ(back.info().nominal_engine, "analytic");
+  EXPECT_EQ(back.info().nominal_fingerprint, NominalModelFingerprint(testing::Omni4()));
+  std::vector<double> x(48);
+  for (int k = 0; k < 48; ++k) x[static_cast<std::size_t>(k)] = 0.01 * k;
+  EXPECT_EQ(linear_->PredictDelta(x.data()), back.PredictDelta(x.data()));
+
+  // Over a model with other parameters its correction means nothing: refused.
+  OmniModel heavier = testing::Omni4();
+  heavier.chassis_mass += 0.5;
+  try {
+    back.CheckUse(heavier, 30, 1, "the learned backend");
+    FAIL() << "a changed model was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": residual predictor was trained over another version of model 'omni4'"),
+              std::string::npos)
+        << e.what();
+  }
+  // The seed's predictor without a track is a programming error, not a silent answer.
+  Pose2 poses[6];
+  Twist2 commands[6];
+  EXPECT_THROW(back.Predict(poses, commands), std::logic_error);
+
+  // A version-2 file cannot say it is residual.
+  std::string v2 = text;
+  v2.replace(0, std::string("twinsim_predictor: 3").size(), "twinsim_predictor: 2");
+  EXPECT_THROW(OmniPredictor::Load(testing::WriteText(path, v2)), InputError);
+}
+
+TEST_F(ResidualPredictor, RunsOnItsOwnDeterministicallyAndStaysAtRest) {
+  // The learned backend with the residual predictor, as `run --backend learned` uses it:
+  // a robot at rest under zero commands stays exactly there, and Save/Restore repeats a
+  // stretch bit for bit (replay relies on it).
+  const OmniModel model = testing::Omni4();
+  OmniReplayOptions o;
+  o.backend = "learned";
+  o.backend_options.predictor = linear_;
+  o.horizon = 0;  // the free run: the residual predictor on its own over the whole log
+  const OmniReplayResult a = ReplayOmniLog(model, *test_, o);
+  const OmniReplayResult b = ReplayOmniLog(model, *test_, o);
+  ASSERT_EQ(a.pose.size(), b.pose.size());
+  for (std::size_t i = 0; i < a.pose.size(); ++i) ASSERT_EQ(a.pose[i].x, b.pose[i].x) << i;
+
+  OmniLog rest = *test_;
+  rest.rows.resize(100);
+  for (OmniLogRow& r : rest.rows) {
+    r.pose = Pose2{1.0, -0.5, 0.3};
+    r.command = Twist2{};
+  }
+  const OmniReplayResult still = ReplayOmniLog(model, rest, o);
+  for (const Pose2& p : still.pose) {
+    EXPECT_NEAR(p.x, 1.0, 1e-9);
+    EXPECT_NEAR(p.y, -0.5, 1e-9);
+    EXPECT_NEAR(p.theta, 0.3, 1e-9);
+  }
+}
+
+TEST(ResidualTraining, OptionsAreChecked) {
+  OmniTrainOptions o;
+  o.residual = true;
+  std::string why;
+  o.nominal_engine = "mujoco";
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--nominal-engine must be analytic, ode or bullet"), std::string::npos) << why;
+  o.nominal_engine = "analytic";
+  o.nominal_errors = -1;
+  EXPECT_FALSE(o.IsValid(&why));
+}
+
+}  // namespace
+}  // namespace twinsim
