@@ -71,13 +71,15 @@ def training_data(model, logs, horizon=1):
     return _twinsim._training_data(model, logs, int(horizon))
 
 
-def train(model, logs, kind="linear", horizon=1, residual=False, seed=1, epochs=400, hidden=(32, 32)):
-    """`twinsim train` without files: an OmniPredictor or ArmPredictor (save() writes it)."""
+def train(model, logs, kind="linear", horizon=1, residual=False, seed=1, epochs=400, hidden=(32, 32),
+          nominal_engine="analytic"):
+    """`twinsim train` without files: an OmniPredictor or ArmPredictor (save() writes it).
+    residual=True learns the correction to the model's own prediction (omni: the Newtonian
+    robot on nominal_engine, carried along the log; docs/learning.md)."""
     if isinstance(model, ArmModel):
         return _twinsim._train_arm(model, logs, kind, bool(residual), int(seed), int(epochs), list(hidden))
-    if residual:
-        raise InputError("residual predictors are for arms only")
-    return _twinsim._train_omni(model, logs, kind, int(horizon), int(seed), int(epochs), list(hidden))
+    return _twinsim._train_omni(model, logs, kind, int(horizon), bool(residual), nominal_engine, int(seed),
+                                int(epochs), list(hidden))
 
 
 def identify(model, logs):

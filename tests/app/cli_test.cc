@@ -137,5 +137,61 @@ TEST(CliLearning, LearnedBackendRefusesAPredictorForAnotherRobot) {
       << none.err;
 }
 
+TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
+  const std::string dir = testing::TempDir("residual_cli");
+  const std::string omni4 = testing::SourcePath("models/omni4.yaml");
+  ASSERT_EQ(testing::RunTwinsim("run " + testing::SourcePath("scenes/random_excitation.yaml") +
+                                " --backend analytic --quiet --out " + dir + "/drive")
+                .exit_code,
+            0);
+  const std::string log = dir + "/drive/trajectory.csv";
+  auto trained = testing::RunTwinsim("train --model " + omni4 + " --log " + log + " --kind linear --residual --out " + dir +
+                                     "/residual.pred");
+  ASSERT_EQ(trained.exit_code, 0) << trained.err;
+  EXPECT_NE(trained.out.find("residual linear predictor of omni4, over its Newtonian model on analytic"),
+            std::string::npos)
+      << trained.out;
+  EXPECT_EQ(testing::ReadText(dir + "/residual.pred").rfind("twinsim_predictor: 3\n", 0), 0u);
+  ASSERT_EQ(testing::RunTwinsim("train --quiet --model " + omni4 + " --log " + log + " --kind linear --out " + dir +
+                                "/seed.pred")
+                .exit_code,
+            0);
+  EXPECT_EQ(testing::ReadText(dir + "/seed.pred").rfind("twinsim_predictor: 2\n", 0), 0u)
+      << "the seed's predictors keep the format older builds read";
+
+  // It runs where a learned predictor runs.
+  auto run = testing::RunTwinsim("run " + testing::SourcePath("scenes/drive45.yaml") +
+                                 " --backend learned --quiet --predictor " + dir + "/residual.pred --out " + dir + "/run");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  auto compare = testing::RunTwinsim("compare --quiet --model " + omni4 + " --log " + log +
+                                     " --backend analytic --backend learned --predictor " + dir +
+                                     "/seed.pred --predictor " + dir + "/residual.pred --out " + dir + "/compare");
+  ASSERT_EQ(compare.exit_code, 0) << compare.err;
+  const std::string errors = testing::ReadText(dir + "/compare/errors.csv");
+  EXPECT_NE(errors.find("\nlearned,learned,4 frames,"), std::string::npos) << errors;
+  EXPECT_NE(errors.find("\nresidual,learned,4 frames,"), std::string::npos) << errors;
+
+  // Over a changed model (same name, heavier) it is refused, naming the file.
+  testing::WriteText(dir + "/heavier.yaml", "extends: " + omni4 + "\nchassis:\n  mass: 2.8\n");
+  auto other = testing::RunTwinsim("replay --model " + dir + "/heavier.yaml --log " + log +
+                                   " --backend learned --predictor " + dir + "/residual.pred --out " + dir + "/r.csv");
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_NE(other.err.find(dir + "/residual.pred: residual predictor was trained over another version of model 'omni4'"),
+            std::string::npos)
+      << other.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/r.csv"));
+
+  // Options of residual predictors without --residual, or out of range, are bad input.
+  auto lone = testing::RunTwinsim("train --model " + omni4 + " --log " + log + " --nominal-engine ode --out " + dir +
+                                  "/x.pred");
+  EXPECT_EQ(lone.exit_code, 2);
+  EXPECT_NE(lone.err.find("are for residual predictors only (add --residual)"), std::string::npos) << lone.err;
+  auto steps = testing::RunTwinsim("train --model " + omni4 + " --log " + log +
+                                   " --residual --nominal-substeps -3 --out " + dir + "/x.pred");
+  EXPECT_EQ(steps.exit_code, 2);
+  EXPECT_NE(steps.err.find("--nominal-substeps must be 1 to 1000"), std::string::npos) << steps.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/x.pred"));
+}
+
 }  // namespace
 }  // namespace twinsim

@@ -157,6 +157,7 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"replay_arm", "replay --model " + kRrr + " --log {d}/arm_a.csv --out {out}/tau.csv"},
         Case{"train_linear", "train --model " + kOmni + " --log {d}/omni.csv --kind linear --horizon 4 --out {out}/p.pred"},
         Case{"train_mlp", "train --model " + kOmni + " --log {d}/omni.csv --kind mlp --horizon 1 --epochs 3 --out {out}/p.pred"},
+        Case{"train_residual", "train --model " + kOmni + " --log {d}/omni.csv --kind linear --residual --out {out}/p.pred"},
         Case{"identify", "identify --model " + kRrr + " --log {d}/arm_a.csv --log {d}/arm_b.csv --out {out}/m.yaml"},
         Case{"compare", "compare --model " + kOmni + " --log {d}/omni.csv --out {out}"},
         Case{"diagnose_omni", "diagnose --model " + kOmni + " --log {d}/omni.csv --out {out}/o --max-effects 1",
