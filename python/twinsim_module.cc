@@ -38,6 +38,7 @@
 #include "diagnosis/omni_diagnosis.h"
 #include "identification/wls_identification.h"
 #include "io/csv_table.h"
+#include "io/yaml_extends.h"
 #include "io/yaml_overrides.h"
 #include "learning/arm_predictor.h"
 #include "learning/omni_features.h"
@@ -987,6 +988,7 @@ PYBIND11_MODULE(_twinsim, m) {
 
   m.def("_replay_omni", [](const PyOmniModel& model, const py::handle& log, const std::string& backend, int horizon,
                            const py::handle& predictor) { return ReplayOmni(model.model, log, backend, horizon, predictor); });
+  m.def("_model_robot", [](const std::string& path) { return ModelFileRobot(path); });
   m.def("_replay_arm", [](const PyArmModel& model, const py::handle& log) { return ReplayArm(model.model, log); });
   m.def("_training_data", [](const PyOmniModel& model, const py::handle& logs, int horizon) {
     return OmniTrainingData(model.model, logs, horizon);

@@ -41,14 +41,10 @@ __all__ = [
 
 
 def load_model(path):
-    """An arm (URDF or YAML with `robot: arm`) or omni model, as the file says."""
-    if str(path).endswith(".urdf"):
+    """An arm (URDF or YAML with `robot: arm`, its own or from the file it extends) or omni
+    model, as the file says."""
+    if _twinsim._model_robot(str(path)) == "arm":
         return load_arm_model(path)
-    with open(path, encoding="utf-8", errors="replace") as f:
-        text = f.read()
-    for line in text.splitlines():
-        if line.split("#")[0].strip().replace(" ", "") in ("robot:arm",):
-            return load_arm_model(path)
     return load_omni_model(path)
 
 

@@ -131,7 +131,8 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
                                const TrackingOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("TrackingOptions: " + why);
-  return RunTrackingTrial(plant, MakeArmBackend(options.backend, plant), hat, reference, options);
+  return RunTrackingTrial(plant, MakeArmBackend(options.backend, plant, options.backend_options), hat, reference,
+                          options);
 }
 
 TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,

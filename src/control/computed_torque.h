@@ -69,6 +69,7 @@ struct TrackingOptions {
   bool interval_acceleration = false;
   bool saturate = true;       // clamp the command to each joint's effort_limit (where given)
   std::string backend = "analytic";  // the plant's physics (MakeArmBackend)
+  ArmBackendOptions backend_options;  // its options: the learned backend's predictor
   // Excitation for recording data to learn from: a seeded Gaussian torque added to the
   // controller's output before clamping, sigma = dither * the joint's effort_limit
   // (1 N·m where none is given), each value held for `dither_hold` samples, so that the

@@ -1,5 +1,7 @@
 #include "io/yaml_extends.h"
 
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 
 #include "core/error.h"
@@ -20,6 +22,14 @@ void Overlay(YAML::Node base, const YAML::Node& over) {
 }
 
 }  // namespace
+
+std::string ModelFileRobot(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".urdf") return "arm";
+  const YAML::Node root = ResolveExtends(LoadYamlFile(path), path, 0, [](const YAML::Node&, const std::string&, int) {});
+  return root.IsMap() && root["robot"] && root["robot"].IsScalar() ? root["robot"].Scalar() : "omni";
+}
 
 YAML::Node ResolveExtends(const YAML::Node& root, const std::string& path, int depth, const CheckBaseFile& check_base) {
   if (!root["extends"]) return root;

@@ -19,4 +19,9 @@ using CheckBaseFile = std::function<void(const YAML::Node& root, const std::stri
 // `check_base` throws for a base file.
 YAML::Node ResolveExtends(const YAML::Node& root, const std::string& path, int depth, const CheckBaseFile& check_base);
 
+// The kind of robot a model file describes: "arm" for URDF (.urdf), else the `robot`
+// value of the YAML with its `extends` chain resolved ("omni" when absent), so that a
+// file extending an arm's is an arm's. Throws InputError when the YAML cannot be read.
+std::string ModelFileRobot(const std::string& path);
+
 }  // namespace twinsim

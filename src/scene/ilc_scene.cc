@@ -3,20 +3,20 @@
 #include <chrono>
 
 #include "core/error.h"
+#include "scene/scene_run.h"
 
 namespace twinsim {
 
-IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, const IlcSceneCallbacks& callbacks) {
+IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, const IlcSceneCallbacks& callbacks,
+                        const std::string& predictor) {
   if (trials >= 0) scene.ilc.options.trials = trials;
   IlcSceneRun run;
   run.backend = backend.empty() ? scene.backend : backend;
-  if (run.backend == "learned") {
-    throw InputError(SourceLocation{scene.path}, "twinsim ilc runs on analytic, ode or bullet; the learned backend "
-                                                 "needs a predictor per trial and is not supported here");
-  }
   run.reference = ArmSceneReference(scene);
   run.tracking = scene.tracking;
   run.tracking.backend = run.backend;
+  // Every trial and FRF run builds its plant's backend with these: the scene's factory.
+  run.tracking.backend_options = ArmSceneBackendOptions(scene, run.backend, predictor);
   run.tracking.dither = 0;  // learning needs the trials to repeat
   const IlcSpec& spec = scene.ilc;
   const int n = scene.plant.dof();

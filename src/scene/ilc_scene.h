@@ -37,9 +37,12 @@ struct IlcSceneCallbacks {
   std::function<void(int, const TrackingTrial&)> trial_done;           // each trial
 };
 
-// Runs ILC on `scene` on `backend` (empty: the scene's) for `trials` learning trials
-// (negative: the scene's). Throws InputError naming the scene for the learned backend
-// (not supported), a fit band the measurement does not cover, and what the parts throw.
-IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, const IlcSceneCallbacks& callbacks = {});
+// Runs ILC on `scene` on `backend` (empty: the scene's; `learned` with `predictor`, an arm
+// predictor for the scene's model, built as `run` builds it: MakeArmSceneBackend) for
+// `trials` learning trials (negative: the scene's). Throws InputError for a backend or
+// predictor `run` would refuse, a fit band the measurement does not cover, and what the
+// parts throw.
+IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, const IlcSceneCallbacks& callbacks = {},
+                        const std::string& predictor = "");
 
 }  // namespace twinsim

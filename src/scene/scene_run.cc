@@ -59,6 +59,10 @@ SimulationResult RunOmniScene(const Scene& scene, const std::string& backend, co
 
 std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std::string& backend,
                                                 const std::string& predictor) {
+  return MakeArmBackend(backend, scene.plant, ArmSceneBackendOptions(scene, backend, predictor));
+}
+
+ArmBackendOptions ArmSceneBackendOptions(const ArmScene& scene, const std::string& backend, const std::string& predictor) {
   ArmBackendOptions backend_options;
   if (backend == "learned") {
     if (predictor.empty()) {
@@ -69,7 +73,10 @@ std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std
   } else if (!predictor.empty()) {
     throw InputError("--predictor applies to --backend learned only; arm scene '" + scene.name + "' runs on " + backend);
   }
-  return MakeArmBackend(backend, scene.plant, backend_options);
+  // Build one now: a predictor that does not fit the scene's model is refused before any
+  // trial runs.
+  MakeArmBackend(backend, scene.plant, backend_options);
+  return backend_options;
 }
 
 TrackingTrial RunArmScene(const ArmScene& scene, const std::string& backend, const std::string& predictor) {

@@ -41,6 +41,10 @@ SimulationResult RunOmniScene(const Scene& scene, const std::string& backend, co
 // predictor given to another backend.
 std::unique_ptr<ArmBackend> MakeArmSceneBackend(const ArmScene& scene, const std::string& backend,
                                                 const std::string& predictor);
+// What MakeArmSceneBackend builds the backend with (the learned one's predictor, loaded
+// and checked against the scene's model), for procedures that build one per trial
+// (TrackingOptions::backend_options: ILC). Throws as MakeArmSceneBackend.
+ArmBackendOptions ArmSceneBackendOptions(const ArmScene& scene, const std::string& backend, const std::string& predictor);
 
 // Runs an arm scene's task on `backend` (as MakeArmSceneBackend), the scene's seed
 // picking the random motion and the controller's dither. Throws as MakeArmSceneBackend,

@@ -1,10 +1,14 @@
 // `twinsim ilc` through the binary: trials.csv with the contract's columns, the other
-// outputs, divergence as exit 1, and bad scene keys as exit 2.
+// outputs, the learned backend, divergence as exit 1, and bad scene keys as exit 2.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <sstream>
 
+#include "control/arm_trials.h"
+#include "robots/arm/arm_log.h"
+#include "robots/arm/arm_model.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -57,6 +61,56 @@ TEST(IlcCli, WritesTrialsCsvWithTheContractColumnsAndTheReport) {
   EXPECT_EQ(again.out, "");
   EXPECT_EQ(testing::ReadText(dir + "/again/trials.csv"), testing::ReadText(dir + "/out/trials.csv"));
   EXPECT_EQ(testing::ReadText(dir + "/again/feedforward.csv"), testing::ReadText(dir + "/out/feedforward.csv"));
+}
+
+// ILC on the learned arm backend, built by the same factory as `run`'s: a residual
+// predictor of the plant learned from its own trials (so nearly the plant itself) learns
+// the task as the plant's own analytic backend does.
+TEST(IlcCli, LearnsOnTheLearnedBackendWithAPredictor) {
+  const std::string dir = testing::TempDir("ilc_learned");
+  const ArmModel plant = LoadArmModel(SourcePath("models/rrr_plant.yaml"));
+  const ArmModel hat = LoadArmModel(SourcePath("models/rrr.yaml"));
+  TrainingTrialOptions trials;
+  trials.seconds = 10;
+  const std::vector<ArmLog> logs = RecordTrainingTrials(plant, hat, trials, 2, 5);
+  WriteArmLog(dir + "/a.csv", logs[0], true);
+  WriteArmLog(dir + "/b.csv", logs[1], true);
+  auto trained = RunTwinsim("train --quiet --model " + SourcePath("models/rrr_plant.yaml") + " --log " + dir +
+                            "/a.csv --log " + dir + "/b.csv --kind linear --residual --out " + dir + "/plant.pred");
+  ASSERT_EQ(trained.exit_code, 0) << trained.err;
+  const std::string scene = IlcScene(dir, "models/rrr_plant.yaml",
+                                     "  trials: 4\n  gain: 0.5\n  frf: {periods: 2, amplitude: 0.3, postures: "
+                                     "[[0.3, 0.9, -1.6], [-0.3, 0.6, -1.7]]}\n");
+  auto learned = RunTwinsim("ilc " + scene + " --quiet --backend learned --predictor " + dir + "/plant.pred --out " + dir +
+                            "/learned");
+  ASSERT_EQ(learned.exit_code, 0) << learned.err;
+  auto analytic = RunTwinsim("ilc " + scene + " --quiet --out " + dir + "/analytic");
+  ASSERT_EQ(analytic.exit_code, 0) << analytic.err;
+  // The worst joint's RMS error, first and last trial.
+  auto worst = [&](const std::string& folder, int trial) {
+    const std::vector<std::string> lines = Lines(testing::ReadText(dir + "/" + folder + "/trials.csv"));
+    std::istringstream row(lines.at(static_cast<std::size_t>(trial) + 1));
+    std::string cell;
+    std::getline(row, cell, ',');
+    double w = 0;
+    for (int j = 0; j < 3 && std::getline(row, cell, ','); ++j) w = std::max(w, std::stod(cell));
+    return w;
+  };
+  const double gain_learned = worst("learned", 0) / worst("learned", 4);
+  const double gain_analytic = worst("analytic", 0) / worst("analytic", 4);
+  EXPECT_GT(gain_learned, 0.5 * gain_analytic) << "learned " << gain_learned << "x, analytic " << gain_analytic << "x";
+  EXPECT_GT(gain_learned, 3) << worst("learned", 0) << " -> " << worst("learned", 4) << " rad";
+  EXPECT_NEAR(worst("learned", 0), worst("analytic", 0), 0.2 * worst("analytic", 0)) << "trial 0, no learning";
+
+  // Without a predictor, or a predictor for another backend, as `run` says.
+  auto none = RunTwinsim("ilc " + scene + " --backend learned --out " + dir + "/none");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("--backend learned needs --predictor P"), std::string::npos) << none.err;
+  auto stray = RunTwinsim("ilc " + scene + " --predictor " + dir + "/plant.pred --out " + dir + "/stray");
+  EXPECT_EQ(stray.exit_code, 2);
+  EXPECT_NE(stray.err.find("--predictor applies to --backend learned only"), std::string::npos) << stray.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/none"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/stray"));
 }
 
 TEST(IlcCli, DivergingLearningExitsOne) {

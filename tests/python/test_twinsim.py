@@ -68,6 +68,8 @@ def test_arm_models_from_yaml_and_urdf():
     assert rrr.dof == 3 and len(rrr.joint_names) == 3
     assert isinstance(twinsim.load_model(path("models/rrr.yaml")), twinsim.ArmModel)
     assert isinstance(twinsim.load_model(path("models/omni4.yaml")), twinsim.OmniModel)
+    # A file that extends an arm's is an arm's.
+    assert isinstance(twinsim.load_model(path("models/rrr_plant.yaml")), twinsim.ArmModel)
     with pytest.raises(twinsim.InputError, match="missing.yaml"):
         twinsim.load_arm_model(path("models/missing.yaml"))
 

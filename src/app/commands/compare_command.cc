@@ -75,10 +75,9 @@ struct CompareCliOptions {
 
 int Compare(const CompareCliOptions& options) {
   // Check everything before running or writing anything.
-  const YAML::Node root = LoadYamlFile(options.model);
-  const std::string kind = root["robot"] && root["robot"].IsScalar() ? root["robot"].Scalar() : "omni";
+  const std::string kind = ModelFileRobotKind(options.model);
   if (kind != "omni")
-    throw InputError(SourceLocation{options.model, root["robot"].Mark().line + 1},
+    throw InputError(SourceLocation{options.model},
                      "compare of '" + kind + "' models is not available in this build (known: omni)");
   const OmniModel model = LoadOmniModel(options.model);
   const OmniLog log = ReadOmniLog(options.log);

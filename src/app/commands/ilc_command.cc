@@ -26,6 +26,7 @@ struct IlcCommandOptions {
   std::string scene;
   std::string out;       // empty: out/<scene name>_ilc
   std::string backend;   // empty: the scene's
+  std::string predictor; // the learned backend's
   int trials = -1;       // -1: the scene's
   bool quiet = false;
 };
@@ -71,7 +72,7 @@ int RunIlcCommand(const IlcCommandOptions& options) {
     std::printf("\n");
     std::fflush(stdout);
   };
-  const IlcSceneRun run = RunIlcScene(scene, options.backend, options.trials, callbacks);
+  const IlcSceneRun run = RunIlcScene(scene, options.backend, options.trials, callbacks, options.predictor);
   const IlcResult& result = run.result;
   const std::string& backend = run.backend;
   const TrackingOptions& tracking = run.tracking;
@@ -133,7 +134,10 @@ void AddIlcCommand(CLI::App& app, int* exit_code) {
       "Exit 1 when the learning diverged (the last trial's worst RMS error is above trial 0's).");
   cmd->add_option("scene", options->scene, "Arm scene file (YAML, docs/scenes.md)")->required();
   cmd->add_option("--out", options->out, "Output folder (default: out/<scene name>_ilc)");
-  cmd->add_option("--backend", options->backend, "Backend: analytic, ode or bullet (default: the scene's)");
+  cmd->add_option("--backend", options->backend,
+                  "Backend: analytic, ode, bullet or learned (default: the scene's)");
+  cmd->add_option("--predictor", options->predictor,
+                  "With --backend learned: an arm predictor for the scene's model (twinsim train)");
   cmd->add_option("--trials", options->trials, "Learning trials after trial 0 (default: the scene's, else 10)")
       ->check(CLI::Range(0, 1000));
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "io/output_files.h"
+#include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "learning/omni_predictor.h"
 #include "robots/arm/arm_log.h"
@@ -98,13 +99,7 @@ int Replay(const ReplayOptions& options) {
 
 }  // namespace
 
-std::string ModelFileRobotKind(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext == ".urdf") return "arm";
-  const YAML::Node root = LoadYamlFile(path);
-  return root.IsMap() && root["robot"] && root["robot"].IsScalar() ? root["robot"].Scalar() : "omni";
-}
+std::string ModelFileRobotKind(const std::string& path) { return ModelFileRobot(path); }
 
 void AddReplayCommand(CLI::App& app, int* exit_code) {
   auto options = std::make_shared<ReplayOptions>();
