@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/math_constants.h"
 #include "core/rng.h"
@@ -132,6 +133,8 @@ class GoToPoseSource final : public CommandSource {
       const double rate = spec_.predictor->info().frame_rate;
       const Twist2 field{(now->pose.x - before->pose.x) * rate, (now->pose.y - before->pose.y) * rate,
                          WrapAngle(now->pose.theta - before->pose.theta) * rate};
+      if (!spec_.predictor_model)
+        throw std::logic_error("go_to_pose: a residual predictor needs CommandSpec::predictor_model (the robot's model)");
       track_.emplace(spec_.predictor->MakeNominalTrack(*spec_.predictor_model));
       track_->Reset(now->pose, FieldToBody(field, now->pose.theta));
       track_row_ = track_start_ = newest_row;
