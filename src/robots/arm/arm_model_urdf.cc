@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <mutex>
 #include <regex>
@@ -44,7 +45,10 @@ urdf::ModelInterfaceSharedPtr ParseQuietly(const std::string& xml, std::string* 
   console_bridge::useOutputHandler(&capture);
   urdf::ModelInterfaceSharedPtr model;
   try {
-    model = urdf::parseURDF(xml);
+    // TinyXML (under urdfdom) steps over a UTF-8 sequence by its lead byte's length and
+    // can step past the text's end; CheckUtf8 refuses such text first, and the padding
+    // keeps any step it still takes inside this string.
+    model = urdf::parseURDF(xml + std::string(8, '\0'));
   } catch (const std::exception& e) {
     capture.errors += (capture.errors.empty() ? "" : "; ") + std::string(e.what());
   }
@@ -56,6 +60,25 @@ urdf::ModelInterfaceSharedPtr ParseQuietly(const std::string& xml, std::string* 
 // The 1-based line of byte `offset` in `text`.
 int LineAt(std::string_view text, std::size_t offset) {
   return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(offset), '\n'));
+}
+
+// Throws InputError "path:line: ..." at the first byte that does not start or continue a
+// well-formed UTF-8 sequence (XML text is UTF-8 here; the fuzzer found that TinyXML reads
+// past the end of text that ends inside a sequence).
+void CheckUtf8(std::string_view text, const std::string& path) {
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const int length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    bool ok = length > 0 && i + static_cast<std::size_t>(length) <= text.size();
+    for (int k = 1; ok && k < length; ++k) ok = (static_cast<unsigned char>(text[i + static_cast<std::size_t>(k)]) >> 6) == 0x2;
+    if (!ok) {
+      char byte[8];
+      std::snprintf(byte, sizeof byte, "0x%02X", c);
+      throw InputError(SourceLocation{path, LineAt(text, i)},
+                       std::string("not UTF-8 text: byte ") + byte + " does not start a complete UTF-8 character");
+    }
+    i += static_cast<std::size_t>(length);
+  }
 }
 
 // Finds where elements are defined, since urdfdom keeps no line numbers.
@@ -274,6 +297,7 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
                                                  std::to_string(kMaxArmJoints) + " moving joints");
     }
   }
+  CheckUtf8(xml, path);
   CheckFiniteAttributes(xml, path);
   const LineFinder lines(xml);
   CheckJointLoops(lines.text(), path);

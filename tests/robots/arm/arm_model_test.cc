@@ -350,6 +350,19 @@ TEST(ArmModel, UrdfCommentedOutJointClosesNoLoop) {
   EXPECT_EQ(m.dof(), 2);
 }
 
+TEST(ArmModel, UrdfThatIsNotUtf8IsRefusedWithItsLine) {
+  // Latin-1 in a comment (a file saved in the wrong encoding) ...
+  std::string e = UrdfError(Chain("  <!-- caf\xE9 -->\n"));
+  EXPECT_NE(e.find("not UTF-8 text: byte 0xE9 does not start a complete UTF-8 character"), std::string::npos) << e;
+  // ... and text ending inside a character: TinyXML read past the end of such text
+  // (found by urdf_fuzz; tests/fuzz/crashes/urdf/).
+  e = UrdfError("<robot name=\"r\"><link name=\"a\"/>\n<mass value=\"1.\xF1\xA7");
+  EXPECT_NE(e.find("bad.urdf:2: not UTF-8 text: byte 0xF1"), std::string::npos) << e;
+  // Well-formed UTF-8 passes (a name in Greek).
+  const ArmModel m = LoadArmModelFromUrdfString(Chain("  <!-- \xCE\xB1\xCF\x81\xCE\xB8\xCF\x81\xCF\x89\xCF\x83\xCE\xB7 -->\n"), "ok.urdf");
+  EXPECT_EQ(m.dof(), 2);
+}
+
 TEST(ArmModel, UrdfBranchNamesTheLink) {
   const std::string e = UrdfError(Chain(R"(  <joint name="j3" type="revolute">
     <parent link="l1"/><child link="l3"/><axis xyz="0 0 1"/>
