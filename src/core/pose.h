@@ -51,6 +51,15 @@ inline Twist2 FieldToBody(const Twist2& field, double theta) {
   return out;
 }
 
+// The robot-frame velocity (in the frame of `after`) that moves `before` to `after` in
+// one frame at `frame_rate` Hz: the finite difference of two consecutive observed poses,
+// heading change wrapped.
+inline Twist2 BodyVelocityBetween(const Pose2& before, const Pose2& after, double frame_rate) {
+  const Twist2 field{(after.x - before.x) * frame_rate, (after.y - before.y) * frame_rate,
+                     WrapAngle(after.theta - before.theta) * frame_rate};
+  return FieldToBody(field, after.theta);
+}
+
 inline bool IsFinite(const Pose2& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta);
 }

@@ -26,21 +26,27 @@ void EncodeInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2*
   }
 }
 
-void EncodeNominalInputs(const FeatureLayout& layout, const Pose2& now, const Eigen::Vector3d& nominal_delta,
-                         const Twist2& nominal_velocity, const Eigen::Vector3d* errors, double* out) {
+Eigen::Vector3d EncodeResidualInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2* commands,
+                                     const Pose2& nominal_end, const Twist2& nominal_velocity,
+                                     const std::vector<Eigen::Vector3d>& errors, double* out) {
+  EncodeInputs(layout, poses, commands, out);
+  out += layout.num_seed_inputs();
+  const Pose2& now = poses[layout.history - 1];
+  const Eigen::Vector3d nominal = EncodeDelta(now, nominal_end);
   const double c = std::cos(now.theta), s = std::sin(now.theta);
-  *out++ = nominal_delta[0];
-  *out++ = nominal_delta[1];
-  *out++ = nominal_delta[2];
+  *out++ = nominal[0];
+  *out++ = nominal[1];
+  *out++ = nominal[2];
   *out++ = nominal_velocity.vx;
   *out++ = nominal_velocity.vy;
   *out++ = nominal_velocity.omega;
-  for (int j = 0; j < layout.nominal_errors; ++j) {
+  for (std::size_t j = errors.size() - static_cast<std::size_t>(layout.nominal_errors); j < errors.size(); ++j) {
     const Eigen::Vector3d& e = errors[j];
     *out++ = c * e[0] + s * e[1];
     *out++ = -s * e[0] + c * e[1];
     *out++ = e[2];
   }
+  return nominal;
 }
 
 Eigen::Vector3d EncodeDelta(const Pose2& now, const Pose2& later) {

@@ -51,13 +51,15 @@ struct FeatureLayout {
 // i+H-1.
 void EncodeInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2* commands, double* out);
 
-// Writes a residual predictor's inputs from its nominal model into out (num_inputs() -
-// num_seed_inputs() numbers, see above): `now` is frame i's pose, `nominal_delta` the
-// model's pose change over the horizon (robot frame of `now`), `nominal_velocity` its
-// velocity (robot frame), `errors` its last nominal_errors errors (field frame, oldest
-// first).
-void EncodeNominalInputs(const FeatureLayout& layout, const Pose2& now, const Eigen::Vector3d& nominal_delta,
-                         const Twist2& nominal_velocity, const Eigen::Vector3d* errors, double* out);
+// Writes a residual predictor's inputs into out (num_inputs() numbers, see above): the
+// seed's from `poses` and `commands` (as EncodeInputs), then its nominal model's:
+// `nominal_end` is the model's prediction of the pose H frames after poses[history - 1],
+// `nominal_velocity` its velocity there (robot frame), `errors` its recent errors (field
+// frame, oldest first; the last nominal_errors are used). Returns the model's pose change
+// (robot frame of poses[history - 1]), which the predictor's output corrects.
+Eigen::Vector3d EncodeResidualInputs(const FeatureLayout& layout, const Pose2* poses, const Twist2* commands,
+                                     const Pose2& nominal_end, const Twist2& nominal_velocity,
+                                     const std::vector<Eigen::Vector3d>& errors, double* out);
 
 // The pose change from `now` to `later` in the robot frame of `now` (dx, dy, dtheta).
 Eigen::Vector3d EncodeDelta(const Pose2& now, const Pose2& later);

@@ -119,15 +119,10 @@ NominalOmniTrack OmniPredictor::MakeNominalTrack(const OmniModel& model) const {
 
 Pose2 OmniPredictor::Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity,
                                const Pose2& nominal_end, const std::vector<Eigen::Vector3d>& errors) const {
-  const FeatureLayout& layout = info_.layout;
-  const Pose2& now = poses[layout.history - 1];
-  InputBuffer x(layout.num_inputs());
-  EncodeInputs(layout, poses, commands, x.data());
-  const Eigen::Vector3d nominal = EncodeDelta(now, nominal_end);
-  EncodeNominalInputs(layout, now, nominal, nominal_velocity,
-                      errors.data() + errors.size() - static_cast<std::size_t>(layout.nominal_errors),
-                      x.data() + layout.num_seed_inputs());
-  return ApplyDelta(now, nominal + PredictDelta(x.data()));
+  InputBuffer x(info_.layout.num_inputs());
+  const Eigen::Vector3d nominal =
+      EncodeResidualInputs(info_.layout, poses, commands, nominal_end, nominal_velocity, errors, x.data());
+  return ApplyDelta(poses[info_.layout.history - 1], nominal + PredictDelta(x.data()));
 }
 
 Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const {
@@ -361,10 +356,8 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
   int f0 = std::max(seq.first_known_command, 1);
   while (f0 < frames && !(seq.observed[static_cast<std::size_t>(f0)] && seq.observed[static_cast<std::size_t>(f0 - 1)])) ++f0;
   if (f0 >= frames) return 0;
-  const Pose2& a = seq.pose[static_cast<std::size_t>(f0 - 1)];
   const Pose2& b = seq.pose[static_cast<std::size_t>(f0)];
-  const Twist2 field_v{(b.x - a.x) * frame_rate, (b.y - a.y) * frame_rate, WrapAngle(b.theta - a.theta) * frame_rate};
-  track->Reset(b, FieldToBody(field_v, b.theta));
+  track->Reset(b, BodyVelocityBetween(seq.pose[static_cast<std::size_t>(f0 - 1)], b, frame_rate));
 
   const int in = layout.num_inputs();
   std::vector<double> train_x, train_y, val_x, val_y;
@@ -393,11 +386,9 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
       } else {
         end = track->Lookahead(&seq.acting[uf], horizon);
       }
-      EncodeInputs(layout, &seq.pose[static_cast<std::size_t>(start)], &seq.acting[static_cast<std::size_t>(start)],
-                   row.data());
-      const Eigen::Vector3d nominal = EncodeDelta(now, end);
-      EncodeNominalInputs(layout, now, nominal, velocity, errors.data() + errors.size() - layout.nominal_errors,
-                          row.data() + layout.num_seed_inputs());
+      const Eigen::Vector3d nominal =
+          EncodeResidualInputs(layout, &seq.pose[static_cast<std::size_t>(start)],
+                               &seq.acting[static_cast<std::size_t>(start)], end, velocity, errors, row.data());
       Eigen::Vector3d y = EncodeDelta(now, seq.pose[static_cast<std::size_t>(f + horizon)]) - nominal;
       y[2] = WrapAngle(y[2]);
       std::vector<double>& xs = for_training ? train_x : val_x;

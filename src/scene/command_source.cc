@@ -130,13 +130,10 @@ class GoToPoseSource final : public CommandSource {
       const Observation* now = observed(newest_row);
       const Observation* before = observed(newest_row - 1);
       if (!now || !before) return;
-      const double rate = spec_.predictor->info().frame_rate;
-      const Twist2 field{(now->pose.x - before->pose.x) * rate, (now->pose.y - before->pose.y) * rate,
-                         WrapAngle(now->pose.theta - before->pose.theta) * rate};
       if (!spec_.predictor_model)
         throw std::logic_error("go_to_pose: a residual predictor needs CommandSpec::predictor_model (the robot's model)");
       track_.emplace(spec_.predictor->MakeNominalTrack(*spec_.predictor_model));
-      track_->Reset(now->pose, FieldToBody(field, now->pose.theta));
+      track_->Reset(now->pose, BodyVelocityBetween(before->pose, now->pose, spec_.predictor->info().frame_rate));
       track_row_ = track_start_ = newest_row;
       return;
     }
