@@ -15,6 +15,12 @@
 // posture on the chosen backend, with the plant's friction and effects: PS is the
 // diagonal of the closed loop's response matrix, what a per-joint ILC needs.
 //
+// The coherence per line, gamma^2 = |sum_p Y_p|^2 / (P sum_p |Y_p|^2) over the P periods
+// (the excitation repeats, so the input's spectrum is the same in each), is 1 where the
+// response repeats from period to period and falls where noise or a transient that has
+// not died out differ between them: the lines to trust. The nominal response of a joint
+// is the average over the postures (seed 001, eq. 23).
+//
 //   FrfOptions o;                                   // 2..200 Hz, 0.5 s periods
 //   ClosedLoopFrf frf = MeasureProcessSensitivity(plant, hat, {q_a, q_b}, tracking, o);
 //   std::complex<double> ps = frf.response[joint][posture][line];  // rad/(N·m)
@@ -52,7 +58,22 @@ struct ClosedLoopFrf {
   std::vector<Eigen::VectorXd> postures;  // each dof, rad or m
   // response[j][p](i): PS of joint j at posture p and line i, rad/(N·m) (m/N).
   std::vector<std::vector<Eigen::VectorXcd>> response;
+  // coherence[j][p](i): gamma^2 of joint j at posture p and line i, in [0, 1].
+  std::vector<std::vector<Eigen::VectorXd>> coherence;
+
+  // The average of joint j's responses over the postures (eq. 23 of seed 001).
+  Eigen::VectorXcd Nominal(int joint) const;
+  // The smallest coherence of joint j's postures at each line.
+  Eigen::VectorXd WorstCoherence(int joint) const;
 };
+
+// Postures spanning joints `a` and `b` (0-based) over [low, high] each, `count` values
+// evenly from end to end (count x count postures; the middle for count 1), the other
+// joints at `base`; each clamped to the joint's limits (seed 001: 16 postures, 4 x 4
+// over joints 2 and 3). Throws std::invalid_argument for joints that do not exist, a =
+// b, count < 1, a base of the wrong size or low > high.
+std::vector<Eigen::VectorXd> GridPostures(const ArmModel& arm, const Eigen::VectorXd& base, int a, int b, int count,
+                                          const Eigen::VectorXd& low, const Eigen::VectorXd& high);
 
 // Measures the process sensitivity of every joint at every posture, running
 // `tracking` (its controller, gains and backend; its feedforward and dither are

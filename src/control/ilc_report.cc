@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <complex>
+#include <functional>
 #include <sstream>
 
 #include "control/tracking_plots.h"
@@ -10,6 +11,7 @@
 #include "io/csv_table.h"
 #include "io/html_text.h"
 #include "render/image_stack.h"
+#include "signal/butterworth.h"
 #include "signal/phase_unwrap.h"
 
 namespace twinsim {
@@ -35,15 +37,21 @@ std::string FormatIlcTrialsCsv(const IlcResult& r) {
 }
 
 std::string FormatIlcFrfCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters) {
-  std::string out = "joint,posture,frequency,magnitude,phase,filter_magnitude,filter_phase\n";
+  std::string out = "joint,posture,frequency,magnitude,phase,coherence,filter_magnitude,filter_phase\n";
   for (std::size_t j = 0; j < frf.response.size(); ++j) {
-    for (std::size_t p = 0; p < frf.response[j].size(); ++p) {
+    const Eigen::VectorXcd nominal = frf.Nominal(static_cast<int>(j));
+    const Eigen::VectorXd worst = frf.WorstCoherence(static_cast<int>(j));
+    // Posture 0 is the nominal response, the average over the postures, with the worst coherence.
+    for (std::size_t p = 0; p <= frf.response[j].size(); ++p) {
       for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
-        const std::complex<double> ps = frf.response[j][p][i];
+        const std::complex<double> ps = p == 0 ? nominal[i] : frf.response[j][p - 1][i];
+        const double coherence = p == 0 ? worst[i]
+                                 : j < frf.coherence.size() && p - 1 < frf.coherence[j].size() ? frf.coherence[j][p - 1][i]
+                                                                                                   : 1.0;
         const std::complex<double> inv = 1.0 / filters[j].Response(frf.frequency[i], frf.sample_time);
-        out += std::to_string(j + 1) + ',' + std::to_string(p + 1) + ',' + Num(frf.frequency[i]) + ',' +
-               Num(std::abs(ps)) + ',' + Num(std::arg(ps) * 180 / kPi) + ',' + Num(std::abs(inv)) + ',' +
-               Num(std::arg(inv) * 180 / kPi) + '\n';
+        out += std::to_string(j + 1) + ',' + std::to_string(p) + ',' + Num(frf.frequency[i]) + ',' +
+               Num(std::abs(ps)) + ',' + Num(std::arg(ps) * 180 / kPi) + ',' + Num(coherence) + ',' +
+               Num(std::abs(inv)) + ',' + Num(std::arg(inv) * 180 / kPi) + '\n';
       }
     }
   }
@@ -53,14 +61,18 @@ std::string FormatIlcFrfCsv(const ClosedLoopFrf& frf, const std::vector<Learning
 std::string FormatIlcFiltersCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters,
                                 const IlcOptions& o) {
   std::string out =
-      "joint,shift,inertia,inertia_early,damping,stiffness,residual,learning_limit_hz,q_order,q_cutoff,worst_factor\n";
+      "joint,shift,inertia,inertia_early,damping,stiffness,residual,fit_lines,fit_min_hz,fit_max_hz,"
+      "learning_limit_hz,q_order,q_cutoff,worst_factor,margin\n";
   for (std::size_t j = 0; j < filters.size(); ++j) {
     const LearningFilter& l = filters[j];
-    const double limit = LearningLimitFrequency(frf, static_cast<int>(j), l, o.gain);
+    const int joint = static_cast<int>(j);
+    const double limit = LearningLimitFrequency(frf, joint, l, o.gain);
+    const double worst = ConvergenceFactor(frf, joint, l, o).maxCoeff();
     out += std::to_string(j + 1) + ',' + std::to_string(l.shift) + ',' + Num(l.inertia) + ',' + Num(l.inertia_early) +
-           ',' + Num(l.damping) + ',' + Num(l.stiffness) + ',' + Num(l.residual) + ',' +
+           ',' + Num(l.damping) + ',' + Num(l.stiffness) + ',' + Num(l.residual) + ',' + std::to_string(l.lines) + ',' +
+           (l.lines > 0 ? Num(l.band_min) + ',' + Num(l.band_max) : std::string(",")) + ',' +
            (std::isfinite(limit) ? Num(limit) : std::string()) + ',' + std::to_string(o.q_order) + ',' +
-           Num(o.q_cutoff) + ',' + Num(ConvergenceFactor(frf, static_cast<int>(j), l, o).maxCoeff()) + '\n';
+           Num(o.Cutoff(joint)) + ',' + Num(worst) + ',' + Num(1 - worst) + '\n';
   }
   return out;
 }
@@ -102,6 +114,31 @@ SeriesPlot IlcErrorPlot(const IlcResult& r, const std::string& title) {
   return plot;
 }
 
+namespace {
+
+constexpr std::uint32_t kGrey = 0xb0b0b0;
+
+// A series of 20 log10 |v(f)| against log10 f.
+PlotSeries DecibelSeries(const std::string& name, const Eigen::VectorXd& frequency,
+                         const std::function<std::complex<double>(Eigen::Index)>& v) {
+  PlotSeries s;
+  s.name = name;
+  for (Eigen::Index i = 0; i < frequency.size(); ++i) {
+    s.x.push_back(std::log10(frequency[i]));
+    s.y.push_back(20 * std::log10(std::abs(v(i))));
+  }
+  return s;
+}
+
+// The same series greyed out, only the first of a group in the legend.
+PlotSeries Grey(PlotSeries s, bool first) {
+  s.color = kGrey;
+  s.legend = first;
+  return s;
+}
+
+}  // namespace
+
 IlcBodePlot IlcBodePlots(const ClosedLoopFrf& frf, const LearningFilter& filter, int joint, const std::string& title) {
   IlcBodePlot bode;
   SeriesPlot& mag = bode.magnitude;
@@ -112,19 +149,26 @@ IlcBodePlot IlcBodePlots(const ClosedLoopFrf& frf, const LearningFilter& filter,
   phase.y_label = "phase [deg]";
   mag.height = phase.height = 450;
   const auto& responses = frf.response.at(static_cast<std::size_t>(joint));
-  for (std::size_t p = 0; p <= responses.size(); ++p) {
-    PlotSeries m, ph;
-    m.name = ph.name = p < responses.size() ? "posture " + std::to_string(p + 1) : "1 / L (learning filter)";
-    std::vector<double> wrapped;
-    for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
-      const std::complex<double> v =
-          p < responses.size() ? responses[p][i] : 1.0 / filter.Response(frf.frequency[i], frf.sample_time);
-      wrapped.push_back(std::arg(v) * 180 / kPi);
-      m.x.push_back(std::log10(frf.frequency[i]));
-      ph.x.push_back(std::log10(frf.frequency[i]));
-      m.y.push_back(20 * std::log10(std::abs(v)));
+  const Eigen::VectorXcd nominal = frf.Nominal(joint);
+  // The postures in grey (seed 001, Fig. 8), the nominal response and the fitted model 1/L (Fig. 9).
+  for (std::size_t p = 0; p <= responses.size() + 1; ++p) {
+    std::function<std::complex<double>(Eigen::Index)> v;
+    std::string name;
+    if (p < responses.size()) {
+      v = [&, p](Eigen::Index i) { return responses[p][i]; };
+      name = std::to_string(responses.size()) + " postures";
+    } else if (p == responses.size()) {
+      v = [&](Eigen::Index i) { return nominal[i]; };
+      name = "nominal (their average)";
+    } else {
+      v = [&](Eigen::Index i) { return 1.0 / filter.Response(frf.frequency[i], frf.sample_time); };
+      name = "1 / L (learning filter)";
     }
+    PlotSeries m = DecibelSeries(name, frf.frequency, v), ph = m;
+    std::vector<double> wrapped;
+    for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) wrapped.push_back(std::arg(v(i)) * 180 / kPi);
     ph.y = UnwrapDegrees(wrapped);
+    if (p < responses.size()) m = Grey(m, p == 0), ph = Grey(ph, p == 0);
     mag.series.push_back(m);
     phase.series.push_back(ph);
   }
@@ -135,6 +179,42 @@ RgbaImage RenderIlcBodePlot(const ClosedLoopFrf& frf, const LearningFilter& filt
                             Renderer& renderer) {
   const IlcBodePlot bode = IlcBodePlots(frf, filter, joint, title);
   return StackImages(RenderSeriesPlot(bode.magnitude, renderer), RenderSeriesPlot(bode.phase, renderer));
+}
+
+IlcBodePlot IlcCriterionPlots(const ClosedLoopFrf& frf, const LearningFilter& filter, const IlcOptions& options,
+                              int joint, const std::string& title) {
+  IlcBodePlot plots;
+  SeriesPlot& top = plots.magnitude;
+  SeriesPlot& bottom = plots.phase;
+  top.title = title;
+  top.x_label = bottom.x_label = "log10(f / Hz)";
+  top.y_label = "[dB re 1 N m/rad]";
+  bottom.y_label = "[dB]";
+  top.height = bottom.height = 450;
+  const auto& responses = frf.response.at(static_cast<std::size_t>(joint));
+  const double ts = frf.sample_time;
+  const Eigen::VectorXd& f = frf.frequency;
+  // Seed 001, Fig. 10: L against the inverse process sensitivities, then the products
+  // |1 - gain PS_i L| against 1/|Q|^2, below which learning converges.
+  for (std::size_t p = 0; p < responses.size(); ++p) {
+    top.series.push_back(Grey(DecibelSeries("1 / PS at the postures", f, [&](Eigen::Index i) { return 1.0 / responses[p][i]; }),
+                              p == 0));
+    bottom.series.push_back(Grey(DecibelSeries("|1 - gain PS L| at the postures", f,
+                                               [&](Eigen::Index i) {
+                                                 return 1.0 - options.gain * responses[p][i] * filter.Response(f[i], ts);
+                                               }),
+                                 p == 0));
+  }
+  top.series.push_back(DecibelSeries("L", f, [&](Eigen::Index i) { return filter.Response(f[i], ts); }));
+  if (options.q_order > 0) {
+    const ButterworthFilter q = DesignButterworthLowPass(options.q_order, options.Cutoff(joint), 1 / ts);
+    bottom.series.push_back(DecibelSeries("1 / |Q|^2 (Q at " + Num(options.Cutoff(joint)) + " Hz)", f, [&](Eigen::Index i) {
+      return std::complex<double>(1 / std::norm(FrequencyResponse(q, f[i])));
+    }));
+  } else {
+    bottom.series.push_back(DecibelSeries("1 (no Q)", f, [](Eigen::Index) { return std::complex<double>(1); }));
+  }
+  return plots;
 }
 
 PathPlot IlcToolPathPlot(const IlcResult& result, const ArmModel& plant, const Eigen::Vector3d& tool,
@@ -171,31 +251,45 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
           "the joint position with the feedback closed, measured per joint at "
        << frf.postures.size() << " postures by a random-phase multisine (" << Num(setup.frf.f_min) << "&ndash;"
        << Num(setup.frf.f_max) << " Hz, " << setup.frf.periods << " periods of " << Num(setup.frf.period)
-       << " s averaged after one transient period).</p>\n";
-  // The Bode plots follow the convergence and error plots in `images`.
-  for (int j = 0; j < n && !images.empty(); ++j) {
-    html << "<img src=\"data:image/png;base64," << Base64Encode(images[2 + j].second) << "\" alt=\"Bode plot joint "
-         << j + 1 << "\">\n";
-  }
+       << " s averaged after one transient period). In grey every posture's, then their average, the nominal "
+          "process sensitivity (seed 001, eq. 23 and Fig. 8), and 1/L, the model the learning filter inverts (Fig. "
+          "9): the controller's known feedback plus the plant's inertia and delay fitted to the nominal response "
+          "(learning filter &ldquo;fitted&rdquo;) or taken from the controller's model (&ldquo;model&rdquo;). "
+          "frf.csv has every line with its coherence (posture 0 is the nominal).</p>\n";
+  auto embed = [&](const std::string& prefix) {
+    for (const auto& [file, png] : images) {
+      if (file.rfind(prefix, 0) != 0) continue;
+      html << "<img src=\"data:image/png;base64," << Base64Encode(png) << "\" alt=\"" << HtmlEscape(file) << "\">\n";
+    }
+  };
+  embed("bode");
   html << "<h2>2. Filters</h2>\n<p>Learning filter L (" << HtmlEscape(setup.learning_filter)
        << "): L(z) = (a2 z^&tau; + a2' z^(&tau;+1)) (z &minus; 2 + 1/z)/Ts&sup2; + a1 (z &minus; 1/z)/(2Ts) + a0, applied "
           "offline (non-causal). Robustness filter Q: "
-       << (o.q_order > 0 ? "zero-phase Butterworth, order " + std::to_string(o.q_order) + ", cut-off " +
-                               Num(o.q_cutoff) + " Hz"
+       << (o.q_order > 0 ? "zero-phase Butterworth, order " + std::to_string(o.q_order) +
+                               (o.q_cutoffs.empty() ? ", cut-off " + Num(o.q_cutoff) + " Hz for every joint"
+                                                    : std::string(", each joint's cut-off the highest for which "
+                                                                  "|Q|&sup2;|1 &minus; &alpha; PS<sub>i</sub> L| &lt; 1 "
+                                                                  "at every measured posture i"))
                          : std::string("none"))
        << ". Update f<sub>k+1</sub> = Q(f<sub>k</sub> + " << Num(o.gain)
        << " L e<sub>k</sub>).</p>\n<table><tr><th>joint</th><th>&tau; [samples]</th><th>a2 + a2' [kg m&sup2;]</th>"
           "<th>a1 [N m s/rad]</th><th>a0 [N m/rad]</th><th>fit residual</th><th>|1 &minus; &alpha; PS L| &lt; 1 up to [Hz]</th>"
-          "<th>worst |Q|&sup2;|1 &minus; &alpha; PS L|</th></tr>\n";
+          "<th>Q cut-off [Hz]</th><th>worst |Q|&sup2;|1 &minus; &alpha; PS L|</th></tr>\n";
   for (int j = 0; j < n; ++j) {
     const double limit = LearningLimitFrequency(frf, j, filters[j], o.gain);
     html << "<tr><td>" << j + 1 << "</td><td>" << filters[j].shift << "</td><td>"
          << Num(filters[j].inertia + filters[j].inertia_early) << "</td><td>" << Num(filters[j].damping) << "</td><td>"
          << Num(filters[j].stiffness) << "</td><td>" << Num(filters[j].residual) << "</td><td>"
          << (std::isfinite(limit) ? Num(limit) : std::string("all")) << "</td><td>"
+         << (o.q_order > 0 ? Num(o.Cutoff(j)) : std::string("none")) << "</td><td>"
          << Num(ConvergenceFactor(frf, j, filters[j], o).maxCoeff()) << "</td></tr>\n";
   }
-  html << "</table>\n<h2>3. Convergence</h2>\n<table><tr><th>trial</th>";
+  html << "</table>\n<p>Below, per joint, L against the inverse process sensitivities of the postures, and the "
+          "products |1 &minus; &alpha; PS<sub>i</sub> L| against 1/|Q|&sup2;: learning converges where the grey lines "
+          "stay below it (seed 001, Fig. 10).</p>\n";
+  embed("criterion");
+  html << "<h2>3. Convergence</h2>\n<table><tr><th>trial</th>";
   for (int j = 1; j <= n; ++j) html << "<th>RMS " << j << " [mrad]</th>";
   for (int j = 1; j <= n; ++j) html << "<th>max " << j << " [mrad]</th>";
   html << "</tr>\n";
@@ -207,7 +301,7 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
   }
   html << "</table>\n";
   for (const auto& [file, png] : images) {
-    if (file.rfind("bode", 0) == 0) continue;
+    if (file.rfind("bode", 0) == 0 || file.rfind("criterion", 0) == 0) continue;
     html << "<p><img src=\"data:image/png;base64," << Base64Encode(png) << "\" alt=\"" << HtmlEscape(file)
          << "\"></p>\n";
   }
@@ -239,6 +333,13 @@ std::vector<std::pair<std::string, std::string>> MakeIlcReport(const IlcReportSe
                           EncodePng(RenderIlcBodePlot(
                               frf, filters[static_cast<std::size_t>(j)], j,
                               what + ": process sensitivity, joint " + std::to_string(j + 1), *renderer)));
+    }
+    for (int j = 0; j < static_cast<int>(filters.size()); ++j) {
+      const IlcBodePlot c = IlcCriterionPlots(frf, filters[static_cast<std::size_t>(j)], setup.options, j,
+                                              what + ": learning filter and convergence, joint " + std::to_string(j + 1));
+      images.emplace_back("criterion_joint" + std::to_string(j + 1) + ".png",
+                          EncodePng(StackImages(RenderSeriesPlot(c.magnitude, *renderer),
+                                                RenderSeriesPlot(c.phase, *renderer))));
     }
     images.emplace_back("path.png", EncodePng(RenderPathPlot(
                                         IlcToolPathPlot(result, plant, setup.tool, what + ": tool path"), *renderer)));

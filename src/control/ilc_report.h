@@ -42,14 +42,18 @@ struct IlcReportSetup {
 // trials.csv: trial,rms1..rmsn,max1..maxn, the tracking error per trial and joint (rad or m).
 std::string FormatIlcTrialsCsv(const IlcResult& result);
 
-// frf.csv: joint,posture,frequency,magnitude,phase,filter_magnitude,filter_phase, the
-// measured PS (rad/(N·m), degrees) per joint, posture and line (Hz), and 1/L of the
-// joint's learning filter at the same line.
+// frf.csv: joint,posture,frequency,magnitude,phase,coherence,filter_magnitude,filter_phase,
+// the measured PS (rad/(N·m), degrees) and its coherence per joint, posture (1-based; 0
+// is the nominal response, the average over the postures, with the worst coherence) and
+// line (Hz), and 1/L of the joint's learning filter at the same line.
 std::string FormatIlcFrfCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters);
 
-// filters.csv: per joint the learning filter's coefficients and fit residual, the
-// frequency (Hz, "inf" for none) up to which learning converges without Q, Q's order and
-// cut-off (Hz), and the worst |Q|^2 |1 - gain PS L|.
+// filters.csv: joint,shift,inertia,inertia_early,damping,stiffness,residual,fit_lines,
+// fit_min_hz,fit_max_hz,learning_limit_hz,q_order,q_cutoff,worst_factor,margin: per joint
+// the learning filter's coefficients, its fit (residual, the lines used and their band;
+// empty for the model's filter), the frequency (Hz, empty for none) up to which learning
+// converges without Q, Q's order and the joint's cut-off (Hz), the worst |Q|^2 |1 - gain
+// PS L| over the lines and postures and the margin 1 - worst.
 std::string FormatIlcFiltersCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters,
                                 const IlcOptions& options);
 
@@ -65,14 +69,22 @@ struct IlcBodePlot {
   SeriesPlot phase;      // deg, unwrapped (signal/phase_unwrap.h)
 };
 
-// The measured PS of joint `joint` (0-based), one line per posture, and 1/L of its
-// learning filter last. Throws std::out_of_range for a joint that was not measured.
+// The measured PS of joint `joint` (0-based): one grey line per posture (seed 001, Fig.
+// 8), the nominal response (their average) and 1/L of its learning filter last (Fig. 9).
+// Throws std::out_of_range for a joint that was not measured.
 IlcBodePlot IlcBodePlots(const ClosedLoopFrf& frf, const LearningFilter& filter, int joint, const std::string& title);
 
 // IlcBodePlots() drawn, the magnitude stacked above the phase. Throws what the renderer
 // throws.
 RgbaImage RenderIlcBodePlot(const ClosedLoopFrf& frf, const LearningFilter& filter, int joint, const std::string& title,
                             Renderer& renderer);
+
+// Seed 001, Fig. 10 for joint `joint`: above, L and 1/PS at every posture (grey); below,
+// |1 - gain PS_i L| at every posture (grey) and 1/|Q|^2 (1 without Q), all in dB: the
+// convergence criterion holds where the grey lines stay below the last. Throws
+// std::out_of_range for a joint that was not measured.
+IlcBodePlot IlcCriterionPlots(const ClosedLoopFrf& frf, const LearningFilter& filter, const IlcOptions& options,
+                              int joint, const std::string& title);
 
 // The tool point's path (ToolPathPlot, control/tracking_plots.h): the reference, trial 0
 // and the last trial.

@@ -111,6 +111,75 @@ LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_m
   return best;
 }
 
+LearningFilter FitPlantLearningFilter(const ClosedLoopFrf& frf, int joint, const LearningFilter& feedback,
+                                      double viscous, double f_min, double f_max, int max_shift,
+                                      double min_coherence) {
+  CheckJoint(frf, joint);
+  if (max_shift < 0) throw InputError("FitPlantLearningFilter: max_shift must be >= 0");
+  const Eigen::VectorXcd ps = frf.Nominal(joint);
+  const Eigen::VectorXd coherence = frf.WorstCoherence(joint);
+  std::vector<Eigen::Index> lines;
+  for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
+    if (frf.frequency[i] >= f_min - 1e-9 && frf.frequency[i] <= f_max + 1e-9 && coherence[i] >= min_coherence) {
+      lines.push_back(i);
+    }
+  }
+  if (lines.size() < 2) {
+    std::ostringstream msg;
+    msg << "fewer than 2 measured lines in [" << f_min << ", " << f_max << "] Hz with coherence >= " << min_coherence;
+    throw InputError("FitPlantLearningFilter: " + msg.str());
+  }
+  const auto rows = static_cast<Eigen::Index>(2 * lines.size());
+  LearningFilter best;
+  best.residual = std::numeric_limits<double>::infinity();
+  for (int shift = 0; shift <= max_shift; ++shift) {
+    LearningFilter f = feedback;
+    f.shift = shift;
+    f.damping = feedback.damping + viscous;
+    // Start from the equation error (weights 1), then weight each line by 1 / |L|^2 of
+    // the last iterate, so that |PS L - 1|^2 / |L|^2 = |PS - 1/L|^2: the output error.
+    Eigen::VectorXd weight = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(lines.size()));
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      // PS (a2 B2 + a2' B2e) = 1 - PS (a1 B1 + a0), real and imaginary parts.
+      Eigen::MatrixXd a(rows, 2);
+      Eigen::VectorXd b(rows);
+      for (std::size_t k = 0; k < lines.size(); ++k) {
+        const Eigen::Index i = lines[k];
+        std::complex<double> b2, b2e, b1;
+        Basis(frf.frequency[i], frf.sample_time, shift, &b2, &b2e, &b1);
+        const double w = std::sqrt(weight[static_cast<Eigen::Index>(k)]);
+        const std::complex<double> c0 = ps[i] * b2 * w, c1 = ps[i] * b2e * w;
+        const std::complex<double> rhs = (1.0 - ps[i] * (f.damping * b1 + f.stiffness)) * w;
+        const auto r = static_cast<Eigen::Index>(2 * k);
+        a(r, 0) = c0.real(), a(r, 1) = c1.real(), b[r] = rhs.real();
+        a(r + 1, 0) = c0.imag(), a(r + 1, 1) = c1.imag(), b[r + 1] = rhs.imag();
+      }
+      // Both inertias >= 0 (an inertia cannot be negative; a negative one would
+      // stand for damping the fit must not take): solve, and if one comes out negative
+      // fix it at 0 and solve for the other alone.
+      Eigen::Vector2d x = a.colPivHouseholderQr().solve(b);
+      if (x[0] < 0 || x[1] < 0) {
+        const int keep = x[0] < 0 ? 1 : 0;
+        const double v = a.col(keep).squaredNorm() > 0 ? a.col(keep).dot(b) / a.col(keep).squaredNorm() : 0;
+        x.setZero();
+        x[keep] = std::max(v, 0.0);
+      }
+      f.inertia = x[0], f.inertia_early = x[1];
+      for (std::size_t k = 0; k < lines.size(); ++k) {
+        weight[static_cast<Eigen::Index>(k)] =
+            1 / std::max(std::norm(f.Response(frf.frequency[lines[k]], frf.sample_time)), 1e-300);
+      }
+    }
+    double sum = 0;
+    for (Eigen::Index i : lines) sum += std::norm(ps[i] * f.Response(frf.frequency[i], frf.sample_time) - 1.0);
+    f.residual = std::sqrt(sum / static_cast<double>(lines.size()));
+    f.lines = static_cast<int>(lines.size());
+    f.band_min = frf.frequency[lines.front()], f.band_max = frf.frequency[lines.back()];
+    if (f.residual < best.residual) best = f;
+  }
+  return best;
+}
+
 LearningFilter ModelLearningFilter(const ArmModel& hat, const TrackingOptions& tracking, const Eigen::VectorXd& q,
                                    const Eigen::VectorXd& q_start, int joint) {
   if (joint < 0 || joint >= hat.dof()) throw std::invalid_argument("ModelLearningFilter: no such joint");
@@ -129,6 +198,11 @@ LearningFilter ModelLearningFilter(const ArmModel& hat, const TrackingOptions& t
   return f;
 }
 
+double IlcOptions::Cutoff(int joint) const {
+  return joint >= 0 && static_cast<std::size_t>(joint) < q_cutoffs.size() ? q_cutoffs[static_cast<std::size_t>(joint)]
+                                                                           : q_cutoff;
+}
+
 bool IlcOptions::IsValid(double sample_time, std::string* why) const {
   auto fail = [&](const std::string& text) {
     if (why) *why = text;
@@ -139,6 +213,12 @@ bool IlcOptions::IsValid(double sample_time, std::string* why) const {
   if (q_order < 0 || q_order > 16) return fail("q_order must be 0 (no robustness filter) to 16");
   if (q_order > 0 && !(q_cutoff > 0 && q_cutoff < 0.5 / sample_time)) {
     return fail("q_cutoff must lie between 0 and the Nyquist frequency " + std::to_string(0.5 / sample_time) + " Hz");
+  }
+  for (double c : q_cutoffs) {
+    if (q_order > 0 && !(c > 0 && c < 0.5 / sample_time)) {
+      return fail("every joint's q_cutoff must lie between 0 and the Nyquist frequency " +
+                  std::to_string(0.5 / sample_time) + " Hz");
+    }
   }
   return true;
 }
@@ -152,7 +232,7 @@ Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const Lea
   for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
     double q = 1;
     if (options.q_order > 0) {
-      const ButterworthFilter bw = DesignButterworthLowPass(options.q_order, options.q_cutoff, 1 / frf.sample_time);
+      const ButterworthFilter bw = DesignButterworthLowPass(options.q_order, options.Cutoff(joint), 1 / frf.sample_time);
       q = std::norm(FrequencyResponse(bw, frf.frequency[i]));
     }
     const std::complex<double> l = filter.Response(frf.frequency[i], frf.sample_time);
@@ -161,6 +241,36 @@ Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const Lea
     }
   }
   return out;
+}
+
+double AutoQCutoff(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, const IlcOptions& options,
+                   double* worst) {
+  CheckJoint(frf, joint);
+  std::string why;
+  if (!options.IsValid(frf.sample_time, &why)) throw InputError("IlcOptions: " + why);
+  if (frf.frequency.size() == 0) throw InputError("AutoQCutoff: no measured lines");
+  IlcOptions o = options;
+  o.q_cutoffs.clear();
+  // Above the measured band nothing is known: at most half its highest line, where Q has
+  // fallen by 12 dB per order (96 dB for the default 4th order through FiltFilt).
+  const double top = std::min(frf.frequency[frf.frequency.size() - 1] / 2, 0.45 / frf.sample_time);
+  const double bottom = frf.frequency[0];
+  // The highest passing cutoff: from the top down (the factor is not monotone in the
+  // cutoff in general, so every grid point is tried until one passes).
+  for (double cutoff = std::floor(top * 2) / 2; cutoff >= bottom - 1e-9; cutoff -= 0.5) {
+    o.q_cutoff = cutoff;
+    const double factor = o.q_order > 0 ? ConvergenceFactor(frf, joint, filter, o).maxCoeff() : 0;
+    if (o.q_order > 0 && factor < 1) {
+      if (worst) *worst = factor;
+      return cutoff;
+    }
+    if (o.q_order == 0) break;
+  }
+  std::ostringstream msg;
+  msg << "joint " << joint + 1 << ": no robustness filter cutoff between " << bottom << " and " << top
+      << " Hz makes |Q|^2 |1 - gain PS L| < 1 at every measured line and posture"
+      << (options.q_order == 0 ? " (q_order is 0: no filter)" : "") << "; lower the gain or refit the learning filter";
+  throw InputError(msg.str());
 }
 
 double LearningLimitFrequency(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, double gain) {
@@ -186,7 +296,10 @@ Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, co
     next.col(j) += options.gain * filters[static_cast<std::size_t>(j)].Apply(e.col(j), sample_time);
   }
   if (options.q_order > 0) {
-    next = FiltFiltColumns(DesignButterworthLowPass(options.q_order, options.q_cutoff, 1 / sample_time), next);
+    for (Eigen::Index j = 0; j < f.cols(); ++j) {
+      const ButterworthFilter q = DesignButterworthLowPass(options.q_order, options.Cutoff(static_cast<int>(j)), 1 / sample_time);
+      next.col(j) = FiltFiltColumns(q, Eigen::MatrixXd(next.col(j)));
+    }
   }
   return next;
 }

@@ -55,6 +55,8 @@ struct LearningFilter {
   double damping = 0;        // N·m·s/rad: a1
   double stiffness = 0;   // N·m/rad: a0
   double residual = 0;    // RMS |PS L - 1| over the fitted lines (0 when not fitted)
+  int lines = 0;          // lines the fit used (0 when not fitted)
+  double band_min = 0, band_max = 0;  // Hz, the lowest and highest of them
 
   // L(e^{j 2 pi f Ts}) (N·m/rad) at `frequency_hz`.
   std::complex<double> Response(double frequency_hz, double sample_time) const;
@@ -71,6 +73,29 @@ struct LearningFilter {
 // than 2 lines in the band, std::invalid_argument for a joint that does not exist.
 LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_min, double f_max, int max_shift);
 
+// The learning filter as the inverse of the process sensitivity put together from its
+// two parts, PS^-1 = P^-1 + C (seed 001, section VII-B; docs/ilc.md):
+//  - C, the feedback the controller applies, is known exactly: `feedback`'s damping and
+//    stiffness (ModelLearningFilter's gains), to which the controller model's viscous
+//    friction `viscous` is added as the plant's known damping;
+//  - the plant's inertia and delay, what the controller's model may have wrong (a
+//    payload, an unmodelled inertia, a lag), are fitted to joint `joint`'s nominal
+//    response (the average over the postures, eq. 23) by output-error least squares,
+//    sum |PS_nom - 1/L|^2 over the lines in [f_min, f_max] whose coherence is at least
+//    `min_coherence` at every posture, by Sanathanan-Koerner iterations (a linear
+//    least-squares problem weighted by the last iterate's 1/|L|^2), for each shift
+//    0..max_shift, keeping the one with the smallest residual.
+// The damping is not fitted: measured at rest, a joint's Coulomb friction reverses with
+// every swing of the multisine and acts as damping that the task, in motion, does not
+// have (the elbow of models/rrr_plant.yaml: 11.4 N m s/rad fitted against 5.8 in
+// motion), and an L with that damping has PS L ~ 2 at the closed loop's natural
+// frequency, where learning at gain 1 then stalls (docs/ilc.md gives the evidence).
+// Throws InputError for max_shift < 0, a band with fewer than 2 coherent lines;
+// std::invalid_argument for a joint that does not exist.
+LearningFilter FitPlantLearningFilter(const ClosedLoopFrf& frf, int joint, const LearningFilter& feedback,
+                                      double viscous, double f_min, double f_max, int max_shift,
+                                      double min_coherence = 0.9);
+
 // The learning filter the controller's model predicts for joint `joint` at posture q:
 // inertia M_hat_jj(q) split evenly over shifts delay_samples and delay_samples + 1, and the feedback gains of
 // `tracking` (PD + feedforward: Kp', Kd' at the reference's start q_start; computed
@@ -83,10 +108,26 @@ struct IlcOptions {
   double gain = 1;        // alpha
   int q_order = 4;        // the robustness filter's Butterworth order; 0 = no filter Q
   double q_cutoff = 40;   // Hz, its -3 dB frequency per pass (-6 dB after FiltFilt)
+  // Hz, one per joint (AutoQCutoff's), used instead of q_cutoff when given.
+  std::vector<double> q_cutoffs;
+
+  // Joint `joint`'s cutoff: q_cutoffs[joint] when given, else q_cutoff.
+  double Cutoff(int joint) const;
 
   // True when usable for sample time `sample_time` (s); else says why in *why.
   bool IsValid(double sample_time, std::string* why) const;
 };
+
+// The highest cutoff (Hz) of Q for joint `joint`, on a 0.5 Hz grid from the lowest to
+// the highest measured line, at which the convergence criterion |Q|^2 |1 - gain PS_i L|
+// < 1 holds at every measured line for every posture i (seed 001: the cutoffs 18, 25 and
+// 27 Hz of its arm); *worst (if given) gets the largest factor left there, so that
+// 1 - *worst is the margin. Above the measured band nothing is known, so the cutoff
+// never exceeds half its highest line (where Q is down by 12 dB per order). Throws InputError when no cutoff on the grid
+// satisfies the criterion (q_order 0 included: then L itself fails it), or for invalid
+// options.
+double AutoQCutoff(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, const IlcOptions& options,
+                   double* worst = nullptr);
 
 // |Q(f)|^2 |1 - gain PS(f) L(f)| at every line of `frf` for joint `joint`, the worst over
 // the postures: < 1 where learning converges. Throws InputError for invalid options,

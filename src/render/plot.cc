@@ -286,6 +286,18 @@ Chart PathChart(const PathPlot& plot) {
   return c;
 }
 
+// The k-th series' line style: its own colour as a thin solid line, or the palette's
+// next (counting only the series without a colour of their own).
+LineStyle SeriesStyle(const SeriesPlot& plot, std::size_t k) {
+  const PlotSeries& s = plot.series[k];
+  if (s.color) return LineStyle{Color::Hex(*s.color), 1.0, {}, LineCap::kButt};
+  int index = 0;
+  for (std::size_t i = 0; i < k; ++i) index += plot.series[i].color ? 0 : 1;
+  LineStyle style = PlotLineStyle(index, kDataWidth);
+  style.color = PlotColor(index);
+  return style;
+}
+
 Chart SeriesChart(const SeriesPlot& plot) {
   Chart c;
   c.title = plot.title;
@@ -306,9 +318,7 @@ Chart SeriesChart(const SeriesPlot& plot) {
       }
     }
     c.occupied_lines.push_back(std::move(line));
-    LineStyle style = PlotLineStyle(static_cast<int>(k), kDataWidth);
-    style.color = PlotColor(static_cast<int>(k));
-    c.legend.push_back(LegendEntry{s.name, style, s.points ? LegendMarker::kDot : LegendMarker::kLine});
+    if (s.legend) c.legend.push_back(LegendEntry{s.name, SeriesStyle(plot, k), s.points ? LegendMarker::kDot : LegendMarker::kLine});
   }
   if (plot.range) {
     c.view = *plot.range;
@@ -430,8 +440,7 @@ RgbaImage RenderSeriesPlot(const SeriesPlot& plot, Renderer& renderer, PlotLayou
   return DrawChart(c, L, renderer, [&] {
     for (std::size_t k = 0; k < plot.series.size(); ++k) {
       const PlotSeries& s = plot.series[k];
-      LineStyle style = PlotLineStyle(static_cast<int>(k), kDataWidth);
-      style.color = PlotColor(static_cast<int>(k));
+      const LineStyle style = SeriesStyle(plot, k);
       std::vector<Point2d> px;
       for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
         px.push_back(std::isfinite(s.x[i]) && std::isfinite(s.y[i]) ? L.ToPixel(s.x[i], s.y[i]) : Point2d{NAN, NAN});

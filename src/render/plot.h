@@ -19,6 +19,7 @@
 // area, axes, title and legend are, and the world-to-pixel mapping (for tests).
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -58,6 +59,10 @@ struct PlotSeries {
   std::vector<double> x;   // e.g. s
   std::vector<double> y;   // same length as x
   bool points = false;     // true: a dot at every sample, no line (a scatter)
+  // 0xRRGGBB, drawn as a thin solid line (a background such as many measurements in
+  // grey); absent: the palette's next colour and style.
+  std::optional<std::uint32_t> color = std::nullopt;
+  bool legend = true;      // false: no legend entry (the name is ignored)
 };
 
 struct SeriesPlot {

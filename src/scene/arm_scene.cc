@@ -192,10 +192,16 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
   m.Get("gain", &o.gain, InRange(1e-6, 2));
   m.Get("learning_filter", &ilc->learning_filter, {"fitted", "model"});
   m.Get("q_order", &o.q_order, InRange(0, 16));
-  if (m.Get("q_cutoff", &o.q_cutoff, Positive()) && plant.sample_time > 0 && o.q_cutoff >= 0.5 / plant.sample_time) {
-    std::ostringstream msg;
-    msg << "must lie below the Nyquist frequency " << 0.5 / plant.sample_time << " Hz";
-    m.Error("q_cutoff", msg.str());
+  const YAML::Node cutoff = m.Has("q_cutoff") ? m.Child("q_cutoff") : YAML::Node();
+  if (cutoff.IsDefined() && cutoff.IsScalar() && cutoff.Scalar() == "auto") {
+    ilc->q_cutoff_auto = true;
+  } else if (cutoff.IsDefined()) {
+    ilc->q_cutoff_auto = false;
+    if (m.Get("q_cutoff", &o.q_cutoff, Positive()) && plant.sample_time > 0 && o.q_cutoff >= 0.5 / plant.sample_time) {
+      std::ostringstream msg;
+      msg << "must lie below the Nyquist frequency " << 0.5 / plant.sample_time << " Hz";
+      m.Error("q_cutoff", msg.str());
+    }
   }
   if (m.Has("frf")) {
     YamlMap f(m.Child("frf"), path, "ilc.frf", errors);
@@ -220,6 +226,7 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
         }
       }
       f.Get("max_shift", &ilc->max_shift, InRange(0, 100));
+      f.Get("coherence", &ilc->min_coherence, InRange(0, 1));
       const YAML::Node list = f.Child("postures");
       if (list.IsDefined() && !list.IsNull()) {
         if (!list.IsSequence() || list.size() == 0) {
@@ -539,6 +546,12 @@ std::string ArmSceneTrajectoryCsv(const ArmScene& scene, const TrackingTrial& tr
 
 std::vector<Eigen::VectorXd> IlcPostures(const ArmScene& scene, const ArmReference& reference) {
   if (!scene.ilc.postures.empty()) return scene.ilc.postures;
+  // Seed 001: 16 static postures, 4 x 4 over joints 2 and 3 across the range the task
+  // moves them through, the waist at the task's start.
+  if (scene.plant.dof() >= 3) {
+    return GridPostures(scene.plant, reference.q.row(0).transpose(), 1, 2, 4, reference.q.colwise().minCoeff().transpose(),
+                        reference.q.colwise().maxCoeff().transpose());
+  }
   std::vector<Eigen::VectorXd> postures;
   const Eigen::Index last = reference.q.rows() - 1;
   for (Eigen::Index i = 0; i < 4; ++i) postures.push_back(reference.q.row(last * i / 3).transpose());

@@ -71,11 +71,16 @@ struct IlcSpec {
   IlcOptions options;                 // trials, gain, q_order, q_cutoff
   std::string learning_filter = "fitted";  // fitted (to the measured FRF) | model (the controller's model)
   FrfOptions frf;                     // period, periods, band, amplitude (seed: the scene's)
-  // rad or m, one per joint each; empty: 4 postures along the task's reference (its
-  // first and last sample and two in between).
+  // rad or m, one per joint each; empty: the seed's 16, a 4 x 4 grid over joints 2 and
+  // 3 across the range the task moves them through, the waist at the task's start
+  // (GridPostures; arms of fewer joints: 4 postures along the task's reference).
   std::vector<Eigen::VectorXd> postures;
   double fit_min = 2, fit_max = 80;   // Hz, the band the learning filter is fitted over
   int max_shift = 5;                  // samples, the largest delay tau tried by the fit
+  double min_coherence = 0.9;         // lines below it at any posture are not fitted
+  // q_cutoff: auto (the default): each joint's highest cutoff meeting the convergence
+  // criterion at every posture (AutoQCutoff); a number: that cutoff for every joint.
+  bool q_cutoff_auto = true;
 };
 
 struct ArmScene {

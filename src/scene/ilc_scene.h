@@ -28,6 +28,8 @@ struct IlcSceneRun {
   ClosedLoopFrf frf;                    // process sensitivity per joint and posture
   double frf_seconds = 0;               // s, wall time of the measurement
   std::vector<LearningFilter> filters;  // per joint
+  IlcOptions options;                   // the scene's, with the trials and each joint's Q cutoff as run
+  std::vector<double> q_margin;         // per joint, 1 - the worst |Q|^2 |1 - gain PS L| (auto cutoffs)
   IlcResult result;                     // the trials
 };
 
@@ -40,8 +42,8 @@ struct IlcSceneCallbacks {
 // Runs ILC on `scene` on `backend` (empty: the scene's; `learned` with `predictor`, an arm
 // predictor for the scene's model, built as `run` builds it: MakeArmSceneBackend) for
 // `trials` learning trials (negative: the scene's). Throws InputError for a backend or
-// predictor `run` would refuse, a fit band the measurement does not cover, and what the
-// parts throw.
+// predictor `run` would refuse, a fit band the measurement does not cover, an automatic
+// Q cutoff that cannot meet the convergence criterion, and what the parts throw.
 IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, const IlcSceneCallbacks& callbacks = {},
                         const std::string& predictor = "");
 

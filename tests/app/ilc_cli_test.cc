@@ -48,8 +48,8 @@ TEST(IlcCli, WritesTrialsCsvWithTheContractColumnsAndTheReport) {
   EXPECT_EQ(lines[0], "trial,rms1,rms2,rms3,max1,max2,max3");
   for (int k = 0; k <= 3; ++k) EXPECT_EQ(lines[static_cast<std::size_t>(k) + 1].rfind(std::to_string(k) + ",", 0), 0u);
   const std::vector<std::string> frf = Lines(testing::ReadText(dir + "/out/frf.csv"));
-  EXPECT_EQ(frf[0], "joint,posture,frequency,magnitude,phase,filter_magnitude,filter_phase");
-  EXPECT_EQ(frf.size(), 1u + 3 * 2 * 100);  // 3 joints x 2 postures x the lines 2..200 Hz
+  EXPECT_EQ(frf[0], "joint,posture,frequency,magnitude,phase,coherence,filter_magnitude,filter_phase");
+  EXPECT_EQ(frf.size(), 1u + 3 * 3 * 100);  // 3 joints x (the nominal + 2 postures) x the lines 2..200 Hz
   for (const char* file : {"filters.csv", "feedforward.csv", "report.html"}) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/out/" + file)) << file;
   }

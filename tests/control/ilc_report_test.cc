@@ -56,14 +56,17 @@ TEST(IlcReport, TrialsCsvHasTheContractColumns) {
   EXPECT_EQ(FormatIlcTrialsCsv(TwoTrials()), "trial,rms1,max1\n0," + n1 + "," + n2 + "\n1," +
                                                  FormatCsvNumber(0.001) + "," + FormatCsvNumber(0.002) + "\n");
   const std::string frf = FormatIlcFrfCsv(DelayFrf(), {Filter()});
-  EXPECT_EQ(frf.substr(0, frf.find('\n')), "joint,posture,frequency,magnitude,phase,filter_magnitude,filter_phase");
-  EXPECT_EQ(std::count(frf.begin(), frf.end(), '\n'), 41);
+  EXPECT_EQ(frf.substr(0, frf.find('\n')),
+            "joint,posture,frequency,magnitude,phase,coherence,filter_magnitude,filter_phase");
+  EXPECT_EQ(std::count(frf.begin(), frf.end(), '\n'), 81);  // the nominal (posture 0) and the posture, 40 lines each
 }
 
 TEST(IlcReport, BodePhaseIsUnwrappedAndMagnitudeInDecibels) {
   const IlcBodePlot bode = IlcBodePlots(DelayFrf(), Filter(), 0, "delay");
-  ASSERT_EQ(bode.phase.series.size(), 2u);  // the posture and 1/L
-  EXPECT_EQ(bode.phase.series[1].name, "1 / L (learning filter)");
+  ASSERT_EQ(bode.phase.series.size(), 3u);  // the posture (grey), the nominal and 1/L
+  EXPECT_TRUE(bode.phase.series[0].color.has_value());
+  EXPECT_EQ(bode.phase.series[1].name, "nominal (their average)");
+  EXPECT_EQ(bode.phase.series[2].name, "1 / L (learning filter)");
   const PlotSeries& phase = bode.phase.series[0];
   for (std::size_t i = 0; i < phase.y.size(); ++i) EXPECT_NEAR(phase.y[i], -10.8 * (i + 1), 1e-9) << i;
   EXPECT_NEAR(bode.magnitude.series[0].y[5], -40, 1e-9);  // |PS| = 0.01 rad/(N m)

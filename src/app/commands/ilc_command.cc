@@ -48,19 +48,20 @@ int RunIlcCommand(const IlcCommandOptions& options) {
     frf_progress.Finish();
     if (options.quiet) return;
     const ClosedLoopFrf& frf = run.frf;
+    const IlcOptions& o = run.options;
     std::printf("ilc %s: %d postures, PS measured %g..%g Hz in %.2f s; learning filter %s, gain %g, Q %s\n",
                 scene.name.c_str(), static_cast<int>(run.postures.size()), frf.frequency[0],
-                frf.frequency[frf.frequency.size() - 1], run.frf_seconds, spec.learning_filter.c_str(),
-                spec.options.gain,
-                spec.options.q_order > 0 ? ("order " + std::to_string(spec.options.q_order) + " at " +
-                                            Num(spec.options.q_cutoff) + " Hz (zero phase)")
-                                               .c_str()
-                                         : "none");
+                frf.frequency[frf.frequency.size() - 1], run.frf_seconds, spec.learning_filter.c_str(), o.gain,
+                o.q_order > 0 ? ("order " + std::to_string(o.q_order) + (o.q_cutoffs.empty() ? " at " + Num(o.q_cutoff) + " Hz"
+                                                                                            : std::string(", cutoff per joint by the convergence criterion")) +
+                                 " (zero phase)")
+                                    .c_str()
+                              : "none");
     for (int j = 0; j < n; ++j) {
-      const double limit = LearningLimitFrequency(frf, j, run.filters[j], spec.options.gain);
-      std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; worst |Q|^2 |1 - gain PS L| %.3g\n", j + 1,
+      const double limit = LearningLimitFrequency(frf, j, run.filters[j], o.gain);
+      std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; Q at %s Hz, worst |Q|^2 |1 - gain PS L| %.3g\n", j + 1,
                   run.filters[j].Summary().c_str(), std::isfinite(limit) ? (Num(limit) + " Hz").c_str() : "every line",
-                  ConvergenceFactor(frf, j, run.filters[j], spec.options).maxCoeff());
+                  Num(o.Cutoff(j)).c_str(), ConvergenceFactor(frf, j, run.filters[j], o).maxCoeff());
     }
   };
   callbacks.trial_done = [&](int trial, const TrackingTrial& t) {
@@ -92,8 +93,7 @@ int RunIlcCommand(const IlcCommandOptions& options) {
   setup.tracking = tracking;
   setup.frf = spec.frf;
   setup.learning_filter = spec.learning_filter;
-  setup.options = spec.options;
-  if (options.trials >= 0) setup.options.trials = options.trials;
+  setup.options = run.options;
   setup.tool = scene.task.writing.tool;
   OutputFiles files(out);
   for (const auto& [file, bytes] :
