@@ -137,17 +137,28 @@ PlotSeries Grey(PlotSeries s, bool first) {
   return s;
 }
 
+// Two panels against log10 f, 450 px high each, the title on the upper one.
+IlcBodePlot TwoPanels(const std::string& title, const std::string& top_label, const std::string& bottom_label) {
+  IlcBodePlot plots;
+  plots.magnitude.title = title;
+  plots.magnitude.x_label = plots.phase.x_label = "log10(f / Hz)";
+  plots.magnitude.y_label = top_label;
+  plots.phase.y_label = bottom_label;
+  plots.magnitude.height = plots.phase.height = 450;
+  return plots;
+}
+
+// Both panels drawn, the upper stacked above the lower.
+RgbaImage RenderPanels(const IlcBodePlot& plots, Renderer& renderer) {
+  return StackImages(RenderSeriesPlot(plots.magnitude, renderer), RenderSeriesPlot(plots.phase, renderer));
+}
+
 }  // namespace
 
 IlcBodePlot IlcBodePlots(const ClosedLoopFrf& frf, const LearningFilter& filter, int joint, const std::string& title) {
-  IlcBodePlot bode;
+  IlcBodePlot bode = TwoPanels(title, "|PS| [dB re 1 rad/(N m)]", "phase [deg]");
   SeriesPlot& mag = bode.magnitude;
   SeriesPlot& phase = bode.phase;
-  mag.title = title;
-  mag.x_label = phase.x_label = "log10(f / Hz)";
-  mag.y_label = "|PS| [dB re 1 rad/(N m)]";
-  phase.y_label = "phase [deg]";
-  mag.height = phase.height = 450;
   const auto& responses = frf.response.at(static_cast<std::size_t>(joint));
   const Eigen::VectorXcd nominal = frf.Nominal(joint);
   // The postures in grey (seed 001, Fig. 8), the nominal response and the fitted model 1/L (Fig. 9).
@@ -177,20 +188,14 @@ IlcBodePlot IlcBodePlots(const ClosedLoopFrf& frf, const LearningFilter& filter,
 
 RgbaImage RenderIlcBodePlot(const ClosedLoopFrf& frf, const LearningFilter& filter, int joint, const std::string& title,
                             Renderer& renderer) {
-  const IlcBodePlot bode = IlcBodePlots(frf, filter, joint, title);
-  return StackImages(RenderSeriesPlot(bode.magnitude, renderer), RenderSeriesPlot(bode.phase, renderer));
+  return RenderPanels(IlcBodePlots(frf, filter, joint, title), renderer);
 }
 
 IlcBodePlot IlcCriterionPlots(const ClosedLoopFrf& frf, const LearningFilter& filter, const IlcOptions& options,
                               int joint, const std::string& title) {
-  IlcBodePlot plots;
+  IlcBodePlot plots = TwoPanels(title, "[dB re 1 N m/rad]", "[dB]");
   SeriesPlot& top = plots.magnitude;
   SeriesPlot& bottom = plots.phase;
-  top.title = title;
-  top.x_label = bottom.x_label = "log10(f / Hz)";
-  top.y_label = "[dB re 1 N m/rad]";
-  bottom.y_label = "[dB]";
-  top.height = bottom.height = 450;
   const auto& responses = frf.response.at(static_cast<std::size_t>(joint));
   const double ts = frf.sample_time;
   const Eigen::VectorXd& f = frf.frequency;
@@ -337,9 +342,7 @@ std::vector<std::pair<std::string, std::string>> MakeIlcReport(const IlcReportSe
     for (int j = 0; j < static_cast<int>(filters.size()); ++j) {
       const IlcBodePlot c = IlcCriterionPlots(frf, filters[static_cast<std::size_t>(j)], setup.options, j,
                                               what + ": learning filter and convergence, joint " + std::to_string(j + 1));
-      images.emplace_back("criterion_joint" + std::to_string(j + 1) + ".png",
-                          EncodePng(StackImages(RenderSeriesPlot(c.magnitude, *renderer),
-                                                RenderSeriesPlot(c.phase, *renderer))));
+      images.emplace_back("criterion_joint" + std::to_string(j + 1) + ".png", EncodePng(RenderPanels(c, *renderer)));
     }
     images.emplace_back("path.png", EncodePng(RenderPathPlot(
                                         IlcToolPathPlot(result, plant, setup.tool, what + ": tool path"), *renderer)));

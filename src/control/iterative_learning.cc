@@ -34,6 +34,18 @@ void CheckJoint(const ClosedLoopFrf& frf, int joint) {
   }
 }
 
+// The measured lines in [f_min, f_max] (Hz) whose coherence is at least min_coherence.
+std::vector<Eigen::Index> LinesInBand(const ClosedLoopFrf& frf, double f_min, double f_max,
+                                     const Eigen::VectorXd& coherence, double min_coherence) {
+  std::vector<Eigen::Index> lines;
+  for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
+    if (frf.frequency[i] >= f_min - 1e-9 && frf.frequency[i] <= f_max + 1e-9 && coherence[i] >= min_coherence) {
+      lines.push_back(i);
+    }
+  }
+  return lines;
+}
+
 }  // namespace
 
 std::complex<double> LearningFilter::Response(double frequency_hz, double sample_time) const {
@@ -69,10 +81,7 @@ std::string LearningFilter::Summary() const {
 LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_min, double f_max, int max_shift) {
   CheckJoint(frf, joint);
   if (max_shift < 0) throw InputError("FitLearningFilter: max_shift must be >= 0");
-  std::vector<Eigen::Index> lines;
-  for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
-    if (frf.frequency[i] >= f_min - 1e-9 && frf.frequency[i] <= f_max + 1e-9) lines.push_back(i);
-  }
+  const std::vector<Eigen::Index> lines = LinesInBand(frf, f_min, f_max, Eigen::VectorXd::Ones(frf.frequency.size()), 0);
   if (lines.size() < 2) {
     throw InputError("FitLearningFilter: fewer than 2 measured lines in [" + std::to_string(f_min) + ", " +
                      std::to_string(f_max) + "] Hz");
@@ -117,13 +126,7 @@ LearningFilter FitPlantLearningFilter(const ClosedLoopFrf& frf, int joint, const
   CheckJoint(frf, joint);
   if (max_shift < 0) throw InputError("FitPlantLearningFilter: max_shift must be >= 0");
   const Eigen::VectorXcd ps = frf.Nominal(joint);
-  const Eigen::VectorXd coherence = frf.WorstCoherence(joint);
-  std::vector<Eigen::Index> lines;
-  for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {
-    if (frf.frequency[i] >= f_min - 1e-9 && frf.frequency[i] <= f_max + 1e-9 && coherence[i] >= min_coherence) {
-      lines.push_back(i);
-    }
-  }
+  const std::vector<Eigen::Index> lines = LinesInBand(frf, f_min, f_max, frf.WorstCoherence(joint), min_coherence);
   if (lines.size() < 2) {
     std::ostringstream msg;
     msg << "fewer than 2 measured lines in [" << f_min << ", " << f_max << "] Hz with coherence >= " << min_coherence;
@@ -249,28 +252,31 @@ double AutoQCutoff(const ClosedLoopFrf& frf, int joint, const LearningFilter& fi
   std::string why;
   if (!options.IsValid(frf.sample_time, &why)) throw InputError("IlcOptions: " + why);
   if (frf.frequency.size() == 0) throw InputError("AutoQCutoff: no measured lines");
-  IlcOptions o = options;
-  o.q_cutoffs.clear();
+  const double bottom = frf.frequency[0];
   // Above the measured band nothing is known: at most half its highest line, where Q has
   // fallen by 12 dB per order (96 dB for the default 4th order through FiltFilt).
   const double top = std::min(frf.frequency[frf.frequency.size() - 1] / 2, 0.45 / frf.sample_time);
-  const double bottom = frf.frequency[0];
+  auto none = [&](const std::string& reason) {
+    std::ostringstream msg;
+    msg << "joint " << joint + 1 << ": no robustness filter cutoff between " << bottom << " and " << top
+        << " Hz makes |Q|^2 |1 - gain PS L| < 1 at every measured line and posture" << reason
+        << "; lower the gain or refit the learning filter";
+    return InputError(msg.str());
+  };
+  if (options.q_order == 0) throw none(" (q_order is 0: no filter)");
+  IlcOptions o = options;
+  o.q_cutoffs.clear();
   // The highest passing cutoff: from the top down (the factor is not monotone in the
   // cutoff in general, so every grid point is tried until one passes).
   for (double cutoff = std::floor(top * 2) / 2; cutoff >= bottom - 1e-9; cutoff -= 0.5) {
     o.q_cutoff = cutoff;
-    const double factor = o.q_order > 0 ? ConvergenceFactor(frf, joint, filter, o).maxCoeff() : 0;
-    if (o.q_order > 0 && factor < 1) {
+    const double factor = ConvergenceFactor(frf, joint, filter, o).maxCoeff();
+    if (factor < 1) {
       if (worst) *worst = factor;
       return cutoff;
     }
-    if (o.q_order == 0) break;
   }
-  std::ostringstream msg;
-  msg << "joint " << joint + 1 << ": no robustness filter cutoff between " << bottom << " and " << top
-      << " Hz makes |Q|^2 |1 - gain PS L| < 1 at every measured line and posture"
-      << (options.q_order == 0 ? " (q_order is 0: no filter)" : "") << "; lower the gain or refit the learning filter";
-  throw InputError(msg.str());
+  throw none("");
 }
 
 double LearningLimitFrequency(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, double gain) {

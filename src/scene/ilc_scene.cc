@@ -51,15 +51,12 @@ IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, 
   run.options = spec.options;
   if (trials >= 0) run.options.trials = trials;
   if (spec.q_cutoff_auto && spec.options.q_order > 0) {
-    run.q_margin.assign(static_cast<std::size_t>(n), 0.0);
     for (int j = 0; j < n; ++j) {
-      double worst = 0;
       try {
-        run.options.q_cutoffs.push_back(AutoQCutoff(run.frf, j, run.filters[static_cast<std::size_t>(j)], spec.options, &worst));
+        run.options.q_cutoffs.push_back(AutoQCutoff(run.frf, j, run.filters[static_cast<std::size_t>(j)], spec.options));
       } catch (const InputError& e) {
         throw InputError(SourceLocation{scene.path}, std::string("ilc.q_cutoff: auto: ") + e.what());
       }
-      run.q_margin[static_cast<std::size_t>(j)] = 1 - worst;
     }
   }
   if (callbacks.filters_ready) callbacks.filters_ready(run);

@@ -29,7 +29,6 @@ struct IlcSceneRun {
   double frf_seconds = 0;               // s, wall time of the measurement
   std::vector<LearningFilter> filters;  // per joint
   IlcOptions options;                   // the scene's, with the trials and each joint's Q cutoff as run
-  std::vector<double> q_margin;         // per joint, 1 - the worst |Q|^2 |1 - gain PS L| (auto cutoffs)
   IlcResult result;                     // the trials
 };
 

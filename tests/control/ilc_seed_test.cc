@@ -14,29 +14,17 @@
 #include "scene/arm_scene.h"
 #include "scene/ilc_scene.h"
 #include "test_util.h"
+#include "control/turntable.h"
 
 namespace twinsim {
 namespace {
 
 using testing::SourcePath;
 
-// One link on a vertical axis, no friction, J = 0.19 kg m^2, one sample of command delay.
-constexpr double kJ = 0.19;  // kg m^2
+using testing::Turntable;
+constexpr double kJ = testing::kTurntableInertia;  // kg m^2
 
-ArmModel Turntable() {
-  return LoadArmModelFromYamlString(
-      "robot: arm\nname: one\nsample_time: 0.001\ndelay_samples: 1\ndh: modified\njoints:\n"
-      "  - name: hinge\n    type: revolute\n    a: 0\n    alpha_deg: 0\n    d: 0\n    theta_deg: 0\n"
-      "    effort_limit: 100\n    link:\n      mass: 2.0\n      com: [0.3, 0, 0]\n"
-      "      inertia: [0.001, 0.01, 0.01, 0, 0, 0]\n",
-      "turntable.yaml");
-}
-
-TrackingOptions Pd() {
-  TrackingOptions t;
-  t.controller = TrackingController::kPdFeedforward;
-  return t;
-}
+TrackingOptions Pd() { return testing::TurntablePd(); }
 
 ClosedLoopFrf TurntableFrf() {
   FrfOptions fo;

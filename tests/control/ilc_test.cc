@@ -14,24 +14,15 @@
 #include "robots/arm/arm_dynamics.h"
 #include "signal/multisine.h"
 #include "test_util.h"
+#include "control/turntable.h"
 
 namespace twinsim {
 namespace {
 
 using testing::SourcePath;
 
-// One link on a vertical axis (a turntable: gravity does nothing), no friction,
-// J = 0.01 + 2 * 0.3^2 = 0.19 kg m^2, one sample of command delay.
-constexpr double kJ = 0.19;  // kg m^2
-
-ArmModel Turntable() {
-  return LoadArmModelFromYamlString(
-      "robot: arm\nname: one\nsample_time: 0.001\ndelay_samples: 1\ndh: modified\njoints:\n"
-      "  - name: hinge\n    type: revolute\n    a: 0\n    alpha_deg: 0\n    d: 0\n    theta_deg: 0\n"
-      "    effort_limit: 100\n    link:\n      mass: 2.0\n      com: [0.3, 0, 0]\n"
-      "      inertia: [0.001, 0.01, 0.01, 0, 0, 0]\n",
-      "turntable.yaml");
-}
+using testing::Turntable;
+constexpr double kJ = testing::kTurntableInertia;  // kg m^2
 
 ArmReference Hold(double q, int samples, double ts) {
   ArmReference r;
@@ -42,12 +33,7 @@ ArmReference Hold(double q, int samples, double ts) {
   return r;
 }
 
-TrackingOptions Pd() {
-  TrackingOptions o;
-  o.controller = TrackingController::kPdFeedforward;
-  o.friction = false;
-  return o;
-}
+TrackingOptions Pd() { return testing::TurntablePd(); }
 
 // The exact sampled-data PS of the turntable: the torque is held over each sample
 // (RK4 on a constant inertia is exact), so q(z) = G(z) u(z), qd(z) = Gv(z) u(z) with

@@ -49,14 +49,16 @@ int RunIlcCommand(const IlcCommandOptions& options) {
     if (options.quiet) return;
     const ClosedLoopFrf& frf = run.frf;
     const IlcOptions& o = run.options;
+    std::string q = "none";
+    if (o.q_order > 0) {
+      q = "order " + std::to_string(o.q_order) +
+          (o.q_cutoffs.empty() ? " at " + Num(o.q_cutoff) + " Hz" : ", cutoff per joint by the convergence criterion") +
+          " (zero phase)";
+    }
     std::printf("ilc %s: %d postures, PS measured %g..%g Hz in %.2f s; learning filter %s, gain %g, Q %s\n",
                 scene.name.c_str(), static_cast<int>(run.postures.size()), frf.frequency[0],
                 frf.frequency[frf.frequency.size() - 1], run.frf_seconds, spec.learning_filter.c_str(), o.gain,
-                o.q_order > 0 ? ("order " + std::to_string(o.q_order) + (o.q_cutoffs.empty() ? " at " + Num(o.q_cutoff) + " Hz"
-                                                                                            : std::string(", cutoff per joint by the convergence criterion")) +
-                                 " (zero phase)")
-                                    .c_str()
-                              : "none");
+                q.c_str());
     for (int j = 0; j < n; ++j) {
       const double limit = LearningLimitFrequency(frf, j, run.filters[j], o.gain);
       std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; Q at %s Hz, worst |Q|^2 |1 - gain PS L| %.3g\n", j + 1,
