@@ -61,15 +61,15 @@ std::string FormatIlcFrfCsv(const ClosedLoopFrf& frf, const std::vector<Learning
 std::string FormatIlcFiltersCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters,
                                 const IlcOptions& o) {
   std::string out =
-      "joint,shift,inertia,inertia_early,damping,stiffness,residual,fit_lines,fit_min_hz,fit_max_hz,"
+      "joint,shift,model_order,inertia,inertia_early,snap,damping,stiffness,residual,fit_lines,fit_min_hz,fit_max_hz,"
       "learning_limit_hz,q_order,q_cutoff,worst_factor,margin\n";
   for (std::size_t j = 0; j < filters.size(); ++j) {
     const LearningFilter& l = filters[j];
     const int joint = static_cast<int>(j);
     const double limit = LearningLimitFrequency(frf, joint, l, o.gain);
     const double worst = ConvergenceFactor(frf, joint, l, o).maxCoeff();
-    out += std::to_string(j + 1) + ',' + std::to_string(l.shift) + ',' + Num(l.inertia) + ',' + Num(l.inertia_early) +
-           ',' + Num(l.damping) + ',' + Num(l.stiffness) + ',' + Num(l.residual) + ',' + std::to_string(l.lines) + ',' +
+    out += std::to_string(j + 1) + ',' + std::to_string(l.shift) + ',' + std::to_string(l.order) + ',' + Num(l.inertia) +
+           ',' + Num(l.inertia_early) + ',' + Num(l.snap) + ',' + Num(l.damping) + ',' + Num(l.stiffness) + ',' + Num(l.residual) + ',' + std::to_string(l.lines) + ',' +
            (l.lines > 0 ? Num(l.band_min) + ',' + Num(l.band_max) : std::string(",")) + ',' +
            (std::isfinite(limit) ? Num(limit) : std::string()) + ',' + std::to_string(o.q_order) + ',' +
            Num(o.Cutoff(joint)) + ',' + Num(worst) + ',' + Num(1 - worst) + '\n';
@@ -279,12 +279,13 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
                          : std::string("none"))
        << ". Update f<sub>k+1</sub> = Q(f<sub>k</sub> + " << Num(o.gain)
        << " L e<sub>k</sub>).</p>\n<table><tr><th>joint</th><th>&tau; [samples]</th><th>a2 + a2' [kg m&sup2;]</th>"
-          "<th>a1 [N m s/rad]</th><th>a0 [N m/rad]</th><th>fit residual</th><th>|1 &minus; &alpha; PS L| &lt; 1 up to [Hz]</th>"
+          "<th>a4 [kg m&sup2; s&sup2;]</th><th>a1 [N m s/rad]</th><th>a0 [N m/rad]</th><th>fit residual</th><th>|1 &minus; &alpha; PS L| &lt; 1 up to [Hz]</th>"
           "<th>Q cut-off [Hz]</th><th>worst |Q|&sup2;|1 &minus; &alpha; PS L|</th></tr>\n";
   for (int j = 0; j < n; ++j) {
     const double limit = LearningLimitFrequency(frf, j, filters[j], o.gain);
     html << "<tr><td>" << j + 1 << "</td><td>" << filters[j].shift << "</td><td>"
-         << Num(filters[j].inertia + filters[j].inertia_early) << "</td><td>" << Num(filters[j].damping) << "</td><td>"
+         << Num(filters[j].inertia + filters[j].inertia_early) << "</td><td>" << Num(filters[j].snap) << "</td><td>"
+         << Num(filters[j].damping) << "</td><td>"
          << Num(filters[j].stiffness) << "</td><td>" << Num(filters[j].residual) << "</td><td>"
          << (std::isfinite(limit) ? Num(limit) : std::string("all")) << "</td><td>"
          << (o.q_order > 0 ? Num(o.Cutoff(j)) : std::string("none")) << "</td><td>"

@@ -48,9 +48,10 @@ std::string FormatIlcTrialsCsv(const IlcResult& result);
 // line (Hz), and 1/L of the joint's learning filter at the same line.
 std::string FormatIlcFrfCsv(const ClosedLoopFrf& frf, const std::vector<LearningFilter>& filters);
 
-// filters.csv: joint,shift,inertia,inertia_early,damping,stiffness,residual,fit_lines,
-// fit_min_hz,fit_max_hz,learning_limit_hz,q_order,q_cutoff,worst_factor,margin: per joint
-// the learning filter's coefficients, its fit (residual, the lines used and their band;
+// filters.csv: joint,shift,model_order,inertia,inertia_early,snap,damping,stiffness,
+// residual,fit_lines,fit_min_hz,fit_max_hz,learning_limit_hz,q_order,q_cutoff,
+// worst_factor,margin: per joint the learning filter's model order (2 rigid, 4 with a
+// series spring) and coefficients, its fit (residual, the lines used and their band;
 // empty for the model's filter), the frequency (Hz, empty for none) up to which learning
 // converges without Q, Q's order and the joint's cut-off (Hz), the worst |Q|^2 |1 - gain
 // PS L| over the lines and postures and the margin 1 - worst.

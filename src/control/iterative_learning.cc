@@ -19,13 +19,40 @@ namespace twinsim {
 namespace {
 
 // The basis responses of L at z = e^{j w Ts}: the inertia at z^shift and at
-// z^(shift+1), the damping (the stiffness's is 1).
+// z^(shift+1), the damping (the stiffness's is 1) and, if asked, the snap at z^shift.
 void Basis(double frequency_hz, double ts, int shift, std::complex<double>* b2, std::complex<double>* b2_early,
-           std::complex<double>* b1) {
+           std::complex<double>* b1, std::complex<double>* b4 = nullptr) {
   const std::complex<double> z = std::polar(1.0, 2 * kPi * frequency_hz * ts);
-  *b2 = std::pow(z, shift) * (z - 2.0 + 1.0 / z) / (ts * ts);
+  const std::complex<double> second = (z - 2.0 + 1.0 / z) / (ts * ts);
+  *b2 = std::pow(z, shift) * second;
   *b2_early = z * *b2;
   *b1 = (z - 1.0 / z) / (2 * ts);
+  if (b4) *b4 = *b2 * second;
+}
+
+// min |a x - b| subject to x >= 0, for the few columns of a learning filter's fit: every
+// subset of columns is solved unconstrained and the best one with no negative entry
+// kept (at most 2^3 small solves; the empty set, x = 0, is always feasible).
+Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
+  const auto n = static_cast<int>(a.cols());
+  Eigen::VectorXd best = Eigen::VectorXd::Zero(n);
+  double best_cost = b.squaredNorm();
+  for (int set = 1; set < (1 << n); ++set) {
+    std::vector<Eigen::Index> cols;
+    for (int k = 0; k < n; ++k) {
+      if (set & (1 << k)) cols.push_back(k);
+    }
+    const Eigen::MatrixXd sub = a(Eigen::all, cols);
+    const Eigen::VectorXd scale = sub.colwise().norm().transpose().cwiseMax(1e-300);
+    const Eigen::VectorXd y =
+        (sub * scale.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(b).cwiseQuotient(scale);
+    if ((y.array() < 0).any()) continue;
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+    x(cols) = y;
+    const double cost = (a * x - b).squaredNorm();
+    if (cost < best_cost) best_cost = cost, best = x;
+  }
+  return best;
 }
 
 void CheckJoint(const ClosedLoopFrf& frf, int joint) {
@@ -49,9 +76,9 @@ std::vector<Eigen::Index> LinesInBand(const ClosedLoopFrf& frf, double f_min, do
 }  // namespace
 
 std::complex<double> LearningFilter::Response(double frequency_hz, double sample_time) const {
-  std::complex<double> b2, b2e, b1;
-  Basis(frequency_hz, sample_time, shift, &b2, &b2e, &b1);
-  return inertia * b2 + inertia_early * b2e + damping * b1 + stiffness;
+  std::complex<double> b2, b2e, b1, b4;
+  Basis(frequency_hz, sample_time, shift, &b2, &b2e, &b1, &b4);
+  return inertia * b2 + inertia_early * b2e + snap * b4 + damping * b1 + stiffness;
 }
 
 Eigen::VectorXd LearningFilter::Apply(const Eigen::VectorXd& e, double sample_time) const {
@@ -65,6 +92,9 @@ Eigen::VectorXd LearningFilter::Apply(const Eigen::VectorXd& e, double sample_ti
     out[k] = (inertia * (at(c + 1) - 2 * at(c) + at(c - 1)) + inertia_early * (at(c + 2) - 2 * at(c + 1) + at(c))) /
                  (h * h) +
              damping * (at(k + 1) - at(k - 1)) / (2 * h) + stiffness * at(k);
+    if (snap != 0) {
+      out[k] += snap * (at(c + 2) - 4 * at(c + 1) + 6 * at(c) - 4 * at(c - 1) + at(c - 2)) / (h * h * h * h);
+    }
   }
   return out;
 }
@@ -73,7 +103,9 @@ std::string LearningFilter::Summary() const {
   std::ostringstream out;
   out.precision(4);
   out << "tau " << shift << " samples, inertia " << inertia + inertia_early << " kg m^2 (" << inertia << " at tau, "
-      << inertia_early << " at tau + 1), damping " << damping << " N m s/rad, stiffness " << stiffness << " N m/rad";
+      << inertia_early << " at tau + 1), ";
+  if (snap != 0) out << "snap " << snap << " kg m^2 s^2, ";
+  out << "damping " << damping << " N m s/rad, stiffness " << stiffness << " N m/rad";
   if (residual > 0) out << " (fit residual RMS |PS L - 1| = " << residual << ")";
   return out.str();
 }
@@ -120,54 +152,71 @@ LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_m
   return best;
 }
 
+bool PlantFitOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (!(f_min > 0 && f_max > f_min)) return fail("the fit band must be [low, high] Hz with 0 < low < high");
+  if (max_shift < 0) return fail("max_shift must be >= 0");
+  if (!(min_coherence >= 0 && min_coherence <= 1)) return fail("coherence must lie in [0, 1]");
+  if (order != 2 && order != 4) return fail("model_order must be 2 (rigid) or 4 (with a series spring)");
+  return true;
+}
+
 LearningFilter FitPlantLearningFilter(const ClosedLoopFrf& frf, int joint, const LearningFilter& feedback,
-                                      double viscous, double f_min, double f_max, int max_shift,
-                                      double min_coherence) {
+                                      double viscous, const PlantFitOptions& options) {
   CheckJoint(frf, joint);
-  if (max_shift < 0) throw InputError("FitPlantLearningFilter: max_shift must be >= 0");
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("FitPlantLearningFilter: " + why);
   const Eigen::VectorXcd ps = frf.Nominal(joint);
-  const std::vector<Eigen::Index> lines = LinesInBand(frf, f_min, f_max, frf.WorstCoherence(joint), min_coherence);
-  if (lines.size() < 2) {
+  const std::vector<Eigen::Index> lines =
+      LinesInBand(frf, options.f_min, options.f_max, frf.WorstCoherence(joint), options.min_coherence);
+  // The fitted coefficients: both inertias, and at order 4 the snap.
+  const int unknowns = options.order == 4 ? 3 : 2;
+  // Each line gives two equations (real and imaginary parts); at least two lines, and
+  // one per coefficient, so that the delay is told from the inertia.
+  const int needed = std::max(2, unknowns);
+  if (lines.size() < static_cast<std::size_t>(needed)) {
     std::ostringstream msg;
-    msg << "fewer than 2 measured lines in [" << f_min << ", " << f_max << "] Hz with coherence >= " << min_coherence;
+    msg << "fewer than " << needed << " measured lines in [" << options.f_min << ", " << options.f_max
+        << "] Hz with coherence >= " << options.min_coherence << " for a model of order " << options.order;
     throw InputError("FitPlantLearningFilter: " + msg.str());
   }
   const auto rows = static_cast<Eigen::Index>(2 * lines.size());
   LearningFilter best;
   best.residual = std::numeric_limits<double>::infinity();
-  for (int shift = 0; shift <= max_shift; ++shift) {
+  for (int shift = 0; shift <= options.max_shift; ++shift) {
     LearningFilter f = feedback;
     f.shift = shift;
+    f.snap = 0;
+    f.order = options.order;
     f.damping = feedback.damping + viscous;
     // Start from the equation error (weights 1), then weight each line by 1 / |L|^2 of
     // the last iterate, so that |PS L - 1|^2 / |L|^2 = |PS - 1/L|^2: the output error.
     Eigen::VectorXd weight = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(lines.size()));
     for (int iteration = 0; iteration < 8; ++iteration) {
-      // PS (a2 B2 + a2' B2e) = 1 - PS (a1 B1 + a0), real and imaginary parts.
-      Eigen::MatrixXd a(rows, 2);
+      // PS (a2 B2 + a2' B2e [+ a4 B4]) = 1 - PS (a1 B1 + a0), real and imaginary parts.
+      Eigen::MatrixXd a(rows, unknowns);
       Eigen::VectorXd b(rows);
       for (std::size_t k = 0; k < lines.size(); ++k) {
         const Eigen::Index i = lines[k];
-        std::complex<double> b2, b2e, b1;
-        Basis(frf.frequency[i], frf.sample_time, shift, &b2, &b2e, &b1);
+        std::complex<double> basis[3], b1;
+        Basis(frf.frequency[i], frf.sample_time, shift, &basis[0], &basis[1], &b1, &basis[2]);
         const double w = std::sqrt(weight[static_cast<Eigen::Index>(k)]);
-        const std::complex<double> c0 = ps[i] * b2 * w, c1 = ps[i] * b2e * w;
         const std::complex<double> rhs = (1.0 - ps[i] * (f.damping * b1 + f.stiffness)) * w;
         const auto r = static_cast<Eigen::Index>(2 * k);
-        a(r, 0) = c0.real(), a(r, 1) = c1.real(), b[r] = rhs.real();
-        a(r + 1, 0) = c0.imag(), a(r + 1, 1) = c1.imag(), b[r + 1] = rhs.imag();
+        for (int u = 0; u < unknowns; ++u) {
+          const std::complex<double> c = ps[i] * basis[u] * w;
+          a(r, u) = c.real(), a(r + 1, u) = c.imag();
+        }
+        b[r] = rhs.real(), b[r + 1] = rhs.imag();
       }
-      // Both inertias >= 0 (an inertia cannot be negative; a negative one would
-      // stand for damping the fit must not take): solve, and if one comes out negative
-      // fix it at 0 and solve for the other alone.
-      Eigen::Vector2d x = a.colPivHouseholderQr().solve(b);
-      if (x[0] < 0 || x[1] < 0) {
-        const int keep = x[0] < 0 ? 1 : 0;
-        const double v = a.col(keep).squaredNorm() > 0 ? a.col(keep).dot(b) / a.col(keep).squaredNorm() : 0;
-        x.setZero();
-        x[keep] = std::max(v, 0.0);
-      }
+      // An inertia cannot be negative (a negative one would stand for damping the fit
+      // must not take), nor can J_m J_l / k.
+      const Eigen::VectorXd x = NonNegativeLeastSquares(a, b);
       f.inertia = x[0], f.inertia_early = x[1];
+      if (unknowns == 3) f.snap = x[2];
       for (std::size_t k = 0; k < lines.size(); ++k) {
         weight[static_cast<Eigen::Index>(k)] =
             1 / std::max(std::norm(f.Response(frf.frequency[lines[k]], frf.sample_time)), 1e-300);

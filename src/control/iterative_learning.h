@@ -47,14 +47,19 @@
 namespace twinsim {
 
 // L(z) = (inertia z^shift + inertia_early z^(shift+1)) (z - 2 + 1/z) / Ts^2
-//        + damping (z - 1/z) / (2 Ts) + stiffness.
+//        + snap z^shift (z - 2 + 1/z)^2 / Ts^4 + damping (z - 1/z) / (2 Ts) + stiffness.
+// The snap term is the fourth-order model's (PlantFitOptions::order 4): the inverse of a
+// joint whose drive is a series spring k between motor and link inertias J_m and J_l,
+// measured at the link, is (J_m + J_l) s^2 + (J_m J_l / k) s^4 (docs/ilc.md).
 struct LearningFilter {
   int shift = 0;             // samples the inertia term acts early (tau)
   double inertia = 0;        // kg m^2 (kg for a prismatic joint): a2, at z^tau
   double inertia_early = 0;  // kg m^2: a2', at z^(tau+1)
+  double snap = 0;           // kg m^2 s^2: a4, at z^tau (0 for the rigid, second-order model)
   double damping = 0;        // N·m·s/rad: a1
   double stiffness = 0;   // N·m/rad: a0
   double residual = 0;    // RMS |PS L - 1| over the fitted lines (0 when not fitted)
+  int order = 2;          // the plant model's order: 2 (rigid) or 4 (with a series spring)
   int lines = 0;          // lines the fit used (0 when not fitted)
   double band_min = 0, band_max = 0;  // Hz, the lowest and highest of them
 
@@ -73,28 +78,43 @@ struct LearningFilter {
 // than 2 lines in the band, std::invalid_argument for a joint that does not exist.
 LearningFilter FitLearningFilter(const ClosedLoopFrf& frf, int joint, double f_min, double f_max, int max_shift);
 
+// How FitPlantLearningFilter fits the plant (the scene's `ilc.frf` keys fit_band,
+// max_shift, coherence, model_order).
+struct PlantFitOptions {
+  double f_min = 2, f_max = 80;  // Hz, the band fitted
+  int max_shift = 5;             // samples, the largest delay tau tried
+  double min_coherence = 0.9;    // lines below it at any posture are not fitted
+  // 2: rigid (inertia and delay); 4: adds the snap term of a series spring between
+  // motor and link, for a drive whose resonance lies near the learning band.
+  int order = 2;
+
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
+};
+
 // The learning filter as the inverse of the process sensitivity put together from its
 // two parts, PS^-1 = P^-1 + C (seed 001, section VII-B; docs/ilc.md):
 //  - C, the feedback the controller applies, is known exactly: `feedback`'s damping and
 //    stiffness (ModelLearningFilter's gains), to which the controller model's viscous
 //    friction `viscous` is added as the plant's known damping;
 //  - the plant's inertia and delay, what the controller's model may have wrong (a
-//    payload, an unmodelled inertia, a lag), are fitted to joint `joint`'s nominal
-//    response (the average over the postures, eq. 23) by output-error least squares,
-//    sum |PS_nom - 1/L|^2 over the lines in [f_min, f_max] whose coherence is at least
-//    `min_coherence` at every posture, by Sanathanan-Koerner iterations (a linear
-//    least-squares problem weighted by the last iterate's 1/|L|^2), for each shift
-//    0..max_shift, keeping the one with the smallest residual.
+//    payload, an unmodelled inertia, a lag), and at order 4 its series spring's snap
+//    term, are fitted to joint `joint`'s nominal response (the average over the
+//    postures, eq. 23) by output-error least squares, sum |PS_nom - 1/L|^2 over the
+//    lines in [f_min, f_max] whose coherence is at least `min_coherence` at every
+//    posture, by Sanathanan-Koerner iterations (a linear least-squares problem weighted
+//    by the last iterate's 1/|L|^2), for each shift 0..max_shift, keeping the one with
+//    the smallest residual. Every fitted coefficient is kept >= 0 (inertias and
+//    J_m J_l / k cannot be negative).
 // The damping is not fitted: measured at rest, a joint's Coulomb friction reverses with
 // every swing of the multisine and acts as damping that the task, in motion, does not
 // have (the elbow of models/rrr_plant.yaml: 11.4 N m s/rad fitted against 5.8 in
 // motion), and an L with that damping has PS L ~ 2 at the closed loop's natural
 // frequency, where learning at gain 1 then stalls (docs/ilc.md gives the evidence).
-// Throws InputError for max_shift < 0, a band with fewer than 2 coherent lines;
-// std::invalid_argument for a joint that does not exist.
+// Throws InputError for options that are not IsValid, a band with fewer coherent lines
+// than 2 or than the coefficients fitted; std::invalid_argument for a joint that does not exist.
 LearningFilter FitPlantLearningFilter(const ClosedLoopFrf& frf, int joint, const LearningFilter& feedback,
-                                      double viscous, double f_min, double f_max, int max_shift,
-                                      double min_coherence = 0.9);
+                                      double viscous, const PlantFitOptions& options);
 
 // The learning filter the controller's model predicts for joint `joint` at posture q:
 // inertia M_hat_jj(q) split evenly over shifts delay_samples and delay_samples + 1, and the feedback gains of

@@ -222,11 +222,14 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
         if (band[1] <= band[0]) {
           f.Error("fit_band", "expected [low, high] Hz with low < high");
         } else {
-          ilc->fit_min = band[0], ilc->fit_max = band[1];
+          ilc->fit.f_min = band[0], ilc->fit.f_max = band[1];
         }
       }
-      f.Get("max_shift", &ilc->max_shift, InRange(0, 100));
-      f.Get("coherence", &ilc->min_coherence, InRange(0, 1));
+      f.Get("max_shift", &ilc->fit.max_shift, InRange(0, 100));
+      f.Get("coherence", &ilc->fit.min_coherence, InRange(0, 1));
+      if (f.Get("model_order", &ilc->fit.order, InRange(2, 4)) && ilc->fit.order == 3) {
+        f.Error("model_order", "must be 2 (rigid: inertia and delay) or 4 (with a series spring)");
+      }
       const YAML::Node list = f.Child("postures");
       if (list.IsDefined() && !list.IsNull()) {
         if (!list.IsSequence() || list.size() == 0) {

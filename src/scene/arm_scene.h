@@ -75,9 +75,9 @@ struct IlcSpec {
   // 3 across the range the task moves them through, the waist at the task's start
   // (GridPostures; arms of fewer joints: 4 postures along the task's reference).
   std::vector<Eigen::VectorXd> postures;
-  double fit_min = 2, fit_max = 80;   // Hz, the band the learning filter is fitted over
-  int max_shift = 5;                  // samples, the largest delay tau tried by the fit
-  double min_coherence = 0.9;         // lines below it at any posture are not fitted
+  // The plant fit behind a "fitted" learning filter (ilc.frf's fit_band, max_shift,
+  // coherence, model_order).
+  PlantFitOptions fit;
   // q_cutoff: auto (the default): each joint's highest cutoff meeting the convergence
   // criterion at every posture (AutoQCutoff); a number: that cutoff for every joint.
   bool q_cutoff_auto = true;

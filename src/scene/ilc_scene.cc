@@ -39,8 +39,8 @@ IlcSceneRun RunIlcScene(ArmScene scene, const std::string& backend, int trials, 
       continue;
     }
     try {
-      run.filters.push_back(FitPlantLearningFilter(run.frf, j, model, scene.hat.joints[static_cast<std::size_t>(j)].viscous,
-                                                   spec.fit_min, spec.fit_max, spec.max_shift, spec.min_coherence));
+      run.filters.push_back(
+          FitPlantLearningFilter(run.frf, j, model, scene.hat.joints[static_cast<std::size_t>(j)].viscous, spec.fit));
     } catch (const InputError& e) {
       throw InputError(SourceLocation{scene.path}, std::string("ilc.frf.fit_band: ") + e.what());
     }

@@ -67,7 +67,9 @@ TEST(IlcSeedFilter, PlantFitRecoversTheInertiaAndDelayGivenTheFeedback) {
   const ClosedLoopFrf frf = TurntableFrf();
   LearningFilter feedback = ModelLearningFilter(arm, Pd(), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Zero(1), 0);
   feedback.inertia = feedback.inertia_early = 123;  // replaced by the fit
-  const LearningFilter l = FitPlantLearningFilter(frf, 0, feedback, 0.0, 2, 100, 4);
+  PlantFitOptions fit;
+  fit.f_min = 2, fit.f_max = 100, fit.max_shift = 4;
+  const LearningFilter l = FitPlantLearningFilter(frf, 0, feedback, 0.0, fit);
   EXPECT_EQ(l.shift, 1);
   EXPECT_NEAR(l.inertia + l.inertia_early, kJ, 0.03 * kJ);
   EXPECT_DOUBLE_EQ(l.damping, feedback.damping);
@@ -82,7 +84,48 @@ TEST(IlcSeedFilter, PlantFitRecoversTheInertiaAndDelayGivenTheFeedback) {
     }
   }
   // Lines below the coherence asked for are not fitted.
-  EXPECT_THROW(FitPlantLearningFilter(frf, 0, feedback, 0.0, 2, 100, 4, 1.5), InputError);
+  fit.min_coherence = 1.5;
+  EXPECT_THROW(FitPlantLearningFilter(frf, 0, feedback, 0.0, fit), InputError);
+}
+
+// A joint driven through a series spring, seen at the link (closed form): motor J_m and
+// link J_l coupled by k and d, one sample of delay, under PD. Its inverse is
+// (J_m + J_l) s^2 + (J_m J_l / k) s^4 to first order in d: the fourth-order fit finds
+// the snap term and fits the band below the 116 Hz resonance better than the rigid one.
+TEST(IlcSeedFilter, FourthOrderFitFindsTheSeriesSpring) {
+  constexpr double kJm = 0.01, kJl = 0.18, kK = 5000, kD = 0.2;  // kg m^2, N·m/rad, N·m·s/rad
+  constexpr double kTs = 0.001, kKp = 1200, kKd = 40;             // s, N·m/rad, N·m·s/rad
+  ClosedLoopFrf frf;
+  frf.sample_time = kTs;
+  frf.frequency = Eigen::VectorXd::LinSpaced(100, 2, 200);
+  frf.postures = {Eigen::VectorXd::Zero(1)};
+  Eigen::VectorXcd ps(frf.frequency.size());
+  for (Eigen::Index i = 0; i < ps.size(); ++i) {
+    const std::complex<double> s(0, 2 * M_PI * frf.frequency[i]);
+    const std::complex<double> p = (kK + kD * s) / (kJm * kJl * s * s * s * s + (kJm + kJl) * (kK + kD * s) * s * s) *
+                                   std::exp(-s * kTs);
+    ps[i] = p / (1.0 + p * (kKp + kKd * s));
+  }
+  frf.response = {{ps}};
+  frf.coherence = {{Eigen::VectorXd::Ones(ps.size())}};
+  LearningFilter feedback;
+  feedback.damping = kKd, feedback.stiffness = kKp;
+  PlantFitOptions fit;  // 2-80 Hz
+  const LearningFilter rigid = FitPlantLearningFilter(frf, 0, feedback, 0.0, fit);
+  fit.order = 4;
+  const LearningFilter spring = FitPlantLearningFilter(frf, 0, feedback, 0.0, fit);
+  EXPECT_EQ(rigid.order, 2);
+  EXPECT_EQ(rigid.snap, 0);
+  EXPECT_EQ(spring.order, 4);
+  EXPECT_EQ(spring.shift, 1);
+  EXPECT_NEAR(spring.snap, kJm * kJl / kK, 0.15 * kJm * kJl / kK);
+  EXPECT_NEAR(spring.inertia + spring.inertia_early, kJm + kJl, 0.03 * (kJm + kJl));
+  EXPECT_LT(spring.residual, 0.2 * rigid.residual) << rigid.residual << " " << spring.residual;
+  // Both inertias and the snap stay >= 0; the order must be 2 or 4.
+  EXPECT_GE(spring.inertia, 0);
+  EXPECT_GE(spring.inertia_early, 0);
+  fit.order = 3;
+  EXPECT_THROW(FitPlantLearningFilter(frf, 0, feedback, 0.0, fit), InputError);
 }
 
 // Where |1 - PS L| < 1 everywhere the criterion allows any cutoff: the highest, half the
