@@ -19,6 +19,7 @@
 // halves are arm_diagnosis.h and omni_diagnosis.h.
 #pragma once
 
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -43,6 +44,11 @@ struct DiagnosisOptions {
   // is anything up to the static level (stiction) rather than the friction law's value.
   double standstill = 0.02;
   int threads = 0;                   // 0 = one per core; results do not depend on it
+  // Arm: refit the model's own base inertial parameters and friction (twinsim identify's
+  // weighted least squares) on the fit blocks before adding effects. Off by default: a
+  // trusted model keeps a payload named `payload` instead of hidden in re-identified
+  // link inertias. Omni robots: refused (their parameters are not identified here).
+  bool refit_model = false;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -120,6 +126,9 @@ struct DiagnosisReport {
   std::vector<ChannelSeries> series;    // one per finding
   std::vector<DiagnosisPath> paths;    // omni: measured, nominal and repaired over one held-out stretch
   std::vector<std::string> notes;       // what the user should know (skipped candidates, limits)
+  // With DiagnosisOptions::refit_model: the held-out gap of the refitted model before any
+  // effect (gap_before stays the given model's); NaN when not refitted.
+  double refit_gap = std::numeric_limits<double>::quiet_NaN();
   double seconds = 0;                   // s, wall time
 };
 

@@ -43,16 +43,21 @@ double ShareClosed(const DiagnosisReport& r) {
 }  // namespace
 
 std::string DiagnosisVerdict(const DiagnosisReport& r) {
+  const bool refit = std::isfinite(r.refit_gap);
+  const std::string refitted = refit ? "Refitting the model's own parameters took the held-out gap from " +
+                                           Num(r.gap_before) + " to " + Num(r.refit_gap) + ". "
+                                     : std::string();
   if (r.effects.empty()) {
-    return "Nothing significant is missing: no effect lowered the held-out gap (" + Num(r.gap_before) +
-           ") by more than the noise allows (noise floor about " + Num(r.noise_floor) + ").";
+    return refitted + "Nothing significant is missing: no effect lowered the held-out gap (" +
+           Num(refit ? r.refit_gap : r.gap_before) + ") by more than the noise allows (noise floor about " +
+           Num(r.noise_floor) + ").";
   }
   std::string names;
   for (std::size_t k = 0; k < r.effects.size(); ++k) {
     if (k > 0) names += k + 1 == r.effects.size() ? " and " : ", ";
     names += EffectLabel(r.effects[k].name, r.effects[k].joint);
   }
-  std::string s = "Missing: " + names + ". The held-out gap fell from " + Num(r.gap_before) + " to " + Num(r.gap_after) +
+  std::string s = refitted + "Missing: " + names + ". The held-out gap fell from " + Num(r.gap_before) + " to " + Num(r.gap_after) +
                   " (noise floor about " + Num(r.noise_floor) + ")";
   const double closed = ShareClosed(r);
   if (std::isfinite(closed)) s += ", " + Num(100 * closed, "%.0f") + " % of the way down to it";
@@ -80,6 +85,7 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
   j["model"] = r.model_name;
   j["verdict"] = DiagnosisVerdict(r);
   j["noise_floor"] = r.noise_floor;
+  if (std::isfinite(r.refit_gap)) j["refit_gap"] = r.refit_gap;
   j["fit_gap_before"] = r.fit_gap_before;
   j["fit_gap_after"] = r.fit_gap_after;
   j["held_out_share"] = r.held_out_share;

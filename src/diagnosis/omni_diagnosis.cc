@@ -429,6 +429,10 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   const auto start = std::chrono::steady_clock::now();
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
+  if (options.refit_model) {
+    throw InputError("--refit-model is for arms: an omni robot's own parameters are not identified by twinsim "
+                     "(diagnose fits the effects on top of the model as given)");
+  }
   if (logs.empty()) throw InputError("diagnose needs at least one --log");
   {
     // Fails early, with the list of backends, for an unknown one.

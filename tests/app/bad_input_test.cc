@@ -765,6 +765,8 @@ std::vector<BadInputCase> Cases() {
        "diagnose --model {src}/models/omni4.yaml --log {d}/log.csv --out {d}/out --horizon -1", 2, "--horizon", "out"},
       {"diagnose_standstill_nan", {ArmLogFile()},
        "diagnose --model {src}/models/rrr.yaml --log {d}/log.csv --out {d}/out --standstill nan", 2, "--standstill", "out"},
+      {"diagnose_refit_model_omni", {OmniLogFile(600)},
+       "diagnose --model {src}/models/omni4.yaml --log {d}/log.csv --out {d}/out --refit-model", 2, "--refit-model", "out"},
       {"diagnose_arm_model_omni_log", {OmniLogFile(600)},
        "diagnose --model {src}/models/rrr.yaml --log {d}/log.csv --out {d}/out", 2, "{d}/log.csv:1:", "out"},
       {"diagnose_out_is_a_file", {OmniLogFile(600), {"out", std::string("x\n")}},

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "diagnosis/diagnosis.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 #include "robots/omni/omni_log.h"
@@ -13,6 +14,11 @@
 
 namespace twinsim {
 namespace testing {
+
+// Records what `report` named and its held-out gaps beside the plant's own (`floor`) as
+// properties of the running test (--gtest_output=xml), from which docs/diagnose.md's
+// counts and confusion table are made.
+void RecordDiagnosis(const DiagnosisReport& report, double floor);
 
 struct ArmRecording {
   double counts_per_rev = 2e5;  // encoder counts per joint revolution (q quantised); 0: exact

@@ -1,5 +1,7 @@
 #include "diagnosis/diagnosis_plants.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <random>
 
@@ -10,6 +12,17 @@
 
 namespace twinsim {
 namespace testing {
+
+void RecordDiagnosis(const DiagnosisReport& report, double floor) {
+  std::string named;
+  for (const DiagnosedEffect& e : report.effects) {
+    named += (named.empty() ? "" : "; ") + EffectLabel(e.name, e.joint);
+    for (const auto& [key, value] : e.parameters) named += " " + key + "=" + FormatParameter(value);
+  }
+  ::testing::Test::RecordProperty("named", named.empty() ? "nothing" : named);
+  ::testing::Test::RecordProperty("gaps", FormatParameter(report.gap_before) + " -> " +
+                                              FormatParameter(report.gap_after) + ", plant " + FormatParameter(floor));
+}
 
 ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t seed, double seconds,
                       const ArmRecording& noise) {

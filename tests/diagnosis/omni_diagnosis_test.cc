@@ -39,6 +39,10 @@ std::vector<OmniCase> OmniCases() {
       {"scale_0_85", "  velocity_scale: {scale: 0.85}\n", {{"velocity_scale", {{"scale", 0.85}}}}},
       {"drift_0_3", "  rotation_drift: {rate: 0.3}\n", {{"rotation_drift", {{"rate", 0.3}}}}},
       {"drift_minus_0_8", "  rotation_drift: {rate: -0.8}\n", {{"rotation_drift", {{"rate", -0.8}}}}},
+      {"saturation_0_7", "  velocity_saturation: {v_max: 0.7}\n", {{"velocity_saturation", {{"v_max", 0.7}}}}},
+      // Look-alikes hidden together: a late command and a slow response.
+      {"delay_and_lag", "  time_delay: {delay: 0.04}\n  motor_lag: {time_constant: 0.08}\n",
+       {{"time_delay", {{"delay", 0.04}}}, {"motor_lag", {{"time_constant", 0.08}}}}},
       {"traction_and_lag", "  traction_limit: {a_max: 1.2}\n  motor_lag: {time_constant: 0.06}\n",
        {{"traction_limit", {{"a_max", 1.2}}}, {"motor_lag", {{"time_constant", 0.06}}}}},
   };
@@ -72,6 +76,7 @@ TEST_P(OmniDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
   DiagnosisOptions none = options;
   none.max_effects = 0;
   const double floor = DiagnoseOmni(plant, logs, none).gap_before;
+  testing::RecordDiagnosis(report, floor);  // for docs/diagnose.md's counts
   if (c.expected.empty()) {
     EXPECT_EQ(report.gap_after, report.gap_before);
   } else {
@@ -110,6 +115,9 @@ TEST(OmniDiagnosis, RefusesBadInput) {
   DiagnosisOptions bad;
   bad.held_out = 1.5;
   EXPECT_THROW(DiagnoseOmni(nominal, {longer}, bad), InputError);
+  DiagnosisOptions refit;
+  refit.refit_model = true;  // an arm's option: omni parameters are not identified
+  EXPECT_THROW(DiagnoseOmni(nominal, {longer}, refit), InputError);
 }
 
 TEST(OmniEffects, SetAndListRoundTripEveryEffect) {

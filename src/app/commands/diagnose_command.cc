@@ -115,6 +115,9 @@ void AddDiagnoseCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--standstill", options->diagnosis.standstill,
                   "Arm: rad/s (m/s) below which a joint sticks, its friction anything up to the static level")
       ->capture_default_str();
+  cmd->add_flag("--refit-model", options->diagnosis.refit_model,
+                "Arm: refit the model's own inertial parameters and friction on the fit blocks first "
+                "(default: trust them, so that a payload is named, not absorbed)");
   cmd->add_option("--cutoff", options->arm_log.cutoff_hz, "Arm: Hz, low-pass cut-off for qd/qdd derived from q")
       ->capture_default_str();
   cmd->add_option("--threads", options->diagnosis.threads, "Worker threads (0: one per core); results do not depend on it")
