@@ -664,12 +664,13 @@ std::shared_ptr<ArmPredictor> TrainArm(const ArmModel& model, const py::handle& 
 
 // (report as JSON text, repaired model YAML)
 py::tuple Diagnose(const py::handle& model, const py::handle& logs, double held_out, int max_effects,
-                   const std::string& backend, int threads) {
+                   const std::string& backend, int threads, bool refit_model) {
   DiagnosisOptions options;
   options.held_out = held_out;
   options.max_effects = max_effects;
   options.backend = backend;
   options.threads = threads;
+  options.refit_model = refit_model;
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (py::isinstance<PyArmModel>(model)) {

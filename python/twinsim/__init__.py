@@ -84,10 +84,12 @@ def identify(model, logs):
     return _twinsim._identify(model, logs)
 
 
-def diagnose(model, logs, held_out=0.3, max_effects=3, backend="analytic", threads=0):
+def diagnose(model, logs, held_out=0.3, max_effects=3, backend="analytic", threads=0, refit_model=False):
     """`twinsim diagnose` without files: (report, repaired model); the report is the
-    dict of report.json (CONTRACT.md)."""
-    text, repaired = _twinsim._diagnose(model, logs, float(held_out), int(max_effects), backend, int(threads))
+    dict of report.json (CONTRACT.md). refit_model (arms): re-identify the model's own
+    parameters on the fit blocks first, as `--refit-model`."""
+    text, repaired = _twinsim._diagnose(model, logs, float(held_out), int(max_effects), backend, int(threads),
+                                        bool(refit_model))
     return _json.loads(text), repaired
 
 

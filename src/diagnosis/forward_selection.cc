@@ -103,17 +103,15 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         // re-estimates every coefficient): an effect added earlier may have absorbed
         // part of this one (a payload fitted alone takes up a torque offset's share),
         // and only the joint fit gives the candidate its due. Kept where it fits better.
-        // A joint flexibility stays at its fit: its replay is a numerical approximation
-        // (the spring's deflection integrated by implicit Euler and differentiated
-        // twice, near a resonance of 100 Hz and more; the true plant replays worse than
-        // the fitted one), and refitted beside another effect it lets that one patch
-        // the approximation (measured: a 3.7 N·m saturation "found" at t = 6 beside a
-        // flexible elbow that has none).
+        // Effects the problem holds while scoring (HeldWhileScoring) keep their fit; a
+        // candidate that removes nothing on its own is not refitted jointly (it would
+        // rarely pass, and the joint fits are most of a round's time).
         std::vector<int> refit;
+        const bool promising = Compare(current_residuals, r, chunk).reduction > 0;
         for (std::size_t m = 0; m < trial.size(); ++m) {
-          if (m + 1 == trial.size() || trial[m].name != "joint_flexibility") refit.push_back(static_cast<int>(m));
+          if (m + 1 == trial.size() || !problem.HeldWhileScoring(trial[m])) refit.push_back(static_cast<int>(m));
         }
-        if (refit.size() > 1) {
+        if (promising && refit.size() > 1) {
           try {
             std::vector<TrialEffect> joint = problem.Fit(trial, refit);
             SquaredResiduals rj = problem.Evaluate(joint);

@@ -54,6 +54,9 @@ class DiagnosisProblem {
   virtual int ChunkRows() const = 0;
   // A clause of evidence particular to this effect (its signature in the data), or "".
   virtual std::string Signature(const TrialEffect& effect) const { return ""; }
+  // True when `effect`, already added, keeps its fit while the next candidates are
+  // scored (the others are refitted with each candidate).
+  virtual bool HeldWhileScoring(const TrialEffect& effect) const { return false; }
 };
 
 struct SelectionResult {
