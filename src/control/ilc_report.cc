@@ -258,7 +258,8 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
        << Num(setup.frf.f_max) << " Hz, " << setup.frf.periods << " periods of " << Num(setup.frf.period)
        << " s averaged after one transient period). In grey every posture's, then their average, the nominal "
           "process sensitivity (seed 001, eq. 23 and Fig. 8), and 1/L, the model the learning filter inverts (Fig. "
-          "9): the controller's known feedback plus the plant's inertia and delay fitted to the nominal response "
+          "9): the controller's known feedback plus the plant's inertia and delay (and, at model order 4, a series "
+          "spring's snap term) fitted to the nominal response "
           "(learning filter &ldquo;fitted&rdquo;) or taken from the controller's model (&ldquo;model&rdquo;). "
           "frf.csv has every line with its coherence (posture 0 is the nominal).</p>\n";
   auto embed = [&](const std::string& prefix) {
@@ -269,7 +270,8 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
   };
   embed("bode");
   html << "<h2>2. Filters</h2>\n<p>Learning filter L (" << HtmlEscape(setup.learning_filter)
-       << "): L(z) = (a2 z^&tau; + a2' z^(&tau;+1)) (z &minus; 2 + 1/z)/Ts&sup2; + a1 (z &minus; 1/z)/(2Ts) + a0, applied "
+       << "): L(z) = (a2 z^&tau; + a2' z^(&tau;+1)) (z &minus; 2 + 1/z)/Ts&sup2; + a4 (z^&tau; + z^(&tau;+1))/2 "
+          "(z &minus; 2 + 1/z)&sup2;/Ts&#8308; + a1 (z &minus; 1/z)/(2Ts) + a0 (a4 = 0 at model order 2), applied "
           "offline (non-causal). Robustness filter Q: "
        << (o.q_order > 0 ? "zero-phase Butterworth, order " + std::to_string(o.q_order) +
                                (o.q_cutoffs.empty() ? ", cut-off " + Num(o.q_cutoff) + " Hz for every joint"

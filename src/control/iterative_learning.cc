@@ -19,7 +19,8 @@ namespace twinsim {
 namespace {
 
 // The basis responses of L at z = e^{j w Ts}: the inertia at z^shift and at
-// z^(shift+1), the damping (the stiffness's is 1) and, if asked, the snap at z^shift.
+// z^(shift+1), the damping (the stiffness's is 1) and, if asked, the snap split evenly
+// over z^shift and z^(shift+1) (centred half a sample early, as the inertia's pair).
 void Basis(double frequency_hz, double ts, int shift, std::complex<double>* b2, std::complex<double>* b2_early,
            std::complex<double>* b1, std::complex<double>* b4 = nullptr) {
   const std::complex<double> z = std::polar(1.0, 2 * kPi * frequency_hz * ts);
@@ -27,7 +28,7 @@ void Basis(double frequency_hz, double ts, int shift, std::complex<double>* b2, 
   *b2 = std::pow(z, shift) * second;
   *b2_early = z * *b2;
   *b1 = (z - 1.0 / z) / (2 * ts);
-  if (b4) *b4 = *b2 * second;
+  if (b4) *b4 = 0.5 * (*b2 + *b2_early) * second;
 }
 
 // min |a x - b| subject to x >= 0, for the few columns of a learning filter's fit: every
@@ -93,7 +94,8 @@ Eigen::VectorXd LearningFilter::Apply(const Eigen::VectorXd& e, double sample_ti
                  (h * h) +
              damping * (at(k + 1) - at(k - 1)) / (2 * h) + stiffness * at(k);
     if (snap != 0) {
-      out[k] += snap * (at(c + 2) - 4 * at(c + 1) + 6 * at(c) - 4 * at(c - 1) + at(c - 2)) / (h * h * h * h);
+      auto fourth = [&](Eigen::Index m) { return at(m + 2) - 4 * at(m + 1) + 6 * at(m) - 4 * at(m - 1) + at(m - 2); };
+      out[k] += snap * 0.5 * (fourth(c) + fourth(c + 1)) / (h * h * h * h);
     }
   }
   return out;

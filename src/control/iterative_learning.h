@@ -14,7 +14,8 @@
 // the learning converges where |Q|^2 |1 - alpha PS L| < 1 (ConvergenceFactor).
 //
 // The learning filter is non-causal (it runs offline on a whole trial) and has the
-// structure of a rigid joint's inverse PS under PD feedback with a command delay:
+// structure of a rigid joint's inverse PS under PD feedback with a command delay (and,
+// for a model of order 4, a snap term for a series spring; LearningFilter):
 //
 //   L(z) = (a2 z^tau + a2' z^(tau+1)) (z - 2 + z^-1) / Ts^2 + a1 (z - z^-1) / (2 Ts) + a0,
 //
@@ -23,13 +24,17 @@
 // sampled inverse has (z^D (z - 1)^2 / Ts^2) 2z / (z + 1), and 2z / (z + 1) ~ (1 + z) / 2
 // to second order in w Ts, so a2 = a2' = J/2, tau = D), a damping a1 and a stiffness a0
 // (the feedback's D through a central difference, for the same reason, and its P).
-// FitLearningFilter fits (a2, a2', a1, a0) for each tau by linear least squares on
-// sum |PS_measured L - 1|^2 over a band and all postures, and keeps the best tau;
-// ModelLearningFilter takes them a priori from the controller's model and gains.
+// FitPlantLearningFilter takes a1, a0 from the known feedback and fits the plant's
+// inertia (and snap) for each tau by output error to the nominal response, keeping the
+// best tau; FitLearningFilter (the earlier equation-error fit) fits all four over every
+// posture; ModelLearningFilter takes them a priori from the controller's model and gains.
 //
 //   ClosedLoopFrf frf = MeasureProcessSensitivity(plant, hat, postures, tracking, {});
 //   std::vector<LearningFilter> l;
-//   for (int j = 0; j < 3; ++j) l.push_back(FitLearningFilter(frf, j, 2, 80, 5));
+//   for (int j = 0; j < 3; ++j) {
+//     const LearningFilter feedback = ModelLearningFilter(hat, tracking, postures[0], q_start, j);
+//     l.push_back(FitPlantLearningFilter(frf, j, feedback, hat.joints[j].viscous, PlantFitOptions{}));
+//   }
 //   IlcResult r = RunIlc(plant, hat, reference, tracking, l, IlcOptions{});
 #pragma once
 
@@ -47,15 +52,17 @@
 namespace twinsim {
 
 // L(z) = (inertia z^shift + inertia_early z^(shift+1)) (z - 2 + 1/z) / Ts^2
-//        + snap z^shift (z - 2 + 1/z)^2 / Ts^4 + damping (z - 1/z) / (2 Ts) + stiffness.
-// The snap term is the fourth-order model's (PlantFitOptions::order 4): the inverse of a
-// joint whose drive is a series spring k between motor and link inertias J_m and J_l,
-// measured at the link, is (J_m + J_l) s^2 + (J_m J_l / k) s^4 (docs/ilc.md).
+//        + snap (z^shift + z^(shift+1)) / 2 (z - 2 + 1/z)^2 / Ts^4
+//        + damping (z - 1/z) / (2 Ts) + stiffness.
+// The snap term is the fourth-order model's (PlantFitOptions::order 4): neglecting the
+// spring's damping, the inverse of a joint whose drive is a series spring k between
+// motor and link inertias J_m and J_l, measured at the link, is
+// (J_m + J_l) s^2 + (J_m J_l / k) s^4 (docs/ilc.md).
 struct LearningFilter {
   int shift = 0;             // samples the inertia term acts early (tau)
   double inertia = 0;        // kg m^2 (kg for a prismatic joint): a2, at z^tau
   double inertia_early = 0;  // kg m^2: a2', at z^(tau+1)
-  double snap = 0;           // kg m^2 s^2: a4, at z^tau (0 for the rigid, second-order model)
+  double snap = 0;           // kg m^2 s^2: a4, centred at z^(tau+1/2) (0 for the rigid model)
   double damping = 0;        // N·m·s/rad: a1
   double stiffness = 0;   // N·m/rad: a0
   double residual = 0;    // RMS |PS L - 1| over the fitted lines (0 when not fitted)

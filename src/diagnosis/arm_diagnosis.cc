@@ -712,7 +712,11 @@ std::vector<ArmLog> FitBlockLogs(const std::vector<ArmLog>& logs, double block, 
       part.qdd = log.qdd.middleRows(first, rows);
       part.tau = log.tau.middleRows(first, rows);
       if (log.qref.rows() > 0) part.qref = log.qref.middleRows(first, rows);
-      part.line_of.assign(log.line_of.begin() + first, log.line_of.begin() + first + rows);
+      if (static_cast<int>(log.line_of.size()) == log.rows()) {
+        part.line_of.assign(log.line_of.begin() + first, log.line_of.begin() + first + rows);
+      } else {
+        part.line_of.clear();  // a log made in memory has no file lines
+      }
       part.edge_samples = 0;
       parts.push_back(std::move(part));
     }

@@ -57,10 +57,11 @@ std::string DiagnosisVerdict(const DiagnosisReport& r) {
     if (k > 0) names += k + 1 == r.effects.size() ? " and " : ", ";
     names += EffectLabel(r.effects[k].name, r.effects[k].joint);
   }
-  std::string s = refitted + "Missing: " + names + ". The held-out gap fell from " + Num(r.gap_before) + " to " + Num(r.gap_after) +
+  std::string s = refitted + "Missing: " + names + ". The held-out gap " + (r.gap_after <= r.gap_before ? "fell" : "rose") +
+                  " from " + Num(r.gap_before) + " to " + Num(r.gap_after) +
                   " (noise floor about " + Num(r.noise_floor) + ")";
   const double closed = ShareClosed(r);
-  if (std::isfinite(closed)) s += ", " + Num(100 * closed, "%.0f") + " % of the way down to it";
+  if (std::isfinite(closed) && closed >= 0) s += ", " + Num(100 * closed, "%.0f") + " % of the way down to it";
   return s + ".";
 }
 

@@ -49,9 +49,15 @@ class TriangularAccumulator {
 };
 
 // The log paths for messages: "a.csv" or "a.csv, b.csv".
+// Each path once (a log may come in several stretches, as diagnose's fit blocks do).
 std::string LogPaths(const std::vector<ArmLog>& logs) {
   std::string s;
-  for (const auto& l : logs) s += (s.empty() ? "" : ", ") + l.path;
+  std::vector<std::string> seen;
+  for (const auto& l : logs) {
+    if (std::find(seen.begin(), seen.end(), l.path) != seen.end()) continue;
+    seen.push_back(l.path);
+    s += (s.empty() ? "" : ", ") + l.path;
+  }
   return s;
 }
 

@@ -83,15 +83,21 @@ TEST(IlcSeedFilter, PlantFitRecoversTheInertiaAndDelayGivenTheFeedback) {
           << frf.frequency[i] << " Hz";
     }
   }
-  // Lines below the coherence asked for are not fitted.
-  fit.min_coherence = 1.5;
+  // Lines below the coherence asked for are not fitted: with every line at 0.5, none is.
+  ClosedLoopFrf noisy = frf;
+  for (Eigen::VectorXd& c : noisy.coherence[0]) c.setConstant(0.5);
+  EXPECT_THROW(FitPlantLearningFilter(noisy, 0, feedback, 0.0, fit), InputError);
+  fit.min_coherence = 0.4;
+  EXPECT_EQ(FitPlantLearningFilter(noisy, 0, feedback, 0.0, fit).lines, 50);
+  fit.min_coherence = 1.5;  // not a coherence
   EXPECT_THROW(FitPlantLearningFilter(frf, 0, feedback, 0.0, fit), InputError);
 }
 
 // A joint driven through a series spring, seen at the link (closed form): motor J_m and
-// link J_l coupled by k and d, one sample of delay, under PD. Its inverse is
-// (J_m + J_l) s^2 + (J_m J_l / k) s^4 to first order in d: the fourth-order fit finds
-// the snap term and fits the band below the 116 Hz resonance better than the rigid one.
+// link J_l coupled by k and d, one sample of delay and the zero-order hold of a sampled
+// controller, under PD. Neglecting d its inverse is (J_m + J_l) s^2 + (J_m J_l / k) s^4:
+// the fourth-order fit finds the snap term and fits the band below the 116 Hz resonance
+// better than the rigid one.
 TEST(IlcSeedFilter, FourthOrderFitFindsTheSeriesSpring) {
   constexpr double kJm = 0.01, kJl = 0.18, kK = 5000, kD = 0.2;  // kg m^2, N·m/rad, N·m·s/rad
   constexpr double kTs = 0.001, kKp = 1200, kKd = 40;             // s, N·m/rad, N·m·s/rad
@@ -102,8 +108,9 @@ TEST(IlcSeedFilter, FourthOrderFitFindsTheSeriesSpring) {
   Eigen::VectorXcd ps(frf.frequency.size());
   for (Eigen::Index i = 0; i < ps.size(); ++i) {
     const std::complex<double> s(0, 2 * M_PI * frf.frequency[i]);
+    const std::complex<double> hold = (1.0 - std::exp(-s * kTs)) / (s * kTs);  // zero-order hold
     const std::complex<double> p = (kK + kD * s) / (kJm * kJl * s * s * s * s + (kJm + kJl) * (kK + kD * s) * s * s) *
-                                   std::exp(-s * kTs);
+                                   std::exp(-s * kTs) * hold;
     ps[i] = p / (1.0 + p * (kKp + kKd * s));
   }
   frf.response = {{ps}};

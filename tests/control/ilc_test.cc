@@ -119,6 +119,7 @@ TEST(IlcLearningFilter, FitInvertsTheTurntablesProcessSensitivityAndAgreesWithTh
 TEST(IlcLearningFilter, ApplyIsTheFilterResponseOnASinusoid) {
   LearningFilter l;
   l.shift = 2, l.inertia = 0.3, l.inertia_early = 0.1, l.damping = 20, l.stiffness = 500;
+  l.snap = 2e-6;  // the order-4 term: at 25 Hz, 2e-6 (2 pi 25)^4 = 0.77 N m/rad against 0.4 (2 pi 25)^2 = 9.9
   const double ts = 0.001, f = 25;  // an integer number of periods in 400 samples
   Eigen::VectorXd e(400);
   for (int k = 0; k < 400; ++k) e[k] = std::sin(2 * kPi * f * k * ts);
