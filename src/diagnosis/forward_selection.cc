@@ -106,21 +106,23 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         // Effects the problem holds while scoring (HeldWhileScoring) keep their fit; a
         // candidate that removes nothing on its own is not refitted jointly (it would
         // rarely pass, and the joint fits are most of a round's time).
+        Score s = Compare(current_residuals, r, chunk);
         std::vector<int> refit;
-        const bool promising = Compare(current_residuals, r, chunk).reduction > 0;
         for (std::size_t m = 0; m < trial.size(); ++m) {
           if (m + 1 == trial.size() || !problem.HeldWhileScoring(trial[m])) refit.push_back(static_cast<int>(m));
         }
-        if (promising && refit.size() > 1) {
+        if (s.reduction > 0 && refit.size() > 1) {
           try {
             std::vector<TrialEffect> joint = problem.Fit(trial, refit);
             SquaredResiduals rj = problem.Evaluate(joint);
-            if (Mean(rj.fit) < Mean(r.fit)) trial = std::move(joint), r = std::move(rj);
+            if (Mean(rj.fit) < Mean(r.fit)) {
+              trial = std::move(joint), r = std::move(rj);
+              s = Compare(current_residuals, r, chunk);
+            }
           } catch (const std::exception&) {
             // the joint refit failed: the one-at-a-time fit stands
           }
         }
-        const Score s = Compare(current_residuals, r, chunk);
         c.parameters = trial.back().parameters;
         c.fit_gap = problem.Gap(Mean(r.fit));
         c.held_out_gap = problem.Gap(Mean(r.held_out));

@@ -227,13 +227,8 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
       }
       f.Get("max_shift", &ilc->fit.max_shift, InRange(0, 100));
       f.Get("coherence", &ilc->fit.min_coherence, InRange(0, 1));
-      if (f.Has("model_order")) {
-        int order = 0;
-        if (f.Get("model_order", &order) && order != 2 && order != 4) {
-          f.Error("model_order", "must be 2 (rigid: inertia and delay) or 4 (with a series spring)");
-        } else if (order != 0) {
-          ilc->fit.order = order;
-        }
+      if (f.Get("model_order", &ilc->fit.order) && ilc->fit.order != 2 && ilc->fit.order != 4) {
+        f.Error("model_order", "must be 2 (rigid: inertia and delay) or 4 (with a series spring)");
       }
       const YAML::Node list = f.Child("postures");
       if (list.IsDefined() && !list.IsNull()) {
