@@ -29,11 +29,24 @@ double PositionRmse(const OmniLog& log, const OmniReplayResult& result) {
   double sum = 0;
   int n = 0;
   for (std::size_t i = 0; i < result.t.size(); ++i) {
-    if (!result.predicted[i]) continue;
+    if (!result.predicted[i] || !log.rows[i].measured) continue;
     sum += std::pow(result.pose[i].x - log.rows[i].pose.x, 2) + std::pow(result.pose[i].y - log.rows[i].pose.y, 2);
     ++n;
   }
   return n ? std::sqrt(sum / n) : 0.0;
+}
+
+OmniPoseErrors PoseErrorsInRobotFrame(const OmniLog& log, const OmniReplayResult& result, double radius) {
+  OmniPoseErrors out;
+  for (std::size_t i = 0; i < result.pose.size(); ++i) {
+    if (!result.predicted[i] || !log.rows[i].measured) continue;
+    const Pose2& m = log.rows[i].pose;
+    const double dx = m.x - result.pose[i].x, dy = m.y - result.pose[i].y;
+    const double c = std::cos(m.theta), s = std::sin(m.theta);
+    out.rows.push_back(i);
+    out.e.push_back({c * dx + s * dy, -s * dx + c * dy, radius * (m.theta - result.pose[i].theta)});
+  }
+  return out;
 }
 
 namespace {
@@ -128,7 +141,10 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   for (int f = first->first; f <= last_frame; ++f) {
     if (progress && f % 64 == 0) progress(f, last_frame);
     auto measured = row_of_frame.find(f);
-    if (measured != row_of_frame.end()) backend->MoveBody(0, log.rows[measured->second].pose);
+    // Frames without a new measurement leave the tracker to its own prediction.
+    if (measured != row_of_frame.end() && log.rows[measured->second].measured) {
+      backend->MoveBody(0, log.rows[measured->second].pose);
+    }
     if (stretch && measured != row_of_frame.end() && measured->second == stretch_first) {
       // The free run: no more corrections from the measurement.
       double last_theta = log.rows[stretch_first].pose.theta;

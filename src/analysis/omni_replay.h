@@ -7,7 +7,8 @@
 //
 // The state at the start frame S = i - K comes from a tracker: the model runs along the
 // whole log under the logged commands, and its pose is corrected to the measurement at
-// every row (OmniBackend::MoveBody). Velocity and internal state (the on-board
+// every row that has one (OmniBackend::MoveBody; frames without a new measurement,
+// OmniLogRow::measured, leave the tracker to its own prediction). Velocity and internal state (the on-board
 // controller's set-points and integrals, a learned model's window) are the tracker's,
 // so vision noise enters through poses only, as it does for a learned predictor. Each
 // prediction runs K frames from a saved tracker state, which is then restored. The
@@ -16,6 +17,7 @@
 // pose.
 #pragma once
 
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -47,8 +49,18 @@ struct OmniReplayResult {
   int num_predicted() const;
 };
 
-// Root-mean-square distance (m) between the predicted rows and the log's poses.
+// Root-mean-square distance (m) between the predicted rows and the log's poses, over
+// the rows with a measurement.
 double PositionRmse(const OmniLog& log, const OmniReplayResult& result);
+
+// The prediction errors of a replay, per predicted row that holds a measurement: the
+// measured pose minus the predicted one as (forward, sideways) in the measured robot
+// frame and the heading error times `radius` (a point on the rim), all in metres.
+struct OmniPoseErrors {
+  std::vector<std::size_t> rows;         // log rows
+  std::vector<std::array<double, 3>> e;  // m, one per row above
+};
+OmniPoseErrors PoseErrorsInRobotFrame(const OmniLog& log, const OmniReplayResult& result, double radius);
 
 // Throws InputError for an unknown backend; CheckFailed if the model diverges.
 OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,

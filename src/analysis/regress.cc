@@ -436,6 +436,7 @@ RegressSummary RegressFolders(const std::string& golden, const std::string& cand
   // written for a comparison that cannot be made.
   std::map<std::string, OmniLog> golden_logs, candidate_logs;
   std::map<std::string, RgbaImage> golden_images, candidate_images;
+  auto read_log = [](const std::string& path) { return ReadOmniLog(path); };
   auto read = [&errors](const std::string& path, auto reader, auto& into, const std::string& name) {
     try {
       into.emplace(name, reader(path));
@@ -444,10 +445,10 @@ RegressSummary RegressFolders(const std::string& golden, const std::string& cand
     }
   };
   for (const auto& name : golden_files) {
-    if (KindOf(name) == FileKind::kTrajectory) read(Join(golden, name), ReadOmniLog, golden_logs, name);
+    if (KindOf(name) == FileKind::kTrajectory) read(Join(golden, name), read_log, golden_logs, name);
     if (!in_candidate.count(name)) continue;
     if (KindOf(name) == FileKind::kTrajectory) {
-      read(Join(candidate, name), ReadOmniLog, candidate_logs, name);
+      read(Join(candidate, name), read_log, candidate_logs, name);
     } else if (KindOf(name) == FileKind::kImage) {
       read(Join(golden, name), ReadPng, golden_images, name);
       read(Join(candidate, name), ReadPng, candidate_images, name);

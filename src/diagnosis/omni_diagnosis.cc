@@ -36,6 +36,8 @@ std::vector<Variable> VariablesOf(const std::string& name) {
   if (name == "motor_lag") return {{"time_constant", 1e-3, 5, true}};
   if (name == "velocity_scale") return {{"scale", 0.2, 5, false}};
   if (name == "rotation_drift") return {{"rate", -10, 10, false}};
+  if (name == "turn_coupling") return {{"forward", -20, 20, false}, {"sideways", -20, 20, false}};
+  if (name == "cross_coupling") return {{"sideways_per_forward", -2, 2, false}, {"forward_per_sideways", -2, 2, false}};
   return {};
 }
 
@@ -45,10 +47,7 @@ struct LogData {
 };
 
 // The residual of one replay: per predicted row (forward, sideways, r * dtheta), m.
-struct ReplayResidual {
-  std::vector<std::size_t> rows;
-  std::vector<std::array<double, 3>> e;
-};
+using ReplayResidual = OmniPoseErrors;
 
 class OmniProblem : public DiagnosisProblem {
  public:
@@ -94,19 +93,7 @@ class OmniProblem : public DiagnosisProblem {
     o.backend = options_.backend;
     o.horizon = horizon;
     o.stride = stride;
-    const OmniReplayResult r = ReplayOmniLog(model, *d.log, o);
-    ReplayResidual out;
-    const double radius = nominal_.chassis_radius;
-    for (std::size_t i = 0; i < r.pose.size(); ++i) {
-      if (!r.predicted[i]) continue;
-      const Pose2& m = d.log->rows[i].pose;
-      // Measured minus predicted, in the robot's frame.
-      const double dx = m.x - r.pose[i].x, dy = m.y - r.pose[i].y;
-      const double c = std::cos(m.theta), s = std::sin(m.theta);
-      out.rows.push_back(i);
-      out.e.push_back({c * dx + s * dy, -s * dx + c * dy, radius * (m.theta - r.pose[i].theta)});
-    }
-    return out;
+    return PoseErrorsInRobotFrame(*d.log, ReplayOmniLog(model, *d.log, o), nominal_.chassis_radius);
   }
 
   SquaredResiduals Evaluate(const std::vector<TrialEffect>& effects) const override {
@@ -212,6 +199,16 @@ void OmniProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
     for (double s : {0.8, 0.9, 0.95, 1.05, 1.1, 1.25}) grid.push_back({{"scale", s}});
   } else if (e.name == "rotation_drift") {
     for (double r : {-1.0, -0.4, -0.15, 0.15, 0.4, 1.0}) grid.push_back({{"rate", r}});
+  } else if (e.name == "turn_coupling") {
+    for (double k : {-1.5, -0.5, -0.15, 0.15, 0.5, 1.5}) {
+      grid.push_back({{"sideways", k}});
+      grid.push_back({{"forward", k}});
+    }
+  } else if (e.name == "cross_coupling") {
+    for (double k : {-0.3, -0.1, 0.1, 0.3}) {
+      grid.push_back({{"sideways_per_forward", k}});
+      grid.push_back({{"forward_per_sideways", k}});
+    }
   }
   double best = kInf;
   for (const auto& p : grid) {
@@ -400,6 +397,16 @@ std::string OmniProblem::Signature(const TrialEffect& e) const {
   } else if (e.name == "rotation_drift") {
     std::snprintf(buf, sizeof buf, "the heading error grows with the distance driven, %s rad per metre, and not while turning on the spot",
                   FormatParameter(p.at("rate")).c_str());
+  } else if (e.name == "turn_coupling") {
+    std::string per;
+    if (p.count("forward")) per += FormatParameter(p.at("forward")) + " rad/s per m/s of forward command";
+    if (p.count("sideways")) per += (per.empty() ? "" : " and ") + FormatParameter(p.at("sideways")) + " rad/s per m/s of sideways command";
+    std::snprintf(buf, sizeof buf, "the heading error follows the translation command, not the distance: the robot turns %s", per.c_str());
+  } else if (e.name == "cross_coupling") {
+    std::string per;
+    if (p.count("sideways_per_forward")) per += FormatParameter(p.at("sideways_per_forward")) + " m/s sideways per m/s forward";
+    if (p.count("forward_per_sideways")) per += (per.empty() ? "" : " and ") + FormatParameter(p.at("forward_per_sideways")) + " m/s forward per m/s sideways";
+    std::snprintf(buf, sizeof buf, "the error across the commanded direction follows the command along it: %s", per.c_str());
   } else {
     return "";
   }
@@ -423,6 +430,36 @@ double ResponseLag(const std::vector<double>& command, const std::vector<double>
 }
 
 }  // namespace
+
+double OmniNoiseFloor(const std::vector<OmniLog>& logs, double radius, double* var_xy_out, double* var_theta_out) {
+  double var_xy = 0, var_theta = 0;
+  for (const OmniLog& log : logs) {
+    // Camera noise from third differences (a smooth path's are tiny): var = E[d3^2] / 20,
+    // over four consecutive frames that each hold a new measurement (a repeated or
+    // missing pose is not the camera's noise).
+    std::vector<double> d3x, d3y, d3t;
+    for (std::size_t i = 3; i < log.rows.size(); ++i) {
+      if (log.FrameIndex(i) - log.FrameIndex(i - 3) != 3) continue;
+      if (!(log.rows[i].measured && log.rows[i - 1].measured && log.rows[i - 2].measured && log.rows[i - 3].measured))
+        continue;
+      auto third = [&](auto get) {
+        return get(log.rows[i]) - 3 * get(log.rows[i - 1]) + 3 * get(log.rows[i - 2]) - get(log.rows[i - 3]);
+      };
+      d3x.push_back(third([](const OmniLogRow& r) { return r.pose.x; }));
+      d3y.push_back(third([](const OmniLogRow& r) { return r.pose.y; }));
+      d3t.push_back(third([](const OmniLogRow& r) { return r.pose.theta; }));
+    }
+    const double sx = RobustSigma(d3x), sy = RobustSigma(d3y), st = RobustSigma(d3t);
+    var_xy += (sx * sx + sy * sy) / 2 / 20;
+    var_theta += st * st / 20;
+  }
+  var_xy /= static_cast<double>(logs.size());
+  var_theta /= static_cast<double>(logs.size());
+  if (var_xy_out) *var_xy_out = var_xy;
+  if (var_theta_out) *var_theta_out = var_theta;
+  // Start and end poses both carry the camera's noise.
+  return std::sqrt(4 * var_xy + 2 * radius * radius * var_theta);
+}
 
 DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
                              OmniModel* repaired, const std::function<void(const std::string&)>& progress) {
@@ -486,27 +523,9 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   const OmniModel repaired_model = problem.Build(selection.effects);
   const char* names[3] = {"forward", "sideways", "rotation (at the rim)"};
   const double dt = logs.front().frame_period;
-  double var_xy = 0, var_theta = 0;
-  for (const OmniLog& log : logs) {
-    // Camera noise from third differences (a smooth path's are tiny): var = E[d3^2] / 20.
-    std::vector<double> d3x, d3y, d3t;
-    for (std::size_t i = 3; i < log.rows.size(); ++i) {
-      auto third = [&](auto get) {
-        return get(log.rows[i]) - 3 * get(log.rows[i - 1]) + 3 * get(log.rows[i - 2]) - get(log.rows[i - 3]);
-      };
-      d3x.push_back(third([](const OmniLogRow& r) { return r.pose.x; }));
-      d3y.push_back(third([](const OmniLogRow& r) { return r.pose.y; }));
-      d3t.push_back(third([](const OmniLogRow& r) { return r.pose.theta; }));
-    }
-    const double sx = RobustSigma(d3x), sy = RobustSigma(d3y), st = RobustSigma(d3t);
-    var_xy += (sx * sx + sy * sy) / 2 / 20;
-    var_theta += st * st / 20;
-  }
-  var_xy /= static_cast<double>(logs.size());
-  var_theta /= static_cast<double>(logs.size());
   const double radius = model.chassis_radius;
-  // Start and end poses both carry the camera's noise.
-  report.noise_floor = std::sqrt(4 * var_xy + 2 * radius * radius * var_theta);
+  double var_xy = 0, var_theta = 0;
+  report.noise_floor = OmniNoiseFloor(logs, radius, &var_xy, &var_theta);
 
   std::vector<ChannelFinding> findings(3);
   std::vector<ChannelSeries> series(3);

@@ -67,7 +67,7 @@ int CsvTable::RequireColumn(const std::string& name) const {
   throw InputError(SourceLocation{path, 1}, "missing column '" + name + "' (have: " + have + ")");
 }
 
-std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names) const {
+std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names, bool allow_empty) const {
   std::vector<int> columns;
   const Problem* first = nullptr;
   const std::string* missing = nullptr;
@@ -79,7 +79,7 @@ std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names)
       if (!missing) missing = &name;
       continue;
     }
-    const Problem& p = problem[static_cast<std::size_t>(c)];
+    const Problem& p = (allow_empty ? nonempty_problem : problem)[static_cast<std::size_t>(c)];
     if (p.line > 0 && (!first || std::tie(p.line, p.column) < std::tie(first->line, first->column))) first = &p;
   }
   // A bad value is named before a missing column, as a reader going row by row would.
@@ -93,6 +93,8 @@ CsvTable TableFromRows(const std::string& name, std::vector<std::string> header,
   t.path = name;
   t.header = std::move(header);
   t.problem.assign(t.header.size(), {});
+  t.nonempty_problem.assign(t.header.size(), {});
+  t.label.assign(t.header.size(), {});
   t.rows = std::move(rows);
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     const int line = static_cast<int>(r) + 1;
@@ -110,6 +112,7 @@ CsvTable TableFromRows(const std::string& name, std::vector<std::string> header,
         problem = {line, static_cast<int>(c) + 1,
                    SourceLocation{name, line, static_cast<int>(c) + 1}.Prefix() + "column '" + t.header[c] +
                        "': value is " + value.str() + ", not a finite number"};
+        t.nonempty_problem[c] = problem;  // a number held in memory is never an empty cell
       }
     }
   }
@@ -125,6 +128,7 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
   std::string line;
   int line_no = 0;
   bool have_header = false;
+  std::vector<bool> keep_label;  // per column
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -143,6 +147,12 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
         t.header.push_back(f.text);
       }
       t.problem.assign(t.header.size(), {});
+      t.nonempty_problem.assign(t.header.size(), {});
+      t.label.assign(t.header.size(), {});
+      keep_label.assign(t.header.size(), false);
+      for (std::size_t c = 0; c < t.header.size(); ++c) {
+        for (const char* name : kLabelColumns) keep_label[c] = keep_label[c] || t.header[c] == name;
+      }
       have_header = true;
       continue;
     }
@@ -163,14 +173,20 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
       CsvTable::Problem& problem = t.problem[i];
       const bool text = f.empty() || ec != std::errc() || ptr != end;
       if (text || !std::isfinite(v)) {
-        if (problem.line == 0) {
-          problem = {line_no, column,
-                     SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] + "': " +
-                         (text ? "expected a number, got '" + Clip(f) + "'" : "value is " + Clip(f) + ", not a finite number")};
+        if (problem.line == 0 || (!f.empty() && t.nonempty_problem[i].line == 0)) {
+          const CsvTable::Problem found{
+              line_no, column,
+              SourceLocation{path, line_no, column}.Prefix() + "column '" + t.header[i] + "': " +
+                  (f.empty() ? std::string("empty cell where a number belongs")
+                   : text    ? "expected a number, got '" + Clip(f) + "'"
+                             : "value is " + Clip(f) + ", not a finite number")};
+          if (problem.line == 0) problem = found;
+          if (!f.empty() && t.nonempty_problem[i].line == 0) t.nonempty_problem[i] = found;
         }
         v = std::numeric_limits<double>::quiet_NaN();
       }
       row[i] = v;
+      if (keep_label[i]) t.label[i].push_back(f);
     }
     t.rows.push_back(std::move(row));
     t.line_of.push_back(line_no);

@@ -27,6 +27,12 @@ struct CsvTable {
     std::string message;  // "path:line:col: ..."
   };
   std::vector<Problem> problem;
+  // Per column, its first value that is neither a finite number nor empty (line 0:
+  // none): what RequireColumns(names, true) reports.
+  std::vector<Problem> nonempty_problem;
+  // Per column, the text of every row for the label columns (kLabelColumns: a robot id,
+  // a team), which may hold words; empty for the other columns.
+  std::vector<std::vector<std::string>> label;
 
   // Index of the column, or -1 (its values unchecked).
   int Column(const std::string& name) const;
@@ -35,8 +41,14 @@ struct CsvTable {
   int RequireColumn(const std::string& name) const;
   // RequireColumn() for each name; of bad values in the columns there are, the first in
   // the file is reported, before a missing column (as a reader going row by row would).
-  std::vector<int> RequireColumns(const std::vector<std::string>& names) const;
+  // With allow_empty, empty cells pass (they read as NaN): a camera frame without a
+  // measurement leaves its pose cells empty.
+  std::vector<int> RequireColumns(const std::vector<std::string>& names, bool allow_empty = false) const;
 };
+
+// Columns whose text the reader keeps (CsvTable::label), to tell robots apart in a log
+// holding several.
+inline const char* const kLabelColumns[] = {"robot_id", "robot", "id", "team"};
 
 // The largest CSV file read (1 GiB: days of a robot at 30 fps); larger ones are refused
 // before any memory is taken.

@@ -95,6 +95,24 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
     s.received.erase(s.received.begin(), s.received.begin() + static_cast<long>(due));
   }
   Twist2 c = s.acting;
+  if (!s.received.empty()) {
+    // A command that falls due within this step acts for the rest of it: the step sees
+    // the time-weighted mean, so the response moves smoothly with the delay rather than
+    // in whole physics steps (what a fit of the delay needs).
+    const double after = s.clock + dt - (s.received.front().first + fx.time_delay);
+    if (after > 1e-9) {
+      const double u = std::min(1.0, after / dt);
+      const Twist2& next = s.received.front().second;
+      c = Twist2{c.vx + u * (next.vx - c.vx), c.vy + u * (next.vy - c.vy), c.omega + u * (next.omega - c.omega)};
+    }
+  }
+  if (fx.MapsCommand()) {
+    // velocity_scale per axis, cross_coupling and turn_coupling (omni_effects.h).
+    const Twist2 a = c;
+    c = Twist2{fx.axis_scale[0] * a.vx + fx.forward_per_sideways * a.vy,
+               fx.axis_scale[1] * a.vy + fx.sideways_per_forward * a.vx,
+               fx.axis_scale[2] * a.omega + fx.turn_per_forward * a.vx + fx.turn_per_sideways * a.vy};
+  }
   if (fx.v_max > 0) {
     const double speed = std::hypot(c.vx, c.vy);
     if (speed > fx.v_max) {
@@ -103,10 +121,12 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
     }
   }
   if (fx.w_max > 0) c.omega = std::clamp(c.omega, -fx.w_max, fx.w_max);
-  if (fx.motor_lag > 0) {
-    const double k = 1 - std::exp(-dt / fx.motor_lag);
-    s.lagged = Twist2{s.lagged.vx + k * (c.vx - s.lagged.vx), s.lagged.vy + k * (c.vy - s.lagged.vy),
-                      s.lagged.omega + k * (c.omega - s.lagged.omega)};
+  if (fx.LagOf(0) > 0 || fx.LagOf(1) > 0 || fx.LagOf(2) > 0) {
+    auto follow = [&](int axis, double lagged, double target) {
+      const double tau = fx.LagOf(axis);
+      return tau > 0 ? lagged + (1 - std::exp(-dt / tau)) * (target - lagged) : target;
+    };
+    s.lagged = Twist2{follow(0, s.lagged.vx, c.vx), follow(1, s.lagged.vy, c.vy), follow(2, s.lagged.omega, c.omega)};
     c = s.lagged;
   }
   return c;

@@ -16,6 +16,11 @@ CLI::Validator NonNegativeNumber();
 // all options of `app` and its subcommands by main().
 void CheckNumberOptions(CLI::App* app);
 
+// --robot ID and --team TEAM: which robot of an omni log holding several to read
+// (robots/omni/omni_log.h).
+struct OmniLogSelector;
+void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select);
+
 void AddRunCommand(CLI::App& app, int* exit_code);
 void AddReplayCommand(CLI::App& app, int* exit_code);
 void AddTrainCommand(CLI::App& app, int* exit_code);

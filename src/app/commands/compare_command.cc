@@ -71,6 +71,7 @@ struct CompareCliOptions {
   std::vector<std::string> predictors;
   double plot_seconds = 8;  // s of the log drawn in paths.png
   bool quiet = false;
+  OmniLogSelector select;  // omni logs holding several robots
 };
 
 int Compare(const CompareCliOptions& options) {
@@ -80,7 +81,7 @@ int Compare(const CompareCliOptions& options) {
     throw InputError(SourceLocation{options.model},
                      "compare of '" + kind + "' models is not available in this build (known: omni)");
   const OmniModel model = LoadOmniModel(options.model);
-  const OmniLog log = ReadOmniLog(options.log);
+  const OmniLog log = ReadOmniLog(options.log, options.select);
   const double frame_rate = 1.0 / log.frame_period;
 
   std::vector<std::shared_ptr<const OmniPredictor>> predictors;
@@ -144,6 +145,7 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str()
       ->check(PositiveNumber());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
+  AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Compare(*options); });
 }
 

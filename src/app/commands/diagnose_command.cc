@@ -26,6 +26,7 @@ struct DiagnoseCliOptions {
   DiagnosisOptions diagnosis;
   ArmLogOptions arm_log;
   bool quiet = false;
+  OmniLogSelector select;  // omni logs holding several robots
 };
 
 int Diagnose(const DiagnoseCliOptions& options) {
@@ -57,7 +58,7 @@ int Diagnose(const DiagnoseCliOptions& options) {
   } else if (kind == "omni") {
     const OmniModel model = LoadOmniModel(options.model);
     std::vector<OmniLog> logs;
-    for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path));
+    for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path, options.select));
     OmniModel repaired;
     report = DiagnoseOmni(model, logs, options.diagnosis, &repaired, report_progress);
     model_yaml = FormatOmniModelYaml(repaired, comment + "\n" + DiagnosisVerdict(report));
@@ -123,6 +124,7 @@ void AddDiagnoseCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--threads", options->diagnosis.threads, "Worker threads (0: one per core); results do not depend on it")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No table and no progress");
+  AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Diagnose(*options); });
 }
 

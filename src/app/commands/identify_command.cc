@@ -17,6 +17,9 @@
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 #include "robots/arm/arm_model_yaml_writer.h"
+#include "diagnosis/omni_identification.h"
+#include "robots/omni/omni_log.h"
+#include "robots/omni/omni_model_yaml_writer.h"
 
 namespace twinsim {
 namespace {
@@ -32,6 +35,10 @@ struct IdentifyCliOptions {
   bool unweighted = false;
   bool offsets = false;
   bool quiet = false;
+  // Omni robots.
+  OmniLogSelector select;
+  OmniIdentificationOptions omni;
+  std::vector<std::string> given;  // options given on the command line, for the checks per robot kind
 };
 
 // Measured torques of joint j against the a-priori and the identified model's.
@@ -55,7 +62,66 @@ SeriesPlot TorquePlot(const ArmLog& log, int j, const Eigen::MatrixXd& a_priori,
   return plot;
 }
 
+bool EndsWithYaml(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".yaml" || ext == ".yml";
+}
+
+// Omni: `--out DIR` writes DIR/model.yaml, report.json and report.html; `--out M.yaml`
+// the model there and the reports into --report DIR when given.
+int IdentifyOmniCli(const IdentifyCliOptions& options) {
+  for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition"}) {
+    if (std::find(options.given.begin(), options.given.end(), arm_only) != options.given.end())
+      throw InputError(std::string(arm_only) + " is for arms; " + options.model + " is an omni robot");
+  }
+  std::string why;
+  if (!options.omni.IsValid(&why)) throw InputError(why);
+  const bool to_yaml = EndsWithYaml(options.out);
+  if (!to_yaml && std::filesystem::exists(options.out) && !std::filesystem::is_directory(options.out))
+    throw InputError("--out " + options.out + ": exists and is not a folder (give a folder, or a .yaml path for the model)");
+  const OmniModel model = LoadOmniModel(options.model);
+  std::vector<OmniLog> logs, validation;
+  for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path, options.select));
+  for (const auto& path : options.validate) validation.push_back(ReadOmniLog(path, options.select));
+
+  Progress progress("identify", !options.quiet);
+  OmniModel identified;
+  const OmniIdentificationReport report =
+      IdentifyOmni(model, logs, validation, options.omni, &identified,
+                   [&](int step, int steps, const std::string& what) { progress.Update(step, steps, what); });
+  progress.Finish();
+
+  std::string comment = "Identified by twinsim identify from " + options.model + " and";
+  for (const auto& path : options.logs) comment += "\n  " + path;
+  comment += "\nreport.json holds every parameter with its standard error.";
+  const std::string yaml = FormatOmniModelYaml(identified, comment);
+  const std::string json = FormatOmniIdentificationJson(report);
+  const std::string report_dir = to_yaml ? options.report : options.out;
+  std::string html;
+  if (!report_dir.empty()) {
+    if (RenderingCompiled()) {
+      html = FormatOmniIdentificationHtml(report, *MakeDefaultRenderer());
+    } else {
+      std::fprintf(stderr, "identify: warning: report.html not written: %s\n", kRenderingNotCompiled);
+    }
+  }
+  OutputFiles files;
+  files.Write(to_yaml ? options.out : options.out + "/model.yaml", yaml);
+  if (!report_dir.empty()) {
+    files.Write(report_dir + "/report.json", json);
+    if (!html.empty()) files.Write(report_dir + "/report.html", html);
+  }
+  if (!options.quiet) {
+    std::printf("identified %s (omni) from %zu log(s) in %.1f s\n\n%s", model.name.c_str(), logs.size(), report.seconds,
+                FormatOmniIdentificationTable(report).c_str());
+    files.PrintWrote();
+  }
+  return kExitOk;
+}
+
 int Identify(const IdentifyCliOptions& options) {
+  if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
   // Check everything before identifying or writing.
   std::string ext = std::filesystem::path(options.out).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -131,7 +197,8 @@ int Identify(const IdentifyCliOptions& options) {
 
 void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   auto options = std::make_shared<IdentifyCliOptions>();
-  CLI::App* cmd = app.add_subcommand("identify", "Estimate an arm's base inertial parameters and friction from logs.");
+  CLI::App* cmd = app.add_subcommand(
+      "identify", "Estimate a robot's parameters from its logs: an arm's inertia and friction, an omni robot's response.");
   cmd->footer(
       "Weighted least squares (seed 001): the torques are linear in the base parameters; OLS first,\n"
       "then each joint weighted by 1 / its residual's standard deviation, solved by QR. Logs are\n"
@@ -142,10 +209,19 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
       "model does. With --offsets the offsets are written as torque_offset effects (tau0 = -offset).\n"
       "The input model's friction effects, payload and torque offsets are dropped (the identified\n"
       "parameters hold their torques); its time_delay, torque_saturation and joint_flexibility are\n"
-      "kept. Data that does not excite a parameter is refused (exit 2) naming it.");
+      "kept. Data that does not excite a parameter is refused (exit 2) naming it.\n"
+      "\n"
+      "Omni robots (a model with robot: omni): the total delay, per axis the share of the command\n"
+      "reached, the set-point ramp, a lag and the speed limits, and the couplings between axes\n"
+      "(a sideways command turning the robot), fitted to the logs' 4-frame predictions on time\n"
+      "blocks and scored on held-out blocks beside constant-velocity extrapolation. --out DIR\n"
+      "writes DIR/model.yaml, report.json (every parameter with its standard error) and\n"
+      "report.html; --out M.yaml writes the model, and the reports into --report DIR if given.\n"
+      "Method: docs/identification.md.");
   cmd->add_option("--model", options->model, "A-priori arm model (URDF or YAML)")->required();
   cmd->add_option("--log", options->logs, "Measured arm log(s) (repeat --log)")->required();
-  cmd->add_option("--out", options->out, "Identified model to write (.yaml)")->required();
+  cmd->add_option("--out", options->out, "Identified model to write (.yaml); omni: or a folder for model.yaml and reports")
+      ->required();
   cmd->add_option("--cutoff", options->log.cutoff_hz,
                   "Hz, low-pass cut-off for qd/qdd derived from q (well above the motion's bandwidth)")
       ->capture_default_str();
@@ -160,8 +236,27 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                   "Held-out log(s): print the a-priori and identified models' torque errors on them");
   cmd->add_option("--report", options->report,
                   "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
+  AddLogSelectorOptions(cmd, &options->select);
+  cmd->add_option("--held-out", options->omni.held_out, "Omni: share of each log's time blocks held out from the fit")
+      ->capture_default_str();
+  cmd->add_option("--block", options->omni.block_seconds,
+                  "Omni: s, length of a time block; 0 = a 20th of the longest log, 0.5 to 10 s")
+      ->capture_default_str();
+  cmd->add_option("--horizon", options->omni.horizon, "Omni: frames predicted ahead in the fit and the scores")
+      ->capture_default_str();
+  cmd->add_option("--backend", options->omni.backend, "Omni: physics that replays the model (analytic, ode, bullet)")
+      ->capture_default_str();
+  cmd->add_option("--stride", options->omni.stride, "Omni: the fit predicts from every stride-th frame")
+      ->capture_default_str();
+  cmd->add_option("--max-delay", options->omni.max_delay, "Omni: s, the longest total delay searched")->capture_default_str();
+  cmd->add_option("--threads", options->omni.threads, "Omni: worker threads (0: one per core); results do not depend on it")
+      ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No tables and no summary");
-  cmd->callback([options, exit_code] { *exit_code = Identify(*options); });
+  cmd->callback([cmd, options, exit_code] {
+    for (const CLI::Option* o : cmd->get_options())
+      if (o->count() > 0) options->given.push_back(o->get_name());
+    *exit_code = Identify(*options);
+  });
 }
 
 }  // namespace twinsim

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "app/commands/commands.h"
+#include "robots/omni/omni_log.h"
 
 namespace twinsim {
 namespace {
@@ -60,6 +61,12 @@ void CheckNumberOptions(CLI::App* app) {
     }
   }
   for (CLI::App* sub : app->get_subcommands({})) CheckNumberOptions(sub);
+}
+
+void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select) {
+  cmd->add_option("--robot", select->robot,
+                  "Omni log holding several robots: the robot id to read (column robot_id, robot or id)");
+  cmd->add_option("--team", select->team, "Omni log holding several robots: the team to read (column team)");
 }
 
 }  // namespace twinsim

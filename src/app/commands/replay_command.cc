@@ -31,6 +31,7 @@ struct ReplayOptions {
   std::string predictor;
   double cutoff_hz = ArmLogOptions{}.cutoff_hz;
   bool quiet = false;
+  OmniLogSelector select;  // omni logs holding several robots
 };
 
 // An arm: the commands the model needs for the logged motion (inverse dynamics with
@@ -74,7 +75,7 @@ int Replay(const ReplayOptions& options) {
     throw InputError(SourceLocation{options.model},
                      "replay of '" + kind + "' models is not available in this build (known: omni, arm)");
   const OmniModel model = LoadOmniModel(options.model);
-  const OmniLog log = ReadOmniLog(options.log);
+  const OmniLog log = ReadOmniLog(options.log, options.select);
   OmniReplayOptions replay;
   replay.backend = options.backend;
   replay.horizon = options.horizon;
@@ -127,6 +128,7 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--cutoff", options->cutoff_hz, "Hz, arms: low-pass cut-off for qd/qdd derived from q")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
+  AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Replay(*options); });
 }
 

@@ -31,6 +31,7 @@ struct TrainCliOptions {
   std::optional<std::string> nominal_engine;  // omni residual only
   std::optional<int> nominal_substeps;         // omni residual only
   bool quiet = false;
+  OmniLogSelector select;  // omni logs holding several robots
 };
 
 int TrainArm(const TrainCliOptions& options) {
@@ -89,7 +90,7 @@ int Train(const TrainCliOptions& options) {
   // Read and check everything before training or writing.
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs;
-  for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path));
+  for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path, options.select));
   OmniTrainOptions train = options.train;
   train.residual = options.residual;
   if (options.nominal_engine) train.nominal_engine = *options.nominal_engine;
@@ -180,6 +181,7 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--patience", options->train.mlp.patience, "Epochs without held-out improvement before stopping")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
+  AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Train(*options); });
 }
 

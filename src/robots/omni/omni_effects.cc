@@ -14,16 +14,19 @@ std::vector<std::string> OmniEffects::Active() const {
   if (time_delay > 0) names.push_back("time_delay");
   if (v_max > 0 || w_max > 0) names.push_back("velocity_saturation");
   if (a_max > 0) names.push_back("traction_limit");
-  if (motor_lag > 0) names.push_back("motor_lag");
-  if (velocity_scale != 1) names.push_back("velocity_scale");
+  if (motor_lag > 0 || axis_lag[0] > 0 || axis_lag[1] > 0 || axis_lag[2] > 0) names.push_back("motor_lag");
+  if (velocity_scale != 1 || axis_scale != std::array<double, 3>{1, 1, 1}) names.push_back("velocity_scale");
   if (rotation_drift != 0) names.push_back("rotation_drift");
+  if (turn_per_forward != 0 || turn_per_sideways != 0) names.push_back("turn_coupling");
+  if (sideways_per_forward != 0 || forward_per_sideways != 0) names.push_back("cross_coupling");
   return names;
 }
 
 
 const std::vector<std::string>& OmniEffectNames() {
-  static const std::vector<std::string> names = {"time_delay",    "velocity_saturation", "traction_limit",
-                                                 "motor_lag",     "velocity_scale",      "rotation_drift"};
+  static const std::vector<std::string> names = {"time_delay",     "velocity_saturation", "traction_limit",
+                                                 "motor_lag",      "velocity_scale",      "rotation_drift",
+                                                 "turn_coupling",  "cross_coupling"};
   return names;
 }
 
@@ -31,9 +34,11 @@ std::vector<std::string> OmniEffectParameters(const std::string& name) {
   if (name == "time_delay") return {"delay"};
   if (name == "velocity_saturation") return {"v_max", "w_max"};
   if (name == "traction_limit") return {"a_max"};
-  if (name == "motor_lag") return {"time_constant"};
-  if (name == "velocity_scale") return {"scale"};
+  if (name == "motor_lag") return {"time_constant", "forward", "sideways", "turn"};
+  if (name == "velocity_scale") return {"scale", "forward", "sideways", "turn"};
   if (name == "rotation_drift") return {"rate"};
+  if (name == "turn_coupling") return {"forward", "sideways"};
+  if (name == "cross_coupling") return {"sideways_per_forward", "forward_per_sideways"};
   return {};
 }
 
@@ -74,11 +79,25 @@ void SetOmniEffect(const std::string& name, const std::map<std::string, double>&
   } else if (name == "traction_limit") {
     effects->a_max = get("a_max", 0, inf, true);
   } else if (name == "motor_lag") {
-    effects->motor_lag = get("time_constant", 0, 10, false);
+    if (parameters.empty()) throw InputError("effect 'motor_lag': needs time_constant or per-axis time constants");
+    effects->motor_lag = parameters.count("time_constant") ? get("time_constant", 0, 10, false) : 0;
+    const char* axes[3] = {"forward", "sideways", "turn"};
+    for (int a = 0; a < 3; ++a) effects->axis_lag[static_cast<std::size_t>(a)] = parameters.count(axes[a]) ? get(axes[a], 0, 10, false) : 0;
   } else if (name == "velocity_scale") {
-    effects->velocity_scale = get("scale", 0.2, 5, false);
+    if (parameters.empty()) throw InputError("effect 'velocity_scale': needs scale or per-axis scales");
+    effects->velocity_scale = parameters.count("scale") ? get("scale", 0.2, 5, false) : 1;
+    const char* axes[3] = {"forward", "sideways", "turn"};
+    for (int a = 0; a < 3; ++a) effects->axis_scale[static_cast<std::size_t>(a)] = parameters.count(axes[a]) ? get(axes[a], 0.02, 5, false) : 1;
   } else if (name == "rotation_drift") {
     effects->rotation_drift = get("rate", -10, 10, false);
+  } else if (name == "turn_coupling") {
+    if (parameters.empty()) throw InputError("effect 'turn_coupling': needs forward, sideways or both");
+    effects->turn_per_forward = parameters.count("forward") ? get("forward", -20, 20, false) : 0;
+    effects->turn_per_sideways = parameters.count("sideways") ? get("sideways", -20, 20, false) : 0;
+  } else if (name == "cross_coupling") {
+    if (parameters.empty()) throw InputError("effect 'cross_coupling': needs sideways_per_forward, forward_per_sideways or both");
+    effects->sideways_per_forward = parameters.count("sideways_per_forward") ? get("sideways_per_forward", -2, 2, false) : 0;
+    effects->forward_per_sideways = parameters.count("forward_per_sideways") ? get("forward_per_sideways", -2, 2, false) : 0;
   }
 }
 
@@ -92,9 +111,34 @@ std::vector<std::pair<std::string, std::map<std::string, double>>> ListOmniEffec
     out.push_back({"velocity_saturation", p});
   }
   if (e.a_max > 0) out.push_back({"traction_limit", {{"a_max", e.a_max}}});
-  if (e.motor_lag > 0) out.push_back({"motor_lag", {{"time_constant", e.motor_lag}}});
-  if (e.velocity_scale != 1) out.push_back({"velocity_scale", {{"scale", e.velocity_scale}}});
+  const char* axes[3] = {"forward", "sideways", "turn"};
+  if (e.motor_lag > 0 || e.axis_lag != std::array<double, 3>{0, 0, 0}) {
+    std::map<std::string, double> p;
+    if (e.motor_lag > 0) p["time_constant"] = e.motor_lag;
+    for (int a = 0; a < 3; ++a)
+      if (e.axis_lag[static_cast<std::size_t>(a)] > 0) p[axes[a]] = e.axis_lag[static_cast<std::size_t>(a)];
+    out.push_back({"motor_lag", p});
+  }
+  if (e.velocity_scale != 1 || e.axis_scale != std::array<double, 3>{1, 1, 1}) {
+    std::map<std::string, double> p;
+    if (e.velocity_scale != 1) p["scale"] = e.velocity_scale;
+    for (int a = 0; a < 3; ++a)
+      if (e.axis_scale[static_cast<std::size_t>(a)] != 1) p[axes[a]] = e.axis_scale[static_cast<std::size_t>(a)];
+    out.push_back({"velocity_scale", p});
+  }
   if (e.rotation_drift != 0) out.push_back({"rotation_drift", {{"rate", e.rotation_drift}}});
+  if (e.turn_per_forward != 0 || e.turn_per_sideways != 0) {
+    std::map<std::string, double> p;
+    if (e.turn_per_forward != 0) p["forward"] = e.turn_per_forward;
+    if (e.turn_per_sideways != 0) p["sideways"] = e.turn_per_sideways;
+    out.push_back({"turn_coupling", p});
+  }
+  if (e.sideways_per_forward != 0 || e.forward_per_sideways != 0) {
+    std::map<std::string, double> p;
+    if (e.sideways_per_forward != 0) p["sideways_per_forward"] = e.sideways_per_forward;
+    if (e.forward_per_sideways != 0) p["forward_per_sideways"] = e.forward_per_sideways;
+    out.push_back({"cross_coupling", p});
+  }
   return out;
 }
 

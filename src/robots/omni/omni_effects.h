@@ -4,15 +4,30 @@
 //
 // Every effect acts where it would on a real robot, above the physics engine, so it
 // works identically on ODE, Bullet and the analytic model:
-//   time_delay          commands reach the firmware `delay` s later (sub-frame resolution)
+//   time_delay          commands reach the firmware `delay` s later (any delay: a command
+//                       falling due within a physics step acts for the rest of that step)
 //   velocity_saturation the firmware clips commands to v_max (m/s) and w_max (rad/s)
 //   motor_lag           the command is followed through a first-order lag of `time_constant` s
 //   traction_limit      the body's horizontal force is limited to m * a_max: acceleration
 //                       beyond a_max (m/s^2) is lost to slip
 //   velocity_scale      the firmware's wheel radius is wrong: the robot moves `scale` times
-//                       as fast as commanded
+//                       as fast as commanded; or per axis (`forward`, `sideways`, `turn`):
+//                       each command component is scaled before the controller sees it
 //   rotation_drift      the robot turns at `rate` rad per metre travelled while translating
+//   turn_coupling       a translation command also turns the robot: `forward`, `sideways`
+//                       rad/s of turn per m/s of forward, sideways command
+//   cross_coupling      forward and sideways leak into each other: `sideways_per_forward`,
+//                       `forward_per_sideways` m/s per m/s
+//
+// The command the firmware acts on is, in this order: the received command late by
+// `time_delay`; mapped by the per-axis scales and the couplings,
+//   [vx', vy', w'] = [[sx, kxy, 0], [kyx, sy, 0], [kwx, kwy, sw]] [vx, vy, w];
+// clipped by velocity_saturation (so v_max and w_max are what the robot reaches);
+// through motor_lag per axis. velocity_scale's `scale` and rotation_drift act on the
+// encoder readings, traction_limit on the wheel torques.
 #pragma once
+
+#include <array>
 
 #include <map>
 #include <string>
@@ -25,10 +40,26 @@ struct OmniEffects {
   double time_delay = 0;      // s; 0 = off
   double v_max = 0;           // m/s; 0 = off (velocity_saturation)
   double w_max = 0;           // rad/s; 0 = off (velocity_saturation)
-  double motor_lag = 0;       // s, time constant; 0 = off
+  double motor_lag = 0;       // s, time constant of every axis; 0 = off
+  std::array<double, 3> axis_lag{0, 0, 0};  // s, motor_lag's forward, sideways, turn where > 0 (over motor_lag)
   double a_max = 0;           // m/s^2; 0 = off (traction_limit)
-  double velocity_scale = 1;  // 1 = off
+  double velocity_scale = 1;  // 1 = off (at the encoders, every axis)
+  std::array<double, 3> axis_scale{1, 1, 1};  // velocity_scale's forward, sideways, turn (on the command); 1 = off
   double rotation_drift = 0;  // rad/m; 0 = off
+  double turn_per_forward = 0;      // rad/s per m/s (turn_coupling `forward`); 0 = off
+  double turn_per_sideways = 0;     // rad/s per m/s (turn_coupling `sideways`); 0 = off
+  double sideways_per_forward = 0;  // m/s per m/s (cross_coupling); 0 = off
+  double forward_per_sideways = 0;  // m/s per m/s (cross_coupling); 0 = off
+
+  // The lag time constant (s) of axis 0 (forward), 1 (sideways) or 2 (turn); 0 = none.
+  double LagOf(int axis) const {
+    return axis_lag[static_cast<std::size_t>(axis)] > 0 ? axis_lag[static_cast<std::size_t>(axis)] : motor_lag;
+  }
+  // True when the per-axis scales or a coupling change the command.
+  bool MapsCommand() const {
+    return axis_scale != std::array<double, 3>{1, 1, 1} || turn_per_forward != 0 || turn_per_sideways != 0 ||
+           sideways_per_forward != 0 || forward_per_sideways != 0;
+  }
 
   // Names (contract vocabulary) of the effects that are on.
   std::vector<std::string> Active() const;

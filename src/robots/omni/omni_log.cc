@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cctype>
+#include <cstdlib>
 #include <sstream>
 
 #include "core/error.h"
@@ -41,24 +43,148 @@ void CheckRowRange(const OmniLogRow& row, const SourceLocation& where) {
 
 }  // namespace
 
-OmniLog OmniLogFromTable(const CsvTable& table) {
-  // The first bad value in these columns is named; other columns are ignored.
-  const std::vector<int> col = table.RequireColumns({"t", "x", "y", "theta", "vx_cmd", "vy_cmd", "omega_cmd"});
+namespace {
+
+// Numbers compare as numbers ("3" is "3.0"), anything else as text, case-insensitively.
+bool SameLabel(const std::string& a, const std::string& b) {
+  char* end_a = nullptr;
+  char* end_b = nullptr;
+  const double x = std::strtod(a.c_str(), &end_a);
+  const double y = std::strtod(b.c_str(), &end_b);
+  if (!a.empty() && !b.empty() && *end_a == '\0' && *end_b == '\0') return x == y;
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char p, char q) {
+           return std::tolower(static_cast<unsigned char>(p)) == std::tolower(static_cast<unsigned char>(q));
+         });
+}
+
+// The rows of `table` that belong to the robot `select` names (all rows when the file
+// holds one robot). Throws InputError when that is ambiguous or matches nothing.
+std::vector<std::size_t> SelectRows(const CsvTable& table, const OmniLogSelector& select, std::string* robot) {
+  int id_column = -1;
+  for (const char* name : {"robot_id", "robot", "id"}) {
+    if (id_column < 0) id_column = table.Column(name);
+  }
+  const int team_column = table.Column("team");
+  std::vector<std::size_t> all(table.rows.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  if (id_column < 0 && team_column < 0) {
+    if (!select.empty()) {
+      throw InputError(SourceLocation{table.path, 1},
+                       "the log has no robot_id, robot, id or team column to select a robot by");
+    }
+    return all;
+  }
+  auto label = [&](int column, std::size_t row) -> std::string {
+    if (column < 0) return "";
+    const auto& text = table.label[static_cast<std::size_t>(column)];
+    return row < text.size() ? text[row] : FormatCsvNumber(table.rows[row][static_cast<std::size_t>(column)]);
+  };
+  auto name_of = [&](std::size_t row) {
+    const std::string team = label(team_column, row), id = label(id_column, row);
+    return team.empty() ? id : id.empty() ? team : team + " " + id;
+  };
+  std::vector<std::string> robots;  // distinct, in order of first appearance
+  std::vector<std::size_t> kept;
+  for (std::size_t i : all) {
+    const std::string name = name_of(i);
+    if (std::find(robots.begin(), robots.end(), name) == robots.end()) robots.push_back(name);
+    const bool match = (select.robot.empty() || SameLabel(label(id_column, i), select.robot)) &&
+                       (select.team.empty() || SameLabel(label(team_column, i), select.team));
+    if (match) kept.push_back(i);
+  }
+  std::string list;
+  for (const auto& r : robots) list += (list.empty() ? "" : ", ") + (r.empty() ? std::string("(blank)") : r);
+  if (kept.empty()) {
+    throw InputError(SourceLocation{table.path, 1}, "no rows for robot '" + (select.team.empty() ? "" : select.team + " ") +
+                                                        select.robot + "' (the log holds: " + list + ")");
+  }
+  std::vector<std::string> chosen;
+  for (std::size_t i : kept) {
+    const std::string name = name_of(i);
+    if (std::find(chosen.begin(), chosen.end(), name) == chosen.end()) chosen.push_back(name);
+  }
+  if (chosen.size() > 1) {
+    throw InputError(SourceLocation{table.path, table.line_of[kept.front()]},
+                     "the log holds " + std::to_string(robots.size()) + " robots (" + list +
+                         "): choose one with --robot ID (and --team TEAM where ids repeat)");
+  }
+  *robot = chosen.front();
+  return kept;
+}
+
+// Marks frames without a new measurement and gives them a pose interpolated in time
+// between the measured frames around them (theta already unwrapped).
+void FillUnmeasured(OmniLog* log) {
+  std::vector<OmniLogRow>& rows = log->rows;
+  std::size_t previous = rows.size();  // the last measured row so far
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (!rows[i].measured) continue;
+    if (previous < rows.size()) {
+      const OmniLogRow& a = rows[previous];
+      for (std::size_t k = previous + 1; k < i; ++k) {
+        const double u = (rows[k].t - a.t) / (rows[i].t - a.t);
+        rows[k].pose = Pose2{a.pose.x + u * (rows[i].pose.x - a.pose.x), a.pose.y + u * (rows[i].pose.y - a.pose.y),
+                             a.pose.theta + u * (rows[i].pose.theta - a.pose.theta)};
+      }
+    } else {
+      for (std::size_t k = 0; k < i; ++k) rows[k].pose = rows[i].pose;
+    }
+    previous = i;
+  }
+  for (std::size_t k = previous + 1; k < rows.size(); ++k) rows[k].pose = rows[previous].pose;
+}
+
+}  // namespace
+
+OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
+  // The first bad value in these columns is named; other columns are ignored. Pose cells
+  // may be empty (a frame without a measurement).
+  std::vector<int> col = table.RequireColumns({"t", "vx_cmd", "vy_cmd", "omega_cmd"});
+  const std::vector<int> pose_col = table.RequireColumns({"x", "y", "theta"}, true);
+  col.insert(col.begin() + 1, pose_col.begin(), pose_col.end());
 
   OmniLog log;
   log.path = table.path;
-  log.line_of = table.line_of;
   if (table.rows.size() < 2)
     throw InputError(SourceLocation{table.path, table.rows.empty() ? 1 : table.line_of[0]},
                      "a log needs at least 2 rows, got " + std::to_string(table.rows.size()));
-  for (std::size_t i = 0; i < table.rows.size(); ++i) {
+  const std::vector<std::size_t> selected = SelectRows(table, select, &log.robot);
+  bool have_measured = false;
+  Pose2 last_raw;
+  for (std::size_t i : selected) {
     const auto& r = table.rows[i];
     OmniLogRow row;
     row.t = r[col[0]];
     row.pose = Pose2{r[col[1]], r[col[2]], r[col[3]]};
     row.command = Twist2{r[col[4]], r[col[5]], r[col[6]]};
+    const int empty = std::isnan(row.pose.x) + std::isnan(row.pose.y) + std::isnan(row.pose.theta);
+    if (empty == 3) {
+      row.measured = false;
+    } else if (empty > 0) {
+      const int c = std::isnan(row.pose.x) ? col[1] : std::isnan(row.pose.y) ? col[2] : col[3];
+      throw InputError(SourceLocation{table.path, table.line_of[i]},
+                       "column '" + table.header[static_cast<std::size_t>(c)] +
+                           "' is empty but the row's other pose cells are not: x, y and theta are all empty (a "
+                           "frame without a measurement) or all numbers");
+    } else if (have_measured && row.pose.x == last_raw.x && row.pose.y == last_raw.y &&
+               row.pose.theta == last_raw.theta) {
+      row.measured = false;  // the camera repeated its last pose
+    }
     CheckRowRange(row, SourceLocation{table.path, table.line_of[i]});
     log.rows.push_back(row);
+    log.line_of.push_back(table.line_of[i]);
+    if (row.measured) {
+      last_raw = row.pose;
+      have_measured = true;
+    }
+  }
+  if (log.rows.size() < 2)
+    throw InputError(SourceLocation{table.path, log.line_of.front()},
+                     "a log needs at least 2 rows, got " + std::to_string(log.rows.size()));
+  if (log.num_measured() == 0) {
+    throw InputError(SourceLocation{table.path, log.line_of.front()},
+                     "no row holds a pose (x, y and theta are empty on every row" +
+                         (log.robot.empty() ? std::string(")") : " of robot " + log.robot + ")"));
   }
 
   std::vector<double> dts;
@@ -67,7 +193,7 @@ OmniLog OmniLogFromTable(const CsvTable& table) {
     if (dt <= 0) {
       std::ostringstream msg;
       msg << "time goes backwards or stands still: t = " << log.rows[i].t << " after " << log.rows[i - 1].t;
-      throw InputError(SourceLocation{table.path, table.line_of[i], 1}, msg.str());
+      throw InputError(SourceLocation{table.path, log.line_of[i], 1}, msg.str());
     }
     dts.push_back(dt);
   }
@@ -78,14 +204,14 @@ OmniLog OmniLogFromTable(const CsvTable& table) {
     std::ostringstream msg;
     msg << "the frame period (the median time between rows) is " << log.frame_period << " s; a camera log has "
         << kMinFramePeriod << " to " << kMaxFramePeriod << " s between frames (is 't' in seconds?)";
-    throw InputError(SourceLocation{table.path, table.line_of[0], 1}, msg.str());
+    throw InputError(SourceLocation{table.path, log.line_of[0], 1}, msg.str());
   }
   const double span = (log.rows.back().t - log.rows.front().t) / log.frame_period;
   if (span > kMaxFrames) {
     std::ostringstream msg;
     msg << "the log spans " << span << " frames of " << log.frame_period << " s; at most " << kMaxFrames
         << " are replayed (split the log)";
-    throw InputError(SourceLocation{table.path, table.line_of.back(), 1}, msg.str());
+    throw InputError(SourceLocation{table.path, log.line_of.back(), 1}, msg.str());
   }
   for (std::size_t i = 0; i < dts.size(); ++i) {
     const double frames = dts[i] / log.frame_period;
@@ -93,25 +219,36 @@ OmniLog OmniLogFromTable(const CsvTable& table) {
       std::ostringstream msg;
       msg << "irregular frame time: " << dts[i] << " s after the previous row, the frame period is "
           << log.frame_period << " s";
-      throw InputError(SourceLocation{table.path, table.line_of[i + 1], 1}, msg.str());
+      throw InputError(SourceLocation{table.path, log.line_of[i + 1], 1}, msg.str());
     }
   }
 
-  // Unwrap theta: successive frames never turn by more than half a turn.
-  for (std::size_t i = 1; i < log.rows.size(); ++i) {
-    const double prev = log.rows[i - 1].pose.theta;
-    log.rows[i].pose.theta = prev + WrapAngle(log.rows[i].pose.theta - prev);
+  // Unwrap theta: successive measurements never turn by more than half a turn.
+  const OmniLogRow* prev = nullptr;
+  for (OmniLogRow& row : log.rows) {
+    if (!row.measured) continue;
+    if (prev) row.pose.theta = prev->pose.theta + WrapAngle(row.pose.theta - prev->pose.theta);
+    prev = &row;
   }
+  FillUnmeasured(&log);
   return log;
+}
+
+int OmniLog::num_measured() const {
+  int n = 0;
+  for (const OmniLogRow& r : rows) n += r.measured;
+  return n;
 }
 
 int OmniLog::FrameIndex(std::size_t row) const {
   return static_cast<int>(std::lround((rows[row].t - rows[0].t) / frame_period));
 }
 
-OmniLog ReadOmniLog(const std::string& path) { return OmniLogFromTable(ReadCsvTable(path)); }
-OmniLog ParseOmniLog(const std::string& text, const std::string& path) {
-  return OmniLogFromTable(ParseCsvTable(text, path));
+OmniLog ReadOmniLog(const std::string& path, const OmniLogSelector& select) {
+  return OmniLogFromTable(ReadCsvTable(path), select);
+}
+OmniLog ParseOmniLog(const std::string& text, const std::string& path, const OmniLogSelector& select) {
+  return OmniLogFromTable(ParseCsvTable(text, path), select);
 }
 
 std::string FormatOmniLog(const std::vector<OmniLogRow>& rows) {
@@ -120,7 +257,7 @@ std::string FormatOmniLog(const std::vector<OmniLogRow>& rows) {
     const double v[] = {r.t, r.pose.x, r.pose.y, r.pose.theta, r.command.vx, r.command.vy, r.command.omega};
     for (int i = 0; i < 7; ++i) {
       if (i) out += ',';
-      out += FormatCsvNumber(v[i]);
+      if (r.measured || i == 0 || i > 3) out += FormatCsvNumber(v[i]);  // no measurement: empty pose cells
     }
     out += '\n';
   }

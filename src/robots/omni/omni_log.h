@@ -2,8 +2,13 @@
 // camera frame, SI units, extra columns ignored. One module reads and writes it.
 //
 // Reading checks every value (file:line:column), that t strictly increases and is
-// nearly uniform (gaps of whole frames, i.e. dropped frames, are fine), and unwraps
-// theta. Writing is atomic and byte-for-byte deterministic.
+// nearly uniform (gaps of whole frames, i.e. dropped frames, are fine; so is jitter of
+// a few per cent of the period), and unwraps theta. A row whose x, y, theta cells are
+// all empty, or whose pose repeats the last measured pose exactly, is a frame with a
+// command and no new measurement (OmniLogRow::measured false): cameras miss frames.
+// A file holding several robots (a `robot_id`, `robot` or `id` column, and optionally
+// `team`) is read for the one robot an OmniLogSelector names. Writing is atomic and
+// byte-for-byte deterministic.
 #pragma once
 
 #include <string>
@@ -19,6 +24,18 @@ struct OmniLogRow {
   double t = 0;     // s
   Pose2 pose;       // field frame, theta unwrapped on reading
   Twist2 command;   // robot frame, sent at t
+  // False for a frame without a new measurement; `pose` is then interpolated in time
+  // between the measured frames around it (held before the first and after the last),
+  // for code that needs a pose, and no fit or score may use it as a measurement.
+  bool measured = true;
+};
+
+// Which robot of a log holding several to read ("" = any). Ids compare as numbers when
+// both are numbers ("3" is "3.0"), else as text; teams as text, case-insensitively.
+struct OmniLogSelector {
+  std::string robot;  // a value of the robot id column
+  std::string team;   // a value of the `team` column
+  bool empty() const { return robot.empty() && team.empty(); }
 };
 
 struct OmniLog {
@@ -26,16 +43,21 @@ struct OmniLog {
   std::vector<OmniLogRow> rows;
   std::vector<int> line_of;  // file line of each row
   double frame_period = 0;   // s, the median time between rows
+  std::string robot;         // which robot of the file, as selected ("" = the file's only one)
 
   // The frame index of row i counted from row 0 (dropped frames leave gaps).
   int FrameIndex(std::size_t row) const;
+  // Rows with a new measurement.
+  int num_measured() const;
 };
 
-// Reads and checks a log; throws InputError "path:line:column: what is wrong".
-// OmniLogFromTable checks a table held in memory (TableFromRows) the same way.
-OmniLog OmniLogFromTable(const CsvTable& table);
-OmniLog ReadOmniLog(const std::string& path);
-OmniLog ParseOmniLog(const std::string& text, const std::string& path);
+// Reads and checks a log; throws InputError "path:line:column: what is wrong", also
+// when the file holds several robots and `select` does not name one of them, or names
+// one it does not hold. OmniLogFromTable checks a table held in memory (TableFromRows)
+// the same way.
+OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select = {});
+OmniLog ReadOmniLog(const std::string& path, const OmniLogSelector& select = {});
+OmniLog ParseOmniLog(const std::string& text, const std::string& path, const OmniLogSelector& select = {});
 
 // The CSV text of a log (header and rows).
 std::string FormatOmniLog(const std::vector<OmniLogRow>& rows);

@@ -105,7 +105,8 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   // Only what is on, with the parameters ListOmniEffects gives (the reader's keys).
   static const std::map<std::string, const char*> kUnits = {
       {"time_delay", "s"},          {"velocity_saturation", "m/s, rad/s"}, {"traction_limit", "m/s^2"},
-      {"motor_lag", "s"},           {"velocity_scale", "times as fast"},   {"rotation_drift", "rad per metre"}};
+      {"motor_lag", "s"},           {"velocity_scale", "times as fast"},   {"rotation_drift", "rad per metre"},
+      {"turn_coupling", "rad/s per m/s"}, {"cross_coupling", "m/s per m/s"}};
   const auto effects = ListOmniEffects(model.effects);
   if (!effects.empty()) s << "effects:\n";
   for (const auto& [name, parameters] : effects) {

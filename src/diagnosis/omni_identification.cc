@@ -1,0 +1,703 @@
+#include "diagnosis/omni_identification.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "analysis/omni_replay.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "diagnosis/diagnosis.h"
+#include "diagnosis/omni_diagnosis.h"
+
+namespace twinsim {
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The estimated parameters besides the delay, in the solver's order.
+enum Param {
+  kGainX, kGainY, kGainW,
+  kLagX, kLagY, kLagW,
+  kSlewX, kSlewY, kSlewW,
+  kTurnX, kTurnY,
+  kCrossYX, kCrossXY,
+  kVMax, kWMax,
+  kDelay,
+  kNumParams
+};
+
+struct ParamSpec {
+  const char* name;
+  const char* key;  // in the model file
+  const char* unit;
+  const char* meaning;
+  double lower, upper;
+  bool log_scale;
+};
+
+const ParamSpec kSpecs[kNumParams] = {
+    {"forward.gain", "effects.velocity_scale.forward", "", "forward speed reached per unit of forward command", 0.05, 3, false},
+    {"sideways.gain", "effects.velocity_scale.sideways", "", "sideways speed reached per unit of sideways command", 0.05, 3, false},
+    {"turn.gain", "effects.velocity_scale.turn", "", "turn rate reached per unit of turn command", 0.05, 3, false},
+    {"forward.lag", "effects.motor_lag.forward", "s", "first-order time constant of the forward response, before the controller", 0.002, 1, true},
+    {"sideways.lag", "effects.motor_lag.sideways", "s", "first-order time constant of the sideways response, before the controller", 0.002, 1, true},
+    {"turn.lag", "effects.motor_lag.turn", "s", "first-order time constant of the turn response, before the controller", 0.002, 1, true},
+    {"forward.slew", "controller.forward.slew_rate", "m/s^2", "the controller's forward set-point ramps at most this fast", 0.05, 200, true},
+    {"sideways.slew", "controller.sideways.slew_rate", "m/s^2", "the controller's sideways set-point ramps at most this fast", 0.05, 200, true},
+    {"turn.slew", "controller.rotation.slew_rate", "rad/s^2", "the controller's turn set-point ramps at most this fast", 0.5, 2000, true},
+    {"turn_coupling.forward", "effects.turn_coupling.forward", "rad/s per m/s", "turn rate per m/s of forward command", -20, 20, false},
+    {"turn_coupling.sideways", "effects.turn_coupling.sideways", "rad/s per m/s", "turn rate per m/s of sideways command", -20, 20, false},
+    {"cross_coupling.sideways_per_forward", "effects.cross_coupling.sideways_per_forward", "", "sideways speed per unit of forward command", -2, 2, false},
+    {"cross_coupling.forward_per_sideways", "effects.cross_coupling.forward_per_sideways", "", "forward speed per unit of sideways command", -2, 2, false},
+    {"velocity_saturation.v_max", "effects.velocity_saturation.v_max", "m/s", "the highest translational speed the robot reaches", 0.05, 20, true},
+    {"velocity_saturation.w_max", "effects.velocity_saturation.w_max", "rad/s", "the highest turn rate the robot reaches", 0.1, 200, true},
+    {"delay", "delay.command_frames + delay.vision_frames + effects.time_delay.delay", "s",
+     "from sending a command to the camera's pose showing its effect (command and vision together)", 0, 2, false},
+};
+
+constexpr double kPieceSeconds = 20;   // s, a log is replayed in pieces this long ...
+constexpr double kLeadInSeconds = 5;   // s, ... each after a lead-in this long, not scored
+constexpr double kStartLag = 0.03;  // s: a lag of 0 has no gradient to start from
+constexpr double kNumericStep = 2e-2;  // relative: the replay's cost is jagged at fine scales (encoder counts, ticks)
+
+// The parameters of a model (physical units); 0 for a limit that is off.
+std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period) {
+  const OmniEffects& fx = m.effects;
+  return {fx.axis_scale[0], fx.axis_scale[1], fx.axis_scale[2], fx.LagOf(0), fx.LagOf(1), fx.LagOf(2),
+          m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
+          fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
+          fx.v_max, fx.w_max, (m.command_delay_frames + m.vision_delay_frames) * frame_period + fx.time_delay};
+}
+
+// `base` with the parameters. The total delay (s) goes into whole frames in `delay:`
+// (the vision's share kept as the model has it while the total allows) and the rest
+// into the time_delay effect; or, with `all_in_effect` (the fit's form, whose replays
+// predict the same rows whatever the delay), all into the effect. Both act alike.
+OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, double frame_period, bool all_in_effect) {
+  const double delay = v[kDelay];
+  OmniEffects& fx = m.effects;
+  for (int a = 0; a < 3; ++a) {
+    fx.axis_scale[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kGainX + a)];
+    fx.axis_lag[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kLagX + a)];
+  }
+  fx.motor_lag = 0;
+  m.controller.forward.slew_rate = v[kSlewX];
+  m.controller.sideways.slew_rate = v[kSlewY];
+  m.controller.rotation.slew_rate = v[kSlewW];
+  fx.turn_per_forward = v[kTurnX];
+  fx.turn_per_sideways = v[kTurnY];
+  fx.sideways_per_forward = v[kCrossYX];
+  fx.forward_per_sideways = v[kCrossXY];
+  fx.v_max = v[kVMax];
+  fx.w_max = v[kWMax];
+  const int frames = all_in_effect ? 0 : static_cast<int>(std::floor(delay / frame_period + 1e-9));
+  m.vision_delay_frames = std::min(m.vision_delay_frames, frames);
+  m.command_delay_frames = frames - m.vision_delay_frames;
+  fx.time_delay = std::max(0.0, delay - frames * frame_period);
+  if (fx.time_delay < 1e-7) fx.time_delay = 0;
+  return m;
+}
+
+// A stretch of one log replayed on its own: a lead-in, where the tracker settles and
+// nothing is scored, then the rows it scores, each in a fit or a held-out block.
+struct Segment {
+  OmniLog log;
+  std::size_t score_from = 0;  // first scored row
+  std::vector<char> held;      // per row: in a held-out block
+  bool validation = false;     // a wholly held-out log
+};
+
+OmniLog SubLog(const OmniLog& log, std::size_t first, std::size_t last) {
+  OmniLog out;
+  out.path = log.path;
+  out.robot = log.robot;
+  out.frame_period = log.frame_period;
+  out.rows.assign(log.rows.begin() + static_cast<long>(first), log.rows.begin() + static_cast<long>(last));
+  out.line_of.assign(log.line_of.begin() + static_cast<long>(first), log.line_of.begin() + static_cast<long>(last));
+  return out;
+}
+
+// Accumulates the three error components of predicted rows.
+struct GapSum {
+  double xy = 0, f = 0, s = 0, w = 0;
+  long n = 0;
+  void Add(const std::array<double, 3>& e) {
+    xy += e[0] * e[0] + e[1] * e[1];
+    f += e[0] * e[0];
+    s += e[1] * e[1];
+    w += e[2] * e[2];
+    ++n;
+  }
+  void Add(const GapSum& o) {
+    xy += o.xy, f += o.f, s += o.s, w += o.w;
+    n += o.n;
+  }
+  OmniGap Gap(const std::string& name) const {
+    OmniGap g;
+    g.name = name;
+    if (n == 0) return g;
+    const double k = 1.0 / static_cast<double>(n);
+    g.rmse = std::sqrt(xy * k);
+    g.pose = std::sqrt((f + s + w) * k);
+    g.forward = std::sqrt(f * k);
+    g.sideways = std::sqrt(s * k);
+    g.turn = std::sqrt(w * k);
+    return g;
+  }
+};
+
+// The constant-velocity extrapolation of the measured poses: frame i predicted from
+// the last two measured frames at or before i - K, at their velocity (field frame).
+OmniReplayResult ConstantVelocity(const OmniLog& log, int horizon, int skip_frames) {
+  OmniReplayResult out;
+  const std::size_t n = log.rows.size();
+  out.t.resize(n);
+  out.pose.resize(n);
+  out.predicted.assign(n, false);
+  std::vector<long> measured;  // rows with a measurement, in order
+  for (std::size_t i = 0; i < n; ++i) {
+    out.t[i] = log.rows[i].t;
+    out.pose[i] = log.rows[i].pose;
+    if (log.rows[i].measured) measured.push_back(static_cast<long>(i));
+  }
+  std::size_t m = 0;  // measured[m] is the first measured row after the start frame
+  for (std::size_t i = 0; i < n; ++i) {
+    const int start = log.FrameIndex(i) - horizon;
+    if (start < skip_frames) continue;
+    while (m < measured.size() && log.FrameIndex(static_cast<std::size_t>(measured[m])) <= start) ++m;
+    if (m < 2) continue;
+    const OmniLogRow& b = log.rows[static_cast<std::size_t>(measured[m - 1])];
+    const OmniLogRow& a = log.rows[static_cast<std::size_t>(measured[m - 2])];
+    const double dt = b.t - a.t, ahead = log.rows[i].t - b.t;
+    out.pose[i] = Pose2{b.pose.x + (b.pose.x - a.pose.x) / dt * ahead, b.pose.y + (b.pose.y - a.pose.y) / dt * ahead,
+                        b.pose.theta + (b.pose.theta - a.pose.theta) / dt * ahead};
+    out.predicted[i] = true;
+  }
+  return out;
+}
+
+class OmniIdentificationProblem {
+ public:
+  OmniIdentificationProblem(const OmniModel& nominal, std::vector<Segment> segments,
+                            const OmniIdentificationOptions& options)
+      : nominal_(nominal), segments_(std::move(segments)), options_(options) {
+    frame_period_ = segments_.front().log.frame_period;
+  }
+
+  double frame_period() const { return frame_period_; }
+  int evaluations() const { return evaluations_; }
+
+  // The model in the fit's form (every delay in the effect), or as written.
+  OmniModel Build(const std::array<double, kNumParams>& v, bool all_in_effect = true) const {
+    return WithValues(nominal_, v, frame_period_, all_in_effect);
+  }
+
+  // The errors of the scored rows of one kind (fit or held out) of every segment, in
+  // segment order; the segments replayed in parallel. Throws CheckFailed when the model
+  // diverges.
+  std::vector<OmniPoseErrors> Errors(const OmniModel& model, bool held_out, int stride) const {
+    std::vector<OmniPoseErrors> out(segments_.size());
+    ParallelFor(static_cast<int>(segments_.size()), options_.threads, [&](int k) {
+      const Segment& s = segments_[static_cast<std::size_t>(k)];
+      if (!held_out && s.validation) return;
+      OmniReplayOptions o;
+      o.backend = options_.backend;
+      o.horizon = options_.horizon;
+      o.stride = stride;
+      const OmniPoseErrors all = PoseErrorsInRobotFrame(s.log, ReplayOmniLog(model, s.log, o), nominal_.chassis_radius);
+      OmniPoseErrors& kept = out[static_cast<std::size_t>(k)];
+      for (std::size_t r = 0; r < all.rows.size(); ++r) {
+        const std::size_t row = all.rows[r];
+        if (row < s.score_from || static_cast<bool>(s.held[row]) != held_out) continue;
+        kept.rows.push_back(row);
+        kept.e.push_back(all.e[r]);
+      }
+    });
+    ++evaluations_;
+    return out;
+  }
+
+  std::vector<double> FitResidual(const std::array<double, kNumParams>& v) const {
+    std::vector<double> r;
+    for (const OmniPoseErrors& e : Errors(Build(v), false, options_.stride)) {
+      for (const auto& x : e.e) r.insert(r.end(), x.begin(), x.end());
+    }
+    return r;
+  }
+
+  // Sum of squared fit residuals; infinity where the model diverges.
+  double Cost(const std::array<double, kNumParams>& v) const {
+    try {
+      double s = 0;
+      for (double x : FitResidual(v)) s += x * x;
+      return s;
+    } catch (const CheckFailed&) {
+      return std::numeric_limits<double>::infinity();
+    }
+  }
+
+  const std::vector<Segment>& segments() const { return segments_; }
+
+ private:
+  OmniModel nominal_;
+  std::vector<Segment> segments_;
+  OmniIdentificationOptions options_;
+  double frame_period_ = 1.0 / 60;
+  mutable int evaluations_ = 0;
+};
+
+// Ceres' view: the free parameters (in the solver's scale) to the fit residual.
+class FitFunctor {
+ public:
+  FitFunctor(const OmniIdentificationProblem* problem, std::array<double, kNumParams> values, std::vector<int> free,
+             std::size_t rows)
+      : problem_(problem), values_(values), free_(std::move(free)), rows_(rows) {}
+
+  std::array<double, kNumParams> Apply(const double* x) const {
+    std::array<double, kNumParams> v = values_;
+    for (std::size_t k = 0; k < free_.size(); ++k) {
+      const ParamSpec& s = kSpecs[free_[k]];
+      v[static_cast<std::size_t>(free_[k])] = s.log_scale ? std::exp(x[k]) : x[k];
+    }
+    return v;
+  }
+
+  bool operator()(double const* const* x, double* residual) const {
+    try {
+      const std::vector<double> r = problem_->FitResidual(Apply(x[0]));
+      if (r.size() != rows_) return false;
+      std::copy(r.begin(), r.end(), residual);
+      return true;
+    } catch (const CheckFailed&) {
+      return false;
+    }
+  }
+
+ private:
+  const OmniIdentificationProblem* problem_;
+  std::array<double, kNumParams> values_;
+  std::vector<int> free_;
+  std::size_t rows_;
+};
+
+struct SolveResult {
+  std::array<double, kNumParams> values;
+  std::vector<double> standard_error;  // per free parameter, physical units; NaN: undetermined
+  int iterations = 0;
+  double cost = 0;
+  std::size_t rows = 0;
+};
+
+// Least squares over the free parameters (the delay up to max_delay s); with
+// `covariance`, the standard errors too.
+SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<double, kNumParams>& start,
+                  const std::vector<int>& free, double max_delay, int max_iterations, bool covariance) {
+  SolveResult out;
+  out.values = start;
+  const std::size_t rows = problem.FitResidual(start).size();
+  if (rows == 0) throw CheckFailed("no fit rows to identify from");
+  out.rows = rows;
+  std::vector<double> x;
+  for (int p : free) {
+    const ParamSpec& s = kSpecs[p];
+    const double v = std::clamp(start[static_cast<std::size_t>(p)], s.lower, p == kDelay ? max_delay : s.upper);
+    x.push_back(s.log_scale ? std::log(v) : v);
+  }
+  ceres::NumericDiffOptions diff;
+  diff.relative_step_size = kNumericStep;
+  auto* functor = new FitFunctor(&problem, start, free, rows);
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<FitFunctor, ceres::FORWARD>(functor, ceres::TAKE_OWNERSHIP, diff);
+  cost->AddParameterBlock(static_cast<int>(x.size()));
+  cost->SetNumResiduals(static_cast<int>(rows));
+  ceres::Problem ceres_problem;
+  ceres_problem.AddResidualBlock(cost, nullptr, x.data());
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    const ParamSpec& s = kSpecs[free[k]];
+    ceres_problem.SetParameterLowerBound(x.data(), static_cast<int>(k), s.log_scale ? std::log(s.lower) : s.lower);
+    const double upper = free[k] == kDelay ? max_delay : s.upper;
+    ceres_problem.SetParameterUpperBound(x.data(), static_cast<int>(k), s.log_scale ? std::log(upper) : upper);
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = max_iterations;
+  options.function_tolerance = 1e-6;
+  options.parameter_tolerance = 1e-5;
+  options.num_threads = 1;  // the functor runs the segments in parallel itself, deterministically
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &ceres_problem, &summary);
+  out.values = functor->Apply(x.data());
+  out.iterations = static_cast<int>(summary.iterations.size());
+  out.cost = 2 * summary.final_cost;
+  out.standard_error.assign(free.size(), kNaN);
+  if (!covariance) return out;
+
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = 0;  // fail rather than hide an undetermined direction
+  co.min_reciprocal_condition_number = 1e-12;
+  ceres::Covariance cov(co);
+  std::vector<std::pair<const double*, const double*>> blocks = {{x.data(), x.data()}};
+  if (!cov.Compute(blocks, &ceres_problem)) return out;
+  std::vector<double> c(free.size() * free.size());
+  if (!cov.GetCovarianceBlock(x.data(), x.data(), c.data())) return out;
+  // Ceres' covariance is for unit-variance residuals: scale by the residual's variance,
+  // and by its correlation length (overlapping predictions are not independent rows).
+  std::vector<double> r = problem.FitResidual(out.values);
+  double ss = 0;
+  for (double v : r) ss += v * v;
+  const double dof = std::max(1.0, static_cast<double>(r.size()) - static_cast<double>(free.size()));
+  std::vector<double> forward;
+  for (std::size_t k = 0; k < r.size(); k += 3) forward.push_back(r[k]);
+  const double correlation = std::max(1, CorrelationLength(forward, 200));
+  const double scale = ss / dof * correlation;
+  for (std::size_t k = 0; k < free.size(); ++k) {
+    const double var = c[k * free.size() + k] * scale;
+    const ParamSpec& s = kSpecs[free[k]];
+    const double v = out.values[static_cast<std::size_t>(free[k])];
+    out.standard_error[k] = std::sqrt(std::max(0.0, var)) * (s.log_scale ? v : 1.0);  // delta method
+  }
+  return out;
+}
+
+// The delay (s) with the lowest fit cost on a grid, and the profile.
+double ProfileDelay(const OmniIdentificationProblem& problem, std::array<double, kNumParams> v, double from,
+                    double to, double step, std::vector<double>* grid, std::vector<double>* cost) {
+  double best = from, best_cost = std::numeric_limits<double>::infinity();
+  const int n = static_cast<int>(std::floor((to - from) / step + 1e-9)) + 1;
+  for (int k = 0; k < n; ++k) {
+    const double d = std::max(0.0, from + k * step);
+    v[kDelay] = d;
+    const double c = problem.Cost(v);
+    if (grid) {
+      grid->push_back(d);
+      cost->push_back(c);
+    }
+    if (c < best_cost) {
+      best_cost = c;
+      best = d;
+    }
+  }
+  return best;
+}
+
+// The robot's body velocity from measured poses (central differences over measured
+// neighbours), the command sent `delay` (s) earlier, and the nominal and identified
+// models' free-run body velocity, for the report's plots over one held-out stretch.
+OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal, const OmniModel& identified,
+                                    const std::string& backend, double delay) {
+  OmniIdentificationSeries s;
+  s.log = log.path;
+  const std::size_t n = log.rows.size();
+  if (n < 8) return s;
+  OmniReplayOptions o;
+  o.backend = backend;
+  o.horizon = 1;
+  const OmniReplayResult rn = ReplayOmniLog(nominal, log, o);
+  const OmniReplayResult ri = ReplayOmniLog(identified, log, o);
+  auto body = [&](const Pose2& a, const Pose2& b, double dt, double theta) {
+    const Twist2 v = FieldToBody(Twist2{(b.x - a.x) / dt, (b.y - a.y) / dt, (b.theta - a.theta) / dt}, theta);
+    return std::array<double, 3>{v.vx, v.vy, v.omega};
+  };
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    if (!rn.predicted[i] || !ri.predicted[i] || !log.rows[i].measured || !log.rows[i - 1].measured ||
+        !log.rows[i + 1].measured)
+      continue;
+    const OmniLogRow& a = log.rows[i - 1];
+    const OmniLogRow& b = log.rows[i + 1];
+    s.t.push_back(log.rows[i].t);
+    s.measured.push_back(body(a.pose, b.pose, b.t - a.t, log.rows[i].pose.theta));
+    const double h = log.rows[i].t - a.t;
+    s.nominal.push_back(body(a.pose, rn.pose[i], h, a.pose.theta));
+    s.identified.push_back(body(a.pose, ri.pose[i], h, a.pose.theta));
+    std::size_t j = i;
+    while (j > 0 && log.rows[j].t > log.rows[i].t - delay + 1e-9) --j;
+    const Twist2& c = log.rows[j].command;
+    s.command.push_back({c.vx, c.vy, c.omega});
+  }
+  return s;
+}
+
+}  // namespace
+
+bool OmniIdentificationOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& s) {
+    if (why) *why = s;
+    return false;
+  };
+  if (horizon < 1 || horizon > 60) return fail("--horizon must be 1 to 60 frames, got " + std::to_string(horizon));
+  if (!(held_out > 0 && held_out < 1)) return fail("--held-out must lie strictly between 0 and 1");
+  if (!(block_seconds >= 0 && block_seconds <= 3600)) return fail("--block must be 0 (automatic) to 3600 s");
+  if (stride < 1 || stride > 60) return fail("--stride must be 1 to 60 frames, got " + std::to_string(stride));
+  if (max_iterations < 1 || max_iterations > 1000) return fail("--max-iterations must be 1 to 1000");
+  if (!(max_delay > 0 && max_delay <= 2)) return fail("--max-delay must be above 0 and at most 2 s");
+  if (threads < 0) return fail("--threads must be 0 (one per core) or more");
+  if (backend == "learned") return fail("--backend: identification fits a physical model (analytic, ode or bullet)");
+  return true;
+}
+
+const OmniGap* OmniIdentificationReport::Gap(const std::vector<OmniGap>& gaps, const std::string& name) const {
+  for (const OmniGap& g : gaps)
+    if (g.name == name) return &g;
+  return nullptr;
+}
+
+OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vector<OmniLog>& logs,
+                                      const std::vector<OmniLog>& validation, const OmniIdentificationOptions& options,
+                                      OmniModel* identified,
+                                      const std::function<void(int, int, const std::string&)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  if (logs.empty()) throw InputError("identify needs at least one log");
+  auto say = [&](int step, const std::string& what) {
+    if (progress) progress(step, 6, what);
+  };
+  const double period = logs.front().frame_period;
+  for (const auto* set : {&logs, &validation}) {
+    for (const OmniLog& log : *set) {
+      if (std::abs(log.frame_period - period) > 0.01 * period) {
+        throw InputError(SourceLocation{log.path, 1},
+                         "the log's frame period differs from the first log's: identify logs of one camera rate together");
+      }
+    }
+  }
+
+  // Time blocks, some held out from the fit. Each log is replayed in pieces of
+  // kPieceSeconds (in parallel), each with a lead-in of kLeadInSeconds that is not
+  // scored: the tracker's hidden state (a slew-limited set-point, a lag) needs that long
+  // to forget its start.
+  std::vector<double> durations;
+  for (const OmniLog& log : logs) durations.push_back(log.rows.back().t - log.rows.front().t);
+  DiagnosisOptions blocks;
+  blocks.block_seconds = options.block_seconds;
+  const double block = DiagnosisBlockSeconds(blocks, durations);
+  std::vector<Segment> segments;
+  for (const OmniLog& log : logs) {
+    std::vector<double> t;
+    for (const OmniLogRow& r : log.rows) t.push_back(r.t - log.rows.front().t);
+    CheckLogHoldsOut(t, 0, block, options.held_out, log.path);
+    for (double from = 0; from < t.back(); from += kPieceSeconds) {
+      const std::size_t first = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from - kLeadInSeconds) - t.begin());
+      const std::size_t score = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from) - t.begin());
+      std::size_t last = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from + kPieceSeconds) - t.begin());
+      if (t.back() - (from + kPieceSeconds) < kPieceSeconds / 2) {
+        last = t.size();  // a short tail joins this piece
+        from = t.back();
+      }
+      Segment s;
+      s.log = SubLog(log, first, last);
+      s.score_from = score - first;
+      for (std::size_t i = first; i < last; ++i) s.held.push_back(InHeldOutBlock(t[i], block, options.held_out));
+      if (s.log.num_measured() >= 2 && last - first > 2) segments.push_back(std::move(s));
+    }
+  }
+  for (const OmniLog& log : validation) {
+    Segment s;
+    s.log = log;
+    s.held.assign(log.rows.size(), 1);
+    s.validation = true;
+    segments.push_back(std::move(s));
+  }
+
+  OmniIdentificationProblem problem(nominal, segments, options);
+  OmniIdentificationReport report;
+  report.model_name = nominal.name;
+  for (const OmniLog& log : logs) report.logs.push_back(log.path);
+  for (const OmniLog& log : validation) report.validation_logs.push_back(log.path);
+  report.backend = options.backend;
+  report.horizon = options.horizon;
+  report.frame_period = period;
+  report.block_seconds = block;
+  report.held_out_share = options.held_out;
+
+  // Start: the model's values; a lag to move from; no limits (added below if reached).
+  std::array<double, kNumParams> v = ValuesOf(nominal, period);
+  const std::array<double, kNumParams> nominal_values = v;
+  for (int a = 0; a < 3; ++a) {
+    double& lag = v[static_cast<std::size_t>(kLagX + a)];
+    if (lag <= 0) lag = kStartLag;
+  }
+  for (int p : {kSlewX, kSlewY, kSlewW}) {
+    if (v[static_cast<std::size_t>(p)] <= 0) v[static_cast<std::size_t>(p)] = kSpecs[p].upper;
+  }
+  const double nominal_cost = problem.Cost(nominal_values);
+  if (!std::isfinite(nominal_cost)) throw CheckFailed("the model as given diverges on the logs");
+
+  // 1. The delay on a half-frame grid with the model's response (a lag to start from):
+  // the fit below is local, and the cost has a valley per frame of delay.
+  say(0, "delay profile");
+  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, &report.delay_profile_s,
+                           &report.delay_profile_rms);
+  // 2. Everything but the speed limits, the delay included (a command falling due
+  // within a physics step acts for its rest, so the cost is smooth in the delay).
+  std::vector<int> free;
+  for (int p = 0; p < kNumParams; ++p)
+    if (p != kVMax && p != kWMax) free.push_back(p);
+  say(1, "delay, response and couplings");
+  SolveResult solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
+  v = solved.values;
+  report.solver_iterations += solved.iterations;
+  // 3. A neighbouring valley of the delay, now that the response fits.
+  say(2, "delay profile again");
+  {
+    double base = problem.Cost(v);
+    std::array<double, kNumParams> trial = v;
+    trial[kDelay] = ProfileDelay(problem, v, std::max(0.0, v[kDelay] - 2 * period), v[kDelay] + 2 * period, period / 2,
+                                 nullptr, nullptr);
+    if (problem.Cost(trial) < 0.99 * base) {
+      solved = Solve(problem, trial, free, options.max_delay, options.max_iterations, false);
+      if (solved.cost < base) v = solved.values;
+      report.solver_iterations += solved.iterations;
+    }
+  }
+
+  // 4. Speed limits, where the commands go beyond what the robot reached: each is kept
+  // when it lowers the fit error by more than 1 %.
+  say(3, "speed limits");
+  std::vector<double> speeds, turns;
+  for (const OmniLog& log : logs) {
+    for (const OmniLogRow& r : log.rows) {
+      const Twist2& c = r.command;
+      speeds.push_back(std::hypot(v[kGainX] * c.vx + v[kCrossXY] * c.vy, v[kGainY] * c.vy + v[kCrossYX] * c.vx));
+      turns.push_back(std::abs(v[kGainW] * c.omega + v[kTurnX] * c.vx + v[kTurnY] * c.vy));
+    }
+  }
+  std::sort(speeds.begin(), speeds.end());
+  std::sort(turns.begin(), turns.end());
+  double base_cost = problem.Cost(v);
+  for (int p : {kVMax, kWMax}) {
+    const std::vector<double>& sorted = p == kVMax ? speeds : turns;
+    double best_cost = base_cost, best_limit = 0;
+    for (double q : {0.6, 0.75, 0.85, 0.92, 0.97}) {
+      const double limit = sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
+      if (limit < kSpecs[p].lower) continue;
+      std::array<double, kNumParams> trial = v;
+      trial[static_cast<std::size_t>(p)] = limit;
+      const double c = problem.Cost(trial);
+      if (c < best_cost) {
+        best_cost = c;
+        best_limit = limit;
+      }
+    }
+    if (best_limit > 0 && best_cost < 0.99 * base_cost) {
+      v[static_cast<std::size_t>(p)] = best_limit;
+      free.push_back(p);
+      base_cost = best_cost;
+    }
+  }
+  // 5. All together, with the standard errors.
+  say(4, "final fit and standard errors");
+  solved = Solve(problem, v, free, options.max_delay, options.max_iterations, true);
+  v = solved.values;
+  report.solver_iterations += solved.iterations;
+  // A limit the fit pushed beyond every command the robot got is no limit.
+  for (int p : {kVMax, kWMax}) {
+    const std::vector<double>& sorted = p == kVMax ? speeds : turns;
+    if (v[static_cast<std::size_t>(p)] > 0 && v[static_cast<std::size_t>(p)] >= sorted.back()) v[static_cast<std::size_t>(p)] = 0;
+  }
+  const OmniModel model = problem.Build(v, false);
+  if (identified) *identified = model;
+
+  // Parameters for the report, the delay first.
+  for (int p : {static_cast<int>(kDelay), 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14}) {
+    IdentifiedParameter q;
+    const ParamSpec& s = kSpecs[p];
+    q.name = s.name;
+    q.key = s.key;
+    q.unit = s.unit;
+    q.meaning = s.meaning;
+    q.nominal = nominal_values[static_cast<std::size_t>(p)];
+    q.value = v[static_cast<std::size_t>(p)];
+    const auto it = std::find(free.begin(), free.end(), p);
+    q.estimated = it != free.end();
+    if (q.estimated) {
+      q.standard_error = solved.standard_error[static_cast<std::size_t>(it - free.begin())];
+      if (!std::isfinite(q.standard_error)) q.note = "not determined by these logs alone (the fit's covariance is singular)";
+    }
+    if ((p == kVMax || p == kWMax) && q.value == 0) {
+      q.estimated = false;
+      q.note = "no limit: the robot reached what it was commanded";
+    }
+    if (p == kDelay) {
+      q.note = "a log of commands and poses holds only the total; the model keeps its vision frames (" +
+               std::to_string(model.vision_delay_frames) + ") and puts the rest on the command side";
+    }
+    report.parameters.push_back(q);
+  }
+  bool any_undetermined = false;
+  for (const auto& q : report.parameters) any_undetermined = any_undetermined || (q.estimated && !std::isfinite(q.standard_error));
+  if (any_undetermined) {
+    report.notes.push_back("the fit's covariance is singular: some parameters trade off against each other on these logs "
+                           "(drive every axis, alone and together, at several speeds to separate them)");
+  }
+
+  // 6. Gaps on the held-out blocks and the validation logs.
+  say(5, "held-out gaps");
+  auto gaps = [&](bool validation_only) {
+    std::vector<OmniGap> out;
+    GapSum n, i, c;
+    for (const Segment& s : segments) {
+      if (s.validation != validation_only) continue;
+      OmniReplayOptions o;
+      o.backend = options.backend;
+      o.horizon = options.horizon;
+      const double r = nominal.chassis_radius;
+      // Every predictor scored on the same rows: the held-out ones all three predict.
+      OmniReplayResult rn = ReplayOmniLog(nominal, s.log, o);
+      OmniReplayResult ri = ReplayOmniLog(model, s.log, o);
+      OmniReplayResult cv = ConstantVelocity(s.log, options.horizon, 0);
+      const int skip = nominal.command_delay_frames + nominal.vision_delay_frames + kWarmUpFrames;
+      for (std::size_t row = 0; row < cv.predicted.size(); ++row) {
+        const bool scored = rn.predicted[row] && ri.predicted[row] && cv.predicted[row] && s.held[row] &&
+                            row >= s.score_from && static_cast<int>(row) >= skip;
+        cv.predicted[row] = rn.predicted[row] = ri.predicted[row] = scored;
+      }
+      for (const auto& e : PoseErrorsInRobotFrame(s.log, rn, r).e) n.Add(e);
+      for (const auto& e : PoseErrorsInRobotFrame(s.log, ri, r).e) i.Add(e);
+      for (const auto& e : PoseErrorsInRobotFrame(s.log, cv, r).e) c.Add(e);
+    }
+    if (n.n == 0) return out;
+    out.push_back(n.Gap("nominal model"));
+    out.push_back(i.Gap("identified model"));
+    out.push_back(c.Gap("constant velocity"));
+    if (!validation_only) report.held_out_rows = static_cast<int>(i.n);
+    return out;
+  };
+  report.held_out = gaps(false);
+  if (!validation.empty()) report.validation = gaps(true);
+  for (const OmniPoseErrors& e : problem.Errors(model, false, options.stride)) report.fit_rows += static_cast<int>(e.rows.size());
+  const double fit_n = std::max(1, report.fit_rows);
+  report.fit_cost_nominal = std::sqrt(nominal_cost / fit_n);
+  report.fit_cost_identified = std::sqrt(problem.Cost(v) / fit_n);
+  std::vector<OmniLog> all = logs;
+  all.insert(all.end(), validation.begin(), validation.end());
+  report.noise_floor = OmniNoiseFloor(all, nominal.chassis_radius);
+  for (std::size_t k = 0; k < report.delay_profile_rms.size(); ++k) {
+    report.delay_profile_rms[k] = std::sqrt(report.delay_profile_rms[k] / fit_n);
+  }
+  const OmniGap* ident = report.Gap(report.held_out, "identified model");
+  const OmniGap* cv = report.Gap(report.held_out, "constant velocity");
+  if (ident && cv && ident->rmse >= cv->rmse) {
+    report.notes.push_back("the identified model predicts no better than extrapolating the measured poses at constant "
+                           "velocity on the held-out blocks: the robot does something the model's structure cannot "
+                           "express (run diagnose on the identified model, and compare with a learned predictor)");
+  }
+  for (const Segment& s : segments) {
+    if (!s.validation) {
+      report.series.push_back(MakeSeries(s.log, nominal, model, options.backend, v[kDelay]));
+      break;
+    }
+  }
+  report.evaluations = problem.evaluations();
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  say(6, "done");
+  return report;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,125 @@
+// Identification of an omni robot from its own logs (`twinsim identify` with an omni
+// model; docs/identification.md, "The omni robot").
+//
+// A model written from a data sheet gets the robot's response to its commands wrong:
+// the delay, how much of each command the robot reaches and how fast, what a sideways
+// command does to the heading. Identification estimates those as physical parameters
+// of the model file, so that every engine (analytic, ODE, Bullet) runs the result:
+//   - the total delay from command to observed pose, in time (whole frames in `delay:`,
+//     the rest as the `time_delay` effect; shorter or longer than the model's);
+//   - per axis (forward, sideways, turn): the share of the command reached
+//     (velocity_scale), the set-point's ramp (controller.*.slew_rate), a first-order lag
+//     beyond the controller's (motor_lag), and the speed limits (velocity_saturation)
+//     where the log reaches them;
+//   - the couplings between axes: turn per forward and per sideways command
+//     (turn_coupling), forward and sideways leaking into each other (cross_coupling).
+// The score is the contract's replay: each frame predicted from the measured state
+// `horizon` frames earlier. The parameters minimise the prediction error on the fit
+// blocks of the logs (Ceres, numeric derivatives through the engine); the delay, whose
+// effect moves in physics steps, by a profile search around them. Held-out blocks, each
+// replayed on its own so nothing of them reaches the fit, give the gaps, beside
+// the constant-velocity extrapolation of the measured poses (no model at all).
+//
+//   OmniIdentificationOptions options;
+//   OmniModel identified;
+//   OmniIdentificationReport report = IdentifyOmni(nominal, logs, options, &identified);
+#pragma once
+
+#include <array>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "robots/omni/omni_log.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+struct OmniIdentificationOptions {
+  std::string backend = "analytic";  // the physics that replays the model
+  int horizon = 4;                   // frames predicted ahead (the contract's replay K)
+  double held_out = 0.3;             // share of each log's time blocks held out from the fit
+  double block_seconds = 0;          // s; 0 = automatic (a 20th of the longest log, 0.5 to 10 s)
+  int stride = 2;                    // the fit predicts from every stride-th frame
+  int max_iterations = 40;           // Ceres iterations per solve
+  double max_delay = 0.35;           // s, the longest total delay searched
+  int threads = 0;                   // 0 = one per core; results do not depend on it
+
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
+};
+
+// One estimated parameter, as report.json lists it.
+struct IdentifiedParameter {
+  std::string name;     // "forward.gain", "delay", ...
+  std::string key;      // where it lives in the model file ("effects.velocity_scale.forward", ...)
+  std::string unit;     // "s", "m/s^2", "" for ratios
+  std::string meaning;  // one sentence
+  double nominal = 0;   // the given model's value
+  double value = 0;     // the estimate
+  // One standard error (the fit's covariance, scaled by the residual's variance and its
+  // correlation length); NaN where the log does not determine the parameter.
+  double standard_error = std::numeric_limits<double>::quiet_NaN();
+  bool estimated = true;  // false: not excited by the log (e.g. a limit never reached); value is the model's
+  std::string note;       // why not estimated, or what limits it
+};
+
+// Held-out prediction error of one predictor, per axis and in all.
+struct OmniGap {
+  std::string name;    // "nominal model", "identified model", "constant velocity"
+  double rmse = 0;     // m, position error of the `horizon`-frame prediction
+  double pose = 0;     // m, sqrt(dx^2 + dy^2 + (r dtheta)^2), the diagnosis's metric
+  double forward = 0, sideways = 0, turn = 0;  // m, RMS per axis (turn: r dtheta)
+};
+
+// One stretch for the report's plots: measured body velocity against command, nominal
+// and identified, per axis.
+struct OmniIdentificationSeries {
+  std::string log;
+  std::vector<double> t;  // s
+  std::vector<std::array<double, 3>> command, measured, nominal, identified;  // forward, sideways, turn
+};
+
+struct OmniIdentificationReport {
+  std::string model_name;
+  std::vector<std::string> logs;
+  std::vector<std::string> validation_logs;  // wholly held out
+  std::string backend;
+  int horizon = 4;
+  double frame_period = 0;    // s
+  double block_seconds = 0;   // s
+  double held_out_share = 0;
+  int fit_rows = 0, held_out_rows = 0;
+  std::vector<IdentifiedParameter> parameters;
+  // On the held-out blocks (and the validation logs): nominal, identified, constant velocity.
+  std::vector<OmniGap> held_out;
+  std::vector<OmniGap> validation;  // empty without validation logs
+  double fit_cost_nominal = 0, fit_cost_identified = 0;  // m, RMS of the fit residual
+  double noise_floor = 0;     // m, the pose metric a perfect model reaches (camera noise)
+  std::vector<double> delay_profile_s, delay_profile_rms;  // s, m: the fit error against the delay
+  int solver_iterations = 0;
+  int evaluations = 0;        // replays of the fit blocks
+  std::vector<std::string> notes;
+  std::vector<OmniIdentificationSeries> series;
+  double seconds = 0;
+
+  const OmniGap* Gap(const std::vector<OmniGap>& gaps, const std::string& name) const;
+};
+
+// Identifies `nominal` on `logs` (fit and held-out blocks) and scores it on `validation`
+// (wholly held out; may be empty). *identified receives the model. Throws InputError for
+// invalid options, logs of different frame rates or too short to hold blocks out;
+// CheckFailed when the model diverges at the start.
+OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vector<OmniLog>& logs,
+                                      const std::vector<OmniLog>& validation, const OmniIdentificationOptions& options,
+                                      OmniModel* identified,
+                                      const std::function<void(int, int, const std::string&)>& progress = {});
+
+// The report as JSON, a plain-text table, and a self-contained HTML page.
+std::string FormatOmniIdentificationJson(const OmniIdentificationReport& report);
+std::string FormatOmniIdentificationTable(const OmniIdentificationReport& report);
+class Renderer;
+std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& report, Renderer& renderer);
+
+}  // namespace twinsim

@@ -1,0 +1,244 @@
+// report.json, the terminal table and report.html of an omni identification.
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "diagnosis/omni_identification.h"
+#include "io/html_text.h"
+#include "render/plot.h"
+
+namespace twinsim {
+namespace {
+
+using ordered_json = nlohmann::ordered_json;
+
+std::string Num(double v, const char* format = "%.4g") {
+  if (!std::isfinite(v)) return "n/a";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+ordered_json Finite(double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); }
+
+ordered_json GapsJson(const std::vector<OmniGap>& gaps) {
+  ordered_json out = ordered_json::array();
+  for (const OmniGap& g : gaps) {
+    ordered_json x;
+    x["name"] = g.name;
+    x["position_rmse"] = g.rmse;
+    x["pose_rms"] = g.pose;
+    x["forward_rms"] = g.forward;
+    x["sideways_rms"] = g.sideways;
+    x["turn_rms"] = g.turn;
+    out.push_back(x);
+  }
+  return out;
+}
+
+// "identified 6.1 mm: 0.52x the constant-velocity extrapolation's 11.8 mm"
+std::string Verdict(const OmniIdentificationReport& r) {
+  const std::vector<OmniGap>& gaps = r.validation.empty() ? r.held_out : r.validation;
+  const OmniGap* n = r.Gap(gaps, "nominal model");
+  const OmniGap* i = r.Gap(gaps, "identified model");
+  const OmniGap* c = r.Gap(gaps, "constant velocity");
+  if (!n || !i || !c) return "no held-out rows to score on";
+  std::ostringstream s;
+  s << "On " << (r.validation.empty() ? "the held-out blocks" : "the validation logs") << ", the " << r.horizon
+    << "-frame position error is " << Num(1000 * i->rmse, "%.3g") << " mm identified against " << Num(1000 * n->rmse, "%.3g")
+    << " mm nominal and " << Num(1000 * c->rmse, "%.3g") << " mm for constant-velocity extrapolation: the identified model "
+    << (i->rmse < c->rmse ? "beats" : "does not beat") << " having no model at all (" << Num(i->rmse / c->rmse, "%.2f")
+    << "x).";
+  return s.str();
+}
+
+SeriesPlot AxisPlot(const OmniIdentificationSeries& s, int axis, bool against_command) {
+  static const char* names[3] = {"forward", "sideways", "turn"};
+  static const char* units[3] = {"m/s", "m/s", "rad/s"};
+  SeriesPlot plot;
+  plot.title = std::string(names[axis]) + (against_command ? ": velocity against the command" : ": velocity over a held-out stretch");
+  plot.y_label = std::string(names[axis]) + " velocity [" + units[axis] + "]";
+  plot.height = 420;
+  auto column = [&](const std::vector<std::array<double, 3>>& v) {
+    std::vector<double> out;
+    for (const auto& x : v) out.push_back(x[static_cast<std::size_t>(axis)]);
+    return out;
+  };
+  if (against_command) {
+    plot.x_label = "command [" + std::string(units[axis]) + "]";
+    plot.width = 600;
+    plot.height = 480;
+    PlotSeries m{"measured", column(s.command), column(s.measured), true};
+    m.color = 0x999999;
+    plot.series.push_back(m);
+    plot.series.push_back({"nominal model", column(s.command), column(s.nominal), true});
+    plot.series.push_back({"identified model", column(s.command), column(s.identified), true});
+  } else {
+    PlotSeries m{"measured", s.t, column(s.measured), false};
+    m.color = 0x999999;
+    plot.series.push_back(m);
+    plot.series.push_back({"command", s.t, column(s.command), false});
+    plot.series.push_back({"nominal model", s.t, column(s.nominal), false});
+    plot.series.push_back({"identified model", s.t, column(s.identified), false});
+  }
+  return plot;
+}
+
+}  // namespace
+
+std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
+  ordered_json j;
+  j["robot"] = "omni";
+  j["model"] = r.model_name;
+  j["metric"] = "RMS over held-out frames of the " + std::to_string(r.horizon) +
+                "-frame prediction's position error (m); pose_rms adds the heading error at the chassis rim";
+  j["verdict"] = Verdict(r);
+  j["held_out"] = GapsJson(r.held_out);
+  if (!r.validation.empty()) j["validation"] = GapsJson(r.validation);
+  j["noise_floor"] = r.noise_floor;
+  j["fit_rms_nominal"] = r.fit_cost_nominal;
+  j["fit_rms_identified"] = r.fit_cost_identified;
+  ordered_json params = ordered_json::array();
+  for (const IdentifiedParameter& p : r.parameters) {
+    ordered_json x;
+    x["name"] = p.name;
+    x["key"] = p.key;
+    x["unit"] = p.unit;
+    x["nominal"] = p.nominal;
+    x["value"] = p.value;
+    x["standard_error"] = Finite(p.standard_error);
+    x["estimated"] = p.estimated;
+    x["meaning"] = p.meaning;
+    if (!p.note.empty()) x["note"] = p.note;
+    params.push_back(x);
+  }
+  j["parameters"] = params;
+  ordered_json profile = ordered_json::array();
+  for (std::size_t k = 0; k < r.delay_profile_s.size(); ++k) {
+    profile.push_back({{"delay", r.delay_profile_s[k]}, {"fit_rms", Finite(r.delay_profile_rms[k])}});
+  }
+  j["delay_profile"] = profile;
+  j["backend"] = r.backend;
+  j["horizon"] = r.horizon;
+  j["frame_period"] = r.frame_period;
+  j["block_seconds"] = r.block_seconds;
+  j["held_out_share"] = r.held_out_share;
+  j["fit_rows"] = r.fit_rows;
+  j["held_out_rows"] = r.held_out_rows;
+  j["logs"] = r.logs;
+  j["validation_logs"] = r.validation_logs;
+  j["solver_iterations"] = r.solver_iterations;
+  j["replays"] = r.evaluations;
+  j["notes"] = r.notes;
+  return j.dump(2) + "\n";
+}
+
+std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
+  std::ostringstream s;
+  char line[256];
+  std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s\n", "parameter", "nominal", "identified", "std. error", "unit");
+  s << line;
+  for (const IdentifiedParameter& p : r.parameters) {
+    std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s%s\n", p.name.c_str(), Num(p.nominal).c_str(),
+                  p.estimated ? Num(p.value).c_str() : "-", p.estimated ? Num(p.standard_error, "%.2g").c_str() : "",
+                  p.unit.c_str(), p.estimated || p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
+    s << line;
+  }
+  auto table = [&](const char* title, const std::vector<OmniGap>& gaps) {
+    if (gaps.empty()) return;
+    s << title << ", " << r.horizon << "-frame prediction error:\n";
+    std::snprintf(line, sizeof line, "  %-20s %14s %12s %12s %12s\n", "", "position [mm]", "forward", "sideways",
+                  "turn (rim)");
+    s << line;
+    for (const OmniGap& g : gaps) {
+      std::snprintf(line, sizeof line, "  %-20s %14.2f %12.2f %12.2f %12.2f\n", g.name.c_str(), 1000 * g.rmse,
+                    1000 * g.forward, 1000 * g.sideways, 1000 * g.turn);
+      s << line;
+    }
+  };
+  table("held-out blocks", r.held_out);
+  table("validation logs", r.validation);
+  s << Verdict(r) << "\n";
+  for (const auto& n : r.notes) s << "note: " << n << "\n";
+  return s.str();
+}
+
+std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Renderer& renderer) {
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Identification: " << HtmlEscape(r.model_name)
+    << "</title>\n<style>body{font-family:sans-serif;max-width:1250px;margin:2em auto;color:#222}"
+       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:left}"
+       "th{background:#eee}.verdict{font-size:1.25em;padding:.7em;border-left:6px solid #0072B2;background:#f3f8fc}"
+       ".small{color:#666;font-size:.9em}td.n{text-align:right}</style></head><body>\n";
+  h << "<h1>Identification of " << HtmlEscape(r.model_name) << " (omni)</h1>\n";
+  h << "<p class=\"verdict\">" << HtmlEscape(Verdict(r)) << "</p>\n";
+  h << "<p>Fitted on " << r.fit_rows << " predictions from the fit blocks; scored on " << r.held_out_rows
+    << " held-out rows (" << Num(100 * r.held_out_share, "%.0f") << " % of the " << Num(r.block_seconds, "%.3g")
+    << " s blocks, each replayed on its own). Engine: " << HtmlEscape(r.backend) << ". Logs:";
+  for (const auto& l : r.logs) h << " <code>" << HtmlEscape(l) << "</code>";
+  for (const auto& l : r.validation_logs) h << " <code>" << HtmlEscape(l) << "</code> (validation)";
+  h << "</p>\n";
+  auto gap_table = [&](const char* title, const std::vector<OmniGap>& gaps) {
+    if (gaps.empty()) return;
+    h << "<h2>" << title << "</h2>\n<table><tr><th>predictor</th><th>position RMSE [mm]</th><th>forward [mm]</th>"
+         "<th>sideways [mm]</th><th>turn at the rim [mm]</th></tr>\n";
+    for (const OmniGap& g : gaps) {
+      h << "<tr><td>" << HtmlEscape(g.name) << "</td><td class=n>" << Num(1000 * g.rmse, "%.2f") << "</td><td class=n>"
+        << Num(1000 * g.forward, "%.2f") << "</td><td class=n>" << Num(1000 * g.sideways, "%.2f") << "</td><td class=n>"
+        << Num(1000 * g.turn, "%.2f") << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  };
+  gap_table("Held-out blocks", r.held_out);
+  gap_table("Validation logs", r.validation);
+  h << "<p class=\"small\">Noise floor from the camera (third differences of consecutive measured frames): "
+    << Num(1000 * r.noise_floor, "%.2f") << " mm (pose metric).</p>\n";
+
+  h << "<h2>Parameters</h2>\n<table><tr><th>parameter</th><th>model file</th><th>nominal</th><th>identified</th>"
+       "<th>std. error</th><th>unit</th><th>meaning</th></tr>\n";
+  for (const IdentifiedParameter& p : r.parameters) {
+    h << "<tr><td>" << HtmlEscape(p.name) << "</td><td><code>" << HtmlEscape(p.key) << "</code></td><td class=n>"
+      << Num(p.nominal) << "</td><td class=n>" << (p.estimated ? Num(p.value) : "-") << "</td><td class=n>"
+      << (p.estimated ? Num(p.standard_error, "%.2g") : "") << "</td><td>" << HtmlEscape(p.unit) << "</td><td>"
+      << HtmlEscape(p.meaning) << (p.note.empty() ? "" : " <i>(" + HtmlEscape(p.note) + ")</i>") << "</td></tr>\n";
+  }
+  h << "</table>\n";
+
+  if (!r.delay_profile_s.empty()) {
+    SeriesPlot plot;
+    plot.title = "Fit error against the total delay (model's response, before the fit)";
+    plot.x_label = "total delay [ms]";
+    plot.y_label = "fit RMS [m]";
+    plot.height = 380;
+    std::vector<double> ms, rms;
+    for (std::size_t k = 0; k < r.delay_profile_s.size(); ++k) {
+      if (!std::isfinite(r.delay_profile_rms[k])) continue;
+      ms.push_back(1000 * r.delay_profile_s[k]);
+      rms.push_back(r.delay_profile_rms[k]);
+    }
+    plot.series.push_back({"fit error", ms, rms, false});
+    h << HtmlImage(RenderSeriesPlot(plot, renderer), "delay profile") << "\n";
+  }
+  for (const OmniIdentificationSeries& s : r.series) {
+    if (s.t.empty()) continue;
+    h << "<h2>Measured against nominal and identified, per axis</h2>\n<p>Body velocity over a held-out stretch of <code>"
+      << HtmlEscape(s.log) << "</code>: measured (central differences of the poses), the command sent the identified "
+      << "delay earlier, and each model's one-frame prediction from the measured state.</p>\n";
+    for (int axis = 0; axis < 3; ++axis) {
+      h << HtmlImage(RenderSeriesPlot(AxisPlot(s, axis, false), renderer), "velocity over time") << "<br>\n";
+      h << HtmlImage(RenderSeriesPlot(AxisPlot(s, axis, true), renderer), "velocity against command") << "<br>\n";
+    }
+  }
+  if (!r.notes.empty()) {
+    h << "<h2>Notes</h2><ul>\n";
+    for (const auto& n : r.notes) h << "<li>" << HtmlEscape(n) << "</li>\n";
+    h << "</ul>\n";
+  }
+  h << "<p class=\"small\">twinsim identify; method: docs/identification.md, \"The omni robot\". " << r.solver_iterations
+    << " solver iterations, " << r.evaluations << " replays of the fit blocks, " << Num(r.seconds, "%.1f") << " s.</p>\n"
+    << "</body></html>\n";
+  return h.str();
+}
+
+}  // namespace twinsim
