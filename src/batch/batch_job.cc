@@ -139,12 +139,13 @@ Metrics Replay(const JobInputs& in, OutputFiles* files) {
   WritePoseCsv(files->Path("replay.csv"), result.t, result.pose);
   files->Add("replay.csv");
   double heading = 0;
+  int predicted = 0;
   for (std::size_t i = 0; i < result.t.size(); ++i) {
-    if (!result.predicted[i]) continue;
+    if (!result.predicted[i] || !log.rows[i].measured) continue;
     const double d = std::remainder(result.pose[i].theta - log.rows[i].pose.theta, 2 * kPi);
     heading += d * d;
+    ++predicted;
   }
-  const int predicted = result.num_predicted();
   return {{"position_rmse", PositionRmse(log, result)},
           {"heading_rmse", predicted > 0 ? std::sqrt(heading / predicted) : 0.0},
           {"predicted", static_cast<double>(predicted)}};

@@ -44,10 +44,11 @@ struct DiagnosisOptions {
   // is anything up to the static level (stiction) rather than the friction law's value.
   double standstill = 0.02;
   int threads = 0;                   // 0 = one per core; results do not depend on it
-  // Arm: refit the model's own base inertial parameters and friction (twinsim identify's
-  // weighted least squares) on the fit blocks before adding effects. Off by default: a
-  // trusted model keeps a payload named `payload` instead of hidden in re-identified
-  // link inertias. Omni robots: refused (their parameters are not identified here).
+  // Refit the model's own parameters on the fit blocks before adding effects (arm:
+  // twinsim identify's weighted least squares of the base inertial parameters and
+  // friction; omni: identification of the delay, per-axis response and couplings). Off
+  // by default: a trusted arm model keeps a payload named `payload` instead of hidden in
+  // re-identified link inertias.
   bool refit_model = false;
 
   // True when usable; else says why in *why.

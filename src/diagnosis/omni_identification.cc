@@ -28,6 +28,7 @@ enum Param {
   kCrossYX, kCrossXY,
   kVMax, kWMax,
   kDelay,
+  kLoopX, kLoopY, kLoopW,
   kNumParams
 };
 
@@ -50,18 +51,21 @@ const ParamSpec kSpecs[kNumParams] = {
     {"forward.slew", "controller.forward.slew_rate", "m/s^2", "the controller's forward set-point ramps at most this fast", 0.05, 200, true},
     {"sideways.slew", "controller.sideways.slew_rate", "m/s^2", "the controller's sideways set-point ramps at most this fast", 0.05, 200, true},
     {"turn.slew", "controller.rotation.slew_rate", "rad/s^2", "the controller's turn set-point ramps at most this fast", 0.5, 2000, true},
-    {"turn_coupling.forward", "effects.turn_coupling.forward", "rad/s per m/s", "turn rate per m/s of forward command", -20, 20, false},
-    {"turn_coupling.sideways", "effects.turn_coupling.sideways", "rad/s per m/s", "turn rate per m/s of sideways command", -20, 20, false},
-    {"cross_coupling.sideways_per_forward", "effects.cross_coupling.sideways_per_forward", "", "sideways speed per unit of forward command", -2, 2, false},
-    {"cross_coupling.forward_per_sideways", "effects.cross_coupling.forward_per_sideways", "", "forward speed per unit of sideways command", -2, 2, false},
+    {"turn_coupling.forward", "effects.turn_coupling.forward", "rad/s per m/s", "turn rate per m/s of forward command", -5, 5, false},
+    {"turn_coupling.sideways", "effects.turn_coupling.sideways", "rad/s per m/s", "turn rate per m/s of sideways command", -5, 5, false},
+    {"cross_coupling.sideways_per_forward", "effects.cross_coupling.sideways_per_forward", "", "sideways speed per unit of forward command", -1, 1, false},
+    {"cross_coupling.forward_per_sideways", "effects.cross_coupling.forward_per_sideways", "", "forward speed per unit of sideways command", -1, 1, false},
     {"velocity_saturation.v_max", "effects.velocity_saturation.v_max", "m/s", "the highest translational speed the robot reaches", 0.05, 20, true},
     {"velocity_saturation.w_max", "effects.velocity_saturation.w_max", "rad/s", "the highest turn rate the robot reaches", 0.1, 200, true},
     {"delay", "delay.command_frames + delay.vision_frames + effects.time_delay.delay", "s",
      "from sending a command to the camera's pose showing its effect (command and vision together)", 0, 2, false},
+    {"forward.loop_gain", "controller.forward.kp, ki, kd", "x", "the forward controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
+    {"sideways.loop_gain", "controller.sideways.kp, ki, kd", "x", "the sideways controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
+    {"turn.loop_gain", "controller.rotation.kp, ki, kd", "x", "the rotation controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
 };
 
-constexpr double kPieceSeconds = 20;   // s, a log is replayed in pieces this long ...
-constexpr double kLeadInSeconds = 5;   // s, ... each after a lead-in this long, not scored
+constexpr double kPieceSeconds = 10;   // s, a log is replayed in pieces this long ...
+constexpr double kLeadInSeconds = 3;   // s, ... each after a lead-in this long, not scored
 constexpr double kStartLag = 0.03;  // s: a lag of 0 has no gradient to start from
 constexpr double kNumericStep = 2e-2;  // relative: the replay's cost is jagged at fine scales (encoder counts, ticks)
 
@@ -71,7 +75,8 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
   return {fx.axis_scale[0], fx.axis_scale[1], fx.axis_scale[2], fx.LagOf(0), fx.LagOf(1), fx.LagOf(2),
           m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
           fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
-          fx.v_max, fx.w_max, (m.command_delay_frames + m.vision_delay_frames) * frame_period + fx.time_delay};
+          fx.v_max, fx.w_max, (m.command_delay_frames + m.vision_delay_frames) * frame_period + fx.time_delay,
+          1, 1, 1};
 }
 
 // `base` with the parameters. The total delay (s) goes into whole frames in `delay:`
@@ -95,6 +100,13 @@ OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, doubl
   fx.forward_per_sideways = v[kCrossXY];
   fx.v_max = v[kVMax];
   fx.w_max = v[kWMax];
+  PidGains* gains[3] = {&m.controller.forward, &m.controller.sideways, &m.controller.rotation};
+  for (int a = 0; a < 3; ++a) {
+    const double k = v[static_cast<std::size_t>(kLoopX + a)];
+    gains[a]->kp *= k;
+    gains[a]->ki *= k;
+    gains[a]->kd *= k;
+  }
   const int frames = all_in_effect ? 0 : static_cast<int>(std::floor(delay / frame_period + 1e-9));
   m.vision_delay_frames = std::min(m.vision_delay_frames, frames);
   m.command_delay_frames = frames - m.vision_delay_frames;
@@ -181,6 +193,75 @@ OmniReplayResult ConstantVelocity(const OmniLog& log, int horizon, int skip_fram
   return out;
 }
 
+// Time blocks, some held out from the fit. Each log is replayed in pieces of
+// kPieceSeconds (in parallel), each with a lead-in of kLeadInSeconds that is not scored:
+// the tracker's hidden state (a slew-limited set-point, a lag) needs that long to
+// forget its start. Validation logs are one piece each, all held out.
+std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::vector<OmniLog>& validation,
+                                  const OmniIdentificationOptions& options, double* block_seconds) {
+  std::vector<double> durations;
+  for (const OmniLog& log : logs) durations.push_back(log.rows.back().t - log.rows.front().t);
+  DiagnosisOptions blocks;
+  blocks.block_seconds = options.block_seconds;
+  const double block = DiagnosisBlockSeconds(blocks, durations);
+  *block_seconds = block;
+  std::vector<Segment> segments;
+  for (const OmniLog& log : logs) {
+    std::vector<double> t;
+    for (const OmniLogRow& r : log.rows) t.push_back(r.t - log.rows.front().t);
+    CheckLogHoldsOut(t, 0, block, options.held_out, log.path);
+    for (double from = 0; from < t.back(); from += kPieceSeconds) {
+      const std::size_t first = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from - kLeadInSeconds) - t.begin());
+      const std::size_t score = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from) - t.begin());
+      std::size_t last = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from + kPieceSeconds) - t.begin());
+      if (t.back() - (from + kPieceSeconds) < kPieceSeconds / 2) {
+        last = t.size();  // a short tail joins this piece
+        from = t.back();
+      }
+      Segment s;
+      s.log = SubLog(log, first, last);
+      s.score_from = score - first;
+      for (std::size_t i = first; i < last; ++i) s.held.push_back(InHeldOutBlock(t[i], block, options.held_out));
+      if (s.log.num_measured() >= 2 && last - first > 2) segments.push_back(std::move(s));
+    }
+  }
+  for (const OmniLog& log : validation) {
+    Segment s;
+    s.log = log;
+    s.held.assign(log.rows.size(), 1);
+    s.validation = true;
+    segments.push_back(std::move(s));
+  }
+
+  return segments;
+}
+
+// Sums the errors of the held-out rows of `segments` (validation logs or the others)
+// that every predictor scores: past the longest warm-up a replay can have, after the
+// piece's lead-in.
+GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model, bool validation_only,
+                    const OmniIdentificationOptions& options, double radius) {
+  GapSum sum;
+  for (const Segment& s : segments) {
+    if (s.validation != validation_only) continue;
+    const int first = static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames + options.horizon;
+    OmniReplayResult r;
+    if (model) {
+      OmniReplayOptions o;
+      o.backend = options.backend;
+      o.horizon = options.horizon;
+      r = ReplayOmniLog(*model, s.log, o);
+    } else {
+      r = ConstantVelocity(s.log, options.horizon, 0);
+    }
+    for (std::size_t row = 0; row < r.predicted.size(); ++row) {
+      r.predicted[row] = r.predicted[row] && s.held[row] && row >= s.score_from && s.log.FrameIndex(row) >= first;
+    }
+    for (const auto& e : PoseErrorsInRobotFrame(s.log, r, radius).e) sum.Add(e);
+  }
+  return sum;
+}
+
 class OmniIdentificationProblem {
  public:
   OmniIdentificationProblem(const OmniModel& nominal, std::vector<Segment> segments,
@@ -251,18 +332,48 @@ class OmniIdentificationProblem {
   mutable int evaluations_ = 0;
 };
 
+// The solver's coordinate of a parameter: the logarithm for a scale (clamped to its
+// range), else a logistic map onto the range, so that no bound is ever crossed and the
+// cost never goes flat outside it (Ceres' own bounds add line searches that cost
+// Jacobians).
+double ParamUpper(int p, double max_delay) { return p == kDelay ? max_delay : kSpecs[p].upper; }
+
+double ToCoordinate(int p, double value, double max_delay) {
+  const ParamSpec& s = kSpecs[p];
+  const double upper = ParamUpper(p, max_delay);
+  if (s.log_scale) return std::log(std::clamp(value, s.lower, upper));
+  const double u = std::clamp((value - s.lower) / (upper - s.lower), 1e-6, 1 - 1e-6);
+  return std::log(u / (1 - u));
+}
+
+double FromCoordinate(int p, double x, double max_delay) {
+  const ParamSpec& s = kSpecs[p];
+  const double upper = ParamUpper(p, max_delay);
+  if (s.log_scale) return std::clamp(std::exp(x), s.lower, upper);
+  return s.lower + (upper - s.lower) / (1 + std::exp(-x));
+}
+
+// d value / d coordinate, for the standard errors (the delta method).
+double CoordinateSlope(int p, double value, double max_delay) {
+  const ParamSpec& s = kSpecs[p];
+  if (s.log_scale) return value;
+  const double upper = ParamUpper(p, max_delay);
+  const double u = (value - s.lower) / (upper - s.lower);
+  return (upper - s.lower) * u * (1 - u);
+}
+
 // Ceres' view: the free parameters (in the solver's scale) to the fit residual.
 class FitFunctor {
  public:
   FitFunctor(const OmniIdentificationProblem* problem, std::array<double, kNumParams> values, std::vector<int> free,
-             std::size_t rows)
-      : problem_(problem), values_(values), free_(std::move(free)), rows_(rows) {}
+             std::size_t rows, double max_delay)
+      : problem_(problem), values_(values), free_(std::move(free)), rows_(rows), max_delay_(max_delay) {}
 
+  // The parameters (physical units) for the solver's x (Coordinate).
   std::array<double, kNumParams> Apply(const double* x) const {
     std::array<double, kNumParams> v = values_;
     for (std::size_t k = 0; k < free_.size(); ++k) {
-      const ParamSpec& s = kSpecs[free_[k]];
-      v[static_cast<std::size_t>(free_[k])] = s.log_scale ? std::exp(x[k]) : x[k];
+      v[static_cast<std::size_t>(free_[k])] = FromCoordinate(free_[k], x[k], max_delay_);
     }
     return v;
   }
@@ -283,6 +394,7 @@ class FitFunctor {
   std::array<double, kNumParams> values_;
   std::vector<int> free_;
   std::size_t rows_;
+  double max_delay_;
 };
 
 struct SolveResult {
@@ -294,7 +406,8 @@ struct SolveResult {
 };
 
 // Least squares over the free parameters (the delay up to max_delay s); with
-// `covariance`, the standard errors too.
+// `covariance`, the standard errors too. max_iterations 0: no solve, the standard errors
+// at `start`.
 SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<double, kNumParams>& start,
                   const std::vector<int>& free, double max_delay, int max_iterations, bool covariance) {
   SolveResult out;
@@ -303,37 +416,33 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   if (rows == 0) throw CheckFailed("no fit rows to identify from");
   out.rows = rows;
   std::vector<double> x;
-  for (int p : free) {
-    const ParamSpec& s = kSpecs[p];
-    const double v = std::clamp(start[static_cast<std::size_t>(p)], s.lower, p == kDelay ? max_delay : s.upper);
-    x.push_back(s.log_scale ? std::log(v) : v);
-  }
+  for (int p : free) x.push_back(ToCoordinate(p, start[static_cast<std::size_t>(p)], max_delay));
   ceres::NumericDiffOptions diff;
   diff.relative_step_size = kNumericStep;
-  auto* functor = new FitFunctor(&problem, start, free, rows);
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<FitFunctor, ceres::FORWARD>(functor, ceres::TAKE_OWNERSHIP, diff);
+  auto* functor = new FitFunctor(&problem, start, free, rows, max_delay);
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<FitFunctor, ceres::CENTRAL>(functor, ceres::TAKE_OWNERSHIP, diff);
   cost->AddParameterBlock(static_cast<int>(x.size()));
   cost->SetNumResiduals(static_cast<int>(rows));
   ceres::Problem ceres_problem;
   ceres_problem.AddResidualBlock(cost, nullptr, x.data());
-  for (std::size_t k = 0; k < free.size(); ++k) {
-    const ParamSpec& s = kSpecs[free[k]];
-    ceres_problem.SetParameterLowerBound(x.data(), static_cast<int>(k), s.log_scale ? std::log(s.lower) : s.lower);
-    const double upper = free[k] == kDelay ? max_delay : s.upper;
-    ceres_problem.SetParameterUpperBound(x.data(), static_cast<int>(k), s.log_scale ? std::log(upper) : upper);
-  }
+  // No bounds in Ceres (a bounded problem adds line searches that cost Jacobians); the
+  // functor clamps each parameter to its range instead.
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = max_iterations;
+  options.max_num_iterations = std::max(1, max_iterations);
   options.function_tolerance = 1e-6;
   options.parameter_tolerance = 1e-5;
   options.num_threads = 1;  // the functor runs the segments in parallel itself, deterministically
   options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &ceres_problem, &summary);
-  out.values = functor->Apply(x.data());
-  out.iterations = static_cast<int>(summary.iterations.size());
-  out.cost = 2 * summary.final_cost;
+  if (max_iterations > 0) {
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &ceres_problem, &summary);
+    out.values = functor->Apply(x.data());
+    out.iterations = static_cast<int>(summary.iterations.size());
+    out.cost = 2 * summary.final_cost;
+  } else {
+    out.cost = problem.Cost(start);  // the standard errors at `start`
+  }
   out.standard_error.assign(free.size(), kNaN);
   if (!covariance) return out;
 
@@ -358,11 +467,65 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   const double scale = ss / dof * correlation;
   for (std::size_t k = 0; k < free.size(); ++k) {
     const double var = c[k * free.size() + k] * scale;
-    const ParamSpec& s = kSpecs[free[k]];
     const double v = out.values[static_cast<std::size_t>(free[k])];
-    out.standard_error[k] = std::sqrt(std::max(0.0, var)) * (s.log_scale ? v : 1.0);  // delta method
+    out.standard_error[k] = std::sqrt(std::max(0.0, var)) * CoordinateSlope(free[k], v, max_delay);  // delta method
   }
   return out;
+}
+
+// Gains and couplings as a linear least-squares fit of the measured body velocity (central
+// differences of measured poses) on the command sent `delay` s earlier, over frames whose
+// command had held for kSettleSeconds by then (near steady state): a start for the fit,
+// which sees the dynamics. Leaves *v as it is where too few frames qualify.
+void LinearStart(const std::vector<OmniLog>& logs, double delay, std::array<double, kNumParams>* v) {
+  constexpr double kSettleSeconds = 0.3;
+  std::vector<std::array<double, 3>> u, y;
+  for (const OmniLog& log : logs) {
+    std::size_t changed = 0;  // the last row whose command differs from the row before
+    std::size_t j = 0;        // the row whose command acts at row i's time
+    for (std::size_t i = 1; i + 1 < log.rows.size(); ++i) {
+      while (j + 1 < log.rows.size() && log.rows[j + 1].t <= log.rows[i].t - delay + 1e-9) {
+        ++j;
+        const Twist2& a = log.rows[j].command;
+        const Twist2& b = log.rows[j - 1].command;
+        if (a.vx != b.vx || a.vy != b.vy || a.omega != b.omega) changed = j;
+      }
+      if (log.rows[i].t - delay < log.rows[0].t + kSettleSeconds) continue;
+      if (log.rows[j].t - log.rows[changed].t < kSettleSeconds) continue;
+      const OmniLogRow& a = log.rows[i - 1];
+      const OmniLogRow& b = log.rows[i + 1];
+      if (!a.measured || !b.measured) continue;
+      const double dt = b.t - a.t;
+      const Twist2 body = FieldToBody(
+          Twist2{(b.pose.x - a.pose.x) / dt, (b.pose.y - a.pose.y) / dt, (b.pose.theta - a.pose.theta) / dt},
+          log.rows[i].pose.theta);
+      const Twist2& c = log.rows[j].command;
+      u.push_back({c.vx, c.vy, c.omega});
+      y.push_back({body.vx, body.vy, body.omega});
+    }
+  }
+  if (u.size() < 30) return;
+  // Per axis, its own command and the ones that couple into it.
+  auto fit = [&](int out, std::vector<int> in) {
+    Eigen::MatrixXd A(static_cast<long>(u.size()), static_cast<long>(in.size()));
+    Eigen::VectorXd b(static_cast<long>(u.size()));
+    for (std::size_t r = 0; r < u.size(); ++r) {
+      for (std::size_t k = 0; k < in.size(); ++k) A(static_cast<long>(r), static_cast<long>(k)) = u[r][static_cast<std::size_t>(in[k])];
+      b[static_cast<long>(r)] = y[r][static_cast<std::size_t>(out)];
+    }
+    return Eigen::VectorXd(A.colPivHouseholderQr().solve(b));
+  };
+  auto set = [&](int p, double value) {
+    if (std::isfinite(value)) (*v)[static_cast<std::size_t>(p)] = std::clamp(value, kSpecs[p].lower, kSpecs[p].upper);
+  };
+  const Eigen::VectorXd fx = fit(0, {0, 1}), fy = fit(1, {1, 0}), fw = fit(2, {2, 0, 1});
+  set(kGainX, fx[0]);
+  set(kCrossXY, fx[1]);
+  set(kGainY, fy[0]);
+  set(kCrossYX, fy[1]);
+  set(kGainW, fw[0]);
+  set(kTurnX, fw[1]);
+  set(kTurnY, fw[2]);
 }
 
 // The delay (s) with the lowest fit cost on a grid, and the profile.
@@ -425,6 +588,12 @@ OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal
 
 }  // namespace
 
+OmniGap OmniHeldOutGap(const OmniModel& model, const std::vector<OmniLog>& logs, const OmniIdentificationOptions& options,
+                       const std::string& name, double radius) {
+  double block = 0;
+  return ScoreHeldOut(MakeSegments(logs, {}, options, &block), &model, false, options, radius).Gap(name);
+}
+
 bool OmniIdentificationOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& s) {
     if (why) *why = s;
@@ -468,43 +637,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     }
   }
 
-  // Time blocks, some held out from the fit. Each log is replayed in pieces of
-  // kPieceSeconds (in parallel), each with a lead-in of kLeadInSeconds that is not
-  // scored: the tracker's hidden state (a slew-limited set-point, a lag) needs that long
-  // to forget its start.
-  std::vector<double> durations;
-  for (const OmniLog& log : logs) durations.push_back(log.rows.back().t - log.rows.front().t);
-  DiagnosisOptions blocks;
-  blocks.block_seconds = options.block_seconds;
-  const double block = DiagnosisBlockSeconds(blocks, durations);
-  std::vector<Segment> segments;
-  for (const OmniLog& log : logs) {
-    std::vector<double> t;
-    for (const OmniLogRow& r : log.rows) t.push_back(r.t - log.rows.front().t);
-    CheckLogHoldsOut(t, 0, block, options.held_out, log.path);
-    for (double from = 0; from < t.back(); from += kPieceSeconds) {
-      const std::size_t first = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from - kLeadInSeconds) - t.begin());
-      const std::size_t score = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from) - t.begin());
-      std::size_t last = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), from + kPieceSeconds) - t.begin());
-      if (t.back() - (from + kPieceSeconds) < kPieceSeconds / 2) {
-        last = t.size();  // a short tail joins this piece
-        from = t.back();
-      }
-      Segment s;
-      s.log = SubLog(log, first, last);
-      s.score_from = score - first;
-      for (std::size_t i = first; i < last; ++i) s.held.push_back(InHeldOutBlock(t[i], block, options.held_out));
-      if (s.log.num_measured() >= 2 && last - first > 2) segments.push_back(std::move(s));
-    }
-  }
-  for (const OmniLog& log : validation) {
-    Segment s;
-    s.log = log;
-    s.held.assign(log.rows.size(), 1);
-    s.validation = true;
-    segments.push_back(std::move(s));
-  }
-
+  double block = 0;
+  const std::vector<Segment> segments = MakeSegments(logs, validation, options, &block);
   OmniIdentificationProblem problem(nominal, segments, options);
   OmniIdentificationReport report;
   report.model_name = nominal.name;
@@ -529,11 +663,16 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   const double nominal_cost = problem.Cost(nominal_values);
   if (!std::isfinite(nominal_cost)) throw CheckFailed("the model as given diverges on the logs");
 
-  // 1. The delay on a half-frame grid with the model's response (a lag to start from):
-  // the fit below is local, and the cost has a valley per frame of delay.
+  // 1. The delay on a half-frame grid (the fit below is local, and the cost has a valley
+  // per frame of delay), with gains and couplings from a linear regression of the
+  // measured velocity on the delayed command as the start; the regression once more at
+  // the delay found.
   say(0, "delay profile");
+  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, nullptr, nullptr);
+  LinearStart(logs, v[kDelay], &v);
   v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, &report.delay_profile_s,
                            &report.delay_profile_rms);
+  LinearStart(logs, v[kDelay], &v);
   // 2. Everything but the speed limits, the delay included (a command falling due
   // within a physics step acts for its rest, so the cost is smooth in the delay).
   std::vector<int> free;
@@ -543,22 +682,27 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   SolveResult solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
   v = solved.values;
   report.solver_iterations += solved.iterations;
-  // 3. A neighbouring valley of the delay, now that the response fits.
-  say(2, "delay profile again");
+  // 3. The neighbouring valleys: a longer delay trades against a faster response, so the
+  // fit is restarted a frame either side and the best kept.
+  say(2, "neighbouring delays");
   {
-    double base = problem.Cost(v);
-    std::array<double, kNumParams> trial = v;
-    trial[kDelay] = ProfileDelay(problem, v, std::max(0.0, v[kDelay] - 2 * period), v[kDelay] + 2 * period, period / 2,
-                                 nullptr, nullptr);
-    if (problem.Cost(trial) < 0.99 * base) {
-      solved = Solve(problem, trial, free, options.max_delay, options.max_iterations, false);
-      if (solved.cost < base) v = solved.values;
-      report.solver_iterations += solved.iterations;
+    double best = problem.Cost(v);
+    const std::array<double, kNumParams> centre = v;
+    for (double shift : {-period, period}) {
+      std::array<double, kNumParams> trial = centre;
+      trial[kDelay] = centre[kDelay] + shift;
+      if (trial[kDelay] < 0 || trial[kDelay] > options.max_delay) continue;
+      const SolveResult other = Solve(problem, trial, free, options.max_delay, options.max_iterations / 2, false);
+      report.solver_iterations += other.iterations;
+      if (other.cost < best) {
+        best = other.cost;
+        v = other.values;
+      }
     }
   }
 
   // 4. Speed limits, where the commands go beyond what the robot reached: each is kept
-  // when it lowers the fit error by more than 1 %.
+  // when it lowers the fit error by more than 0.3 % (a limit touches few frames).
   say(3, "speed limits");
   std::vector<double> speeds, turns;
   for (const OmniLog& log : logs) {
@@ -574,7 +718,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   for (int p : {kVMax, kWMax}) {
     const std::vector<double>& sorted = p == kVMax ? speeds : turns;
     double best_cost = base_cost, best_limit = 0;
-    for (double q : {0.6, 0.75, 0.85, 0.92, 0.97}) {
+    for (double q : {0.6, 0.75, 0.85, 0.92, 0.96, 0.98, 0.99, 0.995}) {
       const double limit = sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
       if (limit < kSpecs[p].lower) continue;
       std::array<double, kNumParams> trial = v;
@@ -585,17 +729,39 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
         best_limit = limit;
       }
     }
-    if (best_limit > 0 && best_cost < 0.99 * base_cost) {
+    if (best_limit > 0 && best_cost < 0.997 * base_cost) {
       v[static_cast<std::size_t>(p)] = best_limit;
       free.push_back(p);
       base_cost = best_cost;
     }
   }
-  // 5. All together, with the standard errors.
+  // 5. All together. Then what ends at the edge of its range is what the data does not
+  // ask for: a lag at its floor is none, a ramp at its ceiling no limit; the standard
+  // errors are for the rest.
   say(4, "final fit and standard errors");
-  solved = Solve(problem, v, free, options.max_delay, options.max_iterations, true);
+  solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
   v = solved.values;
   report.solver_iterations += solved.iterations;
+  std::map<int, std::string> pruned;
+  for (int p : std::vector<int>(free)) {
+    const ParamSpec& s = kSpecs[p];
+    double& value = v[static_cast<std::size_t>(p)];
+    const double upper = p == kDelay ? options.max_delay : s.upper;
+    const bool at_lower = s.log_scale ? value <= 1.05 * s.lower : value <= s.lower + 1e-3 * (upper - s.lower);
+    const bool at_upper = s.log_scale ? value >= upper / 1.05 : value >= upper - 1e-3 * (upper - s.lower);
+    if (!at_lower && !at_upper) continue;
+    if (p >= kLagX && p <= kLagW && at_lower) {
+      value = 0;
+      pruned[p] = "no lag beyond the controller's";
+    } else if (p >= kSlewX && p <= kSlewW && at_upper) {
+      value = 0;
+      pruned[p] = "no ramp limit";
+    } else {
+      pruned[p] = "at the edge of its range (" + std::string(at_lower ? "lower" : "upper") + "): not determined";
+    }
+    free.erase(std::find(free.begin(), free.end(), p));
+  }
+  solved = Solve(problem, v, free, options.max_delay, 0, true);
   // A limit the fit pushed beyond every command the robot got is no limit.
   for (int p : {kVMax, kWMax}) {
     const std::vector<double>& sorted = p == kVMax ? speeds : turns;
@@ -605,7 +771,11 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   if (identified) *identified = model;
 
   // Parameters for the report, the delay first.
-  for (int p : {static_cast<int>(kDelay), 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14}) {
+  for (int p : {static_cast<int>(kDelay), static_cast<int>(kGainX), static_cast<int>(kGainY), static_cast<int>(kGainW),
+                static_cast<int>(kLagX), static_cast<int>(kLagY), static_cast<int>(kLagW), static_cast<int>(kLoopX),
+                static_cast<int>(kLoopY), static_cast<int>(kLoopW), static_cast<int>(kSlewX), static_cast<int>(kSlewY),
+                static_cast<int>(kSlewW), static_cast<int>(kTurnX), static_cast<int>(kTurnY), static_cast<int>(kCrossYX),
+                static_cast<int>(kCrossXY), static_cast<int>(kVMax), static_cast<int>(kWMax)}) {
     IdentifiedParameter q;
     const ParamSpec& s = kSpecs[p];
     q.name = s.name;
@@ -616,13 +786,14 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     q.value = v[static_cast<std::size_t>(p)];
     const auto it = std::find(free.begin(), free.end(), p);
     q.estimated = it != free.end();
+    if (pruned.count(p)) q.note = pruned.at(p);
     if (q.estimated) {
       q.standard_error = solved.standard_error[static_cast<std::size_t>(it - free.begin())];
       if (!std::isfinite(q.standard_error)) q.note = "not determined by these logs alone (the fit's covariance is singular)";
     }
     if ((p == kVMax || p == kWMax) && q.value == 0) {
       q.estimated = false;
-      q.note = "no limit: the robot reached what it was commanded";
+      q.note = "none found: the robot reached what it was commanded";
     }
     if (p == kDelay) {
       q.note = "a log of commands and poses holds only the total; the model keeps its vision frames (" +
@@ -641,28 +812,11 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   say(5, "held-out gaps");
   auto gaps = [&](bool validation_only) {
     std::vector<OmniGap> out;
-    GapSum n, i, c;
-    for (const Segment& s : segments) {
-      if (s.validation != validation_only) continue;
-      OmniReplayOptions o;
-      o.backend = options.backend;
-      o.horizon = options.horizon;
-      const double r = nominal.chassis_radius;
-      // Every predictor scored on the same rows: the held-out ones all three predict.
-      OmniReplayResult rn = ReplayOmniLog(nominal, s.log, o);
-      OmniReplayResult ri = ReplayOmniLog(model, s.log, o);
-      OmniReplayResult cv = ConstantVelocity(s.log, options.horizon, 0);
-      const int skip = nominal.command_delay_frames + nominal.vision_delay_frames + kWarmUpFrames;
-      for (std::size_t row = 0; row < cv.predicted.size(); ++row) {
-        const bool scored = rn.predicted[row] && ri.predicted[row] && cv.predicted[row] && s.held[row] &&
-                            row >= s.score_from && static_cast<int>(row) >= skip;
-        cv.predicted[row] = rn.predicted[row] = ri.predicted[row] = scored;
-      }
-      for (const auto& e : PoseErrorsInRobotFrame(s.log, rn, r).e) n.Add(e);
-      for (const auto& e : PoseErrorsInRobotFrame(s.log, ri, r).e) i.Add(e);
-      for (const auto& e : PoseErrorsInRobotFrame(s.log, cv, r).e) c.Add(e);
-    }
-    if (n.n == 0) return out;
+    const double r = nominal.chassis_radius;
+    const GapSum n = ScoreHeldOut(segments, &nominal, validation_only, options, r);
+    const GapSum i = ScoreHeldOut(segments, &model, validation_only, options, r);
+    const GapSum c = ScoreHeldOut(segments, nullptr, validation_only, options, r);
+    if (i.n == 0) return out;
     out.push_back(n.Gap("nominal model"));
     out.push_back(i.Gap("identified model"));
     out.push_back(c.Gap("constant velocity"));

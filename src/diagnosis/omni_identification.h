@@ -41,8 +41,8 @@ struct OmniIdentificationOptions {
   int horizon = 4;                   // frames predicted ahead (the contract's replay K)
   double held_out = 0.3;             // share of each log's time blocks held out from the fit
   double block_seconds = 0;          // s; 0 = automatic (a 20th of the longest log, 0.5 to 10 s)
-  int stride = 2;                    // the fit predicts from every stride-th frame
-  int max_iterations = 40;           // Ceres iterations per solve
+  int stride = 4;                    // the fit predicts from every stride-th frame
+  int max_iterations = 20;           // Ceres iterations per solve
   double max_delay = 0.35;           // s, the longest total delay searched
   int threads = 0;                   // 0 = one per core; results do not depend on it
 
@@ -115,6 +115,13 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
                                       const std::vector<OmniLog>& validation, const OmniIdentificationOptions& options,
                                       OmniModel* identified,
                                       const std::function<void(int, int, const std::string&)>& progress = {});
+
+// The held-out gap of `model` on the rows IdentifyOmni scores with `options` (the same
+// blocks and rows for any model): a plant's own gap, or a second model's. `radius` (m)
+// weighs the heading error (the nominal model's chassis radius in IdentifyOmni).
+// Throws as IdentifyOmni.
+OmniGap OmniHeldOutGap(const OmniModel& model, const std::vector<OmniLog>& logs, const OmniIdentificationOptions& options,
+                       const std::string& name, double radius);
 
 // The report as JSON, a plain-text table, and a self-contained HTML page.
 std::string FormatOmniIdentificationJson(const OmniIdentificationReport& report);

@@ -48,7 +48,7 @@ int CsvTable::Column(const std::string& name) const {
   return -1;
 }
 
-int CsvTable::RequireColumn(const std::string& name) const {
+int CsvTable::RequireColumn(const std::string& name, bool allow_empty) const {
   const int c = Column(name);
   if (c >= 0) {
     for (std::size_t k = static_cast<std::size_t>(c) + 1; k < header.size(); ++k) {
@@ -58,7 +58,7 @@ int CsvTable::RequireColumn(const std::string& name) const {
                                                       "): which one holds the data?");
       }
     }
-    const Problem& p = problem[static_cast<std::size_t>(c)];
+    const Problem& p = (allow_empty ? nonempty_problem : problem)[static_cast<std::size_t>(c)];
     if (p.line > 0) throw InputError(p.message);
     return c;
   }
@@ -74,7 +74,7 @@ std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names,
   for (const std::string& name : names) {
     const int c = Column(name);
     columns.push_back(c);
-    if (c >= 0) RequireColumn(name);  // throws for a column given twice
+    if (c >= 0) RequireColumn(name, allow_empty);  // throws for a column given twice
     if (c < 0) {
       if (!missing) missing = &name;
       continue;

@@ -38,7 +38,8 @@ struct CsvTable {
   int Column(const std::string& name) const;
   // Index of the column, all of whose values are finite numbers. Throws InputError
   // naming the file and the columns it has, or the first value that is not a number.
-  int RequireColumn(const std::string& name) const;
+  // With allow_empty, empty cells pass (see RequireColumns).
+  int RequireColumn(const std::string& name, bool allow_empty = false) const;
   // RequireColumn() for each name; of bad values in the columns there are, the first in
   // the file is reported, before a missing column (as a reader going row by row would).
   // With allow_empty, empty cells pass (they read as NaN): a camera frame without a

@@ -84,7 +84,7 @@ FrameSequence ToFrameSequence(const OmniLog& log, const FeatureLayout& layout) {
   for (std::size_t i = 0; i < n; ++i) {
     const auto f = static_cast<std::size_t>(log.FrameIndex(i));
     seq.pose[f] = log.rows[i].pose;
-    seq.observed[f] = true;
+    seq.observed[f] = log.rows[i].measured;  // a frame without a new pose is a lost one
   }
   for (int f = layout.command_lag; f < frames; ++f)
     seq.acting[static_cast<std::size_t>(f)] = logged[static_cast<std::size_t>(f - layout.command_lag)];

@@ -158,7 +158,7 @@ void NewtonianOmniBackend::NetTorques(Robot& r) {
       command = &limited;
     }
   }
-  for (int w = 0; w < r.speeds.size(); ++w) r.net[w] = WheelMotorTorque(r.model, (*command)[w], r.speeds[w]);
+  for (int w = 0; w < r.speeds.size(); ++w) r.net[w] = WheelMotorTorque(r.model, w, (*command)[w], r.speeds[w]);
 }
 
 Pose2 NewtonianOmniBackend::pose(int robot) const { return engine_->GetState(robot).pose; }

@@ -41,5 +41,21 @@ ArmModel RrrWith(const std::string& effects_yaml);
 // `seconds` at 30 fps on the analytic backend.
 OmniLog RecordOmniPlant(const OmniModel& plant, double seconds, std::uint64_t seed);
 
+// How an open-world plant is recorded: as a real SSL camera sees a robot.
+struct OmniRecording {
+  std::string backend = "ode";  // the engine that plays the plant
+  double frame_rate = 60;       // Hz
+  double jitter = 0.001;        // s, frame times move by up to this (uniform), the poses stay put
+  double repeat_share = 0.06;   // share of frames whose pose repeats the previous one (no new measurement)
+  double noise_xy = 0.001;      // m
+  double noise_theta = 0.005;   // rad
+  double max_speed = 1.5;       // m/s, commanded
+  double max_omega = 4;         // rad/s, commanded
+  double max_centripetal = 3;   // m/s^2, the commands' turn rate is capped by it at speed
+};
+
+// A random drive of `plant` recorded as `how` says, as if read from a file.
+OmniLog RecordOmniOpenWorld(const OmniModel& plant, double seconds, std::uint64_t seed, const OmniRecording& how = {});
+
 }  // namespace testing
 }  // namespace twinsim

@@ -5,9 +5,11 @@
 #include <cmath>
 #include <random>
 
+#include "backends/omni_backend_factory.h"
 #include "control/arm_trials.h"
 #include "core/math_constants.h"
 #include "scene/command_source.h"
+#include "sim/omni_simulation.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -60,6 +62,31 @@ OmniLog RecordOmniPlant(const OmniModel& plant, double seconds, std::uint64_t se
   m.vision_noise_theta = 0.005;
   CommandSpec drive = RandomDrive(1.5, 3, 1.5);
   return RecordLog(m, drive, seconds, seed, "analytic", "omni_plant_" + std::to_string(seed) + ".csv");
+}
+
+OmniLog RecordOmniOpenWorld(const OmniModel& plant, double seconds, std::uint64_t seed, const OmniRecording& how) {
+  OmniModel m = plant;
+  m.vision_noise_xy = how.noise_xy;
+  m.vision_noise_theta = how.noise_theta;
+  CommandSpec drive = RandomDrive(how.max_speed, how.max_centripetal, 1.5);
+  drive.max_omega = how.max_omega;
+  FrameTiming timing;
+  timing.frame_rate = how.frame_rate;
+  timing.physics_substeps = DefaultPhysicsSubsteps(how.frame_rate);
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", m, Pose2{}, MakeCommandSource(drive, seed, 0, seconds, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend(how.backend, {m}, FieldModel{}, timing), seed);
+  const SimulationResult r = sim.Run(static_cast<int>(seconds * how.frame_rate) + 1);
+  std::mt19937_64 rng(seed * 104729 + 3);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<OmniLogRow> rows;
+  for (const auto& f : r.frames[0]) {
+    if (!f.observed) continue;
+    OmniLogRow row{f.t + how.jitter * (2 * uniform(rng) - 1), f.seen, f.command};
+    if (!rows.empty() && uniform(rng) < how.repeat_share) row.pose = rows.back().pose;  // the camera repeats itself
+    rows.push_back(row);
+  }
+  return ParseOmniLog(FormatOmniLog(rows), "open_world_" + std::to_string(seed) + ".csv");
 }
 
 }  // namespace testing

@@ -115,9 +115,6 @@ TEST(OmniDiagnosis, RefusesBadInput) {
   DiagnosisOptions bad;
   bad.held_out = 1.5;
   EXPECT_THROW(DiagnoseOmni(nominal, {longer}, bad), InputError);
-  DiagnosisOptions refit;
-  refit.refit_model = true;  // an arm's option: omni parameters are not identified
-  EXPECT_THROW(DiagnoseOmni(nominal, {longer}, refit), InputError);
 }
 
 TEST(OmniEffects, SetAndListRoundTripEveryEffect) {

@@ -117,8 +117,9 @@ void AddDiagnoseCommand(CLI::App& app, int* exit_code) {
                   "Arm: rad/s (m/s) below which a joint sticks, its friction anything up to the static level")
       ->capture_default_str();
   cmd->add_flag("--refit-model", options->diagnosis.refit_model,
-                "Arm: refit the model's own inertial parameters and friction on the fit blocks first "
-                "(default: trust them, so that a payload is named, not absorbed)");
+                "Refit the model's own parameters on the fit blocks first (arm: inertial parameters and friction; "
+                "omni: twinsim identify's delay, per-axis response and couplings). Default: trust them, so that "
+                "an arm's payload is named, not absorbed");
   cmd->add_option("--cutoff", options->arm_log.cutoff_hz, "Arm: Hz, low-pass cut-off for qd/qdd derived from q")
       ->capture_default_str();
   cmd->add_option("--threads", options->diagnosis.threads, "Worker threads (0: one per core); results do not depend on it")

@@ -91,6 +91,8 @@ std::string OmniModel::Validate() const {
   if (com_height <= ground_clearance || com_height >= ground_clearance + chassis_height)
     out << "com_height must lie inside the chassis (between " << ground_clearance << " and "
         << ground_clearance + chassis_height << " m)\n";
+  if (!motor_strength.empty() && static_cast<int>(motor_strength.size()) != n)
+    out << "motor strength lists " << motor_strength.size() << " values for " << n << " wheels\n";
   if (n >= 3) {
     // The wheels must span all three body velocities, and hold the robot up.
     Eigen::MatrixXd g(n, 3);

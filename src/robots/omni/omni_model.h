@@ -74,6 +74,9 @@ struct OmniModel {
   double motor_stall_torque = 0.5;  // N·m at zero speed
   double motor_no_load_speed = 160;  // rad/s where the available torque reaches zero
   double encoder_counts_per_rev = 0;  // counts per wheel turn; 0 = ideal encoder
+  // Per wheel, the share of the stall torque its motor gives (a worn motor, a weak
+  // driver); empty = all 1.
+  std::vector<double> motor_strength;
 
   OmniControllerModel controller;
 
@@ -99,6 +102,10 @@ struct OmniModel {
   Eigen::VectorXd wheel_load;     // n, N, static normal force on each wheel
 
   int num_wheels() const { return static_cast<int>(wheel_angles.size()); }
+  // The strength of wheel i's motor (1 unless motor_strength says otherwise).
+  double MotorStrength(int wheel) const {
+    return motor_strength.empty() ? 1.0 : motor_strength[static_cast<std::size_t>(wheel)];
+  }
   // Fills the derived fields; call after changing any parameter.
   void Finalize();
   // The 3 x 3 rigid-body mass matrix about the robot's centre for (vx, vy, omega):

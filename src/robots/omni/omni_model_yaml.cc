@@ -81,6 +81,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     m.Get("stall_torque", &model.motor_stall_torque, Positive(1e4));
     m.Get("no_load_speed", &model.motor_no_load_speed, Positive(1e5));
     m.Get("encoder_counts_per_rev", &model.encoder_counts_per_rev, NonNegative(1e9));
+    m.Get("strength", &model.motor_strength, -1, InRange(0.01, 2));
     m.Finish();
   }
 

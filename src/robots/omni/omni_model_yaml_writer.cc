@@ -87,6 +87,11 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   line("  stall_torque", YamlNumber(model.motor_stall_torque), "N·m at the wheel");
   line("  no_load_speed", YamlNumber(model.motor_no_load_speed), "rad/s at the wheel");
   line("  encoder_counts_per_rev", YamlNumber(model.encoder_counts_per_rev), "counts; 0 = ideal encoder");
+  if (!model.motor_strength.empty()) {
+    std::string strength;
+    for (double v : model.motor_strength) strength += (strength.empty() ? "" : ", ") + YamlNumber(v);
+    line("  strength", "[" + strength + "]", "share of the stall torque, per wheel");
+  }
   s << "controller:\n";
   line("  rate_hz", YamlNumber(model.controller.rate_hz), "Hz");
   s << "  # kp N per m/s, ki N per m, kd N per m/s^2, limits N, slew_rate m/s^2\n"

@@ -13,11 +13,13 @@
 
 namespace twinsim {
 
-// Net torque on the wheel (N·m) for a commanded torque (N·m) at wheel speed w (rad/s).
-inline double WheelMotorTorque(const OmniModel& model, double commanded, double w) {
-  const double back_emf = model.motor_stall_torque / model.motor_no_load_speed * w;
-  const double available =
-      std::clamp(commanded, -model.motor_stall_torque - back_emf, model.motor_stall_torque - back_emf);
+// Net torque on wheel `wheel` (N·m) for a commanded torque (N·m) at wheel speed w
+// (rad/s). A weaker motor (OmniModel::motor_strength) has its whole torque-speed line
+// scaled: less stall torque, the same no-load speed.
+inline double WheelMotorTorque(const OmniModel& model, int wheel, double commanded, double w) {
+  const double stall = model.motor_stall_torque * model.MotorStrength(wheel);
+  const double back_emf = stall / model.motor_no_load_speed * w;
+  const double available = std::clamp(commanded, -stall - back_emf, stall - back_emf);
   return available - model.bearing_damping * w;
 }
 

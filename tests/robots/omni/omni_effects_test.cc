@@ -33,6 +33,19 @@ OmniModel With(const std::string& effects) {
                                  "fx.yaml");
 }
 
+// True body velocity after 2 s of a constant command, on `backend`.
+Twist2 SteadyVelocity(OmniModel model, const Twist2& command, const std::string& backend) {
+  model.command_delay_frames = model.vision_delay_frames = 0;
+  model.vision_noise_xy = model.vision_noise_theta = 0;
+  CommandSpec spec;
+  spec.type = "sequence";
+  spec.segments = {{2.0, command, false}};
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(spec, 1, 0, 3, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, FrameTiming{}), 1);
+  return sim.Run(61).frames.at(0)[59].truth_velocity;
+}
+
 TEST(OmniEffects, NoneByDefault) {
   EXPECT_FALSE(testing::Omni4().effects.any());
   const auto f = ForwardStep(testing::Omni4());
@@ -78,6 +91,29 @@ TEST(OmniEffects, TimeDelayShiftsTheResponse) {
   const auto plain = ForwardStep(testing::Omni4());
   const auto late = ForwardStep(With("time_delay: {delay: 0.2}"));  // six frames at 30 fps
   for (int k = 10; k < 40; ++k) EXPECT_NEAR(late[k + 6].truth.x, plain[k].truth.x, 2e-3) << "frame " << k;
+}
+
+// What a real robot's log shows (issue 27): per-axis gains and a sideways command that
+// turns the robot, on every engine alike.
+TEST(OmniEffects, PerAxisScaleAndTurnCouplingOnEveryEngine) {
+  const OmniModel m = With("velocity_scale: {forward: 0.5, sideways: 0.25, turn: 0.6}, turn_coupling: {sideways: 1.2}, "
+                           "cross_coupling: {forward_per_sideways: 0.2}");
+  EXPECT_EQ(m.effects.Active(), (std::vector<std::string>{"velocity_scale", "turn_coupling", "cross_coupling"}));
+  for (const std::string& backend : AvailableOmniBackends()) {
+    if (backend == "learned") continue;
+    SCOPED_TRACE(backend);
+    const Twist2 v = SteadyVelocity(m, Twist2{0.8, 0.4, 0.5}, backend);
+    EXPECT_NEAR(v.vx, 0.5 * 0.8 + 0.2 * 0.4, 0.02);
+    EXPECT_NEAR(v.vy, 0.25 * 0.4, 0.02);
+    EXPECT_NEAR(v.omega, 0.6 * 0.5 + 1.2 * 0.4, 0.05);
+  }
+}
+
+TEST(OmniEffects, PerAxisLagSlowsOnlyItsAxis) {
+  const OmniModel m = With("motor_lag: {sideways: 0.3}");
+  const auto slow = ForwardStep(m);
+  const auto plain = ForwardStep(testing::Omni4());
+  EXPECT_NEAR(slow[15].truth_velocity.vx, plain[15].truth_velocity.vx, 1e-9);  // forward untouched
 }
 
 TEST(OmniEffects, UnknownEffectOrParameterIsReported) {

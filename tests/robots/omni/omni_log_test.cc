@@ -100,3 +100,93 @@ TEST(OmniLog, WriteReadRoundTripIsExactToNanometres) {
 
 }  // namespace
 }  // namespace twinsim
+
+namespace twinsim {
+namespace {
+
+// CONTRACT.md, "Measured logs": real cameras miss frames.
+TEST(OmniLogMissedFrames, EmptyPoseCellsAreAFrameWithoutMeasurement) {
+  const std::string csv = std::string(kHeader) + "0,0,0,0,1,0,0\n0.0166667,0.01,0,0,1,0,0\n0.0333333,,,,1,0,0\n"
+                          "0.05,0.03,0.003,0.03,1,0,0\n";
+  const OmniLog log = ParseOmniLog(csv, "log.csv");
+  ASSERT_EQ(log.rows.size(), 4u);
+  EXPECT_FALSE(log.rows[2].measured);
+  EXPECT_TRUE(log.rows[3].measured);
+  EXPECT_EQ(log.num_measured(), 3);
+  // Its pose is interpolated between the measured frames around it, never a standstill.
+  EXPECT_NEAR(log.rows[2].pose.x, 0.02, 1e-6);
+  EXPECT_NEAR(log.rows[2].pose.y, 0.0015, 1e-6);
+  EXPECT_NEAR(log.rows[2].pose.theta, 0.015, 1e-6);
+  EXPECT_EQ(log.rows[2].command.vx, 1);  // the command was sent all the same
+}
+
+TEST(OmniLogMissedFrames, ARepeatedPoseIsNotARobotStandingStill) {
+  const std::string csv = std::string(kHeader) + "0,0,0,0,1,0,0\n0.016,0.01,0,0,1,0,0\n0.0335,0.01,0,0,1,0,0\n"
+                          "0.0505,0.03,0,0,1,0,0\n0.067,0.04,0,0,1,0,0\n";  // and jittered frame times
+  const OmniLog log = ParseOmniLog(csv, "log.csv");
+  EXPECT_FALSE(log.rows[2].measured);
+  EXPECT_NEAR(log.rows[2].pose.x, 0.01 + 0.02 * (0.0335 - 0.016) / (0.0505 - 0.016), 1e-9);
+  EXPECT_NEAR(log.frame_period, 0.0167, 0.0005);
+  EXPECT_EQ(log.FrameIndex(4), 4);
+  // Written back, the frame has empty pose cells.
+  EXPECT_NE(FormatOmniLog(log.rows).find("\n0.0335,,,,1,0,0\n"), std::string::npos) << FormatOmniLog(log.rows);
+}
+
+TEST(OmniLogMissedFrames, PartlyEmptyPoseAndNaNAreErrors) {
+  EXPECT_EQ(ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.0333333,1,,0,0,0,0\n0.0666667,1,1,1,0,0,0\n"),
+            "log.csv:3: column 'y' is empty but the row's other pose cells are not: x, y and theta are all empty (a "
+            "frame without a measurement) or all numbers");
+  EXPECT_NE(ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.0333333,nan,nan,nan,0,0,0\n").find("log.csv:3:11: column 'x'"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.0333333,1,1,1,,0,0\n").find("column 'vx_cmd': empty cell"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf(std::string(kHeader) + "0,,,,0,0,0\n0.0333333,,,,0,0,0\n").find("no row holds a pose"),
+            std::string::npos);
+}
+
+const char* kTwoTeams =
+    "t,robot_id,team,x,y,theta,vx_cmd,vy_cmd,omega_cmd\n"
+    "0,3,blue,0,0,0,1,0,0\n0,3,yellow,5,5,0,0,1,0\n0,1,blue,-1,-1,0,0,0,1\n"
+    "0.0166667,3,blue,0.01,0,0,1,0,0\n0.0166667,3,yellow,5,5.01,0,0,1,0\n0.0166667,1,blue,-1,-1,0.01,0,0,1\n"
+    "0.0333333,3,blue,0.02,0,0,1,0,0\n0.0333333,3,yellow,5,5.02,0,0,1,0\n0.0333333,1,blue,-1,-1,0.02,0,0,1\n";
+
+TEST(OmniLogSeveralRobots, ASelectorPicksOneRobot) {
+  OmniLogSelector select;
+  select.robot = "3";
+  select.team = "Yellow";
+  const OmniLog log = ParseOmniLog(kTwoTeams, "game.csv", select);
+  ASSERT_EQ(log.rows.size(), 3u);
+  EXPECT_EQ(log.rows[2].pose.y, 5.02);
+  EXPECT_EQ(log.line_of[2], 9);
+  EXPECT_EQ(log.robot, "yellow 3");
+  select.team = "";
+  select.robot = "1.0";  // ids compare as numbers
+  EXPECT_NEAR(ParseOmniLog(kTwoTeams, "game.csv", select).rows[1].pose.theta, 0.01, 1e-12);
+}
+
+TEST(OmniLogSeveralRobots, WithoutOneTheReaderSaysWhichThereAre) {
+  try {
+    ParseOmniLog(kTwoTeams, "game.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "game.csv:2: the log holds 3 robots (blue 3, yellow 3, blue 1): choose one with --robot ID (and --team "
+              "TEAM where ids repeat)");
+  }
+  OmniLogSelector select;
+  select.robot = "3";  // two teams have a robot 3
+  EXPECT_THROW(ParseOmniLog(kTwoTeams, "game.csv", select), InputError);
+  select.robot = "7";
+  try {
+    ParseOmniLog(kTwoTeams, "game.csv", select);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "game.csv:1: no rows for robot '7' (the log holds: blue 3, yellow 3, blue 1)");
+  }
+  select.robot = "1";
+  EXPECT_THROW(ParseOmniLog(std::string(kHeader) + "0,0,0,0,0,0,0\n0.0333333,1,1,1,0,0,0\n", "one.csv", select),
+               InputError);
+}
+
+}  // namespace
+}  // namespace twinsim
