@@ -1,5 +1,6 @@
 #include "io/csv_table.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -67,13 +68,15 @@ int CsvTable::RequireColumn(const std::string& name, bool allow_empty) const {
   throw InputError(SourceLocation{path, 1}, "missing column '" + name + "' (have: " + have + ")");
 }
 
-std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names, bool allow_empty) const {
+std::vector<int> CsvTable::RequireColumns(const std::vector<std::string>& names,
+                                          const std::vector<std::string>& may_be_empty) const {
   std::vector<int> columns;
   const Problem* first = nullptr;
   const std::string* missing = nullptr;
   for (const std::string& name : names) {
     const int c = Column(name);
     columns.push_back(c);
+    const bool allow_empty = std::find(may_be_empty.begin(), may_be_empty.end(), name) != may_be_empty.end();
     if (c >= 0) RequireColumn(name, allow_empty);  // throws for a column given twice
     if (c < 0) {
       if (!missing) missing = &name;

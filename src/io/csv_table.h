@@ -42,9 +42,10 @@ struct CsvTable {
   int RequireColumn(const std::string& name, bool allow_empty = false) const;
   // RequireColumn() for each name; of bad values in the columns there are, the first in
   // the file is reported, before a missing column (as a reader going row by row would).
-  // With allow_empty, empty cells pass (they read as NaN): a camera frame without a
-  // measurement leaves its pose cells empty.
-  std::vector<int> RequireColumns(const std::vector<std::string>& names, bool allow_empty = false) const;
+  // Empty cells pass (they read as NaN) in the columns named in `may_be_empty`: a camera
+  // frame without a measurement leaves its pose cells empty.
+  std::vector<int> RequireColumns(const std::vector<std::string>& names,
+                                  const std::vector<std::string>& may_be_empty = {}) const;
 };
 
 // Columns whose text the reader keeps (CsvTable::label), to tell robots apart in a log

@@ -19,7 +19,7 @@ namespace {
 std::vector<OmniLogRow> ObserverLog(const std::vector<FrameRecord>& frames) {
   std::vector<OmniLogRow> rows;
   for (const auto& f : frames)
-    if (f.observed) rows.push_back(OmniLogRow{f.t, f.seen, f.command});
+    if (f.observed) rows.push_back(OmniLogRow{f.stamp, f.seen, f.command});
   return rows;
 }
 

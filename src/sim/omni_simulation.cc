@@ -27,6 +27,7 @@ Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend
     state_.commands_in_flight.emplace_back(r.model.command_delay_frames, Twist2{});
     state_.captures_in_flight.emplace_back(r.model.vision_delay_frames, std::optional<Pose2>(r.start));
     state_.delivered.emplace_back();
+    state_.last_captured.emplace_back();
     FrameRecord start;
     start.truth = r.start;
     state_.last_good.push_back(start);
@@ -78,6 +79,14 @@ std::vector<FrameRecord> Simulation::Step() {
     captured.y += state_.rng.Gaussian(m.vision_noise_xy);
     captured.theta = WrapAngle(captured.theta + state_.rng.Gaussian(m.vision_noise_theta));
     const bool lost = state_.rng.Uniform() < m.vision_drop_probability;
+    // A real camera now and then sends its last pose again; and stamps frames a little
+    // off the frame clock. Drawn only where the model asks for them (streams unchanged).
+    if (m.vision_repeat_probability > 0) {
+      std::optional<Pose2>& last = state_.last_captured[k];
+      if (state_.rng.Uniform() < m.vision_repeat_probability && last) captured = *last;
+      last = captured;
+    }
+    rec.stamp = t + (m.vision_time_jitter > 0 ? m.vision_time_jitter * (2 * state_.rng.Uniform() - 1) : 0.0);
     std::optional<Pose2> arrived = state_.captures_in_flight[k].Push(lost ? std::nullopt : std::optional(captured));
 
     auto& delivered = state_.delivered[k];

@@ -40,6 +40,7 @@ struct FrameRecord {
   double t = 0;            // s
   bool observed = false;   // false: this frame's observation was lost (not logged)
   Pose2 seen;              // what the observer received at t (captured D_v frames earlier)
+  double stamp = 0;        // s, the time the observer logs for the frame: t off by the camera's jitter
   Twist2 command;          // sent at t, robot frame
   Pose2 truth;             // the true pose at t
   Twist2 truth_velocity;   // robot frame, true
@@ -57,6 +58,7 @@ struct SimulationState {
   Rng rng;
   std::vector<DelayLine<Twist2>> commands_in_flight;                // per robot
   std::vector<DelayLine<std::optional<Pose2>>> captures_in_flight;  // per robot
+  std::vector<std::optional<Pose2>> last_captured;                  // per robot, what the camera repeats
   std::vector<std::vector<Observation>> delivered;                  // per robot, recent window
   // Per robot, the true state of the last frame that passed the divergence check
   // (t, truth, truth_velocity only): what a divergence message reports as last good.

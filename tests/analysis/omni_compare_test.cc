@@ -60,14 +60,16 @@ TEST(OmniCompare, TheRecordingModelPredictsItsOwnLogAtEveryHorizon) {
   for (const CompareErrorRow& row : r.rows) {
     EXPECT_EQ(row.source, "analytic");
     EXPECT_GT(row.predicted, 100) << row.horizon;
-    // Only the CSV's rounding (1e-9) separates the replay from the recording; a free
-    // run carries it along without correction.
-    const double tolerance = row.horizon_frames == 0 ? 1e-3 : 1e-6;
+    // Only the CSV's rounding (1e-9) separates the replay from the recording, and the
+    // frames at rest, where the noise-free camera repeats its pose: no new measurement
+    // (CONTRACT.md), so the tracker runs on its own state there. A free run carries it
+    // all along without correction.
+    const double tolerance = row.horizon_frames == 0 ? 1e-3 : 2e-4;
     EXPECT_LT(row.position_rmse, tolerance) << row.horizon;
     EXPECT_LT(row.position_max, tolerance) << row.horizon;
     EXPECT_LT(row.heading_rmse, tolerance) << row.horizon;
   }
-  EXPECT_EQ(r.Find("analytic", 0)->predicted, static_cast<int>(log.rows.size()) - 1);
+  EXPECT_EQ(r.Find("analytic", 0)->predicted, log.num_measured() - 1);  // scored where measured
 
   // The wrong delay shows at 4 frames: the commands act 4 frames early.
   OmniModel no_delay = model;

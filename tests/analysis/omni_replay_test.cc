@@ -37,8 +37,10 @@ TEST_F(OmniReplayTest, SameModelPredictsItsOwnLogFourFramesAhead) {
   EXPECT_FALSE(r.predicted[first - 1]);
   EXPECT_TRUE(r.predicted[first]);
   // The tracker is the recording model itself, corrected to poses it would have had
-  // anyway: the predictions are the log, to rounding of the CSV.
-  EXPECT_LT(PositionRmse(log, r), 1e-6);
+  // anyway: the predictions are the log, to rounding of the CSV, but for the frames at
+  // rest where the noise-free camera repeats its pose (no new measurement, CONTRACT.md):
+  // there the tracker runs on its own state.
+  EXPECT_LT(PositionRmse(log, r), 2e-5);
 }
 
 TEST_F(OmniReplayTest, TheRightDelayPredictsBetterThanNone) {

@@ -139,9 +139,8 @@ void FillUnmeasured(OmniLog* log) {
 OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
   // The first bad value in these columns is named; other columns are ignored. Pose cells
   // may be empty (a frame without a measurement).
-  std::vector<int> col = table.RequireColumns({"t", "vx_cmd", "vy_cmd", "omega_cmd"});
-  const std::vector<int> pose_col = table.RequireColumns({"x", "y", "theta"}, true);
-  col.insert(col.begin() + 1, pose_col.begin(), pose_col.end());
+  const std::vector<int> col =
+      table.RequireColumns({"t", "x", "y", "theta", "vx_cmd", "vy_cmd", "omega_cmd"}, {"x", "y", "theta"});
 
   OmniLog log;
   log.path = table.path;

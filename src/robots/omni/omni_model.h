@@ -91,6 +91,8 @@ struct OmniModel {
   double vision_noise_xy = 0.0;      // m, standard deviation of x and y
   double vision_noise_theta = 0.0;   // rad, standard deviation of theta
   double vision_drop_probability = 0;  // probability that a frame is lost
+  double vision_repeat_probability = 0;  // probability that the camera repeats its last pose (no new measurement)
+  double vision_time_jitter = 0;       // s, each frame's time stamp is off by up to this (uniform)
 
   // ---- Derived by Finalize() ----
   double total_mass = 0;          // kg, chassis and wheels

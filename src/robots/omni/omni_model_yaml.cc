@@ -147,6 +147,8 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     v.Get("noise_xy", &model.vision_noise_xy, NonNegative(10));
     v.Get("noise_theta", &model.vision_noise_theta, NonNegative(10));
     v.Get("drop_probability", &model.vision_drop_probability, InRange(0, 0.9));
+    v.Get("repeat_probability", &model.vision_repeat_probability, InRange(0, 0.9));
+    v.Get("time_jitter", &model.vision_time_jitter, InRange(0, 0.005));
     v.Finish();
   }
   top.Finish();

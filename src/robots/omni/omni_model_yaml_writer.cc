@@ -106,6 +106,8 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   line("  noise_xy", YamlNumber(model.vision_noise_xy), "m");
   line("  noise_theta", YamlNumber(model.vision_noise_theta), "rad");
   line("  drop_probability", YamlNumber(model.vision_drop_probability));
+  if (model.vision_repeat_probability > 0) line("  repeat_probability", YamlNumber(model.vision_repeat_probability));
+  if (model.vision_time_jitter > 0) line("  time_jitter", YamlNumber(model.vision_time_jitter), "s");
 
   // Only what is on, with the parameters ListOmniEffects gives (the reader's keys).
   static const std::map<std::string, const char*> kUnits = {
