@@ -67,7 +67,9 @@ const ParamSpec kSpecs[kNumParams] = {
 constexpr double kPieceSeconds = 10;   // s, a log is replayed in pieces this long ...
 constexpr double kLeadInSeconds = 3;   // s, ... each after a lead-in this long, not scored
 constexpr double kStartLag = 0.03;  // s: a lag of 0 has no gradient to start from
-constexpr double kNumericStep = 2e-2;  // relative: the replay's cost is jagged at fine scales (encoder counts, ticks)
+// The numeric derivatives' step in the solver's coordinates (2 % for a scale): the
+// replay's cost is jagged at finer scales (encoder counts, controller ticks).
+constexpr double kCoordinateStep = 2e-2;
 
 // The parameters of a model (physical units); 0 for a limit that is off.
 std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period) {
@@ -363,13 +365,16 @@ double CoordinateSlope(int p, double value, double max_delay) {
 }
 
 // Ceres' view: the free parameters (in the solver's scale) to the fit residual.
-class FitFunctor {
+class FitCost : public ceres::CostFunction {
  public:
-  FitFunctor(const OmniIdentificationProblem* problem, std::array<double, kNumParams> values, std::vector<int> free,
-             std::size_t rows, double max_delay)
-      : problem_(problem), values_(values), free_(std::move(free)), rows_(rows), max_delay_(max_delay) {}
+  FitCost(const OmniIdentificationProblem* problem, std::array<double, kNumParams> values, std::vector<int> free,
+          std::size_t rows, double max_delay)
+      : problem_(problem), values_(values), free_(std::move(free)), rows_(rows), max_delay_(max_delay) {
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(free_.size()));
+    set_num_residuals(static_cast<int>(rows));
+  }
 
-  // The parameters (physical units) for the solver's x (Coordinate).
+  // The parameters (physical units) for the solver's x (ToCoordinate).
   std::array<double, kNumParams> Apply(const double* x) const {
     std::array<double, kNumParams> v = values_;
     for (std::size_t k = 0; k < free_.size(); ++k) {
@@ -378,18 +383,38 @@ class FitFunctor {
     return v;
   }
 
-  bool operator()(double const* const* x, double* residual) const {
+  // Central differences with a fixed step in the coordinates (Ceres' numeric
+  // derivatives scale the step with |x|, and take 1.5e-8 where a coordinate is 0: a
+  // loop gain of 1, a coupling in the middle of its range).
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    if (!Residual(parameters[0], residuals)) return false;
+    if (!jacobians || !jacobians[0]) return true;
+    const std::size_t n = free_.size();
+    std::vector<double> x(parameters[0], parameters[0] + n), plus(rows_), minus(rows_);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double x0 = x[k];
+      x[k] = x0 + kCoordinateStep;
+      if (!Residual(x.data(), plus.data())) return false;
+      x[k] = x0 - kCoordinateStep;
+      if (!Residual(x.data(), minus.data())) return false;
+      x[k] = x0;
+      for (std::size_t r = 0; r < rows_; ++r) jacobians[0][r * n + k] = (plus[r] - minus[r]) / (2 * kCoordinateStep);
+    }
+    return true;
+  }
+
+ private:
+  bool Residual(const double* x, double* out) const {
     try {
-      const std::vector<double> r = problem_->FitResidual(Apply(x[0]));
+      const std::vector<double> r = problem_->FitResidual(Apply(x));
       if (r.size() != rows_) return false;
-      std::copy(r.begin(), r.end(), residual);
+      std::copy(r.begin(), r.end(), out);
       return true;
     } catch (const CheckFailed&) {
       return false;
     }
   }
 
- private:
   const OmniIdentificationProblem* problem_;
   std::array<double, kNumParams> values_;
   std::vector<int> free_;
@@ -417,27 +442,22 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   out.rows = rows;
   std::vector<double> x;
   for (int p : free) x.push_back(ToCoordinate(p, start[static_cast<std::size_t>(p)], max_delay));
-  ceres::NumericDiffOptions diff;
-  diff.relative_step_size = kNumericStep;
-  auto* functor = new FitFunctor(&problem, start, free, rows, max_delay);
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<FitFunctor, ceres::CENTRAL>(functor, ceres::TAKE_OWNERSHIP, diff);
-  cost->AddParameterBlock(static_cast<int>(x.size()));
-  cost->SetNumResiduals(static_cast<int>(rows));
+  auto* cost = new FitCost(&problem, start, free, rows, max_delay);
   ceres::Problem ceres_problem;
   ceres_problem.AddResidualBlock(cost, nullptr, x.data());
   // No bounds in Ceres (a bounded problem adds line searches that cost Jacobians); the
-  // functor clamps each parameter to its range instead.
+  // coordinates keep each parameter in its range instead (ToCoordinate).
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = std::max(1, max_iterations);
   options.function_tolerance = 1e-6;
   options.parameter_tolerance = 1e-5;
-  options.num_threads = 1;  // the functor runs the segments in parallel itself, deterministically
+  options.num_threads = 1;  // the cost runs the pieces in parallel itself, deterministically
   options.logging_type = ceres::SILENT;
   if (max_iterations > 0) {
     ceres::Solver::Summary summary;
     ceres::Solve(options, &ceres_problem, &summary);
-    out.values = functor->Apply(x.data());
+    out.values = cost->Apply(x.data());
     out.iterations = static_cast<int>(summary.iterations.size());
     out.cost = 2 * summary.final_cost;
   } else {

@@ -175,7 +175,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   h << "<p class=\"verdict\">" << HtmlEscape(Verdict(r)) << "</p>\n";
   h << "<p>Fitted on " << r.fit_rows << " predictions from the fit blocks; scored on " << r.held_out_rows
     << " held-out rows (" << Num(100 * r.held_out_share, "%.0f") << " % of the " << Num(r.block_seconds, "%.3g")
-    << " s blocks, each replayed on its own). Engine: " << HtmlEscape(r.backend) << ". Logs:";
+    << " s blocks, which no fit saw). Engine: " << HtmlEscape(r.backend) << ". Logs:";
   for (const auto& l : r.logs) h << " <code>" << HtmlEscape(l) << "</code>";
   for (const auto& l : r.validation_logs) h << " <code>" << HtmlEscape(l) << "</code> (validation)";
   h << "</p>\n";

@@ -77,7 +77,9 @@ std::vector<std::size_t> SelectRows(const CsvTable& table, const OmniLogSelector
   auto label = [&](int column, std::size_t row) -> std::string {
     if (column < 0) return "";
     const auto& text = table.label[static_cast<std::size_t>(column)];
-    return row < text.size() ? text[row] : FormatCsvNumber(table.rows[row][static_cast<std::size_t>(column)]);
+    if (row < text.size()) return text[row];
+    const double v = table.rows[row][static_cast<std::size_t>(column)];  // a table held in memory
+    return std::isfinite(v) ? FormatCsvNumber(v) : std::string();
   };
   auto name_of = [&](std::size_t row) {
     const std::string team = label(team_column, row), id = label(id_column, row);
