@@ -783,15 +783,10 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   for (const ArmLog& log : logs) report.logs.push_back(log.path);
   ReportSelection(problem, selection, &report);
   if (options.refit_model) {
-    ArmProblem given(model, logs, block, options.held_out, options.standstill);
-    const SquaredResiduals r = given.Evaluate({});
-    report.refit_gap = report.gap_before;
-    report.gap_before = given.Gap(Mean(r.held_out));
-    report.fit_gap_before = given.Gap(Mean(r.fit));
-    report.notes.push_back("The model's own inertial parameters and friction were refitted on the fit blocks "
-                           "(twinsim identify's weighted least squares) before effects were sought: held-out gap " +
-                           FormatParameter(report.gap_before) + " -> " + FormatParameter(report.refit_gap) +
-                           ". 'Nominal' in the plots is the refitted model.");
+    ReportRefit(ArmProblem(model, logs, block, options.held_out, options.standstill),
+                "The model's own inertial parameters and friction were refitted on the fit blocks (twinsim identify's "
+                "weighted least squares)",
+                &report);
   }
 
   // Find: per joint, the nominal and the repaired model's residuals.

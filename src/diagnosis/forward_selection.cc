@@ -198,4 +198,13 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   }
 }
 
+void ReportRefit(const DiagnosisProblem& given, const std::string& refitted, DiagnosisReport* report) {
+  const SquaredResiduals r = given.Evaluate({});
+  report->refit_gap = report->gap_before;
+  report->gap_before = given.Gap(Mean(r.held_out));
+  report->fit_gap_before = given.Gap(Mean(r.fit));
+  report->notes.push_back(refitted + " before effects were sought: held-out gap " + FormatParameter(report->gap_before) +
+                          " -> " + FormatParameter(report->refit_gap) + ". 'Nominal' in the plots is the refitted model.");
+}
+
 }  // namespace twinsim

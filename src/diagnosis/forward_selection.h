@@ -75,6 +75,12 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
 // and effects (joint as the problem gave it) from a selection.
 void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, DiagnosisReport* report);
 
+// With --refit-model: the report's gap before becomes the given model's (`given`, the
+// problem over the model as the user gave it) and refit_gap the refitted model's; a note
+// says what `refitted` ("The model's ... were refitted on the fit blocks (...)") did and
+// how far it took the gap.
+void ReportRefit(const DiagnosisProblem& given, const std::string& refitted, DiagnosisReport* report);
+
 // The mean of v (0 when empty).
 double Mean(const std::vector<double>& v);
 

@@ -531,15 +531,10 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   for (const OmniLog& log : logs) report.logs.push_back(log.path);
   ReportSelection(problem, selection, &report);
   if (options.refit_model) {
-    OmniProblem given(model, logs, options, block);
-    const SquaredResiduals r = given.Evaluate({});
-    report.refit_gap = report.gap_before;
-    report.gap_before = given.Gap(Mean(r.held_out));
-    report.fit_gap_before = given.Gap(Mean(r.fit));
-    report.notes.push_back("The model's response was identified on the fit blocks (twinsim identify: delay, per-axis "
-                           "gain, lag, ramp and limits, couplings) before effects were sought: held-out gap " +
-                           FormatParameter(report.gap_before) + " -> " + FormatParameter(report.refit_gap) +
-                           ". 'Nominal' in the plots is the identified model.");
+    ReportRefit(OmniProblem(model, logs, options, block),
+                "The model's response was identified on the fit blocks (twinsim identify: delay, per-axis gain, lag, "
+                "loop gain, ramp and limits, couplings)",
+                &report);
   }
 
   // Find: the residual per axis in the robot's frame, before and after.
