@@ -236,7 +236,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     h << "</ul>\n";
   }
   h << "<p class=\"small\">twinsim identify; method: docs/identification.md, \"The omni robot\". " << r.solver_iterations
-    << " solver iterations, " << r.evaluations << " replays of the fit blocks, " << Num(r.seconds, "%.1f") << " s.</p>\n"
+    << " solver iterations, " << r.evaluations << " replays of the fit blocks.</p>\n"
     << "</body></html>\n";
   return h.str();
 }

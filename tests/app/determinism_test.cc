@@ -160,6 +160,8 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"train_residual", "train --model " + kOmni + " --log {d}/omni.csv --kind linear --residual --out {out}/p.pred"},
         Case{"identify", "identify --model " + kRrr + " --log {d}/arm_a.csv --log {d}/arm_b.csv --out {out}/m.yaml"},
         Case{"compare", "compare --model " + kOmni + " --log {d}/omni.csv --out {out}"},
+        Case{"identify_omni", "identify --model " + kOmni + " --log {d}/omni.csv --out {out}/o --max-delay 0.2 --stride 8",
+             "--threads 1", "--threads 2"},
         Case{"diagnose_omni", "diagnose --model " + kOmni + " --log {d}/omni.csv --out {out}/o --max-effects 1",
              "--threads 1", "--threads 2"},
         Case{"diagnose_arm", "diagnose --model " + kRrr + " --log {d}/arm_a.csv --log {d}/arm_b.csv --out {out}/o --max-effects 1",

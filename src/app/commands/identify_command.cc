@@ -122,6 +122,11 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
 
 int Identify(const IdentifyCliOptions& options) {
   if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
+  for (const char* omni_only :
+       {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--threads", "--robot", "--team"}) {
+    if (std::find(options.given.begin(), options.given.end(), omni_only) != options.given.end())
+      throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
+  }
   // Check everything before identifying or writing.
   std::string ext = std::filesystem::path(options.out).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
