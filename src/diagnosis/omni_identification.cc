@@ -495,9 +495,11 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
 
 // Gains and couplings as a linear least-squares fit of the measured body velocity (central
 // differences of measured poses) on the command sent `delay` s earlier, over frames whose
-// command had held for kSettleSeconds by then (near steady state): a start for the fit,
-// which sees the dynamics. Leaves *v as it is where too few frames qualify.
-void LinearStart(const std::vector<OmniLog>& logs, double delay, std::array<double, kNumParams>* v) {
+// command had held for kSettleSeconds by then (near steady state), in the fit blocks
+// (`in_fit`): a start for the fit, which sees the dynamics. Leaves *v as it is where too
+// few frames qualify.
+void LinearStart(const std::vector<OmniLog>& logs, double delay, const std::function<bool(const OmniLog&, std::size_t)>& in_fit,
+                 std::array<double, kNumParams>* v) {
   constexpr double kSettleSeconds = 0.3;
   std::vector<std::array<double, 3>> u, y;
   for (const OmniLog& log : logs) {
@@ -510,7 +512,7 @@ void LinearStart(const std::vector<OmniLog>& logs, double delay, std::array<doub
         const Twist2& b = log.rows[j - 1].command;
         if (a.vx != b.vx || a.vy != b.vy || a.omega != b.omega) changed = j;
       }
-      if (log.rows[i].t - delay < log.rows[0].t + kSettleSeconds) continue;
+      if (!in_fit(log, i) || log.rows[i].t - delay < log.rows[0].t + kSettleSeconds) continue;
       if (log.rows[j].t - log.rows[changed].t < kSettleSeconds) continue;
       const OmniLogRow& a = log.rows[i - 1];
       const OmniLogRow& b = log.rows[i + 1];
@@ -688,11 +690,15 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   // measured velocity on the delayed command as the start; the regression once more at
   // the delay found.
   say(0, "delay profile");
+  // Nothing of the held-out blocks reaches the fit, its start or its limits.
+  auto in_fit = [&](const OmniLog& log, std::size_t i) {
+    return !InHeldOutBlock(log.rows[i].t - log.rows.front().t, block, options.held_out);
+  };
   v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, nullptr, nullptr);
-  LinearStart(logs, v[kDelay], &v);
+  LinearStart(logs, v[kDelay], in_fit, &v);
   v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, &report.delay_profile_s,
                            &report.delay_profile_rms);
-  LinearStart(logs, v[kDelay], &v);
+  LinearStart(logs, v[kDelay], in_fit, &v);
   // 2. Everything but the speed limits, the delay included (a command falling due
   // within a physics step acts for its rest, so the cost is smooth in the delay).
   std::vector<int> free;
@@ -726,8 +732,9 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   say(3, "speed limits");
   std::vector<double> speeds, turns;
   for (const OmniLog& log : logs) {
-    for (const OmniLogRow& r : log.rows) {
-      const Twist2& c = r.command;
+    for (std::size_t i = 0; i < log.rows.size(); ++i) {
+      if (!in_fit(log, i)) continue;
+      const Twist2& c = log.rows[i].command;
       speeds.push_back(std::hypot(v[kGainX] * c.vx + v[kCrossXY] * c.vy, v[kGainY] * c.vy + v[kCrossYX] * c.vx));
       turns.push_back(std::abs(v[kGainW] * c.omega + v[kTurnX] * c.vx + v[kTurnY] * c.vy));
     }
