@@ -86,8 +86,9 @@ def identify(model, logs):
 
 def diagnose(model, logs, held_out=0.3, max_effects=3, backend="analytic", threads=0, refit_model=False):
     """`twinsim diagnose` without files: (report, repaired model); the report is the
-    dict of report.json (CONTRACT.md). refit_model (arms): re-identify the model's own
-    parameters on the fit blocks first, as `--refit-model`."""
+    dict of report.json (CONTRACT.md). refit_model: re-identify the model's own
+    parameters on the fit blocks first, as `--refit-model` (arms: inertia and friction;
+    omni robots: the response, as `twinsim identify`)."""
     text, repaired = _twinsim._diagnose(model, logs, float(held_out), int(max_effects), backend, int(threads),
                                         bool(refit_model))
     return _json.loads(text), repaired
