@@ -238,26 +238,38 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
   return segments;
 }
 
+// True where row i's prediction both ends and starts (K frames earlier) in blocks of the
+// given kind, after the piece's lead-in: a fit row's prediction never starts from a
+// tracker corrected to a held-out measurement, and a held-out row's never from a fit one.
+bool ScoredRow(const Segment& s, std::size_t i, bool held_out, int horizon) {
+  if (i < s.score_from || static_cast<bool>(s.held[i]) != held_out) return false;
+  const int start = s.log.FrameIndex(i) - horizon;
+  std::size_t j = i;
+  while (j > 0 && s.log.FrameIndex(j) > start) --j;
+  return s.log.FrameIndex(j) == start && j >= s.score_from && static_cast<bool>(s.held[j]) == held_out;
+}
+
 // Sums the errors of the held-out rows of `segments` (validation logs or the others)
-// that every predictor scores: past the longest warm-up a replay can have, after the
-// piece's lead-in.
+// that every predictor scores: past the longest warm-up a replay can have, where the
+// prediction starts on a logged frame and constant velocity has two measurements before
+// it, whatever the model.
 GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model, bool validation_only,
                     const OmniIdentificationOptions& options, double radius) {
   GapSum sum;
   for (const Segment& s : segments) {
     if (s.validation != validation_only) continue;
     const int first = static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames + options.horizon;
-    OmniReplayResult r;
+    const OmniReplayResult cv = ConstantVelocity(s.log, options.horizon, 0);
+    OmniReplayResult r = cv;
     if (model) {
       OmniReplayOptions o;
       o.backend = options.backend;
       o.horizon = options.horizon;
       r = ReplayOmniLog(*model, s.log, o);
-    } else {
-      r = ConstantVelocity(s.log, options.horizon, 0);
     }
     for (std::size_t row = 0; row < r.predicted.size(); ++row) {
-      r.predicted[row] = r.predicted[row] && s.held[row] && row >= s.score_from && s.log.FrameIndex(row) >= first;
+      r.predicted[row] = r.predicted[row] && cv.predicted[row] && s.log.FrameIndex(row) >= first &&
+                         ScoredRow(s, row, true, options.horizon);
     }
     for (const auto& e : PoseErrorsInRobotFrame(s.log, r, radius).e) sum.Add(e);
   }
@@ -296,7 +308,7 @@ class OmniIdentificationProblem {
       OmniPoseErrors& kept = out[static_cast<std::size_t>(k)];
       for (std::size_t r = 0; r < all.rows.size(); ++r) {
         const std::size_t row = all.rows[r];
-        if (row < s.score_from || static_cast<bool>(s.held[row]) != held_out) continue;
+        if (!ScoredRow(s, row, held_out, options_.horizon)) continue;
         kept.rows.push_back(row);
         kept.e.push_back(all.e[r]);
       }
@@ -438,7 +450,7 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   SolveResult out;
   out.values = start;
   const std::size_t rows = problem.FitResidual(start).size();
-  if (rows == 0) throw CheckFailed("no fit rows to identify from");
+  if (rows == 0) throw InputError("the logs leave no rows to fit: every prediction starts or ends in a held-out block");
   out.rows = rows;
   std::vector<double> x;
   for (int p : free) x.push_back(ToCoordinate(p, start[static_cast<std::size_t>(p)], max_delay));
@@ -499,7 +511,7 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
 // (`in_fit`): a start for the fit, which sees the dynamics. Leaves *v as it is where too
 // few frames qualify.
 void LinearStart(const std::vector<OmniLog>& logs, double delay, const std::function<bool(const OmniLog&, std::size_t)>& in_fit,
-                 std::array<double, kNumParams>* v) {
+                 const std::vector<int>& free, std::array<double, kNumParams>* v) {
   constexpr double kSettleSeconds = 0.3;
   std::vector<std::array<double, 3>> u, y;
   for (const OmniLog& log : logs) {
@@ -512,7 +524,8 @@ void LinearStart(const std::vector<OmniLog>& logs, double delay, const std::func
         const Twist2& b = log.rows[j - 1].command;
         if (a.vx != b.vx || a.vy != b.vy || a.omega != b.omega) changed = j;
       }
-      if (!in_fit(log, i) || log.rows[i].t - delay < log.rows[0].t + kSettleSeconds) continue;
+      if (!in_fit(log, i - 1) || !in_fit(log, i) || !in_fit(log, i + 1)) continue;
+      if (log.rows[i].t - delay < log.rows[0].t + kSettleSeconds) continue;
       if (log.rows[j].t - log.rows[changed].t < kSettleSeconds) continue;
       const OmniLogRow& a = log.rows[i - 1];
       const OmniLogRow& b = log.rows[i + 1];
@@ -538,6 +551,7 @@ void LinearStart(const std::vector<OmniLog>& logs, double delay, const std::func
     return Eigen::VectorXd(A.colPivHouseholderQr().solve(b));
   };
   auto set = [&](int p, double value) {
+    if (std::find(free.begin(), free.end(), p) == free.end()) return;  // held at the model's value
     if (std::isfinite(value)) (*v)[static_cast<std::size_t>(p)] = std::clamp(value, kSpecs[p].lower, kSpecs[p].upper);
   };
   const Eigen::VectorXd fx = fit(0, {0, 1}), fy = fit(1, {1, 0}), fw = fit(2, {2, 0, 1});
@@ -694,16 +708,43 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   auto in_fit = [&](const OmniLog& log, std::size_t i) {
     return !InHeldOutBlock(log.rows[i].t - log.rows.front().t, block, options.held_out);
   };
-  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, nullptr, nullptr);
-  LinearStart(logs, v[kDelay], in_fit, &v);
-  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, &report.delay_profile_s,
-                           &report.delay_profile_rms);
-  LinearStart(logs, v[kDelay], in_fit, &v);
-  // 2. Everything but the speed limits, the delay included (a command falling due
-  // within a physics step acts for its rest, so the cost is smooth in the delay).
+  // An axis the fit blocks never command (below 2 % of the largest command) leaves its
+  // parameters, and the couplings it drives, at the model's values: the logs say nothing
+  // of them.
+  double most[3] = {0, 0, 0};
+  for (const OmniLog& log : logs) {
+    for (std::size_t i = 0; i < log.rows.size(); ++i) {
+      if (!in_fit(log, i)) continue;
+      const Twist2& c = log.rows[i].command;
+      most[0] = std::max(most[0], std::abs(c.vx));
+      most[1] = std::max(most[1], std::abs(c.vy));
+      most[2] = std::max(most[2], std::abs(c.omega));
+    }
+  }
+  const double speed_scale = std::max({most[0], most[1], 1e-9});
+  const bool excited[3] = {most[0] > 0.02 * speed_scale && most[0] > 0.01, most[1] > 0.02 * speed_scale && most[1] > 0.01,
+                           most[2] > 0.02};
+  std::map<int, std::string> pruned;
+  const char* axis_names[3] = {"forward", "sideways", "turn"};
+  for (int a = 0; a < 3; ++a) {
+    if (excited[a]) continue;
+    std::vector<int> tied = {kGainX + a, kLagX + a, kLoopX + a, kSlewX + a};
+    if (a == 0) tied.insert(tied.end(), {kTurnX, kCrossYX});
+    if (a == 1) tied.insert(tied.end(), {kTurnY, kCrossXY});
+    for (int p : tied) pruned[p] = std::string("not excited: the fit blocks never command ") + axis_names[a];
+  }
   std::vector<int> free;
   for (int p = 0; p < kNumParams; ++p)
-    if (p != kVMax && p != kWMax) free.push_back(p);
+    if (p != kVMax && p != kWMax && !pruned.count(p)) free.push_back(p);
+  for (const auto& [p, why] : pruned) v[static_cast<std::size_t>(p)] = nominal_values[static_cast<std::size_t>(p)];
+
+  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, nullptr, nullptr);
+  LinearStart(logs, v[kDelay], in_fit, free, &v);
+  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, &report.delay_profile_s,
+                           &report.delay_profile_rms);
+  LinearStart(logs, v[kDelay], in_fit, free, &v);
+  // 2. Everything but the speed limits, the delay included (a command falling due
+  // within a physics step acts for its rest, so the cost is smooth in the delay).
   say(1, "delay, response and couplings");
   SolveResult solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
   v = solved.values;
@@ -718,11 +759,15 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
       std::array<double, kNumParams> trial = centre;
       trial[kDelay] = centre[kDelay] + shift;
       if (trial[kDelay] < 0 || trial[kDelay] > options.max_delay) continue;
-      const SolveResult other = Solve(problem, trial, free, options.max_delay, options.max_iterations / 2, false);
-      report.solver_iterations += other.iterations;
-      if (other.cost < best) {
-        best = other.cost;
-        v = other.values;
+      try {
+        const SolveResult other = Solve(problem, trial, free, options.max_delay, options.max_iterations / 2, false);
+        report.solver_iterations += other.iterations;
+        if (other.cost < best) {
+          best = other.cost;
+          v = other.values;
+        }
+      } catch (const CheckFailed&) {
+        // The model diverges at that delay: not a valley to try.
       }
     }
   }
@@ -769,7 +814,6 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
   v = solved.values;
   report.solver_iterations += solved.iterations;
-  std::map<int, std::string> pruned;
   for (int p : std::vector<int>(free)) {
     const ParamSpec& s = kSpecs[p];
     double& value = v[static_cast<std::size_t>(p)];
@@ -852,7 +896,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   };
   report.held_out = gaps(false);
   if (!validation.empty()) report.validation = gaps(true);
-  for (const OmniPoseErrors& e : problem.Errors(model, false, options.stride)) report.fit_rows += static_cast<int>(e.rows.size());
+  for (const OmniPoseErrors& e : problem.Errors(problem.Build(v), false, options.stride))
+    report.fit_rows += static_cast<int>(e.rows.size());
   const double fit_n = std::max(1, report.fit_rows);
   report.fit_cost_nominal = std::sqrt(nominal_cost / fit_n);
   report.fit_cost_identified = std::sqrt(problem.Cost(v) / fit_n);

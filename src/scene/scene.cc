@@ -193,6 +193,14 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
 
   for (std::size_t i = 0; i < scene.robots.size(); ++i) {
     const SceneRobot& r = scene.robots[i];
+    // Stamps jittered by more than an eighth of a frame either way would make the log
+    // unreadable (rows land on frames by rounding, with 0.3 of a frame to spare).
+    if (r.model.vision_time_jitter > 0.125 / scene.frame_rate) {
+      std::ostringstream msg;
+      msg << "robot '" << r.name << "': vision.time_jitter " << r.model.vision_time_jitter << " s is over an eighth of the "
+          << scene.frame_rate << " Hz frame (" << 0.125 / scene.frame_rate << " s): its log would not be readable";
+      errors.Add(SourceLocation{path}, msg.str());
+    }
     if (r.commands.predictor) {
       const int delay = r.model.command_delay_frames + r.model.vision_delay_frames;
       try {

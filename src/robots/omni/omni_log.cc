@@ -97,8 +97,10 @@ std::vector<std::size_t> SelectRows(const CsvTable& table, const OmniLogSelector
   std::string list;
   for (const auto& r : robots) list += (list.empty() ? "" : ", ") + (r.empty() ? std::string("(blank)") : r);
   if (kept.empty()) {
-    throw InputError(SourceLocation{table.path, 1}, "no rows for robot '" + (select.team.empty() ? "" : select.team + " ") +
-                                                        select.robot + "' (the log holds: " + list + ")");
+    const std::string wanted = select.team.empty() ? select.robot
+                               : select.robot.empty() ? select.team
+                                                      : select.team + " " + select.robot;
+    throw InputError(SourceLocation{table.path, 1}, "no rows for robot '" + wanted + "' (the log holds: " + list + ")");
   }
   std::vector<std::string> chosen;
   for (std::size_t i : kept) {
@@ -114,9 +116,10 @@ std::vector<std::size_t> SelectRows(const CsvTable& table, const OmniLogSelector
   return kept;
 }
 
-// Marks frames without a new measurement and gives them a pose interpolated in time
-// between the measured frames around them (theta already unwrapped).
-void FillUnmeasured(OmniLog* log) {
+// Gives frames with empty pose cells a pose interpolated in time between the measured
+// frames around them (theta already unwrapped). A repeated pose keeps the value the
+// camera sent: nothing is invented where the file holds a number.
+void FillUnmeasured(OmniLog* log, const std::vector<char>& empty) {
   std::vector<OmniLogRow>& rows = log->rows;
   std::size_t previous = rows.size();  // the last measured row so far
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -124,16 +127,18 @@ void FillUnmeasured(OmniLog* log) {
     if (previous < rows.size()) {
       const OmniLogRow& a = rows[previous];
       for (std::size_t k = previous + 1; k < i; ++k) {
+        if (!empty[k]) continue;
         const double u = (rows[k].t - a.t) / (rows[i].t - a.t);
         rows[k].pose = Pose2{a.pose.x + u * (rows[i].pose.x - a.pose.x), a.pose.y + u * (rows[i].pose.y - a.pose.y),
                              a.pose.theta + u * (rows[i].pose.theta - a.pose.theta)};
       }
     } else {
-      for (std::size_t k = 0; k < i; ++k) rows[k].pose = rows[i].pose;
+      for (std::size_t k = 0; k < i; ++k) rows[k].pose = rows[i].pose;  // only empty rows come before
     }
     previous = i;
   }
-  for (std::size_t k = previous + 1; k < rows.size(); ++k) rows[k].pose = rows[previous].pose;
+  for (std::size_t k = previous + 1; k < rows.size(); ++k)
+    if (empty[k]) rows[k].pose = rows[previous].pose;
 }
 
 }  // namespace
@@ -152,16 +157,17 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
   const std::vector<std::size_t> selected = SelectRows(table, select, &log.robot);
   bool have_measured = false;
   Pose2 last_raw;
+  std::vector<char> empty;  // per row: its pose cells are empty
   for (std::size_t i : selected) {
     const auto& r = table.rows[i];
     OmniLogRow row;
     row.t = r[col[0]];
     row.pose = Pose2{r[col[1]], r[col[2]], r[col[3]]};
     row.command = Twist2{r[col[4]], r[col[5]], r[col[6]]};
-    const int empty = std::isnan(row.pose.x) + std::isnan(row.pose.y) + std::isnan(row.pose.theta);
-    if (empty == 3) {
+    const int empty_cells = std::isnan(row.pose.x) + std::isnan(row.pose.y) + std::isnan(row.pose.theta);
+    if (empty_cells == 3) {
       row.measured = false;
-    } else if (empty > 0) {
+    } else if (empty_cells > 0) {
       const int c = std::isnan(row.pose.x) ? col[1] : std::isnan(row.pose.y) ? col[2] : col[3];
       throw InputError(SourceLocation{table.path, table.line_of[i]},
                        "column '" + table.header[static_cast<std::size_t>(c)] +
@@ -172,6 +178,7 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
       row.measured = false;  // the camera repeated its last pose
     }
     CheckRowRange(row, SourceLocation{table.path, table.line_of[i]});
+    empty.push_back(empty_cells == 3);
     log.rows.push_back(row);
     log.line_of.push_back(table.line_of[i]);
     if (row.measured) {
@@ -226,12 +233,13 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
 
   // Unwrap theta: successive measurements never turn by more than half a turn.
   const OmniLogRow* prev = nullptr;
-  for (OmniLogRow& row : log.rows) {
-    if (!row.measured) continue;
+  for (std::size_t i = 0; i < log.rows.size(); ++i) {
+    OmniLogRow& row = log.rows[i];
+    if (empty[i]) continue;
     if (prev) row.pose.theta = prev->pose.theta + WrapAngle(row.pose.theta - prev->pose.theta);
     prev = &row;
   }
-  FillUnmeasured(&log);
+  FillUnmeasured(&log, empty);
   return log;
 }
 

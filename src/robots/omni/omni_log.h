@@ -24,9 +24,10 @@ struct OmniLogRow {
   double t = 0;     // s
   Pose2 pose;       // field frame, theta unwrapped on reading
   Twist2 command;   // robot frame, sent at t
-  // False for a frame without a new measurement; `pose` is then interpolated in time
-  // between the measured frames around it (held before the first and after the last),
-  // for code that needs a pose, and no fit or score may use it as a measurement.
+  // False for a frame without a new measurement; no fit or score may use its pose as a
+  // measurement. Its pose is the camera's repeated one, or for empty cells interpolated
+  // in time between the measured frames around it (held before the first and after the
+  // last), for code that needs a pose.
   bool measured = true;
 };
 
