@@ -35,6 +35,8 @@
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 #include "scene/command_source.h"
+#include "scene/scene.h"
+#include "scene/scene_run.h"
 #include "sim/omni_simulation.h"
 
 namespace twinsim {
@@ -122,11 +124,7 @@ const OmniLog& OmniBenchLog(const OmniModel& nominal) {
     robots.push_back(SimRobot{"r", plant, Pose2{}, MakeCommandSource(drive, seed, 0, kSeconds, Pose2{})});
     Simulation sim(std::move(robots), MakeOmniBackend("analytic", {plant}, FieldModel{}, FrameTiming{}), seed);
     const SimulationResult result = sim.Run(static_cast<int>(kSeconds * FrameTiming{}.frame_rate) + 1);
-    std::vector<OmniLogRow> rows;
-    for (const auto& f : result.frames[0]) {
-      if (f.observed) rows.push_back({f.t, f.seen, f.command});
-    }
-    return ParseOmniLog(FormatOmniLog(rows), "omni_bench.csv");
+    return ParseOmniLog(FormatOmniLog(ObserverLog(result.frames[0])), "omni_bench.csv");
   }();
   return log;
 }
@@ -159,25 +157,10 @@ BENCHMARK_CAPTURE(BM_DiagnoseOmni, ode, std::string("ode"))->Unit(benchmark::kSe
 // models/omni4.yaml identifies the response on the fit blocks, then seeks effects.
 void BM_IdentifyAndDiagnoseOmni(benchmark::State& state) {
   const OmniModel nominal = LoadOmniModel(Source("models/omni4.yaml"));
-  const OmniModel plant = LoadOmniModel(Source("models/omni4_real_like.yaml"));
   static const OmniLog log = [&] {
-    CommandSpec drive;
-    drive.type = "random";
-    drive.max_speed = 1.5;
-    drive.max_omega = 10;
-    drive.max_centripetal = 30;
-    drive.leash = 1.5;
-    FrameTiming timing;
-    timing.frame_rate = 60;
-    timing.physics_substeps = DefaultPhysicsSubsteps(60);
-    std::vector<SimRobot> robots;
-    robots.push_back(SimRobot{"r", plant, Pose2{}, MakeCommandSource(drive, 7, 0, kSeconds, Pose2{})});
-    Simulation sim(std::move(robots), MakeOmniBackend("ode", {plant}, FieldModel{}, timing), 7);
-    const SimulationResult r = sim.Run(static_cast<int>(kSeconds * 60) + 1);
-    std::vector<OmniLogRow> rows;
-    for (const auto& f : r.frames[0])
-      if (f.observed) rows.push_back({f.stamp, f.seen, f.command});
-    return ParseOmniLog(FormatOmniLog(rows), "real_like_bench.csv");
+    const Scene scene = LoadScene(Source("scenes/record_real_like.yaml"));
+    const SimulationResult r = RunOmniScene(scene, scene.backend, "");
+    return ParseOmniLog(FormatOmniLog(ObserverLog(r.frames[0])), "real_like_bench.csv");
   }();
   DiagnosisOptions options;
   options.refit_model = true;

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "backends/omni_backend_factory.h"
+#include "scene/scene_run.h"
 #include "sim/omni_simulation.h"
 #include "test_util.h"
 
@@ -52,10 +53,7 @@ OmniLog RecordLog(const OmniModel& model, const CommandSpec& commands, double se
   robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(commands, seed, 0, seconds, Pose2{})});
   Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, FrameTiming{}), seed);
   const SimulationResult r = sim.Run(static_cast<int>(seconds * 30) + 1);
-  std::vector<OmniLogRow> rows;
-  for (const auto& f : r.frames[0])
-    if (f.observed) rows.push_back({f.t, f.seen, f.command});
-  return ParseOmniLog(FormatOmniLog(rows), name);
+  return ParseOmniLog(FormatOmniLog(ObserverLog(r.frames[0])), name);
 }
 
 CommandResult RunTwinsim(const std::string& args) {

@@ -116,7 +116,7 @@ CompareErrorRow MeasurePredictionErrors(const OmniLog& log, const OmniReplayResu
   CompareErrorRow out;
   double sum_position = 0, sum_heading = 0;
   for (std::size_t i = 0; i < result.t.size(); ++i) {
-    if (!result.predicted[i] || !log.rows[i].measured) continue;  // scored only against a measurement
+    if (!PredictedAndMeasured(log, result, i)) continue;
     const Pose2& p = result.pose[i];
     const Pose2& m = log.rows[i].pose;
     const double d2 = (p.x - m.x) * (p.x - m.x) + (p.y - m.y) * (p.y - m.y);

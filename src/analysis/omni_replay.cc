@@ -29,7 +29,7 @@ double PositionRmse(const OmniLog& log, const OmniReplayResult& result) {
   double sum = 0;
   int n = 0;
   for (std::size_t i = 0; i < result.t.size(); ++i) {
-    if (!result.predicted[i] || !log.rows[i].measured) continue;
+    if (!PredictedAndMeasured(log, result, i)) continue;
     sum += std::pow(result.pose[i].x - log.rows[i].pose.x, 2) + std::pow(result.pose[i].y - log.rows[i].pose.y, 2);
     ++n;
   }
@@ -39,7 +39,7 @@ double PositionRmse(const OmniLog& log, const OmniReplayResult& result) {
 OmniPoseErrors PoseErrorsInRobotFrame(const OmniLog& log, const OmniReplayResult& result, double radius) {
   OmniPoseErrors out;
   for (std::size_t i = 0; i < result.pose.size(); ++i) {
-    if (!result.predicted[i] || !log.rows[i].measured) continue;
+    if (!PredictedAndMeasured(log, result, i)) continue;
     const Pose2& m = log.rows[i].pose;
     const double dx = m.x - result.pose[i].x, dy = m.y - result.pose[i].y;
     const double c = std::cos(m.theta), s = std::sin(m.theta);

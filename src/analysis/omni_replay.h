@@ -49,6 +49,12 @@ struct OmniReplayResult {
   int num_predicted() const;
 };
 
+// True when row i of `result` is a prediction and the log holds a measurement there:
+// the rows every score of a replay is taken over.
+inline bool PredictedAndMeasured(const OmniLog& log, const OmniReplayResult& result, std::size_t i) {
+  return result.predicted[i] && log.rows[i].measured;
+}
+
 // Root-mean-square distance (m) between the predicted rows and the log's poses, over
 // the rows with a measurement.
 double PositionRmse(const OmniLog& log, const OmniReplayResult& result);

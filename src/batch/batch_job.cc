@@ -141,7 +141,7 @@ Metrics Replay(const JobInputs& in, OutputFiles* files) {
   double heading = 0;
   int predicted = 0;
   for (std::size_t i = 0; i < result.t.size(); ++i) {
-    if (!result.predicted[i] || !log.rows[i].measured) continue;
+    if (!PredictedAndMeasured(log, result, i)) continue;
     const double d = std::remainder(result.pose[i].theta - log.rows[i].pose.theta, 2 * kPi);
     heading += d * d;
     ++predicted;

@@ -167,7 +167,7 @@ struct GapSum {
 
 // The constant-velocity extrapolation of the measured poses: frame i predicted from
 // the last two measured frames at or before i - K, at their velocity (field frame).
-OmniReplayResult ConstantVelocity(const OmniLog& log, int horizon, int skip_frames) {
+OmniReplayResult ConstantVelocity(const OmniLog& log, int horizon) {
   OmniReplayResult out;
   const std::size_t n = log.rows.size();
   out.t.resize(n);
@@ -182,7 +182,7 @@ OmniReplayResult ConstantVelocity(const OmniLog& log, int horizon, int skip_fram
   std::size_t m = 0;  // measured[m] is the first measured row after the start frame
   for (std::size_t i = 0; i < n; ++i) {
     const int start = log.FrameIndex(i) - horizon;
-    if (start < skip_frames) continue;
+    if (start < 0) continue;
     while (m < measured.size() && log.FrameIndex(static_cast<std::size_t>(measured[m])) <= start) ++m;
     if (m < 2) continue;
     const OmniLogRow& b = log.rows[static_cast<std::size_t>(measured[m - 1])];
@@ -259,7 +259,7 @@ GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model
   for (const Segment& s : segments) {
     if (s.validation != validation_only) continue;
     const int first = static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames + options.horizon;
-    const OmniReplayResult cv = ConstantVelocity(s.log, options.horizon, 0);
+    const OmniReplayResult cv = ConstantVelocity(s.log, options.horizon);
     OmniReplayResult r = cv;
     if (model) {
       OmniReplayOptions o;
@@ -587,7 +587,8 @@ double ProfileDelay(const OmniIdentificationProblem& problem, std::array<double,
 
 // The robot's body velocity from measured poses (central differences over measured
 // neighbours), the command sent `delay` (s) earlier, and the nominal and identified
-// models' free-run body velocity, for the report's plots over one held-out stretch.
+// models' one-frame predictions from the measured state, for the report's plots over
+// the first stretch of the log (its fit and held-out blocks alike).
 OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal, const OmniModel& identified,
                                     const std::string& backend, double delay) {
   OmniIdentificationSeries s;
@@ -725,13 +726,12 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   const bool excited[3] = {most[0] > 0.02 * speed_scale && most[0] > 0.01, most[1] > 0.02 * speed_scale && most[1] > 0.01,
                            most[2] > 0.02};
   std::map<int, std::string> pruned;
-  const char* axis_names[3] = {"forward", "sideways", "turn"};
   for (int a = 0; a < 3; ++a) {
     if (excited[a]) continue;
     std::vector<int> tied = {kGainX + a, kLagX + a, kLoopX + a, kSlewX + a};
     if (a == 0) tied.insert(tied.end(), {kTurnX, kCrossYX});
     if (a == 1) tied.insert(tied.end(), {kTurnY, kCrossXY});
-    for (int p : tied) pruned[p] = std::string("not excited: the fit blocks never command ") + axis_names[a];
+    for (int p : tied) pruned[p] = std::string("not excited: the fit blocks never command ") + kOmniAxisNames[a];
   }
   std::vector<int> free;
   for (int p = 0; p < kNumParams; ++p)
@@ -896,11 +896,14 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   };
   report.held_out = gaps(false);
   if (!validation.empty()) report.validation = gaps(true);
-  for (const OmniPoseErrors& e : problem.Errors(problem.Build(v), false, options.stride))
+  double fit_cost = 0;  // the identified model's, over the fit rows
+  for (const OmniPoseErrors& e : problem.Errors(problem.Build(v), false, options.stride)) {
     report.fit_rows += static_cast<int>(e.rows.size());
+    for (const auto& x : e.e) fit_cost += x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
+  }
   const double fit_n = std::max(1, report.fit_rows);
   report.fit_cost_nominal = std::sqrt(nominal_cost / fit_n);
-  report.fit_cost_identified = std::sqrt(problem.Cost(v) / fit_n);
+  report.fit_cost_identified = std::sqrt(fit_cost / fit_n);
   std::vector<OmniLog> all = logs;
   all.insert(all.end(), validation.begin(), validation.end());
   report.noise_floor = OmniNoiseFloor(all, nominal.chassis_radius);

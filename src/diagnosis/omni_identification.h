@@ -14,11 +14,11 @@
 //   - the couplings between axes: turn per forward and per sideways command
 //     (turn_coupling), forward and sideways leaking into each other (cross_coupling).
 // The score is the contract's replay: each frame predicted from the measured state
-// `horizon` frames earlier. The parameters minimise the prediction error on the fit
-// blocks of the logs (Ceres, numeric derivatives through the engine); the delay, whose
-// effect moves in physics steps, by a profile search around them. Held-out blocks, each
-// replayed on its own so nothing of them reaches the fit, give the gaps, beside
-// the constant-velocity extrapolation of the measured poses (no model at all).
+// `horizon` frames earlier. The parameters, the delay among them, minimise the
+// prediction error on the fit blocks of the logs (Ceres, numeric derivatives through the
+// engine, after a profile search of the delay). The held-out blocks, whose predictions
+// neither start nor end in a fit block, give the gaps, beside the constant-velocity
+// extrapolation of the measured poses (no model at all).
 //
 //   OmniIdentificationOptions options;
 //   OmniModel identified;
@@ -61,7 +61,10 @@ struct IdentifiedParameter {
   // One standard error (the fit's covariance, scaled by the residual's variance and its
   // correlation length); NaN where the log does not determine the parameter.
   double standard_error = std::numeric_limits<double>::quiet_NaN();
-  bool estimated = true;  // false: not excited by the log (e.g. a limit never reached); value is the model's
+  // False: not estimated (see note). Then value is the model's for an axis the logs do
+  // not excite; 0 (none) for a limit, lag or ramp the data does not ask for; else the
+  // fit's value at the edge of its range.
+  bool estimated = true;
   std::string note;       // why not estimated, or what limits it
 };
 

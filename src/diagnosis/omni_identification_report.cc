@@ -54,11 +54,10 @@ std::string Verdict(const OmniIdentificationReport& r) {
 }
 
 SeriesPlot AxisPlot(const OmniIdentificationSeries& s, int axis, bool against_command) {
-  static const char* names[3] = {"forward", "sideways", "turn"};
   static const char* units[3] = {"m/s", "m/s", "rad/s"};
   SeriesPlot plot;
-  plot.title = std::string(names[axis]) + (against_command ? ": velocity against the command" : ": velocity over a held-out stretch");
-  plot.y_label = std::string(names[axis]) + " velocity [" + units[axis] + "]";
+  plot.title = std::string(kOmniAxisNames[axis]) + (against_command ? ": velocity against the command" : ": velocity over the first stretch of the log");
+  plot.y_label = std::string(kOmniAxisNames[axis]) + " velocity [" + units[axis] + "]";
   plot.height = 420;
   auto column = [&](const std::vector<std::array<double, 3>>& v) {
     std::vector<double> out;
@@ -222,7 +221,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   }
   for (const OmniIdentificationSeries& s : r.series) {
     if (s.t.empty()) continue;
-    h << "<h2>Measured against nominal and identified, per axis</h2>\n<p>Body velocity over a held-out stretch of <code>"
+    h << "<h2>Measured against nominal and identified, per axis</h2>\n<p>Body velocity over the first stretch of <code>"
       << HtmlEscape(s.log) << "</code>: measured (central differences of the poses), the command sent the identified "
       << "delay earlier, and each model's one-frame prediction from the measured state.</p>\n";
     for (int axis = 0; axis < 3; ++axis) {

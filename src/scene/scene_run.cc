@@ -15,14 +15,6 @@
 namespace twinsim {
 namespace {
 
-// The observer's log of one robot: only frames whose observation arrived.
-std::vector<OmniLogRow> ObserverLog(const std::vector<FrameRecord>& frames) {
-  std::vector<OmniLogRow> rows;
-  for (const auto& f : frames)
-    if (f.observed) rows.push_back(OmniLogRow{f.stamp, f.seen, f.command});
-  return rows;
-}
-
 // The ground truth of one robot: true pose and velocity at every frame.
 std::string TruthCsv(const std::vector<FrameRecord>& frames) {
   std::string out = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,vx,vy,omega\n";
@@ -48,6 +40,13 @@ std::string ArmTrackingCsv(const TrackingTrial& trial) {
 }
 
 }  // namespace
+
+std::vector<OmniLogRow> ObserverLog(const std::vector<FrameRecord>& frames) {
+  std::vector<OmniLogRow> rows;
+  for (const auto& f : frames)
+    if (f.observed) rows.push_back(OmniLogRow{f.stamp, f.seen, f.command});
+  return rows;
+}
 
 SimulationResult RunOmniScene(const Scene& scene, const std::string& backend, const std::string& predictor,
                               const std::function<void(int, int)>& progress) {

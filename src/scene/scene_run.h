@@ -23,9 +23,15 @@
 #include "scene/arm_scene.h"
 #include "scene/scene.h"
 #include "sim/arm_backend.h"
+#include "robots/omni/omni_log.h"
 #include "sim/omni_simulation.h"
 
 namespace twinsim {
+
+// The observer's log of one robot (a SimulationResult's frames): the frames whose
+// observation arrived, at the time the camera stamped, with the pose seen and the
+// command sent. What `run` writes as trajectory.csv.
+std::vector<OmniLogRow> ObserverLog(const std::vector<FrameRecord>& frames);
 
 // Runs every frame of an omni scene on `backend` ("learned" with the 1-frame predictor
 // file `predictor`; empty: none). `progress(done, total)` is called as frames finish.

@@ -11,6 +11,7 @@
 #include "robots/omni/omni_log.h"
 #include "scene/command_source.h"
 #include "sim/newtonian_omni_backend.h"
+#include "scene/scene_run.h"
 #include "sim/omni_simulation.h"
 #include "test_util.h"
 
@@ -181,10 +182,7 @@ TEST_P(BackendConformance, SameSeedGivesByteIdenticalLogs) {
   random.type = "random";
   auto log = [&](std::uint64_t seed) {
     const SimulationResult r = Drive(GetParam(), m, random, 4.0, seed);
-    std::vector<OmniLogRow> rows;
-    for (const auto& f : r.frames[0])
-      if (f.observed) rows.push_back({f.t, f.seen, f.command});
-    return FormatOmniLog(rows);
+    return FormatOmniLog(ObserverLog(r.frames[0]));
   };
   const std::string a = log(3), b = log(3), c = log(4);
   EXPECT_EQ(a, b);

@@ -128,9 +128,7 @@ int Identify(const IdentifyCliOptions& options) {
       throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
   }
   // Check everything before identifying or writing.
-  std::string ext = std::filesystem::path(options.out).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext != ".yaml" && ext != ".yml")
+  if (!EndsWithYaml(options.out))
     throw InputError("--out " + options.out + ": the identified model is written as YAML; give a .yaml or .yml path");
   if (ModelFileRobotKind(options.model) != "arm")
     throw InputError(SourceLocation{options.model}, "identify estimates an arm's parameters; this is not an arm model");

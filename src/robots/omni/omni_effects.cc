@@ -81,13 +81,11 @@ void SetOmniEffect(const std::string& name, const std::map<std::string, double>&
   } else if (name == "motor_lag") {
     if (parameters.empty()) throw InputError("effect 'motor_lag': needs time_constant or per-axis time constants");
     effects->motor_lag = parameters.count("time_constant") ? get("time_constant", 0, 10, false) : 0;
-    const char* axes[3] = {"forward", "sideways", "turn"};
-    for (int a = 0; a < 3; ++a) effects->axis_lag[static_cast<std::size_t>(a)] = parameters.count(axes[a]) ? get(axes[a], 0, 10, false) : 0;
+    for (int a = 0; a < 3; ++a) effects->axis_lag[static_cast<std::size_t>(a)] = parameters.count(kOmniAxisNames[a]) ? get(kOmniAxisNames[a], 0, 10, false) : 0;
   } else if (name == "velocity_scale") {
     if (parameters.empty()) throw InputError("effect 'velocity_scale': needs scale or per-axis scales");
     effects->velocity_scale = parameters.count("scale") ? get("scale", 0.2, 5, false) : 1;
-    const char* axes[3] = {"forward", "sideways", "turn"};
-    for (int a = 0; a < 3; ++a) effects->axis_scale[static_cast<std::size_t>(a)] = parameters.count(axes[a]) ? get(axes[a], 0.02, 5, false) : 1;
+    for (int a = 0; a < 3; ++a) effects->axis_scale[static_cast<std::size_t>(a)] = parameters.count(kOmniAxisNames[a]) ? get(kOmniAxisNames[a], 0.02, 5, false) : 1;
   } else if (name == "rotation_drift") {
     effects->rotation_drift = get("rate", -10, 10, false);
   } else if (name == "turn_coupling") {
@@ -111,19 +109,18 @@ std::vector<std::pair<std::string, std::map<std::string, double>>> ListOmniEffec
     out.push_back({"velocity_saturation", p});
   }
   if (e.a_max > 0) out.push_back({"traction_limit", {{"a_max", e.a_max}}});
-  const char* axes[3] = {"forward", "sideways", "turn"};
   if (e.motor_lag > 0 || e.axis_lag != std::array<double, 3>{0, 0, 0}) {
     std::map<std::string, double> p;
     if (e.motor_lag > 0) p["time_constant"] = e.motor_lag;
     for (int a = 0; a < 3; ++a)
-      if (e.axis_lag[static_cast<std::size_t>(a)] > 0) p[axes[a]] = e.axis_lag[static_cast<std::size_t>(a)];
+      if (e.axis_lag[static_cast<std::size_t>(a)] > 0) p[kOmniAxisNames[a]] = e.axis_lag[static_cast<std::size_t>(a)];
     out.push_back({"motor_lag", p});
   }
   if (e.velocity_scale != 1 || e.axis_scale != std::array<double, 3>{1, 1, 1}) {
     std::map<std::string, double> p;
     if (e.velocity_scale != 1) p["scale"] = e.velocity_scale;
     for (int a = 0; a < 3; ++a)
-      if (e.axis_scale[static_cast<std::size_t>(a)] != 1) p[axes[a]] = e.axis_scale[static_cast<std::size_t>(a)];
+      if (e.axis_scale[static_cast<std::size_t>(a)] != 1) p[kOmniAxisNames[a]] = e.axis_scale[static_cast<std::size_t>(a)];
     out.push_back({"velocity_scale", p});
   }
   if (e.rotation_drift != 0) out.push_back({"rotation_drift", {{"rate", e.rotation_drift}}});

@@ -66,6 +66,9 @@ struct OmniEffects {
   bool any() const { return !Active().empty(); }
 };
 
+// The per-axis keys of velocity_scale and motor_lag, axis 0 (forward), 1 (sideways), 2 (turn).
+inline constexpr const char* kOmniAxisNames[3] = {"forward", "sideways", "turn"};
+
 // The omni effect vocabulary (CONTRACT.md), in its order.
 const std::vector<std::string>& OmniEffectNames();
 

@@ -116,16 +116,15 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
       m.Get("w_max", &fx.w_max, Positive(1000));
       if (!m.Has("v_max") && !m.Has("w_max")) m.Missing("v_max");
     });
-    const char* axes[3] = {"forward", "sideways", "turn"};
     effect("motor_lag", [&](YamlMap& m) {
       m.Get("time_constant", &fx.motor_lag, InRange(0, 10));
-      for (int a = 0; a < 3; ++a) m.Get(axes[a], &fx.axis_lag[static_cast<std::size_t>(a)], InRange(0, 10));
+      for (int a = 0; a < 3; ++a) m.Get(kOmniAxisNames[a], &fx.axis_lag[static_cast<std::size_t>(a)], InRange(0, 10));
       if (!m.Has("time_constant") && !m.Has("forward") && !m.Has("sideways") && !m.Has("turn")) m.Missing("time_constant");
     });
     effect("traction_limit", [&](YamlMap& m) { m.Require("a_max", &fx.a_max, Positive(1e4)); });
     effect("velocity_scale", [&](YamlMap& m) {
       m.Get("scale", &fx.velocity_scale, InRange(0.2, 5));
-      for (int a = 0; a < 3; ++a) m.Get(axes[a], &fx.axis_scale[static_cast<std::size_t>(a)], InRange(0.02, 5));
+      for (int a = 0; a < 3; ++a) m.Get(kOmniAxisNames[a], &fx.axis_scale[static_cast<std::size_t>(a)], InRange(0.02, 5));
       if (!m.Has("scale") && !m.Has("forward") && !m.Has("sideways") && !m.Has("turn")) m.Missing("scale");
     });
     effect("rotation_drift", [&](YamlMap& m) { m.Require("rate", &fx.rotation_drift, InRange(-10, 10)); });
