@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "diagnosis/forward_selection.h"
+#include "diagnosis/learned_residual.h"
 #include "identification/wls_identification.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_effects.h"
@@ -42,7 +43,7 @@ struct LogData {
   int first = 0, last = 0;                  // rows used, [first, last)
   Eigen::MatrixXd rigid;                    // rows x n, N·m: inverse dynamics of the bodies, no friction
   std::array<Eigen::MatrixXd, 10> payload;  // rows x n each: the last link's regressor columns
-  std::vector<char> held;                   // per row: in a held-out block
+  std::vector<RowKind> kind;                // per row: fit, selection, test or guard
 };
 
 // How an effect's parameters map to the optimiser's variables.
@@ -53,6 +54,20 @@ struct ParameterMap {
 };
 
 const double kInf = std::numeric_limits<double>::infinity();
+
+// The guard between blocks (s): a zero-phase derivative filter spreads a sample over
+// about one period of its cut-off each way; logged velocities need only a few samples.
+double ArmGuardSeconds(const std::vector<ArmLog>& logs) {
+  double guard = 0;
+  for (const ArmLog& log : logs) {
+    guard = std::max(guard, log.derive_cutoff_hz > 0 ? 1.0 / log.derive_cutoff_hz : 10 * log.sample_period);
+  }
+  return guard;
+}
+
+// Rows a learned residual trains on at most, and its random features.
+constexpr int kMaxLearnedRows = 8000;
+constexpr int kLearnedFeatures = 300;
 
 double Get(const TrialEffect& e, const char* key, double fallback = 0) {
   auto it = e.parameters.find(key);
@@ -140,6 +155,7 @@ class ArmProblem : public DiagnosisProblem {
   ArmProblem(const ArmModel& nominal, const std::vector<ArmLog>& logs, double block_seconds, double held_out,
              double standstill)
       : nominal_(nominal), n_(nominal.dof()), standstill_(standstill) {
+    guard_seconds_ = ArmGuardSeconds(logs);
     const ArmModel bodies = ArmPlantModel(nominal);
     payload_candidate_ = nominal.effects.payload_mass <= 0;
     for (const ArmLog& log : logs) {
@@ -161,8 +177,10 @@ class ArmProblem : public DiagnosisProblem {
           for (int k = 0; k < 10; ++k) d.payload[static_cast<std::size_t>(k)].row(r) = y.col(kParametersPerLink * (n_ - 1) + k).transpose();
         }
       }
-      d.held.assign(static_cast<std::size_t>(rows), 0);
-      for (int r = 0; r < rows; ++r) d.held[static_cast<std::size_t>(r)] = InHeldOutBlock(log.t[r] - log.t[0], block_seconds, held_out);
+      d.kind.resize(static_cast<std::size_t>(rows));
+      for (int r = 0; r < rows; ++r) {
+        d.kind[static_cast<std::size_t>(r)] = DiagnosisRowKind(log.t[r] - log.t[0], block_seconds, held_out, guard_seconds_);
+      }
       data_.push_back(std::move(d));
     }
     chunk_rows_ = std::max(1, static_cast<int>(std::lround(kChunkSeconds / logs.front().sample_period)));
@@ -238,7 +256,14 @@ class ArmProblem : public DiagnosisProblem {
       const Eigen::MatrixXd payload = PayloadTorque(trial, d);
       Eigen::VectorXd sum = Eigen::VectorXd::Zero(d.log->rows());
       for (int j = 0; j < n_; ++j) sum += Residual(trial, d, j, payload).cwiseAbs2();
-      for (int r = d.first; r < d.last; ++r) (d.held[static_cast<std::size_t>(r)] ? out.held_out : out.fit).push_back(sum[r]);
+      for (int r = d.first; r < d.last; ++r) {
+        switch (d.kind[static_cast<std::size_t>(r)]) {
+          case RowKind::kFit: out.fit.push_back(sum[r]); break;
+          case RowKind::kSelection: out.selection.push_back(sum[r]); break;
+          case RowKind::kTest: out.test.push_back(sum[r]); break;
+          case RowKind::kGuard: break;
+        }
+      }
     }
     return out;
   }
@@ -268,6 +293,14 @@ class ArmProblem : public DiagnosisProblem {
   }
 
   std::string Signature(const TrialEffect& e) const override;
+  std::vector<double> FitResiduals(const std::vector<TrialEffect>& effects) const override {
+    std::vector<int> joints(static_cast<std::size_t>(n_));
+    for (int j = 0; j < n_; ++j) joints[static_cast<std::size_t>(j)] = j;
+    const Eigen::VectorXd r = FitResidual(effects, joints);
+    return {r.data(), r.data() + r.size()};
+  }
+  TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const override;
+  double guard_seconds() const { return guard_seconds_; }
 
   // A joint flexibility keeps its fit while candidates are scored: its replay is a
   // numerical approximation (the spring's deflection integrated by implicit Euler and
@@ -338,7 +371,7 @@ class ArmProblem : public DiagnosisProblem {
       for (int j : joints) {
         const Eigen::VectorXd r = Residual(trial, d, j, payload);
         for (int row = d.first; row < d.last; row += stride_) {
-          if (!d.held[static_cast<std::size_t>(row)]) out.push_back(r[row]);
+          if (d.kind[static_cast<std::size_t>(row)] == RowKind::kFit) out.push_back(r[row]);
         }
       }
     }
@@ -387,6 +420,7 @@ class ArmProblem : public DiagnosisProblem {
   std::vector<LogData> data_;
   int chunk_rows_ = 1;
   int stride_ = 1;
+  double guard_seconds_ = 0;
 };
 
 void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
@@ -410,7 +444,7 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
         ndd = ThreePointDerivatives(d.log->t, needed).second;
       }
       for (int row = d.first; row < d.last; row += stride_) {
-        if (d.held[static_cast<std::size_t>(row)]) continue;
+        if (d.kind[static_cast<std::size_t>(row)] != RowKind::kFit) continue;
         r.push_back(res[row]);
         qd.push_back(d.log->qd(row, j));
         qdd.push_back(d.log->qdd(row, j));
@@ -420,7 +454,7 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
       for (int jj = 0; jj < n_; ++jj) {
         const Eigen::VectorXd res = Residual(base, d, jj, payload);
         for (int row = d.first; row < d.last; row += stride_) {
-          if (d.held[static_cast<std::size_t>(row)]) continue;
+          if (d.kind[static_cast<std::size_t>(row)] != RowKind::kFit) continue;
           payload_r.push_back(res[row]);
           payload_rows.push_back({d.payload[0](row, jj), d.payload[1](row, jj), d.payload[2](row, jj), d.payload[3](row, jj)});
         }
@@ -681,6 +715,98 @@ double HighFrequencySigma(const Eigen::VectorXd& residual, double rate, double c
   return std::sqrt(var * nyquist / (nyquist - cutoff_hz));
 }
 
+// The learned residual's inputs at row r of log d: per joint q, qd, qdd, a smooth sign
+// of qd, and qd and qdd 20 ms and qdd 50 ms earlier (a delay shows in the past motion).
+void LearnedInputs(const LogData& d, int r, std::vector<double>* x) {
+  const ArmLog& log = *d.log;
+  const int back20 = std::max(d.first, r - static_cast<int>(std::lround(0.02 / log.sample_period)));
+  const int back50 = std::max(d.first, r - static_cast<int>(std::lround(0.05 / log.sample_period)));
+  x->clear();
+  for (int j = 0; j < log.dof; ++j) {
+    x->insert(x->end(), {log.q(r, j), log.qd(r, j), log.qdd(r, j), std::tanh(log.qd(r, j) / 0.05), log.qd(back20, j),
+                         log.qdd(back20, j), log.qdd(back50, j)});
+  }
+}
+
+TestResiduals ArmProblem::Test(const std::vector<TrialEffect>& effects, bool learn) const {
+  const ArmModel trial = Build(effects);
+  TestResiduals out;
+  const auto n = static_cast<std::size_t>(n_);
+  out.residual.resize(n);
+  out.noise.assign(n, 0.0);
+  for (int j = 0; j < n_; ++j) out.channels.push_back("joint " + std::to_string(j + 1));
+  for (int j = 0; j < n_; ++j) {
+    for (const char* what : {"q", "qd", "qdd", "command"}) out.input_names.push_back(std::string(what) + std::to_string(j + 1));
+  }
+  out.inputs.resize(out.input_names.size());
+  std::vector<std::vector<double>> fit_x, fit_y, test_x;
+  std::vector<double> x;
+  double cutoff = 0;
+  for (const LogData& d : data_) {
+    const ArmLog& log = *d.log;
+    const Eigen::MatrixXd payload = PayloadTorque(trial, d);
+    std::vector<Eigen::VectorXd> res(n);
+    const double rate = 1.0 / log.sample_period;
+    const double filter = log.derive_cutoff_hz > 0 ? log.derive_cutoff_hz : rate / 8;
+    cutoff = std::max(cutoff, filter);
+    for (int j = 0; j < n_; ++j) {
+      res[static_cast<std::size_t>(j)] = Residual(trial, d, j, payload);
+      const double sigma = HighFrequencySigma(res[static_cast<std::size_t>(j)].segment(d.first, d.last - d.first), rate, 2 * filter);
+      out.noise[static_cast<std::size_t>(j)] += sigma * sigma / static_cast<double>(data_.size());
+    }
+    int fit_count = 0;
+    for (int r = d.first; r < d.last; ++r) {
+      const RowKind kind = d.kind[static_cast<std::size_t>(r)];
+      if (kind == RowKind::kTest) {
+        for (std::size_t j = 0; j < n; ++j) {
+          const int jj = static_cast<int>(j);
+          out.residual[j].push_back(res[j][r]);
+          out.inputs[4 * j].push_back(log.q(r, jj));
+          out.inputs[4 * j + 1].push_back(log.qd(r, jj));
+          out.inputs[4 * j + 2].push_back(log.qdd(r, jj));
+          out.inputs[4 * j + 3].push_back(log.tau(r, jj));
+        }
+        if (learn) {
+          LearnedInputs(d, r, &x);
+          test_x.push_back(x);
+        }
+      } else if (learn && kind == RowKind::kFit && fit_count++ % stride_ == 0) {
+        LearnedInputs(d, r, &x);
+        fit_x.push_back(x);
+        std::vector<double> y(n);
+        for (std::size_t j = 0; j < n; ++j) y[j] = res[j][r];
+        fit_y.push_back(y);
+      }
+    }
+  }
+  for (double& v : out.noise) v = std::sqrt(v);
+  out.rate = 1.0 / sample_period_;
+  out.step = std::max(1, static_cast<int>(std::ceil(out.rate / (2 * cutoff))));
+  if (learn && !fit_x.empty() && !test_x.empty()) {
+    // At most kMaxLearnedRows training rows, spread evenly.
+    const std::size_t every = std::max<std::size_t>(1, fit_x.size() / kMaxLearnedRows);
+    const auto rows = static_cast<Eigen::Index>((fit_x.size() + every - 1) / every);
+    const auto inputs = static_cast<Eigen::Index>(fit_x.front().size());
+    Eigen::MatrixXd ax(rows, inputs), ay(rows, n_);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      const std::size_t i = static_cast<std::size_t>(k) * every;
+      ax.row(k) = Eigen::Map<const Eigen::RowVectorXd>(fit_x[i].data(), inputs);
+      ay.row(k) = Eigen::Map<const Eigen::RowVectorXd>(fit_y[i].data(), n_);
+    }
+    const RandomFeatureRidge learner = RandomFeatureRidge::Fit(ax, ay, kLearnedFeatures, 1);
+    Eigen::MatrixXd tx(static_cast<Eigen::Index>(test_x.size()), inputs);
+    for (std::size_t i = 0; i < test_x.size(); ++i) tx.row(static_cast<Eigen::Index>(i)) = Eigen::Map<const Eigen::RowVectorXd>(test_x[i].data(), inputs);
+    const Eigen::MatrixXd correction = learner.Predict(tx);
+    out.learned = out.residual;
+    for (std::size_t j = 0; j < n; ++j) {
+      for (std::size_t i = 0; i < out.learned[j].size(); ++i) out.learned[j][i] -= correction(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+    }
+    out.learner = "kernel ridge regression (random Fourier features) of the torque residual on every joint's q, qd, qdd, "
+                  "sign of qd and the motion 20 and 50 ms before, trained on " + std::to_string(rows) + " fit rows";
+  }
+  return out;
+}
+
 }  // namespace
 
 Eigen::Matrix<double, 10, 1> PointMassParameters(double mass, const Eigen::Vector3d& p) {
@@ -781,7 +907,8 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   report.block_seconds = block;
   report.held_out_share = options.held_out;
   for (const ArmLog& log : logs) report.logs.push_back(log.path);
-  ReportSelection(problem, selection, &report);
+  report.guard_seconds = problem.guard_seconds();
+  ReportSelection(problem, selection, options, &report);
   if (options.refit_model) {
     ReportRefit(ArmProblem(model, logs, block, options.held_out, options.standstill),
                 "The model's own inertial parameters and friction were refitted on the fit blocks (twinsim identify's "

@@ -21,7 +21,7 @@ bool DiagnosisOptions::IsValid(std::string* why) const {
   if (!(block_seconds >= 0) || !std::isfinite(block_seconds)) return fail("--block must be 0 (automatic) or a positive number of seconds");
   if (max_effects < 0) return fail("--max-effects must be 0 or more, got " + std::to_string(max_effects));
   if (!(min_improvement >= 0 && min_improvement < 1)) return fail("--min-improvement must be in [0, 1)");
-  if (!(significance >= 0) || !std::isfinite(significance)) return fail("--significance must be a non-negative number");
+  if (!(alpha > 0 && alpha < 1)) return fail("--alpha must be between 0 and 1 (exclusive), got " + FormatParameter(alpha));
   if (horizon < 1) return fail("--horizon must be 1 or more frames, got " + std::to_string(horizon));
   if (!(standstill >= 0) || !std::isfinite(standstill)) return fail("--standstill must be a non-negative speed");
   if (threads < 0) return fail("--threads must be 0 (one per core) or more");
@@ -41,6 +41,20 @@ bool InHeldOutBlock(double t, double block_seconds, double held_out) {
   return std::floor((k + 1) * held_out) > std::floor(k * held_out);
 }
 
+RowKind DiagnosisRowKind(double t, double block_seconds, double held_out, double guard_seconds) {
+  auto kind_at = [&](double u) {
+    if (u < 0) u = 0;  // before the log: as its first block
+    const double k = std::floor(u / block_seconds);
+    if (!InHeldOutBlock(u, block_seconds, held_out)) return RowKind::kFit;
+    // Held-out blocks before block k: floor(k h) (see InHeldOutBlock).
+    return static_cast<long>(std::floor(k * held_out)) % 2 == 0 ? RowKind::kSelection : RowKind::kTest;
+  };
+  const RowKind here = kind_at(t);
+  const double guard = std::min(guard_seconds, 0.45 * block_seconds);
+  if (guard > 0 && (kind_at(t - guard) != here || kind_at(t + guard) != here)) return RowKind::kGuard;
+  return here;
+}
+
 void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double block_seconds, double held_out,
                       const std::string& path) {
   std::set<long> held, fit;
@@ -56,26 +70,6 @@ void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double bl
                   t.empty() ? 0.0 : t.back() - t.front(), block_seconds);
     throw InputError(SourceLocation{path, 1}, msg);
   }
-}
-
-double ChunkedTStatistic(const std::vector<double>& gain, int chunk) {
-  chunk = std::max(chunk, 1);
-  std::vector<double> means;
-  for (std::size_t start = 0; start + static_cast<std::size_t>(chunk) <= gain.size(); start += static_cast<std::size_t>(chunk)) {
-    double s = 0;
-    for (int i = 0; i < chunk; ++i) s += gain[start + static_cast<std::size_t>(i)];
-    means.push_back(s / chunk);
-  }
-  if (means.size() < 3) return 0;
-  double mean = 0;
-  for (double m : means) mean += m;
-  mean /= static_cast<double>(means.size());
-  double var = 0;
-  for (double m : means) var += (m - mean) * (m - mean);
-  var /= static_cast<double>(means.size() - 1);
-  const double se = std::sqrt(var / static_cast<double>(means.size()));
-  if (se <= 0) return mean > 0 ? 1e9 : 0.0;
-  return mean / se;
 }
 
 int CorrelationLength(const std::vector<double>& x, int max_lag) {

@@ -24,20 +24,23 @@
 #include <string>
 #include <vector>
 
+#include "diagnosis/statistics.h"
+
 namespace twinsim {
 
 struct DiagnosisOptions {
   double held_out = 0.3;      // share of each log's time blocks held out from every fit
   double block_seconds = 0;   // s, length of a time block; 0 = automatic (a 20th of the log, 0.5 to 10 s)
   int max_effects = 3;        // the most effects added
-  // An effect is added only when it lowers the held-out mean squared error by at least
-  // this share of it (a floor against effects too small to matter) ...
+  // An effect is added only when it lowers the selection rows' mean squared error by at
+  // least this share of it (a floor against effects too small to matter) ...
   double min_improvement = 0.05;
-  // ... and the reduction is significant: its mean over held-out chunks (each as long as
-  // the nominal residual stays correlated, and at least 0.25 s for arms, 1 s for omni
-  // robots) is at least `significance` standard errors above zero (a one-sided t test),
-  // or it removes at least a quarter on fit and held-out rows alike (docs/diagnose.md).
-  double significance = 2;
+  // ... the reduction is significant: a one-sided t test with a long-run (Newey-West)
+  // standard error, Holm-corrected over the round's candidates at family-wise level
+  // `alpha`, or a reduction of at least a quarter on fit and selection rows alike ...
+  double alpha = 0.05;
+  // ... and it earns its parameters: n_eff ln(MSE before / MSE after) > 2 k, with n_eff
+  // the selection rows' effective count and k the effect's parameters (docs/diagnose.md).
   std::string backend = "analytic";  // omni: the physics that replays the model
   int horizon = 4;                   // omni: frames predicted ahead (the contract's replay K)
   // Arm: rad/s (m/s) below which a joint counts as standing still, where its friction
@@ -63,8 +66,11 @@ struct DiagnosisCandidate {
   std::map<std::string, double> parameters;  // model-file keys, SI units
   double fit_gap = 0;                        // metric on the fit rows with it added
   double held_out_gap = 0;                   // metric on the held-out rows with it added
-  double reduction = 0;                      // share of the round's held-out MSE it removed
-  double t_statistic = 0;                    // of that reduction over held-out chunks
+  double reduction = 0;                      // share of the round's selection-row MSE it removed
+  double t_statistic = 0;                    // of that reduction (long-run standard error)
+  double p_value = 1;                        // one-sided, before the Holm correction
+  bool significant = false;                  // after the Holm correction over the round
+  double information_gain = 0;               // n_eff ln(MSE before / after) - 2 k; > 0 to be added
   bool selected = false;
   std::string note;                          // why it could not be fitted, when it could not
 };
@@ -74,7 +80,10 @@ struct DiagnosedEffect {
   std::string name;
   int joint = -1;                            // 0-based; -1 for whole-robot effects (null)
   std::map<std::string, double> parameters;  // after the final joint refit
-  double gap_reduction = 0;                  // share of the held-out gap before it was added that it removed
+  // One standard error per parameter (the fit's covariance, scaled by the residual's
+  // variance and correlation length); NaN where the logs do not determine it.
+  std::map<std::string, double> standard_errors;
+  double gap_reduction = 0;                  // share of the test rows' gap before it was added that it removed
   std::string evidence;                      // one sentence: what decided it
 };
 
@@ -109,15 +118,58 @@ struct DiagnosisPath {
   std::vector<double> t, x, y, theta;  // s, m, m, rad
 };
 
+// The repaired model's residual on the test rows, per channel: is what is left noise?
+struct ChannelAdequacy {
+  std::string channel;
+  double rms = 0;                        // of the repaired model's residual on the test rows
+  double noise = 0;                      // the noise floor's share on this channel
+  std::vector<double> autocorrelation;   // lags 1.. (in steps of `step` rows)
+  double step_seconds = 0;               // s between the lags
+  double whiteness_bound = 0;            // 95 % band of a white residual's autocorrelation
+  double whiteness_p = 1;                // Ljung-Box: small means the residual is not white
+  std::vector<CrossCorrelation> inputs;  // the residual against each input, largest first
+  // The learned yardstick on this channel: the repaired model's test-row RMS with a
+  // learned residual correction (trained on the fit rows), and the test of that drop.
+  double learned_rms = 0;
+  double learned_reduction = 0;          // share of the squared residual the correction removed
+  double learned_p = 1;                  // one-sided, long-run standard error
+  // Where the unexplained part lies: the band (Hz) where the repaired residual's
+  // spectrum stands furthest above the corrected one's.
+  double band_low = 0, band_high = 0;
+  bool unexplained = false;              // a significant predictable part remains (docs/diagnose.md)
+};
+
+// Beside the physics: a learned residual predictor trained on the fit rows, scored on
+// the same test rows (docs/diagnose.md, "The learned yardstick").
+struct LearnedYardstick {
+  std::string learner;                   // what was trained, in words
+  double nominal = 0;                    // the test-row gap of the nominal model plus the learned correction
+  double repaired = 0;                   // ... of the repaired model plus the learned correction
+  // Share of the predictable gap the named physics explains: (nominal^2 - repaired^2) /
+  // (nominal^2 - best^2), best the lowest of the four gaps; NaN when nothing is predictable.
+  double physics_share = 0;
+};
+
 struct DiagnosisReport {
   std::string robot;                    // "omni" or "arm"
   std::string model_name;
   std::string metric;                   // what the gaps measure, with its unit
-  double gap_before = 0;                // metric of the nominal model on the held-out rows
+  double gap_before = 0;                // metric of the nominal model on the test rows
   double gap_after = 0;                 // ... of the repaired model
   double noise_floor = 0;               // the metric a perfect model would reach, estimated from the data
   double fit_gap_before = 0, fit_gap_after = 0;  // the same on the fit rows
-  int fit_rows = 0, held_out_rows = 0;  // residual rows of each kind
+  double selection_gap_before = 0, selection_gap_after = 0;  // ... on the selection rows
+  // Residual rows of each kind: fit, selection (chose the effects), test (report the
+  // gaps); held_out_rows = selection + test. Guard rows between blocks of different
+  // kinds belong to none.
+  int fit_rows = 0, held_out_rows = 0, selection_rows = 0, test_rows = 0;
+  double guard_seconds = 0;
+  double alpha = 0.05;                  // the options the selection ran with, for the method text
+  double min_improvement = 0.05;
+  int max_effects = 3;
+  LearnedYardstick yardstick;
+  std::vector<ChannelAdequacy> adequacy;  // one per channel
+  std::vector<std::string> removed;      // effects the backward step took out again, with why
   double held_out_share = 0;
   double block_seconds = 0;
   std::vector<std::string> logs;
@@ -151,6 +203,14 @@ double Rms(const std::vector<double>& v);
 // The block length for logs of these durations (s) under `options`.
 double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<double>& durations);
 
+// What a residual row is for. The held-out blocks (InHeldOutBlock) alternate between
+// selection (the 1st, 3rd, ... held-out block: choose the effects) and test (the 2nd,
+// 4th, ...: report the gaps, choose nothing). Rows within `guard` s of a boundary
+// between blocks of different kinds are guards, used by nothing: a zero-phase filter's
+// derivatives and a prediction's start reach across a boundary by about that much.
+enum class RowKind : char { kFit, kSelection, kTest, kGuard };
+RowKind DiagnosisRowKind(double t, double block_seconds, double held_out, double guard_seconds);
+
 // Whether the sample at time t (s from the log's start) lies in a held-out block:
 // blocks k = floor(t / block) are held out where floor((k + 1) h) > floor(k h), which
 // spreads a share h of them evenly over the log, the first block always kept for fitting.
@@ -160,10 +220,6 @@ bool InHeldOutBlock(double t, double block_seconds, double held_out);
 // residual exists for) span at least two held-out and two fit blocks.
 void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double block_seconds, double held_out,
                       const std::string& path);
-
-// The one-sided t statistic of the mean of `gain` (per-row reductions of the squared
-// residual, held-out rows in time order) over chunks of `chunk` consecutive rows.
-double ChunkedTStatistic(const std::vector<double>& gain, int chunk);
 
 // The first lag (rows) where the autocorrelation of x falls below 1/e, at most max_lag.
 int CorrelationLength(const std::vector<double>& x, int max_lag);

@@ -28,9 +28,14 @@ std::string Num(double v, const char* format = "%.4g") {
   return buf;
 }
 
-std::string ParameterText(const std::map<std::string, double>& p) {
+// "b = 0.5, c = 1.2", or with standard errors "b = 0.5 ± 0.01, ...".
+std::string ParameterText(const std::map<std::string, double>& p, const std::map<std::string, double>& errors = {}) {
   std::string s;
-  for (const auto& [k, v] : p) s += (s.empty() ? "" : ", ") + k + " = " + FormatParameter(v);
+  for (const auto& [k, v] : p) {
+    s += (s.empty() ? "" : ", ") + k + " = " + FormatParameter(v);
+    const auto e = errors.find(k);
+    if (e != errors.end()) s += std::isfinite(e->second) ? " ± " + FormatParameter(e->second) : " (undetermined)";
+  }
   return s;
 }
 
@@ -44,25 +49,77 @@ double ShareClosed(const DiagnosisReport& r) {
 
 std::string DiagnosisVerdict(const DiagnosisReport& r) {
   const bool refit = std::isfinite(r.refit_gap);
-  const std::string refitted = refit ? "Refitting the model's own parameters took the held-out gap from " +
-                                           Num(r.gap_before) + " to " + Num(r.refit_gap) + ". "
-                                     : std::string();
+  std::string s = refit ? "Refitting the model's own parameters took the test-row gap from " + Num(r.gap_before) + " to " +
+                              Num(r.refit_gap) + ". "
+                        : std::string();
   if (r.effects.empty()) {
-    return refitted + "Nothing significant is missing: no effect lowered the held-out gap (" +
-           Num(refit ? r.refit_gap : r.gap_before) + ") by more than the noise allows (noise floor about " +
-           Num(r.noise_floor) + ").";
+    s += "No effect of the vocabulary passes the tests: the test-row gap stays at " + Num(r.gap_after) +
+         " (noise floor about " + Num(r.noise_floor) + ").";
+  } else {
+    std::string names;
+    for (std::size_t k = 0; k < r.effects.size(); ++k) {
+      if (k > 0) names += k + 1 == r.effects.size() ? " and " : ", ";
+      names += EffectLabel(r.effects[k].name, r.effects[k].joint);
+    }
+    s += "Missing: " + names + ". The test-row gap " + (r.gap_after <= r.gap_before ? "fell" : "rose") + " from " +
+         Num(r.gap_before) + " to " + Num(r.gap_after) + " (noise floor about " + Num(r.noise_floor) + ")";
+    const double closed = ShareClosed(r);
+    if (std::isfinite(closed) && closed >= 0) s += ", " + Num(100 * closed, "%.0f") + " % of the way down to it";
+    s += ".";
   }
-  std::string names;
-  for (std::size_t k = 0; k < r.effects.size(); ++k) {
-    if (k > 0) names += k + 1 == r.effects.size() ? " and " : ", ";
-    names += EffectLabel(r.effects[k].name, r.effects[k].joint);
+  // What is left: predictable (a learned residual finds it) or not.
+  std::string unexplained;
+  for (const ChannelAdequacy& a : r.adequacy) {
+    if (!a.unexplained) continue;
+    unexplained += unexplained.empty() ? " Unexplained: " : "; ";
+    unexplained += "on " + a.channel + " a learned residual predicts " + Num(100 * a.learned_reduction, "%.0f") +
+                   " % of what is left (RMS " + Num(a.rms) + " -> " + Num(a.learned_rms) + ", noise about " +
+                   Num(a.noise) + ")";
+    if (a.band_high > 0) unexplained += ", mostly between " + Num(a.band_low, "%.2g") + " and " + Num(a.band_high, "%.2g") + " Hz";
+    if (!a.inputs.empty() && std::abs(a.inputs.front().peak) > a.inputs.front().bound) {
+      unexplained += ", correlating most with " + a.inputs.front().input + " (r = " + Num(a.inputs.front().peak, "%.2f") + ")";
+    }
   }
-  std::string s = refitted + "Missing: " + names + ". The held-out gap " + (r.gap_after <= r.gap_before ? "fell" : "rose") +
-                  " from " + Num(r.gap_before) + " to " + Num(r.gap_after) +
-                  " (noise floor about " + Num(r.noise_floor) + ")";
-  const double closed = ShareClosed(r);
-  if (std::isfinite(closed) && closed >= 0) s += ", " + Num(100 * closed, "%.0f") + " % of the way down to it";
-  return s + ".";
+  if (!unexplained.empty()) {
+    s += unexplained + ": an effect the vocabulary does not name, or a named one it does not fit.";
+  } else if (r.effects.empty()) {
+    s += " Nothing significant is missing: a learned residual finds nothing predictable on any channel either.";
+  } else {
+    s += " What is left is not predictable from the motion and the commands (a learned residual removes no significant share).";
+  }
+  if (std::isfinite(r.yardstick.physics_share) && !r.yardstick.learner.empty()) {
+    s += " The named physics explains " + Num(100 * std::clamp(r.yardstick.physics_share, -9.99, 9.99), "%.0f") +
+         " % of the gap that physics or a learned residual can predict.";
+  }
+  return s;
+}
+
+std::string DiagnosisMethod(const DiagnosisReport& r) {
+  char buf[2048];
+  std::snprintf(
+      buf, sizeof buf,
+      "Each log is cut into %.3g s blocks; %.0f %% of them are held out, and the held-out blocks alternate between "
+      "selection rows (they choose the effects) and test rows (they give every gap reported and choose nothing). Rows "
+      "within %.3g s of a boundary between blocks of different kinds are guards used by nothing (a zero-phase "
+      "filter's derivatives and a prediction's start reach that far). Each round fits every candidate effect of the "
+      "vocabulary on the fit rows, with the effects already added refitted beside it, and scores it on the selection "
+      "rows: the share of their mean squared error it removes, a one-sided t test of that reduction with a "
+      "Newey-West standard error (bandwidth at least three correlation lengths of the row-wise reductions), and an "
+      "information gain n_eff ln(MSE before / MSE after) - 2 k that counts its k parameters against the effective "
+      "number of rows. A candidate passes when it removes at least %.0f %%, has a positive information gain, and is "
+      "significant after Holm's correction over the round's candidates at family-wise level %.3g, or removes at least "
+      "25 %% on fit and selection rows alike (an effect seen in a few events only). The passing candidate with the "
+      "largest information gain is added and every added effect refitted; a backward step then takes out an effect "
+      "added earlier whose removal no longer costs that much; rounds stop when none passes or at %d effects. "
+      "Standard errors come from the fit's Gauss-Newton covariance, scaled by the residual's variance and its "
+      "correlation length. The adequacy checks run on the test rows of the repaired model: whiteness (Ljung-Box, rows a "
+      "filter span or a prediction horizon apart), cross-correlation with the inputs (95 %% bands widened for "
+      "autocorrelated series), and a learned residual trained on the fit rows; a channel is unexplained when the "
+      "learned residual removes at least %.0f %% of its squared error, significant after Holm's correction over the "
+      "channels.",
+      r.block_seconds, 100 * r.held_out_share, r.guard_seconds, 100 * r.min_improvement, r.alpha, r.max_effects,
+      100 * r.min_improvement);
+  return buf;
 }
 
 std::string FormatDiagnosisJson(const DiagnosisReport& r) {
@@ -77,6 +134,7 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["name"] = e.name;
     x["joint"] = Joint(e.joint);
     x["parameters"] = Parameters(e.parameters);
+    x["standard_errors"] = Parameters(e.standard_errors);
     x["gap_reduction"] = e.gap_reduction;
     x["evidence"] = e.evidence;
     effects.push_back(x);
@@ -85,14 +143,30 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
   // Beyond the contract: what a reader needs to judge the result.
   j["model"] = r.model_name;
   j["verdict"] = DiagnosisVerdict(r);
+  j["method"] = DiagnosisMethod(r);
   j["noise_floor"] = r.noise_floor;
+  {
+    ordered_json y;
+    y["learner"] = r.yardstick.learner;
+    y["nominal_plus_learned"] = r.yardstick.nominal;
+    y["repaired_plus_learned"] = r.yardstick.repaired;
+    y["physics_share"] = std::isfinite(r.yardstick.physics_share) ? ordered_json(r.yardstick.physics_share) : ordered_json(nullptr);
+    j["yardstick"] = y;
+  }
   if (std::isfinite(r.refit_gap)) j["refit_gap"] = r.refit_gap;
   j["fit_gap_before"] = r.fit_gap_before;
   j["fit_gap_after"] = r.fit_gap_after;
+  j["selection_gap_before"] = r.selection_gap_before;
+  j["selection_gap_after"] = r.selection_gap_after;
   j["held_out_share"] = r.held_out_share;
   j["block_seconds"] = r.block_seconds;
   j["fit_rows"] = r.fit_rows;
   j["held_out_rows"] = r.held_out_rows;
+  j["selection_rows"] = r.selection_rows;
+  j["test_rows"] = r.test_rows;
+  j["guard_seconds"] = r.guard_seconds;
+  j["alpha"] = r.alpha;
+  j["removed"] = r.removed;
   j["logs"] = r.logs;
   ordered_json candidates = ordered_json::array();
   for (const DiagnosisCandidate& c : r.candidates) {
@@ -105,6 +179,9 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["held_out_gap"] = c.held_out_gap;
     x["reduction"] = std::isfinite(c.reduction) ? ordered_json(c.reduction) : ordered_json(nullptr);
     x["t_statistic"] = c.t_statistic;
+    x["p_value"] = std::isfinite(c.p_value) ? ordered_json(c.p_value) : ordered_json(nullptr);
+    x["significant"] = c.significant;
+    x["information_gain"] = std::isfinite(c.information_gain) ? ordered_json(c.information_gain) : ordered_json(nullptr);
     x["selected"] = c.selected;
     if (!c.note.empty()) x["note"] = c.note;
     candidates.push_back(x);
@@ -127,6 +204,29 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     findings.push_back(x);
   }
   j["findings"] = findings;
+  ordered_json adequacy = ordered_json::array();
+  for (const ChannelAdequacy& a : r.adequacy) {
+    ordered_json x;
+    x["channel"] = a.channel;
+    x["rms"] = a.rms;
+    x["noise"] = a.noise;
+    x["unexplained"] = a.unexplained;
+    x["learned_rms"] = a.learned_rms;
+    x["learned_reduction"] = a.learned_reduction;
+    x["learned_p"] = std::isfinite(a.learned_p) ? ordered_json(a.learned_p) : ordered_json(nullptr);
+    x["band_hz"] = {a.band_low, a.band_high};
+    x["whiteness_p"] = a.whiteness_p;
+    x["whiteness_bound"] = a.whiteness_bound;
+    x["lag_step_seconds"] = a.step_seconds;
+    x["autocorrelation"] = a.autocorrelation;
+    ordered_json inputs = ordered_json::array();
+    for (const CrossCorrelation& c : a.inputs) {
+      inputs.push_back({{"input", c.input}, {"correlation", c.peak}, {"lag_rows", c.lag}, {"bound", c.bound}});
+    }
+    x["cross_correlation"] = inputs;
+    adequacy.push_back(x);
+  }
+  j["adequacy"] = adequacy;
   j["notes"] = r.notes;
   return j.dump(2) + "\n";
 }
@@ -136,15 +236,20 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
   s << DiagnosisVerdict(r) << "\n";
   s << "metric: " << r.metric << "\n";
   char line[256];
-  std::snprintf(line, sizeof line, "held out: %.0f %% of %.3g s blocks (%d rows; %d for fitting)\n", 100 * r.held_out_share,
-                r.block_seconds, r.held_out_rows, r.fit_rows);
+  std::snprintf(line, sizeof line,
+                "held out: %.0f %% of %.3g s blocks: %d selection rows, %d test rows (%d rows for fitting; %.3g s guards)\n",
+                100 * r.held_out_share, r.block_seconds, r.selection_rows, r.test_rows, r.fit_rows, r.guard_seconds);
+  s << line;
+  std::snprintf(line, sizeof line, "test-row gap: nominal %s, repaired %s, nominal + learned %s, repaired + learned %s, noise floor %s\n",
+                Num(r.gap_before).c_str(), Num(r.gap_after).c_str(), Num(r.yardstick.nominal).c_str(),
+                Num(r.yardstick.repaired).c_str(), Num(r.noise_floor).c_str());
   s << line;
   if (!r.effects.empty()) {
     std::snprintf(line, sizeof line, "%-34s %-9s %s\n", "effect", "gap cut", "parameters");
     s << line;
     for (const DiagnosedEffect& e : r.effects) {
       std::snprintf(line, sizeof line, "%-34s %6.1f %%  %s\n", EffectLabel(e.name, e.joint).c_str(), 100 * e.gap_reduction,
-                    ParameterText(e.parameters).c_str());
+                    ParameterText(e.parameters, e.standard_errors).c_str());
       s << line;
     }
   }
@@ -234,18 +339,33 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
   h << "<h1>Diagnosis of " << HtmlEscape(r.model_name) << " (" << HtmlEscape(r.robot) << ")</h1>\n";
   h << "<p class=\"verdict\">" << HtmlEscape(DiagnosisVerdict(r)) << "</p>\n";
   h << "<p>Gap: " << HtmlEscape(r.metric) << ". Held out: " << Num(100 * r.held_out_share, "%.0f") << " % of the "
-    << Num(r.block_seconds, "%.3g") << " s time blocks of each log (" << r.held_out_rows << " rows), never seen by a fit ("
-    << r.fit_rows << " rows). Logs:";
+    << Num(r.block_seconds, "%.3g") << " s time blocks of each log, alternately selection rows (" << r.selection_rows
+    << ", they chose the effects) and test rows (" << r.test_rows << ", they give the gaps and chose nothing); "
+    << r.fit_rows << " fit rows; " << Num(r.guard_seconds, "%.3g") << " s guards between blocks. Logs:";
   for (const auto& l : r.logs) h << " <code>" << HtmlEscape(l) << "</code>";
-  h << "</p>\n<table><tr><th></th><th>held-out gap</th><th>fit gap</th></tr>\n";
-  h << "<tr><td>nominal model</td><td>" << Num(r.gap_before) << "</td><td>" << Num(r.fit_gap_before) << "</td></tr>\n";
-  h << "<tr><td>repaired model</td><td>" << Num(r.gap_after) << "</td><td>" << Num(r.fit_gap_after) << "</td></tr>\n";
-  h << "<tr><td>noise floor (estimated from the data)</td><td>" << Num(r.noise_floor) << "</td><td></td></tr></table>\n";
+  h << "</p>\n<table><tr><th></th><th>test-row gap</th><th>selection-row gap</th><th>fit gap</th></tr>\n";
+  h << "<tr><td>nominal model</td><td>" << Num(r.gap_before) << "</td><td>" << Num(r.selection_gap_before) << "</td><td>"
+    << Num(r.fit_gap_before) << "</td></tr>\n";
+  h << "<tr><td>repaired model (named physics)</td><td>" << Num(r.gap_after) << "</td><td>" << Num(r.selection_gap_after)
+    << "</td><td>" << Num(r.fit_gap_after) << "</td></tr>\n";
+  if (!r.yardstick.learner.empty()) {
+    h << "<tr><td>nominal model + learned residual</td><td>" << Num(r.yardstick.nominal) << "</td><td></td><td></td></tr>\n";
+    h << "<tr><td>repaired model + learned residual</td><td>" << Num(r.yardstick.repaired) << "</td><td></td><td></td></tr>\n";
+  }
+  h << "<tr><td>noise floor (estimated from the data)</td><td>" << Num(r.noise_floor) << "</td><td></td><td></td></tr></table>\n";
+  if (!r.yardstick.learner.empty()) {
+    h << "<p class=\"small\">Learned residual: " << HtmlEscape(r.yardstick.learner) << ".";
+    if (std::isfinite(r.yardstick.physics_share)) {
+      h << " The named physics explains " << Num(100 * r.yardstick.physics_share, "%.0f")
+        << " % of the squared gap that the best of the four predicts away.";
+    }
+    h << "</p>\n";
+  }
 
   if (!r.effects.empty()) {
-    h << "<h2>Effects added</h2>\n<table><tr><th>effect</th><th>parameters</th><th>gap cut</th><th>evidence</th></tr>\n";
+    h << "<h2>Effects added</h2>\n<table><tr><th>effect</th><th>parameters ± one standard error</th><th>test gap cut</th><th>evidence</th></tr>\n";
     for (const DiagnosedEffect& e : r.effects) {
-      h << "<tr><td>" << HtmlEscape(EffectLabel(e.name, e.joint)) << "</td><td>" << HtmlEscape(ParameterText(e.parameters))
+      h << "<tr><td>" << HtmlEscape(EffectLabel(e.name, e.joint)) << "</td><td>" << HtmlEscape(ParameterText(e.parameters, e.standard_errors))
         << "</td><td>" << Num(100 * e.gap_reduction, "%.1f") << " %</td><td>" << HtmlEscape(e.evidence) << "</td></tr>\n";
     }
     h << "</table>\n";
@@ -267,6 +387,44 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     h << HtmlImage(RenderPathPlot(plot, renderer), "paths") << "\n";
   }
 
+  if (!r.adequacy.empty()) {
+    h << "<h2>What is left: adequacy of the repaired model on the test rows</h2>\n<table><tr><th>channel</th><th>RMS</th>"
+         "<th>noise</th><th>RMS with a learned residual</th><th>share it removes (p)</th><th>band [Hz]</th>"
+         "<th>whiteness p (Ljung-Box)</th><th>strongest cross-correlations (95 % band)</th><th></th></tr>\n";
+    for (const ChannelAdequacy& a : r.adequacy) {
+      std::string inputs;
+      for (const CrossCorrelation& c : a.inputs) {
+        inputs += (inputs.empty() ? "" : "; ") + c.input + " " + Num(c.peak, "%.2f") + " (±" + Num(c.bound, "%.2f") + ")";
+      }
+      h << "<tr" << (a.unexplained ? " style=\"background:#fde8e8\"" : "") << "><td>" << HtmlEscape(a.channel) << "</td><td>"
+        << Num(a.rms) << "</td><td>" << Num(a.noise) << "</td><td>" << Num(a.learned_rms) << "</td><td>"
+        << Num(100 * a.learned_reduction, "%.1f") << " % (" << Num(a.learned_p, "%.2g") << ")</td><td>"
+        << (a.band_high > 0 ? Num(a.band_low, "%.2g") + " – " + Num(a.band_high, "%.2g") : std::string()) << "</td><td>"
+        << Num(a.whiteness_p, "%.2g") << "</td><td>" << HtmlEscape(inputs) << "</td><td>"
+        << (a.unexplained ? "unexplained" : "") << "</td></tr>\n";
+    }
+    h << "</table>\n";
+    for (const ChannelAdequacy& a : r.adequacy) {
+      if (a.autocorrelation.empty()) continue;
+      SeriesPlot plot;
+      plot.title = "Autocorrelation of the repaired residual, " + a.channel;
+      plot.x_label = "lag [s]";
+      plot.y_label = "autocorrelation";
+      plot.width = 600;
+      plot.height = 400;
+      std::vector<double> lag, up, down;
+      for (std::size_t k = 0; k < a.autocorrelation.size(); ++k) {
+        lag.push_back(static_cast<double>(k + 1) * a.step_seconds);
+        up.push_back(a.whiteness_bound);
+        down.push_back(-a.whiteness_bound);
+      }
+      plot.series.push_back({"repaired residual", lag, a.autocorrelation, true});
+      plot.series.push_back({"95 % band of a white residual", lag, up, false});
+      plot.series.push_back({"", lag, down, false});
+      h << HtmlImage(RenderSeriesPlot(plot, renderer), "autocorrelation") << "\n";
+    }
+  }
+
   h << "<h2>Where the model and the measurement disagree</h2>\n<table><tr><th>channel</th><th>RMS before</th>"
        "<th>RMS after</th><th>near reversals / stops</th><th>moving</th><th>corr. with velocity</th>"
        "<th>corr. with acceleration</th><th>lag [ms]</th><th>spectral peak [Hz]</th><th>noise</th></tr>\n";
@@ -286,18 +444,23 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     h << HtmlImage(RenderSeriesPlot(SpectrumPlot(r, c), renderer), "residual spectrum") << "\n";
   }
 
-  h << "<h2>Every candidate tried</h2>\n<p>Each round fits every remaining candidate with the effects already added, "
-       "scores it on the held-out blocks, and adds the best if it removes at least the required share of the held-out "
-       "squared error with a t statistic over chunks of held-out data above the threshold.</p>\n"
-       "<table><tr><th>round</th><th>candidate</th><th>fitted parameters</th><th>fit gap</th><th>held-out gap</th>"
-       "<th>share of squared error removed</th><th>t</th><th></th></tr>\n";
+  h << "<h2>Every candidate tried</h2>\n<p>" << HtmlEscape(DiagnosisMethod(r)) << "</p>\n"
+       "<table><tr><th>round</th><th>candidate</th><th>fitted parameters</th><th>fit gap</th><th>selection gap</th>"
+       "<th>share of squared error removed</th><th>t</th><th>p (before Holm)</th><th>information gain</th><th></th></tr>\n";
   for (const DiagnosisCandidate& c : r.candidates) {
     h << "<tr" << (c.selected ? " class=\"sel\"" : "") << "><td>" << c.round << "</td><td>" << HtmlEscape(EffectLabel(c.name, c.joint))
       << "</td><td>" << HtmlEscape(ParameterText(c.parameters)) << "</td><td>" << Num(c.fit_gap) << "</td><td>"
       << Num(c.held_out_gap) << "</td><td>" << (std::isfinite(c.reduction) ? Num(100 * c.reduction, "%.2f") + " %" : "")
-      << "</td><td>" << Num(c.t_statistic, "%.1f") << "</td><td>" << (c.selected ? "added" : HtmlEscape(c.note)) << "</td></tr>\n";
+      << "</td><td>" << Num(c.t_statistic, "%.1f") << "</td><td>" << Num(c.p_value, "%.2g") << (c.significant ? " *" : "")
+      << "</td><td>" << Num(c.information_gain, "%.1f") << "</td><td>" << (c.selected ? "added" : HtmlEscape(c.note))
+      << "</td></tr>\n";
   }
-  h << "</table>\n";
+  h << "</table>\n<p class=\"small\">* significant after Holm's correction over the round.</p>\n";
+  if (!r.removed.empty()) {
+    h << "<h3>Backward steps</h3><ul>\n";
+    for (const auto& n : r.removed) h << "<li>" << HtmlEscape(n) << "</li>\n";
+    h << "</ul>\n";
+  }
   if (!r.notes.empty()) {
     h << "<h2>Notes</h2><ul>\n";
     for (const auto& n : r.notes) h << "<li>" << HtmlEscape(n) << "</li>\n";

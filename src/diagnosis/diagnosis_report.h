@@ -15,9 +15,14 @@
 
 namespace twinsim {
 
-// The verdict in one line: "nothing significant is missing" or the effects named with
-// the gap before and after.
+// The verdict in a few sentences: the effects named (or none) with the test-row gap
+// before and after and the noise floor; what is left unexplained (where a learned
+// residual still predicts part of it: channel, band, what it correlates with); and the
+// share of the predictable gap the named physics explains.
 std::string DiagnosisVerdict(const DiagnosisReport& report);
+
+// Every rule the selection and the adequacy checks followed, with the numbers used.
+std::string DiagnosisMethod(const DiagnosisReport& report);
 
 // report.json: the contract's keys (robot, metric, gap_before, gap_after, effects with
 // name, joint 1-based or null, parameters, gap_reduction, evidence) plus model,

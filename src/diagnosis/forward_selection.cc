@@ -1,5 +1,6 @@
 #include "diagnosis/forward_selection.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,28 +8,40 @@
 #include <limits>
 
 #include "core/parallel.h"
+#include "diagnosis/statistics.h"
 
 namespace twinsim {
 namespace {
 
-// A share of the squared residual removed on fit and held-out rows alike that counts
-// as significant whatever the t statistic.
+// A share of the squared residual removed on fit and selection rows alike that counts
+// as significant whatever the t test says: an effect that shows only in a few events
+// (a speed limit reached now and then) leaves most rows unchanged and its long-run
+// standard error large, yet a quarter removed on both sets is no accident.
 constexpr double kStrongReduction = 0.25;
+constexpr int kWhitenessLags = 20;
+constexpr int kCrossCorrelationsShown = 3;
 
 struct Score {
-  double reduction = 0;      // share of the held-out MSE removed
+  double reduction = 0;      // share of the selection rows' MSE removed
   double fit_reduction = 0;  // share of the fit rows' MSE removed
-  double t = 0;
+  LongRunTest test;
+  double information_gain = 0;
 };
 
-Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int chunk) {
+// `after` against `before` on the selection rows; `parameters` counted against an
+// effective row count `effective_rows`.
+Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int min_bandwidth, int parameters,
+              double effective_rows) {
   Score s;
-  const double mse = Mean(before.held_out);
-  if (mse <= 0 || before.held_out.size() != after.held_out.size()) return s;
-  std::vector<double> gain(before.held_out.size());
-  for (std::size_t i = 0; i < gain.size(); ++i) gain[i] = before.held_out[i] - after.held_out[i];
+  const double mse = Mean(before.selection);
+  if (mse <= 0 || before.selection.size() != after.selection.size()) return s;
+  std::vector<double> gain(before.selection.size());
+  for (std::size_t i = 0; i < gain.size(); ++i) gain[i] = before.selection[i] - after.selection[i];
   s.reduction = Mean(gain) / mse;
-  s.t = ChunkedTStatistic(gain, chunk);
+  s.test = LongRunMeanTest(gain, min_bandwidth);
+  const double mse_after = Mean(after.selection);
+  s.information_gain = mse_after > 0 ? effective_rows * std::log(mse / mse_after) - 2.0 * parameters
+                                     : std::numeric_limits<double>::infinity();
   const double fit_mse = Mean(before.fit);
   if (fit_mse > 0) s.fit_reduction = (fit_mse - Mean(after.fit)) / fit_mse;
   return s;
@@ -40,18 +53,25 @@ std::string Percent(double share) {
   return buf;
 }
 
-// "it removed 64 % of the held-out squared error (t = 23), where coulomb_friction (joint 2)
-// removed 41 % and viscous_friction (joint 2) 12 %".
-std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const DiagnosisCandidate& best) {
+std::string PValue(double p) {
+  char buf[32];
+  if (p < 1e-4) return "p < 1e-4";
+  std::snprintf(buf, sizeof buf, "p = %.2g", p);
+  return buf;
+}
+
+// "it removed 64 % of the selection rows' squared error (t = 23, p < 1e-4, Holm-corrected
+// over 22 candidates), the closest alternatives coulomb_friction (joint 2) 41 % and ...".
+std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const DiagnosisCandidate& best, int tested) {
   std::vector<const DiagnosisCandidate*> others;
   for (const auto& c : round) {
     if (&c != &best && c.note.empty()) others.push_back(&c);
   }
   std::sort(others.begin(), others.end(),
             [](const DiagnosisCandidate* a, const DiagnosisCandidate* b) { return a->reduction > b->reduction; });
-  char head[160];
-  std::snprintf(head, sizeof head, "it removed %s of the held-out squared error (t = %.0f)",
-                Percent(best.reduction).c_str(), best.t_statistic);
+  char head[200];
+  std::snprintf(head, sizeof head, "it removed %s of the selection rows' squared error (t = %.1f, %s; %d candidates tested)",
+                Percent(best.reduction).c_str(), best.t_statistic, PValue(best.p_value).c_str(), tested);
   std::string s = head;
   const std::size_t shown = std::min<std::size_t>(2, others.size());
   for (std::size_t k = 0; k < shown; ++k) {
@@ -59,6 +79,11 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
     s += EffectLabel(others[k]->name, others[k]->joint) + " " + Percent(std::max(0.0, others[k]->reduction));
   }
   return s;
+}
+
+// The effective number of independent rows in a residual series.
+double EffectiveRows(const std::vector<double>& squared, int min_bandwidth) {
+  return LongRunMeanTest(squared, min_bandwidth).effective_rows;
 }
 
 }  // namespace
@@ -74,17 +99,17 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
                               const std::function<void(const std::string&)>& progress) {
   SelectionResult out;
   out.before = problem.Evaluate({});
-  // Chunks at least as long as the nominal residual stays correlated: rows closer than
-  // that are not independent evidence.
-  const int chunk = std::max(problem.ChunkRows(), CorrelationLength(out.before.held_out, 20 * problem.ChunkRows()));
+  const int bandwidth = problem.ChunkRows();
   SquaredResiduals current_residuals = out.before;
   std::vector<TrialEffect> current;
+  std::vector<double> test_reductions;  // per added effect, on the test rows
   for (int round = 1; round <= options.max_effects; ++round) {
     const std::vector<TrialEffect> candidates = problem.Candidates(current);
     if (candidates.empty()) break;
     if (progress) {
       progress("round " + std::to_string(round) + ": fitting " + std::to_string(candidates.size()) + " candidates");
     }
+    const double effective_rows = EffectiveRows(current_residuals.selection, bandwidth);
     std::vector<DiagnosisCandidate> tried(candidates.size());
     std::vector<double> fit_reduction(candidates.size(), 0.0);
     std::vector<std::vector<TrialEffect>> fitted(candidates.size());
@@ -106,7 +131,8 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         // Effects the problem holds while scoring (HeldWhileScoring) keep their fit; a
         // candidate that removes nothing on its own is not refitted jointly (it would
         // rarely pass, and the joint fits are most of a round's time).
-        Score s = Compare(current_residuals, r, chunk);
+        const int parameters = static_cast<int>(trial.back().parameters.size());
+        Score s = Compare(current_residuals, r, bandwidth, parameters, effective_rows);
         std::vector<int> refit;
         for (std::size_t m = 0; m < trial.size(); ++m) {
           if (m + 1 == trial.size() || !problem.HeldWhileScoring(trial[m])) refit.push_back(static_cast<int>(m));
@@ -117,7 +143,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
             SquaredResiduals rj = problem.Evaluate(joint);
             if (Mean(rj.fit) < Mean(r.fit)) {
               trial = std::move(joint), r = std::move(rj);
-              s = Compare(current_residuals, r, chunk);
+              s = Compare(current_residuals, r, bandwidth, parameters, effective_rows);
             }
           } catch (const std::exception&) {
             // the joint refit failed: the one-at-a-time fit stands
@@ -125,36 +151,46 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         }
         c.parameters = trial.back().parameters;
         c.fit_gap = problem.Gap(Mean(r.fit));
-        c.held_out_gap = problem.Gap(Mean(r.held_out));
+        c.held_out_gap = problem.Gap(Mean(r.selection));
         c.reduction = s.reduction;
-        c.t_statistic = s.t;
+        c.t_statistic = s.test.t;
+        c.p_value = s.test.p;
+        c.information_gain = s.information_gain;
         fit_reduction[k] = s.fit_reduction;
         fitted[k] = std::move(trial);
       } catch (const std::exception& e) {
         c.note = e.what();
         c.reduction = -std::numeric_limits<double>::infinity();
+        c.p_value = std::numeric_limits<double>::quiet_NaN();
       }
     });
-    // Significant by the t test, or so large on both the fit and the held-out rows that
-    // chance is out of the question even where the effect shows only in a few events
-    // (a speed limit reached now and then leaves most chunks unchanged: t stays small).
+    // Holm's correction over the candidates that could be fitted: the best of many is
+    // held to the family's level, not to one test's.
+    std::vector<double> p;
+    int tested = 0;
+    for (const auto& c : tried) {
+      p.push_back(c.note.empty() ? c.p_value : std::numeric_limits<double>::quiet_NaN());
+      tested += c.note.empty() ? 1 : 0;
+    }
+    const std::vector<bool> significant = HolmReject(p, options.alpha);
     auto passes_test = [&](std::size_t k) {
       const DiagnosisCandidate& c = tried[k];
       const bool strong = c.reduction >= kStrongReduction && fit_reduction[k] >= kStrongReduction && c.t_statistic > 0;
-      return c.note.empty() && c.reduction >= options.min_improvement &&
-             (c.t_statistic >= options.significance || strong);
+      return c.note.empty() && c.reduction >= options.min_improvement && c.information_gain > 0 &&
+             (significant[k] || strong);
     };
-    // The largest held-out reduction among the candidates that pass (one that fails the
+    // The largest information gain among the candidates that pass (one that fails the
     // test must not hide another that passes); ties go to the earlier candidate.
     std::size_t best = tried.size();
     for (std::size_t k = 0; k < tried.size(); ++k) {
-      if (passes_test(k) && (best == tried.size() || tried[k].reduction > tried[best].reduction)) best = k;
+      tried[k].significant = significant[k];
+      if (passes_test(k) && (best == tried.size() || tried[k].information_gain > tried[best].information_gain)) best = k;
     }
     const bool passes = best < tried.size();
     if (passes) {
       DiagnosisCandidate& winner = tried[best];
       winner.selected = true;
-      const std::string evidence = RoundEvidence(tried, winner);
+      const std::string evidence = RoundEvidence(tried, winner, tested);
       std::vector<TrialEffect> next = fitted[best];
       std::vector<int> all(next.size());
       for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
@@ -166,44 +202,276 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
       } catch (const std::exception&) {
         next = fitted[best];  // the joint refit failed: keep the one-at-a-time fit
       }
-      const SquaredResiduals r = problem.Evaluate(next);
-      const double gap_before = problem.Gap(Mean(current_residuals.held_out));
-      const double gap_after = problem.Gap(Mean(r.held_out));
+      SquaredResiduals r = problem.Evaluate(next);
+      const double test_before = problem.Gap(Mean(current_residuals.test));
       current = next;
-      current_residuals = r;
-      out.gap_reductions.push_back(gap_before > 0 ? (gap_before - gap_after) / gap_before : 0.0);
+      test_reductions.push_back(test_before > 0 ? (test_before - problem.Gap(Mean(r.test))) / test_before : 0.0);
       std::string signature = problem.Signature(current.back());
       out.evidence.push_back(EffectLabel(winner.name, winner.joint) + ": " + evidence +
                              (signature.empty() ? "" : "; " + signature) + ".");
+      // Backward step: an effect added earlier that the new one made redundant (its
+      // removal, the others held, costs less than it must earn) goes out again.
+      if (current.size() > 1) {
+        std::size_t weakest = current.size();
+        Score weakest_score;
+        for (std::size_t m = 0; m + 1 < current.size(); ++m) {
+          std::vector<TrialEffect> without = current;
+          without.erase(without.begin() + static_cast<std::ptrdiff_t>(m));
+          const SquaredResiduals rw = problem.Evaluate(without);
+          const Score keep = Compare(rw, r, bandwidth, static_cast<int>(current[m].parameters.size()),
+                                     EffectiveRows(rw.selection, bandwidth));
+          const bool earns = keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
+                             (keep.test.p <= options.alpha ||
+                              (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction));
+          if (!earns && (weakest == current.size() || keep.test.p > weakest_score.test.p)) {
+            weakest = m;
+            weakest_score = keep;
+          }
+        }
+        if (weakest < current.size()) {
+          char why[320];
+          std::snprintf(why, sizeof why,
+                        "round %d: %s was taken out again: beside %s it removes only %s of the selection rows' squared "
+                        "error (t = %.1f, %s)",
+                        round, EffectLabel(current[weakest].name, current[weakest].joint).c_str(),
+                        EffectLabel(winner.name, winner.joint).c_str(), Percent(weakest_score.reduction).c_str(),
+                        weakest_score.test.t, PValue(weakest_score.test.p).c_str());
+          out.removed.push_back(why);
+          current.erase(current.begin() + static_cast<std::ptrdiff_t>(weakest));
+          out.evidence.erase(out.evidence.begin() + static_cast<std::ptrdiff_t>(weakest));
+          test_reductions.erase(test_reductions.begin() + static_cast<std::ptrdiff_t>(weakest));
+          std::vector<int> rest(current.size());
+          for (std::size_t k = 0; k < rest.size(); ++k) rest[k] = static_cast<int>(k);
+          try {
+            current = problem.Fit(current, rest);
+          } catch (const std::exception&) {
+            // the refit failed: the others keep their parameters
+          }
+          r = problem.Evaluate(current);
+        }
+      }
+      current_residuals = r;
     }
     out.candidates.insert(out.candidates.end(), tried.begin(), tried.end());
     if (!passes) break;
   }
   out.effects = current;
+  out.gap_reductions = test_reductions;
   out.after = current_residuals;
   return out;
 }
 
-void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, DiagnosisReport* report) {
-  report->gap_before = problem.Gap(Mean(selection.before.held_out));
-  report->gap_after = problem.Gap(Mean(selection.after.held_out));
+std::vector<std::map<std::string, double>> StandardErrors(const DiagnosisProblem& problem,
+                                                          const std::vector<TrialEffect>& effects) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::map<std::string, double>> out(effects.size());
+  struct Slot {
+    std::size_t effect;
+    std::string key;
+  };
+  std::vector<Slot> slots;
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    for (const auto& [key, value] : effects[i].parameters) {
+      slots.push_back({i, key});
+      out[i][key] = nan;
+    }
+  }
+  if (slots.empty()) return out;
+  std::vector<double> r0;
+  try {
+    r0 = problem.FitResiduals(effects);
+  } catch (const std::exception&) {
+    return out;
+  }
+  const auto n = static_cast<Eigen::Index>(r0.size());
+  const auto k = static_cast<Eigen::Index>(slots.size());
+  if (n <= k) return out;
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(n, k);
+  std::vector<bool> usable(slots.size(), false);
+  for (std::size_t s = 0; s < slots.size(); ++s) {
+    const double value = effects[slots[s].effect].parameters.at(slots[s].key);
+    const double h = problem.RelativeStep() * std::max(std::abs(value), 1e-3);
+    auto at = [&](double v, std::vector<double>* r) {
+      std::vector<TrialEffect> trial = effects;
+      trial[slots[s].effect].parameters[slots[s].key] = v;
+      try {
+        *r = problem.FitResiduals(trial);
+        return r->size() == r0.size();
+      } catch (const std::exception&) {
+        return false;
+      }
+    };
+    std::vector<double> plus, minus;
+    const bool up = at(value + h, &plus), down = at(value - h, &minus);
+    if (!up && !down) continue;
+    for (Eigen::Index row = 0; row < n; ++row) {
+      const auto i = static_cast<std::size_t>(row);
+      jacobian(row, static_cast<Eigen::Index>(s)) =
+          up && down ? (plus[i] - minus[i]) / (2 * h) : (up ? (plus[i] - r0[i]) / h : (r0[i] - minus[i]) / h);
+    }
+    usable[s] = jacobian.col(static_cast<Eigen::Index>(s)).squaredNorm() > 0;
+  }
+  // Residual variance per row, inflated by how long the residual stays correlated:
+  // neighbouring rows are not independent evidence.
+  double rss = 0;
+  for (double v : r0) rss += v * v;
+  const int components = std::max(1, problem.ResidualComponents());
+  int correlation = 1;
+  for (int c = 0; c < components; ++c) {
+    std::vector<double> series;
+    for (std::size_t i = static_cast<std::size_t>(c); i < r0.size(); i += static_cast<std::size_t>(components)) series.push_back(r0[i]);
+    correlation = std::max(correlation, CorrelationLength(series, std::max(1, static_cast<int>(series.size() / 4))));
+  }
+  const double variance = rss / static_cast<double>(n - k) * correlation;
+  const Eigen::MatrixXd information = jacobian.transpose() * jacobian;
+  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> decomposition(information);
+  if (decomposition.rank() < k) {
+    // Parameters the logs do not separate: only those outside the null space get errors.
+    const Eigen::MatrixXd covariance = decomposition.pseudoInverse() * variance;
+    for (std::size_t s = 0; s < slots.size(); ++s) {
+      if (usable[s] && information(static_cast<Eigen::Index>(s), static_cast<Eigen::Index>(s)) > 0) {
+        // The diagonal of the pseudo-inverse understates a parameter in the null space: report NaN there.
+        Eigen::VectorXd e = Eigen::VectorXd::Zero(k);
+        e[static_cast<Eigen::Index>(s)] = 1;
+        const Eigen::VectorXd back = information * (decomposition.pseudoInverse() * e);
+        if ((back - e).norm() < 1e-6) out[slots[s].effect][slots[s].key] = std::sqrt(std::max(0.0, covariance(static_cast<Eigen::Index>(s), static_cast<Eigen::Index>(s))));
+      }
+    }
+    return out;
+  }
+  const Eigen::MatrixXd covariance = information.inverse() * variance;
+  for (std::size_t s = 0; s < slots.size(); ++s) {
+    if (usable[s]) out[slots[s].effect][slots[s].key] = std::sqrt(std::max(0.0, covariance(static_cast<Eigen::Index>(s), static_cast<Eigen::Index>(s))));
+  }
+  return out;
+}
+
+namespace {
+
+// The adequacy of the repaired model on one channel of the test rows.
+ChannelAdequacy CheckChannel(const TestResiduals& t, std::size_t c, int bandwidth) {
+  ChannelAdequacy a;
+  const std::vector<double>& r = t.residual[c];
+  a.channel = t.channels[c];
+  a.rms = Rms(r);
+  a.noise = c < t.noise.size() ? t.noise[c] : 0.0;
+  const Whiteness w = LjungBox(r, kWhitenessLags, t.step);
+  a.autocorrelation = w.autocorrelation;
+  a.step_seconds = t.step / t.rate;
+  a.whiteness_bound = w.bound;
+  a.whiteness_p = w.p;
+  for (std::size_t i = 0; i < t.inputs.size(); ++i) {
+    a.inputs.push_back(PeakCrossCorrelation(r, t.inputs[i], 10 * t.step, t.step, t.input_names[i]));
+  }
+  std::stable_sort(a.inputs.begin(), a.inputs.end(), [](const CrossCorrelation& x, const CrossCorrelation& y) {
+    return std::abs(x.peak) / std::max(x.bound, 1e-12) > std::abs(y.peak) / std::max(y.bound, 1e-12);
+  });
+  if (a.inputs.size() > static_cast<std::size_t>(kCrossCorrelationsShown)) a.inputs.resize(kCrossCorrelationsShown);
+  if (c < t.learned.size() && t.learned[c].size() == r.size()) {
+    const std::vector<double>& l = t.learned[c];
+    a.learned_rms = Rms(l);
+    std::vector<double> gain(r.size());
+    double mse = 0;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      gain[i] = r[i] * r[i] - l[i] * l[i];
+      mse += r[i] * r[i];
+    }
+    mse /= static_cast<double>(std::max<std::size_t>(r.size(), 1));
+    const LongRunTest test = LongRunMeanTest(gain, bandwidth);
+    a.learned_reduction = mse > 0 ? test.mean / mse : 0.0;
+    a.learned_p = test.p;
+    // The band: where the residual's spectrum stands furthest above the corrected one's.
+    const int segment = static_cast<int>(std::min<double>(1024, std::pow(2, std::floor(std::log2(std::max(8.0, r.size() / 8.0))))));
+    std::vector<double> f, pr, pl;
+    WelchPsd(r, t.rate, segment, &f, &pr);
+    WelchPsd(l, t.rate, segment, &f, &pl);
+    std::size_t peak = 0;
+    double most = 0;
+    for (std::size_t b = 1; b < pr.size() && b < pl.size(); ++b) {
+      if (pr[b] - pl[b] > most) most = pr[b] - pl[b], peak = b;
+    }
+    if (peak > 0) {
+      std::size_t lo = peak, hi = peak;
+      while (lo > 1 && pr[lo - 1] - pl[lo - 1] > 0.25 * most) --lo;
+      while (hi + 1 < pr.size() && pr[hi + 1] - pl[hi + 1] > 0.25 * most) ++hi;
+      a.band_low = f[lo];
+      a.band_high = f[hi];
+    }
+  } else {
+    a.learned_p = std::numeric_limits<double>::quiet_NaN();
+  }
+  return a;
+}
+
+// The gap of per-channel test residuals (row means of the channels' squares summed).
+double ChannelGap(const DiagnosisProblem& problem, const std::vector<std::vector<double>>& channels) {
+  if (channels.empty()) return 0;
+  std::vector<double> rows(channels.front().size(), 0.0);
+  for (const auto& c : channels) {
+    for (std::size_t i = 0; i < rows.size() && i < c.size(); ++i) rows[i] += c[i] * c[i];
+  }
+  return problem.Gap(Mean(rows));
+}
+
+}  // namespace
+
+void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, const DiagnosisOptions& options,
+                     DiagnosisReport* report) {
+  report->alpha = options.alpha;
+  report->min_improvement = options.min_improvement;
+  report->max_effects = options.max_effects;
+  report->gap_before = problem.Gap(Mean(selection.before.test));
+  report->gap_after = problem.Gap(Mean(selection.after.test));
+  report->selection_gap_before = problem.Gap(Mean(selection.before.selection));
+  report->selection_gap_after = problem.Gap(Mean(selection.after.selection));
   report->fit_gap_before = problem.Gap(Mean(selection.before.fit));
   report->fit_gap_after = problem.Gap(Mean(selection.after.fit));
   report->fit_rows = static_cast<int>(selection.before.fit.size());
-  report->held_out_rows = static_cast<int>(selection.before.held_out.size());
+  report->selection_rows = static_cast<int>(selection.before.selection.size());
+  report->test_rows = static_cast<int>(selection.before.test.size());
+  report->held_out_rows = report->selection_rows + report->test_rows;
   report->candidates = selection.candidates;
+  report->removed = selection.removed;
+  const std::vector<std::map<std::string, double>> errors = StandardErrors(problem, selection.effects);
   for (std::size_t k = 0; k < selection.effects.size(); ++k) {
     const TrialEffect& e = selection.effects[k];
-    report->effects.push_back({e.name, e.joint, e.parameters, selection.gap_reductions[k], selection.evidence[k]});
+    report->effects.push_back({e.name, e.joint, e.parameters, errors[k], selection.gap_reductions[k], selection.evidence[k]});
   }
+
+  // Adequacy of the repaired model, and the learned yardstick beside both models.
+  const TestResiduals nominal = problem.Test({}, true);
+  const TestResiduals repaired = problem.Test(selection.effects, true);
+  report->adequacy.clear();
+  std::vector<double> p;
+  for (std::size_t c = 0; c < repaired.channels.size(); ++c) {
+    report->adequacy.push_back(CheckChannel(repaired, c, problem.ChunkRows()));
+    p.push_back(report->adequacy.back().learned_p);
+  }
+  // Unexplained: the learned correction removes a significant share (Holm over the
+  // channels) of at least min_improvement.
+  const std::vector<bool> significant = HolmReject(p, options.alpha);
+  for (std::size_t c = 0; c < report->adequacy.size(); ++c) {
+    ChannelAdequacy& a = report->adequacy[c];
+    a.unexplained = significant[c] && a.learned_reduction >= options.min_improvement;
+  }
+  LearnedYardstick& y = report->yardstick;
+  y.learner = repaired.learner;
+  y.nominal = ChannelGap(problem, nominal.learned);
+  y.repaired = ChannelGap(problem, repaired.learned);
+  const double best = std::min({report->gap_before, report->gap_after, y.nominal, y.repaired});
+  const double predictable = report->gap_before * report->gap_before - best * best;
+  y.physics_share = predictable > 0
+                        ? (report->gap_before * report->gap_before - report->gap_after * report->gap_after) / predictable
+                        : std::numeric_limits<double>::quiet_NaN();
 }
 
 void ReportRefit(const DiagnosisProblem& given, const std::string& refitted, DiagnosisReport* report) {
   const SquaredResiduals r = given.Evaluate({});
   report->refit_gap = report->gap_before;
-  report->gap_before = given.Gap(Mean(r.held_out));
+  report->gap_before = given.Gap(Mean(r.test));
   report->fit_gap_before = given.Gap(Mean(r.fit));
-  report->notes.push_back(refitted + " before effects were sought: held-out gap " + FormatParameter(report->gap_before) +
+  report->selection_gap_before = given.Gap(Mean(r.selection));
+  report->notes.push_back(refitted + " before effects were sought: test-row gap " + FormatParameter(report->gap_before) +
                           " -> " + FormatParameter(report->refit_gap) + ". 'Nominal' in the plots is the refitted model.");
 }
 

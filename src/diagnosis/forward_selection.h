@@ -1,17 +1,20 @@
 // Forward selection of missing effects, the same for both robots (docs/diagnose.md).
 //
 // A DiagnosisProblem knows one robot's model and logs: it evaluates the model plus a
-// set of effects into squared residuals on the fit rows and on the held-out rows,
-// lists the candidate effects, and fits their parameters on the fit rows. Selection
-// then runs rounds:
-//   1. every candidate not yet added is fitted with the added ones held, and scored on
-//      the held-out rows by how much of the held-out mean squared error it removes and
-//      how significant that is (ChunkedTStatistic over chunks of correlated rows);
-//   2. the best is added when it passes both thresholds of DiagnosisOptions, and all
-//      added effects are refitted together;
-//   3. until none passes or max_effects are in.
-// The candidates of a round are fitted in parallel (ParallelFor); the result does not
-// depend on the thread count.
+// set of effects into squared residuals on the fit, selection and test rows, lists the
+// candidate effects, and fits their parameters on the fit rows. Selection then runs
+// rounds:
+//   1. every candidate not yet added is fitted with the added ones, and scored on the
+//      selection rows: the share of their mean squared error it removes, a one-sided t
+//      test of that reduction with a long-run (Newey-West) standard error, and an
+//      information criterion that counts its parameters;
+//   2. the candidates significant after Holm's correction over the round, removing at
+//      least min_improvement and earning their parameters, compete on the criterion;
+//      the best is added and all added effects refitted together;
+//   3. a backward step takes out an effect added earlier that no longer earns its place;
+//   4. until none passes or max_effects are in.
+// The test rows choose nothing: they give the reported gaps. The candidates of a round
+// are fitted in parallel (ParallelFor); the result does not depend on the thread count.
 #pragma once
 
 #include <functional>
@@ -33,7 +36,22 @@ struct TrialEffect {
 // Squared residuals per row, each row's channels summed, in time order.
 struct SquaredResiduals {
   std::vector<double> fit;
-  std::vector<double> held_out;
+  std::vector<double> selection;
+  std::vector<double> test;
+};
+
+// The test rows of one model, per channel, for the adequacy checks (diagnosis.h,
+// ChannelAdequacy) and the learned yardstick.
+struct TestResiduals {
+  std::vector<std::string> channels;           // "joint 1", "forward", ...
+  std::vector<double> noise;                   // per channel, the noise floor's share
+  std::vector<std::vector<double>> residual;   // channel x test row, time order
+  std::vector<std::vector<double>> learned;    // the same, corrected by the learned residual (may be empty)
+  std::vector<std::string> input_names;        // what the residual may correlate with
+  std::vector<std::vector<double>> inputs;     // input x test row
+  int step = 1;         // rows between the samples the whiteness tests use (a filter's span, a prediction's overlap)
+  double rate = 1;      // rows per second
+  std::string learner;  // what the learned residual is, in words
 };
 
 class DiagnosisProblem {
@@ -49,9 +67,18 @@ class DiagnosisProblem {
   // the others held. Throws CheckFailed when a fit fails; the candidate is then
   // reported with the message.
   virtual std::vector<TrialEffect> Fit(std::vector<TrialEffect> effects, const std::vector<int>& free) const = 0;
-  // The fewest held-out rows per chunk of the significance test (longer where the
-  // residual stays correlated longer).
+  // The fewest rows of the long-run variance's bandwidth (longer where the residual
+  // stays correlated longer).
   virtual int ChunkRows() const = 0;
+  // The fit rows' residual components, concatenated (a fixed length for one log set):
+  // what the fit minimises. `components` residuals per row.
+  virtual std::vector<double> FitResiduals(const std::vector<TrialEffect>& effects) const = 0;
+  virtual int ResidualComponents() const { return 1; }
+  // The relative step of the numeric derivatives of FitResiduals for standard errors.
+  virtual double RelativeStep() const { return 1e-3; }
+  // The test rows of the model with `effects`; with `learn`, also corrected by a
+  // learned residual predictor trained on the fit rows.
+  virtual TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const = 0;
   // A clause of evidence particular to this effect (its signature in the data), or "".
   virtual std::string Signature(const TrialEffect& effect) const { return ""; }
   // True when `effect`, already added, keeps its fit while the next candidates are
@@ -65,15 +92,24 @@ struct SelectionResult {
   std::vector<std::string> evidence;          // per added effect
   std::vector<DiagnosisCandidate> candidates; // every candidate of every round
   SquaredResiduals before, after;
+  std::vector<std::string> removed;           // the backward step's removals, with why
 };
 
 // Runs forward selection. `progress` (may be empty) hears each round's start.
 SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOptions& options,
                               const std::function<void(const std::string&)>& progress = {});
 
-// Fills the report's gaps (held-out and fit, before and after), row counts, candidates
-// and effects (joint as the problem gave it) from a selection.
-void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, DiagnosisReport* report);
+// Fills the report's gaps (test, selection and fit rows, before and after), row
+// counts, candidates, effects with their standard errors, the adequacy of the repaired
+// model and the learned yardstick, from a selection.
+void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, const DiagnosisOptions& options,
+                     DiagnosisReport* report);
+
+// One standard error per parameter of each effect: the covariance of the fit
+// (Gauss-Newton, from numeric derivatives of FitResiduals), scaled by the residual's
+// variance and its correlation length. NaN where the parameter is not determined.
+std::vector<std::map<std::string, double>> StandardErrors(const DiagnosisProblem& problem,
+                                                          const std::vector<TrialEffect>& effects);
 
 // With --refit-model: the report's gap before becomes the given model's (`given`, the
 // problem over the model as the user gave it) and refit_gap the refitted model's; a note

@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "diagnosis/forward_selection.h"
 #include "diagnosis/omni_identification.h"
+#include "learning/omni_predictor.h"
 
 namespace twinsim {
 namespace {
@@ -44,7 +45,7 @@ std::vector<Variable> VariablesOf(const std::string& name) {
 
 struct LogData {
   const OmniLog* log = nullptr;
-  std::vector<char> held;  // per row
+  std::vector<RowKind> kind;  // per row
 };
 
 // The residual of one replay: per predicted row (forward, sideways, r * dtheta), m.
@@ -54,13 +55,17 @@ class OmniProblem : public DiagnosisProblem {
  public:
   OmniProblem(const OmniModel& nominal, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
               double block_seconds)
-      : nominal_(nominal), options_(options) {
+      : nominal_(nominal), options_(options), logs_(&logs) {
+    // A prediction starts `horizon` frames back from a tracker fed the measurements and
+    // the commands of the delay before: rows that close to another block are guards.
+    guard_seconds_ = (options.horizon + nominal.command_delay_frames + nominal.vision_delay_frames + 2) *
+                     logs.front().frame_period;
     for (const OmniLog& log : logs) {
       LogData d;
       d.log = &log;
-      d.held.resize(log.rows.size());
+      d.kind.resize(log.rows.size());
       for (std::size_t i = 0; i < log.rows.size(); ++i) {
-        d.held[i] = InHeldOutBlock(log.rows[i].t - log.rows[0].t, block_seconds, options.held_out);
+        d.kind[i] = DiagnosisRowKind(log.rows[i].t - log.rows[0].t, block_seconds, options.held_out, guard_seconds_);
       }
       data_.push_back(std::move(d));
     }
@@ -104,7 +109,13 @@ class OmniProblem : public DiagnosisProblem {
       const ReplayResidual r = Residual(model, d, 1, options_.horizon);
       for (std::size_t k = 0; k < r.rows.size(); ++k) {
         const auto& e = r.e[k];
-        (d.held[r.rows[k]] ? out.held_out : out.fit).push_back(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        const double sq = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+        switch (d.kind[r.rows[k]]) {
+          case RowKind::kFit: out.fit.push_back(sq); break;
+          case RowKind::kSelection: out.selection.push_back(sq); break;
+          case RowKind::kTest: out.test.push_back(sq); break;
+          case RowKind::kGuard: break;
+        }
       }
     }
     return out;
@@ -117,7 +128,7 @@ class OmniProblem : public DiagnosisProblem {
     for (const LogData& d : data_) {
       const ReplayResidual r = Residual(model, d, kFitStride, options_.horizon);
       for (std::size_t k = 0; k < r.rows.size(); ++k) {
-        if (d.held[r.rows[k]]) continue;
+        if (d.kind[r.rows[k]] != RowKind::kFit) continue;
         out.insert(out.end(), r.e[k].begin(), r.e[k].end());
       }
     }
@@ -157,6 +168,11 @@ class OmniProblem : public DiagnosisProblem {
   }
 
   std::string Signature(const TrialEffect& e) const override;
+  std::vector<double> FitResiduals(const std::vector<TrialEffect>& effects) const override { return FitResidual(effects); }
+  int ResidualComponents() const override { return 3; }
+  double RelativeStep() const override { return 2e-2; }  // the replay's cost is jagged at fine scales (Refine)
+  TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const override;
+  double guard_seconds() const { return guard_seconds_; }
 
  private:
   double Quantile(const std::vector<double>& sorted, double q) const {
@@ -171,6 +187,8 @@ class OmniProblem : public DiagnosisProblem {
 
   OmniModel nominal_;
   DiagnosisOptions options_;
+  const std::vector<OmniLog>* logs_;
+  double guard_seconds_ = 0;
   std::vector<LogData> data_;
   double frame_period_ = 1.0 / 30;
   double physics_dt_ = 1.0 / 300;
@@ -430,7 +448,96 @@ double ResponseLag(const std::vector<double>& command, const std::vector<double>
   return best_shift * dt;
 }
 
+// The rows of each stretch of fit blocks, as logs of their own (long enough to train on).
+std::vector<OmniLog> FitStretches(const std::vector<LogData>& data, std::size_t least) {
+  std::vector<OmniLog> out;
+  for (const LogData& d : data) {
+    for (std::size_t i = 0; i < d.kind.size();) {
+      if (d.kind[i] != RowKind::kFit) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      while (j < d.kind.size() && d.kind[j] == RowKind::kFit) ++j;
+      if (j - i >= least) out.push_back(SliceOmniLog(*d.log, i, j));
+      i = j;
+    }
+  }
+  return out;
+}
+
 }  // namespace
+
+TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool learn) const {
+  const OmniModel model = Build(effects);
+  TestResiduals out;
+  out.channels = {"forward", "sideways", "rotation (at the rim)"};
+  double var_xy = 0, var_theta = 0;
+  OmniNoiseFloor(*logs_, nominal_.chassis_radius, &var_xy, &var_theta);
+  out.noise = {std::sqrt(2 * var_xy), std::sqrt(2 * var_xy), nominal_.chassis_radius * std::sqrt(2 * var_theta)};
+  out.residual.resize(3);
+  out.input_names = {"command vx", "command vy", "command omega", "heading sin", "heading cos", "field x", "field y"};
+  out.inputs.resize(out.input_names.size());
+  out.step = std::max(1, options_.horizon);
+  out.rate = 1.0 / frame_period_;
+  std::shared_ptr<const OmniPredictor> predictor;
+  if (learn) {
+    // The seed's linear predictor as a residual on this model (twinsim train --residual
+    // --kind linear), one frame ahead, trained on the fit blocks only; rolled out over
+    // the horizon by the learned backend as replay does.
+    OmniTrainOptions train;
+    train.kind = "linear";
+    train.horizon = 1;
+    train.residual = true;
+    train.nominal_engine = options_.backend;
+    const FeatureLayout layout = PredictorLayout(model, 1);
+    const std::size_t least = static_cast<std::size_t>(
+        layout.history + model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + 10);
+    const std::vector<OmniLog> stretches = FitStretches(data_, least);
+    OmniTrainSummary summary;
+    try {
+      if (!stretches.empty()) {
+        predictor = std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, stretches, train, &summary));
+        out.learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
+                      "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
+                      " fit rows";
+      }
+    } catch (const InputError& e) {
+      out.learner = std::string("no learned residual: ") + e.what();
+    }
+  }
+  if (predictor) out.learned.resize(3);
+  for (const LogData& d : data_) {
+    const ReplayResidual r = Residual(model, d, 1, options_.horizon);
+    ReplayResidual l;
+    if (predictor) {
+      OmniReplayOptions o;
+      o.backend = "learned";
+      o.backend_options.predictor = predictor;
+      o.horizon = options_.horizon;
+      l = PoseErrorsInRobotFrame(*d.log, ReplayOmniLog(model, *d.log, o), nominal_.chassis_radius);
+    }
+    std::size_t m = 0;  // walks l.rows alongside
+    for (std::size_t k = 0; k < r.rows.size(); ++k) {
+      const std::size_t i = r.rows[k];
+      if (d.kind[i] != RowKind::kTest) continue;
+      const OmniLogRow& row = d.log->rows[i];
+      for (std::size_t c = 0; c < 3; ++c) out.residual[c].push_back(r.e[k][c]);
+      const double in[7] = {row.command.vx, row.command.vy, row.command.omega, std::sin(row.pose.theta),
+                            std::cos(row.pose.theta), row.pose.x, row.pose.y};
+      for (std::size_t c = 0; c < 7; ++c) out.inputs[c].push_back(in[c]);
+      if (predictor) {
+        // A row the learned replay does not predict (its window still filling) keeps the
+        // physics' residual: no correction.
+        while (m < l.rows.size() && l.rows[m] < i) ++m;
+        const bool both = m < l.rows.size() && l.rows[m] == i;
+        for (std::size_t c = 0; c < 3; ++c) out.learned[c].push_back(both ? l.e[m][c] : r.e[k][c]);
+      }
+    }
+  }
+  return out;
+}
+
 
 double OmniNoiseFloor(const std::vector<OmniLog>& logs, double radius, double* var_xy_out, double* var_theta_out) {
   double var_xy = 0, var_theta = 0;
@@ -529,7 +636,8 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   report.block_seconds = block;
   report.held_out_share = options.held_out;
   for (const OmniLog& log : logs) report.logs.push_back(log.path);
-  ReportSelection(problem, selection, &report);
+  report.guard_seconds = problem.guard_seconds();
+  ReportSelection(problem, selection, options, &report);
   if (options.refit_model) {
     ReportRefit(OmniProblem(model, logs, options, block),
                 "The model's response was identified on the fit blocks (twinsim identify: delay, per-axis gain, lag, "
@@ -646,18 +754,18 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   report.findings = findings;
   report.series = series;
 
-  // Paths: the longest held-out stretch of the first log, run freely from its start.
+  // Paths: the longest test stretch of the first log, run freely from its start.
   {
     const LogData& d = problem.data().front();
     const OmniLog& log = *d.log;
     std::size_t best_first = 0, best_len = 0;
     for (std::size_t i = static_cast<std::size_t>(first_predicted); i < log.rows.size();) {
-      if (!d.held[i]) {
+      if (d.kind[i] != RowKind::kTest) {
         ++i;
         continue;
       }
       std::size_t j = i;
-      while (j < log.rows.size() && d.held[j]) ++j;
+      while (j < log.rows.size() && d.kind[j] == RowKind::kTest) ++j;
       if (j - i > best_len) {
         best_first = i;
         best_len = j - i;

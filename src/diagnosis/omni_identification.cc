@@ -126,16 +126,6 @@ struct Segment {
   bool validation = false;     // a wholly held-out log
 };
 
-OmniLog SubLog(const OmniLog& log, std::size_t first, std::size_t last) {
-  OmniLog out;
-  out.path = log.path;
-  out.robot = log.robot;
-  out.frame_period = log.frame_period;
-  out.rows.assign(log.rows.begin() + static_cast<long>(first), log.rows.begin() + static_cast<long>(last));
-  out.line_of.assign(log.line_of.begin() + static_cast<long>(first), log.line_of.begin() + static_cast<long>(last));
-  return out;
-}
-
 // Accumulates the three error components of predicted rows.
 struct GapSum {
   double xy = 0, f = 0, s = 0, w = 0;
@@ -221,7 +211,7 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
         from = t.back();
       }
       Segment s;
-      s.log = SubLog(log, first, last);
+      s.log = SliceOmniLog(log, first, last);
       s.score_from = score - first;
       for (std::size_t i = first; i < last; ++i) s.held.push_back(InHeldOutBlock(t[i], block, options.held_out));
       if (s.log.num_measured() >= 2 && last - first > 2) segments.push_back(std::move(s));

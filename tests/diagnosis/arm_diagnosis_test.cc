@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <iostream>
 
 #include "core/error.h"
 #include "diagnosis/diagnosis_plants.h"
@@ -102,6 +104,7 @@ TEST_P(ArmDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
   ArmModel repaired;
   const DiagnosisReport report = DiagnoseArm(nominal, logs, options, &repaired);
   SCOPED_TRACE(FormatDiagnosisTable(report));
+  if (std::getenv("TWINSIM_PRINT_DIAGNOSIS")) std::cout << FormatDiagnosisTable(report);
 
   ASSERT_EQ(report.effects.size(), c.expected.size());
   for (const Expected& want : c.expected) {
@@ -146,6 +149,7 @@ TEST(ArmDiagnosis, RefitModelAbsorbsAPayloadIntoTheLinkParameters) {
   ArmModel repaired;
   const DiagnosisReport report = DiagnoseArm(nominal, logs, options, &repaired);
   SCOPED_TRACE(FormatDiagnosisTable(report));
+  if (std::getenv("TWINSIM_PRINT_DIAGNOSIS")) std::cout << FormatDiagnosisTable(report);
   DiagnosisOptions none;
   none.max_effects = 0;
   const double floor = DiagnoseArm(plant, logs, none).gap_before;

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <iostream>
 
 #include "diagnosis/diagnosis_plants.h"
 #include "diagnosis/diagnosis_report.h"
@@ -61,6 +63,7 @@ TEST_P(OmniDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
   OmniModel repaired;
   const DiagnosisReport report = DiagnoseOmni(nominal, logs, options, &repaired);
   SCOPED_TRACE(FormatDiagnosisTable(report));
+  if (std::getenv("TWINSIM_PRINT_DIAGNOSIS")) std::cout << FormatDiagnosisTable(report);
 
   ASSERT_EQ(report.effects.size(), c.expected.size());
   for (const auto& [name, parameters] : c.expected) {

@@ -105,10 +105,10 @@ void AddDiagnoseCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   cmd->add_option("--max-effects", options->diagnosis.max_effects, "The most effects added")->capture_default_str();
   cmd->add_option("--min-improvement", options->diagnosis.min_improvement,
-                  "Share of the held-out squared error an effect must remove to be added")
+                  "Share of the selection rows' squared error an effect must remove to be added")
       ->capture_default_str();
-  cmd->add_option("--significance", options->diagnosis.significance,
-                  "t statistic (over held-out chunks) the removal must reach to be added")
+  cmd->add_option("--alpha", options->diagnosis.alpha,
+                  "Family-wise level of the tests (Holm over each round's candidates; the adequacy checks)")
       ->capture_default_str();
   cmd->add_option("--backend", options->diagnosis.backend, "Omni: physics that replays the model (analytic, ode, bullet)")
       ->capture_default_str();

@@ -286,4 +286,14 @@ void WritePoseCsv(const std::string& path, const std::vector<double>& t, const s
   WriteFileAtomically(path, out);
 }
 
+OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last) {
+  OmniLog out;
+  out.path = log.path;
+  out.robot = log.robot;
+  out.frame_period = log.frame_period;
+  out.rows.assign(log.rows.begin() + static_cast<long>(first), log.rows.begin() + static_cast<long>(last));
+  out.line_of.assign(log.line_of.begin() + static_cast<long>(first), log.line_of.begin() + static_cast<long>(last));
+  return out;
+}
+
 }  // namespace twinsim

@@ -60,6 +60,9 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select = 
 OmniLog ReadOmniLog(const std::string& path, const OmniLogSelector& select = {});
 OmniLog ParseOmniLog(const std::string& text, const std::string& path, const OmniLogSelector& select = {});
 
+// Rows [first, last) of `log` as a log of their own (path, robot and frame period kept).
+OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last);
+
 // The CSV text of a log (header and rows).
 std::string FormatOmniLog(const std::vector<OmniLogRow>& rows);
 // Writes a log atomically.

@@ -1,0 +1,37 @@
+// The learned yardstick of the arm's diagnosis (docs/diagnose.md, "The learned
+// yardstick"): a regression of the torque residual on the measured motion that knows no
+// physics. Kernel ridge regression with a Gaussian kernel, approximated by random
+// Fourier features (Rahimi and Recht, 2007) at three length scales, beside the inputs
+// themselves; inputs are standardised on the training rows. Fitting is one linear solve
+// and the same data and seed give the same weights.
+//
+//   RandomFeatureRidge r = RandomFeatureRidge::Fit(x_fit, y_fit, 300, 1);
+//   Eigen::MatrixXd correction = r.Predict(x_test);   // rows x outputs
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+
+namespace twinsim {
+
+class RandomFeatureRidge {
+ public:
+  // x: rows x inputs, y: rows x outputs, in time order. The L2 penalty is chosen on a
+  // validation split of the rows (the 4th and 9th tenths); where no penalty beats
+  // predicting zero there, the correction is zero.
+  static RandomFeatureRidge Fit(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, int features, std::uint64_t seed);
+  Eigen::MatrixXd Predict(const Eigen::MatrixXd& x) const;
+  // The penalty chosen per training row; negative when the correction is zero.
+  double ridge() const { return ridge_; }
+
+ private:
+  Eigen::MatrixXd Features(const Eigen::MatrixXd& x) const;
+
+  Eigen::RowVectorXd mean_, scale_;  // inputs' standardisation
+  Eigen::MatrixXd frequencies_;      // inputs x features
+  Eigen::RowVectorXd phases_;        // features
+  Eigen::MatrixXd weights_;          // (1 + inputs + features) x outputs
+  double ridge_ = -1;
+};
+
+}  // namespace twinsim

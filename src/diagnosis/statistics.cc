@@ -1,0 +1,214 @@
+#include "diagnosis/statistics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "diagnosis/diagnosis.h"
+
+namespace twinsim {
+namespace {
+
+constexpr int kMaxContinuedFractionTerms = 500;
+constexpr double kTiny = 1e-300;
+constexpr double kEpsilon = 1e-15;
+
+// The continued fraction of the regularised incomplete beta function (modified Lentz),
+// valid for x < (a + 1) / (a + b + 2).
+double BetaContinuedFraction(double a, double b, double x) {
+  double c = 1, d = 1 - (a + b) * x / (a + 1);
+  if (std::abs(d) < kTiny) d = kTiny;
+  d = 1 / d;
+  double h = d;
+  for (int m = 1; m <= kMaxContinuedFractionTerms; ++m) {
+    const double m2 = 2.0 * m;
+    double coefficient = m * (b - m) * x / ((a + m2 - 1) * (a + m2));
+    for (int half = 0; half < 2; ++half) {
+      d = 1 + coefficient * d;
+      if (std::abs(d) < kTiny) d = kTiny;
+      c = 1 + coefficient / c;
+      if (std::abs(c) < kTiny) c = kTiny;
+      d = 1 / d;
+      h *= d * c;
+      coefficient = -(a + m) * (a + b + m) * x / ((a + m2) * (a + m2 + 1));
+    }
+    if (std::abs(d * c - 1) < kEpsilon) break;
+  }
+  return h;
+}
+
+// I_x(a, b).
+double RegularizedBeta(double a, double b, double x) {
+  if (x <= 0) return 0;
+  if (x >= 1) return 1;
+  const double front =
+      std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x));
+  if (x < (a + 1) / (a + b + 2)) return front * BetaContinuedFraction(a, b, x) / a;
+  return 1 - front * BetaContinuedFraction(b, a, 1 - x) / b;
+}
+
+// Q(a, x), the regularised upper incomplete gamma function.
+double RegularizedGammaQ(double a, double x) {
+  if (x <= 0) return 1;
+  const double log_front = a * std::log(x) - x - std::lgamma(a);
+  if (x < a + 1) {
+    double term = 1 / a, sum = term;
+    for (int n = 1; n <= kMaxContinuedFractionTerms; ++n) {
+      term *= x / (a + n);
+      sum += term;
+      if (std::abs(term) < std::abs(sum) * kEpsilon) break;
+    }
+    return 1 - std::exp(log_front) * sum;
+  }
+  double b = x + 1 - a, c = 1 / kTiny, d = 1 / b, h = d;
+  for (int i = 1; i <= kMaxContinuedFractionTerms; ++i) {
+    const double an = -i * (i - a);
+    b += 2;
+    d = an * d + b;
+    if (std::abs(d) < kTiny) d = kTiny;
+    c = b + an / c;
+    if (std::abs(c) < kTiny) c = kTiny;
+    d = 1 / d;
+    h *= d * c;
+    if (std::abs(d * c - 1) < kEpsilon) break;
+  }
+  return std::exp(log_front) * h;
+}
+
+double MeanOf(const std::vector<double>& x) {
+  return x.empty() ? 0.0 : std::accumulate(x.begin(), x.end(), 0.0) / static_cast<double>(x.size());
+}
+
+// Autocorrelations of x at lags 1..max_lag (0 where x is constant).
+std::vector<double> Autocorrelation(const std::vector<double>& x, int max_lag) {
+  const double m = MeanOf(x);
+  double c0 = 0;
+  for (double v : x) c0 += (v - m) * (v - m);
+  std::vector<double> r(static_cast<std::size_t>(std::max(max_lag, 0)), 0.0);
+  if (c0 <= 0) return r;
+  for (int k = 1; k <= max_lag && static_cast<std::size_t>(k) < x.size(); ++k) {
+    double c = 0;
+    for (std::size_t i = static_cast<std::size_t>(k); i < x.size(); ++i) c += (x[i] - m) * (x[i - static_cast<std::size_t>(k)] - m);
+    r[static_cast<std::size_t>(k - 1)] = c / c0;
+  }
+  return r;
+}
+
+std::vector<double> EveryStep(const std::vector<double>& x, int step) {
+  std::vector<double> out;
+  for (std::size_t i = 0; i < x.size(); i += static_cast<std::size_t>(std::max(step, 1))) out.push_back(x[i]);
+  return out;
+}
+
+}  // namespace
+
+double StudentTUpperTail(double t, double df) {
+  if (std::isnan(t) || !(df > 0)) return std::numeric_limits<double>::quiet_NaN();
+  if (std::isinf(t)) return t > 0 ? 0.0 : 1.0;
+  const double tail = 0.5 * RegularizedBeta(df / 2, 0.5, df / (df + t * t));  // P(T >= |t|)
+  return t >= 0 ? tail : 1 - tail;
+}
+
+double ChiSquareUpperTail(double x, double k) {
+  if (std::isnan(x) || !(k > 0)) return std::numeric_limits<double>::quiet_NaN();
+  return std::clamp(RegularizedGammaQ(k / 2, x / 2), 0.0, 1.0);
+}
+
+LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth) {
+  LongRunTest out;
+  const std::size_t n = x.size();
+  if (n < 4) return out;
+  out.mean = MeanOf(x);
+  const int longest = std::max(1, static_cast<int>(n / 3));
+  out.bandwidth = std::clamp(std::max(min_bandwidth, 3 * CorrelationLength(x, longest)), 1, longest);
+  std::vector<double> d(n);
+  for (std::size_t i = 0; i < n; ++i) d[i] = x[i] - out.mean;
+  auto autocovariance = [&](int lag) {
+    double s = 0;
+    for (std::size_t i = static_cast<std::size_t>(lag); i < n; ++i) s += d[i] * d[i - static_cast<std::size_t>(lag)];
+    return s / static_cast<double>(n);
+  };
+  const double gamma0 = autocovariance(0);
+  double long_run = gamma0;
+  for (int lag = 1; lag <= out.bandwidth; ++lag) {
+    long_run += 2 * (1 - lag / (out.bandwidth + 1.0)) * autocovariance(lag);
+  }
+  long_run = std::max(long_run, gamma0 / static_cast<double>(n));  // Bartlett keeps it positive; rounding may not
+  out.standard_error = std::sqrt(long_run / static_cast<double>(n));
+  out.df = std::max(1.0, static_cast<double>(n) / out.bandwidth - 1);
+  out.effective_rows = gamma0 > 0 ? std::min(static_cast<double>(n), static_cast<double>(n) * gamma0 / long_run)
+                                  : static_cast<double>(n);
+  if (out.standard_error > 0) {
+    out.t = out.mean / out.standard_error;
+    out.p = StudentTUpperTail(out.t, out.df);
+  } else {
+    out.t = out.mean > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+    out.p = out.mean > 0 ? 0.0 : 1.0;
+  }
+  return out;
+}
+
+std::vector<bool> HolmReject(const std::vector<double>& p, double alpha) {
+  std::vector<std::size_t> order;
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    if (!std::isnan(p[k])) order.push_back(k);
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return p[a] < p[b]; });
+  std::vector<bool> reject(p.size(), false);
+  const std::size_t m = order.size();
+  for (std::size_t i = 0; i < m; ++i) {
+    if (p[order[i]] > alpha / static_cast<double>(m - i)) break;
+    reject[order[i]] = true;
+  }
+  return reject;
+}
+
+Whiteness LjungBox(const std::vector<double>& x, int max_lag, int step) {
+  Whiteness w;
+  w.step = std::max(step, 1);
+  const std::vector<double> y = EveryStep(x, w.step);
+  w.rows = static_cast<int>(y.size());
+  const int lags = std::min(max_lag, w.rows / 4);
+  if (lags < 1) return w;
+  w.autocorrelation = Autocorrelation(y, lags);
+  const double n = static_cast<double>(y.size());
+  for (int k = 1; k <= lags; ++k) {
+    const double r = w.autocorrelation[static_cast<std::size_t>(k - 1)];
+    w.q += r * r / (n - k);
+  }
+  w.q *= n * (n + 2);
+  w.bound = 1.96 / std::sqrt(n);
+  w.p = ChiSquareUpperTail(w.q, lags);
+  return w;
+}
+
+CrossCorrelation PeakCrossCorrelation(const std::vector<double>& residual, const std::vector<double>& input, int max_lag,
+                                      int step, const std::string& name) {
+  CrossCorrelation out;
+  out.input = name;
+  const std::vector<double> r = EveryStep(residual, step), u = EveryStep(input, step);
+  const std::size_t n = std::min(r.size(), u.size());
+  if (n < 8) return out;
+  const int reach = std::min<int>(max_lag, static_cast<int>(n / 4));
+  for (int lag = -reach; lag <= reach; ++lag) {
+    std::vector<double> a, b;
+    for (std::size_t i = static_cast<std::size_t>(std::max(lag, 0)); i < n && static_cast<long>(i) - lag < static_cast<long>(n); ++i) {
+      a.push_back(r[i]);
+      b.push_back(u[static_cast<std::size_t>(static_cast<long>(i) - lag)]);
+    }
+    const double c = Correlation(a, b);
+    if (std::abs(c) > std::abs(out.peak)) out.peak = c, out.lag = lag * std::max(step, 1);
+  }
+  // Two autocorrelated series correlate by chance more than white ones: Bartlett's
+  // variance of a cross-correlation, n_eff = n / (1 + 2 sum r_res(k) r_in(k)).
+  const int lags = std::min<int>(50, static_cast<int>(n / 4));
+  const std::vector<double> ar = Autocorrelation(r, lags), au = Autocorrelation(u, lags);
+  double inflation = 1;
+  for (int k = 0; k < lags; ++k) inflation += 2 * ar[static_cast<std::size_t>(k)] * au[static_cast<std::size_t>(k)];
+  const double effective = static_cast<double>(n) / std::max(inflation, 1.0);
+  out.bound = 1.96 / std::sqrt(effective);
+  return out;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,62 @@
+// The diagnosis's statistics (docs/diagnose.md, "Statistics"): tests on series whose
+// rows are correlated (residuals of a filtered log, overlapping predictions), so every
+// standard error is a long-run one, and every test that is one of many is corrected.
+//
+//   LongRunTest t = LongRunMeanTest(gain, 30);       // H0: mean(gain) <= 0
+//   std::vector<bool> keep = HolmReject(p_values, 0.05);
+//   Whiteness w = LjungBox(residual, 20, 4);          // every 4th row, lags 1..20
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace twinsim {
+
+// P(T >= t) for Student's t with `df` degrees of freedom (df > 0; real-valued).
+double StudentTUpperTail(double t, double df);
+// P(X >= x) for a chi-square variable with k degrees of freedom (k > 0).
+double ChiSquareUpperTail(double x, double k);
+
+// The one-sided test that a series' mean is above zero, with the Newey-West (Bartlett
+// kernel) long-run variance: rows closer than the bandwidth are not independent evidence.
+struct LongRunTest {
+  double mean = 0;
+  double standard_error = 0;  // of the mean
+  double t = 0;
+  double df = 0;              // rows / bandwidth - 1, at least 1
+  double p = 1;               // one-sided, P(T >= t) under a zero mean
+  int bandwidth = 1;          // rows
+  double effective_rows = 0;  // rows * (plain variance / long-run variance), at most rows
+};
+// `min_bandwidth` rows at least; longer where the series stays correlated longer
+// (three times its correlation length, CorrelationLength in diagnosis.h).
+LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth);
+
+// Holm's step-down procedure: which of the hypotheses with these p-values are rejected
+// at family-wise level alpha. NaN p-values are never rejected and do not count.
+std::vector<bool> HolmReject(const std::vector<double>& p, double alpha);
+
+// Ljung-Box portmanteau test of whiteness on every `step`-th row of x (step spaces the
+// rows beyond a known correlation: a filter's span, a prediction's overlap).
+struct Whiteness {
+  std::vector<double> autocorrelation;  // lags 1..max_lag (of the subsampled series)
+  double bound = 0;                     // 95 % band for a white series: 1.96 / sqrt(n)
+  double q = 0;                         // Ljung-Box statistic
+  double p = 1;                         // P(chi2(max_lag) >= q): small means not white
+  int rows = 0;                         // after subsampling
+  int step = 1;
+};
+Whiteness LjungBox(const std::vector<double>& x, int max_lag, int step);
+
+// The largest cross-correlation of a residual with an input within +-max_lag rows (the
+// input leading for positive lags), over rows a `step` apart, and its 95 % band.
+struct CrossCorrelation {
+  std::string input;
+  double peak = 0;   // the correlation of largest magnitude
+  int lag = 0;       // rows at which it occurs
+  double bound = 0;  // 1.96 / sqrt(effective rows)
+};
+CrossCorrelation PeakCrossCorrelation(const std::vector<double>& residual, const std::vector<double>& input, int max_lag,
+                                      int step, const std::string& name);
+
+}  // namespace twinsim
