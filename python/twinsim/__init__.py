@@ -84,7 +84,7 @@ def identify(model, logs):
     return _twinsim._identify(model, logs)
 
 
-def diagnose(model, logs, held_out=0.3, max_effects=3, backend="analytic", threads=0, refit_model=False):
+def diagnose(model, logs, held_out=0.4, max_effects=3, backend="analytic", threads=0, refit_model=False):
     """`twinsim diagnose` without files: (report, repaired model); the report is the
     dict of report.json (CONTRACT.md). refit_model: re-identify the model's own
     parameters on the fit blocks first, as `--refit-model` (arms: inertia and friction;

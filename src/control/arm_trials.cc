@@ -171,6 +171,7 @@ ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmRefer
   Rng rng = Rng::Derived(seed, 0x646974);  // "dit"
   Eigen::VectorXd dither = Eigen::VectorXd::Zero(n);
   Eigen::Index k = 0;
+  std::vector<Eigen::VectorXd> sent;  // commands before the disturbance
   const ArmController controller = [&](double, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
     const Eigen::Index ahead = std::min<Eigen::Index>(k + preview, samples - 1);
     if (k % options.dither_hold == 0)
@@ -181,7 +182,10 @@ ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmRefer
                                          qd, nullptr);
     ++k;
     tau += dither;
-    return Eigen::VectorXd(tau.cwiseMax(-limit).cwiseMin(limit));
+    tau = tau.cwiseMax(-limit).cwiseMin(limit);
+    if (!options.disturbance) return tau;
+    sent.push_back(tau);  // what the log shows
+    return Eigen::VectorXd(tau + options.disturbance(q, qd));
   };
   const ArmTrajectory run = sim.Run(static_cast<int>(samples), controller);
 
@@ -191,6 +195,11 @@ ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmRefer
   log.q = run.q;
   log.qd = run.qd;
   log.tau = run.command;
+  if (options.disturbance) {
+    for (Eigen::Index i = 0; i < log.tau.rows() && i < static_cast<Eigen::Index>(sent.size()); ++i) {
+      log.tau.row(i) = sent[static_cast<std::size_t>(i)].transpose();
+    }
+  }
   log.qref = reference.q;
   log.qd_logged = true;
   // Accelerations: the mean over each sample, (qd_{k+1} - qd_k) / Ts, the last repeated.

@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,10 @@ struct TrainingTrialOptions {
   double bandwidth = 10;          // Hz, the computed-torque controller's
   std::string backend = "analytic";  // the plant's physics
   double stop_and_go = 0.5;       // share of RecordTrainingTrials' trials that are stop-and-go
+  // A torque the plant receives beyond the command, which the log does not show: an
+  // effect outside every model (cogging, a spring) for tests of what a diagnosis cannot
+  // name. Empty: none.
+  std::function<Eigen::VectorXd(const Eigen::VectorXd& q, const Eigen::VectorXd& qd)> disturbance;
   double stroke_speed = 1.5;      // rad/s, stop-and-go peak joint speed (the fastest joint)
   double stroke_acceleration = 8; // rad/s^2, stop-and-go acceleration (the fastest joint)
 

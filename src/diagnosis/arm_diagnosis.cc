@@ -56,11 +56,12 @@ struct ParameterMap {
 const double kInf = std::numeric_limits<double>::infinity();
 
 // The guard between blocks (s): a zero-phase derivative filter spreads a sample over
-// about one period of its cut-off each way; logged velocities need only a few samples.
+// about half a period of its cut-off each way (its impulse response's main lobe);
+// logged velocities need only a few samples.
 double ArmGuardSeconds(const std::vector<ArmLog>& logs) {
   double guard = 0;
   for (const ArmLog& log : logs) {
-    guard = std::max(guard, log.derive_cutoff_hz > 0 ? 1.0 / log.derive_cutoff_hz : 10 * log.sample_period);
+    guard = std::max(guard, log.derive_cutoff_hz > 0 ? 0.5 / log.derive_cutoff_hz : 10 * log.sample_period);
   }
   return guard;
 }
@@ -716,15 +717,13 @@ double HighFrequencySigma(const Eigen::VectorXd& residual, double rate, double c
 }
 
 // The learned residual's inputs at row r of log d: per joint q, qd, qdd, a smooth sign
-// of qd, and qd and qdd 20 ms and qdd 50 ms earlier (a delay shows in the past motion).
+// of qd, and qdd 20 ms earlier (a delay shows in the past motion).
 void LearnedInputs(const LogData& d, int r, std::vector<double>* x) {
   const ArmLog& log = *d.log;
   const int back20 = std::max(d.first, r - static_cast<int>(std::lround(0.02 / log.sample_period)));
-  const int back50 = std::max(d.first, r - static_cast<int>(std::lround(0.05 / log.sample_period)));
   x->clear();
   for (int j = 0; j < log.dof; ++j) {
-    x->insert(x->end(), {log.q(r, j), log.qd(r, j), log.qdd(r, j), std::tanh(log.qd(r, j) / 0.05), log.qd(back20, j),
-                         log.qdd(back20, j), log.qdd(back50, j)});
+    x->insert(x->end(), {log.q(r, j), log.qd(r, j), log.qdd(r, j), std::tanh(log.qd(r, j) / 0.05), log.qdd(back20, j)});
   }
 }
 
@@ -802,7 +801,7 @@ TestResiduals ArmProblem::Test(const std::vector<TrialEffect>& effects, bool lea
       for (std::size_t i = 0; i < out.learned[j].size(); ++i) out.learned[j][i] -= correction(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
     }
     out.learner = "kernel ridge regression (random Fourier features) of the torque residual on every joint's q, qd, qdd, "
-                  "sign of qd and the motion 20 and 50 ms before, trained on " + std::to_string(rows) + " fit rows";
+                  "sign of qd and qdd 20 ms before, trained on " + std::to_string(rows) + " fit rows";
   }
   return out;
 }

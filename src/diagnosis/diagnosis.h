@@ -29,7 +29,7 @@
 namespace twinsim {
 
 struct DiagnosisOptions {
-  double held_out = 0.3;      // share of each log's time blocks held out from every fit
+  double held_out = 0.4;      // share of each log's time blocks held out from every fit (half selection, half test)
   double block_seconds = 0;   // s, length of a time block; 0 = automatic (a 20th of the log, 0.5 to 10 s)
   int max_effects = 3;        // the most effects added
   // An effect is added only when it lowers the selection rows' mean squared error by at
@@ -133,8 +133,8 @@ struct ChannelAdequacy {
   double learned_rms = 0;
   double learned_reduction = 0;          // share of the squared residual the correction removed
   double learned_p = 1;                  // one-sided, long-run standard error
-  // Where the unexplained part lies: the band (Hz) where the repaired residual's
-  // spectrum stands furthest above the corrected one's.
+  // Where the unexplained part lies: the band (Hz) that holds most of the learned
+  // correction's power.
   double band_low = 0, band_high = 0;
   bool unexplained = false;              // a significant predictable part remains (docs/diagnose.md)
 };

@@ -104,7 +104,7 @@ std::string DiagnosisMethod(const DiagnosisReport& r) {
       "filter's derivatives and a prediction's start reach that far). Each round fits every candidate effect of the "
       "vocabulary on the fit rows, with the effects already added refitted beside it, and scores it on the selection "
       "rows: the share of their mean squared error it removes, a one-sided t test of that reduction with a "
-      "Newey-West standard error (bandwidth at least three correlation lengths of the row-wise reductions), and an "
+      "Newey-West standard error (bandwidth at least six correlation lengths of the row-wise reductions), and an "
       "information gain n_eff ln(MSE before / MSE after) - 2 k that counts its k parameters against the effective "
       "number of rows. A candidate passes when it removes at least %.0f %%, has a positive information gain, and is "
       "significant after Holm's correction over the round's candidates at family-wise level %.3g, or removes at least "
@@ -244,6 +244,7 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
                 Num(r.gap_before).c_str(), Num(r.gap_after).c_str(), Num(r.yardstick.nominal).c_str(),
                 Num(r.yardstick.repaired).c_str(), Num(r.noise_floor).c_str());
   s << line;
+  if (!r.yardstick.learner.empty()) s << "learned residual: " << r.yardstick.learner << "\n";
   if (!r.effects.empty()) {
     std::snprintf(line, sizeof line, "%-34s %-9s %s\n", "effect", "gap cut", "parameters");
     s << line;
@@ -252,6 +253,12 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
                     ParameterText(e.parameters, e.standard_errors).c_str());
       s << line;
     }
+  }
+  for (const ChannelAdequacy& a : r.adequacy) {
+    std::snprintf(line, sizeof line, "%s: test RMS %s (noise %s), with a learned residual %s (%.0f %% of it, p %.2g), whiteness p %.2g%s\n",
+                  a.channel.c_str(), Num(a.rms).c_str(), Num(a.noise).c_str(), Num(a.learned_rms).c_str(),
+                  100 * a.learned_reduction, a.learned_p, a.whiteness_p, a.unexplained ? "  UNEXPLAINED" : "");
+    s << line;
   }
   // Each round's three best candidates.
   int rounds = 0;

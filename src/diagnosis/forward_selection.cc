@@ -380,20 +380,21 @@ ChannelAdequacy CheckChannel(const TestResiduals& t, std::size_t c, int bandwidt
     const LongRunTest test = LongRunMeanTest(gain, bandwidth);
     a.learned_reduction = mse > 0 ? test.mean / mse : 0.0;
     a.learned_p = test.p;
-    // The band: where the residual's spectrum stands furthest above the corrected one's.
+    // The band: where the learned correction (what it predicts of the residual) has
+    // its power, the peak and the bins around it above a quarter of it.
+    std::vector<double> correction(r.size());
+    for (std::size_t i = 0; i < r.size(); ++i) correction[i] = r[i] - l[i];
     const int segment = static_cast<int>(std::min<double>(1024, std::pow(2, std::floor(std::log2(std::max(8.0, r.size() / 8.0))))));
-    std::vector<double> f, pr, pl;
-    WelchPsd(r, t.rate, segment, &f, &pr);
-    WelchPsd(l, t.rate, segment, &f, &pl);
+    std::vector<double> f, pc;
+    WelchPsd(correction, t.rate, segment, &f, &pc);
     std::size_t peak = 0;
-    double most = 0;
-    for (std::size_t b = 1; b < pr.size() && b < pl.size(); ++b) {
-      if (pr[b] - pl[b] > most) most = pr[b] - pl[b], peak = b;
+    for (std::size_t b = 1; b < pc.size(); ++b) {
+      if (pc[b] > pc[peak] || peak == 0) peak = b;
     }
-    if (peak > 0) {
+    if (peak > 0 && pc[peak] > 0) {
       std::size_t lo = peak, hi = peak;
-      while (lo > 1 && pr[lo - 1] - pl[lo - 1] > 0.25 * most) --lo;
-      while (hi + 1 < pr.size() && pr[hi + 1] - pl[hi + 1] > 0.25 * most) ++hi;
+      while (lo > 1 && pc[lo - 1] > 0.25 * pc[peak]) --lo;
+      while (hi + 1 < pc.size() && pc[hi + 1] > 0.25 * pc[peak]) ++hi;
       a.band_low = f[lo];
       a.band_high = f[hi];
     }
@@ -405,7 +406,7 @@ ChannelAdequacy CheckChannel(const TestResiduals& t, std::size_t c, int bandwidt
 
 // The gap of per-channel test residuals (row means of the channels' squares summed).
 double ChannelGap(const DiagnosisProblem& problem, const std::vector<std::vector<double>>& channels) {
-  if (channels.empty()) return 0;
+  if (channels.empty()) return std::numeric_limits<double>::quiet_NaN();  // nothing learned
   std::vector<double> rows(channels.front().size(), 0.0);
   for (const auto& c : channels) {
     for (std::size_t i = 0; i < rows.size() && i < c.size(); ++i) rows[i] += c[i] * c[i];
@@ -458,7 +459,10 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   y.learner = repaired.learner;
   y.nominal = ChannelGap(problem, nominal.learned);
   y.repaired = ChannelGap(problem, repaired.learned);
-  const double best = std::min({report->gap_before, report->gap_after, y.nominal, y.repaired});
+  double best = std::min(report->gap_before, report->gap_after);
+  for (double g : {y.nominal, y.repaired}) {
+    if (std::isfinite(g)) best = std::min(best, g);
+  }
   const double predictable = report->gap_before * report->gap_before - best * best;
   y.physics_share = predictable > 0
                         ? (report->gap_before * report->gap_before - report->gap_after * report->gap_after) / predictable

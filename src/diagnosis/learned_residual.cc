@@ -1,6 +1,7 @@
 #include "diagnosis/learned_residual.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -8,6 +9,13 @@
 #include "core/rng.h"
 
 namespace twinsim {
+namespace {
+
+constexpr int kBins = 100;             // per input, of equal counts on the training rows
+constexpr int kBackfittingSweeps = 3;
+constexpr double kShrinkCount = 5;     // a bin's mean is sum / (count + this): sparse bins say little
+
+}  // namespace
 
 RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, int features,
                                            std::uint64_t seed) {
@@ -28,6 +36,64 @@ RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen
     for (Eigen::Index c = 0; c < inputs; ++c) r.frequencies_(c, k) = rng.Gaussian() / scales[k % 3];
     r.phases_[k] = 2 * kPi * rng.Uniform();
   }
+  // Validation split: two tenths of the rows in time order (the 4th and the 9th tenth).
+  std::vector<Eigen::Index> train, check;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Index tenth = i * 10 / std::max<Eigen::Index>(n, 1);
+    (tenth == 3 || tenth == 8 ? check : train).push_back(i);
+  }
+  auto rows_of = [](const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& rows) {
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), m.cols());
+    for (std::size_t k = 0; k < rows.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = m.row(rows[k]);
+    return out;
+  };
+
+  // Stage 1: the additive model, fitted on the training rows, kept if it helps on the
+  // validation rows, then refitted on every row.
+  r.outputs_ = y.cols();
+  // Bins of equal counts: a bin fed by one rare event would learn that event's noise.
+  r.edges_.assign(static_cast<std::size_t>(inputs), std::vector<double>());
+  for (Eigen::Index c = 0; c < inputs; ++c) {
+    std::vector<double> v(x.col(c).data(), x.col(c).data() + n);
+    std::sort(v.begin(), v.end());
+    for (int k = 1; k < kBins; ++k) r.edges_[static_cast<std::size_t>(c)].push_back(v[static_cast<std::size_t>(k) * v.size() / kBins]);
+  }
+  auto fit_additive = [&](const std::vector<Eigen::Index>& rows) {
+    r.bins_.assign(static_cast<std::size_t>(inputs), Eigen::MatrixXd::Zero(kBins, y.cols()));
+    Eigen::MatrixXd left = rows_of(y, rows);
+    const Eigen::MatrixXd xs = rows_of(x, rows);
+    for (int sweep = 0; sweep < kBackfittingSweeps; ++sweep) {
+      for (Eigen::Index c = 0; c < inputs; ++c) {
+        Eigen::MatrixXd& b = r.bins_[static_cast<std::size_t>(c)];
+        Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(kBins, y.cols());
+        Eigen::VectorXd count = Eigen::VectorXd::Zero(kBins);
+        for (Eigen::Index i = 0; i < xs.rows(); ++i) {
+          const int k = r.Bin(c, xs(i, c));
+          left.row(i) += b.row(k);  // this input's own share back in
+          sum.row(k) += left.row(i);
+          count[k] += 1;
+        }
+        for (int k = 0; k < kBins; ++k) b.row(k) = sum.row(k) / (count[k] + kShrinkCount);
+        for (Eigen::Index i = 0; i < xs.rows(); ++i) left.row(i) -= b.row(r.Bin(c, xs(i, c)));
+      }
+    }
+  };
+  // Each output keeps the stage only where it lowers that output's validation error.
+  const Eigen::MatrixXd yc = rows_of(y, check);
+  fit_additive(train);
+  const Eigen::RowVectorXd with = (yc - r.Additive(rows_of(x, check))).colwise().squaredNorm();
+  const Eigen::RowVectorXd without = yc.colwise().squaredNorm();
+  std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
+  fit_additive(all);
+  for (Eigen::Index o = 0; o < y.cols(); ++o) {
+    if (!(with[o] < without[o])) {
+      for (auto& b : r.bins_) b.col(o).setZero();
+    }
+  }
+  const Eigen::MatrixXd rest = y - r.Additive(x);
+
+  // Stage 2: kernel ridge on what is left.
   const Eigen::MatrixXd phi = r.Features(x);
   const Eigen::Index width = phi.cols();
   auto solve = [&](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double lambda, double rows) {
@@ -36,32 +102,41 @@ RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen
     normal(0, 0) -= lambda * rows;  // the constant is not shrunk
     return Eigen::MatrixXd(normal.ldlt().solve(b));
   };
-  // The penalty from a validation split: two tenths of the rows in time order (the
-  // 4th and the 9th tenth), the rest trained on; the weights then from every row. No
-  // correction at all (zero weights) competes too: a learner that only adds variance
+  // No correction at all (zero weights) competes too: a learner that only adds variance
   // must not be credited.
-  std::vector<Eigen::Index> train, check;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Index tenth = i * 10 / std::max<Eigen::Index>(n, 1);
-    (tenth == 3 || tenth == 8 ? check : train).push_back(i);
-  }
-  Eigen::MatrixXd pt(static_cast<Eigen::Index>(train.size()), width), yt(static_cast<Eigen::Index>(train.size()), y.cols());
-  Eigen::MatrixXd pc(static_cast<Eigen::Index>(check.size()), width), yc(static_cast<Eigen::Index>(check.size()), y.cols());
-  for (std::size_t k = 0; k < train.size(); ++k) pt.row(static_cast<Eigen::Index>(k)) = phi.row(train[k]), yt.row(static_cast<Eigen::Index>(k)) = y.row(train[k]);
-  for (std::size_t k = 0; k < check.size(); ++k) pc.row(static_cast<Eigen::Index>(k)) = phi.row(check[k]), yc.row(static_cast<Eigen::Index>(k)) = y.row(check[k]);
-  const Eigen::MatrixXd at = pt.transpose() * pt, bt = pt.transpose() * yt;
-  double best_error = yc.squaredNorm(), best_lambda = -1;
+  const Eigen::MatrixXd pt = rows_of(phi, train), pc = rows_of(phi, check);
+  const Eigen::MatrixXd rt = rows_of(rest, train), rc = rows_of(rest, check);
+  const Eigen::MatrixXd at = pt.transpose() * pt, bt = pt.transpose() * rt;
+  // The penalty per output; an output no penalty helps gets no correction.
+  const Eigen::Index outputs = y.cols();
+  Eigen::RowVectorXd best_error = rc.colwise().squaredNorm();
+  Eigen::RowVectorXd best_lambda = Eigen::RowVectorXd::Constant(outputs, -1);
   for (double lambda : {1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0}) {
-    const double error = (yc - pc * solve(at, bt, lambda, static_cast<double>(train.size()))).squaredNorm();
-    if (error < best_error) best_error = error, best_lambda = lambda;
+    const Eigen::RowVectorXd error = (rc - pc * solve(at, bt, lambda, static_cast<double>(train.size()))).colwise().squaredNorm();
+    for (Eigen::Index o = 0; o < outputs; ++o) {
+      if (error[o] < best_error[o]) best_error[o] = error[o], best_lambda[o] = lambda;
+    }
   }
-  r.ridge_ = best_lambda;
-  if (best_lambda < 0) {
-    r.weights_ = Eigen::MatrixXd::Zero(width, y.cols());
-    return r;
+  r.weights_ = Eigen::MatrixXd::Zero(width, outputs);
+  const Eigen::MatrixXd a_all = phi.transpose() * phi, b_all = phi.transpose() * rest;
+  for (Eigen::Index o = 0; o < outputs; ++o) {
+    if (best_lambda[o] > 0) r.weights_.col(o) = solve(a_all, b_all.col(o), best_lambda[o], static_cast<double>(n));
   }
-  r.weights_ = solve(phi.transpose() * phi, phi.transpose() * y, best_lambda, static_cast<double>(n));
+  r.ridge_ = best_lambda.maxCoeff();
   return r;
+}
+
+int RandomFeatureRidge::Bin(Eigen::Index input, double v) const {
+  const std::vector<double>& e = edges_[static_cast<std::size_t>(input)];
+  return static_cast<int>(std::upper_bound(e.begin(), e.end(), v) - e.begin());
+}
+
+Eigen::MatrixXd RandomFeatureRidge::Additive(const Eigen::MatrixXd& x) const {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(x.rows(), outputs_);
+  for (std::size_t c = 0; c < bins_.size(); ++c) {
+    for (Eigen::Index i = 0; i < x.rows(); ++i) out.row(i) += bins_[c].row(Bin(static_cast<Eigen::Index>(c), x(i, static_cast<Eigen::Index>(c))));
+  }
+  return out;
 }
 
 Eigen::MatrixXd RandomFeatureRidge::Features(const Eigen::MatrixXd& x) const {
@@ -74,6 +149,10 @@ Eigen::MatrixXd RandomFeatureRidge::Features(const Eigen::MatrixXd& x) const {
   return phi;
 }
 
-Eigen::MatrixXd RandomFeatureRidge::Predict(const Eigen::MatrixXd& x) const { return Features(x) * weights_; }
+Eigen::MatrixXd RandomFeatureRidge::Predict(const Eigen::MatrixXd& x) const {
+  Eigen::MatrixXd out = Features(x) * weights_;
+  if (!bins_.empty()) out += Additive(x);
+  return out;
+}
 
 }  // namespace twinsim

@@ -11,23 +11,31 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <vector>
 
 namespace twinsim {
 
 class RandomFeatureRidge {
  public:
-  // x: rows x inputs, y: rows x outputs, in time order. The L2 penalty is chosen on a
-  // validation split of the rows (the 4th and 9th tenths); where no penalty beats
-  // predicting zero there, the correction is zero.
+  // x: rows x inputs, y: rows x outputs, in time order. Each stage, and the L2 penalty,
+  // is chosen per output on a validation split of the rows (the 4th and 9th tenths);
+  // where nothing beats predicting zero there, that output's correction is zero.
   static RandomFeatureRidge Fit(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, int features, std::uint64_t seed);
   Eigen::MatrixXd Predict(const Eigen::MatrixXd& x) const;
-  // The penalty chosen per training row; negative when the correction is zero.
+  // The largest penalty chosen per training row (each output has its own); negative
+  // when the kernel stage corrects no output.
   double ridge() const { return ridge_; }
 
  private:
   Eigen::MatrixXd Features(const Eigen::MatrixXd& x) const;
 
+  Eigen::MatrixXd Additive(const Eigen::MatrixXd& x) const;
+  int Bin(Eigen::Index input, double v) const;
+
+  Eigen::Index outputs_ = 0;
   Eigen::RowVectorXd mean_, scale_;  // inputs' standardisation
+  std::vector<std::vector<double>> edges_;  // per input: the bins' inner edges (quantiles of the training rows)
+  std::vector<Eigen::MatrixXd> bins_;  // per input: bins x outputs, the additive model's means
   Eigen::MatrixXd frequencies_;      // inputs x features
   Eigen::RowVectorXd phases_;        // features
   Eigen::MatrixXd weights_;          // (1 + inputs + features) x outputs

@@ -56,10 +56,9 @@ class OmniProblem : public DiagnosisProblem {
   OmniProblem(const OmniModel& nominal, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
               double block_seconds)
       : nominal_(nominal), options_(options), logs_(&logs) {
-    // A prediction starts `horizon` frames back from a tracker fed the measurements and
-    // the commands of the delay before: rows that close to another block are guards.
-    guard_seconds_ = (options.horizon + nominal.command_delay_frames + nominal.vision_delay_frames + 2) *
-                     logs.front().frame_period;
+    // A prediction spans `horizon` frames: rows closer than that (and one more) to
+    // another block are guards.
+    guard_seconds_ = (options.horizon + 1) * logs.front().frame_period;
     for (const OmniLog& log : logs) {
       LogData d;
       d.log = &log;
@@ -492,7 +491,7 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
     train.nominal_engine = options_.backend;
     const FeatureLayout layout = PredictorLayout(model, 1);
     const std::size_t least = static_cast<std::size_t>(
-        layout.history + model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + 10);
+        layout.history + model.command_delay_frames + model.vision_delay_frames + 35);
     const std::vector<OmniLog> stretches = FitStretches(data_, least);
     OmniTrainSummary summary;
     try {
@@ -506,17 +505,27 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
       out.learner = std::string("no learned residual: ") + e.what();
     }
   }
-  if (predictor) out.learned.resize(3);
-  for (const LogData& d : data_) {
-    const ReplayResidual r = Residual(model, d, 1, options_.horizon);
-    ReplayResidual l;
-    if (predictor) {
-      OmniReplayOptions o;
-      o.backend = "learned";
-      o.backend_options.predictor = predictor;
-      o.horizon = options_.horizon;
-      l = PoseErrorsInRobotFrame(*d.log, ReplayOmniLog(model, *d.log, o), nominal_.chassis_radius);
+  // The learned replays first: a predictor that runs away somewhere is no yardstick.
+  std::vector<ReplayResidual> learned(data_.size());
+  if (predictor) {
+    try {
+      for (std::size_t k = 0; k < data_.size(); ++k) {
+        OmniReplayOptions o;
+        o.backend = "learned";
+        o.backend_options.predictor = predictor;
+        o.horizon = options_.horizon;
+        learned[k] = PoseErrorsInRobotFrame(*data_[k].log, ReplayOmniLog(model, *data_[k].log, o), nominal_.chassis_radius);
+      }
+    } catch (const CheckFailed& e) {
+      predictor.reset();
+      out.learner = std::string("no learned residual: ") + e.what();
     }
+  }
+  if (predictor) out.learned.resize(3);
+  for (std::size_t li = 0; li < data_.size(); ++li) {
+    const LogData& d = data_[li];
+    const ReplayResidual r = Residual(model, d, 1, options_.horizon);
+    const ReplayResidual& l = learned[li];
     std::size_t m = 0;  // walks l.rows alongside
     for (std::size_t k = 0; k < r.rows.size(); ++k) {
       const std::size_t i = r.rows[k];

@@ -121,7 +121,7 @@ LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth) {
   if (n < 4) return out;
   out.mean = MeanOf(x);
   const int longest = std::max(1, static_cast<int>(n / 3));
-  out.bandwidth = std::clamp(std::max(min_bandwidth, 3 * CorrelationLength(x, longest)), 1, longest);
+  out.bandwidth = std::clamp(std::max(min_bandwidth, 6 * CorrelationLength(x, longest)), 1, longest);
   std::vector<double> d(n);
   for (std::size_t i = 0; i < n; ++i) d[i] = x[i] - out.mean;
   auto autocovariance = [&](int lag) {

@@ -29,7 +29,8 @@ struct LongRunTest {
   double effective_rows = 0;  // rows * (plain variance / long-run variance), at most rows
 };
 // `min_bandwidth` rows at least; longer where the series stays correlated longer
-// (three times its correlation length, CorrelationLength in diagnosis.h).
+// (six times its correlation length, CorrelationLength in diagnosis.h; at three, 10.3 % of
+// 400 AR(1) series with phi = 0.9 were rejected at the 5 % level, measured).
 LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth);
 
 // Holm's step-down procedure: which of the hypotheses with these p-values are rejected

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <cstdlib>
 #include <iostream>
 
@@ -134,6 +135,65 @@ TEST_P(ArmDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
 
 INSTANTIATE_TEST_SUITE_P(HiddenEffects, ArmDiagnosisCase, ::testing::ValuesIn(ArmCases()),
                          [](const ::testing::TestParamInfo<ArmCase>& info) { return info.param.label; });
+
+// Effects outside the vocabulary: torques the plant receives beyond the command, which
+// no model of the vocabulary can express. Each must come out as unexplained on its
+// joint, or as vocabulary effects that close at least 70 % of the way to the plant's
+// own gap; no effect may be named that closes less. The plant's gap: the nominal model
+// on the same logs with the disturbance added back to the logged command.
+struct OutsideCase {
+  std::string label;
+  int joint;  // 0-based, where the disturbance acts
+  std::function<double(double q, double qd)> torque;
+};
+
+void PrintTo(const OutsideCase& c, std::ostream* os) { *os << c.label; }
+
+class ArmOutsideVocabulary : public ::testing::TestWithParam<OutsideCase> {};
+
+TEST_P(ArmOutsideVocabulary, ComesOutUnexplainedOnItsJoint) {
+  const OutsideCase& c = GetParam();
+  const ArmModel nominal = testing::RrrWith("");
+  testing::ArmRecording noise;
+  noise.disturbance = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    Eigen::VectorXd d = Eigen::VectorXd::Zero(q.size());
+    d[c.joint] = c.torque(q[c.joint], qd[c.joint]);
+    return d;
+  };
+  const std::vector<ArmLog> logs = {testing::RecordArmPlant(nominal, nominal, 1, 20, noise),
+                                    testing::RecordArmPlant(nominal, nominal, 2, 20, noise)};
+  const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
+  SCOPED_TRACE(FormatDiagnosisTable(report));
+  if (std::getenv("TWINSIM_PRINT_DIAGNOSIS")) std::cout << FormatDiagnosisTable(report);
+  std::vector<ArmLog> known = logs;
+  for (ArmLog& log : known) {
+    for (int r = 0; r < log.rows(); ++r) log.tau(r, c.joint) += c.torque(log.q(r, c.joint), log.qd(r, c.joint));
+  }
+  DiagnosisOptions none;
+  none.max_effects = 0;
+  const double floor = DiagnoseArm(nominal, known, none).gap_before;
+  testing::RecordDiagnosis(report, floor);
+  const double closed = (report.gap_before - report.gap_after) / (report.gap_before - floor);
+  ASSERT_EQ(report.adequacy.size(), 3u);
+  const bool flagged = report.adequacy[static_cast<std::size_t>(c.joint)].unexplained;
+  EXPECT_TRUE(flagged || (!report.effects.empty() && closed >= 0.7))
+      << "closed " << closed << " of the way (nominal " << report.gap_before << ", repaired " << report.gap_after
+      << ", plant " << floor << ")";
+  if (!report.effects.empty()) EXPECT_GE(closed, 0.7) << "a vocabulary effect named that closes too little";
+  for (std::size_t j = 0; j < report.adequacy.size(); ++j) {
+    if (static_cast<int>(j) != c.joint) EXPECT_FALSE(report.adequacy[j].unexplained) << "joint " << j + 1;
+  }
+  if (flagged) EXPECT_NE(DiagnosisVerdict(report).find("Unexplained: on joint " + std::to_string(c.joint + 1)), std::string::npos);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    OutsideVocabulary, ArmOutsideVocabulary,
+    ::testing::Values(
+        // Cogging: a motor's magnets pull the rotor towards N rest positions per turn.
+        OutsideCase{"cogging_joint2", 1, [](double q, double) { return 0.6 * std::sin(12 * q); }},
+        // Cogging on the base joint, a finer pitch.
+        OutsideCase{"cogging_joint1", 0, [](double q, double) { return 0.4 * std::sin(20 * q); }}),
+    [](const ::testing::TestParamInfo<OutsideCase>& info) { return info.param.label; });
 
 // --refit-model: the model's own parameters re-identified on the fit blocks first. A
 // hidden payload then goes into the last link's identified inertial parameters and is

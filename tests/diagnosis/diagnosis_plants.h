@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "diagnosis/diagnosis.h"
@@ -26,6 +27,9 @@ struct ArmRecording {
   bool log_velocities = false;  // false: the log holds q and tau only, qd and qdd are derived
   double cutoff_hz = 10;        // Hz, the reader's cut-off for derived qd, qdd
   double bandwidth = 10;        // Hz, the computed-torque controller's
+  // A torque the plant receives beyond the command, never logged: an effect outside
+  // the vocabulary (TrainingTrialOptions::disturbance). Empty: none.
+  std::function<Eigen::VectorXd(const Eigen::VectorXd& q, const Eigen::VectorXd& qd)> disturbance;
 };
 
 // A stop-and-go (even seeds) or multi-sine (odd seeds) tracking run of `plant` under

@@ -32,6 +32,7 @@ ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t 
   options.seconds = seconds;
   options.bandwidth = noise.bandwidth;
   options.dither = 0;  // a dither's fast response is lost to the derivative filter: it would read as noise
+  options.disturbance = noise.disturbance;
   const ArmReference reference = seed % 2 == 0 ? RandomStopAndGoReference(hat, options, seed)
                                                : SampledReference(RandomTrainingTrajectory(hat, options, seed),
                                                                   hat.sample_time, seconds);

@@ -1,0 +1,50 @@
+// The diagnosis's learned yardstick (diagnosis/learned_residual.h) on functions with a
+// known answer, scored on rows it was not trained on.
+#include "diagnosis/learned_residual.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "core/rng.h"
+
+namespace twinsim {
+namespace {
+
+// Rows of five inputs in [-1, 1] and y = f(x) + noise (sigma 0.05).
+void Sample(int rows, std::uint64_t seed, const std::function<double(const Eigen::RowVectorXd&)>& f, Eigen::MatrixXd* x,
+            Eigen::MatrixXd* y) {
+  Rng rng(seed);
+  x->resize(rows, 5);
+  y->resize(rows, 1);
+  for (int i = 0; i < rows; ++i) {
+    for (int c = 0; c < 5; ++c) (*x)(i, c) = rng.Uniform(-1, 1);
+    (*y)(i, 0) = f(x->row(i)) + 0.05 * rng.Gaussian();
+  }
+}
+
+double HeldOutRms(const std::function<double(const Eigen::RowVectorXd&)>& f) {
+  Eigen::MatrixXd x, y, xt, yt;
+  Sample(8000, 1, f, &x, &y);
+  Sample(2000, 2, f, &xt, &yt);
+  const RandomFeatureRidge learner = RandomFeatureRidge::Fit(x, y, 300, 1);
+  return std::sqrt((yt - learner.Predict(xt)).squaredNorm() / static_cast<double>(yt.rows()));
+}
+
+TEST(LearnedResidual, FollowsACoggingProfileInOneInput) {
+  // 0.6 sin(12 x0): RMS 0.42; the noise floor is 0.05.
+  EXPECT_LT(HeldOutRms([](const Eigen::RowVectorXd& x) { return 0.6 * std::sin(12 * x[0]); }), 0.08);
+}
+
+TEST(LearnedResidual, FollowsASmoothFunctionOfSeveralInputs) {
+  EXPECT_LT(HeldOutRms([](const Eigen::RowVectorXd& x) { return 0.5 * x[1] * x[2] + 0.3 * std::cos(2 * x[3]); }), 0.08);
+}
+
+TEST(LearnedResidual, AddsNothingToNoise) {
+  // Pure noise: the correction must not make the held-out error worse than the noise's 0.05.
+  EXPECT_LT(HeldOutRms([](const Eigen::RowVectorXd&) { return 0.0; }), 0.052);
+}
+
+}  // namespace
+}  // namespace twinsim

@@ -1,0 +1,87 @@
+// The diagnosis's statistics (diagnosis/statistics.h) against tabulated values and
+// against their purpose: a test on correlated rows that keeps its level.
+#include "diagnosis/statistics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/rng.h"
+
+namespace twinsim {
+namespace {
+
+TEST(DiagnosisStatistics, StudentTTailMatchesTables) {
+  EXPECT_NEAR(StudentTUpperTail(2.0, 10), 0.036694, 1e-6);
+  EXPECT_NEAR(StudentTUpperTail(1.812461, 10), 0.05, 1e-6);
+  EXPECT_NEAR(StudentTUpperTail(-2.0, 10), 1 - 0.036694, 1e-6);
+  EXPECT_NEAR(StudentTUpperTail(12.706205, 1), 0.025, 1e-6);
+  EXPECT_NEAR(StudentTUpperTail(1.959964, 1e7), 0.025, 1e-5);  // the normal's
+  EXPECT_DOUBLE_EQ(StudentTUpperTail(0, 5), 0.5);
+}
+
+TEST(DiagnosisStatistics, ChiSquareTailMatchesTables) {
+  EXPECT_NEAR(ChiSquareUpperTail(18.307038, 10), 0.05, 1e-6);
+  EXPECT_NEAR(ChiSquareUpperTail(3.841459, 1), 0.05, 1e-6);
+  EXPECT_NEAR(ChiSquareUpperTail(2, 2), std::exp(-1.0), 1e-12);
+  EXPECT_NEAR(ChiSquareUpperTail(37.566235, 20), 0.01, 1e-6);
+}
+
+TEST(DiagnosisStatistics, HolmStepsDownAndStops) {
+  // Sorted: 0.005 <= 0.05/4, 0.01 <= 0.05/3, then 0.03 > 0.05/2 stops it.
+  const std::vector<bool> r = HolmReject({0.01, 0.04, 0.03, 0.005, std::nan("")}, 0.05);
+  EXPECT_EQ(r, (std::vector<bool>{true, false, false, true, false}));
+}
+
+// AR(1) rows, x_i = phi x_{i-1} + e_i, mean `mean`.
+std::vector<double> Ar1(int n, double phi, double mean, std::uint64_t seed) {
+  Rng rng(seed);
+  std::vector<double> x(static_cast<std::size_t>(n));
+  double v = 0;
+  for (int i = 0; i < n; ++i) {
+    v = phi * v + rng.Gaussian();
+    x[static_cast<std::size_t>(i)] = mean + v;
+  }
+  return x;
+}
+
+TEST(DiagnosisStatistics, LongRunTestKeepsItsLevelOnCorrelatedRows) {
+  // 400 series of 2000 strongly correlated rows with mean zero: a plain t test would
+  // reject far more than 5 %; the long-run one stays near its level, and still finds a
+  // real mean.
+  int rejected = 0, plain_rejected = 0, found = 0;
+  for (std::uint64_t seed = 1; seed <= 400; ++seed) {
+    const std::vector<double> x = Ar1(2000, 0.9, 0.0, seed);
+    rejected += LongRunMeanTest(x, 10).p < 0.05;
+    double m = 0, v = 0;
+    for (double e : x) m += e;
+    m /= 2000;
+    for (double e : x) v += (e - m) * (e - m);
+    plain_rejected += m / std::sqrt(v / 1999 / 2000) > 1.645;
+    found += LongRunMeanTest(Ar1(2000, 0.9, 1.0, seed + 1000), 10).p < 0.05;
+  }
+  EXPECT_LE(rejected, 40);         // at most 10 %
+  EXPECT_GE(plain_rejected, 100);  // the plain test: 25 % and more
+  EXPECT_GE(found, 360);           // a mean of 1 (long-run sd of the mean about 0.22)
+}
+
+TEST(DiagnosisStatistics, LjungBoxTellsWhiteFromCorrelated) {
+  EXPECT_GT(LjungBox(Ar1(2000, 0.0, 0.0, 3), 20, 1).p, 0.01);
+  EXPECT_LT(LjungBox(Ar1(2000, 0.5, 0.0, 3), 20, 1).p, 1e-6);
+  // Every 10th row of a series correlated over about 3 rows is white again.
+  EXPECT_GT(LjungBox(Ar1(20000, 0.7, 0.0, 4), 20, 10).p, 0.01);
+}
+
+TEST(DiagnosisStatistics, CrossCorrelationFindsTheLag) {
+  const std::vector<double> u = Ar1(3000, 0.0, 0.0, 5);
+  std::vector<double> r(u.size(), 0.0);
+  for (std::size_t i = 3; i < u.size(); ++i) r[i] = u[i - 3];  // the residual follows the input 3 rows later
+  const CrossCorrelation c = PeakCrossCorrelation(r, u, 10, 1, "u");
+  EXPECT_NEAR(c.peak, 1.0, 1e-3);
+  EXPECT_EQ(c.lag, 3);
+  EXPECT_NEAR(c.bound, 1.96 / std::sqrt(3000.0), 0.01);
+}
+
+}  // namespace
+}  // namespace twinsim
