@@ -53,6 +53,10 @@ struct DiagnosisOptions {
   // by default: a trusted arm model keeps a payload named `payload` instead of hidden in
   // re-identified link inertias.
   bool refit_model = false;
+  // Check what is left on the test rows (whiteness, cross-correlation, a learned
+  // residual beside both models: ChannelAdequacy, LearnedYardstick). Off only where the
+  // gaps alone are wanted (a plant's own gap in a test).
+  bool check_adequacy = true;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -72,6 +76,7 @@ struct DiagnosisCandidate {
   bool significant = false;                  // after the Holm correction over the round
   double information_gain = 0;               // n_eff ln(MSE before / after) - 2 k; > 0 to be added
   bool selected = false;
+  std::string harm;                          // the joint or axis it makes significantly worse, if any: not added
   std::string note;                          // why it could not be fitted, when it could not
 };
 
@@ -136,7 +141,11 @@ struct ChannelAdequacy {
   // Where the unexplained part lies: the band (Hz) that holds most of the learned
   // correction's power.
   double band_low = 0, band_high = 0;
-  bool unexplained = false;              // a significant predictable part remains (docs/diagnose.md)
+  // The test RMS stands more than the problem's FloorRatio times the noise above it.
+  bool above_floor = false;
+  // Something is left that is not noise: a significant predictable part (the learned
+  // residual), or a residual far above the floor (docs/diagnose.md).
+  bool unexplained = false;
 };
 
 // Beside the physics: a learned residual predictor trained on the fit rows, scored on

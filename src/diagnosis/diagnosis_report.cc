@@ -66,22 +66,55 @@ std::string DiagnosisVerdict(const DiagnosisReport& r) {
     const double closed = ShareClosed(r);
     if (std::isfinite(closed) && closed >= 0) s += ", " + Num(100 * closed, "%.0f") + " % of the way down to it";
     s += ".";
+    if (r.gap_after > r.gap_before) {
+      s += " Beware: the named effects chose themselves on the selection rows but make the test rows worse; they do "
+           "not hold on data that chose nothing (too few blocks for an effect that depends on the posture or "
+           "speed, or a look-alike of something else).";
+    }
   }
-  // What is left: predictable (a learned residual finds it) or not.
-  std::string unexplained;
+  // What is left: predictable (a learned residual finds it) or not. The three channels
+  // furthest above their noise are told in full, the others counted.
+  std::vector<const ChannelAdequacy*> flagged_channels;
   for (const ChannelAdequacy& a : r.adequacy) {
-    if (!a.unexplained) continue;
+    if (a.unexplained) flagged_channels.push_back(&a);
+  }
+  std::stable_sort(flagged_channels.begin(), flagged_channels.end(), [](const ChannelAdequacy* x, const ChannelAdequacy* y) {
+    return x->rms * x->rms - x->noise * x->noise > y->rms * y->rms - y->noise * y->noise;
+  });
+  std::string unexplained;
+  for (std::size_t k = 0; k < flagged_channels.size() && k < 3; ++k) {
+    const ChannelAdequacy& a = *flagged_channels[k];
     unexplained += unexplained.empty() ? " Unexplained: " : "; ";
-    unexplained += "on " + a.channel + " a learned residual predicts " + Num(100 * a.learned_reduction, "%.0f") +
-                   " % of what is left (RMS " + Num(a.rms) + " -> " + Num(a.learned_rms) + ", noise about " +
-                   Num(a.noise) + ")";
-    if (a.band_high > 0) unexplained += ", mostly between " + Num(a.band_low, "%.2g") + " and " + Num(a.band_high, "%.2g") + " Hz";
+    if (a.learned_reduction >= r.min_improvement && a.learned_p <= r.alpha) {
+      unexplained += "on " + a.channel + " a learned residual predicts " + Num(100 * a.learned_reduction, "%.0f") +
+                     " % of what is left (RMS " + Num(a.rms) + " -> " + Num(a.learned_rms) + ", noise about " +
+                     Num(a.noise) + ")";
+      if (a.band_high > 0) {
+        unexplained += a.band_high > a.band_low ? ", mostly between " + Num(a.band_low, "%.2g") + " and " + Num(a.band_high, "%.2g") + " Hz"
+                                                : ", mostly near " + Num(a.band_low, "%.2g") + " Hz";
+      }
+    } else {
+      const double ratio = a.rms / a.noise;
+      unexplained += "on " + a.channel + " the residual stays at " + Num(a.rms) + ", " +
+                     (ratio < 1000 ? Num(ratio, "%.1f") + " times its noise (" + Num(a.noise) + ")"
+                                   : "far above a noise floor the log hardly shows (a smoothed signal?)") +
+                     ", and no learned residual of the motion predicts it (a few events, or what the logs' inputs do "
+                     "not show)";
+    }
     if (!a.inputs.empty() && std::abs(a.inputs.front().peak) > a.inputs.front().bound) {
       unexplained += ", correlating most with " + a.inputs.front().input + " (r = " + Num(a.inputs.front().peak, "%.2f") + ")";
     }
   }
+  const int flagged = static_cast<int>(flagged_channels.size());
+  if (flagged > 3) unexplained += "; and " + std::to_string(flagged - 3) + " more (the adequacy table)";
   if (!unexplained.empty()) {
     s += unexplained + ": an effect the vocabulary does not name, or a named one it does not fit.";
+    if (2 * flagged > static_cast<int>(r.adequacy.size()) && !refit) {
+      s += r.robot == "arm" ? " Most joints are unexplained: the model's own inertial parameters or friction are likely "
+                              "off; identify them first (twinsim identify, or diagnose --refit-model)."
+                            : " Most axes are unexplained: the model's own response is likely off; identify it first "
+                              "(twinsim identify, or diagnose --refit-model).";
+    }
   } else if (r.effects.empty()) {
     s += " Nothing significant is missing: a learned residual finds nothing predictable on any channel either.";
   } else {
@@ -95,7 +128,7 @@ std::string DiagnosisVerdict(const DiagnosisReport& r) {
 }
 
 std::string DiagnosisMethod(const DiagnosisReport& r) {
-  char buf[2048];
+  char buf[4096];
   std::snprintf(
       buf, sizeof buf,
       "Each log is cut into %.3g s blocks; %.0f %% of them are held out, and the held-out blocks alternate between "
@@ -106,7 +139,9 @@ std::string DiagnosisMethod(const DiagnosisReport& r) {
       "rows: the share of their mean squared error it removes, a one-sided t test of that reduction with a "
       "Newey-West standard error (bandwidth at least six correlation lengths of the row-wise reductions), and an "
       "information gain n_eff ln(MSE before / MSE after) - 2 k that counts its k parameters against the effective "
-      "number of rows. A candidate passes when it removes at least %.0f %%, has a positive information gain, and is "
+      "number of rows. A candidate passes when it removes at least %.0f %%, has a positive information gain, makes "
+      "no joint or axis worse by 5 %% or more of its squared residual at level alpha (a missing effect, rightly fitted, "
+      "makes none worse), and is "
       "significant after Holm's correction over the round's candidates at family-wise level %.3g, or removes at least "
       "25 %% on fit and selection rows alike (an effect seen in a few events only). The passing candidate with the "
       "largest information gain is added and every added effect refitted; a backward step then takes out an effect "
@@ -183,6 +218,7 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["significant"] = c.significant;
     x["information_gain"] = std::isfinite(c.information_gain) ? ordered_json(c.information_gain) : ordered_json(nullptr);
     x["selected"] = c.selected;
+    if (!c.harm.empty()) x["harm"] = c.harm;
     if (!c.note.empty()) x["note"] = c.note;
     candidates.push_back(x);
   }
@@ -211,6 +247,7 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["rms"] = a.rms;
     x["noise"] = a.noise;
     x["unexplained"] = a.unexplained;
+    x["above_floor"] = a.above_floor;
     x["learned_rms"] = a.learned_rms;
     x["learned_reduction"] = a.learned_reduction;
     x["learned_p"] = std::isfinite(a.learned_p) ? ordered_json(a.learned_p) : ordered_json(nullptr);
@@ -406,7 +443,9 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
       h << "<tr" << (a.unexplained ? " style=\"background:#fde8e8\"" : "") << "><td>" << HtmlEscape(a.channel) << "</td><td>"
         << Num(a.rms) << "</td><td>" << Num(a.noise) << "</td><td>" << Num(a.learned_rms) << "</td><td>"
         << Num(100 * a.learned_reduction, "%.1f") << " % (" << Num(a.learned_p, "%.2g") << ")</td><td>"
-        << (a.band_high > 0 ? Num(a.band_low, "%.2g") + " – " + Num(a.band_high, "%.2g") : std::string()) << "</td><td>"
+        << (a.band_high > a.band_low ? Num(a.band_low, "%.2g") + " – " + Num(a.band_high, "%.2g")
+                                     : (a.band_high > 0 ? Num(a.band_low, "%.2g") : std::string()))
+        << "</td><td>"
         << Num(a.whiteness_p, "%.2g") << "</td><td>" << HtmlEscape(inputs) << "</td><td>"
         << (a.unexplained ? "unexplained" : "") << "</td></tr>\n";
     }
@@ -414,7 +453,7 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     for (const ChannelAdequacy& a : r.adequacy) {
       if (a.autocorrelation.empty()) continue;
       SeriesPlot plot;
-      plot.title = "Autocorrelation of the repaired residual, " + a.channel;
+      plot.title = "Autocorrelation, " + a.channel;
       plot.x_label = "lag [s]";
       plot.y_label = "autocorrelation";
       plot.width = 600;
@@ -427,7 +466,7 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
       }
       plot.series.push_back({"repaired residual", lag, a.autocorrelation, true});
       plot.series.push_back({"95 % band of a white residual", lag, up, false});
-      plot.series.push_back({"", lag, down, false});
+      plot.series.push_back({"its lower edge", lag, down, false});
       h << HtmlImage(RenderSeriesPlot(plot, renderer), "autocorrelation") << "\n";
     }
   }
@@ -459,7 +498,7 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
       << "</td><td>" << HtmlEscape(ParameterText(c.parameters)) << "</td><td>" << Num(c.fit_gap) << "</td><td>"
       << Num(c.held_out_gap) << "</td><td>" << (std::isfinite(c.reduction) ? Num(100 * c.reduction, "%.2f") + " %" : "")
       << "</td><td>" << Num(c.t_statistic, "%.1f") << "</td><td>" << Num(c.p_value, "%.2g") << (c.significant ? " *" : "")
-      << "</td><td>" << Num(c.information_gain, "%.1f") << "</td><td>" << (c.selected ? "added" : HtmlEscape(c.note))
+      << "</td><td>" << Num(c.information_gain, "%.1f") << "</td><td>" << (c.selected ? "added" : HtmlEscape(c.note.empty() ? c.harm : c.note))
       << "</td></tr>\n";
   }
   h << "</table>\n<p class=\"small\">* significant after Holm's correction over the round.</p>\n";

@@ -26,6 +26,11 @@ struct Score {
   double fit_reduction = 0;  // share of the fit rows' MSE removed
   LongRunTest test;
   double information_gain = 0;
+  // The channel it makes worst, by its share of that channel's MSE (negative: worse),
+  // and the t of that change: a missing effect, rightly fitted, makes no channel worse.
+  int worst_channel = -1;
+  double worst_share = 0;
+  double worst_t = 0;
 };
 
 // `after` against `before` on the selection rows; `parameters` counted against an
@@ -44,7 +49,28 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
                                      : std::numeric_limits<double>::infinity();
   const double fit_mse = Mean(before.fit);
   if (fit_mse > 0) s.fit_reduction = (fit_mse - Mean(after.fit)) / fit_mse;
+  for (std::size_t c = 0; c < before.selection_by_channel.size() && c < after.selection_by_channel.size(); ++c) {
+    const std::vector<double>& b = before.selection_by_channel[c];
+    const std::vector<double>& a = after.selection_by_channel[c];
+    const double channel_mse = Mean(b);
+    if (channel_mse <= 0 || a.size() != b.size()) continue;
+    std::vector<double> g(b.size());
+    for (std::size_t i = 0; i < g.size(); ++i) g[i] = b[i] - a[i];
+    const double share = Mean(g) / channel_mse;
+    if (share < s.worst_share) {
+      s.worst_share = share;
+      s.worst_channel = static_cast<int>(c);
+      s.worst_t = LongRunMeanTest(g, min_bandwidth).t;
+    }
+  }
   return s;
+}
+
+// True when `s` makes a channel worse by at least `least` of its MSE, significantly at
+// level alpha (one-sided, long-run standard error).
+bool HarmsAChannel(const Score& s, double least, double alpha) {
+  if (s.worst_channel < 0 || s.worst_share > -least) return false;
+  return StudentTUpperTail(-s.worst_t, std::max(1.0, s.test.df)) <= alpha;
 }
 
 std::string Percent(double share) {
@@ -112,6 +138,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
     const double effective_rows = EffectiveRows(current_residuals.selection, bandwidth);
     std::vector<DiagnosisCandidate> tried(candidates.size());
     std::vector<double> fit_reduction(candidates.size(), 0.0);
+    std::vector<char> harms(candidates.size(), 0);
     std::vector<std::vector<TrialEffect>> fitted(candidates.size());
     ParallelFor(static_cast<int>(candidates.size()), options.threads, [&](int i) {
       const auto k = static_cast<std::size_t>(i);
@@ -157,6 +184,13 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         c.p_value = s.test.p;
         c.information_gain = s.information_gain;
         fit_reduction[k] = s.fit_reduction;
+        harms[k] = HarmsAChannel(s, options.min_improvement, options.alpha);
+        if (harms[k]) {
+          char why[160];
+          std::snprintf(why, sizeof why, "it makes channel %d worse by %s of its squared residual (t = %.1f)",
+                        s.worst_channel + 1, Percent(-s.worst_share).c_str(), s.worst_t);
+          c.harm = why;
+        }
         fitted[k] = std::move(trial);
       } catch (const std::exception& e) {
         c.note = e.what();
@@ -176,7 +210,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
     auto passes_test = [&](std::size_t k) {
       const DiagnosisCandidate& c = tried[k];
       const bool strong = c.reduction >= kStrongReduction && fit_reduction[k] >= kStrongReduction && c.t_statistic > 0;
-      return c.note.empty() && c.reduction >= options.min_improvement && c.information_gain > 0 &&
+      return c.note.empty() && !harms[k] && c.reduction >= options.min_improvement && c.information_gain > 0 &&
              (significant[k] || strong);
     };
     // The largest information gain among the candidates that pass (one that fails the
@@ -440,9 +474,15 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   }
 
   // Adequacy of the repaired model, and the learned yardstick beside both models.
+  report->adequacy.clear();
+  report->yardstick = {};
+  if (!options.check_adequacy) {
+    report->yardstick.nominal = report->yardstick.repaired = report->yardstick.physics_share =
+        std::numeric_limits<double>::quiet_NaN();
+    return;
+  }
   const TestResiduals nominal = problem.Test({}, true);
   const TestResiduals repaired = problem.Test(selection.effects, true);
-  report->adequacy.clear();
   std::vector<double> p;
   for (std::size_t c = 0; c < repaired.channels.size(); ++c) {
     report->adequacy.push_back(CheckChannel(repaired, c, problem.ChunkRows()));
@@ -453,7 +493,8 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   const std::vector<bool> significant = HolmReject(p, options.alpha);
   for (std::size_t c = 0; c < report->adequacy.size(); ++c) {
     ChannelAdequacy& a = report->adequacy[c];
-    a.unexplained = significant[c] && a.learned_reduction >= options.min_improvement;
+    a.above_floor = a.noise > 0 && a.rms > problem.FloorRatio() * a.noise;
+    a.unexplained = (significant[c] && a.learned_reduction >= options.min_improvement) || a.above_floor;
   }
   LearnedYardstick& y = report->yardstick;
   y.learner = repaired.learner;

@@ -9,7 +9,8 @@
 //      test of that reduction with a long-run (Newey-West) standard error, and an
 //      information criterion that counts its parameters;
 //   2. the candidates significant after Holm's correction over the round, removing at
-//      least min_improvement and earning their parameters, compete on the criterion;
+//      least min_improvement, earning their parameters, and making no joint or axis
+//      significantly worse, compete on the criterion;
 //      the best is added and all added effects refitted together;
 //   3. a backward step takes out an effect added earlier that no longer earns its place;
 //   4. until none passes or max_effects are in.
@@ -38,6 +39,7 @@ struct SquaredResiduals {
   std::vector<double> fit;
   std::vector<double> selection;
   std::vector<double> test;
+  std::vector<std::vector<double>> selection_by_channel;  // channel x selection row, unsummed
 };
 
 // The test rows of one model, per channel, for the adequacy checks (diagnosis.h,
@@ -76,6 +78,10 @@ class DiagnosisProblem {
   virtual int ResidualComponents() const { return 1; }
   // The relative step of the numeric derivatives of FitResiduals for standard errors.
   virtual double RelativeStep() const { return 1e-3; }
+  // How far above its noise floor a channel's test RMS may stand and still be noise:
+  // beyond it the channel is unexplained whatever the learned residual says (the floor
+  // is an estimate; for arms a lower bound).
+  virtual double FloorRatio() const = 0;
   // The test rows of the model with `effects`; with `learn`, also corrected by a
   // learned residual predictor trained on the fit rows.
   virtual TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const = 0;

@@ -81,6 +81,7 @@ TEST_P(OmniDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
   }
   DiagnosisOptions none = options;
   none.max_effects = 0;
+  none.check_adequacy = false;
   const double floor = DiagnoseOmni(plant, logs, none).gap_before;
   testing::RecordDiagnosis(report, floor);  // for docs/diagnose.md's counts
   if (c.expected.empty()) {
