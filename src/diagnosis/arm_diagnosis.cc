@@ -33,8 +33,8 @@ constexpr double kMaxDeflection = 0.5;     // rad: the most a flexible joint's s
 constexpr double kMinStiffness = 1e-3;     // N·m/rad: joint_flexibility's search bounds
 constexpr double kMinMotorInertia = 1e-9;  // kg m^2
 constexpr double kPayloadReach = 2;      // m: a payload's position is searched within this of the last link's frame
-// Held-out rows per chunk of the significance test: a quarter second holds a motion's
-// stop or reversal (the events where friction and delays show) without splitting it.
+// The shortest bandwidth of the long-run variance (statistics.h): a quarter second holds
+// a motion's stop or reversal (the events where friction and delays show).
 constexpr double kChunkSeconds = 0.25;
 
 // One log with what every evaluation reuses.

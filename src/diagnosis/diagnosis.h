@@ -1,22 +1,25 @@
 // The diagnosis workflow (`twinsim diagnose`, CONTRACT.md): find where a model and
 // measured logs disagree, name the missing effects from the contract's vocabulary,
-// add them to the model with fitted parameters, and show the gap shrink on data the
-// fit never saw. One method for both robots (docs/diagnose.md):
+// add them to the model with fitted parameters, show the gap shrink on data that chose
+// nothing, and say what is left unexplained. One method for both robots
+// (docs/diagnose.md):
 //
 //   1. Find: replay the nominal model over the logs (arm: the commands its inverse
 //      dynamics needs; omni: the 4-frame prediction of `replay`) and describe the
 //      residual per joint or axis (over time, against velocity, near reversals, its
 //      lag against the command, its spectrum) and the noise floor the data allow.
 //   2. Name: every effect of the vocabulary is a candidate; each is fitted on the fit
-//      blocks of the logs and scored on the held-out blocks.
-//   3. Add: forward selection; the best candidate is added and all added ones refitted
-//      together while the held-out gap drops significantly (DiagnosisOptions).
-//   4. Show: a DiagnosisReport, written as report.json, report.html and model.yaml
+//      blocks of the logs and scored on the selection blocks.
+//   3. Add: forward selection with Holm-corrected long-run t tests, an information
+//      gain that counts parameters, and a backward step (forward_selection.h).
+//   4. Say what is left: on the test blocks, whiteness, cross-correlation with the
+//      inputs and a learned residual beside the physics (ChannelAdequacy).
+//   5. Show: a DiagnosisReport, written as report.json, report.html and model.yaml
 //      (diagnosis_report.h).
 //
-// This header holds what both robots share: options, the held-out split in time
-// blocks, the significance test, and the report's plain structs. The robots' own
-// halves are arm_diagnosis.h and omni_diagnosis.h.
+// This header holds what both robots share: options, the split of the logs into fit,
+// selection and test blocks, and the report's plain structs (the tests are in
+// statistics.h). The robots' own halves are arm_diagnosis.h and omni_diagnosis.h.
 #pragma once
 
 #include <limits>
