@@ -392,7 +392,7 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     << Num(r.fit_gap_before) << "</td></tr>\n";
   h << "<tr><td>repaired model (named physics)</td><td>" << Num(r.gap_after) << "</td><td>" << Num(r.selection_gap_after)
     << "</td><td>" << Num(r.fit_gap_after) << "</td></tr>\n";
-  if (!r.yardstick.learner.empty()) {
+  if (std::isfinite(r.yardstick.nominal) && std::isfinite(r.yardstick.repaired)) {
     h << "<tr><td>nominal model + learned residual</td><td>" << Num(r.yardstick.nominal) << "</td><td></td><td></td></tr>\n";
     h << "<tr><td>repaired model + learned residual</td><td>" << Num(r.yardstick.repaired) << "</td><td></td><td></td></tr>\n";
   }

@@ -95,9 +95,11 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
   }
   std::sort(others.begin(), others.end(),
             [](const DiagnosisCandidate* a, const DiagnosisCandidate* b) { return a->reduction > b->reduction; });
-  char head[200];
-  std::snprintf(head, sizeof head, "it removed %s of the selection rows' squared error (t = %.1f, %s; %d candidates tested)",
-                Percent(best.reduction).c_str(), best.t_statistic, PValue(best.p_value).c_str(), tested);
+  char head[256];
+  std::snprintf(head, sizeof head, "it removed %s of the selection rows' squared error (t = %.1f, %s; %s)",
+                Percent(best.reduction).c_str(), best.t_statistic, PValue(best.p_value).c_str(),
+                best.significant ? ("significant after Holm's correction over " + std::to_string(tested) + " candidates").c_str()
+                                 : "a quarter and more on fit and selection rows alike");
   std::string s = head;
   const std::size_t shown = std::min<std::size_t>(2, others.size());
   for (std::size_t k = 0; k < shown; ++k) {
