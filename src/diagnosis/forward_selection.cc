@@ -21,6 +21,13 @@ constexpr double kStrongReduction = 0.25;
 constexpr int kWhitenessLags = 20;
 constexpr int kCrossCorrelationsShown = 3;
 
+// Row by row, how much `after` is below `before` (the rows of both in the same order).
+std::vector<double> Gains(const std::vector<double>& before, const std::vector<double>& after) {
+  std::vector<double> g(before.size());
+  for (std::size_t i = 0; i < g.size(); ++i) g[i] = before[i] - after[i];
+  return g;
+}
+
 struct Score {
   double reduction = 0;      // share of the selection rows' MSE removed
   double fit_reduction = 0;  // share of the fit rows' MSE removed
@@ -40,8 +47,7 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
   Score s;
   const double mse = Mean(before.selection);
   if (mse <= 0 || before.selection.size() != after.selection.size()) return s;
-  std::vector<double> gain(before.selection.size());
-  for (std::size_t i = 0; i < gain.size(); ++i) gain[i] = before.selection[i] - after.selection[i];
+  const std::vector<double> gain = Gains(before.selection, after.selection);
   s.reduction = Mean(gain) / mse;
   s.test = LongRunMeanTest(gain, min_bandwidth);
   const double mse_after = Mean(after.selection);
@@ -54,8 +60,7 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
     const std::vector<double>& a = after.selection_by_channel[c];
     const double channel_mse = Mean(b);
     if (channel_mse <= 0 || a.size() != b.size()) continue;
-    std::vector<double> g(b.size());
-    for (std::size_t i = 0; i < g.size(); ++i) g[i] = b[i] - a[i];
+    const std::vector<double> g = Gains(b, a);
     const double share = Mean(g) / channel_mse;
     if (share < s.worst_share) {
       s.worst_share = share;
@@ -359,25 +364,16 @@ std::vector<std::map<std::string, double>> StandardErrors(const DiagnosisProblem
     correlation = std::max(correlation, CorrelationLength(series, std::max(1, static_cast<int>(series.size() / 4))));
   }
   const double variance = rss / static_cast<double>(n - k) * correlation;
+  // A parameter gets an error only where the logs determine it: its unit vector lies in
+  // the range of the information matrix (always, when that has full rank).
   const Eigen::MatrixXd information = jacobian.transpose() * jacobian;
-  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> decomposition(information);
-  if (decomposition.rank() < k) {
-    // Parameters the logs do not separate: only those outside the null space get errors.
-    const Eigen::MatrixXd covariance = decomposition.pseudoInverse() * variance;
-    for (std::size_t s = 0; s < slots.size(); ++s) {
-      if (usable[s] && information(static_cast<Eigen::Index>(s), static_cast<Eigen::Index>(s)) > 0) {
-        // The diagonal of the pseudo-inverse understates a parameter in the null space: report NaN there.
-        Eigen::VectorXd e = Eigen::VectorXd::Zero(k);
-        e[static_cast<Eigen::Index>(s)] = 1;
-        const Eigen::VectorXd back = information * (decomposition.pseudoInverse() * e);
-        if ((back - e).norm() < 1e-6) out[slots[s].effect][slots[s].key] = std::sqrt(std::max(0.0, covariance(static_cast<Eigen::Index>(s), static_cast<Eigen::Index>(s))));
-      }
-    }
-    return out;
-  }
-  const Eigen::MatrixXd covariance = information.inverse() * variance;
+  const Eigen::MatrixXd inverse = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(information).pseudoInverse();
   for (std::size_t s = 0; s < slots.size(); ++s) {
-    if (usable[s]) out[slots[s].effect][slots[s].key] = std::sqrt(std::max(0.0, covariance(static_cast<Eigen::Index>(s), static_cast<Eigen::Index>(s))));
+    const auto c = static_cast<Eigen::Index>(s);
+    if (!usable[s]) continue;
+    Eigen::VectorXd back = information * inverse.col(c);
+    back[c] -= 1;
+    if (back.norm() < 1e-6) out[slots[s].effect][slots[s].key] = std::sqrt(std::max(0.0, inverse(c, c) * variance));
   }
   return out;
 }
@@ -406,20 +402,15 @@ ChannelAdequacy CheckChannel(const TestResiduals& t, std::size_t c, int bandwidt
   if (c < t.learned.size() && t.learned[c].size() == r.size()) {
     const std::vector<double>& l = t.learned[c];
     a.learned_rms = Rms(l);
-    std::vector<double> gain(r.size());
-    double mse = 0;
-    for (std::size_t i = 0; i < r.size(); ++i) {
-      gain[i] = r[i] * r[i] - l[i] * l[i];
-      mse += r[i] * r[i];
-    }
-    mse /= static_cast<double>(std::max<std::size_t>(r.size(), 1));
-    const LongRunTest test = LongRunMeanTest(gain, bandwidth);
+    std::vector<double> r2(r.size()), l2(l.size());
+    for (std::size_t i = 0; i < r.size(); ++i) r2[i] = r[i] * r[i], l2[i] = l[i] * l[i];
+    const double mse = Mean(r2);
+    const LongRunTest test = LongRunMeanTest(Gains(r2, l2), bandwidth);
     a.learned_reduction = mse > 0 ? test.mean / mse : 0.0;
     a.learned_p = test.p;
     // The band: where the learned correction (what it predicts of the residual) has
     // its power, the peak and the bins around it above a quarter of it.
-    std::vector<double> correction(r.size());
-    for (std::size_t i = 0; i < r.size(); ++i) correction[i] = r[i] - l[i];
+    const std::vector<double> correction = Gains(r, l);
     const int segment = static_cast<int>(std::min<double>(1024, std::pow(2, std::floor(std::log2(std::max(8.0, r.size() / 8.0))))));
     std::vector<double> f, pc;
     WelchPsd(correction, t.rate, segment, &f, &pc);
@@ -483,8 +474,9 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
         std::numeric_limits<double>::quiet_NaN();
     return;
   }
+  // With nothing added the repaired model is the nominal one: one check serves both.
   const TestResiduals nominal = problem.Test({}, true);
-  const TestResiduals repaired = problem.Test(selection.effects, true);
+  const TestResiduals repaired = selection.effects.empty() ? nominal : problem.Test(selection.effects, true);
   std::vector<double> p;
   for (std::size_t c = 0; c < repaired.channels.size(); ++c) {
     report->adequacy.push_back(CheckChannel(repaired, c, problem.ChunkRows()));

@@ -55,7 +55,7 @@ class OmniProblem : public DiagnosisProblem {
  public:
   OmniProblem(const OmniModel& nominal, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
               double block_seconds)
-      : nominal_(nominal), options_(options), logs_(&logs) {
+      : nominal_(nominal), options_(options) {
     // A prediction spans `horizon` frames: rows closer than that (and one more) to
     // another block are guards.
     guard_seconds_ = (options.horizon + 1) * logs.front().frame_period;
@@ -79,6 +79,9 @@ class OmniProblem : public DiagnosisProblem {
         turn_rates_.push_back(std::abs(r.command.omega));
       }
     }
+    double var_xy = 0, var_theta = 0;
+    OmniNoiseFloor(logs, nominal.chassis_radius, &var_xy, &var_theta);
+    channel_noise_ = {std::sqrt(2 * var_xy), std::sqrt(2 * var_xy), nominal.chassis_radius * std::sqrt(2 * var_theta)};
     std::sort(speeds_.begin(), speeds_.end());
     std::sort(turn_rates_.begin(), turn_rates_.end());
   }
@@ -179,6 +182,7 @@ class OmniProblem : public DiagnosisProblem {
   // (clean logs: at most 1.15 times it over 20 seeds, measured, docs/diagnose-study).
   double FloorRatio() const override { return 1.6; }
   double guard_seconds() const { return guard_seconds_; }
+  const std::vector<double>& channel_noise() const { return channel_noise_; }
 
  private:
   double Quantile(const std::vector<double>& sorted, double q) const {
@@ -193,8 +197,8 @@ class OmniProblem : public DiagnosisProblem {
 
   OmniModel nominal_;
   DiagnosisOptions options_;
-  const std::vector<OmniLog>* logs_;
   double guard_seconds_ = 0;
+  std::vector<double> channel_noise_;  // m, per axis: the camera noise's share (OmniNoiseFloor)
   std::vector<LogData> data_;
   double frame_period_ = 1.0 / 30;
   double physics_dt_ = 1.0 / 300;
@@ -478,9 +482,7 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
   const OmniModel model = Build(effects);
   TestResiduals out;
   out.channels = {"forward", "sideways", "rotation (at the rim)"};
-  double var_xy = 0, var_theta = 0;
-  OmniNoiseFloor(*logs_, nominal_.chassis_radius, &var_xy, &var_theta);
-  out.noise = {std::sqrt(2 * var_xy), std::sqrt(2 * var_xy), nominal_.chassis_radius * std::sqrt(2 * var_theta)};
+  out.noise = channel_noise_;
   out.residual.resize(3);
   out.input_names = {"command vx", "command vy", "command omega", "heading sin", "heading cos", "field x", "field y"};
   out.inputs.resize(out.input_names.size());
@@ -667,8 +669,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   const char* names[3] = {"forward", "sideways", "rotation (at the rim)"};
   const double dt = logs.front().frame_period;
   const double radius = model.chassis_radius;
-  double var_xy = 0, var_theta = 0;
-  report.noise_floor = OmniNoiseFloor(logs, radius, &var_xy, &var_theta);
+  report.noise_floor = OmniNoiseFloor(logs, radius);
 
   std::vector<ChannelFinding> findings(3);
   std::vector<ChannelSeries> series(3);
@@ -765,7 +766,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     f.unit = "m";
     DescribeChannel(samples[cc], series[cc], &f);
     f.lag = lag_sum[cc] / static_cast<double>(logs.size());
-    f.noise = c < 2 ? std::sqrt(2 * var_xy) : radius * std::sqrt(2 * var_theta);
+    f.noise = problem.channel_noise()[cc];
   }
   report.findings = findings;
   report.series = series;
