@@ -147,7 +147,8 @@ struct ChannelAdequacy {
   // The test RMS stands more than the problem's FloorRatio times the noise above it.
   bool above_floor = false;
   // Something is left that is not noise: a significant predictable part (the learned
-  // residual), or a residual far above the floor (docs/diagnose.md).
+  // residual, lowering the RMS by at least the problem's LearnedFloor() times the
+  // noise), or a residual far above the floor (docs/diagnose.md).
   bool unexplained = false;
 };
 
@@ -179,6 +180,8 @@ struct DiagnosisReport {
   double alpha = 0.05;                  // the options the selection ran with, for the method text
   double min_improvement = 0.05;
   int max_effects = 3;
+  double floor_ratio = 0;    // the problem's FloorRatio() and LearnedFloor(), for the method text
+  double learned_floor = 0;
   LearnedYardstick yardstick;
   std::vector<ChannelAdequacy> adequacy;  // one per channel
   std::vector<std::string> removed;      // effects the backward step took out again, with why

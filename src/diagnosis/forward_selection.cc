@@ -448,6 +448,8 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   report->alpha = options.alpha;
   report->min_improvement = options.min_improvement;
   report->max_effects = options.max_effects;
+  report->floor_ratio = problem.FloorRatio();
+  report->learned_floor = problem.LearnedFloor();
   report->gap_before = problem.Gap(Mean(selection.before.test));
   report->gap_after = problem.Gap(Mean(selection.after.test));
   report->selection_gap_before = problem.Gap(Mean(selection.before.selection));
@@ -483,12 +485,14 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
     p.push_back(report->adequacy.back().learned_p);
   }
   // Unexplained: the learned correction removes a significant share (Holm over the
-  // channels) of at least min_improvement.
+  // channels) of at least min_improvement, and at least LearnedFloor() noise in RMS.
   const std::vector<bool> significant = HolmReject(p, options.alpha);
   for (std::size_t c = 0; c < report->adequacy.size(); ++c) {
     ChannelAdequacy& a = report->adequacy[c];
     a.above_floor = a.noise > 0 && a.rms > problem.FloorRatio() * a.noise;
-    a.unexplained = (significant[c] && a.learned_reduction >= options.min_improvement) || a.above_floor;
+    const bool learned = significant[c] && a.learned_reduction >= options.min_improvement &&
+                         a.rms - a.learned_rms >= problem.LearnedFloor() * a.noise;
+    a.unexplained = learned || a.above_floor;
   }
   LearnedYardstick& y = report->yardstick;
   y.learner = repaired.learner;

@@ -82,6 +82,10 @@ class DiagnosisProblem {
   // beyond it the channel is unexplained whatever the learned residual says (the floor
   // is an estimate; for arms a lower bound).
   virtual double FloorRatio() const = 0;
+  // How much a learned residual must lower a channel's test RMS, in units of its noise
+  // floor, to count: what the problem's own processing leaves that is predictable but
+  // not physics (0: any significant drop counts).
+  virtual double LearnedFloor() const { return 0; }
   // The test rows of the model with `effects`; with `learn`, also corrected by a
   // learned residual predictor trained on the fit rows.
   virtual TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const = 0;

@@ -12,8 +12,9 @@ namespace twinsim {
 namespace {
 
 constexpr int kBins = 100;             // per input, of equal counts on the training rows
-constexpr int kBackfittingSweeps = 3;
 constexpr double kShrinkCount = 5;     // a bin's mean is sum / (count + this): sparse bins say little
+constexpr int kBoostingSteps = 150;    // at most, per output
+constexpr double kBoostingShare = 0.3; // of the chosen input's bin means added per step
 
 }  // namespace
 
@@ -48,8 +49,7 @@ RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen
     return out;
   };
 
-  // Stage 1: the additive model, fitted on the training rows, kept if it helps on the
-  // validation rows, then refitted on every row.
+  // Stage 1: an additive model, one function of each input (piecewise constant on bins).
   r.outputs_ = y.cols();
   // Bins of equal counts: a bin fed by one rare event would learn that event's noise.
   r.edges_.assign(static_cast<std::size_t>(inputs), std::vector<double>());
@@ -58,38 +58,78 @@ RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen
     std::sort(v.begin(), v.end());
     for (int k = 1; k < kBins; ++k) r.edges_[static_cast<std::size_t>(c)].push_back(v[static_cast<std::size_t>(k) * v.size() / kBins]);
   }
-  auto fit_additive = [&](const std::vector<Eigen::Index>& rows) {
-    r.bins_.assign(static_cast<std::size_t>(inputs), Eigen::MatrixXd::Zero(kBins, y.cols()));
-    Eigen::MatrixXd left = rows_of(y, rows);
-    const Eigen::MatrixXd xs = rows_of(x, rows);
-    for (int sweep = 0; sweep < kBackfittingSweeps; ++sweep) {
+  // Each row's bin in each input, once.
+  Eigen::MatrixXi bin(n, inputs);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index c = 0; c < inputs; ++c) bin(i, c) = r.Bin(c, x(i, c));
+  }
+  // Componentwise boosting, per output: each step fits every input's bin means to what
+  // is left and adds a share of the one input that explains most. Backfitting all inputs
+  // at once split one effect among inputs that move together (on a periodic trajectory
+  // every input is a function of the phase): the parts cancelled on the training rows
+  // and not off them (measured: a spring on joint 2, residual RMS 0.845 -> 0.825 on the
+  // test rows, where a straight line in q2 gives 0.350).
+  // Returns, per step, the error on `check` (empty when no check rows are given).
+  auto boost = [&](Eigen::Index o, const std::vector<Eigen::Index>& rows, const std::vector<Eigen::Index>& check,
+                   int steps) {
+    std::vector<double> left(rows.size()), check_left(check.size());
+    for (std::size_t k = 0; k < rows.size(); ++k) left[k] = y(rows[k], o);
+    for (std::size_t k = 0; k < check.size(); ++k) check_left[k] = y(check[k], o);
+    std::vector<double> errors;
+    std::vector<double> sum(kBins), count(kBins);
+    for (int step = 0; step < steps; ++step) {
+      Eigen::Index best = -1;
+      double best_gain = 0;
+      Eigen::VectorXd best_means;
       for (Eigen::Index c = 0; c < inputs; ++c) {
-        Eigen::MatrixXd& b = r.bins_[static_cast<std::size_t>(c)];
-        Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(kBins, y.cols());
-        Eigen::VectorXd count = Eigen::VectorXd::Zero(kBins);
-        for (Eigen::Index i = 0; i < xs.rows(); ++i) {
-          const int k = r.Bin(c, xs(i, c));
-          left.row(i) += b.row(k);  // this input's own share back in
-          sum.row(k) += left.row(i);
-          count[k] += 1;
+        std::fill(sum.begin(), sum.end(), 0.0);
+        std::fill(count.begin(), count.end(), 0.0);
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+          const int b = bin(rows[k], c);
+          sum[static_cast<std::size_t>(b)] += left[k];
+          count[static_cast<std::size_t>(b)] += 1;
         }
-        for (int k = 0; k < kBins; ++k) b.row(k) = sum.row(k) / (count[k] + kShrinkCount);
-        for (Eigen::Index i = 0; i < xs.rows(); ++i) left.row(i) -= b.row(r.Bin(c, xs(i, c)));
+        // The squared error removed by subtracting the shrunk means m = s / (c + k0):
+        // sum over bins of 2 m s - c m^2.
+        Eigen::VectorXd means(kBins);
+        double gain = 0;
+        for (int b = 0; b < kBins; ++b) {
+          const double m = sum[static_cast<std::size_t>(b)] / (count[static_cast<std::size_t>(b)] + kShrinkCount);
+          means[b] = m;
+          gain += 2 * m * sum[static_cast<std::size_t>(b)] - count[static_cast<std::size_t>(b)] * m * m;
+        }
+        if (gain > best_gain) best_gain = gain, best = c, best_means = means;
+      }
+      if (best < 0) break;
+      best_means *= kBoostingShare;
+      r.bins_[static_cast<std::size_t>(best)].col(o) += best_means;
+      for (std::size_t k = 0; k < rows.size(); ++k) left[k] -= best_means[bin(rows[k], best)];
+      if (!check.empty()) {
+        double e = 0;
+        for (std::size_t k = 0; k < check.size(); ++k) {
+          check_left[k] -= best_means[bin(check[k], best)];
+          e += check_left[k] * check_left[k];
+        }
+        errors.push_back(e);
       }
     }
+    return errors;
   };
-  // Each output keeps the stage only where it lowers that output's validation error.
-  const Eigen::MatrixXd yc = rows_of(y, check);
-  fit_additive(train);
-  const Eigen::RowVectorXd with = (yc - r.Additive(rows_of(x, check))).colwise().squaredNorm();
-  const Eigen::RowVectorXd without = yc.colwise().squaredNorm();
+  // Each output keeps as many steps as lower its validation error most (none when no
+  // step beats predicting zero), then is refitted with them on every row.
+  r.bins_.assign(static_cast<std::size_t>(inputs), Eigen::MatrixXd::Zero(kBins, y.cols()));
   std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
-  fit_additive(all);
-  for (Eigen::Index o = 0; o < y.cols(); ++o) {
-    if (!(with[o] < without[o])) {
-      for (auto& b : r.bins_) b.col(o).setZero();
+  for (Eigen::Index o = 0; o < r.outputs_; ++o) {
+    double best_error = 0;
+    for (Eigen::Index i : check) best_error += y(i, o) * y(i, o);
+    const std::vector<double> errors = boost(o, train, check, kBoostingSteps);
+    int steps = 0;
+    for (std::size_t s = 0; s < errors.size(); ++s) {
+      if (errors[s] < best_error) best_error = errors[s], steps = static_cast<int>(s) + 1;
     }
+    for (auto& b : r.bins_) b.col(o).setZero();
+    boost(o, all, {}, steps);
   }
   const Eigen::MatrixXd rest = y - r.Additive(x);
 

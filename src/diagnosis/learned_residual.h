@@ -1,9 +1,12 @@
 // The learned yardstick of the arm's diagnosis (docs/diagnose.md, "The learned
 // yardstick"): a regression of the torque residual on the measured motion that knows no
-// physics. Kernel ridge regression with a Gaussian kernel, approximated by random
-// Fourier features (Rahimi and Recht, 2007) at three length scales, beside the inputs
-// themselves; inputs are standardised on the training rows. Fitting is one linear solve
-// and the same data and seed give the same weights.
+// physics, in two stages. First an additive model (one piecewise-constant function of
+// each input on 100 quantile bins) grown by componentwise boosting (Buehlmann and Yu,
+// 2003): each step adds a share of the one input's function that explains most, so an
+// effect of one joint stays on that joint's input. Then kernel ridge regression with a
+// Gaussian kernel on what is left, approximated by random Fourier features (Rahimi and
+// Recht, 2007) at three length scales, beside the inputs themselves (standardised on
+// the training rows). The same data and seed give the same weights.
 //
 //   RandomFeatureRidge r = RandomFeatureRidge::Fit(x_fit, y_fit, 300, 1);
 //   Eigen::MatrixXd correction = r.Predict(x_test);   // rows x outputs
@@ -17,9 +20,10 @@ namespace twinsim {
 
 class RandomFeatureRidge {
  public:
-  // x: rows x inputs, y: rows x outputs, in time order. Each stage, and the L2 penalty,
-  // is chosen per output on a validation split of the rows (the 4th and 9th tenths);
-  // where nothing beats predicting zero there, that output's correction is zero.
+  // x: rows x inputs, y: rows x outputs, in time order. The boosting steps, the kernel
+  // stage and its L2 penalty are chosen per output on a validation split of the rows
+  // (the 4th and 9th tenths); where nothing beats predicting zero there, that output's
+  // correction is zero.
   static RandomFeatureRidge Fit(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, int features, std::uint64_t seed);
   Eigen::MatrixXd Predict(const Eigen::MatrixXd& x) const;
   // The largest penalty chosen per training row (each output has its own); negative
