@@ -151,11 +151,19 @@ std::string DiagnosisMethod(const DiagnosisReport& r) {
       "filter span or a prediction horizon apart), cross-correlation with the inputs (95 %% bands widened for "
       "autocorrelated series), and a learned residual trained on the fit rows; a channel is unexplained when the "
       "learned residual removes at least %.0f %% of its squared error, significant after Holm's correction over the "
-      "channels, and lowers its RMS by at least %.3g times its noise floor (what the processing of the log leaves "
-      "predictable), or when its RMS stands more than %.3g times its noise floor.",
+      "channels",
       r.block_seconds, 100 * r.held_out_share, r.guard_seconds, 100 * r.min_improvement, r.alpha, r.max_effects,
-      100 * r.min_improvement, r.learned_floor, r.floor_ratio);
-  return buf;
+      100 * r.min_improvement);
+  std::string text = buf;
+  if (r.learned_floor > 0) {
+    std::snprintf(buf, sizeof buf,
+                  ", and lowers its RMS by at least %.3g times its noise floor (what the processing of the log leaves "
+                  "predictable)",
+                  r.learned_floor);
+    text += buf;
+  }
+  std::snprintf(buf, sizeof buf, ", or when its RMS stands more than %.3g times its noise floor.", r.floor_ratio);
+  return text + buf;
 }
 
 std::string FormatDiagnosisJson(const DiagnosisReport& r) {
