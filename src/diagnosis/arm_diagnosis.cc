@@ -253,12 +253,12 @@ class ArmProblem : public DiagnosisProblem {
   SquaredResiduals Evaluate(const std::vector<TrialEffect>& effects) const override {
     const ArmModel trial = Build(effects);
     SquaredResiduals out;
+    out.selection_by_channel.resize(static_cast<std::size_t>(n_));
     for (const LogData& d : data_) {
       const Eigen::MatrixXd payload = PayloadTorque(trial, d);
       Eigen::MatrixXd squared(d.log->rows(), n_);
       for (int j = 0; j < n_; ++j) squared.col(j) = Residual(trial, d, j, payload).cwiseAbs2();
       const Eigen::VectorXd sum = squared.rowwise().sum();
-      out.selection_by_channel.resize(static_cast<std::size_t>(n_));
       for (int r = d.first; r < d.last; ++r) {
         switch (d.kind[static_cast<std::size_t>(r)]) {
           case RowKind::kFit: out.fit.push_back(sum[r]); break;

@@ -107,12 +107,12 @@ class OmniProblem : public DiagnosisProblem {
   SquaredResiduals Evaluate(const std::vector<TrialEffect>& effects) const override {
     const OmniModel model = Build(effects);
     SquaredResiduals out;
+    out.selection_by_channel.resize(3);
     for (const LogData& d : data_) {
       const ReplayResidual r = Residual(model, d, 1, options_.horizon);
       for (std::size_t k = 0; k < r.rows.size(); ++k) {
         const auto& e = r.e[k];
         const double sq = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-        out.selection_by_channel.resize(3);
         switch (d.kind[r.rows[k]]) {
           case RowKind::kFit: out.fit.push_back(sq); break;
           case RowKind::kSelection:

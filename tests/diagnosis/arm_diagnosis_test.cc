@@ -133,10 +133,7 @@ TEST_P(ArmDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
     EXPECT_FALSE(it->evidence.empty());
   }
   // The plant's own gap on the same held-out rows: the floor a perfect model reaches.
-  DiagnosisOptions none = options;
-  none.max_effects = 0;
-  none.check_adequacy = false;
-  const double floor = DiagnoseArm(plant, logs, none).gap_before;
+  const double floor = DiagnoseArm(plant, logs, testing::GapsOnly(options)).gap_before;
   testing::RecordDiagnosis(report, floor);  // for docs/diagnose.md's counts
   if (c.expected.empty()) {
     EXPECT_EQ(report.gap_after, report.gap_before);
@@ -146,7 +143,7 @@ TEST_P(ArmDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
   }
   // The repaired model carries the effects, and reaches the same gap when diagnosed again.
   EXPECT_EQ(ListArmEffects(repaired.effects).size(), c.expected.size());
-  EXPECT_NEAR(DiagnoseArm(repaired, logs, none).gap_before, report.gap_after, 1e-9 * (1 + report.gap_after));
+  EXPECT_NEAR(DiagnoseArm(repaired, logs, testing::GapsOnly(options)).gap_before, report.gap_after, 1e-9 * (1 + report.gap_after));
 }
 
 INSTANTIATE_TEST_SUITE_P(HiddenEffects, ArmDiagnosisCase, ::testing::ValuesIn(ArmCases()),
@@ -160,7 +157,7 @@ INSTANTIATE_TEST_SUITE_P(HiddenEffects, ArmDiagnosisCase, ::testing::ValuesIn(Ar
 struct OutsideCase {
   std::string label;
   int joint;  // 0-based, where the disturbance acts
-  std::function<double(double q, double qd)> torque;
+  testing::JointTorque torque;
 };
 
 void PrintTo(const OutsideCase& c, std::ostream* os) { *os << c.label; }
@@ -171,24 +168,14 @@ TEST_P(ArmOutsideVocabulary, ComesOutUnexplainedOnItsJoint) {
   const OutsideCase& c = GetParam();
   const ArmModel nominal = testing::RrrWith("");
   testing::ArmRecording noise;
-  noise.disturbance = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-    Eigen::VectorXd d = Eigen::VectorXd::Zero(q.size());
-    d[c.joint] = c.torque(q[c.joint], qd[c.joint]);
-    return d;
-  };
+  noise.disturbance = testing::OnJoint(c.joint, c.torque);
   const std::vector<ArmLog> logs = {testing::RecordArmPlant(nominal, nominal, 1, 20, noise),
                                     testing::RecordArmPlant(nominal, nominal, 2, 20, noise)};
   const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
   SCOPED_TRACE(FormatDiagnosisTable(report));
   if (std::getenv("TWINSIM_PRINT_DIAGNOSIS")) std::cout << FormatDiagnosisTable(report);
-  std::vector<ArmLog> known = logs;
-  for (ArmLog& log : known) {
-    for (int r = 0; r < log.rows(); ++r) log.tau(r, c.joint) += c.torque(log.q(r, c.joint), log.qd(r, c.joint));
-  }
-  DiagnosisOptions none;
-  none.max_effects = 0;
-  none.check_adequacy = false;
-  const double floor = DiagnoseArm(nominal, known, none).gap_before;
+  const double floor =
+      DiagnoseArm(nominal, testing::WithTorqueAddedBack(logs, c.joint, c.torque), testing::GapsOnly()).gap_before;
   testing::RecordDiagnosis(report, floor);
   const double closed = (report.gap_before - report.gap_after) / (report.gap_before - floor);
   ASSERT_EQ(report.adequacy.size(), 3u);
@@ -236,11 +223,8 @@ TEST(ArmDiagnosis, RefitModelAbsorbsAPayloadIntoTheLinkParameters) {
   const DiagnosisReport report = DiagnoseArm(nominal, logs, options, &repaired);
   SCOPED_TRACE(FormatDiagnosisTable(report));
   if (std::getenv("TWINSIM_PRINT_DIAGNOSIS")) std::cout << FormatDiagnosisTable(report);
-  DiagnosisOptions none;
-  none.max_effects = 0;
-  none.check_adequacy = false;
-  const double floor = DiagnoseArm(plant, logs, none).gap_before;
-  const double given = DiagnoseArm(nominal, logs, none).gap_before;
+  const double floor = DiagnoseArm(plant, logs, testing::GapsOnly()).gap_before;
+  const double given = DiagnoseArm(nominal, logs, testing::GapsOnly()).gap_before;
   testing::RecordDiagnosis(report, floor);
   RecordProperty("refit_gap", FormatParameter(report.refit_gap));
   EXPECT_DOUBLE_EQ(report.gap_before, given);  // the gap before is the given model's

@@ -57,7 +57,7 @@ struct Hidden {
   bool outside = false;      // an effect outside the vocabulary
   double bandwidth = 10;     // arm: the plant's controller
   bool log_velocities = false;
-  std::function<double(double, double)> torque;  // arm disturbance on `joint`
+  testing::JointTorque torque;  // arm disturbance on `joint`
   std::string omni_robot;    // omni: a top-level block (a weak motor)
 };
 
@@ -208,9 +208,7 @@ class DiagnoseStudy : public ::testing::TestWithParam<StudyRun> {};
 TEST_P(DiagnoseStudy, DISABLED_Run) {
   const StudyRun& run = GetParam();
   const auto start = std::chrono::steady_clock::now();
-  DiagnosisOptions none;
-  none.max_effects = 0;
-  none.check_adequacy = false;
+  const DiagnosisOptions none = testing::GapsOnly();
   if (run.robot == "arm") {
     const Hidden h = DrawArm(run.kind, run.seed);
     const ArmModel nominal = testing::RrrWith("");
@@ -218,24 +216,14 @@ TEST_P(DiagnoseStudy, DISABLED_Run) {
     testing::ArmRecording how;
     how.bandwidth = h.bandwidth;
     how.log_velocities = h.log_velocities;
-    if (h.torque) {
-      how.disturbance = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-        Eigen::VectorXd d = Eigen::VectorXd::Zero(q.size());
-        d[h.joint] = h.torque(q[h.joint], qd[h.joint]);
-        return d;
-      };
-    }
+    if (h.torque) how.disturbance = testing::OnJoint(h.joint, h.torque);
     const std::uint64_t s = 2 * static_cast<std::uint64_t>(run.seed);
     const std::vector<ArmLog> logs = {testing::RecordArmPlant(plant, nominal, s + 1, 20, how),
                                       testing::RecordArmPlant(plant, nominal, s + 2, 20, how)};
     const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
     double plant_gap;
     if (h.torque) {
-      std::vector<ArmLog> known = logs;  // the disturbance added back: what a perfect model explains
-      for (ArmLog& log : known) {
-        for (int r = 0; r < log.rows(); ++r) log.tau(r, h.joint) += h.torque(log.q(r, h.joint), log.qd(r, h.joint));
-      }
-      plant_gap = DiagnoseArm(nominal, known, none).gap_before;
+      plant_gap = DiagnoseArm(nominal, testing::WithTorqueAddedBack(logs, h.joint, h.torque), none).gap_before;
     } else {
       plant_gap = DiagnoseArm(plant, logs, none).gap_before;
     }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "diagnosis/diagnosis.h"
 #include "robots/arm/arm_log.h"
@@ -20,6 +21,16 @@ namespace testing {
 // properties of the running test (--gtest_output=xml), from which docs/diagnose.md's
 // counts and confusion table are made.
 void RecordDiagnosis(const DiagnosisReport& report, double floor);
+
+// `options` for a model's own gaps only: no effect added, no adequacy check (the gap a
+// plant reaches on its own logs, the floor each case is measured against).
+DiagnosisOptions GapsOnly(DiagnosisOptions options = {});
+
+// A torque on one joint (a function of that joint's q and qd), and the logs with it
+// added back to the logged command: what a model that knew it would explain.
+using JointTorque = std::function<double(double q, double qd)>;
+std::function<Eigen::VectorXd(const Eigen::VectorXd& q, const Eigen::VectorXd& qd)> OnJoint(int joint, JointTorque torque);
+std::vector<ArmLog> WithTorqueAddedBack(std::vector<ArmLog> logs, int joint, const JointTorque& torque);
 
 struct ArmRecording {
   double counts_per_rev = 2e5;  // encoder counts per joint revolution (q quantised); 0: exact

@@ -26,6 +26,27 @@ void RecordDiagnosis(const DiagnosisReport& report, double floor) {
                                               FormatParameter(report.gap_after) + ", plant " + FormatParameter(floor));
 }
 
+DiagnosisOptions GapsOnly(DiagnosisOptions options) {
+  options.max_effects = 0;
+  options.check_adequacy = false;
+  return options;
+}
+
+std::function<Eigen::VectorXd(const Eigen::VectorXd& q, const Eigen::VectorXd& qd)> OnJoint(int joint, JointTorque torque) {
+  return [joint, torque = std::move(torque)](const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    Eigen::VectorXd d = Eigen::VectorXd::Zero(q.size());
+    d[joint] = torque(q[joint], qd[joint]);
+    return d;
+  };
+}
+
+std::vector<ArmLog> WithTorqueAddedBack(std::vector<ArmLog> logs, int joint, const JointTorque& torque) {
+  for (ArmLog& log : logs) {
+    for (int r = 0; r < log.rows(); ++r) log.tau(r, joint) += torque(log.q(r, joint), log.qd(r, joint));
+  }
+  return logs;
+}
+
 ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t seed, double seconds,
                       const ArmRecording& noise) {
   TrainingTrialOptions options;
