@@ -146,7 +146,7 @@ ArmReference RandomStopAndGoReference(const ArmModel& model, const TrainingTrial
 }
 
 ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
-                      const TrainingTrialOptions& options, std::uint64_t seed) {
+                      const TrainingTrialOptions& options, std::uint64_t seed, Eigen::MatrixXd* received) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("TrainingTrialOptions: " + why);
   const int n = hat.dof();
@@ -172,6 +172,9 @@ ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmRefer
   Eigen::VectorXd dither = Eigen::VectorXd::Zero(n);
   Eigen::Index k = 0;
   std::vector<Eigen::VectorXd> sent;  // commands before the disturbance
+  // A copy per trial: a disturbance with state (a closure) starts every trial afresh.
+  const std::function<Eigen::VectorXd(const Eigen::VectorXd&, const Eigen::VectorXd&)> disturbance =
+      options.disturbance;
   const ArmController controller = [&](double, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
     const Eigen::Index ahead = std::min<Eigen::Index>(k + preview, samples - 1);
     if (k % options.dither_hold == 0)
@@ -183,9 +186,9 @@ ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmRefer
     ++k;
     tau += dither;
     tau = tau.cwiseMax(-limit).cwiseMin(limit);
-    if (!options.disturbance) return tau;
+    if (!disturbance) return tau;
     sent.push_back(tau);  // what the log shows
-    return Eigen::VectorXd(tau + options.disturbance(q, qd));
+    return Eigen::VectorXd(tau + disturbance(q, qd));
   };
   const ArmTrajectory run = sim.Run(static_cast<int>(samples), controller);
 
@@ -195,6 +198,7 @@ ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmRefer
   log.q = run.q;
   log.qd = run.qd;
   log.tau = run.command;
+  if (received) *received = run.command;
   if (options.disturbance) {
     for (Eigen::Index i = 0; i < log.tau.rows() && i < static_cast<Eigen::Index>(sent.size()); ++i) {
       log.tau.row(i) = sent[static_cast<std::size_t>(i)].transpose();

@@ -45,7 +45,8 @@ struct TrainingTrialOptions {
   double stop_and_go = 0.5;       // share of RecordTrainingTrials' trials that are stop-and-go
   // A torque the plant receives beyond the command, which the log does not show: an
   // effect outside every model (cogging, a spring) for tests of what a diagnosis cannot
-  // name. Empty: none.
+  // name. Called once per control sample, in order; a closure with state (backlash)
+  // is copied afresh for every trial. Empty: none.
   std::function<Eigen::VectorXd(const Eigen::VectorXd& q, const Eigen::VectorXd& qd)> disturbance;
   double stroke_speed = 1.5;      // rad/s, stop-and-go peak joint speed (the fastest joint)
   double stroke_acceleration = 8; // rad/s^2, stop-and-go acceleration (the fastest joint)
@@ -74,10 +75,11 @@ ArmReference RandomStopAndGoReference(const ArmModel& model, const TrainingTrial
 // Runs the computed-torque controller over `hat` with the dither on `plant` along
 // `reference` from its first sample, and returns the log a controller would write:
 // t, q, qd (sampled), tau (the command sent at t, dither included), qref; path "".
-// Throws InputError for invalid options, std::invalid_argument for mismatched shapes,
-// CheckFailed when the arm runs away.
+// Where `received` is given, it gets the torque the plant received at each sample (the
+// command plus options.disturbance; rows x dof). Throws InputError for invalid options,
+// std::invalid_argument for mismatched shapes, CheckFailed when the arm runs away.
 ArmLog RecordArmTrial(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
-                      const TrainingTrialOptions& options, std::uint64_t seed);
+                      const TrainingTrialOptions& options, std::uint64_t seed, Eigen::MatrixXd* received = nullptr);
 
 // `count` trials with seeds first_seed, first_seed + 1, ...: the first
 // round(count * (1 - stop_and_go)) multi-sine (RandomTrainingTrajectory), the rest

@@ -146,6 +146,10 @@ struct ChannelAdequacy {
   double band_low = 0, band_high = 0;
   // The test RMS stands more than the problem's FloorRatio times the noise above it.
   bool above_floor = false;
+  // The learned correction's drop counts: significant after Holm's correction over the
+  // channels, at least the minimum improvement, and at least the problem's LearnedFloor()
+  // times the noise in RMS.
+  bool learned_significant = false;
   // Something is left that is not noise: a significant predictable part (the learned
   // residual, lowering the RMS by at least the problem's LearnedFloor() times the
   // noise), or a residual far above the floor (docs/diagnose.md).

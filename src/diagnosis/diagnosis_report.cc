@@ -85,21 +85,27 @@ std::string DiagnosisVerdict(const DiagnosisReport& r) {
   for (std::size_t k = 0; k < flagged_channels.size() && k < 3; ++k) {
     const ChannelAdequacy& a = *flagged_channels[k];
     unexplained += unexplained.empty() ? " Unexplained: " : "; ";
-    if (a.learned_reduction >= r.min_improvement && a.learned_p <= r.alpha) {
+    const std::string band = a.band_high <= 0 ? ""
+                             : a.band_high > a.band_low
+                                 ? ", mostly between " + Num(a.band_low, "%.2g") + " and " + Num(a.band_high, "%.2g") + " Hz"
+                                 : ", mostly near " + Num(a.band_low, "%.2g") + " Hz";
+    const double ratio = a.rms / a.noise;
+    const std::string stays = "on " + a.channel + " the residual stays at " + Num(a.rms) + ", " +
+                              (ratio < 1000 ? Num(ratio, "%.1f") + " times its noise (" + Num(a.noise) + ")"
+                                            : "far above a noise floor the log hardly shows (a smoothed signal?)");
+    if (a.learned_significant) {
       unexplained += "on " + a.channel + " a learned residual predicts " + Num(100 * a.learned_reduction, "%.0f") +
                      " % of what is left (RMS " + Num(a.rms) + " -> " + Num(a.learned_rms) + ", noise about " +
-                     Num(a.noise) + ")";
-      if (a.band_high > 0) {
-        unexplained += a.band_high > a.band_low ? ", mostly between " + Num(a.band_low, "%.2g") + " and " + Num(a.band_high, "%.2g") + " Hz"
-                                                : ", mostly near " + Num(a.band_low, "%.2g") + " Hz";
-      }
+                     Num(a.noise) + ")" + band;
+    } else if (a.learned_reduction >= r.min_improvement && a.learned_p <= r.alpha) {
+      // Predictable on this channel alone, but not once every channel's test is counted
+      // (Holm), or by less than the learned floor: flagged for its size, not its pattern.
+      unexplained += stays + "; a learned residual predicts " + Num(100 * a.learned_reduction, "%.0f") +
+                     " % of it (to " + Num(a.learned_rms) + "), but that is not significant over all " +
+                     std::to_string(r.adequacy.size()) + " channels or is within the learned floor" + band;
     } else {
-      const double ratio = a.rms / a.noise;
-      unexplained += "on " + a.channel + " the residual stays at " + Num(a.rms) + ", " +
-                     (ratio < 1000 ? Num(ratio, "%.1f") + " times its noise (" + Num(a.noise) + ")"
-                                   : "far above a noise floor the log hardly shows (a smoothed signal?)") +
-                     ", and no learned residual of the motion predicts it (a few events, or what the logs' inputs do "
-                     "not show)";
+      unexplained += stays + ", and no learned residual of the motion predicts it (a few events, or what the logs' inputs do "
+                             "not show)";
     }
     if (!a.inputs.empty() && std::abs(a.inputs.front().peak) > a.inputs.front().bound) {
       unexplained += ", correlating most with " + a.inputs.front().input + " (r = " + Num(a.inputs.front().peak, "%.2f") + ")";
@@ -257,6 +263,7 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["noise"] = a.noise;
     x["unexplained"] = a.unexplained;
     x["above_floor"] = a.above_floor;
+    x["learned_significant"] = a.learned_significant;
     x["learned_rms"] = a.learned_rms;
     x["learned_reduction"] = a.learned_reduction;
     x["learned_p"] = std::isfinite(a.learned_p) ? ordered_json(a.learned_p) : ordered_json(nullptr);

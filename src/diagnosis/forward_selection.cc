@@ -490,9 +490,9 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   for (std::size_t c = 0; c < report->adequacy.size(); ++c) {
     ChannelAdequacy& a = report->adequacy[c];
     a.above_floor = a.noise > 0 && a.rms > problem.FloorRatio() * a.noise;
-    const bool learned = significant[c] && a.learned_reduction >= options.min_improvement &&
-                         a.rms - a.learned_rms >= problem.LearnedFloor() * a.noise;
-    a.unexplained = learned || a.above_floor;
+    a.learned_significant = significant[c] && a.learned_reduction >= options.min_improvement &&
+                            a.rms - a.learned_rms >= problem.LearnedFloor() * a.noise;
+    a.unexplained = a.learned_significant || a.above_floor;
   }
   LearnedYardstick& y = report->yardstick;
   y.learner = repaired.learner;

@@ -45,6 +45,11 @@ std::string OpenFinding(const std::string& label) {
     return "issue 28: time_delay (joint 2) removes 21.5 % of the selection rows' squared error at t = 3, short of "
            "Holm's level over 22 candidates with the long-run standard error (two 20 s logs)";
   }
+  if (label == "backlash_joint1") {
+    return "issue 28: backlash is not seen. Joint 1's test RMS is 0.86 N·m, 3.0 times its noise (flexible joints with "
+           "nothing missing reach 3.4); the memoryless learned residual removes 10 % (p 0.10) of bursts that follow each "
+           "reversal; torque_saturation is named and closes 29 % (nominal 0.573, plant 0.337)";
+  }
   if (label == "payload_and_offset_joint2") {
     return "issue 28: the payload (0.64 kg at x = 0.42 m) absorbs the offset on the selection rows; round 2 finds no "
            "offset on joint 2 (the test rows' gap still closes 96 %)";
@@ -153,7 +158,7 @@ INSTANTIATE_TEST_SUITE_P(HiddenEffects, ArmDiagnosisCase, ::testing::ValuesIn(Ar
 // no model of the vocabulary can express. Each must come out as unexplained on its
 // joint, or as vocabulary effects that close at least 70 % of the way to the plant's
 // own gap; no effect may be named that closes less. The plant's gap: the nominal model
-// on the same logs with the disturbance added back to the logged command.
+// on the same logs with the torque the plant received in place of the command.
 struct OutsideCase {
   std::string label;
   int joint;  // 0-based, where the disturbance acts
@@ -166,16 +171,17 @@ class ArmOutsideVocabulary : public ::testing::TestWithParam<OutsideCase> {};
 
 TEST_P(ArmOutsideVocabulary, ComesOutUnexplainedOnItsJoint) {
   const OutsideCase& c = GetParam();
+  if (!OpenFinding(c.label).empty()) GTEST_SKIP() << OpenFinding(c.label);
   const ArmModel nominal = testing::RrrWith("");
   testing::ArmRecording noise;
   noise.disturbance = testing::OnJoint(c.joint, c.torque);
-  const std::vector<ArmLog> logs = {testing::RecordArmPlant(nominal, nominal, 1, 20, noise),
-                                    testing::RecordArmPlant(nominal, nominal, 2, 20, noise)};
+  std::vector<ArmLog> received(2);
+  const std::vector<ArmLog> logs = {testing::RecordArmPlant(nominal, nominal, 1, 20, noise, &received[0]),
+                                    testing::RecordArmPlant(nominal, nominal, 2, 20, noise, &received[1])};
   const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
   SCOPED_TRACE(FormatDiagnosisTable(report));
   if (std::getenv("TWINSIM_PRINT_DIAGNOSIS")) std::cout << FormatDiagnosisTable(report);
-  const double floor =
-      DiagnoseArm(nominal, testing::WithTorqueAddedBack(logs, c.joint, c.torque), testing::GapsOnly()).gap_before;
+  const double floor = DiagnoseArm(nominal, received, testing::GapsOnly()).gap_before;
   testing::RecordDiagnosis(report, floor);
   const double closed = (report.gap_before - report.gap_after) / (report.gap_before - floor);
   ASSERT_EQ(report.adequacy.size(), 3u);
@@ -205,7 +211,10 @@ INSTANTIATE_TEST_SUITE_P(
         OutsideCase{"cogging_joint1", 0, [](double q, double) { return 0.4 * std::sin(20 * q); }},
         // A gravity-compensation spring on the shoulder, k 4 N·m/rad about 0.4 rad. Before
         // the boosted learner it went unflagged in 2 of 5 study runs (docs/diagnose.md).
-        OutsideCase{"spring_joint2", 1, [](double q, double) { return -4.0 * (q - 0.4); }}),
+        OutsideCase{"spring_joint2", 1, [](double q, double) { return -4.0 * (q - 0.4); }},
+        // Backlash: a 0.15 kg m^2 part with 0.02 rad of play either way on the base
+        // joint, striking 15 Hz stops at each reversal (state and a dead band).
+        OutsideCase{"backlash_joint1", 0, testing::Backlash(0.15, 0.02, 15, 0.2, 0.001)}),
     [](const ::testing::TestParamInfo<OutsideCase>& info) { return info.param.label; });
 
 // --refit-model: the model's own parameters re-identified on the fit blocks first. A

@@ -26,11 +26,20 @@ void RecordDiagnosis(const DiagnosisReport& report, double floor);
 // plant reaches on its own logs, the floor each case is measured against).
 DiagnosisOptions GapsOnly(DiagnosisOptions options = {});
 
-// A torque on one joint (a function of that joint's q and qd), and the logs with it
-// added back to the logged command: what a model that knew it would explain.
+// A torque on one joint (a function of that joint's q and qd, called once per control
+// sample in order, so it may carry state).
 using JointTorque = std::function<double(double q, double qd)>;
 std::function<Eigen::VectorXd(const Eigen::VectorXd& q, const Eigen::VectorXd& qd)> OnJoint(int joint, JointTorque torque);
-std::vector<ArmLog> WithTorqueAddedBack(std::vector<ArmLog> logs, int joint, const JointTorque& torque);
+
+// Backlash: a loose part of `inertia` (kg m^2) riding on the joint with `play` rad of
+// free travel either way, whose stops are springs of `frequency` Hz against the part
+// (stiffness inertia (2 pi frequency)^2) with `damping_ratio`. While the joint turns
+// steadily the part is carried against one stop (extra inertia); when the joint
+// reverses it travels freely across the gap and strikes the other stop. The torque on
+// the joint, averaged over each `sample_time`, integrated in 20 sub-steps from the
+// part resting mid-gap at the first call. Outside the vocabulary: no effect carries
+// state or a dead band.
+JointTorque Backlash(double inertia, double play, double frequency, double damping_ratio, double sample_time);
 
 struct ArmRecording {
   double counts_per_rev = 2e5;  // encoder counts per joint revolution (q quantised); 0: exact
@@ -45,8 +54,10 @@ struct ArmRecording {
 
 // A stop-and-go (even seeds) or multi-sine (odd seeds) tracking run of `plant` under
 // computed torque over `hat` with a torque dither, as a real arm's controller logs it.
+// Where `as_received` is given, it gets the same log (same noise) with the torque the
+// plant received, the disturbance included: what a model that knew it would explain.
 ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t seed, double seconds,
-                      const ArmRecording& noise = {});
+                      const ArmRecording& noise = {}, ArmLog* as_received = nullptr);
 
 // The RRR arm of seed 001 (models/rrr.yaml) with `effects` (YAML list items, e.g.
 // "{name: viscous_friction, joint: 2, b: 0.5}") added.

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -40,15 +41,37 @@ std::function<Eigen::VectorXd(const Eigen::VectorXd& q, const Eigen::VectorXd& q
   };
 }
 
-std::vector<ArmLog> WithTorqueAddedBack(std::vector<ArmLog> logs, int joint, const JointTorque& torque) {
-  for (ArmLog& log : logs) {
-    for (int r = 0; r < log.rows(); ++r) log.tau(r, joint) += torque(log.q(r, joint), log.qd(r, joint));
-  }
-  return logs;
+JointTorque Backlash(double inertia, double play, double frequency, double damping_ratio, double sample_time) {
+  constexpr int kSubsteps = 20;
+  const double stiffness = inertia * std::pow(2 * kPi * frequency, 2);
+  const double damping = 2 * damping_ratio * std::sqrt(stiffness * inertia);
+  const double h = sample_time / kSubsteps;
+  bool started = false;
+  double p = 0, pd = 0;  // the part's angle and speed
+  return [=](double q, double qd) mutable {
+    if (!started) {
+      p = q;
+      pd = qd;
+      started = true;
+    }
+    double mean = 0;
+    for (int s = 0; s < kSubsteps; ++s) {
+      const double gap = q - p;  // the joint moves on at qd within the sample
+      const double pressed = gap - std::clamp(gap, -play, play);
+      double on_part = 0;  // a stop pushes, never pulls
+      if (pressed > 0) on_part = std::max(0.0, stiffness * pressed + damping * (qd - pd));
+      if (pressed < 0) on_part = std::min(0.0, stiffness * pressed + damping * (qd - pd));
+      pd += h * on_part / inertia;  // semi-implicit Euler
+      p += h * pd;
+      q += h * qd;
+      mean -= on_part / kSubsteps;  // what the part pushes back on the joint
+    }
+    return mean;
+  };
 }
 
 ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t seed, double seconds,
-                      const ArmRecording& noise) {
+                      const ArmRecording& noise, ArmLog* as_received) {
   TrainingTrialOptions options;
   options.seconds = seconds;
   options.bandwidth = noise.bandwidth;
@@ -57,19 +80,28 @@ ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t 
   const ArmReference reference = seed % 2 == 0 ? RandomStopAndGoReference(hat, options, seed)
                                                : SampledReference(RandomTrainingTrajectory(hat, options, seed),
                                                                   hat.sample_time, seconds);
-  ArmLog log = RecordArmTrial(plant, hat, reference, options, seed);
+  Eigen::MatrixXd received;
+  ArmLog log = RecordArmTrial(plant, hat, reference, options, seed, &received);
   std::mt19937_64 rng(seed * 7919 + 17);
   std::normal_distribution<double> gauss(0.0, 1.0);
   const double count = noise.counts_per_rev > 0 ? 2 * kPi / noise.counts_per_rev : 0;
   for (int r = 0; r < log.rows(); ++r) {
     for (int j = 0; j < log.dof; ++j) {
       if (count > 0) log.q(r, j) = std::round(log.q(r, j) / count) * count;
-      log.tau(r, j) += noise.torque_noise * gauss(rng);
+      const double e = noise.torque_noise * gauss(rng);
+      log.tau(r, j) += e;
+      received(r, j) += e;
     }
   }
   ArmLogOptions read;
   read.cutoff_hz = noise.cutoff_hz;
-  return ParseArmLog(FormatArmLog(log, noise.log_velocities), "plant_" + std::to_string(seed) + ".csv", read);
+  const std::string name = "plant_" + std::to_string(seed) + ".csv";
+  if (as_received) {
+    ArmLog with = log;
+    with.tau = received;
+    *as_received = ParseArmLog(FormatArmLog(with, noise.log_velocities), name, read);
+  }
+  return ParseArmLog(FormatArmLog(log, noise.log_velocities), name, read);
 }
 
 ArmModel RrrWith(const std::string& effects_yaml) {
