@@ -222,6 +222,48 @@ IlcBodePlot IlcCriterionPlots(const ClosedLoopFrf& frf, const LearningFilter& fi
   return plots;
 }
 
+std::string FormatIlcSafeguardCsv(const IlcResult& result) {
+  std::string csv = "trial,joint,rms,best_rms,best_trial,q_cutoff\n";
+  for (const IlcSafeguardEvent& e : result.safeguard) {
+    csv += std::to_string(e.trial) + "," + std::to_string(e.joint + 1) + "," + Num(e.rms) + "," + Num(e.best_rms) + "," +
+           std::to_string(e.best_trial) + "," + Num(e.cutoff) + "\n";
+  }
+  return csv;
+}
+
+std::string IlcSafeguardSummary(const IlcResult& result, const IlcOptions& options) {
+  const int last = static_cast<int>(result.error_rms.size()) - 1;
+  std::ostringstream s;
+  s.precision(3);
+  if (options.safeguard.growth <= 0) {
+    s << "Off (ilc.safeguard: off): nothing watched the trials.";
+  } else {
+    s << "After each trial every joint's RMS error is compared with its best so far; above " << options.safeguard.growth
+      << " times it, the joint's feedforward goes back to that of its best trial and its Q cut-off is multiplied by "
+      << options.safeguard.cutoff_factor << " (below " << options.safeguard.min_cutoff
+      << " Hz, or with no Q, the joint stops learning). ";
+    if (result.safeguard.empty()) {
+      s << "It never acted.";
+    } else {
+      s << "It acted " << result.safeguard.size() << " time(s); Q's cut-offs at the end:";
+      for (Eigen::Index j = 0; j < result.final_cutoffs.size(); ++j) {
+        s << (j ? ", " : " ") << "joint " << j + 1 << " "
+          << (result.final_cutoffs[j] > 0 ? Num(result.final_cutoffs[j]) + " Hz" : std::string("stopped"));
+      }
+      s << ".";
+    }
+  }
+  s << " Best trial " << result.best_trial << " (the worst joint's error relative to trial 0 lowest), its feedforward in "
+    << "best_feedforward.csv; the last trial (" << last << ") stands at";
+  for (Eigen::Index j = 0; j < result.error_rms.front().size(); ++j) {
+    double best = INFINITY;
+    for (const Eigen::VectorXd& r : result.error_rms) best = std::min(best, r[j]);
+    s << (j ? "," : "") << " " << result.error_rms[static_cast<std::size_t>(last)][j] / best << "x";
+  }
+  s << " each joint's best.";
+  return s.str();
+}
+
 PathPlot IlcToolPathPlot(const IlcResult& result, const ArmModel& plant, const Eigen::Vector3d& tool,
                          const std::string& title) {
   PathPlot path = ToolPathPlot(result.first, plant, tool, title);
@@ -308,6 +350,17 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
     html << "</tr>\n";
   }
   html << "</table>\n";
+  html << "<h2>4. Safeguard</h2>\n<p>" << HtmlEscape(IlcSafeguardSummary(result, o)) << "</p>\n";
+  if (!result.safeguard.empty()) {
+    html << "<table><tr><th>trial</th><th>joint</th><th>RMS [mrad]</th><th>its best [mrad]</th><th>back to trial</th>"
+            "<th>Q cut-off now [Hz]</th></tr>\n";
+    for (const IlcSafeguardEvent& e : result.safeguard) {
+      html << "<tr><td>" << e.trial << "</td><td>" << e.joint + 1 << "</td><td>" << Num(1e3 * e.rms) << "</td><td>"
+           << Num(1e3 * e.best_rms) << "</td><td>" << e.best_trial << "</td><td>"
+           << (e.cutoff > 0 ? Num(e.cutoff) : std::string("stopped learning")) << "</td></tr>\n";
+    }
+    html << "</table>\n";
+  }
   for (const auto& [file, png] : images) {
     if (file.rfind("bode", 0) == 0 || file.rfind("criterion", 0) == 0) continue;
     html << "<p><img src=\"data:image/png;base64," << Base64Encode(png) << "\" alt=\"" << HtmlEscape(file)
@@ -326,6 +379,8 @@ std::vector<std::pair<std::string, std::string>> MakeIlcReport(const IlcReportSe
       {"frf.csv", FormatIlcFrfCsv(frf, filters)},
       {"filters.csv", FormatIlcFiltersCsv(frf, filters, setup.options)},
       {"feedforward.csv", JointColumnsCsv(t, {"f"}, {&result.feedforward})},
+      {"best_feedforward.csv", JointColumnsCsv(t, {"f"}, {&result.best_feedforward})},
+      {"safeguard.csv", FormatIlcSafeguardCsv(result)},
   };
   std::vector<std::pair<std::string, std::string>> images;  // file, PNG bytes
   if (renderer) {

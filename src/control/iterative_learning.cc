@@ -274,6 +274,12 @@ bool IlcOptions::IsValid(double sample_time, std::string* why) const {
                   std::to_string(0.5 / sample_time) + " Hz");
     }
   }
+  if (!(safeguard.growth == 0 || (std::isfinite(safeguard.growth) && safeguard.growth > 1)))
+    return fail("safeguard.growth must be > 1 (or 0: no safeguard)");
+  if (!(safeguard.cutoff_factor > 0 && safeguard.cutoff_factor < 1)) return fail("safeguard.cutoff_factor must lie in (0, 1)");
+  if (!(std::isfinite(safeguard.min_cutoff) && safeguard.min_cutoff > 0)) return fail("safeguard.min_cutoff must be > 0");
+  if (safeguard.patience < 1) return fail("safeguard.patience must be >= 1");
+  if (safeguard.lowerings < 0) return fail("safeguard.lowerings must be >= 0");
   return true;
 }
 
@@ -391,8 +397,21 @@ IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference&
   if (!options.IsValid(plant.sample_time, &why)) throw InputError("IlcOptions: " + why);
   if (static_cast<int>(filters.size()) != plant.dof()) throw std::invalid_argument("RunIlc: one learning filter per joint needed");
   const auto start = std::chrono::steady_clock::now();
+  const int n = plant.dof();
   IlcResult result;
-  Eigen::MatrixXd f = Eigen::MatrixXd::Zero(reference.q.rows(), plant.dof());
+  Eigen::MatrixXd f = Eigen::MatrixXd::Zero(reference.q.rows(), n);
+  // The safeguard's state per joint: the best RMS error so far, the trial and the
+  // feedforward that gave it, Q's cutoff now, and whether it still learns.
+  IlcOptions now = options;
+  now.q_cutoffs.resize(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) now.q_cutoffs[static_cast<std::size_t>(j)] = options.Cutoff(j);
+  Eigen::VectorXd best_rms = Eigen::VectorXd::Constant(n, INFINITY);
+  std::vector<int> best_trial(static_cast<std::size_t>(n), 0);
+  Eigen::MatrixXd best_f = f;
+  std::vector<bool> learning(static_cast<std::size_t>(n), true);
+  std::vector<int> above(static_cast<std::size_t>(n), 0);  // trials in a row above growth x best
+  std::vector<int> lowered(static_cast<std::size_t>(n), 0);  // Q's cutoff lowerings so far
+  double best_relative = INFINITY;
   TrackingOptions o = tracking;
   for (int trial = 0; trial <= options.trials; ++trial) {
     o.feedforward = &f;
@@ -402,12 +421,54 @@ IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference&
     if (on_trial) on_trial(trial, run);
     const Eigen::MatrixXd error = reference.q - run.q;
     if (trial == 0) result.first = run;
+    const double relative =
+        (run.error_rms.array() / result.error_rms.front().array().max(1e-300)).maxCoeff();
+    if (relative < best_relative) {
+      best_relative = relative;
+      result.best_trial = trial;
+      result.best_feedforward = f;
+    }
+    // Which joints back off: their error grew past `growth` times their best.
+    std::vector<bool> back_off(static_cast<std::size_t>(n), false);
+    for (int j = 0; j < n; ++j) {
+      const auto js = static_cast<std::size_t>(j);
+      if (run.error_rms[j] < best_rms[j]) {
+        best_rms[j] = run.error_rms[j];
+        best_trial[js] = trial;
+        best_f.col(j) = f.col(j);
+        above[js] = 0;
+      } else if (!(options.safeguard.growth > 0 && learning[js] &&
+                   run.error_rms[j] > options.safeguard.growth * best_rms[j])) {
+        above[js] = 0;
+      } else if (++above[js] >= options.safeguard.patience) {
+        above[js] = 0;
+        back_off[js] = true;
+        IlcSafeguardEvent event{trial, j, run.error_rms[j], best_rms[j], best_trial[js], 0};
+        const double lower = now.q_cutoffs[js] * options.safeguard.cutoff_factor;
+        if (options.q_order > 0 && lower >= options.safeguard.min_cutoff && lowered[js] < options.safeguard.lowerings) {
+          now.q_cutoffs[js] = event.cutoff = lower;
+          ++lowered[js];
+        } else {
+          learning[js] = false;
+        }
+        result.safeguard.push_back(event);
+      }
+    }
     if (trial == options.trials) {
       result.feedforward = f;
       result.last = std::move(run);
     } else {
-      f = IlcUpdate(f, error, filters, options, plant.sample_time);
+      f = IlcUpdate(f, error, filters, now, plant.sample_time);
+      for (int j = 0; j < n; ++j) {
+        const auto js = static_cast<std::size_t>(j);
+        if (back_off[js] || !learning[js]) f.col(j) = best_f.col(j);  // its best trial's, replayed
+      }
     }
+  }
+  result.final_cutoffs.resize(n);
+  for (int j = 0; j < n; ++j) {
+    const auto js = static_cast<std::size_t>(j);
+    result.final_cutoffs[j] = learning[js] ? now.q_cutoffs[js] : 0;
   }
   result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -203,6 +203,24 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
       m.Error("q_cutoff", msg.str());
     }
   }
+  const bool has_guard = m.Has("safeguard");
+  const YAML::Node guard = has_guard ? m.Child("safeguard") : YAML::Node();
+  if (has_guard && guard.IsScalar() && guard.Scalar() == "off") {
+    o.safeguard.growth = 0;
+  } else if (has_guard) {
+    YamlMap g(guard, path, "ilc.safeguard", errors);
+    if (g.valid()) {
+      if (g.Get("growth", &o.safeguard.growth) && !(o.safeguard.growth > 1)) g.Error("growth", "must be > 1 (or the whole key `off`)");
+      if (g.Get("cutoff_factor", &o.safeguard.cutoff_factor) &&
+          !(o.safeguard.cutoff_factor > 0 && o.safeguard.cutoff_factor < 1)) {
+        g.Error("cutoff_factor", "must lie between 0 and 1 (exclusive)");
+      }
+      g.Get("min_cutoff", &o.safeguard.min_cutoff, Positive());
+      g.Get("patience", &o.safeguard.patience, InRange(1, 1000));
+      g.Get("lowerings", &o.safeguard.lowerings, InRange(0, 100));
+      g.Finish();
+    }
+  }
   if (m.Has("frf")) {
     YamlMap f(m.Child("frf"), path, "ilc.frf", errors);
     if (f.valid()) {

@@ -105,7 +105,7 @@ int RunIlcCommand(const IlcCommandOptions& options) {
 
   const int last = static_cast<int>(result.error_rms.size()) - 1;
   if (!options.quiet) {
-    std::printf("%s\n", result.BriefReport().c_str());
+    std::printf("%s\n%s\n", result.BriefReport().c_str(), IlcSafeguardSummary(result, run.options).c_str());
     files.PrintWrote();
   }
   if (result.Diverged()) {
@@ -131,7 +131,8 @@ void AddIlcCommand(CLI::App& app, int* exit_code) {
       "from the same initial state, learning f_{k+1} = Q(f_k + gain L e_k) between trials\n"
       "(the scene's `ilc:` block, docs/ilc.md). Trial 0 runs without learning.\n"
       "Writes DIR/trials.csv (trial,rms1..rmsn,max1..maxn: tracking error per joint, rad or m),\n"
-      "DIR/frf.csv, DIR/filters.csv, DIR/feedforward.csv, the plots (convergence.png,\n"
+      "DIR/frf.csv, DIR/filters.csv, DIR/feedforward.csv (the last trial's), best_feedforward.csv,\n"
+      "safeguard.csv (what the watch over the trials did), the plots (convergence.png,\n"
       "error.png, bode_joint<j>.png, path.png) and DIR/report.html (self-contained).\n"
       "Exit 1 when the learning diverged (the last trial's worst RMS error is above trial 0's).");
   cmd->add_option("scene", options->scene, "Arm scene file (YAML, docs/scenes.md)")->required();
