@@ -86,7 +86,9 @@ TEST(IlcReport, FilesInTheOrderWrittenWithoutPlotsWhenNotDrawn) {
       MakeIlcReport(setup, plant, result.first.t, DelayFrf(), {Filter()}, result, /*renderer=*/nullptr);
   std::vector<std::string> names;
   for (const auto& [name, bytes] : files) names.push_back(name);
-  EXPECT_EQ(names, (std::vector<std::string>{"trials.csv", "frf.csv", "filters.csv", "feedforward.csv", "report.html"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"trials.csv", "frf.csv", "filters.csv", "feedforward.csv",
+                                              "best_feedforward.csv", "safeguard.csv", "report.html"}));
+  EXPECT_EQ(files[5].second, "trial,joint,rms,best_rms,best_trial,q_cutoff\n");  // it never acted
   EXPECT_EQ(files[3].second, "t,f1\n" + FormatCsvNumber(0) + "," + FormatCsvNumber(0.5) + "\n" +
                                  FormatCsvNumber(0.001) + "," + FormatCsvNumber(0.5) + "\n" + FormatCsvNumber(0.002) +
                                  "," + FormatCsvNumber(0.5) + "\n");
@@ -94,6 +96,7 @@ TEST(IlcReport, FilesInTheOrderWrittenWithoutPlotsWhenNotDrawn) {
   EXPECT_NE(html.find("<h1>Iterative learning control: a&lt;b</h1>"), std::string::npos) << html;
   EXPECT_NE(html.find("<b>" + FormatCsvNumber(10) + " times smaller</b>"), std::string::npos) << html;
   EXPECT_EQ(html.find("<img"), std::string::npos);
+  EXPECT_NE(html.find("<h2>4. Safeguard</h2>"), std::string::npos) << html;
 }
 
 }  // namespace
