@@ -76,14 +76,16 @@ std::string ArmUrdf(const ArmModel& model) {
 }
 
 // The KUKA's URDF without its meshes and visual or collision geometry (MuJoCo would look
-// for the mesh files), or "" when ../shared is absent.
+// for the mesh files) and with one <origin> per joint, or "" when ../shared is absent.
 std::string KukaUrdf() {
   const std::string path = std::string(TWINSIM_SOURCE_DIR) + "/../shared/realdata/kuka_lwr4/kuka_lwr4.urdf";
   std::ifstream in(path);
   if (!in) return "";
   std::stringstream text;
   text << in.rdbuf();
-  return std::regex_replace(text.str(), std::regex("<(visual|collision)>[\\s\\S]*?</\\1>"), "");
+  const std::string bare = std::regex_replace(text.str(), std::regex("<(visual|collision)>[\\s\\S]*?</\\1>"), "");
+  // Its fixed base joint lists two <origin>s; urdfdom takes the first, MuJoCo refuses.
+  return std::regex_replace(bare, std::regex("(<origin[^>]*/>\\s*)<origin[^>]*/>"), "$1");
 }
 
 // One arm loaded on both sides from one URDF.

@@ -17,10 +17,8 @@ double Sign(double v) { return v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0; }
 // The joint's nominal friction torque (viscous and Coulomb) at qd.
 double NominalFriction(const ArmJoint& j, double qd) { return j.viscous * qd + j.coulomb * Sign(qd); }
 
-// Spatial vectors are (angular; linear), in a link's own frame about its origin
-// (Featherstone's notation). A joint's motion subspace S is its axis in the angular half
-// (revolute) or the linear half (prismatic): `Half` gives the offset of that half.
-int Half(const ArmJoint& j) { return j.type == JointType::kRevolute ? 0 : 3; }
+// Spatial vectors are (angular; linear) (Featherstone's notation): a motion (w; v_O), a
+// force (n_O; f), about a point O.
 
 // Where joint j puts its link at q: r = R_{parent <- link}, p the link's origin in the
 // parent's frame (JointTransform without the 4 x 4 product).
@@ -47,51 +45,65 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   return s;
 }
 
-// A link's spatial inertia about its frame's origin:
+// The fast algorithms work in the base frame (Featherstone's spatial vectors about the
+// base origin, base axes; RBDA section 7.3's "in absolute coordinates"): a rigid
+// link's inertia is expressed there once, an articulated or composite inertia is
+// handed to the parent by a plain sum, and no 6 x 6 inertia is ever transformed from
+// frame to frame. Per link: its pose, its joint's motion subspace S and its inertia.
+struct WorldLink {
+  Eigen::Matrix3d r;  // R_{base <- link}
+  Eigen::Vector3d p;  // m: the link frame's origin
+  Vector6d s;         // the joint's motion subspace: (a; p x a) revolute, (0; a) prismatic
+  Matrix6d inertia;   // about the base origin
+};
+
+// The spatial inertia about the base origin of a link with centre of mass c and
+// rotational inertia I_c (both in base axes):
 //   [I_c + m [c]x [c]x^T   m [c]x]
 //   [m [c]x^T              m 1   ]
-Matrix6d LinkInertia(const ArmLink& link) {
-  const Eigen::Matrix3d cx = Skew(link.com);
-  Matrix6d i;
-  i.topLeftCorner<3, 3>() = link.inertia - link.mass * cx * cx;
-  i.topRightCorner<3, 3>() = link.mass * cx;
-  i.bottomLeftCorner<3, 3>() = -link.mass * cx;
-  i.bottomRightCorner<3, 3>() = link.mass * Eigen::Matrix3d::Identity();
-  return i;
+void SetWorldInertia(const ArmLink& link, WorldLink* w) {
+  const Eigen::Matrix3d cx = Skew(w->p + w->r * link.com);
+  w->inertia.topLeftCorner<3, 3>().noalias() = w->r * link.inertia * w->r.transpose();
+  w->inertia.topLeftCorner<3, 3>().noalias() -= link.mass * cx * cx;
+  w->inertia.topRightCorner<3, 3>() = link.mass * cx;
+  w->inertia.bottomLeftCorner<3, 3>() = -link.mass * cx;
+  w->inertia.bottomRightCorner<3, 3>() = link.mass * Eigen::Matrix3d::Identity();
 }
 
-// X^T I X for the motion transform X from parent to link: a symmetric 6 x 6 inertia
-// (rigid or articulated) expressed in the parent's frame. In 3 x 3 blocks, rotated
-// first and then shifted by p, about a third of the work of two 6 x 6 products.
-Matrix6d InertiaToParent(const Matrix6d& in, const Placement& x) {
-  const Eigen::Matrix3d& r = x.r;
-  const Eigen::Matrix3d a = r * in.topLeftCorner<3, 3>() * r.transpose();
-  const Eigen::Matrix3d b = r * in.topRightCorner<3, 3>() * r.transpose();
-  const Eigen::Matrix3d c = r * in.bottomRightCorner<3, 3>() * r.transpose();
-  const Eigen::Matrix3d px = Skew(x.p);
-  const Eigen::Matrix3d pxc = px * c;
-  const Eigen::Matrix3d pxbt = px * b.transpose();
-  Matrix6d out;
-  out.topLeftCorner<3, 3>() = a + pxbt + pxbt.transpose() - pxc * px;
-  out.topRightCorner<3, 3>() = b + pxc;
-  out.bottomLeftCorner<3, 3>() = out.topRightCorner<3, 3>().transpose();
-  out.bottomRightCorner<3, 3>() = c;
+// Poses, motion subspaces and inertias of every link at q (forward kinematics).
+template <typename Links>
+void PlaceLinks(const ArmModel& model, const Eigen::VectorXd& q, Links* links) {
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int i = 0; i < model.dof(); ++i) {
+    const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
+    WorldLink& w = (*links)[static_cast<std::size_t>(i)];
+    const Placement x = Place(j, q[i]);
+    w.p = p + r * x.p;
+    w.r.noalias() = r * x.r;
+    const Eigen::Vector3d axis = w.r * j.axis;
+    if (j.type == JointType::kRevolute) {
+      w.s << axis, w.p.cross(axis);
+    } else {
+      w.s << Eigen::Vector3d::Zero(), axis;
+    }
+    SetWorldInertia(j.child, &w);
+    r = w.r;
+    p = w.p;
+  }
+}
+
+// v x m for spatial motions (crm): (w x m_w; w x m_v + v x m_w).
+Vector6d CrossMotion(const Vector6d& v, const Vector6d& m) {
+  Vector6d out;
+  out << v.head<3>().cross(m.head<3>()), v.head<3>().cross(m.tail<3>()) + v.tail<3>().cross(m.head<3>());
   return out;
 }
 
-// X^T f: a force (moment; force) on the link, in the parent's frame about its origin.
-Vector6d ForceToParent(const Vector6d& f, const Placement& x) {
+// v x* f for a spatial force (crf): (w x n + v x f; w x f).
+Vector6d CrossForce(const Vector6d& v, const Vector6d& f) {
   Vector6d out;
-  out.tail<3>() = x.r * f.tail<3>();
-  out.head<3>() = x.r * f.head<3>() + x.p.cross(out.tail<3>());
-  return out;
-}
-
-// X m: a motion (angular; linear) of the parent, in the link's frame about its origin.
-Vector6d MotionToLink(const Vector6d& m, const Placement& x) {
-  Vector6d out;
-  out.head<3>() = x.r.transpose() * m.head<3>();
-  out.tail<3>() = x.r.transpose() * (m.tail<3>() + m.head<3>().cross(x.p));
+  out << v.head<3>().cross(f.head<3>()) + v.tail<3>().cross(f.tail<3>()), v.head<3>().cross(f.tail<3>());
   return out;
 }
 
@@ -106,20 +118,21 @@ void CheckSizes(const ArmModel& model, const Eigen::VectorXd& q) {
 // RNEA with gravity scaled by `g_scale` (0 drops gravity, for the mass matrix).
 Eigen::VectorXd Rnea(const ArmModel& model, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                      const Eigen::VectorXd& qdd, double g_scale) {
+  CheckSizes(model, q);
   const int n = model.dof();
-  std::vector<Eigen::Matrix3d> r(static_cast<std::size_t>(n));   // R_{i-1 <- i}
-  std::vector<Eigen::Vector3d> p(static_cast<std::size_t>(n));   // origin of i in i-1
-  std::vector<Eigen::Vector3d> force(static_cast<std::size_t>(n)), moment(static_cast<std::size_t>(n));
+  std::array<Eigen::Matrix3d, kMaxArmJoints> r;  // R_{i-1 <- i}
+  std::array<Eigen::Vector3d, kMaxArmJoints> p;  // origin of i in i-1
+  std::array<Eigen::Vector3d, kMaxArmJoints> force, moment;
   // Forward: velocities and accelerations of each link frame, in that frame. The base
   // accelerates upwards by -g, which adds gravity to every link.
   Eigen::Vector3d w = Eigen::Vector3d::Zero(), dw = Eigen::Vector3d::Zero();
   Eigen::Vector3d a = -g_scale * model.gravity;
   for (int i = 0; i < n; ++i) {
     const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
-    const Eigen::Isometry3d t = JointTransform(j, q[i]);
     const auto k = static_cast<std::size_t>(i);
-    r[k] = t.linear();
-    p[k] = t.translation();
+    const Placement x = Place(j, q[i]);
+    r[k] = x.r;
+    p[k] = x.p;
     const Eigen::Matrix3d rt = r[k].transpose();
     // Acceleration of this frame's origin from the parent's motion.
     Eigen::Vector3d a_i = rt * (a + dw.cross(p[k]) + w.cross(w.cross(p[k])));
@@ -181,74 +194,57 @@ std::vector<Eigen::Isometry3d> ForwardKinematics(const ArmModel& model, const Ei
 
 namespace {
 
-// Featherstone's articulated-body algorithm (RBDA section 7.3, table 7.1) with the base
-// accelerating by -g, so that gravity acts on every link. Per-link work lives on the
-// stack (kMaxArmJoints entries), nothing is allocated; the per-model quantities (link
-// inertias, joint placements) cost a few dozen flops and are formed here rather than
-// cached, so that a changed model is never stale.
+// Featherstone's articulated-body algorithm (RBDA section 7.3, table 7.1) in the base
+// frame, with the base accelerating by -g so that gravity acts on every link. Per-link
+// work lives on the stack (kMaxArmJoints entries): nothing is allocated. The per-model
+// quantities (link inertias, joint placements) cost a few dozen flops per link and are
+// formed here rather than cached, so that a changed model is never stale.
 void ArticulatedBody(const ArmModel& model, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                      const Eigen::VectorXd& tau, bool friction, Eigen::VectorXd* qdd) {
   const int n = model.dof();
-  struct Link {
-    Placement x;
-    Matrix6d ia;   // articulated inertia
-    Vector6d pa;   // articulated bias force
+  struct Link : WorldLink {
     Vector6d c;    // velocity-product acceleration v x S qd
+    Vector6d pa;   // articulated bias force
     Vector6d u;    // U = I^A S
     double d;      // D = S^T U
-    double force;  // tau - S^T p^A
+    double force;  // tau - S^T p^A (- friction)
   };
   std::array<Link, kMaxArmJoints> links;
-  // Out: link velocities, the velocity-product terms and each link's own inertia and
-  // bias force p = v x* I v.
+  PlaceLinks(model, q, &links);
+  // Out: link velocities, the velocity-product terms and each link's bias force
+  // p = v x* I v; `inertia` becomes the articulated inertia I^A on the way back.
   Vector6d v = Vector6d::Zero();
   for (int i = 0; i < n; ++i) {
-    const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
     Link& l = links[static_cast<std::size_t>(i)];
-    const int h = Half(j);
-    l.x = Place(j, q[i]);
-    v = MotionToLink(v, l.x);
-    const Eigen::Vector3d s_qd = j.axis * qd[i];
-    v.segment<3>(h) += s_qd;
-    l.c.setZero();
-    if (h == 0) {
-      l.c.head<3>() = v.head<3>().cross(s_qd);
-      l.c.tail<3>() = v.tail<3>().cross(s_qd);
-    } else {
-      l.c.tail<3>() = v.head<3>().cross(s_qd);
-    }
-    l.ia = LinkInertia(j.child);
-    const Vector6d iv = l.ia * v;
-    l.pa.head<3>() = v.head<3>().cross(iv.head<3>()) + v.tail<3>().cross(iv.tail<3>());
-    l.pa.tail<3>() = v.head<3>().cross(iv.tail<3>());
+    const Vector6d s_qd = l.s * qd[i];
+    v += s_qd;
+    l.c = CrossMotion(v, s_qd);
+    l.pa = CrossForce(v, l.inertia * v);
   }
   // Back: each link hands its articulated inertia and bias, less what its joint
-  // absorbs, to its parent.
+  // absorbs, to its parent; in base coordinates that is a sum.
   for (int i = n - 1; i >= 0; --i) {
     const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
     Link& l = links[static_cast<std::size_t>(i)];
-    const int h = Half(j);
-    l.u.noalias() = l.ia.middleCols<3>(h) * j.axis;
-    l.d = j.axis.dot(l.u.segment<3>(h));
-    l.force = tau[i] - j.axis.dot(l.pa.segment<3>(h));
+    l.u.noalias() = l.inertia * l.s;
+    l.d = l.s.dot(l.u);
+    l.force = tau[i] - l.s.dot(l.pa);
     if (friction) l.force -= NominalFriction(j, qd[i]);
     if (i == 0) break;
     Link& parent = links[static_cast<std::size_t>(i - 1)];
-    const Matrix6d ia = l.ia - l.u * (l.u.transpose() / l.d);
-    const Vector6d pa = l.pa + ia * l.c + l.u * (l.force / l.d);
-    parent.ia += InertiaToParent(ia, l.x);
-    parent.pa += ForceToParent(pa, l.x);
+    l.inertia.noalias() -= l.u * (l.u.transpose() / l.d);
+    parent.inertia += l.inertia;
+    parent.pa += l.pa + l.inertia * l.c + l.u * (l.force / l.d);
   }
-  // Out again: accelerations from the base's (-g) to the tip.
+  // Out again: accelerations from the base's (0; -g) to the tip.
   qdd->resize(n);
   Vector6d a;
   a << Eigen::Vector3d::Zero(), -model.gravity;
   for (int i = 0; i < n; ++i) {
-    const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
     const Link& l = links[static_cast<std::size_t>(i)];
-    a = MotionToLink(a, l.x) + l.c;
+    a += l.c;
     const double qdd_i = (l.force - l.u.dot(a)) / l.d;
-    a.segment<3>(Half(j)) += j.axis * qdd_i;
+    a += l.s * qdd_i;
     (*qdd)[i] = qdd_i;
   }
 }
@@ -270,33 +266,21 @@ Eigen::MatrixXd MassMatrix(const ArmModel& model, const Eigen::VectorXd& q) {
   return m;
 }
 
-// The composite-rigid-body algorithm (RBDA section 6.2, table 6.2): the inertia of
-// each link with everything beyond it, then each joint's column as the force its unit
-// acceleration needs, carried towards the base.
+// The composite-rigid-body algorithm (RBDA section 6.2, table 6.2) in the base frame:
+// the inertia of each link with everything beyond it is a sum there, and joint i's
+// column is the force F = I^C_i S_i its unit acceleration needs, which every joint
+// between it and the base feels unchanged: M_ji = S_j' F.
 void MassMatrix(const ArmModel& model, const Eigen::VectorXd& q, Eigen::MatrixXd* mass) {
   CheckSizes(model, q);
   const int n = model.dof();
-  std::array<Placement, kMaxArmJoints> x;
-  std::array<Matrix6d, kMaxArmJoints> composite;
-  for (int i = 0; i < n; ++i) {
-    const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
-    x[static_cast<std::size_t>(i)] = Place(j, q[i]);
-    composite[static_cast<std::size_t>(i)] = LinkInertia(j.child);
-  }
-  for (int i = n - 1; i > 0; --i) {
-    const auto k = static_cast<std::size_t>(i);
-    composite[k - 1] += InertiaToParent(composite[k], x[k]);
-  }
+  std::array<WorldLink, kMaxArmJoints> links;
+  PlaceLinks(model, q, &links);
   mass->resize(n, n);
-  for (int i = 0; i < n; ++i) {
-    const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
-    Vector6d f = composite[static_cast<std::size_t>(i)].middleCols<3>(Half(j)) * j.axis;
-    (*mass)(i, i) = j.axis.dot(f.segment<3>(Half(j)));
-    for (int k = i; k > 0; --k) {
-      f = ForceToParent(f, x[static_cast<std::size_t>(k)]);
-      const ArmJoint& parent = model.joints[static_cast<std::size_t>(k - 1)];
-      (*mass)(k - 1, i) = (*mass)(i, k - 1) = parent.axis.dot(f.segment<3>(Half(parent)));
-    }
+  for (int i = n - 1; i >= 0; --i) {
+    WorldLink& l = links[static_cast<std::size_t>(i)];
+    if (i + 1 < n) l.inertia += links[static_cast<std::size_t>(i + 1)].inertia;
+    const Vector6d f = l.inertia * l.s;
+    for (int k = 0; k <= i; ++k) (*mass)(k, i) = (*mass)(i, k) = links[static_cast<std::size_t>(k)].s.dot(f);
   }
 }
 
