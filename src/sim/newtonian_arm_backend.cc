@@ -149,14 +149,15 @@ void NewtonianArmBackend::FrictionTorques(const Eigen::VectorXd& q, const Eigen:
                                           double h, Eigen::VectorXd* friction) {
   friction->setZero(model_.dof());
   if (friction_joints_.empty()) return;
-  // Velocities at the end of the step without friction (the articulated-body algorithm),
-  // and how a torque on one joint changes them: h M^-1 (the composite-rigid-body M).
-  // Into scratch kept from step to step: nothing allocated.
+  // Velocities at the end of the step without friction, and how a torque on one joint
+  // changes them: h M^-1. M and the bias forces in one pass (MassMatrixAndBias), into
+  // scratch kept from step to step: nothing allocated.
   Scratch& w = scratch_;
-  ForwardDynamics(model_, q, qd, tau, /*friction=*/false, &w.qdd);
-  w.free_end = qd + h * w.qdd;
-  MassMatrix(model_, q, &w.mass);
+  MassMatrixAndBias(model_, q, qd, &w.mass, &w.bias);
   w.llt.compute(w.mass);
+  w.free_end = tau - w.bias;
+  w.llt.solveInPlace(w.free_end);
+  w.free_end = qd + h * w.free_end;
   w.response.setIdentity(model_.dof(), model_.dof());
   w.llt.solveInPlace(w.response);
   w.response *= h;

@@ -57,7 +57,7 @@ class NewtonianArmBackend final : public ArmBackend {
   // content between steps means nothing (not state: Save and Restore ignore it).
   struct Scratch {
     Eigen::VectorXd drive, link, friction;  // dof: a physics step's torques
-    Eigen::VectorXd qdd, free_end;          // dof: the friction solve's free motion
+    Eigen::VectorXd bias, free_end;         // dof: the friction solve's free motion
     Eigen::MatrixXd mass, response;         // dof x dof: M and h M^-1
     Eigen::LLT<Eigen::MatrixXd> llt;
   };

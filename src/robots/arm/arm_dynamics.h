@@ -37,6 +37,10 @@ Eigen::VectorXd InverseDynamics(const ArmModel& model, const Eigen::VectorXd& q,
 Eigen::MatrixXd MassMatrix(const ArmModel& model, const Eigen::VectorXd& q);
 // The same into `mass` (resized to dof x dof; no allocation when it has that size).
 void MassMatrix(const ArmModel& model, const Eigen::VectorXd& q, Eigen::MatrixXd* mass);
+// M(q) and the bias C(q, qd) qd + g(q) in one pass over the links (what a solve for
+// qdd with M in hand needs; no allocation when the outputs have their sizes).
+void MassMatrixAndBias(const ArmModel& model, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                       Eigen::MatrixXd* mass, Eigen::VectorXd* bias);
 
 // C(q, qd) qd + g(q) (no friction).
 Eigen::VectorXd BiasForces(const ArmModel& model, const Eigen::VectorXd& q, const Eigen::VectorXd& qd);

@@ -236,7 +236,7 @@ TEST(ArmDynamics, ArticulatedBodyInvertsInverseDynamics) {
   }
 }
 
-TEST(ArmDynamics, CompositeRigidBodyMatchesTheNewtonEulerReference) {
+TEST(ArmDynamics, CompositeRigidBodyAndBiasMatchTheNewtonEulerReference) {
   for (const ArmModel& m : TestArms()) {
     Rng rng(25);
     for (int k = 0; k < 20; ++k) {
@@ -244,6 +244,14 @@ TEST(ArmDynamics, CompositeRigidBodyMatchesTheNewtonEulerReference) {
       const Eigen::MatrixXd fast = MassMatrix(m, q), reference = MassMatrixReference(m, q);
       EXPECT_LE((fast - reference).norm(), 1e-12 * reference.norm()) << m.name;
       EXPECT_EQ((fast - fast.transpose()).norm(), 0) << "symmetric by construction";
+      // And with the bias forces of the same pass.
+      const Eigen::VectorXd qd = RandomVector(m.dof(), &rng, 2);
+      Eigen::MatrixXd mass;
+      Eigen::VectorXd bias;
+      MassMatrixAndBias(m, q, qd, &mass, &bias);
+      EXPECT_EQ((mass - fast).norm(), 0);
+      const Eigen::VectorXd bias_reference = BiasForces(m, q, qd);
+      EXPECT_LE((bias - bias_reference).norm(), 1e-12 * bias_reference.norm()) << m.name;
     }
   }
 }
