@@ -201,9 +201,9 @@ namespace {
 
 // Featherstone's articulated-body algorithm (RBDA section 7.3, table 7.1) in the base
 // frame, with the base accelerating by -g so that gravity acts on every link. Per-link
-// work lives on the stack (kMaxArmJoints entries): nothing is allocated. The per-model
-// quantities (link inertias, joint placements) cost a few dozen flops per link and are
-// formed here rather than cached, so that a changed model is never stale.
+// work lives on the stack (kMaxArmJoints entries): nothing is allocated. The links'
+// poses and inertias in base coordinates (under a hundred multiply-adds per link) are
+// formed on every call, from the model as it is: there is no cache to go stale.
 void ArticulatedBody(const ArmModel& model, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                      const Eigen::VectorXd& tau, bool friction, Eigen::VectorXd* qdd) {
   const int n = model.dof();
