@@ -13,6 +13,7 @@
 #include "core/rng.h"
 #include "io/csv_table.h"
 #include "robots/arm/arm_dynamics.h"
+#include "robots/arm/arm_integrators.h"
 
 namespace twinsim {
 namespace {
@@ -21,16 +22,6 @@ std::string Format(const char* fmt, double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, fmt, v);
   return buf;
-}
-
-// One RK4 step of the plant under a constant torque.
-void Rk4Step(const ArmModel& plant, const Eigen::VectorXd& tau, double h, Eigen::VectorXd* q, Eigen::VectorXd* qd) {
-  const Eigen::VectorXd k1q = *qd, k1v = ForwardDynamics(plant, *q, *qd, tau);
-  const Eigen::VectorXd k2q = *qd + 0.5 * h * k1v, k2v = ForwardDynamics(plant, *q + 0.5 * h * k1q, k2q, tau);
-  const Eigen::VectorXd k3q = *qd + 0.5 * h * k2v, k3v = ForwardDynamics(plant, *q + 0.5 * h * k2q, k3q, tau);
-  const Eigen::VectorXd k4q = *qd + h * k3v, k4v = ForwardDynamics(plant, *q + h * k3q, k4q, tau);
-  *q += h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q);
-  *qd += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
 }
 
 // The mean of sign(qd_i) of the reference over [t0, t1]: +-1 unless the velocity
@@ -94,6 +85,7 @@ ArmTrial RunTrial(const ArmModel& plant, const ArmTrialInput& input, const ArmTr
   Eigen::VectorXd q = input.q_ref.row(0).transpose(), qd = input.qd_ref.row(0).transpose();
   Eigen::VectorXd previous_error;
   const double h = input.sample_time / options.substeps;
+  ArmStepWorkspace work;
   for (Eigen::Index k = 0; k < samples; ++k) {
     Eigen::VectorXd measured(n);
     for (int i = 0; i < n; ++i) measured[i] = Quantise(q[i], options.encoder_resolution);
@@ -111,7 +103,7 @@ ArmTrial RunTrial(const ArmModel& plant, const ArmTrialInput& input, const ArmTr
     in_flight.pop_front();
     if (noisy)
       for (int i = 0; i < n; ++i) tau[i] += rng.Gaussian(options.torque_noise[i]);
-    for (int s = 0; s < options.substeps; ++s) Rk4Step(plant, tau, h, &q, &qd);
+    for (int s = 0; s < options.substeps; ++s) Rk4Step(plant, tau, h, /*friction=*/true, &work, &q, &qd);
     if (!q.allFinite() || !qd.allFinite() || qd.cwiseAbs().maxCoeff() > 1e4)
       throw CheckFailed("trial " + std::to_string(trial) + " diverged at t = " +
                         Format("%.4f", static_cast<double>(k + 1) * input.sample_time) + " s");

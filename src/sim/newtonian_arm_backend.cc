@@ -146,14 +146,23 @@ void NewtonianArmBackend::DriveTorques(std::int64_t step, Eigen::VectorXd* drive
 }
 
 void NewtonianArmBackend::FrictionTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau,
-                                    double h, Eigen::VectorXd* friction) const {
+                                          double h, Eigen::VectorXd* friction) {
   friction->setZero(model_.dof());
   if (friction_joints_.empty()) return;
   // Velocities at the end of the step without friction, and how a torque on one joint
-  // changes them: h M^-1.
-  const Eigen::LLT<Eigen::MatrixXd> llt(MassMatrix(model_, q));
-  const Eigen::VectorXd free_end = qd + h * llt.solve(tau - BiasForces(model_, q, qd));
-  const Eigen::MatrixXd response = h * llt.solve(Eigen::MatrixXd::Identity(model_.dof(), model_.dof()));
+  // changes them: h M^-1. M and the bias forces in one pass (MassMatrixAndBias), into
+  // scratch kept from step to step: nothing allocated.
+  Scratch& w = scratch_;
+  MassMatrixAndBias(model_, q, qd, &w.mass, &w.bias);
+  w.llt.compute(w.mass);
+  w.free_end = tau - w.bias;
+  w.llt.solveInPlace(w.free_end);
+  w.free_end = qd + h * w.free_end;
+  w.response.setIdentity(model_.dof(), model_.dof());
+  w.llt.solveInPlace(w.response);
+  w.response *= h;
+  const Eigen::VectorXd& free_end = w.free_end;
+  const Eigen::MatrixXd& response = w.response;
   // Projected Gauss-Seidel: each joint's friction given the others', until it settles.
   for (int sweep = 0; sweep < kFrictionSweeps; ++sweep) {
     double change = 0, size = 0;
@@ -182,7 +191,10 @@ void NewtonianArmBackend::Step(const Eigen::VectorXd& command, Eigen::VectorXd* 
   }
 
   const double h = model_.sample_time / substeps_;
-  Eigen::VectorXd drive(n), link(n), friction(n);
+  Eigen::VectorXd& drive = scratch_.drive;
+  Eigen::VectorXd& link = scratch_.link;
+  Eigen::VectorXd& friction = scratch_.friction;
+  drive.resize(n);
   applied->setZero(n);
   for (int s = 0; s < substeps_; ++s) {
     DriveTorques(first_step + s, &drive);
@@ -204,7 +216,8 @@ void NewtonianArmBackend::Step(const Eigen::VectorXd& command, Eigen::VectorXd* 
       }
     }
     FrictionTorques(q, qd, link, h, &friction);
-    engine_->Step(link - friction, h);
+    link -= friction;
+    engine_->Step(link, h);
   }
   ++state_.sample;
 }

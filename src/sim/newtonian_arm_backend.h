@@ -13,6 +13,7 @@
 //   ArmSimulation sim(model, MakeNewtonianArmBackend("ode", model));
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <memory>
 #include <string>
 #include <vector>
@@ -50,7 +51,16 @@ class NewtonianArmBackend final : public ArmBackend {
   // Friction torques (opposing positive motion) for one physics step of h seconds
   // with the other joint torques `tau`, solved at velocity level.
   void FrictionTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau, double h,
-                       Eigen::VectorXd* friction) const;
+                       Eigen::VectorXd* friction);
+
+  // Work space of Step and FrictionTorques, kept so that a step allocates nothing; its
+  // content between steps means nothing (not state: Save and Restore ignore it).
+  struct Scratch {
+    Eigen::VectorXd drive, link, friction;  // dof: a physics step's torques
+    Eigen::VectorXd bias, free_end;         // dof: the friction solve's free motion
+    Eigen::MatrixXd mass, response;         // dof x dof: M and h M^-1
+    Eigen::LLT<Eigen::MatrixXd> llt;
+  };
 
   ArmModel model_;  // the plant: payload lumped into the last link
   std::unique_ptr<ArmEngine> engine_;
@@ -61,6 +71,7 @@ class NewtonianArmBackend final : public ArmBackend {
   double max_delay_steps_ = 0;
   bool flexible_ = false;
   ArmBackendState state_;  // all but the engine's part
+  Scratch scratch_;
 };
 
 // A Newtonian backend over the engine called `engine` ("analytic", "ode", "bullet"),

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "robots/arm/arm_dynamics.h"
+#include "robots/arm/arm_integrators.h"
 
 namespace twinsim {
 namespace {
@@ -25,7 +25,7 @@ class AnalyticArmEngine final : public ArmEngine {
     CheckArmStep(name(), dof(), tau, dt);
     const int n = ArmSubsteps(dt, max_step_);
     const double h = dt / n;
-    for (int i = 0; i < n; ++i) Rk4(tau, h);
+    for (int i = 0; i < n; ++i) Rk4Step(plant_, tau, h, /*friction=*/false, &work_, &q_, &qd_);
   }
 
   const Eigen::VectorXd& q() const override { return q_; }
@@ -40,27 +40,10 @@ class AnalyticArmEngine final : public ArmEngine {
   }
 
  private:
-  Eigen::VectorXd Accel(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau) const {
-    return ForwardDynamics(plant_, q, qd, tau, /*friction=*/false);
-  }
-
-  // One classical RK4 step of h seconds of (q, qd)' = (qd, qdd(q, qd, tau)).
-  void Rk4(const Eigen::VectorXd& tau, double h) {
-    const Eigen::VectorXd k1q = qd_;
-    const Eigen::VectorXd k1v = Accel(q_, qd_, tau);
-    const Eigen::VectorXd k2q = qd_ + 0.5 * h * k1v;
-    const Eigen::VectorXd k2v = Accel(q_ + 0.5 * h * k1q, k2q, tau);
-    const Eigen::VectorXd k3q = qd_ + 0.5 * h * k2v;
-    const Eigen::VectorXd k3v = Accel(q_ + 0.5 * h * k2q, k3q, tau);
-    const Eigen::VectorXd k4q = qd_ + h * k3v;
-    const Eigen::VectorXd k4v = Accel(q_ + h * k3q, k4q, tau);
-    q_ += h / 6 * (k1q + 2 * k2q + 2 * k3q + k4q);
-    qd_ += h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-  }
-
   ArmModel plant_;
   double max_step_;  // s
   Eigen::VectorXd q_, qd_;
+  ArmStepWorkspace work_;  // RK4's stages, kept so that a step allocates nothing
 };
 
 }  // namespace
