@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <string>
 
+#include "engines/omni_engine.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 #include "scene/command_source.h"
@@ -34,9 +35,10 @@ OmniModel Omni3();
 // scenes/record_plant.yaml, or without (0).
 CommandSpec RandomDrive(double max_speed, double max_centripetal, double leash);
 // Drives `model` from the origin with `commands` for `seconds` on `backend` (30 fps) and
-// returns what its observer logged, as if read from a file called `name`.
+// returns what its observer logged, as if read from a file called `name`, on `field`.
 OmniLog RecordLog(const OmniModel& model, const CommandSpec& commands, double seconds, std::uint64_t seed,
-                  const std::string& backend = "analytic", const std::string& name = "recorded.csv");
+                  const std::string& backend = "analytic", const std::string& name = "recorded.csv",
+                  const FieldModel& field = FieldModel{});
 
 struct CommandResult {
   int exit_code = -1;

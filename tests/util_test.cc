@@ -48,10 +48,10 @@ CommandSpec RandomDrive(double max_speed, double max_centripetal, double leash) 
 }
 
 OmniLog RecordLog(const OmniModel& model, const CommandSpec& commands, double seconds, std::uint64_t seed,
-                  const std::string& backend, const std::string& name) {
+                  const std::string& backend, const std::string& name, const FieldModel& field) {
   std::vector<SimRobot> robots;
   robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(commands, seed, 0, seconds, Pose2{})});
-  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, FrameTiming{}), seed);
+  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, field, FrameTiming{}), seed);
   const SimulationResult r = sim.Run(static_cast<int>(seconds * 30) + 1);
   return ParseOmniLog(FormatOmniLog(ObserverLog(r.frames[0])), name);
 }

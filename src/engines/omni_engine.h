@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,13 +22,24 @@
 
 namespace twinsim {
 
-// The field: a flat floor with walls around it.
+// The field: a floor with walls around it, level unless it slopes.
 struct FieldModel {
   double length = 10.4;       // m, inside the walls along field x
   double width = 7.4;         // m, inside the walls along field y
   double wall_height = 0.1;   // m
   double wall_thickness = 0.05;  // m
   bool walls = true;
+  // A floor that slopes by `slope` rad, downhill towards `slope_direction` rad (field
+  // frame). The engines tilt gravity instead of the floor: on a plane the same forces,
+  // and the field's coordinates stay those of the floor.
+  double slope = 0;
+  double slope_direction = 0;
+
+  // Gravity (m/s^2) in the floor's frame: (g sin s cos d, g sin s sin d, -g cos s).
+  Eigen::Vector3d Gravity() const {
+    return kGravity * Eigen::Vector3d(std::sin(slope) * std::cos(slope_direction),
+                                      std::sin(slope) * std::sin(slope_direction), -std::cos(slope));
+  }
 };
 
 // Everything that changes about one robot's bodies, enough to put it back exactly.

@@ -138,6 +138,9 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
     f.Get("width", &scene.field.width, Positive());
     f.Get("wall_height", &scene.field.wall_height, Positive());
     f.Get("walls", &scene.field.walls);
+    double slope_deg = 0, direction_deg = 0;
+    if (f.Get("slope_deg", &slope_deg, InRange(0, 30))) scene.field.slope = slope_deg * kPi / 180;
+    if (f.Get("slope_direction_deg", &direction_deg, InRange(-360, 360))) scene.field.slope_direction = direction_deg * kPi / 180;
     f.Finish();
   }
 

@@ -107,52 +107,115 @@ TEST_P(BackendConformance, AgreesWithTheAnalyticModelOnSimpleDrives) {
   }
 }
 
-TEST_P(BackendConformance, OpenLoopWrenchMatchesRigidBodyAcceleration) {
-  // Torques for a constant body wrench from rest: v(t) = M_eff^{-1} (F + F_r) t, while
-  // the wheels roll without slipping (forces well under the friction limit) and the
-  // rollers slide radially against Coulomb friction F_r = -sum mu_r N_i sign(s_i) e_i.
-  const OmniModel m = Quiet(Omni4());
+// Torques for a constant body wrench from rest: v(t) = M_eff^{-1} (F + F_g + F_r) t, while
+// the wheels roll without slipping (forces well under the friction limit) and the
+// rollers slide radially against Coulomb friction F_r = -sum mu_r N_i sign(s_i) e_i; F_g
+// the weight's pull along a sloping floor, at the centre of mass.
+void ExpectRigidBodyAcceleration(const std::string& engine_name, const OmniModel& m, const FieldModel& field,
+                                 const Eigen::Vector3d& wrench) {
   OmniKinematics kin(m);
   // The rigid-body mass matrix about the centre, written out here from the model's
-  // masses (the wheels put the centre of mass off the centre), plus the wheels' spin.
-  Eigen::Matrix3d mass;
+  // masses (the wheels and chassis.com put the centre of mass off the centre), plus the
+  // wheels' spin.
   const double mt = m.chassis_mass + m.num_wheels() * m.wheel_mass;
-  double xc = 0, yc = 0;
+  double xc = m.chassis_mass * m.chassis_com.x() / mt, yc = m.chassis_mass * m.chassis_com.y() / mt;
   for (double a : m.wheel_angles) {
     xc += m.wheel_mass * m.wheel_distance * std::cos(a) / mt;
     yc += m.wheel_mass * m.wheel_distance * std::sin(a) / mt;
   }
-  mass << mt, 0, -mt * yc, 0, mt, mt * xc, -mt * yc, mt * xc, m.total_inertia_z;
+  const double chassis_iz = m.chassis_inertia_z > 0 ? m.chassis_inertia_z
+                                                    : 0.5 * m.chassis_mass * m.chassis_radius * m.chassis_radius;
+  const double iz = chassis_iz + m.chassis_mass * m.chassis_com.squaredNorm() +
+                    m.num_wheels() * (m.wheel_inertia_diametral + m.wheel_mass * m.wheel_distance * m.wheel_distance);
+  Eigen::Matrix3d mass;
+  mass << mt, 0, -mt * yc, 0, mt, mt * xc, -mt * yc, mt * xc, iz;
   mass += m.wheel_spin_inertia * kin.wheels_from_body().transpose() * kin.wheels_from_body();
-  for (const Eigen::Vector3d& wrench : {Eigen::Vector3d(5, 0, 0), Eigen::Vector3d(0, 5, 0), Eigen::Vector3d(0, 0, 0.15)}) {
-    std::unique_ptr<OmniEngine> engine = MakeOmniEngine(GetParam(), {m}, FieldModel{});
-    OmniBodyState s;
-    s.wheel_speeds = Eigen::VectorXd::Zero(m.num_wheels());
-    engine->SetState(0, s);
-    const double dt = 1.0 / 300;
-    for (int i = 0; i < 60; ++i) {  // let the contacts settle
-      engine->SetWheelTorques(0, Eigen::VectorXd::Zero(m.num_wheels()));
-      engine->Step(dt);
-    }
-    s = engine->GetState(0);
-    const Twist2 v0 = s.velocity;
-    engine->SetWheelTorques(0, kin.WheelTorques(wrench));
-    const int steps = 90;
-    for (int i = 0; i < steps; ++i) engine->Step(dt);
-    const Twist2 v = engine->GetState(0).velocity;
-    const Eigen::Vector3d direction = mass.inverse() * wrench;
-    Eigen::Vector3d roller = Eigen::Vector3d::Zero();
-    for (int i = 0; i < m.num_wheels(); ++i) {
-      const Eigen::Vector3d e(std::cos(m.wheel_angles[i]), std::sin(m.wheel_angles[i]), 0);
-      const double slip = e.dot(direction);
-      if (std::abs(slip) > 1e-6 * direction.norm()) roller -= m.roller_friction * m.wheel_load[i] * (slip > 0 ? 1 : -1) * e;
-    }
-    const Eigen::Vector3d expected = mass.inverse() * (wrench + roller) * (steps * dt);
-    const Eigen::Vector3d got(v.vx - v0.vx, v.vy - v0.vy, v.omega - v0.omega);
-    // Rotate the translational part: the robot may have turned a little.
-    EXPECT_LT((got - expected).norm(), 0.03 * expected.norm() + 1e-3)
-        << "wrench " << wrench.transpose() << ": expected " << expected.transpose() << ", got " << got.transpose();
+  // The robot starts at heading 0, so the field's downhill pull is the body's.
+  const Eigen::Vector2d pull = mt * kGravity * std::sin(field.slope) *
+                               Eigen::Vector2d(std::cos(field.slope_direction), std::sin(field.slope_direction));
+  const Eigen::Vector3d load = wrench + Eigen::Vector3d(pull.x(), pull.y(), xc * pull.y() - yc * pull.x());
+
+  // The closed form holds while no wheel slips: each wheel's force well under its grip
+  // (static load; the acceleration moves some load between wheels).
+  const Eigen::VectorXd wheel_force = kin.WheelTorques(wrench) / m.wheel_radius;
+  for (int i = 0; i < m.num_wheels(); ++i)
+    ASSERT_LT(std::abs(wheel_force[i]), 0.6 * m.wheel_friction * m.wheel_load[i]) << "wheel " << i << " would slip";
+
+  std::unique_ptr<OmniEngine> engine = MakeOmniEngine(engine_name, {m}, field);
+  OmniBodyState s;
+  s.wheel_speeds = Eigen::VectorXd::Zero(m.num_wheels());
+  engine->SetState(0, s);
+  const double dt = 1.0 / 300;
+  for (int i = 0; i < 60; ++i) {  // let the contacts settle
+    engine->SetWheelTorques(0, Eigen::VectorXd::Zero(m.num_wheels()));
+    engine->Step(dt);
   }
+  s = engine->GetState(0);
+  const Twist2 v0 = s.velocity;
+  engine->SetWheelTorques(0, kin.WheelTorques(wrench));
+  const int steps = 90;
+  for (int i = 0; i < steps; ++i) engine->Step(dt);
+  const Twist2 v = engine->GetState(0).velocity;
+  const Eigen::Vector3d direction = mass.inverse() * load;
+  Eigen::Vector3d roller = Eigen::Vector3d::Zero();
+  for (int i = 0; i < m.num_wheels(); ++i) {
+    const Eigen::Vector3d e(std::cos(m.wheel_angles[i]), std::sin(m.wheel_angles[i]), 0);
+    const double slip = e.dot(direction);
+    if (std::abs(slip) > 1e-6 * direction.norm()) roller -= m.roller_friction * m.wheel_load[i] * (slip > 0 ? 1 : -1) * e;
+  }
+  const Eigen::Vector3d expected = mass.inverse() * (load + roller) * (steps * dt);
+  const Eigen::Vector3d got(v.vx - v0.vx, v.vy - v0.vy, v.omega - v0.omega);
+  EXPECT_LT((got - expected).norm(), 0.03 * expected.norm() + 1e-3)
+      << engine_name << ", wrench " << wrench.transpose() << ", slope " << field.slope << ": expected "
+      << expected.transpose() << ", got " << got.transpose();
+}
+
+TEST_P(BackendConformance, OpenLoopWrenchMatchesRigidBodyAcceleration) {
+  for (const Eigen::Vector3d& wrench : {Eigen::Vector3d(5, 0, 0), Eigen::Vector3d(0, 5, 0), Eigen::Vector3d(0, 0, 0.15)})
+    ExpectRigidBodyAcceleration(GetParam(), Quiet(Omni4()), FieldModel{}, wrench);
+}
+
+// chassis.com: the chassis' centre of mass 2.5 cm off the centre (a battery to one side).
+// Every engine moves the robot's centre as the rigid body about it predicts; the pose
+// they report is the centre's, not the body's origin.
+TEST_P(BackendConformance, OffCentreChassisMatchesRigidBodyAcceleration) {
+  OmniModel m = Quiet(Omni4());
+  m.chassis_com = Eigen::Vector2d(0.02, -0.015);
+  m.Finalize();
+  ASSERT_EQ(m.Validate(), "");
+  // A force at the centre would spin the robot (the closed form leaves out the turning
+  // frame): each force comes with the torque that keeps the yaw rate at zero.
+  const Eigen::Matrix3d inverse = (m.RigidBodyMass() + m.wheel_spin_inertia * OmniKinematics(m).wheels_from_body().transpose() *
+                                                           OmniKinematics(m).wheels_from_body())
+                                      .inverse();
+  // 2 N, not 5: the rear left wheel carries 1.95 N here, and 5 N sideways makes it slip
+  // (the engines' wheels can, the closed form's cannot; measured).
+  for (Eigen::Vector3d wrench : {Eigen::Vector3d(2, 0, 0), Eigen::Vector3d(0, 2, 0)}) {
+    wrench.z() = -(inverse(2, 0) * wrench.x() + inverse(2, 1) * wrench.y()) / inverse(2, 2);
+    ExpectRigidBodyAcceleration(GetParam(), m, FieldModel{}, wrench);
+  }
+  ExpectRigidBodyAcceleration(GetParam(), m, FieldModel{}, Eigen::Vector3d(0, 0, 0.15));
+  // At rest, placed and read back: the centre, not the body's origin.
+  std::unique_ptr<OmniEngine> engine = MakeOmniEngine(GetParam(), {m}, FieldModel{});
+  OmniBodyState s;
+  s.pose = Pose2{0.3, -0.2, 0.7};
+  s.velocity = Twist2{0.4, -0.1, 1.5};
+  s.wheel_speeds = OmniKinematics(m).WheelSpeeds(s.velocity);
+  engine->SetState(0, s);
+  const OmniBodyState back = engine->GetState(0);
+  EXPECT_NEAR(back.pose.x, 0.3, 1e-12);
+  EXPECT_NEAR(back.pose.y, -0.2, 1e-12);
+  EXPECT_NEAR(back.velocity.vx, 0.4, 1e-12);
+  EXPECT_NEAR(back.velocity.vy, -0.1, 1e-12);
+}
+
+// A floor sloping 3 degrees downhill towards 10 degrees: with no wheel torque the robot
+// rolls off as the weight's pull along the floor, less the rollers' friction, predicts.
+TEST_P(BackendConformance, SlopingFloorPullsAsTheWeightAlongIt) {
+  FieldModel field;
+  field.slope = 3 * kPi / 180;
+  field.slope_direction = 10 * kPi / 180;  // no roller sliding near zero (a stuck roller)
+  ExpectRigidBodyAcceleration(GetParam(), Quiet(Omni4()), field, Eigen::Vector3d::Zero());
 }
 
 TEST_P(BackendConformance, StepCommandAppearsExactlyAfterTheModelsDelay) {

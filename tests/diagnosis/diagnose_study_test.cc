@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/math_constants.h"
 #include "core/rng.h"
 #include "diagnosis/arm_diagnosis.h"
 #include "diagnosis/diagnosis_plants.h"
@@ -58,6 +59,7 @@ struct Hidden {
   double bandwidth = 10;     // arm: the plant's controller
   bool log_velocities = false;
   testing::JointTorque torque;  // arm disturbance on `joint`
+  FieldModel field;             // omni: the floor the plant drives on (a slope)
   std::string omni_robot;    // omni: a top-level block (a weak motor)
 };
 
@@ -157,6 +159,19 @@ Hidden DrawOmni(const std::string& kind, int seed) {
     for (int w = 0; w < 4; ++w) strength += (w ? ", " : "") + (w == wheel ? Fmt(rng.Uniform(0.1, 0.3)) : std::string("1"));
     h.omni_robot = "motor: {strength: [" + strength + "]}\n";
     h.description = h.omni_robot;
+  } else if (kind == "com_offset") {
+    h.name.clear();
+    h.outside = true;
+    const double r = rng.Uniform(0.01, 0.03), a = rng.Uniform(-kPi, kPi);
+    h.omni_robot = "chassis: {com: [" + Fmt(r * std::cos(a)) + ", " + Fmt(r * std::sin(a)) + "]}\n";
+    h.description = h.omni_robot;
+  } else if (kind == "slope") {
+    h.name.clear();
+    h.outside = true;
+    h.field.slope = rng.Uniform(1, 3) * kPi / 180;
+    h.field.slope_direction = rng.Uniform(-kPi, kPi);
+    h.description = "floor slope " + Fmt(h.field.slope * 180 / kPi) + " deg downhill towards " +
+                    Fmt(h.field.slope_direction * 180 / kPi) + " deg";
   }
   if (h.description.empty()) h.description = h.yaml;
   return h;
@@ -205,7 +220,7 @@ std::vector<StudyRun> Runs() {
     for (int s = 1; s <= seeds; ++s) runs.push_back({"arm", k, s});
   }
   for (const char* k : {"time_delay", "motor_lag", "traction_limit", "velocity_saturation", "velocity_scale", "rotation_drift",
-                        "weak_wheel"}) {
+                        "weak_wheel", "com_offset", "slope"}) {
     for (int s = 1; s <= seeds; ++s) runs.push_back({"omni", k, s});
   }
   return runs;
@@ -239,9 +254,12 @@ TEST_P(DiagnoseStudy, DISABLED_Run) {
     const OmniModel plant = LoadOmniModelFromString("extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: hidden\n" +
                                                         h.omni_robot + (h.yaml.empty() ? "" : "effects:\n" + h.yaml),
                                                     "hidden.yaml");
-    const std::vector<OmniLog> logs = {testing::RecordOmniPlant(plant, 30, 100 + static_cast<std::uint64_t>(run.seed))};
+    const std::vector<OmniLog> logs = {
+        testing::RecordOmniPlant(plant, 30, 100 + static_cast<std::uint64_t>(run.seed), h.field)};
     const DiagnosisReport report = DiagnoseOmni(nominal, logs, DiagnosisOptions{});
-    const double plant_gap = DiagnoseOmni(plant, logs, none).gap_before;
+    // A slope lives in the field, which no model replays: its plant's own gap is the
+    // noise floor's estimate.
+    const double plant_gap = h.field.slope > 0 ? report.noise_floor : DiagnoseOmni(plant, logs, none).gap_before;
     WriteRow(run, h, report, plant_gap, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
 }

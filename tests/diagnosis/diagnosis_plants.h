@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "diagnosis/diagnosis.h"
+#include "engines/omni_engine.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 #include "robots/omni/omni_log.h"
@@ -64,8 +65,9 @@ ArmLog RecordArmPlant(const ArmModel& plant, const ArmModel& hat, std::uint64_t 
 ArmModel RrrWith(const std::string& effects_yaml);
 
 // A random drive of `plant` (camera noise as the shipped models: 1 mm, 0.005 rad) of
-// `seconds` at 30 fps on the analytic backend.
-OmniLog RecordOmniPlant(const OmniModel& plant, double seconds, std::uint64_t seed);
+// `seconds` at 30 fps on the analytic backend, on `field` (a sloping floor: outside
+// every model).
+OmniLog RecordOmniPlant(const OmniModel& plant, double seconds, std::uint64_t seed, const FieldModel& field = FieldModel{});
 
 // How an open-world plant is recorded: as a real SSL camera sees a robot.
 struct OmniRecording {

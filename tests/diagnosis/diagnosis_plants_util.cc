@@ -110,12 +110,12 @@ ArmModel RrrWith(const std::string& effects_yaml) {
   return LoadArmModelFromYamlString(yaml, "hidden.yaml");
 }
 
-OmniLog RecordOmniPlant(const OmniModel& plant, double seconds, std::uint64_t seed) {
+OmniLog RecordOmniPlant(const OmniModel& plant, double seconds, std::uint64_t seed, const FieldModel& field) {
   OmniModel m = plant;
   m.vision_noise_xy = 0.001;
   m.vision_noise_theta = 0.005;
   CommandSpec drive = RandomDrive(1.5, 3, 1.5);
-  return RecordLog(m, drive, seconds, seed, "analytic", "omni_plant_" + std::to_string(seed) + ".csv");
+  return RecordLog(m, drive, seconds, seed, "analytic", "omni_plant_" + std::to_string(seed) + ".csv", field);
 }
 
 OmniLog RecordOmniOpenWorld(const OmniModel& plant, double seconds, std::uint64_t seed, const OmniRecording& how) {

@@ -20,8 +20,10 @@ struct AnalyticRobot {
   Eigen::Matrix3d inverse_mass;  // (M + J^T I_w J)^{-1}
   Eigen::Matrix<double, 6, 1> x;  // x, y, theta, vx, vy, omega
   Eigen::VectorXd torques;        // n, N·m
+  Eigen::Vector2d downhill;       // N, the weight's pull along a sloping floor (field frame)
 
-  explicit AnalyticRobot(const OmniModel& m) : model(m), kin(m) {
+  AnalyticRobot(const OmniModel& m, const FieldModel& field) : model(m), kin(m) {
+    downhill = m.total_mass * field.Gravity().head<2>();
     rigid_mass = m.RigidBodyMass();
     const Eigen::Matrix3d mass =
         rigid_mass + m.wheel_spin_inertia * kin.wheels_from_body().transpose() * kin.wheels_from_body();
@@ -35,6 +37,14 @@ struct AnalyticRobot {
     const Eigen::Vector3d p = rigid_mass * Eigen::Vector3d(vx, vy, w);
     Eigen::Vector3d force(w * p[1], -w * p[0], vy * p[0] - vx * p[1]);
     force += kin.Wrench(torques);
+    // A sloping floor: the weight's share along it, at the centre of mass.
+    if (!downhill.isZero()) {
+      const double c = std::cos(th), sn = std::sin(th);
+      const Eigen::Vector2d f(c * downhill.x() + sn * downhill.y(), -sn * downhill.x() + c * downhill.y());
+      force[0] += f.x();
+      force[1] += f.y();
+      force[2] += model.com_offset.x() * f.y() - model.com_offset.y() * f.x();
+    }
     // Rollers: each wheel slides radially at (cos a, sin a) . v; the friction acts
     // along the axle, through the centre, so it makes no torque.
     for (int i = 0; i < model.num_wheels(); ++i) {
@@ -54,8 +64,8 @@ struct AnalyticRobot {
 
 class AnalyticOmniEngine final : public OmniEngine {
  public:
-  explicit AnalyticOmniEngine(const std::vector<OmniModel>& robots) {
-    for (const auto& m : robots) robots_.emplace_back(m);
+  AnalyticOmniEngine(const std::vector<OmniModel>& robots, const FieldModel& field) {
+    for (const auto& m : robots) robots_.emplace_back(m, field);
   }
 
   std::string name() const override { return "analytic"; }
@@ -107,8 +117,8 @@ class AnalyticOmniEngine final : public OmniEngine {
 }  // namespace
 
 std::unique_ptr<OmniEngine> MakeAnalyticOmniEngine(const std::vector<OmniModel>& robots,
-                                                   const FieldModel& /*field*/) {
-  return std::make_unique<AnalyticOmniEngine>(robots);
+                                                   const FieldModel& field) {
+  return std::make_unique<AnalyticOmniEngine>(robots, field);
 }
 
 }  // namespace twinsim

@@ -271,6 +271,7 @@ class BulletOmniEngine final : public OmniEngine {
     OmniModel model;
     std::vector<WheelContact> contacts;  // n, one per wheel; the wheel bodies point here
     std::vector<btVector3> axles;  // a_i in the chassis frame (unit)
+    btVector3 chassis_com{0, 0, 0};  // m, the chassis body's origin from the robot's centre at com_height, robot frame
     Eigen::VectorXd torques;       // n, N·m about a_i
     std::unique_ptr<btCylinderShapeZ> chassis_cylinder;
     std::unique_ptr<btCompoundShape> chassis_shape;
@@ -323,7 +324,8 @@ BulletOmniEngine::BulletOmniEngine(const std::vector<OmniModel>& robots,
   solver_ = std::make_unique<WheelFrictionSolver>();
   world_ = std::make_unique<OmniWorld>(dispatcher_.get(), broadphase_.get(), solver_.get(),
                                        config_.get());
-  world_->setGravity(btVector3(0, 0, -kGravity));
+  const Eigen::Vector3d gravity = field.Gravity();
+  world_->setGravity(btVector3(gravity.x(), gravity.y(), gravity.z()));
 
   btContactSolverInfo& info = world_->getSolverInfo();
   info.m_numIterations = kSolverIterations;
@@ -394,9 +396,11 @@ void BulletOmniEngine::BuildRobot(Robot& robot) {
   // Bullet rounds convex edges by the margin; keep the rounding small against the size.
   robot.chassis_cylinder->setMargin(std::min(0.005, 0.25 * std::min(r_c, 0.5 * h)));
   robot.chassis_shape = std::make_unique<btCompoundShape>(/*enableDynamicAabbTree=*/false, 1);
+  // The chassis' centre of mass may lie off the robot's centre (chassis.com).
+  robot.chassis_com = btVector3(m.chassis_com.x(), m.chassis_com.y(), 0);
   robot.chassis_shape->addChildShape(
       btTransform(btMatrix3x3::getIdentity(),
-                  btVector3(0, 0, m.ground_clearance + 0.5 * h - m.com_height)),
+                  btVector3(-robot.chassis_com.x(), -robot.chassis_com.y(), m.ground_clearance + 0.5 * h - m.com_height)),
       robot.chassis_cylinder.get());
   btRigidBody::btRigidBodyConstructionInfo chassis_info(
       m.chassis_mass, nullptr, robot.chassis_shape.get(), btVector3(i_tilt, i_tilt, i_yaw));
@@ -431,8 +435,8 @@ void BulletOmniEngine::BuildRobot(Robot& robot) {
     // Hinge frames: z = the axle a_i, x = up. In the chassis frame y is then d_i; in the
     // wheel's frame (x = a_i, z = up when level) the same axes read z = x_w, x = z_w.
     btTransform in_chassis, in_wheel;
-    in_chassis.setOrigin(btVector3(m.wheel_distance * c, m.wheel_distance * s,
-                                   m.wheel_radius - m.com_height));
+    in_chassis.setOrigin(btVector3(m.wheel_distance * c, m.wheel_distance * s, m.wheel_radius - m.com_height) -
+                         robot.chassis_com);
     in_chassis.getBasis().setValue(0, -s, -c,  //
                                    0, c, -s,   //
                                    1, 0, 0);
@@ -494,12 +498,16 @@ void BulletOmniEngine::SetState(int robot_index, const OmniBodyState& state) {
                                 " wheels");
 
   const double theta = state.pose.theta;  // rad
+  // chassis_pose: the robot's centre at com_height; the chassis body sits at its centre
+  // of mass, chassis_com from there.
   const btTransform chassis_pose(btQuaternion(btVector3(0, 0, 1), theta),
                                  btVector3(state.pose.x, state.pose.y, m.com_height));
   const Twist2 v_field = BodyToField(state.velocity, theta);
   const btVector3 velocity(v_field.vx, v_field.vy, 0);  // m/s
   const btVector3 spin(0, 0, v_field.omega);             // rad/s
-  PlaceBody(robot.chassis.get(), chassis_pose, velocity, spin);
+  const btVector3 com = chassis_pose.getBasis() * robot.chassis_com;  // m, field frame
+  PlaceBody(robot.chassis.get(), btTransform(chassis_pose.getBasis(), chassis_pose.getOrigin() + com),
+            velocity + spin.cross(com), spin);
 
   for (int i = 0; i < n; ++i) {
     const double alpha = m.wheel_angles[i];  // rad
@@ -601,11 +609,13 @@ OmniBodyState BulletOmniEngine::GetState(int robot_index) const {
   // interpolated between steps.
   const btTransform& pose = robot.chassis->getWorldTransform();
   const btMatrix3x3& basis = pose.getBasis();
+  // The robot's centre: the chassis body's origin less its centre-of-mass offset.
+  const btVector3 com = basis * robot.chassis_com;  // m, field frame
   OmniBodyState state;
-  state.pose.x = pose.getOrigin().x();
-  state.pose.y = pose.getOrigin().y();
+  state.pose.x = pose.getOrigin().x() - com.x();
+  state.pose.y = pose.getOrigin().y() - com.y();
   state.pose.theta = std::atan2(basis[1][0], basis[0][0]);
-  const btVector3& v = robot.chassis->getLinearVelocity();
+  const btVector3 v = robot.chassis->getLinearVelocity() - robot.chassis->getAngularVelocity().cross(com);
   const btVector3& spin = robot.chassis->getAngularVelocity();
   state.velocity = FieldToBody(Twist2{v.x(), v.y(), spin.z()}, state.pose.theta);
 

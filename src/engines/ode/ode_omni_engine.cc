@@ -69,7 +69,8 @@ struct OdeRobot {
   std::vector<dBodyID> wheels;
   std::vector<dGeomID> wheel_geoms;
   std::vector<dJointID> hinges;
-  std::vector<Eigen::Vector3d> wheel_offsets;  // m, wheel centre from chassis COM, robot frame
+  std::vector<Eigen::Vector3d> wheel_offsets;  // m, wheel centre from the robot's centre at com_height, robot frame
+  Eigen::Vector3d chassis_com = Eigen::Vector3d::Zero();  // m, the chassis body's origin from there, robot frame
   std::vector<Eigen::Vector3d> axles;          // unit a_i, robot frame
   Eigen::VectorXd torques;                     // n, N·m about a_i
   double wheel_contact_mass = 0;               // kg, the static share of one wheel
@@ -136,7 +137,8 @@ OdeOmniEngine::OdeOmniEngine(const std::vector<OmniModel>& robots, const FieldMo
   EnsureOdeInitialized();
   ode_world_ = std::make_unique<OdeWorld>();
   world_ = ode_world_->id();
-  dWorldSetGravity(world_, 0, 0, -kGravity);
+  const Eigen::Vector3d gravity = field.Gravity();
+  dWorldSetGravity(world_, gravity.x(), gravity.y(), gravity.z());
   // Robots often stand still between commands; a sleeping body would ignore the next one.
   dWorldSetAutoDisableFlag(world_, 0);
   // The world ERP only drives the hinges (contacts bring their own). Explicit Euler lets a
@@ -195,11 +197,14 @@ void OdeOmniEngine::BuildRobot(int index, const OmniModel& model) {
   dMass mass;
   dMassSetParameters(&mass, m, 0, 0, 0, i_xy, i_xy, i_z, 0, 0, 0);
   dBodySetMass(robot.chassis, &mass);
-  dBodySetPosition(robot.chassis, 0, 0, model.com_height);
+  // ODE's bodies have their centre of mass at their origin: the chassis' sits at its
+  // centre of mass, and the cylinder hangs around the robot's centre.
+  robot.chassis_com = Eigen::Vector3d(model.chassis_com.x(), model.chassis_com.y(), 0);
+  dBodySetPosition(robot.chassis, robot.chassis_com.x(), robot.chassis_com.y(), model.com_height);
 
   robot.chassis_geom = dCreateCylinder(space_, r_c, h);
   dGeomSetBody(robot.chassis_geom, robot.chassis);
-  dGeomSetOffsetPosition(robot.chassis_geom, 0, 0,
+  dGeomSetOffsetPosition(robot.chassis_geom, -robot.chassis_com.x(), -robot.chassis_com.y(),
                          model.ground_clearance + 0.5 * h - model.com_height);
   dGeomSetCategoryBits(robot.chassis_geom, kChassisCategory);
   dGeomSetCollideBits(robot.chassis_geom, kChassisCategory | kWallCategory);
@@ -301,7 +306,8 @@ void OdeOmniEngine::SetState(int index, const OmniBodyState& state) {
     dBodySetTorque(body, 0, 0, 0);
     dBodyEnable(body);
   };
-  place(robot.chassis, com, v, w);
+  const Eigen::Vector3d chassis_com = rot * robot.chassis_com;
+  place(robot.chassis, com + chassis_com, v + w.cross(chassis_com), w);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d offset = rot * robot.wheel_offsets[i];
     place(robot.wheels[i], com + offset, v + w.cross(offset),
@@ -317,11 +323,15 @@ OmniBodyState OdeOmniEngine::GetState(int index) const {
   const dReal* v = dBodyGetLinearVel(robot.chassis);
   const dReal* w = dBodyGetAngularVel(robot.chassis);
 
+  // The robot's centre: the chassis body's origin less its centre-of-mass offset.
   OmniBodyState state;
-  state.pose.x = p[0];
-  state.pose.y = p[1];
   state.pose.theta = std::atan2(rot[4], rot[0]);
-  const Twist2 v_field{v[0], v[1], w[2]};
+  const double c = std::cos(state.pose.theta), s = std::sin(state.pose.theta);
+  const double ox = c * robot.chassis_com.x() - s * robot.chassis_com.y();
+  const double oy = s * robot.chassis_com.x() + c * robot.chassis_com.y();
+  state.pose.x = p[0] - ox;
+  state.pose.y = p[1] - oy;
+  const Twist2 v_field{v[0] + w[2] * oy, v[1] - w[2] * ox, w[2]};
   state.velocity = FieldToBody(v_field, state.pose.theta);
 
   GetWheelSpeeds(index, &state.wheel_speeds);

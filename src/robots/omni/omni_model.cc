@@ -34,10 +34,11 @@ void OmniModel::Finalize() {
   const double chassis_iz =
       chassis_inertia_z > 0 ? chassis_inertia_z : 0.5 * chassis_mass * chassis_radius * chassis_radius;
   // Each wheel spins about a horizontal axle, so its vertical axis is a diameter.
-  total_inertia_z = chassis_iz + n * (wheel_inertia_diametral + m_w * wheel_distance * wheel_distance);
+  total_inertia_z = chassis_iz + chassis_mass * chassis_com.squaredNorm() +
+                    n * (wheel_inertia_diametral + m_w * wheel_distance * wheel_distance);
 
   // The wheels sit off the centre unless the layout is symmetric front to back.
-  com_offset.setZero();
+  com_offset = chassis_mass * chassis_com;
   for (int i = 0; i < n; ++i)
     com_offset += m_w * wheel_distance * Eigen::Vector2d(std::cos(wheel_angles[i]), std::sin(wheel_angles[i]));
   com_offset /= total_mass;
@@ -88,6 +89,8 @@ std::string OmniModel::Validate() const {
         << chassis_radius << " m)\n";
   if (ground_clearance >= 2 * wheel_radius)
     out << "ground_clearance must be below the wheel diameter\n";
+  if (!(chassis_com.allFinite() && chassis_com.norm() < 0.5 * chassis_radius))
+    out << "chassis com must lie within half the chassis radius of the centre (" << 0.5 * chassis_radius << " m)\n";
   if (com_height <= ground_clearance || com_height >= ground_clearance + chassis_height)
     out << "com_height must lie inside the chassis (between " << ground_clearance << " and "
         << ground_clearance + chassis_height << " m)\n";

@@ -58,6 +58,9 @@ struct OmniModel {
   double chassis_height = 0.14;     // m
   double chassis_inertia_z = 0;     // kg m^2 about the vertical axis; 0 = solid cylinder
   double com_height = 0.045;        // m above the floor
+  // m, the chassis' centre of mass in the floor plane, robot frame, from the centre the
+  // wheels are placed around (a battery off to one side); (0, 0) = centred.
+  Eigen::Vector2d chassis_com = Eigen::Vector2d::Zero();
   double ground_clearance = 0.008;  // m between the floor and the chassis' underside
 
   // Wheels (all alike).

@@ -49,6 +49,8 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     c.Get("height", &model.chassis_height, Positive(10));
     c.Get("inertia_z", &model.chassis_inertia_z, NonNegative(1e4));
     c.Get("com_height", &model.com_height, Positive(10));
+    std::vector<double> com;
+    if (c.Get("com", &com, 2, InRange(-10, 10))) model.chassis_com = Eigen::Vector2d(com[0], com[1]);
     c.Get("ground_clearance", &model.ground_clearance, NonNegative(1));
     c.Finish();
   } else {

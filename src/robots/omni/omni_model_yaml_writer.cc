@@ -71,6 +71,10 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   line("  height", YamlNumber(model.chassis_height), "m");
   line("  inertia_z", YamlNumber(model.chassis_inertia_z), "kg m^2; 0 = solid cylinder");
   line("  com_height", YamlNumber(model.com_height), "m above the floor");
+  if (!model.chassis_com.isZero()) {
+    line("  com", "[" + YamlNumber(model.chassis_com.x()) + ", " + YamlNumber(model.chassis_com.y()) + "]",
+         "m, the chassis' centre of mass from the centre, robot frame");
+  }
   line("  ground_clearance", YamlNumber(model.ground_clearance), "m");
   s << "wheels:\n";
   std::string angles;
