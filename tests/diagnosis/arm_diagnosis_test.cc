@@ -40,7 +40,9 @@ struct ArmCase {
 
 // Cases not met under the current rules, and why (measured): skipped with this message
 // until the issue that owns them is resolved.
+// TWINSIM_RUN_OPEN_FINDINGS=1 runs them anyway (to measure them again).
 std::string OpenFinding(const std::string& label) {
+  if (std::getenv("TWINSIM_RUN_OPEN_FINDINGS")) return "";
   if (label == "delay_18ms_joint2") {
     return "issue 28: time_delay (joint 2) removes 21.5 % of the selection rows' squared error at t = 3, short of "
            "Holm's level over 22 candidates with the long-run standard error (two 20 s logs)";
