@@ -223,10 +223,10 @@ IlcBodePlot IlcCriterionPlots(const ClosedLoopFrf& frf, const LearningFilter& fi
 }
 
 std::string FormatIlcSafeguardCsv(const IlcResult& result) {
-  std::string csv = "trial,joint,rms,best_rms,best_trial,q_cutoff\n";
+  std::string csv = "trial,joint,action,rms,best_rms,best_trial,q_cutoff\n";
   for (const IlcSafeguardEvent& e : result.safeguard) {
-    csv += std::to_string(e.trial) + "," + std::to_string(e.joint + 1) + "," + Num(e.rms) + "," + Num(e.best_rms) + "," +
-           std::to_string(e.best_trial) + "," + Num(e.cutoff) + "\n";
+    csv += std::to_string(e.trial) + "," + std::to_string(e.joint + 1) + "," + e.action + "," + Num(e.rms) + "," +
+           Num(e.best_rms) + "," + std::to_string(e.best_trial) + "," + Num(e.cutoff) + "\n";
   }
   return csv;
 }
@@ -241,7 +241,8 @@ std::string IlcSafeguardSummary(const IlcResult& result, const IlcOptions& optio
     s << "After each trial every joint's RMS error is compared with its best so far; above " << options.safeguard.growth
       << " times it, the joint's feedforward goes back to that of its best trial and its Q cut-off is multiplied by "
       << options.safeguard.cutoff_factor << " (below " << options.safeguard.min_cutoff
-      << " Hz, or with no Q, the joint stops learning). ";
+      << " Hz, or with no Q, the joint stops learning; a stopped joint that grows again through the others sends "
+         "every joint back to the best trial's feedforward and ends learning). ";
     if (result.safeguard.empty()) {
       s << "It never acted.";
     } else {
@@ -357,7 +358,10 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
     for (const IlcSafeguardEvent& e : result.safeguard) {
       html << "<tr><td>" << e.trial << "</td><td>" << e.joint + 1 << "</td><td>" << Num(1e3 * e.rms) << "</td><td>"
            << Num(1e3 * e.best_rms) << "</td><td>" << e.best_trial << "</td><td>"
-           << (e.cutoff > 0 ? Num(e.cutoff) : std::string("stopped learning")) << "</td></tr>\n";
+           << (e.action == "stop_all" ? std::string("every joint back to the best trial; learning ended")
+               : e.cutoff > 0       ? Num(e.cutoff)
+                                    : std::string("stopped learning"))
+           << "</td></tr>\n";
     }
     html << "</table>\n";
   }

@@ -61,8 +61,9 @@ std::string FormatIlcFiltersCsv(const ClosedLoopFrf& frf, const std::vector<Lear
 // log10 of the RMS error (rad) per joint and of the worst joint over the trials.
 SeriesPlot IlcConvergencePlot(const IlcResult& result, const std::string& title);
 
-// safeguard.csv: `trial,joint,rms,best_rms,best_trial,q_cutoff`, one row per action of
-// the safeguard (joint 1-based; rad or m; q_cutoff 0 where the joint stopped learning).
+// safeguard.csv: `trial,joint,action,rms,best_rms,best_trial,q_cutoff`, one row per action
+// of the safeguard (joint 1-based; action lower_q, stop_joint or stop_all; rad or m;
+// q_cutoff 0 where learning stopped).
 std::string FormatIlcSafeguardCsv(const IlcResult& result);
 
 // What the safeguard did, the best trial and where the last trial stands, in words.

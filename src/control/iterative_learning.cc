@@ -412,6 +412,7 @@ IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference&
   std::vector<int> above(static_cast<std::size_t>(n), 0);  // trials in a row above growth x best
   std::vector<int> lowered(static_cast<std::size_t>(n), 0);  // Q's cutoff lowerings so far
   double best_relative = INFINITY;
+  bool stopped = false;  // every joint back on the best trial's feedforward, for good
   TrackingOptions o = tracking;
   for (int trial = 0; trial <= options.trials; ++trial) {
     o.feedforward = &f;
@@ -428,40 +429,54 @@ IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference&
       result.best_trial = trial;
       result.best_feedforward = f;
     }
-    // Which joints back off: their error grew past `growth` times their best.
+    // Which joints back off: their error grew past `growth` times their best. A joint
+    // that no longer learns can still grow through the others (the arm couples them):
+    // then every joint goes back to the best trial's feedforward and learning ends.
     std::vector<bool> back_off(static_cast<std::size_t>(n), false);
-    for (int j = 0; j < n; ++j) {
+    for (int j = 0; j < n && !stopped; ++j) {
       const auto js = static_cast<std::size_t>(j);
       if (run.error_rms[j] < best_rms[j]) {
         best_rms[j] = run.error_rms[j];
         best_trial[js] = trial;
         best_f.col(j) = f.col(j);
         above[js] = 0;
-      } else if (!(options.safeguard.growth > 0 && learning[js] &&
-                   run.error_rms[j] > options.safeguard.growth * best_rms[j])) {
+      } else if (!(options.safeguard.growth > 0 && run.error_rms[j] > options.safeguard.growth * best_rms[j])) {
         above[js] = 0;
       } else if (++above[js] >= options.safeguard.patience) {
         above[js] = 0;
-        back_off[js] = true;
-        IlcSafeguardEvent event{trial, j, run.error_rms[j], best_rms[j], best_trial[js], 0};
+        IlcSafeguardEvent event{trial, j, run.error_rms[j], best_rms[j], best_trial[js], 0, ""};
         const double lower = now.q_cutoffs[js] * options.safeguard.cutoff_factor;
-        if (options.q_order > 0 && lower >= options.safeguard.min_cutoff && lowered[js] < options.safeguard.lowerings) {
+        if (!learning[js]) {
+          stopped = true;
+          event.best_trial = result.best_trial;
+          event.action = "stop_all";
+        } else if (options.q_order > 0 && lower >= options.safeguard.min_cutoff &&
+                   lowered[js] < options.safeguard.lowerings) {
+          back_off[js] = true;
           now.q_cutoffs[js] = event.cutoff = lower;
+          event.action = "lower_q";
           ++lowered[js];
         } else {
+          back_off[js] = true;
           learning[js] = false;
+          event.action = "stop_joint";
         }
         result.safeguard.push_back(event);
       }
     }
+    if (stopped) std::fill(learning.begin(), learning.end(), false);
     if (trial == options.trials) {
       result.feedforward = f;
       result.last = std::move(run);
     } else {
-      f = IlcUpdate(f, error, filters, now, plant.sample_time);
-      for (int j = 0; j < n; ++j) {
-        const auto js = static_cast<std::size_t>(j);
-        if (back_off[js] || !learning[js]) f.col(j) = best_f.col(j);  // its best trial's, replayed
+      if (stopped) {
+        f = result.best_feedforward;  // the best trial, replayed from now on
+      } else {
+        f = IlcUpdate(f, error, filters, now, plant.sample_time);
+        for (int j = 0; j < n; ++j) {
+          const auto js = static_cast<std::size_t>(j);
+          if (back_off[js] || !learning[js]) f.col(j) = best_f.col(j);  // its best trial's, replayed
+        }
       }
     }
   }

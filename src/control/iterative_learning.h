@@ -139,7 +139,9 @@ LearningFilter ModelLearningFilter(const ArmModel& hat, const TrackingOptions& t
 // show): the joint's feedforward goes back to the one of its best trial and its Q
 // cutoff is multiplied by `cutoff_factor` (with no Q, q_order 0, it stops learning).
 // After `lowerings` such steps, or below `min_cutoff`, the joint stops learning and
-// keeps its best feedforward: a lower Q filters the whole feedforward learned so far,
+// keeps its best feedforward; if a stopped joint's error then grows the same way (the
+// others move it through the coupling), every joint goes back to the feedforward of the
+// best trial (IlcResult::best_trial) and learning ends: a lower Q filters the whole feedforward learned so far,
 // and each lowering costs a jump in the error (measured: 45 times on the shoulder with
 // three times the payload after a third lowering).
 //
@@ -159,6 +161,10 @@ struct IlcSafeguardEvent {
   double best_rms = 0;      // rad or m: its best before
   int best_trial = 0;       // the trial whose feedforward it went back to
   double cutoff = 0;        // Hz, Q's new cutoff; 0 when the joint stopped learning
+  // "lower_q", "stop_joint" (the joint keeps its best trial's feedforward), or
+  // "stop_all": a joint that had stopped grew again through the others, and every joint
+  // went back to the best trial's feedforward (best_trial is then that trial).
+  std::string action;
 };
 
 struct IlcOptions {

@@ -88,7 +88,7 @@ TEST(IlcReport, FilesInTheOrderWrittenWithoutPlotsWhenNotDrawn) {
   for (const auto& [name, bytes] : files) names.push_back(name);
   EXPECT_EQ(names, (std::vector<std::string>{"trials.csv", "frf.csv", "filters.csv", "feedforward.csv",
                                               "best_feedforward.csv", "safeguard.csv", "report.html"}));
-  EXPECT_EQ(files[5].second, "trial,joint,rms,best_rms,best_trial,q_cutoff\n");  // it never acted
+  EXPECT_EQ(files[5].second, "trial,joint,action,rms,best_rms,best_trial,q_cutoff\n");  // it never acted
   EXPECT_EQ(files[3].second, "t,f1\n" + FormatCsvNumber(0) + "," + FormatCsvNumber(0.5) + "\n" +
                                  FormatCsvNumber(0.001) + "," + FormatCsvNumber(0.5) + "\n" + FormatCsvNumber(0.002) +
                                  "," + FormatCsvNumber(0.5) + "\n");
