@@ -323,9 +323,14 @@ std::string FormatIlcReportHtml(const IlcReportSetup& setup, const ArmModel& pla
                                                                   "at every measured posture i"))
                          : std::string("none"))
        << ". Update f<sub>k+1</sub> = Q(f<sub>k</sub> + " << Num(o.gain)
-       << " L e<sub>k</sub>).</p>\n<table><tr><th>joint</th><th>&tau; [samples]</th><th>a2 + a2' [kg m&sup2;]</th>"
+       << (o.update == "norm_optimal"
+               ? std::string(" S e<sub>k</sub>), S = (I + w L L<sup>T</sup>)<sup>&minus;1</sup> L, the norm-optimal step "
+                             "(L/(1 + w|L|&sup2;) in frequency; w = 1/|L(f<sub>b</sub>)|&sup2;, f<sub>b</sub> = ") +
+                     (o.norm_optimal_bandwidth > 0 ? Num(o.norm_optimal_bandwidth) + " Hz" : std::string("each joint's Q cut-off")) + ")"
+               : std::string(" L e<sub>k</sub>)"))
+       << ".</p>\n<table><tr><th>joint</th><th>&tau; [samples]</th><th>a2 + a2' [kg m&sup2;]</th>"
           "<th>a4 [kg m&sup2; s&sup2;]</th><th>a1 [N m s/rad]</th><th>a0 [N m/rad]</th><th>fit residual</th><th>|1 &minus; &alpha; PS L| &lt; 1 up to [Hz]</th>"
-          "<th>Q cut-off [Hz]</th><th>worst |Q|&sup2;|1 &minus; &alpha; PS L|</th></tr>\n";
+          "<th>Q cut-off [Hz]</th><th>worst |Q|&sup2;|1 &minus; &alpha; PS S| (S the step: L, or the norm-optimal step)</th></tr>\n";
   for (int j = 0; j < n; ++j) {
     const double limit = LearningLimitFrequency(frf, j, filters[j], o.gain);
     html << "<tr><td>" << j + 1 << "</td><td>" << filters[j].shift << "</td><td>"

@@ -3,6 +3,8 @@
 #include "control/iterative_learning.h"
 
 #include <Eigen/QR>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -99,6 +101,47 @@ Eigen::VectorXd LearningFilter::Apply(const Eigen::VectorXd& e, double sample_ti
     }
   }
   return out;
+}
+
+Eigen::SparseMatrix<double> LearningFilter::Matrix(Eigen::Index n, double sample_time) const {
+  // The rows of Apply: each coefficient lands on its clamped index, as e holds its first
+  // and last value beyond the ends.
+  std::vector<Eigen::Triplet<double>> entries;
+  const double h = sample_time;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    auto add = [&](Eigen::Index i, double value) {
+      if (value != 0) entries.emplace_back(k, std::clamp<Eigen::Index>(i, 0, n - 1), value);
+    };
+    const Eigen::Index c = k + shift;
+    for (int d = -1; d <= 1; ++d) add(c + d, inertia * (d == 0 ? -2 : 1) / (h * h));
+    for (int d = 0; d <= 2; ++d) add(c + d, inertia_early * (d == 1 ? -2 : 1) / (h * h));
+    add(k + 1, damping / (2 * h));
+    add(k - 1, -damping / (2 * h));
+    add(k, stiffness);
+    if (snap != 0) {
+      const double w[5] = {1, -4, 6, -4, 1};
+      for (int m : {0, 1}) {
+        for (int d = -2; d <= 2; ++d) add(c + m + d, snap * 0.5 * w[d + 2] / (h * h * h * h));
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> l(n, n);
+  l.setFromTriplets(entries.begin(), entries.end());  // sums duplicates
+  return l;
+}
+
+Eigen::VectorXd NormOptimalStep(const LearningFilter& filter, double weight, const Eigen::VectorXd& e,
+                                double sample_time) {
+  const Eigen::SparseMatrix<double> l = filter.Matrix(e.size(), sample_time);
+  Eigen::SparseMatrix<double> a = weight * (l * Eigen::SparseMatrix<double>(l.transpose()));
+  for (Eigen::Index i = 0; i < e.size(); ++i) a.coeffRef(i, i) += 1;
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(a);
+  if (ldlt.info() != Eigen::Success) throw std::runtime_error("NormOptimalStep: I + w L L^T did not factor");
+  return ldlt.solve(Eigen::VectorXd(l * e));
+}
+
+double NormOptimalWeight(const LearningFilter& filter, double bandwidth_hz, double sample_time) {
+  return 1 / std::norm(filter.Response(bandwidth_hz, sample_time));
 }
 
 std::string LearningFilter::Summary() const {
@@ -279,6 +322,9 @@ bool IlcOptions::IsValid(double sample_time, std::string* why) const {
   if (!(safeguard.cutoff_factor > 0 && safeguard.cutoff_factor < 1)) return fail("safeguard.cutoff_factor must lie in (0, 1)");
   if (!(std::isfinite(safeguard.min_cutoff) && safeguard.min_cutoff > 0)) return fail("safeguard.min_cutoff must be > 0");
   if (safeguard.patience < 1) return fail("safeguard.patience must be >= 1");
+  if (update != "standard" && update != "norm_optimal") return fail("update must be standard or norm_optimal");
+  if (!(std::isfinite(norm_optimal_bandwidth) && norm_optimal_bandwidth >= 0 && norm_optimal_bandwidth < 0.5 / sample_time))
+    return fail("norm_optimal_bandwidth must lie between 0 (each joint's Q cutoff) and the Nyquist frequency");
   if (safeguard.lowerings < 0) return fail("safeguard.lowerings must be >= 0");
   return true;
 }
@@ -295,12 +341,20 @@ Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const Lea
       const ButterworthFilter bw = DesignButterworthLowPass(options.q_order, options.Cutoff(joint), 1 / frf.sample_time);
       q = std::norm(FrequencyResponse(bw, frf.frequency[i]));
     }
-    const std::complex<double> l = filter.Response(frf.frequency[i], frf.sample_time);
+    const std::complex<double> l = LearningStepResponse(filter, options, joint, frf.frequency[i], frf.sample_time);
     for (const Eigen::VectorXcd& ps : frf.response[static_cast<std::size_t>(joint)]) {
       out[i] = std::max(out[i], q * std::abs(1.0 - options.gain * ps[i] * l));
     }
   }
   return out;
+}
+
+std::complex<double> LearningStepResponse(const LearningFilter& filter, const IlcOptions& options, int joint,
+                                          double frequency_hz, double sample_time) {
+  const std::complex<double> l = filter.Response(frequency_hz, sample_time);
+  if (options.update != "norm_optimal") return l;
+  const double bandwidth = options.norm_optimal_bandwidth > 0 ? options.norm_optimal_bandwidth : options.Cutoff(joint);
+  return l / (1 + NormOptimalWeight(filter, bandwidth, sample_time) * std::norm(l));
 }
 
 double AutoQCutoff(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, const IlcOptions& options,
@@ -356,7 +410,14 @@ Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, co
   }
   Eigen::MatrixXd next = f;
   for (Eigen::Index j = 0; j < f.cols(); ++j) {
-    next.col(j) += options.gain * filters[static_cast<std::size_t>(j)].Apply(e.col(j), sample_time);
+    const LearningFilter& l = filters[static_cast<std::size_t>(j)];
+    if (options.update == "norm_optimal") {
+      const double bandwidth =
+          options.norm_optimal_bandwidth > 0 ? options.norm_optimal_bandwidth : options.Cutoff(static_cast<int>(j));
+      next.col(j) += options.gain * NormOptimalStep(l, NormOptimalWeight(l, bandwidth, sample_time), e.col(j), sample_time);
+    } else {
+      next.col(j) += options.gain * l.Apply(e.col(j), sample_time);
+    }
   }
   if (options.q_order > 0) {
     for (Eigen::Index j = 0; j < f.cols(); ++j) {

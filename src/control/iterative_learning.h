@@ -39,6 +39,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <complex>
 #include <functional>
 #include <string>
@@ -75,6 +76,8 @@ struct LearningFilter {
   // L applied to a whole trial's error e (N samples, rad), non-causally; beyond the ends
   // e holds its first and last value. Returns N samples, N·m.
   Eigen::VectorXd Apply(const Eigen::VectorXd& e, double sample_time) const;
+  // Apply as an n x n matrix (the same clamping at the ends).
+  Eigen::SparseMatrix<double> Matrix(Eigen::Index n, double sample_time) const;
   // "tau 1 samples, inertia 0.51 kg m^2, damping 64 N m s/rad, stiffness 2e3 N m/rad".
   std::string Summary() const;
 };
@@ -167,8 +170,26 @@ struct IlcSafeguardEvent {
   std::string action;
 };
 
+// The norm-optimal update (Amann, Owens and Rogers 1996) with the learning filter's
+// model of the plant, P = L^-1: the feedforward step that minimises
+// |e_{k+1}|^2 + w |f_{k+1} - f_k|^2 for that model over the whole trial,
+//   f_{k+1} - f_k = (P^T P + w I)^-1 P^T e_k = (I + w L L^T)^-1 L e_k,
+// a banded system solved by sparse LDL^T. In frequency, the step is L / (1 + w |L|^2):
+// for the model the error falls by w|L|^2 / (1 + w|L|^2) < 1 every trial at every
+// frequency, quickly where |L| is small (low frequencies) and ever more slowly above the
+// frequency where w |L|^2 = 1. NormOptimalWeight sets that frequency.
+Eigen::VectorXd NormOptimalStep(const LearningFilter& filter, double weight, const Eigen::VectorXd& e,
+                                double sample_time);
+// w = 1 / |L(bandwidth)|^2: learning at half speed at `bandwidth_hz`.
+double NormOptimalWeight(const LearningFilter& filter, double bandwidth_hz, double sample_time);
+
 struct IlcOptions {
   int trials = 10;        // learning trials after trial 0 (which runs without learning)
+  // "standard": f + gain L e (seed 001); "norm_optimal": f + gain (I + w L L^T)^-1 L e
+  // (NormOptimalStep), w from norm_optimal_bandwidth (Hz; 0 = each joint's Q cutoff).
+  // Q filters the result in both.
+  std::string update = "standard";
+  double norm_optimal_bandwidth = 0;
   double gain = 1;        // alpha
   int q_order = 4;        // the robustness filter's Butterworth order; 0 = no filter Q
   double q_cutoff = 40;   // Hz, its -3 dB frequency per pass (-6 dB after FiltFilt)
@@ -194,8 +215,13 @@ struct IlcOptions {
 double AutoQCutoff(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, const IlcOptions& options,
                    double* worst = nullptr);
 
-// |Q(f)|^2 |1 - gain PS(f) L(f)| at every line of `frf` for joint `joint`, the worst over
-// the postures: < 1 where learning converges. Throws InputError for invalid options,
+// What one update's learning step does at `frequency_hz` (before gain and Q): L for the
+// standard update, L / (1 + w |L|^2) for the norm-optimal one.
+std::complex<double> LearningStepResponse(const LearningFilter& filter, const IlcOptions& options, int joint,
+                                          double frequency_hz, double sample_time);
+
+// |Q(f)|^2 |1 - gain PS(f) S(f)| at every line of `frf` for joint `joint`, S the learning
+// step (LearningStepResponse), the worst over the postures: < 1 where learning converges. Throws InputError for invalid options,
 // std::invalid_argument for a joint that does not exist.
 Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
                                   const IlcOptions& options);

@@ -1,5 +1,6 @@
 // ILC that stays converged (issue 30): the shipped writing scene over 50 trials, and
-// the filters it measured and fitted run on plants they were not fitted to. The cause
+// the filters it measured and fitted run on plants they were not fitted to; the
+// norm-optimal update. The cause
 // of the slow growth the safeguard answers is measured in docs/ilc.md ("Staying
 // converged"): without friction the same design converges monotonically.
 #include <gtest/gtest.h>
@@ -8,6 +9,8 @@
 #include <cstdlib>
 #include <iostream>
 #include <string>
+
+#include <Eigen/Dense>
 
 #include "control/iterative_learning.h"
 #include "robots/arm/arm_model.h"
@@ -51,8 +54,61 @@ TEST(IlcSafeguard, ShippedSceneStaysWithinItsBestOverFiftyTrials) {
   EXPECT_GT(LastOverBest(unguarded).maxCoeff(), 3) << unguarded.FullReport();
 }
 
-// Plants the filters were not fitted to: the shipped scene's measurement, filters and
-// cutoffs, then 50 trials on a plant with three times the payload, 4 ms more command
+// The norm-optimal step is the lifted solution for the filter's model P = L^-1: with
+// u = P df the model's response to the step, |e - u|^2 + w |L u|^2 is least where
+// (I + w L^T L) u = e (solved densely here, a well-conditioned system), and df = L u is
+// the step; it lowers that cost below |e|^2, the cost of no step.
+TEST(IlcNormOptimal, StepIsTheLiftedOptimumForTheFiltersModel) {
+  LearningFilter l;
+  l.shift = 1;
+  l.inertia = 0.4;
+  l.damping = 40;
+  l.stiffness = 1200;
+  const double h = 1e-3;
+  const int n = 200;
+  Eigen::VectorXd e(n);
+  for (int k = 0; k < n; ++k) e[k] = std::sin(0.05 * k) + 0.3 * std::sin(0.7 * k + 1);
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(l.Matrix(n, h));
+  // The matrix is Apply.
+  EXPECT_LT((dense * e - l.Apply(e, h)).norm(), 1e-9 * (l.Apply(e, h)).norm());
+  for (double bandwidth : {5.0, 40.0, 150.0}) {
+    const double w = NormOptimalWeight(l, bandwidth, h);
+    const Eigen::MatrixXd a = Eigen::MatrixXd::Identity(n, n) + w * dense.transpose() * dense;
+    const Eigen::VectorXd u = a.ldlt().solve(e);
+    const Eigen::VectorXd df = NormOptimalStep(l, w, e, h);
+    EXPECT_LT((df - dense * u).norm(), 1e-9 * df.norm()) << bandwidth;
+    EXPECT_LT((e - u).squaredNorm() + w * (dense * u).squaredNorm(), e.squaredNorm()) << bandwidth;
+  }
+  // w -> 0: the plain learning filter, the model's exact inverse.
+  EXPECT_LT((NormOptimalStep(l, 1e-30, e, h) - l.Apply(e, h)).norm(), 1e-9 * l.Apply(e, h).norm());
+}
+
+// The norm-optimal scene (no Q, half speed at 40 Hz), without the safeguard: 10 times
+// lower within 7 trials, no trial more than 1.1 times the best before it (from trial
+// 29 to 37 the elbow alternates, up to 1.04 times its best at 2-3 urad, while it keeps
+// falling), and the last within 1.05 times the best.
+TEST(IlcNormOptimal, ShippedSceneLearnsWithoutQAndStaysNearItsBest) {
+  ArmScene scene = LoadArmScene(SourcePath("scenes/rrr_writing_ilc_norm_optimal.yaml"));
+  ASSERT_EQ(scene.ilc.options.update, "norm_optimal");
+  scene.ilc.options.safeguard.growth = 0;  // no help: the update alone
+  const IlcSceneRun run = RunIlcScene(scene, "", 50);
+  const IlcResult& r = run.result;
+  SCOPED_TRACE(r.FullReport());
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_LT(ConvergenceFactor(run.frf, j, run.filters[static_cast<std::size_t>(j)], run.options).maxCoeff(), 1);
+    EXPECT_GE(r.error_rms[0][j] / r.error_rms[7][j], 10) << "joint " << j + 1;
+    double best = r.error_rms[0][j];
+    for (int k = 1; k <= 50; ++k) {
+      EXPECT_LE(r.error_rms[k][j], 1.1 * best) << "joint " << j + 1 << ", trial " << k;
+      best = std::min(best, r.error_rms[k][j]);
+    }
+    EXPECT_LE(r.error_rms[50][j], 1.05 * best) << "joint " << j + 1;
+  }
+  EXPECT_TRUE(r.safeguard.empty());
+}
+
+// Plants the filters were not fitted to: each shipped writing scene's measurement,
+// filters and cutoffs (standard and norm-optimal), then 50 trials on a plant with three times the payload, 4 ms more command
 // delay, or twice the friction. No joint ends above 1.5 times its best; none diverges.
 struct Plant {
   std::string label;
@@ -61,31 +117,35 @@ struct Plant {
 
 void PrintTo(const Plant& p, std::ostream* os) { *os << p.label; }
 
+// Each shipped scene's measurement, filters and cutoffs (or none) on the plant, 50 trials.
+IlcResult RunOnUnfittedPlant(const ArmScene& scene, const Plant& p) {
+  const IlcSceneRun fitted = RunIlcScene(scene, "", 0);
+  const ArmModel plant = LoadArmModelFromYamlString(
+      "extends: " + SourcePath("models/rrr_plant.yaml") + "\nname: " + p.label + "\n" + p.yaml, p.label + ".yaml");
+  IlcOptions o = fitted.options;
+  o.trials = 50;
+  return RunIlc(plant, scene.hat, fitted.reference, fitted.tracking, fitted.filters, o);
+}
+
 class IlcUnfittedPlant : public ::testing::TestWithParam<Plant> {};
 
 TEST_P(IlcUnfittedPlant, StaysWithinOneAndAHalfTimesItsBest) {
-  const ArmScene scene = LoadArmScene(SourcePath("scenes/rrr_writing_ilc.yaml"));
-  const IlcSceneRun fitted = RunIlcScene(scene, "", 0);
-  const ArmModel plant = LoadArmModelFromYamlString(
-      "extends: " + SourcePath("models/rrr_plant.yaml") + "\nname: " + GetParam().label + "\n" + GetParam().yaml,
-      GetParam().label + ".yaml");
-  const IlcResult r = RunIlc(plant, scene.hat, fitted.reference, fitted.tracking, fitted.filters,
-                             [&] {
-                               IlcOptions o = fitted.options;
-                               o.trials = 50;
-                               return o;
-                             }());
-  SCOPED_TRACE(r.FullReport());
-  const Eigen::VectorXd ratio = LastOverBest(r);
-  if (std::getenv("TWINSIM_PRINT_ILC")) {
-    std::cout << GetParam().label << ": trial 0 " << r.error_rms[0].transpose() << ", trial 50 "
-              << r.error_rms[50].transpose() << ", last/best " << ratio.transpose() << ", safeguard acted "
-              << r.safeguard.size() << " times\n";
+  for (const char* file : {"scenes/rrr_writing_ilc.yaml", "scenes/rrr_writing_ilc_norm_optimal.yaml"}) {
+    SCOPED_TRACE(file);
+    const IlcResult r = RunOnUnfittedPlant(LoadArmScene(SourcePath(file)), GetParam());
+    SCOPED_TRACE(r.FullReport());
+    const Eigen::VectorXd ratio = LastOverBest(r);
+    if (std::getenv("TWINSIM_PRINT_ILC")) {
+      std::cout << file << ", " << GetParam().label << ": trial 0 " << r.error_rms[0].transpose() << ", trial 50 "
+                << r.error_rms[50].transpose() << ", last/best " << ratio.transpose() << ", safeguard acted "
+                << r.safeguard.size() << " times\n";
+    }
+    for (int j = 0; j < 3; ++j) EXPECT_LE(ratio[j], 1.5) << "joint " << j + 1;
+    EXPECT_FALSE(r.Diverged());
+    // Learned, not only held: twice the friction leaves the elbow 9.6 times lower under
+    // the standard update (docs/ilc.md).
+    EXPECT_LT(r.WorstRms(50), 0.2 * r.WorstRms(0));
   }
-  for (int j = 0; j < 3; ++j) EXPECT_LE(ratio[j], 1.5) << "joint " << j + 1;
-  EXPECT_FALSE(r.Diverged());
-  // Learned, not only held: twice the friction leaves the elbow 9.6 times lower (docs/ilc.md).
-  EXPECT_LT(r.WorstRms(50), 0.2 * r.WorstRms(0));
 }
 
 INSTANTIATE_TEST_SUITE_P(

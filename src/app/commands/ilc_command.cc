@@ -55,15 +55,16 @@ int RunIlcCommand(const IlcCommandOptions& options) {
           (o.q_cutoffs.empty() ? " at " + Num(o.q_cutoff) + " Hz" : ", cutoff per joint by the convergence criterion") +
           " (zero phase)";
     }
-    std::printf("ilc %s: %d postures, PS measured %g..%g Hz in %.2f s; learning filter %s, gain %g, Q %s\n",
+    std::printf("ilc %s: %d postures, PS measured %g..%g Hz in %.2f s; learning filter %s, %s update, gain %g, Q %s\n",
                 scene.name.c_str(), static_cast<int>(run.postures.size()), frf.frequency[0],
-                frf.frequency[frf.frequency.size() - 1], run.frf_seconds, spec.learning_filter.c_str(), o.gain,
-                q.c_str());
+                frf.frequency[frf.frequency.size() - 1], run.frf_seconds, spec.learning_filter.c_str(),
+                o.update == "norm_optimal" ? "norm-optimal" : "standard", o.gain, q.c_str());
     for (int j = 0; j < n; ++j) {
       const double limit = LearningLimitFrequency(frf, j, run.filters[j], o.gain);
-      std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; Q at %s Hz, worst |Q|^2 |1 - gain PS L| %.3g\n", j + 1,
+      std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; %s, worst |Q|^2 |1 - gain PS S| %.3g\n", j + 1,
                   run.filters[j].Summary().c_str(), std::isfinite(limit) ? (Num(limit) + " Hz").c_str() : "every line",
-                  Num(o.Cutoff(j)).c_str(), ConvergenceFactor(frf, j, run.filters[j], o).maxCoeff());
+                  o.q_order > 0 ? ("Q at " + Num(o.Cutoff(j)) + " Hz").c_str() : "no Q",
+                  ConvergenceFactor(frf, j, run.filters[j], o).maxCoeff());
     }
   };
   callbacks.trial_done = [&](int trial, const TrackingTrial& t) {
