@@ -239,8 +239,11 @@ std::string IlcSafeguardSummary(const IlcResult& result, const IlcOptions& optio
     s << "Off (ilc.safeguard: off): nothing watched the trials.";
   } else {
     s << "After each trial every joint's RMS error is compared with its best so far; above " << options.safeguard.growth
-      << " times it, the joint's feedforward goes back to that of its best trial and its Q cut-off is multiplied by "
-      << options.safeguard.cutoff_factor << " (below " << options.safeguard.min_cutoff
+      << " times it for " << options.safeguard.patience
+      << " trial(s) in a row, the joint's feedforward goes back to that of its best trial and its Q cut-off is "
+         "multiplied by "
+      << options.safeguard.cutoff_factor << ", at most " << options.safeguard.lowerings << " time(s) (then, below "
+      << options.safeguard.min_cutoff
       << " Hz, or with no Q, the joint stops learning; a stopped joint that grows again through the others sends "
          "every joint back to the best trial's feedforward and ends learning). ";
     if (result.safeguard.empty()) {

