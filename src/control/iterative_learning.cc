@@ -322,6 +322,7 @@ bool IlcOptions::IsValid(double sample_time, std::string* why) const {
   if (!(safeguard.cutoff_factor > 0 && safeguard.cutoff_factor < 1)) return fail("safeguard.cutoff_factor must lie in (0, 1)");
   if (!(std::isfinite(safeguard.min_cutoff) && safeguard.min_cutoff > 0)) return fail("safeguard.min_cutoff must be > 0");
   if (safeguard.patience < 1) return fail("safeguard.patience must be >= 1");
+  if (q_criterion != "lines" && q_criterion != "robust") return fail("q_criterion must be lines or robust");
   if (update != "standard" && update != "norm_optimal") return fail("update must be standard or norm_optimal");
   if (!(std::isfinite(norm_optimal_bandwidth) && norm_optimal_bandwidth >= 0 && norm_optimal_bandwidth < 0.5 / sample_time))
     return fail("norm_optimal_bandwidth must lie between 0 (each joint's Q cutoff) and the Nyquist frequency");
@@ -357,6 +358,47 @@ std::complex<double> LearningStepResponse(const LearningFilter& filter, const Il
   return l / (1 + NormOptimalWeight(filter, bandwidth, sample_time) * std::norm(l));
 }
 
+RobustCriterion RobustConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
+                                        const IlcOptions& options, double step_hz) {
+  CheckJoint(frf, joint);
+  std::string why;
+  if (!options.IsValid(frf.sample_time, &why)) throw InputError("IlcOptions: " + why);
+  if (!(step_hz > 0)) throw std::invalid_argument("RobustConvergenceFactor: step_hz must be > 0");
+  const auto& postures = frf.response[static_cast<std::size_t>(joint)];
+  const Eigen::Index lines = frf.frequency.size();
+  if (lines == 0 || postures.empty()) throw InputError("RobustConvergenceFactor: no measured lines");
+  const double nyquist = 0.5 / frf.sample_time;
+  const double h = frf.sample_time;
+  ButterworthFilter q_filter;
+  if (options.q_order > 0) q_filter = DesignButterworthLowPass(options.q_order, options.Cutoff(joint), 1 / h);
+  RobustCriterion out;
+  std::vector<std::complex<double>> ps(postures.size());
+  for (double f = frf.frequency[0]; f < nyquist; f += step_hz) {
+    // Each posture's response at f: linear between lines, beyond the last line the last
+    // line's PS L held (the fitted model's shape, the last measured error of it).
+    const double last = frf.frequency[lines - 1];
+    if (f >= last) {
+      const std::complex<double> scale = filter.Response(last, h) / filter.Response(f, h);
+      for (std::size_t p = 0; p < postures.size(); ++p) ps[p] = postures[p][lines - 1] * scale;
+    } else {
+      Eigen::Index i = 0;
+      while (i + 2 < lines && frf.frequency[i + 1] <= f) ++i;
+      const double t = (f - frf.frequency[i]) / (frf.frequency[i + 1] - frf.frequency[i]);
+      for (std::size_t p = 0; p < postures.size(); ++p) ps[p] = (1 - t) * postures[p][i] + t * postures[p][i + 1];
+    }
+    std::complex<double> nominal = 0;
+    for (const auto& v : ps) nominal += v / static_cast<double>(ps.size());
+    double spread = 0;
+    for (const auto& v : ps) spread = std::max(spread, std::abs(v - nominal) / std::abs(nominal));
+    const std::complex<double> step = options.gain * nominal * LearningStepResponse(filter, options, joint, f, h);
+    const double q = options.q_order > 0 ? std::norm(FrequencyResponse(q_filter, f)) : 1.0;
+    out.frequency.push_back(f);
+    out.spread.push_back(spread);
+    out.factor.push_back(q * (std::abs(1.0 - step) + std::abs(step) * spread));
+  }
+  return out;
+}
+
 double AutoQCutoff(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter, const IlcOptions& options,
                    double* worst) {
   CheckJoint(frf, joint);
@@ -381,7 +423,11 @@ double AutoQCutoff(const ClosedLoopFrf& frf, int joint, const LearningFilter& fi
   // cutoff in general, so every grid point is tried until one passes).
   for (double cutoff = std::floor(top * 2) / 2; cutoff >= bottom - 1e-9; cutoff -= 0.5) {
     o.q_cutoff = cutoff;
-    const double factor = ConvergenceFactor(frf, joint, filter, o).maxCoeff();
+    double factor = ConvergenceFactor(frf, joint, filter, o).maxCoeff();
+    if (options.q_criterion == "robust") {
+      const RobustCriterion robust = RobustConvergenceFactor(frf, joint, filter, o, kRobustGridHz);
+      factor = std::max(factor, *std::max_element(robust.factor.begin(), robust.factor.end()));
+    }
     if (factor < 1) {
       if (worst) *worst = factor;
       return cutoff;

@@ -190,6 +190,10 @@ struct IlcOptions {
   // Q filters the result in both.
   std::string update = "standard";
   double norm_optimal_bandwidth = 0;
+  // How AutoQCutoff checks a cutoff: "lines", |Q|^2 |1 - gain PS_i S| < 1 at every
+  // measured line and posture (seed 001); "robust", also RobustConvergenceFactor < 1 on
+  // a 0.25 Hz grid to Nyquist.
+  std::string q_criterion = "lines";
   double gain = 1;        // alpha
   int q_order = 4;        // the robustness filter's Butterworth order; 0 = no filter Q
   double q_cutoff = 40;   // Hz, its -3 dB frequency per pass (-6 dB after FiltFilt)
@@ -225,6 +229,21 @@ std::complex<double> LearningStepResponse(const LearningFilter& filter, const Il
 // std::invalid_argument for a joint that does not exist.
 Eigen::VectorXd ConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
                                   const IlcOptions& options);
+
+// The convergence criterion on a dense grid to Nyquist with a margin from the postures'
+// spread (a robust Q, not the edge of the criterion): at each frequency f from the first
+// line up by step_hz, each posture's PS interpolated between the measured lines (above
+// the last line, the last line's PS L held, i.e. the fitted model's shape), their
+// average PS_nom and their spread d(f) = max_i |PS_i - PS_nom| / |PS_nom|, and
+//   |Q|^2 (|1 - gain PS_nom S| + gain |PS_nom S| d),
+// which bounds |Q|^2 |1 - gain PS S| for every PS within d of the nominal (a
+// multiplicative uncertainty disc), the measured postures and those between them.
+struct RobustCriterion {
+  std::vector<double> frequency, spread, factor;  // Hz; d; the bound
+};
+RobustCriterion RobustConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
+                                        const IlcOptions& options, double step_hz);
+inline constexpr double kRobustGridHz = 0.25;  // the grid AutoQCutoff's robust criterion uses
 
 // The lowest measured frequency (Hz) at which |1 - gain PS L| reaches 1 at some posture,
 // without Q: learning above it must be cut off. Infinity when it stays below 1.

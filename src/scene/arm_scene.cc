@@ -192,6 +192,7 @@ void ReadIlc(const YAML::Node& node, const std::string& path, const ArmModel& pl
   m.Get("gain", &o.gain, InRange(1e-6, 2));
   m.Get("learning_filter", &ilc->learning_filter, {"fitted", "model"});
   m.Get("update", &o.update, {"standard", "norm_optimal"});
+  m.Get("q_criterion", &o.q_criterion, {"lines", "robust"});
   m.Get("norm_optimal_bandwidth", &o.norm_optimal_bandwidth, NonNegative(1e6));
   m.Get("q_order", &o.q_order, InRange(0, 16));
   const YAML::Node cutoff = m.Has("q_cutoff") ? m.Child("q_cutoff") : YAML::Node();

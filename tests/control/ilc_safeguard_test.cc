@@ -54,6 +54,30 @@ TEST(IlcSafeguard, ShippedSceneStaysWithinItsBestOverFiftyTrials) {
   EXPECT_GT(LastOverBest(unguarded).maxCoeff(), 3) << unguarded.FullReport();
 }
 
+// The robust criterion bounds the measured one: at every measured line its value, with
+// the postures' spread as the margin, is at least the worst posture's |Q|^2 |1 - PS L|;
+// it reaches Nyquist; on the shipped plant it keeps the 100 Hz cut-offs (the growth
+// this issue found is not a matter of the criterion, docs/ilc.md).
+TEST(IlcRobustCriterion, BoundsEveryPostureAndReachesNyquist) {
+  ArmScene scene = LoadArmScene(SourcePath("scenes/rrr_writing_ilc.yaml"));
+  scene.ilc.options.q_criterion = "robust";
+  const IlcSceneRun run = RunIlcScene(scene, "", 0);
+  for (int j = 0; j < 3; ++j) {
+    const auto js = static_cast<std::size_t>(j);
+    EXPECT_DOUBLE_EQ(run.options.q_cutoffs[js], 100) << "joint " << j + 1;
+    const double step = run.frf.frequency[1] - run.frf.frequency[0];
+    const RobustCriterion robust = RobustConvergenceFactor(run.frf, j, run.filters[js], run.options, step);
+    const Eigen::VectorXd lines = ConvergenceFactor(run.frf, j, run.filters[js], run.options);
+    ASSERT_GE(robust.factor.size(), static_cast<std::size_t>(lines.size()));
+    for (Eigen::Index i = 0; i < lines.size(); ++i) {
+      EXPECT_NEAR(robust.frequency[static_cast<std::size_t>(i)], run.frf.frequency[i], 1e-9);
+      EXPECT_GE(robust.factor[static_cast<std::size_t>(i)], lines[i] * (1 - 1e-9)) << "joint " << j + 1 << ", line " << i;
+    }
+    EXPECT_GE(robust.frequency.back(), 0.5 / run.frf.sample_time - step - 1e-9);
+    EXPECT_LT(*std::max_element(robust.factor.begin(), robust.factor.end()), 1) << "joint " << j + 1;
+  }
+}
+
 // The norm-optimal step is the lifted solution for the filter's model P = L^-1: with
 // u = P df the model's response to the step, |e - u|^2 + w |L u|^2 is least where
 // (I + w L^T L) u = e (solved densely here, a well-conditioned system), and df = L u is
