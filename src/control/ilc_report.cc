@@ -386,6 +386,10 @@ std::vector<std::pair<std::string, std::string>> MakeIlcReport(const IlcReportSe
                                                                const Eigen::VectorXd& t, const ClosedLoopFrf& frf,
                                                                const std::vector<LearningFilter>& filters,
                                                                const IlcResult& result, Renderer* renderer) {
+  // The tracking error of trial 0 and of the last trial, sample by sample (rad or m).
+  const Eigen::MatrixXd first_error = result.first.q_ref - result.first.q;
+  const Eigen::MatrixXd last_error = result.last.q_ref - result.last.q;
+  const bool have_errors = first_error.rows() == t.size() && last_error.rows() == t.size() && t.size() > 0;
   std::vector<std::pair<std::string, std::string>> files = {
       {"trials.csv", FormatIlcTrialsCsv(result)},
       {"frf.csv", FormatIlcFrfCsv(frf, filters)},
@@ -394,6 +398,7 @@ std::vector<std::pair<std::string, std::string>> MakeIlcReport(const IlcReportSe
       {"best_feedforward.csv", JointColumnsCsv(t, {"f"}, {&result.best_feedforward})},
       {"safeguard.csv", FormatIlcSafeguardCsv(result)},
   };
+  if (have_errors) files.emplace_back("errors.csv", JointColumnsCsv(t, {"first_e", "last_e"}, {&first_error, &last_error}));
   std::vector<std::pair<std::string, std::string>> images;  // file, PNG bytes
   if (renderer) {
     const std::string what = setup.name + " (" + setup.backend + ")";

@@ -87,7 +87,8 @@ TEST(IlcReport, FilesInTheOrderWrittenWithoutPlotsWhenNotDrawn) {
   std::vector<std::string> names;
   for (const auto& [name, bytes] : files) names.push_back(name);
   EXPECT_EQ(names, (std::vector<std::string>{"trials.csv", "frf.csv", "filters.csv", "feedforward.csv",
-                                              "best_feedforward.csv", "safeguard.csv", "report.html"}));
+                                              "best_feedforward.csv", "safeguard.csv", "errors.csv", "report.html"}));
+  EXPECT_EQ(files[6].second.substr(0, files[6].second.find('\n')), "t,first_e1,last_e1");
   EXPECT_EQ(files[5].second, "trial,joint,action,rms,best_rms,best_trial,q_cutoff\n");  // it never acted
   EXPECT_EQ(files[3].second, "t,f1\n" + FormatCsvNumber(0) + "," + FormatCsvNumber(0.5) + "\n" +
                                  FormatCsvNumber(0.001) + "," + FormatCsvNumber(0.5) + "\n" + FormatCsvNumber(0.002) +

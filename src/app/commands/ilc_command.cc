@@ -133,7 +133,8 @@ void AddIlcCommand(CLI::App& app, int* exit_code) {
       "(the scene's `ilc:` block, docs/ilc.md). Trial 0 runs without learning.\n"
       "Writes DIR/trials.csv (trial,rms1..rmsn,max1..maxn: tracking error per joint, rad or m),\n"
       "DIR/frf.csv, DIR/filters.csv, DIR/feedforward.csv (the last trial's), best_feedforward.csv,\n"
-      "safeguard.csv (what the watch over the trials did), the plots (convergence.png,\n"
+      "safeguard.csv (what the watch over the trials did), errors.csv (trial 0's and the last\n"
+      "trial's tracking error, sample by sample), the plots (convergence.png,\n"
       "error.png, bode_joint<j>.png, path.png) and DIR/report.html (self-contained).\n"
       "Exit 1 when the learning diverged (the last trial's worst RMS error is above trial 0's).");
   cmd->add_option("scene", options->scene, "Arm scene file (YAML, docs/scenes.md)")->required();
