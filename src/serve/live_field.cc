@@ -103,7 +103,7 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
         return robots;
       }()),
       control_(),
-      teams_{TeamPort{TeamColor::kBlue, UdpSocket()}, TeamPort{TeamColor::kYellow, UdpSocket()}} {
+      teams_{TeamPort(TeamColor::kBlue), TeamPort(TeamColor::kYellow)} {
   std::string why;
   if (!options_.IsValid(&why)) throw InputError(why);
   if (2 * options_.boundary >= std::min(scene.field.length, scene.field.width))

@@ -104,6 +104,7 @@ class LiveField {
 
  private:
   struct TeamPort {
+    explicit TeamPort(TeamColor color) : team(color) {}
     TeamColor team;
     UdpSocket socket;
     bool waited = false;                   // lockstep: named, or has sent a RobotControl

@@ -68,9 +68,9 @@ TEST(Scene, TeamsAndIdsAreChecked) {
   const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - name: a\n    id: 2\n" + robot +
                                 "  - name: b\n    id: 2\n" + robot + "  - name: c\n    team: red\n" + robot +
                                 "  - name: d\n    id: 16\n" + robot);
-  EXPECT_NE(e.find("s.yaml:8:9: robots[1]: blue robot id 2 is taken by robot 'a'"), std::string::npos) << e;
+  EXPECT_NE(e.find("s.yaml:9:9: robots[1]: blue robot id 2 is taken by robot 'a'"), std::string::npos) << e;
   EXPECT_NE(e.find("unknown value 'red' (known: blue, yellow)"), std::string::npos) << e;
-  EXPECT_NE(e.find("'id'"), std::string::npos) << e;
+  EXPECT_NE(e.find("must be in [0, 15], got 16"), std::string::npos) << e;
 }
 
 TEST(Scene, UnknownCommandTypeListsKnownOnes) {
