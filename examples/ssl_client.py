@@ -29,7 +29,8 @@ def load_messages(proto_py):
         import ssl_simulation_robot_feedback_pb2 as feedback  # noqa: E402
         import ssl_vision_wrapper_pb2 as vision  # noqa: E402
     except ImportError as e:
-        sys.exit(f"{proto_py}: cannot import the generated messages ({e}); build twinsim first or give --proto-py")
+        sys.exit(f"{proto_py}: cannot import the generated messages ({e}); build twinsim first, give --proto-py, "
+                 "and run Debian's /usr/bin/python3 with python3-protobuf")
     return control, feedback, vision
 
 

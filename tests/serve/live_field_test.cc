@@ -98,6 +98,37 @@ std::string Local(unsigned id, const Twist2& v) {
   return control.SerializeAsString();
 }
 
+// Sends `bytes` from `client` to the loopback `port` and reads the answer as a Response.
+template <typename Response>
+std::optional<Response> Ask(const UdpSocket& client, const std::string& bytes, int port) {
+  if (!client.SendTo(bytes, Loopback(port))) return std::nullopt;
+  std::optional<std::string> answer = Receive(client);
+  Response r;
+  if (!answer || !r.ParseFromString(*answer)) return std::nullopt;
+  return r;
+}
+
+// A SimulatorCommand that puts blue robot 0 at (x, y).
+std::string TeleportBlue0(float x, float y) {
+  SimulatorCommand command;
+  TeleportRobot* t = command.mutable_control()->add_teleport_robot();
+  t->mutable_id()->set_id(0);
+  t->mutable_id()->set_team(BLUE);
+  t->set_x(x);
+  t->set_y(y);
+  return command.SerializeAsString();
+}
+
+// The error codes of a response, in order.
+template <typename Response>
+std::vector<std::string> Codes(const std::optional<Response>& r) {
+  std::vector<std::string> codes;
+  if (!r) return {"no answer"};
+  for (const SimulatorError& e : r->errors()) codes.push_back(e.code());
+  return codes;
+}
+using Codes1 = std::vector<std::string>;
+
 // The blue robot's command at frame k: still until frame 10, then forward and turning.
 Twist2 CommandAt(int k) { return k < 10 ? Twist2{} : Twist2{1.0, 0.25, 1.0}; }
 
@@ -176,45 +207,22 @@ TEST(LiveField, RefusalsAreAnsweredAndCountedAndTheFieldRunsOn) {
   options.max_datagram = 256;
   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
   ServerThread server(&field);
-  auto ask = [&](const std::string& bytes, int port) {
-    EXPECT_TRUE(client.SendTo(bytes, Loopback(port)));
-    std::optional<std::string> answer = Receive(client);
-    RobotControlResponse r;
-    EXPECT_TRUE(answer && r.ParseFromString(*answer));
-    return r;
-  };
-  RobotControlResponse r = ask(Local(3, Twist2{1, 0, 0}), field.blue_port());
-  ASSERT_EQ(r.errors_size(), 1);
-  EXPECT_EQ(r.errors(0).code(), "TWINSIM_OTHER_TEAM");
-  r = ask(Local(5, Twist2{1, 0, 0}), field.yellow_port());
-  ASSERT_EQ(r.errors_size(), 1);
-  EXPECT_EQ(r.errors(0).code(), "TWINSIM_UNKNOWN_ROBOT");
-  r = ask(std::string("\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff", 11), field.blue_port());
-  ASSERT_EQ(r.errors_size(), 1);
-  EXPECT_EQ(r.errors(0).code(), "TWINSIM_MALFORMED");
-  r = ask(std::string(1000, '\x08'), field.blue_port());
-  ASSERT_EQ(r.errors_size(), 1);
-  EXPECT_EQ(r.errors(0).code(), "TWINSIM_OVERSIZED");
-  EXPECT_NE(r.errors(0).message().find("1000 bytes"), std::string::npos) << r.errors(0).message();
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, Local(3, Twist2{1, 0, 0}), field.blue_port())),
+            Codes1{"TWINSIM_OTHER_TEAM"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, Local(5, Twist2{1, 0, 0}), field.yellow_port())),
+            Codes1{"TWINSIM_UNKNOWN_ROBOT"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, std::string(11, '\xff'), field.blue_port())),
+            Codes1{"TWINSIM_MALFORMED"});
+  const auto oversized = Ask<RobotControlResponse>(client, std::string(1000, '\x08'), field.blue_port());
+  EXPECT_EQ(Codes(oversized), Codes1{"TWINSIM_OVERSIZED"});
+  if (oversized && oversized->errors_size() == 1) {
+    EXPECT_NE(oversized->errors(0).message().find("1000 bytes"), std::string::npos) << oversized->errors(0).message();
+  }
   // Garbage on the control port is answered as well.
-  client.SendTo("\x0a\x05\x12", Loopback(field.control_port()));
-  SimulatorResponse s;
-  std::optional<std::string> answer = Receive(client);
-  ASSERT_TRUE(answer && s.ParseFromString(*answer));
-  ASSERT_EQ(s.errors_size(), 1);
-  EXPECT_EQ(s.errors(0).code(), "TWINSIM_MALFORMED");
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, "\x0a\x05\x12", field.control_port())), Codes1{"TWINSIM_MALFORMED"});
 
   // A teleport through the control port shows in vision.
-  SimulatorCommand teleport;
-  TeleportRobot* t = teleport.mutable_control()->add_teleport_robot();
-  t->mutable_id()->set_id(0);
-  t->mutable_id()->set_team(BLUE);
-  t->set_x(-1.5f);
-  t->set_y(2.0f);
-  client.SendTo(teleport.SerializeAsString(), Loopback(field.control_port()));
-  answer = Receive(client);
-  ASSERT_TRUE(answer && s.ParseFromString(*answer));
-  EXPECT_EQ(s.errors_size(), 0);
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportBlue0(-1.5f, 2.0f), field.control_port())), Codes1{});
   bool arrived = false;
   for (int i = 0; i < 60 && !arrived; ++i) {
     std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, 0);
@@ -240,33 +248,13 @@ TEST(LiveField, TournamentModeRefusesControlAndASecondAddressPerTeam) {
   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
   ServerThread server(&field);
 
-  SimulatorCommand teleport;
-  TeleportRobot* t = teleport.mutable_control()->add_teleport_robot();
-  t->mutable_id()->set_id(0);
-  t->mutable_id()->set_team(BLUE);
-  t->set_x(1.0f);
-  team.SendTo(teleport.SerializeAsString(), Loopback(field.control_port()));
-  SimulatorResponse s;
-  std::optional<std::string> answer = Receive(team);
-  ASSERT_TRUE(answer && s.ParseFromString(*answer));
-  ASSERT_EQ(s.errors_size(), 1);
-  EXPECT_EQ(s.errors(0).code(), "TWINSIM_TOURNAMENT");
-
-  RobotControlResponse r;
-  team.SendTo(Local(0, Twist2{0.5, 0, 0}), Loopback(field.blue_port()));
-  answer = Receive(team);
-  ASSERT_TRUE(answer && r.ParseFromString(*answer));
-  EXPECT_EQ(r.errors_size(), 0);
-  intruder.SendTo(Local(0, Twist2{-0.5, 0, 0}), Loopback(field.blue_port()));
-  answer = Receive(intruder);
-  ASSERT_TRUE(answer && r.ParseFromString(*answer));
-  ASSERT_EQ(r.errors_size(), 1);
-  EXPECT_EQ(r.errors(0).code(), "TWINSIM_PORT_TAKEN");
-  // The yellow port is still open to the yellow team's own address.
-  intruder.SendTo(Local(3, Twist2{0.5, 0, 0}), Loopback(field.yellow_port()));
-  answer = Receive(intruder);
-  ASSERT_TRUE(answer && r.ParseFromString(*answer));
-  EXPECT_EQ(r.errors_size(), 0);
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(team, TeleportBlue0(1.0f, 0.0f), field.control_port())),
+            Codes1{"TWINSIM_TOURNAMENT"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(team, Local(0, Twist2{0.5, 0, 0}), field.blue_port())), Codes1{});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(intruder, Local(0, Twist2{-0.5, 0, 0}), field.blue_port())),
+            Codes1{"TWINSIM_PORT_TAKEN"});
+  // The yellow port is still open to the yellow team's own (first) address.
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(intruder, Local(3, Twist2{0.5, 0, 0}), field.yellow_port())), Codes1{});
 
   const ServeSummary& summary = server.Stop();
   EXPECT_EQ(summary.counters.refused, 2);
