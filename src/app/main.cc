@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   AddIlcCommand(app, &exit_code);
   AddDiagnoseCommand(app, &exit_code);
   AddBatchCommand(app, &exit_code);
+  AddServeCommand(app, &exit_code);
   CheckNumberOptions(&app);
   InstallInterruptHandlers();
   try {

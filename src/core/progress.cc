@@ -30,6 +30,17 @@ void Progress::Update(long done, long total, const std::string& detail) {
   std::fflush(stderr);
 }
 
+void Progress::Status(const std::string& detail) {
+  if (!enabled_) return;
+  const auto now = std::chrono::steady_clock::now();
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  if (elapsed < 1.0 || (drawn_ && now - last_draw_ < std::chrono::milliseconds(100))) return;
+  last_draw_ = now;
+  drawn_ = true;
+  std::fprintf(stderr, "\r%s %.1f s %s\033[K", label_.c_str(), elapsed, detail.c_str());
+  std::fflush(stderr);
+}
+
 void Progress::Finish() {
   if (drawn_) {
     std::fprintf(stderr, "\r\033[K");

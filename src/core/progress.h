@@ -14,6 +14,9 @@ class Progress {
   ~Progress();
   // Reports `done` of `total` units; `detail` is appended to the line.
   void Update(long done, long total, const std::string& detail = "");
+  // For a job without an end (a served field): "label 12.3 s detail", drawn as Update
+  // draws. Does not look for Ctrl-C: such a job stops on it by itself.
+  void Status(const std::string& detail);
   // Clears the line.
   void Finish();
 

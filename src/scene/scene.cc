@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -152,6 +153,8 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
     top.Error("robots", "expected a non-empty list of robots");
   } else {
     std::set<std::string> names;
+    std::vector<bool> id_given;                     // per robot
+    std::vector<SourceLocation> id_at;              // per robot, where its team or id is given
     for (std::size_t i = 0; i < robots.size(); ++i) {
       const std::string context = "robots[" + std::to_string(i) + "]";
       YamlMap r(robots[i], path, context, &errors);
@@ -159,6 +162,11 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       robot.name = "robot" + std::to_string(i);
       r.Get("name", &robot.name);
       if (!names.insert(robot.name).second) r.Error("name", "duplicate robot name '" + robot.name + "'");
+      r.Get("team", &robot.team, {"blue", "yellow"});
+      id_given.push_back(r.Has("id"));
+      id_at.push_back(r.Has("id") ? r.Where(r.Child("id")) : r.Where());
+      robot.id = -1;
+      if (id_given.back() && !r.Get("id", &robot.id, InRange(0, 15))) robot.id = -1;
       if (r.Require("model", &robot.model_path)) {
         fs::path p(robot.model_path);
         if (p.is_relative()) p = base_dir / p;
@@ -187,6 +195,30 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       }
       r.Finish();
       scene.robots.push_back(std::move(robot));
+    }
+    // Ids: the given ones unique within a team, the others the smallest free in order.
+    std::map<std::pair<std::string, int>, std::size_t> taken;  // (team, id) -> robot
+    for (std::size_t i = 0; i < scene.robots.size(); ++i) {
+      const SceneRobot& robot = scene.robots[i];
+      if (!id_given[i] || robot.id < 0) continue;
+      auto [it, inserted] = taken.emplace(std::make_pair(robot.team, robot.id), i);
+      if (!inserted) {
+        errors.Add(id_at[i], "robots[" + std::to_string(i) + "]: " + robot.team + " robot id " +
+                                 std::to_string(robot.id) + " is taken by robot '" + scene.robots[it->second].name +
+                                 "'");
+      }
+    }
+    for (std::size_t i = 0; i < scene.robots.size(); ++i) {
+      SceneRobot& robot = scene.robots[i];
+      if (id_given[i]) continue;
+      int id = 0;
+      while (taken.count({robot.team, id})) ++id;
+      if (id > 15) {
+        errors.Add(id_at[i], "robots[" + std::to_string(i) + "]: no " + robot.team + " robot id of 0..15 is left");
+        continue;
+      }
+      robot.id = id;
+      taken.emplace(std::make_pair(robot.team, id), i);
     }
   }
   scene.plots = ReadPlotSpecs(top, "plots");

@@ -21,6 +21,11 @@ namespace twinsim {
 
 struct SceneRobot {
   std::string name;
+  // Which team and robot id the league's protocol knows the robot by (twinsim serve,
+  // docs/serve.md): `team: blue|yellow` (default blue) and `id` 0..15 (default: the
+  // smallest of its team's ids not yet taken, in the order of the list).
+  std::string team = "blue";
+  int id = 0;
   std::string model_path;  // as resolved (relative paths are relative to the scene file)
   OmniModel model;
   Pose2 start;

@@ -60,12 +60,30 @@ void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) {
 
 std::vector<FrameRecord> Simulation::Step() {
   ThrowIfInterrupted();
+  std::vector<FrameRecord> records = BeginFrame();
+  for (int i = 0; i < num_robots(); ++i) records[static_cast<std::size_t>(i)].command = SourceCommand(i);
+  EndFrame(&records);
+  return records;
+}
+
+Twist2 Simulation::SourceCommand(int robot) {
+  if (!frame_open_) throw std::logic_error("Simulation::SourceCommand: no frame is open");
+  const auto k = static_cast<std::size_t>(robot);
+  CommandSource* source = robots_.at(k).commands.get();
+  if (!source) return Twist2{};
+  BehaviourInput in;
+  in.frame = state_.frame;
+  in.t = time();
+  in.observations = &state_.delivered[k];
+  return source->Command(in);
+}
+
+std::vector<FrameRecord> Simulation::BeginFrame() {
+  if (frame_open_) throw std::logic_error("Simulation::BeginFrame: the previous frame was not ended");
   const double t = time();
   std::vector<FrameRecord> records(robots_.size());
-  std::vector<Twist2> applied(robots_.size());
   for (int i = 0; i < num_robots(); ++i) {
     const auto k = static_cast<std::size_t>(i);
-    SimRobot& robot = robots_[k];
     FrameRecord& rec = records[k];
     rec.t = t;
     rec.truth = backend_->pose(i);
@@ -73,7 +91,7 @@ std::vector<FrameRecord> Simulation::Step() {
     CheckFinite(i, rec.truth, rec.truth_velocity);
 
     // The camera: noise always drawn, so that dropping frames does not shift the stream.
-    const OmniModel& m = robot.model;
+    const OmniModel& m = robots_[k].model;
     Pose2 captured = rec.truth;
     captured.x += state_.rng.Gaussian(m.vision_noise_xy);
     captured.y += state_.rng.Gaussian(m.vision_noise_xy);
@@ -98,22 +116,32 @@ std::vector<FrameRecord> Simulation::Step() {
       rec.observed = true;
       rec.seen = *arrived;
     }
+  }
+  frame_open_ = true;
+  return records;
+}
 
-    BehaviourInput in;
-    in.frame = state_.frame;
-    in.t = t;
-    in.observations = &delivered;
-    rec.command = robot.commands ? robot.commands->Command(in) : Twist2{};
-    if (!IsFinite(rec.command)) {
+void Simulation::EndFrame(std::vector<FrameRecord>* records) {
+  if (!frame_open_) throw std::logic_error("Simulation::EndFrame: no frame was begun");
+  if (records->size() != robots_.size()) throw std::invalid_argument("Simulation::EndFrame: one record per robot");
+  std::vector<Twist2> applied(robots_.size());
+  for (std::size_t k = 0; k < robots_.size(); ++k) {
+    const Twist2& command = (*records)[k].command;
+    if (!IsFinite(command)) {
       std::ostringstream msg;
-      msg << "behaviour of robot '" << robot.name << "' sent a non-finite command at t = " << t << " s";
+      msg << "behaviour of robot '" << robots_[k].name << "' sent a non-finite command at t = " << (*records)[k].t
+          << " s";
       throw CheckFailed(msg.str());
     }
-    applied[k] = state_.commands_in_flight[k].Push(rec.command);
+    applied[k] = state_.commands_in_flight[k].Push(command);
   }
+  frame_open_ = false;
   backend_->StepFrame(applied);
   ++state_.frame;
-  return records;
+}
+
+void Simulation::Teleport(int robot, const Pose2& pose, const Twist2& velocity) {
+  backend_->Reset(robot, pose, velocity);
 }
 
 SimulationResult Simulation::Run(int frames, const std::function<void(int, int)>& progress) {
@@ -148,6 +176,7 @@ void Simulation::Restore(const SimulationState& state) {
   }
   backend_->Restore(state.backend);
   state_ = state;
+  frame_open_ = false;
   state_.behaviours.clear();
   for (std::size_t i = 0; i < robots_.size(); ++i) {
     robots_[i].commands = state.behaviours[i] ? state.behaviours[i]->Clone() : nullptr;

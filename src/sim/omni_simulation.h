@@ -84,6 +84,30 @@ class Simulation {
   // and giving the robot's last good state (the frame before).
   std::vector<FrameRecord> Step();
 
+  // A frame in two halves, for a loop whose commands come from outside the process
+  // (twinsim serve, serve/live_field.h): BeginFrame() runs steps 1-2 above and returns
+  // each robot's record without its command; EndFrame() sends records[i].command
+  // (robot frame) for robot i and runs steps 4-5. Step() is BeginFrame, each robot's
+  // CommandSource, EndFrame. EndFrame throws CheckFailed for a non-finite command and
+  // std::logic_error when no frame was begun; BeginFrame and Step throw std::logic_error
+  // while a frame is open.
+  std::vector<FrameRecord> BeginFrame();
+  void EndFrame(std::vector<FrameRecord>* records);
+  // What robot i's own CommandSource sends in the open frame (zero without one), for a
+  // loop that drives some robots from outside and the others by their sources. Throws
+  // std::logic_error when no frame is open.
+  Twist2 SourceCommand(int robot);
+  // The observations delivered to robot i so far (the newest kObservationWindow, oldest
+  // first).
+  const std::vector<Observation>& delivered(int robot) const {
+    return state_.delivered.at(static_cast<std::size_t>(robot));
+  }
+  // Puts robot i at `pose` moving at `velocity` (robot frame) now, as a referee's hand
+  // would: the commands and captures already in flight stay in flight.
+  void Teleport(int robot, const Pose2& pose, const Twist2& velocity);
+  const std::string& robot_name(int robot) const { return robots_.at(static_cast<std::size_t>(robot)).name; }
+  const OmniModel& robot_model(int robot) const { return robots_.at(static_cast<std::size_t>(robot)).model; }
+
   // Runs `frames` frames; `progress(done, total)` is called now and then.
   SimulationResult Run(int frames, const std::function<void(int, int)>& progress = {});
 
@@ -100,6 +124,7 @@ class Simulation {
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;
   SimulationState state_;
+  bool frame_open_ = false;  // between BeginFrame and EndFrame
 };
 
 }  // namespace twinsim

@@ -50,6 +50,29 @@ TEST(Scene, UnknownKeyWrongTypeMissingFieldAndBadModel) {
   EXPECT_NE(e.find("missing required key 'commands' in 'robots[1]'"), std::string::npos) << e;
 }
 
+TEST(Scene, RobotsAreBlueWithIdsInOrderUnlessTheySay) {
+  const std::string robot = "    model: ../models/omni4.yaml\n    commands: {type: random}\n";
+  Scene s = LoadSceneFromString("name: t\nduration: 1\nrobots:\n  - name: a\n    id: 0\n" + robot +
+                                    "  - name: b\n" + robot + "  - name: c\n    team: yellow\n" + robot +
+                                    "  - name: d\n    team: yellow\n    id: 0\n" + robot,
+                                "s.yaml", SourcePath("scenes"));
+  ASSERT_EQ(s.robots.size(), 4u);
+  EXPECT_EQ(s.robots[0].team + std::to_string(s.robots[0].id), "blue0");
+  EXPECT_EQ(s.robots[1].team + std::to_string(s.robots[1].id), "blue1");
+  EXPECT_EQ(s.robots[2].team + std::to_string(s.robots[2].id), "yellow1");  // 0 is d's
+  EXPECT_EQ(s.robots[3].team + std::to_string(s.robots[3].id), "yellow0");
+}
+
+TEST(Scene, TeamsAndIdsAreChecked) {
+  const std::string robot = "    model: ../models/omni4.yaml\n    commands: {type: random}\n";
+  const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - name: a\n    id: 2\n" + robot +
+                                "  - name: b\n    id: 2\n" + robot + "  - name: c\n    team: red\n" + robot +
+                                "  - name: d\n    id: 16\n" + robot);
+  EXPECT_NE(e.find("s.yaml:9:9: robots[1]: blue robot id 2 is taken by robot 'a'"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown value 'red' (known: blue, yellow)"), std::string::npos) << e;
+  EXPECT_NE(e.find("must be in [0, 15], got 16"), std::string::npos) << e;
+}
+
 TEST(Scene, UnknownCommandTypeListsKnownOnes) {
   const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands: {type: dance}\n");
   EXPECT_NE(e.find("unknown value 'dance' (known: sequence, test_drive, figure_eight, random, go_to_pose)"),

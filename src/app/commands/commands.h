@@ -32,6 +32,7 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code);
 void AddIlcCommand(CLI::App& app, int* exit_code);
 void AddDiagnoseCommand(CLI::App& app, int* exit_code);
 void AddBatchCommand(CLI::App& app, int* exit_code);
+void AddServeCommand(CLI::App& app, int* exit_code);
 
 // The kind of robot a model file describes: "arm" for URDF (.urdf) and for YAML with
 // `robot: arm` (its own or from the file it extends), else the YAML's `robot` value

@@ -1,0 +1,112 @@
+// `twinsim serve SCENE.yaml [--lockstep] [--tournament] [--out DIR] ...`
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "app/commands/commands.h"
+#include "backends/omni_backend_factory.h"
+#include "core/error.h"
+#include "core/interrupt.h"
+#include "core/progress.h"
+#include "io/output_files.h"
+#include "learning/omni_predictor.h"
+#include "scene/scene.h"
+#include "scene/scene_run.h"
+#include "serve/live_field.h"
+
+namespace twinsim {
+namespace {
+
+struct ServeCommandOptions {
+  std::string scene;
+  std::string backend;    // empty: the scene's
+  std::string predictor;  // for --backend learned
+  std::string out;        // empty: out/<scene name>
+  long long seed = -1;    // -1: the scene's
+  std::string teams;      // "blue,yellow"
+  bool quiet = false;
+  ServeOptions serve;
+};
+
+int Serve(ServeCommandOptions& options) {
+  Scene scene = LoadScene(options.scene);
+  if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
+  const std::string backend = options.backend.empty() ? scene.backend : options.backend;
+  const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
+  if (!options.teams.empty()) {
+    std::stringstream list(options.teams);
+    for (std::string team; std::getline(list, team, ',');) options.serve.teams.push_back(team);
+  }
+
+  OmniBackendOptions backend_options;
+  if (!options.predictor.empty())
+    backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
+  LiveField field(scene, MakeSimulation(scene, backend, backend_options), options.serve);
+
+  if (!options.quiet) {
+    std::printf("serving %s: %zu robot(s) on %s at %g fps, %s\n", scene.name.c_str(), scene.robots.size(),
+                backend.c_str(), scene.frame_rate, options.serve.lockstep ? "lockstep" : "real time");
+    for (const SceneRobot& r : scene.robots) std::printf("  %s %d: %s\n", r.team.c_str(), r.id, r.name.c_str());
+    std::printf("control %s:%d%s, blue %s:%d, yellow %s:%d; vision to %s:%d. Ctrl-C stops and writes the logs.\n",
+                options.serve.listen.c_str(), field.control_port(), options.serve.tournament ? " (refused: tournament)" : "",
+                options.serve.listen.c_str(), field.blue_port(), options.serve.listen.c_str(), field.yellow_port(),
+                options.serve.vision_address.c_str(), options.serve.vision_port);
+    std::fflush(stdout);
+  }
+  Progress progress("serve " + scene.name, !options.quiet);
+  // Ctrl-C (or SIGTERM) is how a served field ends: the frames run so far are written.
+  const ServeSummary summary = field.Run([] { return InterruptSignal() != 0; },
+                                         [&](const ServeSummary& s) { progress.Status(s.Brief()); });
+  progress.Finish();
+  ClearInterrupt();
+
+  OutputFiles files(out);
+  if (summary.counters.frames > 0) WriteOmniRunFiles(scene, field.result(), backend, /*plots=*/true, &files);
+  if (!options.quiet) {
+    std::printf("%s\n%s", summary.Brief().c_str(), summary.Report().c_str());
+    if (summary.counters.frames == 0) std::printf("no frame ran: nothing written\n");
+    files.PrintWrote();
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void AddServeCommand(CLI::App& app, int* exit_code) {
+  auto options = std::make_shared<ServeCommandOptions>();
+  CLI::App* cmd = app.add_subcommand("serve", "Serve a scene's field live over the league's network protocol.");
+  cmd->footer(
+      "Teams drive their robots with the SSL simulation protocol (RobotControl on the blue and\n"
+      "yellow ports, SimulatorCommand on the control port) and receive SSL-Vision packets of what\n"
+      "the observer sees, through the scene's delay loop and camera noise (docs/serve.md).\n"
+      "Robots are blue or yellow with ids by the scene's `team:` and `id:` (docs/scenes.md).\n"
+      "Real time by default; --lockstep steps frame k when every connected team has sent its\n"
+      "command for it. Ctrl-C stops and writes DIR/trajectory.csv (and _NAME per further robot)\n"
+      "and DIR/truth.csv as `twinsim run` does, and the scene's plots. No ball yet.");
+  cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
+  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
+  cmd->add_option("--predictor", options->predictor, "1-step predictor for --backend learned (from twinsim train)");
+  cmd->add_option("--out", options->out, "Output folder for the logs (default: out/<scene name>)");
+  cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(NonNegativeNumber());
+  cmd->add_option("--listen", options->serve.listen, "Address the ports listen on (default 127.0.0.1)");
+  cmd->add_option("--control-port", options->serve.control_port, "Simulator control port (default 10300; 0: any free)");
+  cmd->add_option("--blue-port", options->serve.blue_port, "Blue team's robot control port (default 10301)");
+  cmd->add_option("--yellow-port", options->serve.yellow_port, "Yellow team's robot control port (default 10302)");
+  cmd->add_option("--vision-address", options->serve.vision_address,
+                  "Unicast address the vision packets go to (default 127.0.0.1)");
+  cmd->add_option("--vision-port", options->serve.vision_port, "Port the vision packets go to (default 10020)");
+  cmd->add_flag("--lockstep", options->serve.lockstep, "Step a frame when every connected team has sent its command");
+  cmd->add_option("--teams", options->teams, "Lockstep: teams to wait for from frame 0 (blue, yellow or blue,yellow)");
+  cmd->add_flag("--tournament", options->serve.tournament,
+                "Refuse simulator control; one client address per team port");
+  cmd->add_option("--max-datagram", options->serve.max_datagram, "Largest datagram read, bytes (default 8192)");
+  cmd->add_option("--max-rate", options->serve.max_rate, "Datagrams per second per port before dropping (default 1000)");
+  cmd->add_option("--geometry-period", options->serve.geometry_period, "Seconds between geometry packets (default 1)");
+  cmd->add_option("--boundary", options->serve.boundary, "Metres between the walls and the field lines (default 0.3)");
+  cmd->add_option("--frames", options->serve.max_frames, "Stop after this many frames (default: at Ctrl-C)")
+      ->check(NonNegativeNumber());
+  cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
+  cmd->callback([options, exit_code] { *exit_code = Serve(*options); });
+}
+
+}  // namespace twinsim

@@ -1,0 +1,345 @@
+#include "serve/live_field.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+#include "serve/simulator_control.h"
+#include "serve/vision_packets.h"
+
+namespace twinsim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Datagrams read from one port before the loop looks at the clock again: a flood
+// cannot hold a frame.
+constexpr int kMaxDatagramsPerDrain = 256;
+// Lockstep with a team still to come: the current frame's vision again this often.
+constexpr double kResendPeriod = 0.25;  // s
+// The loop looks for a stop this often while it waits.
+constexpr double kPollPeriod = 0.05;    // s
+
+double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+double UnixNow() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+template <typename Message>
+void Answer(const UdpSocket& socket, const Message& message, const UdpEndpoint& to) {
+  socket.SendTo(message.SerializeAsString(), to);
+}
+
+}  // namespace
+
+bool ServeOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& message) {
+    *why = message;
+    return false;
+  };
+  try {
+    ParseIpv4(listen);
+  } catch (const InputError& e) {
+    return fail(std::string("--listen: ") + e.what());
+  }
+  std::uint32_t vision = 0;
+  try {
+    vision = ParseIpv4(vision_address);
+  } catch (const InputError& e) {
+    return fail(std::string("--vision-address: ") + e.what());
+  }
+  if (IsMulticast(vision))
+    return fail("--vision-address " + vision_address + " is a multicast group; multicast vision is not implemented "
+                "yet, give a unicast address (e.g. 127.0.0.1)");
+  for (int port : {control_port, blue_port, yellow_port})
+    if (port < 0 || port > 65535) return fail("port " + std::to_string(port) + " is not in 0..65535");
+  if (vision_port < 1 || vision_port > 65535) return fail("--vision-port " + std::to_string(vision_port) + " is not in 1..65535");
+  if ((control_port != 0 && (control_port == blue_port || control_port == yellow_port)) ||
+      (blue_port != 0 && blue_port == yellow_port))
+    return fail("the control, blue and yellow ports must differ");
+  if (!teams.empty() && !lockstep) return fail("--teams applies to --lockstep only");
+  for (const std::string& t : teams)
+    if (t != "blue" && t != "yellow") return fail("--teams: unknown team '" + t + "' (known: blue, yellow)");
+  if (max_datagram < 64 || max_datagram > 65507) return fail("--max-datagram " + std::to_string(max_datagram) + " is not in 64..65507 bytes");
+  if (!(max_rate >= 1 && max_rate <= 1e6)) return fail("--max-rate is not in 1..1e6 datagrams/s");
+  if (!(geometry_period > 0 && geometry_period <= 3600)) return fail("--geometry-period is not in (0, 3600] s");
+  if (!(boundary >= 0 && boundary <= 10)) return fail("--boundary is not in 0..10 m");
+  if (max_frames < 0) return fail("--frames is negative");
+  return true;
+}
+
+std::string ServeSummary::Brief() const {
+  std::ostringstream s;
+  s << counters.frames << " frames (" << simulated << " s simulated) in " << wall << " s wall; blue "
+    << (clients[0].empty() ? "-" : clients[0]) << ", yellow " << (clients[1].empty() ? "-" : clients[1]) << "; "
+    << counters.refused << " refused, " << counters.malformed + counters.oversized + counters.rate_dropped
+    << " bad datagrams";
+  return s.str();
+}
+
+std::string ServeSummary::Report() const {
+  std::ostringstream s;
+  s << "frames " << counters.frames << " (" << simulated << " s simulated, " << wall << " s wall)\n"
+    << "vision packets sent " << counters.vision_packets << "\n"
+    << "robot controls " << counters.robot_controls << ", simulator commands " << counters.simulator_commands << "\n"
+    << "refused " << counters.refused << ", malformed " << counters.malformed << ", oversized "
+    << counters.oversized << ", over the rate limit " << counters.rate_dropped << "\n"
+    << "late frames " << counters.late_frames << "\n"
+    << "blue client " << (clients[0].empty() ? "-" : clients[0]) << ", yellow client "
+    << (clients[1].empty() ? "-" : clients[1]) << "\n";
+  return s.str();
+}
+
+LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& options)
+    : scene_(scene),
+      sim_(std::move(sim)),
+      options_(options),
+      roster_([&] {
+        std::vector<TeamRobot> robots;
+        for (const SceneRobot& r : scene.robots)
+          robots.push_back(TeamRobot{r.team == "yellow" ? TeamColor::kYellow : TeamColor::kBlue, r.id});
+        return robots;
+      }()),
+      control_(),
+      teams_{TeamPort(TeamColor::kBlue), TeamPort(TeamColor::kYellow)} {
+  std::string why;
+  if (!options_.IsValid(&why)) throw InputError(why);
+  if (2 * options_.boundary >= std::min(scene.field.length, scene.field.width))
+    throw InputError(SourceLocation{scene.path}, "--boundary " + std::to_string(options_.boundary) +
+                                                     " m leaves no field inside the walls");
+  if (sim_.num_robots() != roster_.size()) throw std::invalid_argument("LiveField: the simulation is not the scene's");
+  vision_delay_ = sim_.robot_model(0).vision_delay_frames;
+  for (int i = 1; i < sim_.num_robots(); ++i) {
+    if (sim_.robot_model(i).vision_delay_frames != vision_delay_) {
+      throw InputError(SourceLocation{scene.path},
+                       "robots '" + sim_.robot_name(0) + "' and '" + sim_.robot_name(i) + "' have vision delays of " +
+                           std::to_string(vision_delay_) + " and " +
+                           std::to_string(sim_.robot_model(i).vision_delay_frames) +
+                           " frames; twinsim serve has one camera, with one delay");
+    }
+  }
+  control_ = UdpSocket(options_.listen, options_.control_port);
+  teams_[0].socket = UdpSocket(options_.listen, options_.blue_port);
+  teams_[1].socket = UdpSocket(options_.listen, options_.yellow_port);
+  for (const std::string& t : options_.teams) teams_[t == "blue" ? 0 : 1].waited = true;
+  vision_to_ = UdpEndpoint{ParseIpv4(options_.vision_address), options_.vision_port};
+  moves_.resize(static_cast<std::size_t>(sim_.num_robots()));
+  result_.backend = sim_.backend().name();
+  result_.timing = sim_.backend().timing();
+  for (int i = 0; i < sim_.num_robots(); ++i) result_.robot_names.push_back(sim_.robot_name(i));
+  result_.frames.resize(static_cast<std::size_t>(sim_.num_robots()));
+  control_tokens_ = teams_[0].tokens = teams_[1].tokens = options_.max_rate;
+}
+
+bool LiveField::TakeToken(double* tokens) {
+  if (*tokens < 1) return false;
+  *tokens -= 1;
+  return true;
+}
+
+bool LiveField::FrameComplete() const {
+  bool any = false;
+  for (const TeamPort& t : teams_) {
+    if (!t.waited) continue;
+    any = true;
+    if (!t.answered) return false;
+  }
+  return any;
+}
+
+void LiveField::SendVision(const std::vector<FrameRecord>& records) {
+  std::vector<Sighting> seen;
+  for (int i = 0; i < sim_.num_robots(); ++i) {
+    const FrameRecord& r = records[static_cast<std::size_t>(i)];
+    if (r.observed) seen.push_back(Sighting{roster_.robot(i), r.seen});
+  }
+  const int k = sim_.frame();
+  const double dt = result_.timing.frame_dt();
+  // Lockstep stamps simulated time (deterministic); real time, Unix time as SSL-Vision.
+  double t_capture = (k - vision_delay_) * dt, t_sent = k * dt;
+  if (!options_.lockstep) {
+    t_capture += unix_start_;
+    t_sent = UnixNow();
+  }
+  SSL_WrapperPacket packet = DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent);
+  // Geometry in the same packet at frame 0 and then every geometry_period.
+  const int every = std::max(1, static_cast<int>(std::lround(options_.geometry_period / dt)));
+  if (k % every == 0) *packet.mutable_geometry() = GeometryPacket(scene_.field, options_.boundary).geometry();
+  last_vision_ = packet.SerializeAsString();
+  vision_out_.SendTo(last_vision_, vision_to_);
+  ++counters_.vision_packets;
+}
+
+void LiveField::Drain(int port) {
+  const UdpSocket& socket = port == 2 ? control_ : teams_[static_cast<std::size_t>(port)].socket;
+  for (int n = 0; n < kMaxDatagramsPerDrain; ++n) {
+    std::optional<Datagram> d = socket.Receive(static_cast<std::size_t>(options_.max_datagram));
+    if (!d) return;
+    if (port == 2) {
+      HandleControl(*d);
+    } else {
+      HandleTeam(teams_[static_cast<std::size_t>(port)], *d);
+    }
+  }
+}
+
+void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
+  if (!TakeToken(&team.tokens)) {
+    ++counters_.rate_dropped;  // answering a flood would double it
+    return;
+  }
+  const std::string port = std::string(TeamName(team.team)) + " port";
+  if (d.truncated()) {
+    ++counters_.oversized;
+    RobotControlResponse r;
+    AddError(&r, "TWINSIM_OVERSIZED", "a datagram of " + std::to_string(d.size) + " bytes on the " + port +
+                                          " is over the limit of " + std::to_string(options_.max_datagram));
+    Answer(team.socket, r, d.from);
+    return;
+  }
+  if (options_.tournament && team.client && *team.client != d.from) {
+    ++counters_.refused;
+    RobotControlResponse r;
+    AddError(&r, "TWINSIM_PORT_TAKEN", "tournament mode: the " + port + " is driven by " + team.client->ToString() +
+                                           "; " + d.from.ToString() + " is refused");
+    Answer(team.socket, r, d.from);
+    return;
+  }
+  RobotControlResult read = ReadRobotControl(d.bytes, team.team, roster_);
+  if (!read.parsed) {
+    ++counters_.malformed;
+    Answer(team.socket, read.response, d.from);
+    return;
+  }
+  ++counters_.robot_controls;
+  counters_.refused += read.refused;
+  team.client = d.from;
+  team.waited = true;
+  team.answered = true;
+  for (const auto& [robot, move] : read.moves) moves_[static_cast<std::size_t>(robot)] = move;
+  Answer(team.socket, read.response, d.from);
+}
+
+void LiveField::HandleControl(const Datagram& d) {
+  if (!TakeToken(&control_tokens_)) {
+    ++counters_.rate_dropped;
+    return;
+  }
+  SimulatorResponse response;
+  if (d.truncated()) {
+    ++counters_.oversized;
+    AddError(&response, "TWINSIM_OVERSIZED", "a datagram of " + std::to_string(d.size) +
+                                                 " bytes on the control port is over the limit of " +
+                                                 std::to_string(options_.max_datagram));
+    Answer(control_, response, d.from);
+    return;
+  }
+  if (options_.tournament) {
+    ++counters_.refused;
+    AddError(&response, "TWINSIM_TOURNAMENT", "tournament mode: simulator control is refused");
+    Answer(control_, response, d.from);
+    return;
+  }
+  SimulatorCommandResult read = ReadSimulatorCommand(d.bytes, roster_, scene_.field);
+  if (!read.parsed) {
+    ++counters_.malformed;
+    Answer(control_, read.response, d.from);
+    return;
+  }
+  ++counters_.simulator_commands;
+  counters_.refused += read.refused;
+  control_client_ = d.from;
+  for (const RobotTeleport& t : read.teleports) {
+    const Pose2 pose = TeleportedPose(t, sim_.backend().pose(t.robot));
+    sim_.Teleport(t.robot, pose, FieldToBody(t.field_velocity, pose.theta));
+  }
+  if (read.simulation_speed) {
+    if (options_.lockstep) {
+      ++counters_.refused;
+      AddError(&read.response, "TWINSIM_UNSUPPORTED", "simulation_speed: in lockstep the clients set the pace");
+    } else {
+      speed_ = *read.simulation_speed;
+    }
+  }
+  Answer(control_, read.response, d.from);
+}
+
+ServeSummary LiveField::Summary() const {
+  ServeSummary s;
+  s.counters = counters_;
+  s.simulated = static_cast<double>(counters_.frames) * result_.timing.frame_dt();
+  s.wall = Seconds(Clock::now() - start_);
+  for (std::size_t t = 0; t < 2; ++t)
+    if (teams_[t].client) s.clients[t] = teams_[t].client->ToString();
+  return s;
+}
+
+ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status) {
+  start_ = last_refill_ = Clock::now();
+  unix_start_ = UnixNow();
+  Clock::time_point frame_end = start_, next_status = start_;
+  const double dt = result_.timing.frame_dt();
+  const std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
+  while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
+    std::vector<FrameRecord> records = sim_.BeginFrame();
+    SendVision(records);
+    for (TeamPort& t : teams_) t.answered = false;
+    if (!options_.lockstep) {
+      frame_end += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt / speed_));
+      if (Clock::now() > frame_end) {
+        ++counters_.late_frames;
+        frame_end = Clock::now();
+      }
+    }
+    Clock::time_point resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
+    bool stopped = false;
+    for (;;) {
+      if (stop()) {
+        stopped = true;
+        break;
+      }
+      if (options_.lockstep && FrameComplete()) break;
+      const Clock::time_point now = Clock::now();
+      double wait = kPollPeriod;
+      if (!options_.lockstep) {
+        const double left = Seconds(frame_end - now);
+        if (left <= 0) break;
+        wait = std::min(wait, left);
+      }
+      // The rate limit's buckets fill at max_rate, up to one second's worth.
+      const double refill = Seconds(now - last_refill_) * options_.max_rate;
+      last_refill_ = now;
+      for (double* tokens : {&teams_[0].tokens, &teams_[1].tokens, &control_tokens_})
+        *tokens = std::min(options_.max_rate, *tokens + refill);
+      if (WaitReadable(sockets, wait) >= 0)
+        for (int port = 0; port < 3; ++port) Drain(port);
+      // Lockstep: a team yet to come may have missed this frame's vision.
+      if (options_.lockstep && Clock::now() >= resend) {
+        bool missing = !teams_[0].waited && !teams_[1].waited;
+        for (const TeamPort& t : teams_) missing = missing || (t.waited && !t.client);
+        if (missing) {
+          vision_out_.SendTo(last_vision_, vision_to_);
+          ++counters_.vision_packets;
+        }
+        resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
+      }
+      if (status && Clock::now() >= next_status) {
+        status(Summary());
+        next_status = Clock::now() + std::chrono::milliseconds(100);
+      }
+    }
+    if (stopped) break;  // the begun frame is not logged: it has no commands
+    for (int i = 0; i < sim_.num_robots(); ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      records[k].command = moves_[k] ? LocalVelocity(*moves_[k], records[k].truth.theta) : sim_.SourceCommand(i);
+    }
+    sim_.EndFrame(&records);
+    for (std::size_t k = 0; k < records.size(); ++k) result_.frames[k].push_back(records[k]);
+    ++counters_.frames;
+  }
+  return Summary();
+}
+
+}  // namespace twinsim

@@ -1,0 +1,145 @@
+// A scene's field served live over the league's network protocol (twinsim serve,
+// docs/serve.md): teams drive their robots with RobotControl on their ports, a
+// controller moves robots with SimulatorCommand, and every camera frame the field sends
+// the SSL-Vision packet of what the observer receives, through the scene's delay loop
+// and camera noise (sim/omni_simulation.h).
+//
+// Per camera frame k: BeginFrame (capture, vision delay) -> send the detection of frame
+// k -> take commands until the frame ends -> EndFrame (command delay, physics). A frame
+// ends
+//   - in lockstep, when every team waited for (those named, and every team that has
+//     sent a RobotControl) has sent one since the frame's vision went out; none yet:
+//     the field waits for the first, sending the frame's vision again every 0.25 s;
+//   - in real time, at the wall-clock time of the next frame (x the simulation speed).
+// So a command sent in answer to the vision of frame k is logged in frame k and first
+// moves the robots seen in frame k + D + 1 (D = command + vision delay), as in
+// `twinsim run`. A robot keeps the last move it received; a robot no team has
+// commanded yet follows its scene's `commands`.
+//
+//   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+//   ServeSummary summary = field.Run([] { return InterruptSignal() != 0; });
+//   WriteOmniRunFiles(scene, field.result(), "analytic", true, &files);
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+#include "serve/robot_control.h"
+#include "serve/team_roster.h"
+#include "serve/udp_socket.h"
+#include "sim/omni_simulation.h"
+
+namespace twinsim {
+
+struct ServeOptions {
+  std::string listen = "127.0.0.1";  // the address the three ports listen on
+  int control_port = 10300;          // SimulatorCommand; 0: any free port
+  int blue_port = 10301;             // blue team's RobotControl
+  int yellow_port = 10302;           // yellow team's RobotControl
+  std::string vision_address = "127.0.0.1";  // SSL_WrapperPacket go here (unicast)
+  int vision_port = 10020;
+  bool lockstep = false;              // false: real time
+  std::vector<std::string> teams;     // lockstep: teams waited for from frame 0 ("blue", "yellow")
+  bool tournament = false;            // refuse simulator control; one address per team port
+  int max_datagram = 8192;            // bytes; a larger datagram is refused
+  double max_rate = 1000;             // datagrams/s per port; beyond, dropped unanswered
+  double geometry_period = 1;         // s of simulated time between geometry packets
+  double boundary = 0.3;              // m between the walls and the field lines
+  long long max_frames = 0;           // stop after this many frames; 0: when stopped
+
+  // False (with the reason in *why) for values out of range, an address that is not
+  // IPv4, a multicast vision address (not implemented yet), an unknown team name.
+  bool IsValid(std::string* why) const;
+};
+
+// What happened, counted.
+struct ServeCounters {
+  long long frames = 0;
+  long long vision_packets = 0;      // sent (detections and geometry)
+  long long robot_controls = 0;      // RobotControl read
+  long long simulator_commands = 0;  // SimulatorCommand read
+  long long refused = 0;             // robot commands and control requests refused (answered)
+  long long malformed = 0;           // datagrams that were no message (answered)
+  long long oversized = 0;           // datagrams over the size limit (answered)
+  long long rate_dropped = 0;        // datagrams over the rate limit (dropped)
+  long long late_frames = 0;         // real time: frames that started after their time
+};
+
+struct ServeSummary {
+  ServeCounters counters;
+  double simulated = 0;  // s
+  double wall = 0;       // s
+  std::array<std::string, 2> clients;  // blue, yellow: the address that last sent, "" none
+  // "1234 frames (41.1 s simulated) in 41.2 s wall; blue 127.0.0.1:5000, yellow -; 0 refused".
+  std::string Brief() const;
+  // Every counter, one per line.
+  std::string Report() const;
+};
+
+class LiveField {
+ public:
+  // Opens the ports (throws InputError naming an address that cannot be bound) for
+  // `sim`, built from `scene` (robots' teams and ids, field). Throws InputError when
+  // the options are not valid or the robots' vision delays differ (one camera).
+  LiveField(const Scene& scene, Simulation sim, const ServeOptions& options);
+
+  int control_port() const { return control_.port(); }
+  int blue_port() const { return teams_[0].socket.port(); }
+  int yellow_port() const { return teams_[1].socket.port(); }
+
+  // Runs frames until `stop()` returns true (asked between datagrams and frames) or
+  // max_frames have run; `status(summary)` is called about ten times a second. Throws
+  // CheckFailed when the simulation diverges.
+  ServeSummary Run(const std::function<bool()>& stop,
+                   const std::function<void(const ServeSummary&)>& status = {});
+
+  // Every frame run, for the logs (scene/scene_run.h: WriteOmniRunFiles).
+  const SimulationResult& result() const { return result_; }
+
+ private:
+  struct TeamPort {
+    explicit TeamPort(TeamColor color) : team(color) {}
+    TeamColor team;
+    UdpSocket socket;
+    bool waited = false;                   // lockstep: named, or has sent a RobotControl
+    bool answered = false;                 // has sent since this frame's vision
+    std::optional<UdpEndpoint> client;     // tournament: the one address allowed; else the last
+    double tokens = 0;                     // rate limit
+  };
+
+  void SendVision(const std::vector<FrameRecord>& records);
+  // Reads every datagram waiting on the socket at `port` (0, 1 teams, 2 control).
+  void Drain(int port);
+  void HandleTeam(TeamPort& team, const Datagram& d);
+  void HandleControl(const Datagram& d);
+  bool TakeToken(double* tokens);
+  bool FrameComplete() const;
+  ServeSummary Summary() const;
+
+  const Scene& scene_;
+  Simulation sim_;
+  ServeOptions options_;
+  TeamRoster roster_;
+  UdpSocket control_;
+  std::array<TeamPort, 2> teams_;
+  std::optional<UdpEndpoint> control_client_;
+  double control_tokens_ = 0;
+  UdpSocket vision_out_;
+  UdpEndpoint vision_to_;
+  int vision_delay_ = 0;                               // frames, every robot's
+  std::vector<std::optional<RobotMove>> moves_;        // per robot; none: its scene's commands
+  double speed_ = 1;                                   // real time x this
+  ServeCounters counters_;
+  SimulationResult result_;
+  std::chrono::steady_clock::time_point start_, last_refill_;
+  double unix_start_ = 0;  // s, real time: the Unix time of frame 0
+  std::string last_vision_;  // the current frame's packet, serialized
+};
+
+}  // namespace twinsim

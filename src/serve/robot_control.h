@@ -1,0 +1,59 @@
+// Reading the league's RobotControl (ssl_simulation_robot_control.proto), sent by a
+// team to its own port, into the moves the served field's robots receive, and the
+// RobotControlResponse that answers it: one SimulatorError for every command refused,
+// one RobotFeedback for every robot commanded.
+//
+// Error codes (SimulatorError.code) a client may act on:
+//   TWINSIM_MALFORMED      the datagram is not a RobotControl
+//   TWINSIM_OVERSIZED      the datagram is over the size limit (not read)
+//   TWINSIM_UNKNOWN_ROBOT  the team has no robot of that id
+//   TWINSIM_OTHER_TEAM     the id is the other team's robot, commanded from this port
+//   TWINSIM_BAD_VALUE      a velocity that is not finite or beyond the limits below
+//   TWINSIM_UNSUPPORTED    wheel velocities (unsupported_capability says so)
+//   TWINSIM_NO_BALL        a kick or the dribbler: the field has no ball yet (the move
+//                          is still applied)
+//   TWINSIM_PORT_TAKEN     tournament mode: another address already drives this team
+//   TWINSIM_TOURNAMENT     tournament mode: simulator control is refused
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/pose.h"
+#include "serve/team_roster.h"
+#include "ssl_simulation_robot_feedback.pb.h"
+
+namespace twinsim {
+
+inline constexpr double kMaxCommandSpeed = 20;    // m/s, a command beyond is refused
+inline constexpr double kMaxCommandOmega = 100;   // rad/s
+
+// A velocity command as the team sent it.
+struct RobotMove {
+  bool global = false;  // true: field frame (vx, vy along the field's axes)
+  Twist2 velocity;      // robot frame unless global; m/s, m/s, rad/s
+};
+
+// The move in the robot's own frame for a robot heading `theta` (rad).
+Twist2 LocalVelocity(const RobotMove& move, double theta);
+
+struct RobotControlResult {
+  bool parsed = false;                          // false: not a RobotControl
+  std::vector<std::pair<int, RobotMove>> moves;  // (robot index, move), in the message's order
+  int refused = 0;                               // robot commands refused
+  RobotControlResponse response;
+};
+
+// Adds a SimulatorError with `code` and `message` to `errors` of any response.
+template <typename Response>
+void AddError(Response* response, const std::string& code, const std::string& message) {
+  SimulatorError* e = response->add_errors();
+  e->set_code(code);
+  e->set_message(message);
+}
+
+// Reads one datagram from `team`'s port. Never throws for any bytes.
+RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, const TeamRoster& roster);
+
+}  // namespace twinsim

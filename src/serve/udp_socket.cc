@@ -1,0 +1,118 @@
+#include "serve/udp_socket.h"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "core/error.h"
+
+namespace twinsim {
+namespace {
+
+sockaddr_in ToSockaddr(const UdpEndpoint& e) {
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(e.address);
+  a.sin_port = htons(static_cast<std::uint16_t>(e.port));
+  return a;
+}
+
+int OpenNonBlocking() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) throw std::runtime_error(std::string("cannot open a UDP socket: ") + std::strerror(errno));
+  return fd;
+}
+
+}  // namespace
+
+std::string UdpEndpoint::ToString() const {
+  return std::to_string((address >> 24) & 255) + "." + std::to_string((address >> 16) & 255) + "." +
+         std::to_string((address >> 8) & 255) + "." + std::to_string(address & 255) + ":" + std::to_string(port);
+}
+
+std::uint32_t ParseIpv4(const std::string& text) {
+  in_addr a{};
+  // inet_pton accepts exactly four decimal parts, nothing else.
+  if (::inet_pton(AF_INET, text.c_str(), &a) != 1)
+    throw InputError("'" + text + "' is not an IPv4 address (expected four numbers 0-255, e.g. 127.0.0.1)");
+  return ntohl(a.s_addr);
+}
+
+bool IsMulticast(std::uint32_t address) { return (address >> 28) == 0xE; }
+
+UdpSocket::UdpSocket() : fd_(OpenNonBlocking()) {}
+
+UdpSocket::UdpSocket(const std::string& address, int port) {
+  const std::uint32_t host = ParseIpv4(address);
+  if (port < 0 || port > 65535) throw InputError("port " + std::to_string(port) + " is not in 0..65535");
+  fd_ = OpenNonBlocking();
+  const sockaddr_in a = ToSockaddr(UdpEndpoint{host, port});
+  if (::bind(fd_, reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
+    const int err = errno;
+    ::close(fd_);
+    fd_ = -1;
+    throw InputError("cannot listen on " + UdpEndpoint{host, port}.ToString() + ": " + std::strerror(err));
+  }
+}
+
+UdpSocket::~UdpSocket() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+UdpSocket::UdpSocket(UdpSocket&& other) noexcept : fd_(other.fd_) { other.fd_ = -1; }
+
+UdpSocket& UdpSocket::operator=(UdpSocket&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = other.fd_;
+    other.fd_ = -1;
+  }
+  return *this;
+}
+
+int UdpSocket::port() const {
+  sockaddr_in a{};
+  socklen_t len = sizeof a;
+  if (::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len) != 0) return 0;
+  return ntohs(a.sin_port);
+}
+
+bool UdpSocket::SendTo(const std::string& bytes, const UdpEndpoint& to) const {
+  const sockaddr_in a = ToSockaddr(to);
+  const ssize_t n = ::sendto(fd_, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&a), sizeof a);
+  return n == static_cast<ssize_t>(bytes.size());
+}
+
+std::optional<Datagram> UdpSocket::Receive(std::size_t max_bytes) const {
+  Datagram d;
+  d.bytes.resize(max_bytes);
+  sockaddr_in a{};
+  socklen_t len = sizeof a;
+  // MSG_TRUNC: the return value is the datagram's full size, even when cut to the buffer.
+  const ssize_t n = ::recvfrom(fd_, d.bytes.data(), d.bytes.size(), MSG_TRUNC, reinterpret_cast<sockaddr*>(&a), &len);
+  if (n < 0) return std::nullopt;  // nothing waiting (EAGAIN), or an error the next call sees again
+  d.size = static_cast<std::size_t>(n);
+  d.bytes.resize(std::min(d.size, max_bytes));
+  d.from = UdpEndpoint{ntohl(a.sin_addr.s_addr), ntohs(a.sin_port)};
+  return d;
+}
+
+int WaitReadable(const std::vector<const UdpSocket*>& sockets, double timeout) {
+  std::vector<pollfd> fds;
+  for (const UdpSocket* s : sockets) fds.push_back(pollfd{s->fd(), POLLIN, 0});
+  const int ms = static_cast<int>(std::ceil(std::max(0.0, timeout) * 1000));
+  if (::poll(fds.data(), fds.size(), ms) <= 0) return -1;
+  for (std::size_t i = 0; i < fds.size(); ++i)
+    if (fds[i].revents & (POLLIN | POLLERR)) return static_cast<int>(i);
+  return -1;
+}
+
+}  // namespace twinsim

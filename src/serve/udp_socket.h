@@ -1,0 +1,71 @@
+// UDP over IPv4 for twinsim serve: a bound, non-blocking socket that sends and receives
+// whole datagrams, and a wait on several sockets at once. Plain POSIX sockets.
+//
+//   UdpSocket control("127.0.0.1", 10300);       // port 0: any free port
+//   if (WaitReadable({&control}, 0.05) >= 0)
+//     while (auto d = control.Receive(8192)) Handle(d->bytes, d->from);
+//   control.SendTo(reply, d->from);
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace twinsim {
+
+// An IPv4 address and port, both in host byte order.
+struct UdpEndpoint {
+  std::uint32_t address = 0;
+  int port = 0;
+  // "127.0.0.1:10300".
+  std::string ToString() const;
+  bool operator==(const UdpEndpoint& o) const { return address == o.address && port == o.port; }
+  bool operator!=(const UdpEndpoint& o) const { return !(*this == o); }
+};
+
+// Parses a dotted IPv4 address ("127.0.0.1"). Throws InputError naming `text` otherwise.
+std::uint32_t ParseIpv4(const std::string& text);
+// Whether `address` (host order) is a multicast group (224.0.0.0/4).
+bool IsMulticast(std::uint32_t address);
+
+// One datagram received.
+struct Datagram {
+  std::string bytes;      // at most the size asked for
+  UdpEndpoint from;
+  std::size_t size = 0;   // bytes the sender sent: larger than bytes.size() when cut off
+  bool truncated() const { return size > bytes.size(); }
+};
+
+class UdpSocket {
+ public:
+  // Binds to `address`:`port` (port 0: a free port the system picks). Throws InputError
+  // naming the address when the socket cannot be bound (in use, not this host's address).
+  UdpSocket(const std::string& address, int port);
+  // An unbound socket for sending only (the system binds it on the first send).
+  UdpSocket();
+  ~UdpSocket();
+  UdpSocket(UdpSocket&& other) noexcept;
+  UdpSocket& operator=(UdpSocket&& other) noexcept;
+  UdpSocket(const UdpSocket&) = delete;
+  UdpSocket& operator=(const UdpSocket&) = delete;
+
+  // The port the socket is bound to (0 before an unbound socket's first send).
+  int port() const;
+  int fd() const { return fd_; }
+
+  // Sends one datagram; false when the system refused it (e.g. a full buffer).
+  bool SendTo(const std::string& bytes, const UdpEndpoint& to) const;
+  // The next datagram waiting, at most `max_bytes` of it kept (its full size is
+  // reported), or nothing when none is waiting. Never blocks.
+  std::optional<Datagram> Receive(std::size_t max_bytes) const;
+
+ private:
+  int fd_ = -1;
+};
+
+// Waits at most `timeout` s for a datagram on any of `sockets`; returns the index of
+// the first that has one, -1 on timeout (or a signal).
+int WaitReadable(const std::vector<const UdpSocket*>& sockets, double timeout);
+
+}  // namespace twinsim

@@ -1,0 +1,125 @@
+#include "serve/vision_packets.h"
+
+#include <cmath>
+#include <string>
+
+#include "core/math_constants.h"
+
+namespace twinsim {
+namespace {
+
+// The one camera: above the centre, looking down, its image covering the field.
+constexpr double kCameraHeight = 4000;  // mm
+constexpr double kFocalLength = 390;    // pixel
+constexpr int kImageWidth = 780, kImageHeight = 580;  // pixel
+// Robots' height as SSL-Vision is configured for them.
+constexpr double kRobotHeight = 150;    // mm
+
+void Pixel(double x_mm, double y_mm, float* px, float* py) {
+  *px = static_cast<float>(kImageWidth / 2.0 + kFocalLength * x_mm / kCameraHeight);
+  *py = static_cast<float>(kImageHeight / 2.0 - kFocalLength * y_mm / kCameraHeight);
+}
+
+void AddLine(SSL_GeometryFieldSize* f, const std::string& name, double x1, double y1, double x2, double y2,
+             double thickness, SSL_FieldShapeType type) {
+  SSL_FieldLineSegment* l = f->add_field_lines();
+  l->set_name(name);
+  l->mutable_p1()->set_x(static_cast<float>(x1));
+  l->mutable_p1()->set_y(static_cast<float>(y1));
+  l->mutable_p2()->set_x(static_cast<float>(x2));
+  l->mutable_p2()->set_y(static_cast<float>(y2));
+  l->set_thickness(static_cast<float>(thickness));
+  l->set_type(type);
+}
+
+}  // namespace
+
+SSL_WrapperPacket DetectionPacket(const std::vector<Sighting>& seen, std::uint32_t frame_number, double t_capture,
+                                  double t_sent) {
+  SSL_WrapperPacket packet;
+  SSL_DetectionFrame* frame = packet.mutable_detection();
+  frame->set_frame_number(frame_number);
+  frame->set_t_capture(t_capture);
+  frame->set_t_sent(t_sent);
+  frame->set_camera_id(0);
+  for (const Sighting& s : seen) {
+    SSL_DetectionRobot* r =
+        s.robot.team == TeamColor::kBlue ? frame->add_robots_blue() : frame->add_robots_yellow();
+    const double x = 1000 * s.pose.x, y = 1000 * s.pose.y;
+    r->set_confidence(1.0f);
+    r->set_robot_id(static_cast<unsigned>(s.robot.id));
+    r->set_x(static_cast<float>(x));
+    r->set_y(static_cast<float>(y));
+    r->set_orientation(static_cast<float>(s.pose.theta));
+    float px, py;
+    Pixel(x, y, &px, &py);
+    r->set_pixel_x(px);
+    r->set_pixel_y(py);
+    r->set_height(static_cast<float>(kRobotHeight));
+  }
+  packet.set_source(SSL_SOURCE_OTHER);
+  return packet;
+}
+
+SSL_WrapperPacket GeometryPacket(const FieldModel& field, double boundary) {
+  SSL_WrapperPacket packet;
+  SSL_GeometryData* g = packet.mutable_geometry();
+  SSL_GeometryFieldSize* f = g->mutable_field();
+  const double length = 1000 * (field.length - 2 * boundary), width = 1000 * (field.width - 2 * boundary);
+  const double line = 10;  // mm
+  f->set_field_length(static_cast<int>(std::lround(length)));
+  f->set_field_width(static_cast<int>(std::lround(width)));
+  f->set_goal_width(1000);
+  f->set_goal_depth(180);
+  f->set_boundary_width(static_cast<int>(std::lround(1000 * boundary)));
+  f->set_penalty_area_depth(1000);
+  f->set_penalty_area_width(2000);
+  f->set_center_circle_radius(500);
+  f->set_line_thickness(static_cast<int>(line));
+  f->set_goal_center_to_penalty_mark(6000);
+  f->set_goal_height(155);
+  f->set_ball_radius(21.5f);
+  f->set_max_robot_radius(90.0f);
+  const double hx = length / 2, hy = width / 2;
+  AddLine(f, "TopTouchLine", -hx, hy, hx, hy, line, TopTouchLine);
+  AddLine(f, "BottomTouchLine", -hx, -hy, hx, -hy, line, BottomTouchLine);
+  AddLine(f, "LeftGoalLine", -hx, -hy, -hx, hy, line, LeftGoalLine);
+  AddLine(f, "RightGoalLine", hx, -hy, hx, hy, line, RightGoalLine);
+  AddLine(f, "HalfwayLine", 0, -hy, 0, hy, line, HalfwayLine);
+  AddLine(f, "CenterLine", -hx, 0, hx, 0, line, CenterLine);
+  AddLine(f, "LeftPenaltyStretch", -hx + 1000, -1000, -hx + 1000, 1000, line, LeftPenaltyStretch);
+  AddLine(f, "RightPenaltyStretch", hx - 1000, -1000, hx - 1000, 1000, line, RightPenaltyStretch);
+  SSL_FieldCircularArc* circle = f->add_field_arcs();
+  circle->set_name("CenterCircle");
+  circle->mutable_center()->set_x(0);
+  circle->mutable_center()->set_y(0);
+  circle->set_radius(500);
+  circle->set_a1(0);
+  circle->set_a2(static_cast<float>(2 * kPi));
+  circle->set_thickness(static_cast<float>(line));
+  circle->set_type(CenterCircle);
+
+  SSL_GeometryCameraCalibration* c = g->add_calib();
+  c->set_camera_id(0);
+  c->set_focal_length(static_cast<float>(kFocalLength));
+  c->set_principal_point_x(kImageWidth / 2.0f);
+  c->set_principal_point_y(kImageHeight / 2.0f);
+  c->set_distortion(0);
+  // A nominal calibration (no real camera): the identity rotation, the camera at tz.
+  c->set_q0(1);
+  c->set_q1(0);
+  c->set_q2(0);
+  c->set_q3(0);
+  c->set_tx(0);
+  c->set_ty(0);
+  c->set_tz(static_cast<float>(kCameraHeight));
+  c->set_derived_camera_world_tx(0);
+  c->set_derived_camera_world_ty(0);
+  c->set_derived_camera_world_tz(static_cast<float>(kCameraHeight));
+  c->set_pixel_image_width(kImageWidth);
+  c->set_pixel_image_height(kImageHeight);
+  packet.set_source(SSL_SOURCE_OTHER);
+  return packet;
+}
+
+}  // namespace twinsim

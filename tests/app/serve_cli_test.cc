@@ -1,0 +1,66 @@
+// `twinsim serve` as a user runs it: Ctrl-C stops it and it writes the contract's log.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "serve/udp_socket.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::SourcePath;
+
+TEST(ServeCli, SigintStopsAndWritesTheLogPerRobot) {
+  const std::string d = testing::TempDir("serve_sigint");
+  const std::string model = SourcePath("models/omni4.yaml");
+  const std::string hold = "commands: {type: sequence, segments: [{duration: 1, command: [0.5, 0, 0]}]}";
+  const std::string scene = testing::WriteText(
+      d + "/s.yaml", "name: s\nbackend: analytic\nduration: 1\nrobots:\n  - {name: b0, model: " + model + ", " + hold +
+                         "}\n  - {name: y0, team: yellow, model: " + model + ", start: {x: 1}, " + hold + "}\n");
+  UdpSocket vision("127.0.0.1", 0);  // receives the packets, so none are refused by the host
+  const std::string args = "serve " + scene + " --out " + d + "/out --control-port 0 --blue-port 0 --yellow-port 0" +
+                           " --vision-port " + std::to_string(vision.port());
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = "exec " + std::string(TWINSIM_BINARY) + " " + args + " >" + d + "/stdout 2>" + d + "/stderr";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Vision flows once the field runs; then stop it the way a user does.
+  bool flowing = false;
+  for (int i = 0; i < 100 && !flowing; ++i) flowing = WaitReadable({&vision}, 0.1) >= 0;
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  const std::string out = testing::ReadText(d + "/stdout"), err = testing::ReadText(d + "/stderr");
+  EXPECT_TRUE(flowing) << err;
+  ASSERT_TRUE(WIFEXITED(status)) << err;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << out << err;
+  for (const char* name : {"trajectory.csv", "trajectory_y0.csv", "truth.csv", "truth_y0.csv"})
+    EXPECT_TRUE(fs::exists(d + "/out/" + name)) << name << "\n" << out << err;
+  const std::string log = testing::ReadText(d + "/out/trajectory.csv");
+  EXPECT_EQ(log.rfind("t,x,y,theta,vx_cmd,vy_cmd,omega_cmd", 0), 0u) << log.substr(0, 200);
+  // About half a second at 30 fps, logged at simulated times; the scene's command drives b0.
+  const auto rows = std::count(log.begin(), log.end(), '\n') - 1;
+  EXPECT_GE(rows, 5) << log;
+  EXPECT_NE(log.find(",0.5,0,0"), std::string::npos) << log.substr(0, 400);
+  EXPECT_NE(out.find("frames"), std::string::npos) << out;
+}
+
+TEST(ServeCli, BadOptionsExitWithCode2) {
+  const testing::CommandResult r = testing::RunTwinsim("serve " + SourcePath("scenes/drive45.yaml") +
+                                                       " --vision-address 224.5.23.2 --frames 1");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("multicast"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace twinsim

@@ -1,0 +1,317 @@
+// A served field on the loopback (127.0.0.1, ports the system picks, never multicast):
+// lockstep equals the simulation with the same commands, a command shows in vision
+// at k + D + 1, and every refusal is answered and counted.
+#include "serve/live_field.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "scene/scene.h"
+#include "ssl_simulation_control.pb.h"
+#include "ssl_simulation_robot_control.pb.h"
+#include "ssl_vision_wrapper.pb.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+using testing::SourcePath;
+
+// Blue 0 and yellow 3 on the analytic backend; both follow zero commands unless a
+// client drives them.
+Scene TwoTeamScene() {
+  const std::string model = SourcePath("models/omni4.yaml");
+  const std::string hold = "commands: {type: sequence, segments: [{duration: 1, command: [0, 0, 0]}]}";
+  return LoadSceneFromString("name: served\nbackend: analytic\nduration: 10\nseed: 7\nrobots:\n"
+                             "  - {name: b0, model: " + model + ", start: {x: 0, y: 0}, " + hold + "}\n"
+                             "  - {name: y3, team: yellow, id: 3, model: " + model +
+                                 ", start: {x: 1, y: 0.5, theta_deg: 90}, " + hold + "}\n",
+                             "served.yaml", ".");
+}
+
+ServeOptions LoopbackOptions(int vision_port) {
+  ServeOptions o;
+  o.control_port = o.blue_port = o.yellow_port = 0;
+  o.vision_port = vision_port;
+  return o;
+}
+
+// Runs the field on a thread until Stop() (or its frame limit).
+class ServerThread {
+ public:
+  explicit ServerThread(LiveField* field) : field_(field) {
+    thread_ = std::thread([this] { summary_ = field_->Run([this] { return stop_.load(); }); });
+  }
+  ~ServerThread() { Stop(); }
+  const ServeSummary& Stop() {
+    stop_ = true;
+    return Join();
+  }
+  // Waits for the field to end by itself (its frame limit).
+  const ServeSummary& Join() {
+    if (thread_.joinable()) thread_.join();
+    return summary_;
+  }
+
+ private:
+  LiveField* field_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+  ServeSummary summary_;
+};
+
+// The next datagram on `socket` within `timeout` s.
+std::optional<std::string> Receive(const UdpSocket& socket, double timeout = 5) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout);
+  while (std::chrono::steady_clock::now() < end) {
+    if (auto d = socket.Receive(65536)) return d->bytes;
+    WaitReadable({&socket}, 0.05);
+  }
+  return std::nullopt;
+}
+
+// The next detection frame numbered at least `frame`.
+std::optional<SSL_DetectionFrame> ReceiveFrame(const UdpSocket& vision, std::uint32_t frame) {
+  for (int tries = 0; tries < 100; ++tries) {
+    std::optional<std::string> bytes = Receive(vision);
+    if (!bytes) return std::nullopt;
+    SSL_WrapperPacket p;
+    if (p.ParseFromString(*bytes) && p.has_detection() && p.detection().frame_number() >= frame) return p.detection();
+  }
+  return std::nullopt;
+}
+
+UdpEndpoint Loopback(int port) { return UdpEndpoint{ParseIpv4("127.0.0.1"), port}; }
+
+std::string Local(unsigned id, const Twist2& v) {
+  RobotControl control;
+  RobotCommand* c = control.add_robot_commands();
+  c->set_id(id);
+  MoveLocalVelocity* m = c->mutable_move_command()->mutable_local_velocity();
+  m->set_forward(static_cast<float>(v.vx));
+  m->set_left(static_cast<float>(v.vy));
+  m->set_angular(static_cast<float>(v.omega));
+  return control.SerializeAsString();
+}
+
+// Sends `bytes` from `client` to the loopback `port` and reads the answer as a Response.
+template <typename Response>
+std::optional<Response> Ask(const UdpSocket& client, const std::string& bytes, int port) {
+  if (!client.SendTo(bytes, Loopback(port))) return std::nullopt;
+  std::optional<std::string> answer = Receive(client);
+  Response r;
+  if (!answer || !r.ParseFromString(*answer)) return std::nullopt;
+  return r;
+}
+
+// A SimulatorCommand that puts blue robot 0 at (x, y).
+std::string TeleportBlue0(float x, float y) {
+  SimulatorCommand command;
+  TeleportRobot* t = command.mutable_control()->add_teleport_robot();
+  t->mutable_id()->set_id(0);
+  t->mutable_id()->set_team(BLUE);
+  t->set_x(x);
+  t->set_y(y);
+  return command.SerializeAsString();
+}
+
+// The error codes of a response, in order.
+template <typename Response>
+std::vector<std::string> Codes(const std::optional<Response>& r) {
+  std::vector<std::string> codes;
+  if (!r) return {"no answer"};
+  for (const SimulatorError& e : r->errors()) codes.push_back(e.code());
+  return codes;
+}
+using Codes1 = std::vector<std::string>;
+
+// The blue robot's command at frame k: still until frame 10, then forward and turning.
+Twist2 CommandAt(int k) { return k < 10 ? Twist2{} : Twist2{1.0, 0.25, 1.0}; }
+
+TEST(LiveField, LockstepVisionIsTheSimulationsAndACommandShowsAtKPlusDelayPlusOne) {
+  const Scene scene = TwoTeamScene();
+  const int frames = 30;
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.lockstep = true;
+  options.teams = {"blue"};
+  options.max_frames = frames;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+
+  std::vector<SSL_DetectionFrame> seen;
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < frames; ++k) {
+      std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, static_cast<std::uint32_t>(k));
+      ASSERT_TRUE(f) << "no vision for frame " << k;
+      ASSERT_EQ(f->frame_number(), static_cast<std::uint32_t>(k));
+      seen.push_back(*f);
+      // Floats on the wire: the command the simulation gets is the float's value.
+      ASSERT_TRUE(client.SendTo(Local(0, CommandAt(k)), Loopback(field.blue_port())));
+      ASSERT_TRUE(Receive(client)) << "no RobotControlResponse at frame " << k;
+    }
+    const ServeSummary& summary = server.Join();
+    EXPECT_EQ(summary.counters.frames, frames);
+    EXPECT_EQ(summary.counters.robot_controls, frames);
+    EXPECT_EQ(summary.counters.refused, 0);
+  }
+
+  // The same scene and seed stepped in-process with the same commands, and with none.
+  auto reference = [&](bool commanded) {
+    Simulation sim = MakeSimulation(scene, "analytic");
+    std::vector<std::vector<FrameRecord>> out;
+    for (int k = 0; k < frames; ++k) {
+      std::vector<FrameRecord> r = sim.BeginFrame();
+      const Twist2 c = CommandAt(k);
+      r[0].command = commanded ? Twist2{static_cast<float>(c.vx), static_cast<float>(c.vy), static_cast<float>(c.omega)}
+                               : Twist2{};
+      r[1].command = sim.SourceCommand(1);
+      sim.EndFrame(&r);
+      out.push_back(r);
+    }
+    return out;
+  };
+  const auto same = reference(true), still = reference(false);
+  const SimulationResult& served = field.result();
+  int first_moved = -1;
+  for (int k = 0; k < frames; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    // Poses identical to the simulation's, to the bit.
+    EXPECT_EQ(served.frames[0][ku].truth.x, same[ku][0].truth.x) << k;
+    EXPECT_EQ(served.frames[0][ku].truth.theta, same[ku][0].truth.theta) << k;
+    EXPECT_EQ(served.frames[1][ku].truth.y, same[ku][1].truth.y) << k;
+    EXPECT_EQ(served.frames[0][ku].command.vx, same[ku][0].command.vx) << k;
+    // Vision is the observer's pose in mm, as a float.
+    ASSERT_EQ(seen[ku].robots_blue_size(), 1);
+    ASSERT_EQ(seen[ku].robots_yellow_size(), 1);
+    EXPECT_EQ(seen[ku].robots_yellow(0).robot_id(), 3u);
+    EXPECT_EQ(seen[ku].robots_blue(0).x(), static_cast<float>(1000 * same[ku][0].seen.x)) << k;
+    EXPECT_EQ(seen[ku].robots_blue(0).orientation(), static_cast<float>(same[ku][0].seen.theta)) << k;
+    if (first_moved < 0 && seen[ku].robots_blue(0).x() != static_cast<float>(1000 * still[ku][0].seen.x))
+      first_moved = k;
+  }
+  const OmniModel& m = scene.robots[0].model;
+  const int delay = m.command_delay_frames + m.vision_delay_frames;
+  EXPECT_EQ(delay, 4);
+  EXPECT_EQ(first_moved, 10 + delay + 1);
+}
+
+TEST(LiveField, RefusalsAreAnsweredAndCountedAndTheFieldRunsOn) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.max_datagram = 256;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  ServerThread server(&field);
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, Local(3, Twist2{1, 0, 0}), field.blue_port())),
+            Codes1{"TWINSIM_OTHER_TEAM"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, Local(5, Twist2{1, 0, 0}), field.yellow_port())),
+            Codes1{"TWINSIM_UNKNOWN_ROBOT"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, std::string(11, '\xff'), field.blue_port())),
+            Codes1{"TWINSIM_MALFORMED"});
+  const auto oversized = Ask<RobotControlResponse>(client, std::string(1000, '\x08'), field.blue_port());
+  EXPECT_EQ(Codes(oversized), Codes1{"TWINSIM_OVERSIZED"});
+  if (oversized && oversized->errors_size() == 1) {
+    EXPECT_NE(oversized->errors(0).message().find("1000 bytes"), std::string::npos) << oversized->errors(0).message();
+  }
+  // Garbage on the control port is answered as well.
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, "\x0a\x05\x12", field.control_port())), Codes1{"TWINSIM_MALFORMED"});
+
+  // A teleport through the control port shows in vision.
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportBlue0(-1.5f, 2.0f), field.control_port())), Codes1{});
+  bool arrived = false;
+  for (int i = 0; i < 60 && !arrived; ++i) {
+    std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, 0);
+    ASSERT_TRUE(f);
+    arrived = f->robots_blue_size() == 1 && std::abs(f->robots_blue(0).x() + 1500) < 10 &&
+              std::abs(f->robots_blue(0).y() - 2000) < 10;
+  }
+  EXPECT_TRUE(arrived);
+
+  const ServeSummary& summary = server.Stop();
+  EXPECT_EQ(summary.counters.refused, 2);
+  EXPECT_EQ(summary.counters.malformed, 2);
+  EXPECT_EQ(summary.counters.oversized, 1);
+  EXPECT_EQ(summary.counters.simulator_commands, 1);
+  EXPECT_GT(summary.counters.frames, 0);
+}
+
+TEST(LiveField, TournamentModeRefusesControlAndASecondAddressPerTeam) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), team("127.0.0.1", 0), intruder("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.tournament = true;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  ServerThread server(&field);
+
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(team, TeleportBlue0(1.0f, 0.0f), field.control_port())),
+            Codes1{"TWINSIM_TOURNAMENT"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(team, Local(0, Twist2{0.5, 0, 0}), field.blue_port())), Codes1{});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(intruder, Local(0, Twist2{-0.5, 0, 0}), field.blue_port())),
+            Codes1{"TWINSIM_PORT_TAKEN"});
+  // The yellow port is still open to the yellow team's own (first) address.
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(intruder, Local(3, Twist2{0.5, 0, 0}), field.yellow_port())), Codes1{});
+
+  const ServeSummary& summary = server.Stop();
+  EXPECT_EQ(summary.counters.refused, 2);
+  EXPECT_EQ(summary.counters.robot_controls, 2);
+  EXPECT_EQ(summary.counters.simulator_commands, 0);
+}
+
+TEST(LiveField, AFloodIsDroppedOverTheRateLimitWithoutStallingTheFrames) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), flooder("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.max_rate = 50;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  ServerThread server(&field);
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < 2000; ++i) {
+    flooder.SendTo(Local(0, Twist2{0.1, 0, 0}), Loopback(field.blue_port()));
+    if (i % 100 == 99) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const ServeSummary& summary = server.Stop();
+  EXPECT_GT(summary.counters.rate_dropped, 0);
+  EXPECT_LE(summary.counters.robot_controls, 50 + static_cast<long long>(50 * wall) + 1);
+  // Frames kept coming (30 fps; half of it allowed for a loaded machine): no stall.
+  EXPECT_GE(summary.counters.frames, static_cast<long long>(15 * wall) - 2);
+}
+
+TEST(LiveField, OptionsAndScenesAreChecked) {
+  const Scene scene = TwoTeamScene();
+  ServeOptions options = LoopbackOptions(10020);
+  std::string why;
+  options.vision_address = "224.5.23.2";
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_NE(why.find("multicast"), std::string::npos) << why;
+  options = LoopbackOptions(10020);
+  options.listen = "localhost:1";
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_NE(why.find("not an IPv4 address"), std::string::npos) << why;
+  options = LoopbackOptions(10020);
+  options.teams = {"red"};
+  options.lockstep = true;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_NE(why.find("unknown team 'red'"), std::string::npos) << why;
+  // A port in use is named.
+  UdpSocket taken("127.0.0.1", 0);
+  options = LoopbackOptions(10020);
+  options.blue_port = taken.port();
+  try {
+    LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+    FAIL() << "expected the port in use to be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot listen on 127.0.0.1:" + std::to_string(taken.port())),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace twinsim

@@ -1,0 +1,200 @@
+// The league's messages as twinsim writes and reads them: round trips through bytes,
+// and RobotControl / SimulatorCommand read into moves, teleports and refusals.
+#include <gtest/gtest.h>
+
+#include "serve/robot_control.h"
+#include "serve/simulator_control.h"
+#include "serve/vision_packets.h"
+#include "ssl_simulation_robot_control.pb.h"
+
+namespace twinsim {
+namespace {
+
+TeamRoster TwoBlueOneYellow() {
+  return TeamRoster({TeamRobot{TeamColor::kBlue, 0}, TeamRobot{TeamColor::kBlue, 1}, TeamRobot{TeamColor::kYellow, 3}});
+}
+
+std::string LocalCommand(unsigned id, float forward, float left, float angular) {
+  RobotControl control;
+  RobotCommand* c = control.add_robot_commands();
+  c->set_id(id);
+  MoveLocalVelocity* v = c->mutable_move_command()->mutable_local_velocity();
+  v->set_forward(forward);
+  v->set_left(left);
+  v->set_angular(angular);
+  return control.SerializeAsString();
+}
+
+TEST(SslMessages, DetectionPacketRoundTripsInMillimetresAndRadians) {
+  const SSL_WrapperPacket sent =
+      DetectionPacket({Sighting{TeamRobot{TeamColor::kBlue, 2}, Pose2{1.25, -0.5, 0.75}},
+                       Sighting{TeamRobot{TeamColor::kYellow, 7}, Pose2{-3, 2, -1}}},
+                      42, 1.5, 1.6);
+  SSL_WrapperPacket read;
+  ASSERT_TRUE(read.ParseFromString(sent.SerializeAsString()));
+  ASSERT_TRUE(read.has_detection());
+  const SSL_DetectionFrame& f = read.detection();
+  EXPECT_EQ(f.frame_number(), 42u);
+  EXPECT_EQ(f.t_capture(), 1.5);
+  EXPECT_EQ(f.t_sent(), 1.6);
+  EXPECT_EQ(f.camera_id(), 0u);
+  ASSERT_EQ(f.robots_blue_size(), 1);
+  ASSERT_EQ(f.robots_yellow_size(), 1);
+  EXPECT_EQ(f.robots_blue(0).robot_id(), 2u);
+  EXPECT_FLOAT_EQ(f.robots_blue(0).x(), 1250.0f);
+  EXPECT_FLOAT_EQ(f.robots_blue(0).y(), -500.0f);
+  EXPECT_FLOAT_EQ(f.robots_blue(0).orientation(), 0.75f);
+  EXPECT_EQ(f.robots_yellow(0).robot_id(), 7u);
+  EXPECT_FLOAT_EQ(f.robots_yellow(0).x(), -3000.0f);
+}
+
+TEST(SslMessages, GeometryIsTheFieldInsideTheBoundary) {
+  FieldModel field;  // 10.4 x 7.4 m inside the walls
+  SSL_WrapperPacket read;
+  ASSERT_TRUE(read.ParseFromString(GeometryPacket(field, 0.3).SerializeAsString()));
+  ASSERT_TRUE(read.has_geometry());
+  EXPECT_EQ(read.geometry().field().field_length(), 9800);
+  EXPECT_EQ(read.geometry().field().field_width(), 6800);
+  EXPECT_EQ(read.geometry().field().boundary_width(), 300);
+  EXPECT_EQ(read.geometry().calib_size(), 1);
+  EXPECT_GE(read.geometry().field().field_lines_size(), 6);
+}
+
+TEST(SslMessages, WireBytesMatchTheSpecificationsFieldNumbers) {
+  // RobotCommand{id = 1 (field 1, varint), move_command (field 2) {local_velocity
+  // (field 2) {forward = 1.0f (field 1, fixed32)}}} as the specification numbers them.
+  RobotCommand c;
+  c.set_id(1);
+  c.mutable_move_command()->mutable_local_velocity()->set_forward(1.0f);
+  c.mutable_move_command()->mutable_local_velocity()->set_left(0);
+  c.mutable_move_command()->mutable_local_velocity()->set_angular(0);
+  const std::string bytes = c.SerializeAsString();
+  const std::string expected("\x08\x01\x12\x11\x12\x0f\x0d\x00\x00\x80\x3f\x15\x00\x00\x00\x00\x1d\x00\x00\x00\x00", 21);
+  EXPECT_EQ(bytes, expected);
+  // SSL_DetectionFrame.t_capture is field 2 (double), robots_blue field 7.
+  SSL_DetectionFrame f;
+  f.set_frame_number(0);
+  f.set_t_capture(0);
+  f.set_t_sent(0);
+  f.set_camera_id(0);
+  f.add_robots_blue();
+  EXPECT_NE(f.SerializePartialAsString().find('\x3a'), std::string::npos);  // (7 << 3) | 2
+}
+
+TEST(RobotControl, LocalAndGlobalVelocitiesBecomeMovesForTheTeamsOwnRobots) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  RobotControlResult r = ReadRobotControl(LocalCommand(1, 1.5f, -0.5f, 2.0f), TeamColor::kBlue, roster);
+  ASSERT_TRUE(r.parsed);
+  EXPECT_EQ(r.refused, 0);
+  ASSERT_EQ(r.moves.size(), 1u);
+  EXPECT_EQ(r.moves[0].first, 1);
+  EXPECT_FALSE(r.moves[0].second.global);
+  EXPECT_DOUBLE_EQ(r.moves[0].second.velocity.vx, 1.5);
+  EXPECT_DOUBLE_EQ(r.moves[0].second.velocity.vy, -0.5);
+  EXPECT_EQ(r.response.errors_size(), 0);
+  ASSERT_EQ(r.response.feedback_size(), 1);
+  EXPECT_EQ(r.response.feedback(0).id().id(), 1u);
+  EXPECT_EQ(r.response.feedback(0).id().team(), BLUE);
+
+  RobotControl global;
+  RobotCommand* c = global.add_robot_commands();
+  c->set_id(3);
+  MoveGlobalVelocity* g = c->mutable_move_command()->mutable_global_velocity();
+  g->set_vel_x(1);
+  g->set_vel_y(0);
+  g->set_vel_angular(0);
+  r = ReadRobotControl(global.SerializeAsString(), TeamColor::kYellow, roster);
+  ASSERT_EQ(r.moves.size(), 1u);
+  EXPECT_EQ(r.moves[0].first, 2);
+  // Along the field's x axis is to the right of a robot heading +y (pi/2).
+  const Twist2 local = LocalVelocity(r.moves[0].second, kPi / 2);
+  EXPECT_NEAR(local.vx, 0, 1e-12);
+  EXPECT_NEAR(local.vy, -1, 1e-12);
+}
+
+TEST(RobotControl, RefusesTheOtherTeamsRobotsUnknownIdsBadValuesAndWheels) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  RobotControl control;
+  auto add = [&](unsigned id, float forward) {
+    RobotCommand* c = control.add_robot_commands();
+    c->set_id(id);
+    MoveLocalVelocity* v = c->mutable_move_command()->mutable_local_velocity();
+    v->set_forward(forward);
+    v->set_left(0);
+    v->set_angular(0);
+    return c;
+  };
+  add(3, 1);     // yellow's robot, from the blue port
+  add(9, 1);     // nobody's
+  add(0, 1e9f);  // beyond the limits
+  RobotCommand* wheels = control.add_robot_commands();
+  wheels->set_id(1);
+  MoveWheelVelocity* w = wheels->mutable_move_command()->mutable_wheel_velocity();
+  w->set_front_right(1);
+  w->set_back_right(1);
+  w->set_back_left(1);
+  w->set_front_left(1);
+  add(1, 0.5f)->set_kick_speed(3);  // moves, but there is no ball to kick
+  const RobotControlResult r = ReadRobotControl(control.SerializeAsString(), TeamColor::kBlue, roster);
+  ASSERT_TRUE(r.parsed);
+  EXPECT_EQ(r.refused, 4);
+  ASSERT_EQ(r.moves.size(), 1u);
+  EXPECT_EQ(r.moves[0].first, 1);
+  std::vector<std::string> codes;
+  for (const SimulatorError& e : r.response.errors()) codes.push_back(e.code());
+  EXPECT_EQ(codes, (std::vector<std::string>{"TWINSIM_OTHER_TEAM", "TWINSIM_UNKNOWN_ROBOT", "TWINSIM_BAD_VALUE",
+                                             "TWINSIM_UNSUPPORTED", "TWINSIM_NO_BALL"}));
+  EXPECT_NE(r.response.errors(0).message().find("robot 3 is a yellow robot"), std::string::npos)
+      << r.response.errors(0).message();
+  EXPECT_EQ(r.response.errors(3).unsupported_capability(), SIMULATOR_CAPABILITY_MOVE_WHEEL_VELOCITY);
+}
+
+TEST(RobotControl, GarbageIsAnsweredNeverThrown) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  const std::string garbage("\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x01", 12);
+  const RobotControlResult r = ReadRobotControl(garbage, TeamColor::kBlue, roster);
+  EXPECT_FALSE(r.parsed);
+  ASSERT_EQ(r.response.errors_size(), 1);
+  EXPECT_EQ(r.response.errors(0).code(), "TWINSIM_MALFORMED");
+  // A RobotCommand without its required id is not a RobotControl either.
+  RobotControl partial;
+  partial.add_robot_commands();
+  EXPECT_FALSE(ReadRobotControl(partial.SerializePartialAsString(), TeamColor::kBlue, roster).parsed);
+  // Every prefix of a valid message is read or refused, never a crash.
+  const std::string valid = LocalCommand(0, 1, 0, 0);
+  for (std::size_t n = 0; n <= valid.size(); ++n) ReadRobotControl(valid.substr(0, n), TeamColor::kBlue, roster);
+}
+
+TEST(SimulatorControl, TeleportsKnownRobotsAndRefusesTheRest) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  SimulatorCommand command;
+  SimulatorControl* control = command.mutable_control();
+  TeleportRobot* t = control->add_teleport_robot();
+  t->mutable_id()->set_id(3);
+  t->mutable_id()->set_team(YELLOW);
+  t->set_x(1.0f);
+  t->set_orientation(0.5f);
+  TeleportRobot* unknown = control->add_teleport_robot();
+  unknown->mutable_id()->set_id(5);
+  unknown->mutable_id()->set_team(BLUE);
+  TeleportRobot* outside = control->add_teleport_robot();
+  outside->mutable_id()->set_id(0);
+  outside->mutable_id()->set_team(BLUE);
+  outside->set_x(50.0f);
+  control->mutable_teleport_ball()->set_x(0);
+  const SimulatorCommandResult r = ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{});
+  ASSERT_TRUE(r.parsed);
+  ASSERT_EQ(r.teleports.size(), 1u);
+  EXPECT_EQ(r.teleports[0].robot, 2);
+  const Pose2 moved = TeleportedPose(r.teleports[0], Pose2{-2, 0.25, 0});
+  EXPECT_DOUBLE_EQ(moved.x, 1.0);
+  EXPECT_DOUBLE_EQ(moved.y, 0.25);  // kept
+  EXPECT_FLOAT_EQ(static_cast<float>(moved.theta), 0.5f);
+  EXPECT_EQ(r.refused, 3);
+  std::vector<std::string> codes;
+  for (const SimulatorError& e : r.response.errors()) codes.push_back(e.code());
+  EXPECT_EQ(codes, (std::vector<std::string>{"TWINSIM_NO_BALL", "TWINSIM_UNKNOWN_ROBOT", "TWINSIM_BAD_VALUE"}));
+}
+
+}  // namespace
+}  // namespace twinsim
