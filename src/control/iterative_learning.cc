@@ -354,8 +354,7 @@ std::complex<double> LearningStepResponse(const LearningFilter& filter, const Il
                                           double frequency_hz, double sample_time) {
   const std::complex<double> l = filter.Response(frequency_hz, sample_time);
   if (options.update != "norm_optimal") return l;
-  const double bandwidth = options.norm_optimal_bandwidth > 0 ? options.norm_optimal_bandwidth : options.Cutoff(joint);
-  return l / (1 + NormOptimalWeight(filter, bandwidth, sample_time) * std::norm(l));
+  return l / (1 + NormOptimalWeight(filter, options.NormOptimalBandwidth(joint), sample_time) * std::norm(l));
 }
 
 RobustCriterion RobustConvergenceFactor(const ClosedLoopFrf& frf, int joint, const LearningFilter& filter,
@@ -458,9 +457,8 @@ Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, co
   for (Eigen::Index j = 0; j < f.cols(); ++j) {
     const LearningFilter& l = filters[static_cast<std::size_t>(j)];
     if (options.update == "norm_optimal") {
-      const double bandwidth =
-          options.norm_optimal_bandwidth > 0 ? options.norm_optimal_bandwidth : options.Cutoff(static_cast<int>(j));
-      next.col(j) += options.gain * NormOptimalStep(l, NormOptimalWeight(l, bandwidth, sample_time), e.col(j), sample_time);
+      const double w = NormOptimalWeight(l, options.NormOptimalBandwidth(static_cast<int>(j)), sample_time);
+      next.col(j) += options.gain * NormOptimalStep(l, w, e.col(j), sample_time);
     } else {
       next.col(j) += options.gain * l.Apply(e.col(j), sample_time);
     }

@@ -203,6 +203,11 @@ struct IlcOptions {
 
   // Joint `joint`'s cutoff: q_cutoffs[joint] when given, else q_cutoff.
   double Cutoff(int joint) const;
+  // Where joint `joint`'s norm-optimal step learns at half speed (Hz):
+  // norm_optimal_bandwidth when given, else Cutoff(joint).
+  double NormOptimalBandwidth(int joint) const {
+    return norm_optimal_bandwidth > 0 ? norm_optimal_bandwidth : Cutoff(joint);
+  }
 
   // True when usable for sample time `sample_time` (s); else says why in *why.
   bool IsValid(double sample_time, std::string* why) const;

@@ -185,9 +185,9 @@ TEST_P(BackendConformance, OffCentreChassisMatchesRigidBodyAcceleration) {
   ASSERT_EQ(m.Validate(), "");
   // A force at the centre would spin the robot (the closed form leaves out the turning
   // frame): each force comes with the torque that keeps the yaw rate at zero.
-  const Eigen::Matrix3d inverse = (m.RigidBodyMass() + m.wheel_spin_inertia * OmniKinematics(m).wheels_from_body().transpose() *
-                                                           OmniKinematics(m).wheels_from_body())
-                                      .inverse();
+  const OmniKinematics kin(m);
+  const Eigen::MatrixXd& wheels = kin.wheels_from_body();
+  const Eigen::Matrix3d inverse = (m.RigidBodyMass() + m.wheel_spin_inertia * wheels.transpose() * wheels).inverse();
   // 2 N, not 5: the rear left wheel carries 1.95 N here, and 5 N sideways makes it slip
   // (the engines' wheels can, the closed form's cannot; measured).
   for (Eigen::Vector3d wrench : {Eigen::Vector3d(2, 0, 0), Eigen::Vector3d(0, 2, 0)}) {
