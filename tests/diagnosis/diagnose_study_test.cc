@@ -3,7 +3,7 @@
 // search grid's values), several seeds each, clean logs over many seeds, and effects
 // outside the vocabulary. Disabled in the suite (about 10 minutes on 2 cores); the
 // script runs it in shards and writes one CSV row per run to $TWINSIM_STUDY_OUT:
-//   robot,case,seed,hidden,expected,named,right_name,closed,unexplained,gap_before,gap_after,plant_gap,noise_floor,seconds
+//   robot,case,seed,hidden,expected,named,right_name,closed,unexplained,gap_before,gap_after,plant_gap,noise_floor,seconds,ratios
 // `closed` is the share of the way from the nominal model's test-row gap to the
 // plant's own that the repaired model went; `unexplained` the channels flagged.
 #include <gtest/gtest.h>
@@ -99,6 +99,29 @@ Hidden DrawArm(const std::string& kind, int seed) {
     h.joint = joint_of({0, 1});
     h.bandwidth = 4;
     h.yaml = item("delay: " + Fmt(rng.Uniform(0.015, 0.03)));
+  } else if (kind == "elbow_stribeck") {
+    // The limits of docs/diagnose.md: friction whose hump lies at the elbow's slowest
+    // speeds; a delay on the elbow, whose torques are small; a delay under the stiff
+    // 10 Hz controller; a flexible joint logged as q alone (derived at 10 Hz).
+    h.name = "stribeck_friction";
+    h.joint = 2;
+    const double c = rng.Uniform(0.2, 0.4);
+    h.yaml = "  - {name: stribeck_friction, joint: 3, c: " + Fmt(c) + ", s: " + Fmt(c + rng.Uniform(0.4, 0.8)) +
+             ", vs: " + Fmt(rng.Uniform(0.03, 0.07)) + "}\n";
+  } else if (kind == "elbow_delay") {
+    h.name = "time_delay";
+    h.joint = 2;
+    h.bandwidth = 4;
+    h.yaml = "  - {name: time_delay, joint: 3, delay: " + Fmt(rng.Uniform(0.015, 0.025)) + "}\n";
+  } else if (kind == "small_delay") {
+    h.name = "time_delay";
+    h.joint = joint_of({0, 1});
+    h.yaml = "  - {name: time_delay, joint: " + std::to_string(h.joint + 1) + ", delay: " + Fmt(rng.Uniform(0.006, 0.009)) + "}\n";
+  } else if (kind == "flexibility_from_q") {
+    h.name = "joint_flexibility";
+    h.joint = joint_of({1, 2});
+    h.yaml = "  - {name: joint_flexibility, joint: " + std::to_string(h.joint + 1) + ", k: " + Fmt(rng.Uniform(3000, 6000)) +
+             ", damping: 0.2, motor_inertia: " + Fmt(rng.Uniform(0.01, 0.02)) + "}\n";
   } else if (kind == "payload") {
     h.joint = -1;
     h.yaml = "  - {name: payload, joint: null, mass: " + Fmt(rng.Uniform(0.3, 1.5)) + ", x: " + Fmt(rng.Uniform(0.2, 0.4)) + "}\n";
@@ -120,11 +143,16 @@ Hidden DrawArm(const std::string& kind, int seed) {
     const double k = rng.Uniform(3, 8), q0 = rng.Uniform(0.2, 0.5);
     h.torque = [k, q0](double q, double) { return -k * (q - q0); };
     h.description = "spring -" + Fmt(k) + " (q - " + Fmt(q0) + ") on joint 2";
-  } else if (kind == "backlash") {
+  } else if (kind == "backlash" || kind == "backlash_heavy") {
+    // backlash_heavy: a part heavy and loose enough to be visible (the suite's
+    // backlash_joint1 is 0.15 kg m^2, 15 Hz).
     h.name.clear();
     h.outside = true;
     h.joint = joint_of({0, 1});
-    const double inertia = rng.Uniform(0.02, 0.06), play = rng.Uniform(0.01, 0.03), hz = rng.Uniform(15, 40);
+    const bool heavy = kind == "backlash_heavy";
+    const double inertia = heavy ? rng.Uniform(0.1, 0.2) : rng.Uniform(0.02, 0.06);
+    const double play = heavy ? rng.Uniform(0.02, 0.04) : rng.Uniform(0.01, 0.03);
+    const double hz = heavy ? rng.Uniform(10, 20) : rng.Uniform(15, 40);
     h.torque = testing::Backlash(inertia, play, hz, 0.2, 0.001);
     h.description = "backlash: a " + Fmt(inertia) + " kg m^2 part with +-" + Fmt(play) + " rad of play, " + Fmt(hz) +
                     " Hz stops, on joint " + std::to_string(h.joint + 1);
@@ -151,24 +179,27 @@ Hidden DrawOmni(const std::string& kind, int seed) {
     h.yaml = "  velocity_scale: {scale: " + Fmt(rng.Uniform() < 0.5 ? 1 - s : 1 + s) + "}\n";
   } else if (kind == "rotation_drift") {
     h.yaml = "  rotation_drift: {rate: " + Fmt((rng.Uniform() < 0.5 ? -1 : 1) * rng.Uniform(0.2, 1.0)) + "}\n";
-  } else if (kind == "weak_wheel") {
+  } else if (kind == "weak_wheel" || kind == "dead_wheel") {
+    // dead_wheel: a motor at 0 to 5 % of its stall torque (a broken driver).
     h.name.clear();
     h.outside = true;
     const int wheel = static_cast<int>(rng.Index(4));
+    const double weak = kind == "dead_wheel" ? rng.Uniform(0.01, 0.05) : rng.Uniform(0.1, 0.3);
     std::string strength;
-    for (int w = 0; w < 4; ++w) strength += (w ? ", " : "") + (w == wheel ? Fmt(rng.Uniform(0.1, 0.3)) : std::string("1"));
+    for (int w = 0; w < 4; ++w) strength += (w ? ", " : "") + (w == wheel ? Fmt(weak) : std::string("1"));
     h.omni_robot = "motor: {strength: [" + strength + "]}\n";
     h.description = h.omni_robot;
-  } else if (kind == "com_offset") {
+  } else if (kind == "com_offset" || kind == "com_offset_far") {
     h.name.clear();
     h.outside = true;
-    const double r = rng.Uniform(0.01, 0.03), a = rng.Uniform(-kPi, kPi);
+    const double r = kind == "com_offset_far" ? rng.Uniform(0.03, 0.044) : rng.Uniform(0.01, 0.03);
+    const double a = rng.Uniform(-kPi, kPi);
     h.omni_robot = "chassis: {com: [" + Fmt(r * std::cos(a)) + ", " + Fmt(r * std::sin(a)) + "]}\n";
     h.description = h.omni_robot;
-  } else if (kind == "slope") {
+  } else if (kind == "slope" || kind == "slope_steep") {
     h.name.clear();
     h.outside = true;
-    h.field.slope = rng.Uniform(1, 3) * kPi / 180;
+    h.field.slope = (kind == "slope_steep" ? rng.Uniform(3, 6) : rng.Uniform(1, 3)) * kPi / 180;
     h.field.slope_direction = rng.Uniform(-kPi, kPi);
     h.description = "floor slope " + Fmt(h.field.slope * 180 / kPi) + " deg downhill towards " +
                     Fmt(h.field.slope_direction * 180 / kPi) + " deg";
@@ -195,18 +226,20 @@ void WriteRow(const StudyRun& run, const Hidden& h, const DiagnosisReport& repor
   }
   if (h.name.empty() && !h.outside) right = report.effects.empty();  // clean: nothing named
   if (h.outside) right = report.effects.empty();                     // judged by closed / unexplained instead
+  std::string ratios;  // each channel's test RMS over its noise, for the floor rule's ratio
   for (const ChannelAdequacy& a : report.adequacy) {
     if (a.unexplained) unexplained += (unexplained.empty() ? "" : "; ") + a.channel;
+    ratios += (ratios.empty() ? "" : " ") + Fmt(a.noise > 0 ? a.rms / a.noise : std::nan(""));
   }
   const double room = report.gap_before - plant_gap;
   const double closed = room > 0 ? (report.gap_before - report.gap_after) / room : std::nan("");
   const char* path = std::getenv("TWINSIM_STUDY_OUT");
   FILE* f = path ? std::fopen(path, "a") : stdout;
   ASSERT_NE(f, nullptr);
-  std::fprintf(f, "%s,%s,%d,%s,%s,%s,%d,%.4g,%s,%.6g,%.6g,%.6g,%.6g,%.1f\n", run.robot.c_str(), run.kind.c_str(), run.seed,
+  std::fprintf(f, "%s,%s,%d,%s,%s,%s,%d,%.4g,%s,%.6g,%.6g,%.6g,%.6g,%.1f,%s\n", run.robot.c_str(), run.kind.c_str(), run.seed,
                Csv(h.description).c_str(), Csv(h.name.empty() ? "" : EffectLabel(h.name, h.joint)).c_str(), Csv(named).c_str(),
                right ? 1 : 0, closed, Csv(unexplained).c_str(), report.gap_before, report.gap_after, plant_gap,
-               report.noise_floor, seconds);
+               report.noise_floor, seconds, ratios.c_str());
   if (f != stdout) std::fclose(f);
 }
 
@@ -216,11 +249,12 @@ std::vector<StudyRun> Runs() {
   for (int s = 1; s <= clean; ++s) runs.push_back({"arm", "clean", s});
   for (int s = 1; s <= clean; ++s) runs.push_back({"omni", "clean", s});
   for (const char* k : {"viscous_friction", "coulomb_friction", "stribeck_friction", "torque_offset", "torque_saturation",
-                        "time_delay", "payload", "joint_flexibility", "cogging", "spring", "backlash"}) {
+                        "time_delay", "payload", "joint_flexibility", "cogging", "spring", "backlash", "backlash_heavy", "elbow_stribeck", "elbow_delay", "small_delay",
+                        "flexibility_from_q"}) {
     for (int s = 1; s <= seeds; ++s) runs.push_back({"arm", k, s});
   }
   for (const char* k : {"time_delay", "motor_lag", "traction_limit", "velocity_saturation", "velocity_scale", "rotation_drift",
-                        "weak_wheel", "com_offset", "slope"}) {
+                        "weak_wheel", "dead_wheel", "com_offset", "com_offset_far", "slope", "slope_steep"}) {
     for (int s = 1; s <= seeds; ++s) runs.push_back({"omni", k, s});
   }
   return runs;
