@@ -49,17 +49,27 @@ class NewtonianArmBackend final : public ArmBackend {
   // offset), from the commands received.
   void DriveTorques(std::int64_t step, Eigen::VectorXd* drive) const;
   // Friction torques (opposing positive motion) for one physics step of h seconds
-  // with the other joint torques `tau`, solved at velocity level.
-  void FrictionTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau, double h,
-                       Eigen::VectorXd* friction);
+  // with the other joint torques `tau` (flexible joints' springs not in it), solved at
+  // velocity level, and with them the mean spring torques of the trapezoidal flexible
+  // joints driven by `drive` (zero elsewhere). Returns true when it solved (some joint
+  // has friction or a trapezoidal spring), with the joint accelerations at the step's
+  // start under tau + spring - friction in scratch_.start_accel, from the same M: the
+  // engine's first stage (ArmEngine::StepFromAcceleration).
+  bool SolveJointTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau,
+                         const Eigen::VectorXd& drive, double h, Eigen::VectorXd* friction, Eigen::VectorXd* spring);
 
-  // Work space of Step and FrictionTorques, kept so that a step allocates nothing; its
+  // Work space of Step and SolveJointTorques, kept so that a step allocates nothing; its
   // content between steps means nothing (not state: Save and Restore ignore it).
   struct Scratch {
     Eigen::VectorXd drive, link, friction;  // dof: a physics step's torques
     Eigen::VectorXd bias, free_end;         // dof: the friction solve's free motion
-    Eigen::MatrixXd mass, response;         // dof x dof: M and h M^-1
+    Eigen::VectorXd free_accel;             // dof: M^-1 (tau - bias)
+    Eigen::VectorXd start_accel;            // dof: M^-1 (tau - friction - bias)
+    Eigen::MatrixXd mass, mobility;         // dof x dof: M and M^-1
+    Eigen::MatrixXd response;               // dof x dof: h M^-1
     Eigen::LLT<Eigen::MatrixXd> llt;
+    Eigen::VectorXd delayed;                // dof: a command's storage, recycled
+    Eigen::VectorXd spring;                 // dof: trapezoidal flexible joints' mean spring torque
   };
 
   ArmModel model_;  // the plant: payload lumped into the last link
@@ -67,6 +77,7 @@ class NewtonianArmBackend final : public ArmBackend {
   int substeps_ = 1;
   std::vector<JointEffects> effects_;  // dof
   std::vector<int> friction_joints_;   // joints with any friction
+  std::vector<int> trapezoidal_joints_;  // flexible joints stepped by the trapezoidal rule
   std::vector<double> delay_steps_;    // per joint, time_delay in physics steps
   double max_delay_steps_ = 0;
   bool flexible_ = false;
