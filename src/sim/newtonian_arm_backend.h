@@ -13,7 +13,7 @@
 //   ArmSimulation sim(model, MakeNewtonianArmBackend("ode", model));
 #pragma once
 
-#include <Eigen/Cholesky>
+#include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
@@ -67,7 +67,7 @@ class NewtonianArmBackend final : public ArmBackend {
     Eigen::VectorXd start_accel;            // dof: M^-1 (tau - friction - bias)
     Eigen::MatrixXd mass, mobility;         // dof x dof: M and M^-1
     Eigen::MatrixXd response;               // dof x dof: h M^-1
-    Eigen::LLT<Eigen::MatrixXd> llt;
+    Eigen::MatrixXd factor;                 // dof x dof: M's Cholesky factor, inverted
     Eigen::VectorXd delayed;                // dof: a command's storage, recycled
     Eigen::VectorXd spring;                 // dof: trapezoidal flexible joints' mean spring torque
   };
