@@ -40,17 +40,21 @@ double SlidingLevel(const ArmJoint& nominal, const JointEffects& e, double speed
 // sticks when its break-away level can stop it within the step; else it slides with
 // the Coulomb/Stribeck level of its present speed and viscous friction on the mean of
 // its start and end velocities (trapezoidal: second order, and stable for any b).
-double JointFriction(const ArmJoint& nominal, const JointEffects& e, double v, double w, double qd) {
+// `inv_w` = 1 / w and `inv_damping` = 1 / (1 + w b / 2), b the joint's viscous
+// coefficient: fixed over a step's sweeps, so divided once.
+double JointFriction(const ArmJoint& nominal, const JointEffects& e, double v, double w, double inv_w,
+                     double inv_damping, double qd) {
   const double viscous = nominal.viscous + e.viscous;
   for (const int dir : {+1, -1}) {
     if (dir * v <= w * SlidingLevel(nominal, e, 0, dir)) continue;
     const double level = dir * SlidingLevel(nominal, e, std::max(dir * qd, 0.0), dir);
-    double v_end = (v - w * (level + 0.5 * viscous * qd)) / (1 + 0.5 * w * viscous);
+    // Sliding: f = level + b (qd + v_end) / 2 with v_end = v - w f.
+    const double f = (level + 0.5 * viscous * (v + qd)) * inv_damping;
     // A damping so strong that the trapezoid would overshoot zero stops the joint.
-    if (dir * v_end < 0) v_end = 0;
-    return (v - v_end) / w;
+    if (dir * (v - w * f) < 0) return v * inv_w;
+    return f;
   }
-  return v / w;  // sticks: exactly the torque that stops it
+  return v * inv_w;  // sticks: exactly the torque that stops it
 }
 
 // M^-1 of a symmetric positive definite M (n x n) by Cholesky, M = L L', into `inverse`,
@@ -211,6 +215,15 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
   const Eigen::VectorXd& free_end = w.free_end;
   const Eigen::MatrixXd& response = w.response;
   const bool springs = !trapezoidal_joints_.empty();
+  Eigen::VectorXd& w_inverse = w.w_inverse;
+  Eigen::VectorXd& damping_inverse = w.damping_inverse;
+  w_inverse.resize(n);
+  damping_inverse.resize(n);
+  for (int j : friction_joints_) {
+    const double viscous = model_.joints[static_cast<std::size_t>(j)].viscous + effects_[static_cast<std::size_t>(j)].viscous;
+    w_inverse[j] = 1 / response(j, j);
+    damping_inverse[j] = 1 / (1 + 0.5 * response(j, j) * viscous);
+  }
   // Projected Gauss-Seidel: each joint's friction, and each trapezoidal spring's torque,
   // given the others', until they settle.
   for (int sweep = 0; sweep < kFrictionSweeps; ++sweep) {
@@ -237,7 +250,7 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
       double v = free_end[j] - response.row(j).dot(*friction) + w * (*friction)[j];
       if (springs) v += response.row(j).dot(*spring);
       const double f = JointFriction(model_.joints[static_cast<std::size_t>(j)], effects_[static_cast<std::size_t>(j)],
-                                     v, w, qd[j]);
+                                     v, w, w_inverse[j], damping_inverse[j], qd[j]);
       change = std::max(change, std::abs(f - (*friction)[j]));
       size = std::max(size, std::abs(f));
       (*friction)[j] = f;

@@ -70,6 +70,8 @@ class NewtonianArmBackend final : public ArmBackend {
     Eigen::MatrixXd factor;                 // dof x dof: M's Cholesky factor, inverted
     Eigen::VectorXd delayed;                // dof: a command's storage, recycled
     Eigen::VectorXd spring;                 // dof: trapezoidal flexible joints' mean spring torque
+    Eigen::VectorXd w_inverse;              // dof: 1 / (h M^-1)_jj of the friction joints
+    Eigen::VectorXd damping_inverse;        // dof: 1 / (1 + (h M^-1)_jj b_j / 2)
   };
 
   ArmModel model_;  // the plant: payload lumped into the last link
