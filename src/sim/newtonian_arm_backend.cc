@@ -220,7 +220,8 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
   w_inverse.resize(n);
   damping_inverse.resize(n);
   for (int j : friction_joints_) {
-    const double viscous = model_.joints[static_cast<std::size_t>(j)].viscous + effects_[static_cast<std::size_t>(j)].viscous;
+    const auto k = static_cast<std::size_t>(j);
+    const double viscous = model_.joints[k].viscous + effects_[k].viscous;
     w_inverse[j] = 1 / response(j, j);
     damping_inverse[j] = 1 / (1 + 0.5 * response(j, j) * viscous);
   }
