@@ -14,6 +14,7 @@
 #include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_model.h"
+#include "robots/arm/arm_model_yaml_writer.h"
 #include "sim/arm_simulation.h"
 #include "test_util.h"
 
@@ -207,6 +208,12 @@ TEST(ArmEffects, FlexibilityIntegratorIsReadWrittenAndCheckedWithItsLine) {
                                        OneLink(0, "  - {name: joint_flexibility, joint: 1, k: 500, motor_inertia: 0.01}\n"));
   const ArmModel m = LoadArmModel(path);
   EXPECT_EQ(m.flexibility_integrator, FlexibilityIntegrator::kTrapezoidal);
+  // Written back (as diagnose's model.yaml is) only when not the default.
+  const std::string written = FormatArmModelYaml(m);
+  EXPECT_NE(written.find("flexibility_integrator: trapezoidal"), std::string::npos) << written;
+  EXPECT_EQ(LoadArmModelFromYamlString(written, "written.yaml").flexibility_integrator,
+            FlexibilityIntegrator::kTrapezoidal);
+  EXPECT_EQ(FormatArmModelYaml(Turntable()).find("flexibility_integrator"), std::string::npos);
   const std::string bad = WriteText(dir + "/bad.yaml", "flexibility_integrator: implicit\n" + OneLink(0));
   try {
     LoadArmModel(bad);
