@@ -5,10 +5,13 @@
 // Each sample of Ts (the model's sample_time) is cut into `physics_substeps` physics
 // steps of h = Ts / substeps. At every physics step, per joint: time_delay,
 // torque_saturation and torque_offset shape the received command into the drive torque;
-// joint_flexibility passes it through the motor inertia and spring; friction (the joint's
-// nominal viscous and Coulomb friction plus the friction effects) is solved at velocity
-// level, so a joint sticks exactly and viscous friction is trapezoidal; the engine steps
-// h. The payload is in the bodies the engine is built with (ArmPlantModel).
+// joint_flexibility passes it through the motor inertia and spring (explicitly, or by
+// the trapezoidal rule solved with the friction: ArmModel::flexibility_integrator);
+// friction (the joint's nominal viscous and Coulomb friction plus the friction effects)
+// is solved at velocity level, so a joint sticks exactly and viscous friction is
+// trapezoidal; the engine steps h, its first stage from the solve's M where there was
+// one (ArmEngine::StepFromAcceleration). The payload is in the bodies the engine is
+// built with (ArmPlantModel).
 //
 //   ArmSimulation sim(model, MakeNewtonianArmBackend("ode", model));
 #pragma once
@@ -29,8 +32,9 @@ class NewtonianArmBackend final : public ArmBackend {
  public:
   // Takes an engine built for ArmPlantModel(model). `physics_substeps`: physics steps per
   // sample, 0 = automatic: 1, or as many as a stiff joint_flexibility needs
-  // (h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5, the link's inertia taken at q = 0
-  // with the other joints free). Throws std::invalid_argument for an engine of another
+  // (explicit: h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5; trapezoidal:
+  // h sqrt(k / J_eff) <= 0.34; the link's inertia taken at q = 0 with the other joints
+  // free). Throws std::invalid_argument for an engine of another
   // arm, InputError for a model that does not Validate() or substeps out of [0, 100000].
   NewtonianArmBackend(const ArmModel& model, std::unique_ptr<ArmEngine> engine, int physics_substeps = 0);
 
