@@ -30,6 +30,18 @@ class DelayLine {
     return out;
   }
 
+  // As Push, with the value out written into *out: assignments only, so a T that
+  // holds storage (a vector) is not allocated again when *out already has its size.
+  void Push(const T& value, T* out) {
+    if (buffer_.empty()) {
+      *out = value;
+      return;
+    }
+    *out = buffer_[head_];
+    buffer_[head_] = value;
+    head_ = (head_ + 1) % buffer_.size();
+  }
+
   // The value Push() will return next, without pushing.
   const T& Front() const { return buffer_[head_]; }
 

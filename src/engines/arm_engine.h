@@ -54,6 +54,16 @@ class ArmEngine {
   // Throws std::invalid_argument for a wrong size or dt <= 0.
   virtual void Step(const Eigen::VectorXd& tau, double dt) = 0;
 
+  // As Step, for a caller that already has `qdd` (dof): the joint accelerations the arm
+  // has now under `tau`, i.e. ForwardDynamics(plant, q(), qd(), tau, friction off) up to
+  // round-off (the Newtonian backend's friction solve has them from its M and bias). An
+  // engine that integrates the joint-space equations (analytic) takes them as its first
+  // stage instead of computing them again; the others ignore them. Throws as Step.
+  virtual void StepFromAcceleration(const Eigen::VectorXd& tau, double dt, const Eigen::VectorXd& qdd) {
+    static_cast<void>(qdd);
+    Step(tau, dt);
+  }
+
   virtual const Eigen::VectorXd& q() const = 0;   // dof, rad or m
   virtual const Eigen::VectorXd& qd() const = 0;  // dof, rad/s or m/s
 

@@ -84,31 +84,40 @@ void ArmSimulation::CheckState() {
 }
 
 ArmSample ArmSimulation::Step(const ArmController& controller) {
+  ArmSample out;
+  StepInto(controller, &out);
+  return out;
+}
+
+void ArmSimulation::StepInto(const ArmController& controller, ArmSample* out) {
   ThrowIfInterrupted();
   CheckState();
   const int n = model_.dof();
-  ArmSample out;
-  out.t = time();
-  out.q = backend_->q();
-  out.qd = backend_->qd();
-  out.command = controller ? controller(out.t, out.q, out.qd) : Eigen::VectorXd::Zero(n);
-  if (out.command.size() != n) {
-    throw std::invalid_argument("arm controller sent " + std::to_string(out.command.size()) +
+  out->t = time();
+  out->q = backend_->q();
+  out->qd = backend_->qd();
+  if (controller) {
+    out->command = controller(out->t, out->q, out->qd);
+  } else {
+    out->command.setZero(n);
+  }
+  if (out->command.size() != n) {
+    throw std::invalid_argument("arm controller sent " + std::to_string(out->command.size()) +
                                 " torques for an arm with " + std::to_string(n) + " joints");
   }
   for (int j = 0; j < n; ++j) {
-    if (!std::isfinite(out.command[j])) {
+    if (!std::isfinite(out->command[j])) {
       std::ostringstream msg;
-      msg << "arm controller sent a non-finite torque to " << JointName(model_, j) << " at t = " << out.t
-          << " s: " << out.command[j];
+      msg << "arm controller sent a non-finite torque to " << JointName(model_, j) << " at t = " << out->t
+          << " s: " << out->command[j];
       throw CheckFailed(msg.str());
     }
   }
 
   // The command delay line; the backend takes it from there.
-  backend_->Step(state_.commands_in_flight.Push(out.command), &out.applied);
+  state_.commands_in_flight.Push(out->command, &delayed_);
+  backend_->Step(delayed_, &out->applied);
   ++state_.sample;
-  return out;
 }
 
 ArmTrajectory ArmSimulation::Run(int samples, const ArmController& controller,
@@ -123,8 +132,9 @@ ArmTrajectory ArmSimulation::Run(int samples, const ArmController& controller,
   run.qd.resize(rows, n);
   run.command.resize(rows, n);
   run.applied.resize(rows, n);
+  ArmSample s;
   for (int k = 0; k < rows; ++k) {
-    const ArmSample s = Step(controller);
+    StepInto(controller, &s);
     run.t[k] = s.t;
     run.q.row(k) = s.q.transpose();
     run.qd.row(k) = s.qd.transpose();

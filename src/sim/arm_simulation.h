@@ -113,11 +113,14 @@ class ArmSimulation {
 
  private:
   void CheckState();
+  // Step into *out, whose vectors are reused (Run steps into one sample throughout).
+  void StepInto(const ArmController& controller, ArmSample* out);
 
   ArmModel model_;  // the plant: payload lumped into the last link
   std::unique_ptr<ArmBackend> backend_;
   ArmSimulationOptions options_;
   ArmSimulationState state_;
+  Eigen::VectorXd delayed_;  // dof: the command leaving the delay line (scratch, not state)
 };
 
 }  // namespace twinsim

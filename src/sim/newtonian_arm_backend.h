@@ -5,15 +5,18 @@
 // Each sample of Ts (the model's sample_time) is cut into `physics_substeps` physics
 // steps of h = Ts / substeps. At every physics step, per joint: time_delay,
 // torque_saturation and torque_offset shape the received command into the drive torque;
-// joint_flexibility passes it through the motor inertia and spring; friction (the joint's
-// nominal viscous and Coulomb friction plus the friction effects) is solved at velocity
-// level, so a joint sticks exactly and viscous friction is trapezoidal; the engine steps
-// h. The payload is in the bodies the engine is built with (ArmPlantModel).
+// joint_flexibility passes it through the motor inertia and spring (explicitly, or by
+// the trapezoidal rule solved with the friction: ArmModel::flexibility_integrator);
+// friction (the joint's nominal viscous and Coulomb friction plus the friction effects)
+// is solved at velocity level, so a joint sticks exactly and viscous friction is
+// trapezoidal; the engine steps h, its first stage from the solve's M where there was
+// one (ArmEngine::StepFromAcceleration). The payload is in the bodies the engine is
+// built with (ArmPlantModel).
 //
 //   ArmSimulation sim(model, MakeNewtonianArmBackend("ode", model));
 #pragma once
 
-#include <Eigen/Cholesky>
+#include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,8 +32,9 @@ class NewtonianArmBackend final : public ArmBackend {
  public:
   // Takes an engine built for ArmPlantModel(model). `physics_substeps`: physics steps per
   // sample, 0 = automatic: 1, or as many as a stiff joint_flexibility needs
-  // (h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5, the link's inertia taken at q = 0
-  // with the other joints free). Throws std::invalid_argument for an engine of another
+  // (explicit: h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5; trapezoidal:
+  // h sqrt(k / J_eff) <= 0.34; the link's inertia taken at q = 0 with the other joints
+  // free). Throws std::invalid_argument for an engine of another
   // arm, InputError for a model that does not Validate() or substeps out of [0, 100000].
   NewtonianArmBackend(const ArmModel& model, std::unique_ptr<ArmEngine> engine, int physics_substeps = 0);
 
@@ -49,17 +53,29 @@ class NewtonianArmBackend final : public ArmBackend {
   // offset), from the commands received.
   void DriveTorques(std::int64_t step, Eigen::VectorXd* drive) const;
   // Friction torques (opposing positive motion) for one physics step of h seconds
-  // with the other joint torques `tau`, solved at velocity level.
-  void FrictionTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau, double h,
-                       Eigen::VectorXd* friction);
+  // with the other joint torques `tau` (flexible joints' springs not in it), solved at
+  // velocity level, and with them the mean spring torques of the trapezoidal flexible
+  // joints driven by `drive` (zero elsewhere). Returns true when it solved (some joint
+  // has friction or a trapezoidal spring), with the joint accelerations at the step's
+  // start under tau + spring - friction in scratch_.start_accel, from the same M: the
+  // engine's first stage (ArmEngine::StepFromAcceleration).
+  bool SolveJointTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau,
+                         const Eigen::VectorXd& drive, double h, Eigen::VectorXd* friction, Eigen::VectorXd* spring);
 
-  // Work space of Step and FrictionTorques, kept so that a step allocates nothing; its
+  // Work space of Step and SolveJointTorques, kept so that a step allocates nothing; its
   // content between steps means nothing (not state: Save and Restore ignore it).
   struct Scratch {
     Eigen::VectorXd drive, link, friction;  // dof: a physics step's torques
     Eigen::VectorXd bias, free_end;         // dof: the friction solve's free motion
-    Eigen::MatrixXd mass, response;         // dof x dof: M and h M^-1
-    Eigen::LLT<Eigen::MatrixXd> llt;
+    Eigen::VectorXd free_accel;             // dof: M^-1 (tau - bias)
+    Eigen::VectorXd start_accel;            // dof: M^-1 (tau - friction - bias)
+    Eigen::MatrixXd mass, mobility;         // dof x dof: M and M^-1
+    Eigen::MatrixXd response;               // dof x dof: h M^-1
+    Eigen::MatrixXd factor;                 // dof x dof: M's Cholesky factor, inverted
+    Eigen::VectorXd delayed;                // dof: a command's storage, recycled
+    Eigen::VectorXd spring;                 // dof: trapezoidal flexible joints' mean spring torque
+    Eigen::VectorXd w_inverse;              // dof: 1 / (h M^-1)_jj of the friction joints
+    Eigen::VectorXd damping_inverse;        // dof: 1 / (1 + (h M^-1)_jj b_j / 2)
   };
 
   ArmModel model_;  // the plant: payload lumped into the last link
@@ -67,6 +83,7 @@ class NewtonianArmBackend final : public ArmBackend {
   int substeps_ = 1;
   std::vector<JointEffects> effects_;  // dof
   std::vector<int> friction_joints_;   // joints with any friction
+  std::vector<int> trapezoidal_joints_;  // flexible joints stepped by the trapezoidal rule
   std::vector<double> delay_steps_;    // per joint, time_delay in physics steps
   double max_delay_steps_ = 0;
   bool flexible_ = false;

@@ -672,6 +672,8 @@ std::vector<BadInputCase> Cases() {
        "replay --model {d}/m.yaml --log {d}/log.csv --out {d}/o.csv", 2, "{d}/m.yaml:22:", "o.csv", 20.0, "duplicate"},
       {"arm_model_delay_samples_1e9", {ArmLogFile(), {"m.yaml", Replace(std::string(kArmModel), {{"delay_samples: 1", "delay_samples: 1000000000"}}, false)}},
        "replay --model {d}/m.yaml --log {d}/log.csv --out {d}/o.csv", 2, "{d}/m.yaml:4:", "o.csv"},
+      {"arm_model_flexibility_integrator_unknown", {ArmLogFile(), {"m.yaml", (std::string(kArmModel) + std::string("flexibility_integrator: backward\n"))}},
+       "replay --model {d}/m.yaml --log {d}/log.csv --out {d}/o.csv", 2, "{d}/m.yaml:58:25: 'flexibility_integrator': unknown value 'backward' (known: explicit, trapezoidal)", "o.csv"},
       {"arm_model_effect_unknown", {ArmLogFile(), {"m.yaml", (std::string(kArmModel) + std::string("effects:\n" "  - {name: gremlins, joint: waist}\n"))}},
        "replay --model {d}/m.yaml --log {d}/log.csv --out {d}/o.csv", 2, "{d}/m.yaml:59:", "o.csv"},
       {"arm_log_missing_tau", {{"log.csv", (std::string("t,q1,q2,q3\n") + std::string("0,0,0,0\n" "0.001,0,0,0\n"))}},

@@ -28,6 +28,15 @@ class AnalyticArmEngine final : public ArmEngine {
     for (int i = 0; i < n; ++i) Rk4Step(plant_, tau, h, /*friction=*/false, &work_, &q_, &qd_);
   }
 
+  // The caller's accelerations serve the first internal step's first stage.
+  void StepFromAcceleration(const Eigen::VectorXd& tau, double dt, const Eigen::VectorXd& qdd) override {
+    CheckArmStep(name(), dof(), tau, dt);
+    const int n = ArmSubsteps(dt, max_step_);
+    const double h = dt / n;
+    Rk4StepFrom(plant_, tau, h, /*friction=*/false, qdd, &work_, &q_, &qd_);
+    for (int i = 1; i < n; ++i) Rk4Step(plant_, tau, h, /*friction=*/false, &work_, &q_, &qd_);
+  }
+
   const Eigen::VectorXd& q() const override { return q_; }
   const Eigen::VectorXd& qd() const override { return qd_; }
 

@@ -29,7 +29,16 @@ struct Placement {
 
 Placement Place(const ArmJoint& j, double q) {
   Placement x;
-  if (j.type == JointType::kRevolute) {
+  if (j.type == JointType::kRevolute && j.axis == Eigen::Vector3d::UnitZ()) {
+    // The common axis (every DH joint, most URDF ones): R_origin Rot(z, q) mixes two
+    // columns, a quarter of the general product's work.
+    const double c = std::cos(q), s = std::sin(q);
+    const Eigen::Matrix3d o = j.origin.linear();
+    x.r.col(0) = c * o.col(0) + s * o.col(1);
+    x.r.col(1) = c * o.col(1) - s * o.col(0);
+    x.r.col(2) = o.col(2);
+    x.p = j.origin.translation();
+  } else if (j.type == JointType::kRevolute) {
     x.r.noalias() = j.origin.linear() * Eigen::AngleAxisd(q, j.axis).toRotationMatrix();
     x.p = j.origin.translation();
   } else {

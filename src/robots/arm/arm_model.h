@@ -49,6 +49,20 @@ struct ArmJoint {
   ArmLink child;                      // the link this joint moves
 };
 
+// How the Newtonian arm backend (sim/newtonian_arm_backend.h) steps a joint_flexibility's
+// spring, damper and motor (docs/arm_backends.md, "Stiff flexible joints"):
+enum class FlexibilityIntegrator {
+  // The spring's torque of the step's start drives the link; the motor follows by
+  // semi-implicit Euler. Stable and accurate only with h sqrt(k / J_eff) well below 1:
+  // the automatic physics step takes h sqrt(k / J_eff) <= 0.1.
+  kExplicit,
+  // The trapezoidal rule (implicit) over spring, damper and motor, solved together with
+  // the velocity-level friction: stable for any stiffness, second order, the undamped
+  // spring's energy kept; the automatic physics step takes h sqrt(k / J_eff) <= 0.35
+  // (the resonance within 1 %).
+  kTrapezoidal,
+};
+
 // The most joints an arm may have (a humanoid's limb has 7; a snake robot a few dozen).
 inline constexpr int kMaxArmJoints = 64;
 
@@ -60,6 +74,7 @@ struct ArmModel {
   double sample_time = 0.001;                            // s, the controller's sampling period
   int delay_samples = 0;                                 // samples of delay from command to joint
   ArmEffects effects;                                    // what the rigid model lacks (arm_effects.h)
+  FlexibilityIntegrator flexibility_integrator = FlexibilityIntegrator::kExplicit;  // joint_flexibility's step
 
   int dof() const { return static_cast<int>(joints.size()); }
   // Empty when consistent (positive masses, positive definite inertias satisfying the

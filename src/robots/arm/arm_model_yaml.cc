@@ -149,6 +149,11 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
   if (top.Get("gravity", &gravity, 3)) model.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
   top.Get("sample_time", &model.sample_time, Positive(10));
   top.Get("delay_samples", &model.delay_samples, InRange(0, 100000));
+  std::string flex_integrator = "explicit";
+  if (top.Get("flexibility_integrator", &flex_integrator, std::vector<std::string>{"explicit", "trapezoidal"})) {
+    model.flexibility_integrator =
+        flex_integrator == "trapezoidal" ? FlexibilityIntegrator::kTrapezoidal : FlexibilityIntegrator::kExplicit;
+  }
   // With `dh` the joints are DH rows; without it they are URDF-style (origin and axis).
   std::string convention;
   const bool dh = top.Has("dh");

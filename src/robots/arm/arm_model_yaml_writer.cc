@@ -61,6 +61,9 @@ std::string FormatArmModelYaml(const ArmModel& model, const std::string& comment
   s << "gravity: " << Vector(model.gravity) << "   # m/s^2, base frame\n";
   s << "sample_time: " << YamlNumber(model.sample_time) << "   # s\n";
   s << "delay_samples: " << model.delay_samples << "\n";
+  if (model.flexibility_integrator == FlexibilityIntegrator::kTrapezoidal) {
+    s << "flexibility_integrator: trapezoidal   # joint_flexibility's step (docs/arm_backends.md)\n";
+  }
   s << "# URDF-style joint table (no 'dh' key): origin and axis in the parent link's frame,\n"
        "# limits in rad (revolute) or m (prismatic), link inertials in the link frame about\n"
        "# the centre of mass, inertia as [ixx, iyy, izz, ixy, ixz, iyz] in kg m^2.\n";

@@ -14,6 +14,7 @@
 #include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_model.h"
+#include "robots/arm/arm_model_yaml_writer.h"
 #include "sim/arm_simulation.h"
 #include "test_util.h"
 
@@ -175,6 +176,52 @@ TEST_P(ArmEffectsOnBackend, JointFlexibilityResonatesAtSqrtKOverJeff) {
   EXPECT_NEAR(f, expected, 0.01 * expected);
   // Momentum is shared: the link's mean speed is the impulse over both inertias.
   EXPECT_NEAR(r.qd.col(0).tail(window).mean(), 0.001 / (0.05 + kJ), 0.01 * 0.001 / (0.05 + kJ));
+}
+
+TEST_P(ArmEffectsOnBackend, TrapezoidalJointFlexibilityResonatesAtSqrtKOverJeff) {
+  // The same turntable with the spring stepped by the trapezoidal rule
+  // (`flexibility_integrator: trapezoidal`): h w = 0.18 at one step per sample, whose
+  // resonance 2 atan(h w / 2) / h is 0.26 % low; and 4x stiffer, k = 4900 (h w = 0.35,
+  // 2 steps per sample, 0.26 % low again).
+  for (const double k : {1225.0, 4900.0}) {
+    const std::string yaml =
+        "flexibility_integrator: trapezoidal\n" +
+        OneLink(0, "  - {name: joint_flexibility, joint: 1, k: " + std::to_string(k) + ", motor_inertia: 0.05}\n");
+    const ArmModel m = LoadArmModelFromYamlString(yaml, "turntable.yaml");
+    EXPECT_EQ(m.flexibility_integrator, FlexibilityIntegrator::kTrapezoidal);
+    EXPECT_EQ(MakeArmBackend(GetParam(), m)->physics_substeps(), k < 2000 ? 1 : 2);
+    const ArmTrajectory r = Drive(GetParam(), m, 0, 0, 0.5, [](double t) { return t < 0.001 ? 1.0 : 0.0; });
+    const double f = 1 / Period(r.t.tail(450), r.qd.col(0).tail(450));
+    const double expected = std::sqrt(k * (1 / 0.05 + 1 / kJ)) / (2 * kPi);
+    std::cout << "[measured] " << GetParam() << " trapezoidal joint_flexibility k = " << k << ": resonance " << f
+              << " Hz, sqrt(k/J_eff) " << expected << " Hz\n";
+    EXPECT_NEAR(f, expected, 0.01 * expected);
+    EXPECT_LT(f, expected);  // the trapezoidal rule's frequency warping
+  }
+}
+
+TEST(ArmEffects, FlexibilityIntegratorIsReadWrittenAndCheckedWithItsLine) {
+  EXPECT_EQ(Turntable().flexibility_integrator, FlexibilityIntegrator::kExplicit);
+  const std::string dir = TempDir("arm_flex_integrator");
+  const std::string path =
+      WriteText(dir + "/arm.yaml", "flexibility_integrator: trapezoidal\n" +
+                                       OneLink(0, "  - {name: joint_flexibility, joint: 1, k: 500, motor_inertia: 0.01}\n"));
+  const ArmModel m = LoadArmModel(path);
+  EXPECT_EQ(m.flexibility_integrator, FlexibilityIntegrator::kTrapezoidal);
+  // Written back (as diagnose's model.yaml is) only when not the default.
+  const std::string written = FormatArmModelYaml(m);
+  EXPECT_NE(written.find("flexibility_integrator: trapezoidal"), std::string::npos) << written;
+  EXPECT_EQ(LoadArmModelFromYamlString(written, "written.yaml").flexibility_integrator,
+            FlexibilityIntegrator::kTrapezoidal);
+  EXPECT_EQ(FormatArmModelYaml(Turntable()).find("flexibility_integrator"), std::string::npos);
+  const std::string bad = WriteText(dir + "/bad.yaml", "flexibility_integrator: implicit\n" + OneLink(0));
+  try {
+    LoadArmModel(bad);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              bad + ":1:25: 'flexibility_integrator': unknown value 'implicit' (known: explicit, trapezoidal)");
+  }
 }
 
 TEST_P(ArmEffectsOnBackend, PayloadIsHeldByItsOwnGravityTorque) {
