@@ -18,7 +18,8 @@ BallState TeleportedBall(const BallTeleport& t, const BallState& current, double
   b.position.z() = std::max(radius, t.z.value_or(radius));
   b.velocity = Eigen::Vector3d(t.vx.value_or(0), t.vy.value_or(0), t.vz.value_or(0));
   // Rolling: the spin that matches the velocity on the floor, w = z x v / r.
-  b.spin = t.roll ? Eigen::Vector3d(-b.velocity.y(), b.velocity.x(), 0) / radius : Eigen::Vector3d::Zero();
+  b.spin = Eigen::Vector3d::Zero();
+  if (t.roll) b.spin = Eigen::Vector3d(-b.velocity.y(), b.velocity.x(), 0) / radius;
   return b;
 }
 

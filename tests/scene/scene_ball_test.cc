@@ -92,11 +92,14 @@ TEST(SceneBall, TheRunWritesTheBallsPathAndItBouncesOffTheRobot) {
     const SimulationResult r = RunOmniScene(s, backend, "");
     ASSERT_EQ(r.ball.size(), r.frames[0].size());
     EXPECT_EQ(r.ball.front().truth.position.x(), 1);
-    // It reaches the front (0.073 m + radius), comes back slower, and ends moving away.
-    double nearest = 1;
-    for (const BallRecord& b : r.ball) nearest = std::min(nearest, b.truth.position.x());
+    // It reaches the front (0.073 m + radius) and bounces back (it only ever came in).
+    double nearest = 1, fastest_out = 0;
+    for (const BallRecord& b : r.ball) {
+      nearest = std::min(nearest, b.truth.position.x());
+      fastest_out = std::max(fastest_out, b.truth.velocity.x());
+    }
     EXPECT_NEAR(nearest, testing::Omni4().FrontDistance() + 0.0215, 0.005) << backend;
-    EXPECT_GT(r.ball.back().truth.velocity.x(), 0) << backend;
+    EXPECT_GT(fastest_out, 0.3) << backend;
 
     const std::string dir = testing::TempDir("scene_ball_" + backend);
     OutputFiles files(dir);

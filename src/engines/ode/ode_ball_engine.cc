@@ -32,6 +32,7 @@ struct OdeChassis {
   dBodyID body = nullptr;
   dGeomID geom = nullptr;
   double reach = 0;               // m, centre to the farthest point of the outline
+  double height = 0;              // m, the body's origin above the floor: the prism's middle, inside it as ODE wants
   std::vector<dReal> planes;      // 4 per face: outward normal, distance
   std::vector<dReal> points;      // 3 per vertex
   std::vector<unsigned> polygons; // per face: count, vertex indices (counter-clockwise from outside)
@@ -123,7 +124,9 @@ OdeBallEngine::~OdeBallEngine() {
 void OdeBallEngine::BuildChassis(OdeChassis* c, const OmniModel& model) {
   const std::vector<Eigen::Vector2d> outline = ChassisOutline(model);
   const auto k = static_cast<unsigned>(outline.size());
-  const double bottom = model.ground_clearance, top = model.ground_clearance + model.chassis_height;
+  // Relative to the body's origin, the middle of the prism.
+  c->height = model.ground_clearance + 0.5 * model.chassis_height;
+  const double top = 0.5 * model.chassis_height, bottom = -top;
   for (double z : {bottom, top}) {
     for (const Eigen::Vector2d& p : outline) c->points.insert(c->points.end(), {p.x(), p.y(), z});
   }
@@ -138,7 +141,7 @@ void OdeBallEngine::BuildChassis(OdeChassis* c, const OmniModel& model) {
   c->planes.insert(c->planes.end(), {0, 0, 1, top});
   c->polygons.push_back(k);
   for (unsigned i = 0; i < k; ++i) c->polygons.push_back(k + i);
-  c->planes.insert(c->planes.end(), {0, 0, -1, -bottom});
+  c->planes.insert(c->planes.end(), {0, 0, -1, top});
   c->polygons.push_back(k);
   for (unsigned i = k; i-- > 0;) c->polygons.push_back(i);
 
@@ -173,8 +176,9 @@ BallState OdeBallEngine::GetBall() const {
 void OdeBallEngine::SetRobot(int robot, const Pose2& pose, const Twist2& velocity) {
   if (robot < 0 || robot >= static_cast<int>(robots_.size()))
     throw std::invalid_argument("ode ball engine: robot index " + std::to_string(robot) + " out of range");
-  dBodyID body = robots_[static_cast<std::size_t>(robot)].body;
-  dBodySetPosition(body, pose.x, pose.y, 0);
+  const OdeChassis& c = robots_[static_cast<std::size_t>(robot)];
+  dBodyID body = c.body;
+  dBodySetPosition(body, pose.x, pose.y, c.height);
   const dQuaternion q = {std::cos(0.5 * pose.theta), 0, 0, std::sin(0.5 * pose.theta)};
   dBodySetQuaternion(body, q);
   dBodySetLinearVel(body, velocity.vx, velocity.vy, 0);
