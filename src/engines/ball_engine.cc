@@ -26,13 +26,10 @@ std::vector<Eigen::Vector2d> ChassisOutline(const OmniModel& model, int arc_segm
 }
 
 std::vector<std::string> AvailableBallEngines() {
+  // Every omni engine built but the analytic one, which has no ball.
   std::vector<std::string> names;
-#ifdef TWINSIM_HAVE_ODE
-  names.push_back("ode");
-#endif
-#ifdef TWINSIM_HAVE_BULLET
-  names.push_back("bullet");
-#endif
+  for (const std::string& n : AvailableOmniEngines())
+    if (n != "analytic") names.push_back(n);
   return names;
 }
 

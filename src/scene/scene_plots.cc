@@ -68,6 +68,9 @@ PathPlot ScenePathPlot(const PlotSpec& spec, const Scene& scene, const Simulatio
   }
   // The ball's true path, without heading ticks (a NaN heading draws none).
   if (!result.ball.empty()) {
+    // Beside the ball a lone robot's paths are named after it.
+    if (single)
+      for (PlotPath& robot : plot.paths) robot.name = result.robot_names[0] + " " + robot.name;
     PlotPath p;
     p.name = "ball";
     for (std::size_t k = 0; k < result.ball.size(); ++k) {

@@ -26,14 +26,7 @@ std::string BallScene(const std::string& ball) {
          "plots: [{type: path, file: path.png}]\n" + ball;
 }
 
-std::string ErrorOf(const std::string& yaml) {
-  try {
-    LoadSceneFromString(yaml, "s.yaml", SourcePath("scenes"));
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string ErrorOf(const std::string& yaml) { return testing::SceneError(yaml); }
 
 TEST(SceneBall, ShippedBallScenesLoad) {
   for (const char* name : {"ball_bounce", "serve_2v2_ball"}) {

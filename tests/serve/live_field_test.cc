@@ -40,6 +40,15 @@ ServeOptions LoopbackOptions(int vision_port) {
   return o;
 }
 
+// Lockstep waiting for the blue team from frame 0, for `frames` frames.
+ServeOptions LockstepOptions(int vision_port, int frames) {
+  ServeOptions o = LoopbackOptions(vision_port);
+  o.lockstep = true;
+  o.teams = {"blue"};
+  o.max_frames = frames;
+  return o;
+}
+
 // Runs the field on a thread until Stop() (or its frame limit).
 class ServerThread {
  public:
@@ -136,10 +145,7 @@ TEST(LiveField, LockstepVisionIsTheSimulationsAndACommandShowsAtKPlusDelayPlusOn
   const Scene scene = TwoTeamScene();
   const int frames = 30;
   UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
-  ServeOptions options = LoopbackOptions(vision.port());
-  options.lockstep = true;
-  options.teams = {"blue"};
-  options.max_frames = frames;
+  const ServeOptions options = LockstepOptions(vision.port(), frames);
   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
 
   std::vector<SSL_DetectionFrame> seen;
@@ -324,10 +330,7 @@ TEST(LiveField, TheBallIsSeenKickedDribbledTeleportedAndLogged) {
   const Scene scene = BallScene();
   const int frames = 40, kick_frame = 5;
   UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
-  ServeOptions options = LoopbackOptions(vision.port());
-  options.lockstep = true;
-  options.teams = {"blue"};
-  options.max_frames = frames;
+  const ServeOptions options = LockstepOptions(vision.port(), frames);
   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
   std::vector<SSL_DetectionFrame> seen;
   std::vector<bool> contact;

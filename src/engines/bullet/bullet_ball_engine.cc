@@ -77,13 +77,8 @@ BulletBallEngine::BulletBallEngine(const BallModel& ball, const std::vector<Omni
   shapes_.push_back(std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), 0));
   AddStatic(shapes_.back().get(), at, ball.sliding_friction, ball.floor_restitution);
   if (field.walls) {
-    const double t = field.wall_thickness, hw = field.wall_height;
-    const double half_l = 0.5 * field.length, half_w = 0.5 * field.width;
-    const double boxes[4][4] = {{half_l + 0.5 * t, 0, t, field.width + 2 * t},
-                                {-half_l - 0.5 * t, 0, t, field.width + 2 * t},
-                                {0, half_w + 0.5 * t, field.length + 2 * t, t},
-                                {0, -half_w - 0.5 * t, field.length + 2 * t, t}};
-    for (const auto& b : boxes) {
+    const double hw = field.wall_height;
+    for (const auto& b : field.WallBoxes()) {
       auto box = std::make_unique<btBoxShape>(btVector3(0.5 * b[2], 0.5 * b[3], 0.5 * hw));
       box->setMargin(kWallMargin);
       at.setOrigin(btVector3(b[0], b[1], 0.5 * hw));

@@ -91,13 +91,8 @@ OdeBallEngine::OdeBallEngine(const BallModel& ball, const std::vector<OmniModel>
   floor_ = dCreatePlane(nullptr, 0, 0, 1, 0);
 
   if (field.walls) {
-    const double t = field.wall_thickness, hw = field.wall_height;
-    const double half_l = 0.5 * field.length, half_w = 0.5 * field.width;
-    const double boxes[4][4] = {{half_l + 0.5 * t, 0, t, field.width + 2 * t},
-                                {-half_l - 0.5 * t, 0, t, field.width + 2 * t},
-                                {0, half_w + 0.5 * t, field.length + 2 * t, t},
-                                {0, -half_w - 0.5 * t, field.length + 2 * t, t}};
-    for (const auto& b : boxes) {
+    const double hw = field.wall_height;
+    for (const auto& b : field.WallBoxes()) {
       dGeomID wall = dCreateBox(nullptr, b[2], b[3], hw);
       dGeomSetPosition(wall, b[0], b[1], 0.5 * hw);
       walls_.push_back(wall);
@@ -218,12 +213,8 @@ void OdeBallEngine::Touch(dGeomID other, dBodyID body, double friction, double r
     contact.fdir1[0] = dir.x();
     contact.fdir1[1] = dir.y();
     contact.fdir1[2] = dir.z();
-    contact.surface.mode = dContactApprox1 | dContactFDir1 | dContactBounce | dContactSoftERP | dContactSoftCFM;
-    contact.surface.mu = friction;
-    contact.surface.bounce = restitution;
-    contact.surface.bounce_vel = kBounceVelocity;
-    contact.surface.soft_erp = kContactErp;
-    contact.surface.soft_cfm = kContactCfm;
+    contact.surface = BouncingSurface(friction, restitution, kBounceVelocity, kContactErp, kContactCfm);
+    contact.surface.mode |= dContactFDir1;
     dJointID joint = dJointCreateContact(world_, contacts_, &contact);
     dJointAttach(joint, ball_, body);
   }

@@ -252,20 +252,12 @@ void OdeOmniEngine::BuildRobot(int index, const OmniModel& model) {
 }
 
 void OdeOmniEngine::BuildWalls(const FieldModel& field) {
-  const double t = field.wall_thickness, hw = field.wall_height;
-  const double half_l = 0.5 * field.length, half_w = 0.5 * field.width;
-  struct Box {
-    double x, y, size_x, size_y;  // m
-  };
-  const Box boxes[4] = {
-      {half_l + 0.5 * t, 0, t, field.width + 2 * t},
-      {-half_l - 0.5 * t, 0, t, field.width + 2 * t},
-      {0, half_w + 0.5 * t, field.length + 2 * t, t},
-      {0, -half_w - 0.5 * t, field.length + 2 * t, t},
-  };
+  const double hw = field.wall_height;
+  const auto boxes = field.WallBoxes();
   for (int j = 0; j < 4; ++j) {
-    dGeomID wall = dCreateBox(space_, boxes[j].size_x, boxes[j].size_y, hw);
-    dGeomSetPosition(wall, boxes[j].x, boxes[j].y, 0.5 * hw);
+    const auto& box = boxes[static_cast<std::size_t>(j)];
+    dGeomID wall = dCreateBox(space_, box[2], box[3], hw);
+    dGeomSetPosition(wall, box[0], box[1], 0.5 * hw);
     dGeomSetCategoryBits(wall, kWallCategory);
     dGeomSetCollideBits(wall, kChassisCategory);
     SetGeomKey(wall, num_robots() + j);
@@ -488,13 +480,7 @@ void OdeOmniEngine::AddBumperContacts(double dt) {
     for (int k = 0; k < pair.count; ++k) {
       dContact contact{};
       contact.geom = pair.geoms[k];
-      contact.surface.mode =
-          dContactApprox1 | dContactBounce | dContactSoftERP | dContactSoftCFM;
-      contact.surface.mu = kBumperFriction;
-      contact.surface.bounce = kBumperRestitution;
-      contact.surface.bounce_vel = kBumperBounceVelocity;
-      contact.surface.soft_erp = erp;
-      contact.surface.soft_cfm = cfm;
+      contact.surface = BouncingSurface(kBumperFriction, kBumperRestitution, kBumperBounceVelocity, erp, cfm);
       dJointID joint = dJointCreateContact(world_, contact_group_, &contact);
       dJointAttach(joint, body_a, body_b);
     }

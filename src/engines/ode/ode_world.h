@@ -15,6 +15,20 @@ namespace twinsim {
 // and dAllocateODEDataForThread once per calling thread.
 void EnsureOdeInitialized();
 
+// A contact surface with Coulomb friction mu (ODE's Approx1: the limit is mu times the
+// normal force), restitution `bounce` above `bounce_vel` m/s of approach, and a soft
+// constraint of `erp` and `cfm`.
+inline dSurfaceParameters BouncingSurface(double mu, double bounce, double bounce_vel, double erp, double cfm) {
+  dSurfaceParameters s{};
+  s.mode = dContactApprox1 | dContactBounce | dContactSoftERP | dContactSoftCFM;
+  s.mu = mu;
+  s.bounce = bounce;
+  s.bounce_vel = bounce_vel;
+  s.soft_erp = erp;
+  s.soft_cfm = cfm;
+  return s;
+}
+
 // A dWorldID that owns its own single-threaded step scheduler: ODE's default scheduler
 // is one process-wide object, and two worlds stepping on two threads trip over it.
 // Destroying it destroys the world with every body and joint in it.
