@@ -93,6 +93,10 @@ void BallField::StepFrame(const std::vector<Pose2>& from, const std::vector<Pose
     velocity[i] = Twist2{(to[i].x - from[i].x) / frame_dt, (to[i].y - from[i].y) / frame_dt,
                          WrapAngle(to[i].theta - from[i].theta) / frame_dt};
   }
+  // Each frame starts from the ball's state alone (Bullet's contact caches cleared, ODE's
+  // orientation of the sphere reset): so Restore() and stepping gives the same bytes as
+  // stepping on from where the state was saved.
+  engine_->SetBall(state_.ball);
   std::vector<bool> kicked(n, false);  // a kicker fires once a frame
   for (int step = 0; step < steps; ++step) {
     const double t = step * dt;

@@ -111,6 +111,31 @@ TEST(SceneBall, TheRunWritesTheBallsPathAndItBouncesOffTheRobot) {
   }
 }
 
+TEST(SceneBall, RestoringAndSteppingGivesTheSameBallAsSteppingOn) {
+  for (const std::string& backend : {std::string("ode"), std::string("bullet")}) {
+    const Scene s = LoadSceneFromString(BallScene("ball: {start: {x: 0.6, y: 0.02, vx: -2}}\n"), "s.yaml",
+                                        SourcePath("scenes"));
+    Simulation sim = MakeSimulation(s, backend);
+    for (int k = 0; k < 20; ++k) sim.Step();
+    const SimulationState saved = sim.Save();
+    std::vector<BallState> first, second;
+    for (int k = 0; k < 40; ++k) {  // through the bounce
+      sim.Step();
+      first.push_back(sim.ball()->ball());
+    }
+    sim.Restore(saved);
+    for (int k = 0; k < 40; ++k) {
+      sim.Step();
+      second.push_back(sim.ball()->ball());
+    }
+    for (std::size_t k = 0; k < first.size(); ++k) {
+      EXPECT_EQ(first[k].position, second[k].position) << backend << " frame " << k;
+      EXPECT_EQ(first[k].velocity, second[k].velocity) << backend << " frame " << k;
+      EXPECT_EQ(first[k].spin, second[k].spin) << backend << " frame " << k;
+    }
+  }
+}
+
 TEST(SceneBall, TheFlatFrontAndTheKickerAndDribblerAreModelKeysWithDefaults) {
   const OmniModel d = testing::Omni4();
   EXPECT_EQ(d.front_distance, 0);
