@@ -76,8 +76,7 @@ OdeBallEngine::OdeBallEngine(const BallModel& ball, const std::vector<OmniModel>
   ode_world_ = std::make_unique<OdeWorld>();
   world_ = ode_world_->id();
   const Eigen::Vector3d gravity = field.Gravity();
-  dWorldSetGravity(world_, gravity.x(), gravity.y(), gravity.z());
-  dWorldSetAutoDisableFlag(world_, 0);
+  SetUpFieldWorld(world_, gravity.x(), gravity.y(), gravity.z());
   dWorldSetContactMaxCorrectingVel(world_, kMaxCorrectingSpeed);
   dWorldSetContactSurfaceLayer(world_, 0);
   contacts_ = dJointGroupCreate(0);

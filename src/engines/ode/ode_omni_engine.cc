@@ -138,9 +138,7 @@ OdeOmniEngine::OdeOmniEngine(const std::vector<OmniModel>& robots, const FieldMo
   ode_world_ = std::make_unique<OdeWorld>();
   world_ = ode_world_->id();
   const Eigen::Vector3d gravity = field.Gravity();
-  dWorldSetGravity(world_, gravity.x(), gravity.y(), gravity.z());
-  // Robots often stand still between commands; a sleeping body would ignore the next one.
-  dWorldSetAutoDisableFlag(world_, 0);
+  SetUpFieldWorld(world_, gravity.x(), gravity.y(), gravity.z());
   // The world ERP only drives the hinges (contacts bring their own). Explicit Euler lets a
   // wheel centre drift outwards by b (omega dt)^2 / 2 per step on a spinning robot; at
   // ODE's default 0.2 that settles 2% of b out at 26 rad/s and 1/300 s, and the wheels
