@@ -27,6 +27,10 @@ std::string TempDir(const std::string& name);
 std::string WriteText(const std::string& path, const std::string& text);
 std::string ReadText(const std::string& path);
 
+// What LoadSceneFromString throws for `yaml` (named "s.yaml", paths relative to
+// scenes/): the InputError's text, "" when it loads.
+std::string SceneError(const std::string& yaml);
+
 // The shipped four- and three-wheel models.
 OmniModel Omni4();
 OmniModel Omni3();

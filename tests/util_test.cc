@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "backends/omni_backend_factory.h"
+#include "core/error.h"
+#include "scene/scene.h"
 #include "scene/scene_run.h"
 #include "sim/omni_simulation.h"
 #include "test_util.h"
@@ -33,6 +35,15 @@ std::string ReadText(const std::string& path) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+std::string SceneError(const std::string& yaml) {
+  try {
+    LoadSceneFromString(yaml, "s.yaml", SourcePath("scenes"));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 OmniModel Omni4() { return LoadOmniModel(SourcePath("models/omni4.yaml")); }

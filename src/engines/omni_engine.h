@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -34,6 +35,16 @@ struct FieldModel {
   // and the field's coordinates stay those of the floor.
   double slope = 0;
   double slope_direction = 0;
+
+  // The four walls as boxes standing on the floor, each {centre x, centre y, size x,
+  // size y} (m, wall_height tall); the walls along x reach over the corners.
+  std::array<std::array<double, 4>, 4> WallBoxes() const {
+    const double t = wall_thickness, half_l = 0.5 * length, half_w = 0.5 * width;
+    return {{{half_l + 0.5 * t, 0, t, width + 2 * t},
+             {-half_l - 0.5 * t, 0, t, width + 2 * t},
+             {0, half_w + 0.5 * t, length + 2 * t, t},
+             {0, -half_w - 0.5 * t, length + 2 * t, t}}};
+  }
 
   // Gravity (m/s^2) in the floor's frame: (g sin s cos d, g sin s sin d, -g cos s).
   Eigen::Vector3d Gravity() const {

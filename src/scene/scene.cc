@@ -221,6 +221,27 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       taken.emplace(std::make_pair(robot.team, id), i);
     }
   }
+  std::optional<SourceLocation> ball_at;
+  if (top.Has("ball")) {
+    YamlMap b(top.Child("ball"), path, "ball", &errors);
+    ball_at = b.Where();
+    SceneBall ball;
+    ReadBallModel(b, &ball.model);
+    ball.start.position.z() = ball.model.radius;
+    if (b.Has("start")) {
+      YamlMap s(b.Child("start"), path, "ball.start", &errors);
+      ball_at = s.Where();
+      s.Get("x", &ball.start.position.x());
+      s.Get("y", &ball.start.position.y());
+      s.Get("z", &ball.start.position.z(), InRange(ball.model.radius, 10));
+      s.Get("vx", &ball.start.velocity.x(), InRange(-20, 20));
+      s.Get("vy", &ball.start.velocity.y(), InRange(-20, 20));
+      s.Get("vz", &ball.start.velocity.z(), InRange(-20, 20));
+      s.Finish();
+    }
+    b.Finish();
+    scene.ball = ball;
+  }
   scene.plots = ReadPlotSpecs(top, "plots");
   if (top.Has("tune_pid")) scene.tune_pid = top.Child("tune_pid");
   top.Finish();
@@ -252,6 +273,16 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       errors.Add(start_at[i], msg.str());
     }
   }
+  if (scene.ball) {
+    const Eigen::Vector3d& p = scene.ball->start.position;
+    if (std::abs(p.x()) > scene.field.length / 2 - scene.ball->model.radius ||
+        std::abs(p.y()) > scene.field.width / 2 - scene.ball->model.radius) {
+      std::ostringstream msg;
+      msg << "the ball starts at (" << p.x() << ", " << p.y() << ") m, outside the " << scene.field.length << " x "
+          << scene.field.width << " m field";
+      errors.Add(*ball_at, msg.str());
+    }
+  }
   errors.ThrowIfAny();
   return scene;
 }
@@ -281,6 +312,13 @@ Scene LoadSceneFromString(const std::string& yaml, const std::string& name, cons
   return ReadScene(root, name, base_dir);
 }
 
+std::string BallEngineFor(const std::string& backend) {
+  const std::vector<std::string> engines = AvailableBallEngines();
+  if (engines.empty()) throw InputError("the ball needs the ode or bullet engine; neither was compiled");
+  if (backend == "ode" || backend == "bullet") return backend;
+  return engines.front();
+}
+
 Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options) {
   std::vector<OmniModel> models;
   std::vector<SimRobot> robots;
@@ -290,8 +328,14 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend, const 
     robots.push_back(SimRobot{r.name, r.model, r.start,
                               MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start)});
   }
-  return Simulation(std::move(robots), MakeOmniBackend(backend, models, scene.field, scene.timing(), options),
-                    scene.seed);
+  Simulation sim(std::move(robots), MakeOmniBackend(backend, models, scene.field, scene.timing(), options), scene.seed);
+  if (scene.ball) {
+    const std::string engine = BallEngineFor(backend);
+    sim.AddBall(std::make_unique<BallField>(scene.ball->model, models, scene.field,
+                                            MakeBallEngine(engine, scene.ball->model, models, scene.field)),
+                scene.ball->start);
+  }
+  return sim;
 }
 
 }  // namespace twinsim

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,12 @@ struct SceneRobot {
   CommandSpec commands;
 };
 
+// The ball of a scene (docs/scenes.md, docs/ball.md): its model and where it starts.
+struct SceneBall {
+  BallModel model;
+  BallState start;  // default: at rest on the floor at the centre
+};
+
 struct Scene {
   std::string path;
   std::string name;
@@ -43,6 +50,7 @@ struct Scene {
   FieldModel field;
   std::vector<SceneRobot> robots;
   std::vector<PlotSpec> plots;   // PNGs `twinsim run` draws (docs/rendering.md)
+  std::optional<SceneBall> ball; // the `ball:` section; none: a field without a ball
   YAML::Node tune_pid;           // the `tune_pid:` block, read by ReadPidTuningOptions (tuning/pid_tuning.h)
 
   FrameTiming timing() const;
@@ -57,7 +65,12 @@ Scene LoadScene(const std::string& path);
 Scene LoadScene(const std::string& path, const SceneOverrides& overrides);
 Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
 
-// Builds the simulation of a scene on the named backend.
+// The engine the ball runs on beside robots on `backend`: ode and bullet their own; the
+// analytic and learned backends ODE (Bullet in a build without ODE).
+std::string BallEngineFor(const std::string& backend);
+
+// Builds the simulation of a scene on the named backend, with the scene's ball if it
+// has one.
 Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options = {});
 
 }  // namespace twinsim

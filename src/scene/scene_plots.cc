@@ -1,5 +1,7 @@
 #include "scene/scene_plots.h"
 
+#include <cmath>
+
 #include "control/tracking_plots.h"
 
 namespace twinsim {
@@ -63,6 +65,20 @@ PathPlot ScenePathPlot(const PlotSpec& spec, const Scene& scene, const Simulatio
       }
       plot.paths.push_back(std::move(p));
     }
+  }
+  // The ball's true path, without heading ticks (a NaN heading draws none).
+  if (!result.ball.empty()) {
+    // Beside the ball a lone robot's paths are named after it.
+    if (single)
+      for (PlotPath& robot : plot.paths) robot.name = result.robot_names[0] + " " + robot.name;
+    PlotPath p;
+    p.name = "ball";
+    for (std::size_t k = 0; k < result.ball.size(); ++k) {
+      const Eigen::Vector3d& b = result.ball[k].truth.position;
+      p.poses.push_back(Pose2{b.x(), b.y(), std::nan("")});
+      p.frames.push_back(static_cast<int>(k));
+    }
+    plot.paths.push_back(std::move(p));
   }
   return plot;
 }

@@ -30,6 +30,24 @@ std::string TruthCsv(const std::vector<FrameRecord>& frames) {
   return out;
 }
 
+}  // namespace
+
+std::string BallCsv(const std::vector<BallRecord>& ball) {
+  std::string out = "t,x,y,z,vx,vy,vz\n";
+  for (const BallRecord& b : ball) {
+    const double v[] = {b.t, b.truth.position.x(), b.truth.position.y(), b.truth.position.z(),
+                        b.truth.velocity.x(), b.truth.velocity.y(), b.truth.velocity.z()};
+    for (int i = 0; i < 7; ++i) {
+      if (i) out += ',';
+      out += FormatCsvNumber(v[i]);
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+namespace {
+
 // What only the simulation knows, per sample and joint: the tracking error, the demand
 // before clamping, the controller's model-based part, the drive torque applied and the
 // torque the plant needed (TrackingTrial's columns).
@@ -95,6 +113,7 @@ void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, const
     files->Add("trajectory" + suffix + ".csv");
     files->Write("truth" + suffix + ".csv", TruthCsv(result.frames[i]));
   }
+  if (!result.ball.empty()) files->Write("ball.csv", BallCsv(result.ball));
   if (plots && !scene.plots.empty() && RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
     for (const ScenePlot& plot : ScenePlots(scene, result, backend))

@@ -9,7 +9,8 @@
 //
 // Omni runs write trajectory.csv (the contract's log as the first robot's observer saw
 // it: late, lost frames left out) and truth.csv (true pose and velocity every frame),
-// and the same with _NAME for every further robot. Arm runs write trajectory.csv (the
+// and the same with _NAME for every further robot, and ball.csv when the scene has a
+// ball. Arm runs write trajectory.csv (the
 // arm log as the scene's sensors record it) and tracking.csv (error, demand, model,
 // applied and needed torque per joint). Plots are the scene's `plots:` list.
 #pragma once
@@ -32,6 +33,10 @@ namespace twinsim {
 // observation arrived, at the time the camera stamped, with the pose seen and the
 // command sent. What `run` writes as trajectory.csv.
 std::vector<OmniLogRow> ObserverLog(const std::vector<FrameRecord>& frames);
+
+// The ball's true path, one row per frame: `t,x,y,z,vx,vy,vz` (s, m, m/s, field frame;
+// z the centre's height). What `run` writes as ball.csv when the scene has a ball.
+std::string BallCsv(const std::vector<BallRecord>& ball);
 
 // Runs every frame of an omni scene on `backend` ("learned" with the 1-frame predictor
 // file `predictor`; empty: none). `progress(done, total)` is called as frames finish.

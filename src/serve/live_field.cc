@@ -126,6 +126,7 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   for (const std::string& t : options_.teams) teams_[t == "blue" ? 0 : 1].waited = true;
   vision_to_ = UdpEndpoint{ParseIpv4(options_.vision_address), options_.vision_port};
   moves_.resize(static_cast<std::size_t>(sim_.num_robots()));
+  ball_commands_.resize(static_cast<std::size_t>(sim_.num_robots()));
   result_.backend = sim_.backend().name();
   result_.timing = sim_.backend().timing();
   for (int i = 0; i < sim_.num_robots(); ++i) result_.robot_names.push_back(sim_.robot_name(i));
@@ -163,7 +164,9 @@ void LiveField::SendVision(const std::vector<FrameRecord>& records) {
     t_capture += unix_start_;
     t_sent = UnixNow();
   }
-  SSL_WrapperPacket packet = DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent);
+  std::optional<Eigen::Vector3d> ball;
+  if (sim_.has_ball() && sim_.ball_record().observed) ball = sim_.ball_record().seen;
+  SSL_WrapperPacket packet = DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent, ball);
   // Geometry in the same packet at frame 0 and then every geometry_period.
   const int every = std::max(1, static_cast<int>(std::lround(options_.geometry_period / dt)));
   if (k % every == 0) *packet.mutable_geometry() = GeometryPacket(scene_.field, options_.boundary).geometry();
@@ -207,7 +210,10 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
     Answer(team.socket, r, d.from);
     return;
   }
-  RobotControlResult read = ReadRobotControl(d.bytes, team.team, roster_);
+  std::vector<bool> contact;
+  if (sim_.has_ball())
+    for (int i = 0; i < sim_.num_robots(); ++i) contact.push_back(sim_.ball()->contact(i));
+  RobotControlResult read = ReadRobotControl(d.bytes, team.team, roster_, sim_.has_ball() ? &contact : nullptr);
   if (!read.parsed) {
     ++counters_.malformed;
     Answer(team.socket, read.response, d.from);
@@ -219,6 +225,7 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
   team.waited = true;
   team.answered = true;
   for (const auto& [robot, move] : read.moves) moves_[static_cast<std::size_t>(robot)] = move;
+  for (const auto& [robot, ball] : read.ball_commands) ball_commands_[static_cast<std::size_t>(robot)] = ball;
   Answer(team.socket, read.response, d.from);
 }
 
@@ -242,7 +249,7 @@ void LiveField::HandleControl(const Datagram& d) {
     Answer(control_, response, d.from);
     return;
   }
-  SimulatorCommandResult read = ReadSimulatorCommand(d.bytes, roster_, scene_.field);
+  SimulatorCommandResult read = ReadSimulatorCommand(d.bytes, roster_, scene_.field, sim_.has_ball());
   if (!read.parsed) {
     ++counters_.malformed;
     Answer(control_, read.response, d.from);
@@ -255,6 +262,7 @@ void LiveField::HandleControl(const Datagram& d) {
     const Pose2 pose = TeleportedPose(t, sim_.backend().pose(t.robot));
     sim_.Teleport(t.robot, pose, FieldToBody(t.field_velocity, pose.theta));
   }
+  if (read.ball) sim_.TeleportBall(TeleportedBall(*read.ball, sim_.ball()->ball(), sim_.ball()->model().radius));
   if (read.simulation_speed) {
     if (options_.lockstep) {
       ++counters_.refused;
@@ -335,8 +343,10 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       const auto k = static_cast<std::size_t>(i);
       records[k].command = moves_[k] ? LocalVelocity(*moves_[k], records[k].truth.theta) : sim_.SourceCommand(i);
     }
-    sim_.EndFrame(&records);
+    sim_.EndFrame(&records, ball_commands_);
+    for (BallCommand& c : ball_commands_) c.kick_speed = 0;  // a kick is for its frame
     for (std::size_t k = 0; k < records.size(); ++k) result_.frames[k].push_back(records[k]);
+    if (sim_.has_ball()) result_.ball.push_back(sim_.ball_record());
     ++counters_.frames;
   }
   return Summary();

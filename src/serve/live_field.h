@@ -134,6 +134,9 @@ class LiveField {
   UdpEndpoint vision_to_;
   int vision_delay_ = 0;                               // frames, every robot's
   std::vector<std::optional<RobotMove>> moves_;        // per robot; none: its scene's commands
+  // Per robot, what it does to the ball: the dribbler holds until the robot's next
+  // command, a kick counts for the frame it was sent in.
+  std::vector<BallCommand> ball_commands_;
   double speed_ = 1;                                   // real time x this
   ServeCounters counters_;
   SimulationResult result_;

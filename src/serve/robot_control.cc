@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "core/math_constants.h"
+
 #include "ssl_simulation_robot_control.pb.h"
 
 namespace twinsim {
@@ -19,7 +21,8 @@ Twist2 LocalVelocity(const RobotMove& move, double theta) {
   return move.global ? FieldToBody(move.velocity, theta) : move.velocity;
 }
 
-RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, const TeamRoster& roster) {
+RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, const TeamRoster& roster,
+                                    const std::vector<bool>* ball_contact) {
   RobotControlResult result;
   RobotControl control;
   if (!control.ParseFromString(bytes)) {
@@ -75,13 +78,37 @@ RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, co
         ++result.refused;
       }
     }
-    if ((c.has_kick_speed() && c.kick_speed() != 0) || (c.has_dribbler_speed() && c.dribbler_speed() != 0)) {
-      AddError(&result.response, "TWINSIM_NO_BALL", robot + ": kicks and the dribbler need a ball; the field has none yet");
+    const bool asks_ball = (c.has_kick_speed() && c.kick_speed() != 0) || (c.has_dribbler_speed() && c.dribbler_speed() != 0);
+    if (!ball_contact) {
+      if (asks_ball)
+        AddError(&result.response, "TWINSIM_NO_BALL", robot + ": kicks and the dribbler need a ball; the scene has none");
+    } else {
+      BallCommand ball;
+      const double speed = c.kick_speed(), angle = c.kick_angle(), dribbler = c.dribbler_speed();
+      if (!(std::isfinite(speed) && speed >= 0 && speed <= kMaxKickSpeed) ||
+          !(std::isfinite(angle) && angle >= 0 && angle <= kMaxKickAngle)) {
+        ++result.refused;
+        AddError(&result.response, "TWINSIM_BAD_VALUE",
+                 robot + ": kick_speed " + std::to_string(speed) + " m/s must lie in 0.." + std::to_string(kMaxKickSpeed) +
+                     " and kick_angle " + std::to_string(angle) + " deg in 0.." + std::to_string(kMaxKickAngle));
+      } else {
+        ball.kick_speed = speed;
+        ball.kick_angle = angle * kPi / 180;
+      }
+      if (!(std::isfinite(dribbler) && dribbler >= 0 && dribbler <= kMaxDribblerSpeed)) {
+        ++result.refused;
+        AddError(&result.response, "TWINSIM_BAD_VALUE",
+                 robot + ": dribbler_speed " + std::to_string(dribbler) + " rpm must lie in 0.." +
+                     std::to_string(kMaxDribblerSpeed));
+      } else {
+        ball.dribbler_speed = dribbler;
+      }
+      result.ball_commands.emplace_back(index, ball);
     }
     RobotFeedback* f = result.response.add_feedback();
     f->mutable_id()->set_id(static_cast<unsigned>(roster.robot(index).id));
     f->mutable_id()->set_team(ProtocolTeam(team));
-    f->set_dribbler_ball_contact(false);
+    f->set_dribbler_ball_contact(ball_contact && (*ball_contact)[static_cast<std::size_t>(index)]);
   }
   return result;
 }

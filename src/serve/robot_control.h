@@ -8,10 +8,12 @@
 //   TWINSIM_OVERSIZED      the datagram is over the size limit (not read)
 //   TWINSIM_UNKNOWN_ROBOT  the team has no robot of that id
 //   TWINSIM_OTHER_TEAM     the id is the other team's robot, commanded from this port
-//   TWINSIM_BAD_VALUE      a velocity that is not finite or beyond the limits below
+//   TWINSIM_BAD_VALUE      a velocity that is not finite or beyond the limits below; a
+//                          kick speed, kick angle or dribbler speed out of range (the
+//                          move is still applied)
 //   TWINSIM_UNSUPPORTED    wheel velocities (unsupported_capability says so)
-//   TWINSIM_NO_BALL        a kick or the dribbler: the field has no ball yet (the move
-//                          is still applied)
+//   TWINSIM_NO_BALL        a kick or the dribbler on a field without a ball (the scene
+//                          has no `ball:`; the move is still applied)
 //   TWINSIM_PORT_TAKEN     tournament mode: another address already drives this team
 //   TWINSIM_TOURNAMENT     tournament mode: simulator control is refused
 #pragma once
@@ -22,12 +24,16 @@
 
 #include "core/pose.h"
 #include "serve/team_roster.h"
+#include "sim/ball_field.h"
 #include "ssl_simulation_robot_feedback.pb.h"
 
 namespace twinsim {
 
 inline constexpr double kMaxCommandSpeed = 20;    // m/s, a command beyond is refused
 inline constexpr double kMaxCommandOmega = 100;   // rad/s
+inline constexpr double kMaxKickSpeed = 20;       // m/s, a kick beyond is refused (the kicker clips at its own limit)
+inline constexpr double kMaxKickAngle = 89;       // deg
+inline constexpr double kMaxDribblerSpeed = 1e5;  // rpm
 
 // A velocity command as the team sent it.
 struct RobotMove {
@@ -41,6 +47,9 @@ Twist2 LocalVelocity(const RobotMove& move, double theta);
 struct RobotControlResult {
   bool parsed = false;                          // false: not a RobotControl
   std::vector<std::pair<int, RobotMove>> moves;  // (robot index, move), in the message's order
+  // (robot index, kick and dribbler), for every robot commanded on a field with a ball
+  // (absent values are 0), in the message's order.
+  std::vector<std::pair<int, BallCommand>> ball_commands;
   int refused = 0;                               // robot commands refused
   RobotControlResponse response;
 };
@@ -53,7 +62,10 @@ void AddError(Response* response, const std::string& code, const std::string& me
   e->set_message(message);
 }
 
-// Reads one datagram from `team`'s port. Never throws for any bytes.
-RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, const TeamRoster& roster);
+// Reads one datagram from `team`'s port. `ball_contact` (per robot index: the ball
+// touches its dribbler) is the field's ball; null: the field has none, kicks and the
+// dribbler are refused with TWINSIM_NO_BALL. Never throws for any bytes.
+RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, const TeamRoster& roster,
+                                    const std::vector<bool>* ball_contact = nullptr);
 
 }  // namespace twinsim

@@ -1,5 +1,6 @@
 #include "serve/simulator_control.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "serve/robot_control.h"
@@ -10,7 +11,20 @@ Pose2 TeleportedPose(const RobotTeleport& t, const Pose2& current) {
   return Pose2{t.x.value_or(current.x), t.y.value_or(current.y), WrapAngle(t.theta.value_or(current.theta))};
 }
 
-SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const TeamRoster& roster, const FieldModel& field) {
+BallState TeleportedBall(const BallTeleport& t, const BallState& current, double radius) {
+  BallState b = current;
+  if (t.x) b.position.x() = *t.x;
+  if (t.y) b.position.y() = *t.y;
+  b.position.z() = std::max(radius, t.z.value_or(radius));
+  b.velocity = Eigen::Vector3d(t.vx.value_or(0), t.vy.value_or(0), t.vz.value_or(0));
+  // Rolling: the spin that matches the velocity on the floor, w = z x v / r.
+  b.spin = Eigen::Vector3d::Zero();
+  if (t.roll) b.spin = Eigen::Vector3d(-b.velocity.y(), b.velocity.x(), 0) / radius;
+  return b;
+}
+
+SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const TeamRoster& roster, const FieldModel& field,
+                                            bool has_ball) {
   SimulatorCommandResult result;
   SimulatorCommand command;
   if (!command.ParseFromString(bytes)) {
@@ -26,7 +40,34 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
   if (command.has_config()) refuse("TWINSIM_UNSUPPORTED", "simulator configuration is not supported; the scene file configures the field");
   if (!command.has_control()) return result;
   const SimulatorControl& control = command.control();
-  if (control.has_teleport_ball()) refuse("TWINSIM_NO_BALL", "teleport_ball: the field has no ball yet");
+  if (control.has_teleport_ball()) {
+    const TeleportBall& t = control.teleport_ball();
+    BallTeleport ball;
+    if (t.has_x()) ball.x = t.x();
+    if (t.has_y()) ball.y = t.y();
+    if (t.has_z()) ball.z = t.z();
+    if (t.has_vx()) ball.vx = t.vx();
+    if (t.has_vy()) ball.vy = t.vy();
+    if (t.has_vz()) ball.vz = t.vz();
+    ball.roll = t.roll();
+    const Eigen::Vector3d v(ball.vx.value_or(0), ball.vy.value_or(0), ball.vz.value_or(0));
+    const bool finite = std::isfinite(ball.x.value_or(0)) && std::isfinite(ball.y.value_or(0)) &&
+                        std::isfinite(ball.z.value_or(0)) && v.allFinite();
+    if (!has_ball) {
+      refuse("TWINSIM_NO_BALL", "teleport_ball: the field has no ball (the scene has no `ball:`)");
+    } else if (t.by_force()) {
+      refuse("TWINSIM_UNSUPPORTED", "teleport_ball: moves by force are not supported yet");
+    } else if (!finite || std::abs(ball.x.value_or(0)) >= field.length / 2 ||
+               std::abs(ball.y.value_or(0)) >= field.width / 2 || ball.z.value_or(0) < 0 || ball.z.value_or(0) > 10 ||
+               v.norm() > kMaxKickSpeed) {
+      refuse("TWINSIM_BAD_VALUE", "teleport_ball: the place is not finite or outside the " +
+                                      std::to_string(field.length) + " x " + std::to_string(field.width) +
+                                      " m field (z in 0..10 m), or the velocity not finite or beyond " +
+                                      std::to_string(kMaxKickSpeed) + " m/s");
+    } else {
+      result.ball = ball;
+    }
+  }
   if (control.has_simulation_speed()) {
     const double speed = control.simulation_speed();
     if (std::isfinite(speed) && speed >= 0.01 && speed <= 100) {

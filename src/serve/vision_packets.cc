@@ -35,13 +35,25 @@ void AddLine(SSL_GeometryFieldSize* f, const std::string& name, double x1, doubl
 }  // namespace
 
 SSL_WrapperPacket DetectionPacket(const std::vector<Sighting>& seen, std::uint32_t frame_number, double t_capture,
-                                  double t_sent) {
+                                  double t_sent, const std::optional<Eigen::Vector3d>& ball) {
   SSL_WrapperPacket packet;
   SSL_DetectionFrame* frame = packet.mutable_detection();
   frame->set_frame_number(frame_number);
   frame->set_t_capture(t_capture);
   frame->set_t_sent(t_sent);
   frame->set_camera_id(0);
+  if (ball) {
+    SSL_DetectionBall* b = frame->add_balls();
+    const double x = 1000 * ball->x(), y = 1000 * ball->y();
+    b->set_confidence(1.0f);
+    b->set_x(static_cast<float>(x));
+    b->set_y(static_cast<float>(y));
+    b->set_z(static_cast<float>(1000 * ball->z()));
+    float px, py;
+    Pixel(x, y, &px, &py);
+    b->set_pixel_x(px);
+    b->set_pixel_y(py);
+  }
   for (const Sighting& s : seen) {
     SSL_DetectionRobot* r =
         s.robot.team == TeamColor::kBlue ? frame->add_robots_blue() : frame->add_robots_yellow();

@@ -3,7 +3,9 @@
 // camera, id 0), and the field's geometry.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "core/pose.h"
@@ -20,9 +22,10 @@ struct Sighting {
 };
 
 // The detection of camera frame `frame_number`: captured at `t_capture`, sent at
-// `t_sent` (s).
+// `t_sent` (s), with the ball's centre at `ball` (m, field frame; z its height) when
+// the camera saw one.
 SSL_WrapperPacket DetectionPacket(const std::vector<Sighting>& seen, std::uint32_t frame_number, double t_capture,
-                                  double t_sent);
+                                  double t_sent, const std::optional<Eigen::Vector3d>& ball = std::nullopt);
 
 // The geometry of `field` (walls, m) with a boundary of `boundary` m between the walls
 // and the field lines: the field lines, goals of the league's size, the penalty areas

@@ -78,9 +78,52 @@ Twist2 Simulation::SourceCommand(int robot) {
   return source->Command(in);
 }
 
+void Simulation::AddBall(std::unique_ptr<BallField> ball, const BallState& start) {
+  if (state_.frame != 0 || frame_open_) throw std::logic_error("Simulation::AddBall: after the first frame");
+  if (!ball || ball->num_robots() != num_robots())
+    throw std::invalid_argument("Simulation::AddBall: a ball field of another number of robots");
+  ball_ = std::move(ball);
+  ball_->Reset(start);
+  state_.ball_commands_in_flight.clear();
+  for (const SimRobot& r : robots_) state_.ball_commands_in_flight.emplace_back(r.model.command_delay_frames, BallCommand{});
+  const int delay = robots_.empty() ? 0 : robots_.front().model.vision_delay_frames;
+  state_.ball_captures_in_flight.emplace(delay, std::optional<Eigen::Vector3d>(start.position));
+  state_.ball = ball_->Save();
+  state_.ball_record = BallRecord{};
+  state_.ball_record.truth = ball_->ball();
+}
+
+const BallRecord& Simulation::ball_record() const {
+  if (!ball_) throw std::logic_error("Simulation::ball_record: no ball");
+  return state_.ball_record;
+}
+
+void Simulation::TeleportBall(const BallState& state) {
+  if (!ball_) throw std::logic_error("Simulation::TeleportBall: no ball");
+  ball_->Reset(state);
+  state_.ball_record.truth = ball_->ball();
+}
+
 std::vector<FrameRecord> Simulation::BeginFrame() {
   if (frame_open_) throw std::logic_error("Simulation::BeginFrame: the previous frame was not ended");
   const double t = time();
+  if (ball_) {
+    // The camera sees the ball without noise (the robots' noise streams stay as they are).
+    BallRecord& b = state_.ball_record;
+    b = BallRecord{};
+    b.t = t;
+    b.truth = ball_->ball();
+    if (!b.truth.position.allFinite() || !b.truth.velocity.allFinite() || b.truth.velocity.norm() > kMaxSpeed ||
+        b.truth.position.norm() > kMaxDistance) {
+      std::ostringstream msg;
+      msg << "simulation diverged at t = " << t << " s (frame " << state_.frame << "): the ball is at ("
+          << b.truth.position.transpose() << ") m moving at (" << b.truth.velocity.transpose() << ") m/s";
+      throw CheckFailed(msg.str());
+    }
+    const std::optional<Eigen::Vector3d> arrived = state_.ball_captures_in_flight->Push(b.truth.position);
+    b.observed = arrived.has_value();
+    if (arrived) b.seen = *arrived;
+  }
   std::vector<FrameRecord> records(robots_.size());
   for (int i = 0; i < num_robots(); ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -122,7 +165,13 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
 }
 
 void Simulation::EndFrame(std::vector<FrameRecord>* records) {
+  EndFrame(records, std::vector<BallCommand>(robots_.size()));
+}
+
+void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<BallCommand>& ball_commands) {
   if (!frame_open_) throw std::logic_error("Simulation::EndFrame: no frame was begun");
+  if (ball_commands.size() != robots_.size())
+    throw std::invalid_argument("Simulation::EndFrame: one ball command per robot");
   if (records->size() != robots_.size()) throw std::invalid_argument("Simulation::EndFrame: one record per robot");
   std::vector<Twist2> applied(robots_.size());
   for (std::size_t k = 0; k < robots_.size(); ++k) {
@@ -136,7 +185,22 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records) {
     applied[k] = state_.commands_in_flight[k].Push(command);
   }
   frame_open_ = false;
+  // The robots go first, then the ball through the same frame among them (one-way).
+  std::vector<Pose2> before;
+  if (ball_) {
+    for (int i = 0; i < num_robots(); ++i) before.push_back(backend_->pose(i));
+  }
   backend_->StepFrame(applied);
+  if (ball_) {
+    std::vector<Pose2> after;
+    std::vector<BallCommand> acting(robots_.size());
+    for (int i = 0; i < num_robots(); ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      after.push_back(backend_->pose(i));
+      acting[k] = state_.ball_commands_in_flight[k].Push(ball_commands[k]);
+    }
+    ball_->StepFrame(before, after, acting, backend_->timing().frame_dt());
+  }
   ++state_.frame;
 }
 
@@ -154,6 +218,7 @@ SimulationResult Simulation::Run(int frames, const std::function<void(int, int)>
   for (int k = 0; k < frames; ++k) {
     std::vector<FrameRecord> records = Step();
     for (std::size_t i = 0; i < records.size(); ++i) result.frames[i].push_back(records[i]);
+    if (ball_) result.ball.push_back(state_.ball_record);
     if (progress && (k % 16 == 0 || k + 1 == frames)) progress(k + 1, frames);
   }
   return result;
@@ -162,6 +227,7 @@ SimulationResult Simulation::Run(int frames, const std::function<void(int, int)>
 SimulationState Simulation::Save() const {
   SimulationState s = state_;
   s.backend = backend_->Save();
+  if (ball_) s.ball = ball_->Save();
   // A behaviour's copy is its state (a go-to-pose source's target and sent commands).
   for (const SimRobot& r : robots_) {
     s.behaviours.push_back(r.commands ? std::shared_ptr<const CommandSource>(r.commands->Clone()) : nullptr);
@@ -174,7 +240,10 @@ void Simulation::Restore(const SimulationState& state) {
       state.last_good.size() != robots_.size()) {
     throw std::invalid_argument("Simulation::Restore: state of a simulation with another number of robots");
   }
+  if (state.ball.has_value() != has_ball())
+    throw std::invalid_argument("Simulation::Restore: state of a simulation with(out) a ball");
   backend_->Restore(state.backend);
+  if (ball_) ball_->Restore(*state.ball);
   state_ = state;
   frame_open_ = false;
   state_.behaviours.clear();

@@ -23,6 +23,7 @@
 
 #include "core/delay_line.h"
 #include "core/rng.h"
+#include "sim/ball_field.h"
 #include "sim/behaviour.h"
 #include "sim/omni_backend.h"
 
@@ -46,11 +47,21 @@ struct FrameRecord {
   Twist2 truth_velocity;   // robot frame, true
 };
 
+// One frame of the ball: its true state at t, and where the camera saw it (captured
+// the first robot's vision_frames earlier; no noise).
+struct BallRecord {
+  double t = 0;           // s
+  BallState truth;        // field frame
+  bool observed = false;  // false in the first frames, before any capture has arrived
+  Eigen::Vector3d seen = Eigen::Vector3d::Zero();  // m, the ball's centre as delivered at t
+};
+
 struct SimulationResult {
   std::string backend;
   FrameTiming timing;
   std::vector<std::string> robot_names;
   std::vector<std::vector<FrameRecord>> frames;  // [robot][frame]
+  std::vector<BallRecord> ball;                  // [frame]; empty without a ball
 };
 
 struct SimulationState {
@@ -64,6 +75,12 @@ struct SimulationState {
   // (t, truth, truth_velocity only): what a divergence message reports as last good.
   std::vector<FrameRecord> last_good;
   OmniBackendState backend;
+  // The ball (none without one): its field, its commands in flight per robot (each
+  // robot's command delay) and its captures in flight (the camera's vision delay).
+  std::optional<BallFieldState> ball;
+  std::vector<DelayLine<BallCommand>> ball_commands_in_flight;
+  std::optional<DelayLine<std::optional<Eigen::Vector3d>>> ball_captures_in_flight;
+  BallRecord ball_record;  // the open (or last) frame's
   // Per robot, a copy of its behaviour as it was (null: none); filled by Save() only.
   std::vector<std::shared_ptr<const CommandSource>> behaviours;
 };
@@ -93,6 +110,24 @@ class Simulation {
   // while a frame is open.
   std::vector<FrameRecord> BeginFrame();
   void EndFrame(std::vector<FrameRecord>* records);
+  // EndFrame with what each robot does to the ball (kicks, dribbler; one per robot,
+  // delayed by the robot's command delay like its move). Throws std::invalid_argument
+  // for a list of another length, and as EndFrame.
+  void EndFrame(std::vector<FrameRecord>* records, const std::vector<BallCommand>& ball_commands);
+
+  // Puts a ball on the field (docs/ball.md) at `start`, before the first frame; the
+  // camera sees it with the first robot's vision delay. Throws std::logic_error after
+  // the first frame and std::invalid_argument for a field of other robots.
+  void AddBall(std::unique_ptr<BallField> ball, const BallState& start);
+  bool has_ball() const { return ball_ != nullptr; }
+  // The ball's field (null without one).
+  const BallField* ball() const { return ball_.get(); }
+  // The ball's record of the open frame (or the last one): its true state now and what
+  // the camera delivers now. Throws std::logic_error without a ball.
+  const BallRecord& ball_record() const;
+  // Puts the ball at `state` now (a referee's hand; the captures in flight stay).
+  // Throws std::logic_error without a ball.
+  void TeleportBall(const BallState& state);
   // What robot i's own CommandSource sends in the open frame (zero without one), for a
   // loop that drives some robots from outside and the others by their sources. Throws
   // std::logic_error when no frame is open.
@@ -123,6 +158,7 @@ class Simulation {
 
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;
+  std::unique_ptr<BallField> ball_;
   SimulationState state_;
   bool frame_open_ = false;  // between BeginFrame and EndFrame
 };

@@ -10,14 +10,7 @@ namespace {
 
 using testing::SourcePath;
 
-std::string ErrorOf(const std::string& yaml) {
-  try {
-    LoadSceneFromString(yaml, "s.yaml", SourcePath("scenes"));
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string ErrorOf(const std::string& yaml) { return testing::SceneError(yaml); }
 
 TEST(Scene, ShippedScenesLoad) {
   for (const char* name : {"drive45", "steps", "figure_eight", "go_to_pose", "random_excitation", "record_plant",

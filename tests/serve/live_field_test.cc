@@ -40,6 +40,15 @@ ServeOptions LoopbackOptions(int vision_port) {
   return o;
 }
 
+// Lockstep waiting for the blue team from frame 0, for `frames` frames.
+ServeOptions LockstepOptions(int vision_port, int frames) {
+  ServeOptions o = LoopbackOptions(vision_port);
+  o.lockstep = true;
+  o.teams = {"blue"};
+  o.max_frames = frames;
+  return o;
+}
+
 // Runs the field on a thread until Stop() (or its frame limit).
 class ServerThread {
  public:
@@ -136,10 +145,7 @@ TEST(LiveField, LockstepVisionIsTheSimulationsAndACommandShowsAtKPlusDelayPlusOn
   const Scene scene = TwoTeamScene();
   const int frames = 30;
   UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
-  ServeOptions options = LoopbackOptions(vision.port());
-  options.lockstep = true;
-  options.teams = {"blue"};
-  options.max_frames = frames;
+  const ServeOptions options = LockstepOptions(vision.port(), frames);
   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
 
   std::vector<SSL_DetectionFrame> seen;
@@ -281,6 +287,128 @@ TEST(LiveField, AFloodIsDroppedOverTheRateLimitWithoutStallingTheFrames) {
   EXPECT_LE(summary.counters.robot_controls, 50 + static_cast<long long>(50 * wall) + 1);
   // Frames kept coming (30 fps; half of it allowed for a loaded machine): no stall.
   EXPECT_GE(summary.counters.frames, static_cast<long long>(15 * wall) - 2);
+}
+
+// Blue 0 at the origin facing +x with the ball touching its flat front; yellow 3 aside.
+Scene BallScene() {
+  const std::string model = SourcePath("models/omni4.yaml");
+  const std::string hold = "commands: {type: sequence, segments: [{duration: 1, command: [0, 0, 0]}]}";
+  const double front = testing::Omni4().FrontDistance() + BallModel{}.radius;
+  return LoadSceneFromString("name: served_ball\nbackend: analytic\nframe_rate: 60\nduration: 10\nseed: 7\nrobots:\n"
+                             "  - {name: b0, model: " + model + ", start: {x: 0, y: 0}, " + hold + "}\n"
+                             "  - {name: y3, team: yellow, id: 3, model: " + model +
+                                 ", start: {x: 1, y: 1.5, theta_deg: 90}, " + hold + "}\n"
+                             "ball: {drag: 0, start: {x: " + std::to_string(front) + ", y: 0}}\n",
+                             "served_ball.yaml", ".");
+}
+
+// Blue robot 0 standing still, kicking at `kick` m/s (0: none), dribbling at `dribbler` rpm.
+std::string KickBlue0(float kick, float angle_deg, float dribbler) {
+  RobotControl control;
+  RobotCommand* c = control.add_robot_commands();
+  c->set_id(0);
+  c->mutable_move_command()->mutable_local_velocity()->set_forward(0);
+  c->mutable_move_command()->mutable_local_velocity()->set_left(0);
+  c->mutable_move_command()->mutable_local_velocity()->set_angular(0);
+  if (kick != 0) c->set_kick_speed(kick);
+  if (angle_deg != 0) c->set_kick_angle(angle_deg);
+  if (dribbler != 0) c->set_dribbler_speed(dribbler);
+  return control.SerializeAsString();
+}
+
+std::string BallTeleportCommand(float x, float y, float vx, bool by_force = false) {
+  SimulatorCommand command;
+  ::TeleportBall* t = command.mutable_control()->mutable_teleport_ball();
+  t->set_x(x);
+  t->set_y(y);
+  t->set_vx(vx);
+  t->set_by_force(by_force);
+  return command.SerializeAsString();
+}
+
+TEST(LiveField, TheBallIsSeenKickedDribbledTeleportedAndLogged) {
+  const Scene scene = BallScene();
+  const int frames = 40, kick_frame = 5;
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  const ServeOptions options = LockstepOptions(vision.port(), frames);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  std::vector<SSL_DetectionFrame> seen;
+  std::vector<bool> contact;
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < frames; ++k) {
+      std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, static_cast<std::uint32_t>(k));
+      ASSERT_TRUE(f) << "no vision for frame " << k;
+      seen.push_back(*f);
+      if (k == 30) {
+        // The referee's hand: the ball to (-1, 1), at rest.
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(-1, 1, 0), field.control_port())), Codes1{});
+      }
+      const auto r = Ask<RobotControlResponse>(client, KickBlue0(k == kick_frame ? 3.0f : 0.0f, 0, k < kick_frame ? 500.0f : 0.0f),
+                                               field.blue_port());
+      ASSERT_TRUE(r) << "no RobotControlResponse at frame " << k;
+      EXPECT_EQ(Codes(r), Codes1{}) << k;
+      ASSERT_EQ(r->feedback_size(), 1);
+      contact.push_back(r->feedback(0).dribbler_ball_contact());
+    }
+    server.Join();
+  }
+  // The ball in every frame, in mm: at the front until the kick acts (sent at frame 5,
+  // acting from frame 5 + 2, first seen moved at 5 + 4 + 1).
+  const double front_mm = 1000 * (testing::Omni4().FrontDistance() + BallModel{}.radius);
+  int first_moved = -1;
+  for (int k = 0; k < 30; ++k) {
+    ASSERT_EQ(seen[static_cast<std::size_t>(k)].balls_size(), 1) << k;
+    const SSL_DetectionBall& b = seen[static_cast<std::size_t>(k)].balls(0);
+    EXPECT_NEAR(b.z(), 21.5, 0.5) << k;
+    if (first_moved < 0 && std::abs(b.x() - front_mm) > 1) first_moved = k;
+  }
+  EXPECT_EQ(first_moved, kick_frame + 4 + 1);
+  // Seen between frames 19 and 20: the truth of frames 17 and 18, 10.5 frames after
+  // the kick, still sliding (mu g = 3.4 m/s^2).
+  const double speed = (seen[20].balls(0).x() - seen[19].balls(0).x()) * 60 / 1000;  // m/s
+  EXPECT_NEAR(speed, 3 - 0.35 * kGravity * 10.5 / 60.0, 0.05);
+  // The robot felt the ball on its dribbler before the kick (the answer to frame k tells
+  // the state after frame k - 1), not after.
+  EXPECT_TRUE(contact[1]);
+  EXPECT_TRUE(contact[static_cast<std::size_t>(kick_frame)]);
+  EXPECT_FALSE(contact[20]);
+  // The teleport (during frame 30) shows after the camera's delay, from frame 33 on.
+  EXPECT_GT(std::abs(seen[32].balls(0).x() + 1000), 100);
+  for (int k = 33; k < frames; ++k) {
+    EXPECT_NEAR(seen[static_cast<std::size_t>(k)].balls(0).x(), -1000, 1) << k;
+    EXPECT_NEAR(seen[static_cast<std::size_t>(k)].balls(0).y(), 1000, 1) << k;
+  }
+  // Ctrl-C's log has the ball's path.
+  ASSERT_EQ(field.result().ball.size(), static_cast<std::size_t>(frames));
+  EXPECT_NEAR(field.result().ball[20].truth.velocity.x(), 3 - 0.35 * kGravity * 13 / 60.0, 0.1);
+}
+
+TEST(LiveField, BadKicksAndBallTeleportsAreRefused) {
+  const Scene scene = BallScene();
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), LoopbackOptions(vision.port()));
+  ServerThread server(&field);
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, KickBlue0(-1, 0, 0), field.blue_port())), Codes1{"TWINSIM_BAD_VALUE"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, KickBlue0(3, 95, 0), field.blue_port())), Codes1{"TWINSIM_BAD_VALUE"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, KickBlue0(0, 0, -10), field.blue_port())), Codes1{"TWINSIM_BAD_VALUE"});
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, KickBlue0(std::nanf(""), 0, 0), field.blue_port())),
+            Codes1{"TWINSIM_BAD_VALUE"});
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(9, 0, 0), field.control_port())), Codes1{"TWINSIM_BAD_VALUE"});
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(0, 0, 50), field.control_port())), Codes1{"TWINSIM_BAD_VALUE"});
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(0, 0, 0, true), field.control_port())),
+            Codes1{"TWINSIM_UNSUPPORTED"});
+  const ServeSummary& summary = server.Stop();
+  EXPECT_EQ(summary.counters.refused, 7);
+}
+
+TEST(LiveField, WithoutABallKicksAndBallTeleportsAnswerNoBall) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), LoopbackOptions(vision.port()));
+  ServerThread server(&field);
+  EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, KickBlue0(3, 0, 0), field.blue_port())), Codes1{"TWINSIM_NO_BALL"});
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(0, 0, 0), field.control_port())), Codes1{"TWINSIM_NO_BALL"});
 }
 
 TEST(LiveField, OptionsAndScenesAreChecked) {

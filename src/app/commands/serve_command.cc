@@ -82,7 +82,8 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
       "Robots are blue or yellow with ids by the scene's `team:` and `id:` (docs/scenes.md).\n"
       "Real time by default; --lockstep steps frame k when every connected team has sent its\n"
       "command for it. Ctrl-C stops and writes DIR/trajectory.csv (and _NAME per further robot)\n"
-      "and DIR/truth.csv as `twinsim run` does, and the scene's plots. No ball yet.");
+      "and DIR/truth.csv as `twinsim run` does, DIR/ball.csv when the scene has a `ball:`\n"
+      "(kicks, chips, the dribbler and ball teleports then work; docs/ball.md), and the plots.");
   cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
   cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
   cmd->add_option("--predictor", options->predictor, "1-step predictor for --backend learned (from twinsim train)");

@@ -138,9 +138,7 @@ OdeOmniEngine::OdeOmniEngine(const std::vector<OmniModel>& robots, const FieldMo
   ode_world_ = std::make_unique<OdeWorld>();
   world_ = ode_world_->id();
   const Eigen::Vector3d gravity = field.Gravity();
-  dWorldSetGravity(world_, gravity.x(), gravity.y(), gravity.z());
-  // Robots often stand still between commands; a sleeping body would ignore the next one.
-  dWorldSetAutoDisableFlag(world_, 0);
+  SetUpFieldWorld(world_, gravity.x(), gravity.y(), gravity.z());
   // The world ERP only drives the hinges (contacts bring their own). Explicit Euler lets a
   // wheel centre drift outwards by b (omega dt)^2 / 2 per step on a spinning robot; at
   // ODE's default 0.2 that settles 2% of b out at 26 rad/s and 1/300 s, and the wheels
@@ -252,20 +250,12 @@ void OdeOmniEngine::BuildRobot(int index, const OmniModel& model) {
 }
 
 void OdeOmniEngine::BuildWalls(const FieldModel& field) {
-  const double t = field.wall_thickness, hw = field.wall_height;
-  const double half_l = 0.5 * field.length, half_w = 0.5 * field.width;
-  struct Box {
-    double x, y, size_x, size_y;  // m
-  };
-  const Box boxes[4] = {
-      {half_l + 0.5 * t, 0, t, field.width + 2 * t},
-      {-half_l - 0.5 * t, 0, t, field.width + 2 * t},
-      {0, half_w + 0.5 * t, field.length + 2 * t, t},
-      {0, -half_w - 0.5 * t, field.length + 2 * t, t},
-  };
+  const double hw = field.wall_height;
+  const auto boxes = field.WallBoxes();
   for (int j = 0; j < 4; ++j) {
-    dGeomID wall = dCreateBox(space_, boxes[j].size_x, boxes[j].size_y, hw);
-    dGeomSetPosition(wall, boxes[j].x, boxes[j].y, 0.5 * hw);
+    const auto& box = boxes[static_cast<std::size_t>(j)];
+    dGeomID wall = dCreateBox(space_, box[2], box[3], hw);
+    dGeomSetPosition(wall, box[0], box[1], 0.5 * hw);
     dGeomSetCategoryBits(wall, kWallCategory);
     dGeomSetCollideBits(wall, kChassisCategory);
     SetGeomKey(wall, num_robots() + j);
@@ -488,13 +478,7 @@ void OdeOmniEngine::AddBumperContacts(double dt) {
     for (int k = 0; k < pair.count; ++k) {
       dContact contact{};
       contact.geom = pair.geoms[k];
-      contact.surface.mode =
-          dContactApprox1 | dContactBounce | dContactSoftERP | dContactSoftCFM;
-      contact.surface.mu = kBumperFriction;
-      contact.surface.bounce = kBumperRestitution;
-      contact.surface.bounce_vel = kBumperBounceVelocity;
-      contact.surface.soft_erp = erp;
-      contact.surface.soft_cfm = cfm;
+      contact.surface = BouncingSurface(kBumperFriction, kBumperRestitution, kBumperBounceVelocity, erp, cfm);
       dJointID joint = dJointCreateContact(world_, contact_group_, &contact);
       dJointAttach(joint, body_a, body_b);
     }

@@ -62,6 +62,14 @@ struct OmniModel {
   // wheels are placed around (a battery off to one side); (0, 0) = centred.
   Eigen::Vector2d chassis_com = Eigen::Vector2d::Zero();
   double ground_clearance = 0.008;  // m between the floor and the chassis' underside
+  // The flat front the kicker and dribbler sit in: the chassis cylinder cut by a vertical
+  // plane this far ahead of the centre (robot +x). 0 = kDefaultFrontRatio x radius. Only
+  // the ball sees it (docs/ball.md); walls and other robots meet the full cylinder.
+  double front_distance = 0;        // m
+
+  // The kicker and dribbler in the flat front (docs/ball.md).
+  double kicker_max_speed = 6.5;    // m/s, faster kicks are clipped (the league's limit)
+  double dribbler_max_force = 1.0;  // N, the most the dribbler pulls the ball towards the front with
 
   // Wheels (all alike).
   std::vector<double> wheel_angles;  // rad, alpha_i of each wheel around the centre
@@ -107,6 +115,9 @@ struct OmniModel {
   Eigen::VectorXd wheel_load;     // n, N, static normal force on each wheel
 
   int num_wheels() const { return static_cast<int>(wheel_angles.size()); }
+  // m, the flat front's distance from the centre (front_distance, or its default).
+  double FrontDistance() const { return front_distance > 0 ? front_distance : kDefaultFrontRatio * chassis_radius; }
+  static constexpr double kDefaultFrontRatio = 0.82;  // a league robot's: 73 mm of a 89 mm radius
   // The strength of wheel i's motor (1 unless motor_strength says otherwise).
   double MotorStrength(int wheel) const {
     return motor_strength.empty() ? 1.0 : motor_strength[static_cast<std::size_t>(wheel)];

@@ -52,6 +52,13 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     std::vector<double> com;
     if (c.Get("com", &com, 2, InRange(-10, 10))) model.chassis_com = Eigen::Vector2d(com[0], com[1]);
     c.Get("ground_clearance", &model.ground_clearance, NonNegative(1));
+    if (c.Get("front_distance", &model.front_distance, NonNegative(10)) &&
+        ((model.front_distance > 0 && model.front_distance < 0.5 * model.chassis_radius) ||
+         model.front_distance >= model.chassis_radius)) {
+      c.Error("front_distance", "must lie between half the radius and the radius (" +
+                                    std::to_string(0.5 * model.chassis_radius) + " .. " +
+                                    std::to_string(model.chassis_radius) + " m), or be 0 for the default");
+    }
     c.Finish();
   } else {
     top.Missing("chassis");
@@ -94,6 +101,17 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     ReadPid(c, "sideways", &model.controller.sideways);
     ReadPid(c, "rotation", &model.controller.rotation);
     c.Finish();
+  }
+
+  if (top.Has("kicker")) {
+    YamlMap k(top.Child("kicker"), path, "kicker", &errors);
+    k.Get("max_speed", &model.kicker_max_speed, InRange(0.1, 20));
+    k.Finish();
+  }
+  if (top.Has("dribbler")) {
+    YamlMap d(top.Child("dribbler"), path, "dribbler", &errors);
+    d.Get("max_force", &model.dribbler_max_force, InRange(0, 100));
+    d.Finish();
   }
 
   if (top.Has("delay")) {

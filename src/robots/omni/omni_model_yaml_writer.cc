@@ -76,6 +76,7 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
          "m, the chassis' centre of mass from the centre, robot frame");
   }
   line("  ground_clearance", YamlNumber(model.ground_clearance), "m");
+  if (model.front_distance > 0) line("  front_distance", YamlNumber(model.front_distance), "m, centre to the flat front");
   s << "wheels:\n";
   std::string angles;
   for (double a : model.wheel_angles) angles += (angles.empty() ? "" : ", ") + Degrees(a);
@@ -95,6 +96,15 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
     std::string strength;
     for (double v : model.motor_strength) strength += (strength.empty() ? "" : ", ") + YamlNumber(v);
     line("  strength", "[" + strength + "]", "share of the stall torque, per wheel");
+  }
+  const OmniModel defaults;
+  if (model.kicker_max_speed != defaults.kicker_max_speed) {
+    s << "kicker:\n";
+    line("  max_speed", YamlNumber(model.kicker_max_speed), "m/s");
+  }
+  if (model.dribbler_max_force != defaults.dribbler_max_force) {
+    s << "dribbler:\n";
+    line("  max_force", YamlNumber(model.dribbler_max_force), "N");
   }
   s << "controller:\n";
   line("  rate_hz", YamlNumber(model.controller.rate_hz), "Hz");

@@ -104,6 +104,22 @@ TEST(OmniModelYamlWriter, AwkwardNumbersAndGivenChassisInertiaRoundTrip) {
   ExpectSameModel(m, back);
 }
 
+TEST(OmniModelYamlWriter, TheFlatFrontKickerAndDribblerRoundTripAndAreLeftOutAtTheirDefaults) {
+  OmniModel m = testing::Omni4();
+  const std::string plain = FormatOmniModelYaml(m);
+  EXPECT_EQ(plain.find("front_distance"), std::string::npos) << plain;
+  EXPECT_EQ(plain.find("kicker"), std::string::npos) << plain;
+  EXPECT_EQ(plain.find("dribbler"), std::string::npos) << plain;
+  m.front_distance = 0.0701;  // m
+  m.kicker_max_speed = 8.25;  // m/s
+  m.dribbler_max_force = 0.7;  // N
+  const OmniModel back = LoadOmniModelFromString(FormatOmniModelYaml(m), "ball.yaml");
+  EXPECT_EQ(back.front_distance, m.front_distance);
+  EXPECT_EQ(back.kicker_max_speed, m.kicker_max_speed);
+  EXPECT_EQ(back.dribbler_max_force, m.dribbler_max_force);
+  ExpectSameModel(m, back);
+}
+
 TEST(OmniModelYamlWriter, EachEffectAloneRoundTripsAndNoneWritesNoBlock) {
   const OmniModel base = testing::Omni4();
   EXPECT_EQ(FormatOmniModelYaml(base).find("effects:"), std::string::npos);

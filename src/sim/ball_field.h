@@ -1,0 +1,95 @@
+// The ball among the robots (docs/ball.md): a BallEngine (ODE or Bullet) stepped beside
+// the robots' backend, with what the robots do to the ball on top: the kicker (flat and
+// chip kicks), the dribbler's pull, and what the engines leave out, rolling resistance
+// and air drag.
+//
+// The loop (sim/omni_simulation.h) steps the robots through a frame first and then the
+// ball through the same frame, each robot's chassis moving in the ball's world from its
+// pose at the frame's start to its pose at the end, at constant speed (one-way
+// coupling: the ball never pushes a robot).
+//
+//   BallField field(ball_model, robot_models, field_model,
+//                   MakeBallEngine("ode", ball_model, robot_models, field_model));
+//   field.Reset(start);
+//   field.StepFrame(poses_before, poses_after, commands, 1.0 / 60);
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "core/pose.h"
+#include "engines/ball_engine.h"
+#include "robots/omni/ball_model.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+// What a robot does to the ball, besides driving (the league's RobotCommand).
+struct BallCommand {
+  double kick_speed = 0;      // m/s, the ball's speed just after the kick (3-D); 0: no kick
+  double kick_angle = 0;      // rad above the floor; 0: a flat kick, > 0: a chip
+  double dribbler_speed = 0;  // rpm; > 0: the dribbler pulls the ball
+};
+
+// Everything that changes about the ball field.
+struct BallFieldState {
+  BallState ball;
+  std::vector<bool> contact;  // per robot: the ball touches its dribbler (end of the last frame)
+};
+
+// Where the ball is relative to a robot's flat front.
+struct FrontContact {
+  double gap = 0;       // m, from the ball's surface to the front plane (negative: pressed in)
+  double lateral = 0;   // m, the ball's centre along the front, robot y
+  bool on_front = false;  // the ball's centre lies within the front's width, on the floor
+};
+
+// The ball relative to the front of a robot at `pose` with model `robot`.
+FrontContact BallAtFront(const BallModel& ball, const OmniModel& robot, const Pose2& pose, const BallState& state);
+
+class BallField {
+ public:
+  // Within this gap of the front (m) the dribbler pulls the ball and the kicker reaches it.
+  static constexpr double kReach = 0.01;
+  // Within this gap (m) the ball counts as touching the dribbler (RobotFeedback).
+  static constexpr double kTouch = 0.003;
+  // The ball's steps are at most this long: a 6.5 m/s kick moves 5 mm per step.
+  static constexpr double kMaxStep = 1.0 / 1200;  // s
+
+  // Throws std::invalid_argument for an invalid ball model or a null engine.
+  BallField(const BallModel& ball, std::vector<OmniModel> robots, const FieldModel& field,
+            std::unique_ptr<BallEngine> engine);
+
+  const BallModel& model() const { return model_; }
+  const std::string& engine_name() const { return engine_name_; }
+  int num_robots() const { return static_cast<int>(robots_.size()); }
+
+  // Puts the ball at `state` at once (contacts forgotten).
+  void Reset(const BallState& state);
+  const BallState& ball() const { return state_.ball; }
+  // Whether the ball touched robot i's dribbler at the end of the last frame.
+  bool contact(int robot) const { return state_.contact.at(static_cast<std::size_t>(robot)); }
+
+  // Advances one frame of `frame_dt` s: robot i moves from `from[i]` to `to[i]` (field
+  // frame) at constant speed and acts on the ball with `commands[i]` (already delayed).
+  // Throws std::invalid_argument when the lists are not one per robot.
+  void StepFrame(const std::vector<Pose2>& from, const std::vector<Pose2>& to, const std::vector<BallCommand>& commands,
+                 double frame_dt);
+
+  BallFieldState Save() const { return state_; }
+  // Throws std::invalid_argument for a state of another field.
+  void Restore(const BallFieldState& state);
+
+ private:
+  // Rolling resistance and drag on the ball for the next step of dt.
+  void AddResistance(double dt);
+
+  BallModel model_;
+  std::vector<OmniModel> robots_;
+  std::unique_ptr<BallEngine> engine_;
+  std::string engine_name_;
+  BallFieldState state_;
+  double normal_gravity_ = 0;  // m/s^2, gravity across the floor
+};
+
+}  // namespace twinsim
