@@ -27,6 +27,12 @@ double UnixNow() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
+// ns since the Unix epoch, the base of a datagram's arrival stamp.
+long long UnixNanos() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
 template <typename Message>
 void Answer(const UdpSocket& socket, const Message& message, const UdpEndpoint& to) {
   socket.SendTo(message.SerializeAsString(), to);
@@ -87,6 +93,9 @@ std::string ServeSummary::Report() const {
     << "refused " << counters.refused << ", malformed " << counters.malformed << ", oversized "
     << counters.oversized << ", over the rate limit " << counters.rate_dropped << "\n"
     << "late frames " << counters.late_frames << "\n"
+    << "frame work " << timing.frame_work.Brief() << "\n"
+    << "frame start lateness " << timing.start_lateness.Brief() << "\n"
+    << "command latency (arrival to delay line) " << timing.command_latency.Brief() << "\n"
     << "blue client " << (clients[0].empty() ? "-" : clients[0]) << ", yellow client "
     << (clients[1].empty() ? "-" : clients[1]) << "\n";
   return s.str();
@@ -226,6 +235,8 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
   team.answered = true;
   for (const auto& [robot, move] : read.moves) moves_[static_cast<std::size_t>(robot)] = move;
   for (const auto& [robot, ball] : read.ball_commands) ball_commands_[static_cast<std::size_t>(robot)] = ball;
+  timing_.command_latency.Add(1e-9 * static_cast<double>(UnixNanos() - d.arrival_ns));
+  if (!d.kernel_stamp) ++timing_.unstamped;
   Answer(team.socket, read.response, d.from);
 }
 
@@ -277,6 +288,7 @@ void LiveField::HandleControl(const Datagram& d) {
 ServeSummary LiveField::Summary() const {
   ServeSummary s;
   s.counters = counters_;
+  s.timing = timing_;
   s.simulated = static_cast<double>(counters_.frames) * result_.timing.frame_dt();
   s.wall = Seconds(Clock::now() - start_);
   for (std::size_t t = 0; t < 2; ++t)
@@ -291,8 +303,11 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   const double dt = result_.timing.frame_dt();
   const std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
+    const Clock::time_point frame_start = Clock::now();
+    if (!options_.lockstep) timing_.start_lateness.Add(Seconds(frame_start - frame_end));
     std::vector<FrameRecord> records = sim_.BeginFrame();
     SendVision(records);
+    const Clock::duration vision_work = Clock::now() - frame_start;
     for (TeamPort& t : teams_) t.answered = false;
     if (!options_.lockstep) {
       frame_end += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt / speed_));
@@ -339,6 +354,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       }
     }
     if (stopped) break;  // the begun frame is not logged: it has no commands
+    const Clock::time_point step_start = Clock::now();
     for (int i = 0; i < sim_.num_robots(); ++i) {
       const auto k = static_cast<std::size_t>(i);
       records[k].command = moves_[k] ? LocalVelocity(*moves_[k], records[k].truth.theta) : sim_.SourceCommand(i);
@@ -348,6 +364,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     for (std::size_t k = 0; k < records.size(); ++k) result_.frames[k].push_back(records[k]);
     if (sim_.has_ball()) result_.ball.push_back(sim_.ball_record());
     ++counters_.frames;
+    timing_.frame_work.Add(Seconds(vision_work + (Clock::now() - step_start)));
   }
   return Summary();
 }

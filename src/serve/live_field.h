@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "core/duration_histogram.h"
 #include "scene/scene.h"
 #include "serve/robot_control.h"
 #include "serve/team_roster.h"
@@ -71,14 +72,31 @@ struct ServeCounters {
   long long late_frames = 0;         // real time: frames that started after their time
 };
 
+// How long the loop took, on the wall clock (bench/serve_bench.cc, docs/benchmarks.md).
+// Recording it allocates nothing and changes nothing the field does.
+struct ServeTiming {
+  // s per frame run: capturing and sending its vision, then stepping its commands
+  // through the delay line and physics and logging it (the waiting for commands left out).
+  DurationHistogram frame_work{50e-6, 1000};
+  // s per frame, real time only: how much later than its time on the wall clock (the
+  // end of the frame before) the frame began.
+  DurationHistogram start_lateness{50e-6, 1000};
+  // s per RobotControl read: from its datagram's arrival (the kernel's receive stamp) to
+  // its moves and ball commands stored for the next step, which pushes them into the
+  // delay line.
+  DurationHistogram command_latency{1e-6, 5000};
+  long long unstamped = 0;  // of those, arrivals without a kernel stamp (the time recv returned)
+};
+
 struct ServeSummary {
   ServeCounters counters;
+  ServeTiming timing;
   double simulated = 0;  // s
   double wall = 0;       // s
   std::array<std::string, 2> clients;  // blue, yellow: the address that last sent, "" none
   // "1234 frames (41.1 s simulated) in 41.2 s wall; blue 127.0.0.1:5000, yellow -; 0 refused".
   std::string Brief() const;
-  // Every counter, one per line.
+  // Every counter, one per line, and the timing's quantiles.
   std::string Report() const;
 };
 
@@ -139,6 +157,7 @@ class LiveField {
   std::vector<BallCommand> ball_commands_;
   double speed_ = 1;                                   // real time x this
   ServeCounters counters_;
+  ServeTiming timing_;
   SimulationResult result_;
   std::chrono::steady_clock::time_point start_, last_refill_;
   double unix_start_ = 0;  // s, real time: the Unix time of frame 0

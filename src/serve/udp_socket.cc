@@ -5,11 +5,14 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <ctime>
 #include <stdexcept>
 
 #include "core/error.h"
@@ -61,6 +64,10 @@ UdpSocket::UdpSocket(const std::string& address, int port) {
     fd_ = -1;
     throw InputError("cannot listen on " + UdpEndpoint{host, port}.ToString() + ": " + std::strerror(err));
   }
+  // The arrival stamp measures how long a datagram waits for the loop; without it
+  // (refused), Receive stamps the time it reads the datagram.
+  const int on = 1;
+  (void)::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
 }
 
 UdpSocket::~UdpSocket() {
@@ -95,13 +102,32 @@ std::optional<Datagram> UdpSocket::Receive(std::size_t max_bytes) const {
   Datagram d;
   d.bytes.resize(max_bytes);
   sockaddr_in a{};
-  socklen_t len = sizeof a;
+  iovec data{d.bytes.data(), d.bytes.size()};
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+  msghdr m{};
+  m.msg_name = &a;
+  m.msg_namelen = sizeof a;
+  m.msg_iov = &data;
+  m.msg_iovlen = 1;
+  m.msg_control = control;
+  m.msg_controllen = sizeof control;
   // MSG_TRUNC: the return value is the datagram's full size, even when cut to the buffer.
-  const ssize_t n = ::recvfrom(fd_, d.bytes.data(), d.bytes.size(), MSG_TRUNC, reinterpret_cast<sockaddr*>(&a), &len);
+  const ssize_t n = ::recvmsg(fd_, &m, MSG_TRUNC);
   if (n < 0) return std::nullopt;  // nothing waiting (EAGAIN), or an error the next call sees again
   d.size = static_cast<std::size_t>(n);
   d.bytes.resize(std::min(d.size, max_bytes));
   d.from = UdpEndpoint{ntohl(a.sin_addr.s_addr), ntohs(a.sin_port)};
+  for (cmsghdr* c = CMSG_FIRSTHDR(&m); c != nullptr; c = CMSG_NXTHDR(&m, c)) {
+    if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
+      timespec t{};
+      std::memcpy(&t, CMSG_DATA(c), sizeof t);
+      d.arrival_ns = static_cast<long long>(t.tv_sec) * 1000000000LL + t.tv_nsec;
+      d.kernel_stamp = true;
+    }
+  }
+  if (!d.kernel_stamp)
+    d.arrival_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                       std::chrono::system_clock::now().time_since_epoch()).count();
   return d;
 }
 

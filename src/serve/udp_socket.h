@@ -1,5 +1,6 @@
 // UDP over IPv4 for twinsim serve: a bound, non-blocking socket that sends and receives
-// whole datagrams, and a wait on several sockets at once. Plain POSIX sockets.
+// whole datagrams, each stamped with the time the kernel received it, and a wait on
+// several sockets at once. Plain POSIX sockets (Linux's SO_TIMESTAMPNS for the stamps).
 //
 //   UdpSocket control("127.0.0.1", 10300);       // port 0: any free port
 //   if (WaitReadable({&control}, 0.05) >= 0)
@@ -34,13 +35,18 @@ struct Datagram {
   std::string bytes;      // at most the size asked for
   UdpEndpoint from;
   std::size_t size = 0;   // bytes the sender sent: larger than bytes.size() when cut off
+  // ns since the Unix epoch (CLOCK_REALTIME, as std::chrono::system_clock): when the
+  // kernel received the datagram, or, when it gave no stamp, when Receive read it.
+  long long arrival_ns = 0;
+  bool kernel_stamp = false;  // arrival_ns is the kernel's receive time
   bool truncated() const { return size > bytes.size(); }
 };
 
 class UdpSocket {
  public:
-  // Binds to `address`:`port` (port 0: a free port the system picks). Throws InputError
-  // naming the address when the socket cannot be bound (in use, not this host's address).
+  // Binds to `address`:`port` (port 0: a free port the system picks) and asks the kernel
+  // to stamp each datagram's arrival. Throws InputError naming the address when the
+  // socket cannot be bound (in use, not this host's address).
   UdpSocket(const std::string& address, int port);
   // An unbound socket for sending only (the system binds it on the first send).
   UdpSocket();

@@ -164,6 +164,12 @@ TEST(LiveField, LockstepVisionIsTheSimulationsAndACommandShowsAtKPlusDelayPlusOn
     EXPECT_EQ(summary.counters.frames, frames);
     EXPECT_EQ(summary.counters.robot_controls, frames);
     EXPECT_EQ(summary.counters.refused, 0);
+    // One work time per frame, one latency per command, each stamped by the kernel;
+    // no lateness in lockstep.
+    EXPECT_EQ(summary.timing.frame_work.count(), frames);
+    EXPECT_EQ(summary.timing.command_latency.count(), frames);
+    EXPECT_EQ(summary.timing.unstamped, 0);
+    EXPECT_EQ(summary.timing.start_lateness.count(), 0);
   }
 
   // The same scene and seed stepped in-process with the same commands, and with none.
@@ -244,6 +250,12 @@ TEST(LiveField, RefusalsAreAnsweredAndCountedAndTheFieldRunsOn) {
   EXPECT_EQ(summary.counters.oversized, 1);
   EXPECT_EQ(summary.counters.simulator_commands, 1);
   EXPECT_GT(summary.counters.frames, 0);
+  // Real time: a lateness for every frame begun (the last, stopped, one has no work).
+  EXPECT_EQ(summary.timing.frame_work.count(), summary.counters.frames);
+  EXPECT_GE(summary.timing.start_lateness.count(), summary.counters.frames);
+  EXPECT_LE(summary.timing.start_lateness.count(), summary.counters.frames + 1);
+  // A latency for each RobotControl read, refused robots or not; none for bad datagrams.
+  EXPECT_EQ(summary.timing.command_latency.count(), summary.counters.robot_controls);
 }
 
 TEST(LiveField, TournamentModeRefusesControlAndASecondAddressPerTeam) {

@@ -1,0 +1,311 @@
+// twinsim serve on the loopback, timed on the wall clock (issue 32; docs/benchmarks.md
+// "twinsim serve (issue 32)"). A plain program rather than a Google Benchmark: each
+// part is one run of a served field for seconds of wall time.
+//
+//   build/serve_bench                      # 20 s real time, 20000 lockstep frames
+//   build/serve_bench --seconds 60 --lockstep-frames 60000
+//
+// 1. Real time: scenes/serve_11v11.yaml (11 blue against 11 yellow and the ball) on ODE
+//    at 60 fps, with one client thread per team that answers every vision packet with a
+//    RobotControl for its 11 robots (each drives a 0.4 m circle). Frames run, late
+//    frames, and histograms of each frame's work (vision, then commands through the
+//    delay line, physics and the log) and of how late each frame began.
+// 2. Latency, from the same run: from a RobotControl datagram's arrival (the kernel's
+//    SO_TIMESTAMPNS receive stamp) to its moves stored for the delay line.
+// 3. Lockstep throughput: one blue and one yellow robot on the analytic backend, a
+//    client thread per team answering each vision packet at once; simulated seconds per
+//    wall second.
+// Everything on 127.0.0.1 with ports the system picks; never a multicast group.
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/duration_histogram.h"
+#include "scene/scene.h"
+#include "serve/live_field.h"
+#include "serve/udp_socket.h"
+#include "ssl_simulation_robot_control.pb.h"
+
+namespace twinsim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string Source(const std::string& path) { return std::string(TWINSIM_SOURCE_DIR) + "/" + path; }
+
+UdpEndpoint Loopback(int port) { return UdpEndpoint{ParseIpv4("127.0.0.1"), port}; }
+
+// Reads the vision packets sent to its port and wakes every team client on each.
+class VisionReader {
+ public:
+  VisionReader() : socket_("127.0.0.1", 0), thread_([this] { Loop(); }) {}
+  ~VisionReader() {
+    stop_ = true;
+    thread_.join();
+  }
+  int port() const { return socket_.port(); }
+  // Waits at most `timeout` s for a packet after the `seen`-th; returns the packets so far.
+  long long WaitAfter(long long seen, double timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait_for(lock, std::chrono::duration<double>(timeout), [&] { return packets_ > seen || stop_; });
+    return packets_;
+  }
+
+ private:
+  void Loop() {
+    while (!stop_) {
+      if (WaitReadable({&socket_}, 0.05) < 0) continue;
+      long long n = 0;
+      while (socket_.Receive(65536)) ++n;
+      if (n == 0) continue;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        packets_ += n;
+      }
+      cv_.notify_all();
+    }
+    cv_.notify_all();
+  }
+
+  UdpSocket socket_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  long long packets_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// A team's software in miniature: answers every vision packet with one RobotControl
+// moving each of its robots on a circle (0.4 m/s forward, 1 rad/s), and reads the
+// answers. In lockstep it sends its last command again after `resend` s without new
+// vision (a datagram lost on the way).
+class TeamClient {
+ public:
+  TeamClient(VisionReader* vision, int port, const std::vector<int>& ids, double resend)
+      : vision_(vision), to_(Loopback(port)), resend_(resend) {
+    RobotControl control;
+    for (int id : ids) {
+      RobotCommand* c = control.add_robot_commands();
+      c->set_id(static_cast<unsigned>(id));
+      MoveLocalVelocity* m = c->mutable_move_command()->mutable_local_velocity();
+      m->set_forward(0.4f);
+      m->set_left(0.0f);
+      m->set_angular(1.0f);
+    }
+    command_ = control.SerializeAsString();
+    thread_ = std::thread([this] { Loop(); });
+  }
+  ~TeamClient() {
+    stop_ = true;
+    thread_.join();
+  }
+  long long sent() const { return sent_; }
+  long long resent() const { return resent_; }
+  long long answers() const { return answers_; }
+
+ private:
+  void Loop() {
+    long long seen = 0;
+    while (!stop_) {
+      const long long now = vision_->WaitAfter(seen, resend_ > 0 ? resend_ : 0.05);
+      if (now > seen || (resend_ > 0 && sent_ > 0)) {
+        if (now == seen) ++resent_;
+        seen = now;
+        if (socket_.SendTo(command_, to_)) ++sent_;
+      }
+      while (socket_.Receive(65536)) ++answers_;
+    }
+  }
+
+  VisionReader* vision_;
+  UdpEndpoint to_;
+  double resend_;
+  UdpSocket socket_{"127.0.0.1", 0};
+  std::string command_;
+  std::atomic<bool> stop_{false};
+  std::atomic<long long> sent_{0}, resent_{0}, answers_{0};
+  std::thread thread_;
+};
+
+std::vector<int> TeamIds(const Scene& scene, const std::string& team) {
+  std::vector<int> ids;
+  for (const SceneRobot& r : scene.robots)
+    if (r.team == team) ids.push_back(r.id);
+  return ids;
+}
+
+struct Served {
+  ServeSummary summary;
+  long long sent[2] = {0, 0}, resent[2] = {0, 0}, answers[2] = {0, 0};
+};
+
+// Serves `scene` on `backend` with a client per team until `frames` frames have run.
+Served Serve(const Scene& scene, const std::string& backend, ServeOptions options, long long frames, double resend) {
+  VisionReader vision;
+  options.control_port = options.blue_port = options.yellow_port = 0;
+  options.vision_port = vision.port();
+  options.max_frames = frames;
+  LiveField field(scene, MakeSimulation(scene, backend), options);
+  Served out;
+  {
+    TeamClient blue(&vision, field.blue_port(), TeamIds(scene, "blue"), resend);
+    TeamClient yellow(&vision, field.yellow_port(), TeamIds(scene, "yellow"), resend);
+    out.summary = field.Run([] { return false; });
+    // Answers still in flight to the clients.
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const TeamClient* clients[2] = {&blue, &yellow};
+    for (int t = 0; t < 2; ++t) {
+      out.sent[t] = clients[t]->sent();
+      out.resent[t] = clients[t]->resent();
+      out.answers[t] = clients[t]->answers();
+    }
+  }
+  return out;
+}
+
+// Rows of a histogram between `edges` (s), shown in `unit` (1e-3: ms, 1e-6: µs).
+void PrintHistogram(const char* title, const DurationHistogram& h, const std::vector<double>& edges, double unit,
+                    const char* unit_name) {
+  std::printf("  %s: %s\n", title, h.Brief().c_str());
+  std::printf("    %-22s %8s %8s\n", (std::string("bin, ") + unit_name).c_str(), "frames", "cum. %");
+  long long cumulative = 0;
+  for (std::size_t i = 0; i + 1 <= edges.size(); ++i) {
+    const double from = edges[i], to = i + 1 < edges.size() ? edges[i + 1] : 1e9;
+    const long long n = h.CountBetween(from, to);
+    cumulative += n;
+    if (n == 0 && (cumulative == 0 || cumulative == h.count())) continue;
+    char bin[64];
+    if (i + 1 < edges.size()) {
+      std::snprintf(bin, sizeof bin, "[%g, %g)", from / unit, to / unit);
+    } else {
+      std::snprintf(bin, sizeof bin, ">= %g", from / unit);
+    }
+    std::printf("    %-22s %8lld %7.2f%%\n", bin, n, 100.0 * static_cast<double>(cumulative) / static_cast<double>(h.count()));
+  }
+}
+
+std::vector<double> Scaled(std::initializer_list<double> values, double unit) {
+  std::vector<double> out;
+  for (double v : values) out.push_back(v * unit);
+  return out;
+}
+
+std::string LoadAverage() {
+  std::ifstream f("/proc/loadavg");
+  std::string one, five;
+  f >> one >> five;
+  return one + " " + five;
+}
+
+// One blue and one yellow robot (ids 0) on the analytic backend at 60 fps.
+Scene OneOnOne() {
+  const std::string model = Source("models/omni4.yaml");
+  const std::string hold = "commands: {type: sequence, segments: [{duration: 1, command: [0, 0, 0]}]}";
+  return LoadSceneFromString("name: serve_1v1\nbackend: analytic\nframe_rate: 60\nduration: 60\nseed: 1\nrobots:\n"
+                             "  - {name: blue0, team: blue, id: 0, model: " + model +
+                                 ", start: {x: -1, y: 0}, " + hold + "}\n"
+                             "  - {name: yellow0, team: yellow, id: 0, model: " + model +
+                                 ", start: {x: 1, y: 0, theta_deg: 180}, " + hold + "}\n",
+                             "serve_1v1.yaml", Source("scenes"));
+}
+
+int Main(int argc, char** argv) {
+  double seconds = 20;
+  long long lockstep_frames = 20000;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--seconds" && i + 1 < argc) {
+      seconds = std::atof(argv[++i]);
+    } else if (a == "--lockstep-frames" && i + 1 < argc) {
+      lockstep_frames = std::atoll(argv[++i]);
+    } else {
+      std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N]\n");
+      return 2;
+    }
+  }
+  if (!(seconds > 0) || lockstep_frames <= 0) {
+    std::fprintf(stderr, "serve_bench: --seconds and --lockstep-frames must be positive\n");
+    return 2;
+  }
+  std::printf("twinsim serve on the loopback (bench/serve_bench.cc): %u cores, load average %s\n\n",
+              std::thread::hardware_concurrency(), LoadAverage().c_str());
+
+  // 1 and 2: real time, 11 v 11 and the ball on ODE.
+  const Scene match = LoadScene(Source("scenes/serve_11v11.yaml"));
+  const auto frames = static_cast<long long>(seconds * match.frame_rate + 0.5);
+  const Served rt = Serve(match, "ode", ServeOptions{}, frames, /*resend=*/0);
+  const ServeSummary& s = rt.summary;
+  std::printf("1. Real time: %s (%zu robots, %s) on ode at %g fps, %lld frames (%g s)\n", match.name.c_str(),
+              match.robots.size(), match.ball ? "ball" : "no ball", match.frame_rate, frames, seconds);
+  std::printf("  frames run %lld in %.3f s wall (%.4f x real time); late frames %lld\n", s.counters.frames, s.wall,
+              s.simulated / s.wall, s.counters.late_frames);
+  std::printf("  robot controls read %lld (sent: blue %lld, yellow %lld), answered %lld + %lld, refused %lld, "
+              "dropped/bad %lld\n",
+              s.counters.robot_controls, rt.sent[0], rt.sent[1], rt.answers[0], rt.answers[1], s.counters.refused,
+              s.counters.malformed + s.counters.oversized + s.counters.rate_dropped);
+  const double period = 1 / match.frame_rate;
+  PrintHistogram("frame work (vision; commands, physics, log)", s.timing.frame_work,
+                 Scaled({0, 0.5, 1, 1.5, 2, 2.5, 3, 4, 6, 8, 12, 1e3 * period}, 1e-3), 1e-3, "ms");
+  PrintHistogram("frame start lateness", s.timing.start_lateness,
+                 Scaled({0, 0.1, 0.2, 0.5, 1, 1.5, 2, 3, 5, 10, 1e3 * period}, 1e-3), 1e-3, "ms");
+  std::printf("\n2. Latency, a RobotControl's arrival (kernel stamp) to its moves stored for the delay line\n");
+  std::printf("  p50 %s, p99 %s, max %s (%lld commands; %lld without a kernel stamp)\n",
+              FormatDuration(s.timing.command_latency.Quantile(0.5)).c_str(),
+              FormatDuration(s.timing.command_latency.Quantile(0.99)).c_str(),
+              FormatDuration(s.timing.command_latency.max()).c_str(), s.timing.command_latency.count(),
+              s.timing.unstamped);
+  PrintHistogram("command latency", s.timing.command_latency,
+                 Scaled({0, 10, 20, 30, 50, 75, 100, 150, 200, 300, 500, 1000, 2000}, 1e-6), 1e-6, "µs");
+
+  // 3: lockstep throughput, two robots on analytic; then four (serve_2v2).
+  std::printf("\n3. Lockstep throughput on analytic, a client thread per team (--max-rate 1e6)\n");
+  std::printf("  %-34s %8s %9s %10s %12s %8s %12s\n", "scene", "frames", "wall, s", "frames/s", "x real time", "resent",
+              "latency p99");
+  ServeOptions lockstep;
+  lockstep.lockstep = true;
+  lockstep.teams = {"blue", "yellow"};
+  lockstep.max_rate = 1e6;  // the default 1000 datagrams/s would cap lockstep at 1000 frames/s
+  const Scene one_on_one = OneOnOne();
+  const Scene two_on_two = LoadScene(Source("scenes/serve_2v2.yaml"));
+  struct Row {
+    const Scene* scene;
+    const char* label;
+    ServeOptions options;
+    long long frames;
+  };
+  ServeOptions default_rate = lockstep;
+  default_rate.max_rate = ServeOptions{}.max_rate;
+  const std::vector<Row> rows{
+      {&one_on_one, "1 v 1 (two robots)", lockstep, lockstep_frames},
+      {&two_on_two, "serve_2v2 (four robots)", lockstep, lockstep_frames},
+      {&one_on_one, "1 v 1, default --max-rate 1000", default_rate, std::min(lockstep_frames, 3000LL)},
+  };
+  for (const Row& row : rows) {
+    const Served ls = Serve(*row.scene, "analytic", row.options, row.frames, /*resend=*/0.02);
+    const ServeSummary& l = ls.summary;
+    std::printf("  %-34s %8lld %9.3f %10.0f %12.1f %8lld %12s\n", row.label, l.counters.frames, l.wall,
+                static_cast<double>(l.counters.frames) / l.wall, l.simulated / l.wall, ls.resent[0] + ls.resent[1],
+                FormatDuration(l.timing.command_latency.Quantile(0.99)).c_str());
+    if (l.counters.rate_dropped > 0) std::printf("    (%lld datagrams over the rate limit)\n", l.counters.rate_dropped);
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace twinsim
+
+int main(int argc, char** argv) {
+  try {
+    return twinsim::Main(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "serve_bench: %s\n", e.what());
+    return 1;
+  }
+}
