@@ -174,7 +174,7 @@ Served Serve(const Scene& scene, const std::string& backend, ServeOptions option
 void PrintHistogram(const char* title, const DurationHistogram& h, const std::vector<double>& edges, double unit,
                     const char* unit_name) {
   std::printf("  %s: %s\n", title, h.Brief().c_str());
-  std::printf("    %-22s %8s %8s\n", (std::string("bin, ") + unit_name).c_str(), "frames", "cum. %");
+  std::printf("    %-22s %8s %8s\n", (std::string("bin, ") + unit_name).c_str(), "count", "cum. %");
   long long cumulative = 0;
   for (std::size_t i = 0; i + 1 <= edges.size(); ++i) {
     const double from = edges[i], to = i + 1 < edges.size() ? edges[i + 1] : 1e9;
@@ -261,8 +261,10 @@ int Main(int argc, char** argv) {
               FormatDuration(s.timing.command_latency.Quantile(0.99)).c_str(),
               FormatDuration(s.timing.command_latency.max()).c_str(), s.timing.command_latency.count(),
               s.timing.unstamped);
-  PrintHistogram("command latency", s.timing.command_latency,
-                 Scaled({0, 10, 20, 30, 50, 75, 100, 150, 200, 300, 500, 1000, 2000}, 1e-6), 1e-6, "µs");
+  const std::vector<double> latency_bins = Scaled({0, 10, 20, 30, 50, 75, 100, 150, 200, 300, 500, 1000, 2000}, 1e-6);
+  PrintHistogram("command latency", s.timing.command_latency, latency_bins, 1e-6, "µs");
+  PrintHistogram("of which after the loop read it (parse, check, store)", s.timing.command_handling, latency_bins,
+                 1e-6, "µs");
 
   // 3: lockstep throughput, two robots on analytic; then four (serve_2v2).
   std::printf("\n3. Lockstep throughput on analytic, a client thread per team (--max-rate 1e6)\n");

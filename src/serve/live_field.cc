@@ -96,6 +96,7 @@ std::string ServeSummary::Report() const {
     << "frame work " << timing.frame_work.Brief() << "\n"
     << "frame start lateness " << timing.start_lateness.Brief() << "\n"
     << "command latency (arrival to delay line) " << timing.command_latency.Brief() << "\n"
+    << "  of which after the read " << timing.command_handling.Brief() << "\n"
     << "blue client " << (clients[0].empty() ? "-" : clients[0]) << ", yellow client "
     << (clients[1].empty() ? "-" : clients[1]) << "\n";
   return s.str();
@@ -235,7 +236,9 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
   team.answered = true;
   for (const auto& [robot, move] : read.moves) moves_[static_cast<std::size_t>(robot)] = move;
   for (const auto& [robot, ball] : read.ball_commands) ball_commands_[static_cast<std::size_t>(robot)] = ball;
-  timing_.command_latency.Add(1e-9 * static_cast<double>(UnixNanos() - d.arrival_ns));
+  const long long stored_ns = UnixNanos();
+  timing_.command_latency.Add(1e-9 * static_cast<double>(stored_ns - d.arrival_ns));
+  timing_.command_handling.Add(1e-9 * static_cast<double>(stored_ns - d.read_ns));
   if (!d.kernel_stamp) ++timing_.unstamped;
   Answer(team.socket, read.response, d.from);
 }

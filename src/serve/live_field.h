@@ -85,6 +85,9 @@ struct ServeTiming {
   // its moves and ball commands stored for the next step, which pushes them into the
   // delay line.
   DurationHistogram command_latency{1e-6, 5000};
+  // s per RobotControl read: the part of command_latency after the loop read the
+  // datagram (parsing, checking, storing); the rest is the datagram waiting to be read.
+  DurationHistogram command_handling{1e-6, 5000};
   long long unstamped = 0;  // of those, arrivals without a kernel stamp (the time recv returned)
 };
 

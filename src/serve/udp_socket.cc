@@ -125,9 +125,9 @@ std::optional<Datagram> UdpSocket::Receive(std::size_t max_bytes) const {
       d.kernel_stamp = true;
     }
   }
-  if (!d.kernel_stamp)
-    d.arrival_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                       std::chrono::system_clock::now().time_since_epoch()).count();
+  d.read_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                  std::chrono::system_clock::now().time_since_epoch()).count();
+  if (!d.kernel_stamp) d.arrival_ns = d.read_ns;
   return d;
 }
 

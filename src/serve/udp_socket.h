@@ -39,6 +39,7 @@ struct Datagram {
   // kernel received the datagram, or, when it gave no stamp, when Receive read it.
   long long arrival_ns = 0;
   bool kernel_stamp = false;  // arrival_ns is the kernel's receive time
+  long long read_ns = 0;      // ns since the Unix epoch: when Receive read it
   bool truncated() const { return size > bytes.size(); }
 };
 

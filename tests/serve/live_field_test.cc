@@ -168,6 +168,7 @@ TEST(LiveField, LockstepVisionIsTheSimulationsAndACommandShowsAtKPlusDelayPlusOn
     // no lateness in lockstep.
     EXPECT_EQ(summary.timing.frame_work.count(), frames);
     EXPECT_EQ(summary.timing.command_latency.count(), frames);
+    EXPECT_EQ(summary.timing.command_handling.count(), frames);
     EXPECT_EQ(summary.timing.unstamped, 0);
     EXPECT_EQ(summary.timing.start_lateness.count(), 0);
   }
