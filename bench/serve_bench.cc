@@ -158,14 +158,14 @@ Served Serve(const Scene& scene, const std::string& backend, ServeOptions option
     TeamClient blue(&vision, field.blue_port(), TeamIds(scene, "blue"), resend);
     TeamClient yellow(&vision, field.yellow_port(), TeamIds(scene, "yellow"), resend);
     out.summary = field.Run([] { return false; });
-    // Answers still in flight to the clients.
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
     const TeamClient* clients[2] = {&blue, &yellow};
     for (int t = 0; t < 2; ++t) {
       out.sent[t] = clients[t]->sent();
-      out.resent[t] = clients[t]->resent();
-      out.answers[t] = clients[t]->answers();
+      out.resent[t] = clients[t]->resent();  // before the clients time out on a field that ended
     }
+    // Answers still in flight to the clients.
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    for (int t = 0; t < 2; ++t) out.answers[t] = clients[t]->answers();
   }
   return out;
 }
@@ -287,6 +287,7 @@ int Main(int argc, char** argv) {
   const std::vector<Row> rows{
       {&one_on_one, "1 v 1 (two robots)", lockstep, lockstep_frames},
       {&two_on_two, "serve_2v2 (four robots)", lockstep, lockstep_frames},
+      // The rate limit's bucket starts with a second's worth (1000); then 1000 frames/s.
       {&one_on_one, "1 v 1, default --max-rate 1000", default_rate, std::min(lockstep_frames, 3000LL)},
   };
   for (const Row& row : rows) {
