@@ -36,9 +36,9 @@ std::optional<ProtocolWheelMap> WheelMapFor(const OmniModel& model) {
   }
   for (int w : wheel_of)
     if (w < 0) return std::nullopt;
-  const Eigen::MatrixXd& body_from_wheels = OmniKinematics(model).body_from_wheels();  // per rad/s
-  ProtocolWheelMap map;
-  for (int q = 0; q < 4; ++q) map.col(q) = body_from_wheels.col(wheel_of[q]) / model.wheel_radius;
+  const OmniKinematics kinematics(model);
+  ProtocolWheelMap map;  // body_from_wheels is per rad/s of wheel spin
+  for (int q = 0; q < 4; ++q) map.col(q) = kinematics.body_from_wheels().col(wheel_of[q]) / model.wheel_radius;
   return map;
 }
 
