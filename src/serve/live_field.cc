@@ -109,7 +109,7 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
       roster_([&] {
         std::vector<TeamRobot> robots;
         for (const SceneRobot& r : scene.robots)
-          robots.push_back(TeamRobot{r.team == "yellow" ? TeamColor::kYellow : TeamColor::kBlue, r.id});
+          robots.push_back(TeamRobot{r.team == "yellow" ? TeamColor::kYellow : TeamColor::kBlue, r.id, WheelMapFor(r.model)});
         return robots;
       }()),
       control_(),

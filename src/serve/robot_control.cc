@@ -1,5 +1,6 @@
 #include "serve/robot_control.h"
 
+#include <Eigen/Core>
 #include <cmath>
 
 #include "core/math_constants.h"
@@ -57,11 +58,28 @@ RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, co
         move.velocity = Twist2{m.global_velocity().vel_x(), m.global_velocity().vel_y(),
                                m.global_velocity().vel_angular()};
       } else if (m.has_wheel_velocity()) {
-        SimulatorError* e = result.response.add_errors();
-        e->set_code("TWINSIM_UNSUPPORTED");
-        e->set_unsupported_capability(SIMULATOR_CAPABILITY_MOVE_WHEEL_VELOCITY);
-        e->set_message(robot + ": wheel velocities are not supported yet; send local or global velocity");
-        ok = false;
+        const MoveWheelVelocity& w = m.wheel_velocity();
+        const Eigen::Vector4d rims(w.front_right(), w.back_right(), w.back_left(), w.front_left());
+        const std::optional<ProtocolWheelMap>& map = roster.robot(index).wheels;
+        if (!map) {
+          SimulatorError* e = result.response.add_errors();
+          e->set_code("TWINSIM_UNSUPPORTED");
+          e->set_unsupported_capability(SIMULATOR_CAPABILITY_MOVE_WHEEL_VELOCITY);
+          e->set_message(robot + ": its wheels are not the protocol's four (one per quadrant); send local or "
+                                 "global velocity");
+          ok = false;
+        } else if (!rims.allFinite() || rims.cwiseAbs().maxCoeff() > kMaxCommandSpeed) {
+          AddError(&result.response, "TWINSIM_BAD_VALUE",
+                   robot + ": wheel velocities (" + std::to_string(rims[0]) + ", " + std::to_string(rims[1]) + ", " +
+                       std::to_string(rims[2]) + ", " + std::to_string(rims[3]) + ") m/s are not finite or beyond " +
+                       std::to_string(kMaxCommandSpeed) + " m/s");
+          ok = false;
+        } else {
+          // The body velocity that best explains the four (least squares, as the robot's
+          // own odometry would): the on-board controllers then track it.
+          const Eigen::Vector3d v = *map * rims;
+          move.velocity = Twist2{v[0], v[1], v[2]};
+        }
       } else {
         ok = false;  // an empty move command: nothing to do
       }

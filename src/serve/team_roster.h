@@ -3,6 +3,8 @@
 // scene's `team:` and `id:` (docs/scenes.md).
 #pragma once
 
+#include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,10 +17,24 @@ const char* TeamName(TeamColor team);
 // The other team.
 inline TeamColor OtherTeam(TeamColor team) { return team == TeamColor::kBlue ? TeamColor::kYellow : TeamColor::kBlue; }
 
+// The protocol's wheel velocities (MoveWheelVelocity: front right, back right, back
+// left, front left; m/s at the rim, positive where the wheel drives the robot
+// counter-clockwise about its centre, docs/serve.md) to the robot's body velocity
+// (robot frame; m/s, m/s, rad/s).
+using ProtocolWheelMap = Eigen::Matrix<double, 3, 4>;
+
 struct TeamRobot {
   TeamColor team = TeamColor::kBlue;
   int id = 0;  // 0..15
+  // Empty: the robot's wheels are not the protocol's four (see WheelMapFor).
+  std::optional<ProtocolWheelMap> wheels;
 };
+
+struct OmniModel;
+// The map for a robot with four wheels, one in each quadrant around its centre (front
+// right: -90 to 0 deg from its heading, back right, back left, front left); empty for
+// any other layout (three wheels, two in one quadrant, one on a quadrant's edge).
+std::optional<ProtocolWheelMap> WheelMapFor(const OmniModel& model);
 
 class TeamRoster {
  public:

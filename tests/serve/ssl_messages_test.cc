@@ -2,10 +2,15 @@
 // and RobotControl / SimulatorCommand read into moves, teleports and refusals.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "core/math_constants.h"
+#include "robots/omni/omni_model.h"
 #include "serve/robot_control.h"
 #include "serve/simulator_control.h"
 #include "serve/vision_packets.h"
 #include "ssl_simulation_robot_control.pb.h"
+#include "test_util.h"
 
 namespace twinsim {
 namespace {
@@ -147,6 +152,58 @@ TEST(RobotControl, RefusesTheOtherTeamsRobotsUnknownIdsBadValuesAndWheels) {
   EXPECT_NE(r.response.errors(0).message().find("robot 3 is a yellow robot"), std::string::npos)
       << r.response.errors(0).message();
   EXPECT_EQ(r.response.errors(3).unsupported_capability(), SIMULATOR_CAPABILITY_MOVE_WHEEL_VELOCITY);
+}
+
+std::string WheelCommand(unsigned id, float front_right, float back_right, float back_left, float front_left) {
+  RobotControl control;
+  RobotCommand* c = control.add_robot_commands();
+  c->set_id(id);
+  MoveWheelVelocity* w = c->mutable_move_command()->mutable_wheel_velocity();
+  w->set_front_right(front_right);
+  w->set_back_right(back_right);
+  w->set_back_left(back_left);
+  w->set_front_left(front_left);
+  return control.SerializeAsString();
+}
+
+TEST(RobotControl, WheelVelocitiesBecomeTheBodyVelocityTheyRollAt) {
+  // omni4's wheels sit at 57, 135, 225 and 303 degrees: front left, back left, back
+  // right, front right. Driving forward at 1 m/s, wheel i's rim moves at
+  // -sin(alpha_i) m/s (models/omni4.yaml's convention, docs/models.md), worked by hand:
+  const OmniModel omni4 = LoadOmniModel(testing::SourcePath("models/omni4.yaml"));
+  const TeamRoster roster({TeamRobot{TeamColor::kBlue, 0, WheelMapFor(omni4)}});
+  const auto rim = [](double deg) { return static_cast<float>(-std::sin(deg * kPi / 180)); };
+  RobotControlResult r = ReadRobotControl(WheelCommand(0, rim(303), rim(225), rim(135), rim(57)), TeamColor::kBlue, roster);
+  ASSERT_EQ(r.moves.size(), 1u) << r.response.DebugString();
+  EXPECT_FALSE(r.moves[0].second.global);
+  EXPECT_NEAR(r.moves[0].second.velocity.vx, 1, 1e-6);
+  EXPECT_NEAR(r.moves[0].second.velocity.vy, 0, 1e-6);
+  EXPECT_NEAR(r.moves[0].second.velocity.omega, 0, 1e-6);
+  // Turning on the spot at 2 rad/s: every rim moves at b * omega, counter-clockwise positive.
+  const float spin = static_cast<float>(2 * omni4.wheel_distance);
+  r = ReadRobotControl(WheelCommand(0, spin, spin, spin, spin), TeamColor::kBlue, roster);
+  ASSERT_EQ(r.moves.size(), 1u);
+  EXPECT_NEAR(r.moves[0].second.velocity.vx, 0, 1e-6);
+  EXPECT_NEAR(r.moves[0].second.velocity.omega, 2, 1e-5);
+  // Speeds no rigid motion rolls at come back as the least-squares fit (the robot's own
+  // odometry): one wheel alone gives a quarter of its share.
+  r = ReadRobotControl(WheelCommand(0, 0, 0, 0, 1), TeamColor::kBlue, roster);
+  ASSERT_EQ(r.moves.size(), 1u);
+  EXPECT_LT(r.moves[0].second.velocity.vx, 0);  // the front-left wheel alone pushes backwards-left
+  // Bad values are refused like a bad velocity.
+  r = ReadRobotControl(WheelCommand(0, NAN, 0, 0, 0), TeamColor::kBlue, roster);
+  EXPECT_TRUE(r.moves.empty());
+  ASSERT_EQ(r.response.errors_size(), 1);
+  EXPECT_EQ(r.response.errors(0).code(), "TWINSIM_BAD_VALUE");
+}
+
+TEST(RobotControl, OnlyFourWheelsOnePerQuadrantTakeWheelVelocities) {
+  EXPECT_FALSE(WheelMapFor(LoadOmniModel(testing::SourcePath("models/omni3.yaml"))).has_value());
+  const OmniModel skewed = LoadOmniModelFromString(
+      "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: skewed\nwheels: {angles_deg: [30, 60, 225, 303]}\n",
+      "skewed.yaml");
+  EXPECT_FALSE(WheelMapFor(skewed).has_value());  // two front-left wheels
+  EXPECT_TRUE(WheelMapFor(LoadOmniModel(testing::SourcePath("models/omni4.yaml"))).has_value());
 }
 
 TEST(RobotControl, GarbageIsAnsweredNeverThrown) {

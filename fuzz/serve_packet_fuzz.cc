@@ -1,0 +1,34 @@
+// Fuzzes the served field's packet readers (twinsim serve, docs/serve.md): a team's
+// RobotControl and the simulator's SimulatorCommand. The first byte picks the reader
+// (blue RobotControl without a ball, yellow with one, SimulatorCommand without a ball,
+// with one); the rest is the datagram. Both readers promise never to throw for any
+// bytes, so any exception is a crash here.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fuzz_util.h"
+#include "robots/omni/omni_model.h"
+#include "serve/robot_control.h"
+#include "serve/simulator_control.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace twinsim;
+  if (size == 0) return 0;
+  static const TeamRoster roster = [] {
+    const std::optional<ProtocolWheelMap> wheels =
+        WheelMapFor(LoadOmniModel(std::string(TWINSIM_SOURCE_DIR) + "/models/omni4.yaml"));
+    return TeamRoster({TeamRobot{TeamColor::kBlue, 0, wheels}, TeamRobot{TeamColor::kBlue, 1},
+                       TeamRobot{TeamColor::kYellow, 0, wheels}, TeamRobot{TeamColor::kYellow, 3}});
+  }();
+  static const FieldModel field;
+  static const std::vector<bool> contact = {true, false, false, true};
+  const std::string bytes = fuzz::AsString(data + 1, size - 1);
+  switch (data[0] % 4) {
+    case 0: ReadRobotControl(bytes, TeamColor::kBlue, roster); break;
+    case 1: ReadRobotControl(bytes, TeamColor::kYellow, roster, &contact); break;
+    case 2: ReadSimulatorCommand(bytes, roster, field, false); break;
+    default: ReadSimulatorCommand(bytes, roster, field, true); break;
+  }
+  return 0;
+}
