@@ -16,7 +16,8 @@ using Clock = std::chrono::steady_clock;
 // Datagrams read from one port before the loop looks at the clock again: a flood
 // cannot hold a frame.
 constexpr int kMaxDatagramsPerDrain = 256;
-// Lockstep with a team still to come: the current frame's vision again this often.
+// Lockstep with a team still to come or an answer still missing: the current frame's
+// vision again this often.
 constexpr double kResendPeriod = 0.25;  // s
 // The loop looks for a stop this often while it waits.
 constexpr double kPollPeriod = 0.05;    // s
@@ -148,6 +149,11 @@ bool LiveField::TakeToken(double* tokens) {
   if (*tokens < 1) return false;
   *tokens -= 1;
   return true;
+}
+
+void LiveField::RefillTokens(double seconds) {
+  for (double* tokens : {&teams_[0].tokens, &teams_[1].tokens, &control_tokens_})
+    *tokens = std::min(options_.max_rate, *tokens + seconds * options_.max_rate);
 }
 
 bool LiveField::FrameComplete() const {
@@ -319,6 +325,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
         frame_end = Clock::now();
       }
     }
+    if (options_.lockstep) RefillTokens(dt);
     Clock::time_point resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
     bool stopped = false;
     for (;;) {
@@ -334,18 +341,18 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
         if (left <= 0) break;
         wait = std::min(wait, left);
       }
-      // The rate limit's buckets fill at max_rate, up to one second's worth.
-      const double refill = Seconds(now - last_refill_) * options_.max_rate;
+      // The rate limit's buckets fill at max_rate per second of wall time, up to one
+      // second's worth; in lockstep, which runs as fast as the clients answer, also per
+      // second of simulated time (at each frame's start).
+      RefillTokens(Seconds(now - last_refill_));
       last_refill_ = now;
-      for (double* tokens : {&teams_[0].tokens, &teams_[1].tokens, &control_tokens_})
-        *tokens = std::min(options_.max_rate, *tokens + refill);
       if (WaitReadable(sockets, wait) >= 0)
         for (int port = 0; port < 3; ++port) Drain(port);
-      // Lockstep: a team yet to come may have missed this frame's vision.
+      // Lockstep: a team yet to come may have missed this frame's vision, and a team
+      // waited for may have had its answer lost (dropped over the rate limit, or by the
+      // network): the frame's vision again, which a client answers as it answers any.
       if (options_.lockstep && Clock::now() >= resend) {
-        bool missing = !teams_[0].waited && !teams_[1].waited;
-        for (const TeamPort& t : teams_) missing = missing || (t.waited && !t.client);
-        if (missing) {
+        if (!FrameComplete()) {
           vision_out_.SendTo(last_vision_, vision_to_);
           ++counters_.vision_packets;
         }

@@ -8,8 +8,9 @@
 // k -> take commands until the frame ends -> EndFrame (command delay, physics). A frame
 // ends
 //   - in lockstep, when every team waited for (those named, and every team that has
-//     sent a RobotControl) has sent one since the frame's vision went out; none yet:
-//     the field waits for the first, sending the frame's vision again every 0.25 s;
+//     sent a RobotControl) has sent one since the frame's vision went out; until then
+//     the frame's vision goes out again every 0.25 s (a client started late, an
+//     answer lost);
 //   - in real time, at the wall-clock time of the next frame (x the simulation speed).
 // So a command sent in answer to the vision of frame k is logged in frame k and first
 // moves the robots seen in frame k + D + 1 (D = command + vision delay), as in
@@ -49,7 +50,7 @@ struct ServeOptions {
   std::vector<std::string> teams;     // lockstep: teams waited for from frame 0 ("blue", "yellow")
   bool tournament = false;            // refuse simulator control; one address per team port
   int max_datagram = 8192;            // bytes; a larger datagram is refused
-  double max_rate = 1000;             // datagrams/s per port; beyond, dropped unanswered
+  double max_rate = 1000;             // datagrams/s per port (lockstep: also per simulated s); beyond, dropped unanswered
   double geometry_period = 1;         // s of simulated time between geometry packets
   double boundary = 0.3;              // m between the walls and the field lines
   long long max_frames = 0;           // stop after this many frames; 0: when stopped
@@ -140,6 +141,8 @@ class LiveField {
   void HandleTeam(TeamPort& team, const Datagram& d);
   void HandleControl(const Datagram& d);
   bool TakeToken(double* tokens);
+  // Adds `seconds` worth of max_rate to every port's bucket (at most one second's worth).
+  void RefillTokens(double seconds);
   bool FrameComplete() const;
   ServeSummary Summary() const;
 

@@ -302,6 +302,29 @@ TEST(LiveField, AFloodIsDroppedOverTheRateLimitWithoutStallingTheFrames) {
   EXPECT_GE(summary.counters.frames, static_cast<long long>(15 * wall) - 2);
 }
 
+TEST(LiveField, LockstepRecoversWhenAnAnswerIsLostOverTheRateLimit) {
+  // A bucket of 2 datagrams a second: from the third frame on, most answers are dropped
+  // unanswered. The frame's vision goes out again every 0.25 s and the client answers
+  // each copy, so every frame is stepped (one is let through as the bucket refills)
+  // and the field never stalls.
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), team("127.0.0.1", 0);
+  ServeOptions options = LockstepOptions(vision.port(), 5);
+  options.max_rate = 2;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  ServerThread server(&field);
+  int answered = 0;
+  while (answered < 40) {
+    if (!Receive(vision, 2)) break;  // the field ended (no vision for 2 s)
+    team.SendTo(Local(0, Twist2{0.2, 0, 0}), Loopback(field.blue_port()));
+    ++answered;
+  }
+  const ServeSummary& summary = server.Stop();  // a stalled field fails here, not hangs
+  EXPECT_EQ(summary.counters.frames, 5);
+  EXPECT_GT(summary.counters.rate_dropped, 0);
+  EXPECT_GT(summary.counters.vision_packets, 5);  // the frames' vision sent again
+}
+
 // Blue 0 at the origin facing +x with the ball touching its flat front; yellow 3 aside.
 Scene BallScene() {
   const std::string model = SourcePath("models/omni4.yaml");

@@ -101,7 +101,7 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
   cmd->add_flag("--tournament", options->serve.tournament,
                 "Refuse simulator control; one client address per team port");
   cmd->add_option("--max-datagram", options->serve.max_datagram, "Largest datagram read, bytes (default 8192)");
-  cmd->add_option("--max-rate", options->serve.max_rate, "Datagrams per second per port before dropping (default 1000)");
+  cmd->add_option("--max-rate", options->serve.max_rate, "Datagrams per second per port before dropping (lockstep: also per simulated second; default 1000)");
   cmd->add_option("--geometry-period", options->serve.geometry_period, "Seconds between geometry packets (default 1)");
   cmd->add_option("--boundary", options->serve.boundary, "Metres between the walls and the field lines (default 0.3)");
   cmd->add_option("--frames", options->serve.max_frames, "Stop after this many frames (default: at Ctrl-C)")
