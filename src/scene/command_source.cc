@@ -252,7 +252,22 @@ std::unique_ptr<CommandSource> MakeCommandSource(const CommandSpec& spec, std::u
     if (spec.leash <= 0) return plan;
     return std::make_unique<LeashedSource>(std::move(plan), start, spec.leash);
   }
+  if (spec.type == "log") return std::make_unique<LogCommandSource>(spec.log);
   return std::make_unique<GoToPoseSource>(spec);
+}
+
+std::vector<CommandSpec> LogCommandSpecs(const std::string& path, const std::vector<std::string>& names,
+                                         double frame_rate) {
+  std::vector<CommandSpec> specs;
+  for (const std::string& name : names) {
+    CommandSpec spec;
+    spec.type = "log";
+    spec.log_path = path;
+    spec.log_robot = name;
+    spec.log = std::make_shared<CommandLog>(ReadCommandLog(path, name, frame_rate));
+    specs.push_back(std::move(spec));
+  }
+  return specs;
 }
 
 }  // namespace twinsim

@@ -1,6 +1,6 @@
 // The command sources a scene can name: scripted sequences, the 45-degree test drive,
-// a figure eight, seeded random excitation, and a go-to-pose behaviour that sees only
-// the delayed observations.
+// a figure eight, seeded random excitation, a go-to-pose behaviour that sees only
+// the delayed observations, and a recorded log played back (kicks included).
 //
 // Sources are built from a CommandSpec, the parsed and validated `commands:` block of a
 // scene (docs/scenes.md); random ones draw their plan from the scene seed when built,
@@ -15,13 +15,14 @@
 
 #include "core/pose.h"
 #include "learning/omni_predictor.h"
+#include "scene/command_log.h"
 #include "sim/behaviour.h"
 
 namespace twinsim {
 
 // The validated `commands:` block of a scene.
 struct CommandSpec {
-  std::string type = "sequence";  // sequence | test_drive | figure_eight | random | go_to_pose
+  std::string type = "sequence";  // sequence | test_drive | figure_eight | random | go_to_pose | log
   int line = 0;                   // where the spec begins in its scene file (0: not from a file)
 
   // sequence
@@ -69,7 +70,17 @@ struct CommandSpec {
   std::string predictor_path;
   std::shared_ptr<const OmniPredictor> predictor;
   std::shared_ptr<const OmniModel> predictor_model;
+
+  // log: a recorded match played back (scene/command_log.h), read when the scene is.
+  std::string log_path;    // resolved against the scene file
+  std::string log_robot;   // whose rows; default the scene robot's name
+  std::shared_ptr<const CommandLog> log;
 };
+
+// Every robot of `scene`-like lists driven by the log at `path` instead: robot i's rows
+// are those named `names[i]`. Throws InputError as ReadCommandLog.
+std::vector<CommandSpec> LogCommandSpecs(const std::string& path, const std::vector<std::string>& names,
+                                         double frame_rate);
 
 // Builds the source. `seed` and `robot_index` seed random plans; `duration` (s) is how
 // long a random plan must last; `start` is the robot's start pose (open-loop paths).

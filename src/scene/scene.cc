@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -26,7 +27,8 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
                   ErrorList* errors, CommandSpec* spec) {
   YamlMap m(node, path, context, errors);
   spec->line = m.Where().line;
-  m.Require("type", &spec->type, std::vector<std::string>{"sequence", "test_drive", "figure_eight", "random", "go_to_pose"});
+  m.Require("type", &spec->type,
+            std::vector<std::string>{"sequence", "test_drive", "figure_eight", "random", "go_to_pose", "log"});
   const std::string& type = spec->type;
   if (type == "sequence") {
     m.Get("repeat", &spec->repeat, InRange(1, 1000000));
@@ -69,6 +71,14 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     m.Get("leash", &spec->leash, NonNegative());
     m.Get("max_centripetal", &spec->max_centripetal, NonNegative());
     if (spec->max_segment < spec->min_segment) m.Error("max_segment", "must not be below min_segment");
+  } else if (type == "log") {
+    // Read when the scene's frame rate and the robot's name are known (ReadScene).
+    if (m.Require("file", &spec->log_path)) {
+      fs::path p(spec->log_path);
+      if (p.is_relative()) p = fs::path(path).parent_path() / p;
+      spec->log_path = p.lexically_normal().string();
+    }
+    m.Get("robot", &spec->log_robot);
   } else if (type == "go_to_pose") {
     m.Get("max_speed", &spec->max_speed, Positive());
     m.Get("max_omega", &spec->max_omega, Positive());
@@ -190,6 +200,15 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       }
       if (r.Has("commands")) {
         ReadCommands(r.Child("commands"), path, context + ".commands", &errors, &robot.commands);
+        CommandSpec& spec = robot.commands;
+        if (spec.type == "log" && !spec.log_path.empty()) {
+          if (spec.log_robot.empty()) spec.log_robot = robot.name;
+          try {
+            spec.log = std::make_shared<CommandLog>(ReadCommandLog(spec.log_path, spec.log_robot, scene.frame_rate));
+          } catch (const InputError& e) {
+            errors.Add(SourceLocation{path, spec.line}, context + ".commands: " + e.what());
+          }
+        }
       } else {
         r.Missing("commands");
       }
@@ -310,6 +329,18 @@ Scene LoadSceneFromString(const std::string& yaml, const std::string& name, cons
   YAML::Node root = LoadYamlString(yaml, name);
   if (!root.IsMap()) throw InputError(SourceLocation{name, 1}, "expected a YAML mapping at the top level");
   return ReadScene(root, name, base_dir);
+}
+
+void ReplayCommandLog(const std::string& path, Scene* scene) {
+  std::vector<std::string> names;
+  for (const SceneRobot& r : scene->robots) names.push_back(r.name);
+  std::vector<CommandSpec> specs = LogCommandSpecs(path, names, scene->frame_rate);
+  int last = 0;
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    last = std::max(last, specs[i].log->frames.back());
+    scene->robots[i].commands = std::move(specs[i]);
+  }
+  scene->duration = last / scene->frame_rate;
 }
 
 std::string BallEngineFor(const std::string& backend) {

@@ -65,6 +65,12 @@ Scene LoadScene(const std::string& path);
 Scene LoadScene(const std::string& path, const SceneOverrides& overrides);
 Scene LoadSceneFromString(const std::string& yaml, const std::string& name, const std::string& base_dir);
 
+// Replays a recorded match (`twinsim run --commands FILE`): every robot of `scene` is
+// driven by its rows of the log at `path` (scene/command_log.h; commands.csv of `twinsim
+// serve`), and the scene lasts until the log's last frame. Throws InputError as
+// ReadCommandLog (a robot without rows is named).
+void ReplayCommandLog(const std::string& path, Scene* scene);
+
 // The engine the ball runs on beside robots on `backend`: ode and bullet their own; the
 // analytic and learned backends ODE (Bullet in a build without ODE).
 std::string BallEngineFor(const std::string& backend);

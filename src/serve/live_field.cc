@@ -138,6 +138,7 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   vision_to_ = UdpEndpoint{ParseIpv4(options_.vision_address), options_.vision_port};
   moves_.resize(static_cast<std::size_t>(sim_.num_robots()));
   ball_commands_.resize(static_cast<std::size_t>(sim_.num_robots()));
+  ball_driven_.assign(static_cast<std::size_t>(sim_.num_robots()), false);
   result_.backend = sim_.backend().name();
   result_.timing = sim_.backend().timing();
   for (int i = 0; i < sim_.num_robots(); ++i) result_.robot_names.push_back(sim_.robot_name(i));
@@ -241,7 +242,10 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
   team.waited = true;
   team.answered = true;
   for (const auto& [robot, move] : read.moves) moves_[static_cast<std::size_t>(robot)] = move;
-  for (const auto& [robot, ball] : read.ball_commands) ball_commands_[static_cast<std::size_t>(robot)] = ball;
+  for (const auto& [robot, ball] : read.ball_commands) {
+    ball_commands_[static_cast<std::size_t>(robot)] = ball;
+    ball_driven_[static_cast<std::size_t>(robot)] = true;
+  }
   const long long stored_ns = UnixNanos();
   timing_.command_latency.Add(1e-9 * static_cast<double>(stored_ns - d.arrival_ns));
   timing_.command_handling.Add(1e-9 * static_cast<double>(stored_ns - d.read_ns));
@@ -365,11 +369,14 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     }
     if (stopped) break;  // the begun frame is not logged: it has no commands
     const Clock::time_point step_start = Clock::now();
+    // A robot no team has commanded yet follows its scene's source, kicks included.
+    std::vector<BallCommand> ball_commands = ball_commands_;
     for (int i = 0; i < sim_.num_robots(); ++i) {
       const auto k = static_cast<std::size_t>(i);
       records[k].command = moves_[k] ? LocalVelocity(*moves_[k], records[k].truth.theta) : sim_.SourceCommand(i);
+      if (sim_.has_ball() && !ball_driven_[k]) ball_commands[k] = sim_.SourceBallCommand(i);
     }
-    sim_.EndFrame(&records, ball_commands_);
+    sim_.EndFrame(&records, ball_commands);
     for (BallCommand& c : ball_commands_) c.kick_speed = 0;  // a kick is for its frame
     for (std::size_t k = 0; k < records.size(); ++k) result_.frames[k].push_back(records[k]);
     if (sim_.has_ball()) result_.ball.push_back(sim_.ball_record());

@@ -161,6 +161,7 @@ class LiveField {
   // Per robot, what it does to the ball: the dribbler holds until the robot's next
   // command, a kick counts for the frame it was sent in.
   std::vector<BallCommand> ball_commands_;
+  std::vector<bool> ball_driven_;  // per robot: a team has sent it a kick or dribbler (else its scene's source)
   double speed_ = 1;                                   // real time x this
   ServeCounters counters_;
   ServeTiming timing_;

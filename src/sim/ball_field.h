@@ -19,17 +19,11 @@
 
 #include "core/pose.h"
 #include "engines/ball_engine.h"
+#include "sim/ball_command.h"
 #include "robots/omni/ball_model.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
-
-// What a robot does to the ball, besides driving (the league's RobotCommand).
-struct BallCommand {
-  double kick_speed = 0;      // m/s, the ball's speed just after the kick (3-D); 0: no kick
-  double kick_angle = 0;      // rad above the floor; 0: a flat kick, > 0: a chip
-  double dribbler_speed = 0;  // rpm; > 0: the dribbler pulls the ball
-};
 
 // Everything that changes about the ball field.
 struct BallFieldState {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/pose.h"
+#include "sim/ball_command.h"
 
 namespace twinsim {
 
@@ -34,6 +35,9 @@ class CommandSource {
  public:
   virtual ~CommandSource() = default;
   virtual Twist2 Command(const BehaviourInput& in) = 0;
+  // What the robot does to the ball in the same frame (asked after Command, only on a
+  // field with a ball); scripted velocity sources neither kick nor dribble.
+  virtual BallCommand Ball(const BehaviourInput& /*in*/) { return {}; }
   virtual std::unique_ptr<CommandSource> Clone() const = 0;
 };
 

@@ -61,21 +61,37 @@ void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) {
 std::vector<FrameRecord> Simulation::Step() {
   ThrowIfInterrupted();
   std::vector<FrameRecord> records = BeginFrame();
-  for (int i = 0; i < num_robots(); ++i) records[static_cast<std::size_t>(i)].command = SourceCommand(i);
-  EndFrame(&records);
+  std::vector<BallCommand> ball_commands(robots_.size());
+  for (int i = 0; i < num_robots(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    records[k].command = SourceCommand(i);
+    if (ball_) ball_commands[k] = SourceBallCommand(i);
+  }
+  EndFrame(&records, ball_commands);
   return records;
 }
 
-Twist2 Simulation::SourceCommand(int robot) {
-  if (!frame_open_) throw std::logic_error("Simulation::SourceCommand: no frame is open");
+BallCommand Simulation::SourceBallCommand(int robot) {
+  CommandSource* source = nullptr;
+  const BehaviourInput in = SourceInput(robot, "SourceBallCommand", &source);
+  return source ? source->Ball(in) : BallCommand{};
+}
+
+BehaviourInput Simulation::SourceInput(int robot, const char* caller, CommandSource** source) {
+  if (!frame_open_) throw std::logic_error(std::string("Simulation::") + caller + ": no frame is open");
   const auto k = static_cast<std::size_t>(robot);
-  CommandSource* source = robots_.at(k).commands.get();
-  if (!source) return Twist2{};
+  *source = robots_.at(k).commands.get();
   BehaviourInput in;
   in.frame = state_.frame;
   in.t = time();
   in.observations = &state_.delivered[k];
-  return source->Command(in);
+  return in;
+}
+
+Twist2 Simulation::SourceCommand(int robot) {
+  CommandSource* source = nullptr;
+  const BehaviourInput in = SourceInput(robot, "SourceCommand", &source);
+  return source ? source->Command(in) : Twist2{};
 }
 
 void Simulation::AddBall(std::unique_ptr<BallField> ball, const BallState& start) {
@@ -183,6 +199,7 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
       throw CheckFailed(msg.str());
     }
     applied[k] = state_.commands_in_flight[k].Push(command);
+    (*records)[k].ball_command = ball_commands[k];
   }
   frame_open_ = false;
   // The robots go first, then the ball through the same frame among them (one-way).

@@ -43,6 +43,7 @@ struct FrameRecord {
   Pose2 seen;              // what the observer received at t (captured D_v frames earlier)
   double stamp = 0;        // s, the time the observer logs for the frame: t off by the camera's jitter
   Twist2 command;          // sent at t, robot frame
+  BallCommand ball_command;  // sent at t with it: kick, dribbler (zero without a ball)
   Pose2 truth;             // the true pose at t
   Twist2 truth_velocity;   // robot frame, true
 };
@@ -132,6 +133,9 @@ class Simulation {
   // loop that drives some robots from outside and the others by their sources. Throws
   // std::logic_error when no frame is open.
   Twist2 SourceCommand(int robot);
+  // What robot i's own CommandSource does to the ball in the open frame (none without
+  // one); ask after SourceCommand. Throws as SourceCommand.
+  BallCommand SourceBallCommand(int robot);
   // The observations delivered to robot i so far (the newest kObservationWindow, oldest
   // first).
   const std::vector<Observation>& delivered(int robot) const {
@@ -155,6 +159,9 @@ class Simulation {
 
  private:
   void CheckFinite(int robot, const Pose2& pose, const Twist2& velocity);
+  // Robot i's source (null: none) and what it is given in the open frame; throws
+  // std::logic_error naming `caller` when no frame is open.
+  BehaviourInput SourceInput(int robot, const char* caller, CommandSource** source);
 
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;

@@ -23,6 +23,7 @@ struct RunOptions {
   std::string out;      // empty: out/<scene name>
   long long seed = -1;  // -1: the scene's
   std::string predictor;  // for --backend learned
+  std::string commands;   // a recorded match to replay (commands.csv)
   bool quiet = false;
 };
 
@@ -32,6 +33,8 @@ void WarnPlotsNotDrawn(const std::string& scene_path, std::size_t plots) {
 }
 
 int RunArm(const RunOptions& options) {
+  if (!options.commands.empty())
+    throw InputError(options.scene + ": --commands replays an omni field's commands; this is an arm scene");
   ArmScene scene = LoadArmScene(options.scene);
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
@@ -63,6 +66,7 @@ int Run(const RunOptions& options) {
   if (SceneRobotKind(options.scene) == "arm") return RunArm(options);
   Scene scene = LoadScene(options.scene);
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
+  if (!options.commands.empty()) ReplayCommandLog(options.commands, &scene);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
 
@@ -116,6 +120,9 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--predictor", options->predictor, "1-step predictor for --backend learned (from twinsim train)");
   cmd->add_option("--out", options->out, "Output folder (default: out/<scene name>)");
   cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(NonNegativeNumber());
+  cmd->add_option("--commands", options->commands,
+                  "Replay a recorded match: every robot sends its rows of this file (commands.csv of\n"
+                  "twinsim serve; docs/serve.md), for as many frames as it holds");
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Run(*options); });
 }

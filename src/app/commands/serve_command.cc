@@ -10,6 +10,7 @@
 #include "core/progress.h"
 #include "io/output_files.h"
 #include "learning/omni_predictor.h"
+#include "scene/command_log.h"
 #include "scene/scene.h"
 #include "scene/scene_run.h"
 #include "serve/live_field.h"
@@ -61,7 +62,11 @@ int Serve(ServeCommandOptions& options) {
   ClearInterrupt();
 
   OutputFiles files(out);
-  if (summary.counters.frames > 0) WriteOmniRunFiles(scene, field.result(), backend, /*plots=*/true, &files);
+  if (summary.counters.frames > 0) {
+    WriteOmniRunFiles(scene, field.result(), backend, /*plots=*/true, &files);
+    // What every robot sent, exactly: `twinsim run SCENE --commands commands.csv` replays it.
+    files.Write("commands.csv", CommandsCsv(field.result()));
+  }
   if (!options.quiet) {
     std::printf("%s\n%s", summary.Brief().c_str(), summary.Report().c_str());
     if (summary.counters.frames == 0) std::printf("no frame ran: nothing written\n");
