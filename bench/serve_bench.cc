@@ -4,6 +4,7 @@
 //
 //   build/serve_bench                      # 20 s real time, 20000 lockstep frames
 //   build/serve_bench --seconds 60 --lockstep-frames 60000
+//   build/serve_bench --realtime-priority 50 --cpu 1   # as twinsim serve's options
 //
 // 1. Real time: scenes/serve_11v11.yaml (11 blue against 11 yellow and the ball) on ODE
 //    at 60 fps, with one client thread per team that answers every vision packet with a
@@ -219,14 +220,19 @@ Scene OneOnOne() {
 int Main(int argc, char** argv) {
   double seconds = 20;
   long long lockstep_frames = 20000;
+  ServeOptions realtime;  // part 1's serving thread: twinsim serve's --realtime-priority, --cpu
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--seconds" && i + 1 < argc) {
       seconds = std::atof(argv[++i]);
     } else if (a == "--lockstep-frames" && i + 1 < argc) {
       lockstep_frames = std::atoll(argv[++i]);
+    } else if (a == "--realtime-priority" && i + 1 < argc) {
+      realtime.realtime_priority = std::atoi(argv[++i]);
+    } else if (a == "--cpu" && i + 1 < argc) {
+      realtime.cpu = std::atoi(argv[++i]);
     } else {
-      std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N]\n");
+      std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N] [--realtime-priority P] [--cpu C]\n");
       return 2;
     }
   }
@@ -240,10 +246,12 @@ int Main(int argc, char** argv) {
   // 1 and 2: real time, 11 v 11 and the ball on ODE.
   const Scene match = LoadScene(Source("scenes/serve_11v11.yaml"));
   const auto frames = static_cast<long long>(seconds * match.frame_rate + 0.5);
-  const Served rt = Serve(match, "ode", ServeOptions{}, frames, /*resend=*/0);
+  const Served rt = Serve(match, "ode", realtime, frames, /*resend=*/0);
   const ServeSummary& s = rt.summary;
-  std::printf("1. Real time: %s (%zu robots, %s) on ode at %g fps, %lld frames (%g s)\n", match.name.c_str(),
-              match.robots.size(), match.ball ? "ball" : "no ball", match.frame_rate, frames, seconds);
+  std::printf("1. Real time: %s (%zu robots, %s) on ode at %g fps, %lld frames (%g s); serving thread SCHED_FIFO %d, "
+              "CPU %d (0, -1: the normal scheduler, any CPU)\n",
+              match.name.c_str(), match.robots.size(), match.ball ? "ball" : "no ball", match.frame_rate, frames, seconds,
+              realtime.realtime_priority, realtime.cpu);
   std::printf("  frames run %lld in %.3f s wall (%.4f x real time); late frames %lld\n", s.counters.frames, s.wall,
               s.simulated / s.wall, s.counters.late_frames);
   std::printf("  robot controls read %lld (sent: blue %lld, yellow %lld), answered %lld + %lld, refused %lld, "

@@ -258,6 +258,13 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       s.Get("vz", &ball.start.velocity.z(), InRange(-20, 20));
       s.Finish();
     }
+    if (b.Has("vision")) {
+      YamlMap v(b.Child("vision"), path, "ball.vision", &errors);
+      v.Get("noise_xy", &ball.vision.noise_xy, InRange(0, 1));
+      v.Get("noise_z", &ball.vision.noise_z, InRange(0, 1));
+      v.Get("drop_probability", &ball.vision.drop_probability, InRange(0, 1));
+      v.Finish();
+    }
     b.Finish();
     scene.ball = ball;
   }
@@ -364,7 +371,7 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend, const 
     const std::string engine = BallEngineFor(backend);
     sim.AddBall(std::make_unique<BallField>(scene.ball->model, models, scene.field,
                                             MakeBallEngine(engine, scene.ball->model, models, scene.field)),
-                scene.ball->start);
+                scene.ball->start, scene.ball->vision);
   }
   return sim;
 }

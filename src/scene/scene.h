@@ -36,7 +36,8 @@ struct SceneRobot {
 // The ball of a scene (docs/scenes.md, docs/ball.md): its model and where it starts.
 struct SceneBall {
   BallModel model;
-  BallState start;  // default: at rest on the floor at the centre
+  BallState start;    // default: at rest on the floor at the centre
+  BallVision vision;  // the camera's noise and lost frames for the ball; default none
 };
 
 struct Scene {

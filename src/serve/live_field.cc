@@ -1,7 +1,11 @@
 #include "serve/live_field.h"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include "core/error.h"
@@ -10,6 +14,52 @@
 
 namespace twinsim {
 namespace {
+
+// Raises the calling thread to SCHED_FIFO at `priority` (0: leaves it) and pins it to
+// `cpu` (-1: leaves it) while it lives; puts the thread's policy and CPUs back after.
+class RealtimeScope {
+ public:
+  RealtimeScope(int priority, int cpu) {
+    const pthread_t self = pthread_self();
+    if (priority > 0) {
+      pthread_getschedparam(self, &old_policy_, &old_param_);
+      sched_param p{};
+      p.sched_priority = priority;
+      if (const int err = pthread_setschedparam(self, SCHED_FIFO, &p); err != 0) {
+        throw InputError("--realtime-priority " + std::to_string(priority) + ": the system refused SCHED_FIFO (" +
+                         std::strerror(err) + "); it needs root, CAP_SYS_NICE or an rtprio limit (ulimit -r)");
+      }
+      raised_ = true;
+    }
+    if (cpu >= 0) {
+      pthread_getaffinity_np(self, sizeof old_cpus_, &old_cpus_);
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(cpu, &set);
+      if (const int err = pthread_setaffinity_np(self, sizeof set, &set); err != 0) {
+        Restore();
+        throw InputError("--cpu " + std::to_string(cpu) + ": the system refused to pin the thread there (" +
+                         std::strerror(err) + ")");
+      }
+      pinned_ = true;
+    }
+  }
+  ~RealtimeScope() { Restore(); }
+  RealtimeScope(const RealtimeScope&) = delete;
+  RealtimeScope& operator=(const RealtimeScope&) = delete;
+
+ private:
+  void Restore() {
+    if (raised_) pthread_setschedparam(pthread_self(), old_policy_, &old_param_);
+    if (pinned_) pthread_setaffinity_np(pthread_self(), sizeof old_cpus_, &old_cpus_);
+    raised_ = pinned_ = false;
+  }
+
+  int old_policy_ = SCHED_OTHER;
+  sched_param old_param_{};
+  cpu_set_t old_cpus_{};
+  bool raised_ = false, pinned_ = false;
+};
 
 using Clock = std::chrono::steady_clock;
 
@@ -57,9 +107,21 @@ bool ServeOptions::IsValid(std::string* why) const {
   } catch (const InputError& e) {
     return fail(std::string("--vision-address: ") + e.what());
   }
-  if (IsMulticast(vision))
-    return fail("--vision-address " + vision_address + " is a multicast group; multicast vision is not implemented "
-                "yet, give a unicast address (e.g. 127.0.0.1)");
+  if (!IsMulticast(vision) && (vision_ttl != 1 || !vision_interface.empty()))
+    return fail("--vision-ttl and --vision-interface apply to a multicast --vision-address (224.0.0.0/4) only");
+  if (vision_ttl < 1 || vision_ttl > 255) return fail("--vision-ttl " + std::to_string(vision_ttl) + " is not in 1..255");
+  if (!vision_interface.empty()) {
+    try {
+      ParseIpv4(vision_interface);
+    } catch (const InputError& e) {
+      return fail(std::string("--vision-interface: ") + e.what());
+    }
+  }
+  if (realtime_priority < 0 || realtime_priority > 99)
+    return fail("--realtime-priority " + std::to_string(realtime_priority) + " is not in 0..99");
+  if (cpu < -1 || cpu >= CPU_SETSIZE) return fail("--cpu " + std::to_string(cpu) + " is not a CPU number");
+  if ((realtime_priority > 0 || cpu >= 0) && lockstep)
+    return fail("--realtime-priority and --cpu apply to real time, not --lockstep");
   for (int port : {control_port, blue_port, yellow_port})
     if (port < 0 || port > 65535) return fail("port " + std::to_string(port) + " is not in 0..65535");
   if (vision_port < 1 || vision_port > 65535) return fail("--vision-port " + std::to_string(vision_port) + " is not in 1..65535");
@@ -136,6 +198,10 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   teams_[1].socket = UdpSocket(options_.listen, options_.yellow_port);
   for (const std::string& t : options_.teams) teams_[t == "blue" ? 0 : 1].waited = true;
   vision_to_ = UdpEndpoint{ParseIpv4(options_.vision_address), options_.vision_port};
+  // A multicast group reaches every client on the network (and this host's own: loop),
+  // as the league's SSL-Vision does; only when the user names one.
+  if (IsMulticast(vision_to_.address))
+    vision_out_.SetMulticastSender(options_.vision_ttl, /*loop=*/true, options_.vision_interface);
   moves_.resize(static_cast<std::size_t>(sim_.num_robots()));
   ball_commands_.resize(static_cast<std::size_t>(sim_.num_robots()));
   ball_driven_.assign(static_cast<std::size_t>(sim_.num_robots()), false);
@@ -310,6 +376,7 @@ ServeSummary LiveField::Summary() const {
 }
 
 ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status) {
+  const RealtimeScope realtime(options_.realtime_priority, options_.cpu);
   start_ = last_refill_ = Clock::now();
   unix_start_ = UnixNow();
   Clock::time_point frame_end = start_, next_status = start_;

@@ -44,8 +44,15 @@ struct ServeOptions {
   int control_port = 10300;          // SimulatorCommand; 0: any free port
   int blue_port = 10301;             // blue team's RobotControl
   int yellow_port = 10302;           // yellow team's RobotControl
-  std::string vision_address = "127.0.0.1";  // SSL_WrapperPacket go here (unicast)
+  std::string vision_address = "127.0.0.1";  // SSL_WrapperPacket go here (unicast, or a multicast group)
   int vision_port = 10020;
+  int vision_ttl = 1;                 // multicast vision: hops (1: this network only)
+  std::string vision_interface;       // multicast vision: leave by the interface of this address; empty: the route's
+  // Real time: the serving thread's SCHED_FIFO priority (1..99; 0: the normal
+  // scheduler) and the CPU it is pinned to (-1: any), so that other work on the host
+  // does not delay a frame or a command (docs/serve.md "How fast").
+  int realtime_priority = 0;
+  int cpu = -1;
   bool lockstep = false;              // false: real time
   std::vector<std::string> teams;     // lockstep: teams waited for from frame 0 ("blue", "yellow")
   bool tournament = false;            // refuse simulator control; one address per team port
@@ -56,7 +63,7 @@ struct ServeOptions {
   long long max_frames = 0;           // stop after this many frames; 0: when stopped
 
   // False (with the reason in *why) for values out of range, an address that is not
-  // IPv4, a multicast vision address (not implemented yet), an unknown team name.
+  // IPv4, multicast options for a unicast vision address, an unknown team name.
   bool IsValid(std::string* why) const;
 };
 

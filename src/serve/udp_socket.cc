@@ -131,11 +131,29 @@ std::optional<Datagram> UdpSocket::Receive(std::size_t max_bytes) const {
   return d;
 }
 
+void UdpSocket::SetMulticastSender(int ttl, bool loop, const std::string& interface_address) {
+  auto refused = [](const std::string& what) {
+    throw InputError("cannot send vision to a multicast group: the system refused " + what + ": " +
+                     std::strerror(errno));
+  };
+  const unsigned char hops = static_cast<unsigned char>(ttl), looped = loop ? 1 : 0;
+  if (ttl < 1 || ttl > 255) throw InputError("multicast ttl " + std::to_string(ttl) + " is not in 1..255");
+  if (::setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_TTL, &hops, sizeof hops) != 0) refused("the ttl");
+  if (::setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &looped, sizeof looped) != 0) refused("the loop");
+  if (!interface_address.empty()) {
+    in_addr a{};
+    a.s_addr = htonl(ParseIpv4(interface_address));
+    if (::setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_IF, &a, sizeof a) != 0)
+      refused("the interface " + interface_address + " (not an address of this host?)");
+  }
+}
+
 int WaitReadable(const std::vector<const UdpSocket*>& sockets, double timeout) {
   std::vector<pollfd> fds;
   for (const UdpSocket* s : sockets) fds.push_back(pollfd{s->fd(), POLLIN, 0});
-  const int ms = static_cast<int>(std::ceil(std::max(0.0, timeout) * 1000));
-  if (::poll(fds.data(), fds.size(), ms) <= 0) return -1;
+  const auto ns = static_cast<long long>(std::ceil(std::max(0.0, timeout) * 1e9));
+  const timespec wait{static_cast<time_t>(ns / 1000000000LL), static_cast<long>(ns % 1000000000LL)};
+  if (::ppoll(fds.data(), fds.size(), &wait, nullptr) <= 0) return -1;
   for (std::size_t i = 0; i < fds.size(); ++i)
     if (fds[i].revents & (POLLIN | POLLERR)) return static_cast<int>(i);
   return -1;

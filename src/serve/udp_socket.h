@@ -66,13 +66,19 @@ class UdpSocket {
   // The next datagram waiting, at most `max_bytes` of it kept (its full size is
   // reported), or nothing when none is waiting. Never blocks.
   std::optional<Datagram> Receive(std::size_t max_bytes) const;
+  // For sending to a multicast group: hops a datagram may take (`ttl`, 1: this network
+  // only), whether this host's own members receive it (`loop`), and the interface it
+  // leaves by (an address of that interface; empty: the kernel's route to the group).
+  // Throws InputError naming what the system refused.
+  void SetMulticastSender(int ttl, bool loop, const std::string& interface_address);
 
  private:
   int fd_ = -1;
 };
 
-// Waits at most `timeout` s for a datagram on any of `sockets`; returns the index of
-// the first that has one, -1 on timeout (or a signal).
+// Waits at most `timeout` s (to the nanosecond: the real-time pace depends on it) for a
+// datagram on any of `sockets`; returns the index of the first that has one, -1 on
+// timeout (or a signal).
 int WaitReadable(const std::vector<const UdpSocket*>& sockets, double timeout);
 
 }  // namespace twinsim

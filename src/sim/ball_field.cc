@@ -132,7 +132,9 @@ void BallField::StepFrame(const std::vector<Pose2>& from, const std::vector<Pose
         const double k = model_.mass * omega * omega, damping = 2 * model_.mass * omega;
         Eigen::Vector3d pull = k * (hold - state_.ball.position) + damping * (hold_velocity - state_.ball.velocity);
         pull.z() = 0;
-        const double most = robots_[i].dribbler_max_force;
+        const OmniModel& robot = robots_[i];
+        const double most = robot.dribbler_max_force *
+                            (robot.dribbler_full_speed > 0 ? std::min(1.0, c.dribbler_speed / robot.dribbler_full_speed) : 1.0);
         if (pull.norm() > most) pull *= most / pull.norm();
         engine_->AddBallForce(pull, Eigen::Vector3d::Zero());
       }

@@ -21,6 +21,7 @@ Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend
                        std::uint64_t seed)
     : robots_(std::move(robots)), backend_(std::move(backend)) {
   state_.rng = Rng::Derived(seed, 0);
+  state_.ball_rng = Rng::Derived(seed, 0x62616c6c);  // "ball"
   for (int i = 0; i < num_robots(); ++i) {
     const SimRobot& r = robots_[static_cast<std::size_t>(i)];
     backend_->Reset(i, r.start, Twist2{});
@@ -94,11 +95,12 @@ Twist2 Simulation::SourceCommand(int robot) {
   return source ? source->Command(in) : Twist2{};
 }
 
-void Simulation::AddBall(std::unique_ptr<BallField> ball, const BallState& start) {
+void Simulation::AddBall(std::unique_ptr<BallField> ball, const BallState& start, const BallVision& vision) {
   if (state_.frame != 0 || frame_open_) throw std::logic_error("Simulation::AddBall: after the first frame");
   if (!ball || ball->num_robots() != num_robots())
     throw std::invalid_argument("Simulation::AddBall: a ball field of another number of robots");
   ball_ = std::move(ball);
+  ball_vision_ = vision;
   ball_->Reset(start);
   state_.ball_commands_in_flight.clear();
   for (const SimRobot& r : robots_) state_.ball_commands_in_flight.emplace_back(r.model.command_delay_frames, BallCommand{});
@@ -124,7 +126,8 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
   if (frame_open_) throw std::logic_error("Simulation::BeginFrame: the previous frame was not ended");
   const double t = time();
   if (ball_) {
-    // The camera sees the ball without noise (the robots' noise streams stay as they are).
+    // The camera sees the ball with its own noise stream (the robots' streams stay as
+    // they are), drawn only when the scene asks for noise or lost frames.
     BallRecord& b = state_.ball_record;
     b = BallRecord{};
     b.t = t;
@@ -136,7 +139,14 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
           << b.truth.position.transpose() << ") m moving at (" << b.truth.velocity.transpose() << ") m/s";
       throw CheckFailed(msg.str());
     }
-    const std::optional<Eigen::Vector3d> arrived = state_.ball_captures_in_flight->Push(b.truth.position);
+    std::optional<Eigen::Vector3d> captured = b.truth.position;
+    if (ball_vision_.any()) {
+      *captured += Eigen::Vector3d(state_.ball_rng.Gaussian(ball_vision_.noise_xy),
+                                   state_.ball_rng.Gaussian(ball_vision_.noise_xy),
+                                   state_.ball_rng.Gaussian(ball_vision_.noise_z));
+      if (state_.ball_rng.Uniform() < ball_vision_.drop_probability) captured.reset();
+    }
+    const std::optional<Eigen::Vector3d> arrived = state_.ball_captures_in_flight->Push(captured);
     b.observed = arrived.has_value();
     if (arrived) b.seen = *arrived;
   }

@@ -49,11 +49,11 @@ struct FrameRecord {
 };
 
 // One frame of the ball: its true state at t, and where the camera saw it (captured
-// the first robot's vision_frames earlier; no noise).
+// the first robot's vision_frames earlier, with the ball's camera noise).
 struct BallRecord {
   double t = 0;           // s
   BallState truth;        // field frame
-  bool observed = false;  // false in the first frames, before any capture has arrived
+  bool observed = false;  // false in the first frames, before any capture has arrived, and in lost frames
   Eigen::Vector3d seen = Eigen::Vector3d::Zero();  // m, the ball's centre as delivered at t
 };
 
@@ -81,6 +81,7 @@ struct SimulationState {
   std::optional<BallFieldState> ball;
   std::vector<DelayLine<BallCommand>> ball_commands_in_flight;
   std::optional<DelayLine<std::optional<Eigen::Vector3d>>> ball_captures_in_flight;
+  Rng ball_rng;  // the ball camera's noise and lost frames
   BallRecord ball_record;  // the open (or last) frame's
   // Per robot, a copy of its behaviour as it was (null: none); filled by Save() only.
   std::vector<std::shared_ptr<const CommandSource>> behaviours;
@@ -117,9 +118,10 @@ class Simulation {
   void EndFrame(std::vector<FrameRecord>* records, const std::vector<BallCommand>& ball_commands);
 
   // Puts a ball on the field (docs/ball.md) at `start`, before the first frame; the
-  // camera sees it with the first robot's vision delay. Throws std::logic_error after
+  // camera sees it with the first robot's vision delay, and with `vision`'s noise and
+  // lost frames (drawn from a stream of their own: the robots' noise stays as it was). Throws std::logic_error after
   // the first frame and std::invalid_argument for a field of other robots.
-  void AddBall(std::unique_ptr<BallField> ball, const BallState& start);
+  void AddBall(std::unique_ptr<BallField> ball, const BallState& start, const BallVision& vision = {});
   bool has_ball() const { return ball_ != nullptr; }
   // The ball's field (null without one).
   const BallField* ball() const { return ball_.get(); }
@@ -166,6 +168,7 @@ class Simulation {
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;
   std::unique_ptr<BallField> ball_;
+  BallVision ball_vision_;
   SimulationState state_;
   bool frame_open_ = false;  // between BeginFrame and EndFrame
 };

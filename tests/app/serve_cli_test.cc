@@ -44,7 +44,7 @@ TEST(ServeCli, SigintStopsAndWritesTheLogPerRobot) {
   EXPECT_TRUE(flowing) << err;
   ASSERT_TRUE(WIFEXITED(status)) << err;
   EXPECT_EQ(WEXITSTATUS(status), 0) << out << err;
-  for (const char* name : {"trajectory.csv", "trajectory_y0.csv", "truth.csv", "truth_y0.csv"})
+  for (const char* name : {"trajectory.csv", "trajectory_y0.csv", "truth.csv", "truth_y0.csv", "commands.csv"})
     EXPECT_TRUE(fs::exists(d + "/out/" + name)) << name << "\n" << out << err;
   const std::string log = testing::ReadText(d + "/out/trajectory.csv");
   EXPECT_EQ(log.rfind("t,x,y,theta,vx_cmd,vy_cmd,omega_cmd", 0), 0u) << log.substr(0, 200);
@@ -56,10 +56,14 @@ TEST(ServeCli, SigintStopsAndWritesTheLogPerRobot) {
 }
 
 TEST(ServeCli, BadOptionsExitWithCode2) {
-  const testing::CommandResult r = testing::RunTwinsim("serve " + SourcePath("scenes/drive45.yaml") +
-                                                       " --vision-address 224.5.23.2 --frames 1");
+  // Never a multicast group here: a multicast option on the default unicast address.
+  testing::CommandResult r = testing::RunTwinsim("serve " + SourcePath("scenes/drive45.yaml") +
+                                                 " --vision-ttl 4 --frames 1");
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("multicast"), std::string::npos) << r.err;
+  r = testing::RunTwinsim("serve " + SourcePath("scenes/drive45.yaml") + " --realtime-priority 200 --frames 1");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("0..99"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -73,6 +73,12 @@ TEST(SceneBall, BadValuesAreReportedWithFileAndLine) {
   EXPECT_NE(e.find("s.yaml:12:"), std::string::npos) << e;  // drag
   EXPECT_NE(e.find("unknown key 'colour'"), std::string::npos) << e;
   EXPECT_NE(e.find("s.yaml:14:"), std::string::npos) << e;  // z below the radius
+  const std::string camera = ErrorOf(BallScene("ball:\n  vision:\n    noise_xy: -0.001\n    drop_probability: 1.5\n"
+                                               "    noise_z: .nan\n    blur: 1\n"));
+  EXPECT_NE(camera.find("s.yaml:10:"), std::string::npos) << camera;  // noise_xy
+  EXPECT_NE(camera.find("s.yaml:11:"), std::string::npos) << camera;  // drop_probability
+  EXPECT_NE(camera.find("s.yaml:12:"), std::string::npos) << camera;  // noise_z
+  EXPECT_NE(camera.find("unknown key 'blur'"), std::string::npos) << camera;
   const std::string outside = ErrorOf(BallScene("ball: {start: {x: 9}}\n"));
   EXPECT_NE(outside.find("s.yaml:8:"), std::string::npos) << outside;
   EXPECT_NE(outside.find("outside the"), std::string::npos) << outside;

@@ -5,6 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/socket.h>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -451,9 +457,22 @@ TEST(LiveField, OptionsAndScenesAreChecked) {
   const Scene scene = TwoTeamScene();
   ServeOptions options = LoopbackOptions(10020);
   std::string why;
-  options.vision_address = "224.5.23.2";
+  options.vision_ttl = 4;  // multicast options for a unicast address
   EXPECT_FALSE(options.IsValid(&why));
   EXPECT_NE(why.find("multicast"), std::string::npos) << why;
+  options.vision_address = "224.5.23.2";
+  EXPECT_TRUE(options.IsValid(&why)) << why;
+  options.vision_ttl = 0;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_NE(why.find("--vision-ttl 0"), std::string::npos) << why;
+  options = LoopbackOptions(10020);
+  options.realtime_priority = 100;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_NE(why.find("0..99"), std::string::npos) << why;
+  options.realtime_priority = 10;
+  options.lockstep = true;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_NE(why.find("real time"), std::string::npos) << why;
   options = LoopbackOptions(10020);
   options.listen = "localhost:1";
   EXPECT_FALSE(options.IsValid(&why));
@@ -475,6 +494,69 @@ TEST(LiveField, OptionsAndScenesAreChecked) {
               std::string::npos)
         << e.what();
   }
+}
+
+// Multicast vision is only set up here, never sent (tests stay off multicast groups):
+// the socket gets the ttl, the loop to this host's members and the interface asked for.
+TEST(LiveField, AMulticastVisionSocketGetsItsTtlLoopAndInterface) {
+  UdpSocket out;
+  out.SetMulticastSender(3, true, "127.0.0.1");
+  unsigned char ttl = 0, loop = 0;
+  in_addr interface{};
+  socklen_t n = sizeof ttl;
+  ASSERT_EQ(getsockopt(out.fd(), IPPROTO_IP, IP_MULTICAST_TTL, &ttl, &n), 0);
+  n = sizeof loop;
+  ASSERT_EQ(getsockopt(out.fd(), IPPROTO_IP, IP_MULTICAST_LOOP, &loop, &n), 0);
+  n = sizeof interface;
+  ASSERT_EQ(getsockopt(out.fd(), IPPROTO_IP, IP_MULTICAST_IF, &interface, &n), 0);
+  EXPECT_EQ(ttl, 3);
+  EXPECT_EQ(loop, 1);
+  EXPECT_EQ(ntohl(interface.s_addr), ParseIpv4("127.0.0.1"));
+  EXPECT_THROW(out.SetMulticastSender(0, true, ""), InputError);
+  // An address that is not this host's is refused by the system, and named.
+  try {
+    out.SetMulticastSender(1, true, "192.0.2.77");
+    FAIL() << "expected a foreign interface address to be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("192.0.2.77"), std::string::npos) << e.what();
+  }
+  // A served field takes the league's group (and sends nothing until it runs).
+  const Scene scene = TwoTeamScene();
+  ServeOptions options = LoopbackOptions(10020);
+  options.vision_address = "224.5.23.2";
+  EXPECT_NO_THROW(LiveField(scene, MakeSimulation(scene, "analytic"), options));
+}
+
+// --realtime-priority: the serving thread runs at SCHED_FIFO while the field runs and
+// gets its old policy back after; where the system refuses (no CAP_SYS_NICE), the
+// refusal says what is needed.
+TEST(LiveField, RealTimePriorityHoldsWhileServingAndIsGivenBack) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.realtime_priority = 10;
+  options.cpu = 0;
+  options.max_frames = 3;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  int policy_before = -1, policy_during = -1, policy_after = -1, cpus_during = 0;
+  sched_param param{};
+  pthread_getschedparam(pthread_self(), &policy_before, &param);
+  try {
+    field.Run([] { return false; },
+              [&](const ServeSummary&) {
+                pthread_getschedparam(pthread_self(), &policy_during, &param);
+                cpu_set_t set;
+                pthread_getaffinity_np(pthread_self(), sizeof set, &set);
+                cpus_during = CPU_COUNT(&set);
+              });
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("CAP_SYS_NICE"), std::string::npos) << e.what();
+    GTEST_SKIP() << "this system refuses SCHED_FIFO: " << e.what();
+  }
+  pthread_getschedparam(pthread_self(), &policy_after, &param);
+  EXPECT_EQ(policy_during, SCHED_FIFO);
+  EXPECT_EQ(cpus_during, 1);
+  EXPECT_EQ(policy_after, policy_before);
 }
 
 }  // namespace

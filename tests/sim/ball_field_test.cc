@@ -255,6 +255,29 @@ TEST_P(BallFieldTest, TheDribblerPullsTheBallAlongWhenTheRobotBacksOff) {
   EXPECT_NEAR(field.ball().velocity.x(), -0.5, 0.05);
 }
 
+// dribbler.full_speed: the pull's cap scales with the rpm below it. Backing off at
+// 3 m/s^2 takes 7/5 m a = 0.19 N: the full 1 N holds the ball, a tenth of it (100 of
+// 1000 rpm) does not; without full_speed, 100 rpm pulls with all of it.
+TEST_P(BallFieldTest, TheDribblersPullScalesWithItsSpeedBelowFullSpeed) {
+  const BallModel model;
+  auto held = [&](double full_speed, double rpm) {
+    OmniModel robot = testing::Omni4();
+    robot.dribbler_full_speed = full_speed;
+    const std::vector<OmniModel> robots{robot};
+    BallField field(model, robots, FieldModel{}, MakeBallEngine(GetParam(), model, robots, FieldModel{}));
+    field.Reset(AtFront(model, Pose2{}));
+    for (int k = 0; k < 24; ++k) {
+      const double t0 = k * kFrame, t1 = t0 + kFrame;
+      field.StepFrame({Pose2{-1.5 * t0 * t0, 0, 0}}, {Pose2{-1.5 * t1 * t1, 0, 0}}, {BallCommand{0, 0, rpm}}, kFrame);
+    }
+    return field.contact(0);
+  };
+  EXPECT_TRUE(held(1000, 1000)) << GetParam();
+  EXPECT_TRUE(held(1000, 5000)) << GetParam();
+  EXPECT_FALSE(held(1000, 100)) << GetParam();
+  EXPECT_TRUE(held(0, 100)) << GetParam();
+}
+
 TEST_P(BallFieldTest, TheSameInputsGiveTheSameBytes) {
   auto run = [&] {
     BallField field = Make(BallModel{});

@@ -52,6 +52,12 @@ int Serve(ServeCommandOptions& options) {
                 options.serve.listen.c_str(), field.control_port(), options.serve.tournament ? " (refused: tournament)" : "",
                 options.serve.listen.c_str(), field.blue_port(), options.serve.listen.c_str(), field.yellow_port(),
                 options.serve.vision_address.c_str(), options.serve.vision_port);
+    if (IsMulticast(ParseIpv4(options.serve.vision_address)))
+      std::printf("vision is multicast (ttl %d, interface %s)\n", options.serve.vision_ttl,
+                  options.serve.vision_interface.empty() ? "by route" : options.serve.vision_interface.c_str());
+    if (options.serve.realtime_priority > 0 || options.serve.cpu >= 0)
+      std::printf("serving thread: SCHED_FIFO %d, CPU %s\n", options.serve.realtime_priority,
+                  options.serve.cpu >= 0 ? std::to_string(options.serve.cpu).c_str() : "any");
     std::fflush(stdout);
   }
   Progress progress("serve " + scene.name, !options.quiet);
@@ -99,8 +105,15 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--blue-port", options->serve.blue_port, "Blue team's robot control port (default 10301)");
   cmd->add_option("--yellow-port", options->serve.yellow_port, "Yellow team's robot control port (default 10302)");
   cmd->add_option("--vision-address", options->serve.vision_address,
-                  "Unicast address the vision packets go to (default 127.0.0.1)");
+                  "Address the vision packets go to: unicast (default 127.0.0.1), or a multicast group\n"
+                  "such as the league's 224.5.23.2");
   cmd->add_option("--vision-port", options->serve.vision_port, "Port the vision packets go to (default 10020)");
+  cmd->add_option("--vision-ttl", options->serve.vision_ttl, "Multicast vision: hops (default 1: this network only)");
+  cmd->add_option("--vision-interface", options->serve.vision_interface,
+                  "Multicast vision: leave by the interface with this address (default: the route's)");
+  cmd->add_option("--realtime-priority", options->serve.realtime_priority,
+                  "Real time: serve at this SCHED_FIFO priority, 1..99 (needs root or CAP_SYS_NICE; default 0: normal)");
+  cmd->add_option("--cpu", options->serve.cpu, "Real time: pin the serving thread to this CPU (default: any)");
   cmd->add_flag("--lockstep", options->serve.lockstep, "Step a frame when every connected team has sent its command");
   cmd->add_option("--teams", options->teams, "Lockstep: teams to wait for from frame 0 (blue, yellow or blue,yellow)");
   cmd->add_flag("--tournament", options->serve.tournament,

@@ -38,6 +38,16 @@ struct BallModel {
 
 inline constexpr double kAirDensity = 1.2;  // kg/m^3
 
+// How the camera sees the ball (a scene's `ball.vision`): Gaussian noise on the
+// captured centre and a chance of losing the ball in a frame (then no ball is
+// delivered for it). The defaults see it exactly, every frame.
+struct BallVision {
+  double noise_xy = 0;          // m, standard deviation along x and along y
+  double noise_z = 0;           // m, standard deviation of the height
+  double drop_probability = 0;  // per frame
+  bool any() const { return noise_xy > 0 || noise_z > 0 || drop_probability > 0; }
+};
+
 // Everything that changes about the ball, field frame.
 struct BallState {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // m, the centre (z = radius: on the floor)

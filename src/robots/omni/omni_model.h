@@ -70,6 +70,9 @@ struct OmniModel {
   // The kicker and dribbler in the flat front (docs/ball.md).
   double kicker_max_speed = 6.5;    // m/s, faster kicks are clipped (the league's limit)
   double dribbler_max_force = 1.0;  // N, the most the dribbler pulls the ball towards the front with
+  // rpm at which the dribbler pulls with all of dribbler_max_force; slower, the most it
+  // pulls with scales with the speed. 0: any speed above 0 pulls with all of it.
+  double dribbler_full_speed = 0;
 
   // Wheels (all alike).
   std::vector<double> wheel_angles;  // rad, alpha_i of each wheel around the centre

@@ -111,6 +111,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
   if (top.Has("dribbler")) {
     YamlMap d(top.Child("dribbler"), path, "dribbler", &errors);
     d.Get("max_force", &model.dribbler_max_force, InRange(0, 100));
+    d.Get("full_speed", &model.dribbler_full_speed, InRange(0, 1e5));
     d.Finish();
   }
 

@@ -102,9 +102,11 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
     s << "kicker:\n";
     line("  max_speed", YamlNumber(model.kicker_max_speed), "m/s");
   }
-  if (model.dribbler_max_force != defaults.dribbler_max_force) {
+  if (model.dribbler_max_force != defaults.dribbler_max_force ||
+      model.dribbler_full_speed != defaults.dribbler_full_speed) {
     s << "dribbler:\n";
     line("  max_force", YamlNumber(model.dribbler_max_force), "N");
+    line("  full_speed", YamlNumber(model.dribbler_full_speed), "rpm");
   }
   s << "controller:\n";
   line("  rate_hz", YamlNumber(model.controller.rate_hz), "Hz");
