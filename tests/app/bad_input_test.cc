@@ -382,7 +382,7 @@ struct BadInputCase {
   std::string expect;  // must occur in stderr ('#': a line number; "--opt": names the option)
   std::string out;     // the command's output, relative to {d}: must not exist after a failure
   double seconds = 20; // the most wall time the command may take
-  std::string also;    // a second substring stderr must contain
+  std::string also{};  // a second substring stderr must contain
 };
 
 std::ostream& operator<<(std::ostream& os, const BadInputCase& c) { return os << c.name; }
