@@ -427,6 +427,19 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend, const 
                                         : RobotBackendChoice{r.backend, r.predictor});
     labels.push_back(r.name);
   }
+  // Where robots name their own backends, say which robots need the field's predictor
+  // (the learned backend's own message cannot tell them apart).
+  const auto own = [](const SceneRobot& r) { return !r.backend.empty(); };
+  if (backend == "learned" && !options.predictor && std::any_of(scene.robots.begin(), scene.robots.end(), own)) {
+    std::string names;
+    for (const SceneRobot& r : scene.robots)
+      if (!own(r)) names += (names.empty() ? "'" : ", '") + r.name + "'";
+    if (!names.empty()) {
+      throw InputError(SourceLocation{scene.path},
+                       "the learned backend needs a predictor: pass --predictor FILE (robots " + names +
+                           " run on the field's backend, learned; a robot's own 'backend: learned' takes 'predictor:')");
+    }
+  }
   Simulation sim(std::move(robots), MakeOmniBackend(choices, models, labels, scene.field, scene.timing()), scene.seed);
   if (scene.ball) {
     const std::string engine = BallEngineFor(RobotBackends(scene, backend));

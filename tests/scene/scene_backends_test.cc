@@ -139,6 +139,22 @@ TEST(SceneBackends, ARobotsOwnBackendWinsAndTheOthersTakeTheFields) {
   EXPECT_EQ(ScenePathPlot(plotted.plots[0], plotted, one, "ode").paths[0].name, "b0");
 }
 
+TEST(SceneBackends, AFieldOnLearnedNeedsItsPredictorOnlyForRobotsWithoutTheirOwn) {
+  const std::string b0 = Robot("b0", "blue", "ode", -2, 0, 0, Drive(0));
+  const Scene all_own = Load(SceneText("learned", b0 + Robot("y0", "yellow", "analytic", 2, 0, 180, Drive(1))));
+  EXPECT_EQ(MakeSimulation(all_own, all_own.backend).backend().name(), "mixed: ode (b0), analytic (y0)");
+  const Scene one_field = Load(SceneText("learned", b0 + Robot("y0", "yellow", "", 2, 0, 180, Drive(1))));
+  try {
+    MakeSimulation(one_field, one_field.backend);
+    ADD_FAILURE() << "y0 runs on the field's learned backend without a predictor";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.yaml: the learned backend needs a predictor: pass --predictor FILE "
+                                         "(robots 'y0' run on the field's backend"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(SceneBackends, OneBackendForEveryRobotRunsExactlyAsTheFieldsBackend) {
   // Every robot naming the scene's backend is the same field as none naming it.
   const std::string named = SceneText("ode", Robot("b0", "blue", "ode", -2, 0, 0, Drive(0)) +
