@@ -354,10 +354,16 @@ class PyOmniSim {
     if (seed) scene_.seed = *seed;
     std::vector<OmniModel> models;
     std::vector<SimRobot> robots;
+    // A robot of its own `backend:` keeps it (and its predictor); the others run on `backend`.
+    std::vector<RobotBackendChoice> choices;
+    std::vector<std::string> labels;
     commands_.clear();
     for (std::size_t i = 0; i < scene_.robots.size(); ++i) {
       const SceneRobot& r = scene_.robots[i];
       models.push_back(r.model);
+      choices.push_back(r.backend.empty() ? RobotBackendChoice{backend_, predictor_}
+                                          : RobotBackendChoice{r.backend, r.predictor});
+      labels.push_back(r.name);
       std::unique_ptr<CommandSource> source;
       if (external_) {
         commands_.push_back(std::make_shared<Twist2>());
@@ -367,10 +373,8 @@ class PyOmniSim {
       }
       robots.push_back(SimRobot{r.name, r.model, r.start, std::move(source)});
     }
-    OmniBackendOptions options;
-    options.predictor = predictor_;
     sim_ = std::make_unique<Simulation>(std::move(robots),
-                                        MakeOmniBackend(backend_, models, scene_.field, scene_.timing(), options),
+                                        MakeOmniBackend(choices, models, labels, scene_.field, scene_.timing()),
                                         scene_.seed);
     last_.assign(scene_.robots.size(), FrameRecord{});
   }
@@ -486,7 +490,8 @@ class PyOmniSim {
   double time() const { return last_.empty() ? 0 : last_[0].t; }
   int frame() const { return sim_->frame(); }
   const Scene& scene() const { return scene_; }
-  const std::string& backend() const { return backend_; }
+  // The backend's name: `backend`, or "mixed: ..." where robots name their own.
+  std::string backend() const { return sim_->backend().name(); }
 
  private:
   Scene scene_;

@@ -63,7 +63,7 @@ Metrics RunOmni(const Sweep& sweep, const JobInputs& in, OutputFiles* files) {
   scene.seed = in.seed;
   const std::string backend = in.backend.empty() ? scene.backend : in.backend;
   const SimulationResult result = RunOmniScene(scene, backend, in.predictor);
-  WriteOmniRunFiles(scene, result, backend, sweep.plots, files);
+  WriteOmniRunFiles(scene, result, sweep.plots, files);
   const FrameRecord& last = result.frames[0].back();
   return {{"final_x", last.truth.x},
           {"final_y", last.truth.y},
@@ -98,7 +98,7 @@ std::string JobLog(const JobInputs& in, const std::string& kind, OutputFiles* fi
   } else {
     Scene scene = LoadScene(in.scene, in.scene_overrides);
     scene.seed = in.seed;
-    WriteOmniRunFiles(scene, RunOmniScene(scene, scene.backend, ""), scene.backend, false, files);
+    WriteOmniRunFiles(scene, RunOmniScene(scene, scene.backend, ""), false, files);
   }
   return files->Path("trajectory.csv");
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <set>
+#include <tuple>
 
 #include "core/error.h"
 #include "core/math_constants.h"
@@ -29,16 +30,22 @@ constexpr double kMaxKickAngle = 89 * kPi / 180;
 
 std::string CommandsCsv(const SimulationResult& result) {
   std::string out = "frame,t,robot,vx_cmd,vy_cmd,omega_cmd,kick_speed,kick_angle,dribbler_speed\n";
-  const std::size_t frames = result.frames.empty() ? 0 : result.frames[0].size();
-  for (std::size_t k = 0; k < frames; ++k) {
-    for (std::size_t i = 0; i < result.frames.size(); ++i) {
-      const FrameRecord& f = result.frames[i][k];
-      out += std::to_string(k) + ',' + FormatCsvNumber(f.t) + ',' + result.robot_names[i];
-      for (double v : {f.command.vx, f.command.vy, f.command.omega, f.ball_command.kick_speed,
-                       f.ball_command.kick_angle, f.ball_command.dribbler_speed})
-        out += ',' + Exact(v);
-      out += '\n';
-    }
+  // Frame by frame, the robots in the field's order; a robot that was off the field for
+  // a while has no records then, so rows go by each record's own frame.
+  std::vector<std::tuple<long long, std::size_t, const FrameRecord*>> rows;
+  for (std::size_t i = 0; i < result.frames.size(); ++i) {
+    for (const FrameRecord& f : result.frames[i])
+      rows.emplace_back(std::llround(f.t * result.timing.frame_rate), i, &f);
+  }
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+    return std::tie(std::get<0>(a), std::get<1>(a)) < std::tie(std::get<0>(b), std::get<1>(b));
+  });
+  for (const auto& [frame, i, f] : rows) {
+    out += std::to_string(frame) + ',' + FormatCsvNumber(f->t) + ',' + result.robot_names[i];
+    for (double v : {f->command.vx, f->command.vy, f->command.omega, f->ball_command.kick_speed,
+                     f->ball_command.kick_angle, f->ball_command.dribbler_speed})
+      out += ',' + Exact(v);
+    out += '\n';
   }
   return out;
 }

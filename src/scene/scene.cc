@@ -1,6 +1,7 @@
 #include "scene/scene.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -121,6 +122,81 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
   m.Finish();
 }
 
+// Where a robot's `backend:` and `predictor:` are given (the robot's mapping when absent).
+struct RobotBackendAt {
+  SourceLocation backend;
+  SourceLocation predictor;
+};
+
+// Reads a robot's own `backend:` and `predictor:` (loaded once per file: robots naming
+// the same file share it, and so one learned backend). The checks that need the whole
+// scene are CheckRobotBackend's.
+void ReadRobotBackend(YamlMap& r, const fs::path& base_dir,
+                      std::map<std::string, std::shared_ptr<const OmniPredictor>>* predictors, SceneRobot* robot,
+                      std::vector<RobotBackendAt>* at) {
+  RobotBackendAt where{r.Where(), r.Where()};
+  if (r.Has("backend")) {
+    where.backend = r.Where(r.Child("backend"));
+    if (r.Get("backend", &robot->backend, {"analytic", "ode", "bullet", "learned"})) {
+      const std::vector<std::string> built = AvailableOmniBackends();
+      if (std::find(built.begin(), built.end(), robot->backend) == built.end()) {
+        std::string upper = robot->backend;
+        for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+        r.Error("backend", robot->backend + " backend not compiled; rebuild with -DTWINSIM_WITH_" + upper + "=ON");
+        robot->backend.clear();
+      }
+    }
+  }
+  if (r.Has("predictor")) {
+    where.predictor = r.Where(r.Child("predictor"));
+    if (r.Get("predictor", &robot->predictor_path)) {
+      fs::path p(robot->predictor_path);
+      if (p.is_relative()) p = base_dir / p;
+      robot->predictor_path = p.lexically_normal().string();
+      auto it = predictors->find(robot->predictor_path);
+      if (it == predictors->end()) {
+        std::shared_ptr<const OmniPredictor> loaded;
+        try {
+          loaded = std::make_shared<const OmniPredictor>(OmniPredictor::Load(robot->predictor_path));
+        } catch (const InputError& e) {
+          r.errors()->Add(where.predictor, "'predictor' in '" + r.context() + "': " + e.what());
+        }
+        it = predictors->emplace(robot->predictor_path, loaded).first;
+      }
+      robot->predictor = it->second;
+    }
+  }
+  at->push_back(where);
+}
+
+// A robot's backend against the rest of the scene: a learned robot has a predictor that
+// fits its model and the frame rate (as the learned backend checks it), and a predictor
+// belongs to a learned robot.
+void CheckRobotBackend(const Scene& scene, std::size_t i, const RobotBackendAt& at, ErrorList* errors) {
+  const SceneRobot& r = scene.robots[i];
+  const std::string context = "robots[" + std::to_string(i) + "]";
+  if (r.predictor_path.empty()) {
+    if (r.backend == "learned") {
+      errors->Add(at.backend, "'backend' in '" + context + "': robot '" + r.name +
+                                  "' on the learned backend needs 'predictor': a 1-frame predictor file "
+                                  "(twinsim train --horizon 1)");
+    }
+    return;
+  }
+  if (r.backend != "learned") {
+    errors->Add(at.predictor, "'predictor' in '" + context + "': applies to 'backend: learned' only; robot '" +
+                                  r.name + "' " +
+                                  (r.backend.empty() ? "names no backend of its own" : "runs on " + r.backend));
+    return;
+  }
+  if (!r.predictor) return;  // did not load: said above
+  try {
+    r.predictor->CheckUse(r.model, scene.frame_rate, 1, "the learned backend of robot '" + r.name + "'");
+  } catch (const InputError& e) {
+    errors->Add(at.predictor, "'predictor' in '" + context + "': " + e.what());
+  }
+}
+
 Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path& base_dir,
                 const YamlOverrides& plant = {}) {
   ErrorList errors;
@@ -157,12 +233,14 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
 
   YAML::Node robots = top.Child("robots");
   std::vector<SourceLocation> start_at;  // per robot, where its start is given
+  std::vector<RobotBackendAt> backend_at;  // per robot, where its backend keys are given
   if (!robots.IsDefined()) {
     top.Missing("robots");
   } else if (!robots.IsSequence() || robots.size() == 0) {
     top.Error("robots", "expected a non-empty list of robots");
   } else {
     std::set<std::string> names;
+    std::map<std::string, std::shared_ptr<const OmniPredictor>> predictors;  // by resolved path
     std::vector<bool> id_given;                     // per robot
     std::vector<SourceLocation> id_at;              // per robot, where its team or id is given
     for (std::size_t i = 0; i < robots.size(); ++i) {
@@ -212,6 +290,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       } else {
         r.Missing("commands");
       }
+      ReadRobotBackend(r, base_dir, &predictors, &robot, &backend_at);
       r.Finish();
       scene.robots.push_back(std::move(robot));
     }
@@ -292,6 +371,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
         errors.Add(e.what());
       }
     }
+    CheckRobotBackend(scene, i, backend_at[i], &errors);
     if (std::abs(r.start.x) > scene.field.length / 2 || std::abs(r.start.y) > scene.field.width / 2) {
       std::ostringstream msg;
       msg << "robot '" << r.name << "' starts at (" << r.start.x << ", " << r.start.y << ") m, outside the "
@@ -350,6 +430,12 @@ void ReplayCommandLog(const std::string& path, Scene* scene) {
   scene->duration = last / scene->frame_rate;
 }
 
+std::vector<std::string> RobotBackends(const Scene& scene, const std::string& field_backend) {
+  std::vector<std::string> names;
+  for (const SceneRobot& r : scene.robots) names.push_back(r.backend.empty() ? field_backend : r.backend);
+  return names;
+}
+
 std::string BallEngineFor(const std::string& backend) {
   const std::vector<std::string> engines = AvailableBallEngines();
   if (engines.empty()) throw InputError("the ball needs the ode or bullet engine; neither was compiled");
@@ -357,18 +443,43 @@ std::string BallEngineFor(const std::string& backend) {
   return engines.front();
 }
 
+std::string BallEngineFor(const std::vector<std::string>& backends) {
+  for (const char* engine : {"ode", "bullet"})
+    if (std::find(backends.begin(), backends.end(), engine) != backends.end()) return BallEngineFor(engine);
+  return BallEngineFor(std::string("analytic"));
+}
+
 Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options) {
   std::vector<OmniModel> models;
   std::vector<SimRobot> robots;
+  std::vector<RobotBackendChoice> choices;
+  std::vector<std::string> labels;
   for (std::size_t i = 0; i < scene.robots.size(); ++i) {
     const SceneRobot& r = scene.robots[i];
     models.push_back(r.model);
     robots.push_back(SimRobot{r.name, r.model, r.start,
                               MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start)});
+    // A robot of its own backend brings its own predictor; the others share the field's.
+    choices.push_back(r.backend.empty() ? RobotBackendChoice{backend, options.predictor}
+                                        : RobotBackendChoice{r.backend, r.predictor});
+    labels.push_back(r.name);
   }
-  Simulation sim(std::move(robots), MakeOmniBackend(backend, models, scene.field, scene.timing(), options), scene.seed);
+  // Where robots name their own backends, say which robots need the field's predictor
+  // (the learned backend's own message cannot tell them apart).
+  const auto own = [](const SceneRobot& r) { return !r.backend.empty(); };
+  if (backend == "learned" && !options.predictor && std::any_of(scene.robots.begin(), scene.robots.end(), own)) {
+    std::string names;
+    for (const SceneRobot& r : scene.robots)
+      if (!own(r)) names += (names.empty() ? "'" : ", '") + r.name + "'";
+    if (!names.empty()) {
+      throw InputError(SourceLocation{scene.path},
+                       "the learned backend needs a predictor: pass --predictor FILE (robots " + names +
+                           " run on the field's backend, learned; a robot's own 'backend: learned' takes 'predictor:')");
+    }
+  }
+  Simulation sim(std::move(robots), MakeOmniBackend(choices, models, labels, scene.field, scene.timing()), scene.seed);
   if (scene.ball) {
-    const std::string engine = BallEngineFor(backend);
+    const std::string engine = BallEngineFor(RobotBackends(scene, backend));
     sim.AddBall(std::make_unique<BallField>(scene.ball->model, models, scene.field,
                                             MakeBallEngine(engine, scene.ball->model, models, scene.field)),
                 scene.ball->start, scene.ball->vision);

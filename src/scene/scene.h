@@ -31,6 +31,14 @@ struct SceneRobot {
   OmniModel model;
   Pose2 start;
   CommandSpec commands;
+  // The robot's own backend (`backend:`, docs/scenes.md): analytic, ode, bullet or
+  // learned; empty: the field's (the scene's `backend:` or --backend).
+  std::string backend;
+  // With `backend: learned`: its 1-frame predictor (`predictor:`, relative to the scene
+  // file; as resolved) and the predictor loaded, checked against the model and the frame
+  // rate. Robots naming the same file share one loaded predictor (and so one backend).
+  std::string predictor_path;
+  std::shared_ptr<const OmniPredictor> predictor;
 };
 
 // The ball of a scene (docs/scenes.md, docs/ball.md): its model and where it starts.
@@ -43,7 +51,7 @@ struct SceneBall {
 struct Scene {
   std::string path;
   std::string name;
-  std::string backend = "ode";   // default; `twinsim run --backend` overrides
+  std::string backend = "ode";   // the field's: robots without their own `backend:` run on it; --backend overrides
   double frame_rate = 30;        // Hz
   int physics_substeps = 0;      // per frame; 0 = DefaultPhysicsSubsteps(frame_rate)
   double duration = 5;           // s
@@ -72,12 +80,23 @@ Scene LoadSceneFromString(const std::string& yaml, const std::string& name, cons
 // ReadCommandLog (a robot without rows is named).
 void ReplayCommandLog(const std::string& path, Scene* scene);
 
+// The backend each robot of `scene` runs on when the field's is `field_backend` (the
+// scene's `backend:` or --backend): its own `backend:` if it names one, else the field's.
+std::vector<std::string> RobotBackends(const Scene& scene, const std::string& field_backend);
+
 // The engine the ball runs on beside robots on `backend`: ode and bullet their own; the
 // analytic and learned backends ODE (Bullet in a build without ODE).
 std::string BallEngineFor(const std::string& backend);
+// The same for robots on several backends (one name per robot): ODE when any robot runs
+// on ode, else Bullet when any runs on bullet, else as for analytic. One backend for
+// every robot gives what BallEngineFor(backend) gives.
+std::string BallEngineFor(const std::vector<std::string>& backends);
 
-// Builds the simulation of a scene on the named backend, with the scene's ball if it
-// has one.
+// Builds the simulation of a scene, with the scene's ball if it has one. `backend` is the
+// field's (the scene's `backend:` or --backend) and `options.predictor` its predictor:
+// they apply to the robots that do not name their own. When every robot runs on the same
+// backend this is exactly that backend (MakeOmniBackend(name, ...)); else one backend per
+// group of robots (GroupedOmniBackend, docs/backends.md).
 Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options = {});
 
 }  // namespace twinsim

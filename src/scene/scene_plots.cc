@@ -38,10 +38,14 @@ PathPlot ScenePathPlot(const PlotSpec& spec, const Scene& scene, const Simulatio
     plot.region = spec.region;
   }
   const bool single = result.frames.size() == 1;
+  // Robots on several backends: each path names its robot's (the title only says mixed).
+  bool mixed = false;
+  for (const std::string& b : result.robot_backends) mixed = mixed || b != result.robot_backends.front();
   const std::string source = !spec.source.empty() ? spec.source : single ? "both" : "truth";
   for (std::size_t i = 0; i < result.frames.size(); ++i) {
     const std::vector<FrameRecord>& frames = result.frames[i];
-    const std::string& robot = result.robot_names[i];
+    const std::string robot =
+        result.robot_names[i] + (mixed && i < result.robot_backends.size() ? " on " + result.robot_backends[i] : "");
     if (source == "truth" || source == "both") {
       PlotPath p;
       p.name = single ? "truth" : source == "both" ? robot + " truth" : robot;

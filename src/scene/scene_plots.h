@@ -35,7 +35,8 @@ RgbaImage RenderScenePlot(const ScenePlot& plot, Renderer& renderer);
 
 // The path plot `spec` asks for of a run of `scene` on `backend`: each robot's true
 // path (every frame) and/or what its observer saw (the frames that arrived, numbered by
-// the frame the camera captured them in), on the field (m).
+// the frame the camera captured them in), on the field (m). On a field of several
+// backends (result.robot_backends differ) each robot's paths say its: "blue0 on ode".
 PathPlot ScenePathPlot(const PlotSpec& spec, const Scene& scene, const SimulationResult& result,
                        const std::string& backend);
 

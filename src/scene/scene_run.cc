@@ -105,7 +105,7 @@ TrackingTrial RunArmScene(const ArmScene& scene, const std::string& backend, con
   return RunTrackingTrial(scene.plant, std::move(engine), scene.hat, reference, tracking);
 }
 
-void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, const std::string& backend, bool plots,
+void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, bool plots,
                        OutputFiles* files) {
   for (std::size_t i = 0; i < result.frames.size(); ++i) {
     const std::string suffix = i == 0 ? "" : "_" + result.robot_names[i];
@@ -116,7 +116,9 @@ void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, const
   if (!result.ball.empty()) files->Write("ball.csv", BallCsv(result.ball));
   if (plots && !scene.plots.empty() && RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    for (const ScenePlot& plot : ScenePlots(scene, result, backend))
+    // A mixed field's name lists every robot: too long for a title; the paths say each one's.
+    const bool mixed = result.backend.rfind("mixed:", 0) == 0;
+    for (const ScenePlot& plot : ScenePlots(scene, result, mixed ? "mixed backends" : result.backend))
       files->WritePng(plot.file, RenderScenePlot(plot, *renderer));
   }
 }

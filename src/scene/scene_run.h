@@ -5,7 +5,7 @@
 //   Scene scene = LoadScene("scenes/drive45.yaml");
 //   SimulationResult result = RunOmniScene(scene, "ode", "");
 //   OutputFiles files("out/drive45");
-//   WriteOmniRunFiles(scene, result, "ode", /*plots=*/true, &files);
+//   WriteOmniRunFiles(scene, result, /*plots=*/true, &files);
 //
 // Omni runs write trajectory.csv (the contract's log as the first robot's observer saw
 // it: late, lost frames left out) and truth.csv (true pose and velocity every frame),
@@ -63,9 +63,9 @@ ArmBackendOptions ArmSceneBackendOptions(const ArmScene& scene, const std::strin
 TrackingTrial RunArmScene(const ArmScene& scene, const std::string& backend, const std::string& predictor);
 
 // Writes what `twinsim run` writes for a finished run into `files`; the scene's PNGs
-// only when `plots` and rendering was compiled in. Throws InputError when a file cannot
-// be written.
-void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, const std::string& backend, bool plots,
+// (titled with result.backend) only when `plots` and rendering was compiled in. Throws
+// InputError when a file cannot be written.
+void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, bool plots,
                        OutputFiles* files);
 void WriteArmRunFiles(const ArmScene& scene, const TrackingTrial& trial, const std::string& backend, bool plots,
                       OutputFiles* files);

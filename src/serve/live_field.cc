@@ -207,7 +207,10 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   ball_driven_.assign(static_cast<std::size_t>(sim_.num_robots()), false);
   result_.backend = sim_.backend().name();
   result_.timing = sim_.backend().timing();
-  for (int i = 0; i < sim_.num_robots(); ++i) result_.robot_names.push_back(sim_.robot_name(i));
+  for (int i = 0; i < sim_.num_robots(); ++i) {
+    result_.robot_names.push_back(sim_.robot_name(i));
+    result_.robot_backends.push_back(sim_.backend().robot_backend(i));
+  }
   result_.frames.resize(static_cast<std::size_t>(sim_.num_robots()));
   control_tokens_ = teams_[0].tokens = teams_[1].tokens = options_.max_rate;
 }

@@ -19,7 +19,7 @@
 //
 //   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
 //   ServeSummary summary = field.Run([] { return InterruptSignal() != 0; });
-//   WriteOmniRunFiles(scene, field.result(), "analytic", true, &files);
+//   WriteOmniRunFiles(scene, field.result(), true, &files);
 #pragma once
 
 #include <array>

@@ -79,6 +79,11 @@ class OmniBackend {
  public:
   virtual ~OmniBackend() = default;
   virtual std::string name() const = 0;
+  // The backend robot i runs on: name() but on a field of several (sim/grouped_omni_backend.h).
+  virtual std::string robot_backend(int robot) const {
+    static_cast<void>(robot);
+    return name();
+  }
   virtual int num_robots() const = 0;
   virtual const FrameTiming& timing() const = 0;
 

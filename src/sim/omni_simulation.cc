@@ -40,7 +40,7 @@ void Simulation::CheckFinite(int robot, const Pose2& pose, const Twist2& v) {
   auto fail = [&](const std::string& what, double value) {
     std::ostringstream msg;
     msg << "simulation diverged at t = " << time() << " s (frame " << state_.frame << "), robot '"
-        << robots_[static_cast<std::size_t>(robot)].name << "' on backend " << backend_->name() << ": "
+        << robots_[static_cast<std::size_t>(robot)].name << "' on backend " << backend_->robot_backend(robot) << ": "
         << what << " = " << value << "; last good state at t = " << good.t << " s: x = " << good.truth.x
         << " m, y = " << good.truth.y << " m, theta = " << good.truth.theta << " rad, vx = "
         << good.truth_velocity.vx << " m/s, vy = " << good.truth_velocity.vy << " m/s, omega = "
@@ -240,6 +240,7 @@ SimulationResult Simulation::Run(int frames, const std::function<void(int, int)>
   result.backend = backend_->name();
   result.timing = backend_->timing();
   for (const auto& r : robots_) result.robot_names.push_back(r.name);
+  for (int i = 0; i < num_robots(); ++i) result.robot_backends.push_back(backend_->robot_backend(i));
   result.frames.resize(robots_.size());
   for (auto& f : result.frames) f.reserve(static_cast<std::size_t>(frames));
   for (int k = 0; k < frames; ++k) {

@@ -58,7 +58,8 @@ struct BallRecord {
 };
 
 struct SimulationResult {
-  std::string backend;
+  std::string backend;                      // OmniBackend::name(): "ode", or "mixed: ode (a), analytic (b)"
+  std::vector<std::string> robot_backends;  // per robot, the backend it ran on (OmniBackend::robot_backend)
   FrameTiming timing;
   std::vector<std::string> robot_names;
   std::vector<std::vector<FrameRecord>> frames;  // [robot][frame]

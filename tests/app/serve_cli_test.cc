@@ -55,6 +55,23 @@ TEST(ServeCli, SigintStopsAndWritesTheLogPerRobot) {
   EXPECT_NE(out.find("frames"), std::string::npos) << out;
 }
 
+// The robot list names each robot's backend; the logs are written as for one backend.
+TEST(ServeCli, ItPrintsEachRobotsBackend) {
+  const std::string d = testing::TempDir("serve_mixed");
+  UdpSocket vision("127.0.0.1", 0);
+  const testing::CommandResult r = testing::RunTwinsim(
+      "serve " + SourcePath("scenes/serve_mixed.yaml") + " --frames 6 --out " + d +
+      "/out --control-port 0 --blue-port 0 --yellow-port 0 --vision-port " + std::to_string(vision.port()));
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("4 robot(s) on mixed: ode (blue0, blue1), analytic (yellow0, yellow1) at 60 fps"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("  blue 1: blue1 on ode\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  yellow 0: yellow0 on analytic\n"), std::string::npos) << r.out;
+  for (const char* name : {"trajectory.csv", "trajectory_yellow1.csv", "ball.csv"})
+    EXPECT_TRUE(fs::exists(d + "/out/" + name)) << name << "\n" << r.out << r.err;
+}
+
 TEST(ServeCli, BadOptionsExitWithCode2) {
   // Never a multicast group here: a multicast option on the default unicast address.
   testing::CommandResult r = testing::RunTwinsim("serve " + SourcePath("scenes/drive45.yaml") +

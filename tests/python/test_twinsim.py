@@ -93,6 +93,18 @@ def test_stepping_is_the_run_commands_loop():
     np.testing.assert_allclose(run["truth"][:, 0, 1], truth[:, y], atol=2e-9)
 
 
+def test_robots_keep_their_own_backends_from_python():
+    """A scene whose robots name their own backends (docs/scenes.md): `backend=` sets the
+    field's, for the others, as `twinsim run --backend` does."""
+    scene = twinsim.load_scene(path("scenes/serve_mixed.yaml"))
+    sim = twinsim.OmniSim(scene, backend="bullet")
+    assert sim.backend == "mixed: bullet (blue0, blue1), analytic (yellow0, yellow1)"
+    run = sim.run(np.tile([0.5, 0.0, 0.0], (30, 4, 1)))
+    assert run["truth"].shape == (30, 4, 3)
+    moved = run["truth"][-1, :, :2] - run["truth"][0, :, :2]
+    assert np.all(np.hypot(moved[:, 0], moved[:, 1]) > 0.1)  # blue and yellow drove
+
+
 def test_step_by_step_equals_one_run_and_reset_repeats():
     model = twinsim.load_omni_model(path("models/omni4.yaml"))
     commands = random_commands(90, 3)

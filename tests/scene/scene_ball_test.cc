@@ -102,7 +102,7 @@ TEST(SceneBall, TheRunWritesTheBallsPathAndItBouncesOffTheRobot) {
 
     const std::string dir = testing::TempDir("scene_ball_" + backend);
     OutputFiles files(dir);
-    WriteOmniRunFiles(s, r, backend, false, &files);
+    WriteOmniRunFiles(s, r, false, &files);
     const std::string csv = testing::ReadText(dir + "/ball.csv");
     EXPECT_EQ(csv.substr(0, csv.find('\n')), "t,x,y,z,vx,vy,vz");
     EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), static_cast<long>(r.ball.size()) + 1);

@@ -11,11 +11,13 @@
 #include <sched.h>
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <thread>
 
+#include "backends/omni_backend_factory.h"
 #include "scene/scene.h"
 #include "ssl_simulation_control.pb.h"
 #include "ssl_simulation_robot_control.pb.h"
@@ -217,6 +219,55 @@ TEST(LiveField, LockstepVisionIsTheSimulationsAndACommandShowsAtKPlusDelayPlusOn
   const int delay = m.command_delay_frames + m.vision_delay_frames;
   EXPECT_EQ(delay, 4);
   EXPECT_EQ(first_moved, 10 + delay + 1);
+}
+
+// A backend per robot: blue 0 on ode (its own `backend:`), yellow 3 on the field's
+// analytic. Lockstep serves it as it serves one backend: vision and poses to the bit
+// those of the same mixed field stepped in-process with the same commands.
+TEST(LiveField, LockstepServesAFieldOfSeveralBackends) {
+  const std::vector<std::string> built = AvailableOmniBackends();
+  if (std::find(built.begin(), built.end(), "ode") == built.end()) GTEST_SKIP() << "ode not built";
+  const std::string model = SourcePath("models/omni4.yaml");
+  const std::string hold = "commands: {type: sequence, segments: [{duration: 1, command: [0, 0, 0]}]}";
+  const Scene scene = LoadSceneFromString(
+      "name: served\nbackend: analytic\nduration: 10\nseed: 7\nrobots:\n"
+      "  - {name: b0, backend: ode, model: " + model + ", start: {x: 0, y: 0}, " + hold + "}\n"
+      "  - {name: y3, team: yellow, id: 3, model: " + model + ", start: {x: 1, y: 0.5, theta_deg: 90}, " + hold + "}\n",
+      "served.yaml", ".");
+  const int frames = 30;
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), LockstepOptions(vision.port(), frames));
+  EXPECT_EQ(field.result().backend, "mixed: ode (b0), analytic (y3)");
+  std::vector<SSL_DetectionFrame> seen;
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < frames; ++k) {
+      std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, static_cast<std::uint32_t>(k));
+      ASSERT_TRUE(f) << "no vision for frame " << k;
+      seen.push_back(*f);
+      ASSERT_TRUE(client.SendTo(Local(0, CommandAt(k)), Loopback(field.blue_port())));
+      ASSERT_TRUE(Receive(client)) << "no RobotControlResponse at frame " << k;
+    }
+    EXPECT_EQ(server.Join().counters.frames, frames);
+  }
+  Simulation sim = MakeSimulation(scene, "analytic");
+  const SimulationResult& served = field.result();
+  bool moved = false;
+  for (int k = 0; k < frames; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    std::vector<FrameRecord> r = sim.BeginFrame();
+    const Twist2 c = CommandAt(k);
+    r[0].command = Twist2{static_cast<float>(c.vx), static_cast<float>(c.vy), static_cast<float>(c.omega)};
+    r[1].command = sim.SourceCommand(1);
+    sim.EndFrame(&r);
+    EXPECT_EQ(served.frames[0][ku].truth.x, r[0].truth.x) << k;
+    EXPECT_EQ(served.frames[0][ku].truth.theta, r[0].truth.theta) << k;
+    EXPECT_EQ(served.frames[1][ku].truth.y, r[1].truth.y) << k;
+    ASSERT_EQ(seen[ku].robots_blue_size(), 1);
+    EXPECT_EQ(seen[ku].robots_blue(0).x(), static_cast<float>(1000 * r[0].seen.x)) << k;
+    moved = moved || std::abs(r[0].truth.x) > 0.05;
+  }
+  EXPECT_TRUE(moved) << "the commanded ode robot should drive";
 }
 
 TEST(LiveField, RefusalsAreAnsweredAndCountedAndTheFieldRunsOn) {

@@ -125,14 +125,14 @@ TEST(ServeReplay, ALockstepMatchReplayedByRunGivesTheClientsVisionAndTheSameFile
 
   // What `twinsim serve` writes at Ctrl-C, and what `twinsim run --commands` writes.
   OutputFiles served(dir + "/served");
-  WriteOmniRunFiles(scene, field.result(), "ode", /*plots=*/false, &served);
+  WriteOmniRunFiles(scene, field.result(), /*plots=*/false, &served);
   served.Write("commands.csv", CommandsCsv(field.result()));
   Scene replay = MatchScene(dir);
   ReplayCommandLog(dir + "/served/commands.csv", &replay);
   ASSERT_EQ(replay.num_frames(), frames);
   const SimulationResult run = RunOmniScene(replay, "ode", "");
   OutputFiles ran(dir + "/ran");
-  WriteOmniRunFiles(replay, run, "ode", /*plots=*/false, &ran);
+  WriteOmniRunFiles(replay, run, /*plots=*/false, &ran);
 
   for (const char* name : {"trajectory.csv", "trajectory_y3.csv", "truth.csv", "truth_y3.csv", "ball.csv"}) {
     const std::string a = ReadAll(served.Path(name)), b = ReadAll(ran.Path(name));
@@ -180,6 +180,7 @@ TEST(ServeReplay, ACommandLogReadsBackTheSameDoublesAndHoldsBetweenRows) {
   const std::string dir = testing::TempDir("command_log");
   SimulationResult result;
   result.robot_names = {"a", "b"};
+  result.timing.frame_rate = 60;
   result.frames.resize(2);
   for (int k = 0; k < 3; ++k) {
     for (int i = 0; i < 2; ++i) {

@@ -80,14 +80,14 @@ int Run(const RunOptions& options) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   OutputFiles files(out);
-  WriteOmniRunFiles(scene, result, backend, /*plots=*/true, &files);
+  WriteOmniRunFiles(scene, result, /*plots=*/true, &files);
   // The logs are the contract's main output: a build without a renderer still writes them.
   WarnPlotsNotDrawn(options.scene, scene.plots.size());
 
   if (!options.quiet) {
     const double simulated = (frames - 1) / scene.frame_rate;
     std::printf("scene %s: %zu robot(s) on %s, %d frames at %g fps (%.2f s simulated) in %.2f s wall, %.0fx real time\n",
-                scene.name.c_str(), result.frames.size(), backend.c_str(), frames, scene.frame_rate, simulated, wall,
+                scene.name.c_str(), result.frames.size(), result.backend.c_str(), frames, scene.frame_rate, simulated, wall,
                 wall > 0 ? simulated / wall : 0.0);
     const FrameRecord& last = result.frames[0].back();
     std::printf("  %s ends at x = %.3f m, y = %.3f m, theta = %.1f deg\n", result.robot_names[0].c_str(), last.truth.x,
@@ -108,6 +108,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
       "true pose and velocity every frame), and the same with _NAME for every further robot;\n"
       "DIR/ball.csv (t,x,y,z,vx,vy,vz) when the scene has a `ball:` (docs/ball.md); and the PNG\n"
       "plots the scene's `plots:` list asks for (docs/rendering.md).\n"
+      "A scene's robots may each name their own backend (`backend:`, `predictor:`; docs/scenes.md):\n"
+      "--backend and --predictor then set the field's, for the robots that name none.\n"
       "Arm scenes (`robot: arm`, docs/scenes.md) run a tracking controller along a task (the\n"
       "writing task of seed 001, a hold, a step, a sinusoid, or seeded random motion to learn\n"
       "from) and write DIR/trajectory.csv (t,q1..qn,tau1..taun,qd1..qdn,qref1..qrefn: the arm\n"
@@ -116,7 +118,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
       "tracking_error). --seed picks the random task's motion and the controller's dither.\n"
       "--backend learned --predictor P runs an arm scene on a predictor trained for its model.");
   cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
-  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
+  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's; robots with their own "
+                  "`backend:` keep theirs)");
   cmd->add_option("--predictor", options->predictor, "1-step predictor for --backend learned (from twinsim train)");
   cmd->add_option("--out", options->out, "Output folder (default: out/<scene name>)");
   cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(NonNegativeNumber());

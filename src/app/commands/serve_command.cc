@@ -1,5 +1,6 @@
 // `twinsim serve SCENE.yaml [--lockstep] [--tournament] [--out DIR] ...`
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <sstream>
 
@@ -46,8 +47,14 @@ int Serve(ServeCommandOptions& options) {
 
   if (!options.quiet) {
     std::printf("serving %s: %zu robot(s) on %s at %g fps, %s\n", scene.name.c_str(), scene.robots.size(),
-                backend.c_str(), scene.frame_rate, options.serve.lockstep ? "lockstep" : "real time");
-    for (const SceneRobot& r : scene.robots) std::printf("  %s %d: %s\n", r.team.c_str(), r.id, r.name.c_str());
+                field.result().backend.c_str(), scene.frame_rate, options.serve.lockstep ? "lockstep" : "real time");
+    const std::vector<std::string> backends = RobotBackends(scene, backend);
+    for (std::size_t i = 0; i < scene.robots.size(); ++i) {
+      const SceneRobot& r = scene.robots[i];
+      const std::string predictor =
+          r.predictor ? " (" + std::filesystem::path(r.predictor_path).filename().string() + ")" : "";
+      std::printf("  %s %d: %s on %s%s\n", r.team.c_str(), r.id, r.name.c_str(), backends[i].c_str(), predictor.c_str());
+    }
     std::printf("control %s:%d%s, blue %s:%d, yellow %s:%d; vision to %s:%d. Ctrl-C stops and writes the logs.\n",
                 options.serve.listen.c_str(), field.control_port(), options.serve.tournament ? " (refused: tournament)" : "",
                 options.serve.listen.c_str(), field.blue_port(), options.serve.listen.c_str(), field.yellow_port(),
@@ -69,7 +76,7 @@ int Serve(ServeCommandOptions& options) {
 
   OutputFiles files(out);
   if (summary.counters.frames > 0) {
-    WriteOmniRunFiles(scene, field.result(), backend, /*plots=*/true, &files);
+    WriteOmniRunFiles(scene, field.result(), /*plots=*/true, &files);
     // What every robot sent, exactly: `twinsim run SCENE --commands commands.csv` replays it.
     files.Write("commands.csv", CommandsCsv(field.result()));
   }
@@ -90,13 +97,16 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
       "Teams drive their robots with the SSL simulation protocol (RobotControl on the blue and\n"
       "yellow ports, SimulatorCommand on the control port) and receive SSL-Vision packets of what\n"
       "the observer sees, through the scene's delay loop and camera noise (docs/serve.md).\n"
-      "Robots are blue or yellow with ids by the scene's `team:` and `id:` (docs/scenes.md).\n"
+      "Robots are blue or yellow with ids by the scene's `team:` and `id:` (docs/scenes.md), each on\n"
+      "its own `backend:` or the field's (the scene's, or --backend); robots on different backends\n"
+      "do not touch (docs/backends.md).\n"
       "Real time by default; --lockstep steps frame k when every connected team has sent its\n"
       "command for it. Ctrl-C stops and writes DIR/trajectory.csv (and _NAME per further robot)\n"
       "and DIR/truth.csv as `twinsim run` does, DIR/ball.csv when the scene has a `ball:`\n"
       "(kicks, chips, the dribbler and ball teleports then work; docs/ball.md), and the plots.");
   cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
-  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's)");
+  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's; robots with their own "
+                  "`backend:` keep theirs)");
   cmd->add_option("--predictor", options->predictor, "1-step predictor for --backend learned (from twinsim train)");
   cmd->add_option("--out", options->out, "Output folder for the logs (default: out/<scene name>)");
   cmd->add_option("--seed", options->seed, "Random seed (default: the scene's)")->check(NonNegativeNumber());
