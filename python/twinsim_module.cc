@@ -365,7 +365,7 @@ class PyOmniSim {
       } else {
         source = MakeCommandSource(r.commands, scene_.seed, static_cast<int>(i), scene_.duration, r.start);
       }
-      robots.push_back(SimRobot{r.name, r.model, r.start, std::move(source)});
+      robots.push_back(SimRobot{r.name, r.model, r.start, std::move(source), r.present});
     }
     OmniBackendOptions options;
     options.predictor = predictor_;

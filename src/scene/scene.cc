@@ -163,6 +163,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       r.Get("name", &robot.name);
       if (!names.insert(robot.name).second) r.Error("name", "duplicate robot name '" + robot.name + "'");
       r.Get("team", &robot.team, {"blue", "yellow"});
+      r.Get("present", &robot.present);
       id_given.push_back(r.Has("id"));
       id_at.push_back(r.Has("id") ? r.Where(r.Child("id")) : r.Where());
       robot.id = -1;
@@ -326,7 +327,8 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend, const 
     const SceneRobot& r = scene.robots[i];
     models.push_back(r.model);
     robots.push_back(SimRobot{r.name, r.model, r.start,
-                              MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start)});
+                              MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start),
+                              r.present});
   }
   Simulation sim(std::move(robots), MakeOmniBackend(backend, models, scene.field, scene.timing(), options), scene.seed);
   if (scene.ball) {

@@ -31,6 +31,9 @@ struct SceneRobot {
   OmniModel model;
   Pose2 start;
   CommandSpec commands;
+  // `present: false`: the robot starts off the field (twinsim serve adds it with a
+  // teleport's `present: true`; `twinsim run` keeps it off for the whole run).
+  bool present = true;
 };
 
 // The ball of a scene (docs/scenes.md, docs/ball.md): its model and where it starts.

@@ -86,8 +86,12 @@ int Run(const RunOptions& options) {
                 scene.name.c_str(), result.frames.size(), backend.c_str(), frames, scene.frame_rate, simulated, wall,
                 wall > 0 ? simulated / wall : 0.0);
     const FrameRecord& last = result.frames[0].back();
-    std::printf("  %s ends at x = %.3f m, y = %.3f m, theta = %.1f deg\n", result.robot_names[0].c_str(), last.truth.x,
-                last.truth.y, last.truth.theta * 180 / kPi);
+    if (last.present) {
+      std::printf("  %s ends at x = %.3f m, y = %.3f m, theta = %.1f deg\n", result.robot_names[0].c_str(),
+                  last.truth.x, last.truth.y, last.truth.theta * 180 / kPi);
+    } else {
+      std::printf("  %s ends off the field (present: false)\n", result.robot_names[0].c_str());
+    }
     files.PrintWrote();
   }
   return kExitOk;
