@@ -68,7 +68,7 @@ TEST(BallClearance, MovesTheRobotTheShortestWayOutAndNoFurther) {
   for (const Eigen::Vector2d& local : {Eigen::Vector2d(f + 0.01, 0.0), Eigen::Vector2d(f + 0.01, 0.06),
                                        Eigen::Vector2d(0.02, 0.1), Eigen::Vector2d(-0.08, -0.03),
                                        Eigen::Vector2d(0.0, 0.0)}) {
-    SCOPED_TRACE(testing::PrintToString(local.transpose()));
+    SCOPED_TRACE("ball at (" + std::to_string(local.x()) + ", " + std::to_string(local.y()) + ") m, robot frame");
     const Eigen::Vector2d ball = field(local.x(), local.y());
     ASSERT_LT(DistanceToChassis(m, local), clearance);
     const std::optional<Eigen::Vector2d> move = BallClearance(m, pose, ball, clearance);

@@ -528,9 +528,8 @@ TEST(LiveField, RobotsAreAddedAndRemovedAndOffTheFieldTheyAreNeitherSeenNorComma
       ASSERT_TRUE(f) << "no vision for frame " << k;
       seen.push_back(*f);
       if (k == 2) {
-        // Blue 1 is off the field: not commanded, not teleported without present: true.
-        EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, Local(1, Twist2{1, 0, 0}), field.blue_port())),
-                  Codes1{"TWINSIM_NOT_PRESENT"});
+        // Blue 1 is off the field: not teleported without present: true (nor commanded:
+        // the team's message below).
         EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(BLUE, 1, std::nullopt, Pose2{1, 1, 0}),
                                                field.control_port())),
                   Codes1{"TWINSIM_NOT_PRESENT"});
@@ -548,8 +547,13 @@ TEST(LiveField, RobotsAreAddedAndRemovedAndOffTheFieldTheyAreNeitherSeenNorComma
         EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(YELLOW, 3, false, std::nullopt),
                                                field.control_port())),
                   Codes1{});
+      }
+      // Yellow 3 is refused from then on (the yellow team, once it has sent, is waited
+      // for in lockstep: it answers every frame).
+      if (k >= 15) {
         EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, Local(3, Twist2{1, 0, 0}), field.yellow_port())),
-                  Codes1{"TWINSIM_NOT_PRESENT"});
+                  Codes1{"TWINSIM_NOT_PRESENT"})
+            << k;
       }
       // Blue 1, once added, takes commands like any robot (standing still here).
       RobotControl control;
@@ -565,8 +569,8 @@ TEST(LiveField, RobotsAreAddedAndRemovedAndOffTheFieldTheyAreNeitherSeenNorComma
       EXPECT_EQ(Codes(r), k < 5 ? Codes1{"TWINSIM_NOT_PRESENT"} : Codes1{}) << k;
     }
     const ServeSummary& summary = server.Join();
-    // Frames 0..4 refuse blue 1's command; frame 2 three requests, frame 15 one.
-    EXPECT_EQ(summary.counters.refused, 5 + 3 + 1);
+    // Frames 0..4 refuse blue 1's command, frame 2 two requests, frames 15..29 yellow 3's.
+    EXPECT_EQ(summary.counters.refused, 5 + 2 + 15);
   }
   // Vision shows what the camera captured two frames earlier: blue 1 from frame 8 (added
   // during frame 5, captured from 6) where it was put; yellow 3 until frame 17 (removed
