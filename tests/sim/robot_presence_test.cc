@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engines/omni_engine.h"
+#include "learning/omni_predictor.h"
 #include "scene/scene.h"
 #include "scene/scene_run.h"
 #include "sim/omni_simulation.h"
@@ -23,10 +24,11 @@ using testing::SourcePath;
 // Robot a drives forward from (-1, 1); robot b stands at the origin (or is off the
 // field with `b_present` false), spinning slowly. Camera noise on: the noise streams
 // are part of what must not change.
-Scene TwoRobots(const std::string& backend, bool b_present, const std::string& ball = "") {
+Scene TwoRobots(const std::string& backend, bool b_present, const std::string& ball = "", int frame_rate = 60) {
   const std::string model = SourcePath("models/omni4.yaml");
   return LoadSceneFromString(
-      "name: presence\nbackend: " + backend + "\nframe_rate: 60\nduration: 10\nseed: 3\nrobots:\n"
+      "name: presence\nbackend: " + backend + "\nframe_rate: " + std::to_string(frame_rate) +
+      "\nduration: 10\nseed: 3\nrobots:\n"
       "  - {name: a, model: " + model + ", start: {x: -1, y: 1},"
       " commands: {type: sequence, segments: [{duration: 20, command: [0.5, 0, 0]}]}}\n"
       "  - {name: b, model: " + model + ", start: {x: 0, y: 0}, present: " + (b_present ? "true" : "false") +
@@ -71,6 +73,30 @@ TEST(RobotPresence, ARobotOffTheFieldIsNeitherSeenNorSteppedAndTheOtherDoesNotNo
     }
     EXPECT_GT(std::abs(r_with.frames[1][89].truth.theta), 0.2);
   }
+}
+
+TEST(RobotPresence, OnTheLearnedBackendTooAParkedRobotIsHeldAndTheOtherDoesNotNoticeIt) {
+  // A 1-frame predictor learned from 30 s of random driving at 30 fps (the rate
+  // RecordLog logs at).
+  const OmniModel m = testing::Omni4();
+  const OmniLog drive = testing::RecordLog(m, testing::RandomDrive(2.0, 2.0, 2.0), 30, 5, "analytic", "drive.csv");
+  OmniTrainOptions train;
+  train.horizon = 1;
+  OmniBackendOptions options;
+  options.predictor = std::make_shared<OmniPredictor>(TrainOmniPredictor(m, {drive}, train));
+  Simulation with = MakeSimulation(TwoRobots("learned", true, "", 30), "learned", options);
+  Simulation without = MakeSimulation(TwoRobots("learned", false, "", 30), "learned", options);
+  const SimulationResult r_with = with.Run(60), r_without = without.Run(60);
+  for (std::size_t k = 0; k < 60; ++k) {
+    ASSERT_EQ(r_with.frames[0][k].truth.x, r_without.frames[0][k].truth.x) << k;
+    ASSERT_EQ(r_with.frames[0][k].seen.y, r_without.frames[0][k].seen.y) << k;
+    const FrameRecord& b = r_without.frames[1][k];
+    EXPECT_FALSE(b.observed) << k;
+    EXPECT_EQ(b.truth.x, Simulation::ParkedPose(1).x) << k;
+    EXPECT_EQ(b.truth.y, Simulation::ParkedPose(1).y) << k;
+    EXPECT_EQ(b.truth.theta, 0) << k;
+  }
+  EXPECT_GT(r_with.frames[0][59].truth.x - r_with.frames[0][0].truth.x, 0.5);  // a drove on
 }
 
 TEST(RobotPresence, ItsLogsLeaveOutTheFramesOffTheField) {
