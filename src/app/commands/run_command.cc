@@ -105,7 +105,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   cmd->footer(
       "Writes DIR/trajectory.csv (t,x,y,theta,vx_cmd,vy_cmd,omega_cmd: the first robot as its\n"
       "observer saw it, four frames late by default, lost frames left out), DIR/truth.csv (the\n"
-      "true pose and velocity every frame), and the same with _NAME for every further robot;\n"
+      "true pose and velocity every frame the robot is on the field: a scene robot with\n"
+      "`present: false` has none), and the same with _NAME for every further robot;\n"
       "DIR/ball.csv (t,x,y,z,vx,vy,vz) when the scene has a `ball:` (docs/ball.md); and the PNG\n"
       "plots the scene's `plots:` list asks for (docs/rendering.md).\n"
       "Arm scenes (`robot: arm`, docs/scenes.md) run a tracking controller along a task (the\n"

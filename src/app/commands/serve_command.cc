@@ -80,6 +80,8 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
       "yellow ports, SimulatorCommand on the control port) and receive SSL-Vision packets of what\n"
       "the observer sees, through the scene's delay loop and camera noise (docs/serve.md).\n"
       "Robots are blue or yellow with ids by the scene's `team:` and `id:` (docs/scenes.md).\n"
+      "The scene is the squad: a robot with `present: false` starts off the field and a\n"
+      "teleport with present: true adds it (present: false removes one; by_force moves by force).\n"
       "Real time by default; --lockstep steps frame k when every connected team has sent its\n"
       "command for it. Ctrl-C stops and writes DIR/trajectory.csv (and _NAME per further robot)\n"
       "and DIR/truth.csv as `twinsim run` does, DIR/ball.csv when the scene has a `ball:`\n"
