@@ -1,7 +1,8 @@
 // Fuzzes the served field's packet readers (twinsim serve, docs/serve.md): a team's
 // RobotControl and the simulator's SimulatorCommand. The first byte picks the reader
-// (blue RobotControl without a ball, yellow with one, SimulatorCommand without a ball,
-// with one); the rest is the datagram. Both readers promise never to throw for any
+// (blue RobotControl without a ball, yellow with one and yellow robot 3 off the field,
+// SimulatorCommand without a ball, with one and yellow robot 3 off the field); the rest
+// is the datagram. Both readers promise never to throw for any
 // bytes, so any exception is a crash here.
 #include <cstdint>
 #include <string>
@@ -23,12 +24,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }();
   static const FieldModel field;
   static const std::vector<bool> contact = {true, false, false, true};
+  static const std::vector<bool> present = {true, true, true, false};
   const std::string bytes = fuzz::AsString(data + 1, size - 1);
   switch (data[0] % 4) {
     case 0: ReadRobotControl(bytes, TeamColor::kBlue, roster); break;
-    case 1: ReadRobotControl(bytes, TeamColor::kYellow, roster, &contact); break;
+    case 1: ReadRobotControl(bytes, TeamColor::kYellow, roster, &contact, &present); break;
     case 2: ReadSimulatorCommand(bytes, roster, field, false); break;
-    default: ReadSimulatorCommand(bytes, roster, field, true); break;
+    default: ReadSimulatorCommand(bytes, roster, field, true, &present); break;
   }
   return 0;
 }

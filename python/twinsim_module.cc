@@ -371,7 +371,7 @@ class PyOmniSim {
       } else {
         source = MakeCommandSource(r.commands, scene_.seed, static_cast<int>(i), scene_.duration, r.start);
       }
-      robots.push_back(SimRobot{r.name, r.model, r.start, std::move(source)});
+      robots.push_back(SimRobot{r.name, r.model, r.start, std::move(source), r.present});
     }
     sim_ = std::make_unique<Simulation>(std::move(robots),
                                         MakeOmniBackend(choices, models, labels, scene_.field, scene_.timing()),

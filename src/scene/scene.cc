@@ -251,6 +251,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       r.Get("name", &robot.name);
       if (!names.insert(robot.name).second) r.Error("name", "duplicate robot name '" + robot.name + "'");
       r.Get("team", &robot.team, {"blue", "yellow"});
+      r.Get("present", &robot.present);
       id_given.push_back(r.Has("id"));
       id_at.push_back(r.Has("id") ? r.Where(r.Child("id")) : r.Where());
       robot.id = -1;
@@ -419,13 +420,20 @@ Scene LoadSceneFromString(const std::string& yaml, const std::string& name, cons
 }
 
 void ReplayCommandLog(const std::string& path, Scene* scene) {
+  // A robot that starts off the field stays off in a run (only a served field's
+  // teleports add robots), so it needs no rows.
   std::vector<std::string> names;
-  for (const SceneRobot& r : scene->robots) names.push_back(r.name);
+  std::vector<SceneRobot*> robots;
+  for (SceneRobot& r : scene->robots) {
+    if (!r.present) continue;
+    names.push_back(r.name);
+    robots.push_back(&r);
+  }
   std::vector<CommandSpec> specs = LogCommandSpecs(path, names, scene->frame_rate);
   int last = 0;
   for (std::size_t i = 0; i < specs.size(); ++i) {
     last = std::max(last, specs[i].log->frames.back());
-    scene->robots[i].commands = std::move(specs[i]);
+    robots[i]->commands = std::move(specs[i]);
   }
   scene->duration = last / scene->frame_rate;
 }
@@ -458,7 +466,8 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend, const 
     const SceneRobot& r = scene.robots[i];
     models.push_back(r.model);
     robots.push_back(SimRobot{r.name, r.model, r.start,
-                              MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start)});
+                              MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start),
+                              r.present});
     // A robot of its own backend brings its own predictor; the others share the field's.
     choices.push_back(r.backend.empty() ? RobotBackendChoice{backend, options.predictor}
                                         : RobotBackendChoice{r.backend, r.predictor});

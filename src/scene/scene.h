@@ -39,6 +39,9 @@ struct SceneRobot {
   // rate. Robots naming the same file share one loaded predictor (and so one backend).
   std::string predictor_path;
   std::shared_ptr<const OmniPredictor> predictor;
+  // `present: false`: the robot starts off the field (twinsim serve adds it with a
+  // teleport's `present: true`; `twinsim run` keeps it off for the whole run).
+  bool present = true;
 };
 
 // The ball of a scene (docs/scenes.md, docs/ball.md): its model and where it starts.
@@ -76,7 +79,8 @@ Scene LoadSceneFromString(const std::string& yaml, const std::string& name, cons
 
 // Replays a recorded match (`twinsim run --commands FILE`): every robot of `scene` is
 // driven by its rows of the log at `path` (scene/command_log.h; commands.csv of `twinsim
-// serve`), and the scene lasts until the log's last frame. Throws InputError as
+// serve`), and the scene lasts until the log's last frame; robots that start off the
+// field (`present: false`) stay off and need no rows. Throws InputError as
 // ReadCommandLog (a robot without rows is named).
 void ReplayCommandLog(const std::string& path, Scene* scene);
 

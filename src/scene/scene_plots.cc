@@ -50,6 +50,7 @@ PathPlot ScenePathPlot(const PlotSpec& spec, const Scene& scene, const Simulatio
       PlotPath p;
       p.name = single ? "truth" : source == "both" ? robot + " truth" : robot;
       for (std::size_t k = 0; k < frames.size(); ++k) {
+        if (!frames[k].present) continue;  // off the field
         p.poses.push_back(frames[k].truth);
         p.frames.push_back(static_cast<int>(k));
       }

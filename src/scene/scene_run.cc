@@ -15,10 +15,12 @@
 namespace twinsim {
 namespace {
 
-// The ground truth of one robot: true pose and velocity at every frame.
+// The ground truth of one robot: true pose and velocity at every frame it is on the
+// field (a frame off the field, SimRobot::present, has no row).
 std::string TruthCsv(const std::vector<FrameRecord>& frames) {
   std::string out = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,vx,vy,omega\n";
   for (const auto& f : frames) {
+    if (!f.present) continue;  // off the field: no true pose to log
     const double v[] = {f.t, f.truth.x, f.truth.y, f.truth.theta, f.command.vx, f.command.vy, f.command.omega,
                         f.truth_velocity.vx, f.truth_velocity.vy, f.truth_velocity.omega};
     for (int i = 0; i < 10; ++i) {
@@ -138,7 +140,8 @@ double TruePathLength(const SimulationResult& result, int robot) {
   double length = 0;
   const std::vector<FrameRecord>& frames = result.frames.at(robot);
   for (std::size_t i = 1; i < frames.size(); ++i)
-    length += std::hypot(frames[i].truth.x - frames[i - 1].truth.x, frames[i].truth.y - frames[i - 1].truth.y);
+    if (frames[i].present && frames[i - 1].present)
+      length += std::hypot(frames[i].truth.x - frames[i - 1].truth.x, frames[i].truth.y - frames[i - 1].truth.y);
   return length;
 }
 

@@ -8,7 +8,7 @@
 //   WriteOmniRunFiles(scene, result, /*plots=*/true, &files);
 //
 // Omni runs write trajectory.csv (the contract's log as the first robot's observer saw
-// it: late, lost frames left out) and truth.csv (true pose and velocity every frame),
+// it: late, lost frames left out) and truth.csv (true pose and velocity every frame the robot is on the field),
 // and the same with _NAME for every further robot, and ball.csv when the scene has a
 // ball. Arm runs write trajectory.csv (the
 // arm log as the scene's sensors record it) and tracking.csv (error, demand, model,

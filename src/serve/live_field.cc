@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "serve/simulator_control.h"
+#include "serve/ball_clearance.h"
 #include "serve/vision_packets.h"
 
 namespace twinsim {
@@ -299,7 +299,9 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
   std::vector<bool> contact;
   if (sim_.has_ball())
     for (int i = 0; i < sim_.num_robots(); ++i) contact.push_back(sim_.ball()->contact(i));
-  RobotControlResult read = ReadRobotControl(d.bytes, team.team, roster_, sim_.has_ball() ? &contact : nullptr);
+  const std::vector<bool> present = Present();
+  RobotControlResult read =
+      ReadRobotControl(d.bytes, team.team, roster_, sim_.has_ball() ? &contact : nullptr, &present);
   if (!read.parsed) {
     ++counters_.malformed;
     Answer(team.socket, read.response, d.from);
@@ -342,7 +344,8 @@ void LiveField::HandleControl(const Datagram& d) {
     Answer(control_, response, d.from);
     return;
   }
-  SimulatorCommandResult read = ReadSimulatorCommand(d.bytes, roster_, scene_.field, sim_.has_ball());
+  const std::vector<bool> present = Present();
+  SimulatorCommandResult read = ReadSimulatorCommand(d.bytes, roster_, scene_.field, sim_.has_ball(), &present);
   if (!read.parsed) {
     ++counters_.malformed;
     Answer(control_, read.response, d.from);
@@ -351,11 +354,7 @@ void LiveField::HandleControl(const Datagram& d) {
   ++counters_.simulator_commands;
   counters_.refused += read.refused;
   control_client_ = d.from;
-  for (const RobotTeleport& t : read.teleports) {
-    const Pose2 pose = TeleportedPose(t, sim_.backend().pose(t.robot));
-    sim_.Teleport(t.robot, pose, FieldToBody(t.field_velocity, pose.theta));
-  }
-  if (read.ball) sim_.TeleportBall(TeleportedBall(*read.ball, sim_.ball()->ball(), sim_.ball()->model().radius));
+  ApplyControl(read);
   if (read.simulation_speed) {
     if (options_.lockstep) {
       ++counters_.refused;
@@ -365,6 +364,67 @@ void LiveField::HandleControl(const Datagram& d) {
     }
   }
   Answer(control_, read.response, d.from);
+}
+
+std::vector<bool> LiveField::Present() const {
+  std::vector<bool> present(static_cast<std::size_t>(sim_.num_robots()));
+  for (int i = 0; i < sim_.num_robots(); ++i) present[static_cast<std::size_t>(i)] = sim_.present(i);
+  return present;
+}
+
+void LiveField::ApplyControl(const SimulatorCommandResult& read) {
+  for (const RobotTeleport& t : read.teleports) {
+    const auto k = static_cast<std::size_t>(t.robot);
+    if (t.present && !*t.present) {
+      // Removed: the team's last move and ball command are forgotten, so that the robot
+      // stands still when it is added again, until its team commands it.
+      sim_.Remove(t.robot);
+      moves_[k] = RobotMove{};
+      ball_commands_[k] = BallCommand{};
+      continue;
+    }
+    if (!sim_.present(t.robot)) {
+      // Added: a coordinate left out is the scene start's (the parking spot means nothing).
+      const Pose2 pose = TeleportedPose(t, scene_.robots[k].start);
+      sim_.Add(t.robot, pose, FieldToBody(t.field_velocity, pose.theta));
+      continue;
+    }
+    const Pose2 pose = TeleportedPose(t, sim_.backend().pose(t.robot));
+    if (t.by_force) {
+      sim_.PullRobot(t.robot, pose);
+    } else {
+      sim_.Teleport(t.robot, pose, FieldToBody(t.field_velocity, pose.theta));
+    }
+  }
+  if (read.ball) {
+    const BallState target = TeleportedBall(*read.ball, sim_.ball()->ball(), sim_.ball()->model().radius);
+    if (read.ball->safely) MakeRoomForBall(target.position.head<2>());
+    if (read.ball->by_force) {
+      sim_.PullBall(target.position.head<2>());
+    } else {
+      sim_.TeleportBall(target);
+    }
+  }
+  if (read.config.vision_port) vision_to_.port = *read.config.vision_port;
+  if (read.config.robot_noise_xy || read.config.robot_noise_theta) {
+    for (int i = 0; i < sim_.num_robots(); ++i) {
+      const OmniModel& m = sim_.robot_model(i);
+      sim_.SetVisionNoise(i, read.config.robot_noise_xy.value_or(m.vision_noise_xy),
+                          read.config.robot_noise_theta.value_or(m.vision_noise_theta));
+    }
+  }
+}
+
+void LiveField::MakeRoomForBall(const Eigen::Vector2d& target) {
+  const double clearance = sim_.ball()->model().radius + kBallMargin;
+  for (int i = 0; i < sim_.num_robots(); ++i) {
+    if (!sim_.present(i)) continue;
+    const Pose2 pose = sim_.backend().pose(i);
+    const std::optional<Eigen::Vector2d> move = BallClearance(sim_.robot_model(i), pose, target, clearance);
+    if (!move) continue;
+    // Moved as a referee's hand moves it, keeping its velocity (robot frame).
+    sim_.Teleport(i, Pose2{pose.x + move->x(), pose.y + move->y(), pose.theta}, sim_.backend().velocity(i));
+  }
 }
 
 ServeSummary LiveField::Summary() const {
@@ -443,6 +503,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     std::vector<BallCommand> ball_commands = ball_commands_;
     for (int i = 0; i < sim_.num_robots(); ++i) {
       const auto k = static_cast<std::size_t>(i);
+      if (!sim_.present(i)) continue;  // off the field: sent nothing, its behaviour not asked
       records[k].command = moves_[k] ? LocalVelocity(*moves_[k], records[k].truth.theta) : sim_.SourceCommand(i);
       if (sim_.has_ball() && !ball_driven_[k]) ball_commands[k] = sim_.SourceBallCommand(i);
     }

@@ -33,6 +33,7 @@
 #include "core/duration_histogram.h"
 #include "scene/scene.h"
 #include "serve/robot_control.h"
+#include "serve/simulator_control.h"
 #include "serve/team_roster.h"
 #include "serve/udp_socket.h"
 #include "sim/omni_simulation.h"
@@ -118,6 +119,9 @@ class LiveField {
   // the options are not valid or the robots' vision delays differ (one camera).
   LiveField(const Scene& scene, Simulation sim, const ServeOptions& options);
 
+  // teleport_safely leaves at least this much between the ball and every chassis.
+  static constexpr double kBallMargin = 0.02;  // m
+
   int control_port() const { return control_.port(); }
   int blue_port() const { return teams_[0].socket.port(); }
   int yellow_port() const { return teams_[1].socket.port(); }
@@ -130,6 +134,10 @@ class LiveField {
 
   // Every frame run, for the logs (scene/scene_run.h: WriteOmniRunFiles).
   const SimulationResult& result() const { return result_; }
+  // The simulation served (for tests: who is on the field, where the robots are).
+  const Simulation& simulation() const { return sim_; }
+  // Where vision goes now (--vision-port, or SimulatorConfig.vision_port).
+  const UdpEndpoint& vision_to() const { return vision_to_; }
 
  private:
   struct TeamPort {
@@ -147,6 +155,13 @@ class LiveField {
   void Drain(int port);
   void HandleTeam(TeamPort& team, const Datagram& d);
   void HandleControl(const Datagram& d);
+  // Applies what a SimulatorCommand asked for and the reader accepted.
+  void ApplyControl(const SimulatorCommandResult& read);
+  // teleport_safely: moves every robot on the field whose chassis would be within
+  // kBallMargin of a ball at `target` (m, field frame) the shortest way out of it.
+  void MakeRoomForBall(const Eigen::Vector2d& target);
+  // Per robot index: on the field now.
+  std::vector<bool> Present() const;
   bool TakeToken(double* tokens);
   // Adds `seconds` worth of max_rate to every port's bucket (at most one second's worth).
   void RefillTokens(double seconds);

@@ -23,7 +23,7 @@ Twist2 LocalVelocity(const RobotMove& move, double theta) {
 }
 
 RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, const TeamRoster& roster,
-                                    const std::vector<bool>* ball_contact) {
+                                    const std::vector<bool>* ball_contact, const std::vector<bool>* present) {
   RobotControlResult result;
   RobotControl control;
   if (!control.ParseFromString(bytes)) {
@@ -45,6 +45,12 @@ RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, co
       } else {
         AddError(&result.response, "TWINSIM_UNKNOWN_ROBOT", "no " + robot + " on the field");
       }
+      continue;
+    }
+    if (present && static_cast<std::size_t>(index) < present->size() && !(*present)[static_cast<std::size_t>(index)]) {
+      ++result.refused;
+      AddError(&result.response, "TWINSIM_NOT_PRESENT",
+               robot + " is off the field; its command is not applied (a teleport with present: true adds it)");
       continue;
     }
     if (c.has_move_command()) {

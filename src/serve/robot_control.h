@@ -8,6 +8,9 @@
 //   TWINSIM_OVERSIZED      the datagram is over the size limit (not read)
 //   TWINSIM_UNKNOWN_ROBOT  the team has no robot of that id
 //   TWINSIM_OTHER_TEAM     the id is the other team's robot, commanded from this port
+//   TWINSIM_NOT_PRESENT    the robot is off the field (removed, or `present: false` in
+//                          the scene): its command is not applied; a teleport with
+//                          `present: true` adds it
 //   TWINSIM_BAD_VALUE      a velocity that is not finite or beyond the limits below; a
 //                          kick speed, kick angle or dribbler speed out of range (the
 //                          move is still applied)
@@ -65,8 +68,11 @@ void AddError(Response* response, const std::string& code, const std::string& me
 
 // Reads one datagram from `team`'s port. `ball_contact` (per robot index: the ball
 // touches its dribbler) is the field's ball; null: the field has none, kicks and the
-// dribbler are refused with TWINSIM_NO_BALL. Never throws for any bytes.
+// dribbler are refused with TWINSIM_NO_BALL. `present` (per robot index: on the field;
+// null: all are): a command for a robot off the field is refused with
+// TWINSIM_NOT_PRESENT and has no feedback. Never throws for any bytes.
 RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, const TeamRoster& roster,
-                                    const std::vector<bool>* ball_contact = nullptr);
+                                    const std::vector<bool>* ball_contact = nullptr,
+                                    const std::vector<bool>* present = nullptr);
 
 }  // namespace twinsim

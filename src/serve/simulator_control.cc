@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <google/protobuf/descriptor.h>
+
 #include "serve/robot_control.h"
 
 namespace twinsim {
@@ -23,8 +25,17 @@ BallState TeleportedBall(const BallTeleport& t, const BallState& current, double
   return b;
 }
 
+namespace {
+
+// The camera noise twinsim serve takes from a RealismConfigErForce; every other field of
+// it is refused by name.
+constexpr double kMaxNoiseXy = 1;       // m, stddev_robot_p beyond is refused
+constexpr double kMaxNoiseTheta = 3.2;  // rad, stddev_robot_phi
+
+}  // namespace
+
 SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const TeamRoster& roster, const FieldModel& field,
-                                            bool has_ball) {
+                                            bool has_ball, const std::vector<bool>* present) {
   SimulatorCommandResult result;
   SimulatorCommand command;
   if (!command.ParseFromString(bytes)) {
@@ -37,7 +48,55 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
     ++result.refused;
     AddError(&result.response, code, message);
   };
-  if (command.has_config()) refuse("TWINSIM_UNSUPPORTED", "simulator configuration is not supported; the scene file configures the field");
+  if (command.has_config()) {
+    const SimulatorConfig& config = command.config();
+    if (config.has_geometry())
+      refuse("TWINSIM_UNSUPPORTED", "config.geometry: the field's size and walls come from the scene file (field:) and "
+                                    "cannot change while it is served");
+    if (config.robot_specs_size() > 0)
+      refuse("TWINSIM_UNSUPPORTED", "config.robot_specs: the robots' bodies, wheels and limits come from their model "
+                                    "files (the scene's model:) and cannot change while it is served");
+    if (config.has_vision_port()) {
+      const unsigned port = config.vision_port();
+      if (port >= 1 && port <= 65535) {
+        result.config.vision_port = static_cast<int>(port);
+      } else {
+        refuse("TWINSIM_BAD_VALUE", "config.vision_port " + std::to_string(port) + " is not in 1..65535");
+      }
+    }
+    if (config.has_realism_config() && config.realism_config().has_custom() &&
+        config.realism_config().custom().has_erforce()) {
+      const RealismConfigErForce& realism = config.realism_config().custom().erforce();
+      const std::string at = "config.realism_config.custom.erforce.";
+      if (realism.has_stddev_robot_p()) {
+        const double v = realism.stddev_robot_p();
+        if (std::isfinite(v) && v >= 0 && v <= kMaxNoiseXy) {
+          result.config.robot_noise_xy = v;
+        } else {
+          refuse("TWINSIM_BAD_VALUE", at + "stddev_robot_p " + std::to_string(v) + " m is not in 0.." +
+                                          std::to_string(kMaxNoiseXy));
+        }
+      }
+      if (realism.has_stddev_robot_phi()) {
+        const double v = realism.stddev_robot_phi();
+        if (std::isfinite(v) && v >= 0 && v <= kMaxNoiseTheta) {
+          result.config.robot_noise_theta = v;
+        } else {
+          refuse("TWINSIM_BAD_VALUE", at + "stddev_robot_phi " + std::to_string(v) + " rad is not in 0.." +
+                                          std::to_string(kMaxNoiseTheta));
+        }
+      }
+      // Every other realism setting (the ball's noise and lost detections, delays,
+      // losses of commands and answers, ...) is named and refused.
+      std::vector<const google::protobuf::FieldDescriptor*> fields;
+      realism.GetReflection()->ListFields(realism, &fields);
+      for (const google::protobuf::FieldDescriptor* f : fields) {
+        if (f->name() == "stddev_robot_p" || f->name() == "stddev_robot_phi") continue;
+        refuse("TWINSIM_UNSUPPORTED", at + f->name() + ": not supported; the camera takes stddev_robot_p and "
+                                      "stddev_robot_phi only");
+      }
+    }
+  }
   if (!command.has_control()) return result;
   const SimulatorControl& control = command.control();
   if (control.has_teleport_ball()) {
@@ -50,13 +109,13 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
     if (t.has_vy()) ball.vy = t.vy();
     if (t.has_vz()) ball.vz = t.vz();
     ball.roll = t.roll();
+    ball.by_force = t.by_force();
+    ball.safely = t.teleport_safely();
     const Eigen::Vector3d v(ball.vx.value_or(0), ball.vy.value_or(0), ball.vz.value_or(0));
     const bool finite = std::isfinite(ball.x.value_or(0)) && std::isfinite(ball.y.value_or(0)) &&
                         std::isfinite(ball.z.value_or(0)) && v.allFinite();
     if (!has_ball) {
       refuse("TWINSIM_NO_BALL", "teleport_ball: the field has no ball (the scene has no `ball:`)");
-    } else if (t.by_force()) {
-      refuse("TWINSIM_UNSUPPORTED", "teleport_ball: moves by force are not supported yet");
     } else if (!finite || std::abs(ball.x.value_or(0)) >= field.length / 2 ||
                std::abs(ball.y.value_or(0)) >= field.width / 2 || ball.z.value_or(0) < 0 || ball.z.value_or(0) > 10 ||
                v.norm() > kMaxKickSpeed) {
@@ -76,6 +135,9 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
       refuse("TWINSIM_BAD_VALUE", "simulation_speed " + std::to_string(speed) + " is not in 0.01..100");
     }
   }
+  // Who is on the field, as the teleports read so far leave it.
+  std::vector<bool> on_field = present ? *present : std::vector<bool>(static_cast<std::size_t>(roster.size()), true);
+  on_field.resize(static_cast<std::size_t>(roster.size()), true);
   for (const TeleportRobot& t : control.teleport_robot()) {
     const bool yellow = t.id().team() == YELLOW;
     if (t.id().team() != YELLOW && t.id().team() != BLUE) {
@@ -89,16 +151,28 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
       refuse("TWINSIM_UNKNOWN_ROBOT", "teleport_robot: no " + robot + " on the field");
       continue;
     }
-    if (t.has_present() && !t.present()) {
-      refuse("TWINSIM_UNSUPPORTED", "teleport_robot " + robot + ": removing robots is not supported yet");
-      continue;
-    }
-    if (t.by_force()) {
-      refuse("TWINSIM_UNSUPPORTED", "teleport_robot " + robot + ": moves by force are not supported yet");
-      continue;
-    }
+    const auto k = static_cast<std::size_t>(index);
     RobotTeleport teleport;
     teleport.robot = index;
+    if (t.has_present() && !t.present()) {
+      // Removed: where and how fast do not matter.
+      teleport.present = false;
+      on_field[k] = false;
+      result.teleports.push_back(teleport);
+      continue;
+    }
+    if (t.has_present()) teleport.present = true;
+    teleport.by_force = t.by_force();
+    if (!on_field[k] && !t.has_present()) {
+      refuse("TWINSIM_NOT_PRESENT", "teleport_robot " + robot + ": the robot is off the field; send present: true "
+                                    "to add it");
+      continue;
+    }
+    if (!on_field[k] && teleport.by_force) {
+      refuse("TWINSIM_NOT_PRESENT", "teleport_robot " + robot + ": the robot is off the field and cannot be moved "
+                                    "by force; add it without by_force");
+      continue;
+    }
     if (t.has_x()) teleport.x = t.x();
     if (t.has_y()) teleport.y = t.y();
     if (t.has_orientation()) teleport.theta = t.orientation();
@@ -115,6 +189,7 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
                                       " m field, or the velocity not finite or beyond the command limits");
       continue;
     }
+    on_field[k] = true;
     result.teleports.push_back(teleport);
   }
   return result;

@@ -51,6 +51,22 @@ void BallField::Reset(const BallState& state) {
   engine_->SetBall(state);
   state_.ball = engine_->GetBall();
   state_.contact.assign(robots_.size(), false);
+  state_.pull.reset();
+}
+
+void BallField::Pull(const Eigen::Vector2d& target) { state_.pull = BallPull{target, kPullTimeout}; }
+
+void BallField::AddPull() {
+  const BallState& b = state_.ball;
+  // F = 2 m w (v_want - v) with v_want = (w / 2) e: the spring m w^2 e and the damper
+  // 2 m w v, critically damped, as long as neither limit is reached.
+  const double omega = 2 * kPi * kPullFrequency;
+  Eigen::Vector2d want = 0.5 * omega * (state_.pull->target - b.position.head<2>());
+  if (want.norm() > kPullSpeed) want *= kPullSpeed / want.norm();
+  Eigen::Vector2d force = 2 * model_.mass * omega * (want - b.velocity.head<2>());
+  const double most = model_.mass * kPullAccel;
+  if (force.norm() > most) force *= most / force.norm();
+  engine_->AddBallForce(Eigen::Vector3d(force.x(), force.y(), 0), Eigen::Vector3d::Zero());
 }
 
 void BallField::Restore(const BallFieldState& state) {
@@ -140,8 +156,15 @@ void BallField::StepFrame(const std::vector<Pose2>& from, const std::vector<Pose
       }
     }
     AddResistance(dt);
+    if (state_.pull) AddPull();
     engine_->Step(dt);
     state_.ball = engine_->GetBall();
+  }
+  if (state_.pull) {
+    state_.pull->time_left -= frame_dt;
+    const bool there = (state_.pull->target - state_.ball.position.head<2>()).norm() < kPullTolerance &&
+                       state_.ball.velocity.head<2>().norm() < kPullStopSpeed;
+    if (there || state_.pull->time_left <= 0) state_.pull.reset();
   }
   for (std::size_t i = 0; i < n; ++i) {
     const FrontContact at = BallAtFront(model_, robots_[i], to[i], state_.ball);

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/pose.h"
@@ -25,10 +26,17 @@
 
 namespace twinsim {
 
+// A move of the ball by force under way (BallField::Pull).
+struct BallPull {
+  Eigen::Vector2d target = Eigen::Vector2d::Zero();  // m, on the floor, field frame
+  double time_left = 0;                              // s before the pull gives up
+};
+
 // Everything that changes about the ball field.
 struct BallFieldState {
   BallState ball;
   std::vector<bool> contact;  // per robot: the ball touches its dribbler (end of the last frame)
+  std::optional<BallPull> pull;  // a move by force under way
 };
 
 // Where the ball is relative to a robot's flat front.
@@ -49,6 +57,16 @@ class BallField {
   static constexpr double kTouch = 0.003;
   // The ball's steps are at most this long: a 6.5 m/s kick moves 5 mm per step.
   static constexpr double kMaxStep = 1.0 / 1200;  // s
+  // A move by force (Pull): a critically damped spring of this natural frequency
+  // towards the target in the floor's plane, whose pull asks for no more than
+  // kPullSpeed and gives no more than kPullAccel; it lets go when the ball is within
+  // kPullTolerance of the target slower than kPullStopSpeed, or after kPullTimeout.
+  static constexpr double kPullFrequency = 1.5;    // Hz
+  static constexpr double kPullSpeed = 2;          // m/s
+  static constexpr double kPullAccel = 10;         // m/s^2
+  static constexpr double kPullTolerance = 0.01;   // m
+  static constexpr double kPullStopSpeed = 0.02;   // m/s
+  static constexpr double kPullTimeout = 10;       // s
 
   // Throws std::invalid_argument for an invalid ball model or a null engine.
   BallField(const BallModel& ball, std::vector<OmniModel> robots, const FieldModel& field,
@@ -58,8 +76,13 @@ class BallField {
   const std::string& engine_name() const { return engine_name_; }
   int num_robots() const { return static_cast<int>(robots_.size()); }
 
-  // Puts the ball at `state` at once (contacts forgotten).
+  // Puts the ball at `state` at once (contacts forgotten, a move by force ended).
   void Reset(const BallState& state);
+  // Starts moving the ball by force towards `target` (m, field frame, on the floor): a
+  // force through its centre on every step of the frames that follow (see kPullFrequency),
+  // besides whatever else acts on it (robots, kicks, walls). Replaces a move under way.
+  void Pull(const Eigen::Vector2d& target);
+  const std::optional<BallPull>& pull() const { return state_.pull; }
   const BallState& ball() const { return state_.ball; }
   // Whether the ball touched robot i's dribbler at the end of the last frame.
   bool contact(int robot) const { return state_.contact.at(static_cast<std::size_t>(robot)); }
@@ -77,6 +100,8 @@ class BallField {
  private:
   // Rolling resistance and drag on the ball for the next step of dt.
   void AddResistance(double dt);
+  // The move by force's pull for the next step.
+  void AddPull();
 
   BallModel model_;
   std::vector<OmniModel> robots_;

@@ -1,5 +1,6 @@
 #include "sim/omni_simulation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <sstream>
@@ -15,7 +16,13 @@ constexpr double kMaxSpeed = 50;       // m/s
 constexpr double kMaxOmega = 1000;     // rad/s
 constexpr double kMaxDistance = 1000;  // m
 
+// Where the ball's world keeps robot i while it is off the field: beyond kMaxDistance,
+// so the ball diverges (and the run stops) before it could touch one.
+Pose2 BallWorldParkedPose(int robot) { return Pose2{0, 1e4 + 10.0 * robot, 0}; }
+
 }  // namespace
+
+Pose2 Simulation::ParkedPose(int robot) { return Pose2{500 + 2.0 * robot, 500, 0}; }
 
 Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend> backend,
                        std::uint64_t seed)
@@ -24,14 +31,19 @@ Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend
   state_.ball_rng = Rng::Derived(seed, 0x62616c6c);  // "ball"
   for (int i = 0; i < num_robots(); ++i) {
     const SimRobot& r = robots_[static_cast<std::size_t>(i)];
-    backend_->Reset(i, r.start, Twist2{});
+    // A robot off the field at the start is parked, and the observer has seen nothing of it.
+    const Pose2 start = r.present ? r.start : ParkedPose(i);
+    backend_->Reset(i, start, Twist2{});
+    state_.present.push_back(r.present);
+    state_.pulls.emplace_back();
     state_.commands_in_flight.emplace_back(r.model.command_delay_frames, Twist2{});
-    state_.captures_in_flight.emplace_back(r.model.vision_delay_frames, std::optional<Pose2>(r.start));
+    state_.captures_in_flight.emplace_back(r.model.vision_delay_frames,
+                                           r.present ? std::optional<Pose2>(r.start) : std::nullopt);
     state_.delivered.emplace_back();
     state_.last_captured.emplace_back();
-    FrameRecord start;
-    start.truth = r.start;
-    state_.last_good.push_back(start);
+    FrameRecord first;
+    first.truth = start;
+    state_.last_good.push_back(first);
   }
 }
 
@@ -64,6 +76,7 @@ std::vector<FrameRecord> Simulation::Step() {
   std::vector<FrameRecord> records = BeginFrame();
   std::vector<BallCommand> ball_commands(robots_.size());
   for (int i = 0; i < num_robots(); ++i) {
+    if (!present(i)) continue;
     const auto k = static_cast<std::size_t>(i);
     records[k].command = SourceCommand(i);
     if (ball_) ball_commands[k] = SourceBallCommand(i);
@@ -122,6 +135,11 @@ void Simulation::TeleportBall(const BallState& state) {
   state_.ball_record.truth = ball_->ball();
 }
 
+void Simulation::PullBall(const Eigen::Vector2d& target) {
+  if (!ball_) throw std::logic_error("Simulation::PullBall: no ball");
+  ball_->Pull(target);
+}
+
 std::vector<FrameRecord> Simulation::BeginFrame() {
   if (frame_open_) throw std::logic_error("Simulation::BeginFrame: the previous frame was not ended");
   const double t = time();
@@ -157,6 +175,7 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
     rec.t = t;
     rec.truth = backend_->pose(i);
     rec.truth_velocity = backend_->velocity(i);
+    rec.present = state_.present[k];
     CheckFinite(i, rec.truth, rec.truth_velocity);
 
     // The camera: noise always drawn, so that dropping frames does not shift the stream.
@@ -174,7 +193,11 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
       last = captured;
     }
     rec.stamp = t + (m.vision_time_jitter > 0 ? m.vision_time_jitter * (2 * state_.rng.Uniform() - 1) : 0.0);
-    std::optional<Pose2> arrived = state_.captures_in_flight[k].Push(lost ? std::nullopt : std::optional(captured));
+    // A robot off the field is not captured (the draws above are made all the same, so
+    // that the other robots' noise does not depend on it), and has nothing to repeat.
+    if (!rec.present) state_.last_captured[k].reset();
+    std::optional<Pose2> arrived =
+        state_.captures_in_flight[k].Push(lost || !rec.present ? std::nullopt : std::optional(captured));
 
     auto& delivered = state_.delivered[k];
     if (arrived) {
@@ -201,6 +224,8 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
   if (records->size() != robots_.size()) throw std::invalid_argument("Simulation::EndFrame: one record per robot");
   std::vector<Twist2> applied(robots_.size());
   for (std::size_t k = 0; k < robots_.size(); ++k) {
+    // A robot off the field is sent nothing (what its sender gave is logged as zero).
+    if (!state_.present[k]) (*records)[k].command = Twist2{};
     const Twist2& command = (*records)[k].command;
     if (!IsFinite(command)) {
       std::ostringstream msg;
@@ -210,29 +235,96 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
     }
     applied[k] = state_.commands_in_flight[k].Push(command);
     (*records)[k].ball_command = ball_commands[k];
+    if (!state_.present[k]) applied[k] = Twist2{};
+    // A move by force overrides what comes out of the delay line while it lasts.
+    if (state_.pulls[k]) {
+      if (std::optional<Twist2> pulled = PullCommand(static_cast<int>(k))) applied[k] = *pulled;
+    }
   }
   frame_open_ = false;
-  // The robots go first, then the ball through the same frame among them (one-way).
+  // The robots go first, then the ball through the same frame among them (one-way);
+  // in the ball's world a robot off the field stands far beyond its reach.
+  auto ball_world_pose = [&](int i) { return present(i) ? backend_->pose(i) : BallWorldParkedPose(i); };
   std::vector<Pose2> before;
   if (ball_) {
-    for (int i = 0; i < num_robots(); ++i) before.push_back(backend_->pose(i));
+    for (int i = 0; i < num_robots(); ++i) before.push_back(ball_world_pose(i));
   }
   backend_->StepFrame(applied);
+  // Parked robots are put back exactly where they were, at rest.
+  for (int i = 0; i < num_robots(); ++i)
+    if (!present(i)) backend_->Reset(i, ParkedPose(i), Twist2{});
   if (ball_) {
     std::vector<Pose2> after;
     std::vector<BallCommand> acting(robots_.size());
     for (int i = 0; i < num_robots(); ++i) {
       const auto k = static_cast<std::size_t>(i);
-      after.push_back(backend_->pose(i));
-      acting[k] = state_.ball_commands_in_flight[k].Push(ball_commands[k]);
+      after.push_back(ball_world_pose(i));
+      acting[k] = state_.ball_commands_in_flight[k].Push(present(i) ? ball_commands[k] : BallCommand{});
+      if (!present(i)) acting[k] = BallCommand{};
     }
     ball_->StepFrame(before, after, acting, backend_->timing().frame_dt());
   }
   ++state_.frame;
 }
 
+std::optional<Twist2> Simulation::PullCommand(int robot) {
+  std::optional<RobotPull>& pull = state_.pulls.at(static_cast<std::size_t>(robot));
+  const Pose2 pose = backend_->pose(robot);
+  const Eigen::Vector2d error(pull->target.x - pose.x, pull->target.y - pose.y);
+  const double turn = WrapAngle(pull->target.theta - pose.theta);
+  const double distance = error.norm();
+  if ((distance < kPullTolerance && std::abs(turn) < kPullAngleTolerance) || pull->frames_left <= 0) {
+    pull.reset();
+    return std::nullopt;
+  }
+  --pull->frames_left;
+  // First order towards the target (time constant kPullTau), no faster than kPullSpeed
+  // and slow enough to brake at kPullAccel before it; the robot's own controller and
+  // motors then track the velocity, so its path stays continuous and its speed bounded.
+  const double speed = std::min({kPullSpeed, distance / kPullTau, std::sqrt(2 * kPullAccel * distance)});
+  const Eigen::Vector2d v = distance > 0 ? Eigen::Vector2d(error / distance * speed) : Eigen::Vector2d::Zero();
+  const double omega = std::clamp(turn / kPullTau, -kPullOmega, kPullOmega);
+  return FieldToBody(Twist2{v.x(), v.y(), omega}, pose.theta);
+}
+
 void Simulation::Teleport(int robot, const Pose2& pose, const Twist2& velocity) {
+  if (!present(robot)) {
+    throw std::logic_error("Simulation::Teleport: robot '" + robot_name(robot) + "' is off the field; Add() it");
+  }
+  state_.pulls[static_cast<std::size_t>(robot)].reset();
   backend_->Reset(robot, pose, velocity);
+}
+
+void Simulation::SetVisionNoise(int robot, double xy, double theta) {
+  if (!(std::isfinite(xy) && xy >= 0 && std::isfinite(theta) && theta >= 0))
+    throw std::invalid_argument("Simulation::SetVisionNoise: the noise must be finite and >= 0");
+  OmniModel& m = robots_.at(static_cast<std::size_t>(robot)).model;
+  m.vision_noise_xy = xy;
+  m.vision_noise_theta = theta;
+}
+
+void Simulation::Remove(int robot) {
+  const auto k = static_cast<std::size_t>(robot);
+  if (!state_.present.at(k)) return;
+  state_.present[k] = false;
+  state_.pulls[k].reset();
+  state_.last_captured[k].reset();
+  backend_->Reset(robot, ParkedPose(robot), Twist2{});
+}
+
+void Simulation::Add(int robot, const Pose2& pose, const Twist2& velocity) {
+  const auto k = static_cast<std::size_t>(robot);
+  state_.present.at(k) = true;
+  state_.pulls[k].reset();
+  backend_->Reset(robot, pose, velocity);
+}
+
+void Simulation::PullRobot(int robot, const Pose2& target) {
+  if (!present(robot)) {
+    throw std::logic_error("Simulation::PullRobot: robot '" + robot_name(robot) + "' is off the field");
+  }
+  const int frames = static_cast<int>(std::ceil(kPullTimeout * backend_->timing().frame_rate));
+  state_.pulls[static_cast<std::size_t>(robot)] = RobotPull{target, frames};
 }
 
 SimulationResult Simulation::Run(int frames, const std::function<void(int, int)>& progress) {
@@ -265,7 +357,8 @@ SimulationState Simulation::Save() const {
 
 void Simulation::Restore(const SimulationState& state) {
   if (state.behaviours.size() != robots_.size() || state.commands_in_flight.size() != robots_.size() ||
-      state.last_good.size() != robots_.size()) {
+      state.last_good.size() != robots_.size() || state.present.size() != robots_.size() ||
+      state.pulls.size() != robots_.size()) {
     throw std::invalid_argument("Simulation::Restore: state of a simulation with another number of robots");
   }
   if (state.ball.has_value() != has_ball())

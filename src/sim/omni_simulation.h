@@ -12,6 +12,21 @@
 //
 // The model (robots, timing) is fixed at construction; SimulationState holds all that
 // changes, and Save()/Restore() make a run repeatable from any frame.
+//
+// Robots off the field (SimRobot::present false, Remove(); Add() brings one back): the
+// backends and the ball's engines keep a fixed number of robots, so a robot off the
+// field is parked: held at rest at a spot of its own far outside any field
+// (ParkedPose(), reset there after every frame), and in the ball's world further still,
+// beyond where the ball counts as diverged, so nothing on the field can touch it. The
+// camera captures nothing of it (its noise is still drawn: the other robots' streams
+// stay), its commands and ball commands are replaced by zero, its behaviour is not
+// asked, and its records say present = false.
+//
+// Moves by force (PullRobot(), PullBall()): for the frames that follow, the robot's
+// delayed commands are replaced by a position controller's (towards the target, at
+// most kPullSpeed and kPullAccel, kPullOmega), and the ball feels a critically damped
+// pull (sim/ball_field.h), until each is within tolerance of its target or
+// kPullTimeout has passed; both collide on the way like any robot and ball.
 #pragma once
 
 #include <cstdint>
@@ -34,6 +49,7 @@ struct SimRobot {
   OmniModel model;
   Pose2 start;
   std::unique_ptr<CommandSource> commands;
+  bool present = true;  // on the field at the start (false: parked until Add())
 };
 
 // One row of what happened to one robot in one frame.
@@ -46,6 +62,7 @@ struct FrameRecord {
   BallCommand ball_command;  // sent at t with it: kick, dribbler (zero without a ball)
   Pose2 truth;             // the true pose at t
   Twist2 truth_velocity;   // robot frame, true
+  bool present = true;     // false: off the field this frame (truth is its parking spot)
 };
 
 // One frame of the ball: its true state at t, and where the camera saw it (captured
@@ -66,8 +83,17 @@ struct SimulationResult {
   std::vector<BallRecord> ball;                  // [frame]; empty without a ball
 };
 
+// A robot being moved by force: where to, and how many frames are left before the
+// pull gives up.
+struct RobotPull {
+  Pose2 target;         // field frame
+  int frames_left = 0;
+};
+
 struct SimulationState {
   int frame = 0;
+  std::vector<bool> present;                   // per robot: on the field
+  std::vector<std::optional<RobotPull>> pulls;  // per robot: a move by force under way
   Rng rng;
   std::vector<DelayLine<Twist2>> commands_in_flight;                // per robot
   std::vector<DelayLine<std::optional<Pose2>>> captures_in_flight;  // per robot
@@ -90,6 +116,16 @@ struct SimulationState {
 
 class Simulation {
  public:
+  // A move by force (PullRobot): the controller's speed limits, its time constant, and
+  // when it lets go.
+  static constexpr double kPullSpeed = 2;        // m/s
+  static constexpr double kPullAccel = 3;        // m/s^2, braking towards the target
+  static constexpr double kPullOmega = 4;        // rad/s
+  static constexpr double kPullTau = 0.2;        // s, the position error's time constant
+  static constexpr double kPullTolerance = 0.01;  // m; arrived within this and kPullAngleTolerance
+  static constexpr double kPullAngleTolerance = 0.02;  // rad
+  static constexpr double kPullTimeout = 10;     // s, a pull that has not arrived by then stops
+
   // Places every robot at rest at its start; commands before t = 0 are zero and the
   // observer has seen the robots standing at their starts.
   Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend> backend, std::uint64_t seed);
@@ -145,8 +181,32 @@ class Simulation {
     return state_.delivered.at(static_cast<std::size_t>(robot));
   }
   // Puts robot i at `pose` moving at `velocity` (robot frame) now, as a referee's hand
-  // would: the commands and captures already in flight stay in flight.
+  // would: the commands and captures already in flight stay in flight; a move by force
+  // under way ends. Throws std::logic_error for a robot off the field (Add it).
   void Teleport(int robot, const Pose2& pose, const Twist2& velocity);
+  // Sets robot i's camera noise (standard deviations: m of x and y, rad of theta), as a
+  // live configuration does (twinsim serve's SimulatorConfig): a change of the model, not
+  // of the state, so Restore() keeps it. Throws std::invalid_argument for a negative or
+  // non-finite value.
+  void SetVisionNoise(int robot, double xy, double theta);
+  // Whether robot i is on the field now.
+  bool present(int robot) const { return state_.present.at(static_cast<std::size_t>(robot)); }
+  // Takes robot i off the field now (parks it, see above); a move by force it was under
+  // ends. Its captures already in flight still arrive, as a teleport's would. Nothing
+  // happens for a robot already off.
+  void Remove(int robot);
+  // Puts robot i on the field now (or, if it is on, teleports it) at `pose` moving at
+  // `velocity` (robot frame).
+  void Add(int robot, const Pose2& pose, const Twist2& velocity);
+  // Where robot i is parked while off the field (field frame): 500 m out, 2 m apart.
+  static Pose2 ParkedPose(int robot);
+  // Starts moving robot i by force towards `target` (replacing a move under way); throws
+  // std::logic_error for a robot off the field. pull(i) is the move under way, if any.
+  void PullRobot(int robot, const Pose2& target);
+  const std::optional<RobotPull>& pull(int robot) const { return state_.pulls.at(static_cast<std::size_t>(robot)); }
+  // Starts moving the ball by force towards `target` (x, y on the floor; BallField::Pull).
+  // Throws std::logic_error without a ball.
+  void PullBall(const Eigen::Vector2d& target);
   const std::string& robot_name(int robot) const { return robots_.at(static_cast<std::size_t>(robot)).name; }
   const OmniModel& robot_model(int robot) const { return robots_.at(static_cast<std::size_t>(robot)).model; }
 
@@ -165,6 +225,9 @@ class Simulation {
   // Robot i's source (null: none) and what it is given in the open frame; throws
   // std::logic_error naming `caller` when no frame is open.
   BehaviourInput SourceInput(int robot, const char* caller, CommandSource** source);
+  // The command of robot i's move by force from its true state now (robot frame); ends
+  // the move (returns nothing) when the robot has arrived or the time is up.
+  std::optional<Twist2> PullCommand(int robot);
 
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;

@@ -66,6 +66,18 @@ TEST(Scene, TeamsAndIdsAreChecked) {
   EXPECT_NE(e.find("must be in [0, 15], got 16"), std::string::npos) << e;
 }
 
+TEST(Scene, ARobotMayStartOffTheFieldAndPresentIsChecked) {
+  const std::string robot = "    model: ../models/omni4.yaml\n    commands: {type: random}\n";
+  Scene s = LoadSceneFromString("name: t\nduration: 1\nrobots:\n  - name: a\n" + robot +
+                                    "  - name: b\n    present: false\n" + robot,
+                                "s.yaml", SourcePath("scenes"));
+  ASSERT_EQ(s.robots.size(), 2u);
+  EXPECT_TRUE(s.robots[0].present);  // the default
+  EXPECT_FALSE(s.robots[1].present);
+  const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - name: a\n    present: maybe\n" + robot);
+  EXPECT_NE(e.find("s.yaml:5:14: 'present' in 'robots[0]': expected true or false, got 'maybe'"), std::string::npos) << e;
+}
+
 TEST(Scene, UnknownCommandTypeListsKnownOnes) {
   const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands: {type: dance}\n");
   EXPECT_NE(e.find("unknown value 'dance' (known: sequence, test_drive, figure_eight, random, go_to_pose, log)"),

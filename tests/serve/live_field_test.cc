@@ -489,8 +489,8 @@ TEST(LiveField, BadKicksAndBallTeleportsAreRefused) {
             Codes1{"TWINSIM_BAD_VALUE"});
   EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(9, 0, 0), field.control_port())), Codes1{"TWINSIM_BAD_VALUE"});
   EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(0, 0, 50), field.control_port())), Codes1{"TWINSIM_BAD_VALUE"});
-  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(0, 0, 0, true), field.control_port())),
-            Codes1{"TWINSIM_UNSUPPORTED"});
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(9, 0, 0, true), field.control_port())),
+            Codes1{"TWINSIM_BAD_VALUE"});
   const ServeSummary& summary = server.Stop();
   EXPECT_EQ(summary.counters.refused, 7);
 }
@@ -608,6 +608,284 @@ TEST(LiveField, RealTimePriorityHoldsWhileServingAndIsGivenBack) {
   EXPECT_EQ(policy_during, SCHED_FIFO);
   EXPECT_EQ(cpus_during, 1);
   EXPECT_EQ(policy_after, policy_before);
+}
+
+// Blue 0, yellow 3, and blue 1 off the field at the start (the scene's `present: false`).
+Scene SquadScene(const std::string& ball = "") {
+  const std::string model = SourcePath("models/omni4.yaml");
+  const std::string hold = "commands: {type: sequence, segments: [{duration: 1, command: [0, 0, 0]}]}";
+  return LoadSceneFromString("name: squad\nbackend: analytic\nframe_rate: 60\nduration: 10\nseed: 7\nrobots:\n"
+                             "  - {name: b0, model: " + model + ", start: {x: 0, y: 0}, " + hold + "}\n"
+                             "  - {name: y3, team: yellow, id: 3, model: " + model +
+                                 ", start: {x: 1, y: 1.5, theta_deg: 90}, " + hold + "}\n"
+                             "  - {name: b1, id: 1, present: false, model: " + model +
+                                 ", start: {x: -2, y: 1}, " + hold + "}\n" + ball,
+                             "squad.yaml", ".");
+}
+
+// A SimulatorCommand with one teleport of `team`'s robot `id`; `present` set unless null.
+std::string TeleportCommand(Team team, unsigned id, std::optional<bool> present, std::optional<Pose2> pose,
+                            bool by_force = false) {
+  SimulatorCommand command;
+  TeleportRobot* t = command.mutable_control()->add_teleport_robot();
+  t->mutable_id()->set_id(id);
+  t->mutable_id()->set_team(team);
+  if (present) t->set_present(*present);
+  if (pose) {
+    t->set_x(static_cast<float>(pose->x));
+    t->set_y(static_cast<float>(pose->y));
+    t->set_orientation(static_cast<float>(pose->theta));
+  }
+  if (by_force) t->set_by_force(true);
+  return command.SerializeAsString();
+}
+
+// Whether the detection frame shows `team`'s robot `id`, and where (mm).
+std::optional<Eigen::Vector2d> Sighted(const SSL_DetectionFrame& f, Team team, unsigned id) {
+  const auto& robots = team == BLUE ? f.robots_blue() : f.robots_yellow();
+  for (const SSL_DetectionRobot& r : robots)
+    if (r.robot_id() == id) return Eigen::Vector2d(r.x(), r.y());
+  return std::nullopt;
+}
+
+TEST(LiveField, RobotsAreAddedAndRemovedAndOffTheFieldTheyAreNeitherSeenNorCommanded) {
+  const Scene scene = SquadScene();
+  const int frames = 30;
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), LockstepOptions(vision.port(), frames));
+  std::vector<SSL_DetectionFrame> seen;
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < frames; ++k) {
+      std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, static_cast<std::uint32_t>(k));
+      ASSERT_TRUE(f) << "no vision for frame " << k;
+      seen.push_back(*f);
+      if (k == 2) {
+        // Blue 1 is off the field: not teleported without present: true (nor commanded:
+        // the team's message below).
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(BLUE, 1, std::nullopt, Pose2{1, 1, 0}),
+                                               field.control_port())),
+                  Codes1{"TWINSIM_NOT_PRESENT"});
+        // A robot the scene does not have stays unknown: the scene is the squad.
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(BLUE, 7, true, Pose2{1, 1, 0}),
+                                               field.control_port())),
+                  Codes1{"TWINSIM_UNKNOWN_ROBOT"});
+      }
+      if (k == 5) {
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(BLUE, 1, true, Pose2{2, -1, 1}),
+                                               field.control_port())),
+                  Codes1{});
+      }
+      if (k == 15) {
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(YELLOW, 3, false, std::nullopt),
+                                               field.control_port())),
+                  Codes1{});
+      }
+      // Yellow 3 is refused from then on (the yellow team, once it has sent, is waited
+      // for in lockstep: it answers every frame).
+      if (k >= 15) {
+        EXPECT_EQ(Codes(Ask<RobotControlResponse>(client, Local(3, Twist2{1, 0, 0}), field.yellow_port())),
+                  Codes1{"TWINSIM_NOT_PRESENT"})
+            << k;
+      }
+      // Blue 1, once added, takes commands like any robot (standing still here).
+      RobotControl control;
+      for (unsigned id : {0u, 1u}) {
+        RobotCommand* c = control.add_robot_commands();
+        c->set_id(id);
+        c->mutable_move_command()->mutable_local_velocity()->set_forward(0);
+        c->mutable_move_command()->mutable_local_velocity()->set_left(0);
+        c->mutable_move_command()->mutable_local_velocity()->set_angular(0);
+      }
+      const auto r = Ask<RobotControlResponse>(client, control.SerializeAsString(), field.blue_port());
+      ASSERT_TRUE(r) << k;
+      EXPECT_EQ(Codes(r), k < 5 ? Codes1{"TWINSIM_NOT_PRESENT"} : Codes1{}) << k;
+    }
+    const ServeSummary& summary = server.Join();
+    // Frames 0..4 refuse blue 1's command, frame 2 two requests, frames 15..29 yellow 3's.
+    EXPECT_EQ(summary.counters.refused, 5 + 2 + 15);
+  }
+  // Vision shows what the camera captured two frames earlier: blue 1 from frame 8 (added
+  // during frame 5, captured from 6) where it was put; yellow 3 until frame 17 (removed
+  // during frame 15, last captured in 15).
+  for (int k = 0; k < frames; ++k) {
+    const SSL_DetectionFrame& f = seen[static_cast<std::size_t>(k)];
+    const std::optional<Eigen::Vector2d> b1 = Sighted(f, BLUE, 1), y3 = Sighted(f, YELLOW, 3);
+    EXPECT_EQ(b1.has_value(), k >= 8) << k;
+    EXPECT_EQ(y3.has_value(), k <= 17) << k;
+    EXPECT_TRUE(Sighted(f, BLUE, 0).has_value()) << k;
+    if (b1) {
+      EXPECT_NEAR(b1->x(), 2000, 5) << k;
+      EXPECT_NEAR(b1->y(), -1000, 5) << k;
+    }
+  }
+  // The logs: blue 1 and yellow 3 are on the field in the frames they were.
+  const SimulationResult& result = field.result();
+  for (int k = 0; k < frames; ++k) {
+    EXPECT_EQ(result.frames[2][static_cast<std::size_t>(k)].present, k >= 6) << k;
+    EXPECT_EQ(result.frames[1][static_cast<std::size_t>(k)].present, k <= 15) << k;
+  }
+  EXPECT_FALSE(field.simulation().present(1));
+  EXPECT_TRUE(field.simulation().present(2));
+}
+
+TEST(LiveField, MovesByForceArriveWithoutAJump) {
+  const Scene scene = SquadScene("ball: {start: {x: 1, y: -1}}\n");
+  const int frames = 200;
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), LockstepOptions(vision.port(), frames));
+  const Pose2 target{1.0, 0.5, 1.0};
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < frames; ++k) {
+      ASSERT_TRUE(ReceiveFrame(vision, static_cast<std::uint32_t>(k))) << "no vision for frame " << k;
+      if (k == 3) {
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(BLUE, 0, std::nullopt, target, true),
+                                               field.control_port())),
+                  Codes1{});
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, BallTeleportCommand(-1.0f, 1.5f, 0, true), field.control_port())),
+                  Codes1{});
+        // Off the field a robot cannot be moved by force.
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(BLUE, 1, true, target, true),
+                                               field.control_port())),
+                  Codes1{"TWINSIM_NOT_PRESENT"});
+      }
+      // The team keeps sending "stand still": the move by force overrides it.
+      ASSERT_TRUE(Ask<RobotControlResponse>(client, Local(0, Twist2{}), field.blue_port())) << k;
+    }
+    server.Join();
+  }
+  const SimulationResult& result = field.result();
+  const double dt = 1.0 / 60;
+  for (int k = 1; k < frames; ++k) {
+    const Pose2& a = result.frames[0][static_cast<std::size_t>(k - 1)].truth;
+    const Pose2& b = result.frames[0][static_cast<std::size_t>(k)].truth;
+    EXPECT_LE(std::hypot(b.x - a.x, b.y - a.y), 1.1 * Simulation::kPullSpeed * dt) << k;
+    const Eigen::Vector3d& p = result.ball[static_cast<std::size_t>(k - 1)].truth.position;
+    const Eigen::Vector3d& q = result.ball[static_cast<std::size_t>(k)].truth.position;
+    EXPECT_LE((q - p).norm(), 1.1 * BallField::kPullSpeed * dt) << k;
+  }
+  // It got there (within the pull's tolerance), and let go it stays near (the last
+  // few cm/s of the approach).
+  double nearest = 1;
+  for (const FrameRecord& f : result.frames[0])
+    nearest = std::min(nearest, std::hypot(f.truth.x - target.x, f.truth.y - target.y));
+  EXPECT_LT(nearest, Simulation::kPullTolerance);
+  const Pose2& end = result.frames[0].back().truth;
+  EXPECT_LT(std::hypot(end.x - target.x, end.y - target.y), 0.02);
+  EXPECT_LT(std::abs(WrapAngle(end.theta - target.theta)), 2 * Simulation::kPullAngleTolerance);
+  const Eigen::Vector3d& ball = result.ball.back().truth.position;
+  EXPECT_LT(std::hypot(ball.x() + 1, ball.y() - 1.5), 0.02);
+  // Both were let go.
+  EXPECT_FALSE(field.simulation().pull(0).has_value());
+  EXPECT_FALSE(field.simulation().ball()->pull().has_value());
+}
+
+TEST(LiveField, TheBallTeleportedSafelyMovesRobotsOutOfItsWay) {
+  const Scene scene = SquadScene("ball: {start: {x: 1, y: -1}}\n");
+  const int frames = 6;
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), LockstepOptions(vision.port(), frames));
+  // Onto blue 0 (at the origin, facing +x): just before its flat front, 5 mm off its axis.
+  const float bx = static_cast<float>(testing::Omni4().FrontDistance() + 0.01), by = 0.005f;
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < frames; ++k) {
+      ASSERT_TRUE(ReceiveFrame(vision, static_cast<std::uint32_t>(k))) << "no vision for frame " << k;
+      if (k == 2) {
+        SimulatorCommand command;
+        ::TeleportBall* t = command.mutable_control()->mutable_teleport_ball();
+        t->set_x(bx);
+        t->set_y(by);
+        t->set_teleport_safely(true);
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, command.SerializeAsString(), field.control_port())), Codes1{});
+      }
+      ASSERT_TRUE(Ask<RobotControlResponse>(client, Local(0, Twist2{}), field.blue_port())) << k;
+    }
+    server.Join();
+  }
+  const SimulationResult& result = field.result();
+  // Frame 3 starts after the teleport: blue 0 backed off to leave exactly the margin
+  // between the ball and its front (the shortest way: straight back, with the heading
+  // kept); yellow 3, far away, did not move.
+  const Pose2& b0 = result.frames[0][3].truth;
+  const Eigen::Vector3d& placed = result.ball[3].truth.position;
+  EXPECT_NEAR(placed.x(), bx, 1e-6);
+  const double gap = bx - b0.x - testing::Omni4().FrontDistance() - BallModel{}.radius;
+  EXPECT_NEAR(gap, LiveField::kBallMargin, 1e-4);
+  EXPECT_NEAR(b0.y, 0, 1e-4);
+  EXPECT_NEAR(b0.theta, 0, 1e-6);
+  EXPECT_EQ(result.frames[1][3].truth.x, result.frames[1][2].truth.x);
+  EXPECT_EQ(result.frames[1][3].truth.y, result.frames[1][2].truth.y);
+}
+
+TEST(LiveField, ConfigurationMovesVisionAndSetsTheCameraNoiseAndRefusesTheRest) {
+  const Scene scene = SquadScene();
+  const int frames = 12;
+  UdpSocket vision("127.0.0.1", 0), vision2("127.0.0.1", 0), client("127.0.0.1", 0);
+  LiveField field(scene, MakeSimulation(scene, "analytic"), LockstepOptions(vision.port(), frames));
+  std::vector<SSL_DetectionFrame> seen;
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < frames; ++k) {
+      // From frame 4 on vision comes to the new port.
+      std::optional<SSL_DetectionFrame> f = ReceiveFrame(k < 4 ? vision : vision2, static_cast<std::uint32_t>(k));
+      ASSERT_TRUE(f) << "no vision for frame " << k;
+      seen.push_back(*f);
+      if (k == 3) {
+        SimulatorCommand command;
+        SimulatorConfig* config = command.mutable_config();
+        config->set_vision_port(static_cast<unsigned>(vision2.port()));
+        RealismConfigErForce* realism = config->mutable_realism_config()->mutable_custom()->mutable_erforce();
+        realism->set_stddev_robot_p(0);
+        realism->set_stddev_robot_phi(0);
+        realism->set_missing_ball_detections(0.5f);
+        RobotSpecs* specs = config->add_robot_specs();
+        specs->mutable_id()->set_id(0);
+        specs->mutable_id()->set_team(BLUE);
+        specs->set_radius(0.1f);
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, command.SerializeAsString(), field.control_port())),
+                  (Codes1{"TWINSIM_UNSUPPORTED", "TWINSIM_UNSUPPORTED"}));
+      }
+      ASSERT_TRUE(Ask<RobotControlResponse>(client, Local(0, Twist2{0.5, 0, 0.5}), field.blue_port())) << k;
+    }
+    server.Join();
+  }
+  EXPECT_EQ(field.vision_to().port, vision2.port());
+  // Noise 1 mm before; none in what was captured from frame 4 on (seen from frame 6).
+  const SimulationResult& result = field.result();
+  int exact_before = 0;
+  for (int k = 2; k < frames; ++k) {
+    const auto ku = static_cast<std::size_t>(k);
+    const Pose2& captured = result.frames[0][ku - 2].truth;
+    const SSL_DetectionRobot& r = seen[ku].robots_blue(0);
+    const bool exact = r.x() == static_cast<float>(1000 * captured.x) && r.y() == static_cast<float>(1000 * captured.y) &&
+                       r.orientation() == static_cast<float>(captured.theta);
+    if (k >= 6) {
+      EXPECT_TRUE(exact) << k;
+    } else if (exact) {
+      ++exact_before;
+    }
+  }
+  EXPECT_EQ(exact_before, 0);
+}
+
+TEST(LiveField, TournamentModeRefusesConfiguration) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.tournament = true;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  ServerThread server(&field);
+  SimulatorCommand command;
+  command.mutable_config()->set_vision_port(static_cast<unsigned>(client.port()));
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, command.SerializeAsString(), field.control_port())),
+            Codes1{"TWINSIM_TOURNAMENT"});
+  EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, TeleportCommand(BLUE, 0, false, std::nullopt), field.control_port())),
+            Codes1{"TWINSIM_TOURNAMENT"});
+  server.Stop();
+  EXPECT_EQ(field.vision_to().port, vision.port());
+  EXPECT_TRUE(field.simulation().present(0));
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <map>
 
 #include "core/math_constants.h"
 #include "robots/omni/omni_model.h"
@@ -251,6 +253,177 @@ TEST(SimulatorControl, TeleportsKnownRobotsAndRefusesTheRest) {
   std::vector<std::string> codes;
   for (const SimulatorError& e : r.response.errors()) codes.push_back(e.code());
   EXPECT_EQ(codes, (std::vector<std::string>{"TWINSIM_NO_BALL", "TWINSIM_UNKNOWN_ROBOT", "TWINSIM_BAD_VALUE"}));
+}
+
+TeleportRobot* AddTeleport(SimulatorControl* control, Team team, unsigned id) {
+  TeleportRobot* t = control->add_teleport_robot();
+  t->mutable_id()->set_id(id);
+  t->mutable_id()->set_team(team);
+  return t;
+}
+
+std::vector<std::string> CodesOf(const SimulatorResponse& response) {
+  std::vector<std::string> codes;
+  for (const SimulatorError& e : response.errors()) codes.push_back(e.code());
+  return codes;
+}
+
+TEST(SimulatorControl, PresentAddsAndRemovesAndARobotOffTheFieldNeedsIt) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  const std::vector<bool> present = {true, false, true};  // blue 1 is off the field
+  SimulatorCommand command;
+  SimulatorControl* control = command.mutable_control();
+  AddTeleport(control, BLUE, 1)->set_x(1.0f);  // off the field, no present: refused
+  TeleportRobot* forced = AddTeleport(control, BLUE, 1);
+  forced->set_present(true);
+  forced->set_by_force(true);  // cannot be added by force: refused
+  TeleportRobot* add = AddTeleport(control, BLUE, 1);
+  add->set_present(true);
+  add->set_x(1.0f);
+  add->set_y(-1.0f);
+  AddTeleport(control, BLUE, 1)->set_x(2.0f);  // now on the field: a plain teleport
+  TeleportRobot* remove = AddTeleport(control, YELLOW, 3);
+  remove->set_present(false);
+  remove->set_x(50.0f);  // ignored with present: false
+  AddTeleport(control, YELLOW, 3)->set_x(0.0f);  // removed just before: refused
+  TeleportRobot* pull = AddTeleport(control, BLUE, 0);
+  pull->set_by_force(true);
+  pull->set_x(1.0f);
+  const SimulatorCommandResult r =
+      ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{}, false, &present);
+  ASSERT_TRUE(r.parsed);
+  EXPECT_EQ(CodesOf(r.response),
+            (std::vector<std::string>{"TWINSIM_NOT_PRESENT", "TWINSIM_NOT_PRESENT", "TWINSIM_NOT_PRESENT"}));
+  EXPECT_EQ(r.refused, 3);
+  ASSERT_EQ(r.teleports.size(), 4u);
+  EXPECT_EQ(r.teleports[0].robot, 1);
+  EXPECT_EQ(r.teleports[0].present, std::optional<bool>(true));
+  EXPECT_FLOAT_EQ(static_cast<float>(*r.teleports[0].y), -1.0f);
+  EXPECT_EQ(r.teleports[1].robot, 1);
+  EXPECT_FALSE(r.teleports[1].present.has_value());
+  EXPECT_EQ(r.teleports[2].robot, 2);
+  EXPECT_EQ(r.teleports[2].present, std::optional<bool>(false));
+  EXPECT_EQ(r.teleports[3].robot, 0);
+  EXPECT_TRUE(r.teleports[3].by_force);
+  // Without presence flags every robot is on the field.
+  const SimulatorCommandResult all = ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{});
+  EXPECT_EQ(CodesOf(all.response), (std::vector<std::string>{"TWINSIM_NOT_PRESENT"}));  // yellow 3 after its removal
+}
+
+TEST(SimulatorControl, BallMovesByForceAndSafelyAreRead) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  SimulatorCommand command;
+  TeleportBall* t = command.mutable_control()->mutable_teleport_ball();
+  t->set_x(1.0f);
+  t->set_by_force(true);
+  t->set_teleport_safely(true);
+  const SimulatorCommandResult r = ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{}, true);
+  EXPECT_EQ(r.refused, 0);
+  ASSERT_TRUE(r.ball.has_value());
+  EXPECT_TRUE(r.ball->by_force);
+  EXPECT_TRUE(r.ball->safely);
+}
+
+TEST(SimulatorControl, ConfigTakesTheVisionPortAndCameraNoiseAndNamesWhatItRefuses) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  SimulatorCommand command;
+  SimulatorConfig* config = command.mutable_config();
+  config->set_vision_port(10777);
+  RealismConfigErForce* realism = config->mutable_realism_config()->mutable_custom()->mutable_erforce();
+  realism->set_stddev_robot_p(0.002f);
+  realism->set_stddev_robot_phi(0.01f);
+  realism->set_stddev_ball_p(0.003f);
+  realism->set_vision_delay(30000000);
+  const SimulatorCommandResult r = ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{});
+  EXPECT_EQ(r.config.vision_port, std::optional<int>(10777));
+  EXPECT_FLOAT_EQ(static_cast<float>(r.config.robot_noise_xy.value_or(-1)), 0.002f);
+  EXPECT_FLOAT_EQ(static_cast<float>(r.config.robot_noise_theta.value_or(-1)), 0.01f);
+  ASSERT_EQ(CodesOf(r.response), (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_UNSUPPORTED"}));
+  EXPECT_NE(r.response.errors(0).message().find("config.realism_config.custom.erforce.stddev_ball_p"),
+            std::string::npos)
+      << r.response.errors(0).message();
+  EXPECT_NE(r.response.errors(1).message().find("config.realism_config.custom.erforce.vision_delay"),
+            std::string::npos)
+      << r.response.errors(1).message();
+
+  // Geometry and robot specs are named and refused; a port out of range and a negative
+  // noise are bad values; nothing of them is taken.
+  SimulatorCommand rest;
+  SimulatorConfig* c = rest.mutable_config();
+  *c->mutable_geometry() = GeometryPacket(FieldModel{}, 0.3).geometry();
+  c->add_robot_specs()->mutable_id()->set_id(0);
+  c->mutable_robot_specs(0)->mutable_id()->set_team(BLUE);
+  c->set_vision_port(70000);
+  c->mutable_realism_config()->mutable_custom()->mutable_erforce()->set_stddev_robot_p(-1);
+  const SimulatorCommandResult bad = ReadSimulatorCommand(rest.SerializeAsString(), roster, FieldModel{});
+  ASSERT_TRUE(bad.parsed);
+  EXPECT_EQ(CodesOf(bad.response), (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_UNSUPPORTED",
+                                                             "TWINSIM_BAD_VALUE", "TWINSIM_BAD_VALUE"}));
+  EXPECT_NE(bad.response.errors(0).message().find("config.geometry"), std::string::npos);
+  EXPECT_NE(bad.response.errors(1).message().find("config.robot_specs"), std::string::npos);
+  EXPECT_FALSE(bad.config.vision_port.has_value());
+  EXPECT_FALSE(bad.config.robot_noise_xy.has_value());
+  EXPECT_EQ(bad.refused, 4);
+}
+
+TEST(RobotControl, ARobotOffTheFieldIsRefusedAndTheOthersCommanded) {
+  const TeamRoster roster = TwoBlueOneYellow();
+  const std::vector<bool> present = {true, false, true};
+  RobotControl control;
+  for (unsigned id : {0u, 1u}) {
+    RobotCommand* c = control.add_robot_commands();
+    c->set_id(id);
+    c->mutable_move_command()->mutable_local_velocity()->set_forward(1);
+    c->mutable_move_command()->mutable_local_velocity()->set_left(0);
+    c->mutable_move_command()->mutable_local_velocity()->set_angular(0);
+  }
+  const RobotControlResult r = ReadRobotControl(control.SerializeAsString(), TeamColor::kBlue, roster, nullptr, &present);
+  ASSERT_EQ(r.response.errors_size(), 1);
+  EXPECT_EQ(r.response.errors(0).code(), "TWINSIM_NOT_PRESENT");
+  EXPECT_NE(r.response.errors(0).message().find("blue robot 1 is off the field"), std::string::npos);
+  EXPECT_EQ(r.refused, 1);
+  ASSERT_EQ(r.moves.size(), 1u);
+  EXPECT_EQ(r.moves[0].first, 0);
+  EXPECT_EQ(r.response.feedback_size(), 1);
+}
+
+// The fuzz target's seeds (tests/fuzz/corpus/serve_packet/, dispatched as
+// fuzz/serve_packet_fuzz.cc does: the first byte picks the reader) are read here too, with
+// every prefix, so that a reader that throws fails the ordinary suite; and the seeds for
+// robots off the field, moves by force and configuration mean what they are named.
+TEST(SimulatorControl, TheFuzzSeedsAreReadWithoutThrowing) {
+  const TeamRoster roster({TeamRobot{TeamColor::kBlue, 0}, TeamRobot{TeamColor::kBlue, 1},
+                           TeamRobot{TeamColor::kYellow, 0}, TeamRobot{TeamColor::kYellow, 3}});
+  const FieldModel field;
+  const std::vector<bool> contact = {true, false, false, true}, present = {true, true, true, false};
+  auto read = [&](const std::string& datagram) -> std::vector<std::string> {
+    const std::string bytes = datagram.substr(1);
+    std::vector<std::string> codes;
+    auto collect = [&](const auto& response) {
+      for (const SimulatorError& e : response.errors()) codes.push_back(e.code());
+    };
+    switch (static_cast<unsigned char>(datagram[0]) % 4) {
+      case 0: collect(ReadRobotControl(bytes, TeamColor::kBlue, roster).response); break;
+      case 1: collect(ReadRobotControl(bytes, TeamColor::kYellow, roster, &contact, &present).response); break;
+      case 2: collect(ReadSimulatorCommand(bytes, roster, field, false).response); break;
+      default: collect(ReadSimulatorCommand(bytes, roster, field, true, &present).response); break;
+    }
+    return codes;
+  };
+  const std::string dir = testing::SourcePath("tests/fuzz/corpus/serve_packet");
+  std::map<std::string, std::vector<std::string>> codes;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string seed = testing::ReadText(entry.path().string());
+    ASSERT_FALSE(seed.empty()) << entry.path();
+    for (std::size_t n = 1; n < seed.size(); ++n) EXPECT_NO_THROW(read(seed.substr(0, n))) << entry.path() << " " << n;
+    codes[entry.path().filename().string()] = read(seed);
+  }
+  ASSERT_EQ(codes.count("simulator_present"), 1u);
+  EXPECT_EQ(codes["simulator_present"], std::vector<std::string>{});
+  EXPECT_EQ(codes["simulator_by_force"], std::vector<std::string>{});
+  EXPECT_EQ(codes["simulator_config"], (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_UNSUPPORTED",
+                                                                 "TWINSIM_UNSUPPORTED"}));
+  EXPECT_EQ(codes["control_not_present"], std::vector<std::string>{"TWINSIM_NOT_PRESENT"});
 }
 
 }  // namespace

@@ -90,8 +90,12 @@ int Run(const RunOptions& options) {
                 scene.name.c_str(), result.frames.size(), result.backend.c_str(), frames, scene.frame_rate, simulated, wall,
                 wall > 0 ? simulated / wall : 0.0);
     const FrameRecord& last = result.frames[0].back();
-    std::printf("  %s ends at x = %.3f m, y = %.3f m, theta = %.1f deg\n", result.robot_names[0].c_str(), last.truth.x,
-                last.truth.y, last.truth.theta * 180 / kPi);
+    if (last.present) {
+      std::printf("  %s ends at x = %.3f m, y = %.3f m, theta = %.1f deg\n", result.robot_names[0].c_str(),
+                  last.truth.x, last.truth.y, last.truth.theta * 180 / kPi);
+    } else {
+      std::printf("  %s ends off the field (present: false)\n", result.robot_names[0].c_str());
+    }
     files.PrintWrote();
   }
   return kExitOk;
@@ -105,7 +109,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   cmd->footer(
       "Writes DIR/trajectory.csv (t,x,y,theta,vx_cmd,vy_cmd,omega_cmd: the first robot as its\n"
       "observer saw it, four frames late by default, lost frames left out), DIR/truth.csv (the\n"
-      "true pose and velocity every frame), and the same with _NAME for every further robot;\n"
+      "true pose and velocity every frame the robot is on the field: a scene robot with\n"
+      "`present: false` has none), and the same with _NAME for every further robot;\n"
       "DIR/ball.csv (t,x,y,z,vx,vy,vz) when the scene has a `ball:` (docs/ball.md); and the PNG\n"
       "plots the scene's `plots:` list asks for (docs/rendering.md).\n"
       "A scene's robots may each name their own backend (`backend:`, `predictor:`; docs/scenes.md):\n"
