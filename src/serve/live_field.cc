@@ -406,6 +406,12 @@ void LiveField::ApplyControl(const SimulatorCommandResult& read) {
     }
   }
   if (read.config.vision_port) vision_to_.port = *read.config.vision_port;
+  if (read.config.ball_noise_xy || read.config.ball_drop) {
+    BallVision vision = sim_.ball_vision();
+    vision.noise_xy = read.config.ball_noise_xy.value_or(vision.noise_xy);
+    vision.drop_probability = read.config.ball_drop.value_or(vision.drop_probability);
+    sim_.SetBallVision(vision);
+  }
   if (read.config.robot_noise_xy || read.config.robot_noise_theta) {
     for (int i = 0; i < sim_.num_robots(); ++i) {
       const OmniModel& m = sim_.robot_model(i);

@@ -86,14 +86,33 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
                                           std::to_string(kMaxNoiseTheta));
         }
       }
-      // Every other realism setting (the ball's noise and lost detections, delays,
-      // losses of commands and answers, ...) is named and refused.
+      // The ball's camera (the scene's ball.vision): its noise on x and y, and the
+      // chance of a frame without it.
+      auto ball_value = [&](bool has, double v, const char* name, double most, const char* unit,
+                            std::optional<double>* out) {
+        if (!has) return;
+        if (!has_ball) {
+          refuse("TWINSIM_NO_BALL", at + name + ": the scene has no ball");
+        } else if (std::isfinite(v) && v >= 0 && v <= most) {
+          *out = v;
+        } else {
+          refuse("TWINSIM_BAD_VALUE", at + name + " " + std::to_string(v) + unit + " is not in 0.." + std::to_string(most));
+        }
+      };
+      ball_value(realism.has_stddev_ball_p(), realism.stddev_ball_p(), "stddev_ball_p", kMaxNoiseXy, " m",
+                 &result.config.ball_noise_xy);
+      ball_value(realism.has_missing_ball_detections(), realism.missing_ball_detections(), "missing_ball_detections", 1,
+                 "", &result.config.ball_drop);
+      // Every other realism setting (delays, losses of commands and answers, ...) is
+      // named and refused.
+      static const char* const kTaken[] = {"stddev_robot_p", "stddev_robot_phi", "stddev_ball_p",
+                                           "missing_ball_detections"};
       std::vector<const google::protobuf::FieldDescriptor*> fields;
       realism.GetReflection()->ListFields(realism, &fields);
       for (const google::protobuf::FieldDescriptor* f : fields) {
-        if (f->name() == "stddev_robot_p" || f->name() == "stddev_robot_phi") continue;
-        refuse("TWINSIM_UNSUPPORTED", at + f->name() + ": not supported; the camera takes stddev_robot_p and "
-                                      "stddev_robot_phi only");
+        if (std::find(std::begin(kTaken), std::end(kTaken), f->name()) != std::end(kTaken)) continue;
+        refuse("TWINSIM_UNSUPPORTED", at + f->name() + ": not supported; the camera takes stddev_robot_p, "
+                                      "stddev_robot_phi, stddev_ball_p and missing_ball_detections only");
       }
     }
   }

@@ -49,6 +49,8 @@ struct ConfigChange {
   std::optional<int> vision_port;             // vision goes to this port from now on
   std::optional<double> robot_noise_xy;       // m, every robot's camera noise (stddev_robot_p)
   std::optional<double> robot_noise_theta;    // rad (stddev_robot_phi)
+  std::optional<double> ball_noise_xy;        // m, the ball's camera noise on x and y (stddev_ball_p)
+  std::optional<double> ball_drop;            // probability the camera misses the ball (missing_ball_detections)
 };
 
 // Where the teleport puts a ball of `radius` that is at `current`.

@@ -303,6 +303,14 @@ void Simulation::SetVisionNoise(int robot, double xy, double theta) {
   m.vision_noise_theta = theta;
 }
 
+void Simulation::SetBallVision(const BallVision& vision) {
+  if (!ball_) throw std::logic_error("Simulation::SetBallVision: no ball");
+  auto ok = [](double v) { return std::isfinite(v) && v >= 0; };
+  if (!ok(vision.noise_xy) || !ok(vision.noise_z) || !ok(vision.drop_probability) || vision.drop_probability > 1)
+    throw std::invalid_argument("Simulation::SetBallVision: the noise must be finite and >= 0, the probability in 0..1");
+  ball_vision_ = vision;
+}
+
 void Simulation::Remove(int robot) {
   const auto k = static_cast<std::size_t>(robot);
   if (!state_.present.at(k)) return;

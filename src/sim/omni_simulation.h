@@ -189,6 +189,11 @@ class Simulation {
   // of the state, so Restore() keeps it. Throws std::invalid_argument for a negative or
   // non-finite value.
   void SetVisionNoise(int robot, double xy, double theta);
+  // How the camera sees the ball, and a change of it as SetVisionNoise's (a change of
+  // the model: Restore() keeps it). Throws std::logic_error without a ball and
+  // std::invalid_argument for a negative or non-finite value or a probability over 1.
+  const BallVision& ball_vision() const { return ball_vision_; }
+  void SetBallVision(const BallVision& vision);
   // Whether robot i is on the field now.
   bool present(int robot) const { return state_.present.at(static_cast<std::size_t>(robot)); }
   // Takes robot i off the field now (parks it, see above); a move by force it was under

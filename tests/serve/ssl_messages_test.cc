@@ -338,10 +338,25 @@ TEST(SimulatorControl, ConfigTakesTheVisionPortAndCameraNoiseAndNamesWhatItRefus
   EXPECT_EQ(r.config.vision_port, std::optional<int>(10777));
   EXPECT_FLOAT_EQ(static_cast<float>(r.config.robot_noise_xy.value_or(-1)), 0.002f);
   EXPECT_FLOAT_EQ(static_cast<float>(r.config.robot_noise_theta.value_or(-1)), 0.01f);
-  ASSERT_EQ(CodesOf(r.response), (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_UNSUPPORTED"}));
+  // The ball's noise on a field without a ball: no ball; the vision delay: unsupported.
+  ASSERT_EQ(CodesOf(r.response), (std::vector<std::string>{"TWINSIM_NO_BALL", "TWINSIM_UNSUPPORTED"}));
   EXPECT_NE(r.response.errors(0).message().find("config.realism_config.custom.erforce.stddev_ball_p"),
             std::string::npos)
       << r.response.errors(0).message();
+  EXPECT_FALSE(r.config.ball_noise_xy.has_value());
+  // With a ball, the ball's camera noise and missed detections are taken; a probability
+  // over 1 is a bad value.
+  realism->set_missing_ball_detections(0.25f);
+  const SimulatorCommandResult with_ball =
+      ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{}, /*has_ball=*/true);
+  EXPECT_EQ(CodesOf(with_ball.response), (std::vector<std::string>{"TWINSIM_UNSUPPORTED"}));
+  EXPECT_FLOAT_EQ(static_cast<float>(with_ball.config.ball_noise_xy.value_or(-1)), 0.003f);
+  EXPECT_FLOAT_EQ(static_cast<float>(with_ball.config.ball_drop.value_or(-1)), 0.25f);
+  realism->set_missing_ball_detections(1.5f);
+  const SimulatorCommandResult over =
+      ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{}, /*has_ball=*/true);
+  EXPECT_EQ(CodesOf(over.response), (std::vector<std::string>{"TWINSIM_BAD_VALUE", "TWINSIM_UNSUPPORTED"}));
+  EXPECT_FALSE(over.config.ball_drop.has_value());
   EXPECT_NE(r.response.errors(1).message().find("config.realism_config.custom.erforce.vision_delay"),
             std::string::npos)
       << r.response.errors(1).message();
@@ -421,7 +436,9 @@ TEST(SimulatorControl, TheFuzzSeedsAreReadWithoutThrowing) {
   ASSERT_EQ(codes.count("simulator_present"), 1u);
   EXPECT_EQ(codes["simulator_present"], std::vector<std::string>{});
   EXPECT_EQ(codes["simulator_by_force"], std::vector<std::string>{});
-  EXPECT_EQ(codes["simulator_config"], (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_UNSUPPORTED",
+  // Geometry refused, the ball's camera noise on a field read without a ball, one more
+  // realism field refused.
+  EXPECT_EQ(codes["simulator_config"], (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_NO_BALL",
                                                                  "TWINSIM_UNSUPPORTED"}));
   EXPECT_EQ(codes["control_not_present"], std::vector<std::string>{"TWINSIM_NOT_PRESENT"});
 }
