@@ -68,30 +68,12 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
         config.realism_config().custom().has_erforce()) {
       const RealismConfigErForce& realism = config.realism_config().custom().erforce();
       const std::string at = "config.realism_config.custom.erforce.";
-      if (realism.has_stddev_robot_p()) {
-        const double v = realism.stddev_robot_p();
-        if (std::isfinite(v) && v >= 0 && v <= kMaxNoiseXy) {
-          result.config.robot_noise_xy = v;
-        } else {
-          refuse("TWINSIM_BAD_VALUE", at + "stddev_robot_p " + std::to_string(v) + " m is not in 0.." +
-                                          std::to_string(kMaxNoiseXy));
-        }
-      }
-      if (realism.has_stddev_robot_phi()) {
-        const double v = realism.stddev_robot_phi();
-        if (std::isfinite(v) && v >= 0 && v <= kMaxNoiseTheta) {
-          result.config.robot_noise_theta = v;
-        } else {
-          refuse("TWINSIM_BAD_VALUE", at + "stddev_robot_phi " + std::to_string(v) + " rad is not in 0.." +
-                                          std::to_string(kMaxNoiseTheta));
-        }
-      }
-      // The ball's camera (the scene's ball.vision): its noise on x and y, and the
-      // chance of a frame without it.
-      auto ball_value = [&](bool has, double v, const char* name, double most, const char* unit,
-                            std::optional<double>* out) {
+      // The camera's noise on the robots (the models' vision.noise_xy, noise_theta) and
+      // on the ball (the scene's ball.vision), and the chance of a frame without the ball.
+      auto take = [&](bool has, double v, const char* name, double most, const char* unit, bool of_ball,
+                      std::optional<double>* out) {
         if (!has) return;
-        if (!has_ball) {
+        if (of_ball && !has_ball) {
           refuse("TWINSIM_NO_BALL", at + name + ": the scene has no ball");
         } else if (std::isfinite(v) && v >= 0 && v <= most) {
           *out = v;
@@ -99,10 +81,14 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
           refuse("TWINSIM_BAD_VALUE", at + name + " " + std::to_string(v) + unit + " is not in 0.." + std::to_string(most));
         }
       };
-      ball_value(realism.has_stddev_ball_p(), realism.stddev_ball_p(), "stddev_ball_p", kMaxNoiseXy, " m",
-                 &result.config.ball_noise_xy);
-      ball_value(realism.has_missing_ball_detections(), realism.missing_ball_detections(), "missing_ball_detections", 1,
-                 "", &result.config.ball_drop);
+      take(realism.has_stddev_robot_p(), realism.stddev_robot_p(), "stddev_robot_p", kMaxNoiseXy, " m", false,
+           &result.config.robot_noise_xy);
+      take(realism.has_stddev_robot_phi(), realism.stddev_robot_phi(), "stddev_robot_phi", kMaxNoiseTheta, " rad",
+           false, &result.config.robot_noise_theta);
+      take(realism.has_stddev_ball_p(), realism.stddev_ball_p(), "stddev_ball_p", kMaxNoiseXy, " m", true,
+           &result.config.ball_noise_xy);
+      take(realism.has_missing_ball_detections(), realism.missing_ball_detections(), "missing_ball_detections", 1, "",
+           true, &result.config.ball_drop);
       // Every other realism setting (delays, losses of commands and answers, ...) is
       // named and refused.
       static const char* const kTaken[] = {"stddev_robot_p", "stddev_robot_phi", "stddev_ball_p",
