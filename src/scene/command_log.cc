@@ -30,12 +30,12 @@ constexpr double kMaxKickAngle = 89 * kPi / 180;
 
 std::string CommandsCsv(const SimulationResult& result) {
   std::string out = "frame,t,robot,vx_cmd,vy_cmd,omega_cmd,kick_speed,kick_angle,dribbler_speed\n";
-  // Frame by frame, the robots in the field's order; a robot that was off the field for
-  // a while has no records then, so rows go by each record's own frame.
+  // Frame by frame, the robots in the field's order; a robot off the field sends
+  // nothing and has no row (rows go by each record's own frame).
   std::vector<std::tuple<long long, std::size_t, const FrameRecord*>> rows;
   for (std::size_t i = 0; i < result.frames.size(); ++i) {
     for (const FrameRecord& f : result.frames[i])
-      rows.emplace_back(std::llround(f.t * result.timing.frame_rate), i, &f);
+      if (f.present) rows.emplace_back(std::llround(f.t * result.timing.frame_rate), i, &f);
   }
   std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
     return std::tie(std::get<0>(a), std::get<1>(a)) < std::tie(std::get<0>(b), std::get<1>(b));

@@ -191,11 +191,16 @@ TEST(ServeReplay, ACommandLogReadsBackTheSameDoublesAndHoldsBetweenRows) {
       result.frames[static_cast<std::size_t>(i)].push_back(f);
     }
   }
-  // A robot added to the field at frame 1 (robot_presence): records from then on.
+  // A robot added to the field at frame 1 (off it in frame 0), and one whose records
+  // begin later: rows only where it was on the field.
   result.robot_names.push_back("late");
-  result.frames.push_back({result.frames[0][1], result.frames[0][2]});
+  result.frames.push_back(result.frames[0]);
+  result.frames.back()[0].present = false;
+  result.robot_names.push_back("later");
+  result.frames.push_back({result.frames[0][2]});
   WriteText(dir + "/c.csv", CommandsCsv(result));
   EXPECT_EQ(ReadCommandLog(dir + "/c.csv", "late", 60).frames, (std::vector<int>{1, 2}));
+  EXPECT_EQ(ReadCommandLog(dir + "/c.csv", "later", 60).frames, (std::vector<int>{2}));
   const CommandLog log = ReadCommandLog(dir + "/c.csv", "b", 60);
   ASSERT_EQ(log.frames, (std::vector<int>{0, 1, 2}));
   for (std::size_t k = 0; k < 3; ++k) {
