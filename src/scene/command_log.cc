@@ -25,6 +25,7 @@ std::string Exact(double v) {
 // file holds what a team could have sent.
 constexpr double kMaxSpeed = 20, kMaxOmega = 100, kMaxKick = 20, kMaxDribbler = 1e5;
 constexpr double kMaxKickAngle = 89 * kPi / 180;
+constexpr double kMaxLogFrames = 1e7;
 
 }  // namespace
 
@@ -85,7 +86,10 @@ CommandLog ReadCommandLog(const std::string& path, const std::string& robot, dou
     const double when = row[static_cast<std::size_t>(time)];
     const double frame = by_frame ? when : std::round(when * frame_rate);
     if (by_frame && frame != std::round(frame)) throw InputError(at, "frame " + Exact(when) + " is not a whole number");
-    if (frame < 0 || frame > 1e9) throw InputError(at, "frame " + Exact(frame) + " is outside 0..1e9");
+    // A run keeps every frame (scene.h: at most 1e7), so a replay ends before that.
+    if (frame < 0 || frame >= kMaxLogFrames)
+      throw InputError(at, "frame " + Exact(frame) + " is outside 0.." + Exact(kMaxLogFrames - 1) +
+                               " (a run keeps at most 1e7 frames)");
     if (!log.frames.empty() && frame <= log.frames.back()) {
       throw InputError(at, "frame " + std::to_string(static_cast<long long>(frame)) + " does not come after frame " +
                                std::to_string(log.frames.back()) + (robots >= 0 ? " of robot '" + robot + "'" : "") +

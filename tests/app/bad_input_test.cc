@@ -603,6 +603,8 @@ std::vector<BadInputCase> Cases() {
        "run {d}/s.yaml --out {d}/out --commands {d}/c.csv", 2, "{d}/c.csv:4:", "out", 20.0, "time order"},
       {"run_commands_speed_1e308", {{"s.yaml", std::string(kOmniScene)}, {"c.csv", std::string("frame,t,robot,vx_cmd,vy_cmd,omega_cmd,kick_speed,kick_angle,dribbler_speed\n" "0,0,blue0,0,0,0,0,0,0\n" "1,0.033,blue0,1,0,0,0,0,0\n" "2,0.067,blue0,1e308,0,0,0,0,0\n")}},
        "run {d}/s.yaml --out {d}/out --commands {d}/c.csv", 2, "{d}/c.csv:4:4:", "out"},
+      {"run_commands_frame_1e8", {{"s.yaml", std::string(kOmniScene)}, {"c.csv", std::string("frame,t,robot,vx_cmd,vy_cmd,omega_cmd,kick_speed,kick_angle,dribbler_speed\n" "0,0,blue0,0,0,0,0,0,0\n" "1,0.033,blue0,1,0,0,0,0,0\n" "100000000,3333333.3,blue0,0,0,0,0,0,0\n")}},
+       "run {d}/s.yaml --out {d}/out --commands {d}/c.csv", 2, "{d}/c.csv:4:", "out", 20.0, "1e7 frames"},
       {"run_commands_kick_nan", {{"s.yaml", std::string(kOmniScene)}, {"c.csv", std::string("frame,t,robot,vx_cmd,vy_cmd,omega_cmd,kick_speed,kick_angle,dribbler_speed\n" "0,0,blue0,0,0,0,0,0,0\n" "1,0.033,blue0,1,0,0,0,0,0\n" "2,0.067,blue0,0,0,0,nan,0,0\n")}},
        "run {d}/s.yaml --out {d}/out --commands {d}/c.csv", 2, "{d}/c.csv:4:", "out"},
       {"run_commands_no_column", {{"s.yaml", std::string(kOmniScene)}, {"c.csv", std::string("t,vx_cmd,vy_cmd\n0,0,0\n")}},
