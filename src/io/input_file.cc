@@ -24,4 +24,10 @@ std::string ReadInputFile(const std::string& path, const std::string& kind, std:
   return buffer.str();
 }
 
+std::string ResolveRelativeTo(const std::string& file, const std::string& base_dir) {
+  std::filesystem::path p(file);
+  if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
+  return p.lexically_normal().string();
+}
+
 }  // namespace twinsim

@@ -14,4 +14,8 @@ namespace twinsim {
 // `max_bytes` (`kind` names the format in the message: "CSV", "YAML") or cannot be opened.
 std::string ReadInputFile(const std::string& path, const std::string& kind, std::uintmax_t max_bytes);
 
+// `file` as named in an input file: relative to `base_dir` (the naming file's folder)
+// unless absolute, normalised ("a/../b" -> "b").
+std::string ResolveRelativeTo(const std::string& file, const std::string& base_dir);
+
 }  // namespace twinsim

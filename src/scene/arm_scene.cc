@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "core/math_constants.h"
+#include "io/input_file.h"
 #include "io/yaml_reader.h"
 #include "render/plot_spec.h"
 
@@ -19,18 +20,12 @@ namespace fs = std::filesystem;
 const std::vector<std::string> kPlotTypes = {"tool_path", "joint_torques", "tracking_error"};
 const std::vector<std::string> kTaskTypes = {"writing", "hold", "step", "sinusoid", "random"};
 
-std::string Resolve(const std::string& file, const fs::path& base_dir) {
-  fs::path p(file);
-  if (p.is_relative()) p = base_dir / p;
-  return p.lexically_normal().string();
-}
-
 // Loads the arm model at `key` of `m` into *model (resolved path into *path).
 bool ReadModel(YamlMap& m, const std::string& key, bool required, const fs::path& base_dir, std::string* path,
                ArmModel* model, const YamlOverrides& overrides = {}) {
   std::string file;
   if (!(required ? m.Require(key, &file) : m.Get(key, &file))) return false;
-  *path = Resolve(file, base_dir);
+  *path = ResolveRelativeTo(file, base_dir.string());
   try {
     *model = LoadArmModel(*path, overrides);
     return true;

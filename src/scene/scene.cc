@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "core/math_constants.h"
+#include "io/input_file.h"
 #include "io/yaml_reader.h"
 
 namespace twinsim {
@@ -75,9 +76,7 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
   } else if (type == "log") {
     // Read when the scene's frame rate and the robot's name are known (ReadScene).
     if (m.Require("file", &spec->log_path)) {
-      fs::path p(spec->log_path);
-      if (p.is_relative()) p = fs::path(path).parent_path() / p;
-      spec->log_path = p.lexically_normal().string();
+      spec->log_path = ResolveRelativeTo(spec->log_path, fs::path(path).parent_path().string());
     }
     m.Get("robot", &spec->log_robot);
   } else if (type == "go_to_pose") {
@@ -91,9 +90,7 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
       spec->angle_tolerance = angle_tolerance_deg * kPi / 180;
     m.Get("hold", &spec->hold, NonNegative());
     if (m.Get("predictor", &spec->predictor_path)) {
-      std::filesystem::path p(spec->predictor_path);
-      if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
-      spec->predictor_path = p.lexically_normal().string();
+      spec->predictor_path = ResolveRelativeTo(spec->predictor_path, fs::path(path).parent_path().string());
       try {
         spec->predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(spec->predictor_path));
       } catch (const InputError& e) {
@@ -150,9 +147,7 @@ void ReadRobotBackend(YamlMap& r, const fs::path& base_dir,
   if (r.Has("predictor")) {
     where.predictor = r.Where(r.Child("predictor"));
     if (r.Get("predictor", &robot->predictor_path)) {
-      fs::path p(robot->predictor_path);
-      if (p.is_relative()) p = base_dir / p;
-      robot->predictor_path = p.lexically_normal().string();
+      robot->predictor_path = ResolveRelativeTo(robot->predictor_path, base_dir.string());
       auto it = predictors->find(robot->predictor_path);
       if (it == predictors->end()) {
         std::shared_ptr<const OmniPredictor> loaded;
@@ -257,9 +252,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
       robot.id = -1;
       if (id_given.back() && !r.Get("id", &robot.id, InRange(0, 15))) robot.id = -1;
       if (r.Require("model", &robot.model_path)) {
-        fs::path p(robot.model_path);
-        if (p.is_relative()) p = base_dir / p;
-        robot.model_path = p.lexically_normal().string();
+        robot.model_path = ResolveRelativeTo(robot.model_path, base_dir.string());
         try {
           robot.model = LoadOmniModel(robot.model_path, plant);
         } catch (const InputError& e) {

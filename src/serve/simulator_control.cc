@@ -29,7 +29,7 @@ namespace {
 
 // The camera noise twinsim serve takes from a RealismConfigErForce; every other field of
 // it is refused by name.
-constexpr double kMaxNoiseXy = 1;       // m, stddev_robot_p beyond is refused
+constexpr double kMaxNoiseXy = 1;       // m, stddev_robot_p and stddev_ball_p beyond are refused
 constexpr double kMaxNoiseTheta = 3.2;  // rad, stddev_robot_phi
 
 }  // namespace

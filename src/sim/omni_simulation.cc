@@ -225,7 +225,12 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
   std::vector<Twist2> applied(robots_.size());
   for (std::size_t k = 0; k < robots_.size(); ++k) {
     // A robot off the field is sent nothing (what its sender gave is logged as zero).
-    if (!state_.present[k]) (*records)[k].command = Twist2{};
+    if (!state_.present[k]) {
+      (*records)[k].command = Twist2{};
+      (*records)[k].ball_command = BallCommand{};
+    } else {
+      (*records)[k].ball_command = ball_commands[k];
+    }
     const Twist2& command = (*records)[k].command;
     if (!IsFinite(command)) {
       std::ostringstream msg;
@@ -234,7 +239,6 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
       throw CheckFailed(msg.str());
     }
     applied[k] = state_.commands_in_flight[k].Push(command);
-    (*records)[k].ball_command = ball_commands[k];
     if (!state_.present[k]) applied[k] = Twist2{};
     // A move by force overrides what comes out of the delay line while it lasts.
     if (state_.pulls[k]) {
@@ -259,7 +263,8 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
     for (int i = 0; i < num_robots(); ++i) {
       const auto k = static_cast<std::size_t>(i);
       after.push_back(ball_world_pose(i));
-      acting[k] = state_.ball_commands_in_flight[k].Push(present(i) ? ball_commands[k] : BallCommand{});
+      // What a robot sent before it left is still in flight: it does not act off the field.
+      acting[k] = state_.ball_commands_in_flight[k].Push((*records)[k].ball_command);
       if (!present(i)) acting[k] = BallCommand{};
     }
     ball_->StepFrame(before, after, acting, backend_->timing().frame_dt());
