@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "backends/omni_backend_factory.h"
@@ -16,7 +17,9 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
   };
   if (horizon < 0) return fail("--horizon must be 0 or more, got " + std::to_string(horizon));
   if (stride < 1) return fail("stride must be 1 or more, got " + std::to_string(stride));
-  return true;
+  if (state != "observer" && state != "tracker")
+    return fail("--state must be observer or tracker, got '" + state + "'");
+  return observer.IsValid(why);
 }
 
 int OmniReplayResult::num_predicted() const {
@@ -51,6 +54,69 @@ OmniPoseErrors PoseErrorsInRobotFrame(const OmniLog& log, const OmniReplayResult
 
 namespace {
 
+// The observer's replay (OmniReplayOptions::state "observer"): the filter runs along the
+// log; each prediction (or the stretch's free run) starts from its estimate.
+void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                    const std::function<void(int, int)>& progress, std::size_t stretch_first, std::size_t stretch_last,
+                    const std::map<int, std::size_t>& row_of_frame, const std::vector<Twist2>& command_at,
+                    const std::function<void(std::size_t, const Pose2&)>& check, OmniReplayResult* out) {
+  OmniObserver observer(model, options.backend, 1.0 / log.frame_period, options.observer);
+  const int k = options.horizon;
+  const int last_frame = static_cast<int>(command_at.size()) - 1;
+  const bool stretch = stretch_first < stretch_last;
+  auto planned = [&](int f, int until) {
+    return std::vector<Twist2>(command_at.begin() + std::min(f + 1, last_frame + 1),
+                               command_at.begin() + std::min(until, last_frame) + 1);
+  };
+  // A prediction's headings on the log's unwrapped branch at the start row.
+  auto unwrap_shift = [&](std::size_t row) {
+    const double d = log.rows[row].pose.theta - observer.Estimate().pose.theta;
+    return d - WrapAngle(d);
+  };
+  int start_frame = -1;
+  for (int f = 0; f <= last_frame; ++f) {
+    if (progress && f % 64 == 0) progress(f, last_frame);
+    auto here = row_of_frame.find(f);
+    std::optional<Pose2> camera;
+    if (here != row_of_frame.end() && log.rows[here->second].measured) camera = log.rows[here->second].pose;
+    observer.AddFrame(camera, command_at[static_cast<std::size_t>(f)]);
+    if (observer.started() && start_frame < 0) start_frame = f;
+    if (here == row_of_frame.end()) continue;
+    const std::size_t row = here->second;
+    if (stretch && row == stretch_first) {
+      if (!observer.started() || f - start_frame < kWarmUpFrames) {
+        throw InputError(log.path + ":" + std::to_string(log.line_of[stretch_first]) +
+                         ": a free run must start after the observer's warm-up of " + std::to_string(kWarmUpFrames) +
+                         " frames");
+      }
+      // The free run: no more corrections from the measurement.
+      const int end_frame = log.FrameIndex(stretch_last - 1);
+      const double shift = unwrap_shift(row);
+      const OmniPrediction run = observer.PredictAhead(end_frame - f, planned(f, end_frame));
+      for (int j = 1; j <= end_frame - f; ++j) {
+        auto it = row_of_frame.find(f + j);
+        if (it == row_of_frame.end()) continue;
+        Pose2 p = run.pose[static_cast<std::size_t>(j - 1)];
+        check(it->second, p);
+        p.theta += shift;
+        out->pose[it->second] = p;
+        out->predicted[it->second] = true;
+      }
+      return;
+    }
+    if (!observer.started()) continue;
+    auto target = row_of_frame.find(f + k);
+    const int since = f - start_frame - kWarmUpFrames;
+    if (stretch || target == row_of_frame.end() || since < 0 || since % options.stride != 0) continue;
+    Pose2 p = observer.PredictAhead(k, planned(f, f + k)).pose.back();
+    check(target->second, p);
+    p.theta += unwrap_shift(row);
+    out->pose[target->second] = p;
+    out->predicted[target->second] = true;
+  }
+  if (progress) progress(last_frame, last_frame);
+}
+
 // ReplayOmniLog, or with stretch_first < stretch_last the free run of ReplayOmniStretch.
 OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                         const std::function<void(int, int)>& progress, std::size_t stretch_first,
@@ -79,7 +145,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   }
   auto delayed_command = [&](int frame) { return frame - delay < 0 ? Twist2{} : command_at[static_cast<std::size_t>(frame - delay)]; };
 
-  auto check = [&](std::size_t row, const Pose2& p) {
+  const std::function<void(std::size_t, const Pose2&)> check = [&](std::size_t row, const Pose2& p) {
     if (!IsFinite(p)) {
       std::ostringstream msg;
       msg << log.path << ":" << log.line_of[row] << ": model " << model.name << " on " << options.backend
@@ -99,6 +165,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   }
 
   if (k == 0) {
+    out.state = "none";
     // One free run from the first row; its velocity from the first two rows.
     const OmniLogRow& a = log.rows[0];
     const OmniLogRow& b = log.rows[1];
@@ -121,6 +188,14 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     return out;
   }
 
+  const bool stretch = stretch_first < stretch_last;
+  if (options.state == "observer" && backend->has_velocity_state()) {
+    out.state = "observer";
+    ObserverReplay(model, log, options, progress, stretch_first, stretch_last, row_of_frame, command_at, check, &out);
+    return out;
+  }
+  out.state = "tracker";
+
   // The tracker starts at the first row at or after frame D that has a row before it.
   auto first = row_of_frame.lower_bound(std::max(delay, log.FrameIndex(1)));
   if (first == row_of_frame.end()) return out;
@@ -132,7 +207,6 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
                        (now.pose.theta - prev.pose.theta) / dt};
   backend->Reset(0, now.pose, FieldToBody(field_v, now.pose.theta));
 
-  const bool stretch = stretch_first < stretch_last;
   if (stretch && log.FrameIndex(stretch_first) - first->first < kWarmUpFrames) {
     throw InputError(log.path + ":" + std::to_string(log.line_of[stretch_first]) +
                      ": a free run must start after the tracker's warm-up of " + std::to_string(kWarmUpFrames) +

@@ -5,16 +5,20 @@
 // + vision delay D: the step from frame j to j+1 is driven by the command logged at
 // frame j - D. K = 0 is one free run from the first row.
 //
-// The state at the start frame S = i - K comes from a tracker: the model runs along the
-// whole log under the logged commands, and its pose is corrected to the measurement at
-// every row that has one (OmniBackend::MoveBody; frames without a new measurement,
-// OmniLogRow::measured, leave the tracker to its own prediction). Velocity and internal state (the on-board
-// controller's set-points and integrals, a learned model's window) are the tracker's,
-// so vision noise enters through poses only, as it does for a learned predictor. Each
-// prediction runs K frames from a saved tracker state, which is then restored. The
-// tracker starts at frame D (older commands are not in the log) and predicts once it
-// has run kWarmUpFrames; earlier rows, and rows without a row at S, hold the measured
-// pose.
+// The state at the start frame S = i - K is estimated from the measurements up to S:
+//   - "observer" (the default on the Newtonian backends): the model's Kalman filter
+//     (estimation/omni_observer.h) runs along the log under the logged commands and
+//     corrects pose and velocity at every row with a new measurement; the controller's
+//     and the effects' states are the model's own under that estimate;
+//   - "tracker" (the only one on the learned backend, whose window of measured poses is
+//     its own estimate; kept on the others for comparison): the model runs along the
+//     log under the logged commands and only its pose is corrected to each measurement
+//     (OmniBackend::MoveBody), so its velocity is the commands' open-loop response.
+// Frames without a new measurement (OmniLogRow::measured) leave either to its own
+// prediction. Each prediction runs K frames from the estimate, which is then restored.
+// Commands before the log's first row are taken as zero; a row is predicted once the
+// estimate has run kWarmUpFrames; earlier rows, and rows without a row at S, hold the
+// measured pose.
 #pragma once
 
 #include <array>
@@ -24,6 +28,7 @@
 
 #include "backends/omni_backend_factory.h"
 #include "core/pose.h"
+#include "estimation/omni_observer.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
@@ -36,6 +41,10 @@ struct OmniReplayOptions {
   OmniBackendOptions backend_options;  // the predictor, for the learned backend
   int horizon = 4;  // K, frames; 0 = free run
   int stride = 1;   // predict from every stride-th frame only (1: every row), for fits that need speed
+  // How the start state is estimated: "observer" or "tracker" (see above). The learned
+  // backend always uses the tracker.
+  std::string state = "observer";
+  OmniObserverOptions observer;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -46,6 +55,7 @@ struct OmniReplayResult {
   std::vector<Pose2> pose;           // predicted (or held measured) pose per row
   std::vector<bool> predicted;       // false where the measured pose was held
   int delay_frames = 0;              // D used
+  std::string state;                 // the state estimate used: "observer" or "tracker"
   int num_predicted() const;
 };
 
@@ -73,10 +83,9 @@ OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const
                                const std::function<void(int, int)>& progress = {});
 
 // The model's free run over the rows [first_row, last_row) of `log`, started from the
-// tracker's state at first_row (the tracker runs from the log's start as above, so the
-// velocity and internal state at first_row are the model's own). Rows outside the
-// stretch hold the measured pose and are not marked predicted. Throws as ReplayOmniLog;
-// InputError when first_row is before the tracker's warm-up ends.
+// state estimated at first_row (the estimate runs from the log's start as above).
+// Rows outside the stretch hold the measured pose and are not marked predicted. Throws
+// as ReplayOmniLog; InputError when first_row is before the estimate's warm-up ends.
 OmniReplayResult ReplayOmniStretch(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                                    std::size_t first_row, std::size_t last_row);
 

@@ -29,6 +29,7 @@ enum Param {
   kVMax, kWMax,
   kDelay,
   kLoopX, kLoopY, kLoopW,
+  kNoiseX, kNoiseY, kNoiseW,
   kNumParams
 };
 
@@ -62,6 +63,9 @@ const ParamSpec kSpecs[kNumParams] = {
     {"forward.loop_gain", "controller.forward.kp, ki, kd", "x", "the forward controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"sideways.loop_gain", "controller.sideways.kp, ki, kd", "x", "the sideways controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"turn.loop_gain", "controller.rotation.kp, ki, kd", "x", "the rotation controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
+    {"forward.process_noise", "observer.process_noise.forward", "m/s per sqrt(s)", "how fast the forward speed wanders from the model's (the observer's process noise)", 0.005, 20, true},
+    {"sideways.process_noise", "observer.process_noise.sideways", "m/s per sqrt(s)", "how fast the sideways speed wanders from the model's (the observer's process noise)", 0.005, 20, true},
+    {"turn.process_noise", "observer.process_noise.turn", "rad/s per sqrt(s)", "how fast the turn rate wanders from the model's (the observer's process noise)", 0.05, 200, true},
 };
 
 constexpr double kPieceSeconds = 10;   // s, a log is replayed in pieces this long ...
@@ -78,7 +82,7 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
           m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
           fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
           fx.v_max, fx.w_max, (m.command_delay_frames + m.vision_delay_frames) * frame_period + fx.time_delay,
-          1, 1, 1};
+          1, 1, 1, m.observer.process_noise[0], m.observer.process_noise[1], m.observer.process_noise[2]};
 }
 
 // `base` with the parameters. The total delay (s) goes into whole frames in `delay:`
@@ -102,6 +106,7 @@ OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, doubl
   fx.forward_per_sideways = v[kCrossXY];
   fx.v_max = v[kVMax];
   fx.w_max = v[kWMax];
+  for (int a = 0; a < 3; ++a) m.observer.process_noise[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kNoiseX + a)];
   PidGains* gains[3] = {&m.controller.forward, &m.controller.sideways, &m.controller.rotation};
   for (int a = 0; a < 3; ++a) {
     const double k = v[static_cast<std::size_t>(kLoopX + a)];
@@ -255,6 +260,7 @@ GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model
       OmniReplayOptions o;
       o.backend = options.backend;
       o.horizon = options.horizon;
+      o.state = options.state;
       r = ReplayOmniLog(*model, s.log, o);
     }
     for (std::size_t row = 0; row < r.predicted.size(); ++row) {
@@ -293,6 +299,7 @@ class OmniIdentificationProblem {
       OmniReplayOptions o;
       o.backend = options_.backend;
       o.horizon = options_.horizon;
+      o.state = options_.state;
       o.stride = stride;
       const OmniPoseErrors all = PoseErrorsInRobotFrame(s.log, ReplayOmniLog(model, s.log, o), nominal_.chassis_radius);
       OmniPoseErrors& kept = out[static_cast<std::size_t>(k)];
@@ -580,13 +587,14 @@ double ProfileDelay(const OmniIdentificationProblem& problem, std::array<double,
 // models' one-frame predictions from the measured state, for the report's plots over
 // the first stretch of the log (its fit and held-out blocks alike).
 OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal, const OmniModel& identified,
-                                    const std::string& backend, double delay) {
+                                    const OmniIdentificationOptions& options, double delay) {
   OmniIdentificationSeries s;
   s.log = log.path;
   const std::size_t n = log.rows.size();
   if (n < 8) return s;
   OmniReplayOptions o;
-  o.backend = backend;
+  o.backend = options.backend;
+  o.state = options.state;
   o.horizon = 1;
   const OmniReplayResult rn = ReplayOmniLog(nominal, log, o);
   const OmniReplayResult ri = ReplayOmniLog(identified, log, o);
@@ -634,6 +642,7 @@ bool OmniIdentificationOptions::IsValid(std::string* why) const {
   if (!(max_delay > 0 && max_delay <= 2)) return fail("--max-delay must be above 0 and at most 2 s");
   if (threads < 0) return fail("--threads must be 0 (one per core) or more");
   if (backend == "learned") return fail("--backend: identification fits a physical model (analytic, ode or bullet)");
+  if (state != "observer" && state != "tracker") return fail("--state must be observer or tracker, got '" + state + "'");
   return true;
 }
 
@@ -722,6 +731,9 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     if (a == 0) tied.insert(tied.end(), {kTurnX, kCrossYX});
     if (a == 1) tied.insert(tied.end(), {kTurnY, kCrossXY});
     for (int p : tied) pruned[p] = std::string("not excited: the fit blocks never command ") + kOmniAxisNames[a];
+  }
+  if (options.state != "observer") {
+    for (int p : {kNoiseX, kNoiseY, kNoiseW}) pruned[p] = "the open-loop tracker (--state tracker) has no process noise";
   }
   std::vector<int> free;
   for (int p = 0; p < kNumParams; ++p)
@@ -836,7 +848,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
                 static_cast<int>(kLagX), static_cast<int>(kLagY), static_cast<int>(kLagW), static_cast<int>(kLoopX),
                 static_cast<int>(kLoopY), static_cast<int>(kLoopW), static_cast<int>(kSlewX), static_cast<int>(kSlewY),
                 static_cast<int>(kSlewW), static_cast<int>(kTurnX), static_cast<int>(kTurnY), static_cast<int>(kCrossYX),
-                static_cast<int>(kCrossXY), static_cast<int>(kVMax), static_cast<int>(kWMax)}) {
+                static_cast<int>(kCrossXY), static_cast<int>(kVMax), static_cast<int>(kWMax), static_cast<int>(kNoiseX),
+                static_cast<int>(kNoiseY), static_cast<int>(kNoiseW)}) {
     IdentifiedParameter q;
     const ParamSpec& s = kSpecs[p];
     q.name = s.name;
@@ -881,6 +894,12 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     out.push_back(n.Gap("nominal model"));
     out.push_back(i.Gap("identified model"));
     out.push_back(c.Gap("constant velocity"));
+    if (options.state == "observer") {
+      // The same model predicting from the open-loop tracker's state: what the observer adds.
+      OmniIdentificationOptions tracker = options;
+      tracker.state = "tracker";
+      out.push_back(ScoreHeldOut(segments, &model, validation_only, tracker, r).Gap("identified model, open-loop tracker"));
+    }
     if (!validation_only) report.held_out_rows = static_cast<int>(i.n);
     return out;
   };
@@ -909,7 +928,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   }
   for (const Segment& s : segments) {
     if (!s.validation) {
-      report.series.push_back(MakeSeries(s.log, nominal, model, options.backend, v[kDelay]));
+      report.series.push_back(MakeSeries(s.log, nominal, model, options, v[kDelay]));
       break;
     }
   }

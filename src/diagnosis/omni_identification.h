@@ -14,11 +14,14 @@
 //   - the couplings between axes: turn per forward and per sideways command
 //     (turn_coupling), forward and sideways leaking into each other (cross_coupling).
 // The score is the contract's replay: each frame predicted from the measured state
-// `horizon` frames earlier. The parameters, the delay among them, minimise the
-// prediction error on the fit blocks of the logs (Ceres, numeric derivatives through the
-// engine, after a profile search of the delay). The held-out blocks, whose predictions
-// neither start nor end in a fit block, give the gaps, beside the constant-velocity
-// extrapolation of the measured poses (no model at all).
+// `horizon` frames earlier, estimated by the model's own Kalman filter
+// (estimation/omni_observer.h). The parameters, the delay and the filter's process noise
+// among them, minimise the prediction error on the fit blocks of the logs (the
+// prediction-error method; Ceres, numeric derivatives through the engine, after a
+// profile search of the delay). The held-out blocks, whose predictions neither start
+// nor end in a fit block, give the gaps, beside the constant-velocity extrapolation of
+// the measured poses (no model at all) and the identified model through the open-loop
+// tracker.
 //
 //   OmniIdentificationOptions options;
 //   OmniModel identified;
@@ -39,6 +42,10 @@ namespace twinsim {
 struct OmniIdentificationOptions {
   std::string backend = "analytic";  // the physics that replays the model
   int horizon = 4;                   // frames predicted ahead (the contract's replay K)
+  // How each prediction's start state is estimated (analysis/omni_replay.h): "observer",
+  // the model's Kalman filter, whose process noise is then fitted with the rest (the
+  // prediction-error method); or "tracker", the open-loop response with corrected poses.
+  std::string state = "observer";
   double held_out = 0.3;             // share of each log's time blocks held out from the fit
   double block_seconds = 0;          // s; 0 = automatic (a 20th of the longest log, 0.5 to 10 s)
   int stride = 4;                    // the fit predicts from every stride-th frame

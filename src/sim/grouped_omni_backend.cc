@@ -59,6 +59,17 @@ void GroupedOmniBackend::MoveBody(int robot, const Pose2& pose) {
   groups_[static_cast<std::size_t>(p.group)].backend->MoveBody(p.index, pose);
 }
 
+bool GroupedOmniBackend::has_velocity_state() const {
+  for (const OmniBackendGroup& g : groups_)
+    if (!g.backend->has_velocity_state()) return false;
+  return true;
+}
+
+void GroupedOmniBackend::SetVelocity(int robot, const Twist2& velocity) {
+  const Place& p = At(robot);
+  groups_[static_cast<std::size_t>(p.group)].backend->SetVelocity(p.index, velocity);
+}
+
 void GroupedOmniBackend::StepFrame(const std::vector<Twist2>& commands) {
   if (commands.size() != where_.size()) throw std::invalid_argument("StepFrame: one command per robot expected");
   for (OmniBackendGroup& g : groups_) {

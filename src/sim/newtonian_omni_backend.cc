@@ -48,6 +48,15 @@ void NewtonianOmniBackend::Reset(int robot, const Pose2& pose, const Twist2& vel
 
 void NewtonianOmniBackend::MoveBody(int robot, const Pose2& pose) { engine_->MoveRobot(robot, pose); }
 
+void NewtonianOmniBackend::SetVelocity(int robot, const Twist2& velocity) {
+  const Robot& r = robots_.at(static_cast<std::size_t>(robot));
+  OmniBodyState body = engine_->GetState(robot);
+  body.velocity = velocity;
+  // The wheels roll with the body: the encoders read the corrected motion from now on.
+  body.wheel_speeds = r.kin.WheelSpeeds(velocity);
+  engine_->SetState(robot, body);
+}
+
 void NewtonianOmniBackend::StepFrame(const std::vector<Twist2>& commands) {
   if (static_cast<int>(commands.size()) != num_robots())
     throw std::invalid_argument("StepFrame: one command per robot expected");

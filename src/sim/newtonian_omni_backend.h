@@ -26,6 +26,8 @@ class NewtonianOmniBackend final : public OmniBackend {
 
   void Reset(int robot, const Pose2& pose, const Twist2& velocity) override;
   void MoveBody(int robot, const Pose2& pose) override;
+  bool has_velocity_state() const override { return true; }
+  void SetVelocity(int robot, const Twist2& velocity) override;
   void StepFrame(const std::vector<Twist2>& commands) override;
   Pose2 pose(int robot) const override;
   Twist2 velocity(int robot) const override;

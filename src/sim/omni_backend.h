@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -94,6 +95,18 @@ class OmniBackend {
   // and everything internal (the controller's state; a learned backend keeps its older
   // poses, so a window corrected every frame holds measured poses).
   virtual void MoveBody(int robot, const Pose2& pose) = 0;
+  // True when SetVelocity works: the backend's state holds each body's velocity (the
+  // Newtonian backends). A learned backend's velocity is its window of poses.
+  virtual bool has_velocity_state() const { return false; }
+  // Sets robot i's velocity (robot frame), keeping its pose and everything internal (the
+  // controller's set-points and integrals, the effects' queues and lags): the state
+  // observer's correction (estimation/omni_observer.h). Throws std::logic_error where
+  // has_velocity_state() is false.
+  virtual void SetVelocity(int robot, const Twist2& velocity) {
+    static_cast<void>(robot);
+    static_cast<void>(velocity);
+    throw std::logic_error("backend " + name() + " holds no velocity state to set");
+  }
   // Advances one camera frame; commands[i] is what robot i's firmware receives now.
   virtual void StepFrame(const std::vector<Twist2>& commands) = 0;
 

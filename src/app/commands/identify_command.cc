@@ -123,7 +123,8 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
 int Identify(const IdentifyCliOptions& options) {
   if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
   for (const char* omni_only :
-       {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--threads", "--robot", "--team"}) {
+       {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--threads", "--robot", "--team",
+        "--state"}) {
     if (std::find(options.given.begin(), options.given.end(), omni_only) != options.given.end())
       throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
   }
@@ -251,6 +252,11 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   cmd->add_option("--stride", options->omni.stride, "Omni: the fit predicts from every stride-th frame")
       ->capture_default_str();
+  cmd->add_option("--state", options->omni.state,
+                  "Omni: each prediction starts from the model's Kalman filter (observer; its process noise is fitted "
+                  "too) or from the open-loop tracker (tracker)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"observer", "tracker"}));
   cmd->add_option("--max-delay", options->omni.max_delay, "Omni: s, the longest total delay searched")->capture_default_str();
   cmd->add_option("--threads", options->omni.threads, "Omni: worker threads (0: one per core); results do not depend on it")
       ->capture_default_str();

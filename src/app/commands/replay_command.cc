@@ -28,6 +28,7 @@ struct ReplayOptions {
   std::string out;
   std::string backend = "ode";
   int horizon = 4;
+  std::string state = "observer";
   std::string predictor;
   double cutoff_hz = ArmLogOptions{}.cutoff_hz;
   bool quiet = false;
@@ -79,6 +80,7 @@ int Replay(const ReplayOptions& options) {
   OmniReplayOptions replay;
   replay.backend = options.backend;
   replay.horizon = options.horizon;
+  replay.state = options.state;
   if (!options.predictor.empty())
     replay.backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
 
@@ -90,9 +92,12 @@ int Replay(const ReplayOptions& options) {
   files.Add(options.out);
 
   if (!options.quiet) {
-    std::printf("replayed %zu rows of %s through %s on %s (K = %d, delay %d frames): %d predicted, position RMSE %.4f m\n",
-                log.rows.size(), options.log.c_str(), model.name.c_str(), options.backend.c_str(), options.horizon,
-                result.delay_frames, result.num_predicted(), PositionRmse(log, result));
+    std::printf(
+        "replayed %zu rows of %s through %s on %s (K = %d, delay %d frames, state from the %s): %d predicted, position "
+        "RMSE %.4f m\n",
+        log.rows.size(), options.log.c_str(), model.name.c_str(), options.backend.c_str(), options.horizon,
+        result.delay_frames, result.state == "none" ? "first two rows" : result.state.c_str(), result.num_predicted(),
+        PositionRmse(log, result));
     files.PrintWrote();
   }
   return kExitOk;
@@ -109,6 +114,10 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
       "Omni robots: row i of OUT.csv (t,x,y,theta) is the model's prediction of frame i from the\n"
       "measured state K frames earlier and the logged commands since, with the model's delay.\n"
       "K = 0: one free run from the first row. Rows without enough history hold the measured pose.\n"
+      "The measured state comes from the model's Kalman filter (--state observer: pose and velocity\n"
+      "corrected at every measured frame, observer: block of the model file) or, for comparison, from\n"
+      "the model's open-loop response with only its pose corrected (--state tracker; the learned\n"
+      "backend always tracks so, its window of measured poses being its estimate).\n"
       "Arms (URDF, or YAML with 'robot: arm'): OUT.csv (t,tau1..taun) holds the model's torques for\n"
       "the logged motion (inverse dynamics with friction and the model's effects inverted: offsets\n"
       "subtracted, flexible joints' motors driven, commands sent ahead by delay_samples and\n"
@@ -125,6 +134,9 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--horizon", options->horizon, "K, frames predicted ahead (0: free run)")
       ->capture_default_str()
       ->check(NonNegativeNumber());
+  cmd->add_option("--state", options->state, "Omni: how the measured state is estimated: observer or tracker")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"observer", "tracker"}));
   cmd->add_option("--cutoff", options->cutoff_hz, "Hz, arms: low-pass cut-off for qd/qdd derived from q")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");

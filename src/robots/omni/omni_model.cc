@@ -1,6 +1,7 @@
 #include "robots/omni/omni_model.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -23,6 +24,16 @@ PidGains PidGains::FromVector(const Eigen::Matrix<double, 6, 1>& v) {
   g.output_limit = v[4];
   g.slew_rate = v[5];
   return g;
+}
+
+double OmniModel::ObserverNoiseXy() const {
+  const double given = observer.measurement_noise_xy > 0 ? observer.measurement_noise_xy : vision_noise_xy;
+  return std::max(given, OmniObserverModel::kMinMeasurementNoiseXy);
+}
+
+double OmniModel::ObserverNoiseTheta() const {
+  const double given = observer.measurement_noise_theta > 0 ? observer.measurement_noise_theta : vision_noise_theta;
+  return std::max(given, OmniObserverModel::kMinMeasurementNoiseTheta);
 }
 
 void OmniModel::Finalize() {

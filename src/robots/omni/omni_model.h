@@ -14,6 +14,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,28 @@ struct OmniControllerModel {
   PidGains forward{40, 200, 0, 4, 11, 2};      // robot x
   PidGains sideways{40, 200, 0, 4, 11, 2};     // robot y
   PidGains rotation{0.5, 3, 0, 0.3, 1.5, 30};  // yaw (N·m, rad)
+};
+
+// The state observer's noise model (estimation/omni_observer.h; docs/models.md
+// `observer:`): what the model does not predict, as its Kalman filter sees it.
+struct OmniObserverModel {
+  // Driving noise: the body moves at the model's velocity plus a slip the wheels (and so
+  // the on-board controller) do not see, a first-order Gauss-Markov process per robot
+  // axis with this stationary spread (forward, sideways m/s; turn rad/s) and correlation
+  // time (s).
+  std::array<double, 3> slip{0.1, 0.1, 0.5};
+  double slip_time = 0.15;
+  // The square root of the spectral density of the white acceleration that moves the
+  // model's own velocity beyond what it predicts (errors of the model), per robot axis:
+  // forward and sideways in m/s per sqrt(s), turn in rad/s per sqrt(s).
+  std::array<double, 3> process_noise{0.1, 0.1, 1.0};
+  // Standard deviation of a camera pose: x and y (m), theta (rad); 0 = the vision block's
+  // noise, at least kMinMeasurementNoiseXy / kMinMeasurementNoiseTheta.
+  double measurement_noise_xy = 0;
+  double measurement_noise_theta = 0;
+
+  static constexpr double kMinMeasurementNoiseXy = 5e-4;     // m
+  static constexpr double kMinMeasurementNoiseTheta = 5e-3;  // rad
 };
 
 struct OmniModel {
@@ -101,6 +124,9 @@ struct OmniModel {
   // What a real robot does that the Newtonian model does not (omni_effects.h).
   OmniEffects effects;
 
+  // How the observer weighs the model against the camera (estimation/omni_observer.h).
+  OmniObserverModel observer;
+
   // Vision (the observation model).
   double vision_noise_xy = 0.0;      // m, standard deviation of x and y
   double vision_noise_theta = 0.0;   // rad, standard deviation of theta
@@ -116,6 +142,11 @@ struct OmniModel {
   double wheel_inertia_diametral = 0;  // kg m^2, one wheel about a diameter
   Eigen::MatrixXd geometry;       // n x 3, rows [-sin a_i, cos a_i, b] (m for the last)
   Eigen::VectorXd wheel_load;     // n, N, static normal force on each wheel
+
+  // The observer's camera noise (m, rad): observer.measurement_noise_*, else the vision
+  // block's, never below the minimum.
+  double ObserverNoiseXy() const;
+  double ObserverNoiseTheta() const;
 
   int num_wheels() const { return static_cast<int>(wheel_angles.size()); }
   // m, the flat front's distance from the centre (front_distance, or its default).

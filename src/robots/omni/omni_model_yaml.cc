@@ -171,6 +171,29 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     v.Get("time_jitter", &model.vision_time_jitter, InRange(0, 0.005));
     v.Finish();
   }
+
+  if (top.Has("observer")) {
+    YamlMap o(top.Child("observer"), path, "observer", &errors);
+    if (o.Has("process_noise")) {
+      YamlMap q(o.Child("process_noise"), path, "observer.process_noise", &errors);
+      for (int a = 0; a < 3; ++a)
+        q.Get(kOmniAxisNames[a], &model.observer.process_noise[static_cast<std::size_t>(a)], InRange(1e-6, 1e3));
+      q.Finish();
+    }
+    if (o.Has("slip")) {
+      YamlMap d(o.Child("slip"), path, "observer.slip", &errors);
+      for (int a = 0; a < 3; ++a) d.Get(kOmniAxisNames[a], &model.observer.slip[static_cast<std::size_t>(a)], NonNegative(100));
+      d.Get("correlation_time", &model.observer.slip_time, InRange(1e-3, 100));
+      d.Finish();
+    }
+    if (o.Has("measurement_noise")) {
+      YamlMap r(o.Child("measurement_noise"), path, "observer.measurement_noise", &errors);
+      r.Get("xy", &model.observer.measurement_noise_xy, NonNegative(10));
+      r.Get("theta", &model.observer.measurement_noise_theta, NonNegative(10));
+      r.Finish();
+    }
+    o.Finish();
+  }
   top.Finish();
   errors.ThrowIfAny();
 

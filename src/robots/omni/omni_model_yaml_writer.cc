@@ -124,6 +124,25 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   line("  drop_probability", YamlNumber(model.vision_drop_probability));
   if (model.vision_repeat_probability > 0) line("  repeat_probability", YamlNumber(model.vision_repeat_probability));
   if (model.vision_time_jitter > 0) line("  time_jitter", YamlNumber(model.vision_time_jitter), "s");
+  const OmniObserverModel& o = model.observer;
+  if (o.process_noise != defaults.observer.process_noise || o.slip != defaults.observer.slip ||
+      o.slip_time != defaults.observer.slip_time || o.measurement_noise_xy > 0 || o.measurement_noise_theta > 0) {
+    s << "observer:\n";
+    std::string d;
+    for (int a = 0; a < 3; ++a)
+      d += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(o.slip[static_cast<std::size_t>(a)]);
+    line("  slip", "{" + d + ", correlation_time: " + YamlNumber(o.slip_time) + "}",
+         "m/s, rad/s, s: driving noise the wheels do not see", 46);
+    std::string q;
+    for (int a = 0; a < 3; ++a)
+      q += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(o.process_noise[static_cast<std::size_t>(a)]);
+    line("  process_noise", "{" + q + "}", "m/s and rad/s per sqrt(s): the model's own errors", 46);
+    if (o.measurement_noise_xy > 0 || o.measurement_noise_theta > 0) {
+      line("  measurement_noise",
+           "{xy: " + YamlNumber(o.measurement_noise_xy) + ", theta: " + YamlNumber(o.measurement_noise_theta) + "}",
+           "m, rad; 0 = the vision block's", 46);
+    }
+  }
 
   // Only what is on, with the parameters ListOmniEffects gives (the reader's keys).
   static const std::map<std::string, const char*> kUnits = {

@@ -1,0 +1,257 @@
+#include "estimation/omni_observer.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "backends/omni_backend_factory.h"
+#include "core/error.h"
+#include "core/math_constants.h"
+
+namespace twinsim {
+
+bool OmniObserverOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& s) {
+    if (why) *why = s;
+    return false;
+  };
+  if (!(gate > 0)) return fail("observer gate must be positive");
+  if (reacquire_after < 1) return fail("observer reacquire_after must be 1 or more");
+  if (!(initial_speed_sd > 0) || !(initial_turn_sd > 0)) return fail("observer initial spreads must be positive");
+  if (!(speed_step > 0) || !(turn_step > 0)) return fail("observer finite-difference steps must be positive");
+  return true;
+}
+
+namespace {
+
+std::unique_ptr<OmniBackend> MakeFilterBackend(const OmniModel& model, const std::string& name, const FrameTiming& timing) {
+  FieldModel field;
+  field.walls = false;  // a logged robot may be anywhere
+  return MakeOmniBackend(name, {model}, field, timing);
+}
+
+}  // namespace
+
+OmniObserver::OmniObserver(const OmniModel& model, const std::string& backend, double frame_rate,
+                           const OmniObserverOptions& options)
+    : model_(model), options_(options) {
+  if (std::string why; !options.IsValid(&why)) throw InputError(why);
+  if (!(frame_rate > 0)) throw InputError("observer: the frame rate must be positive");
+  FrameTiming timing;
+  timing.frame_rate = frame_rate;
+  timing.physics_substeps = DefaultPhysicsSubsteps(frame_rate);
+  dt_ = timing.frame_dt();
+  backend_ = MakeFilterBackend(model, backend, timing);
+  if (!backend_->has_velocity_state()) {
+    throw InputError("the observer needs a backend that holds the robot's velocity (analytic, ode, bullet); " +
+                     backend_->name() + " predicts from its own window of measured poses");
+  }
+  if (backend_->name() != "analytic") twin_ = MakeFilterBackend(model, "analytic", timing);
+  delay_ = model.command_delay_frames + model.vision_delay_frames;
+  sent_.assign(static_cast<std::size_t>(delay_ + 1), Twist2{});
+  const double sxy = model.ObserverNoiseXy(), sth = model.ObserverNoiseTheta();
+  r_.diagonal() << sxy * sxy, sxy * sxy, sth * sth;
+  slip_decay_ = std::exp(-dt_ / model.observer.slip_time);
+}
+
+OmniObserver::~OmniObserver() = default;
+
+ObserverMatrix OmniObserver::InitialCovariance() const {
+  ObserverMatrix p = ObserverMatrix::Zero();
+  p.topLeftCorner<3, 3>() = r_;
+  p(3, 3) = p(4, 4) = options_.initial_speed_sd * options_.initial_speed_sd;
+  p(5, 5) = options_.initial_turn_sd * options_.initial_turn_sd;
+  for (int a = 0; a < 3; ++a) p(6 + a, 6 + a) = std::pow(model_.observer.slip[static_cast<std::size_t>(a)], 2);
+  return p;
+}
+
+ObserverMatrix OmniObserver::ProcessNoise(double theta) const {
+  const double c = std::cos(theta), s = std::sin(theta);
+  const Eigen::Vector3d along[3] = {{c, s, 0}, {-s, c, 0}, {0, 0, 1}};
+  ObserverMatrix q = ObserverMatrix::Zero();
+  const double dt = dt_, dt2 = dt * dt / 2, dt3 = dt * dt * dt / 3;
+  for (int a = 0; a < 3; ++a) {
+    const double qa = std::pow(model_.observer.process_noise[static_cast<std::size_t>(a)], 2);
+    const Eigen::Vector3d& g = along[a];
+    q.topLeftCorner<3, 3>() += qa * dt3 * g * g.transpose();
+    q.block<3, 1>(0, 3 + a) += qa * dt2 * g;
+    q.block<1, 3>(3 + a, 0) += qa * dt2 * g.transpose();
+    q(3 + a, 3 + a) += qa * dt;
+    q(6 + a, 6 + a) = std::pow(model_.observer.slip[static_cast<std::size_t>(a)], 2) * (1 - slip_decay_ * slip_decay_);
+  }
+  return q;
+}
+
+void OmniObserver::Step(const Twist2& acting, bool jacobian) {
+  const Pose2 p0 = backend_->pose(0);
+  const Twist2 v0 = backend_->velocity(0);
+  OmniBackendState before;
+  if (jacobian) before = backend_->Save();
+  backend_->StepFrame({acting});
+  Pose2 base_pose = backend_->pose(0);  // the model's own step, for F
+  Twist2 base_velocity = backend_->velocity(0);
+  // The slip moves the body on, unseen by the wheels; then it decays.
+  const double c = std::cos(p0.theta), sn = std::sin(p0.theta);
+  Pose2 moved = base_pose;
+  if (!slip_.isZero()) {
+    moved.x += dt_ * (c * slip_[0] - sn * slip_[1]);
+    moved.y += dt_ * (sn * slip_[0] + c * slip_[1]);
+    moved.theta += dt_ * slip_[2];
+    backend_->MoveBody(0, moved);
+  }
+  slip_ *= slip_decay_;
+  if (!jacobian) return;
+
+  // F's model-velocity columns by forward differences of the model over the frame.
+  OmniBackend* fd = backend_.get();
+  OmniBackendState after;
+  if (twin_) {
+    for (OmniRobotState& r : before.robots) r.engine_snapshot.clear();  // the twin's engine has no 3D state
+    fd = twin_.get();
+    fd->Restore(before);
+    fd->StepFrame({acting});
+    base_pose = fd->pose(0);
+    base_velocity = fd->velocity(0);
+  } else {
+    after = backend_->Save();
+  }
+  ObserverMatrix f = ObserverMatrix::Identity();
+  f(0, 2) = -(moved.y - p0.y);
+  f(1, 2) = moved.x - p0.x;
+  const double steps[3] = {options_.speed_step, options_.speed_step, options_.turn_step};
+  for (int j = 0; j < 3; ++j) {
+    fd->Restore(before);
+    Twist2 v = v0;
+    (j == 0 ? v.vx : j == 1 ? v.vy : v.omega) += steps[j];
+    fd->SetVelocity(0, v);
+    fd->StepFrame({acting});
+    const Pose2 p = fd->pose(0);
+    const Twist2 w = fd->velocity(0);
+    const double h = steps[j];
+    f.block<6, 1>(0, 3 + j) << (p.x - base_pose.x) / h, (p.y - base_pose.y) / h,
+        WrapAngle(p.theta - base_pose.theta) / h, (w.vx - base_velocity.vx) / h, (w.vy - base_velocity.vy) / h,
+        (w.omega - base_velocity.omega) / h;
+  }
+  if (!twin_) backend_->Restore(after);
+  // The slip's columns: it moves the pose along the robot's axes, and decays.
+  f(0, 6) = dt_ * c;
+  f(0, 7) = -dt_ * sn;
+  f(1, 6) = dt_ * sn;
+  f(1, 7) = dt_ * c;
+  f(2, 8) = dt_;
+  for (int a = 0; a < 3; ++a) f(6 + a, 6 + a) = slip_decay_;
+  p_ = f * p_ * f.transpose() + ProcessNoise(p0.theta);
+  p_ = 0.5 * (p_ + p_.transpose()).eval();
+}
+
+Twist2 OmniObserver::Acting(int ahead, const std::vector<Twist2>& planned) const {
+  // Step `ahead` (0 = from the newest frame to the next) acts on the command sent at
+  // frame newest + ahead - D: sent_ holds newest - D .. newest.
+  if (ahead <= delay_) return sent_[static_cast<std::size_t>(ahead)];
+  const int i = ahead - delay_ - 1;  // into planned
+  if (planned.empty()) return sent_.back();
+  return planned[static_cast<std::size_t>(std::min<int>(i, static_cast<int>(planned.size()) - 1))];
+}
+
+void OmniObserver::Restart(const Pose2& pose, const Twist2& velocity) {
+  backend_->MoveBody(0, pose);
+  backend_->SetVelocity(0, velocity);
+  slip_.setZero();
+  p_ = InitialCovariance();
+  refused_in_a_row_ = 0;
+}
+
+bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& command) {
+  if (camera && !IsFinite(*camera)) throw InputError("observer: a camera pose is not finite");
+  if (!IsFinite(command)) throw InputError("observer: a command is not finite");
+  ++frame_;
+  if (!started_) {
+    sent_.pop_front();
+    sent_.push_back(command);
+    if (!camera) return false;
+    backend_->Reset(0, *camera, Twist2{});
+    slip_.setZero();
+    p_ = InitialCovariance();
+    started_ = true;
+    return true;
+  }
+  // From the previous frame to this one, under the command sent D frames before it.
+  Step(sent_.front(), true);
+  sent_.pop_front();
+  sent_.push_back(command);
+  const Pose2 pose = backend_->pose(0);
+  const Twist2 velocity = backend_->velocity(0);
+  if (!IsFinite(pose) || !IsFinite(velocity) || !p_.allFinite() || !slip_.allFinite()) {
+    std::ostringstream msg;
+    msg << "observer: model " << model_.name << " on " << backend_->name() << " diverged at frame " << frame_;
+    throw CheckFailed(msg.str());
+  }
+  if (!camera) return false;
+
+  const Eigen::Vector3d nu(camera->x - pose.x, camera->y - pose.y, WrapAngle(camera->theta - pose.theta));
+  const Eigen::Matrix3d s = p_.topLeftCorner<3, 3>() + r_;
+  const Eigen::LLT<Eigen::Matrix3d> llt(s);
+  const double nis = nu.dot(llt.solve(nu));
+  stats_.last_nis = nis;
+  if (!(nis <= options_.gate)) {
+    ++stats_.refused;
+    if (++refused_in_a_row_ >= options_.reacquire_after) {
+      ++stats_.restarts;
+      Restart(*camera, velocity);
+    }
+    return false;
+  }
+  refused_in_a_row_ = 0;
+  const Eigen::Matrix<double, kObserverStates, 3> gain =
+      llt.solve(p_.topLeftCorner<kObserverStates, 3>().transpose()).transpose();
+  const Eigen::Matrix<double, kObserverStates, 1> delta = gain * nu;
+  ObserverMatrix ikh = ObserverMatrix::Identity();
+  ikh.leftCols<3>() -= gain;
+  p_ = ikh * p_ * ikh.transpose() + gain * r_ * gain.transpose();
+  p_ = 0.5 * (p_ + p_.transpose()).eval();
+  backend_->MoveBody(0, Pose2{pose.x + delta[0], pose.y + delta[1], pose.theta + delta[2]});
+  backend_->SetVelocity(0, Twist2{velocity.vx + delta[3], velocity.vy + delta[4], velocity.omega + delta[5]});
+  slip_ += delta.tail<3>();
+
+  const double log_det = 2 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+  ++stats_.updates;
+  stats_.nis_sum += nis;
+  stats_.log_likelihood += -0.5 * (nis + log_det + 3 * std::log(2 * kPi));
+  return true;
+}
+
+OmniEstimate OmniObserver::Estimate() const {
+  OmniEstimate e;
+  if (!started_) return e;
+  e.frame = frame_;
+  e.pose = backend_->pose(0);
+  e.model_velocity = backend_->velocity(0);
+  e.slip = Twist2{slip_[0], slip_[1], slip_[2]};
+  e.velocity = Twist2{e.model_velocity.vx + slip_[0], e.model_velocity.vy + slip_[1], e.model_velocity.omega + slip_[2]};
+  e.covariance = p_;
+  return e;
+}
+
+OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& planned, bool covariance) {
+  if (!started_) throw std::logic_error("OmniObserver::PredictAhead before the first camera pose");
+  OmniPrediction out;
+  if (k <= 0) return out;
+  const OmniBackendState saved = backend_->Save();
+  const ObserverMatrix p = p_;
+  const Eigen::Vector3d slip = slip_;
+  double last_theta = backend_->pose(0).theta;
+  for (int j = 0; j < k; ++j) {
+    Step(Acting(j, planned), covariance);
+    Pose2 pose = backend_->pose(0);
+    pose.theta = last_theta = last_theta + WrapAngle(pose.theta - last_theta);
+    out.pose.push_back(pose);
+    if (covariance) out.pose_covariance.push_back(p_.topLeftCorner<3, 3>());
+  }
+  backend_->Restore(saved);
+  p_ = p;
+  slip_ = slip;
+  return out;
+}
+
+}  // namespace twinsim

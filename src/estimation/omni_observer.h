@@ -1,0 +1,164 @@
+// The state observer of an omni robot: an extended Kalman filter over the model's state,
+// driven by the commands through the model's delay and corrected by each camera pose
+// (docs/identification.md, "The observer"). Replay, compare, batch's scoring,
+// identification and diagnosis predict from its estimate; a team's software can run it
+// live, frame by frame, for the robot's state now and its pose K frames ahead.
+//
+// The model's whole state (pose, velocity, the controller's set-points and integrals,
+// the effects' command queue and lags) lives in a Newtonian backend (analytic, ODE or
+// Bullet), which the filter steps one camera frame at a time. Beside it the body slips:
+// it moves at the model's velocity plus a slip d that the wheels, and so the on-board
+// controller, do not see (the driving noise), a first-order Gauss-Markov process per
+// robot axis of spread sigma_a and correlation time T (model.observer.slip). The
+// filter's state is
+//   s = (x, y, theta, vx, vy, omega, dx, dy, domega): the pose in the field frame, the
+//   model's velocity and the slip in the robot's,
+// with its covariance P. Per frame f (period dt, a = exp(-dt / T)):
+//   predict  the backend steps from f-1 to f under the command sent at f-1-D (D = the
+//            model's command + vision delay, in frames: the filter runs at the camera's
+//            capture time); the pose moves on by R(theta) d dt; d <- a d. P <- F P F^T + Q
+//            with F the frame's Jacobian: the pose block exactly (a turn of the start pose
+//            swings the frame's displacement with it), the model velocity's columns by
+//            finite differences of the model itself (on its analytic twin when the
+//            backend is ODE or Bullet), the slip's as written. Q holds the slip's
+//            innovations sigma_a^2 (1 - a^2) and white acceleration of spectral density
+//            q_a (model.observer.process_noise squared) on the model's velocity along
+//            each robot axis a, integrated over the frame:
+//              Q_a = q_a [dt^3/3 g g^T, dt^2/2 g e_a^T; dt^2/2 e_a g^T, dt e_a e_a^T],
+//            g the axis in the field frame (forward, sideways) or the heading (turn).
+//   update   with a camera pose z: nu = z - pose (heading wrapped), S = P_pp + R,
+//            K = P H^T S^-1, s <- s + K nu, P <- (I - K H) P (I - K H)^T + K R K^T
+//            (Joseph's form). The correction moves the backend's pose and velocity
+//            (OmniBackend::MoveBody, SetVelocity); the controller and effects keep theirs.
+//            A pose with nu^T S^-1 nu above the gate is refused as an outlier; after
+//            `reacquire_after` refusals in a row the filter restarts on the camera (the
+//            robot was carried away).
+// A frame without a camera pose only predicts: P grows, and after a gap of seconds the
+// next pose is taken with the weight the grown P gives it (the filter re-acquires).
+// Predictions ahead carry the slip on, decaying as a^k.
+//
+//   OmniObserver observer(model, "analytic", 1.0 / log.frame_period);
+//   per frame:  observer.AddFrame(camera_pose_or_nullopt, command_sent_now);
+//               OmniEstimate now = observer.Estimate();
+//               OmniPrediction ahead = observer.PredictAhead(4);  // the pose 4 frames on
+#pragma once
+
+#include <Eigen/Core>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/pose.h"
+#include "robots/omni/omni_model.h"
+#include "sim/omni_backend.h"
+
+namespace twinsim {
+
+struct OmniObserverOptions {
+  // Refuse a camera pose whose normalised innovation squared exceeds this: a pose some
+  // 14 standard deviations off, a misdetection rather than a robot the model does not
+  // quite know (a model's error shows as innovations of 30 to 50 now and then, which the
+  // filter must follow; chi-square with 3 degrees of freedom passes 30.7 once in 1e6).
+  double gate = 200;
+  int reacquire_after = 3;       // refusals in a row after which the filter restarts on the camera
+  double initial_speed_sd = 1.0;  // m/s, the velocity's standard deviation at the start
+  double initial_turn_sd = 5.0;   // rad/s
+  // Finite-difference steps of the velocity columns of F: above an encoder count's speed.
+  double speed_step = 0.02;  // m/s
+  double turn_step = 0.2;    // rad/s
+
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
+};
+
+inline constexpr int kObserverStates = 9;
+using ObserverMatrix = Eigen::Matrix<double, kObserverStates, kObserverStates>;
+
+// The filter's estimate at its newest frame.
+struct OmniEstimate {
+  int frame = -1;         // frames since the first AddFrame (-1: not started)
+  Pose2 pose;             // field frame
+  Twist2 velocity;        // robot frame: the body's, the model's velocity plus the slip
+  Twist2 model_velocity;  // robot frame: the model's (what its wheels and controller see)
+  Twist2 slip;            // robot frame: the slip
+  // Of (x, y, theta, model vx, vy, omega, slip vx, vy, omega).
+  ObserverMatrix covariance = ObserverMatrix::Zero();
+};
+
+// The poses of the frames ahead of the estimate, with their uncertainty.
+struct OmniPrediction {
+  std::vector<Pose2> pose;                      // frames 1..k ahead
+  std::vector<Eigen::Matrix3d> pose_covariance;  // of (x, y, theta) per frame; empty unless asked for
+};
+
+// Totals of the camera poses the filter has seen.
+struct OmniInnovationStats {
+  int updates = 0;            // poses taken
+  int refused = 0;            // poses refused by the gate
+  int restarts = 0;           // re-acquisitions after refusals in a row
+  double nis_sum = 0;         // sum of nu^T S^-1 nu over the poses taken (3 per pose when consistent)
+  double log_likelihood = 0;  // sum of log N(nu; 0, S) over the poses taken
+  double last_nis = 0;
+};
+
+class OmniObserver {
+ public:
+  // A filter for one robot of `model` on `backend` (analytic, ode or bullet) at the
+  // camera's `frame_rate` (Hz). Throws InputError for a backend without a velocity
+  // state (learned: its window of measured poses is its own estimate), an unknown
+  // backend or invalid options.
+  OmniObserver(const OmniModel& model, const std::string& backend, double frame_rate,
+               const OmniObserverOptions& options = {});
+  ~OmniObserver();
+  OmniObserver(const OmniObserver&) = delete;
+  OmniObserver& operator=(const OmniObserver&) = delete;
+
+  // One camera frame: `camera` the pose captured in it (nullopt: none), `command` the
+  // command sent in it (robot frame). The first frame with a pose starts the filter
+  // there, at rest with a wide velocity. Returns true when the pose was taken.
+  // Throws CheckFailed when the estimate stops being finite.
+  bool AddFrame(const std::optional<Pose2>& camera, const Twist2& command);
+
+  bool started() const { return started_; }
+  int delay_frames() const { return delay_; }
+  const OmniModel& model() const { return model_; }
+  OmniEstimate Estimate() const;
+  const OmniInnovationStats& innovations() const { return stats_; }
+
+  // The poses of the next k frames from the estimate, the filter unchanged: the commands
+  // already sent act first, then `planned` (the commands to be sent from the next frame
+  // on), then the last of them held. With `covariance`, each pose's covariance too (the
+  // filter's prediction, process noise included). Throws std::logic_error before start.
+  OmniPrediction PredictAhead(int k, const std::vector<Twist2>& planned = {}, bool covariance = false);
+
+  // The backend the filter steps (for tests; its state is the estimate).
+  const OmniBackend& backend() const { return *backend_; }
+
+ private:
+  // One frame under the command acting now; with `jacobian`, P is propagated too.
+  void Step(const Twist2& acting, bool jacobian);
+  ObserverMatrix ProcessNoise(double theta) const;
+  ObserverMatrix InitialCovariance() const;
+  void Restart(const Pose2& pose, const Twist2& velocity);
+  Twist2 Acting(int ahead, const std::vector<Twist2>& planned) const;
+
+  OmniModel model_;
+  OmniObserverOptions options_;
+  double dt_ = 0;
+  int delay_ = 0;
+  std::unique_ptr<OmniBackend> backend_;
+  std::unique_ptr<OmniBackend> twin_;  // analytic, for F's velocity columns; null when backend_ is analytic
+  std::deque<Twist2> sent_;            // the last delay_ + 1 commands sent, the newest last
+  ObserverMatrix p_ = ObserverMatrix::Zero();
+  Eigen::Vector3d slip_ = Eigen::Vector3d::Zero();  // d, robot frame
+  double slip_decay_ = 0;                           // a
+  Eigen::Matrix3d r_ = Eigen::Matrix3d::Zero();
+  bool started_ = false;
+  int frame_ = -1;
+  int refused_in_a_row_ = 0;
+  OmniInnovationStats stats_;
+};
+
+}  // namespace twinsim

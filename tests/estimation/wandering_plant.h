@@ -1,0 +1,47 @@
+// A test plant that wanders as a real small-size robot does, written apart from
+// twinsim's models: a kinematic robot whose body velocity follows its delayed command
+// through a first-order lag per robot axis, plus driving noise (a Gauss-Markov velocity
+// disturbance in the robot frame, correlated over a few frames), seen by a camera with
+// noise, lost frames and optionally a gap of seconds. No PID, no wheels, no engine.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/pose.h"
+#include "robots/omni/omni_log.h"
+
+namespace twinsim::testing {
+
+struct WanderingPlant {
+  double frame_rate = 60;                        // Hz
+  int delay_frames = 4;                          // from command to camera pose, frames
+  std::array<double, 3> gain{0.8, 0.7, 0.6};     // velocity reached per unit command, forward, sideways, turn
+  std::array<double, 3> lag{0.08, 0.1, 0.06};    // s, first-order time constants per axis
+  std::array<double, 3> noise_sd{0.12, 0.15, 1.0};  // m/s, m/s, rad/s: the driving noise's stationary spread
+  double noise_correlation = 0.2;                // s, its correlation time
+  double camera_xy = 0.001;                      // m
+  double camera_theta = 0.01;                    // rad
+  double drop = 0.1;                             // share of frames the camera loses
+  double gap_start = -1;                         // s, where the camera loses the robot for gap_seconds (< 0: never)
+  double gap_seconds = 0;
+  double max_speed = 1.2;                        // m/s, of the random commands
+  double max_turn = 3;                           // rad/s
+};
+
+struct PlantRecording {
+  OmniLog log;                       // what the camera saw, read back as a log file
+  std::vector<Pose2> truth;          // per frame
+  std::vector<Twist2> velocity;      // per frame, robot frame
+};
+
+// `seconds` of random piecewise-constant driving, deterministic per seed.
+PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds, std::uint64_t seed);
+
+// The constant-velocity extrapolation (no model) at `horizon` frames: RMS position
+// error over the rows with a measurement whose origin frame has two measured rows
+// at or before it.
+double ConstantVelocityRmse(const OmniLog& log, int horizon, std::size_t first_row = 0);
+
+}  // namespace twinsim::testing
