@@ -55,6 +55,7 @@
 #include "sim/arm_simulation.h"
 #include "sim/omni_simulation.h"
 #include "tuning/pid_tuning.h"
+#include "python/observer_binding.h"
 
 namespace py = pybind11;
 
@@ -898,6 +899,7 @@ PYBIND11_MODULE(_twinsim, m) {
         return names;
       });
 
+  BindOmniObserver(m, [](const py::handle& model) { return model.cast<const PyOmniModel&>().model; });
   m.def("load_omni_model", [](const std::string& path) { return PyOmniModel{LoadOmniModel(path)}; }, py::arg("path"));
   m.def("load_arm_model", [](const std::string& path) { return PyArmModel{LoadArmModel(path)}; }, py::arg("path"));
   m.def("omni_model_from_yaml", [](const std::string& text, const std::string& name) {

@@ -19,6 +19,7 @@ from ._twinsim import (  # noqa: F401  (the public names)
     CheckFailed,
     InputError,
     OmniModel,
+    OmniObserver,
     OmniPredictor,
     OmniSim,
     Scene,
@@ -33,7 +34,7 @@ from ._twinsim import (  # noqa: F401  (the public names)
 from . import _twinsim
 
 __all__ = [
-    "ArmModel", "ArmPredictor", "ArmSim", "CheckFailed", "InputError", "OmniModel", "OmniPredictor",
+    "ArmModel", "ArmPredictor", "ArmSim", "CheckFailed", "InputError", "OmniModel", "OmniObserver", "OmniPredictor",
     "OmniSim", "Scene", "arm_model_from_urdf", "arm_model_from_yaml", "available_backends",
     "load_arm_model", "load_model", "load_omni_model", "load_scene", "omni_model_from_yaml",
     "replay", "training_data", "train", "identify", "diagnose", "compare", "tune_pid", "batch", "ilc", "run",

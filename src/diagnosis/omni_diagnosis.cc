@@ -19,6 +19,15 @@
 namespace twinsim {
 namespace {
 
+// The diagnosis reads effects from the residual of the open-loop tracker's predictions
+// (analysis/omni_replay.h): a missing delay, lag or scale shows there as a pattern that
+// grows with the command. The observer corrects the velocity at every frame and so
+// absorbs most of that pattern into its estimate (measured: every hidden-effect case of
+// tests/diagnosis/omni_diagnosis_test.cc fails its naming with it), so diagnosis keeps
+// the tracker for its residuals, its evidence and its refit until its tests are
+// redesigned around the filter's innovations (issue 40).
+constexpr const char* kDiagnosisState = "tracker";
+
 constexpr int kFitStride = 4;     // fits predict from every fourth frame (consecutive predictions overlap)
 constexpr int kMaxCeresIterations = 8;
 constexpr double kReversalWindow = 0.1;  // s
@@ -100,6 +109,7 @@ class OmniProblem : public DiagnosisProblem {
     OmniReplayOptions o;
     o.backend = options_.backend;
     o.horizon = horizon;
+    o.state = kDiagnosisState;
     o.stride = stride;
     return PoseErrorsInRobotFrame(*d.log, ReplayOmniLog(model, *d.log, o), nominal_.chassis_radius);
   }
@@ -634,6 +644,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   if (options.refit_model) {
     if (progress) progress("identifying the model on the fit blocks");
     OmniIdentificationOptions identify;
+    identify.state = kDiagnosisState;
     identify.backend = options.backend;
     identify.horizon = options.horizon;
     identify.held_out = options.held_out;
@@ -698,6 +709,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     // (its delay and controller): what the model misses in timing.
     const int delay = model.command_delay_frames + model.vision_delay_frames;
     OmniReplayOptions free_run;
+    free_run.state = kDiagnosisState;
     free_run.backend = options.backend;
     free_run.horizon = 1;
     const OmniReplayResult one = ReplayOmniLog(nominal_model, log, free_run);
@@ -791,6 +803,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     }
     if (best_len > 2) {
       OmniReplayOptions o;
+      o.state = kDiagnosisState;
       o.backend = options.backend;
       DiagnosisPath measured{"measured", {}, {}, {}, {}};
       DiagnosisPath nominal_path{"nominal model", {}, {}, {}, {}};

@@ -29,7 +29,7 @@ enum Param {
   kVMax, kWMax,
   kDelay,
   kLoopX, kLoopY, kLoopW,
-  kNoiseX, kNoiseY, kNoiseW,
+  kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale,
   kNumParams
 };
 
@@ -63,9 +63,11 @@ const ParamSpec kSpecs[kNumParams] = {
     {"forward.loop_gain", "controller.forward.kp, ki, kd", "x", "the forward controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"sideways.loop_gain", "controller.sideways.kp, ki, kd", "x", "the sideways controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"turn.loop_gain", "controller.rotation.kp, ki, kd", "x", "the rotation controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
-    {"forward.process_noise", "observer.process_noise.forward", "m/s per sqrt(s)", "how fast the forward speed wanders from the model's (the observer's process noise)", 0.005, 20, true},
-    {"sideways.process_noise", "observer.process_noise.sideways", "m/s per sqrt(s)", "how fast the sideways speed wanders from the model's (the observer's process noise)", 0.005, 20, true},
-    {"turn.process_noise", "observer.process_noise.turn", "rad/s per sqrt(s)", "how fast the turn rate wanders from the model's (the observer's process noise)", 0.05, 200, true},
+    {"forward.slip", "observer.slip.forward", "m/s", "spread of the forward driving noise the wheels do not see (the observer's)", 0.002, 5, true},
+    {"sideways.slip", "observer.slip.sideways", "m/s", "spread of the sideways driving noise the wheels do not see (the observer's)", 0.002, 5, true},
+    {"turn.slip", "observer.slip.turn", "rad/s", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true},
+    {"slip.correlation_time", "observer.slip.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
+    {"process_noise.scale", "observer.process_noise", "x", "the observer's process noise on the model's velocity relative to the model's: how far the model's own velocity is trusted", 0.001, 100, true},
 };
 
 constexpr double kPieceSeconds = 10;   // s, a log is replayed in pieces this long ...
@@ -82,7 +84,7 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
           m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
           fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
           fx.v_max, fx.w_max, (m.command_delay_frames + m.vision_delay_frames) * frame_period + fx.time_delay,
-          1, 1, 1, m.observer.process_noise[0], m.observer.process_noise[1], m.observer.process_noise[2]};
+          1, 1, 1, m.observer.slip[0], m.observer.slip[1], m.observer.slip[2], m.observer.slip_time, 1};
 }
 
 // `base` with the parameters. The total delay (s) goes into whole frames in `delay:`
@@ -106,7 +108,9 @@ OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, doubl
   fx.forward_per_sideways = v[kCrossXY];
   fx.v_max = v[kVMax];
   fx.w_max = v[kWMax];
-  for (int a = 0; a < 3; ++a) m.observer.process_noise[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kNoiseX + a)];
+  for (int a = 0; a < 3; ++a) m.observer.slip[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kSlipX + a)];
+  m.observer.slip_time = v[kSlipTime];
+  for (double& q : m.observer.process_noise) q *= v[kProcessScale];
   PidGains* gains[3] = {&m.controller.forward, &m.controller.sideways, &m.controller.rotation};
   for (int a = 0; a < 3; ++a) {
     const double k = v[static_cast<std::size_t>(kLoopX + a)];
@@ -733,7 +737,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     for (int p : tied) pruned[p] = std::string("not excited: the fit blocks never command ") + kOmniAxisNames[a];
   }
   if (options.state != "observer") {
-    for (int p : {kNoiseX, kNoiseY, kNoiseW}) pruned[p] = "the open-loop tracker (--state tracker) has no process noise";
+    for (int p : {kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale}) pruned[p] = "the open-loop tracker (--state tracker) has no observer";
   }
   std::vector<int> free;
   for (int p = 0; p < kNumParams; ++p)
@@ -848,8 +852,9 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
                 static_cast<int>(kLagX), static_cast<int>(kLagY), static_cast<int>(kLagW), static_cast<int>(kLoopX),
                 static_cast<int>(kLoopY), static_cast<int>(kLoopW), static_cast<int>(kSlewX), static_cast<int>(kSlewY),
                 static_cast<int>(kSlewW), static_cast<int>(kTurnX), static_cast<int>(kTurnY), static_cast<int>(kCrossYX),
-                static_cast<int>(kCrossXY), static_cast<int>(kVMax), static_cast<int>(kWMax), static_cast<int>(kNoiseX),
-                static_cast<int>(kNoiseY), static_cast<int>(kNoiseW)}) {
+                static_cast<int>(kCrossXY), static_cast<int>(kVMax), static_cast<int>(kWMax), static_cast<int>(kSlipX),
+                static_cast<int>(kSlipY), static_cast<int>(kSlipW), static_cast<int>(kSlipTime),
+                static_cast<int>(kProcessScale)}) {
     IdentifiedParameter q;
     const ParamSpec& s = kSpecs[p];
     q.name = s.name;

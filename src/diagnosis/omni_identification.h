@@ -15,7 +15,7 @@
 //     (turn_coupling), forward and sideways leaking into each other (cross_coupling).
 // The score is the contract's replay: each frame predicted from the measured state
 // `horizon` frames earlier, estimated by the model's own Kalman filter
-// (estimation/omni_observer.h). The parameters, the delay and the filter's process noise
+// (estimation/omni_observer.h). The parameters, the delay and the filter's driving noise
 // among them, minimise the prediction error on the fit blocks of the logs (the
 // prediction-error method; Ceres, numeric derivatives through the engine, after a
 // profile search of the delay). The held-out blocks, whose predictions neither start
@@ -43,7 +43,7 @@ struct OmniIdentificationOptions {
   std::string backend = "analytic";  // the physics that replays the model
   int horizon = 4;                   // frames predicted ahead (the contract's replay K)
   // How each prediction's start state is estimated (analysis/omni_replay.h): "observer",
-  // the model's Kalman filter, whose process noise is then fitted with the rest (the
+  // the model's Kalman filter, whose driving noise (observer.slip) is fitted with the rest (the
   // prediction-error method); or "tracker", the open-loop response with corrected poses.
   std::string state = "observer";
   double held_out = 0.3;             // share of each log's time blocks held out from the fit

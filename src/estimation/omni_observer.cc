@@ -20,6 +20,7 @@ bool OmniObserverOptions::IsValid(std::string* why) const {
   if (reacquire_after < 1) return fail("observer reacquire_after must be 1 or more");
   if (!(initial_speed_sd > 0) || !(initial_turn_sd > 0)) return fail("observer initial spreads must be positive");
   if (!(speed_step > 0) || !(turn_step > 0)) return fail("observer finite-difference steps must be positive");
+  if (jacobian_interval < 1) return fail("observer jacobian_interval must be 1 or more");
   return true;
 }
 
@@ -86,8 +87,9 @@ ObserverMatrix OmniObserver::ProcessNoise(double theta) const {
 void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   const Pose2 p0 = backend_->pose(0);
   const Twist2 v0 = backend_->velocity(0);
+  const bool difference = jacobian && (frames_since_jacobian_ < 0 || frames_since_jacobian_ + 1 >= options_.jacobian_interval);
   OmniBackendState before;
-  if (jacobian) before = backend_->Save();
+  if (difference) before = backend_->Save();
   backend_->StepFrame({acting});
   Pose2 base_pose = backend_->pose(0);  // the model's own step, for F
   Twist2 base_velocity = backend_->velocity(0);
@@ -104,36 +106,53 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   if (!jacobian) return;
 
   // F's model-velocity columns by forward differences of the model over the frame.
-  OmniBackend* fd = backend_.get();
-  OmniBackendState after;
-  if (twin_) {
-    for (OmniRobotState& r : before.robots) r.engine_snapshot.clear();  // the twin's engine has no 3D state
-    fd = twin_.get();
-    fd->Restore(before);
-    fd->StepFrame({acting});
-    base_pose = fd->pose(0);
-    base_velocity = fd->velocity(0);
+  if (difference) {
+    OmniBackend* fd = backend_.get();
+    OmniBackendState after;
+    if (twin_) {
+      for (OmniRobotState& r : before.robots) r.engine_snapshot.clear();  // the twin's engine has no 3D state
+      fd = twin_.get();
+      fd->Restore(before);
+      fd->StepFrame({acting});
+      base_pose = fd->pose(0);
+      base_velocity = fd->velocity(0);
+    } else {
+      after = backend_->Save();
+    }
+    const double steps[3] = {options_.speed_step, options_.speed_step, options_.turn_step};
+    for (int j = 0; j < 3; ++j) {
+      fd->Restore(before);
+      Twist2 v = v0;
+      (j == 0 ? v.vx : j == 1 ? v.vy : v.omega) += steps[j];
+      fd->SetVelocity(0, v);
+      fd->StepFrame({acting});
+      const Pose2 p = fd->pose(0);
+      const Twist2 w = fd->velocity(0);
+      const double h = steps[j];
+      velocity_columns_.col(j) << (p.x - base_pose.x) / h, (p.y - base_pose.y) / h,
+          WrapAngle(p.theta - base_pose.theta) / h, (w.vx - base_velocity.vx) / h, (w.vy - base_velocity.vy) / h,
+          (w.omega - base_velocity.omega) / h;
+    }
+    if (!twin_) backend_->Restore(after);
+    frames_since_jacobian_ = 0;
   } else {
-    after = backend_->Save();
+    ++frames_since_jacobian_;
   }
   ObserverMatrix f = ObserverMatrix::Identity();
   f(0, 2) = -(moved.y - p0.y);
   f(1, 2) = moved.x - p0.x;
-  const double steps[3] = {options_.speed_step, options_.speed_step, options_.turn_step};
-  for (int j = 0; j < 3; ++j) {
-    fd->Restore(before);
-    Twist2 v = v0;
-    (j == 0 ? v.vx : j == 1 ? v.vy : v.omega) += steps[j];
-    fd->SetVelocity(0, v);
-    fd->StepFrame({acting});
-    const Pose2 p = fd->pose(0);
-    const Twist2 w = fd->velocity(0);
-    const double h = steps[j];
-    f.block<6, 1>(0, 3 + j) << (p.x - base_pose.x) / h, (p.y - base_pose.y) / h,
-        WrapAngle(p.theta - base_pose.theta) / h, (w.vx - base_velocity.vx) / h, (w.vy - base_velocity.vy) / h,
-        (w.omega - base_velocity.omega) / h;
+  // The differenced columns are in the robot frame of their frame: turn them to this one.
+  const double turn = p0.theta - jacobian_theta_;
+  if (difference) jacobian_theta_ = p0.theta;
+  f.block<6, 3>(0, 3) = velocity_columns_;
+  if (!difference && turn != 0) {
+    const double ct = std::cos(turn), st = std::sin(turn);
+    for (int j = 0; j < 3; ++j) {
+      const double x = f(0, 3 + j), y = f(1, 3 + j);
+      f(0, 3 + j) = ct * x - st * y;
+      f(1, 3 + j) = st * x + ct * y;
+    }
   }
-  if (!twin_) backend_->Restore(after);
   // The slip's columns: it moves the pose along the robot's axes, and decays.
   f(0, 6) = dt_ * c;
   f(0, 7) = -dt_ * sn;
@@ -172,6 +191,7 @@ bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& co
     if (!camera) return false;
     backend_->Reset(0, *camera, Twist2{});
     slip_.setZero();
+    frames_since_jacobian_ = -1;
     p_ = InitialCovariance();
     started_ = true;
     return true;
@@ -240,6 +260,9 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
   const OmniBackendState saved = backend_->Save();
   const ObserverMatrix p = p_;
   const Eigen::Vector3d slip = slip_;
+  const Eigen::Matrix<double, 6, 3> columns = velocity_columns_;
+  const double jacobian_theta = jacobian_theta_;
+  const int frames_since_jacobian = frames_since_jacobian_;
   double last_theta = backend_->pose(0).theta;
   for (int j = 0; j < k; ++j) {
     Step(Acting(j, planned), covariance);
@@ -251,6 +274,9 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
   backend_->Restore(saved);
   p_ = p;
   slip_ = slip;
+  velocity_columns_ = columns;
+  jacobian_theta_ = jacobian_theta;
+  frames_since_jacobian_ = frames_since_jacobian;
   return out;
 }
 

@@ -68,6 +68,9 @@ struct OmniObserverOptions {
   // Finite-difference steps of the velocity columns of F: above an encoder count's speed.
   double speed_step = 0.02;  // m/s
   double turn_step = 0.2;    // rad/s
+  // F's model-velocity columns are differenced anew every this many frames and reused
+  // in between (they change with the controller's saturation, slowly against a frame).
+  int jacobian_interval = 4;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -152,6 +155,9 @@ class OmniObserver {
   std::unique_ptr<OmniBackend> twin_;  // analytic, for F's velocity columns; null when backend_ is analytic
   std::deque<Twist2> sent_;            // the last delay_ + 1 commands sent, the newest last
   ObserverMatrix p_ = ObserverMatrix::Zero();
+  Eigen::Matrix<double, 6, 3> velocity_columns_ = Eigen::Matrix<double, 6, 3>::Zero();  // F's, last differenced
+  double jacobian_theta_ = 0;       // rad, the heading they were differenced at
+  int frames_since_jacobian_ = -1;  // -1: none yet
   Eigen::Vector3d slip_ = Eigen::Vector3d::Zero();  // d, robot frame
   double slip_decay_ = 0;                           // a
   Eigen::Matrix3d r_ = Eigen::Matrix3d::Zero();

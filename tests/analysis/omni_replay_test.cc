@@ -22,6 +22,7 @@ class OmniReplayTest : public ::testing::Test {
   OmniReplayTest() {
     model.vision_noise_xy = model.vision_noise_theta = 0;
     options.backend = "analytic";
+    options.state = "tracker";
   }
   OmniModel model = testing::Omni4();
   OmniReplayOptions options;
@@ -41,6 +42,21 @@ TEST_F(OmniReplayTest, SameModelPredictsItsOwnLogFourFramesAhead) {
   // rest where the noise-free camera repeats its pose (no new measurement, CONTRACT.md):
   // there the tracker runs on its own state.
   EXPECT_LT(PositionRmse(log, r), 2e-5);
+}
+
+// The observer on the model's own noise-free log: it starts at the first row (the
+// tracker at frame D), and its estimate, which weighs the camera against the model,
+// predicts the log to a fraction of a millimetre.
+TEST_F(OmniReplayTest, TheObserverPredictsTheSameModelsLogFromItsFirstRow) {
+  const OmniLog log = RecordLog(model, 20);
+  options.state = "observer";
+  const OmniReplayResult r = ReplayOmniLog(model, log, options);
+  EXPECT_EQ(r.state, "observer");
+  const int first = kWarmUpFrames + 4;
+  EXPECT_EQ(r.num_predicted(), static_cast<int>(log.rows.size()) - first);
+  EXPECT_FALSE(r.predicted[first - 1]);
+  EXPECT_TRUE(r.predicted[first]);
+  EXPECT_LT(PositionRmse(log, r), 5e-4);
 }
 
 TEST_F(OmniReplayTest, TheRightDelayPredictsBetterThanNone) {

@@ -185,16 +185,22 @@ TEST(OmniLearnedVsNewtonian, LearnedWinsOnAPlantWithUnmodelledEffects) {
   options.kind = "mlp";
   auto learned = std::make_shared<OmniPredictor>(TrainOmniPredictor(newtonian, {train}, options));
 
-  auto rmse = [&](const std::string& backend, int horizon) {
+  auto rmse = [&](const std::string& backend, int horizon, const std::string& state = "observer") {
     OmniReplayOptions o;
     o.backend = backend;
     o.horizon = horizon;
+    o.state = state;
     o.backend_options.predictor = learned;
     return PositionRmse(test, ReplayOmniLog(newtonian, test, o));
   };
-  const double newton4 = rmse("ode", 4), learned4 = rmse("learned", 4);
-  const double newton30 = rmse("ode", 30), learned30 = rmse("learned", 30);
-  EXPECT_LE(learned4, 0.5 * newton4) << "4 frames: learned " << learned4 << " m, Newtonian " << newton4 << " m";
+  // The seed's comparison: the Newtonian model's open-loop response with corrected poses.
+  const double tracked4 = rmse("ode", 4, "tracker"), learned4 = rmse("learned", 4);
+  EXPECT_LE(learned4, 0.5 * tracked4) << "4 frames: learned " << learned4 << " m, Newtonian tracked " << tracked4 << " m";
+  // The Newtonian model with its observer (velocity from the camera) closes much of
+  // that gap, but not all: the plant's lag, drift and limits are not in it.
+  const double newton4 = rmse("ode", 4), newton30 = rmse("ode", 30), learned30 = rmse("learned", 30);
+  EXPECT_LT(learned4, newton4) << "4 frames: learned " << learned4 << " m, Newtonian " << newton4 << " m";
+  EXPECT_LT(newton4, 0.75 * tracked4) << "4 frames: observer " << newton4 << " m, tracker " << tracked4 << " m";
   EXPECT_LT(learned30, newton30) << "1 s: learned " << learned30 << " m, Newtonian " << newton30 << " m";
 }
 

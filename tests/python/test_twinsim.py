@@ -184,6 +184,38 @@ def test_replay_of_arrays_is_the_replay_command():
     assert np.sqrt(np.mean(error ** 2)) < 0.01
 
 
+def test_the_observer_fed_live_predicts_what_replay_predicts():
+    model = twinsim.load_omni_model(path("models/omni4.yaml"))
+    log = record(model, 300, 5)
+    predicted = twinsim.replay(model, log, backend="analytic", horizon=4)
+    period = np.median(np.diff(log[:, 0]))
+    frames = np.rint((log[:, 0] - log[0, 0]) / period).astype(int)
+    row_of = {int(f): i for i, f in enumerate(frames)}
+    observer = twinsim.OmniObserver(model, backend="analytic", frame_rate=1 / period)
+    assert observer.delay_frames == model.delay_frames
+    command, checked = log[0, 4:7], 0
+    for f in range(frames[-1] + 1):
+        i = row_of.get(f)
+        if i is not None:
+            command = log[i, 4:7]
+        observer.add_frame(None if i is None else log[i, 1:4], command)
+        target = row_of.get(f + 4)
+        if i is None or target is None or f < 15:
+            continue
+        ahead = observer.predict(4, covariance=True)
+        np.testing.assert_allclose(ahead["pose"][-1, :2], predicted[target, 1:3], atol=1e-9)
+        spread = ahead["pose_covariance"][:, 0, 0]
+        assert np.all(np.diff(spread) > 0)
+        checked += 1
+    assert checked > 200
+    estimate = observer.estimate
+    assert estimate["covariance"].shape == (9, 9)
+    np.testing.assert_allclose(estimate["velocity"], estimate["model_velocity"] + estimate["slip"])
+    assert observer.innovations["updates"] > 200
+    with pytest.raises(twinsim.InputError, match="expected 3 numbers"):
+        observer.add_frame([0, 0], [0, 0, 0])
+
+
 def test_bad_arrays_are_input_errors_naming_row_and_column():
     model = twinsim.load_omni_model(path("models/omni4.yaml"))
     log = record(model, 60, 2)

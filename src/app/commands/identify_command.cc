@@ -253,7 +253,7 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--stride", options->omni.stride, "Omni: the fit predicts from every stride-th frame")
       ->capture_default_str();
   cmd->add_option("--state", options->omni.state,
-                  "Omni: each prediction starts from the model's Kalman filter (observer; its process noise is fitted "
+                  "Omni: each prediction starts from the model's Kalman filter (observer; its driving noise is fitted "
                   "too) or from the open-loop tracker (tracker)")
       ->capture_default_str()
       ->check(CLI::IsMember({"observer", "tracker"}));
