@@ -63,10 +63,10 @@ const ParamSpec kSpecs[kNumParams] = {
     {"forward.loop_gain", "controller.forward.kp, ki, kd", "x", "the forward controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"sideways.loop_gain", "controller.sideways.kp, ki, kd", "x", "the sideways controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"turn.loop_gain", "controller.rotation.kp, ki, kd", "x", "the rotation controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
-    {"forward.slip", "observer.slip.forward", "m/s", "spread of the forward driving noise the wheels do not see (the observer's)", 0.002, 5, true},
-    {"sideways.slip", "observer.slip.sideways", "m/s", "spread of the sideways driving noise the wheels do not see (the observer's)", 0.002, 5, true},
-    {"turn.slip", "observer.slip.turn", "rad/s", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true},
-    {"slip.correlation_time", "observer.slip.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
+    {"forward.slip", "driving_noise.forward", "m/s", "spread of the forward driving noise the wheels do not see (the observer's)", 0.002, 5, true},
+    {"sideways.slip", "driving_noise.sideways", "m/s", "spread of the sideways driving noise the wheels do not see (the observer's)", 0.002, 5, true},
+    {"turn.slip", "driving_noise.turn", "rad/s", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true},
+    {"slip.correlation_time", "driving_noise.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
     {"process_noise.scale", "observer.process_noise", "x", "the observer's process noise on the model's velocity relative to the model's: how far the model's own velocity is trusted", 0.001, 100, true},
 };
 
@@ -84,7 +84,7 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
           m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
           fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
           fx.v_max, fx.w_max, (m.command_delay_frames + m.vision_delay_frames) * frame_period + fx.time_delay,
-          1, 1, 1, m.observer.slip[0], m.observer.slip[1], m.observer.slip[2], m.observer.slip_time, 1};
+          1, 1, 1, m.driving_noise.sd[0], m.driving_noise.sd[1], m.driving_noise.sd[2], m.driving_noise.correlation_time, 1};
 }
 
 // `base` with the parameters. The total delay (s) goes into whole frames in `delay:`
@@ -108,8 +108,8 @@ OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, doubl
   fx.forward_per_sideways = v[kCrossXY];
   fx.v_max = v[kVMax];
   fx.w_max = v[kWMax];
-  for (int a = 0; a < 3; ++a) m.observer.slip[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kSlipX + a)];
-  m.observer.slip_time = v[kSlipTime];
+  for (int a = 0; a < 3; ++a) m.driving_noise.sd[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kSlipX + a)];
+  m.driving_noise.correlation_time = v[kSlipTime];
   for (double& q : m.observer.process_noise) q *= v[kProcessScale];
   PidGains* gains[3] = {&m.controller.forward, &m.controller.sideways, &m.controller.rotation};
   for (int a = 0; a < 3; ++a) {

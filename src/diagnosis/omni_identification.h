@@ -43,7 +43,7 @@ struct OmniIdentificationOptions {
   std::string backend = "analytic";  // the physics that replays the model
   int horizon = 4;                   // frames predicted ahead (the contract's replay K)
   // How each prediction's start state is estimated (analysis/omni_replay.h): "observer",
-  // the model's Kalman filter, whose driving noise (observer.slip) is fitted with the rest (the
+  // the model's Kalman filter, whose driving noise (driving_noise:) is fitted with the rest (the
   // prediction-error method); or "tracker", the open-loop response with corrected poses.
   std::string state = "observer";
   double held_out = 0.3;             // share of each log's time blocks held out from the fit

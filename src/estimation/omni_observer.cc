@@ -53,7 +53,7 @@ OmniObserver::OmniObserver(const OmniModel& model, const std::string& backend, d
   sent_.assign(static_cast<std::size_t>(delay_ + 1), Twist2{});
   const double sxy = model.ObserverNoiseXy(), sth = model.ObserverNoiseTheta();
   r_.diagonal() << sxy * sxy, sxy * sxy, sth * sth;
-  slip_decay_ = std::exp(-dt_ / model.observer.slip_time);
+  slip_decay_ = std::exp(-dt_ / model.driving_noise.correlation_time);
 }
 
 OmniObserver::~OmniObserver() = default;
@@ -63,7 +63,7 @@ ObserverMatrix OmniObserver::InitialCovariance() const {
   p.topLeftCorner<3, 3>() = r_;
   p(3, 3) = p(4, 4) = options_.initial_speed_sd * options_.initial_speed_sd;
   p(5, 5) = options_.initial_turn_sd * options_.initial_turn_sd;
-  for (int a = 0; a < 3; ++a) p(6 + a, 6 + a) = std::pow(model_.observer.slip[static_cast<std::size_t>(a)], 2);
+  for (int a = 0; a < 3; ++a) p(6 + a, 6 + a) = std::pow(model_.driving_noise.sd[static_cast<std::size_t>(a)], 2);
   return p;
 }
 
@@ -79,7 +79,7 @@ ObserverMatrix OmniObserver::ProcessNoise(double theta) const {
     q.block<3, 1>(0, 3 + a) += qa * dt2 * g;
     q.block<1, 3>(3 + a, 0) += qa * dt2 * g.transpose();
     q(3 + a, 3 + a) += qa * dt;
-    q(6 + a, 6 + a) = std::pow(model_.observer.slip[static_cast<std::size_t>(a)], 2) * (1 - slip_decay_ * slip_decay_);
+    q(6 + a, 6 + a) = std::pow(model_.driving_noise.sd[static_cast<std::size_t>(a)], 2) * (1 - slip_decay_ * slip_decay_);
   }
   return q;
 }

@@ -9,7 +9,7 @@
 // Bullet), which the filter steps one camera frame at a time. Beside it the body slips:
 // it moves at the model's velocity plus a slip d that the wheels, and so the on-board
 // controller, do not see (the driving noise), a first-order Gauss-Markov process per
-// robot axis of spread sigma_a and correlation time T (model.observer.slip). The
+// robot axis of spread sigma_a and correlation time T (model.driving_noise). The
 // filter's state is
 //   s = (x, y, theta, vx, vy, omega, dx, dy, domega): the pose in the field frame, the
 //   model's velocity and the slip in the robot's,

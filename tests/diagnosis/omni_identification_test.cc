@@ -150,8 +150,8 @@ TEST(OpenWorldWandering, IdentifiedWithItsObserverBeatsNoModelAndTheTracker) {
   }
   resembling.controller.forward.slew_rate = resembling.controller.sideways.slew_rate = 50;
   resembling.controller.rotation.slew_rate = 500;
-  resembling.observer.slip = plant.noise_sd;
-  resembling.observer.slip_time = plant.noise_correlation;
+  resembling.driving_noise.sd = plant.noise_sd;
+  resembling.driving_noise.correlation_time = plant.noise_correlation;
   const OmniGap own = OmniHeldOutGap(resembling, {rec.log}, options, "resembling", resembling.chassis_radius);
   RecordProperty("gaps_mm", std::to_string(1000 * ident->rmse) + ", tracker " + std::to_string(1000 * tracked->rmse) +
                                 ", resembling " + std::to_string(1000 * own.rmse) + ", constant velocity " +
@@ -160,13 +160,13 @@ TEST(OpenWorldWandering, IdentifiedWithItsObserverBeatsNoModelAndTheTracker) {
   EXPECT_LT(ident->rmse, 0.7 * tracked->rmse);
   EXPECT_LT(ident->rmse, own.rmse);
   for (int a = 0; a < 2; ++a) {
-    const double fitted = identified.observer.slip[static_cast<std::size_t>(a)];
+    const double fitted = identified.driving_noise.sd[static_cast<std::size_t>(a)];
     const double truth = plant.noise_sd[static_cast<std::size_t>(a)];
     EXPECT_GT(fitted, truth / 2) << kOmniAxisNames[a];
     EXPECT_LT(fitted, truth * 2) << kOmniAxisNames[a];
   }
-  EXPECT_GT(identified.observer.slip_time, plant.noise_correlation / 2);
-  EXPECT_LT(identified.observer.slip_time, plant.noise_correlation * 2);
+  EXPECT_GT(identified.driving_noise.correlation_time, plant.noise_correlation / 2);
+  EXPECT_LT(identified.driving_noise.correlation_time, plant.noise_correlation * 2);
   EXPECT_EQ(identified.Validate(), "");
 }
 

@@ -29,8 +29,8 @@ OmniModel ResemblingModel(const testing::WanderingPlant& plant) {
   m.vision_noise_xy = plant.camera_xy;
   m.vision_noise_theta = plant.camera_theta;
   // The plant's driving noise as the observer's slip.
-  m.observer.slip = plant.noise_sd;
-  m.observer.slip_time = plant.noise_correlation;
+  m.driving_noise.sd = plant.noise_sd;
+  m.driving_noise.correlation_time = plant.noise_correlation;
   return m;
 }
 
@@ -89,8 +89,8 @@ TEST(OmniObserver, IsConsistentOnItsOwnModel) {
   model.vision_noise_xy = 0.001;
   model.vision_noise_theta = 0.01;
   model.observer.process_noise = {0.3, 0.3, 2.0};
-  model.observer.slip = {0.1, 0.05, 0.4};
-  model.observer.slip_time = 0.2;
+  model.driving_noise.sd = {0.1, 0.05, 0.4};
+  model.driving_noise.correlation_time = 0.2;
   const double rate = 60;
   FrameTiming timing;
   timing.frame_rate = rate;
@@ -104,7 +104,7 @@ TEST(OmniObserver, IsConsistentOnItsOwnModel) {
   const int delay = model.command_delay_frames + model.vision_delay_frames;
   std::vector<Twist2> sent;
   double slip[3] = {0, 0, 0};
-  const double a = std::exp(-1 / rate / model.observer.slip_time);
+  const double a = std::exp(-1 / rate / model.driving_noise.correlation_time);
   int within = 0, counted = 0;
   for (int f = 0; f < 1800; ++f) {
     const double t = f / rate;
@@ -128,7 +128,7 @@ TEST(OmniObserver, IsConsistentOnItsOwnModel) {
     q.theta += slip[2] / rate;
     truth->MoveBody(0, q);
     for (int k = 0; k < 3; ++k)
-      slip[k] = a * slip[k] + model.observer.slip[static_cast<std::size_t>(k)] * std::sqrt(1 - a * a) * normal(rng);
+      slip[k] = a * slip[k] + model.driving_noise.sd[static_cast<std::size_t>(k)] * std::sqrt(1 - a * a) * normal(rng);
     // White acceleration of the observer's density, as a velocity kick per frame.
     Twist2 v = truth->velocity(0);
     const double k = std::sqrt(1 / rate);

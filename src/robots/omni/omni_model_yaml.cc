@@ -172,6 +172,12 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     v.Finish();
   }
 
+  if (top.Has("driving_noise")) {
+    YamlMap d(top.Child("driving_noise"), path, "driving_noise", &errors);
+    for (int a = 0; a < 3; ++a) d.Get(kOmniAxisNames[a], &model.driving_noise.sd[static_cast<std::size_t>(a)], NonNegative(100));
+    d.Get("correlation_time", &model.driving_noise.correlation_time, InRange(1e-3, 100));
+    d.Finish();
+  }
   if (top.Has("observer")) {
     YamlMap o(top.Child("observer"), path, "observer", &errors);
     if (o.Has("process_noise")) {
@@ -179,12 +185,6 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
       for (int a = 0; a < 3; ++a)
         q.Get(kOmniAxisNames[a], &model.observer.process_noise[static_cast<std::size_t>(a)], InRange(1e-6, 1e3));
       q.Finish();
-    }
-    if (o.Has("slip")) {
-      YamlMap d(o.Child("slip"), path, "observer.slip", &errors);
-      for (int a = 0; a < 3; ++a) d.Get(kOmniAxisNames[a], &model.observer.slip[static_cast<std::size_t>(a)], NonNegative(100));
-      d.Get("correlation_time", &model.observer.slip_time, InRange(1e-3, 100));
-      d.Finish();
     }
     if (o.Has("measurement_noise")) {
       YamlMap r(o.Child("measurement_noise"), path, "observer.measurement_noise", &errors);

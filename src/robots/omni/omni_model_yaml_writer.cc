@@ -124,15 +124,18 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   line("  drop_probability", YamlNumber(model.vision_drop_probability));
   if (model.vision_repeat_probability > 0) line("  repeat_probability", YamlNumber(model.vision_repeat_probability));
   if (model.vision_time_jitter > 0) line("  time_jitter", YamlNumber(model.vision_time_jitter), "s");
-  const OmniObserverModel& o = model.observer;
-  if (o.process_noise != defaults.observer.process_noise || o.slip != defaults.observer.slip ||
-      o.slip_time != defaults.observer.slip_time || o.measurement_noise_xy > 0 || o.measurement_noise_theta > 0) {
-    s << "observer:\n";
+  const OmniDrivingNoise& dn = model.driving_noise;
+  if (dn.sd != defaults.driving_noise.sd || dn.correlation_time != defaults.driving_noise.correlation_time) {
     std::string d;
     for (int a = 0; a < 3; ++a)
-      d += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(o.slip[static_cast<std::size_t>(a)]);
-    line("  slip", "{" + d + ", correlation_time: " + YamlNumber(o.slip_time) + "}",
-         "m/s, rad/s, s: driving noise the wheels do not see", 46);
+      d += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(dn.sd[static_cast<std::size_t>(a)]);
+    line("driving_noise", "{" + d + ", correlation_time: " + YamlNumber(dn.correlation_time) + "}",
+         "m/s, rad/s, s: slip the wheels do not see", 46);
+  }
+  const OmniObserverModel& o = model.observer;
+  if (o.process_noise != defaults.observer.process_noise || o.measurement_noise_xy > 0 ||
+      o.measurement_noise_theta > 0) {
+    s << "observer:\n";
     std::string q;
     for (int a = 0; a < 3; ++a)
       q += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(o.process_noise[static_cast<std::size_t>(a)]);

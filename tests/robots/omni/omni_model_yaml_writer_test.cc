@@ -120,6 +120,39 @@ TEST(OmniModelYamlWriter, TheFlatFrontKickerAndDribblerRoundTripAndAreLeftOutAtT
   ExpectSameModel(m, back);
 }
 
+// The driving noise and the observer's noise: left out at their defaults, written and
+// read back bit for bit otherwise; out-of-range values are the file's errors.
+TEST(OmniModelYamlWriter, DrivingNoiseAndObserverRoundTripAndAreLeftOutAtTheirDefaults) {
+  OmniModel m = testing::Omni4();
+  const std::string plain = FormatOmniModelYaml(m);
+  EXPECT_EQ(plain.find("driving_noise:"), std::string::npos);
+  EXPECT_EQ(plain.find("observer:"), std::string::npos);
+  m.driving_noise.sd = {0.123, 0.1 / 3, 1.7};
+  m.driving_noise.correlation_time = 0.21;
+  m.observer.process_noise = {0.05, 0.07, 0.9};
+  m.observer.measurement_noise_xy = 0.0015;
+  m.observer.measurement_noise_theta = 0.02;
+  const OmniModel back = RoundTrip(m);
+  EXPECT_EQ(back.driving_noise.sd, m.driving_noise.sd);
+  EXPECT_EQ(back.driving_noise.correlation_time, m.driving_noise.correlation_time);
+  EXPECT_EQ(back.observer.process_noise, m.observer.process_noise);
+  EXPECT_EQ(back.observer.measurement_noise_xy, 0.0015);
+  EXPECT_EQ(back.ObserverNoiseTheta(), 0.02);
+  EXPECT_EQ(FormatOmniModelYaml(back), FormatOmniModelYaml(m));
+  const std::string base = "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n";
+  try {
+    LoadOmniModelFromString(base + "driving_noise: {forward: -0.1, correlation_time: 0}\n", "bad.yaml");
+    ADD_FAILURE() << "a negative spread loads";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("bad.yaml:3:"), std::string::npos) << what;
+    EXPECT_NE(what.find("forward"), std::string::npos) << what;
+    EXPECT_NE(what.find("correlation_time"), std::string::npos) << what;
+  }
+  EXPECT_THROW(LoadOmniModelFromString(base + "observer: {process_noise: {sideways: 0}}\n", "bad.yaml"), InputError);
+  EXPECT_THROW(LoadOmniModelFromString(base + "observer: {slip: 1}\n", "bad.yaml"), InputError);
+}
+
 TEST(OmniModelYamlWriter, EachEffectAloneRoundTripsAndNoneWritesNoBlock) {
   const OmniModel base = testing::Omni4();
   EXPECT_EQ(FormatOmniModelYaml(base).find("effects:"), std::string::npos);
