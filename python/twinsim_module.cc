@@ -611,11 +611,12 @@ class PyArmSim {
 // ---- the command functions ---------------------------------------------------------
 
 Array ReplayOmni(const OmniModel& model, const py::handle& log, const std::string& backend, int horizon,
-                 const py::handle& predictor) {
+                 const py::handle& predictor, const std::string& state) {
   const OmniLog l = ToOmniLog(log, "log");
   OmniReplayOptions options;
   options.backend = backend;
   options.horizon = horizon;
+  options.state = state;
   options.backend_options.predictor = OmniPredictorArg(predictor);
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
@@ -995,7 +996,9 @@ PYBIND11_MODULE(_twinsim, m) {
       .def_property_readonly("sample_time", &PyArmSim::sample_time);
 
   m.def("_replay_omni", [](const PyOmniModel& model, const py::handle& log, const std::string& backend, int horizon,
-                           const py::handle& predictor) { return ReplayOmni(model.model, log, backend, horizon, predictor); });
+                           const py::handle& predictor, const std::string& state) {
+    return ReplayOmni(model.model, log, backend, horizon, predictor, state);
+  });
   m.def("_model_robot", [](const std::string& path) { return ModelFileRobot(path); });
   m.def("_replay_arm", [](const PyArmModel& model, const py::handle& log) { return ReplayArm(model.model, log); });
   m.def("_training_data", [](const PyOmniModel& model, const py::handle& logs, int horizon) {

@@ -49,17 +49,19 @@ def load_model(path):
     return load_omni_model(path)
 
 
-def replay(model, log, backend="analytic", horizon=4, predictor=None):
+def replay(model, log, backend="analytic", horizon=4, predictor=None, state="observer"):
     """`twinsim replay` without files.
 
     Omni: `log` is an (N, 7) array t,x,y,theta,vx_cmd,vy_cmd,omega_cmd (or a CSV path);
-    returns an (N, 4) array t,x,y,theta of the model's K-frame predictions.
+    returns an (N, 4) array t,x,y,theta of the model's K-frame predictions, each from the
+    state the model's Kalman filter estimated K frames earlier (state="tracker": from the
+    open-loop tracker, as `replay --state tracker`).
     Arm: `log` is a dict of arrays t (N), q and tau (N, n), optionally qd, qdd (or a
     CSV path); returns the model's (N, n) torques for the logged motion.
     """
     if isinstance(model, ArmModel):
         return _twinsim._replay_arm(model, log)
-    return _twinsim._replay_omni(model, log, backend, int(horizon), predictor)
+    return _twinsim._replay_omni(model, log, backend, int(horizon), predictor, state)
 
 
 def training_data(model, logs, horizon=1):

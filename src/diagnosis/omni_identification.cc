@@ -739,6 +739,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   if (options.state != "observer") {
     for (int p : {kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale}) pruned[p] = "the open-loop tracker (--state tracker) has no observer";
   }
+  // The observer's noise is fitted with the physical parameters from the start: fitted
+  // last, it let the filter absorb what a speed limit explains (w_max went unfound).
   std::vector<int> free;
   for (int p = 0; p < kNumParams; ++p)
     if (p != kVMax && p != kWMax && !pruned.count(p)) free.push_back(p);

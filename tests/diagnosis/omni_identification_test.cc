@@ -84,9 +84,15 @@ TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
   const OmniIdentificationReport report = IdentifyOmni(testing::Omni4(), logs, {}, options, &identified);
   SCOPED_TRACE(FormatOmniIdentificationTable(report));
 
-  // The plant itself, on its own engine, on the same held-out rows: a perfect model.
+  // The plant itself, on its own engine, on the same held-out rows: a perfect model. It
+  // has no driving noise, so its own filter is the open-loop tracker (the camera's noise
+  // only moves its poses); the identified model predicts through its fitted observer,
+  // which pays a little for the camera's noise in its velocity estimate (measured 1.11x
+  // on the ODE plant, against 1.08x through the tracker before issue 40; 0.76x on Bullet,
+  // against 1.00x).
   OmniIdentificationOptions own = options;
   own.backend = c.backend;
+  own.state = "tracker";
   const OmniGap floor = OmniHeldOutGap(plant, logs, own, "plant", plant.chassis_radius);
   const OmniGap* ident = report.Gap(report.held_out, "identified model");
   const OmniGap* cv = report.Gap(report.held_out, "constant velocity");
@@ -143,15 +149,7 @@ TEST(OpenWorldWandering, IdentifiedWithItsObserverBeatsNoModelAndTheTracker) {
   const OmniGap* cv = report.Gap(report.held_out, "constant velocity");
   const OmniGap* tracked = report.Gap(report.held_out, "identified model, open-loop tracker");
   ASSERT_TRUE(ident && cv && tracked);
-  OmniModel resembling = testing::Omni4();
-  for (int a = 0; a < 3; ++a) {
-    resembling.effects.axis_scale[static_cast<std::size_t>(a)] = plant.gain[static_cast<std::size_t>(a)];
-    resembling.effects.axis_lag[static_cast<std::size_t>(a)] = plant.lag[static_cast<std::size_t>(a)];
-  }
-  resembling.controller.forward.slew_rate = resembling.controller.sideways.slew_rate = 50;
-  resembling.controller.rotation.slew_rate = 500;
-  resembling.driving_noise.sd = plant.noise_sd;
-  resembling.driving_noise.correlation_time = plant.noise_correlation;
+  const OmniModel resembling = testing::ResemblingModel(testing::Omni4(), plant);
   const OmniGap own = OmniHeldOutGap(resembling, {rec.log}, options, "resembling", resembling.chassis_radius);
   RecordProperty("gaps_mm", std::to_string(1000 * ident->rmse) + ", tracker " + std::to_string(1000 * tracked->rmse) +
                                 ", resembling " + std::to_string(1000 * own.rmse) + ", constant velocity " +

@@ -14,24 +14,8 @@
 namespace twinsim {
 namespace {
 
-// Omni4 set up to resemble the wandering plant's response (gain and lag per axis, the
-// delay), but not its structure: a PID-driven body on wheels, no driving noise.
 OmniModel ResemblingModel(const testing::WanderingPlant& plant) {
-  OmniModel m = testing::Omni4();
-  m.command_delay_frames = plant.delay_frames / 2;
-  m.vision_delay_frames = plant.delay_frames - m.command_delay_frames;
-  for (int a = 0; a < 3; ++a) {
-    m.effects.axis_scale[static_cast<std::size_t>(a)] = plant.gain[static_cast<std::size_t>(a)];
-    m.effects.axis_lag[static_cast<std::size_t>(a)] = plant.lag[static_cast<std::size_t>(a)];
-  }
-  m.controller.forward.slew_rate = m.controller.sideways.slew_rate = 50;
-  m.controller.rotation.slew_rate = 500;
-  m.vision_noise_xy = plant.camera_xy;
-  m.vision_noise_theta = plant.camera_theta;
-  // The plant's driving noise as the observer's slip.
-  m.driving_noise.sd = plant.noise_sd;
-  m.driving_noise.correlation_time = plant.noise_correlation;
-  return m;
+  return testing::ResemblingModel(testing::Omni4(), plant);
 }
 
 OmniReplayOptions Options(const std::string& state, int horizon = 4) {

@@ -11,6 +11,7 @@
 
 #include "core/pose.h"
 #include "robots/omni/omni_log.h"
+#include "robots/omni/omni_model.h"
 
 namespace twinsim::testing {
 
@@ -38,6 +39,11 @@ struct PlantRecording {
 
 // `seconds` of random piecewise-constant driving, deterministic per seed.
 PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds, std::uint64_t seed);
+
+// `base` (an Omni4) set up to resemble the plant's response (gain and lag per axis, the
+// delay, fast ramps) and its driving noise, but not its structure: a PID-driven body on
+// wheels. The nearest a twinsim model comes to the plant's own model.
+OmniModel ResemblingModel(OmniModel base, const WanderingPlant& plant);
 
 // The constant-velocity extrapolation (no model) at `horizon` frames: RMS position
 // error over the rows with a measurement whose origin frame has two measured rows

@@ -80,6 +80,22 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
   return out;
 }
 
+OmniModel ResemblingModel(OmniModel m, const WanderingPlant& plant) {
+  m.command_delay_frames = plant.delay_frames / 2;
+  m.vision_delay_frames = plant.delay_frames - m.command_delay_frames;
+  for (std::size_t a = 0; a < 3; ++a) {
+    m.effects.axis_scale[a] = plant.gain[a];
+    m.effects.axis_lag[a] = plant.lag[a];
+  }
+  m.controller.forward.slew_rate = m.controller.sideways.slew_rate = 50;
+  m.controller.rotation.slew_rate = 500;
+  m.vision_noise_xy = plant.camera_xy;
+  m.vision_noise_theta = plant.camera_theta;
+  m.driving_noise.sd = plant.noise_sd;
+  m.driving_noise.correlation_time = plant.noise_correlation;
+  return m;
+}
+
 double ConstantVelocityRmse(const OmniLog& log, int horizon, std::size_t first_row) {
   double sum = 0;
   int n = 0;
