@@ -1,6 +1,7 @@
 #include "analysis/omni_replay.h"
 
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -79,7 +80,14 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     auto here = row_of_frame.find(f);
     std::optional<Pose2> camera;
     if (here != row_of_frame.end() && log.rows[here->second].measured) camera = log.rows[here->second].pose;
-    observer.AddFrame(camera, command_at[static_cast<std::size_t>(f)]);
+    try {
+      observer.AddFrame(camera, command_at[static_cast<std::size_t>(f)]);
+    } catch (const CheckFailed& e) {
+      // Where in the log: the row at or before this frame.
+      auto at = row_of_frame.upper_bound(f);
+      const std::size_t row = at == row_of_frame.begin() ? 0 : std::prev(at)->second;
+      throw CheckFailed(log.path + ":" + std::to_string(log.line_of[row]) + ": " + e.what());
+    }
     if (observer.started() && start_frame < 0) start_frame = f;
     if (here == row_of_frame.end()) continue;
     const std::size_t row = here->second;
