@@ -11,6 +11,12 @@
 
 namespace twinsim {
 
+bool IsReplayState(const std::string& state, std::string* why, const std::string& what) {
+  if (state == "observer" || state == "tracker") return true;
+  if (why) *why = what + " must be observer or tracker, got '" + state + "'";
+  return false;
+}
+
 bool OmniReplayOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& s) {
     if (why) *why = s;
@@ -18,9 +24,7 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
   };
   if (horizon < 0) return fail("--horizon must be 0 or more, got " + std::to_string(horizon));
   if (stride < 1) return fail("stride must be 1 or more, got " + std::to_string(stride));
-  if (state != "observer" && state != "tracker")
-    return fail("--state must be observer or tracker, got '" + state + "'");
-  return observer.IsValid(why);
+  return IsReplayState(state, why) && observer.IsValid(why);
 }
 
 int OmniReplayResult::num_predicted() const {
@@ -60,8 +64,9 @@ namespace {
 void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                     const std::function<void(int, int)>& progress, std::size_t stretch_first, std::size_t stretch_last,
                     const std::map<int, std::size_t>& row_of_frame, const std::vector<Twist2>& command_at,
-                    const std::function<void(std::size_t, const Pose2&)>& check, OmniReplayResult* out) {
-  OmniObserver observer(model, options.backend, 1.0 / log.frame_period, options.observer);
+                    const std::function<void(std::size_t, const Pose2&)>& check, std::unique_ptr<OmniBackend> backend,
+                    OmniReplayResult* out) {
+  OmniObserver observer(model, std::move(backend), options.observer);
   const int k = options.horizon;
   const int last_frame = static_cast<int>(command_at.size()) - 1;
   const bool stretch = stretch_first < stretch_last;
@@ -199,7 +204,8 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   const bool stretch = stretch_first < stretch_last;
   if (options.state == "observer" && backend->has_velocity_state()) {
     out.state = "observer";
-    ObserverReplay(model, log, options, progress, stretch_first, stretch_last, row_of_frame, command_at, check, &out);
+    ObserverReplay(model, log, options, progress, stretch_first, stretch_last, row_of_frame, command_at, check,
+                   std::move(backend), &out);
     return out;
   }
   out.state = "tracker";

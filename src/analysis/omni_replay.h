@@ -36,6 +36,10 @@ namespace twinsim {
 
 inline constexpr int kWarmUpFrames = 15;
 
+// The names OmniReplayOptions::state takes ("observer", "tracker"); `what` ("--state")
+// names the option in the message. True when `state` is one, else says why in *why.
+bool IsReplayState(const std::string& state, std::string* why, const std::string& what = "--state");
+
 struct OmniReplayOptions {
   std::string backend = "ode";
   OmniBackendOptions backend_options;  // the predictor, for the learned backend

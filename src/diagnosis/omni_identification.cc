@@ -646,8 +646,7 @@ bool OmniIdentificationOptions::IsValid(std::string* why) const {
   if (!(max_delay > 0 && max_delay <= 2)) return fail("--max-delay must be above 0 and at most 2 s");
   if (threads < 0) return fail("--threads must be 0 (one per core) or more");
   if (backend == "learned") return fail("--backend: identification fits a physical model (analytic, ode or bullet)");
-  if (state != "observer" && state != "tracker") return fail("--state must be observer or tracker, got '" + state + "'");
-  return true;
+  return IsReplayState(state, why);
 }
 
 const OmniGap* OmniIdentificationReport::Gap(const std::vector<OmniGap>& gaps, const std::string& name) const {

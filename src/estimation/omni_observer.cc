@@ -34,20 +34,32 @@ std::unique_ptr<OmniBackend> MakeFilterBackend(const OmniModel& model, const std
 
 }  // namespace
 
-OmniObserver::OmniObserver(const OmniModel& model, const std::string& backend, double frame_rate,
-                           const OmniObserverOptions& options)
-    : model_(model), options_(options) {
-  if (std::string why; !options.IsValid(&why)) throw InputError(why);
+namespace {
+
+FrameTiming TimingAt(double frame_rate) {
   if (!(frame_rate > 0)) throw InputError("observer: the frame rate must be positive");
   FrameTiming timing;
   timing.frame_rate = frame_rate;
   timing.physics_substeps = DefaultPhysicsSubsteps(frame_rate);
-  dt_ = timing.frame_dt();
-  backend_ = MakeFilterBackend(model, backend, timing);
+  return timing;
+}
+
+}  // namespace
+
+OmniObserver::OmniObserver(const OmniModel& model, const std::string& backend, double frame_rate,
+                           const OmniObserverOptions& options)
+    : OmniObserver(model, MakeFilterBackend(model, backend, TimingAt(frame_rate)), options) {}
+
+OmniObserver::OmniObserver(const OmniModel& model, std::unique_ptr<OmniBackend> backend,
+                           const OmniObserverOptions& options)
+    : model_(model), options_(options), backend_(std::move(backend)) {
+  if (std::string why; !options.IsValid(&why)) throw InputError(why);
   if (!backend_->has_velocity_state()) {
     throw InputError("the observer needs a backend that holds the robot's velocity (analytic, ode, bullet); " +
                      backend_->name() + " predicts from its own window of measured poses");
   }
+  const FrameTiming& timing = backend_->timing();
+  dt_ = timing.frame_dt();
   if (backend_->name() != "analytic") twin_ = MakeFilterBackend(model, "analytic", timing);
   delay_ = model.command_delay_frames + model.vision_delay_frames;
   sent_.assign(static_cast<std::size_t>(delay_ + 1), Twist2{});

@@ -114,6 +114,9 @@ class OmniObserver {
   // backend or invalid options.
   OmniObserver(const OmniModel& model, const std::string& backend, double frame_rate,
                const OmniObserverOptions& options = {});
+  // The same on a backend the caller has built for `model` alone (one robot, no walls):
+  // the filter owns it from now on. Throws InputError as above.
+  OmniObserver(const OmniModel& model, std::unique_ptr<OmniBackend> backend, const OmniObserverOptions& options = {});
   ~OmniObserver();
   OmniObserver(const OmniObserver&) = delete;
   OmniObserver& operator=(const OmniObserver&) = delete;

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -39,6 +40,14 @@ std::string Text(const std::string& s) {
   YAML::Emitter out;
   out << s;
   return out.c_str();
+}
+
+// "forward: a, sideways: b, turn: c", the per-axis keys of a flow map.
+std::string AxisValues(const std::array<double, 3>& v) {
+  std::string out;
+  for (int a = 0; a < 3; ++a)
+    out += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(v[static_cast<std::size_t>(a)]);
+  return out;
 }
 
 std::string Pid(const PidGains& g) {
@@ -126,20 +135,14 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   if (model.vision_time_jitter > 0) line("  time_jitter", YamlNumber(model.vision_time_jitter), "s");
   const OmniDrivingNoise& dn = model.driving_noise;
   if (dn.sd != defaults.driving_noise.sd || dn.correlation_time != defaults.driving_noise.correlation_time) {
-    std::string d;
-    for (int a = 0; a < 3; ++a)
-      d += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(dn.sd[static_cast<std::size_t>(a)]);
-    line("driving_noise", "{" + d + ", correlation_time: " + YamlNumber(dn.correlation_time) + "}",
+    line("driving_noise", "{" + AxisValues(dn.sd) + ", correlation_time: " + YamlNumber(dn.correlation_time) + "}",
          "m/s, rad/s, s: slip the wheels do not see", 46);
   }
   const OmniObserverModel& o = model.observer;
   if (o.process_noise != defaults.observer.process_noise || o.measurement_noise_xy > 0 ||
       o.measurement_noise_theta > 0) {
     s << "observer:\n";
-    std::string q;
-    for (int a = 0; a < 3; ++a)
-      q += std::string(a ? ", " : "") + kOmniAxisNames[a] + ": " + YamlNumber(o.process_noise[static_cast<std::size_t>(a)]);
-    line("  process_noise", "{" + q + "}", "m/s and rad/s per sqrt(s): the model's own errors", 46);
+    line("  process_noise", "{" + AxisValues(o.process_noise) + "}", "m/s and rad/s per sqrt(s): the model's own errors", 46);
     if (o.measurement_noise_xy > 0 || o.measurement_noise_theta > 0) {
       line("  measurement_noise",
            "{xy: " + YamlNumber(o.measurement_noise_xy) + ", theta: " + YamlNumber(o.measurement_noise_theta) + "}",
