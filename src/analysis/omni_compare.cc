@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "analysis/omni_baselines.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
 #include "engines/omni_engine.h"
@@ -23,10 +24,26 @@ bool IsLabelChar(char c) {
          c == '.';
 }
 
-// Replay work of one run, in frames stepped: the tracker plus K frames per prediction.
-long RunWeight(const OmniLog& log, int horizon) {
+// Every how many frames a horizon predicts from: every frame up to 1 s, then every
+// (K / 24)-th (a 3 s horizon would cost 45 times a 4-frame one).
+int StrideOf(int horizon, double frame_rate) {
+  return horizon > std::lround(frame_rate) ? std::max(1, horizon / 24) : 1;
+}
+
+// Replay work of one run, in frames stepped: the estimate plus K frames per prediction.
+long RunWeight(const OmniLog& log, int horizon, double frame_rate) {
   const long frames = log.FrameIndex(log.rows.size() - 1) + 1;
-  return frames * (horizon + 1);
+  return frames * (1 + horizon / StrideOf(horizon, frame_rate));
+}
+
+// The first frame a prediction `horizon` frames ahead can end on.
+int FirstPredictedFrame(const OmniModel& model, const OmniLog& log, int horizon) {
+  const int delay = model.command_delay_frames + model.vision_delay_frames;
+  return std::max(delay, log.FrameIndex(1)) + kWarmUpFrames + horizon;
+}
+
+double ModelDelaySeconds(const OmniModel& model, double frame_period) {
+  return (model.command_delay_frames + model.vision_delay_frames) * frame_period + model.effects.time_delay;
 }
 
 }  // namespace
@@ -95,12 +112,19 @@ std::string OmniCompareResult::FullReport() const {
     for (std::size_t h = 0; h < horizons.size(); ++h) out << "   " << lpad(cells[s][h], widths[h]);
     out << "\n";
   }
+  for (const CompareErrorRow& r : rows) {
+    if (r.bounded_steps > 0) {
+      out << "note: " << r.source << " at " << r.horizon << ": the learned predictor left the range of its training data on "
+          << r.bounded_steps << " steps, each held to " << kBoundFactor << "x the largest step it was trained on\n";
+    }
+  }
   return out.str();
 }
 
 std::vector<int> DefaultCompareHorizons(double frame_rate) {
   std::vector<int> out;
-  for (int k : {1, 4, static_cast<int>(std::lround(frame_rate)), 0})
+  for (int k : {1, 4, static_cast<int>(std::lround(frame_rate / 4)), static_cast<int>(std::lround(frame_rate)),
+                static_cast<int>(std::lround(3 * frame_rate)), 0})
     if (k >= 0 && std::find(out.begin(), out.end(), k) == out.end()) out.push_back(k);
   return out;
 }
@@ -108,7 +132,9 @@ std::vector<int> DefaultCompareHorizons(double frame_rate) {
 std::string HorizonLabel(int frames, double frame_rate) {
   if (frames == 0) return "free run";
   if (frames == 1) return "1 frame";
+  if (frames == std::lround(frame_rate / 4)) return "0.25 s";
   if (frames == std::lround(frame_rate)) return "1 s";
+  if (frames == std::lround(3 * frame_rate)) return "3 s";
   return std::to_string(frames) + " frames";
 }
 
@@ -152,7 +178,7 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
   const int delay = model.command_delay_frames + model.vision_delay_frames;
   const int last_frame = log.FrameIndex(log.rows.size() - 1);
   const int longest = *std::max_element(options.horizons.begin(), options.horizons.end());
-  const int needed = std::max(delay, log.FrameIndex(1)) + kWarmUpFrames + longest;
+  const int needed = FirstPredictedFrame(model, log, longest);
   if (longest > 0 && last_frame < needed) {
     std::ostringstream msg;
     msg << "log of " << last_frame + 1 << " frames is too short to compare at the " << HorizonLabel(longest, frame_rate)
@@ -163,19 +189,22 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
 
   long total = 0;
   for (std::size_t s = 0; s < options.sources.size(); ++s)
-    for (int k : options.horizons) total += RunWeight(log, k);
+    for (int k : options.horizons) total += RunWeight(log, k, frame_rate);
 
   OmniCompareResult out;
   out.horizons = options.horizons;
   out.frame_rate = frame_rate;
   long done = 0;
+  std::vector<std::vector<bool>> first_predicted(options.horizons.size());  // the first source's rows, per horizon
   for (const CompareSource& source : options.sources) {
-    for (int k : options.horizons) {
+    for (std::size_t h = 0; h < options.horizons.size(); ++h) {
+      const int k = options.horizons[h];
       OmniReplayOptions replay;
       replay.backend = source.backend;
       replay.backend_options = source.backend_options;
       replay.horizon = k;
-      const long weight = RunWeight(log, k);
+      replay.stride = StrideOf(k, frame_rate);
+      const long weight = RunWeight(log, k, frame_rate);
       const std::string what = source.label + ", " + HorizonLabel(k, frame_rate);
       const OmniReplayResult result = ReplayOmniLog(model, log, replay, [&](int d, int t) {
         if (progress && t > 0) progress(done + weight * std::min(d, t) / t, total, what);
@@ -183,12 +212,34 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
       done += weight;
 
       CompareErrorRow row = MeasurePredictionErrors(log, result);
+      row.bounded_steps = result.bounded_steps;
       row.source = source.label;
       row.backend = source.backend;
       row.horizon = HorizonLabel(k, frame_rate);
       row.horizon_frames = k;
       out.rows.push_back(row);
       if (k == 0) out.free_runs.push_back({source.label, result.t, result.pose});
+      if (first_predicted[h].empty()) first_predicted[h] = result.predicted;
+    }
+  }
+  if (options.baselines) {
+    for (const char* name : {"constant_velocity", "integrated_command"}) {
+      for (std::size_t h = 0; h < options.horizons.size(); ++h) {
+        const int k = options.horizons[h];
+        if (k == 0) continue;
+        OmniReplayResult result = std::string(name) == "constant_velocity"
+                                      ? ConstantVelocityPrediction(log, k)
+                                      : IntegratedCommandPrediction(log, k, ModelDelaySeconds(model, log.frame_period));
+        for (std::size_t i = 0; i < result.predicted.size(); ++i) {
+          result.predicted[i] = result.predicted[i] && first_predicted[h][i];
+        }
+        CompareErrorRow row = MeasurePredictionErrors(log, result);
+        row.source = name;
+        row.backend = "baseline";
+        row.horizon = HorizonLabel(k, frame_rate);
+        row.horizon_frames = k;
+        out.rows.push_back(row);
+      }
     }
   }
   if (progress) progress(total, total, "");
@@ -253,7 +304,12 @@ OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log
     }
   }
   OmniCompareOptions compare;
-  compare.horizons = DefaultCompareHorizons(frame_rate);
+  compare.baselines = true;
+  // The default horizons the log is long enough for (the 1-frame one always, so that a
+  // log too short for anything is still told so).
+  for (int k : DefaultCompareHorizons(frame_rate)) {
+    if (k <= 1 || FirstPredictedFrame(model, log, k) <= log.FrameIndex(log.rows.size() - 1)) compare.horizons.push_back(k);
+  }
   for (const std::string& b : backends) {
     if (b != "learned" || predictors.empty()) {
       compare.sources.push_back({b, b, OmniBackendOptions{}});

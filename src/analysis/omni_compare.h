@@ -38,6 +38,11 @@ struct CompareSource {
 struct OmniCompareOptions {
   std::vector<CompareSource> sources;
   std::vector<int> horizons;  // frames; 0 = free run
+  // Also score the predictions of no model (analysis/omni_baselines.h) at every horizon
+  // but the free run, as the sources "constant_velocity" and "integrated_command"
+  // (backend "baseline"; the command at the model's delay), over the rows the first
+  // source predicts there.
+  bool baselines = false;
 
   // True when usable; else says why in *why (every problem, one per line).
   bool IsValid(std::string* why) const;
@@ -53,6 +58,7 @@ struct CompareErrorRow {
   double position_rmse = 0;   // m
   double position_max = 0;    // m
   double heading_rmse = 0;    // rad, differences wrapped to [-pi, pi)
+  long bounded_steps = 0;     // learned: steps held to the predictor's training bounds
 };
 
 // One source's free run: the predicted pose at every log row (row 0 is the measurement).
@@ -75,12 +81,13 @@ struct OmniCompareResult {
   std::string FullReport() const;
 };
 
-// 1 frame, 4 frames, 1 s (round(frame_rate) frames) and free run (0), without repeats.
+// 1 frame, 4 frames, 0.25 s, 1 s, 3 s (rounded to frames) and free run (0), without
+// repeats. Horizons longer than 1 s predict from every (K / 24)-th frame.
 std::vector<int> DefaultCompareHorizons(double frame_rate);
 
 // What `twinsim compare` runs on `log`: every backend of `backends` (empty: every
-// physics engine built, plus learned when `predictor` is given) at
-// DefaultCompareHorizons. Throws InputError when the predictor does not fit the model
+// physics engine built, plus learned when `predictor` is given) and the baselines at
+// DefaultCompareHorizons, less those the log is too short for. Throws InputError when the predictor does not fit the model
 // or the log's frame rate.
 OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
                                       const std::shared_ptr<const OmniPredictor>& predictor);
@@ -92,7 +99,8 @@ OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log
 OmniCompareOptions MakeCompareOptions(const OmniModel& model, const OmniLog& log, std::vector<std::string> backends,
                                       const std::vector<std::shared_ptr<const OmniPredictor>>& predictors,
                                       const std::vector<std::string>& predictor_paths);
-// "free run", "1 frame", "1 s" (when frames == round(frame_rate)) or "K frames".
+// "free run", "1 frame", "0.25 s", "1 s", "3 s" (when frames is that many seconds
+// rounded) or "K frames".
 std::string HorizonLabel(int frames, double frame_rate);
 
 // The errors of a replay's predicted rows against the log's poses (horizon fields left

@@ -167,15 +167,8 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     }
   };
 
-  OmniReplayResult out;
+  OmniReplayResult out = HeldMeasurements(log);
   out.delay_frames = delay;
-  out.t.resize(n);
-  out.pose.resize(n);
-  out.predicted.assign(n, false);
-  for (std::size_t i = 0; i < n; ++i) {
-    out.t[i] = log.rows[i].t;
-    out.pose[i] = log.rows[i].pose;
-  }
 
   if (k == 0) {
     out.state = "none";
@@ -247,6 +240,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
         out.pose[it->second] = p;
         out.predicted[it->second] = true;
       }
+      out.bounded_steps = backend->bounded_steps();
       return out;
     }
     auto target = row_of_frame.find(f + k);
@@ -267,10 +261,24 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     if (f < last_frame) backend->StepFrame({delayed_command(f)});
   }
   if (progress) progress(static_cast<int>(n), static_cast<int>(n));
+  out.bounded_steps = backend->bounded_steps();
   return out;
 }
 
 }  // namespace
+
+OmniReplayResult HeldMeasurements(const OmniLog& log) {
+  OmniReplayResult out;
+  const std::size_t n = log.rows.size();
+  out.t.resize(n);
+  out.pose.resize(n);
+  out.predicted.assign(n, false);
+  for (std::size_t i = 0; i < n; ++i) {
+    out.t[i] = log.rows[i].t;
+    out.pose[i] = log.rows[i].pose;
+  }
+  return out;
+}
 
 OmniReplayResult ReplayOmniLog(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                                const std::function<void(int, int)>& progress) {

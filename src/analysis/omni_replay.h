@@ -60,8 +60,14 @@ struct OmniReplayResult {
   std::vector<bool> predicted;       // false where the measured pose was held
   int delay_frames = 0;              // D used
   std::string state;                 // the state estimate used: "observer" or "tracker"
+  // Learned backend: steps on which the predictor was held to the bounds of its training
+  // data (it left what it learned); the user is told.
+  long bounded_steps = 0;
   int num_predicted() const;
 };
+
+// A result that predicts nothing yet: every row holds its measured pose, none marked.
+OmniReplayResult HeldMeasurements(const OmniLog& log);
 
 // True when row i of `result` is a prediction and the log holds a measurement there:
 // the rows every score of a replay is taken over.

@@ -159,7 +159,10 @@ struct ChannelAdequacy {
 // Beside the physics: a learned residual predictor trained on the fit rows, scored on
 // the same test rows (docs/diagnose.md, "The learned yardstick").
 struct LearnedYardstick {
-  std::string learner;                   // what was trained, in words
+  std::string learner;                   // what was trained, in words; or why none could be
+  // False when no learned residual could be trained or replayed (learner says why): then
+  // no channel's "predictable" is known, and the report says so instead of "nothing".
+  bool available = false;
   double nominal = 0;                    // the test-row gap of the nominal model plus the learned correction
   double repaired = 0;                   // ... of the repaired model plus the learned correction
   // Share of the predictable gap the named physics explains: (nominal^2 - repaired^2) /

@@ -103,6 +103,9 @@ std::string DiagnosisVerdict(const DiagnosisReport& r) {
       unexplained += stays + "; a learned residual predicts " + Num(100 * a.learned_reduction, "%.0f") +
                      " % of it (to " + Num(a.learned_rms) + "), but that is not significant over all " +
                      std::to_string(r.adequacy.size()) + " channels or is within the learned floor" + band;
+    } else if (!r.yardstick.available) {
+      unexplained += stays + "; whether it is predictable is not known: " +
+                     (r.yardstick.learner.empty() ? std::string("no learned yardstick was trained") : r.yardstick.learner);
     } else {
       unexplained += stays + ", and no learned residual of the motion predicts it (a few events, or what the logs' inputs do "
                              "not show)";
@@ -121,12 +124,16 @@ std::string DiagnosisVerdict(const DiagnosisReport& r) {
                             : " Most axes are unexplained: the model's own response is likely off; identify it first "
                               "(twinsim identify, or diagnose --refit-model).";
     }
+  } else if (!r.yardstick.available) {
+    s += std::string(r.effects.empty() ? " Nothing significant is missing from the vocabulary" : " What is left") +
+         "; whether anything else is predictable is not known: " +
+         (r.yardstick.learner.empty() ? std::string("no learned yardstick was trained") : r.yardstick.learner) + ".";
   } else if (r.effects.empty()) {
     s += " Nothing significant is missing: a learned residual finds nothing predictable on any channel either.";
   } else {
     s += " What is left is not predictable from the motion and the commands (a learned residual removes no significant share).";
   }
-  if (std::isfinite(r.yardstick.physics_share) && !r.yardstick.learner.empty()) {
+  if (std::isfinite(r.yardstick.physics_share) && r.yardstick.available) {
     s += " The named physics explains " + Num(100 * std::clamp(r.yardstick.physics_share, -9.99, 9.99), "%.0f") +
          " % of the gap that physics or a learned residual can predict.";
   }
@@ -198,6 +205,7 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
   {
     ordered_json y;
     y["learner"] = r.yardstick.learner;
+    y["available"] = r.yardstick.available;
     y["nominal_plus_learned"] = r.yardstick.nominal;
     y["repaired_plus_learned"] = r.yardstick.repaired;
     y["physics_share"] = std::isfinite(r.yardstick.physics_share) ? ordered_json(r.yardstick.physics_share) : ordered_json(nullptr);

@@ -496,6 +496,7 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   }
   LearnedYardstick& y = report->yardstick;
   y.learner = repaired.learner;
+  y.available = !repaired.learned.empty();
   y.nominal = ChannelGap(problem, nominal.learned);
   y.repaired = ChannelGap(problem, repaired.learned);
   double best = std::min(report->gap_before, report->gap_after);
@@ -503,7 +504,7 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
     if (std::isfinite(g)) best = std::min(best, g);
   }
   const double predictable = report->gap_before * report->gap_before - best * best;
-  y.physics_share = predictable > 0
+  y.physics_share = predictable > 0 && y.available
                         ? (report->gap_before * report->gap_before - report->gap_after * report->gap_after) / predictable
                         : std::numeric_limits<double>::quiet_NaN();
 }

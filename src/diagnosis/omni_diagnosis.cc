@@ -526,6 +526,7 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
   }
   // The learned replays first: a predictor that runs away somewhere is no yardstick.
   std::vector<ReplayResidual> learned(data_.size());
+  long bounded = 0;  // learned steps held to the predictor's training bounds
   if (predictor) {
     try {
       for (std::size_t k = 0; k < data_.size(); ++k) {
@@ -533,11 +534,16 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
         o.backend = "learned";
         o.backend_options.predictor = predictor;
         o.horizon = options_.horizon;
-        learned[k] = PoseErrorsInRobotFrame(*data_[k].log, ReplayOmniLog(model, *data_[k].log, o), nominal_.chassis_radius);
+        const OmniReplayResult replayed = ReplayOmniLog(model, *data_[k].log, o);
+        bounded += replayed.bounded_steps;
+        learned[k] = PoseErrorsInRobotFrame(*data_[k].log, replayed, nominal_.chassis_radius);
       }
     } catch (const CheckFailed& e) {
       predictor.reset();
       out.learner = std::string("no learned residual: ") + e.what();
+    }
+    if (predictor && bounded > 0) {
+      out.learner += "; held to the bounds of its training data on " + std::to_string(bounded) + " steps";
     }
   }
   if (predictor) out.learned.resize(3);

@@ -2,16 +2,21 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <set>
 #include <sstream>
 
+#include "analysis/omni_baselines.h"
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "diagnosis/diagnosis.h"
+#include "diagnosis/identifiability.h"
 #include "diagnosis/omni_diagnosis.h"
 
 namespace twinsim {
@@ -69,6 +74,17 @@ const ParamSpec kSpecs[kNumParams] = {
     {"slip.correlation_time", "driving_noise.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
     {"process_noise.scale", "observer.process_noise", "x", "the observer's process noise on the model's velocity relative to the model's: how far the model's own velocity is trusted", 0.001, 100, true},
 };
+
+// Which of parameters that trade against each other is held at its value (larger:
+// sooner; diagnosis/identifiability.h): the controller's loop gain and ramp before the
+// lag they mimic, the filter's overall trust before the driving noise's spreads, and the
+// delay and the gains last, as the quantities a user reads first.
+double HoldPreference(int p) {
+  if (p >= kLoopX && p <= kLoopW) return 2;
+  if ((p >= kSlewX && p <= kSlewW) || p == kProcessScale) return 1.5;
+  if (p == kDelay || (p >= kGainX && p <= kGainW)) return 0.5;
+  return 1;
+}
 
 constexpr double kPieceSeconds = 10;   // s, a log is replayed in pieces this long ...
 constexpr double kLeadInSeconds = 3;   // s, ... each after a lead-in this long, not scored
@@ -164,36 +180,6 @@ struct GapSum {
   }
 };
 
-// The constant-velocity extrapolation of the measured poses: frame i predicted from
-// the last two measured frames at or before i - K, at their velocity (field frame).
-OmniReplayResult ConstantVelocity(const OmniLog& log, int horizon) {
-  OmniReplayResult out;
-  const std::size_t n = log.rows.size();
-  out.t.resize(n);
-  out.pose.resize(n);
-  out.predicted.assign(n, false);
-  std::vector<long> measured;  // rows with a measurement, in order
-  for (std::size_t i = 0; i < n; ++i) {
-    out.t[i] = log.rows[i].t;
-    out.pose[i] = log.rows[i].pose;
-    if (log.rows[i].measured) measured.push_back(static_cast<long>(i));
-  }
-  std::size_t m = 0;  // measured[m] is the first measured row after the start frame
-  for (std::size_t i = 0; i < n; ++i) {
-    const int start = log.FrameIndex(i) - horizon;
-    if (start < 0) continue;
-    while (m < measured.size() && log.FrameIndex(static_cast<std::size_t>(measured[m])) <= start) ++m;
-    if (m < 2) continue;
-    const OmniLogRow& b = log.rows[static_cast<std::size_t>(measured[m - 1])];
-    const OmniLogRow& a = log.rows[static_cast<std::size_t>(measured[m - 2])];
-    const double dt = b.t - a.t, ahead = log.rows[i].t - b.t;
-    out.pose[i] = Pose2{b.pose.x + (b.pose.x - a.pose.x) / dt * ahead, b.pose.y + (b.pose.y - a.pose.y) / dt * ahead,
-                        b.pose.theta + (b.pose.theta - a.pose.theta) / dt * ahead};
-    out.predicted[i] = true;
-  }
-  return out;
-}
-
 // Time blocks, some held out from the fit. Each log is replayed in pieces of
 // kPieceSeconds (in parallel), each with a lead-in of kLeadInSeconds that is not scored:
 // the tracker's hidden state (a slew-limited set-point, a lag) needs that long to
@@ -258,7 +244,7 @@ GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model
   for (const Segment& s : segments) {
     if (s.validation != validation_only) continue;
     const int first = static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames + options.horizon;
-    const OmniReplayResult cv = ConstantVelocity(s.log, options.horizon);
+    const OmniReplayResult cv = ConstantVelocityPrediction(s.log, options.horizon);
     OmniReplayResult r = cv;
     if (model) {
       OmniReplayOptions o;
@@ -274,6 +260,70 @@ GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model
     for (const auto& e : PoseErrorsInRobotFrame(s.log, r, radius).e) sum.Add(e);
   }
   return sum;
+}
+
+// One predictor of the horizons' table: a model replayed through `state`, or a
+// baseline (analysis/omni_baselines.h) when model is null.
+struct HorizonPredictor {
+  std::string name;
+  const OmniModel* model = nullptr;
+  enum Baseline { kNone, kConstantVelocity, kIntegratedCommand } baseline = kNone;
+};
+
+// The errors of every predictor at a horizon of `frames`, over the same rows: those in
+// held-out blocks (or the validation logs) whose prediction starts on a logged frame
+// after the piece's lead-in and the longest warm-up, wherever that start lies (a 1 s or
+// 3 s prediction is longer than most blocks; the estimate has seen measurements up to its
+// start only), and that every predictor predicts. Models predict from every
+// (frames / 24)-th frame: a 3 s horizon costs a few times a 4-frame one, not 45.
+std::vector<OmniGap> ScoreHorizon(const std::vector<Segment>& segments, const std::vector<HorizonPredictor>& predictors,
+                                  int frames, double delay, bool validation_only, const OmniIdentificationOptions& options,
+                                  double radius, int* rows) {
+  std::vector<std::vector<GapSum>> sums(segments.size(), std::vector<GapSum>(predictors.size()));
+  ParallelFor(static_cast<int>(segments.size()), options.threads, [&](int k) {
+    const Segment& s = segments[static_cast<std::size_t>(k)];
+    if (s.validation != validation_only) return;
+    std::vector<OmniReplayResult> results;
+    for (const HorizonPredictor& p : predictors) {
+      if (p.baseline == HorizonPredictor::kConstantVelocity) {
+        results.push_back(ConstantVelocityPrediction(s.log, frames));
+      } else if (p.baseline == HorizonPredictor::kIntegratedCommand) {
+        results.push_back(IntegratedCommandPrediction(s.log, frames, delay));
+      } else {
+        OmniReplayOptions o;
+        o.backend = options.backend;
+        o.horizon = frames;
+        o.state = options.state;
+        o.stride = std::max(1, frames / 24);
+        results.push_back(ReplayOmniLog(*p.model, s.log, o));
+      }
+    }
+    const int first = static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames + frames;
+    std::vector<bool> scored(s.log.rows.size(), false);
+    for (std::size_t row = 0; row < scored.size(); ++row) {
+      if (!s.held[row] || s.log.FrameIndex(row) < first) continue;
+      const int start = s.log.FrameIndex(row) - frames;
+      std::size_t j = row;
+      while (j > 0 && s.log.FrameIndex(j) > start) --j;
+      if (s.log.FrameIndex(j) != start || j < s.score_from) continue;
+      bool all = true;
+      for (const OmniReplayResult& r : results) all = all && r.predicted[row];
+      scored[row] = all;
+    }
+    for (std::size_t q = 0; q < predictors.size(); ++q) {
+      OmniReplayResult& r = results[q];
+      for (std::size_t row = 0; row < scored.size(); ++row) r.predicted[row] = scored[row];
+      for (const auto& e : PoseErrorsInRobotFrame(s.log, r, radius).e) sums[static_cast<std::size_t>(k)][q].Add(e);
+    }
+  });
+  std::vector<OmniGap> out;
+  for (std::size_t q = 0; q < predictors.size(); ++q) {
+    GapSum total;
+    for (const auto& per_segment : sums) total.Add(per_segment[q]);
+    out.push_back(total.Gap(predictors[q].name));
+    *rows = static_cast<int>(total.n);
+  }
+  return out;
 }
 
 class OmniIdentificationProblem {
@@ -435,9 +485,18 @@ class FitCost : public ceres::CostFunction {
   double max_delay_;
 };
 
+// A parameter the fit's sensitivities cannot tell from others: held at its value.
+struct HeldBack {
+  int param = 0;
+  std::vector<int> partners;  // empty: the fit does not depend on it
+  double collinearity = 0;
+};
+
 struct SolveResult {
   std::array<double, kNumParams> values;
-  std::vector<double> standard_error;  // per free parameter, physical units; NaN: undetermined
+  std::vector<double> standard_error;  // per free parameter, physical units; NaN: undetermined or held
+  std::vector<HeldBack> held;          // with `covariance`: what the logs do not determine
+  double collinearity = 1;             // with `covariance`: the index of the determined set
   int iterations = 0;
   double cost = 0;
   std::size_t rows = 0;
@@ -479,29 +538,42 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   out.standard_error.assign(free.size(), kNaN);
   if (!covariance) return out;
 
-  ceres::Covariance::Options co;
-  co.algorithm_type = ceres::DENSE_SVD;
-  co.null_space_rank = 0;  // fail rather than hide an undetermined direction
-  co.min_reciprocal_condition_number = 1e-12;
-  ceres::Covariance cov(co);
-  std::vector<std::pair<const double*, const double*>> blocks = {{x.data(), x.data()}};
-  if (!cov.Compute(blocks, &ceres_problem)) return out;
-  std::vector<double> c(free.size() * free.size());
-  if (!cov.GetCovarianceBlock(x.data(), x.data(), c.data())) return out;
-  // Ceres' covariance is for unit-variance residuals: scale by the residual's variance,
-  // and by its correlation length (overlapping predictions are not independent rows).
-  std::vector<double> r = problem.FitResidual(out.values);
+  // The sensitivities at the solution, which parameters they determine, and the
+  // covariance of those (diagnosis/identifiability.h).
+  const double* at[1] = {x.data()};
+  std::vector<double> residual(rows), jacobian(rows * free.size());
+  double* jacobians[1] = {jacobian.data()};
+  if (!cost->Evaluate(at, residual.data(), jacobians)) return out;
+  const Eigen::MatrixXd j = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      jacobian.data(), static_cast<long>(rows), static_cast<long>(free.size()));
+  std::vector<double> preference;
+  for (int p : free) preference.push_back(HoldPreference(p));
+  const Identifiability id = AnalyseIdentifiability(j, preference);
+  out.collinearity = id.collinearity;
+  for (const HeldParameter& h : id.held) {
+    HeldBack held;
+    held.param = free[static_cast<std::size_t>(h.column)];
+    for (int c : h.partners) held.partners.push_back(free[static_cast<std::size_t>(c)]);
+    held.collinearity = h.collinearity;
+    out.held.push_back(held);
+  }
+  const Eigen::MatrixXd c = KeptInverseNormal(j, id.kept);
+  if (c.size() == 0) return out;
+  // The inverse normal matrix is for unit-variance residuals: scale by the residual's
+  // variance, and by its correlation length (overlapping predictions are not
+  // independent rows).
   double ss = 0;
-  for (double v : r) ss += v * v;
-  const double dof = std::max(1.0, static_cast<double>(r.size()) - static_cast<double>(free.size()));
+  for (double v : residual) ss += v * v;
+  const double dof = std::max(1.0, static_cast<double>(rows) - static_cast<double>(id.kept.size()));
   std::vector<double> forward;
-  for (std::size_t k = 0; k < r.size(); k += 3) forward.push_back(r[k]);
+  for (std::size_t k = 0; k < residual.size(); k += 3) forward.push_back(residual[k]);
   const double correlation = std::max(1, CorrelationLength(forward, 200));
   const double scale = ss / dof * correlation;
-  for (std::size_t k = 0; k < free.size(); ++k) {
-    const double var = c[k * free.size() + k] * scale;
-    const double v = out.values[static_cast<std::size_t>(free[k])];
-    out.standard_error[k] = std::sqrt(std::max(0.0, var)) * CoordinateSlope(free[k], v, max_delay);  // delta method
+  for (std::size_t k = 0; k < id.kept.size(); ++k) {
+    const auto col = static_cast<std::size_t>(id.kept[k]);
+    const double var = c(static_cast<long>(k), static_cast<long>(k)) * scale;
+    const double v = out.values[static_cast<std::size_t>(free[col])];
+    out.standard_error[col] = std::sqrt(std::max(0.0, var)) * CoordinateSlope(free[col], v, max_delay);  // delta method
   }
   return out;
 }
@@ -834,12 +906,29 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     } else if (p >= kSlewX && p <= kSlewW && at_upper) {
       value = 0;
       pruned[p] = "no ramp limit";
+    } else if (p >= kSlipX && p <= kSlipW && at_lower) {
+      pruned[p] = "no driving noise found on this axis: the model's response explains its motion (the floor of the range is kept)";
+    } else if (p == kProcessScale && at_lower) {
+      pruned[p] = "the observer trusts the model's velocity (the floor of the range is kept)";
     } else {
       pruned[p] = "at the edge of its range (" + std::string(at_lower ? "lower" : "upper") + "): not determined";
     }
     free.erase(std::find(free.begin(), free.end(), p));
   }
   solved = Solve(problem, v, free, options.max_delay, 0, true);
+  report.collinearity = solved.collinearity;
+  std::set<int> held;
+  for (const HeldBack& h : solved.held) {
+    held.insert(h.param);
+    std::string partners;
+    for (int q : h.partners) partners += (partners.empty() ? "" : ", ") + std::string(kSpecs[q].name);
+    char index[32];
+    std::snprintf(index, sizeof index, "%.3g", h.collinearity);
+    pruned[h.param] = h.partners.empty()
+                          ? std::string("held at the fit's value: the fit's error does not depend on it on these logs")
+                          : "held at the fit's value: on these logs it trades with " + partners +
+                                " (collinearity index " + index + "); the others' standard errors take it as known";
+  }
   // A limit the fit pushed beyond every command the robot got is no limit.
   for (int p : {kVMax, kWMax}) {
     const std::vector<double>& sorted = p == kVMax ? speeds : turns;
@@ -866,8 +955,9 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     q.value = v[static_cast<std::size_t>(p)];
     const auto it = std::find(free.begin(), free.end(), p);
     q.estimated = it != free.end();
+    q.held = held.count(p) > 0;
     if (pruned.count(p)) q.note = pruned.at(p);
-    if (q.estimated) {
+    if (q.estimated && !q.held) {
       q.standard_error = solved.standard_error[static_cast<std::size_t>(it - free.begin())];
       if (!std::isfinite(q.standard_error)) q.note = "not determined by these logs alone (the fit's covariance is singular)";
     }
@@ -882,7 +972,15 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     report.parameters.push_back(q);
   }
   bool any_undetermined = false;
-  for (const auto& q : report.parameters) any_undetermined = any_undetermined || (q.estimated && !std::isfinite(q.standard_error));
+  for (const auto& q : report.parameters) {
+    any_undetermined = any_undetermined || (q.estimated && !q.held && !std::isfinite(q.standard_error));
+  }
+  if (!held.empty()) {
+    report.notes.push_back(std::to_string(held.size()) +
+                           " parameter(s) held at the fit's value because these logs cannot tell them from others "
+                           "(their notes say which): drive every axis, alone and together, at several speeds and "
+                           "with steps as well as ramps to separate them");
+  }
   if (any_undetermined) {
     report.notes.push_back("the fit's covariance is singular: some parameters trade off against each other on these logs "
                            "(drive every axis, alone and together, at several speeds to separate them)");
@@ -911,6 +1009,29 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   };
   report.held_out = gaps(false);
   if (!validation.empty()) report.validation = gaps(true);
+  // Every horizon a simulator needs, on the validation logs if there are any.
+  {
+    const std::vector<HorizonPredictor> predictors = {{"nominal model", &nominal},
+                                                      {"identified model", &model},
+                                                      {"constant velocity", nullptr, HorizonPredictor::kConstantVelocity},
+                                                      {"integrated command", nullptr, HorizonPredictor::kIntegratedCommand}};
+    std::vector<int> done;
+    for (const auto& [label, seconds] : std::vector<std::pair<std::string, double>>{
+             {std::to_string(options.horizon) + (options.horizon == 1 ? " frame" : " frames"), 0}, {"0.25 s", 0.25},
+             {"1 s", 1}, {"3 s", 3}}) {
+      const int frames = seconds > 0 ? static_cast<int>(std::lround(seconds / period)) : options.horizon;
+      if (frames < 1 || std::find(done.begin(), done.end(), frames) != done.end()) continue;
+      done.push_back(frames);
+      OmniHorizonGaps h;
+      h.label = label;
+      h.frames = frames;
+      h.seconds = frames * period;
+      h.gaps = ScoreHorizon(segments, predictors, frames, v[kDelay], !validation.empty(), options,
+                            nominal.chassis_radius, &h.rows);
+      report.horizons.push_back(h);
+    }
+    report.horizons_on = validation.empty() ? "held-out blocks" : "validation logs";
+  }
   double fit_cost = 0;  // the identified model's, over the fit rows
   for (const OmniPoseErrors& e : problem.Errors(problem.Build(v), false, options.stride)) {
     report.fit_rows += static_cast<int>(e.rows.size());

@@ -72,6 +72,9 @@ struct IdentifiedParameter {
   // not excite; 0 (none) for a limit, lag or ramp the data does not ask for; else the
   // fit's value at the edge of its range.
   bool estimated = true;
+  // True: fitted, but the logs cannot tell it from others (see note): held at the fit's
+  // value while the others' standard errors are taken, and has none itself.
+  bool held = false;
   std::string note;       // why not estimated, or what limits it
 };
 
@@ -81,6 +84,17 @@ struct OmniGap {
   double rmse = 0;     // m, position error of the `horizon`-frame prediction
   double pose = 0;     // m, sqrt(dx^2 + dy^2 + (r dtheta)^2), the diagnosis's metric
   double forward = 0, sideways = 0, turn = 0;  // m, RMS per axis (turn: r dtheta)
+};
+
+// Every predictor's held-out error at one horizon, over the same rows.
+struct OmniHorizonGaps {
+  std::string label;   // "4 frames", "0.25 s", "1 s", "3 s"
+  int frames = 0;      // K
+  double seconds = 0;  // K frame periods
+  int rows = 0;        // rows scored
+  // nominal model, identified model, constant velocity, integrated command (the command
+  // as the body velocity, at the identified delay)
+  std::vector<OmniGap> gaps;
 };
 
 // One stretch for the report's plots: measured body velocity against command, nominal
@@ -105,8 +119,17 @@ struct OmniIdentificationReport {
   // On the held-out blocks (and the validation logs): nominal, identified, constant velocity.
   std::vector<OmniGap> held_out;
   std::vector<OmniGap> validation;  // empty without validation logs
+  // The prediction error at the report's horizon, 0.25 s, 1 s and 3 s (free runs from the
+  // estimated state) on `horizons_on`: the validation logs when given, else the held-out
+  // blocks, counting rows whose prediction ends there, wherever it starts.
+  std::vector<OmniHorizonGaps> horizons;
+  std::string horizons_on;
   double fit_cost_nominal = 0, fit_cost_identified = 0;  // m, RMS of the fit residual
   double noise_floor = 0;     // m, the pose metric a perfect model reaches (camera noise)
+  // The collinearity index of the parameters estimated with standard errors (1: their
+  // effects independent; diagnosis/identifiability.h); those it would push above 20 are
+  // held at the fit's value, each with a note naming what it trades with.
+  double collinearity = 1;
   std::vector<double> delay_profile_s, delay_profile_rms;  // s, m: the fit error against the delay
   int solver_iterations = 0;
   int evaluations = 0;        // replays of the fit blocks

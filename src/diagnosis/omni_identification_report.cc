@@ -53,6 +53,48 @@ std::string Verdict(const OmniIdentificationReport& r) {
   return s.str();
 }
 
+// The predictor with the lowest position error at a horizon ("" without rows).
+std::string BestAt(const OmniHorizonGaps& h) {
+  const OmniGap* best = nullptr;
+  for (const OmniGap& g : h.gaps)
+    if (!best || g.rmse < best->rmse) best = &g;
+  return best && h.rows > 0 ? best->name : "";
+}
+
+// Predictors down, horizons across: position RMSE in mm, the best marked '*'.
+std::string HorizonsText(const OmniIdentificationReport& r) {
+  if (r.horizons.empty()) return "";
+  std::ostringstream s;
+  char cell[64];
+  s << "every horizon (" << r.horizons_on << "), position error [mm], * best:\n";
+  std::snprintf(cell, sizeof cell, "  %-20s", "");
+  s << cell;
+  for (const OmniHorizonGaps& h : r.horizons) {
+    std::snprintf(cell, sizeof cell, " %11s", h.label.c_str());
+    s << cell;
+  }
+  s << "\n";
+  for (std::size_t q = 0; q < r.horizons.front().gaps.size(); ++q) {
+    std::snprintf(cell, sizeof cell, "  %-20s", r.horizons.front().gaps[q].name.c_str());
+    s << cell;
+    for (const OmniHorizonGaps& h : r.horizons) {
+      const OmniGap& g = h.gaps[q];
+      std::snprintf(cell, sizeof cell, " %10s%s", h.rows > 0 ? Num(1000 * g.rmse, "%.1f").c_str() : "-",
+                    BestAt(h) == g.name ? "*" : " ");
+      s << cell;
+    }
+    s << "\n";
+  }
+  std::snprintf(cell, sizeof cell, "  %-20s", "rows");
+  s << cell;
+  for (const OmniHorizonGaps& h : r.horizons) {
+    std::snprintf(cell, sizeof cell, " %10d ", h.rows);
+    s << cell;
+  }
+  s << "\n";
+  return s.str();
+}
+
 SeriesPlot AxisPlot(const OmniIdentificationSeries& s, int axis, bool against_command) {
   static const char* units[3] = {"m/s", "m/s", "rad/s"};
   SeriesPlot plot;
@@ -95,7 +137,17 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
   j["verdict"] = Verdict(r);
   j["held_out"] = GapsJson(r.held_out);
   if (!r.validation.empty()) j["validation"] = GapsJson(r.validation);
+  if (!r.horizons.empty()) {
+    ordered_json hs = ordered_json::array();
+    for (const OmniHorizonGaps& h : r.horizons) {
+      hs.push_back({{"label", h.label}, {"frames", h.frames}, {"seconds", h.seconds}, {"rows", h.rows},
+                    {"best", BestAt(h)}, {"gaps", GapsJson(h.gaps)}});
+    }
+    j["horizons_on"] = r.horizons_on;
+    j["horizons"] = hs;
+  }
   j["noise_floor"] = r.noise_floor;
+  j["collinearity_index"] = Finite(r.collinearity);
   j["fit_rms_nominal"] = r.fit_cost_nominal;
   j["fit_rms_identified"] = r.fit_cost_identified;
   ordered_json params = ordered_json::array();
@@ -108,6 +160,7 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
     x["value"] = p.value;
     x["standard_error"] = Finite(p.standard_error);
     x["estimated"] = p.estimated;
+    x["held"] = p.held;
     x["meaning"] = p.meaning;
     if (!p.note.empty()) x["note"] = p.note;
     params.push_back(x);
@@ -141,7 +194,7 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   for (const IdentifiedParameter& p : r.parameters) {
     std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s%s\n", p.name.c_str(), Num(p.nominal).c_str(),
                   p.estimated ? Num(p.value).c_str() : "-", p.estimated ? Num(p.standard_error, "%.2g").c_str() : "",
-                  p.unit.c_str(), p.estimated || p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
+                  p.unit.c_str(), (p.estimated && !p.held) || p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
     s << line;
   }
   auto table = [&](const char* title, const std::vector<OmniGap>& gaps) {
@@ -158,6 +211,7 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   };
   table("held-out blocks", r.held_out);
   table("validation logs", r.validation);
+  s << HorizonsText(r);
   s << Verdict(r) << "\n";
   for (const auto& n : r.notes) s << "note: " << n << "\n";
   return s.str();
@@ -191,6 +245,26 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   };
   gap_table("Held-out blocks", r.held_out);
   gap_table("Validation logs", r.validation);
+  if (!r.horizons.empty()) {
+    h << "<h2>Every horizon</h2>\n<p>Position RMSE [mm] on the " << HtmlEscape(r.horizons_on)
+      << " at each horizon, every predictor on the same rows (whose prediction ends there; it starts from the state "
+         "estimated from the measurements up to its start, and runs free on the logged commands). Best in bold.</p>\n"
+         "<table><tr><th>predictor</th>";
+    for (const OmniHorizonGaps& g : r.horizons) h << "<th>" << HtmlEscape(g.label) << "</th>";
+    h << "</tr>\n";
+    for (std::size_t q = 0; q < r.horizons.front().gaps.size(); ++q) {
+      h << "<tr><td>" << HtmlEscape(r.horizons.front().gaps[q].name) << "</td>";
+      for (const OmniHorizonGaps& g : r.horizons) {
+        const bool best = BestAt(g) == g.gaps[q].name;
+        h << "<td class=n>" << (best ? "<b>" : "") << (g.rows > 0 ? Num(1000 * g.gaps[q].rmse, "%.1f") : "-")
+          << (best ? "</b>" : "") << "</td>";
+      }
+      h << "</tr>\n";
+    }
+    h << "<tr><td class=small>rows</td>";
+    for (const OmniHorizonGaps& g : r.horizons) h << "<td class=n>" << g.rows << "</td>";
+    h << "</tr>\n</table>\n";
+  }
   h << "<p class=\"small\">Noise floor from the camera (third differences of consecutive measured frames): "
     << Num(1000 * r.noise_floor, "%.2f") << " mm (pose metric).</p>\n";
 

@@ -67,6 +67,15 @@ bool FrameSequence::Complete(int from, int to) const {
   return true;
 }
 
+bool FrameSequence::Usable(int from, int to) const {
+  if (from < 0 || to >= frames() || !observed[static_cast<std::size_t>(from)] || !observed[static_cast<std::size_t>(to)]) {
+    return false;
+  }
+  int lost = 0;
+  for (int f = from + 1; f < to; ++f) lost += !observed[static_cast<std::size_t>(f)];
+  return lost <= kMaxLostInWindow;
+}
+
 FrameSequence ToFrameSequence(const OmniLog& log, const FeatureLayout& layout) {
   const std::size_t n = log.rows.size();
   const int frames = log.FrameIndex(n - 1) + 1;
@@ -85,6 +94,27 @@ FrameSequence ToFrameSequence(const OmniLog& log, const FeatureLayout& layout) {
     const auto f = static_cast<std::size_t>(log.FrameIndex(i));
     seq.pose[f] = log.rows[i].pose;
     seq.observed[f] = log.rows[i].measured;  // a frame without a new pose is a lost one
+  }
+  // Lost frames: interpolated in time between the measured frames around them (heading
+  // on its unwrapped branch), held after the last one.
+  int before = -1;
+  for (int f = 0; f < frames; ++f) {
+    const auto uf = static_cast<std::size_t>(f);
+    if (seq.observed[uf]) {
+      before = f;
+      continue;
+    }
+    int after = f + 1;
+    while (after < frames && !seq.observed[static_cast<std::size_t>(after)]) ++after;
+    if (before < 0) continue;  // before the first measurement: as logged
+    const Pose2& a = seq.pose[static_cast<std::size_t>(before)];
+    if (after >= frames) {
+      seq.pose[uf] = a;
+      continue;
+    }
+    const Pose2& b = seq.pose[static_cast<std::size_t>(after)];
+    const double w = static_cast<double>(f - before) / static_cast<double>(after - before);
+    seq.pose[uf] = Pose2{a.x + w * (b.x - a.x), a.y + w * (b.y - a.y), a.theta + w * (b.theta - a.theta)};
   }
   for (int f = layout.command_lag; f < frames; ++f)
     seq.acting[static_cast<std::size_t>(f)] = logged[static_cast<std::size_t>(f - layout.command_lag)];
@@ -108,7 +138,7 @@ int AppendSamples(const FrameSequence& seq, const FeatureLayout& layout, int fir
   for (int i = std::max(first, layout.history - 1); i <= last && i + layout.horizon < seq.frames(); ++i) {
     const int start = i - layout.history + 1;
     if (start < seq.first_known_command) continue;
-    if (!seq.Complete(start, i) || !seq.observed[static_cast<std::size_t>(i + layout.horizon)]) continue;
+    if (!seq.Usable(start, i) || !seq.observed[static_cast<std::size_t>(i + layout.horizon)]) continue;
     ends.push_back(i);
   }
   Eigen::MatrixXd x(static_cast<long>(ends.size()), layout.num_inputs());

@@ -73,9 +73,16 @@ struct OmniDataset {
   int rows() const { return static_cast<int>(x.rows()); }
 };
 
-// A log laid out by frame index: poses (where a frame was observed) and the command
-// acting at each frame (logged `command_lag` frames earlier; unknown before that).
+// A log laid out by frame index: poses and the command acting at each frame (logged
+// `command_lag` frames earlier; unknown before that). A frame the camera did not measure
+// (a lost frame, a repeated pose) holds the pose interpolated in time between the
+// measured frames around it (held after the last), as a tracker would carry it.
 struct FrameSequence {
+  // Lost frames a training window may hold among its `history` (interpolated, as above);
+  // its newest frame and its target are always measured. Real cameras lose one frame in
+  // a few: windows of only measured frames left 34 of 3210 rows of a real SSL log.
+  static constexpr int kMaxLostInWindow = 2;
+
   std::vector<Pose2> pose;
   std::vector<bool> observed;
   std::vector<Twist2> acting;
@@ -83,11 +90,14 @@ struct FrameSequence {
   int frames() const { return static_cast<int>(pose.size()); }
   // True when frames [from, to] are all observed.
   bool Complete(int from, int to) const;
+  // True when frames [from, to] may form a window: `to` and `from` observed, at most
+  // kMaxLostInWindow frames between them not.
+  bool Usable(int from, int to) const;
 };
 FrameSequence ToFrameSequence(const OmniLog& log, const FeatureLayout& layout);
 
-// Every complete window of a log: frames i-history+1..i and i+H present (lost frames
-// break windows), commands from frame 0 on (earlier ones are unknown). Appends to *data.
+// Every usable window of a log: frames i-history+1..i (FrameSequence::Usable) and i+H
+// measured, commands from frame 0 on (earlier ones are unknown). Appends to *data.
 // Returns the number of samples added.
 int AppendSamples(const OmniLog& log, const FeatureLayout& layout, OmniDataset* data);
 // The same from a FrameSequence, for windows whose newest frame lies in [first, last].

@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -102,6 +103,27 @@ class InputBuffer {
 };
 
 }  // namespace
+
+Pose2 BoundStep(const OmniPredictorInfo& info, const Pose2& from, const Pose2& to, bool* bounded) {
+  if (!(info.max_step > 0)) return to;  // no bounds known
+  Eigen::Vector3d d = EncodeDelta(from, to);
+  const double step = std::hypot(d[0], d[1]), step_limit = kBoundFactor * info.max_step;
+  const double turn_limit = kBoundFactor * std::max(info.max_turn, 1e-6);
+  bool changed = false;
+  if (!(step <= step_limit)) {  // NaN too
+    const double k = std::isfinite(step) ? step_limit / step : 0;
+    d[0] = std::isfinite(step) ? d[0] * k : 0;
+    d[1] = std::isfinite(step) ? d[1] * k : 0;
+    changed = true;
+  }
+  if (!(std::abs(d[2]) <= turn_limit)) {
+    d[2] = std::isfinite(d[2]) ? std::clamp(d[2], -turn_limit, turn_limit) : 0;
+    changed = true;
+  }
+  if (!changed) return to;
+  if (bounded) *bounded = true;
+  return ApplyDelta(from, d);
+}
 
 Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands) const {
   if (residual())
@@ -208,6 +230,12 @@ void OmniPredictor::Save(const std::string& path) const {
                 {{"train_rmse", info_.train_rmse},
                  {"validation_rmse", info_.validation_rmse},
                  {"validation_rollout_rmse", info_.validation_rollout_rmse}});
+  if (info_.max_step > 0 || info_.max_turn > 0) {
+    out << YAML::Key << "bounds" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "max_step" << YAML::Value << info_.max_step;
+    out << YAML::Key << "max_turn" << YAML::Value << info_.max_turn;
+    out << YAML::EndMap;
+  }
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
   WritePredictorFile(out, path);
 }
@@ -255,6 +283,12 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
                 {{"train_rmse", &info.train_rmse},
                  {"validation_rmse", &info.validation_rmse},
                  {"validation_rollout_rmse", &info.validation_rollout_rmse}});
+  if (top.Has("bounds")) {  // optional: files from before issue 40 have none
+    YamlMap b(top.Child("bounds"), path, "bounds", &errors);
+    b.Require("max_step", &info.max_step, Positive());
+    b.Require("max_turn", &info.max_turn, NonNegative());
+    b.Finish();
+  }
   errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();
@@ -368,7 +402,7 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
     if (seq.observed[uf]) track->Correct(seq.pose[uf]);
     const int start = f - h + 1;
     const bool usable = f >= f0 + kNominalWarmUpFrames && start >= seq.first_known_command && f + horizon < frames &&
-                        seq.Complete(start, f) && seq.observed[static_cast<std::size_t>(f + horizon)];
+                        seq.Usable(start, f) && seq.observed[static_cast<std::size_t>(f + horizon)];
     const bool for_training = usable && f + horizon < cut;
     const bool for_validation = usable && f >= cut;
     bool stepped = false;
@@ -496,6 +530,17 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     split.push_back(std::move(part));
   }
   info.samples = train.rows() + validation.rows();
+  // The bounds: the largest pose change over the horizon between measured frames.
+  for (const SplitLog& part : split) {
+    const FrameSequence& seq = part.seq;
+    for (int f = 0; f + info.layout.horizon < seq.frames(); ++f) {
+      const auto a = static_cast<std::size_t>(f), b = static_cast<std::size_t>(f + info.layout.horizon);
+      if (!seq.observed[a] || !seq.observed[b]) continue;
+      const Eigen::Vector3d d = EncodeDelta(seq.pose[a], seq.pose[b]);
+      info.max_step = std::max(info.max_step, std::hypot(d[0], d[1]));
+      info.max_turn = std::max(info.max_turn, std::abs(WrapAngle(d[2])));
+    }
+  }
 
   const auto start = std::chrono::steady_clock::now();
   std::string mlp_report;

@@ -52,11 +52,23 @@ struct OmniPredictorInfo {
   double train_rmse = 0;          // m, position part of the fit on the training split
   double validation_rmse = 0;     // m, on the held-out split (last 20 % of each log)
   double validation_rollout_rmse = 0;  // m, H = 1: the model run on its own for 1 s, held out
+  // The largest pose change over H frames between measured frames of the training logs
+  // (m and rad, camera noise included); 0 where unknown (a file from before issue 40).
+  // The learned backend holds a step to kBoundFactor times these (BoundStep).
+  double max_step = 0, max_turn = 0;
   // Residual predictors (layout.residual) only:
   std::string nominal_engine;       // the engine of the model it corrects: analytic, ode, bullet
   int nominal_substeps = 0;         // that model's physics steps per frame
   std::string nominal_fingerprint;  // NominalModelFingerprint() of that model
 };
+
+// How far beyond anything its training logs showed a learned step may go.
+inline constexpr double kBoundFactor = 1.5;
+
+// The pose H frames after `from` that `to` predicts, held to `info`'s bounds: a
+// translation longer than kBoundFactor * max_step is shortened along its direction, a
+// turn beyond kBoundFactor * max_turn clipped. Sets *bounded when it changed anything.
+Pose2 BoundStep(const OmniPredictorInfo& info, const Pose2& from, const Pose2& to, bool* bounded);
 
 class OmniPredictor {
  public:

@@ -115,6 +115,11 @@ class OmniBackend {
 
   // Saves and restores everything that changes: restoring a saved state and stepping
   // gives the same result as stepping from where it was saved.
+  // Steps (a robot's frame, or a prediction's) on which a learned backend held its
+  // predictor to the bounds of its training data, since construction (Save and Restore
+  // leave it); 0 for physics.
+  virtual long bounded_steps() const { return 0; }
+
   virtual OmniBackendState Save() const = 0;
   virtual void Restore(const OmniBackendState& state) = 0;
 };

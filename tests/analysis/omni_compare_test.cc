@@ -40,12 +40,15 @@ std::string InputErrorOf(const OmniModel& model, const OmniLog& log, const OmniC
   return "(no InputError)";
 }
 
-TEST(OmniCompare, DefaultHorizonsAreOneFrameFourFramesOneSecondAndFreeRun) {
-  EXPECT_EQ(DefaultCompareHorizons(30), (std::vector<int>{1, 4, 30, 0}));
-  EXPECT_EQ(DefaultCompareHorizons(59.94), (std::vector<int>{1, 4, 60, 0}));
+TEST(OmniCompare, DefaultHorizonsRunFromOneFrameToThreeSecondsAndFreeRun) {
+  EXPECT_EQ(DefaultCompareHorizons(30), (std::vector<int>{1, 4, 8, 30, 90, 0}));
+  EXPECT_EQ(DefaultCompareHorizons(59.94), (std::vector<int>{1, 4, 15, 60, 180, 0}));
+  EXPECT_EQ(DefaultCompareHorizons(16), (std::vector<int>{1, 4, 16, 48, 0}));  // 0.25 s is 4 frames
   EXPECT_EQ(HorizonLabel(1, 30), "1 frame");
   EXPECT_EQ(HorizonLabel(4, 30), "4 frames");
+  EXPECT_EQ(HorizonLabel(8, 30), "0.25 s");
   EXPECT_EQ(HorizonLabel(30, 30), "1 s");
+  EXPECT_EQ(HorizonLabel(90, 30), "3 s");
   EXPECT_EQ(HorizonLabel(0, 30), "free run");
 }
 
@@ -56,15 +59,15 @@ TEST(OmniCompare, TheRecordingModelPredictsItsOwnLogAtEveryHorizon) {
   model.encoder_counts_per_rev = 0;
   const OmniLog log = RecordLog(model, 8);
   const OmniCompareResult r = CompareOmniLog(model, log, AnalyticAtDefaultHorizons());
-  ASSERT_EQ(r.rows.size(), 4u);
+  ASSERT_EQ(r.rows.size(), 6u);
   for (const CompareErrorRow& row : r.rows) {
     EXPECT_EQ(row.source, "analytic");
-    EXPECT_GT(row.predicted, 100) << row.horizon;
+    EXPECT_GT(row.predicted, row.horizon_frames > 30 ? 30 : 100) << row.horizon;  // 3 s: every 3rd frame
     // Only the CSV's rounding (1e-9) separates the replay from the recording, and the
     // frames at rest, where the noise-free camera repeats its pose: no new measurement
     // (CONTRACT.md), so the tracker runs on its own state there. A free run carries it
     // all along without correction.
-    const double tolerance = row.horizon_frames == 0 ? 1e-3 : 2e-4;
+    const double tolerance = row.horizon_frames == 0 || row.horizon_frames > 30 ? 1e-3 : 2e-4;
     EXPECT_LT(row.position_rmse, tolerance) << row.horizon;
     EXPECT_LT(row.position_max, tolerance) << row.horizon;
     EXPECT_LT(row.heading_rmse, tolerance) << row.horizon;
@@ -95,10 +98,44 @@ TEST(OmniCompare, ErrorsGrowWithTheHorizonForAMismatchedModel) {
   for (const CompareErrorRow& row : r.rows) EXPECT_LE(row.position_rmse, row.position_max) << row.horizon;
 }
 
+// The no-model baselines are scored on the rows the first source predicts, at every
+// horizon but the free run; the options a user gets leave out horizons the log is too
+// short for.
+TEST(OmniCompare, BaselinesShareTheFirstSourcesRowsAndShortLogsDropLongHorizons) {
+  const OmniLog log = RecordLog(LoadOmniModel(testing::SourcePath("models/omni4_plant.yaml")), 8);
+  OmniCompareOptions options = AnalyticAtDefaultHorizons();
+  options.baselines = true;
+  const OmniCompareResult r = CompareOmniLog(testing::Omni4(), log, options);
+  ASSERT_EQ(r.rows.size(), 6u + 2 * 5);
+  for (int k : options.horizons) {
+    const CompareErrorRow* model = r.Find("analytic", k);
+    ASSERT_TRUE(model);
+    for (const char* name : {"constant_velocity", "integrated_command"}) {
+      const CompareErrorRow* b = r.Find(name, k);
+      if (k == 0) {
+        EXPECT_FALSE(b);
+        continue;
+      }
+      ASSERT_TRUE(b) << name << " " << k;
+      EXPECT_EQ(b->backend, "baseline");
+      EXPECT_EQ(b->predicted, model->predicted) << name << " " << k;
+      EXPECT_GT(b->position_rmse, 0) << name << " " << k;
+    }
+  }
+  // A frame ahead, the camera's last two poses are hard to beat; a second ahead, the
+  // constant velocity of a robot that changes its command every few tenths is far off.
+  EXPECT_LT(r.Find("constant_velocity", 1)->position_rmse, r.Find("constant_velocity", 30)->position_rmse / 10);
+
+  const OmniCompareOptions made = MakeCompareOptions(testing::Omni4(), RecordLog(testing::Omni4(), 3), {"analytic"}, nullptr);
+  EXPECT_EQ(made.horizons, (std::vector<int>{1, 4, 8, 30, 0}));
+  EXPECT_TRUE(made.baselines);
+}
+
 TEST(OmniCompare, CsvsHaveOneRowPerSourceAndHorizonAndOnePathRowPerLogRow) {
   const OmniModel model = testing::Omni4();
   const OmniLog log = RecordLog(model, 3);
   OmniCompareOptions options = AnalyticAtDefaultHorizons();
+  options.horizons = {1, 4, 30, 0};  // the 3 s log is too short for 3 s
   options.sources.push_back({"again", "analytic", {}});
   const OmniCompareResult r = CompareOmniLog(model, log, options);
 
@@ -172,7 +209,10 @@ TEST_F(CompareCli, WritesErrorsForEveryBackendAndHorizonAndThePaths) {
   EXPECT_EQ(errors.rfind("source,backend,horizon,horizon_frames,predicted,position_rmse,position_max,heading_rmse\n", 0),
             0u)
       << errors;
-  EXPECT_EQ(std::count(errors.begin(), errors.end(), '\n'), 1 + 2 * 4) << errors;
+  // The 4 s log holds 1, 4 frames, 0.25, 1 and 3 s and the free run; the baselines all but the free run.
+  EXPECT_EQ(std::count(errors.begin(), errors.end(), '\n'), 1 + 2 * 6 + 2 * 5) << errors;
+  EXPECT_NE(errors.find("\nconstant_velocity,baseline,3 s,90,"), std::string::npos) << errors;
+  EXPECT_NE(errors.find("\nintegrated_command,baseline,0.25 s,8,"), std::string::npos) << errors;
   EXPECT_NE(errors.find("\nlearned,learned,free run,0,"), std::string::npos) << errors;
   const std::string paths = testing::ReadText(out + "/paths.csv");
   EXPECT_EQ(paths.rfind("t,measured_x,measured_y,measured_theta,analytic_x,analytic_y,analytic_theta,learned_x,", 0), 0u);

@@ -301,8 +301,10 @@ def test_compare_tune_pid_and_batch_give_the_commands_numbers(tmp_path):
     model = twinsim.load_omni_model(path("models/omni4.yaml"))
     log = record(model, 300, 5)
     result = twinsim.compare(model, log, backends=["analytic"])
-    horizons = [r["horizon"] for r in result["rows"]]
-    assert horizons == ["1 frame", "4 frames", "1 s", "free run"]
+    horizons = [r["horizon"] for r in result["rows"] if r["source"] == "analytic"]
+    assert horizons == ["1 frame", "4 frames", "0.25 s", "1 s", "3 s", "free run"]
+    baselines = {r["source"] for r in result["rows"] if r["backend"] == "baseline"}
+    assert baselines == {"constant_velocity", "integrated_command"}
     assert result["rows"][1]["position_rmse"] < 0.01
     assert result["free_runs"]["analytic"].shape == (len(log), 4)
     log_csv = tmp_path / "log.csv"

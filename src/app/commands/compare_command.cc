@@ -60,6 +60,19 @@ SeriesPlot ErrorPlot(const OmniCompareResult& result, double frame_rate) {
     it->x.push_back(row.horizon_frames / frame_rate);
     it->y.push_back(row.position_rmse * 1000);
   }
+  // The models' errors fill the height; a baseline far above them (constant velocity
+  // 3 s ahead is metres) leaves the top, drawn as far as it stays inside.
+  double x_max = 0, y_models = 0, y_all = 0;
+  for (const CompareErrorRow& row : result.rows) {
+    if (row.horizon_frames == 0) continue;
+    x_max = std::max(x_max, row.horizon_frames / frame_rate);
+    y_all = std::max(y_all, row.position_rmse * 1000);
+    if (row.backend != "baseline") y_models = std::max(y_models, row.position_rmse * 1000);
+  }
+  if (y_models > 0 && y_all > 1.5 * y_models) {
+    plot.range = WorldRect{0, x_max, 0, 1.5 * y_models};
+    plot.title += " (baselines beyond the top are cut)";
+  }
   return plot;
 }
 
@@ -119,16 +132,21 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
   auto options = std::make_shared<CompareCliOptions>();
   CLI::App* cmd = app.add_subcommand("compare", "Compare how well backends predict a measured log.");
   cmd->footer(
-      "Every backend replays the log (as 'twinsim replay' does) at four horizons: row i is predicted\n"
-      "from the measured state K frames earlier and the logged commands since, with the model's delay.\n"
+      "Every backend replays the log (as 'twinsim replay' does) at six horizons: row i is predicted\n"
+      "from the state estimated K frames earlier and the logged commands since, with the model's delay.\n"
       "  1 frame    K = 1\n"
       "  4 frames   K = 4\n"
+      "  0.25 s     K = round(frame rate / 4)\n"
       "  1 s        K = round(frame rate)\n"
+      "  3 s        K = round(3 x frame rate), predicted from every (K/24)-th frame\n"
       "  free run   one run from the first row on the commands alone (K = 0)\n"
       "Rows predicted: those with enough history (delay + 15 warm-up frames + K); errors are over them.\n"
+      "Horizons the log is too short for are left out. Beside the backends, two predictions of no\n"
+      "model on the first backend's rows: constant_velocity (the last two measured poses\n"
+      "extrapolated) and integrated_command (the commands at the model's delay as the velocity).\n"
       "Outputs in DIR:\n"
       "  errors.csv  source,backend,horizon,horizon_frames,predicted,position_rmse,position_max,heading_rmse\n"
-      "              (m, m, rad; one row per backend and horizon)\n"
+      "              (m, m, rad; one row per backend and horizon; backend 'baseline' for the two above)\n"
       "  paths.csv   t,measured_x,measured_y,measured_theta,<backend>_x,<backend>_y,<backend>_theta,...\n"
       "              (the free run of every backend, one row per log row)\n"
       "Default backends: every physics backend built, plus learned when --predictor is given.\n"

@@ -87,6 +87,13 @@ int Replay(const ReplayOptions& options) {
   Progress progress("replay", !options.quiet);
   OmniReplayResult result = ReplayOmniLog(model, log, replay, [&](int done, int total) { progress.Update(done, total); });
   progress.Finish();
+  if (result.bounded_steps > 0) {
+    // Said even with --quiet: the predictions there are the bounds', not the predictor's.
+    std::fprintf(stderr,
+                 "warning: the learned predictor left the range of its training data on %ld steps; each was held to "
+                 "%.1fx the largest step it was trained on\n",
+                 result.bounded_steps, kBoundFactor);
+  }
   OutputFiles files;
   WritePoseCsv(options.out, result.t, result.pose);
   files.Add(options.out);

@@ -53,10 +53,18 @@ class LearnedOmniBackend final : public OmniBackend {
       OmniRobotState& s = At(i);
       s.command_history.erase(s.command_history.begin());
       s.command_history.push_back(commands[static_cast<std::size_t>(i)]);
-      const Pose2 next =
+      const Pose2 predicted =
           tracks_.empty()
               ? predictor_->Predict(s.pose_history.data(), s.command_history.data())
               : predictor_->Step(s.pose_history.data(), s.command_history.data(), &tracks_[static_cast<std::size_t>(i)]);
+      // A predictor outside what it learned (speeds, inputs) is held to the robot's
+      // bounds seen in training instead of running away (learning/omni_predictor.h).
+      bool bounded = false;
+      const Pose2 next = BoundStep(predictor_->info(), s.pose_history.back(), predicted, &bounded);
+      if (bounded) {
+        ++bounded_steps_;
+        if (!tracks_.empty()) tracks_[static_cast<std::size_t>(i)].Correct(next);
+      }
       s.pose_history.erase(s.pose_history.begin());
       s.pose_history.push_back(next);
     }
@@ -74,6 +82,8 @@ class LearnedOmniBackend final : public OmniBackend {
     Rotate(-d[2], v.vx, v.vy, &out.vx, &out.vy);
     return out;
   }
+
+  long bounded_steps() const override { return bounded_steps_; }
 
   OmniBackendState Save() const override {
     OmniBackendState state{robots_};
@@ -100,6 +110,7 @@ class LearnedOmniBackend final : public OmniBackend {
   FeatureLayout layout_;
   std::vector<OmniRobotState> robots_;
   std::vector<NominalOmniTrack> tracks_;  // a residual predictor's nominal model per robot; empty otherwise
+  long bounded_steps_ = 0;
 };
 
 }  // namespace
