@@ -27,6 +27,11 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
   return IsReplayState(state, why) && observer.IsValid(why);
 }
 
+bool OmniReplayOptions::OnStride(int frame, int since_warm_up) const {
+  const int counted = stride_origin >= 0 ? frame - stride_origin : since_warm_up;
+  return ((counted % stride) + stride) % stride == 0;
+}
+
 int OmniReplayResult::num_predicted() const {
   int n = 0;
   for (bool p : predicted) n += p;
@@ -120,7 +125,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     if (!observer.started()) continue;
     auto target = row_of_frame.find(f + k);
     const int since = f - start_frame - kWarmUpFrames;
-    if (stretch || target == row_of_frame.end() || since < 0 || since % options.stride != 0) continue;
+    if (stretch || target == row_of_frame.end() || since < 0 || !options.OnStride(f, since)) continue;
     Pose2 p = observer.PredictAhead(k, planned(f, f + k)).pose.back();
     check(target->second, p);
     p.theta += unwrap_shift(row);
@@ -246,7 +251,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     auto target = row_of_frame.find(f + k);
     const int since = f - first->first - kWarmUpFrames;
     if (!stretch && measured != row_of_frame.end() && target != row_of_frame.end() && since >= 0 &&
-        since % options.stride == 0) {
+        options.OnStride(f, since)) {
       const OmniBackendState saved = backend->Save();
       for (int j = f; j < f + k; ++j) backend->StepFrame({delayed_command(j)});
       Pose2 p = backend->pose(0);

@@ -45,6 +45,10 @@ struct OmniReplayOptions {
   OmniBackendOptions backend_options;  // the predictor, for the learned backend
   int horizon = 4;  // K, frames; 0 = free run
   int stride = 1;   // predict from every stride-th frame only (1: every row), for fits that need speed
+  // Where the stride counts from: -1, the end of the estimate's warm-up (which depends on
+  // the model's delay for the tracker); a frame index, the same frames for every model
+  // (scores that compare models on the same rows).
+  int stride_origin = -1;
   // How the start state is estimated: "observer" or "tracker" (see above). The learned
   // backend always uses the tracker.
   std::string state = "observer";
@@ -52,6 +56,8 @@ struct OmniReplayOptions {
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
+  // True when a prediction starts at `frame`, `since_warm_up` frames after the warm-up.
+  bool OnStride(int frame, int since_warm_up) const;
 };
 
 struct OmniReplayResult {

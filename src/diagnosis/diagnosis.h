@@ -170,6 +170,15 @@ struct LearnedYardstick {
   double physics_share = 0;
 };
 
+// Omni: every predictor's test-row error at one horizon (analysis/omni_horizons.h).
+struct DiagnosisHorizon {
+  std::string label;          // "4 frames", "0.25 s", "1 s", "3 s"
+  double seconds = 0;
+  int rows = 0;               // test rows scored
+  std::vector<std::string> predictors;  // given model, [identified model,] repaired model, constant velocity, integrated command
+  std::vector<double> gaps;   // the report's metric (m), one per predictor
+};
+
 struct DiagnosisReport {
   std::string robot;                    // "omni" or "arm"
   std::string model_name;
@@ -201,6 +210,9 @@ struct DiagnosisReport {
   std::vector<ChannelSeries> series;    // one per finding
   std::vector<DiagnosisPath> paths;    // omni: measured, nominal and repaired over one held-out stretch
   std::vector<std::string> notes;       // what the user should know (skipped candidates, limits)
+  // Omni: the test-row gap at the report's horizon, 0.25 s, 1 s and 3 s (rows whose
+  // prediction ends on a test row, started wherever); empty for arms.
+  std::vector<DiagnosisHorizon> horizons;
   // With DiagnosisOptions::refit_model: the held-out gap of the refitted model before any
   // effect (gap_before stays the given model's); NaN when not refitted.
   double refit_gap = std::numeric_limits<double>::quiet_NaN();

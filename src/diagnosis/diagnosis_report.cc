@@ -288,6 +288,15 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     adequacy.push_back(x);
   }
   j["adequacy"] = adequacy;
+  if (!r.horizons.empty()) {
+    ordered_json hs = ordered_json::array();
+    for (const DiagnosisHorizon& h : r.horizons) {
+      ordered_json gaps;
+      for (std::size_t q = 0; q < h.predictors.size(); ++q) gaps[h.predictors[q]] = h.gaps[q];
+      hs.push_back({{"label", h.label}, {"seconds", h.seconds}, {"rows", h.rows}, {"gaps", gaps}});
+    }
+    j["horizons"] = hs;
+  }
   j["notes"] = r.notes;
   return j.dump(2) + "\n";
 }
@@ -306,6 +315,25 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
                 Num(r.yardstick.repaired).c_str(), Num(r.noise_floor).c_str());
   s << line;
   if (!r.yardstick.learner.empty()) s << "learned residual: " << r.yardstick.learner << "\n";
+  if (!r.horizons.empty()) {
+    s << "every horizon (test rows; the gap's metric, mm):\n";
+    std::snprintf(line, sizeof line, "  %-20s", "");
+    s << line;
+    for (const DiagnosisHorizon& h : r.horizons) {
+      std::snprintf(line, sizeof line, " %10s", h.label.c_str());
+      s << line;
+    }
+    s << "\n";
+    for (std::size_t q = 0; q < r.horizons.front().predictors.size(); ++q) {
+      std::snprintf(line, sizeof line, "  %-20s", r.horizons.front().predictors[q].c_str());
+      s << line;
+      for (const DiagnosisHorizon& h : r.horizons) {
+        std::snprintf(line, sizeof line, " %10s", h.rows > 0 ? Num(1000 * h.gaps[q], "%.1f").c_str() : "-");
+        s << line;
+      }
+      s << "\n";
+    }
+  }
   if (!r.effects.empty()) {
     std::snprintf(line, sizeof line, "%-34s %-9s %s\n", "effect", "gap cut", "parameters");
     s << line;
@@ -530,6 +558,21 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     h << "<h3>Backward steps</h3><ul>\n";
     for (const auto& n : r.removed) h << "<li>" << HtmlEscape(n) << "</li>\n";
     h << "</ul>\n";
+  }
+  if (!r.horizons.empty()) {
+    h << "<h2>Every horizon</h2>\n<p>The gap's metric [mm] on the test rows at each horizon, every predictor on the "
+         "same rows (whose prediction ends on a test row; it starts wherever, from the state estimated up to there, "
+         "and runs on the logged commands).</p>\n<table><tr><th>predictor</th>";
+    for (const DiagnosisHorizon& g : r.horizons) h << "<th>" << HtmlEscape(g.label) << "</th>";
+    h << "</tr>\n";
+    for (std::size_t q = 0; q < r.horizons.front().predictors.size(); ++q) {
+      h << "<tr><td>" << HtmlEscape(r.horizons.front().predictors[q]) << "</td>";
+      for (const DiagnosisHorizon& g : r.horizons) h << "<td>" << (g.rows > 0 ? Num(1000 * g.gaps[q], "%.1f") : "-") << "</td>";
+      h << "</tr>\n";
+    }
+    h << "<tr><td class=small>rows</td>";
+    for (const DiagnosisHorizon& g : r.horizons) h << "<td class=small>" << g.rows << "</td>";
+    h << "</tr>\n</table>\n";
   }
   if (!r.notes.empty()) {
     h << "<h2>Notes</h2><ul>\n";

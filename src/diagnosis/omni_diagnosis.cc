@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "analysis/omni_horizons.h"
 #include "analysis/omni_replay.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
@@ -603,6 +604,61 @@ double OmniNoiseFloor(const std::vector<OmniLog>& logs, double radius, double* v
   return std::sqrt(4 * var_xy + 2 * radius * radius * var_theta);
 }
 
+namespace {
+
+// The test-row gap of the given, (identified,) repaired model and the two no-model
+// baselines at the report's horizon, 0.25 s, 1 s and 3 s; a note where the named effects
+// make a longer horizon worse than the model they were added to (they fit the
+// `horizon`-frame prediction, not the motion further ahead).
+void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const OmniModel& start, const OmniModel& repaired,
+                   const DiagnosisOptions& options, DiagnosisReport* report) {
+  std::vector<HorizonPredictor> predictors = {{"given model", &given}};
+  if (options.refit_model) predictors.push_back({"identified model", &start});
+  predictors.push_back({"repaired model", &repaired});
+  predictors.push_back({"constant velocity", nullptr, HorizonPredictor::kConstantVelocity});
+  predictors.push_back({"integrated command", nullptr, HorizonPredictor::kIntegratedCommand});
+  const std::size_t from = options.refit_model ? 1 : 0, to = from + 1;  // the repaired model against its start
+  std::vector<HorizonStretch> stretches;
+  int min_start = 0;
+  for (const OmniModel* m : {&given, &start, &repaired}) {
+    min_start = std::max(min_start, m->command_delay_frames + m->vision_delay_frames + kWarmUpFrames);
+  }
+  for (const LogData& d : problem.data()) {
+    std::vector<char> scored(d.kind.size());
+    for (std::size_t i = 0; i < scored.size(); ++i) scored[i] = d.kind[i] == RowKind::kTest;
+    stretches.push_back({d.log, std::move(scored), 0, min_start});
+  }
+  const double period = problem.data().front().log->frame_period;
+  HorizonOptions ho;
+  ho.backend = options.backend;
+  ho.state = kDiagnosisState;
+  ho.delay = (repaired.command_delay_frames + repaired.vision_delay_frames) * period + repaired.effects.time_delay;
+  ho.radius = given.chassis_radius;
+  ho.threads = options.threads;
+  for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
+    const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);
+    DiagnosisHorizon h;
+    h.label = label;
+    h.seconds = frames * period;
+    h.rows = static_cast<int>(sums.front().rows);
+    for (std::size_t q = 0; q < predictors.size(); ++q) {
+      h.predictors.push_back(predictors[q].name);
+      h.gaps.push_back(sums[q].PoseRms());
+    }
+    if (frames != options.horizon && h.rows > 0 && h.gaps[to] > 1.05 * h.gaps[from]) {
+      char msg[320];
+      std::snprintf(msg, sizeof msg,
+                    "at %s the repaired model predicts worse than the %s (%.3g against %.3g mm on the test rows): the "
+                    "named effects fit the %d-frame prediction, not the motion further ahead",
+                    label.c_str(), predictors[from].name.c_str(), 1000 * h.gaps[to], 1000 * h.gaps[from], options.horizon);
+      report->notes.push_back(msg);
+    }
+    report->horizons.push_back(h);
+  }
+}
+
+}  // namespace
+
 DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
                              OmniModel* repaired, const std::function<void(const std::string&)>& progress) {
   const auto start = std::chrono::steady_clock::now();
@@ -833,6 +889,8 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   for (const auto& [name, p] : ListOmniEffects(model.effects)) {
     report.notes.push_back("the model's own " + name + " was trusted, not refitted");
   }
+  if (progress) progress("every horizon");
+  ScoreHorizons(problem, model, nominal_model, repaired_model, options, &report);
   if (repaired) *repaired = repaired_model;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "analysis/omni_baselines.h"
+#include "analysis/omni_horizons.h"
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/parallel.h"
@@ -151,34 +152,19 @@ struct Segment {
   bool validation = false;     // a wholly held-out log
 };
 
-// Accumulates the three error components of predicted rows.
-struct GapSum {
-  double xy = 0, f = 0, s = 0, w = 0;
-  long n = 0;
-  void Add(const std::array<double, 3>& e) {
-    xy += e[0] * e[0] + e[1] * e[1];
-    f += e[0] * e[0];
-    s += e[1] * e[1];
-    w += e[2] * e[2];
-    ++n;
-  }
-  void Add(const GapSum& o) {
-    xy += o.xy, f += o.f, s += o.s, w += o.w;
-    n += o.n;
-  }
-  OmniGap Gap(const std::string& name) const {
-    OmniGap g;
-    g.name = name;
-    if (n == 0) return g;
-    const double k = 1.0 / static_cast<double>(n);
-    g.rmse = std::sqrt(xy * k);
-    g.pose = std::sqrt((f + s + w) * k);
-    g.forward = std::sqrt(f * k);
-    g.sideways = std::sqrt(s * k);
-    g.turn = std::sqrt(w * k);
-    return g;
-  }
-};
+// The report's gap of summed errors.
+OmniGap ToGap(const HorizonSum& sum, const std::string& name) {
+  OmniGap g;
+  g.name = name;
+  if (sum.rows == 0) return g;
+  const double k = 1.0 / static_cast<double>(sum.rows);
+  g.rmse = sum.PositionRmse();
+  g.pose = sum.PoseRms();
+  g.forward = std::sqrt(sum.forward * k);
+  g.sideways = std::sqrt(sum.sideways * k);
+  g.turn = std::sqrt(sum.turn * k);
+  return g;
+}
 
 // Time blocks, some held out from the fit. Each log is replayed in pieces of
 // kPieceSeconds (in parallel), each with a lead-in of kLeadInSeconds that is not scored:
@@ -238,9 +224,9 @@ bool ScoredRow(const Segment& s, std::size_t i, bool held_out, int horizon) {
 // that every predictor scores: past the longest warm-up a replay can have, where the
 // prediction starts on a logged frame and constant velocity has two measurements before
 // it, whatever the model.
-GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model, bool validation_only,
+HorizonSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model, bool validation_only,
                     const OmniIdentificationOptions& options, double radius) {
-  GapSum sum;
+  HorizonSum sum;
   for (const Segment& s : segments) {
     if (s.validation != validation_only) continue;
     const int first = static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames + options.horizon;
@@ -260,70 +246,6 @@ GapSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model
     for (const auto& e : PoseErrorsInRobotFrame(s.log, r, radius).e) sum.Add(e);
   }
   return sum;
-}
-
-// One predictor of the horizons' table: a model replayed through `state`, or a
-// baseline (analysis/omni_baselines.h) when model is null.
-struct HorizonPredictor {
-  std::string name;
-  const OmniModel* model = nullptr;
-  enum Baseline { kNone, kConstantVelocity, kIntegratedCommand } baseline = kNone;
-};
-
-// The errors of every predictor at a horizon of `frames`, over the same rows: those in
-// held-out blocks (or the validation logs) whose prediction starts on a logged frame
-// after the piece's lead-in and the longest warm-up, wherever that start lies (a 1 s or
-// 3 s prediction is longer than most blocks; the estimate has seen measurements up to its
-// start only), and that every predictor predicts. Models predict from every
-// (frames / 24)-th frame: a 3 s horizon costs a few times a 4-frame one, not 45.
-std::vector<OmniGap> ScoreHorizon(const std::vector<Segment>& segments, const std::vector<HorizonPredictor>& predictors,
-                                  int frames, double delay, bool validation_only, const OmniIdentificationOptions& options,
-                                  double radius, int* rows) {
-  std::vector<std::vector<GapSum>> sums(segments.size(), std::vector<GapSum>(predictors.size()));
-  ParallelFor(static_cast<int>(segments.size()), options.threads, [&](int k) {
-    const Segment& s = segments[static_cast<std::size_t>(k)];
-    if (s.validation != validation_only) return;
-    std::vector<OmniReplayResult> results;
-    for (const HorizonPredictor& p : predictors) {
-      if (p.baseline == HorizonPredictor::kConstantVelocity) {
-        results.push_back(ConstantVelocityPrediction(s.log, frames));
-      } else if (p.baseline == HorizonPredictor::kIntegratedCommand) {
-        results.push_back(IntegratedCommandPrediction(s.log, frames, delay));
-      } else {
-        OmniReplayOptions o;
-        o.backend = options.backend;
-        o.horizon = frames;
-        o.state = options.state;
-        o.stride = std::max(1, frames / 24);
-        results.push_back(ReplayOmniLog(*p.model, s.log, o));
-      }
-    }
-    const int first = static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames + frames;
-    std::vector<bool> scored(s.log.rows.size(), false);
-    for (std::size_t row = 0; row < scored.size(); ++row) {
-      if (!s.held[row] || s.log.FrameIndex(row) < first) continue;
-      const int start = s.log.FrameIndex(row) - frames;
-      std::size_t j = row;
-      while (j > 0 && s.log.FrameIndex(j) > start) --j;
-      if (s.log.FrameIndex(j) != start || j < s.score_from) continue;
-      bool all = true;
-      for (const OmniReplayResult& r : results) all = all && r.predicted[row];
-      scored[row] = all;
-    }
-    for (std::size_t q = 0; q < predictors.size(); ++q) {
-      OmniReplayResult& r = results[q];
-      for (std::size_t row = 0; row < scored.size(); ++row) r.predicted[row] = scored[row];
-      for (const auto& e : PoseErrorsInRobotFrame(s.log, r, radius).e) sums[static_cast<std::size_t>(k)][q].Add(e);
-    }
-  });
-  std::vector<OmniGap> out;
-  for (std::size_t q = 0; q < predictors.size(); ++q) {
-    GapSum total;
-    for (const auto& per_segment : sums) total.Add(per_segment[q]);
-    out.push_back(total.Gap(predictors[q].name));
-    *rows = static_cast<int>(total.n);
-  }
-  return out;
 }
 
 class OmniIdentificationProblem {
@@ -702,7 +624,7 @@ OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal
 OmniGap OmniHeldOutGap(const OmniModel& model, const std::vector<OmniLog>& logs, const OmniIdentificationOptions& options,
                        const std::string& name, double radius) {
   double block = 0;
-  return ScoreHeldOut(MakeSegments(logs, {}, options, &block), &model, false, options, radius).Gap(name);
+  return ToGap(ScoreHeldOut(MakeSegments(logs, {}, options, &block), &model, false, options, radius), name);
 }
 
 bool OmniIdentificationOptions::IsValid(std::string* why) const {
@@ -991,43 +913,52 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   auto gaps = [&](bool validation_only) {
     std::vector<OmniGap> out;
     const double r = nominal.chassis_radius;
-    const GapSum n = ScoreHeldOut(segments, &nominal, validation_only, options, r);
-    const GapSum i = ScoreHeldOut(segments, &model, validation_only, options, r);
-    const GapSum c = ScoreHeldOut(segments, nullptr, validation_only, options, r);
-    if (i.n == 0) return out;
-    out.push_back(n.Gap("nominal model"));
-    out.push_back(i.Gap("identified model"));
-    out.push_back(c.Gap("constant velocity"));
+    const HorizonSum n = ScoreHeldOut(segments, &nominal, validation_only, options, r);
+    const HorizonSum i = ScoreHeldOut(segments, &model, validation_only, options, r);
+    const HorizonSum c = ScoreHeldOut(segments, nullptr, validation_only, options, r);
+    if (i.rows == 0) return out;
+    out.push_back(ToGap(n, "nominal model"));
+    out.push_back(ToGap(i, "identified model"));
+    out.push_back(ToGap(c, "constant velocity"));
     if (options.state == "observer") {
       // The same model predicting from the open-loop tracker's state: what the observer adds.
       OmniIdentificationOptions tracker = options;
       tracker.state = "tracker";
-      out.push_back(ScoreHeldOut(segments, &model, validation_only, tracker, r).Gap("identified model, open-loop tracker"));
+      out.push_back(ToGap(ScoreHeldOut(segments, &model, validation_only, tracker, r), "identified model, open-loop tracker"));
     }
-    if (!validation_only) report.held_out_rows = static_cast<int>(i.n);
+    if (!validation_only) report.held_out_rows = static_cast<int>(i.rows);
     return out;
   };
   report.held_out = gaps(false);
   if (!validation.empty()) report.validation = gaps(true);
-  // Every horizon a simulator needs, on the validation logs if there are any.
+  // Every horizon a simulator needs, on the validation logs if there are any: rows in
+  // held-out blocks (or the validation logs), predicted from a start after the piece's
+  // lead-in and the longest warm-up, wherever it lies (analysis/omni_horizons.h).
   {
     const std::vector<HorizonPredictor> predictors = {{"nominal model", &nominal},
                                                       {"identified model", &model},
                                                       {"constant velocity", nullptr, HorizonPredictor::kConstantVelocity},
                                                       {"integrated command", nullptr, HorizonPredictor::kIntegratedCommand}};
-    std::vector<int> done;
-    for (const auto& [label, seconds] : std::vector<std::pair<std::string, double>>{
-             {std::to_string(options.horizon) + (options.horizon == 1 ? " frame" : " frames"), 0}, {"0.25 s", 0.25},
-             {"1 s", 1}, {"3 s", 3}}) {
-      const int frames = seconds > 0 ? static_cast<int>(std::lround(seconds / period)) : options.horizon;
-      if (frames < 1 || std::find(done.begin(), done.end(), frames) != done.end()) continue;
-      done.push_back(frames);
+    std::vector<HorizonStretch> stretches;
+    for (const Segment& s : segments) {
+      if (s.validation != !validation.empty()) continue;
+      stretches.push_back({&s.log, s.held, s.score_from,
+                           static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames});
+    }
+    HorizonOptions ho;
+    ho.backend = options.backend;
+    ho.state = options.state;
+    ho.delay = v[kDelay];
+    ho.radius = nominal.chassis_radius;
+    ho.threads = options.threads;
+    for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
       OmniHorizonGaps h;
       h.label = label;
       h.frames = frames;
       h.seconds = frames * period;
-      h.gaps = ScoreHorizon(segments, predictors, frames, v[kDelay], !validation.empty(), options,
-                            nominal.chassis_radius, &h.rows);
+      const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);
+      for (std::size_t q = 0; q < predictors.size(); ++q) h.gaps.push_back(ToGap(sums[q], predictors[q].name));
+      h.rows = static_cast<int>(sums.front().rows);
       report.horizons.push_back(h);
     }
     report.horizons_on = validation.empty() ? "held-out blocks" : "validation logs";

@@ -1,0 +1,89 @@
+#include "analysis/omni_horizons.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "analysis/omni_baselines.h"
+#include "core/parallel.h"
+
+namespace twinsim {
+
+double HorizonSum::PositionRmse() const { return rows > 0 ? std::sqrt(xy / static_cast<double>(rows)) : 0; }
+double HorizonSum::PoseRms() const {
+  return rows > 0 ? std::sqrt((forward + sideways + turn) / static_cast<double>(rows)) : 0;
+}
+void HorizonSum::Add(const std::array<double, 3>& e) {
+  xy += e[0] * e[0] + e[1] * e[1];
+  forward += e[0] * e[0];
+  sideways += e[1] * e[1];
+  turn += e[2] * e[2];
+  ++rows;
+}
+void HorizonSum::Add(const HorizonSum& o) {
+  xy += o.xy, forward += o.forward, sideways += o.sideways, turn += o.turn;
+  rows += o.rows;
+}
+
+std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretches,
+                                     const std::vector<HorizonPredictor>& predictors, int frames,
+                                     const HorizonOptions& options) {
+  std::vector<std::vector<HorizonSum>> sums(stretches.size(), std::vector<HorizonSum>(predictors.size()));
+  ParallelFor(static_cast<int>(stretches.size()), options.threads, [&](int k) {
+    const HorizonStretch& s = stretches[static_cast<std::size_t>(k)];
+    const OmniLog& log = *s.log;
+    std::vector<OmniReplayResult> results;
+    for (const HorizonPredictor& p : predictors) {
+      if (p.baseline == HorizonPredictor::kConstantVelocity) {
+        results.push_back(ConstantVelocityPrediction(log, frames));
+      } else if (p.baseline == HorizonPredictor::kIntegratedCommand) {
+        results.push_back(IntegratedCommandPrediction(log, frames, options.delay));
+      } else {
+        OmniReplayOptions o;
+        o.backend = options.backend;
+        o.horizon = frames;
+        o.state = options.state;
+        o.stride = std::max(1, frames / 24);
+        o.stride_origin = 0;  // every model predicts from the same frames
+        results.push_back(ReplayOmniLog(*p.model, log, o));
+      }
+    }
+    std::vector<bool> scored(log.rows.size(), false);
+    for (std::size_t row = 0; row < scored.size(); ++row) {
+      if (!s.scored[row]) continue;
+      const int start = log.FrameIndex(row) - frames;
+      if (start < s.min_start_frame) continue;
+      std::size_t j = row;
+      while (j > 0 && log.FrameIndex(j) > start) --j;
+      if (log.FrameIndex(j) != start || j < s.first_start) continue;
+      bool all = true;
+      for (const OmniReplayResult& r : results) all = all && r.predicted[row];
+      scored[row] = all;
+    }
+    for (std::size_t q = 0; q < predictors.size(); ++q) {
+      OmniReplayResult& r = results[q];
+      for (std::size_t row = 0; row < scored.size(); ++row) r.predicted[row] = scored[row];
+      for (const auto& e : PoseErrorsInRobotFrame(log, r, options.radius).e) sums[static_cast<std::size_t>(k)][q].Add(e);
+    }
+  });
+  std::vector<HorizonSum> out(predictors.size());
+  for (const auto& per_stretch : sums)
+    for (std::size_t q = 0; q < predictors.size(); ++q) out[q].Add(per_stretch[q]);
+  return out;
+}
+
+std::vector<std::pair<std::string, int>> ReportHorizons(int first, double frame_period) {
+  std::vector<std::pair<std::string, int>> out;
+  auto add = [&](const std::string& label, int frames) {
+    if (frames < 1) return;
+    for (const auto& h : out)
+      if (h.second == frames) return;
+    out.push_back({label, frames});
+  };
+  add(std::to_string(first) + (first == 1 ? " frame" : " frames"), first);
+  add("0.25 s", static_cast<int>(std::lround(0.25 / frame_period)));
+  add("1 s", static_cast<int>(std::lround(1 / frame_period)));
+  add("3 s", static_cast<int>(std::lround(3 / frame_period)));
+  return out;
+}
+
+}  // namespace twinsim

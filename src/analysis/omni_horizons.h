@@ -1,0 +1,67 @@
+// Every horizon a simulator needs: several predictors (models through the replay, and
+// the no-model baselines of omni_baselines.h) scored on the same rows at one horizon
+// (identify's and diagnose's reports; docs/identification.md, "Every horizon").
+//
+//   std::vector<HorizonStretch> stretches = ...;  // logs, the rows that may be scored
+//   std::vector<HorizonSum> s = ScoreHorizon(stretches, predictors, 60, options);
+//   double rmse = s[1].PositionRmse();
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "analysis/omni_replay.h"
+#include "robots/omni/omni_log.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+// One predictor: a model replayed, or a baseline when model is null.
+struct HorizonPredictor {
+  std::string name;
+  const OmniModel* model = nullptr;
+  enum Baseline { kNone, kConstantVelocity, kIntegratedCommand } baseline = kNone;
+};
+
+// A log and which of its rows a prediction may end on (`scored`, one per row) and start
+// from (rows from `first_start` on, at frames from `min_start_frame` on).
+struct HorizonStretch {
+  const OmniLog* log = nullptr;
+  std::vector<char> scored;
+  std::size_t first_start = 0;
+  int min_start_frame = 0;
+};
+
+struct HorizonOptions {
+  std::string backend = "analytic";
+  std::string state = "observer";
+  double delay = 0;  // s, the integrated command's
+  double radius = 0.09;  // m, weighs the heading error (a point on the rim)
+  int threads = 0;
+};
+
+// Squared errors summed over the scored rows, in the robot frame of the measurement.
+struct HorizonSum {
+  double xy = 0, forward = 0, sideways = 0, turn = 0;  // m^2 (turn: r dtheta)
+  long rows = 0;
+  double PositionRmse() const;  // m
+  double PoseRms() const;       // m, sqrt(dx^2 + dy^2 + (r dtheta)^2)
+  void Add(const std::array<double, 3>& e);
+  void Add(const HorizonSum& other);
+};
+
+// Each predictor's errors at `frames` ahead over the same rows: rows marked scored whose
+// prediction starts on a logged frame at or after the stretch's start, and that every
+// predictor predicts. Models predict from every (frames / 24)-th frame, so a 3 s horizon
+// costs a few 4-frame ones. Stretches are replayed in parallel; the sums do not depend on
+// the thread count. Throws as ReplayOmniLog.
+std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretches,
+                                     const std::vector<HorizonPredictor>& predictors, int frames,
+                                     const HorizonOptions& options);
+
+// The horizons of the reports: `first` frames (the report's own), then 0.25 s, 1 s and
+// 3 s rounded to frames, without repeats, each with its label ("4 frames", "0.25 s").
+std::vector<std::pair<std::string, int>> ReportHorizons(int first, double frame_period);
+
+}  // namespace twinsim
