@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "analysis/omni_baselines.h"
 #include "core/parallel.h"
@@ -69,6 +70,42 @@ std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretche
   for (const auto& per_stretch : sums)
     for (std::size_t q = 0; q < predictors.size(); ++q) out[q].Add(per_stretch[q]);
   return out;
+}
+
+std::string FormatHorizonTable(const std::vector<std::string>& horizons, const std::vector<std::string>& predictors,
+                               const std::vector<std::vector<double>>& values, const std::vector<int>& rows,
+                               bool mark_best) {
+  std::string out;
+  char cell[64];
+  std::snprintf(cell, sizeof cell, "  %-20s", "");
+  out += cell;
+  for (const std::string& h : horizons) {
+    std::snprintf(cell, sizeof cell, " %11s", h.c_str());
+    out += cell;
+  }
+  out += "\n";
+  for (std::size_t p = 0; p < predictors.size(); ++p) {
+    std::snprintf(cell, sizeof cell, "  %-20s", predictors[p].c_str());
+    out += cell;
+    for (std::size_t h = 0; h < horizons.size(); ++h) {
+      const std::vector<double>& v = values[h];
+      const bool best = mark_best && rows[h] > 0 && std::min_element(v.begin(), v.end()) - v.begin() == static_cast<long>(p);
+      if (rows[h] > 0) {
+        std::snprintf(cell, sizeof cell, " %10.1f%s", v[p], best ? "*" : " ");
+      } else {
+        std::snprintf(cell, sizeof cell, " %10s ", "-");
+      }
+      out += cell;
+    }
+    out += "\n";
+  }
+  std::snprintf(cell, sizeof cell, "  %-20s", "rows");
+  out += cell;
+  for (int r : rows) {
+    std::snprintf(cell, sizeof cell, " %10d ", r);
+    out += cell;
+  }
+  return out + "\n";
 }
 
 std::vector<std::pair<std::string, int>> ReportHorizons(int first, double frame_period) {

@@ -60,6 +60,13 @@ std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretche
                                      const std::vector<HorizonPredictor>& predictors, int frames,
                                      const HorizonOptions& options);
 
+// A terminal table, predictors down and horizons across: `values[h][p]` (mm, one
+// decimal; "-" where horizon h has no rows), the lowest per horizon marked '*' when
+// `mark_best`, and a last line of row counts.
+std::string FormatHorizonTable(const std::vector<std::string>& horizons, const std::vector<std::string>& predictors,
+                               const std::vector<std::vector<double>>& values, const std::vector<int>& rows,
+                               bool mark_best);
+
 // The horizons of the reports: `first` frames (the report's own), then 0.25 s, 1 s and
 // 3 s rounded to frames, without repeats, each with its label ("4 frames", "0.25 s").
 std::vector<std::pair<std::string, int>> ReportHorizons(int first, double frame_period);

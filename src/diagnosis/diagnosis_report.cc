@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "analysis/omni_horizons.h"
 #include "io/html_text.h"
 #include "render/plot.h"
 
@@ -316,23 +317,17 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
   s << line;
   if (!r.yardstick.learner.empty()) s << "learned residual: " << r.yardstick.learner << "\n";
   if (!r.horizons.empty()) {
-    s << "every horizon (test rows; the gap's metric, mm):\n";
-    std::snprintf(line, sizeof line, "  %-20s", "");
-    s << line;
+    std::vector<std::string> labels;
+    std::vector<std::vector<double>> mm;
+    std::vector<int> rows;
     for (const DiagnosisHorizon& h : r.horizons) {
-      std::snprintf(line, sizeof line, " %10s", h.label.c_str());
-      s << line;
+      labels.push_back(h.label);
+      rows.push_back(h.rows);
+      mm.emplace_back();
+      for (double g : h.gaps) mm.back().push_back(1000 * g);
     }
-    s << "\n";
-    for (std::size_t q = 0; q < r.horizons.front().predictors.size(); ++q) {
-      std::snprintf(line, sizeof line, "  %-20s", r.horizons.front().predictors[q].c_str());
-      s << line;
-      for (const DiagnosisHorizon& h : r.horizons) {
-        std::snprintf(line, sizeof line, " %10s", h.rows > 0 ? Num(1000 * h.gaps[q], "%.1f").c_str() : "-");
-        s << line;
-      }
-      s << "\n";
-    }
+    s << "every horizon (test rows; the gap's metric, mm), * best:\n"
+      << FormatHorizonTable(labels, r.horizons.front().predictors, mm, rows, true);
   }
   if (!r.effects.empty()) {
     std::snprintf(line, sizeof line, "%-34s %-9s %s\n", "effect", "gap cut", "parameters");

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "analysis/omni_horizons.h"
 #include "diagnosis/omni_identification.h"
 #include "io/html_text.h"
 #include "render/plot.h"
@@ -64,35 +65,18 @@ std::string BestAt(const OmniHorizonGaps& h) {
 // Predictors down, horizons across: position RMSE in mm, the best marked '*'.
 std::string HorizonsText(const OmniIdentificationReport& r) {
   if (r.horizons.empty()) return "";
-  std::ostringstream s;
-  char cell[64];
-  s << "every horizon (" << r.horizons_on << "), position error [mm], * best:\n";
-  std::snprintf(cell, sizeof cell, "  %-20s", "");
-  s << cell;
+  std::vector<std::string> labels, names;
+  std::vector<std::vector<double>> mm;
+  std::vector<int> rows;
+  for (const OmniGap& g : r.horizons.front().gaps) names.push_back(g.name);
   for (const OmniHorizonGaps& h : r.horizons) {
-    std::snprintf(cell, sizeof cell, " %11s", h.label.c_str());
-    s << cell;
+    labels.push_back(h.label);
+    rows.push_back(h.rows);
+    mm.emplace_back();
+    for (const OmniGap& g : h.gaps) mm.back().push_back(1000 * g.rmse);
   }
-  s << "\n";
-  for (std::size_t q = 0; q < r.horizons.front().gaps.size(); ++q) {
-    std::snprintf(cell, sizeof cell, "  %-20s", r.horizons.front().gaps[q].name.c_str());
-    s << cell;
-    for (const OmniHorizonGaps& h : r.horizons) {
-      const OmniGap& g = h.gaps[q];
-      std::snprintf(cell, sizeof cell, " %10s%s", h.rows > 0 ? Num(1000 * g.rmse, "%.1f").c_str() : "-",
-                    BestAt(h) == g.name ? "*" : " ");
-      s << cell;
-    }
-    s << "\n";
-  }
-  std::snprintf(cell, sizeof cell, "  %-20s", "rows");
-  s << cell;
-  for (const OmniHorizonGaps& h : r.horizons) {
-    std::snprintf(cell, sizeof cell, " %10d ", h.rows);
-    s << cell;
-  }
-  s << "\n";
-  return s.str();
+  return "every horizon (" + r.horizons_on + "), position error [mm], * best:\n" +
+         FormatHorizonTable(labels, names, mm, rows, true);
 }
 
 SeriesPlot AxisPlot(const OmniIdentificationSeries& s, int axis, bool against_command) {
