@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <sstream>
 
 #include "core/error.h"
 #include "diagnosis/diagnosis_plants.h"
@@ -83,6 +84,30 @@ void ExpectIdentifiedBestAtEveryHorizon(const OmniIdentificationReport& report) 
   }
 }
 
+// The numbers of docs/identification.md's open-world tables, as a test property
+// (`table_row`, JSON) that scripts/omni-identification-table turns into the tables.
+void RecordTableRow(const OmniIdentificationReport& report, const std::string& plant, const OmniGap& own) {
+  std::ostringstream row;
+  row << "{\"plant\": \"" << plant << "\", \"own\": " << own.rmse;
+  for (const OmniGap& g : report.held_out) row << ", \"" << g.name << "\": " << g.rmse;
+  row << ", \"horizons\": [";
+  for (std::size_t k = 0; k < report.horizons.size(); ++k) {
+    const OmniHorizonGaps& h = report.horizons[k];
+    row << (k ? ", " : "") << "{\"label\": \"" << h.label << "\", \"rows\": " << h.rows;
+    for (const OmniGap& g : h.gaps) row << ", \"" << g.name << "\": " << g.rmse;
+    row << "}";
+  }
+  row << "], \"collinearity\": " << report.collinearity << ", \"held\": [";
+  bool first = true;
+  for (const IdentifiedParameter& p : report.parameters) {
+    if (!p.held) continue;
+    row << (first ? "" : ", ") << "\"" << p.name << "\"";
+    first = false;
+  }
+  row << "]}";
+  ::testing::Test::RecordProperty("table_row", row.str());
+}
+
 void ExpectDeterminedOrHeld(const OmniIdentificationReport& report) {
   EXPECT_LE(report.collinearity, 20);
   for (const IdentifiedParameter& p : report.parameters) {
@@ -131,9 +156,7 @@ TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
   const OmniGap* cv = report.Gap(report.held_out, "constant velocity");
   const OmniGap* nominal = report.Gap(report.held_out, "nominal model");
   ASSERT_TRUE(ident && cv && nominal);
-  RecordProperty("gaps_mm", std::to_string(1000 * nominal->rmse) + " -> " + std::to_string(1000 * ident->rmse) +
-                                ", plant " + std::to_string(1000 * floor.rmse) + ", constant velocity " +
-                                std::to_string(1000 * cv->rmse));
+  RecordTableRow(report, c.label, floor);
   EXPECT_LT(ident->rmse, cv->rmse);
   EXPECT_LT(ident->rmse, 1.2 * floor.rmse) << "plant's own " << floor.rmse;
 
@@ -182,9 +205,7 @@ TEST(OpenWorldWandering, IdentifiedWithItsObserverBeatsNoModelAndTheTracker) {
   ASSERT_TRUE(ident && cv && tracked);
   const OmniModel resembling = testing::ResemblingModel(testing::Omni4(), plant);
   const OmniGap own = OmniHeldOutGap(resembling, {rec.log}, options, "resembling", resembling.chassis_radius);
-  RecordProperty("gaps_mm", std::to_string(1000 * ident->rmse) + ", tracker " + std::to_string(1000 * tracked->rmse) +
-                                ", resembling " + std::to_string(1000 * own.rmse) + ", constant velocity " +
-                                std::to_string(1000 * cv->rmse));
+  RecordTableRow(report, "wandering", own);
   EXPECT_LT(ident->rmse, 0.75 * cv->rmse);
   EXPECT_LT(ident->rmse, 0.7 * tracked->rmse);
   EXPECT_LT(ident->rmse, own.rmse);
