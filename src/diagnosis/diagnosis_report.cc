@@ -452,6 +452,21 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     }
     h << "</p>\n";
   }
+  if (!r.horizons.empty()) {
+    h << "<h2>Every horizon</h2>\n<p>The gap's metric [mm] on the test rows at each horizon, every predictor on the "
+         "same rows (whose prediction ends on a test row; it starts wherever, from the state estimated up to there, "
+         "and runs on the logged commands).</p>\n<table><tr><th>predictor</th>";
+    for (const DiagnosisHorizon& g : r.horizons) h << "<th>" << HtmlEscape(g.label) << "</th>";
+    h << "</tr>\n";
+    for (std::size_t q = 0; q < r.horizons.front().predictors.size(); ++q) {
+      h << "<tr><td>" << HtmlEscape(r.horizons.front().predictors[q]) << "</td>";
+      for (const DiagnosisHorizon& g : r.horizons) h << "<td>" << (g.rows > 0 ? Num(1000 * g.gaps[q], "%.1f") : "-") << "</td>";
+      h << "</tr>\n";
+    }
+    h << "<tr><td class=small>rows</td>";
+    for (const DiagnosisHorizon& g : r.horizons) h << "<td class=small>" << g.rows << "</td>";
+    h << "</tr>\n</table>\n";
+  }
 
   if (!r.effects.empty()) {
     h << "<h2>Effects added</h2>\n<table><tr><th>effect</th><th>parameters ± one standard error</th><th>test gap cut</th><th>evidence</th></tr>\n";
@@ -553,21 +568,6 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     h << "<h3>Backward steps</h3><ul>\n";
     for (const auto& n : r.removed) h << "<li>" << HtmlEscape(n) << "</li>\n";
     h << "</ul>\n";
-  }
-  if (!r.horizons.empty()) {
-    h << "<h2>Every horizon</h2>\n<p>The gap's metric [mm] on the test rows at each horizon, every predictor on the "
-         "same rows (whose prediction ends on a test row; it starts wherever, from the state estimated up to there, "
-         "and runs on the logged commands).</p>\n<table><tr><th>predictor</th>";
-    for (const DiagnosisHorizon& g : r.horizons) h << "<th>" << HtmlEscape(g.label) << "</th>";
-    h << "</tr>\n";
-    for (std::size_t q = 0; q < r.horizons.front().predictors.size(); ++q) {
-      h << "<tr><td>" << HtmlEscape(r.horizons.front().predictors[q]) << "</td>";
-      for (const DiagnosisHorizon& g : r.horizons) h << "<td>" << (g.rows > 0 ? Num(1000 * g.gaps[q], "%.1f") : "-") << "</td>";
-      h << "</tr>\n";
-    }
-    h << "<tr><td class=small>rows</td>";
-    for (const DiagnosisHorizon& g : r.horizons) h << "<td class=small>" << g.rows << "</td>";
-    h << "</tr>\n</table>\n";
   }
   if (!r.notes.empty()) {
     h << "<h2>Notes</h2><ul>\n";

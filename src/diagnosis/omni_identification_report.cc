@@ -252,7 +252,10 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   h << "<p class=\"small\">Noise floor from the camera (third differences of consecutive measured frames): "
     << Num(1000 * r.noise_floor, "%.2f") << " mm (pose metric).</p>\n";
 
-  h << "<h2>Parameters</h2>\n<table><tr><th>parameter</th><th>model file</th><th>nominal</th><th>identified</th>"
+  h << "<h2>Parameters</h2>\n<p class=\"small\">Collinearity index of the parameters with a standard error: "
+    << Num(r.collinearity, "%.3g")
+    << " (1: their effects independent; a parameter that would take it above 20 is held at the fit's value, its note "
+       "naming what it trades with).</p>\n<table><tr><th>parameter</th><th>model file</th><th>nominal</th><th>identified</th>"
        "<th>std. error</th><th>unit</th><th>meaning</th></tr>\n";
   for (const IdentifiedParameter& p : r.parameters) {
     h << "<tr><td>" << HtmlEscape(p.name) << "</td><td><code>" << HtmlEscape(p.key) << "</code></td><td class=n>"
