@@ -204,6 +204,7 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
       replay.backend_options = source.backend_options;
       replay.horizon = k;
       replay.stride = StrideOf(k, frame_rate);
+      replay.stride_origin = 0;  // every source (observer or tracker) predicts from the same frames
       const long weight = RunWeight(log, k, frame_rate);
       const std::string what = source.label + ", " + HorizonLabel(k, frame_rate);
       const OmniReplayResult result = ReplayOmniLog(model, log, replay, [&](int d, int t) {
