@@ -181,6 +181,21 @@ TEST(LearnedBounds, APredictorOutsideItsTrainingIsHeldAndCounted) {
     const double step = std::hypot(free.pose[i].x - free.pose[i - 1].x, free.pose[i].y - free.pose[i - 1].y);
     ASSERT_LE(step, limit * (fast.FrameIndex(i) - fast.FrameIndex(i - 1)) + 1e-9) << i;
   }
+
+  // The command line says so, even with --quiet; within its range it says nothing.
+  const std::string dir = testing::TempDir("learned_bounds");
+  p->Save(dir + "/slow.pred");
+  WriteOmniLog(dir + "/fast.csv", fast.rows);
+  WriteOmniLog(dir + "/slow.csv", slow.rows);
+  const std::string args = "replay --quiet --model " + testing::SourcePath("models/omni4.yaml") +
+                           " --backend learned --predictor " + dir + "/slow.pred --horizon 30 --out " + dir + "/r.csv --log ";
+  const auto fast_run = testing::RunTwinsim(args + dir + "/fast.csv");
+  ASSERT_EQ(fast_run.exit_code, 0) << fast_run.err;
+  EXPECT_NE(fast_run.err.find("warning: the learned predictor left the range of its training data on"), std::string::npos)
+      << fast_run.err;
+  const auto slow_run = testing::RunTwinsim(args + dir + "/slow.csv");
+  ASSERT_EQ(slow_run.exit_code, 0) << slow_run.err;
+  EXPECT_EQ(slow_run.err.find("warning"), std::string::npos) << slow_run.err;
 }
 
 // BoundStep shortens a step along its direction, clips a turn, passes what is inside,
