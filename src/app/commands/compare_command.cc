@@ -1,6 +1,7 @@
 // `twinsim compare --model MODEL --log LOG.csv --out DIR [--backend B ...] [--predictor P ...]`
 #include <algorithm>
 #include <cstdio>
+#include <map>
 #include <memory>
 
 #include "analysis/omni_compare.h"
@@ -60,17 +61,27 @@ SeriesPlot ErrorPlot(const OmniCompareResult& result, double frame_rate) {
     it->x.push_back(row.horizon_frames / frame_rate);
     it->y.push_back(row.position_rmse * 1000);
   }
-  // The models' errors fill the height; a baseline far above them (constant velocity
-  // 3 s ahead is metres) leaves the top, drawn as far as it stays inside.
+  // The models' errors fill most of the height, with room for every baseline's start; a
+  // baseline far above them (constant velocity 3 s ahead is metres) leaves the top,
+  // drawn as far as it stays inside.
   double x_max = 0, y_models = 0, y_all = 0;
+  std::map<std::string, double> baseline_low;  // each baseline's smallest error
   for (const CompareErrorRow& row : result.rows) {
     if (row.horizon_frames == 0) continue;
+    const double mm = row.position_rmse * 1000;
     x_max = std::max(x_max, row.horizon_frames / frame_rate);
-    y_all = std::max(y_all, row.position_rmse * 1000);
-    if (row.backend != "baseline") y_models = std::max(y_models, row.position_rmse * 1000);
+    y_all = std::max(y_all, mm);
+    if (row.backend != "baseline") {
+      y_models = std::max(y_models, mm);
+    } else {
+      auto [it, added] = baseline_low.emplace(row.source, mm);
+      if (!added) it->second = std::min(it->second, mm);
+    }
   }
-  if (y_models > 0 && y_all > 1.5 * y_models) {
-    plot.range = WorldRect{0, x_max, 0, 1.5 * y_models};
+  double top = 1.5 * y_models;
+  for (const auto& [name, low] : baseline_low) top = std::max(top, 1.2 * low);
+  if (y_models > 0 && y_all > top) {
+    plot.range = WorldRect{0, x_max, 0, top};
     plot.title += " (baselines beyond the top are cut)";
   }
   return plot;
