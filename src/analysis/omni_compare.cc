@@ -42,10 +42,6 @@ int FirstPredictedFrame(const OmniModel& model, const OmniLog& log, int horizon)
   return std::max(delay, log.FrameIndex(1)) + kWarmUpFrames + horizon;
 }
 
-double ModelDelaySeconds(const OmniModel& model, double frame_period) {
-  return (model.command_delay_frames + model.vision_delay_frames) * frame_period + model.effects.time_delay;
-}
-
 }  // namespace
 
 bool OmniCompareOptions::IsValid(std::string* why) const {
@@ -230,7 +226,7 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
         if (k == 0) continue;
         OmniReplayResult result = std::string(name) == "constant_velocity"
                                       ? ConstantVelocityPrediction(log, k)
-                                      : IntegratedCommandPrediction(log, k, ModelDelaySeconds(model, log.frame_period));
+                                      : IntegratedCommandPrediction(log, k, model.TotalDelaySeconds(log.frame_period));
         for (std::size_t i = 0; i < result.predicted.size(); ++i) {
           result.predicted[i] = result.predicted[i] && first_predicted[h][i];
         }

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 
 #include "analysis/omni_baselines.h"
+#include "io/html_text.h"
 #include "core/parallel.h"
 
 namespace twinsim {
@@ -72,26 +74,27 @@ std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretche
   return out;
 }
 
-std::string FormatHorizonTable(const std::vector<std::string>& horizons, const std::vector<std::string>& predictors,
-                               const std::vector<std::vector<double>>& values, const std::vector<int>& rows,
-                               bool mark_best) {
+int HorizonTable::Best(std::size_t h) const {
+  if (rows[h] <= 0 || mm[h].empty()) return -1;
+  return static_cast<int>(std::min_element(mm[h].begin(), mm[h].end()) - mm[h].begin());
+}
+
+std::string FormatHorizonTable(const HorizonTable& t) {
   std::string out;
   char cell[64];
   std::snprintf(cell, sizeof cell, "  %-20s", "");
   out += cell;
-  for (const std::string& h : horizons) {
+  for (const std::string& h : t.horizons) {
     std::snprintf(cell, sizeof cell, " %11s", h.c_str());
     out += cell;
   }
   out += "\n";
-  for (std::size_t p = 0; p < predictors.size(); ++p) {
-    std::snprintf(cell, sizeof cell, "  %-20s", predictors[p].c_str());
+  for (std::size_t p = 0; p < t.predictors.size(); ++p) {
+    std::snprintf(cell, sizeof cell, "  %-20s", t.predictors[p].c_str());
     out += cell;
-    for (std::size_t h = 0; h < horizons.size(); ++h) {
-      const std::vector<double>& v = values[h];
-      const bool best = mark_best && rows[h] > 0 && std::min_element(v.begin(), v.end()) - v.begin() == static_cast<long>(p);
-      if (rows[h] > 0) {
-        std::snprintf(cell, sizeof cell, " %10.1f%s", v[p], best ? "*" : " ");
+    for (std::size_t h = 0; h < t.horizons.size(); ++h) {
+      if (t.rows[h] > 0) {
+        std::snprintf(cell, sizeof cell, " %10.1f%s", t.mm[h][p], t.Best(h) == static_cast<int>(p) ? "*" : " ");
       } else {
         std::snprintf(cell, sizeof cell, " %10s ", "-");
       }
@@ -101,11 +104,32 @@ std::string FormatHorizonTable(const std::vector<std::string>& horizons, const s
   }
   std::snprintf(cell, sizeof cell, "  %-20s", "rows");
   out += cell;
-  for (int r : rows) {
+  for (int r : t.rows) {
     std::snprintf(cell, sizeof cell, " %10d ", r);
     out += cell;
   }
   return out + "\n";
+}
+
+std::string FormatHorizonTableHtml(const HorizonTable& t) {
+  std::ostringstream h;
+  h << "<table><tr><th>predictor</th>";
+  for (const std::string& label : t.horizons) h << "<th>" << HtmlEscape(label) << "</th>";
+  h << "</tr>\n";
+  char cell[32];
+  for (std::size_t p = 0; p < t.predictors.size(); ++p) {
+    h << "<tr><td>" << HtmlEscape(t.predictors[p]) << "</td>";
+    for (std::size_t k = 0; k < t.horizons.size(); ++k) {
+      const bool best = t.Best(k) == static_cast<int>(p);
+      std::snprintf(cell, sizeof cell, "%.1f", t.mm[k][p]);
+      h << "<td class=n>" << (best ? "<b>" : "") << (t.rows[k] > 0 ? cell : "-") << (best ? "</b>" : "") << "</td>";
+    }
+    h << "</tr>\n";
+  }
+  h << "<tr><td class=small>rows</td>";
+  for (int r : t.rows) h << "<td class=n>" << r << "</td>";
+  h << "</tr>\n</table>\n";
+  return h.str();
 }
 
 std::vector<std::pair<std::string, int>> ReportHorizons(int first, double frame_period) {

@@ -60,12 +60,19 @@ std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretche
                                      const std::vector<HorizonPredictor>& predictors, int frames,
                                      const HorizonOptions& options);
 
-// A terminal table, predictors down and horizons across: `values[h][p]` (mm, one
-// decimal; "-" where horizon h has no rows), the lowest per horizon marked '*' when
-// `mark_best`, and a last line of row counts.
-std::string FormatHorizonTable(const std::vector<std::string>& horizons, const std::vector<std::string>& predictors,
-                               const std::vector<std::vector<double>>& values, const std::vector<int>& rows,
-                               bool mark_best);
+// A report's table of errors, predictors down and horizons across.
+struct HorizonTable {
+  std::vector<std::string> horizons;       // labels: "4 frames", "0.25 s", ...
+  std::vector<std::string> predictors;
+  std::vector<std::vector<double>> mm;     // [horizon][predictor], mm
+  std::vector<int> rows;                   // per horizon
+  // The predictor with the lowest error at horizon h (the first of equals); -1 without rows.
+  int Best(std::size_t h) const;
+};
+// As text for a terminal (one decimal, "-" where a horizon has no rows, the best marked
+// '*', a last line of row counts), and as an HTML <table> (the best in bold).
+std::string FormatHorizonTable(const HorizonTable& table);
+std::string FormatHorizonTableHtml(const HorizonTable& table);
 
 // The horizons of the reports: `first` frames (the report's own), then 0.25 s, 1 s and
 // 3 s rounded to frames, without repeats, each with its label ("4 frames", "0.25 s").

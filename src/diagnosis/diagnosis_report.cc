@@ -13,6 +13,20 @@
 namespace twinsim {
 namespace {
 
+// An omni report's horizons as a table: the gap's metric in mm.
+HorizonTable HorizonTableOf(const DiagnosisReport& r) {
+  HorizonTable t;
+  if (r.horizons.empty()) return t;
+  t.predictors = r.horizons.front().predictors;
+  for (const DiagnosisHorizon& h : r.horizons) {
+    t.horizons.push_back(h.label);
+    t.rows.push_back(h.rows);
+    t.mm.emplace_back();
+    for (double g : h.gaps) t.mm.back().push_back(1000 * g);
+  }
+  return t;
+}
+
 using nlohmann::ordered_json;
 
 ordered_json Parameters(const std::map<std::string, double>& p) {
@@ -317,17 +331,7 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
   s << line;
   if (!r.yardstick.learner.empty()) s << "learned residual: " << r.yardstick.learner << "\n";
   if (!r.horizons.empty()) {
-    std::vector<std::string> labels;
-    std::vector<std::vector<double>> mm;
-    std::vector<int> rows;
-    for (const DiagnosisHorizon& h : r.horizons) {
-      labels.push_back(h.label);
-      rows.push_back(h.rows);
-      mm.emplace_back();
-      for (double g : h.gaps) mm.back().push_back(1000 * g);
-    }
-    s << "every horizon (test rows; the gap's metric, mm), * best:\n"
-      << FormatHorizonTable(labels, r.horizons.front().predictors, mm, rows, true);
+    s << "every horizon (test rows; the gap's metric, mm), * best:\n" << FormatHorizonTable(HorizonTableOf(r));
   }
   if (!r.effects.empty()) {
     std::snprintf(line, sizeof line, "%-34s %-9s %s\n", "effect", "gap cut", "parameters");
@@ -455,17 +459,8 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
   if (!r.horizons.empty()) {
     h << "<h2>Every horizon</h2>\n<p>The gap's metric [mm] on the test rows at each horizon, every predictor on the "
          "same rows (whose prediction ends on a test row; it starts wherever, from the state estimated up to there, "
-         "and runs on the logged commands).</p>\n<table><tr><th>predictor</th>";
-    for (const DiagnosisHorizon& g : r.horizons) h << "<th>" << HtmlEscape(g.label) << "</th>";
-    h << "</tr>\n";
-    for (std::size_t q = 0; q < r.horizons.front().predictors.size(); ++q) {
-      h << "<tr><td>" << HtmlEscape(r.horizons.front().predictors[q]) << "</td>";
-      for (const DiagnosisHorizon& g : r.horizons) h << "<td>" << (g.rows > 0 ? Num(1000 * g.gaps[q], "%.1f") : "-") << "</td>";
-      h << "</tr>\n";
-    }
-    h << "<tr><td class=small>rows</td>";
-    for (const DiagnosisHorizon& g : r.horizons) h << "<td class=small>" << g.rows << "</td>";
-    h << "</tr>\n</table>\n";
+         "and runs on the logged commands). Best in bold.</p>\n"
+      << FormatHorizonTableHtml(HorizonTableOf(r));
   }
 
   if (!r.effects.empty()) {

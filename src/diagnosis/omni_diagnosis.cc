@@ -632,7 +632,7 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   HorizonOptions ho;
   ho.backend = options.backend;
   ho.state = kDiagnosisState;
-  ho.delay = (repaired.command_delay_frames + repaired.vision_delay_frames) * period + repaired.effects.time_delay;
+  ho.delay = repaired.TotalDelaySeconds(period);
   ho.radius = given.chassis_radius;
   ho.threads = options.threads;
   for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {

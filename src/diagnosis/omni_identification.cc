@@ -100,7 +100,7 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
   return {fx.axis_scale[0], fx.axis_scale[1], fx.axis_scale[2], fx.LagOf(0), fx.LagOf(1), fx.LagOf(2),
           m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
           fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
-          fx.v_max, fx.w_max, (m.command_delay_frames + m.vision_delay_frames) * frame_period + fx.time_delay,
+          fx.v_max, fx.w_max, m.TotalDelaySeconds(frame_period),
           1, 1, 1, m.driving_noise.sd[0], m.driving_noise.sd[1], m.driving_noise.sd[2], m.driving_noise.correlation_time, 1};
 }
 

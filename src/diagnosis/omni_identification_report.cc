@@ -54,29 +54,18 @@ std::string Verdict(const OmniIdentificationReport& r) {
   return s.str();
 }
 
-// The predictor with the lowest position error at a horizon ("" without rows).
-std::string BestAt(const OmniHorizonGaps& h) {
-  const OmniGap* best = nullptr;
-  for (const OmniGap& g : h.gaps)
-    if (!best || g.rmse < best->rmse) best = &g;
-  return best && h.rows > 0 ? best->name : "";
-}
-
-// Predictors down, horizons across: position RMSE in mm, the best marked '*'.
-std::string HorizonsText(const OmniIdentificationReport& r) {
-  if (r.horizons.empty()) return "";
-  std::vector<std::string> labels, names;
-  std::vector<std::vector<double>> mm;
-  std::vector<int> rows;
-  for (const OmniGap& g : r.horizons.front().gaps) names.push_back(g.name);
+// The report's horizons as a table: position RMSE in mm.
+HorizonTable TableOf(const OmniIdentificationReport& r) {
+  HorizonTable t;
+  if (r.horizons.empty()) return t;
+  for (const OmniGap& g : r.horizons.front().gaps) t.predictors.push_back(g.name);
   for (const OmniHorizonGaps& h : r.horizons) {
-    labels.push_back(h.label);
-    rows.push_back(h.rows);
-    mm.emplace_back();
-    for (const OmniGap& g : h.gaps) mm.back().push_back(1000 * g.rmse);
+    t.horizons.push_back(h.label);
+    t.rows.push_back(h.rows);
+    t.mm.emplace_back();
+    for (const OmniGap& g : h.gaps) t.mm.back().push_back(1000 * g.rmse);
   }
-  return "every horizon (" + r.horizons_on + "), position error [mm], * best:\n" +
-         FormatHorizonTable(labels, names, mm, rows, true);
+  return t;
 }
 
 SeriesPlot AxisPlot(const OmniIdentificationSeries& s, int axis, bool against_command) {
@@ -122,10 +111,14 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
   j["held_out"] = GapsJson(r.held_out);
   if (!r.validation.empty()) j["validation"] = GapsJson(r.validation);
   if (!r.horizons.empty()) {
+    const HorizonTable t = TableOf(r);
     ordered_json hs = ordered_json::array();
-    for (const OmniHorizonGaps& h : r.horizons) {
+    for (std::size_t k = 0; k < r.horizons.size(); ++k) {
+      const OmniHorizonGaps& h = r.horizons[k];
+      const int best = t.Best(k);
       hs.push_back({{"label", h.label}, {"frames", h.frames}, {"seconds", h.seconds}, {"rows", h.rows},
-                    {"best", BestAt(h)}, {"gaps", GapsJson(h.gaps)}});
+                    {"best", best < 0 ? std::string() : t.predictors[static_cast<std::size_t>(best)]},
+                    {"gaps", GapsJson(h.gaps)}});
     }
     j["horizons_on"] = r.horizons_on;
     j["horizons"] = hs;
@@ -195,7 +188,9 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   };
   table("held-out blocks", r.held_out);
   table("validation logs", r.validation);
-  s << HorizonsText(r);
+  if (!r.horizons.empty()) {
+    s << "every horizon (" << r.horizons_on << "), position error [mm], * best:\n" << FormatHorizonTable(TableOf(r));
+  }
   s << Verdict(r) << "\n";
   for (const auto& n : r.notes) s << "note: " << n << "\n";
   return s.str();
@@ -233,21 +228,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     h << "<h2>Every horizon</h2>\n<p>Position RMSE [mm] on the " << HtmlEscape(r.horizons_on)
       << " at each horizon, every predictor on the same rows (whose prediction ends there; it starts from the state "
          "estimated from the measurements up to its start, and runs free on the logged commands). Best in bold.</p>\n"
-         "<table><tr><th>predictor</th>";
-    for (const OmniHorizonGaps& g : r.horizons) h << "<th>" << HtmlEscape(g.label) << "</th>";
-    h << "</tr>\n";
-    for (std::size_t q = 0; q < r.horizons.front().gaps.size(); ++q) {
-      h << "<tr><td>" << HtmlEscape(r.horizons.front().gaps[q].name) << "</td>";
-      for (const OmniHorizonGaps& g : r.horizons) {
-        const bool best = BestAt(g) == g.gaps[q].name;
-        h << "<td class=n>" << (best ? "<b>" : "") << (g.rows > 0 ? Num(1000 * g.gaps[q].rmse, "%.1f") : "-")
-          << (best ? "</b>" : "") << "</td>";
-      }
-      h << "</tr>\n";
-    }
-    h << "<tr><td class=small>rows</td>";
-    for (const OmniHorizonGaps& g : r.horizons) h << "<td class=n>" << g.rows << "</td>";
-    h << "</tr>\n</table>\n";
+      << FormatHorizonTableHtml(TableOf(r));
   }
   h << "<p class=\"small\">Noise floor from the camera (third differences of consecutive measured frames): "
     << Num(1000 * r.noise_floor, "%.2f") << " mm (pose metric).</p>\n";

@@ -154,6 +154,12 @@ struct OmniModel {
   double ObserverNoiseXy() const;
   double ObserverNoiseTheta() const;
 
+  // s, from sending a command to the camera's pose showing its effect at `frame_period`:
+  // the command and vision frames and the time_delay effect.
+  double TotalDelaySeconds(double frame_period) const {
+    return (command_delay_frames + vision_delay_frames) * frame_period + effects.time_delay;
+  }
+
   int num_wheels() const { return static_cast<int>(wheel_angles.size()); }
   // m, the flat front's distance from the centre (front_distance, or its default).
   double FrontDistance() const { return front_distance > 0 ? front_distance : kDefaultFrontRatio * chassis_radius; }
