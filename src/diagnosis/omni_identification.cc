@@ -36,6 +36,7 @@ enum Param {
   kDelay,
   kLoopX, kLoopY, kLoopW,
   kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale,
+  kBraking, kFieldFrame,
   kNumParams
 };
 
@@ -74,6 +75,9 @@ const ParamSpec kSpecs[kNumParams] = {
     {"turn.slip", "driving_noise.turn", "rad/s", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true},
     {"slip.correlation_time", "driving_noise.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
     {"process_noise.scale", "observer.process_noise", "x", "the observer's process noise on the model's velocity relative to the model's: how far the model's own velocity is trusted", 0.001, 100, true},
+    {"lag.braking", "effects.motor_lag.braking", "x", "the lags' time constants while slowing down, relative to speeding up", 0.1, 10, true},
+    // A choice, never fitted: 0 the lag acts in the robot's frame, 1 in the field's.
+    {"lag.field_frame", "effects.motor_lag.field_frame", "", "1: the lagged velocity keeps its direction in the field while the robot turns; 0: it turns with the robot", 0, 1, false},
 };
 
 // Which of parameters that trade against each other is held at its value (larger:
@@ -89,6 +93,13 @@ double HoldPreference(int p) {
 
 constexpr double kPieceSeconds = 10;   // s, a log is replayed in pieces this long ...
 constexpr double kLeadInSeconds = 3;   // s, ... each after a lead-in this long, not scored
+// A structure of the lag (field frame, braking) is kept where it predicts the held-out
+// blocks this much better at the lookahead (a share of their RMSE) ...
+constexpr double kStructureGain = 0.01;
+constexpr double kStructureTolerance = 0.005;  // ... and at K frames no worse than this
+// The lag's structures and the speed limits, which a K-frame prediction hardly sees, are
+// chosen on predictions this far ahead (the lookahead).
+constexpr double kLookaheadSeconds = 0.25;
 constexpr double kStartLag = 0.03;  // s: a lag of 0 has no gradient to start from
 // The numeric derivatives' step in the solver's coordinates (2 % for a scale): the
 // replay's cost is jagged at finer scales (encoder counts, controller ticks).
@@ -101,7 +112,8 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
           m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
           fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
           fx.v_max, fx.w_max, m.TotalDelaySeconds(frame_period),
-          1, 1, 1, m.driving_noise.sd[0], m.driving_noise.sd[1], m.driving_noise.sd[2], m.driving_noise.correlation_time, 1};
+          1, 1, 1, m.driving_noise.sd[0], m.driving_noise.sd[1], m.driving_noise.sd[2], m.driving_noise.correlation_time, 1,
+          fx.lag_braking, fx.lag_field_frame ? 1.0 : 0.0};
 }
 
 // `base` with the parameters. The total delay (s) goes into whole frames in `delay:`
@@ -116,6 +128,8 @@ OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, doubl
     fx.axis_lag[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kLagX + a)];
   }
   fx.motor_lag = 0;
+  fx.lag_braking = v[kBraking];
+  fx.lag_field_frame = v[kFieldFrame] > 0.5;
   m.controller.forward.slew_rate = v[kSlewX];
   m.controller.sideways.slew_rate = v[kSlewY];
   m.controller.rotation.slew_rate = v[kSlewW];
@@ -268,20 +282,23 @@ class OmniIdentificationProblem {
   // segment order; the segments replayed in parallel. Throws CheckFailed when the model
   // diverges.
   std::vector<OmniPoseErrors> Errors(const OmniModel& model, bool held_out, int stride) const {
+    return Errors(model, held_out, stride, options_.horizon);
+  }
+  std::vector<OmniPoseErrors> Errors(const OmniModel& model, bool held_out, int stride, int horizon) const {
     std::vector<OmniPoseErrors> out(segments_.size());
     ParallelFor(static_cast<int>(segments_.size()), options_.threads, [&](int k) {
       const Segment& s = segments_[static_cast<std::size_t>(k)];
       if (!held_out && s.validation) return;
       OmniReplayOptions o;
       o.backend = options_.backend;
-      o.horizon = options_.horizon;
+      o.horizon = horizon;
       o.state = options_.state;
       o.stride = stride;
       const OmniPoseErrors all = PoseErrorsInRobotFrame(s.log, ReplayOmniLog(model, s.log, o), nominal_.chassis_radius);
       OmniPoseErrors& kept = out[static_cast<std::size_t>(k)];
       for (std::size_t r = 0; r < all.rows.size(); ++r) {
         const std::size_t row = all.rows[r];
-        if (!ScoredRow(s, row, held_out, options_.horizon)) continue;
+        if (!ScoredRow(s, row, held_out, horizon)) continue;
         kept.rows.push_back(row);
         kept.e.push_back(all.e[r]);
       }
@@ -584,6 +601,94 @@ double ProfileDelay(const OmniIdentificationProblem& problem, std::array<double,
 // neighbours), the command sent `delay` (s) earlier, and the nominal and identified
 // models' one-frame predictions from the measured state, for the report's plots over
 // the first stretch of the log (its fit and held-out blocks alike).
+// The held-out blocks' position RMSE (m) at the fit's horizon; infinity where the model
+// diverges.
+double HeldOutRmse(const OmniIdentificationProblem& problem, const std::vector<Segment>& segments,
+                   const OmniIdentificationOptions& options, const std::array<double, kNumParams>& v) {
+  try {
+    const OmniModel model = problem.Build(v);
+    return ScoreHeldOut(segments, &model, false, options, model.chassis_radius).PositionRmse();
+  } catch (const CheckFailed&) {
+    return std::numeric_limits<double>::infinity();
+  }
+}
+
+// Tries the lag's structures on top of the fit `v`: the lag held in the field frame,
+// then braking at its own time constants (the factor that predicts the fit blocks best
+// at the lookahead, on a grid refined by a parabola in its logarithm). A 4-frame
+// prediction hardly sees either (the observer corrects the velocity every frame), so
+// both are judged at the lookahead: kept, and added to `chosen`, where they cut the
+// held-out blocks' lookahead RMSE by kStructureGain without making their K-frame RMSE
+// worse by more than kStructureTolerance. The verdict, with the numbers, goes into
+// `notes`.
+void ChooseLagStructures(const OmniIdentificationProblem& lookahead, const std::vector<Segment>& segments,
+                         const OmniIdentificationOptions& options, const OmniIdentificationOptions& ahead,
+                         bool turned, const std::vector<int>& free, std::array<double, kNumParams>* v,
+                         std::map<int, std::string>* notes, std::set<int>* chosen) {
+  bool any_lag = false;
+  for (int a = 0; a < 3; ++a) {
+    const int p = kLagX + a;
+    any_lag = any_lag || (std::find(free.begin(), free.end(), p) != free.end() &&
+                          (*v)[static_cast<std::size_t>(p)] > 1.05 * kSpecs[p].lower);
+  }
+  if (!any_lag) {
+    (*notes)[kFieldFrame] = (*notes)[kBraking] = "not tried: the fit found no lag";
+    return;
+  }
+  double k_now = HeldOutRmse(lookahead, segments, options, *v);
+  double l_now = HeldOutRmse(lookahead, segments, ahead, *v);
+  auto decide = [&](int p, const std::array<double, kNumParams>& trial) {
+    const double k_with = HeldOutRmse(lookahead, segments, options, trial);
+    const double l_with = HeldOutRmse(lookahead, segments, ahead, trial);
+    const bool keep = l_with < (1 - kStructureGain) * l_now && k_with < (1 + kStructureTolerance) * k_now;
+    char numbers[200];
+    std::snprintf(numbers, sizeof numbers, "%.3g mm at %d frames and %.3g mm at %d with it, %.3g and %.3g mm without",
+                  1e3 * l_with, ahead.horizon, 1e3 * k_with, options.horizon, 1e3 * l_now, 1e3 * k_now);
+    char value[48] = "";
+    if (p == kBraking) std::snprintf(value, sizeof value, " (factor %.3g)", trial[kBraking]);
+    (*notes)[p] = std::string(keep ? "chosen" : "not chosen") + value + " on the held-out blocks: " + numbers +
+                  (keep ? "; held at this value in the final fit" : "");
+    if (!keep) return;
+    *v = trial;
+    k_now = k_with;
+    l_now = l_with;
+    chosen->insert(p);
+  };
+  if (turned) {
+    std::array<double, kNumParams> trial = *v;
+    trial[kFieldFrame] = 1;
+    decide(kFieldFrame, trial);
+  } else {
+    (*notes)[kFieldFrame] = "not tried: the fit blocks never command a turn, where the frames differ";
+  }
+  // Braking: log-spaced factors around 1, the best refined by a parabola through it and
+  // its neighbours.
+  const std::vector<double> grid = {0.25, 0.35, 0.5, 0.7, 1, 1.4, 2, 2.8};
+  std::vector<double> cost;
+  for (double b : grid) {
+    std::array<double, kNumParams> trial = *v;
+    trial[kBraking] = b;
+    cost.push_back(lookahead.Cost(trial));
+  }
+  const std::size_t best = static_cast<std::size_t>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+  if (grid[best] == 1) {
+    (*notes)[kBraking] = "not chosen: braking as fast as speeding up predicts the fit blocks best";
+    return;
+  }
+  double b = grid[best];
+  if (best > 0 && best + 1 < grid.size() && std::isfinite(cost[best - 1]) && std::isfinite(cost[best + 1])) {
+    const double x0 = std::log(grid[best - 1]), x1 = std::log(grid[best]), x2 = std::log(grid[best + 1]);
+    const double c0 = cost[best - 1], c1 = cost[best], c2 = cost[best + 1];
+    const double denom = (x0 - x1) * (x0 - x2) * (x1 - x2);
+    const double a = (x2 * (c1 - c0) + x1 * (c0 - c2) + x0 * (c2 - c1)) / denom;
+    const double bb = (x2 * x2 * (c0 - c1) + x1 * x1 * (c2 - c0) + x0 * x0 * (c1 - c2)) / denom;
+    if (a > 0) b = std::exp(std::clamp(-bb / (2 * a), x0, x2));
+  }
+  std::array<double, kNumParams> trial = *v;
+  trial[kBraking] = b;
+  decide(kBraking, trial);
+}
+
 OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal, const OmniModel& identified,
                                     const OmniIdentificationOptions& options, double delay) {
   OmniIdentificationSeries s;
@@ -658,7 +763,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   if (!options.IsValid(&why)) throw InputError(why);
   if (logs.empty()) throw InputError("identify needs at least one log");
   auto say = [&](int step, const std::string& what) {
-    if (progress) progress(step, 6, what);
+    if (progress) progress(step, 7, what);
   };
   const double period = logs.front().frame_period;
   for (const auto* set : {&logs, &validation}) {
@@ -673,6 +778,10 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   double block = 0;
   const std::vector<Segment> segments = MakeSegments(logs, validation, options, &block);
   OmniIdentificationProblem problem(nominal, segments, options);
+  OmniIdentificationOptions ahead = options;
+  ahead.horizon = std::max(options.horizon + 1, static_cast<int>(std::lround(kLookaheadSeconds / period)));
+  ahead.stride = std::max(options.stride, ahead.horizon / 2);
+  const OmniIdentificationProblem lookahead(nominal, segments, ahead);
   OmniIdentificationReport report;
   report.model_name = nominal.name;
   for (const OmniLog& log : logs) report.logs.push_back(log.path);
@@ -736,7 +845,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   // last, it let the filter absorb what a speed limit explains (w_max went unfound).
   std::vector<int> free;
   for (int p = 0; p < kNumParams; ++p)
-    if (p != kVMax && p != kWMax && !pruned.count(p)) free.push_back(p);
+    if (p != kVMax && p != kWMax && p != kBraking && p != kFieldFrame && !pruned.count(p)) free.push_back(p);
   for (const auto& [p, why] : pruned) v[static_cast<std::size_t>(p)] = nominal_values[static_cast<std::size_t>(p)];
 
   v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, nullptr, nullptr);
@@ -774,7 +883,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   }
 
   // 4. Speed limits, where the commands go beyond what the robot reached: each is kept
-  // when it lowers the fit error by more than 0.3 % (a limit touches few frames).
+  // when it lowers the fit blocks' lookahead error by more than 0.3 % (a limit touches
+  // few frames, and a K-frame prediction from the observer's velocity hardly sees it).
   say(3, "speed limits");
   std::vector<double> speeds, turns;
   for (const OmniLog& log : logs) {
@@ -787,7 +897,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   }
   std::sort(speeds.begin(), speeds.end());
   std::sort(turns.begin(), turns.end());
-  double base_cost = problem.Cost(v);
+  double base_cost = lookahead.Cost(v);
   for (int p : {kVMax, kWMax}) {
     const std::vector<double>& sorted = p == kVMax ? speeds : turns;
     double best_cost = base_cost, best_limit = 0;
@@ -796,7 +906,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
       if (limit < kSpecs[p].lower) continue;
       std::array<double, kNumParams> trial = v;
       trial[static_cast<std::size_t>(p)] = limit;
-      const double c = problem.Cost(trial);
+      const double c = lookahead.Cost(trial);
       if (c < best_cost) {
         best_cost = c;
         best_limit = limit;
@@ -808,13 +918,32 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
       base_cost = best_cost;
     }
   }
-  // 5. All together. Then what ends at the edge of its range is what the data does not
+  // 5. Structures the held-out blocks choose: the lag held in the field frame rather than
+  // the robot's, then braking at its own time constants. Each is fitted with the rest and
+  // kept where it predicts the held-out blocks at least kStructureGain better.
+  say(4, "lag structures");
+  std::set<int> chosen;
+  ChooseLagStructures(lookahead, segments, options, ahead, excited[2], free, &v, &pruned, &chosen);
+  // 6. All together. Then what ends at the edge of its range is what the data does not
   // ask for: a lag at its floor is none, a ramp at its ceiling no limit; the standard
   // errors are for the rest.
-  say(4, "final fit and standard errors");
-  solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
-  v = solved.values;
-  report.solver_iterations += solved.iterations;
+  say(5, "final fit and standard errors");
+  {
+    // Kept only where it does not predict the held-out blocks worse than before it (the
+    // fit blocks can pull a misfit structure away from what generalises: early stopping).
+    const double before = HeldOutRmse(problem, segments, options, v);
+    solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
+    report.solver_iterations += solved.iterations;
+    const double after = HeldOutRmse(problem, segments, options, solved.values);
+    if (after <= (1 + kStructureTolerance) * before) {
+      v = solved.values;
+    } else {
+      char numbers[160];
+      std::snprintf(numbers, sizeof numbers, "%.3g mm against %.3g mm", 1e3 * after, 1e3 * before);
+      report.notes.push_back(std::string("the final joint fit predicted the held-out blocks worse (") + numbers +
+                             " at the fit's horizon): the estimate before it is kept");
+    }
+  }
   for (int p : std::vector<int>(free)) {
     const ParamSpec& s = kSpecs[p];
     double& value = v[static_cast<std::size_t>(p)];
@@ -861,7 +990,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
 
   // Parameters for the report, the delay first.
   for (int p : {static_cast<int>(kDelay), static_cast<int>(kGainX), static_cast<int>(kGainY), static_cast<int>(kGainW),
-                static_cast<int>(kLagX), static_cast<int>(kLagY), static_cast<int>(kLagW), static_cast<int>(kLoopX),
+                static_cast<int>(kLagX), static_cast<int>(kLagY), static_cast<int>(kLagW), static_cast<int>(kBraking),
+                static_cast<int>(kFieldFrame), static_cast<int>(kLoopX),
                 static_cast<int>(kLoopY), static_cast<int>(kLoopW), static_cast<int>(kSlewX), static_cast<int>(kSlewY),
                 static_cast<int>(kSlewW), static_cast<int>(kTurnX), static_cast<int>(kTurnY), static_cast<int>(kCrossYX),
                 static_cast<int>(kCrossXY), static_cast<int>(kVMax), static_cast<int>(kWMax), static_cast<int>(kSlipX),
@@ -878,6 +1008,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     const auto it = std::find(free.begin(), free.end(), p);
     q.estimated = it != free.end();
     q.held = held.count(p) > 0;
+    if (chosen.count(p)) q.estimated = q.held = true;  // a structure: chosen, then held
     if (pruned.count(p)) q.note = pruned.at(p);
     if (q.estimated && !q.held) {
       q.standard_error = solved.standard_error[static_cast<std::size_t>(it - free.begin())];
@@ -908,8 +1039,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
                            "(drive every axis, alone and together, at several speeds to separate them)");
   }
 
-  // 6. Gaps on the held-out blocks and the validation logs.
-  say(5, "held-out gaps");
+  // 7. Gaps on the held-out blocks and the validation logs.
+  say(6, "held-out gaps");
   auto gaps = [&](bool validation_only) {
     std::vector<OmniGap> out;
     const double r = nominal.chassis_radius;
@@ -963,14 +1094,12 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     }
     report.horizons_on = validation.empty() ? "held-out blocks" : "validation logs";
   }
-  double fit_cost = 0;  // the identified model's, over the fit rows
   for (const OmniPoseErrors& e : problem.Errors(problem.Build(v), false, options.stride)) {
     report.fit_rows += static_cast<int>(e.rows.size());
-    for (const auto& x : e.e) fit_cost += x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
   }
   const double fit_n = std::max(1, report.fit_rows);
   report.fit_cost_nominal = std::sqrt(nominal_cost / fit_n);
-  report.fit_cost_identified = std::sqrt(fit_cost / fit_n);
+  report.fit_cost_identified = std::sqrt(problem.Cost(v) / fit_n);
   std::vector<OmniLog> all = logs;
   all.insert(all.end(), validation.begin(), validation.end());
   report.noise_floor = OmniNoiseFloor(all, nominal.chassis_radius);
@@ -992,7 +1121,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   }
   report.evaluations = problem.evaluations();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  say(6, "done");
+  say(7, "done");
   return report;
 }
 

@@ -23,6 +23,7 @@ NewtonianOmniBackend::NewtonianOmniBackend(std::unique_ptr<OmniEngine> engine,
             Eigen::VectorXd::Zero(m.num_wheels()), Eigen::VectorXd::Zero(m.num_wheels())};
     const double ratio = physics_rate / m.controller.rate_hz;
     r.ticks_per_control = std::max(1, static_cast<int>(std::lround(ratio)));
+    r.index = static_cast<int>(robots_.size());
     robots_.push_back(std::move(r));
   }
   for (int i = 0; i < num_robots(); ++i) Reset(i, Pose2{}, Twist2{});
@@ -130,9 +131,18 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
     }
   }
   if (fx.w_max > 0) c.omega = std::clamp(c.omega, -fx.w_max, fx.w_max);
-  if (fx.LagOf(0) > 0 || fx.LagOf(1) > 0 || fx.LagOf(2) > 0) {
+  if (fx.AnyLag()) {
+    if (fx.lag_field_frame) {
+      // The lagged translation keeps its direction in the field: in the robot's frame it
+      // turns against the robot's own turn over the step.
+      const double turn = -engine_->GetState(r.index).velocity.omega * dt;
+      const double cs = std::cos(turn), sn = std::sin(turn);
+      s.lagged = Twist2{cs * s.lagged.vx - sn * s.lagged.vy, sn * s.lagged.vx + cs * s.lagged.vy, s.lagged.omega};
+    }
     auto follow = [&](int axis, double lagged, double target) {
-      const double tau = fx.LagOf(axis);
+      double tau = fx.LagOf(axis);
+      // Slowing down (the set-point moves towards zero) at braking times the time constant.
+      if ((target - lagged) * lagged < 0) tau *= fx.lag_braking;
       return tau > 0 ? lagged + (1 - std::exp(-dt / tau)) * (target - lagged) : target;
     };
     s.lagged = Twist2{follow(0, s.lagged.vx, c.vx), follow(1, s.lagged.vy, c.vy), follow(2, s.lagged.omega, c.omega)};

@@ -48,10 +48,11 @@ class NewtonianOmniBackend final : public OmniBackend {
     Eigen::VectorXd speeds;     // n, scratch: wheel speeds read this step
     Eigen::VectorXd seen;       // n, scratch: wheel speeds as the firmware believes them
     Eigen::VectorXd net;        // n, scratch: net wheel torques
+    int index = 0;              // in the engine
   };
 
   // The command the firmware acts on at this physics step, after time_delay,
-  // velocity_saturation and motor_lag.
+  // velocity_saturation and motor_lag (its braking and field frame included).
   Twist2 EffectiveCommand(Robot& r, const Twist2& received, bool new_frame, double dt);
   // The encoder speeds the firmware believes (velocity_scale, rotation_drift).
   void SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const;

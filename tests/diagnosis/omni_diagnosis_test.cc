@@ -139,7 +139,7 @@ TEST(OmniEffects, SetAndListRoundTripEveryEffect) {
   OmniEffects e;
   for (const std::string& name : OmniEffectNames()) {
     std::map<std::string, double> p;
-    for (const std::string& key : OmniEffectParameters(name)) p[key] = key == "scale" ? 1.2 : 0.3;
+    for (const std::string& key : OmniEffectParameters(name)) p[key] = key == "scale" ? 1.2 : key == "field_frame" ? 1 : 0.3;
     SetOmniEffect(name, p, &e);
   }
   const auto listed = ListOmniEffects(e);

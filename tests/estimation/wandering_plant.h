@@ -3,6 +3,8 @@
 // through a first-order lag per robot axis, plus driving noise (a Gauss-Markov velocity
 // disturbance in the robot frame, correlated over a few frames), seen by a camera with
 // noise, lost frames and optionally a gap of seconds. No PID, no wheels, no engine.
+// Optionally the real robot's further traits: a lag in the field frame, braking faster
+// than accelerating, a turn-rate limit, a turn when driven sideways, smoothed poses.
 #pragma once
 
 #include <array>
@@ -29,6 +31,12 @@ struct WanderingPlant {
   double gap_seconds = 0;
   double max_speed = 1.2;                        // m/s, of the random commands
   double max_turn = 3;                           // rad/s
+  // What the real SSL robot of issue 40 showed besides (all off by default):
+  bool field_frame_lag = false;    // the lagged translation keeps its direction in the field (momentum)
+  double braking = 1;              // the lag's time constants times this while an axis slows down
+  double turn_limit = 0;           // rad/s, the turn rate the robot reaches at most (0: none)
+  double turn_per_sideways = 0;    // rad/s of turn per m/s of sideways command
+  double camera_smoothing = 0;     // s, the camera's poses through a first-order smoother (a vision filter)
 };
 
 struct PlantRecording {
@@ -41,8 +49,8 @@ struct PlantRecording {
 PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds, std::uint64_t seed);
 
 // `base` (an Omni4) set up to resemble the plant's response (gain and lag per axis, the
-// delay, fast ramps) and its driving noise, but not its structure: a PID-driven body on
-// wheels. The nearest a twinsim model comes to the plant's own model.
+// delay, fast ramps, and the traits above) and its driving noise, but not its structure:
+// a PID-driven body on wheels. The nearest a twinsim model comes to the plant's own model.
 OmniModel ResemblingModel(OmniModel base, const WanderingPlant& plant);
 
 // The constant-velocity extrapolation (no model) at `horizon` frames: RMS position

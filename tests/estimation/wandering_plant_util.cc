@@ -1,5 +1,6 @@
 #include "estimation/wandering_plant.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -46,6 +47,7 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
   double x = 0, y = 0, th = 0;
   std::array<double, 3> v{0, 0, 0}, d{0, 0, 0};
   const double decay = std::exp(-dt / plant.noise_correlation);
+  Pose2 smoothed;  // the camera's smoother, started on the first pose
   for (int f = 0; f < frames; ++f) {
     const double t = f / plant.frame_rate;
     out.truth.push_back(Pose2{x, y, th});
@@ -57,16 +59,34 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
     const bool in_gap = plant.gap_start >= 0 && t >= plant.gap_start && t < plant.gap_start + plant.gap_seconds;
     row.measured = !in_gap && !(f > 1 && normal.Uniform() < plant.drop);
     row.pose = Pose2{x + plant.camera_xy * normal(), y + plant.camera_xy * normal(), th + plant.camera_theta * normal()};
+    if (plant.camera_smoothing > 0) {
+      const double k = f == 0 ? 1 : 1 - std::exp(-1 / (plant.frame_rate * plant.camera_smoothing));
+      smoothed = Pose2{smoothed.x + k * (row.pose.x - smoothed.x), smoothed.y + k * (row.pose.y - smoothed.y),
+                       smoothed.theta + k * (row.pose.theta - smoothed.theta)};
+      row.pose = smoothed;
+    }
     if (!row.measured) row.pose = rows.empty() ? Pose2{} : rows.back().pose;
     rows.push_back(row);
     // One frame of motion under the command sent delay_frames ago.
     const int from = f - plant.delay_frames;
     const std::array<double, 3> acting = from < 0 ? std::array<double, 3>{0, 0, 0} : sent[static_cast<std::size_t>(from)];
     for (int s = 0; s < substeps; ++s) {
+      if (plant.field_frame_lag) {
+        // The translation's lag state stays put in the field while the body turns.
+        const double turn = -(v[2] + d[2]) * dt, cs = std::cos(turn), sn = std::sin(turn);
+        const double vx = v[0];
+        v[0] = cs * vx - sn * v[1];
+        v[1] = sn * vx + cs * v[1];
+      }
+      std::array<double, 3> targets;
+      for (int a = 0; a < 3; ++a) targets[static_cast<std::size_t>(a)] = plant.gain[static_cast<std::size_t>(a)] * acting[static_cast<std::size_t>(a)];
+      targets[2] += plant.turn_per_sideways * acting[1];
+      if (plant.turn_limit > 0) targets[2] = std::clamp(targets[2], -plant.turn_limit, plant.turn_limit);
       for (int a = 0; a < 3; ++a) {
-        const double target = plant.gain[static_cast<std::size_t>(a)] * acting[static_cast<std::size_t>(a)];
-        v[static_cast<std::size_t>(a)] += (1 - std::exp(-dt / plant.lag[static_cast<std::size_t>(a)])) *
-                                          (target - v[static_cast<std::size_t>(a)]);
+        const double target = targets[static_cast<std::size_t>(a)];
+        double& va = v[static_cast<std::size_t>(a)];
+        const double tau = plant.lag[static_cast<std::size_t>(a)] * ((target - va) * va < 0 ? plant.braking : 1);
+        va += (1 - std::exp(-dt / tau)) * (target - va);
         d[static_cast<std::size_t>(a)] = decay * d[static_cast<std::size_t>(a)] +
                                          plant.noise_sd[static_cast<std::size_t>(a)] * std::sqrt(1 - decay * decay) * normal();
       }
@@ -91,6 +111,10 @@ OmniModel ResemblingModel(OmniModel m, const WanderingPlant& plant) {
   m.controller.rotation.slew_rate = 500;
   m.vision_noise_xy = plant.camera_xy;
   m.vision_noise_theta = plant.camera_theta;
+  m.effects.lag_field_frame = plant.field_frame_lag;
+  m.effects.lag_braking = plant.braking;
+  m.effects.w_max = plant.turn_limit;
+  m.effects.turn_per_sideways = plant.turn_per_sideways;
   m.driving_noise.sd = plant.noise_sd;
   m.driving_noise.correlation_time = plant.noise_correlation;
   return m;

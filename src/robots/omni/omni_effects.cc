@@ -34,7 +34,7 @@ std::vector<std::string> OmniEffectParameters(const std::string& name) {
   if (name == "time_delay") return {"delay"};
   if (name == "velocity_saturation") return {"v_max", "w_max"};
   if (name == "traction_limit") return {"a_max"};
-  if (name == "motor_lag") return {"time_constant", "forward", "sideways", "turn"};
+  if (name == "motor_lag") return {"time_constant", "forward", "sideways", "turn", "braking", "field_frame"};
   if (name == "velocity_scale") return {"scale", "forward", "sideways", "turn"};
   if (name == "rotation_drift") return {"rate"};
   if (name == "turn_coupling") return {"forward", "sideways"};
@@ -79,9 +79,20 @@ void SetOmniEffect(const std::string& name, const std::map<std::string, double>&
   } else if (name == "traction_limit") {
     effects->a_max = get("a_max", 0, inf, true);
   } else if (name == "motor_lag") {
-    if (parameters.empty()) throw InputError("effect 'motor_lag': needs time_constant or per-axis time constants");
+    if (!parameters.count("time_constant") && !parameters.count("forward") && !parameters.count("sideways") &&
+        !parameters.count("turn")) {
+      throw InputError("effect 'motor_lag': needs time_constant or per-axis time constants");
+    }
     effects->motor_lag = parameters.count("time_constant") ? get("time_constant", 0, 10, false) : 0;
     for (int a = 0; a < 3; ++a) effects->axis_lag[static_cast<std::size_t>(a)] = parameters.count(kOmniAxisNames[a]) ? get(kOmniAxisNames[a], 0, 10, false) : 0;
+    effects->lag_braking = parameters.count("braking") ? get("braking", 0.05, 20, false) : 1;
+    if (parameters.count("field_frame")) {
+      const double f = parameters.at("field_frame");
+      if (f != 0 && f != 1) throw InputError("effect 'motor_lag': 'field_frame' must be 0 (robot frame) or 1 (field frame)");
+      effects->lag_field_frame = f == 1;
+    } else {
+      effects->lag_field_frame = false;
+    }
   } else if (name == "velocity_scale") {
     if (parameters.empty()) throw InputError("effect 'velocity_scale': needs scale or per-axis scales");
     effects->velocity_scale = parameters.count("scale") ? get("scale", 0.2, 5, false) : 1;
@@ -114,6 +125,8 @@ std::vector<std::pair<std::string, std::map<std::string, double>>> ListOmniEffec
     if (e.motor_lag > 0) p["time_constant"] = e.motor_lag;
     for (int a = 0; a < 3; ++a)
       if (e.axis_lag[static_cast<std::size_t>(a)] > 0) p[kOmniAxisNames[a]] = e.axis_lag[static_cast<std::size_t>(a)];
+    if (e.lag_braking != 1) p["braking"] = e.lag_braking;
+    if (e.lag_field_frame) p["field_frame"] = 1;
     out.push_back({"motor_lag", p});
   }
   if (e.velocity_scale != 1 || e.axis_scale != std::array<double, 3>{1, 1, 1}) {

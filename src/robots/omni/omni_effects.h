@@ -8,6 +8,10 @@
 //                       falling due within a physics step acts for the rest of that step)
 //   velocity_saturation the firmware clips commands to v_max (m/s) and w_max (rad/s)
 //   motor_lag           the command is followed through a first-order lag of `time_constant` s
+//                       (or per axis); `braking` times as long (or short) when the set-point
+//                       moves towards zero on an axis; with `field_frame: 1` the lagged
+//                       velocity keeps its direction in the field while the robot turns
+//                       under it (momentum), so a spinning robot's path bends against the spin
 //   traction_limit      the body's horizontal force is limited to m * a_max: acceleration
 //                       beyond a_max (m/s^2) is lost to slip
 //   velocity_scale      the firmware's wheel radius is wrong: the robot moves `scale` times
@@ -42,6 +46,8 @@ struct OmniEffects {
   double w_max = 0;           // rad/s; 0 = off (velocity_saturation)
   double motor_lag = 0;       // s, time constant of every axis; 0 = off
   std::array<double, 3> axis_lag{0, 0, 0};  // s, motor_lag's forward, sideways, turn where > 0 (over motor_lag)
+  double lag_braking = 1;     // motor_lag's `braking`: time constants times this while slowing down; 1 = as accelerating
+  bool lag_field_frame = false;  // motor_lag's `field_frame`: the lagged translation is held in the field frame
   double a_max = 0;           // m/s^2; 0 = off (traction_limit)
   double velocity_scale = 1;  // 1 = off (at the encoders, every axis)
   std::array<double, 3> axis_scale{1, 1, 1};  // velocity_scale's forward, sideways, turn (on the command); 1 = off
@@ -55,6 +61,7 @@ struct OmniEffects {
   double LagOf(int axis) const {
     return axis_lag[static_cast<std::size_t>(axis)] > 0 ? axis_lag[static_cast<std::size_t>(axis)] : motor_lag;
   }
+  bool AnyLag() const { return LagOf(0) > 0 || LagOf(1) > 0 || LagOf(2) > 0; }
   // True when the per-axis scales or a coupling change the command.
   bool MapsCommand() const {
     return axis_scale != std::array<double, 3>{1, 1, 1} || turn_per_forward != 0 || turn_per_sideways != 0 ||

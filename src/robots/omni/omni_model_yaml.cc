@@ -141,6 +141,10 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
       m.Get("time_constant", &fx.motor_lag, InRange(0, 10));
       for (int a = 0; a < 3; ++a) m.Get(kOmniAxisNames[a], &fx.axis_lag[static_cast<std::size_t>(a)], InRange(0, 10));
       if (!m.Has("time_constant") && !m.Has("forward") && !m.Has("sideways") && !m.Has("turn")) m.Missing("time_constant");
+      m.Get("braking", &fx.lag_braking, InRange(0.05, 20));
+      int field_frame = 0;
+      m.Get("field_frame", &field_frame, InRange(0, 1));
+      fx.lag_field_frame = field_frame == 1;
     });
     effect("traction_limit", [&](YamlMap& m) { m.Require("a_max", &fx.a_max, Positive(1e4)); });
     effect("velocity_scale", [&](YamlMap& m) {

@@ -116,6 +116,67 @@ TEST(OmniEffects, PerAxisLagSlowsOnlyItsAxis) {
   EXPECT_NEAR(slow[15].truth_velocity.vx, plain[15].truth_velocity.vx, 1e-9);  // forward untouched
 }
 
+// braking: 0.3 makes the lag three times quicker when an axis slows down, and leaves
+// speeding up alone.
+TEST(OmniEffects, MotorLagBrakesAtItsOwnTimeConstant) {
+  auto run = [](const OmniModel& base) {
+    OmniModel model = base;
+    model.command_delay_frames = model.vision_delay_frames = 0;
+    CommandSpec spec;
+    spec.type = "sequence";
+    spec.segments = {{2.0, Twist2{0.2, 0, 0}, false}, {1.0, Twist2{0, 0, 0}, false}};
+    std::vector<SimRobot> robots;
+    robots.push_back(SimRobot{"r", model, Pose2{}, MakeCommandSource(spec, 1, 0, 3, Pose2{})});
+    Simulation sim(std::move(robots), MakeOmniBackend("analytic", {model}, FieldModel{}, FrameTiming{}), 1);
+    return sim.Run(91).frames.at(0);
+  };
+  const auto lag = run(With("motor_lag: {time_constant: 0.3}"));
+  const auto brakes = run(With("motor_lag: {time_constant: 0.3, braking: 0.3}"));
+  EXPECT_EQ(With("motor_lag: {time_constant: 0.3, braking: 0.3}").effects.lag_braking, 0.3);
+  for (int k = 0; k < 59; ++k) EXPECT_EQ(brakes[k].truth_velocity.vx, lag[k].truth_velocity.vx) << "frame " << k;
+  // 0.2 s after the stop: the plain lag still holds about exp(-0.2 / 0.3) of the speed,
+  // the braking one far less.
+  EXPECT_GT(lag[66].truth_velocity.vx, 0.08);
+  EXPECT_LT(brakes[66].truth_velocity.vx, 0.5 * lag[66].truth_velocity.vx);
+  EXPECT_NEAR(brakes[89].truth_velocity.vx, 0, 0.004);
+}
+
+// field_frame: 1 holds the lagged velocity still in the field while the robot spins
+// under it. Driven forward at c while turning at w, the lag in the robot's frame obeys
+// dv/dt = (c - v) / tau - w x v, whose steady state is v = c (1, -w tau) / (1 + (w tau)^2):
+// the robot drives slower and off to the side against its spin. In the robot's frame it
+// reaches c straight ahead. On every engine alike.
+TEST(OmniEffects, FieldFrameLagBendsTheDirectionAgainstTheSpin) {
+  const double c = 0.3, w = 3, tau = 0.3;
+  const OmniModel field = With("motor_lag: {time_constant: 0.3, field_frame: 1}");
+  const OmniModel robot = With("motor_lag: {time_constant: 0.3}");
+  EXPECT_TRUE(field.effects.lag_field_frame);
+  const double k = 1 / (1 + w * tau * w * tau);
+  for (const std::string& backend : AvailableOmniBackends()) {
+    if (backend == "learned") continue;
+    SCOPED_TRACE(backend);
+    const Twist2 bent = SteadyVelocity(field, Twist2{c, 0, w}, backend);
+    EXPECT_NEAR(bent.vx, c * k, 0.01);
+    EXPECT_NEAR(bent.vy, -c * w * tau * k, 0.01);
+    EXPECT_NEAR(bent.omega, w, 0.05);
+    const Twist2 straight = SteadyVelocity(robot, Twist2{c, 0, w}, backend);
+    EXPECT_NEAR(straight.vx, c, 0.01);
+    EXPECT_NEAR(straight.vy, 0, 0.01);
+  }
+}
+
+TEST(OmniEffects, MotorLagStructureIsChecked) {
+  EXPECT_THROW(With("motor_lag: {time_constant: 0.1, field_frame: 2}"), InputError);
+  EXPECT_THROW(With("motor_lag: {time_constant: 0.1, braking: 0}"), InputError);
+  EXPECT_THROW(With("motor_lag: {braking: 0.5}"), InputError);  // no time constant to brake with
+  OmniEffects e;
+  EXPECT_THROW(SetOmniEffect("motor_lag", {{"time_constant", 0.1}, {"field_frame", 0.5}}, &e), InputError);
+  SetOmniEffect("motor_lag", {{"forward", 0.1}, {"braking", 0.4}, {"field_frame", 1}}, &e);
+  EXPECT_EQ(e.lag_braking, 0.4);
+  EXPECT_TRUE(e.lag_field_frame);
+  EXPECT_EQ(ListOmniEffects(e).front().second, (std::map<std::string, double>{{"braking", 0.4}, {"field_frame", 1}, {"forward", 0.1}}));
+}
+
 TEST(OmniEffects, UnknownEffectOrParameterIsReported) {
   try {
     With("time_delay: {seconds: 0.1}, friction_creep: {x: 1}");

@@ -47,6 +47,9 @@ void ExpectSameModel(const OmniModel& a, const OmniModel& b) {
   EXPECT_EQ(a.effects.v_max, b.effects.v_max);
   EXPECT_EQ(a.effects.w_max, b.effects.w_max);
   EXPECT_EQ(a.effects.motor_lag, b.effects.motor_lag);
+  EXPECT_EQ(a.effects.axis_lag, b.effects.axis_lag);
+  EXPECT_EQ(a.effects.lag_braking, b.effects.lag_braking);
+  EXPECT_EQ(a.effects.lag_field_frame, b.effects.lag_field_frame);
   EXPECT_EQ(a.effects.a_max, b.effects.a_max);
   EXPECT_EQ(a.effects.velocity_scale, b.effects.velocity_scale);
   EXPECT_EQ(a.effects.rotation_drift, b.effects.rotation_drift);
@@ -165,6 +168,11 @@ TEST(OmniModelYamlWriter, EachEffectAloneRoundTripsAndNoneWritesNoBlock) {
       {"  velocity_saturation: {v_max: 1.7}", [](OmniEffects* e) { e->v_max = 1.7; }},
       {"  velocity_saturation: {w_max: 0.3333333333333333}", [](OmniEffects* e) { e->w_max = 1.0 / 3; }},
       {"  motor_lag: {time_constant: 0.08}", [](OmniEffects* e) { e->motor_lag = 0.08; }},
+      {"  motor_lag: {braking: 0.4, field_frame: 1, forward: 0.11, turn: 0.07}", [](OmniEffects* e) {
+         e->axis_lag = {0.11, 0, 0.07};
+         e->lag_braking = 0.4;
+         e->lag_field_frame = true;
+       }},
       {"  traction_limit: {a_max: 2.5}", [](OmniEffects* e) { e->a_max = 2.5; }},
       {"  velocity_scale: {scale: 0.9}", [](OmniEffects* e) { e->velocity_scale = 0.9; }},
       {"  rotation_drift: {rate: -0.2}", [](OmniEffects* e) { e->rotation_drift = -0.2; }},
