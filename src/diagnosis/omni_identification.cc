@@ -239,7 +239,7 @@ bool ScoredRow(const Segment& s, std::size_t i, bool held_out, int horizon) {
 // prediction starts on a logged frame and constant velocity has two measurements before
 // it, whatever the model.
 HorizonSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* model, bool validation_only,
-                    const OmniIdentificationOptions& options, double radius) {
+                    const OmniIdentificationOptions& options, double radius, int stride = 1) {
   HorizonSum sum;
   for (const Segment& s : segments) {
     if (s.validation != validation_only) continue;
@@ -251,6 +251,7 @@ HorizonSum ScoreHeldOut(const std::vector<Segment>& segments, const OmniModel* m
       o.backend = options.backend;
       o.horizon = options.horizon;
       o.state = options.state;
+      o.stride = stride;
       r = ReplayOmniLog(*model, s.log, o);
     }
     for (std::size_t row = 0; row < r.predicted.size(); ++row) {
@@ -601,13 +602,13 @@ double ProfileDelay(const OmniIdentificationProblem& problem, std::array<double,
 // neighbours), the command sent `delay` (s) earlier, and the nominal and identified
 // models' one-frame predictions from the measured state, for the report's plots over
 // the first stretch of the log (its fit and held-out blocks alike).
-// The held-out blocks' position RMSE (m) at the fit's horizon; infinity where the model
-// diverges.
+// The held-out blocks' position RMSE (m) at the options' horizon, predicted from every
+// options.stride-th frame; infinity where the model diverges.
 double HeldOutRmse(const OmniIdentificationProblem& problem, const std::vector<Segment>& segments,
                    const OmniIdentificationOptions& options, const std::array<double, kNumParams>& v) {
   try {
     const OmniModel model = problem.Build(v);
-    return ScoreHeldOut(segments, &model, false, options, model.chassis_radius).PositionRmse();
+    return ScoreHeldOut(segments, &model, false, options, model.chassis_radius, options.stride).PositionRmse();
   } catch (const CheckFailed&) {
     return std::numeric_limits<double>::infinity();
   }
