@@ -28,6 +28,9 @@ namespace {
 // the tracker for its residuals, its evidence and its refit until its tests are
 // redesigned around the filter's innovations (issue 40).
 constexpr const char* kDiagnosisState = "tracker";
+// The report's every-horizon table, though, is what a user's replay gives: predictions
+// from the observer's estimate, as the contract's replay makes them.
+constexpr const char* kReportState = "observer";
 
 constexpr int kFitStride = 4;     // fits predict from every fourth frame (consecutive predictions overlap)
 constexpr int kMaxCeresIterations = 8;
@@ -607,7 +610,8 @@ double OmniNoiseFloor(const std::vector<OmniLog>& logs, double radius, double* v
 namespace {
 
 // The test-row gap of the given, (identified,) repaired model and the two no-model
-// baselines at the report's horizon, 0.25 s, 1 s and 3 s; a note where the named effects
+// baselines at the report's horizon, 0.25 s, 1 s and 3 s, each model predicting from
+// its observer's estimate (kReportState); a note where the named effects
 // make a longer horizon worse than the model they were added to (they fit the
 // `horizon`-frame prediction, not the motion further ahead).
 void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const OmniModel& start, const OmniModel& repaired,
@@ -631,7 +635,7 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   const double period = problem.data().front().log->frame_period;
   HorizonOptions ho;
   ho.backend = options.backend;
-  ho.state = kDiagnosisState;
+  ho.state = kReportState;
   ho.delay = repaired.TotalDelaySeconds(period);
   ho.radius = given.chassis_radius;
   ho.threads = options.threads;
