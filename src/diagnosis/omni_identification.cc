@@ -598,10 +598,6 @@ double ProfileDelay(const OmniIdentificationProblem& problem, std::array<double,
   return best;
 }
 
-// The robot's body velocity from measured poses (central differences over measured
-// neighbours), the command sent `delay` (s) earlier, and the nominal and identified
-// models' one-frame predictions from the measured state, for the report's plots over
-// the first stretch of the log (its fit and held-out blocks alike).
 // The held-out blocks' position RMSE (m) at the options' horizon, predicted from every
 // options.stride-th frame; infinity where the model diverges.
 double HeldOutRmse(const OmniIdentificationProblem& problem, const std::vector<Segment>& segments,
@@ -690,6 +686,10 @@ void ChooseLagStructures(const OmniIdentificationProblem& lookahead, const std::
   decide(kBraking, trial);
 }
 
+// The robot's body velocity from measured poses (central differences over measured
+// neighbours), the command sent `delay` (s) earlier, and the nominal and identified
+// models' one-frame predictions from the measured state, for the report's plots over
+// the first stretch of the log (its fit and held-out blocks alike).
 OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal, const OmniModel& identified,
                                     const OmniIdentificationOptions& options, double delay) {
   OmniIdentificationSeries s;
@@ -803,6 +803,9 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   for (int p : {kSlewX, kSlewY, kSlewW}) {
     if (v[static_cast<std::size_t>(p)] <= 0) v[static_cast<std::size_t>(p)] = kSpecs[p].upper;
   }
+  // The lag's structures start off, whatever the given model has: the logs choose them (step 5).
+  v[kBraking] = 1;
+  v[kFieldFrame] = 0;
   const double nominal_cost = problem.Cost(nominal_values);
   if (!std::isfinite(nominal_cost)) throw CheckFailed("the model as given diverges on the logs");
 
