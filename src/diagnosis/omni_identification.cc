@@ -834,6 +834,12 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   const double speed_scale = std::max({most[0], most[1], 1e-9});
   const bool excited[3] = {most[0] > 0.02 * speed_scale && most[0] > 0.01, most[1] > 0.02 * speed_scale && most[1] > 0.01,
                            most[2] > 0.02};
+  if (!excited[0] && !excited[1] && !excited[2]) {
+    throw InputError(SourceLocation{logs.front().path, 1},
+                     "the robot is never commanded to move in the fit blocks (every command under 1 cm/s and "
+                     "0.02 rad/s): a log of a robot that stood still says nothing of its response (is --robot the "
+                     "one that drove?)");
+  }
   std::map<int, std::string> pruned;
   for (int a = 0; a < 3; ++a) {
     if (excited[a]) continue;

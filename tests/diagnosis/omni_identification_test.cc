@@ -337,6 +337,31 @@ TEST(OmniNoiseFloor, RightOnLogsWithRepeatedFrames) {
   EXPECT_NEAR(std::sqrt(var_theta), how.noise_theta, 0.25 * how.noise_theta);
 }
 
+// A robot that stood still (or the wrong --robot): nothing of its response is in the
+// log. Refused with a message that says so, never an abort inside the solver.
+TEST(OmniIdentification, RefusesALogWhereNothingMoves) {
+  std::vector<OmniLogRow> rows;
+  for (int i = 0; i < 1200; ++i) {
+    OmniLogRow r;
+    r.t = i / 60.0;
+    r.measured = true;
+    r.pose = Pose2{1e-4 * std::sin(0.7 * i), 1e-4 * std::cos(1.3 * i), 1e-3 * std::sin(2.1 * i)};
+    rows.push_back(r);
+  }
+  const OmniLog still = ParseOmniLog(FormatOmniLog(rows), "still.csv");
+  for (const char* state : {"observer", "tracker"}) {
+    SCOPED_TRACE(state);
+    OmniIdentificationOptions options;
+    options.state = state;
+    try {
+      IdentifyOmni(testing::Omni4(), {still}, {}, options, nullptr);
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("never commanded to move"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(OmniIdentification, RefusesLogsTooShortToHoldOut) {
   testing::OmniRecording how;
   how.backend = "analytic";
