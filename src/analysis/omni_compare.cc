@@ -113,6 +113,10 @@ std::string OmniCompareResult::FullReport() const {
       out << "note: " << r.source << " at " << r.horizon << ": the learned predictor left the range of its training data on "
           << r.bounded_steps << " steps, each held to " << kBoundFactor << "x the largest step it was trained on\n";
     }
+    if (r.unseen_input_steps > 0) {
+      out << "note: " << r.source << " at " << r.horizon << ": on " << r.unseen_input_steps
+          << " steps the learned predictor's inputs lay beyond its training data's range (extrapolation)\n";
+    }
   }
   return out.str();
 }
@@ -210,6 +214,7 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
 
       CompareErrorRow row = MeasurePredictionErrors(log, result);
       row.bounded_steps = result.bounded_steps;
+      row.unseen_input_steps = result.unseen_input_steps;
       row.source = source.label;
       row.backend = source.backend;
       row.horizon = HorizonLabel(k, frame_rate);

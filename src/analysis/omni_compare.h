@@ -59,6 +59,7 @@ struct CompareErrorRow {
   double position_max = 0;    // m
   double heading_rmse = 0;    // rad, differences wrapped to [-pi, pi)
   long bounded_steps = 0;     // learned: steps held to the predictor's training bounds
+  long unseen_input_steps = 0;  // learned: steps whose inputs left the training range
 };
 
 // One source's free run: the predicted pose at every log row (row 0 is the measurement).

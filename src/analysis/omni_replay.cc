@@ -246,6 +246,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
         out.predicted[it->second] = true;
       }
       out.bounded_steps = backend->bounded_steps();
+      out.unseen_input_steps = backend->unseen_input_steps();
       return out;
     }
     auto target = row_of_frame.find(f + k);
@@ -267,6 +268,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   }
   if (progress) progress(static_cast<int>(n), static_cast<int>(n));
   out.bounded_steps = backend->bounded_steps();
+  out.unseen_input_steps = backend->unseen_input_steps();
   return out;
 }
 

@@ -69,6 +69,9 @@ struct OmniReplayResult {
   // Learned backend: steps on which the predictor was held to the bounds of its training
   // data (it left what it learned); the user is told.
   long bounded_steps = 0;
+  // Learned backend: steps whose inputs lay beyond anything in its training data
+  // (InputsSeen): its predictions there are extrapolation; the user is told.
+  long unseen_input_steps = 0;
   int num_predicted() const;
 };
 

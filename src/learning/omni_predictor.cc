@@ -125,11 +125,20 @@ Pose2 BoundStep(const OmniPredictorInfo& info, const Pose2& from, const Pose2& t
   return ApplyDelta(from, d);
 }
 
-Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands) const {
+bool InputsSeen(const OmniPredictorInfo& info, const double* inputs) {
+  for (std::size_t i = 0; i < info.input_low.size(); ++i) {
+    const double margin = kInputMargin * (info.input_high[i] - info.input_low[i]) + 1e-9;
+    if (!(inputs[i] >= info.input_low[i] - margin && inputs[i] <= info.input_high[i] + margin)) return false;
+  }
+  return true;
+}
+
+Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, bool* unseen) const {
   if (residual())
     throw std::logic_error("OmniPredictor::Predict: a residual predictor needs its nominal model's track");
   InputBuffer x(info_.layout.num_inputs());
   EncodeInputs(info_.layout, poses, commands, x.data());
+  if (unseen) *unseen = !InputsSeen(info_, x.data());
   return ApplyDelta(poses[info_.layout.history - 1], PredictDelta(x.data()));
 }
 
@@ -140,29 +149,31 @@ NominalOmniTrack OmniPredictor::MakeNominalTrack(const OmniModel& model) const {
 }
 
 Pose2 OmniPredictor::Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity,
-                               const Pose2& nominal_end, const std::vector<Eigen::Vector3d>& errors) const {
+                               const Pose2& nominal_end, const std::vector<Eigen::Vector3d>& errors,
+                               bool* unseen) const {
   InputBuffer x(info_.layout.num_inputs());
   const Eigen::Vector3d nominal =
       EncodeResidualInputs(info_.layout, poses, commands, nominal_end, nominal_velocity, errors, x.data());
+  if (unseen) *unseen = !InputsSeen(info_, x.data());
   return ApplyDelta(poses[info_.layout.history - 1], nominal + PredictDelta(x.data()));
 }
 
-Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const {
-  if (!residual()) return Predict(poses, commands);
+Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen) const {
+  if (!residual()) return Predict(poses, commands, unseen);
   const FeatureLayout& layout = info_.layout;
   const Twist2 velocity = track->velocity();
   const Pose2 end = track->Lookahead(commands + layout.history - 1, layout.horizon);
-  return Corrected(poses, commands, velocity, end, track->errors());
+  return Corrected(poses, commands, velocity, end, track->errors(), unseen);
 }
 
-Pose2 OmniPredictor::Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const {
+Pose2 OmniPredictor::Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen) const {
   const FeatureLayout& layout = info_.layout;
   if (layout.horizon != 1) throw std::logic_error("OmniPredictor::Step: a 1-frame predictor is needed");
-  if (!residual()) return Predict(poses, commands);
+  if (!residual()) return Predict(poses, commands, unseen);
   const Twist2 velocity = track->velocity();
   const std::vector<Eigen::Vector3d> errors = track->errors();  // before the step shifts them
   const Pose2 end = track->Step(commands[layout.history - 1]);
-  const Pose2 next = Corrected(poses, commands, velocity, end, errors);
+  const Pose2 next = Corrected(poses, commands, velocity, end, errors, unseen);
   // A prediction the nominal model cannot be put at (not finite, or faster than any
   // robot: 50 m/s, 1000 rad/s) has run away; say so before an engine chokes on it.
   const Pose2& now = poses[layout.history - 1];
@@ -234,6 +245,10 @@ void OmniPredictor::Save(const std::string& path) const {
     out << YAML::Key << "bounds" << YAML::Value << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "max_step" << YAML::Value << info_.max_step;
     out << YAML::Key << "max_turn" << YAML::Value << info_.max_turn;
+    if (!info_.input_low.empty()) {
+      out << YAML::Key << "input_low" << YAML::Value << YAML::Flow << info_.input_low;
+      out << YAML::Key << "input_high" << YAML::Value << YAML::Flow << info_.input_high;
+    }
     out << YAML::EndMap;
   }
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
@@ -287,6 +302,12 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
     YamlMap b(top.Child("bounds"), path, "bounds", &errors);
     b.Require("max_step", &info.max_step, Positive());
     b.Require("max_turn", &info.max_turn, NonNegative());
+    const int n = info.layout.num_inputs();
+    if (b.Has("input_low") || b.Has("input_high")) {  // optional: files from before have none
+      b.Get("input_low", &info.input_low, n);
+      b.Get("input_high", &info.input_high, n);
+      if (info.input_low.size() != info.input_high.size()) b.Missing(info.input_low.empty() ? "input_low" : "input_high");
+    }
     b.Finish();
   }
   errors.ThrowIfAny();
@@ -530,6 +551,15 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     split.push_back(std::move(part));
   }
   info.samples = train.rows() + validation.rows();
+  // The inputs' range over the training windows.
+  if (train.rows() > 0) {
+    info.input_low.resize(static_cast<std::size_t>(train.x.cols()));
+    info.input_high.resize(static_cast<std::size_t>(train.x.cols()));
+    for (long j = 0; j < train.x.cols(); ++j) {
+      info.input_low[static_cast<std::size_t>(j)] = train.x.col(j).minCoeff();
+      info.input_high[static_cast<std::size_t>(j)] = train.x.col(j).maxCoeff();
+    }
+  }
   // The bounds: the largest pose change over the horizon between measured frames.
   for (const SplitLog& part : split) {
     const FrameSequence& seq = part.seq;

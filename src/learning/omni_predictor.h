@@ -56,6 +56,10 @@ struct OmniPredictorInfo {
   // (m and rad, camera noise included); 0 where unknown (a file from before issue 40).
   // The learned backend holds a step to kBoundFactor times these (BoundStep).
   double max_step = 0, max_turn = 0;
+  // Each input's lowest and highest value over the training windows (num_inputs() each);
+  // empty where unknown (a file from before). A window with an input beyond them by more
+  // than kInputMargin of their span is one the predictor never saw the like of.
+  std::vector<double> input_low, input_high;
   // Residual predictors (layout.residual) only:
   std::string nominal_engine;       // the engine of the model it corrects: analytic, ode, bullet
   int nominal_substeps = 0;         // that model's physics steps per frame
@@ -64,6 +68,13 @@ struct OmniPredictorInfo {
 
 // How far beyond anything its training logs showed a learned step may go.
 inline constexpr double kBoundFactor = 1.5;
+// How far beyond the training inputs' range (a share of its span) an input may lie
+// before the window counts as unseen.
+inline constexpr double kInputMargin = 0.25;
+
+// True when every input lies within `info`'s training range widened by kInputMargin of
+// its span (true when the range is unknown).
+bool InputsSeen(const OmniPredictorInfo& info, const double* inputs);
 
 // The pose H frames after `from` that `to` predicts, held to `info`'s bounds: a
 // translation longer than kBoundFactor * max_step is shortened along its direction, a
@@ -81,18 +92,19 @@ class OmniPredictor {
 
   // The pose H frames after poses.back(), from `history` poses and num_commands()
   // acting commands (omni_features.h). Throws std::logic_error for a residual predictor,
-  // which needs its track (below).
-  Pose2 Predict(const Pose2* poses, const Twist2* commands) const;
+  // which needs its track (below). With `unseen`, sets it to whether the inputs left the
+  // training range (InputsSeen); so do the calls below.
+  Pose2 Predict(const Pose2* poses, const Twist2* commands, bool* unseen = nullptr) const;
 
   // Residual predictors: the model they correct, ready to be carried along the poses
   // (Reset, then Step and Correct each frame). `model` must have passed CheckUse().
   NominalOmniTrack MakeNominalTrack(const OmniModel& model) const;
   // The pose H frames after poses.back(), `track` standing at that pose (corrected to
   // it); the track is left as it was.
-  Pose2 Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const;
+  Pose2 Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen = nullptr) const;
   // H = 1 on its own: the next pose, and `track` moved on to it (stepped and corrected),
   // ready for the next call. Throws CheckFailed when the nominal model runs away.
-  Pose2 Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track) const;
+  Pose2 Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen = nullptr) const;
 
   // Throws InputError naming the file when the predictor was trained for another
   // robot model, frame rate (more than 1 % off) or horizon, or (residual) over a model
@@ -121,7 +133,7 @@ class OmniPredictor {
   // H frames after poses[history - 1], corrected; `nominal_velocity` and `errors` are the
   // model's at poses[history - 1].
   Pose2 Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity, const Pose2& nominal_end,
-                  const std::vector<Eigen::Vector3d>& errors) const;
+                  const std::vector<Eigen::Vector3d>& errors, bool* unseen) const;
 
   Mlp mlp_;
   Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs

@@ -119,6 +119,9 @@ class OmniBackend {
   // predictor to the bounds of its training data, since construction (Save and Restore
   // leave it); 0 for physics.
   virtual long bounded_steps() const { return 0; }
+  // Steps whose inputs a learned backend's predictor never saw the like of in training
+  // (learning/omni_predictor.h, InputsSeen), counted the same way; 0 for physics.
+  virtual long unseen_input_steps() const { return 0; }
 
   virtual OmniBackendState Save() const = 0;
   virtual void Restore(const OmniBackendState& state) = 0;

@@ -151,6 +151,9 @@ TEST_F(PredictorFiles, TrainingRecordsTheRobotsBoundsAndTheFileKeepsThem) {
   const OmniPredictor q = OmniPredictor::Load(dir + "/p.pred");
   EXPECT_EQ(q.info().max_step, p.info().max_step);
   EXPECT_EQ(q.info().max_turn, p.info().max_turn);
+  EXPECT_EQ(q.info().input_low.size(), static_cast<std::size_t>(p.info().layout.num_inputs()));
+  EXPECT_EQ(q.info().input_low, p.info().input_low);
+  EXPECT_EQ(q.info().input_high, p.info().input_high);
   std::string text = testing::ReadText(dir + "/p.pred");
   const std::size_t at = text.find("bounds:");
   ASSERT_NE(at, std::string::npos);
@@ -173,9 +176,13 @@ TEST(LearnedBounds, APredictorOutsideItsTrainingIsHeldAndCounted) {
   o.backend = "learned";
   o.backend_options.predictor = p;
   o.horizon = 1;
-  EXPECT_EQ(ReplayOmniLog(m, slow, o).bounded_steps, 0);
+  const OmniReplayResult within = ReplayOmniLog(m, slow, o);
+  EXPECT_EQ(within.bounded_steps, 0);
+  EXPECT_EQ(within.unseen_input_steps, 0);
   const OmniReplayResult free = ReplayOmniStretch(m, fast, o, 40, fast.rows.size());
   EXPECT_GT(free.bounded_steps, 10);
+  // Its inputs (speeds and commands four times the trained ones) are beyond its range.
+  EXPECT_GT(free.unseen_input_steps, free.bounded_steps);
   for (std::size_t i = 41; i < fast.rows.size(); ++i) {
     if (!free.predicted[i] || !free.predicted[i - 1]) continue;
     const double step = std::hypot(free.pose[i].x - free.pose[i - 1].x, free.pose[i].y - free.pose[i - 1].y);
@@ -193,6 +200,7 @@ TEST(LearnedBounds, APredictorOutsideItsTrainingIsHeldAndCounted) {
   ASSERT_EQ(fast_run.exit_code, 0) << fast_run.err;
   EXPECT_NE(fast_run.err.find("warning: the learned predictor left the range of its training data on"), std::string::npos)
       << fast_run.err;
+  EXPECT_NE(fast_run.err.find("lay beyond anything in its training data"), std::string::npos) << fast_run.err;
   const auto slow_run = testing::RunTwinsim(args + dir + "/slow.csv");
   ASSERT_EQ(slow_run.exit_code, 0) << slow_run.err;
   EXPECT_EQ(slow_run.err.find("warning"), std::string::npos) << slow_run.err;

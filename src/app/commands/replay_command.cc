@@ -94,6 +94,12 @@ int Replay(const ReplayOptions& options) {
                  "%.1fx the largest step it was trained on\n",
                  result.bounded_steps, kBoundFactor);
   }
+  if (result.unseen_input_steps > 0) {
+    std::fprintf(stderr,
+                 "warning: on %ld steps the learned predictor's inputs (poses, speeds, commands) lay beyond anything in "
+                 "its training data (by more than %.0f %% of their range): its predictions there are extrapolation\n",
+                 result.unseen_input_steps, 100 * kInputMargin);
+  }
   OutputFiles files;
   WritePoseCsv(options.out, result.t, result.pose);
   files.Add(options.out);

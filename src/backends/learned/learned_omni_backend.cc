@@ -53,10 +53,13 @@ class LearnedOmniBackend final : public OmniBackend {
       OmniRobotState& s = At(i);
       s.command_history.erase(s.command_history.begin());
       s.command_history.push_back(commands[static_cast<std::size_t>(i)]);
+      bool unseen = false;
       const Pose2 predicted =
           tracks_.empty()
-              ? predictor_->Predict(s.pose_history.data(), s.command_history.data())
-              : predictor_->Step(s.pose_history.data(), s.command_history.data(), &tracks_[static_cast<std::size_t>(i)]);
+              ? predictor_->Predict(s.pose_history.data(), s.command_history.data(), &unseen)
+              : predictor_->Step(s.pose_history.data(), s.command_history.data(), &tracks_[static_cast<std::size_t>(i)],
+                                 &unseen);
+      unseen_steps_ += unseen ? 1 : 0;
       // A predictor outside what it learned (speeds, inputs) is held to the robot's
       // bounds seen in training instead of running away (learning/omni_predictor.h).
       bool bounded = false;
@@ -84,6 +87,7 @@ class LearnedOmniBackend final : public OmniBackend {
   }
 
   long bounded_steps() const override { return bounded_steps_; }
+  long unseen_input_steps() const override { return unseen_steps_; }
 
   OmniBackendState Save() const override {
     OmniBackendState state{robots_};
@@ -111,6 +115,7 @@ class LearnedOmniBackend final : public OmniBackend {
   std::vector<OmniRobotState> robots_;
   std::vector<NominalOmniTrack> tracks_;  // a residual predictor's nominal model per robot; empty otherwise
   long bounded_steps_ = 0;
+  long unseen_steps_ = 0;  // steps whose inputs left the training range
 };
 
 }  // namespace
