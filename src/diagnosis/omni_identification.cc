@@ -96,7 +96,8 @@ constexpr double kLeadInSeconds = 3;   // s, ... each after a lead-in this long,
 // A structure of the lag (field frame, braking) is kept where it predicts the held-out
 // blocks this much better at the lookahead (a share of their RMSE) ...
 constexpr double kStructureGain = 0.01;
-constexpr double kStructureTolerance = 0.005;  // ... and at K frames no worse than this
+// ... and at K frames no worse than this (also what the final joint fit may lose there).
+constexpr double kStructureTolerance = 0.005;
 // The lag's structures and the speed limits, which a K-frame prediction hardly sees, are
 // chosen on predictions this far ahead (the lookahead).
 constexpr double kLookaheadSeconds = 0.25;
@@ -283,23 +284,20 @@ class OmniIdentificationProblem {
   // segment order; the segments replayed in parallel. Throws CheckFailed when the model
   // diverges.
   std::vector<OmniPoseErrors> Errors(const OmniModel& model, bool held_out, int stride) const {
-    return Errors(model, held_out, stride, options_.horizon);
-  }
-  std::vector<OmniPoseErrors> Errors(const OmniModel& model, bool held_out, int stride, int horizon) const {
     std::vector<OmniPoseErrors> out(segments_.size());
     ParallelFor(static_cast<int>(segments_.size()), options_.threads, [&](int k) {
       const Segment& s = segments_[static_cast<std::size_t>(k)];
       if (!held_out && s.validation) return;
       OmniReplayOptions o;
       o.backend = options_.backend;
-      o.horizon = horizon;
+      o.horizon = options_.horizon;
       o.state = options_.state;
       o.stride = stride;
       const OmniPoseErrors all = PoseErrorsInRobotFrame(s.log, ReplayOmniLog(model, s.log, o), nominal_.chassis_radius);
       OmniPoseErrors& kept = out[static_cast<std::size_t>(k)];
       for (std::size_t r = 0; r < all.rows.size(); ++r) {
         const std::size_t row = all.rows[r];
-        if (!ScoredRow(s, row, held_out, horizon)) continue;
+        if (!ScoredRow(s, row, held_out, options_.horizon)) continue;
         kept.rows.push_back(row);
         kept.e.push_back(all.e[r]);
       }
