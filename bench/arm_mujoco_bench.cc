@@ -33,6 +33,7 @@
 #include <string>
 
 #include "core/rng.h"
+#include "diagnosis/mujoco_arm_plant.h"
 #include "engines/arm_engine.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_integrators.h"
@@ -41,39 +42,9 @@
 namespace twinsim {
 namespace {
 
-constexpr double kStep = 1e-3;  // s
+using testing::ArmUrdf;
 
-// URDF of `model` (its joint table as it is, inertials about the centre of mass),
-// readable by urdfdom and by MuJoCo: the same text loads on both sides.
-std::string ArmUrdf(const ArmModel& model) {
-  std::ostringstream out;
-  out.precision(17);
-  auto origin = [&](const Eigen::Vector3d& xyz, const Eigen::Matrix3d& r) {
-    const Eigen::Vector3d ypr = r.eulerAngles(2, 1, 0);  // URDF's rpy: R = Rz(y) Ry(p) Rx(r)
-    out << "<origin xyz=\"" << xyz.x() << " " << xyz.y() << " " << xyz.z() << "\" rpy=\"" << ypr[2] << " "
-        << ypr[1] << " " << ypr[0] << "\"/>";
-  };
-  out << "<?xml version=\"1.0\"?>\n<robot name=\"" << model.name << "\">\n<link name=\"base\"/>\n";
-  std::string parent = "base";
-  for (int i = 0; i < model.dof(); ++i) {
-    const ArmJoint& j = model.joints[static_cast<std::size_t>(i)];
-    const std::string link = "link" + std::to_string(i + 1);
-    const Eigen::Matrix3d& in = j.child.inertia;
-    out << "<link name=\"" << link << "\"><inertial>";
-    origin(j.child.com, Eigen::Matrix3d::Identity());
-    out << "<mass value=\"" << j.child.mass << "\"/><inertia ixx=\"" << in(0, 0) << "\" iyy=\"" << in(1, 1)
-        << "\" izz=\"" << in(2, 2) << "\" ixy=\"" << in(0, 1) << "\" ixz=\"" << in(0, 2) << "\" iyz=\"" << in(1, 2)
-        << "\"/></inertial></link>\n";
-    out << "<joint name=\"" << j.name << "\" type=\"" << (j.type == JointType::kRevolute ? "revolute" : "prismatic")
-        << "\"><parent link=\"" << parent << "\"/><child link=\"" << link << "\"/>";
-    origin(j.origin.translation(), j.origin.linear());
-    out << "<axis xyz=\"" << j.axis.x() << " " << j.axis.y() << " " << j.axis.z() << "\"/><limit lower=\"" << j.lower
-        << "\" upper=\"" << j.upper << "\" effort=\"100\" velocity=\"10\"/></joint>\n";
-    parent = link;
-  }
-  out << "</robot>\n";
-  return out.str();
-}
+constexpr double kStep = 1e-3;  // s
 
 // The KUKA's URDF without its meshes and visual or collision geometry (MuJoCo would look
 // for the mesh files) and with one <origin> per joint, or "" when ../shared is absent.

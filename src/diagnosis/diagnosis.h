@@ -80,6 +80,7 @@ struct DiagnosisCandidate {
   double information_gain = 0;               // n_eff ln(MSE before / after) - 2 k; > 0 to be added
   bool selected = false;
   std::string harm;                          // the joint or axis it makes significantly worse, if any: not added
+  std::string veto;                          // passed on the selection rows but made the test rows worse: not added
   std::string note;                          // why it could not be fitted, when it could not
 };
 

@@ -257,6 +257,7 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["information_gain"] = std::isfinite(c.information_gain) ? ordered_json(c.information_gain) : ordered_json(nullptr);
     x["selected"] = c.selected;
     if (!c.harm.empty()) x["harm"] = c.harm;
+    if (!c.veto.empty()) x["veto"] = c.veto;
     if (!c.note.empty()) x["note"] = c.note;
     candidates.push_back(x);
   }
@@ -555,7 +556,7 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
       << "</td><td>" << HtmlEscape(ParameterText(c.parameters)) << "</td><td>" << Num(c.fit_gap) << "</td><td>"
       << Num(c.held_out_gap) << "</td><td>" << (std::isfinite(c.reduction) ? Num(100 * c.reduction, "%.2f") + " %" : "")
       << "</td><td>" << Num(c.t_statistic, "%.1f") << "</td><td>" << Num(c.p_value, "%.2g") << (c.significant ? " *" : "")
-      << "</td><td>" << Num(c.information_gain, "%.1f") << "</td><td>" << (c.selected ? "added" : HtmlEscape(c.note.empty() ? c.harm : c.note))
+      << "</td><td>" << Num(c.information_gain, "%.1f") << "</td><td>" << (c.selected ? "added" : HtmlEscape(!c.note.empty() ? c.note : (!c.veto.empty() ? c.veto : c.harm)))
       << "</td></tr>\n";
   }
   h << "</table>\n<p class=\"small\">* significant after Holm's correction over the round.</p>\n";

@@ -165,13 +165,21 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
         // Effects the problem holds while scoring (HeldWhileScoring) keep their fit; a
         // candidate that removes nothing on its own is not refitted jointly (it would
         // rarely pass, and the joint fits are most of a round's time).
+        // A candidate on a joint an added effect already acts on is always refitted with
+        // it: the added one may have taken its share (Coulomb friction chosen first
+        // absorbs most of a viscous term; viscous fitted with Coulomb held then gains
+        // nothing and would never be refitted beside it). Effects of the whole robot
+        // (joint -1: a payload, every omni effect) share with everything, and a joint
+        // refit beside them would credit the candidate with their refinement.
         const int parameters = static_cast<int>(trial.back().parameters.size());
         Score s = Compare(current_residuals, r, bandwidth, parameters, effective_rows);
         std::vector<int> refit;
+        bool shares = false;
         for (std::size_t m = 0; m < trial.size(); ++m) {
           if (m + 1 == trial.size() || !problem.HeldWhileScoring(trial[m])) refit.push_back(static_cast<int>(m));
+          shares = shares || (m + 1 < trial.size() && trial.back().joint >= 0 && trial[m].joint == trial.back().joint);
         }
-        if (s.reduction > 0 && refit.size() > 1) {
+        if ((s.reduction > 0 || shares) && refit.size() > 1) {
           try {
             std::vector<TrialEffect> joint = problem.Fit(trial, refit);
             SquaredResiduals rj = problem.Evaluate(joint);
@@ -220,30 +228,51 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
       return c.note.empty() && !harms[k] && c.reduction >= options.min_improvement && c.information_gain > 0 &&
              (significant[k] || strong);
     };
-    // The largest information gain among the candidates that pass (one that fails the
-    // test must not hide another that passes); ties go to the earlier candidate.
-    std::size_t best = tried.size();
+    // The candidates that pass, by information gain (one that fails the test must not
+    // hide another that passes); ties go to the earlier candidate.
+    std::vector<std::size_t> order;
     for (std::size_t k = 0; k < tried.size(); ++k) {
       tried[k].significant = significant[k];
-      if (passes_test(k) && (best == tried.size() || tried[k].information_gain > tried[best].information_gain)) best = k;
+      if (passes_test(k)) order.push_back(k);
     }
-    const bool passes = best < tried.size();
-    if (passes) {
-      DiagnosisCandidate& winner = tried[best];
-      winner.selected = true;
-      const std::string evidence = RoundEvidence(tried, winner, tested);
-      std::vector<TrialEffect> next = fitted[best];
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return tried[a].information_gain > tried[b].information_gain; });
+    // The best of them, all added effects refitted with it, unless that makes the test
+    // rows worse: the test rows choose nothing, but they veto. An effect that fits the
+    // fit and selection rows and not the rows neither saw is fitted to something else
+    // (the noise's peaks, a derivative filter's error); it is reported, never added.
+    std::size_t best = tried.size();
+    std::vector<TrialEffect> next;
+    SquaredResiduals r;
+    for (std::size_t k : order) {
+      next = fitted[k];
       std::vector<int> all(next.size());
-      for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<int>(k);
+      for (std::size_t m = 0; m < all.size(); ++m) all[m] = static_cast<int>(m);
       // Refit every added effect together, a single one too (one more refinement from
       // where it stands): the next round's candidates, scored with a joint refit, must
       // not be credited with what more refinement of these alone would have found.
       try {
         next = problem.Fit(next, all);
       } catch (const std::exception&) {
-        next = fitted[best];  // the joint refit failed: keep the one-at-a-time fit
+        next = fitted[k];  // the joint refit failed: keep the one-at-a-time fit
       }
-      SquaredResiduals r = problem.Evaluate(next);
+      r = problem.Evaluate(next);
+      const double test_before = Mean(current_residuals.test), test_after = Mean(r.test);
+      if (test_after > test_before) {
+        char why[200];
+        std::snprintf(why, sizeof why, "vetoed: it makes the test rows worse (gap %s -> %s)",
+                      FormatParameter(problem.Gap(test_before)).c_str(), FormatParameter(problem.Gap(test_after)).c_str());
+        tried[k].veto = why;
+        continue;
+      }
+      best = k;
+      break;
+    }
+    const bool passes = best < tried.size();
+    if (passes) {
+      DiagnosisCandidate& winner = tried[best];
+      winner.selected = true;
+      const std::string evidence = RoundEvidence(tried, winner, tested);
       const double test_before = problem.Gap(Mean(current_residuals.test));
       current = next;
       test_reductions.push_back(test_before > 0 ? (test_before - problem.Gap(Mean(r.test))) / test_before : 0.0);
@@ -499,6 +528,13 @@ void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& sel
   y.available = !repaired.learned.empty();
   y.nominal = ChannelGap(problem, nominal.learned);
   y.repaired = ChannelGap(problem, repaired.learned);
+  // A learned correction that predicts the test rows worse than the nominal model alone
+  // learned nothing it can stand for (on EMPS: 345.8 against 46.96): not trained.
+  if (y.available && std::isfinite(y.nominal) && y.nominal > report->gap_before) {
+    y.available = false;
+    y.learner += ", which predicts the test rows worse than the nominal model alone (" + FormatParameter(y.nominal) +
+                 " against " + FormatParameter(report->gap_before) + "): counted as not trained";
+  }
   double best = std::min(report->gap_before, report->gap_after);
   for (double g : {y.nominal, y.repaired}) {
     if (std::isfinite(g)) best = std::min(best, g);
