@@ -21,7 +21,9 @@
 #include "diagnosis/arm_diagnosis.h"
 #include "diagnosis/diagnosis_plants.h"
 #include "diagnosis/diagnosis_report.h"
+#include "diagnosis/mujoco_arm_plant.h"
 #include "diagnosis/omni_diagnosis.h"
+#include "robots/arm/arm_effects.h"
 #include "robots/arm/arm_model.h"
 #include "test_util.h"
 
@@ -41,7 +43,7 @@ int EnvInt(const char* name, int fallback) {
 }
 
 struct StudyRun {
-  std::string robot;     // arm | omni
+  std::string robot;     // arm | omni | arm_mujoco (the plant from elsewhere)
   std::string kind;      // effect name, "clean", or an out-of-vocabulary label
   int seed = 1;
 };
@@ -161,6 +163,65 @@ Hidden DrawArm(const std::string& kind, int seed) {
   return h;
 }
 
+// The MuJoCo plant (mujoco_arm_plant.h, issue 41): the effect as a torque on the joint
+// beside the motor's (a payload as mass on the last link), sizes drawn off any grid.
+struct ForeignHidden {
+  Hidden h;
+  testing::HiddenArmTorque torque;  // empty: none
+  std::string payload;             // a payload the plant's links carry
+};
+
+ForeignHidden DrawForeign(const std::string& kind, int seed) {
+  Rng rng(0x4d4a + 7919 * static_cast<std::uint64_t>(seed) + NameHash(kind) % 1000);
+  ForeignHidden f;
+  Hidden& h = f.h;
+  if (kind == "clean") return f;
+  h.name = kind;
+  h.joint = static_cast<int>(rng.Index(3));
+  std::function<double(double, double)> t;
+  if (kind == "viscous_friction") {
+    const double b = rng.Uniform(0.2, 1.5);
+    t = [b](double, double qd) { return -b * qd; };
+    h.description = "b = " + Fmt(b);
+  } else if (kind == "coulomb_friction") {
+    const double c = rng.Uniform(0.3, 1.5);
+    t = [c](double, double qd) { return qd > 0 ? -c : (qd < 0 ? c : 0.0); };
+    h.description = "c = " + Fmt(c);
+  } else if (kind == "torque_offset") {
+    const double tau0 = (rng.Uniform() < 0.5 ? -1 : 1) * rng.Uniform(0.3, 1.5);
+    t = [tau0](double, double) { return tau0; };
+    h.description = "tau0 = " + Fmt(tau0);
+  } else if (kind == "payload") {
+    h.joint = -1;
+    f.payload = "  - {name: payload, joint: null, mass: " + Fmt(rng.Uniform(0.3, 1.5)) + ", x: " + Fmt(rng.Uniform(0.2, 0.4)) + "}\n";
+    h.description = f.payload;
+  } else if (kind == "cogging" || kind == "spring") {
+    h.name.clear();
+    h.outside = true;
+    if (kind == "cogging") {
+      h.joint = static_cast<int>(rng.Index(2));
+      const double a = rng.Uniform(0.3, 0.8), n = std::round(rng.Uniform(4, 12));
+      t = [a, n](double q, double) { return a * std::sin(n * q); };
+      h.description = "cogging " + Fmt(a) + " sin(" + Fmt(n) + " q)";
+    } else {
+      h.joint = 1;
+      const double k = rng.Uniform(3, 8), q0 = rng.Uniform(0.2, 0.5);
+      t = [k, q0](double q, double) { return -k * (q - q0); };
+      h.description = "spring -" + Fmt(k) + " (q - " + Fmt(q0) + ")";
+    }
+  }
+  if (t) {
+    const int j = h.joint;
+    f.torque = [j, t](double, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+      Eigen::VectorXd tau = Eigen::VectorXd::Zero(q.size());
+      tau[j] = t(q[j], qd[j]);
+      return tau;
+    };
+    h.description += " on joint " + std::to_string(j + 1);
+  }
+  return f;
+}
+
 Hidden DrawOmni(const std::string& kind, int seed) {
   Rng rng(0x4f4d + 7919 * static_cast<std::uint64_t>(seed) + NameHash(kind) % 1000);
   Hidden h;
@@ -248,6 +309,12 @@ std::vector<StudyRun> Runs() {
   std::vector<StudyRun> runs;
   for (int s = 1; s <= clean; ++s) runs.push_back({"arm", "clean", s});
   for (int s = 1; s <= clean; ++s) runs.push_back({"omni", "clean", s});
+  if (testing::MujocoAvailable()) {
+    for (int s = 1; s <= clean; ++s) runs.push_back({"arm_mujoco", "clean", s});
+    for (const char* k : {"viscous_friction", "coulomb_friction", "torque_offset", "payload", "cogging", "spring"}) {
+      for (int s = 1; s <= seeds; ++s) runs.push_back({"arm_mujoco", k, s});
+    }
+  }
   for (const char* k : {"viscous_friction", "coulomb_friction", "stribeck_friction", "torque_offset", "torque_saturation",
                         "time_delay", "payload", "joint_flexibility", "cogging", "spring", "backlash", "backlash_heavy", "elbow_stribeck", "elbow_delay", "small_delay",
                         "flexibility_from_q"}) {
@@ -282,6 +349,25 @@ TEST_P(DiagnoseStudy, DISABLED_Run) {
     const double plant_gap =
         h.torque ? DiagnoseArm(nominal, received, none).gap_before : DiagnoseArm(plant, logs, none).gap_before;
     WriteRow(run, h, report, plant_gap, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  } else if (run.robot == "arm_mujoco") {
+    // Clean logs alternate open and closed loop (ForeignArmRecording); effects are
+    // recorded open loop, the plant's gap from the same seeds recorded without them.
+    const ForeignHidden f = DrawForeign(run.kind, run.seed);
+    const ArmModel nominal = testing::RrrWith("");
+    const ArmModel plant = f.payload.empty() ? nominal : ArmPlantModel(testing::RrrWith(f.payload));
+    testing::ForeignArmRecording how, clean;
+    how.hidden = f.torque;
+    how.closed_loop = clean.closed_loop = run.kind == "clean" && run.seed % 2 == 0;
+    const std::uint64_t s = 2 * static_cast<std::uint64_t>(run.seed);
+    const std::vector<ArmLog> logs = {testing::RecordMujocoArm(plant, s, how), testing::RecordMujocoArm(plant, s + 1, how)};
+    const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
+    const double plant_gap =
+        run.kind == "clean"
+            ? report.gap_before
+            : DiagnoseArm(nominal, {testing::RecordMujocoArm(nominal, s, clean), testing::RecordMujocoArm(nominal, s + 1, clean)},
+                          none)
+                  .gap_before;
+    WriteRow(run, f.h, report, plant_gap, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   } else {
     const Hidden h = DrawOmni(run.kind, run.seed);
     const OmniModel nominal = testing::Omni4();
