@@ -14,7 +14,7 @@ namespace {
 
 using ordered_json = nlohmann::ordered_json;
 
-std::string Num(double v, const char* format = "%.4g") {
+std::string Number(double v, const char* format = "%.4g") {
   if (!std::isfinite(v)) return "n/a";
   char buf[64];
   std::snprintf(buf, sizeof buf, format, v);
@@ -47,9 +47,9 @@ std::string Verdict(const OmniIdentificationReport& r) {
   if (!n || !i || !c) return "no held-out rows to score on";
   std::ostringstream s;
   s << "On " << (r.validation.empty() ? "the held-out blocks" : "the validation logs") << ", the " << r.horizon
-    << "-frame position error is " << Num(1000 * i->rmse, "%.3g") << " mm identified against " << Num(1000 * n->rmse, "%.3g")
-    << " mm nominal and " << Num(1000 * c->rmse, "%.3g") << " mm for constant-velocity extrapolation: the identified model "
-    << (i->rmse < c->rmse ? "beats" : "does not beat") << " having no model at all (" << Num(i->rmse / c->rmse, "%.2f")
+    << "-frame position error is " << Number(1000 * i->rmse, "%.3g") << " mm identified against " << Number(1000 * n->rmse, "%.3g")
+    << " mm nominal and " << Number(1000 * c->rmse, "%.3g") << " mm for constant-velocity extrapolation: the identified model "
+    << (i->rmse < c->rmse ? "beats" : "does not beat") << " having no model at all (" << Number(i->rmse / c->rmse, "%.2f")
     << "x).";
   return s.str();
 }
@@ -169,8 +169,8 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s\n", "parameter", "nominal", "identified", "std. error", "unit");
   s << line;
   for (const IdentifiedParameter& p : r.parameters) {
-    std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s%s\n", p.name.c_str(), Num(p.nominal).c_str(),
-                  p.estimated ? Num(p.value).c_str() : "-", p.estimated ? Num(p.standard_error, "%.2g").c_str() : "",
+    std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s%s\n", p.name.c_str(), Number(p.nominal).c_str(),
+                  p.estimated ? Number(p.value).c_str() : "-", p.estimated ? Number(p.standard_error, "%.2g").c_str() : "",
                   p.unit.c_str(), (p.estimated && !p.held) || p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
     s << line;
   }
@@ -206,7 +206,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   h << "<h1>Identification of " << HtmlEscape(r.model_name) << " (omni)</h1>\n";
   h << "<p class=\"verdict\">" << HtmlEscape(Verdict(r)) << "</p>\n";
   h << "<p>Fitted on " << r.fit_rows << " predictions from the fit blocks; scored on " << r.held_out_rows
-    << " held-out rows (" << Num(100 * r.held_out_share, "%.0f") << " % of the " << Num(r.block_seconds, "%.3g")
+    << " held-out rows (" << Number(100 * r.held_out_share, "%.0f") << " % of the " << Number(r.block_seconds, "%.3g")
     << " s blocks, which no fit saw). Engine: " << HtmlEscape(r.backend) << ". Logs:";
   for (const auto& l : r.logs) h << " <code>" << HtmlEscape(l) << "</code>";
   for (const auto& l : r.validation_logs) h << " <code>" << HtmlEscape(l) << "</code> (validation)";
@@ -216,9 +216,9 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     h << "<h2>" << title << "</h2>\n<table><tr><th>predictor</th><th>position RMSE [mm]</th><th>forward [mm]</th>"
          "<th>sideways [mm]</th><th>turn at the rim [mm]</th></tr>\n";
     for (const OmniGap& g : gaps) {
-      h << "<tr><td>" << HtmlEscape(g.name) << "</td><td class=n>" << Num(1000 * g.rmse, "%.2f") << "</td><td class=n>"
-        << Num(1000 * g.forward, "%.2f") << "</td><td class=n>" << Num(1000 * g.sideways, "%.2f") << "</td><td class=n>"
-        << Num(1000 * g.turn, "%.2f") << "</td></tr>\n";
+      h << "<tr><td>" << HtmlEscape(g.name) << "</td><td class=n>" << Number(1000 * g.rmse, "%.2f") << "</td><td class=n>"
+        << Number(1000 * g.forward, "%.2f") << "</td><td class=n>" << Number(1000 * g.sideways, "%.2f") << "</td><td class=n>"
+        << Number(1000 * g.turn, "%.2f") << "</td></tr>\n";
     }
     h << "</table>\n";
   };
@@ -231,17 +231,17 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
       << FormatHorizonTableHtml(TableOf(r));
   }
   h << "<p class=\"small\">Noise floor from the camera (third differences of consecutive measured frames): "
-    << Num(1000 * r.noise_floor, "%.2f") << " mm (pose metric).</p>\n";
+    << Number(1000 * r.noise_floor, "%.2f") << " mm (pose metric).</p>\n";
 
   h << "<h2>Parameters</h2>\n<p class=\"small\">Collinearity index of the parameters with a standard error: "
-    << Num(r.collinearity, "%.3g")
+    << Number(r.collinearity, "%.3g")
     << " (1: their effects independent; a parameter that would take it above 20 is held at the fit's value, its note "
        "naming what it trades with).</p>\n<table><tr><th>parameter</th><th>model file</th><th>nominal</th><th>identified</th>"
        "<th>std. error</th><th>unit</th><th>meaning</th></tr>\n";
   for (const IdentifiedParameter& p : r.parameters) {
     h << "<tr><td>" << HtmlEscape(p.name) << "</td><td><code>" << HtmlEscape(p.key) << "</code></td><td class=n>"
-      << Num(p.nominal) << "</td><td class=n>" << (p.estimated ? Num(p.value) : "-") << "</td><td class=n>"
-      << (p.estimated ? Num(p.standard_error, "%.2g") : "") << "</td><td>" << HtmlEscape(p.unit) << "</td><td>"
+      << Number(p.nominal) << "</td><td class=n>" << (p.estimated ? Number(p.value) : "-") << "</td><td class=n>"
+      << (p.estimated ? Number(p.standard_error, "%.2g") : "") << "</td><td>" << HtmlEscape(p.unit) << "</td><td>"
       << HtmlEscape(p.meaning) << (p.note.empty() ? "" : " <i>(" + HtmlEscape(p.note) + ")</i>") << "</td></tr>\n";
   }
   h << "</table>\n";

@@ -12,7 +12,7 @@ namespace twinsim {
 namespace {
 
 // A log recorded from the analytic model itself (the callers turn camera noise off).
-OmniLog RecordLog(const OmniModel& model, double seconds) {
+OmniLog RecordReplayLog(const OmniModel& model, double seconds) {
   return testing::RecordLog(model, testing::RandomDrive(1.5, 0, 0), seconds, 21);
 }
 
@@ -29,7 +29,7 @@ class OmniReplayTest : public ::testing::Test {
 };
 
 TEST_F(OmniReplayTest, SameModelPredictsItsOwnLogFourFramesAhead) {
-  const OmniLog log = RecordLog(model, 20);
+  const OmniLog log = RecordReplayLog(model, 20);
   const OmniReplayResult r = ReplayOmniLog(model, log, options);
   // The tracker starts at frame D and predicts after its warm-up: rows before
   // D + kWarmUpFrames + K hold the measurement, all others are predicted.
@@ -48,7 +48,7 @@ TEST_F(OmniReplayTest, SameModelPredictsItsOwnLogFourFramesAhead) {
 // tracker at frame D), and its estimate, which weighs the camera against the model,
 // predicts the log to a fraction of a millimetre.
 TEST_F(OmniReplayTest, TheObserverPredictsTheSameModelsLogFromItsFirstRow) {
-  const OmniLog log = RecordLog(model, 20);
+  const OmniLog log = RecordReplayLog(model, 20);
   options.state = "observer";
   const OmniReplayResult r = ReplayOmniLog(model, log, options);
   EXPECT_EQ(r.state, "observer");
@@ -60,7 +60,7 @@ TEST_F(OmniReplayTest, TheObserverPredictsTheSameModelsLogFromItsFirstRow) {
 }
 
 TEST_F(OmniReplayTest, TheRightDelayPredictsBetterThanNone) {
-  const OmniLog log = RecordLog(model, 20);
+  const OmniLog log = RecordReplayLog(model, 20);
   OmniModel no_delay = model;
   no_delay.command_delay_frames = no_delay.vision_delay_frames = 0;
   const double right = PositionRmse(log, ReplayOmniLog(model, log, options));
@@ -69,7 +69,7 @@ TEST_F(OmniReplayTest, TheRightDelayPredictsBetterThanNone) {
 }
 
 TEST_F(OmniReplayTest, FreeRunFromTheFirstRowFollowsTheSameModel) {
-  const OmniLog log = RecordLog(model, 10);
+  const OmniLog log = RecordReplayLog(model, 10);
   options.horizon = 0;
   const OmniReplayResult r = ReplayOmniLog(model, log, options);
   EXPECT_EQ(r.num_predicted(), static_cast<int>(log.rows.size()) - 1);

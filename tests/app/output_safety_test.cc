@@ -53,7 +53,7 @@ struct FailCase {
   std::string args;
 };
 
-std::string Fill(std::string s, const std::string& key, const std::string& value) {
+std::string FillPaths(std::string s, const std::string& key, const std::string& value) {
   for (std::size_t at = s.find(key); at != std::string::npos; at = s.find(key, at + value.size()))
     s.replace(at, key.size(), value);
   return s;
@@ -71,7 +71,7 @@ TEST_P(FailPartWay, LeavesNoFileBehind) {
   WriteOmniLog(log, testing::RecordLog(testing::Omni4(), testing::RandomDrive(1.5, 4, 1.5), 20, 7).rows);
 
   const std::string good = d + "/good";
-  const auto ok = RunTwinsim(Fill(Fill(c.args, "{out}", good), "{d}", d));
+  const auto ok = RunTwinsim(FillPaths(FillPaths(c.args, "{out}", good), "{d}", d));
   ASSERT_EQ(ok.exit_code, 0) << ok.err;
   // The files in the order written where the command lists them, else all it left.
   std::vector<std::string> wrote = WroteList(ok.out);
@@ -85,7 +85,7 @@ TEST_P(FailPartWay, LeavesNoFileBehind) {
   const std::string last = fs::path(wrote.back()).filename().string();
   const std::string bad = d + "/bad";
   ::setenv("TWINSIM_FAIL_WRITE", last.c_str(), 1);
-  const auto failed = RunTwinsim(Fill(Fill(c.args, "{out}", bad), "{d}", d));
+  const auto failed = RunTwinsim(FillPaths(FillPaths(c.args, "{out}", bad), "{d}", d));
   ::unsetenv("TWINSIM_FAIL_WRITE");
   EXPECT_EQ(failed.exit_code, 2) << failed.err;
   EXPECT_NE(failed.err.find(last), std::string::npos) << failed.err;

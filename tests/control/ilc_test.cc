@@ -22,7 +22,7 @@ namespace {
 using testing::SourcePath;
 
 using testing::Turntable;
-constexpr double kJ = testing::kTurntableInertia;  // kg m^2
+constexpr double kIlcJ = testing::kTurntableInertia;  // kg m^2
 
 ArmReference Hold(double q, int samples, double ts) {
   ArmReference r;
@@ -33,7 +33,7 @@ ArmReference Hold(double q, int samples, double ts) {
   return r;
 }
 
-TrackingOptions Pd() { return testing::TurntablePd(); }
+TrackingOptions IlcPd() { return testing::TurntablePd(); }
 
 // The exact sampled-data PS of the turntable: the torque is held over each sample
 // (RK4 on a constant inertia is exact), so q(z) = G(z) u(z), qd(z) = Gv(z) u(z) with
@@ -42,19 +42,19 @@ TrackingOptions Pd() { return testing::TurntablePd(); }
 //   PS(z) = z^-D G / (1 + z^-D (Kp G + Kd Gv)).
 std::complex<double> TurntablePs(double f, double ts, double kp, double kd, int delay) {
   const std::complex<double> z = std::polar(1.0, 2 * kPi * f * ts);
-  const std::complex<double> g = ts * ts * (z + 1.0) / (2 * kJ * (z - 1.0) * (z - 1.0));
-  const std::complex<double> gv = ts / (kJ * (z - 1.0));
+  const std::complex<double> g = ts * ts * (z + 1.0) / (2 * kIlcJ * (z - 1.0) * (z - 1.0));
+  const std::complex<double> gv = ts / (kIlcJ * (z - 1.0));
   const std::complex<double> zd = std::pow(z, -delay);
   return zd * g / (1.0 + zd * (kp * g + kd * gv));
 }
 
 TEST(IlcFeedforward, ConstantTorqueOffsetsThePdLoopByFOverKp) {
   const ArmModel arm = Turntable();
-  ASSERT_NEAR(MassMatrix(arm, Eigen::VectorXd::Zero(1))(0, 0), kJ, 1e-12);
+  ASSERT_NEAR(MassMatrix(arm, Eigen::VectorXd::Zero(1))(0, 0), kIlcJ, 1e-12);
   const int samples = 2000;
   const ArmReference hold = Hold(0.2, samples, arm.sample_time);
   Eigen::MatrixXd f = Eigen::MatrixXd::Constant(samples, 1, 1.5);  // N·m
-  TrackingOptions o = Pd();
+  TrackingOptions o = IlcPd();
   o.feedforward = &f;
   const TrackingTrial trial = RunTrackingTrial(arm, arm, hold, o);
   const double kp = PdFeedforwardGains(arm, Eigen::VectorXd::Constant(1, 0.2), 10, 1).kp[0];
@@ -74,7 +74,7 @@ TEST(IlcFrf, TurntableProcessSensitivityMatchesTheSampledClosedForm) {
   const ArmModel arm = Turntable();
   FrfOptions fo;
   fo.period = 0.5, fo.periods = 2, fo.f_min = 2, fo.f_max = 300;
-  const ClosedLoopFrf frf = MeasureProcessSensitivity(arm, arm, {Eigen::VectorXd::Constant(1, 0.3)}, Pd(), fo);
+  const ClosedLoopFrf frf = MeasureProcessSensitivity(arm, arm, {Eigen::VectorXd::Constant(1, 0.3)}, IlcPd(), fo);
   ASSERT_EQ(frf.response.size(), 1u);
   ASSERT_EQ(frf.frequency.size(), 150);
   const TrackingGains g = PdFeedforwardGains(arm, Eigen::VectorXd::Constant(1, 0.3), 10, 1);
@@ -93,13 +93,13 @@ TEST(IlcLearningFilter, FitInvertsTheTurntablesProcessSensitivityAndAgreesWithTh
   const ArmModel arm = Turntable();
   FrfOptions fo;
   fo.period = 0.5, fo.periods = 1, fo.f_min = 2, fo.f_max = 200;
-  const ClosedLoopFrf frf = MeasureProcessSensitivity(arm, arm, {Eigen::VectorXd::Constant(1, 0.0)}, Pd(), fo);
+  const ClosedLoopFrf frf = MeasureProcessSensitivity(arm, arm, {Eigen::VectorXd::Constant(1, 0.0)}, IlcPd(), fo);
   const LearningFilter l = FitLearningFilter(frf, 0, 2, 100, 4);
   EXPECT_EQ(l.shift, 1);                 // the command delay
-  EXPECT_NEAR(l.inertia + l.inertia_early, kJ, 0.05 * kJ);  // it trades a little inertia for the hold's gain
-  const LearningFilter m = ModelLearningFilter(arm, Pd(), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Zero(1), 0);
+  EXPECT_NEAR(l.inertia + l.inertia_early, kIlcJ, 0.05 * kIlcJ);  // it trades a little inertia for the hold's gain
+  const LearningFilter m = ModelLearningFilter(arm, IlcPd(), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Zero(1), 0);
   EXPECT_EQ(m.shift, 1);
-  EXPECT_NEAR(m.inertia + m.inertia_early, kJ, 1e-12);
+  EXPECT_NEAR(m.inertia + m.inertia_early, kIlcJ, 1e-12);
   EXPECT_NEAR(l.stiffness, m.stiffness, 0.05 * m.stiffness);
   // PS L = 1 within 5 % up to 50 Hz and 15 % up to 100 Hz (a half-sample hold phase remains).
   for (Eigen::Index i = 0; i < frf.frequency.size(); ++i) {

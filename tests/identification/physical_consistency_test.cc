@@ -12,7 +12,7 @@
 namespace twinsim {
 namespace {
 
-ArmModel Rrr() { return LoadArmModel(testing::SourcePath("models/rrr.yaml")); }
+ArmModel PhysicalRrr() { return LoadArmModel(testing::SourcePath("models/rrr.yaml")); }
 
 // The R factor of the base regressor over random states: the metric of a fit.
 Eigen::MatrixXd RandomR(const ArmModel& m, const BaseParameters& base) {
@@ -27,7 +27,7 @@ Eigen::MatrixXd RandomR(const ArmModel& m, const BaseParameters& base) {
 }
 
 TEST(PhysicalConsistency, NearestParametersGiveBetaAndKeepTheAPrioriWhenTheyAlreadyDo) {
-  const ArmModel m = Rrr();
+  const ArmModel m = PhysicalRrr();
   const BaseParameters base = IdentificationBase(m, {});
   const Eigen::VectorXd pi0 = StandardParameters(m);
   const Eigen::VectorXd beta0 = base.from_standard * pi0;
@@ -41,9 +41,9 @@ TEST(PhysicalConsistency, NearestParametersGiveBetaAndKeepTheAPrioriWhenTheyAlre
 TEST(PhysicalConsistency, FindsConsistentParametersThatGiveBetaExactlyAtAnyWeight) {
   // An a-priori forearm ten times too thin; the truth is a real arm, so some consistent
   // parameters give its base parameters exactly, whatever the weights' scale.
-  ArmModel a_priori = Rrr();
+  ArmModel a_priori = PhysicalRrr();
   a_priori.joints[2].child.inertia = Eigen::Vector3d(0.0002, 0.0016, 0.0016).asDiagonal();
-  ArmModel truth = Rrr();
+  ArmModel truth = PhysicalRrr();
   truth.joints[2].child.inertia = Eigen::Vector3d(0.0024, 0.0168, 0.0152).asDiagonal();
   truth.joints[2].child.com = Eigen::Vector3d(0.15, 0.02, -0.01);
   truth.joints[1].child.com = Eigen::Vector3d(0.26, 0.01, 0.02);
@@ -69,7 +69,7 @@ TEST(PhysicalConsistency, BetaOfNoRealArmGivesTheBestConsistentCompromise) {
   // Negative Coulomb friction on joint 3: no real arm has it. The compromise keeps every
   // friction non-negative and fits the torques at least as well as simply clipping fc3
   // to zero (here far better: joint 3's viscous friction takes up part of it).
-  const ArmModel m = Rrr();
+  const ArmModel m = PhysicalRrr();
   const BaseParameters base = IdentificationBase(m, {});
   Eigen::VectorXd pi = StandardParameters(m);
   const int fc3 = kParametersPerLink * 3 + 5;
@@ -90,9 +90,9 @@ TEST(PhysicalConsistency, BetaOfNoRealArmGivesTheBestConsistentCompromise) {
 }
 
 TEST(PhysicalConsistency, RefusesAnUnphysicalAPrioriModel) {
-  ArmModel m = Rrr();
+  ArmModel m = PhysicalRrr();
   m.joints[1].child.inertia = Eigen::Vector3d(0.001, 0.001, 0.05).asDiagonal();
-  const BaseParameters base = IdentificationBase(Rrr(), {});
+  const BaseParameters base = IdentificationBase(PhysicalRrr(), {});
   EXPECT_THROW(FitConsistentParameters(m, base.from_standard, Eigen::MatrixXd::Identity(21, 21),
                                        Eigen::VectorXd::Zero(21)),
                InputError);

@@ -21,13 +21,13 @@ using testing::MakeMultiSine;
 using testing::MakeSyntheticLog;
 using testing::SensorNoise;
 
-ArmModel Rrr() { return LoadArmModel(testing::SourcePath("models/rrr.yaml")); }
+ArmModel WlsRrr() { return LoadArmModel(testing::SourcePath("models/rrr.yaml")); }
 
 // The "true" arm: models/rrr.yaml with every mass, centre of mass, inertia and friction
 // changed by up to +-20 %, the centres of mass moved off the links' axes and the
 // inertias turned (products of inertia), so that no base parameter is zero.
 ArmModel TrueRrr() {
-  ArmModel m = Rrr();
+  ArmModel m = WlsRrr();
   const double mass[] = {1.2, 0.85, 1.15};
   const Eigen::Vector3d com_shift[] = {{0.02, 0.03, -0.015}, {0.03, -0.02, 0.015}, {-0.025, 0.02, -0.01}};
   const Eigen::Vector3d inertia_scale[] = {{1.2, 0.8, 1.1}, {0.85, 1.2, 1.15}, {1.2, 1.05, 0.95}};
@@ -65,7 +65,7 @@ double WorstRelativeError(const Eigen::VectorXd& estimate, const Eigen::VectorXd
 
 TEST(WlsIdentification, RecoversEveryBaseParameterWithin1PercentWithoutNoise) {
   const ArmModel truth = TrueRrr();
-  const ArmModel a_priori = Rrr();
+  const ArmModel a_priori = WlsRrr();
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 20.0, 1000.0, SensorNoise{}));
   ASSERT_FALSE(log.qd_logged);
   WlsIdentificationOptions options;
@@ -95,7 +95,7 @@ TEST(WlsIdentification, RecoversEveryBaseParameterWithin1PercentWithoutNoise) {
 
 TEST(WlsIdentification, RecoversEveryBaseParameterWithin5PercentFromQuantisedPositionsAndNoisyTorques) {
   const ArmModel truth = TrueRrr();
-  const ArmModel a_priori = Rrr();
+  const ArmModel a_priori = WlsRrr();
   SensorNoise noise;
   noise.counts_per_rev = 1 << 18;  // 24 micro-rad steps
   noise.torque_fraction = 0.02;    // 2 % of each joint's torque RMS
@@ -126,8 +126,8 @@ TEST(WlsIdentification, IsDeterministic) {
   noise.torque_fraction = 0.02;
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 5), 6.0, 500.0, noise));
   WlsIdentificationSummary a, b;
-  IdentifyArm(Rrr(), {log}, {}, &a);
-  IdentifyArm(Rrr(), {log}, {}, &b);
+  IdentifyArm(WlsRrr(), {log}, {}, &a);
+  IdentifyArm(WlsRrr(), {log}, {}, &b);
   EXPECT_EQ(a.identified, b.identified);
   EXPECT_EQ(a.consistent, b.consistent);
 }
@@ -136,7 +136,7 @@ TEST(WlsIdentification, AJointThatNeverMovesIsNamed) {
   const ArmModel truth = TrueRrr();
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 10.0, 500.0, SensorNoise{}, 2));
   try {
-    IdentifyArm(Rrr(), {log}, {});
+    IdentifyArm(WlsRrr(), {log}, {});
     FAIL() << "expected an InputError";
   } catch (const InputError& e) {
     const std::string what = e.what();
@@ -154,7 +154,7 @@ TEST(WlsIdentification, NegativeFrictionInTheDataIsClippedAndTheShiftReported) {
   odd.joints[1].viscous = -0.2;
   const ArmLog log = ThroughCsv(MakeSyntheticLog(odd, MakeMultiSine(odd, 11), 10.0, 500.0, SensorNoise{}));
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(Rrr(), {log}, {}, &summary);
+  const ArmModel identified = IdentifyArm(WlsRrr(), {log}, {}, &summary);
   const auto fv2 = std::find(summary.names.begin(), summary.names.end(), "fv2") - summary.names.begin();
   ASSERT_LT(fv2, static_cast<long>(summary.names.size()));
   EXPECT_NEAR(summary.identified[fv2], -0.2, 0.005);
@@ -174,7 +174,7 @@ TEST(WlsIdentification, AnUnphysicalInertiaIsFixedInTheDirectionsTheTorquesDoNot
   // but not Ixx3 + Iyy3. A-priori values far too small for the true Izz3 give a
   // minimum-norm forearm that breaks the triangle inequality; the fix raises Ixx3 + Iyy3
   // and leaves the base parameters, and so the torques, as identified.
-  ArmModel a_priori = Rrr();
+  ArmModel a_priori = WlsRrr();
   a_priori.joints[2].child.inertia = Eigen::Vector3d(0.0002, 0.0016, 0.0016).asDiagonal();
   ASSERT_EQ(a_priori.Validate(), "");
   const ArmModel truth = TrueRrr();
@@ -199,22 +199,22 @@ TEST(WlsIdentification, DecimationAndOptionsAreChecked) {
   options.decimate = 1;
   options.max_condition_number = 0.5;
   EXPECT_FALSE(options.IsValid(&why));
-  EXPECT_THROW(IdentifyArm(Rrr(), {}, {}), InputError);
+  EXPECT_THROW(IdentifyArm(WlsRrr(), {}, {}), InputError);
 
   // Every 4th sample of a 1 kHz log gives nearly the same answer.
   const ArmModel truth = TrueRrr();
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 10.0, 1000.0, SensorNoise{}));
   WlsIdentificationSummary all, quarter;
-  IdentifyArm(Rrr(), {log}, {}, &all);
+  IdentifyArm(WlsRrr(), {log}, {}, &all);
   WlsIdentificationOptions decimated;
   decimated.decimate = 4;
-  IdentifyArm(Rrr(), {log}, decimated, &quarter);
+  IdentifyArm(WlsRrr(), {log}, decimated, &quarter);
   EXPECT_NEAR(quarter.samples, all.samples / 4.0, 1.0);
   EXPECT_LT((quarter.identified - all.identified).cwiseQuotient(all.identified).cwiseAbs().maxCoeff(), 0.01);
 }
 
 TEST(WlsIdentification, DescribesParametersInWords) {
-  const ArmModel m = Rrr();
+  const ArmModel m = WlsRrr();
   const BaseParameters base = IdentificationBase(m, {});
   bool friction = false;
   for (int k = 0; k < base.rank(); ++k) {

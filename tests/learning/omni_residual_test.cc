@@ -16,7 +16,7 @@
 namespace twinsim {
 namespace {
 
-OmniLog Record(const OmniModel& model, double seconds, std::uint64_t seed, const std::string& name) {
+OmniLog RecordResidualLog(const OmniModel& model, double seconds, std::uint64_t seed, const std::string& name) {
   return testing::RecordLog(model, testing::RandomDrive(2.0, 2.0, 2.0), seconds, seed, "analytic", name);
 }
 
@@ -49,7 +49,7 @@ TEST(NominalOmniTrack, FollowsALogOfItsOwnModelWithZeroErrors) {
   // track's one-frame predictions are the log's next poses, to the rounding of the log
   // (as replay's tracker, tests/analysis/omni_replay_test.cc).
   const OmniModel m = Quiet(testing::Omni4());
-  const OmniLog log = Record(m, 20, 3, "own.csv");
+  const OmniLog log = RecordResidualLog(m, 20, 3, "own.csv");
   const FeatureLayout layout = PredictorLayout(m, 1);
   const FrameSequence seq = ToFrameSequence(log, layout);
   NominalOmniTrack track(m, "analytic", 30, 0, 5);  // the loop's physics step
@@ -85,8 +85,8 @@ class ResidualPredictor : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     const OmniModel plant = SlippingLaggingPlant();
-    train_ = new OmniLog(Record(plant, 180, 11, "slip_train.csv"));
-    test_ = new OmniLog(Record(plant, 40, 12, "slip_test.csv"));
+    train_ = new OmniLog(RecordResidualLog(plant, 180, 11, "slip_train.csv"));
+    test_ = new OmniLog(RecordResidualLog(plant, 40, 12, "slip_test.csv"));
     OmniTrainOptions options;
     options.residual = true;
     linear_ = std::make_shared<OmniPredictor>(TrainOmniPredictor(testing::Omni4(), {*train_}, options));

@@ -17,7 +17,7 @@ namespace {
 
 using testing::SourcePath;
 
-std::string ErrorOf(const std::string& yaml) {
+std::string ArmSceneErrorOf(const std::string& yaml) {
   try {
     LoadArmSceneFromString(yaml, "a.yaml", SourcePath("scenes"));
   } catch (const InputError& e) {
@@ -75,7 +75,7 @@ TEST(ArmScene, TaskReferencesInClosedForm) {
 }
 
 TEST(ArmScene, BadInputIsReportedWithFileLineAndColumn) {
-  const std::string e = ErrorOf(
+  const std::string e = ArmSceneErrorOf(
       "name: a\n"
       "robot: arm\n"
       "model: ../models/rrr.yaml\n"
@@ -89,22 +89,22 @@ TEST(ArmScene, BadInputIsReportedWithFileLineAndColumn) {
   EXPECT_NE(e.find("unknown value 'torque' (known: tool_path, joint_torques, tracking_error)"), std::string::npos) << e;
   EXPECT_NE(e.find("expected a plain file name ending in .png"), std::string::npos) << e;
 
-  const std::string sizes = ErrorOf(
+  const std::string sizes = ArmSceneErrorOf(
       "name: a\nrobot: arm\nmodel: ../models/rrr.yaml\n"
       "task: {type: hold, q: [0, 0.8], duration: 1}\n");
   EXPECT_NE(sizes.find("a.yaml:4:"), std::string::npos) << sizes;
   EXPECT_NE(sizes.find("'q'"), std::string::npos) << sizes;
 
-  const std::string limits = ErrorOf(
+  const std::string limits = ArmSceneErrorOf(
       "name: a\nrobot: arm\nmodel: ../models/rrr.yaml\n"
       "task: {type: hold, q: [0, 0.8, 9], duration: 1}\n");
   EXPECT_NE(limits.find("joint 3 ('elbow') at 9"), std::string::npos) << limits;
 
-  const std::string missing = ErrorOf("name: a\nrobot: arm\n");
+  const std::string missing = ArmSceneErrorOf("name: a\nrobot: arm\n");
   EXPECT_NE(missing.find("missing required key 'model'"), std::string::npos) << missing;
   EXPECT_NE(missing.find("missing required key 'task'"), std::string::npos) << missing;
 
-  const std::string hat = ErrorOf(
+  const std::string hat = ArmSceneErrorOf(
       "name: a\nrobot: arm\nmodel: ../models/rrr.yaml\ncontroller: {model: ../models/nope.yaml}\ntask: {type: writing}\n");
   EXPECT_NE(hat.find("nope.yaml"), std::string::npos) << hat;
 
@@ -306,7 +306,7 @@ TEST(ArmSceneSensors, PrismaticJointsTakeTheirResolutionInMetres) {
 }
 
 TEST(ArmSceneSensors, BadKeysAreReportedWithFileLineAndColumn) {
-  const std::string e = ErrorOf(SensorScene("{type: writing}",
+  const std::string e = ArmSceneErrorOf(SensorScene("{type: writing}",
                                             "sensors:\n"
                                             "  encoder_counts: 40000\n"
                                             "  torque_noise: [0.1, 0.2]\n"
@@ -327,7 +327,7 @@ TEST(ArmSceneSensors, BadKeysAreReportedWithFileLineAndColumn) {
   EXPECT_NE(e.find("a.yaml:11:23: 'encoder_resolution' in 'sensors': 'rrr' has no prismatic joint"), std::string::npos)
       << e;
 
-  const std::string ranges = ErrorOf(SensorScene("{type: writing}",
+  const std::string ranges = ArmSceneErrorOf(SensorScene("{type: writing}",
                                                  "sensors:\n"
                                                  "  torque_noise: [0.1, -0.2, 0]\n"
                                                  "  encoder_counts_per_rev: 2e9\n"));
@@ -338,11 +338,11 @@ TEST(ArmSceneSensors, BadKeysAreReportedWithFileLineAndColumn) {
             std::string::npos)
       << ranges;
 
-  const std::string shape = ErrorOf(SensorScene("{type: writing}", "sensors: {torque_noise: {j1: 0.1}}\n"));
+  const std::string shape = ArmSceneErrorOf(SensorScene("{type: writing}", "sensors: {torque_noise: {j1: 0.1}}\n"));
   EXPECT_NE(shape.find("a.yaml:6:25: 'torque_noise' in 'sensors': expected a number or a list of 3 numbers"),
             std::string::npos)
       << shape;
-  const std::string scalar = ErrorOf(SensorScene("{type: writing}", "sensors: 40000\n"));
+  const std::string scalar = ArmSceneErrorOf(SensorScene("{type: writing}", "sensors: 40000\n"));
   EXPECT_NE(scalar.find("a.yaml:6:10: 'sensors': expected a mapping"), std::string::npos) << scalar;
 }
 

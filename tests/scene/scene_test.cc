@@ -10,7 +10,7 @@ namespace {
 
 using testing::SourcePath;
 
-std::string ErrorOf(const std::string& yaml) { return testing::SceneError(yaml); }
+std::string SceneErrorOf(const std::string& yaml) { return testing::SceneError(yaml); }
 
 TEST(Scene, ShippedScenesLoad) {
   for (const char* name : {"drive45", "steps", "figure_eight", "go_to_pose", "random_excitation", "record_plant",
@@ -30,7 +30,7 @@ TEST(Scene, TimingDefaultsToAtLeast300HzPhysics) {
 }
 
 TEST(Scene, UnknownKeyWrongTypeMissingFieldAndBadModel) {
-  const std::string e = ErrorOf(
+  const std::string e = SceneErrorOf(
       "name: t\n"
       "duration: long\n"
       "robots:\n"
@@ -58,7 +58,7 @@ TEST(Scene, RobotsAreBlueWithIdsInOrderUnlessTheySay) {
 
 TEST(Scene, TeamsAndIdsAreChecked) {
   const std::string robot = "    model: ../models/omni4.yaml\n    commands: {type: random}\n";
-  const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - name: a\n    id: 2\n" + robot +
+  const std::string e = SceneErrorOf("name: t\nduration: 1\nrobots:\n  - name: a\n    id: 2\n" + robot +
                                 "  - name: b\n    id: 2\n" + robot + "  - name: c\n    team: red\n" + robot +
                                 "  - name: d\n    id: 16\n" + robot);
   EXPECT_NE(e.find("s.yaml:9:9: robots[1]: blue robot id 2 is taken by robot 'a'"), std::string::npos) << e;
@@ -74,19 +74,19 @@ TEST(Scene, ARobotMayStartOffTheFieldAndPresentIsChecked) {
   ASSERT_EQ(s.robots.size(), 2u);
   EXPECT_TRUE(s.robots[0].present);  // the default
   EXPECT_FALSE(s.robots[1].present);
-  const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - name: a\n    present: maybe\n" + robot);
+  const std::string e = SceneErrorOf("name: t\nduration: 1\nrobots:\n  - name: a\n    present: maybe\n" + robot);
   EXPECT_NE(e.find("s.yaml:5:14: 'present' in 'robots[0]': expected true or false, got 'maybe'"), std::string::npos) << e;
 }
 
 TEST(Scene, UnknownCommandTypeListsKnownOnes) {
-  const std::string e = ErrorOf("name: t\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands: {type: dance}\n");
+  const std::string e = SceneErrorOf("name: t\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands: {type: dance}\n");
   EXPECT_NE(e.find("unknown value 'dance' (known: sequence, test_drive, figure_eight, random, go_to_pose, log)"),
             std::string::npos)
       << e;
 }
 
 TEST(Scene, SegmentNeedsExactlyOneOfCommandOrRamp) {
-  const std::string e = ErrorOf(
+  const std::string e = SceneErrorOf(
       "name: t\nduration: 1\nrobots:\n  - model: ../models/omni4.yaml\n    commands:\n      type: sequence\n"
       "      segments:\n        - {duration: 1}\n");
   EXPECT_NE(e.find("give exactly one of 'command' (hold) or 'ramp_to' (ramp)"), std::string::npos) << e;

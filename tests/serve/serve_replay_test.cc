@@ -82,7 +82,7 @@ std::string YellowAt(int k) {
   return control.SerializeAsString();
 }
 
-std::optional<std::string> Receive(const UdpSocket& socket) {
+std::optional<std::string> ReceiveOne(const UdpSocket& socket) {
   for (int tries = 0; tries < 100; ++tries) {
     if (auto d = socket.Receive(65536)) return d->bytes;
     WaitReadable({&socket}, 0.05);
@@ -108,7 +108,7 @@ TEST(ServeReplay, ALockstepMatchReplayedByRunGivesTheClientsVisionAndTheSameFile
   for (int k = 0; k < frames; ++k) {
     std::optional<SSL_DetectionFrame> frame;
     while (!frame) {
-      std::optional<std::string> bytes = Receive(vision);
+      std::optional<std::string> bytes = ReceiveOne(vision);
       ASSERT_TRUE(bytes) << "no vision for frame " << k;
       SSL_WrapperPacket p;
       if (p.ParseFromString(*bytes) && p.has_detection() && p.detection().frame_number() == static_cast<std::uint32_t>(k))
@@ -118,8 +118,8 @@ TEST(ServeReplay, ALockstepMatchReplayedByRunGivesTheClientsVisionAndTheSameFile
     // Yellow joins at frame 25 (from then on lockstep waits for it too); both answer.
     if (k >= 25) ASSERT_TRUE(yellow.SendTo(YellowAt(k), UdpEndpoint{ParseIpv4("127.0.0.1"), field.yellow_port()}));
     ASSERT_TRUE(blue.SendTo(BlueAt(k), UdpEndpoint{ParseIpv4("127.0.0.1"), field.blue_port()}));
-    ASSERT_TRUE(Receive(blue)) << k;
-    if (k >= 25) ASSERT_TRUE(Receive(yellow)) << k;
+    ASSERT_TRUE(ReceiveOne(blue)) << k;
+    if (k >= 25) ASSERT_TRUE(ReceiveOne(yellow)) << k;
   }
   server.join();
 

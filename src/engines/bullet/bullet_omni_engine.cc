@@ -31,7 +31,7 @@ constexpr double kChassisFriction = 0.3;  // Coulomb coefficient, chassis-wall a
 // hangs on it by a hinge whose impulses Bullet does not warm-start; with 20 sweeps the
 // chassis stays within 3e-4 rad of level under 2 m/s^2 drives, and more sweeps change
 // the drive results by less than 1e-4.
-constexpr int kSolverIterations = 20;
+constexpr int kOmniSolverIterations = 20;
 // Baumgarte factor of the hinges. Integrating chassis and wheel separately moves a wheel
 // outwards by b (omega dt)^2 / 2 per step while the robot turns; at the default 0.2 the
 // hinge let it drift 2 mm out at 36 rad/s (2% less yaw speed after a 1 s spin-up at
@@ -328,7 +328,7 @@ BulletOmniEngine::BulletOmniEngine(const std::vector<OmniModel>& robots,
   world_->setGravity(btVector3(gravity.x(), gravity.y(), gravity.z()));
 
   btContactSolverInfo& info = world_->getSolverInfo();
-  info.m_numIterations = kSolverIterations;
+  info.m_numIterations = kOmniSolverIterations;
   info.m_erp = kJointErp;
   info.m_erp2 = kContactErp;
   info.m_restitution = 0;

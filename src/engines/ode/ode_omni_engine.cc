@@ -37,7 +37,7 @@ constexpr int kMaxContactsPerPair = 4;
 // At 1/300 s a robot at 2.5 m/s is found 8 mm inside a wall; pushing that out at the
 // full ERP rate would throw it back at 0.4 m/s whatever the restitution. The wheels'
 // own spring correction stays below 0.01 m/s, so the cap never touches them at rest.
-constexpr double kMaxCorrectingSpeed = 0.1;  // m/s
+constexpr double kOmniMaxCorrectingSpeed = 0.1;  // m/s
 
 constexpr double kHingeErp = 0.8;  // fraction of a hinge's position error fixed per step
 
@@ -144,7 +144,7 @@ OdeOmniEngine::OdeOmniEngine(const std::vector<OmniModel>& robots, const FieldMo
   // ODE's default 0.2 that settles 2% of b out at 26 rad/s and 1/300 s, and the wheels
   // then spin 2% too fast. 0.8 leaves 0.3%; the direct solver takes it without jitter.
   dWorldSetERP(world_, kHingeErp);
-  dWorldSetContactMaxCorrectingVel(world_, kMaxCorrectingSpeed);
+  dWorldSetContactMaxCorrectingVel(world_, kOmniMaxCorrectingSpeed);
   // A hash space keeps the broad phase near-linear when 22 robots share the field.
   space_ = dHashSpaceCreate(nullptr);
   floor_ = dCreatePlane(nullptr, 0, 0, 1, 0);
@@ -368,13 +368,13 @@ void OdeOmniEngine::MoveRobot(int index, const Pose2& pose) {
 }
 
 // Per body: position (3), quaternion (4), linear (3) and angular velocity (3).
-constexpr int kBodySnapshotSize = 13;
+constexpr int kOmniBodySnapshotSize = 13;
 
 std::vector<double> OdeOmniEngine::SaveExact(int index) const {
   CheckRobot(index);
   const OdeRobot& robot = robots_[index];
   std::vector<double> out;
-  out.reserve(kBodySnapshotSize * (1 + robot.wheels.size()));
+  out.reserve(kOmniBodySnapshotSize * (1 + robot.wheels.size()));
   auto save = [&out](dBodyID body) {
     for (const dReal* values : {dBodyGetPosition(body), dBodyGetQuaternion(body), dBodyGetLinearVel(body),
                                 dBodyGetAngularVel(body)}) {
@@ -390,7 +390,7 @@ std::vector<double> OdeOmniEngine::SaveExact(int index) const {
 void OdeOmniEngine::RestoreExact(int index, const std::vector<double>& snapshot) {
   CheckRobot(index);
   OdeRobot& robot = robots_[index];
-  if (snapshot.size() != kBodySnapshotSize * (1 + robot.wheels.size()))
+  if (snapshot.size() != kOmniBodySnapshotSize * (1 + robot.wheels.size()))
     throw std::invalid_argument("ode engine: snapshot of the wrong size");
   const double* v = snapshot.data();
   auto restore = [&v](dBodyID body) {
@@ -399,7 +399,7 @@ void OdeOmniEngine::RestoreExact(int index, const std::vector<double>& snapshot)
     dBodySetQuaternion(body, q);
     dBodySetLinearVel(body, v[7], v[8], v[9]);
     dBodySetAngularVel(body, v[10], v[11], v[12]);
-    v += kBodySnapshotSize;
+    v += kOmniBodySnapshotSize;
   };
   restore(robot.chassis);
   for (dBodyID wheel : robot.wheels) restore(wheel);

@@ -12,7 +12,7 @@
 namespace twinsim {
 namespace {
 
-std::string ErrorOf(const std::string& text, const ArmLogOptions& options = {}) {
+std::string ArmLogErrorOf(const std::string& text, const ArmLogOptions& options = {}) {
   try {
     ParseArmLog(text, "arm.csv", options);
   } catch (const InputError& e) {
@@ -99,24 +99,24 @@ TEST(ArmLog, RoundTripsThroughItsCsv) {
 }
 
 TEST(ArmLog, BadInputNamesFileLineAndColumn) {
-  EXPECT_EQ(ErrorOf("t,q1,tau1\n0,0,0\n0.01,x,0\n0.02,0,0\n"), "arm.csv:3:6: column 'q1': expected a number, got 'x'");
-  EXPECT_EQ(ErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n0.01,0,0\n"),
+  EXPECT_EQ(ArmLogErrorOf("t,q1,tau1\n0,0,0\n0.01,x,0\n0.02,0,0\n"), "arm.csv:3:6: column 'q1': expected a number, got 'x'");
+  EXPECT_EQ(ArmLogErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n0.01,0,0\n"),
             "arm.csv:4:1: column 't': time goes backwards or stands still: t = 0.01 after 0.01");
-  EXPECT_EQ(ErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n0.02,0,0\n0.03,0,0\n0.05,0,0\n0.06,0,0\n"),
+  EXPECT_EQ(ArmLogErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n0.02,0,0\n0.03,0,0\n0.05,0,0\n0.06,0,0\n"),
             "arm.csv:6:1: column 't': irregular sampling: 0.02 s after the previous row, but the median step is 0.01 s "
             "(an arm log must be nearly uniform: every step within 50 % of the median)");
-  EXPECT_EQ(ErrorOf("t,q1,q2,tau1\n0,0,0,0\n"), "arm.csv:1: the log has q1..q2 but tau1: every joint needs a position and a torque column");
-  EXPECT_EQ(ErrorOf("t,q1,tau2,tau1\n0,0,0,0\n"),
+  EXPECT_EQ(ArmLogErrorOf("t,q1,q2,tau1\n0,0,0,0\n"), "arm.csv:1: the log has q1..q2 but tau1: every joint needs a position and a torque column");
+  EXPECT_EQ(ArmLogErrorOf("t,q1,tau2,tau1\n0,0,0,0\n"),
             "arm.csv:1: the log has q1 but tau1..tau2: every joint needs a position and a torque column");
-  EXPECT_EQ(ErrorOf("t,q1,q2,tau1,tau2,qd1\n0,0,0,0,0,0\n"), "arm.csv:1: the log has q1..q2 but qd1: give qd1..qd2 or none of them");
-  EXPECT_EQ(ErrorOf("t,q1,q3,tau1,tau3\n0,0,0,0,0\n"),
+  EXPECT_EQ(ArmLogErrorOf("t,q1,q2,tau1,tau2,qd1\n0,0,0,0,0,0\n"), "arm.csv:1: the log has q1..q2 but qd1: give qd1..qd2 or none of them");
+  EXPECT_EQ(ArmLogErrorOf("t,q1,q3,tau1,tau3\n0,0,0,0,0\n"),
             "arm.csv:1: missing column 'q2': joint columns must run q1..q3 without gaps");
-  EXPECT_EQ(ErrorOf("t,tau1\n0,0\n").rfind("arm.csv:1: missing column 'q1' (have: t, tau1)", 0), 0u);
-  EXPECT_EQ(ErrorOf("q1,tau1\n0,0\n").rfind("arm.csv:1: missing column 't'", 0), 0u);
-  EXPECT_EQ(ErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n"), "arm.csv:2: an arm log needs at least 3 rows, got 2");
+  EXPECT_EQ(ArmLogErrorOf("t,tau1\n0,0\n").rfind("arm.csv:1: missing column 'q1' (have: t, tau1)", 0), 0u);
+  EXPECT_EQ(ArmLogErrorOf("q1,tau1\n0,0\n").rfind("arm.csv:1: missing column 't'", 0), 0u);
+  EXPECT_EQ(ArmLogErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n"), "arm.csv:2: an arm log needs at least 3 rows, got 2");
   ArmLogOptions bad;
   bad.cutoff_hz = -1;
-  EXPECT_EQ(ErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n0.02,0,0\n", bad),
+  EXPECT_EQ(ArmLogErrorOf("t,q1,tau1\n0,0,0\n0.01,0,0\n0.02,0,0\n", bad),
             "the cut-off for derived velocities must be positive and at most 1e6 Hz, got -1 Hz");
   try {
     ReadArmLog("/nonexistent/arm.csv");

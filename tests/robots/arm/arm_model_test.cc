@@ -274,7 +274,7 @@ TEST(ArmModel, DhConversionMatchesTextbookFramesWithPrismaticJoint) {
   }
 }
 
-std::string ErrorOf(const std::function<void()>& load) {
+std::string ArmModelErrorOf(const std::function<void()>& load) {
   try {
     load();
   } catch (const InputError& e) {
@@ -284,7 +284,7 @@ std::string ErrorOf(const std::function<void()>& load) {
 }
 
 std::string UrdfError(const std::string& xml) {
-  return ErrorOf([&] { LoadArmModelFromUrdfString(xml, "bad.urdf"); });
+  return ArmModelErrorOf([&] { LoadArmModelFromUrdfString(xml, "bad.urdf"); });
 }
 
 // A two-joint chain with `extra` spliced in before </robot>.
@@ -384,15 +384,15 @@ TEST(ArmModel, UrdfMovingLinkWithoutInertialNamesTheLink) {
 
 TEST(ArmModel, UrdfThatUrdfdomRejectsNamesTheFile) {
   EXPECT_NE(UrdfError("<robot name='x'><link name='a'/><joint").find("bad.urdf: not a valid URDF"), std::string::npos);
-  const std::string missing = ErrorOf([] { LoadArmModel("/nonexistent/arm.urdf"); });
+  const std::string missing = ArmModelErrorOf([] { LoadArmModel("/nonexistent/arm.urdf"); });
   EXPECT_NE(missing.find("/nonexistent/arm.urdf: cannot open file"), std::string::npos) << missing;
-  const std::string ext = ErrorOf([] { LoadArmModel("arm.sdf"); });
+  const std::string ext = ArmModelErrorOf([] { LoadArmModel("arm.sdf"); });
   EXPECT_NE(ext.find("arm.sdf: "), std::string::npos) << ext;
   EXPECT_NE(ext.find(".urdf, .yaml or .yml"), std::string::npos) << ext;
 }
 
 std::string YamlError(const std::string& yaml) {
-  return ErrorOf([&] { LoadArmModelFromYamlString(yaml, "bad.yaml"); });
+  return ArmModelErrorOf([&] { LoadArmModelFromYamlString(yaml, "bad.yaml"); });
 }
 
 TEST(ArmModel, YamlUnknownKeyWrongTypeAndMissingFieldHavePlaces) {

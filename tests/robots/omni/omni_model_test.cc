@@ -16,7 +16,7 @@ wheels:
   radius: 0.027
 )";
 
-std::string ErrorOf(const std::string& yaml) {
+std::string OmniModelErrorOf(const std::string& yaml) {
   try {
     LoadOmniModelFromString(yaml, "m.yaml");
   } catch (const InputError& e) {
@@ -48,7 +48,7 @@ TEST(OmniModel, ShippedModelsLoadAndAreSslSized) {
 TEST(OmniModel, UnknownKeyNamesLineColumnAndKnownKeys) {
   std::string yaml = kGood;
   yaml += "motor: {stall_torque: 0.5, frction: 3}\n";
-  const std::string e = ErrorOf(yaml);
+  const std::string e = OmniModelErrorOf(yaml);
   EXPECT_NE(e.find("m.yaml:7:"), std::string::npos) << e;
   EXPECT_NE(e.find("unknown key 'frction' in 'motor'"), std::string::npos) << e;
   EXPECT_NE(e.find("known: "), std::string::npos) << e;
@@ -58,17 +58,17 @@ TEST(OmniModel, UnknownKeyNamesLineColumnAndKnownKeys) {
 TEST(OmniModel, WrongTypeIsReportedWithPlace) {
   std::string yaml = kGood;
   yaml.replace(yaml.find("radius: 0.027"), 13, "radius: big");
-  const std::string e = ErrorOf(yaml);
+  const std::string e = OmniModelErrorOf(yaml);
   EXPECT_NE(e.find("m.yaml:6:11: 'radius' in 'wheels': expected a number, got 'big'"), std::string::npos) << e;
 }
 
 TEST(OmniModel, MissingFieldIsReported) {
-  const std::string e = ErrorOf("robot: omni\nname: x\nchassis: {mass: 2}\n");
+  const std::string e = OmniModelErrorOf("robot: omni\nname: x\nchassis: {mass: 2}\n");
   EXPECT_NE(e.find("missing required key 'wheels'"), std::string::npos) << e;
 }
 
 TEST(OmniModel, AllProblemsAreReportedAtOnce) {
-  const std::string e = ErrorOf(
+  const std::string e = OmniModelErrorOf(
       "robot: omni\nname: x\nchassis: {mass: -2, colour: red}\nwheels: {angles_deg: [0, 90, 180], radius: 0}\n");
   EXPECT_NE(e.find("'mass' in 'chassis': must be positive"), std::string::npos) << e;
   EXPECT_NE(e.find("unknown key 'colour'"), std::string::npos) << e;
@@ -78,12 +78,12 @@ TEST(OmniModel, AllProblemsAreReportedAtOnce) {
 TEST(OmniModel, PhysicallyInconsistentModelIsRejected) {
   std::string yaml = kGood;
   yaml.replace(yaml.find("[60, 180, 300]"), 14, "[0, 10, 20]");
-  const std::string e = ErrorOf(yaml);
+  const std::string e = OmniModelErrorOf(yaml);
   EXPECT_NE(e.find("do not surround the centre of mass"), std::string::npos) << e;
 }
 
 TEST(OmniModel, YamlSyntaxErrorHasLine) {
-  const std::string e = ErrorOf("name: x\nchassis: {mass: 2\n");
+  const std::string e = OmniModelErrorOf("name: x\nchassis: {mass: 2\n");
   EXPECT_NE(e.find("m.yaml:"), std::string::npos) << e;
   EXPECT_NE(e.find("YAML syntax error"), std::string::npos) << e;
 }
