@@ -211,13 +211,8 @@ ForeignHidden DrawForeign(const std::string& kind, int seed) {
     }
   }
   if (t) {
-    const int j = h.joint;
-    f.torque = [j, t](double, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-      Eigen::VectorXd tau = Eigen::VectorXd::Zero(q.size());
-      tau[j] = t(q[j], qd[j]);
-      return tau;
-    };
-    h.description += " on joint " + std::to_string(j + 1);
+    f.torque = testing::HiddenOnJoint(h.joint, t);
+    h.description += " on joint " + std::to_string(h.joint + 1);
   }
   return f;
 }

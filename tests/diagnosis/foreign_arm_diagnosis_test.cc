@@ -88,14 +88,6 @@ void PrintTo(const ForeignCase& c, std::ostream* os) { *os << c.label; }
 
 class ForeignArmEffect : public ::testing::TestWithParam<ForeignCase> {};
 
-testing::HiddenArmTorque OnJoint(int joint, std::function<double(double q, double qd)> f) {
-  return [joint, f](double, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-    Eigen::VectorXd tau = Eigen::VectorXd::Zero(q.size());
-    tau[joint] = f(q[joint], qd[joint]);
-    return tau;
-  };
-}
-
 TEST_P(ForeignArmEffect, IsNamedOrFlaggedAndClosesTheGap) {
   if (!testing::MujocoAvailable()) GTEST_SKIP() << "built without MuJoCo (libmujoco-dev)";
   const ForeignCase& c = GetParam();
@@ -129,14 +121,14 @@ TEST_P(ForeignArmEffect, IsNamedOrFlaggedAndClosesTheGap) {
 INSTANTIATE_TEST_SUITE_P(
     Foreign, ForeignArmEffect,
     ::testing::Values(
-        ForeignCase{"viscous_joint2", "viscous_friction", 1, OnJoint(1, [](double, double qd) { return -0.43 * qd; })},
+        ForeignCase{"viscous_joint2", "viscous_friction", 1, testing::HiddenOnJoint(1, [](double, double qd) { return -0.43 * qd; })},
         ForeignCase{"coulomb_joint3", "coulomb_friction", 2,
-                    OnJoint(2, [](double, double qd) { return qd > 0 ? -0.37 : (qd < 0 ? 0.37 : 0.0); })},
-        ForeignCase{"offset_joint1", "torque_offset", 0, OnJoint(0, [](double, double) { return 0.62; })},
+                    testing::HiddenOnJoint(2, [](double, double qd) { return qd > 0 ? -0.37 : (qd < 0 ? 0.37 : 0.0); })},
+        ForeignCase{"offset_joint1", "torque_offset", 0, testing::HiddenOnJoint(0, [](double, double) { return 0.62; })},
         ForeignCase{"payload", "payload", -1, {}, "  - {name: payload, joint: null, mass: 0.7, x: 0.33}\n"},
         // Cogging (issue 41: named torque_saturation, closing 0 %) and a spring.
-        ForeignCase{"cogging_joint1", "", 0, OnJoint(0, [](double q, double) { return 0.5 * std::sin(6 * q); })},
-        ForeignCase{"spring_joint2", "", 1, OnJoint(1, [](double q, double) { return -4.0 * (q - 0.4); })}),
+        ForeignCase{"cogging_joint1", "", 0, testing::HiddenOnJoint(0, [](double q, double) { return 0.5 * std::sin(6 * q); })},
+        ForeignCase{"spring_joint2", "", 1, testing::HiddenOnJoint(1, [](double q, double) { return -4.0 * (q - 0.4); })}),
     [](const ::testing::TestParamInfo<ForeignCase>& info) { return info.param.label; });
 
 }  // namespace

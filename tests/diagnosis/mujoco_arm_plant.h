@@ -29,6 +29,9 @@ std::string ArmUrdf(const ArmModel& model);
 // effect (a spring, cogging). Called once per sample with the time and the exact motion.
 using HiddenArmTorque = std::function<Eigen::VectorXd(double t, const Eigen::VectorXd& q, const Eigen::VectorXd& qd)>;
 
+// `torque(q, qd)` of one joint's own motion on `joint` (0-based), nothing on the others.
+HiddenArmTorque HiddenOnJoint(int joint, std::function<double(double q, double qd)> torque);
+
 struct ForeignArmRecording {
   double seconds = 30;
   // false: the motion is the excitation exactly and the logged torque is MuJoCo's

@@ -51,6 +51,14 @@ std::string ArmUrdf(const ArmModel& model) {
   return out.str();
 }
 
+HiddenArmTorque HiddenOnJoint(int joint, std::function<double(double q, double qd)> torque) {
+  return [joint, torque](double, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
+    Eigen::VectorXd tau = Eigen::VectorXd::Zero(q.size());
+    tau[joint] = torque(q[joint], qd[joint]);
+    return tau;
+  };
+}
+
 #ifndef TWINSIM_HAVE_MUJOCO
 
 bool MujocoAvailable() { return false; }
@@ -184,8 +192,9 @@ ArmLog RecordMujocoArm(const ArmModel& plant, std::uint64_t seed, const ForeignA
   const Excitation excitation = DrawExcitation(plant, &rng);
   std::unique_ptr<Mujoco> mj = LoadMujoco(plant, seed);
 
-  // The open-loop torque: what the exact motion needs, sent `delay` early.
-  Eigen::MatrixXd feedforward(rows, n), q_exact(rows, n), qd_exact(rows, n);
+  // What the exact motion needs, sent `delay` early (the closed loop's feedforward);
+  // open loop the hidden torque helps the motor, which sends that much less.
+  Eigen::MatrixXd feedforward(rows, n), open_loop(rows, n), q_exact(rows, n), qd_exact(rows, n);
   for (int k = 0; k < rows; ++k) {
     Eigen::VectorXd q, qd, qdd;
     excitation.At(k * dt, &q, &qd, &qdd);
@@ -193,13 +202,8 @@ ArmLog RecordMujocoArm(const ArmModel& plant, std::uint64_t seed, const ForeignA
     qd_exact.row(k) = qd.transpose();
     excitation.At(k * dt + delay, &q, &qd, &qdd);
     feedforward.row(k) = Needed(plant, mj.get(), q, qd, qdd).transpose();
-  }
-  // Open loop, the hidden torque helps the motor: it sends that much less.
-  Eigen::MatrixXd open_loop = feedforward;
-  for (int k = 0; k < rows && how.hidden; ++k) {
-    Eigen::VectorXd q, qd, qdd;
-    excitation.At(k * dt + delay, &q, &qd, &qdd);
-    open_loop.row(k) -= how.hidden(k * dt + delay, q, qd).transpose();
+    open_loop.row(k) = feedforward.row(k);
+    if (how.hidden) open_loop.row(k) -= how.hidden(k * dt + delay, q, qd).transpose();
   }
   Eigen::VectorXd sigma(n);
   for (int j = 0; j < n; ++j) sigma[j] = how.noise_share * feedforward.col(j).cwiseAbs().mean();
