@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "analysis/arm_simulation_score.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
 #include "learning/arm_features.h"
@@ -80,25 +81,12 @@ WritingComparison CompareOnReference(const ArmModel& plant, const ArmModel& hat,
 
 Eigen::MatrixXd PhysicalRolloutError(const ArmModel& model, const std::string& backend, const ArmLog& log, int start,
                                      int steps) {
-  const int n = model.dof(), d = model.delay_samples;
-  if (log.dof != n || start - d < 0 || steps < 0 || start + steps >= log.rows())
+  if (log.dof != model.dof() || start - model.delay_samples < 0 || steps < 0 || start + steps >= log.rows())
     throw std::invalid_argument("PhysicalRolloutError: the window does not fit the log");
   ArmSimulation sim(model, MakeArmBackend(backend, model));
-  sim.Reset(log.q.row(start).transpose(), log.qd.row(start).transpose(), log.tau.row(start - d).transpose());
-  // The commands logged in the D samples before the start are in flight.
-  ArmSimulationState state = sim.Save();
-  for (int k = start - d + 1; k < start; ++k) state.commands_in_flight.Push(log.tau.row(k).transpose());
-  sim.Restore(state);
-  int k = start;
-  const ArmController replay = [&](double, const Eigen::VectorXd&, const Eigen::VectorXd&) {
-    return Eigen::VectorXd(log.tau.row(k++).transpose());
-  };
-  Eigen::MatrixXd error(steps, n);
-  for (int t = 0; t < steps; ++t) {
-    sim.Step(replay);
-    error.row(t) = sim.backend().q().transpose() - log.q.row(start + t + 1);
-  }
-  return error;
+  Eigen::MatrixXd q;
+  SimulateArmFromLog(&sim, log, start, steps, &q);
+  return q - log.q.middleRows(start + 1, steps);
 }
 
 namespace {

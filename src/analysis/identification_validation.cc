@@ -27,6 +27,11 @@ IdentificationValidation ValidateIdentification(const ArmModel& a_priori, const 
     errors.identified = CompareArmTorques(identified, log, tau, first, last);
     errors.unconstrained = CompareArmTorques(identified, log, free, first, last);
     validation.logs.push_back(std::move(errors));
+
+    ArmSimulationScoreOptions simulation;
+    simulation.drop_long_horizons = true;
+    validation.simulated.emplace_back("a-priori", ScoreArmSimulation(a_priori, log, simulation));
+    validation.simulated.emplace_back("identified", ScoreArmSimulation(identified, log, simulation));
   }
   return validation;
 }
@@ -56,6 +61,7 @@ std::string IdentificationValidation::FullReport() const {
                   100 * before.normalised, 100 * after.normalised, 100 * unconstrained.normalised);
     text += line;
   }
+  if (!simulated.empty()) text += FormatArmSimulationScores(simulated);
   return text;
 }
 

@@ -1,7 +1,8 @@
 // Judging an identified arm model on held-out logs (`twinsim identify --validate`): the
 // torque errors on logs the identification never saw, of the a-priori model, of the
 // identified (physically consistent) model, and of the unconstrained least-squares
-// estimate, which predicts straight from its base parameters. The first and the last
+// estimate, which predicts straight from its base parameters; and the motion the
+// a-priori and the identified model simulate from the logs' torques. The first and the last
 // edge_samples rows of each log are left out, where derived velocities and
 // accelerations are least reliable.
 //
@@ -11,9 +12,11 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/arm_replay.h"
+#include "analysis/arm_simulation_score.h"
 #include "identification/wls_identification.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
@@ -30,10 +33,14 @@ struct HeldOutTorqueErrors {
 
 struct IdentificationValidation {
   std::vector<HeldOutTorqueErrors> logs;  // in the order given
+  // Per log, the a-priori and the identified model simulated from the log's torques
+  // ("a-priori", "identified"; analysis/arm_simulation_score.h), at the default horizons
+  // that fit in the log.
+  std::vector<std::pair<std::string, ArmSimulationScore>> simulated;
 
   // Per log: a table of the torque RMS and the three errors per joint (N·m or N, and
-  // percent of the torque RMS), and the mean relative and normalised errors; empty
-  // without logs.
+  // percent of the torque RMS), and the mean relative and normalised errors; then the
+  // simulation errors; empty without logs.
   std::string FullReport() const;
 };
 

@@ -25,6 +25,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/math_constants.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -208,7 +209,6 @@ grid:
   scene.duration: [0.5, 1.0]
 )yaml";
 
-constexpr double kPi = 3.14159265358979323846;
 
 // True while the cases are listed for registration only: the generators below then
 // return nothing. Every process ctest starts registers all the cases, and building

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/math_constants.h"
 #include "core/rng.h"
 
 #ifdef TWINSIM_HAVE_MUJOCO
@@ -73,7 +74,6 @@ bool MujocoAvailable() { return true; }
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kHarmonics = 5;
 constexpr double kFundamentalHz = 0.1;
 constexpr double kRangeShare = 0.7;  // the most of a joint's range the excitation sweeps

@@ -12,10 +12,13 @@
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "io/png_image.h"
+#include "render/pixel_util.h"
 #include "render/plot.h"
 
 namespace twinsim {
 namespace {
+
+using testing::ColorDistance;
 
 constexpr double kDeg = kPi / 180;
 
@@ -28,7 +31,6 @@ Path3D Segment(const std::string& name, const Eigen::Vector3d& a, const Eigen::V
 }
 
 // Sum of absolute channel differences.
-int ColorDistance(const std::uint8_t* p, Color c) { return std::abs(p[0] - c.r) + std::abs(p[1] - c.g) + std::abs(p[2] - c.b); }
 
 double DistanceToRect(Point2d p, const Rect& r) {
   const double dx = std::max({r.x0 - p.x, 0.0, p.x - r.x1}), dy = std::max({r.y0 - p.y, 0.0, p.y - r.y1});

@@ -9,10 +9,13 @@
 
 #include "core/error.h"
 #include "io/png_image.h"
+#include "render/pixel_util.h"
 #include "test_util.h"
 
 namespace twinsim {
 namespace {
+
+using testing::ColorDistance;
 
 // A straight path from (x0, y0) to (x1, y1) in `n` poses, heading along it.
 PlotPath Line(const std::string& name, double x0, double y0, double x1, double y1, int n = 200) {
@@ -26,7 +29,6 @@ PlotPath Line(const std::string& name, double x0, double y0, double x1, double y
 }
 
 // Distance in colour space (sum of absolute channel differences).
-int ColorDistance(const std::uint8_t* p, Color c) { return std::abs(p[0] - c.r) + std::abs(p[1] - c.g) + std::abs(p[2] - c.b); }
 
 // The smallest ColorDistance in the 3 x 3 pixels around p: p's own pixel may be one a
 // line's edge only partly covers.

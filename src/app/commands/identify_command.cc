@@ -169,7 +169,10 @@ int Identify(const IdentifyCliOptions& options) {
     const std::string report = options.report + "/";
     files.Write(report + "parameters.csv", FormatIdentifiedParametersCsv(summary));
     files.Write(report + "joints.csv", FormatIdentifiedJointsCsv(summary));
-    if (!held_out.empty()) files.Write(report + "validation.csv", FormatIdentificationValidationCsv(validation));
+    if (!held_out.empty()) {
+      files.Write(report + "validation.csv", FormatIdentificationValidationCsv(validation));
+      files.Write(report + "simulation.csv", FormatArmSimulationScoresCsv(validation.simulated));
+    }
     if (RenderingCompiled()) {
       std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
       const Eigen::MatrixXd before = PredictArmCommands(model, logs[0]);

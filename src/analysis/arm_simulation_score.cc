@@ -1,0 +1,227 @@
+#include "analysis/arm_simulation_score.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <stdexcept>
+
+#include "backends/arm_backend_factory.h"
+#include "core/error.h"
+#include "io/csv_table.h"
+#include "sim/arm_simulation.h"
+
+namespace twinsim {
+
+bool ArmSimulationScoreOptions::IsValid(std::string* why) const {
+  if (horizons.empty()) {
+    *why = "no horizon to score";
+    return false;
+  }
+  for (double h : horizons) {
+    if (!std::isfinite(h) || h < 0) {
+      char text[64];
+      std::snprintf(text, sizeof text, "%g", h);
+      *why = std::string("a horizon must be 0 (the free run) or a positive number of seconds, not ") + text;
+      return false;
+    }
+  }
+  return true;
+}
+
+namespace {
+
+// The model stepping once per row of a log sampled every `period` s.
+ArmModel AtLogPeriod(const ArmModel& model, double period) {
+  ArmModel at = model;
+  at.delay_samples = static_cast<int>(std::lround(model.delay_samples * model.sample_time / period));
+  at.sample_time = period;
+  return at;
+}
+
+ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, int first, int last, double horizon) {
+  const int n = log.dof;
+  const int length = horizon > 0 ? std::max(1, static_cast<int>(std::lround(horizon / log.sample_period)))
+                                 : last - first;
+  ArmHorizonScore score;
+  score.horizon = horizon;
+  Eigen::ArrayXd model = Eigen::ArrayXd::Zero(n), hold = model, velocity = model, sum = model, squares = model;
+  Eigen::MatrixXd q(length, n);
+  for (int start = first; start + length <= last; start += length) {
+    if (!SimulateArmFromLog(sim, log, start, length, &q, true)) ++score.diverged;
+    ++score.windows;
+    for (int r = 0; r < length; ++r) {
+      const int row = start + 1 + r;
+      const Eigen::ArrayXd measured = log.q.row(row).transpose().array();
+      const double elapsed = static_cast<double>(r + 1) * log.sample_period;
+      model += (q.row(r).transpose().array() - measured).square();
+      hold += (log.q.row(start).transpose().array() - measured).square();
+      velocity += (log.q.row(start).transpose().array() + elapsed * log.qd.row(start).transpose().array() - measured)
+                      .square();
+      sum += measured;
+      squares += measured.square();
+    }
+    score.rows += length;
+  }
+  const double rows = std::max(1, score.rows);
+  score.rmse = (model / rows).sqrt().matrix();
+  score.hold = (hold / rows).sqrt().matrix();
+  score.constant_velocity = (velocity / rows).sqrt().matrix();
+  // ||q - mean q||^2 = sum q^2 - (sum q)^2 / rows
+  const Eigen::ArrayXd spread = (squares - sum.square() / rows).max(0).sqrt();
+  score.fit.resize(n);
+  for (int j = 0; j < n; ++j)
+    score.fit[j] = spread[j] > 0 ? 100 * (1 - std::sqrt(model[j]) / spread[j]) : std::nan("");
+  return score;
+}
+
+}  // namespace
+
+bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int steps, Eigen::MatrixXd* q,
+                        bool hold_on_runaway) {
+  const int n = sim->model().dof(), d = sim->model().delay_samples;
+  if (log.dof != n || start - d < 0 || steps < 0 || start + steps >= log.rows())
+    throw std::invalid_argument("SimulateArmFromLog: the window does not fit the log");
+  q->resize(steps, n);
+  sim->Reset(log.q.row(start).transpose(), log.qd.row(start).transpose(), log.tau.row(start - d).transpose());
+  // The commands logged in the D rows before the start are in flight.
+  ArmSimulationState state = sim->Save();
+  for (int k = start - d + 1; k < start; ++k) state.commands_in_flight.Push(log.tau.row(k).transpose());
+  sim->Restore(state);
+  int k = start;
+  const ArmController replay = [&](double, const Eigen::VectorXd&, const Eigen::VectorXd&) {
+    return Eigen::VectorXd(log.tau.row(k++).transpose());
+  };
+  for (int r = 0; r < steps; ++r) {
+    try {
+      sim->Step(replay);
+    } catch (const CheckFailed&) {
+      if (!hold_on_runaway) throw;
+      const Eigen::RowVectorXd last = r > 0 ? Eigen::RowVectorXd(q->row(r - 1)) : Eigen::RowVectorXd(log.q.row(start));
+      for (int rest = r; rest < steps; ++rest) q->row(rest) = last;
+      return false;
+    }
+    q->row(r) = sim->backend().q().transpose();
+  }
+  return true;
+}
+
+ArmSimulationScore ScoreArmSimulation(const ArmModel& model, const ArmLog& log,
+                                      const ArmSimulationScoreOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError("simulation score: " + why);
+  CheckArmLogMatchesModel(log, model);
+  const ArmModel at = AtLogPeriod(model, log.sample_period);
+  const int first = std::max(log.edge_samples, at.delay_samples);
+  const int last = log.rows() - 1 - log.edge_samples;
+  ArmSimulationScore score;
+  score.path = log.path;
+  if (last - first < 2) {
+    if (options.drop_long_horizons) return score;
+    throw InputError(SourceLocation{log.path, 1}, "the log is too short to simulate");
+  }
+  std::vector<double> horizons;
+  for (double h : options.horizons) {
+    const bool fits = std::lround(h / log.sample_period) <= last - first;
+    if (!fits && options.drop_long_horizons) continue;
+    if (!fits) {
+      throw InputError(SourceLocation{log.path, 1},
+                       "the log's " + std::to_string(last - first) + " usable rows (" +
+                           FormatCsvNumber((last - first) * log.sample_period) +
+                           " s) are too few for a simulation window of " + FormatCsvNumber(h) + " s");
+    }
+    horizons.push_back(h);
+  }
+  ArmSimulation sim(at, MakeArmBackend(options.backend, at));
+  for (double h : horizons) score.horizons.push_back(ScoreHorizon(&sim, log, first, last, h));
+  return score;
+}
+
+namespace {
+
+std::string HorizonName(double horizon) {
+  if (horizon == 0) return "free run";
+  char text[32];
+  std::snprintf(text, sizeof text, "%g s", horizon);
+  return text;
+}
+
+}  // namespace
+
+std::string FormatArmSimulationScores(const std::vector<std::pair<std::string, ArmSimulationScore>>& scores) {
+  // One table per log, the models side by side.
+  std::vector<std::string> paths;
+  std::map<std::string, std::vector<const std::pair<std::string, ArmSimulationScore>*>> by_log;
+  for (const auto& s : scores) {
+    if (!by_log.count(s.second.path)) paths.push_back(s.second.path);
+    by_log[s.second.path].push_back(&s);
+  }
+  std::string text;
+  char cell[160];
+  for (const std::string& path : paths) {
+    const auto& models = by_log[path];
+    const ArmSimulationScore& first = models.front()->second;
+    if (first.horizons.empty()) continue;
+    text += "\nsimulated from its torques: " + path + " (position RMSE per joint, rad or m; fit in %)\n";
+    std::snprintf(cell, sizeof cell, "%-10s %-5s", "horizon", "joint");
+    text += cell;
+    for (const auto* m : models) {
+      std::snprintf(cell, sizeof cell, " %22s", m->first.c_str());
+      text += cell;
+    }
+    std::snprintf(cell, sizeof cell, " %11s %11s\n", "hold", "const. vel.");
+    text += cell;
+    for (std::size_t h = 0; h < first.horizons.size(); ++h) {
+      const ArmHorizonScore& base = first.horizons[h];
+      for (Eigen::Index j = 0; j < base.rmse.size(); ++j) {
+        std::snprintf(cell, sizeof cell, "%-10s %-5d", j == 0 ? HorizonName(base.horizon).c_str() : "",
+                      static_cast<int>(j) + 1);
+        text += cell;
+        for (const auto* m : models) {
+          const ArmHorizonScore& s = m->second.horizons.at(h);
+          if (std::isfinite(s.fit[j])) {
+            std::snprintf(cell, sizeof cell, " %11.4g (%7.1f%%)", s.rmse[j], s.fit[j]);
+          } else {
+            std::snprintf(cell, sizeof cell, " %11.4g (%8s)", s.rmse[j], "still");
+          }
+          text += cell;
+        }
+        std::snprintf(cell, sizeof cell, " %11.4g %11.4g\n", base.hold[j], base.constant_velocity[j]);
+        text += cell;
+      }
+      // Said plainly: where a model predicts worse than no model at all.
+      for (const auto* m : models) {
+        const ArmHorizonScore& s = m->second.horizons.at(h);
+        const int n = static_cast<int>(s.rmse.size());
+        const int hold = static_cast<int>((s.rmse.array() < s.hold.array()).count());
+        const int velocity = static_cast<int>((s.rmse.array() < s.constant_velocity.array()).count());
+        std::snprintf(cell, sizeof cell, "  %s beats holding on %d of %d joints, constant velocity on %d of %d", m->first.c_str(),
+                      hold, n, velocity, n);
+        text += cell;
+        if (s.diverged > 0) {
+          std::snprintf(cell, sizeof cell, "; ran away in %d of %d windows", s.diverged, s.windows);
+          text += cell;
+        }
+        text += "\n";
+      }
+    }
+  }
+  return text;
+}
+
+std::string FormatArmSimulationScoresCsv(const std::vector<std::pair<std::string, ArmSimulationScore>>& scores) {
+  std::string csv = "log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,rmse_constant_velocity\n";
+  for (const auto& [name, score] : scores) {
+    for (const ArmHorizonScore& s : score.horizons) {
+      for (Eigen::Index j = 0; j < s.rmse.size(); ++j) {
+        csv += score.path + "," + name + "," + FormatCsvNumber(s.horizon) + "," + std::to_string(j + 1) + "," +
+               std::to_string(s.windows) + "," + std::to_string(s.rows) + "," + std::to_string(s.diverged) + "," +
+               FormatCsvNumber(s.rmse[j]) + "," + (std::isfinite(s.fit[j]) ? FormatCsvNumber(s.fit[j]) : "") + "," + FormatCsvNumber(s.hold[j]) +
+               "," + FormatCsvNumber(s.constant_velocity[j]) + "\n";
+      }
+    }
+  }
+  return csv;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,92 @@
+// What a simulator of an arm is for: predicting its motion from its torques. An arm
+// model is scored on a log by simulating it open loop from the logged torques (sent as
+// commands: the model's delays, effects and friction applied by the Newtonian backend),
+// started from the logged state, against the logged positions (docs/identification.md,
+// "Simulation error"):
+//
+//   - windows of `horizon` seconds, each restarted from the logged q and q̇ of its first
+//     row with the commands logged before it in the delay line; every row of every
+//     window is scored (the error grows along a window);
+//   - the free run: one window over the whole log, as the nonlinear system-identification
+//     benchmarks score a simulator (fit = 100 (1 - ||q - q_sim|| / ||q - mean q||)).
+//
+// Beside the model, two baselines a user would try with no model at all: the joints held
+// where the window starts, and moved on at the velocity they had there. A model that
+// does not beat them at a horizon predicts nothing there.
+//
+// The simulation steps at the log's own period (the model's sample_time replaced by it,
+// its delay_samples rescaled to the nearest whole row): logs sampled slower than the
+// controller (the KUKA's 200 Hz) hold each torque over a row, as their rows record it.
+//
+//   ArmSimulationScore s = ScoreArmSimulation(model, log, {});
+//   std::printf("%s", FormatArmSimulationScores({{"identified", s}}).c_str());
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "robots/arm/arm_log.h"
+#include "robots/arm/arm_model.h"
+
+namespace twinsim {
+
+class ArmSimulation;
+
+// The open-loop simulation of `sim`'s model from row `start` of `log`: reset to the
+// logged q and q̇ there, with the commands logged in the delay_samples rows before it
+// in flight, then driven by the logged torques, one row per sample; the simulated q at
+// rows start+1 .. start+steps into *q (steps x dof). A run-away (CheckFailed) propagates,
+// or with `hold_on_runaway` holds the last good state for the remaining rows and returns
+// false. Throws std::invalid_argument when the window does not fit the log.
+bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int steps, Eigen::MatrixXd* q,
+                        bool hold_on_runaway = false);
+
+struct ArmSimulationScoreOptions {
+  // s: the windows' lengths; 0 is the free run over the whole log.
+  std::vector<double> horizons = {0.1, 1.0, 0};
+  std::string backend = "analytic";  // the Newtonian backend that simulates the model
+  // Horizons longer than the log's usable rows are left out instead of refused (a log
+  // too short for any window then gets no horizons).
+  bool drop_long_horizons = false;
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
+};
+
+// One horizon's errors, per joint (rad or m), pooled over the rows of every window.
+struct ArmHorizonScore {
+  double horizon = 0;      // s; 0: the free run
+  int windows = 0;         // windows simulated
+  int rows = 0;            // rows scored (every window's rows after its first)
+  int diverged = 0;        // windows the model ran away in (their rows held at the last good state)
+  Eigen::VectorXd rmse;    // the model's position error
+  Eigen::VectorXd fit;     // percent: 100 (1 - ||error|| / ||q - mean q||) over the scored rows;
+                           // NaN for a joint that never moves (an empty cell in the CSV)
+  Eigen::VectorXd hold;    // the baseline that holds the window's first q
+  Eigen::VectorXd constant_velocity;  // the baseline that moves on at the window's first q̇
+};
+
+struct ArmSimulationScore {
+  std::string path;  // the log's
+  std::vector<ArmHorizonScore> horizons;  // in the order of the options
+};
+
+// Scores `model` on `log` (the rows between its edge_samples, where logged or derived
+// q̇ is reliable). Throws InputError for invalid options, a log of another arm, or one
+// too short for a window (without drop_long_horizons).
+ArmSimulationScore ScoreArmSimulation(const ArmModel& model, const ArmLog& log,
+                                      const ArmSimulationScoreOptions& options = {});
+
+// A table per log of the named models' scores: one row per horizon and joint, the
+// models' RMSE and fit beside the two baselines'. All scores of one log must share its
+// horizons.
+std::string FormatArmSimulationScores(const std::vector<std::pair<std::string, ArmSimulationScore>>& scores);
+
+// simulation.csv: log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,
+// rmse_constant_velocity (rad or m; fit in percent, empty for a joint that never moves;
+// horizon 0: the free run).
+std::string FormatArmSimulationScoresCsv(const std::vector<std::pair<std::string, ArmSimulationScore>>& scores);
+
+}  // namespace twinsim
