@@ -31,23 +31,15 @@ bool ArmSimulationScoreOptions::IsValid(std::string* why) const {
 
 namespace {
 
-// The model stepping once per row of a log sampled every `period` s.
-ArmModel AtLogPeriod(const ArmModel& model, double period) {
-  ArmModel at = model;
-  at.delay_samples = static_cast<int>(std::lround(model.delay_samples * model.sample_time / period));
-  at.sample_time = period;
-  return at;
-}
-
-ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, int first, int last, double horizon) {
+ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horizon) {
   const int n = log.dof;
-  const int length = horizon > 0 ? std::max(1, static_cast<int>(std::lround(horizon / log.sample_period)))
-                                 : last - first;
+  int length = 0;
+  const std::vector<int> starts = ArmSimulationWindows(sim->model(), log, horizon, &length);
   ArmHorizonScore score;
   score.horizon = horizon;
   Eigen::ArrayXd model = Eigen::ArrayXd::Zero(n), hold = model, velocity = model, sum = model, squares = model;
   Eigen::MatrixXd q(length, n);
-  for (int start = first; start + length <= last; start += length) {
+  for (int start : starts) {
     if (!SimulateArmFromLog(sim, log, start, length, &q, true)) ++score.diverged;
     ++score.windows;
     for (int r = 0; r < length; ++r) {
@@ -106,34 +98,47 @@ bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int st
   return true;
 }
 
+ArmModel ArmModelAtLogPeriod(const ArmModel& model, double period) {
+  ArmModel at = model;
+  at.delay_samples = static_cast<int>(std::lround(model.delay_samples * model.sample_time / period));
+  at.sample_time = period;
+  return at;
+}
+
+std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, double horizon, int* length) {
+  const int first = std::max(log.edge_samples, model.delay_samples);
+  const int last = log.rows() - 1 - log.edge_samples;
+  *length = horizon > 0 ? std::max(1, static_cast<int>(std::lround(horizon / log.sample_period))) : last - first;
+  std::vector<int> starts;
+  if (last - first < 2) return starts;
+  for (int start = first; start + *length <= last; start += *length) starts.push_back(start);
+  return starts;
+}
+
 ArmSimulationScore ScoreArmSimulation(const ArmModel& model, const ArmLog& log,
                                       const ArmSimulationScoreOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("simulation score: " + why);
   CheckArmLogMatchesModel(log, model);
-  const ArmModel at = AtLogPeriod(model, log.sample_period);
-  const int first = std::max(log.edge_samples, at.delay_samples);
-  const int last = log.rows() - 1 - log.edge_samples;
+  const ArmModel at = ArmModelAtLogPeriod(model, log.sample_period);
   ArmSimulationScore score;
   score.path = log.path;
-  if (last - first < 2) {
-    if (options.drop_long_horizons) return score;
-    throw InputError(SourceLocation{log.path, 1}, "the log is too short to simulate");
-  }
   std::vector<double> horizons;
   for (double h : options.horizons) {
-    const bool fits = std::lround(h / log.sample_period) <= last - first;
-    if (!fits && options.drop_long_horizons) continue;
-    if (!fits) {
+    int length = 0;
+    if (!ArmSimulationWindows(at, log, h, &length).empty()) {
+      horizons.push_back(h);
+    } else if (!options.drop_long_horizons) {
+      const int usable = std::max(0, log.rows() - 1 - 2 * log.edge_samples - at.delay_samples);
       throw InputError(SourceLocation{log.path, 1},
-                       "the log's " + std::to_string(last - first) + " usable rows (" +
-                           FormatCsvNumber((last - first) * log.sample_period) +
-                           " s) are too few for a simulation window of " + FormatCsvNumber(h) + " s");
+                       "the log's " + std::to_string(usable) + " usable rows (" +
+                           FormatCsvNumber(usable * log.sample_period) + " s) are too few for a simulation window" +
+                           (h > 0 ? " of " + FormatCsvNumber(h) + " s" : ""));
     }
-    horizons.push_back(h);
   }
+  if (horizons.empty()) return score;
   ArmSimulation sim(at, MakeArmBackend(options.backend, at));
-  for (double h : horizons) score.horizons.push_back(ScoreHorizon(&sim, log, first, last, h));
+  for (double h : horizons) score.horizons.push_back(ScoreHorizon(&sim, log, h));
   return score;
 }
 

@@ -44,6 +44,15 @@ class ArmSimulation;
 bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int steps, Eigen::MatrixXd* q,
                         bool hold_on_runaway = false);
 
+// `model` stepping once per row of a log sampled every `period` s: its sample_time
+// replaced by the period, its delay_samples rescaled to the nearest whole row.
+ArmModel ArmModelAtLogPeriod(const ArmModel& model, double period);
+
+// The first rows of the windows of `horizon` s (0: one window over the whole log) that a
+// score of `model` (at the log's period) simulates on `log`, each *length rows long: the
+// rows between the log's edge_samples, after the model's delay. Empty when none fits.
+std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, double horizon, int* length);
+
 struct ArmSimulationScoreOptions {
   // s: the windows' lengths; 0 is the free run over the whole log.
   std::vector<double> horizons = {0.1, 1.0, 0};

@@ -1,11 +1,23 @@
 #include "analysis/identification_validation.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <utility>
 
 #include "io/csv_table.h"
 
 namespace twinsim {
+
+namespace {
+
+// The default horizons, those longer than a held-out log left out.
+ArmSimulationScoreOptions HeldOutSimulation() {
+  ArmSimulationScoreOptions options;
+  options.drop_long_horizons = true;
+  return options;
+}
+
+}  // namespace
 
 IdentificationValidation ValidateIdentification(const ArmModel& a_priori, const ArmModel& identified,
                                                 const WlsIdentificationSummary& summary,
@@ -28,12 +40,20 @@ IdentificationValidation ValidateIdentification(const ArmModel& a_priori, const 
     errors.unconstrained = CompareArmTorques(identified, log, free, first, last);
     validation.logs.push_back(std::move(errors));
 
-    ArmSimulationScoreOptions simulation;
-    simulation.drop_long_horizons = true;
-    validation.simulated.emplace_back("a-priori", ScoreArmSimulation(a_priori, log, simulation));
-    validation.simulated.emplace_back("identified", ScoreArmSimulation(identified, log, simulation));
+    validation.simulated.emplace_back("a-priori", ScoreArmSimulation(a_priori, log, HeldOutSimulation()));
+    validation.simulated.emplace_back("identified", ScoreArmSimulation(identified, log, HeldOutSimulation()));
   }
   return validation;
+}
+
+void AddSimulatedModel(IdentificationValidation* validation, const std::string& name, const ArmModel& model,
+                       const std::vector<ArmLog>& held_out) {
+  auto& simulated = validation->simulated;
+  for (const ArmLog& log : held_out) {
+    auto at = std::find_if(simulated.begin(), simulated.end(),
+                           [&](const auto& s) { return s.first == "identified" && s.second.path == log.path; });
+    simulated.emplace(at, name, ScoreArmSimulation(model, log, HeldOutSimulation()));
+  }
 }
 
 std::string IdentificationValidation::FullReport() const {

@@ -52,6 +52,11 @@ IdentificationValidation ValidateIdentification(const ArmModel& a_priori, const 
                                                 const WlsIdentificationOptions& options,
                                                 const std::vector<ArmLog>& held_out);
 
+// Adds `model`'s simulation scores on `held_out` to validation->simulated under `name`,
+// each log's just before its "identified" entry.
+void AddSimulatedModel(IdentificationValidation* validation, const std::string& name, const ArmModel& model,
+                       const std::vector<ArmLog>& held_out);
+
 // validation.csv: log,joint,torque_rms,error_a_priori,error_identified,error_unconstrained,
 // relative_a_priori,relative_identified,relative_unconstrained, one row per log and joint
 // (N·m or N; relative as fractions of the torque RMS).

@@ -1,6 +1,7 @@
 // The simulation score of an arm model: the motion simulated from a log's torques
 // against the logged one, beside the hold and constant-velocity baselines.
 #include "analysis/arm_simulation_score.h"
+#include "analysis/arm_output_error.h"
 
 #include <gtest/gtest.h>
 
@@ -23,6 +24,7 @@ namespace {
 // `hold` samples (the controller of a log sampled at 1 kHz / hold), recorded one row per
 // update: t, q, q̇ as sampled, the torque sent. Read back through the CSV reader.
 ArmLog PlantLog(const ArmModel& plant, double seconds, int hold) {
+  // t, q, q̇ and q̈ logged (no derived values, no edge rows).
   ArmSimulation sim(plant, MakeArmBackend("ode", plant));
   const Eigen::Vector3d centre(0.2, 0.4, -0.6), amplitude(0.5, 0.3, 0.6);
   auto reference = [&](double t) {
@@ -49,13 +51,19 @@ ArmLog PlantLog(const ArmModel& plant, double seconds, int hold) {
   log.t.resize(rows);
   log.q.resize(rows, 3);
   log.qd.resize(rows, 3);
-  log.qdd = Eigen::MatrixXd::Zero(rows, 3);
+  log.qdd.resize(rows, 3);
   log.tau.resize(rows, 3);
   for (int r = 0; r < rows; ++r) {
     log.t[r] = run.t[r * hold];
     log.q.row(r) = run.q.row(r * hold);
     log.qd.row(r) = run.qd.row(r * hold);
     log.tau.row(r) = run.command.row(r * hold);
+  }
+  // q̈ by central differences of the sampled q̇ (one-sided at the ends).
+  const double dt = hold * plant.sample_time;
+  for (int r = 0; r < rows; ++r) {
+    const int a = std::max(r - 1, 0), b = std::min(r + 1, rows - 1);
+    log.qdd.row(r) = (log.qd.row(b) - log.qd.row(a)) / ((b - a) * dt);
   }
   return ParseArmLog(FormatArmLog(log, true), "plant.csv");
 }
@@ -162,6 +170,55 @@ TEST(ArmSimulationScore, AModelThatRunsAwayIsCountedAndHeld) {
   EXPECT_EQ(s.horizons.at(0).diverged, 1);
   EXPECT_TRUE(s.horizons.at(0).rmse.allFinite());
   EXPECT_NE(FormatArmSimulationScores({{"light", s}}).find("; ran away in 1 of 1 windows"), std::string::npos);
+}
+
+// Output error: a model whose links are 30 % too heavy and whose viscous friction is
+// half the plant's, refined on the ODE plant's log, finds the plant's (the analytic
+// model and ODE agree to 3e-5 rad over 0.1 s, above).
+TEST(ArmOutputError, RecoversTheLinksScaleAndTheFrictionOfAPlantFromAnotherEngine) {
+  const ArmModel truth = Rrr();
+  ArmModel start = truth;
+  for (ArmJoint& j : start.joints) j.child.mass *= 1.3, j.child.inertia *= 1.3, j.viscous *= 0.5;
+  const ArmLog log = PlantLog(truth, 4.0, 2);  // 500 Hz
+  ArmOutputErrorOptions options;
+  options.horizon = 0.1;
+  options.threads = 2;
+  options.torque_weight = 0;
+  ArmOutputErrorSummary summary;
+  const ArmModel refined = RefineArmByOutputError(start, {log}, options, &summary);
+  std::cout << summary.FullReport();
+  EXPECT_TRUE(summary.kept);
+  // Windows of 50 rows from row 0: the model's 1 ms delay rounds to no row at 2 ms.
+  EXPECT_EQ(summary.fit_windows + summary.check_windows, (log.rows() - 1) / 50);
+  EXPECT_EQ(summary.check_windows, (summary.fit_windows + summary.check_windows) / 4);
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_NEAR(summary.scale[j] * 1.3, 1.0, 0.03) << "joint " << j + 1;
+    EXPECT_NEAR(refined.joints[j].child.mass, truth.joints[j].child.mass, 0.03 * truth.joints[j].child.mass);
+    EXPECT_NEAR(refined.joints[j].viscous, truth.joints[j].viscous, 0.1 * truth.joints[j].viscous) << "joint " << j + 1;
+    EXPECT_LT(summary.check_after[j], 0.2 * summary.check_before[j]) << "joint " << j + 1;
+  }
+  // Deterministic whatever the thread count.
+  options.threads = 1;
+  ArmOutputErrorSummary one;
+  const ArmModel again = RefineArmByOutputError(start, {log}, options, &one);
+  for (int j = 0; j < 3; ++j) {
+    EXPECT_EQ(again.joints[j].child.mass, refined.joints[j].child.mass);
+    EXPECT_EQ(again.joints[j].viscous, refined.joints[j].viscous);
+  }
+}
+
+TEST(ArmOutputError, RefusesBadOptionsAndLogsTooShort) {
+  const ArmModel truth = Rrr();
+  const ArmLog log = PlantLog(truth, 0.5, 1);
+  ArmOutputErrorOptions options;
+  options.horizon = 0;
+  EXPECT_THROW(RefineArmByOutputError(truth, {log}, options), InputError);
+  options.horizon = 0.2;  // two windows in 0.5 s: fewer than the four it needs
+  EXPECT_THROW(RefineArmByOutputError(truth, {log}, options), InputError);
+  options.horizon = 0.1;
+  options.torque_weight = -1;
+  EXPECT_THROW(RefineArmByOutputError(truth, {log}, options), InputError);
+  EXPECT_THROW(RefineArmByOutputError(truth, {}, ArmOutputErrorOptions{}), InputError);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "analysis/arm_output_error.h"
 #include "analysis/arm_replay.h"
 #include "analysis/identification_validation.h"
 #include "app/commands/commands.h"
@@ -34,6 +35,7 @@ struct IdentifyCliOptions {
   WlsIdentificationOptions identification;
   bool unweighted = false;
   bool offsets = false;
+  double output_error = 0;  // s: the output-error refinement's horizon; 0 = none
   bool quiet = false;
   // Omni robots.
   OmniLogSelector select;
@@ -71,7 +73,7 @@ bool EndsWithYaml(const std::string& path) {
 // Omni: `--out DIR` writes DIR/model.yaml, report.json and report.html; `--out M.yaml`
 // the model there and the reports into --report DIR when given.
 int IdentifyOmniCli(const IdentifyCliOptions& options) {
-  for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition"}) {
+  for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition", "--output-error"}) {
     if (std::find(options.given.begin(), options.given.end(), arm_only) != options.given.end())
       throw InputError(std::string(arm_only) + " is for arms; " + options.model + " is an omni robot");
   }
@@ -123,8 +125,7 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
 int Identify(const IdentifyCliOptions& options) {
   if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
   for (const char* omni_only :
-       {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--threads", "--robot", "--team",
-        "--state"}) {
+       {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--robot", "--team", "--state"}) {
     if (std::find(options.given.begin(), options.given.end(), omni_only) != options.given.end())
       throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
   }
@@ -138,6 +139,12 @@ int Identify(const IdentifyCliOptions& options) {
   identification.torque_offsets = options.offsets;
   std::string why;
   if (!identification.IsValid(&why)) throw InputError(why);
+  ArmOutputErrorOptions output_error;
+  output_error.horizon = options.output_error;
+  output_error.offsets = options.offsets;
+  output_error.threads = options.omni.threads;
+  if (options.output_error != 0 && !output_error.IsValid(&why)) throw InputError("--output-error: " + why);
+  if (options.omni.threads < 0) throw InputError("--threads must be 0 (one per core) or more");
   const ArmModel model = LoadArmModel(options.model);
   std::vector<ArmLog> logs;
   for (const auto& path : options.logs) {
@@ -152,16 +159,31 @@ int Identify(const IdentifyCliOptions& options) {
   }
 
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(model, logs, identification, &summary);
+  const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
+  // --output-error: the inverse-dynamics estimate refined on the logs' simulation error.
+  ArmOutputErrorSummary refinement;
+  const ArmModel identified = options.output_error > 0
+                                  ? RefineArmByOutputError(inverse_dynamics, logs, output_error, &refinement)
+                                  : inverse_dynamics;
 
   // Held-out logs: the torque errors of the a-priori, the identified and the
-  // unconstrained model.
-  const IdentificationValidation validation =
-      ValidateIdentification(model, identified, summary, identification, held_out);
+  // unconstrained model, and the motion they simulate (with --output-error the
+  // inverse-dynamics estimate's too).
+  IdentificationValidation validation = ValidateIdentification(model, identified, summary, identification, held_out);
+  if (options.output_error > 0) AddSimulatedModel(&validation, "inverse dynamics", inverse_dynamics, held_out);
 
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs.size()) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
   comment += "\nstarting from " + options.model + "; " + summary.BriefReport();
+  if (options.output_error > 0) {
+    char refined[160];
+    std::snprintf(refined, sizeof refined,
+                  refinement.kept ? "\nrefined by output error: windows of %g s simulated from the logs' torques"
+                                  : "\noutput error on windows of %g s tried and not kept: the held-out windows were "
+                                    "simulated no better",
+                  options.output_error);
+    comment += refined;
+  }
   OutputFiles files;
   files.Write(options.out, FormatArmModelYaml(identified, comment));
 
@@ -194,6 +216,7 @@ int Identify(const IdentifyCliOptions& options) {
       for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
       std::printf(" N·m or N\n");
     }
+    if (options.output_error > 0) std::printf("\n%s", refinement.FullReport().c_str());
     std::printf("%s\n", validation.FullReport().c_str());
     files.PrintWrote();
   }
@@ -240,7 +263,12 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   cmd->add_flag("--offsets", options->offsets,
                 "Also estimate a constant torque offset per joint (a torque sensor's bias), written as torque_offset effects");
   cmd->add_option("--validate", options->validate,
-                  "Held-out log(s): print the a-priori and identified models' torque errors on them");
+                  "Held-out log(s): print the a-priori and identified models' torque errors on them and the motion "
+                  "they simulate from the logs' torques");
+  cmd->add_option("--output-error", options->output_error,
+                  "s: refine the estimate by output error, on windows of this length simulated from the logs' "
+                  "torques (link inertial scales, friction, offsets); 0 = off")
+      ->capture_default_str();
   cmd->add_option("--report", options->report,
                   "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
   AddLogSelectorOptions(cmd, &options->select);
@@ -261,7 +289,8 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str()
       ->check(CLI::IsMember({"observer", "tracker"}));
   cmd->add_option("--max-delay", options->omni.max_delay, "Omni: s, the longest total delay searched")->capture_default_str();
-  cmd->add_option("--threads", options->omni.threads, "Omni: worker threads (0: one per core); results do not depend on it")
+  cmd->add_option("--threads", options->omni.threads,
+                  "Omni, and an arm's --output-error: worker threads (0: one per core); results do not depend on it")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No tables and no summary");
   cmd->callback([cmd, options, exit_code] {

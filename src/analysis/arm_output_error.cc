@@ -1,0 +1,332 @@
+#include "analysis/arm_output_error.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "analysis/arm_replay.h"
+#include "analysis/arm_simulation_score.h"
+#include "backends/arm_backend_factory.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "sim/arm_simulation.h"
+
+namespace twinsim {
+
+bool ArmOutputErrorOptions::IsValid(std::string* why) const {
+  if (!std::isfinite(horizon) || horizon <= 0) {
+    *why = "the output-error horizon must be a positive number of seconds";
+    return false;
+  }
+  if (max_iterations < 1) {
+    *why = "the output-error fit needs at least one iteration";
+    return false;
+  }
+  if (!std::isfinite(torque_weight) || torque_weight < 0) {
+    *why = "the torque rows' weight must be 0 or more";
+    return false;
+  }
+  if (threads < 0) {
+    *why = "threads must be 0 (one per core) or more";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+// The coordinates' step for the central differences: 0.1 % of a scale or a friction,
+// a hundredth of a percent of a joint's torque RMS for an offset.
+constexpr double kStep = 1e-3;
+
+// The fit's data and coordinates. Coordinates per joint j of n: x[j] = ln k (the link's
+// inertial scale), x[n + j], x[2n + j] the logarithms of viscous and Coulomb friction
+// over their units (the start's values, or a thousandth of the joint's torque scale
+// where the start has none), x[3n + j] the offset's change in tenths of the joint's
+// torque RMS.
+class OutputErrorProblem {
+ public:
+  OutputErrorProblem(const ArmModel& start, const std::vector<ArmLog>& logs, const ArmOutputErrorOptions& options)
+      : start_(start), logs_(logs), options_(options), n_(start.dof()) {
+    Eigen::ArrayXd tau2 = Eigen::ArrayXd::Zero(n_), qd2 = tau2, velocity2 = tau2, torque_error2 = tau2;
+    double samples = 0, rows = 0;
+    int window = 0;
+    for (const ArmLog& log : logs_) {
+      CheckArmLogMatchesModel(log, start_);
+      int length = 0;
+      const std::vector<int> starts =
+          ArmSimulationWindows(ArmModelAtLogPeriod(start_, log.sample_period), log, options_.horizon, &length);
+      fit_.emplace_back();
+      check_.emplace_back();
+      lengths_.push_back(length);
+      for (int s : starts) {
+        // Every fourth window is held out of the fit: the check the refinement must pass.
+        if (window++ % 4 == 3) {
+          check_.back().push_back(s);
+          continue;
+        }
+        fit_.back().push_back(s);
+        for (int r = 0; r < length; ++r) {
+          const double elapsed = static_cast<double>(r + 1) * log.sample_period;
+          velocity2 += (log.q.row(s).array() + elapsed * log.qd.row(s).array() - log.q.row(s + 1 + r).array())
+                           .square()
+                           .transpose();
+        }
+        rows += length;
+      }
+      const int first = log.edge_samples, last = log.rows() - log.edge_samples;
+      tau2 += log.tau.array().square().colwise().sum().transpose();
+      qd2 += log.qd.array().square().colwise().sum().transpose();
+      torque_error2 += (PredictArmCommands(start_, log) - log.tau)
+                           .middleRows(first, last - first)
+                           .array()
+                           .square()
+                           .colwise()
+                           .sum()
+                           .transpose();
+      samples += log.rows();
+      torque_rows_ += static_cast<std::size_t>(last - first);
+    }
+    if (window < 4) {
+      throw InputError(SourceLocation{logs_.empty() ? std::string("(no log)") : logs_.front().path, 1},
+                       "the logs are too short for the output-error fit: it needs at least 4 windows of the horizon "
+                       "(one held out), they hold " + std::to_string(window));
+    }
+    fit_windows_ = window - window / 4;
+    check_windows_ = window / 4;
+    simulated_rows_ = static_cast<std::size_t>(rows);
+    constant_velocity_ = (velocity2 / rows).sqrt().matrix();
+    // Each block's residuals scaled so that its squares start near 1 per joint: the
+    // simulation's by the constant-velocity baseline, the torques' by the start's error.
+    weight_ = (constant_velocity_.array().max(1e-12) * std::sqrt(rows)).inverse().matrix();
+    const double torque_rows = static_cast<double>(std::max<std::size_t>(torque_rows_, 1));
+    const Eigen::ArrayXd torque_rmse = (torque_error2 / torque_rows).sqrt().max(1e-12);
+    torque_weight_ = (std::sqrt(options_.torque_weight) / (torque_rmse * std::sqrt(torque_rows))).matrix();
+    const Eigen::ArrayXd tau_rms = (tau2 / samples).sqrt(), qd_rms = (qd2 / samples).sqrt().max(1e-6);
+    viscous_unit_.resize(n_);
+    coulomb_unit_.resize(n_);
+    offset_unit_ = 0.1 * tau_rms.max(1e-9).matrix();
+    for (int j = 0; j < n_; ++j) {
+      viscous_unit_[j] = std::max(start_.joints[j].viscous, 1e-3 * tau_rms[j] / qd_rms[j]);
+      coulomb_unit_[j] = std::max(start_.joints[j].coulomb, 1e-3 * tau_rms[j]);
+    }
+  }
+
+  int parameters() const { return n_ * (options_.offsets ? 4 : 3); }
+  // The fit's residuals: the simulated rows' position errors, then the torque rows'.
+  std::size_t residuals() const { return (simulated_rows_ + torque_rows_) * static_cast<std::size_t>(n_); }
+  int fit_windows() const { return fit_windows_; }
+  int check_windows() const { return check_windows_; }
+  const Eigen::VectorXd& constant_velocity() const { return constant_velocity_; }
+
+  // The model for coordinates x (0: the start, frictions raised to their floors).
+  ArmModel Apply(const double* x) const {
+    ArmModel m = start_;
+    if (options_.offsets && m.effects.joints.size() != static_cast<std::size_t>(n_)) m.effects.joints.resize(n_);
+    for (int j = 0; j < n_; ++j) {
+      ArmJoint& joint = m.joints[j];
+      const double k = std::exp(x[j]);
+      joint.child.mass *= k;
+      joint.child.inertia *= k;
+      joint.viscous = viscous_unit_[j] * std::exp(x[n_ + j]);
+      joint.coulomb = coulomb_unit_[j] * std::exp(x[2 * n_ + j]);
+      if (options_.offsets)
+        m.effects.joints[j].torque_offset = start_.effects.joint(j).torque_offset + offset_unit_[j] * x[3 * n_ + j];
+    }
+    return m;
+  }
+
+  // The fit's weighted residuals: the position errors of every fit window of every log,
+  // row by row, joint by joint; then the torque errors of every log's rows.
+  void Residual(const ArmModel& model, double* out) const {
+    std::size_t i = 0;
+    Eigen::MatrixXd q;
+    for (std::size_t l = 0; l < logs_.size(); ++l) {
+      const ArmLog& log = logs_[l];
+      const ArmModel at = ArmModelAtLogPeriod(model, log.sample_period);
+      ArmSimulation sim(at, MakeArmBackend(options_.backend, at));
+      for (int s : fit_[l]) {
+        SimulateArmFromLog(&sim, log, s, lengths_[l], &q, true);
+        for (int r = 0; r < lengths_[l]; ++r)
+          for (int j = 0; j < n_; ++j) out[i++] = (q(r, j) - log.q(s + 1 + r, j)) * weight_[j];
+      }
+    }
+    for (const ArmLog& log : logs_) {
+      const Eigen::MatrixXd tau = PredictArmCommands(model, log);
+      for (int r = log.edge_samples; r < log.rows() - log.edge_samples; ++r)
+        for (int j = 0; j < n_; ++j) out[i++] = (tau(r, j) - log.tau(r, j)) * torque_weight_[j];
+    }
+  }
+
+  // Per joint, the position RMSE of the fit windows (`check` false) or the held-out ones.
+  Eigen::VectorXd SimulationRmse(const ArmModel& model, bool check) const {
+    Eigen::ArrayXd squares = Eigen::ArrayXd::Zero(n_);
+    double rows = 0;
+    Eigen::MatrixXd q;
+    for (std::size_t l = 0; l < logs_.size(); ++l) {
+      const ArmLog& log = logs_[l];
+      const ArmModel at = ArmModelAtLogPeriod(model, log.sample_period);
+      ArmSimulation sim(at, MakeArmBackend(options_.backend, at));
+      for (int s : (check ? check_ : fit_)[l]) {
+        SimulateArmFromLog(&sim, log, s, lengths_[l], &q, true);
+        squares += (q - log.q.middleRows(s + 1, lengths_[l])).array().square().colwise().sum().transpose();
+        rows += lengths_[l];
+      }
+    }
+    return (squares / std::max(1.0, rows)).sqrt().matrix();
+  }
+
+  // The held-out windows' error, each joint's against the constant-velocity baseline.
+  double CheckCost(const ArmModel& model) const {
+    return (SimulationRmse(model, true).array() / constant_velocity_.array().max(1e-12)).square().sum();
+  }
+
+ private:
+  const ArmModel& start_;
+  const std::vector<ArmLog>& logs_;
+  ArmOutputErrorOptions options_;
+  int n_;
+  std::vector<std::vector<int>> fit_, check_;  // per log, the windows' first rows
+  std::vector<int> lengths_;                   // per log, the windows' rows
+  int fit_windows_ = 0, check_windows_ = 0;
+  std::size_t simulated_rows_ = 0, torque_rows_ = 0;
+  Eigen::VectorXd constant_velocity_, weight_, torque_weight_, viscous_unit_, coulomb_unit_, offset_unit_;
+};
+
+// Central differences at kStep in every coordinate, the columns simulated in parallel.
+class OutputErrorCost : public ceres::CostFunction {
+ public:
+  OutputErrorCost(const OutputErrorProblem* problem, int threads) : problem_(problem), threads_(threads) {
+    mutable_parameter_block_sizes()->push_back(problem->parameters());
+    set_num_residuals(static_cast<int>(problem->residuals()));
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const int p = problem_->parameters();
+    const std::size_t rows = problem_->residuals();
+    problem_->Residual(problem_->Apply(parameters[0]), residuals);
+    if (!jacobians || !jacobians[0]) return true;
+    std::vector<std::vector<double>> columns(2 * static_cast<std::size_t>(p), std::vector<double>(rows));
+    ParallelFor(2 * p, threads_, [&](int c) {
+      std::vector<double> x(parameters[0], parameters[0] + p);
+      x[static_cast<std::size_t>(c / 2)] += c % 2 == 0 ? kStep : -kStep;
+      problem_->Residual(problem_->Apply(x.data()), columns[static_cast<std::size_t>(c)].data());
+    });
+    for (int k = 0; k < p; ++k) {
+      const std::vector<double>& plus = columns[2 * static_cast<std::size_t>(k)];
+      const std::vector<double>& minus = columns[2 * static_cast<std::size_t>(k) + 1];
+      for (std::size_t r = 0; r < rows; ++r) jacobians[0][r * p + k] = (plus[r] - minus[r]) / (2 * kStep);
+    }
+    return true;
+  }
+
+ private:
+  const OutputErrorProblem* problem_;
+  int threads_;
+};
+
+}  // namespace
+
+ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
+                                const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  if (logs.empty()) throw InputError("output error: no log to fit");
+  const OutputErrorProblem problem(start, logs, options);
+  const int n = start.dof(), p = problem.parameters();
+  std::vector<double> x(static_cast<std::size_t>(p), 0.0);
+  const ArmModel floor = problem.Apply(x.data());
+
+  ceres::Problem ceres_problem;
+  ceres_problem.AddResidualBlock(new OutputErrorCost(&problem, options.threads), nullptr, x.data());
+  // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its
+  // unit to a thousand times it, an offset within twice the joint's torque RMS.
+  std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
+  for (int k = 0; k < p; ++k) {
+    upper[k] = k < n ? std::log(100.0) : k < 3 * n ? std::log(1000.0) : 20.0;
+    lower[k] = k < n || k >= 3 * n ? -upper[k] : std::log(1e-6);
+    ceres_problem.SetParameterLowerBound(x.data(), k, lower[k]);
+    ceres_problem.SetParameterUpperBound(x.data(), k, upper[k]);
+  }
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = 1e-9;
+  solver.parameter_tolerance = 1e-8;
+  solver.num_threads = 1;  // the cost simulates its columns in parallel itself
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary result;
+  ceres::Solve(solver, &ceres_problem, &result);
+  const ArmModel fitted = problem.Apply(x.data());
+  // Kept only where the held-out windows get better.
+  const bool kept = problem.CheckCost(fitted) < problem.CheckCost(floor);
+
+  if (summary) {
+    ArmOutputErrorSummary& s = *summary;
+    s = {};
+    s.horizon = options.horizon;
+    s.iterations = static_cast<int>(result.iterations.size()) - 1;
+    s.fit_windows = problem.fit_windows();
+    s.check_windows = problem.check_windows();
+    s.kept = kept;
+    s.rmse_before = problem.SimulationRmse(floor, false);
+    s.rmse_after = problem.SimulationRmse(fitted, false);
+    s.check_before = problem.SimulationRmse(floor, true);
+    s.check_after = problem.SimulationRmse(fitted, true);
+    s.constant_velocity = problem.constant_velocity();
+    s.scale.resize(n);
+    s.viscous_before.resize(n), s.viscous_after.resize(n), s.coulomb_before.resize(n), s.coulomb_after.resize(n);
+    s.offset_before.resize(n), s.offset_after.resize(n);
+    for (int j = 0; j < n; ++j) {
+      s.scale[j] = std::exp(x[static_cast<std::size_t>(j)]);
+      s.viscous_before[j] = start.joints[j].viscous;
+      s.coulomb_before[j] = start.joints[j].coulomb;
+      s.viscous_after[j] = fitted.joints[j].viscous;
+      s.coulomb_after[j] = fitted.joints[j].coulomb;
+      s.offset_before[j] = start.effects.joint(j).torque_offset;
+      s.offset_after[j] = fitted.effects.joint(j).torque_offset;
+    }
+    for (int k = 0; k < p; ++k) {
+      const double margin = 1e-3 * (upper[k] - lower[k]);
+      if (x[k] < lower[k] + margin || x[k] > upper[k] - margin) s.at_bound.push_back(k);
+    }
+  }
+  return kept ? fitted : start;
+}
+
+std::string ArmOutputErrorSummary::FullReport() const {
+  std::string text;
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "output error: windows of %g s simulated from the logged torques, %d fitted and %d held out; %d "
+                "iterations\n",
+                horizon, fit_windows, check_windows, iterations);
+  text += line;
+  std::snprintf(line, sizeof line, "%-6s %27s %27s %11s %8s %23s %23s %23s\n", "joint", "fit windows' RMSE",
+                "held-out windows' RMSE", "const. vel.", "scale k", "viscous", "Coulomb", "offset tau0");
+  text += line;
+  const int n = static_cast<int>(scale.size());
+  for (int j = 0; j < n; ++j) {
+    std::snprintf(line, sizeof line,
+                  "%-6d %11.4g -> %11.4g  %11.4g -> %11.4g  %11.4g %8.4g %10.4g -> %10.4g %10.4g -> %10.4g %10.4g -> "
+                  "%10.4g\n",
+                  j + 1, rmse_before[j], rmse_after[j], check_before[j], check_after[j], constant_velocity[j],
+                  scale[j], viscous_before[j], viscous_after[j], coulomb_before[j], coulomb_after[j],
+                  offset_before[j], offset_after[j]);
+    text += line;
+  }
+  if (!at_bound.empty()) {
+    const char* kinds[] = {"scale", "viscous", "Coulomb", "offset"};
+    text += "at the edge of its range (not determined by the simulation):";
+    for (int k : at_bound) text += std::string(" ") + kinds[k / n] + " of joint " + std::to_string(k % n + 1);
+    text += "\n";
+  }
+  text += kept ? "kept: the held-out windows are simulated better\n"
+               : "not kept: the held-out windows are simulated no better; the estimate is written as it was\n";
+  return text;
+}
+
+}  // namespace twinsim

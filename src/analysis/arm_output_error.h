@@ -1,0 +1,73 @@
+// Identification of an arm by output error: the parameters a simulator needs, fitted to
+// the motion the logged torques make rather than to the torques a logged motion needs
+// (docs/identification.md, "Output error"; issue 41).
+//
+// Starting from a model (usually identify's inverse-dynamics estimate), it minimises the
+// simulation error of ScoreArmSimulation's windows (arm_simulation_score.h) on the
+// fitting logs: every row of every window of `horizon` seconds, simulated open loop from
+// the logged state by the logged torques, each joint's error divided by the error of
+// the constant-velocity baseline on the same rows; beside it the torque error on every
+// row (PredictArmCommands), each joint's divided by the start's, times `torque_weight`:
+// a simulation error bought with torques the arm never logged is not a better model.
+// Every fourth window is held out of the fit; the refined model is kept only when those
+// windows are simulated better (their squared errors over the baseline's, summed over
+// the joints), else the start is returned as it was. Per joint it refines
+//   - the moving link's inertial scale k (mass, first moment and inertia times k: a
+//     physically consistent link stays consistent),
+//   - the nominal viscous and Coulomb friction (kept positive),
+//   - with `offsets`, the torque_offset effect's tau0,
+// by Levenberg-Marquardt (Ceres) with central differences at a fixed step in
+// coordinates (ln k, the frictions' logarithms, the offset in tenths of the joint's
+// torque RMS), the Jacobian's columns simulated on `threads` threads (deterministic:
+// each column on its own simulation).
+//
+//   ArmOutputErrorSummary summary;
+//   ArmModel refined = RefineArmByOutputError(identified, logs, {}, &summary);
+//   std::printf("%s", summary.FullReport().c_str());
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "robots/arm/arm_log.h"
+#include "robots/arm/arm_model.h"
+
+namespace twinsim {
+
+struct ArmOutputErrorOptions {
+  double horizon = 0.1;       // s: the simulated windows' length (> 0)
+  int max_iterations = 30;    // Levenberg-Marquardt iterations
+  bool offsets = false;       // also refine each joint's torque_offset tau0
+  double torque_weight = 1;   // the torque rows' weight beside the simulated rows' (0: none)
+  std::string backend = "analytic";
+  int threads = 0;            // 0: one per core
+  // True when usable; else says why in *why.
+  bool IsValid(std::string* why) const;
+};
+
+struct ArmOutputErrorSummary {
+  double horizon = 0;
+  int iterations = 0;
+  int fit_windows = 0, check_windows = 0;   // over all logs: fitted, and held out (every fourth)
+  bool kept = false;                        // the held-out windows got better: the refined model returned
+  Eigen::VectorXd rmse_before, rmse_after;  // per joint, rad or m: the fit windows' position RMSE
+  Eigen::VectorXd check_before, check_after;  // the same on the held-out windows
+  Eigen::VectorXd constant_velocity;          // per joint: the baseline's RMSE on the fit windows
+  Eigen::VectorXd scale;                      // per joint: the link's inertial scale k found
+  Eigen::VectorXd viscous_before, viscous_after, coulomb_before, coulomb_after;
+  Eigen::VectorXd offset_before, offset_after;  // tau0 (unchanged when offsets are not refined)
+  std::vector<int> at_bound;  // coordinates that ended at the edge of their range (k: scale, n+k viscous, ...)
+  // A table: per joint the simulation errors before and after (and the baseline's), the
+  // scale, frictions and offsets found; what ended at a bound; whether it was kept.
+  std::string FullReport() const;
+};
+
+// Refines `start` on `logs` (joint counts checked): the refined model, or `start` when
+// the held-out windows do not get better. Throws InputError for invalid options or logs
+// too short for four windows.
+ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
+                                const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary = nullptr);
+
+}  // namespace twinsim
