@@ -455,6 +455,10 @@ class PyOmniSim {
     out["t"] = t;
     out["truth"] = truth;
     out["truth_velocity"] = velocity;
+    // Python's names read as English and match the `observed` property (poses): "observed"
+    // holds the poses the camera delivered (NaN where lost), "seen" whether it delivered
+    // one. FrameRecord names them the other way round (`seen` the pose, `observed` the
+    // flag); docs/api.md gives the mapping.
     out["observed"] = seen;
     out["seen"] = observed;
     out["command"] = sent;

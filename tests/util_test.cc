@@ -1,7 +1,10 @@
 // Implementation of test_util.h (named *_test.cc so the test glob picks it up).
 #include <sys/wait.h>
 
+#include <gtest/gtest.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -17,9 +20,35 @@ namespace twinsim::testing {
 
 std::string SourcePath(const std::string& relative) { return std::string(TWINSIM_SOURCE_DIR) + "/" + relative; }
 
+namespace {
+
+// This process's folder of temporary folders.
+std::filesystem::path ProcessTempRoot() {
+  return std::filesystem::temp_directory_path() / ("twinsim_test_" + std::to_string(::getpid()));
+}
+
+// Removes the process's temporary folders when every test passed (a failure keeps them
+// to look at, as does TWINSIM_KEEP_TEST_FILES=1): every ctest test is a process of its
+// own, and a suite's run left a thousand folders (and the bad-input battery's 60 MB URDF)
+// in /tmp.
+class TempRootCleanup : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    const char* keep = std::getenv("TWINSIM_KEEP_TEST_FILES");
+    if ((keep && *keep && std::string(keep) != "0") || !::testing::UnitTest::GetInstance()->Passed()) return;
+    std::error_code ignored;
+    std::filesystem::remove_all(ProcessTempRoot(), ignored);
+  }
+};
+
+[[maybe_unused]] ::testing::Environment* const g_temp_root_cleanup =
+    ::testing::AddGlobalTestEnvironment(new TempRootCleanup);
+
+}  // namespace
+
 std::string TempDir(const std::string& name) {
   namespace fs = std::filesystem;
-  fs::path p = fs::temp_directory_path() / ("twinsim_test_" + std::to_string(::getpid())) / name;
+  fs::path p = ProcessTempRoot() / name;
   fs::remove_all(p);
   fs::create_directories(p);
   return p.string();

@@ -7,6 +7,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <chrono>
+#include <utility>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -495,6 +496,81 @@ std::string IlcResult::FullReport() const {
   return out.str();
 }
 
+IlcSafeguardWatch::IlcSafeguardWatch(const IlcSafeguard& safeguard, int q_order, std::vector<double> cutoffs)
+    : safeguard_(safeguard),
+      q_order_(q_order),
+      cutoffs_(std::move(cutoffs)),
+      best_rms_(Eigen::VectorXd::Constant(static_cast<Eigen::Index>(cutoffs_.size()), INFINITY)),
+      best_trial_of_(cutoffs_.size(), 0),
+      learning_(cutoffs_.size(), true),
+      back_off_(cutoffs_.size(), false),
+      above_(cutoffs_.size(), 0),
+      lowered_(cutoffs_.size(), 0),
+      best_relative_(INFINITY) {}
+
+std::vector<IlcSafeguardEvent> IlcSafeguardWatch::Observe(int trial, const Eigen::VectorXd& error_rms,
+                                                          const Eigen::MatrixXd& f) {
+  const int n = static_cast<int>(cutoffs_.size());
+  if (error_rms.size() != n || f.cols() != n) throw std::invalid_argument("IlcSafeguardWatch: one error per joint needed");
+  if (first_rms_.size() == 0) {
+    first_rms_ = error_rms;
+    best_f_ = f;
+  }
+  const double relative = (error_rms.array() / first_rms_.array().max(1e-300)).maxCoeff();
+  if (relative < best_relative_) {
+    best_relative_ = relative;
+    best_trial_ = trial;
+    best_feedforward_ = f;
+  }
+  // Which joints back off: their error grew past `growth` times their best. A joint that
+  // no longer learns can still grow through the others (the arm couples them): then
+  // every joint goes back to the best trial's feedforward and learning ends.
+  std::vector<IlcSafeguardEvent> events;
+  std::fill(back_off_.begin(), back_off_.end(), false);
+  for (int j = 0; j < n && !stopped_; ++j) {
+    const auto js = static_cast<std::size_t>(j);
+    if (error_rms[j] < best_rms_[j]) {
+      best_rms_[j] = error_rms[j];
+      best_trial_of_[js] = trial;
+      best_f_.col(j) = f.col(j);
+      above_[js] = 0;
+    } else if (!(safeguard_.growth > 0 && error_rms[j] > safeguard_.growth * best_rms_[j])) {
+      above_[js] = 0;
+    } else if (++above_[js] >= safeguard_.patience) {
+      above_[js] = 0;
+      IlcSafeguardEvent event{trial, j, error_rms[j], best_rms_[j], best_trial_of_[js], 0, ""};
+      const double lower = cutoffs_[js] * safeguard_.cutoff_factor;
+      if (!learning_[js]) {
+        stopped_ = true;
+        event.best_trial = best_trial_;
+        event.action = "stop_all";
+      } else if (q_order_ > 0 && lower >= safeguard_.min_cutoff && lowered_[js] < safeguard_.lowerings) {
+        back_off_[js] = true;
+        cutoffs_[js] = event.cutoff = lower;
+        event.action = "lower_q";
+        ++lowered_[js];
+      } else {
+        back_off_[js] = true;
+        learning_[js] = false;
+        event.action = "stop_joint";
+      }
+      events.push_back(event);
+    }
+  }
+  if (stopped_) std::fill(learning_.begin(), learning_.end(), false);
+  return events;
+}
+
+Eigen::MatrixXd IlcSafeguardWatch::Next(const Eigen::MatrixXd& updated) const {
+  if (stopped_) return best_feedforward_;  // the best trial, replayed from now on
+  Eigen::MatrixXd f = updated;
+  for (int j = 0; j < static_cast<int>(cutoffs_.size()); ++j) {
+    const auto js = static_cast<std::size_t>(j);
+    if (back_off_[js] || !learning_[js]) f.col(j) = best_f_.col(j);  // its best trial's, replayed
+  }
+  return f;
+}
+
 IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference& reference,
                  const TrackingOptions& tracking, const std::vector<LearningFilter>& filters, const IlcOptions& options,
                  const std::function<void(int, const TrackingTrial&)>& on_trial) {
@@ -505,19 +581,10 @@ IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference&
   const int n = plant.dof();
   IlcResult result;
   Eigen::MatrixXd f = Eigen::MatrixXd::Zero(reference.q.rows(), n);
-  // The safeguard's state per joint: the best RMS error so far, the trial and the
-  // feedforward that gave it, Q's cutoff now, and whether it still learns.
-  IlcOptions now = options;
+  IlcOptions now = options;  // Q's cutoffs as the safeguard lowers them
   now.q_cutoffs.resize(static_cast<std::size_t>(n));
   for (int j = 0; j < n; ++j) now.q_cutoffs[static_cast<std::size_t>(j)] = options.Cutoff(j);
-  Eigen::VectorXd best_rms = Eigen::VectorXd::Constant(n, INFINITY);
-  std::vector<int> best_trial(static_cast<std::size_t>(n), 0);
-  Eigen::MatrixXd best_f = f;
-  std::vector<bool> learning(static_cast<std::size_t>(n), true);
-  std::vector<int> above(static_cast<std::size_t>(n), 0);  // trials in a row above growth x best
-  std::vector<int> lowered(static_cast<std::size_t>(n), 0);  // Q's cutoff lowerings so far
-  double best_relative = INFINITY;
-  bool stopped = false;  // every joint back on the best trial's feedforward, for good
+  IlcSafeguardWatch watch(options.safeguard, options.q_order, now.q_cutoffs);
   TrackingOptions o = tracking;
   for (int trial = 0; trial <= options.trials; ++trial) {
     o.feedforward = &f;
@@ -525,71 +592,24 @@ IlcResult RunIlc(const ArmModel& plant, const ArmModel& hat, const ArmReference&
     result.error_rms.push_back(run.error_rms);
     result.error_max.push_back(run.error_max);
     if (on_trial) on_trial(trial, run);
-    const Eigen::MatrixXd error = reference.q - run.q;
     if (trial == 0) result.first = run;
-    const double relative =
-        (run.error_rms.array() / result.error_rms.front().array().max(1e-300)).maxCoeff();
-    if (relative < best_relative) {
-      best_relative = relative;
-      result.best_trial = trial;
-      result.best_feedforward = f;
-    }
-    // Which joints back off: their error grew past `growth` times their best. A joint
-    // that no longer learns can still grow through the others (the arm couples them):
-    // then every joint goes back to the best trial's feedforward and learning ends.
-    std::vector<bool> back_off(static_cast<std::size_t>(n), false);
-    for (int j = 0; j < n && !stopped; ++j) {
-      const auto js = static_cast<std::size_t>(j);
-      if (run.error_rms[j] < best_rms[j]) {
-        best_rms[j] = run.error_rms[j];
-        best_trial[js] = trial;
-        best_f.col(j) = f.col(j);
-        above[js] = 0;
-      } else if (!(options.safeguard.growth > 0 && run.error_rms[j] > options.safeguard.growth * best_rms[j])) {
-        above[js] = 0;
-      } else if (++above[js] >= options.safeguard.patience) {
-        above[js] = 0;
-        IlcSafeguardEvent event{trial, j, run.error_rms[j], best_rms[j], best_trial[js], 0, ""};
-        const double lower = now.q_cutoffs[js] * options.safeguard.cutoff_factor;
-        if (!learning[js]) {
-          stopped = true;
-          event.best_trial = result.best_trial;
-          event.action = "stop_all";
-        } else if (options.q_order > 0 && lower >= options.safeguard.min_cutoff &&
-                   lowered[js] < options.safeguard.lowerings) {
-          back_off[js] = true;
-          now.q_cutoffs[js] = event.cutoff = lower;
-          event.action = "lower_q";
-          ++lowered[js];
-        } else {
-          back_off[js] = true;
-          learning[js] = false;
-          event.action = "stop_joint";
-        }
-        result.safeguard.push_back(event);
-      }
-    }
-    if (stopped) std::fill(learning.begin(), learning.end(), false);
+    const std::vector<IlcSafeguardEvent> events = watch.Observe(trial, run.error_rms, f);
+    result.safeguard.insert(result.safeguard.end(), events.begin(), events.end());
+    now.q_cutoffs = watch.cutoffs();
     if (trial == options.trials) {
-      result.feedforward = f;
+      // What the safeguard decided on the last trial applies to the feedforward handed on.
+      result.feedforward = watch.Next(f);
       result.last = std::move(run);
+    } else if (watch.stopped()) {
+      f = watch.best_feedforward();
     } else {
-      if (stopped) {
-        f = result.best_feedforward;  // the best trial, replayed from now on
-      } else {
-        f = IlcUpdate(f, error, filters, now, plant.sample_time);
-        for (int j = 0; j < n; ++j) {
-          const auto js = static_cast<std::size_t>(j);
-          if (back_off[js] || !learning[js]) f.col(j) = best_f.col(j);  // its best trial's, replayed
-        }
-      }
+      f = watch.Next(IlcUpdate(f, reference.q - run.q, filters, now, plant.sample_time));
     }
   }
+  result.best_trial = watch.best_trial();
+  result.best_feedforward = watch.best_feedforward();
   result.final_cutoffs.resize(n);
-  for (int j = 0; j < n; ++j) {
-    const auto js = static_cast<std::size_t>(j);
-    result.final_cutoffs[j] = learning[js] ? now.q_cutoffs[js] : 0;
-  }
+  for (int j = 0; j < n; ++j) result.final_cutoffs[j] = watch.learning(j) ? now.q_cutoffs[static_cast<std::size_t>(j)] : 0;
   result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }

@@ -170,6 +170,52 @@ struct IlcSafeguardEvent {
   std::string action;
 };
 
+// The safeguard's state machine, trial by trial (RunIlc's watch; IlcSafeguard above):
+// per joint the best RMS error so far, the trial and the feedforward that gave it, the
+// trials in a row above `growth` times it, Q's cutoff now and whether the joint still
+// learns; for the arm the best trial (the lowest worst-joint error relative to trial 0)
+// and its feedforward, and whether learning ended.
+//
+//   IlcSafeguardWatch watch(options.safeguard, options.q_order, cutoffs);
+//   for each trial k run with feedforward f:
+//     events = watch.Observe(k, run.error_rms, f);
+//     f = watch.stopped() ? watch.best_feedforward() : watch.Next(IlcUpdate(f, ...watch.cutoffs()...));
+class IlcSafeguardWatch {
+ public:
+  // `cutoffs`: Q's cutoff per joint (Hz) at the start.
+  IlcSafeguardWatch(const IlcSafeguard& safeguard, int q_order, std::vector<double> cutoffs);
+
+  // Records trial `trial`'s RMS error per joint, run with feedforward `f` (N x dof), and
+  // returns what the safeguard decided on it (in joint order; after a stop_all no more).
+  std::vector<IlcSafeguardEvent> Observe(int trial, const Eigen::VectorXd& error_rms, const Eigen::MatrixXd& f);
+
+  // The feedforward to run next (or, after the last trial, to hand on) from `updated`,
+  // the learned update or the last trial's own: joints that backed off on the last
+  // Observe or no longer learn take their best trial's columns; after a stop_all, every
+  // joint the best trial's feedforward.
+  Eigen::MatrixXd Next(const Eigen::MatrixXd& updated) const;
+
+  const std::vector<double>& cutoffs() const { return cutoffs_; }  // Hz, Q's cutoff per joint now
+  bool learning(int joint) const { return learning_[static_cast<std::size_t>(joint)]; }
+  bool stopped() const { return stopped_; }  // stop_all happened: learning ended
+  int best_trial() const { return best_trial_; }
+  const Eigen::MatrixXd& best_feedforward() const { return best_feedforward_; }
+
+ private:
+  IlcSafeguard safeguard_;
+  int q_order_;
+  std::vector<double> cutoffs_;
+  Eigen::VectorXd first_rms_, best_rms_;  // trial 0's and each joint's best RMS
+  std::vector<int> best_trial_of_;        // per joint
+  Eigen::MatrixXd best_f_;                // per joint, the column of its best trial
+  std::vector<bool> learning_, back_off_;
+  std::vector<int> above_, lowered_;      // trials in a row above growth x best; Q's lowerings so far
+  double best_relative_;
+  int best_trial_ = 0;
+  Eigen::MatrixXd best_feedforward_;
+  bool stopped_ = false;
+};
+
 // The norm-optimal update (Amann, Owens and Rogers 1996) with the learning filter's
 // model of the plant, P = L^-1: the feedforward step that minimises
 // |e_{k+1}|^2 + w |f_{k+1} - f_k|^2 for that model over the whole trial,
@@ -263,7 +309,9 @@ Eigen::MatrixXd IlcUpdate(const Eigen::MatrixXd& f, const Eigen::MatrixXd& e, co
 struct IlcResult {
   std::vector<Eigen::VectorXd> error_rms, error_max;  // per trial 0..trials, dof each, rad or m
   TrackingTrial first, last;                          // trial 0 and the last trial
-  Eigen::MatrixXd feedforward;                        // N x dof, N·m: f of the last trial
+  // N x dof, N·m: f of the last trial, with what the safeguard decided on that trial
+  // applied (a joint that backed off then hands on its best trial's columns)
+  Eigen::MatrixXd feedforward;
   // The trial with the lowest worst-joint error relative to trial 0 (max_j RMS_j(k) /
   // RMS_j(0)) and its feedforward: what a user keeps.
   int best_trial = 0;

@@ -87,7 +87,10 @@ RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, co
           move.velocity = Twist2{v[0], v[1], v[2]};
         }
       } else {
-        ok = false;  // an empty move command: nothing to do
+        // A move_command that names no velocity: refused, and said so.
+        AddError(&result.response, "TWINSIM_BAD_VALUE",
+                 robot + ": an empty move_command (it sets none of local_velocity, global_velocity, wheel_velocity)");
+        ok = false;
       }
       if (ok && !InLimits(move.velocity)) {
         AddError(&result.response, "TWINSIM_BAD_VALUE",

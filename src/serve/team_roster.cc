@@ -26,7 +26,7 @@ std::optional<ProtocolWheelMap> WheelMapFor(const OmniModel& model) {
   constexpr double kLow[4] = {-kPi / 2, -kPi, kPi / 2, 0};
   int wheel_of[4] = {-1, -1, -1, -1};
   for (int i = 0; i < 4; ++i) {
-    const double a = std::remainder(model.wheel_angles[static_cast<std::size_t>(i)], 2 * kPi);  // (-pi, pi]
+    const double a = std::remainder(model.wheel_angles[static_cast<std::size_t>(i)], 2 * kPi);  // [-pi, pi]; on a boundary: no quadrant
     for (int q = 0; q < 4; ++q) {
       if (a > kLow[q] && a < kLow[q] + kPi / 2) {
         if (wheel_of[q] >= 0) return std::nullopt;

@@ -156,6 +156,23 @@ TEST(RobotControl, RefusesTheOtherTeamsRobotsUnknownIdsBadValuesAndWheels) {
   EXPECT_EQ(r.response.errors(3).unsupported_capability(), SIMULATOR_CAPABILITY_MOVE_WHEEL_VELOCITY);
 }
 
+TEST(RobotControl, AnEmptyMoveCommandIsRefusedWithAnError) {
+  // Counted as refused and named in the answer (it was counted with no error before).
+  const TeamRoster roster = TwoBlueOneYellow();
+  RobotControl control;
+  RobotCommand* c = control.add_robot_commands();
+  c->set_id(1);
+  c->mutable_move_command();
+  const RobotControlResult r = ReadRobotControl(control.SerializeAsString(), TeamColor::kBlue, roster);
+  ASSERT_TRUE(r.parsed);
+  EXPECT_EQ(r.refused, 1);
+  EXPECT_TRUE(r.moves.empty());
+  ASSERT_EQ(r.response.errors_size(), 1);
+  EXPECT_EQ(r.response.errors(0).code(), "TWINSIM_BAD_VALUE");
+  EXPECT_NE(r.response.errors(0).message().find("an empty move_command"), std::string::npos)
+      << r.response.errors(0).message();
+}
+
 std::string WheelCommand(unsigned id, float front_right, float back_right, float back_left, float front_left) {
   RobotControl control;
   RobotCommand* c = control.add_robot_commands();
