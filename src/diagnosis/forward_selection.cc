@@ -38,6 +38,7 @@ struct Score {
   int worst_channel = -1;
   double worst_share = 0;
   double worst_t = 0;
+  int channels = 0;  // compared: the worst is picked among them
 };
 
 // `after` against `before` on the selection rows; `parameters` counted against an
@@ -60,6 +61,7 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
     const std::vector<double>& a = after.selection_by_channel[c];
     const double channel_mse = Mean(b);
     if (channel_mse <= 0 || a.size() != b.size()) continue;
+    ++s.channels;
     const std::vector<double> g = Gains(b, a);
     const double share = Mean(g) / channel_mse;
     if (share < s.worst_share) {
@@ -72,10 +74,11 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
 }
 
 // True when `s` makes a channel worse by at least `least` of its MSE, significantly at
-// level alpha (one-sided, long-run standard error).
+// level alpha (one-sided, long-run standard error; the worst of the channels compared,
+// so Bonferroni-corrected over them: WorstChannelP).
 bool HarmsAChannel(const Score& s, double least, double alpha) {
   if (s.worst_channel < 0 || s.worst_share > -least) return false;
-  return StudentTUpperTail(-s.worst_t, std::max(1.0, s.test.df)) <= alpha;
+  return WorstChannelP(s.worst_t, std::max(1.0, s.test.df), s.channels) <= alpha;
 }
 
 std::string Percent(double share) {
@@ -422,7 +425,9 @@ ChannelAdequacy CheckChannel(const TestResiduals& t, std::size_t c, int bandwidt
   a.whiteness_bound = w.bound;
   a.whiteness_p = w.p;
   for (std::size_t i = 0; i < t.inputs.size(); ++i) {
-    a.inputs.push_back(PeakCrossCorrelation(r, t.inputs[i], 10 * t.step, t.step, t.input_names[i]));
+    // The inputs are read together (the report shows the largest against its band).
+    a.inputs.push_back(PeakCrossCorrelation(r, t.inputs[i], 10 * t.step, t.step, t.input_names[i],
+                                            static_cast<int>(t.inputs.size())));
   }
   std::stable_sort(a.inputs.begin(), a.inputs.end(), [](const CrossCorrelation& x, const CrossCorrelation& y) {
     return std::abs(x.peak) / std::max(x.bound, 1e-12) > std::abs(y.peak) / std::max(y.bound, 1e-12);

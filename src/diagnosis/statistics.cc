@@ -103,6 +103,21 @@ std::vector<double> EveryStep(const std::vector<double>& x, int step) {
 
 }  // namespace
 
+double TwoSidedNormalQuantile(double p) {
+  if (!(p > 0 && p < 1)) return std::numeric_limits<double>::quiet_NaN();
+  // P(|Z| > z) = erfc(z / sqrt 2) falls monotonically: bisection to double precision.
+  double lo = 0, hi = 40;
+  for (int i = 0; i < 200 && hi - lo > 1e-15 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+double WorstChannelP(double t, double df, int channels) {
+  return std::min(1.0, std::max(1, channels) * StudentTUpperTail(-t, df));
+}
+
 double StudentTUpperTail(double t, double df) {
   if (std::isnan(t) || !(df > 0)) return std::numeric_limits<double>::quiet_NaN();
   if (std::isinf(t)) return t > 0 ? 0.0 : 1.0;
@@ -184,7 +199,7 @@ Whiteness LjungBox(const std::vector<double>& x, int max_lag, int step) {
 }
 
 CrossCorrelation PeakCrossCorrelation(const std::vector<double>& residual, const std::vector<double>& input, int max_lag,
-                                      int step, const std::string& name) {
+                                      int step, const std::string& name, int family) {
   CrossCorrelation out;
   out.input = name;
   const std::vector<double> r = EveryStep(residual, step), u = EveryStep(input, step);
@@ -207,7 +222,10 @@ CrossCorrelation PeakCrossCorrelation(const std::vector<double>& residual, const
   double inflation = 1;
   for (int k = 0; k < lags; ++k) inflation += 2 * ar[static_cast<std::size_t>(k)] * au[static_cast<std::size_t>(k)];
   const double effective = static_cast<double>(n) / std::max(inflation, 1.0);
-  out.bound = 1.96 / std::sqrt(effective);
+  // The band for the largest of `tests` correlations, each within it with 1 - alpha_1:
+  // (1 - alpha_1)^tests = 0.95.
+  const double tests = static_cast<double>(2 * reach + 1) * std::max(1, family);
+  out.bound = TwoSidedNormalQuantile(1 - std::pow(0.95, 1 / tests)) / std::sqrt(effective);
   return out;
 }
 
