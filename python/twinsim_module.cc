@@ -351,32 +351,22 @@ class PyOmniSim {
     Reset(std::nullopt);
   }
 
+  // The scene's simulation as `twinsim run` makes it (MakeSimulation: the robots' own
+  // backends, the ball, the learned backend's messages), with external commands when
+  // Python drives the robots.
   void Reset(std::optional<std::uint64_t> seed) {
     if (seed) scene_.seed = *seed;
-    std::vector<OmniModel> models;
-    std::vector<SimRobot> robots;
-    // A robot of its own `backend:` keeps it (and its predictor); the others run on `backend`.
-    std::vector<RobotBackendChoice> choices;
-    std::vector<std::string> labels;
     commands_.clear();
-    for (std::size_t i = 0; i < scene_.robots.size(); ++i) {
-      const SceneRobot& r = scene_.robots[i];
-      models.push_back(r.model);
-      choices.push_back(r.backend.empty() ? RobotBackendChoice{backend_, predictor_}
-                                          : RobotBackendChoice{r.backend, r.predictor});
-      labels.push_back(r.name);
-      std::unique_ptr<CommandSource> source;
-      if (external_) {
+    CommandSourceFactory external;
+    if (external_) {
+      external = [this](std::size_t) -> std::unique_ptr<CommandSource> {
         commands_.push_back(std::make_shared<Twist2>());
-        source = std::make_unique<ExternalCommand>(commands_.back());
-      } else {
-        source = MakeCommandSource(r.commands, scene_.seed, static_cast<int>(i), scene_.duration, r.start);
-      }
-      robots.push_back(SimRobot{r.name, r.model, r.start, std::move(source), r.present});
+        return std::make_unique<ExternalCommand>(commands_.back());
+      };
     }
-    sim_ = std::make_unique<Simulation>(std::move(robots),
-                                        MakeOmniBackend(choices, models, labels, scene_.field, scene_.timing()),
-                                        scene_.seed);
+    OmniBackendOptions options;
+    options.predictor = predictor_;
+    sim_ = std::make_unique<Simulation>(MakeSimulation(scene_, backend_, options, external));
     last_.assign(scene_.robots.size(), FrameRecord{});
   }
 
@@ -494,6 +484,14 @@ class PyOmniSim {
 
   double time() const { return last_.empty() ? 0 : last_[0].t; }
   int frame() const { return sim_->frame(); }
+  // The ball's true centre (x, y, z) now, or None on a field without one.
+  py::object Ball() const {
+    if (!sim_->has_ball()) return py::none();
+    const Eigen::Vector3d& p = sim_->ball_record().truth.position;
+    Array a({py::ssize_t{3}});
+    std::copy(p.data(), p.data() + 3, a.mutable_data());
+    return std::move(a);
+  }
   const Scene& scene() const { return scene_; }
   // The backend's name: `backend`, or "mixed: ..." where robots name their own.
   std::string backend() const { return sim_->backend().name(); }
@@ -977,6 +975,7 @@ PYBIND11_MODULE(_twinsim, m) {
       .def_property_readonly("observed", &PyOmniSim::Observed)
       .def_property_readonly("t", &PyOmniSim::time)
       .def_property_readonly("frame", &PyOmniSim::frame)
+      .def_property_readonly("ball", &PyOmniSim::Ball)
       .def_property_readonly("robots", &PyOmniSim::robots)
       .def_property_readonly("backend", &PyOmniSim::backend);
 

@@ -450,7 +450,8 @@ std::string BallEngineFor(const std::vector<std::string>& backends) {
   return BallEngineFor(std::string("analytic"));
 }
 
-Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options) {
+Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options,
+                          const CommandSourceFactory& commands) {
   std::vector<OmniModel> models;
   std::vector<SimRobot> robots;
   std::vector<RobotBackendChoice> choices;
@@ -459,7 +460,9 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend, const 
     const SceneRobot& r = scene.robots[i];
     models.push_back(r.model);
     robots.push_back(SimRobot{r.name, r.model, r.start,
-                              MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration, r.start),
+                              commands ? commands(i)
+                                       : MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration,
+                                                           r.start),
                               r.present});
     // A robot of its own backend brings its own predictor; the others share the field's.
     choices.push_back(r.backend.empty() ? RobotBackendChoice{backend, options.predictor}

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -100,7 +101,11 @@ std::string BallEngineFor(const std::vector<std::string>& backends);
 // field's (the scene's `backend:` or --backend) and `options.predictor` its predictor:
 // they apply to the robots that do not name their own. When every robot runs on the same
 // backend this is exactly that backend (MakeOmniBackend(name, ...)); else one backend per
-// group of robots (GroupedOmniBackend, docs/backends.md).
-Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options = {});
+// group of robots (GroupedOmniBackend, docs/backends.md). `commands`, when given, makes
+// robot i's command source instead of the scene's behaviour (Python's OmniSim drives
+// them from outside).
+using CommandSourceFactory = std::function<std::unique_ptr<CommandSource>(std::size_t robot)>;
+Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options = {},
+                          const CommandSourceFactory& commands = {});
 
 }  // namespace twinsim

@@ -93,6 +93,24 @@ def test_stepping_is_the_run_commands_loop():
     np.testing.assert_allclose(run["truth"][:, 0, 1], truth[:, y], atol=2e-9)
 
 
+def test_a_scenes_ball_is_on_the_field_as_in_run():
+    """OmniSim builds the scene as `twinsim run` does (MakeSimulation), its ball included:
+    the ball rolled at the keeper bounces back as ball.csv says (issue 44: the Python copy
+    dropped it)."""
+    scene = twinsim.load_scene(path("scenes/ball_bounce.yaml"))
+    out = os.path.join(os.environ.get("TMPDIR", "/tmp"), "twinsim_pytest_ball")
+    subprocess.run([BINARY, "run", path("scenes/ball_bounce.yaml"), "--quiet", "--out", out], check=True)
+    header, ball = read_csv(os.path.join(out, "ball.csv"))
+    sim = twinsim.OmniSim(scene, backend="ode", external=False)
+    xs = []
+    for _ in range(scene.frames):
+        sim.step()
+        xs.append(sim.ball[0])
+    np.testing.assert_allclose(xs, ball[:, header.index("x")], atol=1e-6)
+    assert min(xs) < 1.3 - 0.5 and xs[-1] > min(xs) + 0.1  # rolled in, bounced back
+    assert twinsim.OmniSim(twinsim.load_omni_model(path("models/omni4.yaml"))).ball is None
+
+
 def test_robots_keep_their_own_backends_from_python():
     """A scene whose robots name their own backends (docs/scenes.md): `backend=` sets the
     field's, for the others, as `twinsim run --backend` does."""
