@@ -1,5 +1,6 @@
 #include "engines/ball_engine.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -16,7 +17,7 @@ namespace twinsim {
 std::vector<Eigen::Vector2d> ChassisOutline(const OmniModel& model, int arc_segments) {
   const double r = model.chassis_radius, front = model.FrontDistance();
   // The arc runs from the front's left corner, round the back, to its right corner.
-  const double corner = std::acos(front / r);  // rad
+  const double corner = std::acos(std::min(front / r, 1.0));  // rad; a front beyond the radius: none
   std::vector<Eigen::Vector2d> outline;
   for (int k = 0; k <= arc_segments; ++k) {
     const double a = corner + (2 * kPi - 2 * corner) * k / arc_segments;

@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "io/csv_table.h"
+#include "sim/command_limits.h"
 
 namespace twinsim {
 namespace {
@@ -21,10 +22,9 @@ std::string Exact(double v) {
   return buf;
 }
 
-// The limits `twinsim serve` takes from the network (serve/robot_control.h), so that a
+// The limits `twinsim serve` takes from the network (sim/command_limits.h), so that a
 // file holds what a team could have sent.
-constexpr double kMaxSpeed = 20, kMaxOmega = 100, kMaxKick = 20, kMaxDribbler = 1e5;
-constexpr double kMaxKickAngle = 89 * kPi / 180;
+constexpr double kMaxKickRadians = kMaxKickAngle * kPi / 180;
 constexpr double kMaxLogFrames = 1e7;
 
 }  // namespace
@@ -96,12 +96,13 @@ CommandLog ReadCommandLog(const std::string& path, const std::string& robot, dou
                                ": rows must be in time order, one per frame");
     }
     log.frames.push_back(static_cast<int>(frame));
-    log.moves.push_back(Twist2{value(vx, -kMaxSpeed, kMaxSpeed, "m/s"), value(vy, -kMaxSpeed, kMaxSpeed, "m/s"),
-                               value(omega, -kMaxOmega, kMaxOmega, "rad/s")});
+    log.moves.push_back(Twist2{value(vx, -kMaxCommandSpeed, kMaxCommandSpeed, "m/s"),
+                               value(vy, -kMaxCommandSpeed, kMaxCommandSpeed, "m/s"),
+                               value(omega, -kMaxCommandOmega, kMaxCommandOmega, "rad/s")});
     BallCommand ball;
-    if (kick >= 0) ball.kick_speed = value(kick, 0, kMaxKick, "m/s");
-    if (angle >= 0) ball.kick_angle = value(angle, 0, kMaxKickAngle, "rad");
-    if (dribbler >= 0) ball.dribbler_speed = value(dribbler, 0, kMaxDribbler, "rpm");
+    if (kick >= 0) ball.kick_speed = value(kick, 0, kMaxKickSpeed, "m/s");
+    if (angle >= 0) ball.kick_angle = value(angle, 0, kMaxKickRadians, "rad");
+    if (dribbler >= 0) ball.dribbler_speed = value(dribbler, 0, kMaxDribblerSpeed, "rpm");
     log.balls.push_back(ball);
   }
   if (log.frames.empty()) {

@@ -14,7 +14,7 @@ std::optional<Eigen::Vector2d> BallClearance(const OmniModel& model, const Pose2
   const Eigen::Vector2d p(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
   const double radius = model.chassis_radius;
   const double front = std::min(model.FrontDistance(), radius);
-  const double half_width = std::sqrt(std::max(0.0, radius * radius - front * front));
+  const double half_width = model.FrontHalfWidth();
   const double corner_angle = std::atan2(half_width, front);  // the front's corners seen from the centre
 
   // The chassis' support function h(psi) (its extent along the direction psi): the arc's

@@ -29,15 +29,13 @@
 #include "core/pose.h"
 #include "serve/team_roster.h"
 #include "sim/ball_field.h"
+#include "sim/command_limits.h"
 #include "ssl_simulation_robot_feedback.pb.h"
 
 namespace twinsim {
 
-inline constexpr double kMaxCommandSpeed = 20;    // m/s, a command beyond is refused
-inline constexpr double kMaxCommandOmega = 100;   // rad/s
-inline constexpr double kMaxKickSpeed = 20;       // m/s, a kick beyond is refused (the kicker clips at its own limit)
-inline constexpr double kMaxKickAngle = 89;       // deg
-inline constexpr double kMaxDribblerSpeed = 1e5;  // rpm
+// The limits: sim/command_limits.h (kMaxCommandSpeed, kMaxCommandOmega, kMaxKickSpeed,
+// kMaxKickAngle in degrees, kMaxDribblerSpeed).
 
 // A velocity command as the team sent it.
 struct RobotMove {

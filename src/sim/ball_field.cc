@@ -27,7 +27,7 @@ Eigen::Vector2d ToRobot(const Pose2& pose, const Eigen::Vector2d& p) {
 FrontContact BallAtFront(const BallModel& ball, const OmniModel& robot, const Pose2& pose, const BallState& state) {
   const Eigen::Vector2d p = ToRobot(pose, state.position.head<2>());
   const double front = robot.FrontDistance();
-  const double half_width = std::sqrt(robot.chassis_radius * robot.chassis_radius - front * front);
+  const double half_width = robot.FrontHalfWidth();
   FrontContact c;
   c.gap = p.x() - front - ball.radius;
   c.lateral = p.y();

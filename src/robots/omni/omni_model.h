@@ -13,6 +13,8 @@
 //   wheel_speed_i = (1/r) [-sin alpha_i, cos alpha_i, b] . (vx, vy, omega).
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <Eigen/Core>
 #include <array>
 #include <string>
@@ -164,6 +166,12 @@ struct OmniModel {
   // m, the flat front's distance from the centre (front_distance, or its default).
   double FrontDistance() const { return front_distance > 0 ? front_distance : kDefaultFrontRatio * chassis_radius; }
   static constexpr double kDefaultFrontRatio = 0.82;  // a league robot's: 73 mm of a 89 mm radius
+  // m, half the flat front's width, where it meets the chassis circle: sqrt(r^2 - d^2)
+  // (0 for a front at or beyond the radius, which a model file cannot give).
+  double FrontHalfWidth() const {
+    const double d = FrontDistance();
+    return std::sqrt(std::max(0.0, chassis_radius * chassis_radius - d * d));
+  }
   // The strength of wheel i's motor (1 unless motor_strength says otherwise).
   double MotorStrength(int wheel) const {
     return motor_strength.empty() ? 1.0 : motor_strength[static_cast<std::size_t>(wheel)];
