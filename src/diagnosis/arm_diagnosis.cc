@@ -26,6 +26,11 @@ namespace twinsim {
 namespace {
 
 constexpr double kReversalWindow = 0.1;   // s either side of a velocity reversal
+// A joint stands below 2 % of its largest speed: its q̇ is filtered and smooth.
+constexpr double kStandFraction = 0.02;
+// Samples of the residual spectra's Welch segments at most: arm logs run at hundreds of
+// Hz to kHz for tens of seconds.
+constexpr int kWelchSegmentCap = 4096;
 constexpr double kMaxLag = 0.1;           // s, the cross-correlation's reach
 constexpr int kMaxFitRows = 20000;        // residual rows per joint a Ceres fit uses at most
 constexpr int kPlotPoints = 4000;
@@ -1013,20 +1018,15 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
       const double sigma = HighFrequencySigma(ra.segment(d.first, d.last - d.first), rate, cutoff);
       noise_joint += sigma * sigma;
       // Reversals: where the velocity changes sign or the joint stands.
-      const double vmax = log.qd.col(j).segment(d.first, d.last - d.first).cwiseAbs().maxCoeff();
-      std::vector<double> reversal_times;
-      for (int r = d.first + 1; r < d.last; ++r) {
-        if ((log.qd(r, j) > 0) != (log.qd(r - 1, j) > 0) || std::abs(log.qd(r, j)) < 0.02 * vmax) reversal_times.push_back(log.t[r]);
-      }
-      std::size_t next = 0;
+      ReversalWindows reversals(std::vector<double>(log.t.data() + d.first, log.t.data() + d.last),
+                                std::vector<double>(log.qd.col(j).data() + d.first, log.qd.col(j).data() + d.last),
+                                kStandFraction, kReversalWindow);
       for (int r = d.first; r < d.last; ++r) {
         x.before.push_back(rb[r]);
         x.after.push_back(ra[r]);
         x.velocity.push_back(log.qd(r, j));
         x.acceleration.push_back(log.qdd(r, j));
-        while (next < reversal_times.size() && reversal_times[next] < log.t[r] - kReversalWindow) ++next;
-        const bool close = next < reversal_times.size() && reversal_times[next] <= log.t[r] + kReversalWindow;
-        (close ? x.near_reversal : x.moving).push_back(rb[r]);
+        (reversals.Near(log.t[r]) ? x.near_reversal : x.moving).push_back(rb[r]);
       }
       if (k == 0) {
         // Plots: the first log, subsampled.
@@ -1037,11 +1037,8 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
           s.after.push_back(ra[r]);
           s.velocity.push_back(log.qd(r, j));
         }
-        std::vector<double> xb(rb.data() + d.first, rb.data() + d.last), xa(ra.data() + d.first, ra.data() + d.last);
-        const int segment = static_cast<int>(std::min<double>(4096, std::pow(2, std::floor(std::log2(std::max(8.0, xb.size() / 4.0))))));
-        WelchPsd(xb, rate, segment, &s.frequency, &s.psd_before);
-        std::vector<double> unused;
-        WelchPsd(xa, rate, segment, &unused, &s.psd_after);
+        ResidualSpectra(std::vector<double>(rb.data() + d.first, rb.data() + d.last),
+                        std::vector<double>(ra.data() + d.first, ra.data() + d.last), rate, kWelchSegmentCap, &s);
       }
     }
     DescribeChannel(x, s, &f);

@@ -89,6 +89,34 @@ int CorrelationLength(const std::vector<double>& x, int max_lag) {
   return max_lag;
 }
 
+ReversalWindows::ReversalWindows(const std::vector<double>& t, const std::vector<double>& v, double stand,
+                                 double window)
+    : window_(window) {
+  double vmax = 0;
+  for (double x : v) vmax = std::max(vmax, std::abs(x));
+  for (std::size_t i = 1; i < v.size() && i < t.size(); ++i) {
+    if ((v[i] > 0) != (v[i - 1] > 0) || std::abs(v[i]) < stand * vmax) times_.push_back(t[i]);
+  }
+}
+
+bool ReversalWindows::Near(double t) {
+  while (next_ < times_.size() && times_[next_] < t - window_) ++next_;
+  return next_ < times_.size() && times_[next_] <= t + window_;
+}
+
+int WelchSegmentFor(std::size_t n, int cap) {
+  return static_cast<int>(
+      std::min<double>(cap, std::pow(2, std::floor(std::log2(std::max(8.0, static_cast<double>(n) / 4.0))))));
+}
+
+void ResidualSpectra(const std::vector<double>& before, const std::vector<double>& after, double rate, int cap,
+                     ChannelSeries* s) {
+  const int segment = WelchSegmentFor(before.size(), cap);
+  WelchPsd(before, rate, segment, &s->frequency, &s->psd_before);
+  std::vector<double> unused;
+  WelchPsd(after, rate, segment, &unused, &s->psd_after);
+}
+
 void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vector<double>* frequency,
               std::vector<double>* psd) {
   frequency->clear();

@@ -232,6 +232,29 @@ struct ChannelSamples {
 // Sets f's RMS values, correlations and dominant frequency (the peak of s.psd_before).
 void DescribeChannel(const ChannelSamples& x, const ChannelSeries& s, ChannelFinding* f);
 
+// Which rows of a channel lie near a reversal or a stop, the events where friction and
+// delays show: times (ascending) within `window` s of a row where the velocity changes
+// sign or stands (|v| below `stand` times its largest |v|). Ask in ascending time.
+class ReversalWindows {
+ public:
+  ReversalWindows(const std::vector<double>& t, const std::vector<double>& v, double stand, double window);
+  bool Near(double t);
+
+ private:
+  std::vector<double> times_;
+  double window_;
+  std::size_t next_ = 0;
+};
+
+// The residual spectra's Welch segment for n rows: a quarter of them rounded down to a
+// power of two, 8 at least and `cap` at most.
+int WelchSegmentFor(std::size_t n, int cap);
+
+// Fills s's spectra of the nominal and the repaired model's residuals (`before`,
+// `after`) at `rate` Hz with WelchSegmentFor(before.size(), cap).
+void ResidualSpectra(const std::vector<double>& before, const std::vector<double>& after, double rate, int cap,
+                     ChannelSeries* s);
+
 // Root mean square of v (0 when empty).
 double Rms(const std::vector<double>& v);
 

@@ -35,6 +35,11 @@ constexpr const char* kReportState = "observer";
 constexpr int kFitStride = 4;     // fits predict from every fourth frame (consecutive predictions overlap)
 constexpr int kMaxCeresIterations = 8;
 constexpr double kReversalWindow = 0.1;  // s
+// An axis stands below 5 % of its largest speed: its velocity is differenced from camera
+// poses, noisier than an arm's filtered q̇ (2 %).
+constexpr double kStandFraction = 0.05;
+// Samples of the residual spectra's Welch segments at most: omni logs run at 30 to 60 Hz.
+constexpr int kWelchSegmentCap = 256;
 const double kInf = std::numeric_limits<double>::infinity();
 
 // One optimiser variable of an omni effect.
@@ -799,13 +804,9 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     }
     for (int c = 0; c < 3; ++c) {
       const auto cc = static_cast<std::size_t>(c);
-      double vmax = 0;
-      for (std::size_t i = 0; i < n; ++i) vmax = std::max(vmax, std::abs(v[i][cc]));
-      std::vector<double> reversal_times;
-      for (std::size_t i = 1; i < n; ++i) {
-        if ((v[i][cc] > 0) != (v[i - 1][cc] > 0) || std::abs(v[i][cc]) < 0.05 * vmax) reversal_times.push_back(log.rows[i].t);
-      }
-      std::size_t next = 0;
+      std::vector<double> times(n), speeds(n);
+      for (std::size_t i = 0; i < n; ++i) times[i] = log.rows[i].t, speeds[i] = v[i][cc];
+      ReversalWindows reversals(times, speeds, kStandFraction, kReversalWindow);
       std::vector<double> xb, xa;
       for (std::size_t k = 0; k < rb.rows.size(); ++k) {
         const std::size_t i = rb.rows[k];
@@ -815,9 +816,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
         samples[cc].acceleration.push_back(a[i][cc]);
         xb.push_back(e);
         const double t = log.rows[i].t;
-        while (next < reversal_times.size() && reversal_times[next] < t - kReversalWindow) ++next;
-        const bool close = next < reversal_times.size() && reversal_times[next] <= t + kReversalWindow;
-        (close ? samples[cc].near_reversal : samples[cc].moving).push_back(e);
+        (reversals.Near(t) ? samples[cc].near_reversal : samples[cc].moving).push_back(e);
         if (li == 0) {
           series[cc].t.push_back(t);
           series[cc].before.push_back(e);
@@ -829,12 +828,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
         xa.push_back(ra.e[k][cc]);
         if (li == 0) series[cc].after.push_back(ra.e[k][cc]);
       }
-      if (li == 0) {
-        const int segment = static_cast<int>(std::min<double>(256, std::pow(2, std::floor(std::log2(std::max(8.0, xb.size() / 4.0))))));
-        WelchPsd(xb, 1.0 / dt, segment, &series[cc].frequency, &series[cc].psd_before);
-        std::vector<double> unused;
-        WelchPsd(xa, 1.0 / dt, segment, &unused, &series[cc].psd_after);
-      }
+      if (li == 0) ResidualSpectra(xb, xa, 1.0 / dt, kWelchSegmentCap, &series[cc]);
     }
   }
   for (int c = 0; c < 3; ++c) {
