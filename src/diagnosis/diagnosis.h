@@ -92,7 +92,7 @@ struct DiagnosedEffect {
   // One standard error per parameter (the fit's covariance, scaled by the residual's
   // variance and correlation length); NaN where the logs do not determine it.
   std::map<std::string, double> standard_errors;
-  double gap_reduction = 0;                  // share of the test rows' gap before it was added that it removed
+  double gap_reduction = 0;                  // share of the test rows' gap it removes on top of the effects before it
   std::string evidence;                      // one sentence: what decided it
 };
 

@@ -138,7 +138,6 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
   const int bandwidth = problem.ChunkRows();
   SquaredResiduals current_residuals = out.before;
   std::vector<TrialEffect> current;
-  std::vector<double> test_reductions;  // per added effect, on the test rows
   for (int round = 1; round <= options.max_effects; ++round) {
     const std::vector<TrialEffect> candidates = problem.Candidates(current);
     if (candidates.empty()) break;
@@ -276,9 +275,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
       DiagnosisCandidate& winner = tried[best];
       winner.selected = true;
       const std::string evidence = RoundEvidence(tried, winner, tested);
-      const double test_before = problem.Gap(Mean(current_residuals.test));
       current = next;
-      test_reductions.push_back(test_before > 0 ? (test_before - problem.Gap(Mean(r.test))) / test_before : 0.0);
       std::string signature = problem.Signature(current.back());
       out.evidence.push_back(EffectLabel(winner.name, winner.joint) + ": " + evidence +
                              (signature.empty() ? "" : "; " + signature) + ".");
@@ -312,7 +309,6 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
           out.removed.push_back(why);
           current.erase(current.begin() + static_cast<std::ptrdiff_t>(weakest));
           out.evidence.erase(out.evidence.begin() + static_cast<std::ptrdiff_t>(weakest));
-          test_reductions.erase(test_reductions.begin() + static_cast<std::ptrdiff_t>(weakest));
           std::vector<int> rest(current.size());
           for (std::size_t k = 0; k < rest.size(); ++k) rest[k] = static_cast<int>(k);
           try {
@@ -329,8 +325,21 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
     if (!passes) break;
   }
   out.effects = current;
-  out.gap_reductions = test_reductions;
   out.after = current_residuals;
+  // Each effect's share of the test rows' gap on top of those before it, with the
+  // parameters they all end with: the shares recorded as each was added no longer add up
+  // once a refit changed the earlier ones or the backward step took one out.
+  double gap = problem.Gap(Mean(out.before.test));
+  for (std::size_t k = 1; k <= current.size(); ++k) {
+    const double next = k == current.size()
+                            ? problem.Gap(Mean(out.after.test))
+                            : problem.Gap(Mean(problem.Evaluate(std::vector<TrialEffect>(current.begin(),
+                                                                                         current.begin() +
+                                                                                             static_cast<std::ptrdiff_t>(k)))
+                                                   .test));
+    out.gap_reductions.push_back(gap > 0 ? (gap - next) / gap : 0.0);
+    gap = next;
+  }
   return out;
 }
 

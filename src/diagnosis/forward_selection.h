@@ -98,7 +98,9 @@ class DiagnosisProblem {
 
 struct SelectionResult {
   std::vector<TrialEffect> effects;           // added, in order, after the final refit
-  std::vector<double> gap_reductions;         // per added effect: share of the held-out gap it removed
+  // per effect kept: its share of the test rows' gap on top of those before it, with the
+  // parameters all end with (the product of 1 - share is gap after / gap before)
+  std::vector<double> gap_reductions;
   std::vector<std::string> evidence;          // per added effect
   std::vector<DiagnosisCandidate> candidates; // every candidate of every round
   SquaredResiduals before, after;

@@ -202,5 +202,34 @@ TEST(ForwardSelection, ACandidateOnAJointWithAnAddedEffectIsRefittedWithIt) {
   }
 }
 
+// An effect taken out again by the backward step: the shares of the test rows' gap that
+// the effects left report are each one's on top of those before it, with the parameters
+// they end with, so together they make the whole reduction: the product of (1 - share)
+// is the gap after over the gap before. (Recorded when each was added, the shares of the
+// effects after the one taken out were on top of it: issue 44.)
+TEST(ForwardSelection, TheGapSharesAddUpAfterAnEffectIsTakenOut) {
+  Rng rng(9);
+  const std::size_t n = 6000;
+  std::vector<double> y(n), x1(n), x2(n), mix(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x1[i] = rng.Gaussian(1.0);
+    x2[i] = rng.Gaussian(1.0);
+    // Explains most of y alone (R^2 0.67), and nothing once x1 and x2 are in.
+    mix[i] = (x1[i] + x2[i]) / std::sqrt(2.0) + 0.7 * rng.Gaussian(1.0);
+    y[i] = x1[i] + x2[i] + rng.Gaussian(0.05);
+  }
+  const LinearProblem problem(y, {{"payload", 0, mix}, {"viscous_friction", 0, x1}, {"coulomb_friction", 0, x2}});
+  const SelectionResult s = SelectEffects(problem, Options());
+  ASSERT_EQ(s.removed.size(), 1u);
+  EXPECT_NE(s.removed[0].find("payload"), std::string::npos) << s.removed[0];
+  ASSERT_EQ(s.effects.size(), 2u);
+  ASSERT_EQ(s.gap_reductions.size(), 2u);
+  double left = 1;
+  for (double share : s.gap_reductions) left *= 1 - share;
+  const double ratio = problem.Gap(Mean(s.after.test)) / problem.Gap(Mean(s.before.test));
+  EXPECT_NEAR(left, ratio, 1e-9);
+  EXPECT_GT(s.gap_reductions[0], 0.2);
+}
+
 }  // namespace
 }  // namespace twinsim
