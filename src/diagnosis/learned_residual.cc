@@ -116,8 +116,11 @@ RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen
     return errors;
   };
   // Each output keeps as many steps as lower its validation error most (none when no
-  // step beats predicting zero), then is refitted with them on every row.
+  // step beats predicting zero), then is refitted with them on every row. The model of
+  // the training rows alone is kept too: stage 2 chooses its penalty on what it leaves on
+  // the check rows (what the refit on every row leaves there, it has partly fitted).
   r.bins_.assign(static_cast<std::size_t>(inputs), Eigen::MatrixXd::Zero(kBins, y.cols()));
+  std::vector<Eigen::MatrixXd> train_bins = r.bins_;
   std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) all[static_cast<std::size_t>(i)] = i;
   for (Eigen::Index o = 0; o < r.outputs_; ++o) {
@@ -129,9 +132,15 @@ RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen
       if (errors[s] < best_error) best_error = errors[s], steps = static_cast<int>(s) + 1;
     }
     for (auto& b : r.bins_) b.col(o).setZero();
+    boost(o, train, {}, steps);
+    for (std::size_t c = 0; c < train_bins.size(); ++c) train_bins[c].col(o) = r.bins_[c].col(o);
+    for (auto& b : r.bins_) b.col(o).setZero();
     boost(o, all, {}, steps);
   }
   const Eigen::MatrixXd rest = y - r.Additive(x);
+  std::swap(r.bins_, train_bins);
+  const Eigen::MatrixXd rest_of_train = y - r.Additive(x);  // stage 1 fitted on the training rows only
+  std::swap(r.bins_, train_bins);
 
   // Stage 2: kernel ridge on what is left.
   const Eigen::MatrixXd phi = r.Features(x);
@@ -145,7 +154,7 @@ RandomFeatureRidge RandomFeatureRidge::Fit(const Eigen::MatrixXd& x, const Eigen
   // No correction at all (zero weights) competes too: a learner that only adds variance
   // must not be credited.
   const Eigen::MatrixXd pt = rows_of(phi, train), pc = rows_of(phi, check);
-  const Eigen::MatrixXd rt = rows_of(rest, train), rc = rows_of(rest, check);
+  const Eigen::MatrixXd rt = rows_of(rest_of_train, train), rc = rows_of(rest_of_train, check);
   const Eigen::MatrixXd at = pt.transpose() * pt, bt = pt.transpose() * rt;
   // The penalty per output; an output no penalty helps gets no correction.
   const Eigen::Index outputs = y.cols();
