@@ -13,6 +13,7 @@
 #include "analysis/omni_replay.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
+#include "diagnosis/fixed_step_cost.h"
 #include "diagnosis/forward_selection.h"
 #include "diagnosis/omni_identification.h"
 #include "learning/omni_predictor.h"
@@ -371,16 +372,21 @@ void OmniProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<in
   }
   const std::size_t rows = FitResidual(*effects).size();
   if (rows == 0) throw CheckFailed("no fit rows");
-  ceres::NumericDiffOptions diff;
-  // Wide steps: the replay's cost is jagged at fine scales (encoder counts, the controller's
-  // ticks); at 1e-3 Ceres stalled on a traction limit 20 % off (measured).
-  diff.relative_step_size = 2e-2;
-  auto* functor = new OmniFitFunctor(this, *effects, slots);
-  auto* cost = new ceres::DynamicNumericDiffCostFunction<OmniFitFunctor, ceres::CENTRAL>(functor, ceres::TAKE_OWNERSHIP, diff);
-  cost->AddParameterBlock(static_cast<int>(x.size()));
-  cost->SetNumResiduals(static_cast<int>(rows));
+  // Wide steps, fixed in each coordinate (FixedStepCost): the replay's cost is jagged at
+  // fine scales (encoder counts, the controller's ticks); at 1e-3 Ceres stalled on a
+  // traction limit 20 % off (measured). 2 % of a logarithm's value, and of a linear
+  // variable's value or, near 0 (a coupling, a drift), of a hundredth of its range.
+  std::vector<double> steps(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k)
+    steps[k] = slots[k].log_scale ? 2e-2 : 2e-2 * std::max(std::abs(x[k]), 0.01 * (upper[k] - lower[k]));
+  const OmniFitFunctor functor(this, *effects, slots);
   ceres::Problem problem;
-  problem.AddResidualBlock(cost, nullptr, x.data());
+  problem.AddResidualBlock(new FixedStepCost(rows, steps,
+                                             [&functor](const double* at, double* out) {
+                                               const double* blocks[] = {at};
+                                               return functor(blocks, out);
+                                             }),
+                           nullptr, x.data());
   for (std::size_t k = 0; k < x.size(); ++k) {
     problem.SetParameterLowerBound(x.data(), static_cast<int>(k), lower[k]);
     problem.SetParameterUpperBound(x.data(), static_cast<int>(k), upper[k]);
@@ -394,7 +400,7 @@ void OmniProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<in
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  *effects = functor->Apply(x.data());
+  *effects = functor.Apply(x.data());
 }
 
 void OmniProblem::StepDelay(std::vector<TrialEffect>* effects, int i) const {

@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "diagnosis/diagnosis.h"
+#include "diagnosis/fixed_step_cost.h"
 #include "diagnosis/identifiability.h"
 #include "diagnosis/omni_diagnosis.h"
 
@@ -384,24 +385,14 @@ class FitCost : public ceres::CostFunction {
     return v;
   }
 
-  // Central differences with a fixed step in the coordinates (Ceres' numeric
-  // derivatives scale the step with |x|, and take 1.5e-8 where a coordinate is 0: a
-  // loop gain of 1, a coupling in the middle of its range).
+  // Central differences with a fixed step in the coordinates (diagnosis/fixed_step_cost.h:
+  // Ceres' numeric derivatives take 1.5e-8 where a coordinate is 0, a loop gain of 1, a
+  // coupling in the middle of its range).
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     if (!Residual(parameters[0], residuals)) return false;
     if (!jacobians || !jacobians[0]) return true;
-    const std::size_t n = free_.size();
-    std::vector<double> x(parameters[0], parameters[0] + n), plus(rows_), minus(rows_);
-    for (std::size_t k = 0; k < n; ++k) {
-      const double x0 = x[k];
-      x[k] = x0 + kCoordinateStep;
-      if (!Residual(x.data(), plus.data())) return false;
-      x[k] = x0 - kCoordinateStep;
-      if (!Residual(x.data(), minus.data())) return false;
-      x[k] = x0;
-      for (std::size_t r = 0; r < rows_; ++r) jacobians[0][r * n + k] = (plus[r] - minus[r]) / (2 * kCoordinateStep);
-    }
-    return true;
+    return CentralDifferences([this](const double* x, double* out) { return Residual(x, out); }, parameters[0],
+                              std::vector<double>(free_.size(), kCoordinateStep), rows_, jacobians[0]);
   }
 
  private:
