@@ -490,7 +490,7 @@ class PyOmniSim {
     const Eigen::Vector3d& p = sim_->ball_record().truth.position;
     Array a({py::ssize_t{3}});
     std::copy(p.data(), p.data() + 3, a.mutable_data());
-    return std::move(a);
+    return a;
   }
   const Scene& scene() const { return scene_; }
   // The backend's name: `backend`, or "mixed: ..." where robots name their own.

@@ -114,7 +114,9 @@ TEST_P(ForeignArmEffect, IsNamedOrFlaggedAndClosesTheGap) {
     // that closes less (a torque offset takes the spring's mean) must close something
     // and leave the joint flagged.
     EXPECT_TRUE(flagged || (!report.effects.empty() && closed >= 0.7)) << Named(report) << ", closed " << closed;
-    if (!report.effects.empty()) EXPECT_GT(closed, 0.0) << "a vocabulary effect named that makes the test rows worse";
+    if (!report.effects.empty()) {
+      EXPECT_GT(closed, 0.0) << "a vocabulary effect named that makes the test rows worse";
+    }
   }
 }
 

@@ -229,7 +229,9 @@ TEST(SceneBackends, RobotsCollideWithinAGroupAndPassThroughAcrossGroups) {
     // Two worlds (the other engine, or analytic): they drive through each other.
     EXPECT_LT(closest(e, "analytic"), 0.05) << e;
   }
-  if (engines.size() == 2) EXPECT_LT(closest("ode", "bullet"), 0.05);
+  if (engines.size() == 2) {
+    EXPECT_LT(closest("ode", "bullet"), 0.05);
+  }
 }
 
 // (2) Save and Restore on a mixed field give the continuation exactly.
@@ -310,9 +312,12 @@ TEST(SceneBackends, TheBallBouncesOffRobotsOfEveryBackend) {
   if (AvailableBallEngines().empty()) GTEST_SKIP() << "no ball engine";
   EXPECT_EQ(BallEngineFor(std::vector<std::string>{"analytic", "ode"}), "ode");
   EXPECT_EQ(BallEngineFor(std::vector<std::string>{"analytic", "learned"}), BallEngineFor("analytic"));
-  if (Built("bullet")) EXPECT_EQ(BallEngineFor(std::vector<std::string>{"learned", "bullet"}), "bullet");
-  if (Built("ode") && Built("bullet"))
+  if (Built("bullet")) {
+    EXPECT_EQ(BallEngineFor(std::vector<std::string>{"learned", "bullet"}), "bullet");
+  }
+  if (Built("ode") && Built("bullet")) {
     EXPECT_EQ(BallEngineFor(std::vector<std::string>{"bullet", "ode"}), "ode");
+  }
   for (const std::string& keeper : {std::string("analytic"), std::string("learned")}) {
     const std::string hold = "{type: sequence, segments: [{duration: 1, command: [0, 0, 0]}]}";
     const std::string extra = keeper == "learned" ? "predictor: " + PredictorFile(false) : "";

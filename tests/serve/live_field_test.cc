@@ -909,8 +909,12 @@ TEST(LiveField, TheBallsCameraNoiseAndMissedDetectionsAreSetOverTheProtocol) {
       std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, static_cast<std::uint32_t>(k));
       ASSERT_TRUE(f) << "no vision for frame " << k;
       seen.push_back(*f);
-      if (k == 5) EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, realism(0, 1), field.control_port())), Codes1{});
-      if (k == 20) EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, realism(0.005f, 0), field.control_port())), Codes1{});
+      if (k == 5) {
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, realism(0, 1), field.control_port())), Codes1{});
+      }
+      if (k == 20) {
+        EXPECT_EQ(Codes(Ask<SimulatorResponse>(client, realism(0.005f, 0), field.control_port())), Codes1{});
+      }
       ASSERT_TRUE(Ask<RobotControlResponse>(client, Local(0, Twist2{}), field.blue_port())) << k;
     }
     server.Join();

@@ -116,10 +116,14 @@ TEST(ServeReplay, ALockstepMatchReplayedByRunGivesTheClientsVisionAndTheSameFile
     }
     seen.push_back(*frame);
     // Yellow joins at frame 25 (from then on lockstep waits for it too); both answer.
-    if (k >= 25) ASSERT_TRUE(yellow.SendTo(YellowAt(k), UdpEndpoint{ParseIpv4("127.0.0.1"), field.yellow_port()}));
+    if (k >= 25) {
+      ASSERT_TRUE(yellow.SendTo(YellowAt(k), UdpEndpoint{ParseIpv4("127.0.0.1"), field.yellow_port()}));
+    }
     ASSERT_TRUE(blue.SendTo(BlueAt(k), UdpEndpoint{ParseIpv4("127.0.0.1"), field.blue_port()}));
     ASSERT_TRUE(ReceiveOne(blue)) << k;
-    if (k >= 25) ASSERT_TRUE(ReceiveOne(yellow)) << k;
+    if (k >= 25) {
+      ASSERT_TRUE(ReceiveOne(yellow)) << k;
+    }
   }
   server.join();
 

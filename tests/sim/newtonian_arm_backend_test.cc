@@ -207,7 +207,9 @@ TEST(NewtonianArmBackend, UndampedFlexibleArmKeepsItsEnergyWithTheTrapezoidalRul
     std::cout << "[measured] undamped flexible RRR, " << (trapezoidal ? "trapezoidal" : "explicit") << ", "
               << b->physics_substeps() << " physics steps per sample: max |E - E0| = " << drift << " J of "
               << std::abs(e0) << " J\n";
-    if (trapezoidal) EXPECT_LT(drift, 1e-6);
+    if (trapezoidal) {
+      EXPECT_LT(drift, 1e-6);
+    }
   }
 }
 
