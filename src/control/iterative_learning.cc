@@ -7,11 +7,11 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <chrono>
-#include <utility>
 #include <cmath>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "core/error.h"
 #include "core/math_constants.h"
