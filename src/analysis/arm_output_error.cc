@@ -9,9 +9,9 @@
 
 #include "analysis/arm_replay.h"
 #include "analysis/arm_simulation_score.h"
+#include "analysis/fixed_step_cost.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
-#include "core/parallel.h"
 #include "sim/arm_simulation.h"
 
 namespace twinsim {
@@ -69,12 +69,8 @@ class OutputErrorProblem {
           continue;
         }
         fit_.back().push_back(s);
-        for (int r = 0; r < length; ++r) {
-          const double elapsed = static_cast<double>(r + 1) * log.sample_period;
-          velocity2 += (log.q.row(s).array() + elapsed * log.qd.row(s).array() - log.q.row(s + 1 + r).array())
-                           .square()
-                           .transpose();
-        }
+        for (int r = 0; r < length; ++r)
+          velocity2 += (ConstantVelocityQ(log, s, r + 1) - log.q.row(s + 1 + r)).array().square().transpose();
         rows += length;
       }
       const int first = log.edge_samples, last = log.rows() - log.edge_samples;
@@ -143,17 +139,10 @@ class OutputErrorProblem {
   // row by row, joint by joint; then the torque errors of every log's rows.
   void Residual(const ArmModel& model, double* out) const {
     std::size_t i = 0;
-    Eigen::MatrixXd q;
-    for (std::size_t l = 0; l < logs_.size(); ++l) {
-      const ArmLog& log = logs_[l];
-      const ArmModel at = ArmModelAtLogPeriod(model, log.sample_period);
-      ArmSimulation sim(at, MakeArmBackend(options_.backend, at));
-      for (int s : fit_[l]) {
-        SimulateArmFromLog(&sim, log, s, lengths_[l], &q, true);
-        for (int r = 0; r < lengths_[l]; ++r)
-          for (int j = 0; j < n_; ++j) out[i++] = (q(r, j) - log.q(s + 1 + r, j)) * weight_[j];
-      }
-    }
+    SimulateWindows(model, false, [&](const ArmLog& log, int s, const Eigen::MatrixXd& q) {
+      for (Eigen::Index r = 0; r < q.rows(); ++r)
+        for (int j = 0; j < n_; ++j) out[i++] = (q(r, j) - log.q(s + 1 + r, j)) * weight_[j];
+    });
     for (const ArmLog& log : logs_) {
       const Eigen::MatrixXd tau = PredictArmCommands(model, log);
       for (int r = log.edge_samples; r < log.rows() - log.edge_samples; ++r)
@@ -165,6 +154,24 @@ class OutputErrorProblem {
   Eigen::VectorXd SimulationRmse(const ArmModel& model, bool check) const {
     Eigen::ArrayXd squares = Eigen::ArrayXd::Zero(n_);
     double rows = 0;
+    SimulateWindows(model, check, [&](const ArmLog& log, int s, const Eigen::MatrixXd& q) {
+      squares += (q - log.q.middleRows(s + 1, q.rows())).array().square().colwise().sum().transpose();
+      rows += static_cast<double>(q.rows());
+    });
+    return (squares / std::max(1.0, rows)).sqrt().matrix();
+  }
+
+  // The held-out windows' error `rmse` (SimulationRmse(model, true)), each joint's against
+  // the constant-velocity baseline.
+  double CheckCost(const Eigen::VectorXd& rmse) const {
+    return (rmse.array() / constant_velocity_.array().max(1e-12)).square().sum();
+  }
+
+ private:
+  // Simulates `model` over the fit windows (or, with `check`, the held-out ones) of every
+  // log, calling each(log, first row, the simulated q of the rows after it).
+  template <typename Each>
+  void SimulateWindows(const ArmModel& model, bool check, const Each& each) const {
     Eigen::MatrixXd q;
     for (std::size_t l = 0; l < logs_.size(); ++l) {
       const ArmLog& log = logs_[l];
@@ -172,19 +179,11 @@ class OutputErrorProblem {
       ArmSimulation sim(at, MakeArmBackend(options_.backend, at));
       for (int s : (check ? check_ : fit_)[l]) {
         SimulateArmFromLog(&sim, log, s, lengths_[l], &q, true);
-        squares += (q - log.q.middleRows(s + 1, lengths_[l])).array().square().colwise().sum().transpose();
-        rows += lengths_[l];
+        each(log, s, q);
       }
     }
-    return (squares / std::max(1.0, rows)).sqrt().matrix();
   }
 
-  // The held-out windows' error, each joint's against the constant-velocity baseline.
-  double CheckCost(const ArmModel& model) const {
-    return (SimulationRmse(model, true).array() / constant_velocity_.array().max(1e-12)).square().sum();
-  }
-
- private:
   const ArmModel& start_;
   const std::vector<ArmLog>& logs_;
   ArmOutputErrorOptions options_;
@@ -194,38 +193,6 @@ class OutputErrorProblem {
   int fit_windows_ = 0, check_windows_ = 0;
   std::size_t simulated_rows_ = 0, torque_rows_ = 0;
   Eigen::VectorXd constant_velocity_, weight_, torque_weight_, viscous_unit_, coulomb_unit_, offset_unit_;
-};
-
-// Central differences at kStep in every coordinate, the columns simulated in parallel.
-class OutputErrorCost : public ceres::CostFunction {
- public:
-  OutputErrorCost(const OutputErrorProblem* problem, int threads) : problem_(problem), threads_(threads) {
-    mutable_parameter_block_sizes()->push_back(problem->parameters());
-    set_num_residuals(static_cast<int>(problem->residuals()));
-  }
-
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const int p = problem_->parameters();
-    const std::size_t rows = problem_->residuals();
-    problem_->Residual(problem_->Apply(parameters[0]), residuals);
-    if (!jacobians || !jacobians[0]) return true;
-    std::vector<std::vector<double>> columns(2 * static_cast<std::size_t>(p), std::vector<double>(rows));
-    ParallelFor(2 * p, threads_, [&](int c) {
-      std::vector<double> x(parameters[0], parameters[0] + p);
-      x[static_cast<std::size_t>(c / 2)] += c % 2 == 0 ? kStep : -kStep;
-      problem_->Residual(problem_->Apply(x.data()), columns[static_cast<std::size_t>(c)].data());
-    });
-    for (int k = 0; k < p; ++k) {
-      const std::vector<double>& plus = columns[2 * static_cast<std::size_t>(k)];
-      const std::vector<double>& minus = columns[2 * static_cast<std::size_t>(k) + 1];
-      for (std::size_t r = 0; r < rows; ++r) jacobians[0][r * p + k] = (plus[r] - minus[r]) / (2 * kStep);
-    }
-    return true;
-  }
-
- private:
-  const OutputErrorProblem* problem_;
-  int threads_;
 };
 
 }  // namespace
@@ -241,7 +208,15 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   const ArmModel floor = problem.Apply(x.data());
 
   ceres::Problem ceres_problem;
-  ceres_problem.AddResidualBlock(new OutputErrorCost(&problem, options.threads), nullptr, x.data());
+  // Central differences at kStep in every coordinate, the columns simulated on
+  // options.threads threads.
+  ceres_problem.AddResidualBlock(new FixedStepCost(problem.residuals(), std::vector<double>(x.size(), kStep),
+                                                   [&problem](const double* at, double* out) {
+                                                     problem.Residual(problem.Apply(at), out);
+                                                     return true;
+                                                   },
+                                                   options.threads),
+                                 nullptr, x.data());
   // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its
   // unit to a thousand times it, an offset within twice the joint's torque RMS.
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
@@ -262,7 +237,9 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   ceres::Solve(solver, &ceres_problem, &result);
   const ArmModel fitted = problem.Apply(x.data());
   // Kept only where the held-out windows get better.
-  const bool kept = problem.CheckCost(fitted) < problem.CheckCost(floor);
+  const Eigen::VectorXd check_before = problem.SimulationRmse(floor, true);
+  const Eigen::VectorXd check_after = problem.SimulationRmse(fitted, true);
+  const bool kept = problem.CheckCost(check_after) < problem.CheckCost(check_before);
 
   if (summary) {
     ArmOutputErrorSummary& s = *summary;
@@ -274,8 +251,8 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     s.kept = kept;
     s.rmse_before = problem.SimulationRmse(floor, false);
     s.rmse_after = problem.SimulationRmse(fitted, false);
-    s.check_before = problem.SimulationRmse(floor, true);
-    s.check_after = problem.SimulationRmse(fitted, true);
+    s.check_before = check_before;
+    s.check_after = check_after;
     s.constant_velocity = problem.constant_velocity();
     s.scale.resize(n);
     s.viscous_before.resize(n), s.viscous_after.resize(n), s.coulomb_before.resize(n), s.coulomb_after.resize(n);

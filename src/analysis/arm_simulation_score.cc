@@ -45,11 +45,9 @@ ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horiz
     for (int r = 0; r < length; ++r) {
       const int row = start + 1 + r;
       const Eigen::ArrayXd measured = log.q.row(row).transpose().array();
-      const double elapsed = static_cast<double>(r + 1) * log.sample_period;
       model += (q.row(r).transpose().array() - measured).square();
       hold += (log.q.row(start).transpose().array() - measured).square();
-      velocity += (log.q.row(start).transpose().array() + elapsed * log.qd.row(start).transpose().array() - measured)
-                      .square();
+      velocity += (ConstantVelocityQ(log, start, r + 1).transpose().array() - measured).square();
       sum += measured;
       squares += measured.square();
     }
@@ -96,6 +94,10 @@ bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int st
     q->row(r) = sim->backend().q().transpose();
   }
   return true;
+}
+
+Eigen::RowVectorXd ConstantVelocityQ(const ArmLog& log, int start, int ahead) {
+  return log.q.row(start) + static_cast<double>(ahead) * log.sample_period * log.qd.row(start);
 }
 
 ArmModel ArmModelAtLogPeriod(const ArmModel& model, double period) {

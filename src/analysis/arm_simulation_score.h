@@ -53,6 +53,10 @@ ArmModel ArmModelAtLogPeriod(const ArmModel& model, double period);
 // rows between the log's edge_samples, after the model's delay. Empty when none fits.
 std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, double horizon, int* length);
 
+// The constant-velocity baseline at row start + ahead: the joints moved on from row
+// `start` at the q̇ logged there (ahead rows of the log's period).
+Eigen::RowVectorXd ConstantVelocityQ(const ArmLog& log, int start, int ahead);
+
 struct ArmSimulationScoreOptions {
   // s: the windows' lengths; 0 is the free run over the whole log.
   std::vector<double> horizons = {0.1, 1.0, 0};

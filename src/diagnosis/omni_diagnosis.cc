@@ -9,11 +9,11 @@
 #include <set>
 #include <stdexcept>
 
+#include "analysis/fixed_step_cost.h"
 #include "analysis/omni_horizons.h"
 #include "analysis/omni_replay.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
-#include "diagnosis/fixed_step_cost.h"
 #include "diagnosis/forward_selection.h"
 #include "diagnosis/omni_identification.h"
 #include "learning/omni_predictor.h"

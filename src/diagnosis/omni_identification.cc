@@ -11,13 +11,13 @@
 #include <set>
 #include <sstream>
 
+#include "analysis/fixed_step_cost.h"
 #include "analysis/omni_baselines.h"
 #include "analysis/omni_horizons.h"
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "diagnosis/diagnosis.h"
-#include "diagnosis/fixed_step_cost.h"
 #include "diagnosis/identifiability.h"
 #include "diagnosis/omni_diagnosis.h"
 
@@ -385,7 +385,7 @@ class FitCost : public ceres::CostFunction {
     return v;
   }
 
-  // Central differences with a fixed step in the coordinates (diagnosis/fixed_step_cost.h:
+  // Central differences with a fixed step in the coordinates (analysis/fixed_step_cost.h:
   // Ceres' numeric derivatives take 1.5e-8 where a coordinate is 0, a loop gain of 1, a
   // coupling in the middle of its range).
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {

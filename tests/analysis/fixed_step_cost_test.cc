@@ -1,6 +1,6 @@
-// Numeric derivatives at fixed steps (diagnosis/fixed_step_cost.h) on a cost that is
+// Numeric derivatives at fixed steps (analysis/fixed_step_cost.h) on a cost that is
 // jagged at fine scales, as a replay's is (encoder counts, controller ticks).
-#include "diagnosis/fixed_step_cost.h"
+#include "analysis/fixed_step_cost.h"
 
 #include <gtest/gtest.h>
 
