@@ -31,7 +31,9 @@ bool ArmSimulationScoreOptions::IsValid(std::string* why) const {
 
 namespace {
 
-ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horizon) {
+// `free_run` (if given) receives the simulated q of the last window: the free run's
+// whole path when horizon is 0.
+ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horizon, Eigen::MatrixXd* free_run) {
   const int n = log.dof;
   int length = 0;
   const std::vector<int> starts = ArmSimulationWindows(sim->model(), log, horizon, &length);
@@ -53,6 +55,7 @@ ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horiz
     }
     score.rows += length;
   }
+  if (free_run) *free_run = q;
   const double rows = std::max(1, score.rows);
   score.rmse = (model / rows).sqrt().matrix();
   score.hold = (hold / rows).sqrt().matrix();
@@ -139,8 +142,15 @@ ArmSimulationScore ScoreArmSimulation(const ArmModel& model, const ArmLog& log,
     }
   }
   if (horizons.empty()) return score;
-  ArmSimulation sim(at, MakeArmBackend(options.backend, at));
-  for (double h : horizons) score.horizons.push_back(ScoreHorizon(&sim, log, h));
+  ArmSimulation sim(at, MakeArmBackend(options.backend, at, options.backend_options));
+  for (double h : horizons) {
+    const bool free = h == 0;
+    score.horizons.push_back(ScoreHorizon(&sim, log, h, free ? &score.free_run : nullptr));
+    if (free) {
+      int length = 0;
+      score.free_run_start = ArmSimulationWindows(at, log, 0, &length).front();
+    }
+  }
   return score;
 }
 

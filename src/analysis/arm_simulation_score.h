@@ -28,6 +28,7 @@
 
 #include <Eigen/Core>
 
+#include "backends/arm_backend_factory.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
@@ -60,7 +61,8 @@ Eigen::RowVectorXd ConstantVelocityQ(const ArmLog& log, int start, int ahead);
 struct ArmSimulationScoreOptions {
   // s: the windows' lengths; 0 is the free run over the whole log.
   std::vector<double> horizons = {0.1, 1.0, 0};
-  std::string backend = "analytic";  // the Newtonian backend that simulates the model
+  std::string backend = "analytic";  // the backend that simulates the model (MakeArmBackend's names)
+  ArmBackendOptions backend_options;  // e.g. the learned backend's predictor
   // Horizons longer than the log's usable rows are left out instead of refused (a log
   // too short for any window then gets no horizons).
   bool drop_long_horizons = false;
@@ -84,6 +86,10 @@ struct ArmHorizonScore {
 struct ArmSimulationScore {
   std::string path;  // the log's
   std::vector<ArmHorizonScore> horizons;  // in the order of the options
+  // The free run's simulated q (when horizon 0 was scored): row r is the log's row
+  // free_run_start + 1 + r (rows x dof, rad or m); empty otherwise.
+  int free_run_start = -1;
+  Eigen::MatrixXd free_run;
 };
 
 // Scores `model` on `log` (the rows between its edge_samples, where logged or derived

@@ -14,59 +14,11 @@
 #include "core/math_constants.h"
 #include "robots/arm/arm_dynamics.h"
 #include "sim/arm_simulation.h"
+#include "analysis/ode_pd_arm_log.h"
 #include "test_util.h"
 
 namespace twinsim {
 namespace {
-
-// A log of the RRR arm on ODE (another engine than the analytic one that scores it) under
-// a PD with gravity feed-forward along a two-tone reference, the command updated every
-// `hold` samples (the controller of a log sampled at 1 kHz / hold), recorded one row per
-// update: t, q, q̇ as sampled, the torque sent. Read back through the CSV reader.
-ArmLog PlantLog(const ArmModel& plant, double seconds, int hold) {
-  // t, q, q̇ and q̈ logged (no derived values, no edge rows).
-  ArmSimulation sim(plant, MakeArmBackend("ode", plant));
-  const Eigen::Vector3d centre(0.2, 0.4, -0.6), amplitude(0.5, 0.3, 0.6);
-  auto reference = [&](double t) {
-    Eigen::Vector3d q;
-    for (int j = 0; j < 3; ++j)
-      q[j] = centre[j] + amplitude[j] * (0.6 * std::sin(2 * kPi * 0.4 * (j + 1) * t) + 0.4 * std::sin(2 * kPi * 1.3 * t + j));
-    return q;
-  };
-  sim.Reset(reference(0), Eigen::Vector3d::Zero());
-  Eigen::VectorXd held;
-  int k = 0;
-  const ArmController pd = [&](double t, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
-    if (k++ % hold == 0) {
-      const Eigen::VectorXd gravity = InverseDynamics(plant, q, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
-      held = gravity + 60.0 * (reference(t) - q) - 6.0 * qd;
-    }
-    return held;
-  };
-  const int samples = static_cast<int>(std::lround(seconds / plant.sample_time)) + 1;
-  const ArmTrajectory run = sim.Run(samples, pd);
-  const int rows = (samples - 1) / hold + 1;
-  ArmLog log;
-  log.dof = 3;
-  log.t.resize(rows);
-  log.q.resize(rows, 3);
-  log.qd.resize(rows, 3);
-  log.qdd.resize(rows, 3);
-  log.tau.resize(rows, 3);
-  for (int r = 0; r < rows; ++r) {
-    log.t[r] = run.t[r * hold];
-    log.q.row(r) = run.q.row(r * hold);
-    log.qd.row(r) = run.qd.row(r * hold);
-    log.tau.row(r) = run.command.row(r * hold);
-  }
-  // q̈ by central differences of the sampled q̇ (one-sided at the ends).
-  const double dt = hold * plant.sample_time;
-  for (int r = 0; r < rows; ++r) {
-    const int a = std::max(r - 1, 0), b = std::min(r + 1, rows - 1);
-    log.qdd.row(r) = (log.qd.row(b) - log.qd.row(a)) / ((b - a) * dt);
-  }
-  return ParseArmLog(FormatArmLog(log, true), "plant.csv");
-}
 
 ArmModel Rrr() { return LoadArmModel(testing::SourcePath("models/rrr.yaml")); }
 
@@ -80,7 +32,7 @@ TEST(ArmSimulationScore, TheTruthFollowsALogFromAnotherEngineAndAWrongModelDoesN
   const ArmModel truth = Rrr();
   ArmModel heavy = truth;  // links 30 % heavier, twice the viscous friction
   for (ArmJoint& j : heavy.joints) j.child.mass *= 1.3, j.viscous *= 2;
-  const ArmLog log = PlantLog(truth, 6.0, 1);
+  const ArmLog log = testing::OdePdArmLog(truth, 6.0, 1);
   ArmSimulationScoreOptions options;
   options.horizons = {0.1, 1.0, 0};
   const ArmSimulationScore right = ScoreArmSimulation(truth, log, options);
@@ -117,7 +69,7 @@ TEST(ArmSimulationScore, ALogSampledSlowerThanTheControllerIsSimulatedAtItsOwnPe
   // The same plant, its controller updating every 5 ms: a 200 Hz log of a model whose
   // sample time is 1 ms. Simulated a row at a time, each torque held over its row.
   const ArmModel truth = Rrr();
-  const ArmLog log = PlantLog(truth, 6.0, 5);
+  const ArmLog log = testing::OdePdArmLog(truth, 6.0, 5);
   EXPECT_NEAR(log.sample_period, 0.005, 1e-12);
   ArmSimulationScoreOptions options;
   options.horizons = {0.1};
@@ -132,7 +84,7 @@ TEST(ArmSimulationScore, ALogSampledSlowerThanTheControllerIsSimulatedAtItsOwnPe
 
 TEST(ArmSimulationScore, TablesCsvAndRefusals) {
   const ArmModel truth = Rrr();
-  const ArmLog log = PlantLog(truth, 1.5, 1);
+  const ArmLog log = testing::OdePdArmLog(truth, 1.5, 1);
   ArmSimulationScoreOptions options;
   options.horizons = {0.25, 0};
   const ArmSimulationScore s = ScoreArmSimulation(truth, log, options);
@@ -163,7 +115,7 @@ TEST(ArmSimulationScore, AModelThatRunsAwayIsCountedAndHeld) {
   const ArmModel truth = Rrr();
   ArmModel light = truth;
   for (ArmJoint& j : light.joints) j.child.mass *= 1e-3, j.child.inertia *= 1e-3, j.viscous = 0, j.coulomb = 0;
-  const ArmLog log = PlantLog(truth, 1.5, 1);
+  const ArmLog log = testing::OdePdArmLog(truth, 1.5, 1);
   ArmSimulationScoreOptions options;
   options.horizons = {0};
   const ArmSimulationScore s = ScoreArmSimulation(light, log, options);
@@ -179,7 +131,7 @@ TEST(ArmOutputError, RecoversTheLinksScaleAndTheFrictionOfAPlantFromAnotherEngin
   const ArmModel truth = Rrr();
   ArmModel start = truth;
   for (ArmJoint& j : start.joints) j.child.mass *= 1.3, j.child.inertia *= 1.3, j.viscous *= 0.5;
-  const ArmLog log = PlantLog(truth, 4.0, 2);  // 500 Hz
+  const ArmLog log = testing::OdePdArmLog(truth, 4.0, 2);  // 500 Hz
   ArmOutputErrorOptions options;
   options.horizon = 0.1;
   options.threads = 2;
@@ -209,7 +161,7 @@ TEST(ArmOutputError, RecoversTheLinksScaleAndTheFrictionOfAPlantFromAnotherEngin
 
 TEST(ArmOutputError, RefusesBadOptionsAndLogsTooShort) {
   const ArmModel truth = Rrr();
-  const ArmLog log = PlantLog(truth, 0.5, 1);
+  const ArmLog log = testing::OdePdArmLog(truth, 0.5, 1);
   ArmOutputErrorOptions options;
   options.horizon = 0;
   EXPECT_THROW(RefineArmByOutputError(truth, {log}, options), InputError);

@@ -26,7 +26,7 @@ std::string BallScene(const std::string& ball) {
          "plots: [{type: path, file: path.png}]\n" + ball;
 }
 
-std::string ErrorOf(const std::string& yaml) { return testing::SceneError(yaml); }
+std::string BallSceneErrorOf(const std::string& yaml) { return testing::SceneError(yaml); }
 
 TEST(SceneBall, ShippedBallScenesLoad) {
   for (const char* name : {"ball_bounce", "serve_2v2_ball"}) {
@@ -65,7 +65,7 @@ TEST(SceneBall, TheBallsParametersAndStartAreRead) {
 }
 
 TEST(SceneBall, BadValuesAreReportedWithFileAndLine) {
-  const std::string e = ErrorOf(BallScene("ball:\n  radius: -0.02\n  mass: 0\n  restitution: 1.2\n  drag: abc\n"
+  const std::string e = BallSceneErrorOf(BallScene("ball:\n  radius: -0.02\n  mass: 0\n  restitution: 1.2\n  drag: abc\n"
                                           "  colour: white\n  start: {x: 9, z: 0.001}\n"));
   EXPECT_NE(e.find("s.yaml:9:"), std::string::npos) << e;   // radius
   EXPECT_NE(e.find("s.yaml:10:"), std::string::npos) << e;  // mass
@@ -73,13 +73,13 @@ TEST(SceneBall, BadValuesAreReportedWithFileAndLine) {
   EXPECT_NE(e.find("s.yaml:12:"), std::string::npos) << e;  // drag
   EXPECT_NE(e.find("unknown key 'colour'"), std::string::npos) << e;
   EXPECT_NE(e.find("s.yaml:14:"), std::string::npos) << e;  // z below the radius
-  const std::string camera = ErrorOf(BallScene("ball:\n  vision:\n    noise_xy: -0.001\n    drop_probability: 1.5\n"
+  const std::string camera = BallSceneErrorOf(BallScene("ball:\n  vision:\n    noise_xy: -0.001\n    drop_probability: 1.5\n"
                                                "    noise_z: .nan\n    blur: 1\n"));
   EXPECT_NE(camera.find("s.yaml:10:"), std::string::npos) << camera;  // noise_xy
   EXPECT_NE(camera.find("s.yaml:11:"), std::string::npos) << camera;  // drop_probability
   EXPECT_NE(camera.find("s.yaml:12:"), std::string::npos) << camera;  // noise_z
   EXPECT_NE(camera.find("unknown key 'blur'"), std::string::npos) << camera;
-  const std::string outside = ErrorOf(BallScene("ball: {start: {x: 9}}\n"));
+  const std::string outside = BallSceneErrorOf(BallScene("ball: {start: {x: 9}}\n"));
   EXPECT_NE(outside.find("s.yaml:8:"), std::string::npos) << outside;
   EXPECT_NE(outside.find("outside the"), std::string::npos) << outside;
 }

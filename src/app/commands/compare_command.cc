@@ -1,9 +1,13 @@
-// `twinsim compare --model MODEL --log LOG.csv --out DIR [--backend B ...] [--predictor P ...]`
+// `twinsim compare --model MODEL [--model ...] --log LOG.csv --out DIR [--backend B ...] [--predictor P ...]`
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 
+#include "analysis/arm_compare.h"
 #include "analysis/omni_compare.h"
 #include "app/commands/commands.h"
 #include "backends/omni_backend_factory.h"
@@ -12,9 +16,13 @@
 #include "engines/omni_engine.h"
 #include "io/output_files.h"
 #include "io/yaml_reader.h"
+#include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
+#include "render/image_stack.h"
 #include "render/plot.h"
 #include "render/renderer.h"
+#include "robots/arm/arm_log.h"
+#include "robots/arm/arm_model.h"
 #include "robots/omni/omni_log.h"
 
 namespace twinsim {
@@ -44,6 +52,32 @@ PathPlot FreeRunPlot(const OmniLog& log, const OmniCompareResult& result, const 
   return plot;
 }
 
+// The models' errors fill most of the height, with room for every baseline's start; a
+// baseline far above them (constant velocity 3 s ahead is metres) leaves the top,
+// drawn as far as it stays inside. `baselines` names the baselines' series.
+void CutBaselinesAboveModels(SeriesPlot* plot, const std::set<std::string>& baselines) {
+  double x_max = 0, y_models = 0, y_all = 0;
+  std::map<std::string, double> baseline_low;  // each baseline's smallest error
+  for (const PlotSeries& series : plot->series) {
+    for (std::size_t i = 0; i < series.y.size(); ++i) {
+      x_max = std::max(x_max, series.x[i]);
+      y_all = std::max(y_all, series.y[i]);
+      if (!baselines.count(series.name)) {
+        y_models = std::max(y_models, series.y[i]);
+      } else {
+        auto [it, added] = baseline_low.emplace(series.name, series.y[i]);
+        if (!added) it->second = std::min(it->second, series.y[i]);
+      }
+    }
+  }
+  double top = 1.5 * y_models;
+  for (const auto& [name, low] : baseline_low) top = std::max(top, 1.2 * low);
+  if (y_models > 0 && y_all > top) {
+    plot->range = WorldRect{0, x_max, 0, top};
+    plot->title += " (baselines beyond the top are cut)";
+  }
+}
+
 // Position error against the prediction horizon, one line per source.
 SeriesPlot ErrorPlot(const OmniCompareResult& result, double frame_rate) {
   SeriesPlot plot;
@@ -61,50 +95,183 @@ SeriesPlot ErrorPlot(const OmniCompareResult& result, double frame_rate) {
     it->x.push_back(row.horizon_frames / frame_rate);
     it->y.push_back(row.position_rmse * 1000);
   }
-  // The models' errors fill most of the height, with room for every baseline's start; a
-  // baseline far above them (constant velocity 3 s ahead is metres) leaves the top,
-  // drawn as far as it stays inside.
-  double x_max = 0, y_models = 0, y_all = 0;
-  std::map<std::string, double> baseline_low;  // each baseline's smallest error
-  for (const CompareErrorRow& row : result.rows) {
-    if (row.horizon_frames == 0) continue;
-    const double mm = row.position_rmse * 1000;
-    x_max = std::max(x_max, row.horizon_frames / frame_rate);
-    y_all = std::max(y_all, mm);
-    if (row.backend != "baseline") {
-      y_models = std::max(y_models, mm);
-    } else {
-      auto [it, added] = baseline_low.emplace(row.source, mm);
-      if (!added) it->second = std::min(it->second, mm);
-    }
-  }
-  double top = 1.5 * y_models;
-  for (const auto& [name, low] : baseline_low) top = std::max(top, 1.2 * low);
-  if (y_models > 0 && y_all > top) {
-    plot.range = WorldRect{0, x_max, 0, top};
-    plot.title += " (baselines beyond the top are cut)";
-  }
+  std::set<std::string> baselines;
+  for (const CompareErrorRow& row : result.rows)
+    if (row.backend == "baseline") baselines.insert(row.source);
+  CutBaselinesAboveModels(&plot, baselines);
   return plot;
 }
 
 struct CompareCliOptions {
-  std::string model;
+  std::vector<std::string> models;  // omni: one; arm: one or more, side by side
   std::string log;
   std::string out;
   std::vector<std::string> backends;  // empty: every physics backend built, and learned with --predictor
   std::vector<std::string> predictors;
   double plot_seconds = 8;  // s of the log drawn in paths.png
+  std::vector<double> horizons;  // arm: s, the simulation windows (0: the free run); empty: the default
   bool quiet = false;
   OmniLogSelector select;  // omni logs holding several robots
 };
 
+// Arm sources: every model on every backend asked for (default analytic), and the learned
+// backend once per predictor (over the first model). Labelled by backend, or by model
+// file and backend when several models are compared.
+std::vector<ArmCompareSource> ArmSources(const CompareCliOptions& options) {
+  std::vector<std::pair<std::string, ArmModel>> models;
+  std::set<std::string> stems;
+  for (const std::string& path : options.models) {
+    const std::string stem = std::filesystem::path(path).stem().string();
+    models.emplace_back(stems.insert(stem).second ? stem : path, LoadArmModel(path));
+  }
+  std::vector<std::string> backends = options.backends;
+  if (backends.empty()) backends.push_back("analytic");
+  const bool learned = std::count(backends.begin(), backends.end(), "learned") > 0;
+  if (learned && options.predictors.empty())
+    throw InputError("--backend learned needs --predictor (an arm predictor from twinsim train)");
+  if (!options.predictors.empty() && !learned) backends.push_back("learned");
+  const std::vector<std::string> known = AvailableArmBackends();
+  std::vector<ArmCompareSource> sources;
+  for (const std::string& backend : backends) {
+    if (std::find(known.begin(), known.end(), backend) == known.end())
+      throw InputError("--backend: unknown arm backend '" + backend + "' in this build");
+    if (backend == "learned") continue;
+    for (const auto& [label, model] : models)
+      sources.push_back({models.size() > 1 ? label + "/" + backend : backend, model, backend, {}});
+  }
+  for (const std::string& path : options.predictors) {
+    ArmCompareSource s{"learned", models.front().second, "learned", {}};
+    if (options.predictors.size() > 1) s.name += "/" + std::filesystem::path(path).stem().string();
+    s.backend_options.predictor = std::make_shared<ArmPredictor>(ArmPredictor::Load(path));
+    sources.push_back(std::move(s));
+  }
+  return sources;
+}
+
+// Per joint, the measured q and every source's free run over the first `seconds` of the
+// log, stacked; runs that leave the measured range by more than its span are cut there.
+RgbaImage ArmFreeRunImage(const ArmLog& log, const ArmModel& model, const ArmCompareResult& result, double seconds,
+                          Renderer& renderer) {
+  const double t_end = log.t[0] + seconds;
+  RgbaImage image;
+  for (int j = 0; j < log.dof; ++j) {
+    SeriesPlot plot;
+    plot.height = 360;
+    const bool prismatic = model.joints.at(static_cast<std::size_t>(j)).type == JointType::kPrismatic;
+    plot.y_label = "q" + std::to_string(j + 1) + (prismatic ? " [m]" : " [rad]");
+    plot.title = "joint " + std::to_string(j + 1) + ": measured, and a free run from the logged torques";
+    PlotSeries measured{"measured", {}, {}};
+    double low = HUGE_VAL, high = -HUGE_VAL;
+    for (int i = 0; i < log.rows() && log.t[i] <= t_end; ++i) {
+      measured.x.push_back(log.t[i]);
+      measured.y.push_back(log.q(i, j));
+      low = std::min(low, log.q(i, j));
+      high = std::max(high, log.q(i, j));
+    }
+    plot.series.push_back(std::move(measured));
+    double simulated_low = low, simulated_high = high;
+    for (const auto& [name, score] : result.scores) {
+      if (score.free_run_start < 0) continue;
+      PlotSeries run{name, {}, {}};
+      for (Eigen::Index r = 0; r < score.free_run.rows(); ++r) {
+        const int i = score.free_run_start + 1 + static_cast<int>(r);
+        if (log.t[i] > t_end) break;
+        run.x.push_back(log.t[i]);
+        run.y.push_back(score.free_run(r, j));
+        simulated_low = std::min(simulated_low, run.y.back());
+        simulated_high = std::max(simulated_high, run.y.back());
+      }
+      plot.series.push_back(std::move(run));
+    }
+    const double span = std::max(high - low, 1e-6);
+    if (simulated_low < low - span || simulated_high > high + span) {
+      plot.range = WorldRect{log.t[0], std::min(t_end, log.t[log.rows() - 1]), low - span, high + span};
+      plot.title += " (cut)";
+    }
+    RgbaImage panel = RenderSeriesPlot(plot, renderer);
+    image = j == 0 ? std::move(panel) : StackImages(image, panel);
+  }
+  return image;
+}
+
+// Every source's and baseline's position RMSE against the horizon, RMS over the joints
+// (the windowed horizons; the free run has none).
+SeriesPlot ArmErrorPlot(const ArmCompareResult& result) {
+  SeriesPlot plot;
+  plot.title = "Simulated from the logged torques: error against horizon (RMS over joints)";
+  plot.x_label = "horizon [s]";
+  plot.y_label = "position RMSE [mrad or mm]";
+  auto rms = [](const Eigen::VectorXd& v) { return 1000 * std::sqrt(v.squaredNorm() / std::max<Eigen::Index>(1, v.size())); };
+  PlotSeries hold{"hold (no model)", {}, {}}, velocity{"constant velocity (no model)", {}, {}};
+  for (const auto& [name, score] : result.scores) {
+    PlotSeries series{name, {}, {}};
+    for (const ArmHorizonScore& h : score.horizons) {
+      if (h.horizon == 0) continue;
+      series.x.push_back(h.horizon);
+      series.y.push_back(rms(h.rmse));
+      if (&score == &result.scores.front().second) {
+        hold.x.push_back(h.horizon);
+        hold.y.push_back(rms(h.hold));
+        velocity.x.push_back(h.horizon);
+        velocity.y.push_back(rms(h.constant_velocity));
+      }
+    }
+    plot.series.push_back(std::move(series));
+  }
+  plot.series.push_back(std::move(hold));
+  plot.series.push_back(std::move(velocity));
+  CutBaselinesAboveModels(&plot, {plot.series[plot.series.size() - 2].name, plot.series.back().name});
+  return plot;
+}
+
+int CompareArm(const CompareCliOptions& options) {
+  // Check everything before running or writing anything.
+  const std::vector<ArmCompareSource> sources = ArmSources(options);
+  const ArmLog log = ReadArmLog(options.log);
+  ArmCompareOptions compare;
+  if (!options.horizons.empty()) compare.horizons = options.horizons;
+
+  Progress progress("compare", !options.quiet);
+  const ArmCompareResult result = CompareArmLog(
+      log, sources, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
+  progress.Finish();
+
+  OutputFiles files(options.out);
+  files.Write("errors.csv", FormatArmSimulationScoresCsv(result.scores));
+  files.Write("paths.csv", FormatArmComparePathsCsv(log, result));
+  if (RenderingCompiled()) {
+    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
+    files.WritePng("paths.png", ArmFreeRunImage(log, sources.front().model, result, options.plot_seconds, *renderer));
+    if (std::any_of(result.scores.front().second.horizons.begin(), result.scores.front().second.horizons.end(),
+                    [](const ArmHorizonScore& h) { return h.horizon > 0; }))
+      files.WritePng("errors.png", RenderSeriesPlot(ArmErrorPlot(result), *renderer));
+  } else {
+    std::fprintf(stderr, "compare: warning: plots not drawn: %s\n", kRenderingNotCompiled);
+  }
+  if (!options.quiet) {
+    std::printf("compared %d rows of %s (%g Hz) through %zu source(s)\n%s\n", log.rows(), options.log.c_str(),
+                1.0 / log.sample_period, sources.size(), result.FullReport().c_str());
+    files.PrintWrote();
+  }
+  return kExitOk;
+}
+
 int Compare(const CompareCliOptions& options) {
   // Check everything before running or writing anything.
-  const std::string kind = ModelFileRobotKind(options.model);
+  const std::string kind = ModelFileRobotKind(options.models.front());
+  for (const std::string& path : options.models) {
+    if (ModelFileRobotKind(path) != kind)
+      throw InputError(SourceLocation{path}, "compare: every --model must be of one robot (the first is '" + kind + "')");
+  }
+  if (kind == "arm") return CompareArm(options);
   if (kind != "omni")
-    throw InputError(SourceLocation{options.model},
-                     "compare of '" + kind + "' models is not available in this build (known: omni)");
-  const OmniModel model = LoadOmniModel(options.model);
+    throw InputError(SourceLocation{options.models.front()},
+                     "compare of '" + kind + "' models is not available in this build (known: omni, arm)");
+  if (options.models.size() > 1)
+    throw InputError("compare: an omni robot is compared on one --model (its backends side by side); got " +
+                     std::to_string(options.models.size()));
+  if (!options.horizons.empty()) throw InputError("compare: --horizon is for arm models (omni horizons are fixed)");
+  const OmniModel model = LoadOmniModel(options.models.front());
   const OmniLog log = ReadOmniLog(options.log, options.select);
   const double frame_rate = 1.0 / log.frame_period;
 
@@ -143,7 +310,7 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
   auto options = std::make_shared<CompareCliOptions>();
   CLI::App* cmd = app.add_subcommand("compare", "Compare how well backends predict a measured log.");
   cmd->footer(
-      "Every backend replays the log (as 'twinsim replay' does) at six horizons: row i is predicted\n"
+      "OMNI ROBOTS. Every backend replays the log (as 'twinsim replay' does) at six horizons: row i is predicted\n"
       "from the state estimated K frames earlier and the logged commands since, with the model's delay.\n"
       "  1 frame    K = 1\n"
       "  4 frames   K = 4\n"
@@ -162,14 +329,34 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
       "              (the free run of every backend, one row per log row)\n"
       "Default backends: every physics backend built, plus learned when --predictor is given.\n"
       "Several --predictor files (the seed's and a residual one, say) each run on the learned backend,\n"
-      "labelled 'learned' or 'residual' after their kind (and their file's name where two share one).");
-  cmd->add_option("--model", options->model, "Model file (YAML)")->required();
-  cmd->add_option("--log", options->log, "Measured log (CSV: t,x,y,theta,vx_cmd,vy_cmd,omega_cmd)")->required();
+      "labelled 'learned' or 'residual' after their kind (and their file's name where two share one).\n"
+      "\n"
+      "ARMS. Every model (repeat --model: a URDF beside an identified model, say) on every --backend\n"
+      "(default analytic; learned with --predictor, over the first model) is simulated open loop from\n"
+      "the log's torques, in windows of each --horizon restarted from the logged q and qd, and in one\n"
+      "free run over the whole log (horizon 0), beside holding the joints and constant velocity.\n"
+      "Horizons the log is too short for are left out. Sources are named by backend, or model/backend.\n"
+      "Outputs in DIR:\n"
+      "  errors.csv  log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,rmse_constant_velocity\n"
+      "              (rad or m, fit in %; model is the source's name; horizon 0 the free run)\n"
+      "  paths.csv   t,measured_q1..measured_qn,<source>_q1..<source>_qn,... (the free runs; empty\n"
+      "              cells outside them)\n"
+      "  paths.png   per joint, measured and simulated q over the first --plot-seconds\n"
+      "  errors.png  RMSE against horizon, every source and both baselines");
+  cmd->add_option("--model", options->models,
+                  "Model file (omni YAML; arm URDF or YAML). Arms: repeat to compare several models")
+      ->required();
+  cmd->add_option("--log", options->log,
+                  "Measured log (CSV: omni t,x,y,theta,vx_cmd,vy_cmd,omega_cmd; arm t,q1..qn,tau1..taun)")
+      ->required();
   cmd->add_option("--out", options->out, "Output folder")->required();
   cmd->add_option("--backend", options->backends,
                   "Backend to compare (repeat --backend): ode, bullet, analytic or learned");
   cmd->add_option("--predictor", options->predictors,
                   "1-frame predictor for the learned backend (from twinsim train; repeat for several)");
+  cmd->add_option("--horizon", options->horizons,
+                  "Arm: a simulation window in s, 0 for the free run (repeat; default 0.05 0.1 0.25 0.5 1 2 0)")
+      ->check(NonNegativeNumber());
   cmd->add_option("--plot-seconds", options->plot_seconds, "Seconds of the log drawn in paths.png")
       ->capture_default_str()
       ->check(PositiveNumber());
