@@ -19,6 +19,10 @@ bool ArmSimulationScoreOptions::IsValid(std::string* why) const {
     return false;
   }
   for (double h : horizons) {
+    if (h == 0 && scored_rows) {
+      *why = "the free run (horizon 0) scores every row: it cannot be limited to some";
+      return false;
+    }
     if (!std::isfinite(h) || h < 0) {
       char text[64];
       std::snprintf(text, sizeof text, "%g", h);
@@ -33,10 +37,11 @@ namespace {
 
 // `free_run` (if given) receives the simulated q of the last window: the free run's
 // whole path when horizon is 0.
-ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horizon, Eigen::MatrixXd* free_run) {
+ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horizon,
+                             const std::function<bool(int)>& scored_rows, Eigen::MatrixXd* free_run) {
   const int n = log.dof;
   int length = 0;
-  const std::vector<int> starts = ArmSimulationWindows(sim->model(), log, horizon, &length);
+  const std::vector<int> starts = ArmSimulationWindows(sim->model(), log, horizon, &length, scored_rows);
   ArmHorizonScore score;
   score.horizon = horizon;
   Eigen::ArrayXd model = Eigen::ArrayXd::Zero(n), hold = model, velocity = model, sum = model, squares = model;
@@ -110,13 +115,26 @@ ArmModel ArmModelAtLogPeriod(const ArmModel& model, double period) {
   return at;
 }
 
-std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, double horizon, int* length) {
+std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, double horizon, int* length,
+                                      const std::function<bool(int row)>& scored) {
   const int first = std::max(log.edge_samples, model.delay_samples);
   const int last = log.rows() - 1 - log.edge_samples;
   *length = horizon > 0 ? std::max(1, static_cast<int>(std::lround(horizon / log.sample_period))) : last - first;
   std::vector<int> starts;
   if (last - first < 2) return starts;
-  for (int start = first; start + *length <= last; start += *length) starts.push_back(start);
+  if (!scored || horizon == 0) {
+    for (int start = first; start + *length <= last; start += *length) starts.push_back(start);
+    return starts;
+  }
+  // The runs of rows that pass, cut into whole windows from each run's start.
+  int run = 0;  // rows that pass, ending at `row`
+  for (int row = first; row <= last; ++row) {
+    run = scored(row) ? run + 1 : 0;
+    if (run == *length + 1) {
+      starts.push_back(row - *length);
+      run = 1;  // the window's last row may start the next
+    }
+  }
   return starts;
 }
 
@@ -131,7 +149,7 @@ ArmSimulationScore ScoreArmSimulation(const ArmModel& model, const ArmLog& log,
   std::vector<double> horizons;
   for (double h : options.horizons) {
     int length = 0;
-    if (!ArmSimulationWindows(at, log, h, &length).empty()) {
+    if (!ArmSimulationWindows(at, log, h, &length, options.scored_rows).empty()) {
       horizons.push_back(h);
     } else if (!options.drop_long_horizons) {
       const int usable = std::max(0, log.rows() - 1 - 2 * log.edge_samples - at.delay_samples);
@@ -145,7 +163,7 @@ ArmSimulationScore ScoreArmSimulation(const ArmModel& model, const ArmLog& log,
   ArmSimulation sim(at, MakeArmBackend(options.backend, at, options.backend_options));
   for (double h : horizons) {
     const bool free = h == 0;
-    score.horizons.push_back(ScoreHorizon(&sim, log, h, free ? &score.free_run : nullptr));
+    score.horizons.push_back(ScoreHorizon(&sim, log, h, options.scored_rows, free ? &score.free_run : nullptr));
     if (free) {
       int length = 0;
       score.free_run_start = ArmSimulationWindows(at, log, 0, &length).front();

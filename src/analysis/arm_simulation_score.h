@@ -22,6 +22,7 @@
 //   std::printf("%s", FormatArmSimulationScores({{"identified", s}}).c_str());
 #pragma once
 
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,8 +52,11 @@ ArmModel ArmModelAtLogPeriod(const ArmModel& model, double period);
 
 // The first rows of the windows of `horizon` s (0: one window over the whole log) that a
 // score of `model` (at the log's period) simulates on `log`, each *length rows long: the
-// rows between the log's edge_samples, after the model's delay. Empty when none fits.
-std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, double horizon, int* length);
+// rows between the log's edge_samples, after the model's delay, one window after the
+// other. With `scored` (horizon > 0 only), only windows whose rows start .. start +
+// length all pass it, each the first that fits after the one before. Empty when none fits.
+std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, double horizon, int* length,
+                                      const std::function<bool(int row)>& scored = {});
 
 // The constant-velocity baseline at row start + ahead: the joints moved on from row
 // `start` at the q̇ logged there (ahead rows of the log's period).
@@ -66,6 +70,9 @@ struct ArmSimulationScoreOptions {
   // Horizons longer than the log's usable rows are left out instead of refused (a log
   // too short for any window then gets no horizons).
   bool drop_long_horizons = false;
+  // Rows a window may score (e.g. a diagnosis's test rows); empty: every row. A window
+  // lies wholly in such rows (ArmSimulationWindows); not with the free run (horizon 0).
+  std::function<bool(int row)> scored_rows;
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
 };

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "analysis/arm_replay.h"
+#include "analysis/arm_simulation_score.h"
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "diagnosis/forward_selection.h"
@@ -934,6 +935,49 @@ ArmModel RefitOnFitBlocks(const ArmModel& model, const std::vector<ArmLog>& logs
   }
 }
 
+// s: the windows the test rows are simulated in. A 20 s log's 1 s test blocks hold one
+// 0.5 s window each between their guards; logs under 10 s (0.5 s blocks) only 0.1 s ones.
+constexpr double kSimulationHorizons[] = {0.1, 0.5};
+
+// `given` and `repaired` simulated from the logs' torques in windows wholly in test rows,
+// per horizon that at least one window fits, pooled over the logs (RMSE weighted by rows).
+std::vector<DiagnosisSimulation> SimulateTestRows(const ArmModel& given, const ArmModel& repaired,
+                                                  const std::vector<LogData>& data) {
+  std::vector<DiagnosisSimulation> out;
+  for (double horizon : kSimulationHorizons) {
+    DiagnosisSimulation sim;
+    sim.seconds = horizon;
+    const int n = given.dof();
+    Eigen::ArrayXd nominal = Eigen::ArrayXd::Zero(n), fixed = nominal, velocity = nominal;
+    for (const LogData& d : data) {
+      ArmSimulationScoreOptions options;
+      options.horizons = {horizon};
+      options.drop_long_horizons = true;
+      options.scored_rows = [&d](int row) {
+        return row >= d.first && row < d.last && d.kind[static_cast<std::size_t>(row)] == RowKind::kTest;
+      };
+      const ArmSimulationScore a = ScoreArmSimulation(given, *d.log, options);
+      const ArmSimulationScore b = ScoreArmSimulation(repaired, *d.log, options);
+      if (a.horizons.empty() || b.horizons.empty()) continue;
+      const ArmHorizonScore& ha = a.horizons.front();
+      const ArmHorizonScore& hb = b.horizons.front();
+      sim.windows += ha.windows;
+      sim.rows += ha.rows;
+      nominal += ha.rows * ha.rmse.array().square();
+      fixed += hb.rows * hb.rmse.array().square();
+      velocity += ha.rows * ha.constant_velocity.array().square();
+    }
+    if (sim.rows == 0) continue;
+    for (int j = 0; j < n; ++j) {
+      sim.nominal.push_back(std::sqrt(nominal[j] / sim.rows));
+      sim.repaired.push_back(std::sqrt(fixed[j] / sim.rows));
+      sim.constant_velocity.push_back(std::sqrt(velocity[j] / sim.rows));
+    }
+    out.push_back(std::move(sim));
+  }
+  return out;
+}
+
 }  // namespace
 
 DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& logs, const DiagnosisOptions& options,
@@ -1052,6 +1096,17 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   if (model.effects.payload_mass > 0) report.notes.push_back("the model already has a payload: no payload candidate was tried");
   for (const ArmEffect& e : ListArmEffects(model.effects)) {
     report.notes.push_back("the model's own " + EffectLabel(e.name, e.joint) + " was trusted, not refitted");
+  }
+  // What a simulator is for: the motion from the torques, on the test rows.
+  report.simulation = SimulateTestRows(model, repaired_model, data);
+  for (const DiagnosisSimulation& sim : report.simulation) {
+    std::string worse;
+    for (std::size_t j = 0; j < sim.nominal.size(); ++j)
+      if (sim.repaired[j] > sim.nominal[j]) worse += (worse.empty() ? "" : ", ") + std::to_string(j + 1);
+    if (!worse.empty() && !selection.effects.empty()) {
+      report.notes.push_back("simulated from the torques over " + FormatParameter(sim.seconds) +
+                             " s, the repaired model follows the test rows worse than the given one on joint(s) " + worse);
+    }
   }
   if (repaired) {
     *repaired = repaired_model;

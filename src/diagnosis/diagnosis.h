@@ -180,6 +180,16 @@ struct DiagnosisHorizon {
   std::vector<double> gaps;   // the report's metric (m), one per predictor
 };
 
+// Arm: the given and the repaired model simulated open loop from the logs' torques in
+// windows of `seconds` lying wholly in test rows (analysis/arm_simulation_score.h),
+// pooled over the logs; beside them the constant-velocity baseline on the same windows.
+struct DiagnosisSimulation {
+  double seconds = 0;
+  int windows = 0;
+  int rows = 0;
+  std::vector<double> nominal, repaired, constant_velocity;  // per joint: position RMSE, rad or m
+};
+
 struct DiagnosisReport {
   std::string robot;                    // "omni" or "arm"
   std::string model_name;
@@ -214,6 +224,9 @@ struct DiagnosisReport {
   // Omni: the test-row gap at the report's horizon, 0.25 s, 1 s and 3 s (rows whose
   // prediction ends on a test row, started wherever); empty for arms.
   std::vector<DiagnosisHorizon> horizons;
+  // Arm: the simulation error on the test rows at 0.1 s and 0.5 s (those the test blocks
+  // hold a window of); empty for omni robots.
+  std::vector<DiagnosisSimulation> simulation;
   // With DiagnosisOptions::refit_model: the held-out gap of the refitted model before any
   // effect (gap_before stays the given model's); NaN when not refitted.
   double refit_gap = std::numeric_limits<double>::quiet_NaN();

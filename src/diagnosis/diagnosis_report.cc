@@ -315,6 +315,20 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     }
     j["horizons"] = hs;
   }
+  if (!r.simulation.empty()) {
+    ordered_json sims = ordered_json::array();
+    for (const DiagnosisSimulation& sim : r.simulation) {
+      ordered_json joints = ordered_json::array();
+      for (std::size_t q = 0; q < sim.nominal.size(); ++q) {
+        joints.push_back({{"joint", q + 1},
+                          {"nominal", sim.nominal[q]},
+                          {"repaired", sim.repaired[q]},
+                          {"constant_velocity", sim.constant_velocity[q]}});
+      }
+      sims.push_back({{"seconds", sim.seconds}, {"windows", sim.windows}, {"rows", sim.rows}, {"rmse", joints}});
+    }
+    j["simulation"] = sims;
+  }
   j["notes"] = r.notes;
   return j.dump(2) + "\n";
 }
@@ -335,6 +349,16 @@ std::string FormatDiagnosisTable(const DiagnosisReport& r) {
   if (!r.yardstick.learner.empty()) s << "learned residual: " << r.yardstick.learner << "\n";
   if (!r.horizons.empty()) {
     s << "every horizon (test rows; the gap's metric, mm), * best:\n" << FormatHorizonTable(HorizonTableOf(r));
+  }
+  for (const DiagnosisSimulation& sim : r.simulation) {
+    std::snprintf(line, sizeof line, "simulated from the torques, %s s windows in test rows (%d): position RMSE per joint\n",
+                  Num(sim.seconds).c_str(), sim.windows);
+    s << line;
+    for (std::size_t q = 0; q < sim.nominal.size(); ++q) {
+      std::snprintf(line, sizeof line, "  joint %zu: nominal %s, repaired %s, constant velocity %s\n", q + 1,
+                    Num(sim.nominal[q]).c_str(), Num(sim.repaired[q]).c_str(), Num(sim.constant_velocity[q]).c_str());
+      s << line;
+    }
   }
   if (!r.effects.empty()) {
     std::snprintf(line, sizeof line, "%-34s %-9s %s\n", "effect", "gap cut", "parameters");
@@ -464,6 +488,22 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
          "same rows (whose prediction ends on a test row; it starts wherever, from the state estimated up to there, "
          "and runs on the logged commands). Best in bold.</p>\n"
       << FormatHorizonTableHtml(HorizonTableOf(r));
+  }
+  if (!r.simulation.empty()) {
+    h << "<h2>Simulated from the torques</h2>\n<p>What a simulator is asked: the motion the logged torques make. The "
+         "given and the repaired model run open loop from the logged state in windows lying wholly in test rows, "
+         "beside constant velocity (no model) on the same windows. Position RMSE [rad or m]; the best in bold.</p>\n"
+         "<table><tr><th>window</th><th>joint</th><th>nominal</th><th>repaired</th><th>constant velocity</th></tr>\n";
+    for (const DiagnosisSimulation& sim : r.simulation) {
+      for (std::size_t q = 0; q < sim.nominal.size(); ++q) {
+        const double best = std::min({sim.nominal[q], sim.repaired[q], sim.constant_velocity[q]});
+        auto cell = [&](double v) { return "<td>" + std::string(v == best ? "<b>" : "") + Num(v) + (v == best ? "</b>" : "") + "</td>"; };
+        h << "<tr><td>" << (q == 0 ? Num(sim.seconds) + " s (" + std::to_string(sim.windows) + " windows)" : "")
+          << "</td><td>" << q + 1 << "</td>" << cell(sim.nominal[q]) << cell(sim.repaired[q])
+          << cell(sim.constant_velocity[q]) << "</tr>\n";
+      }
+    }
+    h << "</table>\n";
   }
 
   if (!r.effects.empty()) {

@@ -109,6 +109,27 @@ TEST(ArmSimulationScore, TablesCsvAndRefusals) {
   EXPECT_THROW(ScoreArmSimulation(truth, log, options), InputError);
 }
 
+TEST(ArmSimulationScore, WindowsCanBeLimitedToSomeRows) {
+  // Rows 100..199 and 300..350 may be scored. A 25-step window needs 26 rows (its start
+  // and the 25 it scores), each starting where the one before ended: three in the
+  // first stretch (the fourth would need row 200), two in the second; nothing straddles.
+  const ArmModel truth = Rrr();
+  const ArmLog log = testing::OdePdArmLog(truth, 0.5, 1);  // 501 rows
+  const auto scored = [](int row) { return (row >= 100 && row < 200) || (row >= 300 && row <= 350); };
+  int length = 0;
+  const std::vector<int> starts = ArmSimulationWindows(truth, log, 0.025, &length, scored);
+  EXPECT_EQ(length, 25);
+  EXPECT_EQ(starts, (std::vector<int>{100, 125, 150, 300, 325}));
+  ArmSimulationScoreOptions options;
+  options.horizons = {0.025};
+  options.scored_rows = scored;
+  const ArmSimulationScore s = ScoreArmSimulation(truth, log, options);
+  EXPECT_EQ(s.horizons.at(0).windows, 5);
+  EXPECT_EQ(s.horizons.at(0).rows, 125);
+  options.horizons = {0};  // the free run scores every row
+  EXPECT_THROW(ScoreArmSimulation(truth, log, options), InputError);
+}
+
 TEST(ArmSimulationScore, AModelThatRunsAwayIsCountedAndHeld) {
   // Links a thousand times lighter: the logged torques fling them past the simulation's
   // speed limit within the window.
