@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -107,6 +108,17 @@ std::string OmniCompareResult::FullReport() const {
     out << pad(sources[s], first_width);
     for (std::size_t h = 0; h < horizons.size(); ++h) out << "   " << lpad(cells[s][h], widths[h]);
     out << "\n";
+  }
+  // The grip once per source, from the horizon where most steps passed it (each
+  // horizon simulates the same tracking and its own predictions).
+  auto share = [](const GripCheck& g) { return g.steps > 0 ? static_cast<double>(g.beyond) / static_cast<double>(g.steps) : 0.0; };
+  std::map<std::string, GripCheck> grips;
+  for (const CompareErrorRow& r : rows) {
+    GripCheck& g = grips[r.source];
+    if (share(r.grip) > share(g)) g = r.grip;
+  }
+  for (const std::string& source : sources) {
+    if (const std::string grip = DescribeGrip(grips[source]); !grip.empty()) out << "note: " << source << ": " << grip << "\n";
   }
   for (const CompareErrorRow& r : rows) {
     if (r.bounded_steps > 0) {
@@ -215,6 +227,7 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
       CompareErrorRow row = MeasurePredictionErrors(log, result);
       row.bounded_steps = result.bounded_steps;
       row.unseen_input_steps = result.unseen_input_steps;
+      row.grip = result.grip;
       row.source = source.label;
       row.backend = source.backend;
       row.horizon = HorizonLabel(k, frame_rate);

@@ -60,6 +60,7 @@ struct CompareErrorRow {
   double heading_rmse = 0;    // rad, differences wrapped to [-pi, pi)
   long bounded_steps = 0;     // learned: steps held to the predictor's training bounds
   long unseen_input_steps = 0;  // learned: steps whose inputs left the training range
+  GripCheck grip;             // analytic: where its wheels needed more grip than they have
 };
 
 // One source's free run: the predicted pose at every log row (row 0 is the measurement).

@@ -120,6 +120,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
         out->pose[it->second] = p;
         out->predicted[it->second] = true;
       }
+      out->grip = observer.backend().grip();
       return;
     }
     if (!observer.started()) continue;
@@ -133,6 +134,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     out->predicted[target->second] = true;
   }
   if (progress) progress(last_frame, last_frame);
+  out->grip = observer.backend().grip();
 }
 
 // ReplayOmniLog, or with stretch_first < stretch_last the free run of ReplayOmniStretch.
@@ -196,6 +198,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
       }
       if (progress && f % 64 == 0) progress(f + 1, last_frame);
     }
+    out.grip = backend->grip();
     return out;
   }
 
@@ -247,6 +250,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
       }
       out.bounded_steps = backend->bounded_steps();
       out.unseen_input_steps = backend->unseen_input_steps();
+      out.grip = backend->grip();
       return out;
     }
     auto target = row_of_frame.find(f + k);
@@ -269,6 +273,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   if (progress) progress(static_cast<int>(n), static_cast<int>(n));
   out.bounded_steps = backend->bounded_steps();
   out.unseen_input_steps = backend->unseen_input_steps();
+  out.grip = backend->grip();
   return out;
 }
 

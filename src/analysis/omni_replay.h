@@ -72,6 +72,10 @@ struct OmniReplayResult {
   // Learned backend: steps whose inputs lay beyond anything in its training data
   // (InputsSeen): its predictions there are extrapolation; the user is told.
   long unseen_input_steps = 0;
+  // Physics: the analytic engine's check of its own validity over every step simulated
+  // (the tracking and every prediction): where a wheel needed more grip than it has, a
+  // real robot slips and the analytic model does not (engines/omni_engine.h).
+  GripCheck grip;
   int num_predicted() const;
 };
 

@@ -53,6 +53,7 @@ struct LogData {
   Eigen::MatrixXd rigid;                    // rows x n, N·m: inverse dynamics of the bodies, no friction
   std::array<Eigen::MatrixXd, 10> payload;  // rows x n each: the last link's regressor columns
   std::vector<RowKind> kind;                // per row: fit, selection, test or guard
+  std::vector<int> block;                   // per row: its block, numbered over every log
 };
 
 // How an effect's parameters map to the optimiser's variables.
@@ -168,6 +169,7 @@ class ArmProblem : public DiagnosisProblem {
     guard_seconds_ = ArmGuardSeconds(logs);
     const ArmModel bodies = ArmPlantModel(nominal);
     payload_candidate_ = nominal.effects.payload_mass <= 0;
+    int blocks = 0;  // of the logs before
     for (const ArmLog& log : logs) {
       LogData d;
       d.log = &log;
@@ -188,9 +190,12 @@ class ArmProblem : public DiagnosisProblem {
         }
       }
       d.kind.resize(static_cast<std::size_t>(rows));
+      d.block.resize(static_cast<std::size_t>(rows));
       for (int r = 0; r < rows; ++r) {
         d.kind[static_cast<std::size_t>(r)] = DiagnosisRowKind(log.t[r] - log.t[0], block_seconds, held_out, guard_seconds_);
+        d.block[static_cast<std::size_t>(r)] = blocks + DiagnosisBlockIndex(log.t[r] - log.t[0], block_seconds);
       }
+      blocks = d.block.back() + 1;
       data_.push_back(std::move(d));
     }
     noise_ = NoiseFloor();
@@ -289,6 +294,7 @@ class ArmProblem : public DiagnosisProblem {
           case RowKind::kFit: out.fit.push_back(sum[r]); break;
           case RowKind::kSelection:
             out.selection.push_back(sum[r]);
+            out.selection_block.push_back(d.block[static_cast<std::size_t>(r)]);
             for (int j = 0; j < n_; ++j) out.selection_by_channel[static_cast<std::size_t>(j)].push_back(squared(r, j));
             break;
           case RowKind::kTest: out.test.push_back(sum[r]); break;

@@ -35,6 +35,10 @@ double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<
   return std::clamp(longest / 20, 0.5, 10.0);
 }
 
+int DiagnosisBlockIndex(double t, double block_seconds) {
+  return static_cast<int>(std::floor(std::max(0.0, t) / block_seconds));
+}
+
 bool InHeldOutBlock(double t, double block_seconds, double held_out) {
   const double k = std::floor(t / block_seconds);
   if (k < 1) return false;

@@ -78,6 +78,9 @@ struct DiagnosisCandidate {
   double p_value = 1;                        // one-sided, before the Holm correction
   bool significant = false;                  // after the Holm correction over the round
   double information_gain = 0;               // n_eff ln(MSE before / after) - 2 k; > 0 to be added
+  // Selection blocks whose squared error it changed, and of those the ones it lowered:
+  // the 25 % rule (a large share removed, significant or not) asks for most of them.
+  int blocks_changed = 0, blocks_improved = 0;
   bool selected = false;
   std::string harm;                          // the joint or axis it makes significantly worse, if any: not added
   std::string veto;                          // passed on the selection rows but made the test rows worse: not added
@@ -281,6 +284,9 @@ double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<
 // derivatives and a prediction's start reach across a boundary by about that much.
 enum class RowKind : char { kFit, kSelection, kTest, kGuard };
 RowKind DiagnosisRowKind(double t, double block_seconds, double held_out, double guard_seconds);
+
+// The block (0, 1, ...) the sample at time t (s from the log's start) lies in.
+int DiagnosisBlockIndex(double t, double block_seconds);
 
 // Whether the sample at time t (s from the log's start) lies in a held-out block:
 // blocks k = floor(t / block) are held out where floor((k + 1) h) > floor(k h), which

@@ -257,6 +257,8 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["p_value"] = std::isfinite(c.p_value) ? ordered_json(c.p_value) : ordered_json(nullptr);
     x["significant"] = c.significant;
     x["information_gain"] = std::isfinite(c.information_gain) ? ordered_json(c.information_gain) : ordered_json(nullptr);
+    x["blocks_changed"] = c.blocks_changed;
+    x["blocks_improved"] = c.blocks_improved;
     x["selected"] = c.selected;
     if (!c.harm.empty()) x["harm"] = c.harm;
     if (!c.veto.empty()) x["veto"] = c.veto;

@@ -40,6 +40,10 @@ struct SquaredResiduals {
   std::vector<double> selection;
   std::vector<double> test;
   std::vector<std::vector<double>> selection_by_channel;  // channel x selection row, unsummed
+  // Per selection row, the block it lies in (numbered over every log; rows of one block
+  // share it): the 25 % rule asks most blocks an effect changes to improve. Empty: one
+  // block per row.
+  std::vector<int> selection_block;
 };
 
 // The test rows of one model, per channel, for the adequacy checks (diagnosis.h,

@@ -65,6 +65,7 @@ std::vector<Variable> VariablesOf(const std::string& name) {
 struct LogData {
   const OmniLog* log = nullptr;
   std::vector<RowKind> kind;  // per row
+  std::vector<int> block;     // per row: its block, numbered over every log
 };
 
 // The residual of one replay: per predicted row (forward, sideways, r * dtheta), m.
@@ -78,13 +79,17 @@ class OmniProblem : public DiagnosisProblem {
     // A prediction spans `horizon` frames: rows closer than that (and one more) to
     // another block are guards.
     guard_seconds_ = (options.horizon + 1) * logs.front().frame_period;
+    int blocks = 0;  // of the logs before
     for (const OmniLog& log : logs) {
       LogData d;
       d.log = &log;
       d.kind.resize(log.rows.size());
+      d.block.resize(log.rows.size());
       for (std::size_t i = 0; i < log.rows.size(); ++i) {
         d.kind[i] = DiagnosisRowKind(log.rows[i].t - log.rows[0].t, block_seconds, options.held_out, guard_seconds_);
+        d.block[i] = blocks + DiagnosisBlockIndex(log.rows[i].t - log.rows[0].t, block_seconds);
       }
+      if (!d.block.empty()) blocks = d.block.back() + 1;
       data_.push_back(std::move(d));
     }
     frame_period_ = logs.front().frame_period;
@@ -137,6 +142,7 @@ class OmniProblem : public DiagnosisProblem {
           case RowKind::kFit: out.fit.push_back(sq); break;
           case RowKind::kSelection:
             out.selection.push_back(sq);
+            out.selection_block.push_back(d.block[r.rows[k]]);
             for (std::size_t c = 0; c < 3; ++c) out.selection_by_channel[c].push_back(e[c] * e[c]);
             break;
           case RowKind::kTest: out.test.push_back(sq); break;
@@ -763,6 +769,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   std::vector<ChannelSeries> series(3);
   std::vector<ChannelSamples> samples(3);
   std::vector<double> lag_sum(3, 0.0);
+  GripCheck grip;  // the nominal model's 1-frame replays: where the analytic model holds
   for (std::size_t li = 0; li < problem.data().size(); ++li) {
     const LogData& d = problem.data()[li];
     const OmniLog& log = *d.log;
@@ -790,6 +797,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     free_run.backend = options.backend;
     free_run.horizon = 1;
     const OmniReplayResult one = ReplayOmniLog(nominal_model, log, free_run);
+    grip += one.grip;
     for (int c = 0; c < 3; ++c) {
       std::vector<double> cmd, measured, modelled;
       for (std::size_t i = 1; i + 1 < n; ++i) {
@@ -892,6 +900,9 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   }
   for (const auto& [name, p] : ListOmniEffects(model.effects)) {
     report.notes.push_back("the model's own " + name + " was trusted, not refitted");
+  }
+  if (const std::string text = DescribeGrip(grip); !text.empty()) {
+    report.notes.push_back("replaying the logs, " + text + "; an effect named from those rows may stand for the slip");
   }
   if (progress) progress("every horizon");
   ScoreHorizons(problem, model, nominal_model, repaired_model, options, &report);

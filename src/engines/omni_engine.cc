@@ -1,5 +1,7 @@
 #include "engines/omni_engine.h"
 
+#include <cstdio>
+
 #include "core/error.h"
 #include "engines/analytic/analytic_omni_engine.h"
 #ifdef TWINSIM_HAVE_ODE
@@ -10,6 +12,17 @@
 #endif
 
 namespace twinsim {
+
+std::string DescribeGrip(const GripCheck& grip) {
+  if (grip.beyond == 0 || grip.steps == 0) return "";
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "the analytic model's wheels needed more grip than they have (wheel_friction times their load) on "
+                "%.2g %% of the steps simulated, up to %.2g times it: a real robot slips there and the analytic model, "
+                "which cannot, is not valid there (--backend ode or bullet simulates the slip; docs/backends.md)",
+                100.0 * static_cast<double>(grip.beyond) / static_cast<double>(grip.steps), grip.worst);
+  return text;
+}
 
 std::vector<std::string> AvailableOmniEngines() {
   std::vector<std::string> names = {"analytic"};

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -52,6 +53,26 @@ struct FieldModel {
                                       std::sin(slope) * std::sin(slope_direction), -std::cos(slope));
   }
 };
+
+// Where an engine whose wheels cannot slip (the analytic model) leaves its validity: the
+// steps on which some wheel needed a contact force (its rolling force and the rollers'
+// friction together) beyond wheel_friction times its static load. There a real robot,
+// ODE and Bullet slip; the model goes on rolling.
+struct GripCheck {
+  long steps = 0;     // robot-steps checked (0: the engine does not check, it slips)
+  long beyond = 0;    // robot-steps on which a wheel needed more grip than it has
+  double worst = 0;   // the largest force over grip seen (above 1 where beyond > 0)
+  GripCheck& operator+=(const GripCheck& other) {
+    steps += other.steps;
+    beyond += other.beyond;
+    worst = std::max(worst, other.worst);
+    return *this;
+  }
+};
+
+// Empty when nothing passed the grip; else one sentence for the user: on what share of
+// the steps the analytic model's wheels needed more grip than they have, and what to do.
+std::string DescribeGrip(const GripCheck& grip);
 
 // Everything that changes about one robot's bodies, enough to put it back exactly.
 struct OmniBodyState {
@@ -99,6 +120,9 @@ class OmniEngine {
 
   // Advances the world by dt seconds.
   virtual void Step(double dt) = 0;
+  // Every step's grip since construction (SetState and RestoreExact leave it): an
+  // engine that cannot slip checks itself; those that slip return steps = 0.
+  virtual GripCheck grip() const { return {}; }
 };
 
 // Builds the engine called `name` ("analytic", "ode", "bullet") for the given robots.

@@ -55,6 +55,12 @@ class GroupedOmniBackend final : public OmniBackend {
   void StepFrame(const std::vector<Twist2>& commands) override;
   Pose2 pose(int robot) const override;
   Twist2 velocity(int robot) const override;
+  // Every group's grip check together.
+  GripCheck grip() const override {
+    GripCheck total;
+    for (const OmniBackendGroup& g : groups_) total += g.backend->grip();
+    return total;
+  }
 
   // The robots' states in field order (each as its own backend saves it).
   OmniBackendState Save() const override;

@@ -31,6 +31,7 @@ class NewtonianOmniBackend final : public OmniBackend {
   void StepFrame(const std::vector<Twist2>& commands) override;
   Pose2 pose(int robot) const override;
   Twist2 velocity(int robot) const override;
+  GripCheck grip() const override { return engine_->grip(); }
   OmniBackendState Save() const override;
   void Restore(const OmniBackendState& state) override;
 

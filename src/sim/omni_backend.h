@@ -113,8 +113,6 @@ class OmniBackend {
   virtual Pose2 pose(int robot) const = 0;
   virtual Twist2 velocity(int robot) const = 0;  // robot frame
 
-  // Saves and restores everything that changes: restoring a saved state and stepping
-  // gives the same result as stepping from where it was saved.
   // Steps (a robot's frame, or a prediction's) on which a learned backend held its
   // predictor to the bounds of its training data, since construction (Save and Restore
   // leave it); 0 for physics.
@@ -122,7 +120,12 @@ class OmniBackend {
   // Steps whose inputs a learned backend's predictor never saw the like of in training
   // (learning/omni_predictor.h, InputsSeen), counted the same way; 0 for physics.
   virtual long unseen_input_steps() const { return 0; }
+  // Physics: the engine's grip check since construction (engines/omni_engine.h;
+  // only the analytic engine, which cannot slip, checks); empty for learned backends.
+  virtual GripCheck grip() const { return {}; }
 
+  // Saves and restores everything that changes: restoring a saved state and stepping
+  // gives the same result as stepping from where it was saved.
   virtual OmniBackendState Save() const = 0;
   virtual void Restore(const OmniBackendState& state) = 0;
 };

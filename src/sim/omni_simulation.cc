@@ -354,6 +354,7 @@ SimulationResult Simulation::Run(int frames, const std::function<void(int, int)>
     if (ball_) result.ball.push_back(state_.ball_record);
     if (progress && (k % 16 == 0 || k + 1 == frames)) progress(k + 1, frames);
   }
+  result.grip = backend_->grip();
   return result;
 }
 

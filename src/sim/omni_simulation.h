@@ -81,6 +81,7 @@ struct SimulationResult {
   std::vector<std::string> robot_names;
   std::vector<std::vector<FrameRecord>> frames;  // [robot][frame]
   std::vector<BallRecord> ball;                  // [frame]; empty without a ball
+  GripCheck grip;  // the analytic engine's check of its validity over the run (engines/omni_engine.h)
 };
 
 // A robot being moved by force: where to, and how many frames are left before the

@@ -87,6 +87,10 @@ int Replay(const ReplayOptions& options) {
   Progress progress("replay", !options.quiet);
   OmniReplayResult result = ReplayOmniLog(model, log, replay, [&](int done, int total) { progress.Update(done, total); });
   progress.Finish();
+  if (const std::string grip = DescribeGrip(result.grip); !grip.empty()) {
+    // Said even with --quiet: the predictions there are the model's outside its validity.
+    std::fprintf(stderr, "warning: %s\n", grip.c_str());
+  }
   if (result.bounded_steps > 0) {
     // Said even with --quiet: the predictions there are the bounds', not the predictor's.
     std::fprintf(stderr,

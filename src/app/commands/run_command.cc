@@ -83,6 +83,8 @@ int Run(const RunOptions& options) {
   WriteOmniRunFiles(scene, result, /*plots=*/true, &files);
   // The logs are the contract's main output: a build without a renderer still writes them.
   WarnPlotsNotDrawn(options.scene, scene.plots.size());
+  if (const std::string grip = DescribeGrip(result.grip); !grip.empty())
+    std::fprintf(stderr, "%s: warning: %s\n", options.scene.c_str(), grip.c_str());
 
   if (!options.quiet) {
     const double simulated = (frames - 1) / scene.frame_rate;

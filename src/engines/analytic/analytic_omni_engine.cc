@@ -1,6 +1,7 @@
 #include "engines/analytic/analytic_omni_engine.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -60,6 +61,23 @@ struct AnalyticRobot {
     d << std::cos(th) * vx - std::sin(th) * vy, std::sin(th) * vx + std::cos(th) * vy, w, acc;
     return d;
   }
+
+  // The largest share of its grip (wheel_friction times its static load) a wheel needs
+  // in state s with derivative ds: along the rolling direction the floor carries what
+  // the motor's torque does not spend on the wheel's own spin, F_i = (tau_i - I_w
+  // dw_i/dt) / r with dw/dt = J dv/dt; across it the rollers' friction.
+  double GripNeeded(const Eigen::Matrix<double, 6, 1>& s, const Eigen::Matrix<double, 6, 1>& ds) const {
+    const Eigen::VectorXd spin = kin.wheels_from_body() * ds.tail<3>();
+    double worst = 0;
+    for (int i = 0; i < model.num_wheels(); ++i) {
+      const double rolling = (torques[i] - model.wheel_spin_inertia * spin[i]) / model.wheel_radius;
+      const double slip = std::cos(model.wheel_angles[i]) * s[3] + std::sin(model.wheel_angles[i]) * s[4];
+      const double across = model.roller_friction * model.wheel_load[i] * std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
+      const double grip = model.wheel_friction * model.wheel_load[i];
+      if (grip > 0) worst = std::max(worst, std::hypot(rolling, across) / grip);
+    }
+    return worst;
+  }
 };
 
 class AnalyticOmniEngine final : public OmniEngine {
@@ -93,10 +111,16 @@ class AnalyticOmniEngine final : public OmniEngine {
     r.torques = torques;
   }
 
+  GripCheck grip() const override { return grip_; }
+
   void Step(double dt) override {
     for (auto& r : robots_) {
       const auto& x = r.x;
       const auto k1 = r.Derivative(x);
+      const double needed = r.GripNeeded(x, k1);
+      ++grip_.steps;
+      if (needed > 1) ++grip_.beyond;
+      grip_.worst = std::max(grip_.worst, needed);
       const auto k2 = r.Derivative(x + 0.5 * dt * k1);
       const auto k3 = r.Derivative(x + 0.5 * dt * k2);
       const auto k4 = r.Derivative(x + dt * k3);
@@ -112,6 +136,7 @@ class AnalyticOmniEngine final : public OmniEngine {
   AnalyticRobot& At(int robot) { return robots_[static_cast<std::size_t>(Check(robot))]; }
 
   std::vector<AnalyticRobot> robots_;
+  GripCheck grip_;
 };
 
 }  // namespace

@@ -12,7 +12,9 @@
 // wheels put the centre of mass slightly off it; OmniModel::RigidBodyMass) and I_w the
 // wheels' spin inertia.
 // Integrated by classic RK4 per step. No walls, no robot-robot contact, no traction
-// limit: valid below the wheels' friction limit (docs/backends.md).
+// limit: valid below the wheels' friction limit (docs/backends.md), which grip() checks
+// on every step (a wheel's rolling force and roller friction against wheel_friction
+// times its static load) and counts where it is passed.
 #pragma once
 
 #include <memory>
