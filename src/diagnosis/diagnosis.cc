@@ -39,19 +39,32 @@ int DiagnosisBlockIndex(double t, double block_seconds) {
   return static_cast<int>(std::floor(std::max(0.0, t) / block_seconds));
 }
 
+namespace {
+
+// The golden ratio's fractional part, (sqrt 5 - 1) / 2: block k is held out where
+// frac(k g) < h (a Weyl sequence: equidistributed, never periodic).
+constexpr double kGoldenFraction = 0.6180339887498948482;
+
+bool HeldOutBlockIndex(long k, double held_out) {
+  if (k < 1) return false;  // the first block is always kept for fitting
+  const double x = static_cast<double>(k) * kGoldenFraction;
+  return x - std::floor(x) < held_out;
+}
+
+}  // namespace
+
 bool InHeldOutBlock(double t, double block_seconds, double held_out) {
-  const double k = std::floor(t / block_seconds);
-  if (k < 1) return false;
-  return std::floor((k + 1) * held_out) > std::floor(k * held_out);
+  return HeldOutBlockIndex(static_cast<long>(std::floor(t / block_seconds)), held_out);
 }
 
 RowKind DiagnosisRowKind(double t, double block_seconds, double held_out, double guard_seconds) {
   auto kind_at = [&](double u) {
     if (u < 0) u = 0;  // before the log: as its first block
-    const double k = std::floor(u / block_seconds);
-    if (!InHeldOutBlock(u, block_seconds, held_out)) return RowKind::kFit;
-    // Held-out blocks before block k: floor(k h) (see InHeldOutBlock).
-    return static_cast<long>(std::floor(k * held_out)) % 2 == 0 ? RowKind::kSelection : RowKind::kTest;
+    const long k = static_cast<long>(std::floor(u / block_seconds));
+    if (!HeldOutBlockIndex(k, held_out)) return RowKind::kFit;
+    long before = 0;  // held-out blocks before block k
+    for (long j = 1; j < k; ++j) before += HeldOutBlockIndex(j, held_out) ? 1 : 0;
+    return before % 2 == 0 ? RowKind::kSelection : RowKind::kTest;
   };
   const RowKind here = kind_at(t);
   const double guard = std::min(guard_seconds, 0.45 * block_seconds);

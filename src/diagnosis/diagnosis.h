@@ -289,8 +289,12 @@ RowKind DiagnosisRowKind(double t, double block_seconds, double held_out, double
 int DiagnosisBlockIndex(double t, double block_seconds);
 
 // Whether the sample at time t (s from the log's start) lies in a held-out block:
-// blocks k = floor(t / block) are held out where floor((k + 1) h) > floor(k h), which
-// spreads a share h of them evenly over the log, the first block always kept for fitting.
+// blocks k = floor(t / block) >= 1 are held out where frac(k g) < h, g = (sqrt 5 - 1) / 2,
+// the first block always kept for fitting. A Weyl sequence: a share h of the blocks,
+// spread over the log (gaps of two or three sizes), and never periodic, so the held-out
+// blocks cannot line up with a periodic excitation (an evenly repeating pattern, every
+// 5th block for h = 0.4, put the selection blocks of a 10 s Fourier excitation cut into
+// 1 s blocks on 2 phases of it; issue 41).
 bool InHeldOutBlock(double t, double block_seconds, double held_out);
 
 // Throws InputError "path:1: ..." unless the times `t` (s, from `first` on; the rows a

@@ -53,6 +53,12 @@ std::string OpenFinding(const std::string& label) {
            "nothing missing reach 3.4); the memoryless learned residual removes 10 % (p 0.10) of bursts that follow each "
            "reversal; torque_saturation is named and closes 29 % (nominal 0.573, plant 0.337)";
   }
+  if (label == "cogging_joint1") {
+    return "issue 41: with the held-out blocks placed never-periodically the learned residual removes 18 % of joint "
+           "1's test error (p 0.2), short of significance, and its RMS is 1.42 times its noise (4 flags on size "
+           "alone). With the periodic placement before, which put fit and test blocks on the same phases of the "
+           "trials, it removed 40 % (p 3e-10)";
+  }
   if (label == "payload_and_offset_joint2") {
     return "issue 28: the payload (0.64 kg at x = 0.42 m) absorbs the offset on the selection rows; round 2 finds no "
            "offset on joint 2 (the test rows' gap still closes 96 %)";
@@ -135,13 +141,25 @@ TEST_P(ArmDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
     const auto it = std::find_if(report.effects.begin(), report.effects.end(),
                                  [&](const DiagnosedEffect& e) { return e.name == want.name && e.joint == want.joint; });
     ASSERT_NE(it, report.effects.end()) << "expected " << EffectLabel(want.name, want.joint);
-    for (const auto& [key, value] : want.parameters) {
-      EXPECT_NEAR(it->parameters.at(key), value, want.tolerance * std::abs(value)) << want.name << " " << key;
+    if (want.name == "joint_flexibility") {
+      // What a log determines is the resonance sqrt(k / J_m); k and J_m trade along it
+      // (the report calls both undetermined). Measured: the soft joint's k 2329 and J_m
+      // 0.0156 against 3000 and 0.02, the resonance 386 against 387 rad/s.
+      const double found = std::sqrt(it->parameters.at("k") / it->parameters.at("motor_inertia"));
+      const double hidden = std::sqrt(want.parameters.at("k") / want.parameters.at("motor_inertia"));
+      EXPECT_NEAR(found, hidden, 0.05 * hidden) << "resonance, rad/s";
+      for (const auto& [key, value] : want.parameters)
+        EXPECT_NEAR(it->parameters.at(key), value, 0.3 * std::abs(value)) << want.name << " " << key;
+    } else {
+      for (const auto& [key, value] : want.parameters) {
+        EXPECT_NEAR(it->parameters.at(key), value, want.tolerance * std::abs(value)) << want.name << " " << key;
+      }
     }
     EXPECT_FALSE(it->evidence.empty());
   }
   // The plant's own gap on the same held-out rows: the floor a perfect model reaches.
-  const double floor = DiagnoseArm(plant, logs, testing::GapsOnly(options)).gap_before;
+  const DiagnosisReport own = DiagnoseArm(plant, logs, testing::GapsOnly(options));
+  const double floor = own.gap_before;
   testing::RecordDiagnosis(report, floor);  // for docs/diagnose.md's counts
   if (c.expected.empty()) {
     EXPECT_EQ(report.gap_after, report.gap_before);
@@ -151,22 +169,26 @@ TEST_P(ArmDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
   }
   // Simulated from the torques on the test rows, the repaired model follows the motion:
   // its worst joint at least twice as close as the nominal's (measured 4 to 800 times
-  // closer, 0.1 s windows). Not the flexible joints: a 112 Hz resonance simulated at the
-  // log's 1 kHz leaves both models near constant velocity, the repaired one 1 to 9 % worse
-  // (measured; the report says so in a note). A delay's repair closes less (measured
-  // 0.012 -> 0.0085 rad).
+  // closer, 0.1 s windows), or within twice the plant's own where the effect barely acts
+  // on those rows (a saturation the test rows never reach: the nominal is as good as the
+  // plant there, 1.1e-4 rad, and a limit fitted 6 % low clips a little, 2.1e-4). Not the
+  // flexible joints: a 112 Hz resonance simulated at the log's 1 kHz leaves both models
+  // near constant velocity, the repaired one 1 to 9 % worse (measured; the report says
+  // so in a note). A delay's repair closes less (measured 0.012 -> 0.0085 rad).
   ASSERT_FALSE(report.simulation.empty());
+  ASSERT_EQ(own.simulation.size(), report.simulation.size());
   const DiagnosisSimulation& sim = report.simulation.front();
   EXPECT_EQ(sim.seconds, 0.1);
   EXPECT_GT(sim.windows, 20);
   const double nominal_worst = *std::max_element(sim.nominal.begin(), sim.nominal.end());
   const double repaired_worst = *std::max_element(sim.repaired.begin(), sim.repaired.end());
+  const double plant_worst = *std::max_element(own.simulation.front().nominal.begin(), own.simulation.front().nominal.end());
   if (c.expected.empty()) {
     EXPECT_EQ(repaired_worst, nominal_worst);
   } else if (c.expected.front().name == "time_delay") {
-    EXPECT_LT(repaired_worst, 0.8 * nominal_worst);
+    EXPECT_LT(repaired_worst, std::max(0.8 * nominal_worst, 2 * plant_worst));
   } else if (c.expected.front().name != "joint_flexibility") {
-    EXPECT_LT(repaired_worst, 0.5 * nominal_worst);
+    EXPECT_LT(repaired_worst, std::max(0.5 * nominal_worst, 2 * plant_worst));
   }
   // The repaired model carries the effects, and reaches the same gap when diagnosed again.
   EXPECT_EQ(ListArmEffects(repaired.effects).size(), c.expected.size());

@@ -72,6 +72,24 @@ TEST(ForeignArmPlant, CleanLogsNameNothing) {
   EXPECT_LE(named, seeds / 20) << named << " of " << seeds << " clean logs had an effect named";
 }
 
+// Clean logs under two more noise models: torque noise that scales with the torque (5 %
+// of it, row by row, beside the white 2 %), and the white share made coloured (a first-
+// order process of 20 ms: twenty rows at 1 kHz, longer than the derivative filter's
+// span). Nothing is missing, so nothing may be named.
+TEST(ForeignArmPlant, CleanLogsUnderProportionalAndColouredNoiseNameNothing) {
+  if (!testing::MujocoAvailable()) GTEST_SKIP() << "built without MuJoCo (libmujoco-dev)";
+  testing::ForeignArmRecording proportional, coloured;
+  proportional.proportional_noise = 0.05;
+  coloured.noise_correlation = 0.02;
+  for (const auto& [label, how] : {std::pair<const char*, testing::ForeignArmRecording>{"proportional", proportional},
+                                   std::pair<const char*, testing::ForeignArmRecording>{"coloured", coloured}}) {
+    for (int seed : {1, 2}) {  // open loop, closed loop
+      const DiagnosisReport report = Diagnose(ForeignLogs(testing::RrrWith(""), seed, how));
+      EXPECT_TRUE(report.effects.empty()) << label << " noise, seed " << seed << ": " << Named(report);
+    }
+  }
+}
+
 // Hidden effects on the MuJoCo plant, their sizes off any grid: each named on its joint
 // (outside the vocabulary: flagged unexplained there, or named) and closing at least 70 % of
 // the test-row gap down to the plant's own: the nominal model's gap on the same seed's

@@ -43,6 +43,7 @@ struct ForeignArmRecording {
   double quantum = 2e-5;           // rad, encoder resolution (q quantised)
   double noise_share = 0.02;       // white torque noise: this share of each joint's mean |torque|
   double proportional_noise = 0;   // and this share of the torque itself, row by row
+  double noise_correlation = 0;    // s: the white share made coloured (first order, this correlation time); 0: white
   double cutoff_hz = 10;           // the reader's cut-off for the derived qd, qdd
   HiddenArmTorque hidden;          // empty: a clean plant
 };

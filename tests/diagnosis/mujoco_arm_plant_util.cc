@@ -207,7 +207,14 @@ ArmLog RecordMujocoArm(const ArmModel& plant, std::uint64_t seed, const ForeignA
   }
   Eigen::VectorXd sigma(n);
   for (int j = 0; j < n; ++j) sigma[j] = how.noise_share * feedforward.col(j).cwiseAbs().mean();
-  auto noise = [&](int j, double tau) { return rng.Gaussian(sigma[j]) + rng.Gaussian(how.proportional_noise * std::abs(tau)); };
+  // Coloured: an AR(1) of the same spread, c_k = a c_(k-1) + sqrt(1 - a^2) w_k.
+  const double a = how.noise_correlation > 0 ? std::exp(-dt / how.noise_correlation) : 0.0;
+  Eigen::VectorXd coloured = Eigen::VectorXd::Zero(n);
+  for (int j = 0; j < n; ++j) coloured[j] = rng.Gaussian(sigma[j]);
+  auto noise = [&](int j, double tau) {
+    coloured[j] = a * coloured[j] + std::sqrt(1 - a * a) * rng.Gaussian(sigma[j]);
+    return coloured[j] + rng.Gaussian(how.proportional_noise * std::abs(tau));
+  };
 
   ArmLog log;
   log.dof = n;

@@ -1,11 +1,13 @@
 // The diagnosis's statistics (diagnosis/statistics.h) against tabulated values and
 // against their purpose: a test on correlated rows that keeps its level.
 #include "diagnosis/statistics.h"
+#include "diagnosis/diagnosis.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <iostream>
+#include <set>
 #include <vector>
 
 #include "core/rng.h"
@@ -135,6 +137,37 @@ TEST(DiagnosisStatistics, TheWorstOfSeveralChannelsIsCorrected) {
             << uncorrected << ")\n";
   EXPECT_LE(corrected, 28);    // 7 %
   EXPECT_GE(uncorrected, 48);  // 12 %
+}
+
+// The held-out blocks: a share h of them, the first kept for fitting, and placed so that
+// selection and test blocks meet every phase of a periodic excitation. With the pattern
+// before issue 41 (every 5th block for h = 0.4) the selection blocks of a 10 s period cut
+// into 1 s blocks met 2 of its 10 phases, the test blocks 2 others.
+TEST(DiagnosisBlocks, HeldOutBlocksMeetEveryPhaseOfAPeriodicExcitation) {
+  for (double h : {0.2, 0.4, 0.5}) {
+    std::set<long> selection_phases, test_phases;
+    int held = 0, selection = 0, test = 0;
+    const int blocks = 60;  // a minute of 1 s blocks; the excitation repeats every 10
+    for (int k = 0; k < blocks; ++k) {
+      const double t = k + 0.5;
+      const RowKind kind = DiagnosisRowKind(t, 1.0, h, 0.0);
+      EXPECT_EQ(kind != RowKind::kFit, InHeldOutBlock(t, 1.0, h)) << k;
+      if (kind == RowKind::kFit) continue;
+      ++held;
+      if (kind == RowKind::kSelection) ++selection, selection_phases.insert(k % 10);
+      if (kind == RowKind::kTest) ++test, test_phases.insert(k % 10);
+    }
+    EXPECT_FALSE(InHeldOutBlock(0.5, 1.0, h));  // the first block fits
+    EXPECT_NEAR(held, h * blocks, 2) << "h " << h;
+    EXPECT_LE(std::abs(selection - test), 1) << "h " << h;
+    EXPECT_GE(selection_phases.size(), std::min<std::size_t>(5, selection)) << "h " << h;
+    EXPECT_GE(test_phases.size(), std::min<std::size_t>(5, test)) << "h " << h;
+  }
+  // Guards: rows within `guard` of a boundary between kinds belong to none.
+  long first_held = 1;
+  while (!InHeldOutBlock(first_held + 0.5, 1.0, 0.4)) ++first_held;
+  EXPECT_EQ(DiagnosisRowKind(first_held + 0.01, 1.0, 0.4, 0.05), RowKind::kGuard);
+  EXPECT_EQ(DiagnosisRowKind(first_held + 0.5, 1.0, 0.4, 0.05), RowKind::kSelection);
 }
 
 }  // namespace
