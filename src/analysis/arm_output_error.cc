@@ -42,11 +42,34 @@ namespace {
 // a hundredth of a percent of a joint's torque RMS for an offset.
 constexpr double kStep = 1e-3;
 
+// The share of the held-out windows' cost (their squared errors over the baseline's)
+// the low-speed friction must remove to be kept: 2n parameters more must earn their
+// place (measured on a plant without it: 3 % from fitting the engines' differences).
+constexpr double kLowSpeedGain = 0.1;
+
+// What a coordinate is, in the order they come (n of each; offsets and the two Stribeck
+// kinds only when asked for).
+enum class Coordinate { kScale, kViscous, kCoulomb, kOffset, kBreakaway, kStribeckVelocity };
+
+const char* CoordinateName(Coordinate c) {
+  switch (c) {
+    case Coordinate::kScale: return "scale";
+    case Coordinate::kViscous: return "viscous";
+    case Coordinate::kCoulomb: return "Coulomb";
+    case Coordinate::kOffset: return "offset";
+    case Coordinate::kBreakaway: return "break-away";
+    case Coordinate::kStribeckVelocity: return "Stribeck speed";
+  }
+  return "";
+}
+
 // The fit's data and coordinates. Coordinates per joint j of n: x[j] = ln k (the link's
 // inertial scale), x[n + j], x[2n + j] the logarithms of viscous and Coulomb friction
 // over their units (the start's values, or a thousandth of the joint's torque scale
-// where the start has none), x[3n + j] the offset's change in tenths of the joint's
-// torque RMS.
+// where the start has none); with offsets x[3n + j] the offset's change in tenths of the
+// joint's torque RMS; with stribeck, next, the logarithms of the break-away s - c and the
+// Stribeck speed vs over their units (the start's, or the Coulomb unit and a tenth of the
+// joint's RMS speed).
 class OutputErrorProblem {
  public:
   OutputErrorProblem(const ArmModel& start, const std::vector<ArmLog>& logs, const ArmOutputErrorOptions& options)
@@ -104,14 +127,39 @@ class OutputErrorProblem {
     const Eigen::ArrayXd tau_rms = (tau2 / samples).sqrt(), qd_rms = (qd2 / samples).sqrt().max(1e-6);
     viscous_unit_.resize(n_);
     coulomb_unit_.resize(n_);
+    breakaway_unit_.resize(n_);
+    stribeck_velocity_unit_.resize(n_);
     offset_unit_ = 0.1 * tau_rms.max(1e-9).matrix();
     for (int j = 0; j < n_; ++j) {
       viscous_unit_[j] = std::max(start_.joints[j].viscous, 1e-3 * tau_rms[j] / qd_rms[j]);
       coulomb_unit_[j] = std::max(start_.joints[j].coulomb, 1e-3 * tau_rms[j]);
+      const JointEffects& e = start_.effects.joint(j);
+      breakaway_unit_[j] = e.stribeck() ? e.stribeck_static - e.stribeck_coulomb : coulomb_unit_[j];
+      stribeck_velocity_unit_[j] = e.stribeck() ? e.stribeck_velocity : 0.1 * qd_rms[j];
     }
   }
 
-  int parameters() const { return n_ * (options_.offsets ? 4 : 3); }
+  int parameters() const { return n_ * (3 + (options_.offsets ? 1 : 0) + (options_.stribeck ? 2 : 0)); }
+  Coordinate Kind(int k) const {
+    const int block = k / n_;
+    if (block < 3) return static_cast<Coordinate>(block);
+    if (options_.offsets && block == 3) return Coordinate::kOffset;
+    return block == (options_.offsets ? 4 : 3) ? Coordinate::kBreakaway : Coordinate::kStribeckVelocity;
+  }
+  // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its unit
+  // to a thousand times it, an offset within twice the joint's torque RMS, a break-away
+  // from a thousandth of the Coulomb unit to a hundred times it, a Stribeck speed from a
+  // thousandth to ten times the joint's RMS speed.
+  void Bounds(int k, double* lower, double* upper) const {
+    switch (Kind(k)) {
+      case Coordinate::kScale: *upper = std::log(100.0), *lower = -*upper; break;
+      case Coordinate::kViscous:
+      case Coordinate::kCoulomb: *lower = std::log(1e-6), *upper = std::log(1000.0); break;
+      case Coordinate::kOffset: *lower = -20, *upper = 20; break;
+      case Coordinate::kBreakaway: *lower = std::log(1e-3), *upper = std::log(100.0); break;
+      case Coordinate::kStribeckVelocity: *lower = std::log(1e-2), *upper = std::log(100.0); break;
+    }
+  }
   // The fit's residuals: the simulated rows' position errors, then the torque rows'.
   std::size_t residuals() const { return (simulated_rows_ + torque_rows_) * static_cast<std::size_t>(n_); }
   int fit_windows() const { return fit_windows_; }
@@ -131,6 +179,13 @@ class OutputErrorProblem {
       joint.coulomb = coulomb_unit_[j] * std::exp(x[2 * n_ + j]);
       if (options_.offsets)
         m.effects.joints[j].torque_offset = start_.effects.joint(j).torque_offset + offset_unit_[j] * x[3 * n_ + j];
+      if (options_.stribeck) {
+        const int base = n_ * (options_.offsets ? 4 : 3);
+        if (m.effects.joints.size() != static_cast<std::size_t>(n_)) m.effects.joints.resize(n_);
+        JointEffects& e = m.effects.joints[j];
+        e.stribeck_static = e.stribeck_coulomb + breakaway_unit_[j] * std::exp(x[base + j]);
+        e.stribeck_velocity = stribeck_velocity_unit_[j] * std::exp(x[base + n_ + j]);
+      }
     }
     return m;
   }
@@ -193,38 +248,30 @@ class OutputErrorProblem {
   int fit_windows_ = 0, check_windows_ = 0;
   std::size_t simulated_rows_ = 0, torque_rows_ = 0;
   Eigen::VectorXd constant_velocity_, weight_, torque_weight_, viscous_unit_, coulomb_unit_, offset_unit_;
+  Eigen::VectorXd breakaway_unit_, stribeck_velocity_unit_;
 };
 
-}  // namespace
-
-ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
-                                const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary) {
-  std::string why;
-  if (!options.IsValid(&why)) throw InputError(why);
-  if (logs.empty()) throw InputError("output error: no log to fit");
-  const OutputErrorProblem problem(start, logs, options);
-  const int n = start.dof(), p = problem.parameters();
-  std::vector<double> x(static_cast<std::size_t>(p), 0.0);
-  const ArmModel floor = problem.Apply(x.data());
-
+// Levenberg-Marquardt from `x` within the problem's bounds; the coordinates found into
+// *x, the iterations taken returned, those that ended at a bound into *at_bound.
+int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& options, std::vector<double>* x,
+          std::vector<int>* at_bound) {
+  const int p = problem.parameters();
   ceres::Problem ceres_problem;
   // Central differences at kStep in every coordinate, the columns simulated on
   // options.threads threads.
-  ceres_problem.AddResidualBlock(new FixedStepCost(problem.residuals(), std::vector<double>(x.size(), kStep),
+  ceres_problem.AddResidualBlock(new FixedStepCost(problem.residuals(), std::vector<double>(x->size(), kStep),
                                                    [&problem](const double* at, double* out) {
                                                      problem.Residual(problem.Apply(at), out);
                                                      return true;
                                                    },
                                                    options.threads),
-                                 nullptr, x.data());
-  // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its
-  // unit to a thousand times it, an offset within twice the joint's torque RMS.
+                                 nullptr, x->data());
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
   for (int k = 0; k < p; ++k) {
-    upper[k] = k < n ? std::log(100.0) : k < 3 * n ? std::log(1000.0) : 20.0;
-    lower[k] = k < n || k >= 3 * n ? -upper[k] : std::log(1e-6);
-    ceres_problem.SetParameterLowerBound(x.data(), k, lower[k]);
-    ceres_problem.SetParameterUpperBound(x.data(), k, upper[k]);
+    problem.Bounds(k, &lower[k], &upper[k]);
+    (*x)[k] = std::clamp((*x)[k], lower[k], upper[k]);
+    ceres_problem.SetParameterLowerBound(x->data(), k, lower[k]);
+    ceres_problem.SetParameterUpperBound(x->data(), k, upper[k]);
   }
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_QR;
@@ -235,25 +282,74 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   solver.logging_type = ceres::SILENT;
   ceres::Solver::Summary result;
   ceres::Solve(solver, &ceres_problem, &result);
-  const ArmModel fitted = problem.Apply(x.data());
+  at_bound->clear();
+  for (int k = 0; k < p; ++k) {
+    const double margin = 1e-3 * (upper[k] - lower[k]);
+    if ((*x)[k] < lower[k] + margin || (*x)[k] > upper[k] - margin) at_bound->push_back(k);
+  }
+  return static_cast<int>(result.iterations.size()) - 1;
+}
+
+}  // namespace
+
+ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
+                                const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  if (logs.empty()) throw InputError("output error: no log to fit");
+  ArmOutputErrorOptions plain_options = options;
+  plain_options.stribeck = false;
+  const OutputErrorProblem plain(start, logs, plain_options);
+  const int n = start.dof();
+  std::vector<double> x(static_cast<std::size_t>(plain.parameters()), 0.0);
+  const ArmModel floor = plain.Apply(x.data());
+  std::vector<int> at_bound;
+  int iterations = Solve(plain, plain_options, &x, &at_bound);
+  ArmModel fitted = plain.Apply(x.data());
   // Kept only where the held-out windows get better.
-  const Eigen::VectorXd check_before = problem.SimulationRmse(floor, true);
-  const Eigen::VectorXd check_after = problem.SimulationRmse(fitted, true);
-  const bool kept = problem.CheckCost(check_after) < problem.CheckCost(check_before);
+  const Eigen::VectorXd check_before = plain.SimulationRmse(floor, true);
+  Eigen::VectorXd check_after = plain.SimulationRmse(fitted, true);
+  const bool kept = plain.CheckCost(check_after) < plain.CheckCost(check_before);
+  const OutputErrorProblem* final_problem = &plain;
+
+  // Friction that holds at low speed: fitted from where the plain refinement ended, and
+  // kept where it simulates the held-out windows better still.
+  std::unique_ptr<OutputErrorProblem> low_speed;
+  const Eigen::VectorXd check_plain = check_after;
+  bool stribeck_kept = false;
+  ArmModel with;  // the low-speed fit, kept or not
+  if (options.stribeck) {
+    low_speed = std::make_unique<OutputErrorProblem>(start, logs, options);
+    std::vector<double> y = x;
+    y.resize(static_cast<std::size_t>(low_speed->parameters()), 0.0);
+    std::vector<int> y_bound;
+    const int y_iterations = Solve(*low_speed, options, &y, &y_bound);
+    with = low_speed->Apply(y.data());
+    const Eigen::VectorXd check_with = low_speed->SimulationRmse(with, true);
+    stribeck_kept = kept && low_speed->CheckCost(check_with) < (1 - kLowSpeedGain) * plain.CheckCost(check_plain);
+    if (stribeck_kept) {
+      x = std::move(y);
+      at_bound = std::move(y_bound);
+      iterations += y_iterations;
+      fitted = with;
+      check_after = check_with;
+      final_problem = low_speed.get();
+    }
+  }
 
   if (summary) {
     ArmOutputErrorSummary& s = *summary;
     s = {};
     s.horizon = options.horizon;
-    s.iterations = static_cast<int>(result.iterations.size()) - 1;
-    s.fit_windows = problem.fit_windows();
-    s.check_windows = problem.check_windows();
+    s.iterations = iterations;
+    s.fit_windows = plain.fit_windows();
+    s.check_windows = plain.check_windows();
     s.kept = kept;
-    s.rmse_before = problem.SimulationRmse(floor, false);
-    s.rmse_after = problem.SimulationRmse(fitted, false);
+    s.rmse_before = plain.SimulationRmse(floor, false);
+    s.rmse_after = plain.SimulationRmse(fitted, false);
     s.check_before = check_before;
     s.check_after = check_after;
-    s.constant_velocity = problem.constant_velocity();
+    s.constant_velocity = plain.constant_velocity();
     s.scale.resize(n);
     s.viscous_before.resize(n), s.viscous_after.resize(n), s.coulomb_before.resize(n), s.coulomb_after.resize(n);
     s.offset_before.resize(n), s.offset_after.resize(n);
@@ -266,12 +362,22 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
       s.offset_before[j] = start.effects.joint(j).torque_offset;
       s.offset_after[j] = fitted.effects.joint(j).torque_offset;
     }
-    for (int k = 0; k < p; ++k) {
-      const double margin = 1e-3 * (upper[k] - lower[k]);
-      if (x[k] < lower[k] + margin || x[k] > upper[k] - margin) s.at_bound.push_back(k);
+    for (int k : at_bound) s.at_bound.push_back(std::string(CoordinateName(final_problem->Kind(k))) + " of joint " + std::to_string(k % n + 1));
+    s.stribeck_tried = options.stribeck;
+    s.stribeck_kept = stribeck_kept;
+    if (options.stribeck) {
+      s.check_plain = check_plain;
+      s.breakaway.resize(n);
+      s.stribeck_velocity.resize(n);
+      for (int j = 0; j < n; ++j) {
+        const JointEffects& e = with.effects.joint(j);
+        s.breakaway[j] = e.stribeck_static - e.stribeck_coulomb;
+        s.stribeck_velocity[j] = e.stribeck_velocity;
+      }
     }
   }
-  return kept ? fitted : start;
+  if (!kept) return start;
+  return fitted;
 }
 
 std::string ArmOutputErrorSummary::FullReport() const {
@@ -295,10 +401,19 @@ std::string ArmOutputErrorSummary::FullReport() const {
                   offset_before[j], offset_after[j]);
     text += line;
   }
+  if (stribeck_tried) {
+    text += "low-speed friction (stribeck_friction: break-away s - c, speed vs), fitted after the plain refinement:\n";
+    for (int j = 0; j < n; ++j) {
+      std::snprintf(line, sizeof line, "  joint %d: s - c %.4g, vs %.4g; held-out windows' RMSE %.4g without it\n", j + 1,
+                    breakaway[j], stribeck_velocity[j], check_plain[j]);
+      text += line;
+    }
+    text += stribeck_kept ? "  kept: the held-out windows are simulated better with it\n"
+                          : "  not kept: it removes under 10 % of the held-out windows' cost the plain refinement leaves\n";
+  }
   if (!at_bound.empty()) {
-    const char* kinds[] = {"scale", "viscous", "Coulomb", "offset"};
     text += "at the edge of its range (not determined by the simulation):";
-    for (int k : at_bound) text += std::string(" ") + kinds[k / n] + " of joint " + std::to_string(k % n + 1);
+    for (std::size_t k = 0; k < at_bound.size(); ++k) text += (k ? ", " : " ") + at_bound[k];
     text += "\n";
   }
   text += kept ? "kept: the held-out windows are simulated better\n"

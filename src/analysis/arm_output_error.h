@@ -16,6 +16,9 @@
 //     physically consistent link stays consistent),
 //   - the nominal viscous and Coulomb friction (kept positive),
 //   - with `offsets`, the torque_offset effect's tau0,
+//   - with `stribeck`, a second fit: the stribeck_friction effect's break-away s - c and
+//     speed vs (a Coulomb level that holds near zero speed), kept only where it beats the
+//     plain refinement on the held-out windows,
 // by Levenberg-Marquardt (Ceres) with central differences at a fixed step in
 // coordinates (ln k, the frictions' logarithms, the offset in tenths of the joint's
 // torque RMS), the Jacobian's columns simulated on `threads` threads (deterministic:
@@ -40,6 +43,11 @@ struct ArmOutputErrorOptions {
   double horizon = 0.1;       // s: the simulated windows' length (> 0)
   int max_iterations = 30;    // Levenberg-Marquardt iterations
   bool offsets = false;       // also refine each joint's torque_offset tau0
+  // Also try friction that holds at low speed: per joint a break-away above the Coulomb
+  // level that fades with speed (stribeck_friction: its s - c and vs), fitted after the
+  // plain refinement from where it ended, and kept only where it removes at least 10 %
+  // of the held-out windows' cost left by the plain refinement.
+  bool stribeck = false;
   double torque_weight = 1;   // the torque rows' weight beside the simulated rows' (0: none)
   std::string backend = "analytic";
   int threads = 0;            // 0: one per core
@@ -58,7 +66,12 @@ struct ArmOutputErrorSummary {
   Eigen::VectorXd scale;                      // per joint: the link's inertial scale k found
   Eigen::VectorXd viscous_before, viscous_after, coulomb_before, coulomb_after;
   Eigen::VectorXd offset_before, offset_after;  // tau0 (unchanged when offsets are not refined)
-  std::vector<int> at_bound;  // coordinates that ended at the edge of their range (k: scale, n+k viscous, ...)
+  // With ArmOutputErrorOptions::stribeck: the plain refinement's held-out RMSE, whether
+  // the low-speed friction beat it (and was returned), and its break-away s - c (N·m or
+  // N) and speed vs (rad/s or m/s) per joint as fitted.
+  bool stribeck_tried = false, stribeck_kept = false;
+  Eigen::VectorXd check_plain, breakaway, stribeck_velocity;
+  std::vector<std::string> at_bound;  // coordinates that ended at the edge of their range ("scale of joint 1", ...)
   // A table: per joint the simulation errors before and after (and the baseline's), the
   // scale, frictions and offsets found; what ended at a bound; whether it was kept.
   std::string FullReport() const;

@@ -36,6 +36,7 @@ struct IdentifyCliOptions {
   bool unweighted = false;
   bool offsets = false;
   double output_error = 0;  // s: the output-error refinement's horizon; 0 = none
+  bool stribeck = false;    // with output_error: also try friction that holds at low speed
   bool quiet = false;
   // Omni robots.
   OmniLogSelector select;
@@ -73,7 +74,7 @@ bool EndsWithYaml(const std::string& path) {
 // Omni: `--out DIR` writes DIR/model.yaml, report.json and report.html; `--out M.yaml`
 // the model there and the reports into --report DIR when given.
 int IdentifyOmniCli(const IdentifyCliOptions& options) {
-  for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition", "--output-error"}) {
+  for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition", "--output-error", "--stribeck"}) {
     if (std::find(options.given.begin(), options.given.end(), arm_only) != options.given.end())
       throw InputError(std::string(arm_only) + " is for arms; " + options.model + " is an omni robot");
   }
@@ -142,8 +143,11 @@ int Identify(const IdentifyCliOptions& options) {
   ArmOutputErrorOptions output_error;
   output_error.horizon = options.output_error;
   output_error.offsets = options.offsets;
+  output_error.stribeck = options.stribeck;
   output_error.threads = options.omni.threads;
   if (options.output_error != 0 && !output_error.IsValid(&why)) throw InputError("--output-error: " + why);
+  if (options.stribeck && options.output_error <= 0)
+    throw InputError("--stribeck refines by output error: give --output-error S as well");
   if (options.omni.threads < 0) throw InputError("--threads must be 0 (one per core) or more");
   const ArmModel model = LoadArmModel(options.model);
   std::vector<ArmLog> logs;
@@ -183,6 +187,12 @@ int Identify(const IdentifyCliOptions& options) {
                                     "simulated no better",
                   options.output_error);
     comment += refined;
+    if (refinement.stribeck_tried) {
+      comment += refinement.stribeck_kept
+                     ? "\nwith friction that holds at low speed (stribeck_friction), chosen on the held-out windows"
+                     : "\nfriction that holds at low speed (stribeck_friction) tried and not kept: under 10 % better on "
+                       "the held-out windows";
+    }
   }
   OutputFiles files;
   files.Write(options.out, FormatArmModelYaml(identified, comment));
@@ -269,6 +279,9 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                   "s: refine the estimate by output error, on windows of this length simulated from the logs' "
                   "torques (link inertial scales, friction, offsets); 0 = off")
       ->capture_default_str();
+  cmd->add_flag("--stribeck", options->stribeck,
+                "With --output-error: also fit a break-away above the Coulomb level per joint (stribeck_friction), "
+                "kept only where it simulates the held-out windows at least 10 % better");
   cmd->add_option("--report", options->report,
                   "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
   AddLogSelectorOptions(cmd, &options->select);
