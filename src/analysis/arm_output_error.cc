@@ -290,6 +290,49 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
   return static_cast<int>(result.iterations.size()) - 1;
 }
 
+// The summary's fits, parameters and bounds: `plain` the plain refinement's problem,
+// `used` the one whose coordinates x are (plain, or the low-speed one), `floor` the start
+// with its frictions raised to their floors, `with` the low-speed fit (an empty model
+// when not tried). The check windows, iterations and decisions are the caller's.
+ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErrorProblem& used, const ArmModel& start,
+                                const ArmModel& floor, const ArmModel& fitted, const ArmModel& with,
+                                const std::vector<double>& x, const std::vector<int>& at_bound,
+                                const ArmOutputErrorOptions& options) {
+  const int n = start.dof();
+  ArmOutputErrorSummary s;
+  s.horizon = options.horizon;
+  s.fit_windows = plain.fit_windows();
+  s.check_windows = plain.check_windows();
+  s.rmse_before = plain.SimulationRmse(floor, false);
+  s.rmse_after = plain.SimulationRmse(fitted, false);
+  s.constant_velocity = plain.constant_velocity();
+  s.scale.resize(n);
+  s.viscous_before.resize(n), s.viscous_after.resize(n), s.coulomb_before.resize(n), s.coulomb_after.resize(n);
+  s.offset_before.resize(n), s.offset_after.resize(n);
+  for (int j = 0; j < n; ++j) {
+    s.scale[j] = std::exp(x[static_cast<std::size_t>(j)]);
+    s.viscous_before[j] = start.joints[j].viscous;
+    s.coulomb_before[j] = start.joints[j].coulomb;
+    s.viscous_after[j] = fitted.joints[j].viscous;
+    s.coulomb_after[j] = fitted.joints[j].coulomb;
+    s.offset_before[j] = start.effects.joint(j).torque_offset;
+    s.offset_after[j] = fitted.effects.joint(j).torque_offset;
+  }
+  for (int k : at_bound)
+    s.at_bound.push_back(std::string(CoordinateName(used.Kind(k))) + " of joint " + std::to_string(k % n + 1));
+  s.stribeck_tried = options.stribeck;
+  if (options.stribeck) {
+    s.breakaway.resize(n);
+    s.stribeck_velocity.resize(n);
+    for (int j = 0; j < n; ++j) {
+      const JointEffects& e = with.effects.joint(j);
+      s.breakaway[j] = e.stribeck_static - e.stribeck_coulomb;
+      s.stribeck_velocity[j] = e.stribeck_velocity;
+    }
+  }
+  return s;
+}
+
 }  // namespace
 
 ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
@@ -300,7 +343,6 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   ArmOutputErrorOptions plain_options = options;
   plain_options.stribeck = false;
   const OutputErrorProblem plain(start, logs, plain_options);
-  const int n = start.dof();
   std::vector<double> x(static_cast<std::size_t>(plain.parameters()), 0.0);
   const ArmModel floor = plain.Apply(x.data());
   std::vector<int> at_bound;
@@ -338,43 +380,13 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   }
 
   if (summary) {
-    ArmOutputErrorSummary& s = *summary;
-    s = {};
-    s.horizon = options.horizon;
-    s.iterations = iterations;
-    s.fit_windows = plain.fit_windows();
-    s.check_windows = plain.check_windows();
-    s.kept = kept;
-    s.rmse_before = plain.SimulationRmse(floor, false);
-    s.rmse_after = plain.SimulationRmse(fitted, false);
-    s.check_before = check_before;
-    s.check_after = check_after;
-    s.constant_velocity = plain.constant_velocity();
-    s.scale.resize(n);
-    s.viscous_before.resize(n), s.viscous_after.resize(n), s.coulomb_before.resize(n), s.coulomb_after.resize(n);
-    s.offset_before.resize(n), s.offset_after.resize(n);
-    for (int j = 0; j < n; ++j) {
-      s.scale[j] = std::exp(x[static_cast<std::size_t>(j)]);
-      s.viscous_before[j] = start.joints[j].viscous;
-      s.coulomb_before[j] = start.joints[j].coulomb;
-      s.viscous_after[j] = fitted.joints[j].viscous;
-      s.coulomb_after[j] = fitted.joints[j].coulomb;
-      s.offset_before[j] = start.effects.joint(j).torque_offset;
-      s.offset_after[j] = fitted.effects.joint(j).torque_offset;
-    }
-    for (int k : at_bound) s.at_bound.push_back(std::string(CoordinateName(final_problem->Kind(k))) + " of joint " + std::to_string(k % n + 1));
-    s.stribeck_tried = options.stribeck;
-    s.stribeck_kept = stribeck_kept;
-    if (options.stribeck) {
-      s.check_plain = check_plain;
-      s.breakaway.resize(n);
-      s.stribeck_velocity.resize(n);
-      for (int j = 0; j < n; ++j) {
-        const JointEffects& e = with.effects.joint(j);
-        s.breakaway[j] = e.stribeck_static - e.stribeck_coulomb;
-        s.stribeck_velocity[j] = e.stribeck_velocity;
-      }
-    }
+    *summary = Summarise(plain, *final_problem, start, floor, fitted, with, x, at_bound, options);
+    summary->iterations = iterations;
+    summary->kept = kept;
+    summary->stribeck_kept = stribeck_kept;
+    summary->check_before = check_before;
+    summary->check_after = check_after;
+    summary->check_plain = options.stribeck ? check_plain : Eigen::VectorXd();
   }
   if (!kept) return start;
   return fitted;
