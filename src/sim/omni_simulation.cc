@@ -28,13 +28,15 @@ Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend
                        std::uint64_t seed)
     : robots_(std::move(robots)), backend_(std::move(backend)) {
   state_.rng = Rng::Derived(seed, 0);
-  state_.ball_rng = Rng::Derived(seed, 0x62616c6c);  // "ball"
+  state_.ball_rng = Rng::Derived(seed, 0x62616c6c);   // "ball"
+  state_.drive_rng = Rng::Derived(seed, 0x64726976);  // "driv"
   for (int i = 0; i < num_robots(); ++i) {
     const SimRobot& r = robots_[static_cast<std::size_t>(i)];
     // A robot off the field at the start is parked, and the observer has seen nothing of it.
     const Pose2 start = r.present ? r.start : ParkedPose(i);
     backend_->Reset(i, start, Twist2{});
     state_.present.push_back(r.present);
+    state_.slip.push_back({0, 0, 0});
     state_.pulls.emplace_back();
     state_.commands_in_flight.emplace_back(r.model.command_delay_frames, Twist2{});
     state_.captures_in_flight.emplace_back(r.model.vision_delay_frames,
@@ -257,6 +259,7 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
   // Parked robots are put back exactly where they were, at rest.
   for (int i = 0; i < num_robots(); ++i)
     if (!present(i)) backend_->Reset(i, ParkedPose(i), Twist2{});
+  Slip();
   if (ball_) {
     std::vector<Pose2> after;
     std::vector<BallCommand> acting(robots_.size());
@@ -270,6 +273,24 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
     ball_->StepFrame(before, after, acting, backend_->timing().frame_dt());
   }
   ++state_.frame;
+}
+
+void Simulation::Slip() {
+  const double dt = backend_->timing().frame_dt();
+  for (int i = 0; i < num_robots(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const OmniDrivingNoise& noise = robots_[k].model.driving_noise;
+    if (!noise.simulated || !present(i) || state_.pulls[k]) continue;
+    // The Gauss-Markov process sampled exactly over a frame: s <- a s + sqrt(1 - a^2) sd w,
+    // its spread stationary at sd; the body moves on by the slip, the wheels unaware.
+    const double a = std::exp(-dt / noise.correlation_time);
+    std::array<double, 3>& s = state_.slip[k];
+    for (std::size_t c = 0; c < 3; ++c) s[c] = a * s[c] + std::sqrt(1 - a * a) * state_.drive_rng.Gaussian(noise.sd[c]);
+    const Pose2 pose = backend_->pose(i);
+    const double cos_t = std::cos(pose.theta), sin_t = std::sin(pose.theta);
+    backend_->MoveBody(i, Pose2{pose.x + (cos_t * s[0] - sin_t * s[1]) * dt, pose.y + (sin_t * s[0] + cos_t * s[1]) * dt,
+                                pose.theta + s[2] * dt});
+  }
 }
 
 std::optional<Twist2> Simulation::PullCommand(int robot) {

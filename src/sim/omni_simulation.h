@@ -30,6 +30,7 @@
 #pragma once
 
 #include <cstdint>
+#include <array>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -110,6 +111,11 @@ struct SimulationState {
   std::vector<DelayLine<BallCommand>> ball_commands_in_flight;
   std::optional<DelayLine<std::optional<Eigen::Vector3d>>> ball_captures_in_flight;
   Rng ball_rng;  // the ball camera's noise and lost frames
+  // Driving noise (OmniDrivingNoise::simulated): per robot the slip now (forward and
+  // sideways m/s, turn rad/s, robot frame), drawn from a stream of its own so that the
+  // camera's draws stay as they were.
+  std::vector<std::array<double, 3>> slip;
+  Rng drive_rng;
   BallRecord ball_record;  // the open (or last) frame's
   // Per robot, a copy of its behaviour as it was (null: none); filled by Save() only.
   std::vector<std::shared_ptr<const CommandSource>> behaviours;
@@ -234,6 +240,10 @@ class Simulation {
   // The command of robot i's move by force from its true state now (robot frame); ends
   // the move (returns nothing) when the robot has arrived or the time is up.
   std::optional<Twist2> PullCommand(int robot);
+  // Driving noise: each present robot whose model simulates it, not being pulled, is
+  // moved on by its slip over the frame (robot frame; the backend's velocity untouched,
+  // as the wheels and the controller never see it).
+  void Slip();
 
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;

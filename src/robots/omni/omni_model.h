@@ -55,10 +55,12 @@ struct OmniControllerModel {
 // plus a slip the wheels, and so the on-board controller, do not see: a first-order
 // Gauss-Markov process per robot axis with a stationary spread and a correlation time.
 // The observer (estimation/omni_observer.h) estimates it and carries it into its
-// predictions; identify fits it. (The simulator does not draw it yet: issue 42.)
+// predictions; identify fits it; with `simulated` the simulation loop draws it on every
+// backend (sim/omni_simulation.h).
 struct OmniDrivingNoise {
   std::array<double, 3> sd{0.1, 0.1, 0.5};  // forward, sideways m/s; turn rad/s
   double correlation_time = 0.15;           // s
+  bool simulated = false;                   // the simulation draws it (off: the observer's model only)
 };
 
 // The state observer's noise model (estimation/omni_observer.h; docs/models.md

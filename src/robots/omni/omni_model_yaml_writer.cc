@@ -134,8 +134,11 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   if (model.vision_repeat_probability > 0) line("  repeat_probability", YamlNumber(model.vision_repeat_probability));
   if (model.vision_time_jitter > 0) line("  time_jitter", YamlNumber(model.vision_time_jitter), "s");
   const OmniDrivingNoise& dn = model.driving_noise;
-  if (dn.sd != defaults.driving_noise.sd || dn.correlation_time != defaults.driving_noise.correlation_time) {
-    line("driving_noise", "{" + AxisValues(dn.sd) + ", correlation_time: " + YamlNumber(dn.correlation_time) + "}",
+  if (dn.sd != defaults.driving_noise.sd || dn.correlation_time != defaults.driving_noise.correlation_time ||
+      dn.simulated) {
+    line("driving_noise",
+         "{" + AxisValues(dn.sd) + ", correlation_time: " + YamlNumber(dn.correlation_time) +
+             (dn.simulated ? ", simulated: true" : "") + "}",
          "m/s, rad/s, s: slip the wheels do not see", 46);
   }
   const OmniObserverModel& o = model.observer;
