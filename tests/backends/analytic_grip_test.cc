@@ -12,19 +12,13 @@
 #include "core/math_constants.h"
 #include "scene/command_source.h"
 #include "sim/omni_simulation.h"
+#include "backends/engine_drives.h"
 #include "test_util.h"
 
 namespace twinsim {
 namespace {
 
-OmniModel QuietOmni4() {
-  OmniModel m = testing::Omni4();
-  m.command_delay_frames = 0;
-  m.vision_delay_frames = 0;
-  m.vision_noise_xy = 0;
-  m.vision_noise_theta = 0;
-  return m;
-}
+OmniModel QuietOmni4() { return testing::Quiet(testing::Omni4()); }
 
 struct GripRun {
   SimulationResult result;
@@ -32,38 +26,10 @@ struct GripRun {
 };
 
 GripRun DriveFor(const std::string& backend, const OmniModel& model, const CommandSpec& spec, double seconds) {
-  FrameTiming timing;
-  timing.frame_rate = 30;
-  timing.physics_substeps = DefaultPhysicsSubsteps(30);
-  std::vector<SimRobot> robots;
-  robots.push_back(SimRobot{"r", model, Pose2{0, 0, 0}, MakeCommandSource(spec, 1, 0, seconds, Pose2{})});
-  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, timing), 1);
   GripRun run;
-  run.result = sim.Run(static_cast<int>(std::lround(seconds * 30)) + 1);
+  run.result = testing::Drive(backend, model, spec, seconds);
   run.grip = run.result.grip;
   return run;
-}
-
-// Largest position (m) and heading (rad) difference between two runs' true paths.
-std::pair<double, double> Apart(const SimulationResult& a, const SimulationResult& b) {
-  double position = 0, heading = 0;
-  for (std::size_t k = 0; k < a.frames[0].size(); ++k) {
-    const Pose2& p = a.frames[0][k].truth;
-    const Pose2& q = b.frames[0][k].truth;
-    position = std::max(position, std::hypot(p.x - q.x, p.y - q.y));
-    heading = std::max(heading, std::abs(WrapAngle(p.theta - q.theta)));
-  }
-  return {position, heading};
-}
-
-CommandSpec Drive45() {
-  CommandSpec spec;
-  spec.type = "test_drive";
-  spec.start = 0.2;
-  spec.speed = 1.5;
-  spec.direction_deg = 45;
-  spec.drive_time = 1.5;
-  return spec;
 }
 
 // A constant robot-frame command to drive at `speed` while turning at `omega`: the
@@ -79,7 +45,7 @@ TEST(AnalyticGrip, WithinItsGripTheAnalyticModelSaysSoAndAgreesWithOde) {
   if (AvailableOmniEngines().size() < 2) GTEST_SKIP() << "needs ODE";
   // The shipped 2 m/s^2 ramps (docs/backends.md): the 45 degree test drive and a gentle
   // circle (1 m/s at 1.5 rad/s: 1.5 m/s^2 inward).
-  for (const CommandSpec& spec : {Drive45(), Circle(1.0, 1.5)}) {
+  for (const CommandSpec& spec : {testing::TestDrive45(), Circle(1.0, 1.5)}) {
     const GripRun analytic = DriveFor("analytic", QuietOmni4(), spec, 3.0);
     const GripRun ode = DriveFor("ode", QuietOmni4(), spec, 3.0);
     EXPECT_EQ(analytic.grip.steps, 91 * DefaultPhysicsSubsteps(30));  // every physics step of the 91 frames
@@ -88,7 +54,7 @@ TEST(AnalyticGrip, WithinItsGripTheAnalyticModelSaysSoAndAgreesWithOde) {
     EXPECT_GT(analytic.grip.worst, 0.05);  // it is checked, and the drive asks for grip
     EXPECT_EQ(ode.grip.steps, 0);          // ODE slips: it does not check
     EXPECT_TRUE(DescribeGrip(analytic.grip).empty());
-    const auto [position, heading] = Apart(analytic.result, ode.result);
+    const auto [position, heading] = testing::LargestTruthDifference(analytic.result, ode.result);
     EXPECT_LT(position, 0.02) << spec.type;
     EXPECT_LT(heading, 1.0 * kPi / 180) << spec.type;
   }
@@ -106,14 +72,14 @@ TEST(AnalyticGrip, BeyondItsGripTheAnalyticModelSaysSoAndOdeSlipsAway) {
     OmniModel model;
     CommandSpec spec;
   };
-  for (const Case& c : {Case{"3 m/s^2 ramps", steep, Drive45()}, Case{"fast turn", QuietOmni4(), Circle(1.9, 3.8)}}) {
+  for (const Case& c : {Case{"3 m/s^2 ramps", steep, testing::TestDrive45()}, Case{"fast turn", QuietOmni4(), Circle(1.9, 3.8)}}) {
     const GripRun analytic = DriveFor("analytic", c.model, c.spec, 3.0);
     const GripRun ode = DriveFor("ode", c.model, c.spec, 3.0);
     EXPECT_GT(analytic.grip.beyond, 0) << c.label;
     EXPECT_GT(analytic.grip.worst, 1.0) << c.label;
     const std::string text = DescribeGrip(analytic.grip);
     EXPECT_NE(text.find("not valid there"), std::string::npos) << text;
-    const auto [position, heading] = Apart(analytic.result, ode.result);
+    const auto [position, heading] = testing::LargestTruthDifference(analytic.result, ode.result);
     EXPECT_GT(std::max(position / 0.02, heading / (1.0 * kPi / 180)), 1.0)
         << c.label << ": the engines agree where the analytic model says they should part (" << position << " m, "
         << heading << " rad)";

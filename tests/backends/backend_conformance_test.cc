@@ -13,6 +13,7 @@
 #include "sim/newtonian_omni_backend.h"
 #include "scene/scene_run.h"
 #include "sim/omni_simulation.h"
+#include "backends/engine_drives.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -22,15 +23,6 @@ using testing::Omni4;
 
 class BackendConformance : public ::testing::TestWithParam<std::string> {};
 
-// A model without delay and noise, for physics checks.
-OmniModel Quiet(OmniModel m) {
-  m.command_delay_frames = 0;
-  m.vision_delay_frames = 0;
-  m.vision_noise_xy = 0;
-  m.vision_noise_theta = 0;
-  return m;
-}
-
 CommandSpec Steps(std::vector<CommandSpec::Segment> segments) {
   CommandSpec spec;
   spec.type = "sequence";
@@ -38,16 +30,8 @@ CommandSpec Steps(std::vector<CommandSpec::Segment> segments) {
   return spec;
 }
 
-SimulationResult Drive(const std::string& backend, const OmniModel& model, const CommandSpec& spec,
-                       double seconds, std::uint64_t seed = 1, double frame_rate = 30) {
-  FrameTiming timing;
-  timing.frame_rate = frame_rate;
-  timing.physics_substeps = DefaultPhysicsSubsteps(frame_rate);
-  std::vector<SimRobot> robots;
-  robots.push_back(SimRobot{"r", model, Pose2{0, 0, 0}, MakeCommandSource(spec, seed, 0, seconds, Pose2{})});
-  Simulation sim(std::move(robots), MakeOmniBackend(backend, {model}, FieldModel{}, timing), seed);
-  return sim.Run(static_cast<int>(std::lround(seconds * frame_rate)) + 1);
-}
+using testing::Drive;
+using testing::Quiet;
 
 TEST_P(BackendConformance, RestStaysAtRest) {
   const SimulationResult r = Drive(GetParam(), Quiet(Omni4()), Steps({{3.0, Twist2{}, false}}), 3.0);
@@ -83,25 +67,14 @@ TEST_P(BackendConformance, AgreesWithTheAnalyticModelOnSimpleDrives) {
     const char* label;
     CommandSpec spec;
   };
-  CommandSpec drive45;
-  drive45.type = "test_drive";
-  drive45.start = 0.2;
-  drive45.speed = 1.5;
-  drive45.direction_deg = 45;
-  drive45.drive_time = 1.5;
+  const CommandSpec drive45 = testing::TestDrive45();
   for (const Case& c : {Case{"forward", Steps({{2.0, {1.5, 0, 0}, false}})},
                         Case{"sideways", Steps({{2.0, {0, 1.5, 0}, false}})},
                         Case{"rotation", Steps({{2.0, {0, 0, 4.0}, false}})},
                         Case{"45 degree test drive", drive45}}) {
     const SimulationResult engine = Drive(GetParam(), model, c.spec, 3.0);
     const SimulationResult reference = Drive("analytic", model, c.spec, 3.0);
-    double max_position = 0, max_heading = 0;
-    for (std::size_t k = 0; k < engine.frames[0].size(); ++k) {
-      const Pose2& a = engine.frames[0][k].truth;
-      const Pose2& b = reference.frames[0][k].truth;
-      max_position = std::max(max_position, std::hypot(a.x - b.x, a.y - b.y));
-      max_heading = std::max(max_heading, std::abs(WrapAngle(a.theta - b.theta)));
-    }
+    const auto [max_position, max_heading] = testing::LargestTruthDifference(engine, reference);
     EXPECT_LT(max_position, 0.02) << c.label;
     EXPECT_LT(max_heading, 1.0 * kPi / 180) << c.label;
   }
