@@ -5,6 +5,7 @@
 
 #include "app/commands/commands.h"
 #include "robots/omni/omni_log.h"
+#include "scene/scene.h"
 
 namespace twinsim {
 namespace {
@@ -67,6 +68,19 @@ void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select) {
   cmd->add_option("--robot", select->robot,
                   "Omni log holding several robots: the robot id to read (column robot_id, robot or id)");
   cmd->add_option("--team", select->team, "Omni log holding several robots: the team to read (column team)");
+}
+
+void AddDrivingNoiseOption(CLI::App* cmd, std::string* value) {
+  cmd->add_option("--driving-noise", *value,
+                  "on: every robot slips by its model's driving noise (docs/models.md); off: none; model: as each "
+                  "model's driving_noise.simulated says")
+      ->check(CLI::IsMember({"on", "off", "model"}))
+      ->capture_default_str();
+}
+
+void ApplyDrivingNoiseOption(const std::string& value, Scene* scene) {
+  if (value == "model") return;
+  for (SceneRobot& robot : scene->robots) robot.model.driving_noise.simulated = value == "on";
 }
 
 }  // namespace twinsim

@@ -69,9 +69,7 @@ int Run(const RunOptions& options) {
     return RunArm(options);
   }
   Scene scene = LoadScene(options.scene);
-  if (options.driving_noise != "model") {
-    for (SceneRobot& robot : scene.robots) robot.model.driving_noise.simulated = options.driving_noise == "on";
-  }
+  ApplyDrivingNoiseOption(options.driving_noise, &scene);
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
   if (!options.commands.empty()) ReplayCommandLog(options.commands, &scene);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
@@ -140,11 +138,7 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--commands", options->commands,
                   "Replay a recorded match: every robot sends its rows of this file (commands.csv of\n"
                   "twinsim serve; docs/serve.md), for as many frames as it holds");
-  cmd->add_option("--driving-noise", options->driving_noise,
-                  "on: every robot slips by its model's driving noise (docs/models.md); off: none; model: as each "
-                  "model's driving_noise.simulated says")
-      ->check(CLI::IsMember({"on", "off", "model"}))
-      ->capture_default_str();
+  AddDrivingNoiseOption(cmd, &options->driving_noise);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Run(*options); });
 }

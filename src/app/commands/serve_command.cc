@@ -26,6 +26,7 @@ struct ServeCommandOptions {
   std::string out;        // empty: out/<scene name>
   long long seed = -1;    // -1: the scene's
   std::string teams;      // "blue,yellow"
+  std::string driving_noise = "model";  // on | off | model (commands.h)
   bool quiet = false;
   ServeOptions serve;
 };
@@ -33,6 +34,7 @@ struct ServeCommandOptions {
 int Serve(ServeCommandOptions& options) {
   Scene scene = LoadScene(options.scene);
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
+  ApplyDrivingNoiseOption(options.driving_noise, &scene);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
   if (!options.teams.empty()) {
@@ -136,6 +138,7 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--boundary", options->serve.boundary, "Metres between the walls and the field lines (default 0.3)");
   cmd->add_option("--frames", options->serve.max_frames, "Stop after this many frames (default: at Ctrl-C)")
       ->check(NonNegativeNumber());
+  AddDrivingNoiseOption(cmd, &options->driving_noise);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Serve(*options); });
 }
