@@ -1,5 +1,6 @@
 #include "analysis/omni_replay.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <iterator>
 #include <map>
@@ -8,6 +9,7 @@
 
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
+#include "core/rng.h"
 
 namespace twinsim {
 
@@ -24,6 +26,9 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
   };
   if (horizon < 0) return fail("--horizon must be 0 or more, got " + std::to_string(horizon));
   if (stride < 1) return fail("stride must be 1 or more, got " + std::to_string(stride));
+  if (samples < 0) return fail("--samples must be 0 or more, got " + std::to_string(samples));
+  if (samples > 0 && (state != "observer" || horizon < 1))
+    return fail("--samples draws from the observer's prediction K >= 1 frames ahead (--state observer, --horizon 1 or more)");
   return IsReplayState(state, why) && observer.IsValid(why);
 }
 
@@ -64,6 +69,21 @@ OmniPoseErrors PoseErrorsInRobotFrame(const OmniLog& log, const OmniReplayResult
 
 namespace {
 
+// N draws of a pose from a Gaussian of `mean` and covariance `c` (x, y, theta) into *out:
+// mean + L z with L L^T = c (a covariance the filter made slightly indefinite by rounding
+// is read as its positive part).
+void DrawSamples(const Pose2& mean, const Eigen::Matrix3d& c, int n, Rng* rng, std::vector<Pose2>* out) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (c + c.transpose()));
+  const Eigen::Matrix3d root =
+      eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  out->resize(static_cast<std::size_t>(n));
+  for (Pose2& p : *out) {
+    const Eigen::Vector3d z(rng->Gaussian(1.0), rng->Gaussian(1.0), rng->Gaussian(1.0));
+    const Eigen::Vector3d d = root * z;
+    p = Pose2{mean.x + d[0], mean.y + d[1], mean.theta + d[2]};
+  }
+}
+
 // The observer's replay (OmniReplayOptions::state "observer"): the filter runs along the
 // log; each prediction (or the stretch's free run) starts from its estimate.
 void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
@@ -73,6 +93,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
                     OmniReplayResult* out) {
   OmniObserver observer(model, std::move(backend), options.observer);
   const int k = options.horizon;
+  Rng draws = Rng::Derived(options.seed, 0x73616d70);  // "samp": the samples' own stream
   const int last_frame = static_cast<int>(command_at.size()) - 1;
   const bool stretch = stretch_first < stretch_last;
   auto planned = [&](int f, int until) {
@@ -127,11 +148,13 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     auto target = row_of_frame.find(f + k);
     const int since = f - start_frame - kWarmUpFrames;
     if (stretch || target == row_of_frame.end() || since < 0 || !options.OnStride(f, since)) continue;
-    Pose2 p = observer.PredictAhead(k, planned(f, f + k)).pose.back();
+    const OmniPrediction prediction = observer.PredictAhead(k, planned(f, f + k), options.samples > 0);
+    Pose2 p = prediction.pose.back();
     check(target->second, p);
     p.theta += unwrap_shift(row);
     out->pose[target->second] = p;
     out->predicted[target->second] = true;
+    if (options.samples > 0) DrawSamples(p, prediction.pose_covariance.back(), options.samples, &draws, &out->samples[target->second]);
   }
   if (progress) progress(last_frame, last_frame);
   out->grip = observer.backend().grip();
@@ -205,10 +228,17 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   const bool stretch = stretch_first < stretch_last;
   if (options.state == "observer" && backend->has_velocity_state()) {
     out.state = "observer";
+    if (options.samples > 0) out.samples.resize(n);
     ObserverReplay(model, log, options, progress, stretch_first, stretch_last, row_of_frame, command_at, check,
                    std::move(backend), &out);
+    // Rows not predicted hold their measured pose in every sample.
+    for (std::size_t i = 0; i < out.samples.size(); ++i)
+      if (out.samples[i].empty()) out.samples[i].assign(static_cast<std::size_t>(options.samples), out.pose[i]);
     return out;
   }
+  if (options.samples > 0)
+    throw InputError("--samples needs a physics backend with the observer's state (analytic, ode or bullet), not " +
+                     options.backend);
   out.state = "tracker";
 
   // The tracker starts at the first row at or after frame D that has a row before it.

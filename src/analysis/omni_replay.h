@@ -22,6 +22,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -53,6 +54,12 @@ struct OmniReplayOptions {
   // backend always uses the tracker.
   std::string state = "observer";
   OmniObserverOptions observer;
+  // With samples N > 0 (the observer's state, K >= 1), N draws of each predicted pose
+  // from the filter's prediction K frames ahead: its mean and covariance (the estimate's
+  // own uncertainty carried on, the driving noise and the model's process noise added;
+  // estimation/omni_observer.h), from a stream seeded by `seed`.
+  int samples = 0;
+  std::uint64_t seed = 1;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -76,6 +83,9 @@ struct OmniReplayResult {
   // (the tracking and every prediction): where a wheel needed more grip than it has, a
   // real robot slips and the analytic model does not (engines/omni_engine.h).
   GripCheck grip;
+  // With OmniReplayOptions::samples N: per row N poses, the draws where the row was
+  // predicted, else N copies of the held measured pose; empty otherwise.
+  std::vector<std::vector<Pose2>> samples;
   int num_predicted() const;
 };
 

@@ -31,6 +31,8 @@ struct ReplayOptions {
   std::string state = "observer";
   std::string predictor;
   double cutoff_hz = ArmLogOptions{}.cutoff_hz;
+  int samples = 0;             // omni: draws per row from the observer's prediction (0: the mean only)
+  long long seed = 1;          // their stream
   bool quiet = false;
   OmniLogSelector select;  // omni logs holding several robots
 };
@@ -38,6 +40,7 @@ struct ReplayOptions {
 // An arm: the commands the model needs for the logged motion (inverse dynamics with
 // friction, the effects inverted, the delays shifted: PredictArmCommands).
 int ReplayArm(const ReplayOptions& options) {
+  if (options.samples > 0) throw InputError("--samples is for omni robots: an arm replay writes the model's torques");
   const ArmModel model = LoadArmModel(options.model);
   ArmLogOptions log_options;
   log_options.cutoff_hz = options.cutoff_hz;
@@ -81,6 +84,11 @@ int Replay(const ReplayOptions& options) {
   replay.backend = options.backend;
   replay.horizon = options.horizon;
   replay.state = options.state;
+  replay.samples = options.samples;
+  replay.seed = static_cast<std::uint64_t>(options.seed);
+  if (std::string why; !replay.IsValid(&why)) throw InputError(why);
+  if (options.samples > 0 && options.backend == "learned")
+    throw InputError("--samples draws from the observer's prediction, which needs a physics backend (analytic, ode or bullet)");
   if (!options.predictor.empty())
     replay.backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
 
@@ -105,7 +113,11 @@ int Replay(const ReplayOptions& options) {
                  result.unseen_input_steps, 100 * kInputMargin);
   }
   OutputFiles files;
-  WritePoseCsv(options.out, result.t, result.pose);
+  if (options.samples > 0) {
+    WritePoseSamplesCsv(options.out, result.t, result.samples);
+  } else {
+    WritePoseCsv(options.out, result.t, result.pose);
+  }
   files.Add(options.out);
 
   if (!options.quiet) {
@@ -156,6 +168,11 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::IsMember({"observer", "tracker"}));
   cmd->add_option("--cutoff", options->cutoff_hz, "Hz, arms: low-pass cut-off for qd/qdd derived from q")
       ->capture_default_str();
+  cmd->add_option("--samples", options->samples,
+                  "Omni: N draws per row from the observer's prediction (its mean and covariance: the estimate's "
+                  "uncertainty, the driving noise and the process noise); writes t,sample,x,y,theta")
+      ->check(NonNegativeNumber());
+  cmd->add_option("--seed", options->seed, "The samples' random seed")->capture_default_str()->check(NonNegativeNumber());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Replay(*options); });

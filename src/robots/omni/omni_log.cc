@@ -286,6 +286,19 @@ void WritePoseCsv(const std::string& path, const std::vector<double>& t, const s
   WriteFileAtomically(path, out);
 }
 
+void WritePoseSamplesCsv(const std::string& path, const std::vector<double>& t,
+                         const std::vector<std::vector<Pose2>>& samples) {
+  std::string out = "t,sample,x,y,theta\n";
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    for (std::size_t k = 0; k < samples[i].size(); ++k) {
+      const Pose2& p = samples[i][k];
+      out += FormatCsvNumber(t[i]) + ',' + std::to_string(k) + ',' + FormatCsvNumber(p.x) + ',' + FormatCsvNumber(p.y) +
+             ',' + FormatCsvNumber(p.theta) + '\n';
+    }
+  }
+  WriteFileAtomically(path, out);
+}
+
 OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last) {
   OmniLog out;
   out.path = log.path;
