@@ -292,12 +292,12 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
 
 // The summary's fits, parameters and bounds: `plain` the plain refinement's problem,
 // `used` the one whose coordinates x are (plain, or the low-speed one), `floor` the start
-// with its frictions raised to their floors, `with` the low-speed fit (an empty model
-// when not tried). The check windows, iterations and decisions are the caller's.
+// with its frictions raised to their floors, `with` the low-speed fit (read only when
+// `stribeck_tried`). The check windows, iterations and decisions are the caller's.
 ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErrorProblem& used, const ArmModel& start,
                                 const ArmModel& floor, const ArmModel& fitted, const ArmModel& with,
                                 const std::vector<double>& x, const std::vector<int>& at_bound,
-                                const ArmOutputErrorOptions& options) {
+                                const ArmOutputErrorOptions& options, bool stribeck_tried) {
   const int n = start.dof();
   ArmOutputErrorSummary s;
   s.horizon = options.horizon;
@@ -320,8 +320,8 @@ ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErr
   }
   for (int k : at_bound)
     s.at_bound.push_back(std::string(CoordinateName(used.Kind(k))) + " of joint " + std::to_string(k % n + 1));
-  s.stribeck_tried = options.stribeck;
-  if (options.stribeck) {
+  s.stribeck_tried = stribeck_tried;
+  if (stribeck_tried) {
     s.breakaway.resize(n);
     s.stribeck_velocity.resize(n);
     for (int j = 0; j < n; ++j) {
@@ -354,13 +354,15 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   const bool kept = plain.CheckCost(check_after) < plain.CheckCost(check_before);
   const OutputErrorProblem* final_problem = &plain;
 
-  // Friction that holds at low speed: fitted from where the plain refinement ended, and
+  // Friction that holds at low speed: fitted from where a kept plain refinement ended (a
+  // refinement not kept returns the start, so a fit on top of it could not be used), and
   // kept where it simulates the held-out windows better still.
   std::unique_ptr<OutputErrorProblem> low_speed;
   const Eigen::VectorXd check_plain = check_after;
+  const bool stribeck_tried = options.stribeck && kept;
   bool stribeck_kept = false;
   ArmModel with;  // the low-speed fit, kept or not
-  if (options.stribeck) {
+  if (stribeck_tried) {
     low_speed = std::make_unique<OutputErrorProblem>(start, logs, options);
     std::vector<double> y = x;
     y.resize(static_cast<std::size_t>(low_speed->parameters()), 0.0);
@@ -368,7 +370,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     const int y_iterations = Solve(*low_speed, options, &y, &y_bound);
     with = low_speed->Apply(y.data());
     const Eigen::VectorXd check_with = low_speed->SimulationRmse(with, true);
-    stribeck_kept = kept && low_speed->CheckCost(check_with) < (1 - kLowSpeedGain) * plain.CheckCost(check_plain);
+    stribeck_kept = low_speed->CheckCost(check_with) < (1 - kLowSpeedGain) * plain.CheckCost(check_plain);
     if (stribeck_kept) {
       x = std::move(y);
       at_bound = std::move(y_bound);
@@ -380,13 +382,13 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   }
 
   if (summary) {
-    *summary = Summarise(plain, *final_problem, start, floor, fitted, with, x, at_bound, options);
+    *summary = Summarise(plain, *final_problem, start, floor, fitted, with, x, at_bound, options, stribeck_tried);
     summary->iterations = iterations;
     summary->kept = kept;
     summary->stribeck_kept = stribeck_kept;
     summary->check_before = check_before;
     summary->check_after = check_after;
-    summary->check_plain = options.stribeck ? check_plain : Eigen::VectorXd();
+    summary->check_plain = stribeck_tried ? check_plain : Eigen::VectorXd();
   }
   if (!kept) return start;
   return fitted;

@@ -45,8 +45,9 @@ struct ArmOutputErrorOptions {
   bool offsets = false;       // also refine each joint's torque_offset tau0
   // Also try friction that holds at low speed: per joint a break-away above the Coulomb
   // level that fades with speed (stribeck_friction: its s - c and vs), fitted after the
-  // plain refinement from where it ended, and kept only where it removes at least 10 %
-  // of the held-out windows' cost left by the plain refinement.
+  // plain refinement from where it ended (not tried when that refinement is not kept),
+  // and kept only where it removes at least 10 % of the held-out windows' cost left by
+  // the plain refinement.
   bool stribeck = false;
   double torque_weight = 1;   // the torque rows' weight beside the simulated rows' (0: none)
   std::string backend = "analytic";
@@ -66,7 +67,8 @@ struct ArmOutputErrorSummary {
   Eigen::VectorXd scale;                      // per joint: the link's inertial scale k found
   Eigen::VectorXd viscous_before, viscous_after, coulomb_before, coulomb_after;
   Eigen::VectorXd offset_before, offset_after;  // tau0 (unchanged when offsets are not refined)
-  // With ArmOutputErrorOptions::stribeck: the plain refinement's held-out RMSE, whether
+  // With ArmOutputErrorOptions::stribeck and a kept plain refinement (stribeck_tried):
+  // the plain refinement's held-out RMSE, whether
   // the low-speed friction beat it (and was returned), and its break-away s - c (N·m or
   // N) and speed vs (rad/s or m/s) per joint as fitted.
   bool stribeck_tried = false, stribeck_kept = false;

@@ -20,18 +20,6 @@ namespace {
 
 OmniModel QuietOmni4() { return testing::Quiet(testing::Omni4()); }
 
-struct GripRun {
-  SimulationResult result;
-  GripCheck grip;
-};
-
-GripRun DriveFor(const std::string& backend, const OmniModel& model, const CommandSpec& spec, double seconds) {
-  GripRun run;
-  run.result = testing::Drive(backend, model, spec, seconds);
-  run.grip = run.result.grip;
-  return run;
-}
-
 // A constant robot-frame command to drive at `speed` while turning at `omega`: the
 // velocity turns with the robot, a centripetal acceleration of speed x omega.
 CommandSpec Circle(double speed, double omega) {
@@ -46,15 +34,15 @@ TEST(AnalyticGrip, WithinItsGripTheAnalyticModelSaysSoAndAgreesWithOde) {
   // The shipped 2 m/s^2 ramps (docs/backends.md): the 45 degree test drive and a gentle
   // circle (1 m/s at 1.5 rad/s: 1.5 m/s^2 inward).
   for (const CommandSpec& spec : {testing::TestDrive45(), Circle(1.0, 1.5)}) {
-    const GripRun analytic = DriveFor("analytic", QuietOmni4(), spec, 3.0);
-    const GripRun ode = DriveFor("ode", QuietOmni4(), spec, 3.0);
+    const SimulationResult analytic = testing::Drive("analytic", QuietOmni4(), spec, 3.0);
+    const SimulationResult ode = testing::Drive("ode", QuietOmni4(), spec, 3.0);
     EXPECT_EQ(analytic.grip.steps, 91 * DefaultPhysicsSubsteps(30));  // every physics step of the 91 frames
     EXPECT_EQ(analytic.grip.beyond, 0) << spec.type << ": worst " << analytic.grip.worst;
     EXPECT_LT(analytic.grip.worst, 1.0);
     EXPECT_GT(analytic.grip.worst, 0.05);  // it is checked, and the drive asks for grip
     EXPECT_EQ(ode.grip.steps, 0);          // ODE slips: it does not check
     EXPECT_TRUE(DescribeGrip(analytic.grip).empty());
-    const auto [position, heading] = testing::LargestTruthDifference(analytic.result, ode.result);
+    const auto [position, heading] = testing::LargestTruthDifference(analytic, ode);
     EXPECT_LT(position, 0.02) << spec.type;
     EXPECT_LT(heading, 1.0 * kPi / 180) << spec.type;
   }
@@ -73,13 +61,13 @@ TEST(AnalyticGrip, BeyondItsGripTheAnalyticModelSaysSoAndOdeSlipsAway) {
     CommandSpec spec;
   };
   for (const Case& c : {Case{"3 m/s^2 ramps", steep, testing::TestDrive45()}, Case{"fast turn", QuietOmni4(), Circle(1.9, 3.8)}}) {
-    const GripRun analytic = DriveFor("analytic", c.model, c.spec, 3.0);
-    const GripRun ode = DriveFor("ode", c.model, c.spec, 3.0);
+    const SimulationResult analytic = testing::Drive("analytic", c.model, c.spec, 3.0);
+    const SimulationResult ode = testing::Drive("ode", c.model, c.spec, 3.0);
     EXPECT_GT(analytic.grip.beyond, 0) << c.label;
     EXPECT_GT(analytic.grip.worst, 1.0) << c.label;
     const std::string text = DescribeGrip(analytic.grip);
     EXPECT_NE(text.find("not valid there"), std::string::npos) << text;
-    const auto [position, heading] = testing::LargestTruthDifference(analytic.result, ode.result);
+    const auto [position, heading] = testing::LargestTruthDifference(analytic, ode);
     EXPECT_GT(std::max(position / 0.02, heading / (1.0 * kPi / 180)), 1.0)
         << c.label << ": the engines agree where the analytic model says they should part (" << position << " m, "
         << heading << " rad)";
