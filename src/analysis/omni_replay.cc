@@ -29,6 +29,10 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
   if (samples < 0) return fail("--samples must be 0 or more, got " + std::to_string(samples));
   if (samples > 0 && (state != "observer" || horizon < 1))
     return fail("--samples draws from the observer's prediction K >= 1 frames ahead (--state observer, --horizon 1 or more)");
+  if ((covariance || !also.empty()) && (state != "observer" || horizon < 1))
+    return fail("a prediction's covariance and shorter horizons come from the observer's prediction K >= 1 frames ahead");
+  for (int h : also)
+    if (h < 1 || h >= horizon) return fail("a shorter horizon must lie in 1.." + std::to_string(horizon - 1) + ", got " + std::to_string(h));
   return IsReplayState(state, why) && observer.IsValid(why);
 }
 
@@ -93,6 +97,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
                     OmniReplayResult* out) {
   OmniObserver observer(model, std::move(backend), options.observer);
   const int k = options.horizon;
+  const bool with_covariance = options.covariance || options.samples > 0;
   Rng draws = Rng::Derived(options.seed, 0x73616d70);  // "samp": the samples' own stream
   const int last_frame = static_cast<int>(command_at.size()) - 1;
   const bool stretch = stretch_first < stretch_last;
@@ -145,17 +150,36 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
       return;
     }
     if (!observer.started()) continue;
-    auto target = row_of_frame.find(f + k);
     const int since = f - start_frame - kWarmUpFrames;
-    if (stretch || target == row_of_frame.end() || since < 0 || !options.OnStride(f, since)) continue;
-    const OmniPrediction prediction = observer.PredictAhead(k, planned(f, f + k), options.samples > 0);
-    Pose2 p = prediction.pose.back();
-    check(target->second, p);
-    p.theta += unwrap_shift(row);
-    out->pose[target->second] = p;
-    out->predicted[target->second] = true;
-    if (options.samples > 0) DrawSamples(p, prediction.pose_covariance.back(), options.samples, &draws, &out->samples[target->second]);
+    if (stretch || since < 0 || !options.OnStride(f, since)) continue;
+    // The rows this start predicts: K frames on, and each shorter horizon's.
+    auto target = row_of_frame.find(f + k);
+    bool any = target != row_of_frame.end();
+    for (int h : options.also) any = any || row_of_frame.count(f + h) > 0;
+    if (!any) continue;
+    const OmniPrediction prediction = observer.PredictAhead(k, planned(f, f + k), with_covariance);
+    const double shift = unwrap_shift(row);
+    // Row `at` of `result` from the prediction's frame j (1..K).
+    auto put = [&](OmniReplayResult* result, std::size_t at, int j) {
+      Pose2 p = prediction.pose[static_cast<std::size_t>(j - 1)];
+      check(at, p);
+      p.theta += shift;
+      result->pose[at] = p;
+      result->predicted[at] = true;
+      if (with_covariance) result->covariance[at] = prediction.pose_covariance[static_cast<std::size_t>(j - 1)];
+    };
+    for (std::size_t a = 0; a < options.also.size(); ++a) {
+      auto at = row_of_frame.find(f + options.also[a]);
+      if (at != row_of_frame.end()) put(&out->also[a], at->second, options.also[a]);
+    }
+    if (target == row_of_frame.end()) continue;
+    put(out, target->second, k);
+    if (options.samples > 0)
+      DrawSamples(out->pose[target->second], prediction.pose_covariance.back(), options.samples, &draws,
+                  &out->samples[target->second]);
   }
+  out->measurement_covariance = observer.measurement_covariance();
+  for (OmniReplayResult& a : out->also) a.measurement_covariance = out->measurement_covariance;
   if (progress) progress(last_frame, last_frame);
   out->grip = observer.backend().grip();
 }
@@ -229,6 +253,13 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   if (options.state == "observer" && backend->has_velocity_state()) {
     out.state = "observer";
     if (options.samples > 0) out.samples.resize(n);
+    if (options.covariance || options.samples > 0) out.covariance.assign(n, Eigen::Matrix3d::Zero());
+    for (std::size_t a = 0; a < options.also.size(); ++a) {
+      out.also.push_back(HeldMeasurements(log));
+      out.also.back().delay_frames = delay;
+      out.also.back().state = "observer";
+      if (options.covariance || options.samples > 0) out.also.back().covariance.assign(n, Eigen::Matrix3d::Zero());
+    }
     ObserverReplay(model, log, options, progress, stretch_first, stretch_last, row_of_frame, command_at, check,
                    std::move(backend), &out);
     // Rows not predicted hold their measured pose in every sample.
@@ -238,6 +269,9 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   }
   if (options.samples > 0)
     throw InputError("--samples needs a physics backend with the observer's state (analytic, ode or bullet), not " +
+                     options.backend);
+  if (options.covariance || !options.also.empty())
+    throw InputError("a prediction's covariance needs a physics backend with the observer's state (analytic, ode or bullet), not " +
                      options.backend);
   out.state = "tracker";
 

@@ -60,6 +60,12 @@ struct OmniReplayOptions {
   // estimation/omni_observer.h), from a stream seeded by `seed`.
   int samples = 0;
   std::uint64_t seed = 1;
+  // With covariance (the observer's state, K >= 1): each predicted row's pose covariance
+  // too (OmniReplayResult::covariance), the prediction's as the samples draw from it.
+  bool covariance = false;
+  // Shorter horizons (each 1..K-1) predicted from the same start frames: one K-frame
+  // prediction gives them all (OmniReplayResult::also, in this order). Observer only.
+  std::vector<int> also;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -86,6 +92,15 @@ struct OmniReplayResult {
   // With OmniReplayOptions::samples N: per row N poses, the draws where the row was
   // predicted, else N copies of the held measured pose; empty otherwise.
   std::vector<std::vector<Pose2>> samples;
+  // With OmniReplayOptions::covariance or samples: per row the covariance of the
+  // predicted pose (x, y, theta), zero where the measured pose was held; and the camera
+  // pose's own covariance as the filter takes it (a measurement's distribution is the
+  // prediction's plus this).
+  std::vector<Eigen::Matrix3d> covariance;
+  Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
+  // With OmniReplayOptions::also: one result per shorter horizon, in its order (the same
+  // fields; their own `also` empty).
+  std::vector<OmniReplayResult> also;
   int num_predicted() const;
 };
 

@@ -21,7 +21,7 @@ constexpr double kFrameMatch = 0.25;
 // Times closer than this are the same (CSV files keep 1e-9 s).
 constexpr double kTimeNoise = 1e-9;  // s
 
-constexpr std::uint32_t kWhite = 0xffffffff;
+constexpr std::uint32_t kWhitePixel = 0xffffffff;
 constexpr std::uint32_t kGoldenGrey = 0x555555ff;
 constexpr std::uint32_t kCandidateBlue = 0x0072b2ff;    // Okabe-Ito blue
 constexpr std::uint32_t kToleranceOrange = 0xe69f00ff;  // Okabe-Ito orange
@@ -315,7 +315,7 @@ RgbaImage DrawMovedPaths(const OmniLog& golden, const OmniLog& candidate, const 
 
   // Both paths from above in a panel centred on (cx, cy) m at `scale` px/m, y up.
   auto draw_paths = [&](int width, int height, double cx, double cy, double scale) {
-    RgbaImage panel(width, height, kWhite);
+    RgbaImage panel(width, height, kWhitePixel);
     auto px = [&](double x) { return width / 2.0 + (x - cx) * scale; };
     auto py = [&](double y) { return height / 2.0 - (y - cy) * scale; };
     auto draw = [&](const OmniLog& log, int radius, std::uint32_t colour) {
@@ -341,7 +341,7 @@ RgbaImage DrawMovedPaths(const OmniLog& golden, const OmniLog& candidate, const 
     return panel;
   };
 
-  RgbaImage image(kWidth, kPathHeight + kStripHeight, kWhite);
+  RgbaImage image(kWidth, kPathHeight + kStripHeight, kWhitePixel);
   double min_x = 1e300, max_x = -1e300, min_y = 1e300, max_y = -1e300;
   for (const OmniLog* log : {&golden, &candidate})
     for (const auto& r : log->rows) {

@@ -733,6 +733,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     identify.held_out = options.held_out;
     identify.block_seconds = block;
     identify.threads = options.threads;
+    identify.noise = false;  // the diagnosis scores the mean prediction; the filter's tuning is the fit's
     IdentifyOmni(model, logs, {}, identify, &start_model);
     start_model.name = model.name;
     start_model.source_path = model.source_path;

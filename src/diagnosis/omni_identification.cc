@@ -93,6 +93,7 @@ double HoldPreference(int p) {
 }
 
 constexpr double kPieceSeconds = 10;   // s, a log is replayed in pieces this long ...
+constexpr int kBlocksPerLog = 1 << 20;  // block numbers: a log's index times this plus its block's
 constexpr double kLeadInSeconds = 3;   // s, ... each after a lead-in this long, not scored
 // A structure of the lag (field frame, braking) is kept where it predicts the held-out
 // blocks this much better at the lookahead (a share of their RMSE) ...
@@ -165,8 +166,11 @@ struct Segment {
   OmniLog log;
   std::size_t score_from = 0;  // first scored row
   std::vector<char> held;      // per row: in a held-out block
+  std::vector<int> block;      // per row: its block's number, unique across logs
   bool validation = false;     // a wholly held-out log
 };
+
+OmniBlockedStretch View(const Segment& s) { return {&s.log, s.score_from, &s.held, &s.block, s.validation}; }
 
 // The report's gap of summed errors.
 OmniGap ToGap(const HorizonSum& sum, const std::string& name) {
@@ -210,7 +214,10 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
       Segment s;
       s.log = SliceOmniLog(log, first, last);
       s.score_from = score - first;
-      for (std::size_t i = first; i < last; ++i) s.held.push_back(InHeldOutBlock(t[i], block, options.held_out));
+      for (std::size_t i = first; i < last; ++i) {
+        s.held.push_back(InHeldOutBlock(t[i], block, options.held_out));
+        s.block.push_back(static_cast<int>(&log - logs.data()) * kBlocksPerLog + DiagnosisBlockIndex(t[i], block));
+      }
       if (s.log.num_measured() >= 2 && last - first > 2) segments.push_back(std::move(s));
     }
   }
@@ -218,6 +225,9 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
     Segment s;
     s.log = log;
     s.held.assign(log.rows.size(), 1);
+    for (const OmniLogRow& r : log.rows)
+      s.block.push_back(static_cast<int>(logs.size() + static_cast<std::size_t>(&log - validation.data())) * kBlocksPerLog +
+                        DiagnosisBlockIndex(r.t - log.rows.front().t, block));
     s.validation = true;
     segments.push_back(std::move(s));
   }
@@ -229,11 +239,7 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
 // given kind, after the piece's lead-in: a fit row's prediction never starts from a
 // tracker corrected to a held-out measurement, and a held-out row's never from a fit one.
 bool ScoredRow(const Segment& s, std::size_t i, bool held_out, int horizon) {
-  if (i < s.score_from || static_cast<bool>(s.held[i]) != held_out) return false;
-  const int start = s.log.FrameIndex(i) - horizon;
-  std::size_t j = i;
-  while (j > 0 && s.log.FrameIndex(j) > start) --j;
-  return s.log.FrameIndex(j) == start && j >= s.score_from && static_cast<bool>(s.held[j]) == held_out;
+  return ScoredInBlocks(View(s), i, held_out, horizon);
 }
 
 // Sums the errors of the held-out rows of `segments` (validation logs or the others)
@@ -759,7 +765,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   if (!options.IsValid(&why)) throw InputError(why);
   if (logs.empty()) throw InputError("identify needs at least one log");
   auto say = [&](int step, const std::string& what) {
-    if (progress) progress(step, 7, what);
+    if (progress) progress(step, 8, what);
   };
   const double period = logs.front().frame_period;
   for (const auto* set : {&logs, &validation}) {
@@ -990,7 +996,23 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     const std::vector<double>& sorted = p == kVMax ? speeds : turns;
     if (v[static_cast<std::size_t>(p)] > 0 && v[static_cast<std::size_t>(p)] >= sorted.back()) v[static_cast<std::size_t>(p)] = 0;
   }
-  const OmniModel model = problem.Build(v, false);
+  OmniModel model = problem.Build(v, false);
+  // The driving noise for predictions ahead and the simulation, then its calibration.
+  std::vector<OmniBlockedStretch> views;
+  for (const Segment& s : segments) views.push_back(View(s));
+  OmniNoiseOptions noise_options;
+  noise_options.backend = options.backend;
+  noise_options.max_delay = options.max_delay;
+  noise_options.threads = options.threads;
+  if (options.state == "observer" && options.noise) {
+    say(6, "driving noise");
+    report.noise = IdentifyDrivingNoise(model, views, noise_options);
+    report.noise_identified = true;
+    if (report.noise.kept) model = report.noise.model;
+    // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
+    model.driving_noise.simulated = true;
+  }
+  if (options.state == "observer") report.calibration = CalibrateOnBlocks(model, views, noise_options);
   if (identified) *identified = model;
 
   // Parameters for the report, the delay first.
@@ -1029,6 +1051,28 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
     }
     report.parameters.push_back(q);
   }
+  // The noise identified for predictions ahead replaces the fit's (the filter's tuning).
+  if (report.noise.kept) {
+    const std::map<std::string, std::string> replaced = {{"forward.slip", "forward"},
+                                                         {"sideways.slip", "sideways"},
+                                                         {"turn.slip", "turn"},
+                                                         {"slip.correlation_time", "correlation_time"},
+                                                         {"process_noise.scale", "process_noise_scale"}};
+    for (IdentifiedParameter& q : report.parameters) {
+      auto it = replaced.find(q.name);
+      if (it == replaced.end()) continue;
+      for (const OmniNoiseParameter& n : report.noise.parameters) {
+        if (n.name != it->second) continue;
+        q.note = "identified for predictions ahead (the driving noise's likelihood at 4, 16 and 63 frames); the "
+                 "4-frame fit gave " + FormatParameter(q.value);
+        q.value = n.name == "process_noise_scale" ? q.value * n.value : n.value;
+        q.standard_error = n.name == "process_noise_scale" ? q.value / n.value * n.standard_error : n.standard_error;
+        q.estimated = true;
+        q.held = !std::isfinite(q.standard_error);
+        if (q.held) q.note += "; held at this value: the likelihood is flat along it with others (no standard error)";
+      }
+    }
+  }
   bool any_undetermined = false;
   for (const auto& q : report.parameters) {
     any_undetermined = any_undetermined || (q.estimated && !q.held && !std::isfinite(q.standard_error));
@@ -1045,7 +1089,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   }
 
   // 7. Gaps on the held-out blocks and the validation logs.
-  say(6, "held-out gaps");
+  say(7, "held-out gaps");
   auto gaps = [&](bool validation_only) {
     std::vector<OmniGap> out;
     const double r = nominal.chassis_radius;
@@ -1126,7 +1170,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   }
   report.evaluations = problem.evaluations();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  say(7, "done");
+  say(8, "done");
   return report;
 }
 

@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "diagnosis/omni_noise_identification.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
@@ -52,6 +53,9 @@ struct OmniIdentificationOptions {
   int max_iterations = 20;           // Ceres iterations per solve
   double max_delay = 0.35;           // s, the longest total delay searched
   int threads = 0;                   // 0 = one per core; results do not depend on it
+  // With the observer's state: the driving noise identified anew for predictions ahead
+  // (omni_noise_identification.h), kept where the held-out blocks score it better.
+  bool noise = true;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -133,6 +137,12 @@ struct OmniIdentificationReport {
   std::vector<double> delay_profile_s, delay_profile_rms;  // s, m: the fit error against the delay
   int solver_iterations = 0;
   int evaluations = 0;        // replays of the fit blocks
+  // The driving noise for predictions ahead (with the observer's state and options.noise).
+  bool noise_identified = false;
+  OmniNoiseIdentification noise;
+  // The identified model's predictive distribution on the held-out blocks (or the
+  // validation logs) at 4, 16 and 63 frames (analysis/omni_calibration.h).
+  std::vector<OmniCalibration> calibration;
   std::vector<std::string> notes;
   std::vector<OmniIdentificationSeries> series;
   double seconds = 0;

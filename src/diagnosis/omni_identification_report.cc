@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "analysis/omni_calibration_report.h"
 #include "analysis/omni_horizons.h"
 #include "diagnosis/omni_identification.h"
 #include "io/html_text.h"
@@ -39,6 +40,52 @@ ordered_json GapsJson(const std::vector<OmniGap>& gaps) {
 }
 
 // "identified 6.1 mm: 0.52x the constant-velocity extrapolation's 11.8 mm"
+ordered_json NoiseJson(const OmniIdentificationReport& r) {
+  const OmniNoiseIdentification& n = r.noise;
+  ordered_json j;
+  j["identified"] = r.noise_identified;
+  if (!r.noise_identified) return j;
+  j["kept"] = n.kept;
+  j["simulated"] = true;  // the identified model draws it in run and serve
+  j["fit_log_score_before"] = Finite(n.fit_before);
+  j["fit_log_score_after"] = Finite(n.fit_after);
+  j["held_out_log_score_before"] = Finite(n.held_out_before);
+  j["held_out_log_score_after"] = Finite(n.held_out_after);
+  j["fit_rows"] = n.fit_rows;
+  j["held_out_rows"] = n.held_out_rows;
+  j["evaluations"] = n.evaluations;
+  ordered_json params = ordered_json::array();
+  for (const OmniNoiseParameter& p : n.parameters) {
+    params.push_back({{"name", p.name}, {"unit", p.unit}, {"start", p.start}, {"value", p.value},
+                      {"standard_error", Finite(p.standard_error)}});
+  }
+  j["parameters"] = params;
+  if (!n.note.empty()) j["note"] = n.note;
+  if (!n.growth_note.empty()) j["growth_note"] = n.growth_note;
+  return j;
+}
+
+ordered_json CalibrationJson(const std::vector<OmniCalibration>& calibration) {
+  ordered_json out = ordered_json::array();
+  for (const OmniCalibration& c : calibration) {
+    out.push_back({{"frames", c.frames},
+                   {"seconds", c.seconds},
+                   {"rows", c.rows},
+                   {"position_50", c.position_50},
+                   {"position_90", c.position_90},
+                   {"heading_50", c.heading_50},
+                   {"heading_90", c.heading_90},
+                   {"energy_score", c.energy_score},
+                   {"constant_spread_energy_score", c.baseline_energy_score},
+                   {"constant_spread", c.baseline_spread},
+                   {"energy_gain", c.EnergyGain()},
+                   {"log_score", Finite(c.log_score)},
+                   {"pit_position", c.position_pit},
+                   {"pit_heading", c.heading_pit}});
+  }
+  return out;
+}
+
 std::string Verdict(const OmniIdentificationReport& r) {
   const std::vector<OmniGap>& gaps = r.validation.empty() ? r.held_out : r.validation;
   const OmniGap* n = r.Gap(gaps, "nominal model");
@@ -123,6 +170,11 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
     j["horizons_on"] = r.horizons_on;
     j["horizons"] = hs;
   }
+  j["driving_noise"] = NoiseJson(r);
+  if (!r.calibration.empty()) {
+    j["calibration_on"] = r.validation.empty() ? "held-out blocks" : "validation logs";
+    j["calibration"] = CalibrationJson(r.calibration);
+  }
   j["noise_floor"] = r.noise_floor;
   j["collinearity_index"] = Finite(r.collinearity);
   j["fit_rms_nominal"] = r.fit_cost_nominal;
@@ -191,6 +243,19 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   if (!r.horizons.empty()) {
     s << "every horizon (" << r.horizons_on << "), position error [mm], * best:\n" << FormatHorizonTable(TableOf(r));
   }
+  if (r.noise_identified) {
+    s << "driving noise for predictions ahead (" << (r.noise.kept ? "kept" : "not kept") << "; start -> identified):\n";
+    for (const OmniNoiseParameter& p : r.noise.parameters) {
+      std::snprintf(line, sizeof line, "  %-22s %12s -> %12s +- %-10s %s\n", p.name.c_str(), Number(p.start).c_str(),
+                    Number(p.value).c_str(), Number(p.standard_error, "%.2g").c_str(), p.unit.c_str());
+      s << line;
+    }
+  }
+  if (!r.calibration.empty()) {
+    s << "calibration of the predictions (" << (r.validation.empty() ? "held-out blocks" : "validation logs")
+      << "; energy score against a constant spread):\n"
+      << FormatCalibrationTable(r.calibration);
+  }
   s << Verdict(r) << "\n";
   for (const auto& n : r.notes) s << "note: " << n << "\n";
   return s.str();
@@ -246,6 +311,32 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   }
   h << "</table>\n";
 
+  if (r.noise_identified) {
+    h << "<h2>Driving noise</h2>\n<p>How far and how long the robot wanders from what its wheels do, with the "
+         "camera's noise and the model's process noise: identified by the likelihood of the predictions 4, 16 and 63 "
+         "frames ahead on the fit blocks, "
+      << (r.noise.kept ? "kept: the held-out blocks score it better than the prediction-error fit's (log score "
+                       : "not kept: the held-out blocks score it worse than the prediction-error fit's (log score ")
+      << Number(r.noise.held_out_before) << " &rarr; " << Number(r.noise.held_out_after)
+      << " nats per row). The identified model draws its noise in <code>run</code> and <code>serve</code> "
+         "(<code>driving_noise.simulated</code>; <code>--driving-noise off</code> turns it off)."
+      << "</p>\n<table><tr><th>parameter</th><th>start</th><th>identified</th><th>std. error</th><th>unit</th></tr>\n";
+    for (const OmniNoiseParameter& p : r.noise.parameters) {
+      h << "<tr><td>" << HtmlEscape(p.name) << "</td><td class=n>" << Number(p.start) << "</td><td class=n>"
+        << Number(p.value) << "</td><td class=n>" << Number(p.standard_error, "%.2g") << "</td><td>"
+        << HtmlEscape(p.unit) << "</td></tr>\n";
+    }
+    h << "</table>\n";
+    if (!r.noise.growth_note.empty()) h << "<p class=\"small\">" << HtmlEscape(r.noise.growth_note) << "</p>\n";
+  }
+  if (!r.calibration.empty()) {
+    h << "<h2>Calibration</h2>\n<p>The identified model's predictive distribution on the "
+      << (r.validation.empty() ? "held-out blocks" : "validation logs")
+      << ": the share of measured positions inside its central 50 % and 90 % ellipses (and of headings inside the "
+         "intervals), which a calibrated model holds at 50 % and 90 %; the energy score of the position beside the "
+         "same mean with one round spread per horizon (fitted on the fit blocks), lower is better.</p>\n"
+      << FormatCalibrationHtml(r.calibration, renderer);
+  }
   if (!r.delay_profile_s.empty()) {
     SeriesPlot plot;
     plot.title = "Fit error against the total delay (model's response, before the fit)";

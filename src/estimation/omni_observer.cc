@@ -79,7 +79,7 @@ ObserverMatrix OmniObserver::InitialCovariance() const {
   return p;
 }
 
-ObserverMatrix OmniObserver::ProcessNoise(double theta) const {
+ObserverMatrix OmniObserver::ProcessNoise(double theta, double speed, double acceleration) const {
   const double c = std::cos(theta), s = std::sin(theta);
   const Eigen::Vector3d along[3] = {{c, s, 0}, {-s, c, 0}, {0, 0, 1}};
   ObserverMatrix q = ObserverMatrix::Zero();
@@ -91,7 +91,7 @@ ObserverMatrix OmniObserver::ProcessNoise(double theta) const {
     q.block<3, 1>(0, 3 + a) += qa * dt2 * g;
     q.block<1, 3>(3 + a, 0) += qa * dt2 * g.transpose();
     q(3 + a, 3 + a) += qa * dt;
-    q(6 + a, 6 + a) = std::pow(model_.driving_noise.sd[static_cast<std::size_t>(a)], 2) * (1 - slip_decay_ * slip_decay_);
+    q(6 + a, 6 + a) = std::pow(model_.driving_noise.Spread(a, speed, acceleration), 2) * (1 - slip_decay_ * slip_decay_);
   }
   return q;
 }
@@ -105,6 +105,7 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   backend_->StepFrame({acting});
   Pose2 base_pose = backend_->pose(0);  // the model's own step, for F
   Twist2 base_velocity = backend_->velocity(0);
+  const double acceleration = std::hypot(base_velocity.vx - v0.vx, base_velocity.vy - v0.vy) / dt_;  // m/s^2
   // The slip moves the body on, unseen by the wheels; then it decays.
   const double c = std::cos(p0.theta), sn = std::sin(p0.theta);
   Pose2 moved = base_pose;
@@ -172,7 +173,7 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   f(1, 7) = dt_ * c;
   f(2, 8) = dt_;
   for (int a = 0; a < 3; ++a) f(6 + a, 6 + a) = slip_decay_;
-  p_ = f * p_ * f.transpose() + ProcessNoise(p0.theta);
+  p_ = f * p_ * f.transpose() + ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration);
   p_ = 0.5 * (p_ + p_.transpose()).eval();
 }
 

@@ -132,6 +132,8 @@ class OmniObserver {
   const OmniModel& model() const { return model_; }
   OmniEstimate Estimate() const;
   const OmniInnovationStats& innovations() const { return stats_; }
+  // The covariance of a camera pose (x, y, theta) as the filter takes it.
+  const Eigen::Matrix3d& measurement_covariance() const { return r_; }
 
   // The poses of the next k frames from the estimate, the filter unchanged: the commands
   // already sent act first, then `planned` (the commands to be sent from the next frame
@@ -145,7 +147,9 @@ class OmniObserver {
  private:
   // One frame under the command acting now; with `jacobian`, P is propagated too.
   void Step(const Twist2& acting, bool jacobian);
-  ObserverMatrix ProcessNoise(double theta) const;
+  // Q of one frame at heading theta (rad), the model's translational speed (m/s) and
+  // acceleration over the frame (m/s^2).
+  ObserverMatrix ProcessNoise(double theta, double speed, double acceleration) const;
   ObserverMatrix InitialCovariance() const;
   void Restart(const Pose2& pose, const Twist2& velocity);
   Twist2 Acting(int ahead, const std::vector<Twist2>& planned) const;

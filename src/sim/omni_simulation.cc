@@ -255,11 +255,13 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
   if (ball_) {
     for (int i = 0; i < num_robots(); ++i) before.push_back(ball_world_pose(i));
   }
+  std::vector<Twist2> velocity_before;  // the wheels' own, for the driving noise's spread
+  for (int i = 0; i < num_robots(); ++i) velocity_before.push_back(backend_->velocity(i));
   backend_->StepFrame(applied);
   // Parked robots are put back exactly where they were, at rest.
   for (int i = 0; i < num_robots(); ++i)
     if (!present(i)) backend_->Reset(i, ParkedPose(i), Twist2{});
-  Slip();
+  Slip(velocity_before);
   if (ball_) {
     std::vector<Pose2> after;
     std::vector<BallCommand> acting(robots_.size());
@@ -275,7 +277,7 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
   ++state_.frame;
 }
 
-void Simulation::Slip() {
+void Simulation::Slip(const std::vector<Twist2>& velocity_before) {
   const double dt = backend_->timing().frame_dt();
   for (int i = 0; i < num_robots(); ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -283,9 +285,15 @@ void Simulation::Slip() {
     if (!noise.simulated || !present(i) || state_.pulls[k]) continue;
     // The Gauss-Markov process sampled exactly over a frame: s <- a s + sqrt(1 - a^2) sd w,
     // its spread stationary at sd; the body moves on by the slip, the wheels unaware.
+    // Its spread at the speed and acceleration of the robot's own (wheel) velocity.
     const double a = std::exp(-dt / noise.correlation_time);
+    const Twist2 v = backend_->velocity(i), v0 = velocity_before[k];
+    const double speed = std::hypot(v.vx, v.vy);
+    const double acceleration = std::hypot(v.vx - v0.vx, v.vy - v0.vy) / dt;
     std::array<double, 3>& s = state_.slip[k];
-    for (std::size_t c = 0; c < 3; ++c) s[c] = a * s[c] + std::sqrt(1 - a * a) * state_.drive_rng.Gaussian(noise.sd[c]);
+    for (std::size_t c = 0; c < 3; ++c) {
+      s[c] = a * s[c] + std::sqrt(1 - a * a) * state_.drive_rng.Gaussian(noise.Spread(static_cast<int>(c), speed, acceleration));
+    }
     const Pose2 pose = backend_->pose(i);
     const double cos_t = std::cos(pose.theta), sin_t = std::sin(pose.theta);
     backend_->MoveBody(i, Pose2{pose.x + (cos_t * s[0] - sin_t * s[1]) * dt, pose.y + (sin_t * s[0] + cos_t * s[1]) * dt,

@@ -242,8 +242,9 @@ class Simulation {
   std::optional<Twist2> PullCommand(int robot);
   // Driving noise: each present robot whose model simulates it, not being pulled, is
   // moved on by its slip over the frame (robot frame; the backend's velocity untouched,
-  // as the wheels and the controller never see it).
-  void Slip();
+  // as the wheels and the controller never see it); its spread at the robot's speed and
+  // its acceleration since `velocity_before` (per robot, before the frame's step).
+  void Slip(const std::vector<Twist2>& velocity_before);
 
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;

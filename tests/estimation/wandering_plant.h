@@ -24,6 +24,11 @@ struct WanderingPlant {
   std::array<double, 3> lag{0.08, 0.1, 0.06};    // s, first-order time constants per axis
   std::array<double, 3> noise_sd{0.12, 0.15, 1.0};  // m/s, m/s, rad/s: the driving noise's stationary spread
   double noise_correlation = 0.2;                // s, its correlation time
+  // A spread that grows with speed: noise_sd times sqrt(f^2 + (1 - f^2) min(1, (v / V)^2)),
+  // f = noise_still (1: the same at every speed), V = noise_full_speed (m/s), v the
+  // lagged velocity's translational speed: f of it standing still, all of it from V on.
+  double noise_still = 1;
+  double noise_full_speed = 1;                   // m/s
   double camera_xy = 0.001;                      // m
   double camera_theta = 0.01;                    // rad
   double drop = 0.1;                             // share of frames the camera loses

@@ -82,13 +82,16 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
       for (int a = 0; a < 3; ++a) targets[static_cast<std::size_t>(a)] = plant.gain[static_cast<std::size_t>(a)] * acting[static_cast<std::size_t>(a)];
       targets[2] += plant.turn_per_sideways * acting[1];
       if (plant.turn_limit > 0) targets[2] = std::clamp(targets[2], -plant.turn_limit, plant.turn_limit);
+      const double speed = std::min(1.0, std::hypot(v[0], v[1]) / plant.noise_full_speed);
+      const double f2 = plant.noise_still * plant.noise_still;
+      const double grow = std::sqrt(f2 + (1 - f2) * speed * speed);
       for (int a = 0; a < 3; ++a) {
         const double target = targets[static_cast<std::size_t>(a)];
         double& va = v[static_cast<std::size_t>(a)];
         const double tau = plant.lag[static_cast<std::size_t>(a)] * ((target - va) * va < 0 ? plant.braking : 1);
         va += (1 - std::exp(-dt / tau)) * (target - va);
         d[static_cast<std::size_t>(a)] = decay * d[static_cast<std::size_t>(a)] +
-                                         plant.noise_sd[static_cast<std::size_t>(a)] * std::sqrt(1 - decay * decay) * normal();
+                                         grow * plant.noise_sd[static_cast<std::size_t>(a)] * std::sqrt(1 - decay * decay) * normal();
       }
       const double bx = v[0] + d[0], by = v[1] + d[1], w = v[2] + d[2];
       x += dt * (std::cos(th) * bx - std::sin(th) * by);

@@ -76,6 +76,41 @@ TEST(DrivingNoise, AStandingRobotSlipsWithTheModelsSpreadAndCorrelationOnEveryBa
   }
 }
 
+// A spread that grows with speed (driving_noise.per_speed): a robot circling at about
+// 0.8 m/s slips by sd (1 + per_speed v) on each axis, the velocity its wheels keep being
+// steady, so the body velocity's spread about its mean is the slip's.
+TEST(DrivingNoise, ASpreadGrowingWithSpeedIsWiderWhileDriving) {
+  OmniModel model = Slipping(0.1);
+  model.driving_noise.per_speed = 1.5;
+  FrameTiming timing;
+  timing.frame_rate = 30;
+  timing.physics_substeps = DefaultPhysicsSubsteps(30);
+  const double seconds = 150;
+  CommandSpec circle;
+  circle.type = "sequence";
+  circle.segments = {{seconds, Twist2{0.8, 0, 1.0}, false}};
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", model, Pose2{0, 0, 0}, MakeCommandSource(circle, 3, 0, seconds, Pose2{})});
+  FieldModel open;
+  open.walls = false;
+  Simulation sim(std::move(robots), MakeOmniBackend("analytic", {model}, open, timing), 3);
+  std::vector<std::array<double, 3>> v = BodyVelocities(sim.Run(static_cast<int>(seconds * 30)));
+  v.erase(v.begin(), v.begin() + 60);  // the start's transient
+  std::array<double, 3> mean{};
+  for (const auto& x : v)
+    for (std::size_t c = 0; c < 3; ++c) mean[c] += x[c] / static_cast<double>(v.size());
+  const double speed = std::hypot(mean[0], mean[1]);
+  EXPECT_GT(speed, 0.5);
+  for (std::size_t c = 0; c < 3; ++c) {
+    double sum2 = 0;
+    for (const auto& x : v) sum2 += (x[c] - mean[c]) * (x[c] - mean[c]);
+    const double expected = model.driving_noise.Spread(static_cast<int>(c), speed, 0);
+    // About 4400 frames, 700 independent stretches of 2 tau: within 10 %, and far from
+    // the spread standing still (a factor 1 + 1.5 v, about 2).
+    EXPECT_NEAR(std::sqrt(sum2 / v.size()), expected, 0.1 * expected) << "axis " << c;
+  }
+}
+
 TEST(DrivingNoise, OffByDefaultDeterministicAndTheCamerasDrawsStayAsTheyWere) {
   OmniModel quiet = Slipping(0.15);
   quiet.driving_noise.simulated = false;
@@ -134,7 +169,15 @@ TEST(DrivingNoise, TheModelFileSaysWhetherItIsSimulated) {
   const OmniModel back = LoadOmniModelFromString(yaml, "back.yaml");
   EXPECT_TRUE(back.driving_noise.simulated);
   EXPECT_EQ(back.driving_noise.correlation_time, 0.3);
+  EXPECT_EQ(back.driving_noise.per_speed, 0.0);
+  EXPECT_EQ(yaml.find("per_speed"), std::string::npos) << yaml;
+  m.driving_noise.per_speed = 0.75;
+  m.driving_noise.per_acceleration = 0.125;
+  const OmniModel grown = LoadOmniModelFromString(FormatOmniModelYaml(m), "grown.yaml");
+  EXPECT_EQ(grown.driving_noise.per_speed, 0.75);
+  EXPECT_EQ(grown.driving_noise.per_acceleration, 0.125);
   EXPECT_THROW(LoadOmniModelFromString("driving_noise: {simulated: perhaps}\n", "bad.yaml"), InputError);
+  EXPECT_THROW(LoadOmniModelFromString("driving_noise: {per_speed: -1}\n", "bad.yaml"), InputError);
 }
 
 // `run --driving-noise on|off|model`: on, the 45 degree drive ends elsewhere, the same
@@ -187,7 +230,7 @@ TEST(DrivingNoise, ReplaySamplesWritesTheContractsColumns) {
     EXPECT_EQ(table.rows[i][1], static_cast<double>(i % 3));
     EXPECT_EQ(table.rows[i][0], input.rows[i / 3][0]);
   }
-  for (const std::string& bad : {"--samples 3 --state tracker", "--samples 3 --horizon 0", "--samples -1"}) {
+  for (const char* bad : {"--samples 3 --state tracker", "--samples 3 --horizon 0", "--samples -1"}) {
     EXPECT_EQ(replay("bad.csv", bad).exit_code, 2) << bad;
     EXPECT_FALSE(std::filesystem::exists(dir + "/bad.csv")) << bad;
   }

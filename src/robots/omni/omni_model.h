@@ -58,9 +58,21 @@ struct OmniControllerModel {
 // predictions; identify fits it; with `simulated` the simulation loop draws it on every
 // backend (sim/omni_simulation.h).
 struct OmniDrivingNoise {
-  std::array<double, 3> sd{0.1, 0.1, 0.5};  // forward, sideways m/s; turn rad/s
+  std::array<double, 3> sd{0.1, 0.1, 0.5};  // forward, sideways m/s; turn rad/s: the spread standing still
   double correlation_time = 0.15;           // s
+  // 1/(m/s): the spreads grow by this share per m/s of the model's translational speed
+  // (a robot that wanders more the faster it drives); 0: the same at every speed.
+  double per_speed = 0;
+  // 1/(m/s^2): and by this share per m/s^2 of the model's translational acceleration (a
+  // robot whose wheels slip when it speeds up or brakes hard).
+  double per_acceleration = 0;
   bool simulated = false;                   // the simulation draws it (off: the observer's model only)
+
+  // The spread (m/s or rad/s) of axis a (forward, sideways, turn) at `speed` (m/s) and
+  // `acceleration` (m/s^2).
+  double Spread(int a, double speed, double acceleration) const {
+    return sd[static_cast<std::size_t>(a)] * (1 + per_speed * speed + per_acceleration * acceleration);
+  }
 };
 
 // The state observer's noise model (estimation/omni_observer.h; docs/models.md

@@ -180,6 +180,8 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     YamlMap d(top.Child("driving_noise"), path, "driving_noise", &errors);
     for (int a = 0; a < 3; ++a) d.Get(kOmniAxisNames[a], &model.driving_noise.sd[static_cast<std::size_t>(a)], NonNegative(100));
     d.Get("correlation_time", &model.driving_noise.correlation_time, InRange(1e-3, 100));
+    d.Get("per_speed", &model.driving_noise.per_speed, NonNegative(100));
+    d.Get("per_acceleration", &model.driving_noise.per_acceleration, NonNegative(100));
     d.Get("simulated", &model.driving_noise.simulated);
     d.Finish();
   }

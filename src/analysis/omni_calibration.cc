@@ -1,0 +1,160 @@
+#include "analysis/omni_calibration.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/math_constants.h"
+
+namespace twinsim {
+
+namespace {
+
+// A fixed quadrature of the standard bivariate normal: kRadii Rayleigh quantiles times
+// kAngles directions (each ring turned by half a step against the last), equal weights.
+// Its mean of ||z|| is within 0.3 % of sqrt(pi / 2).
+constexpr int kRadii = 16, kAngles = 16;
+const std::vector<Eigen::Vector2d>& StandardDraws() {
+  static const std::vector<Eigen::Vector2d> draws = [] {
+    std::vector<Eigen::Vector2d> z;
+    for (int i = 0; i < kRadii; ++i) {
+      const double r = std::sqrt(-2 * std::log(1 - (i + 0.5) / kRadii));
+      for (int j = 0; j < kAngles; ++j) {
+        const double a = (j + 0.5 * (i % 2)) * 2 * kPi / kAngles;
+        z.emplace_back(r * std::cos(a), r * std::sin(a));
+      }
+    }
+    return z;
+  }();
+  return draws;
+}
+
+// A square root of a 2 x 2 covariance (its positive part where rounding made it indefinite).
+Eigen::Matrix2d Root(const Eigen::Matrix2d& c) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(0.5 * (c + c.transpose()));
+  return eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+}
+
+// The energy score of N(0, L L^T) at the outcome y.
+double EnergyScore(const Eigen::Matrix2d& root, const Eigen::Vector2d& y) {
+  double to_y = 0, spread = 0;
+  for (const Eigen::Vector2d& z : StandardDraws()) {
+    const Eigen::Vector2d x = root * z;
+    to_y += (x - y).norm();
+    spread += x.norm();
+  }
+  const double n = static_cast<double>(StandardDraws().size());
+  return to_y / n - std::sqrt(0.5) * spread / n;  // E||X - X'|| = sqrt(2) E||L z||
+}
+
+double MeanConstantEnergy(const std::vector<PredictiveError>& rows, double s) {
+  double sum = 0;
+  const Eigen::Matrix2d root = s * Eigen::Matrix2d::Identity();
+  for (const PredictiveError& r : rows) sum += EnergyScore(root, r.e.head<2>());
+  return rows.empty() ? 0 : sum / static_cast<double>(rows.size());
+}
+
+int PitBin(double u) { return std::clamp(static_cast<int>(u * kPitBins), 0, kPitBins - 1); }
+
+}  // namespace
+
+std::vector<PredictiveError> PredictiveErrors(const OmniLog& log, const OmniReplayResult& result,
+                                              const std::function<bool(std::size_t)>& keep) {
+  std::vector<PredictiveError> out;
+  if (result.covariance.size() != log.rows.size()) return out;
+  for (std::size_t i = 0; i < log.rows.size(); ++i) {
+    if (!PredictedAndMeasured(log, result, i) || (keep && !keep(i))) continue;
+    out.push_back(PredictiveErrorAt(log, result, i));
+  }
+  return out;
+}
+
+PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& result, std::size_t i) {
+  const Pose2& m = log.rows[i].pose;
+  PredictiveError p;
+  p.e << m.x - result.pose[i].x, m.y - result.pose[i].y, m.theta - result.pose[i].theta;
+  p.c = result.covariance[i] + result.measurement_covariance;
+  return p;
+}
+
+double OmniCalibration::EnergyGain() const {
+  return baseline_energy_score > 0 ? 1 - energy_score / baseline_energy_score : 0;
+}
+
+double ConstantSpread(const std::vector<PredictiveError>& rows) {
+  if (rows.empty()) return 0;
+  double ms = 0;
+  for (const PredictiveError& r : rows) ms += r.e.head<2>().squaredNorm();
+  const double rms = std::sqrt(ms / (2.0 * static_cast<double>(rows.size())));
+  if (rms <= 0) return 0;
+  // Golden-section search on log s over three decades around the per-coordinate RMS.
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double a = std::log(rms) - std::log(100.0), b = std::log(rms) + std::log(10.0);
+  double c = b - g * (b - a), d = a + g * (b - a);
+  double fc = MeanConstantEnergy(rows, std::exp(c)), fd = MeanConstantEnergy(rows, std::exp(d));
+  while (b - a > 1e-3) {
+    if (fc < fd) {
+      b = d, d = c, fd = fc;
+      c = b - g * (b - a);
+      fc = MeanConstantEnergy(rows, std::exp(c));
+    } else {
+      a = c, c = d, fc = fd;
+      d = a + g * (b - a);
+      fd = MeanConstantEnergy(rows, std::exp(d));
+    }
+  }
+  return std::exp(0.5 * (a + b));
+}
+
+OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double constant_spread) {
+  OmniCalibration out;
+  out.rows = static_cast<int>(rows.size());
+  out.baseline_spread = constant_spread;
+  if (rows.empty()) return out;
+  const double d50 = -2 * std::log(0.5), d90 = -2 * std::log(0.1);  // chi-square, 2 degrees of freedom
+  const double z50 = 0.6744897501960817, z90 = 1.6448536269514722;   // normal quantiles of 0.75, 0.95
+  int in50 = 0, in90 = 0, h50 = 0, h90 = 0;
+  double es = 0, base = 0;
+  const Eigen::Matrix2d round = constant_spread * Eigen::Matrix2d::Identity();
+  for (const PredictiveError& r : rows) {
+    const Eigen::Matrix2d cxy = r.c.topLeftCorner<2, 2>();
+    const Eigen::Vector2d exy = r.e.head<2>();
+    const double d2 = exy.dot(cxy.ldlt().solve(exy));
+    in50 += d2 <= d50;
+    in90 += d2 <= d90;
+    ++out.position_pit[static_cast<std::size_t>(PitBin(1 - std::exp(-0.5 * d2)))];
+    const double z = r.e[2] / std::sqrt(std::max(r.c(2, 2), 1e-300));
+    h50 += std::abs(z) <= z50;
+    h90 += std::abs(z) <= z90;
+    ++out.heading_pit[static_cast<std::size_t>(PitBin(0.5 * std::erfc(-z / std::sqrt(2.0))))];
+    es += EnergyScore(Root(cxy), exy);
+    base += EnergyScore(round, exy);
+  }
+  const double n = static_cast<double>(rows.size());
+  out.position_50 = in50 / n, out.position_90 = in90 / n;
+  out.heading_50 = h50 / n, out.heading_90 = h90 / n;
+  out.energy_score = es / n;
+  out.baseline_energy_score = base / n;
+  out.log_score = MeanLogScore(rows);
+  return out;
+}
+
+double LogScore(const PredictiveError& r) {
+  const Eigen::LLT<Eigen::Matrix3d> llt(0.5 * (r.c + r.c.transpose()));
+  if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d w = llt.matrixL().solve(r.e);
+  double log_det = 0;
+  for (int i = 0; i < 3; ++i) log_det += 2 * std::log(llt.matrixL()(i, i));
+  return 0.5 * (w.squaredNorm() + log_det + 3 * std::log(2 * kPi));
+}
+
+double MeanLogScore(const std::vector<PredictiveError>& rows) {
+  if (rows.empty()) return 0;
+  double sum = 0;
+  for (const PredictiveError& r : rows) sum += LogScore(r);
+  return sum / static_cast<double>(rows.size());
+}
+
+}  // namespace twinsim

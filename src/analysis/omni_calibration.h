@@ -1,0 +1,80 @@
+// How well an omni model's predictive distribution matches where the robot was measured
+// (identify's and compare's calibration; docs/identification.md, "Calibration").
+//
+// A prediction K frames ahead from the observer (analysis/omni_replay.h with
+// `covariance`) is a Gaussian over the pose: the predicted mean and the filter's
+// covariance, to which the camera's own noise is added, since what is scored is the
+// measured pose. Over rows with a measurement it is scored as a forecaster is:
+//   - coverage: the share of measured positions inside the central 50 % and 90 %
+//     ellipses (Mahalanobis distance d^2 <= -2 ln(1 - p) for two dimensions), and of
+//     headings inside the central intervals; a calibrated model holds 50 % and 90 %;
+//   - the PIT (probability integral transform): 1 - exp(-d^2 / 2) for the position,
+//     Phi(z) for the heading; uniform on [0, 1] when calibrated (a U: too narrow, a hump:
+//     too wide), shown as a histogram;
+//   - the energy score of the position, E||X - y|| - E||X - X'|| / 2 (Gneiting and
+//     Raftery 2007), m, lower is better: it rewards a spread that is right row by row,
+//     beside the baseline of the same mean with one round spread per horizon, the one
+//     that scores best on the rows it is fitted on (a model's distribution must beat
+//     that to be worth its noise model);
+//   - the mean negative log density (nats), what the noise's identification minimises.
+// The expectations of the energy score are taken over a fixed set of draws, so scores
+// are deterministic.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <functional>
+#include <vector>
+
+#include "analysis/omni_replay.h"
+#include "robots/omni/omni_log.h"
+
+namespace twinsim {
+
+// One predicted row: the measured pose minus the mean and the distribution's covariance.
+struct PredictiveError {
+  Eigen::Vector3d e = Eigen::Vector3d::Zero();  // x, y in the field frame (m); theta (rad)
+  Eigen::Matrix3d c = Eigen::Matrix3d::Zero();  // its covariance: the prediction's plus the camera's
+};
+
+// Row i of a replay run with `covariance` (predicted, with a measurement).
+PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& result, std::size_t i);
+// The rows of a replay run with `covariance` that were predicted, hold a measurement and
+// that `keep` accepts (all when empty).
+std::vector<PredictiveError> PredictiveErrors(const OmniLog& log, const OmniReplayResult& result,
+                                              const std::function<bool(std::size_t)>& keep = {});
+
+inline constexpr int kPitBins = 10;
+
+// The scores at one horizon.
+struct OmniCalibration {
+  int frames = 0;      // K
+  double seconds = 0;  // K frame periods
+  int rows = 0;        // rows scored
+  double position_50 = 0, position_90 = 0;  // shares inside the central ellipses
+  double heading_50 = 0, heading_90 = 0;    // shares inside the central intervals
+  double energy_score = 0;           // m, mean over the rows
+  double baseline_energy_score = 0;  // m, the same mean under the constant spread
+  double baseline_spread = 0;        // m, the constant spread per coordinate
+  double log_score = 0;              // nats per row, mean negative log density of the pose
+  std::array<int, kPitBins> position_pit{};  // counts per tenth of [0, 1]
+  std::array<int, kPitBins> heading_pit{};
+  // How much the model's energy score improves on the baseline's: 1 - ES / ES_baseline.
+  double EnergyGain() const;
+};
+
+// The constant spread s (m) whose round Gaussian N(mean, s^2 I) has the lowest mean
+// energy score over `rows` (a golden-section search); 0 without rows.
+double ConstantSpread(const std::vector<PredictiveError>& rows);
+
+// Scores `rows` at one horizon, the baseline with `constant_spread` (from other rows).
+OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double constant_spread);
+
+// The negative log density (nats) of one row's pose under its Gaussian; infinity for a
+// covariance that is not positive definite.
+double LogScore(const PredictiveError& row);
+// Its mean over `rows` (0 without rows): the cost the driving noise is identified by.
+double MeanLogScore(const std::vector<PredictiveError>& rows);
+
+}  // namespace twinsim

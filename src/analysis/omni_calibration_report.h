@@ -1,0 +1,25 @@
+// The calibration of an omni model's predictive distribution (analysis/omni_calibration.h)
+// as people read it: a table for the terminal, and for a report an HTML table with the
+// PIT histograms (identify's and compare's reports; docs/identification.md, "Calibration").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "analysis/omni_calibration.h"
+#include "render/plot.h"
+
+namespace twinsim {
+
+// One line per horizon: rows, coverage of the 50 % and 90 % position ellipses and
+// heading intervals (%), the energy score against the constant spread's (mm) and the gain.
+std::string FormatCalibrationTable(const std::vector<OmniCalibration>& calibration);
+
+// The same as an HTML <table>, then the PIT histograms of the position and the heading
+// (one line per horizon over the uniform a calibrated model gives).
+std::string FormatCalibrationHtml(const std::vector<OmniCalibration>& calibration, Renderer& renderer);
+
+// The PIT histograms as a plot: density per tenth of [0, 1], one step line per horizon.
+SeriesPlot PitPlot(const std::vector<OmniCalibration>& calibration, bool heading);
+
+}  // namespace twinsim

@@ -1,0 +1,350 @@
+#include "diagnosis/omni_noise_identification.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "analysis/omni_replay.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "diagnosis/diagnosis.h"
+
+namespace twinsim {
+
+namespace {
+
+// The driving noise's forward, sideways and turn spreads and correlation time, the
+// scale of the model's process noise, the camera's position and heading noise, and the
+// spreads' growth with speed and acceleration. The search runs in the logarithms of all
+// but the growths, which run in log(1 + g), so that they may start at none.
+constexpr int kNoiseParams = 9;
+constexpr int kPerSpeed = 7, kPerAcceleration = 8;  // the growths, last
+constexpr double kLower[kNoiseParams] = {1e-3, 1e-3, 1e-2, 5e-3, 1e-3, OmniObserverModel::kMinMeasurementNoiseXy,
+                                         OmniObserverModel::kMinMeasurementNoiseTheta, 0, 0};
+constexpr double kUpper[kNoiseParams] = {5, 5, 50, 5, 100, 0.1, 0.5, 20, 20};
+constexpr const char* kNames[kNoiseParams] = {"forward",   "sideways",     "turn",      "correlation_time",
+                                              "process_noise_scale", "camera_xy", "camera_theta", "per_speed",
+                                              "per_acceleration"};
+constexpr const char* kUnits[kNoiseParams] = {"m/s", "m/s", "rad/s", "s", "x", "m", "rad", "1/(m/s)", "1/(m/s^2)"};
+using NoiseValues = std::array<double, kNoiseParams>;  // the search's coordinates
+
+bool IsGrowth(int i) { return i >= kPerSpeed; }
+double ToCoordinate(int i, double value) { return IsGrowth(i) ? std::log1p(value) : std::log(value); }
+double FromCoordinate(int i, double x) { return IsGrowth(i) ? std::expm1(x) : std::exp(x); }
+double Slope(int, double x) { return std::exp(x); }  // d value / d x, for both maps
+
+NoiseValues Coordinates(const OmniModel& m) {
+  const double values[kNoiseParams] = {m.driving_noise.sd[0], m.driving_noise.sd[1], m.driving_noise.sd[2],
+                                       m.driving_noise.correlation_time, 1.0, m.ObserverNoiseXy(),
+                                       m.ObserverNoiseTheta(), m.driving_noise.per_speed,
+                                       m.driving_noise.per_acceleration};
+  NoiseValues v;
+  for (int i = 0; i < kNoiseParams; ++i) v[i] = ToCoordinate(i, values[i]);
+  return v;
+}
+
+OmniModel WithNoise(OmniModel m, const NoiseValues& v) {
+  for (std::size_t a = 0; a < 3; ++a) m.driving_noise.sd[a] = FromCoordinate(static_cast<int>(a), v[a]);
+  m.driving_noise.correlation_time = FromCoordinate(3, v[3]);
+  for (double& q : m.observer.process_noise) q *= FromCoordinate(4, v[4]);
+  m.observer.measurement_noise_xy = FromCoordinate(5, v[5]);
+  m.observer.measurement_noise_theta = FromCoordinate(6, v[6]);
+  m.driving_noise.per_speed = FromCoordinate(kPerSpeed, v[kPerSpeed]);
+  m.driving_noise.per_acceleration = FromCoordinate(kPerAcceleration, v[kPerAcceleration]);
+  return m;
+}
+
+NoiseValues Clamped(NoiseValues v) {
+  for (int i = 0; i < kNoiseParams; ++i) v[i] = std::clamp(v[i], ToCoordinate(i, kLower[i]), ToCoordinate(i, kUpper[i]));
+  return v;
+}
+
+// The scored rows of one kind at one horizon: each row's negative log density and block.
+struct HorizonRows {
+  std::vector<PredictiveError> rows;
+  std::vector<int> block;
+};
+
+// Replays every stretch of the kind once (in parallel) at the longest horizon, the
+// others on the way, and gathers the rows per horizon in stretch order. Held-out rows
+// are the validation logs' where there are any, else the held-out blocks'.
+std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                 const OmniNoiseOptions& options, bool held_out) {
+  bool any_validation = false;
+  for (const OmniBlockedStretch& s : stretches) any_validation = any_validation || s.validation;
+  const int longest = *std::max_element(options.horizons.begin(), options.horizons.end());
+  std::vector<std::vector<HorizonRows>> per(stretches.size(), std::vector<HorizonRows>(options.horizons.size()));
+  ParallelFor(static_cast<int>(stretches.size()), options.threads, [&](int k) {
+    const OmniBlockedStretch& s = stretches[static_cast<std::size_t>(k)];
+    if (held_out ? (any_validation && !s.validation) : s.validation) return;
+    OmniReplayOptions o;
+    o.backend = options.backend;
+    o.horizon = longest;
+    o.stride = options.stride;
+    o.stride_origin = 0;
+    o.covariance = true;
+    for (int h : options.horizons)
+      if (h != longest) o.also.push_back(h);
+    const OmniReplayResult r = ReplayOmniLog(model, *s.log, o);
+    const int warm = static_cast<int>(std::ceil(options.max_delay / s.log->frame_period)) + kWarmUpFrames;
+    for (std::size_t q = 0, a = 0; q < options.horizons.size(); ++q) {
+      const int h = options.horizons[q];
+      const OmniReplayResult& at = h == longest ? r : r.also[a++];
+      HorizonRows& out = per[static_cast<std::size_t>(k)][q];
+      for (std::size_t row = 0; row < s.log->rows.size(); ++row) {
+        if (!PredictedAndMeasured(*s.log, at, row) || s.log->FrameIndex(row) < warm + h) continue;
+        if (!ScoredInBlocks(s, row, held_out, h)) continue;
+        out.rows.push_back(PredictiveErrorAt(*s.log, at, row));
+        out.block.push_back((*s.block)[row]);
+      }
+    }
+  });
+  std::vector<HorizonRows> out(options.horizons.size());
+  for (const auto& stretch : per) {
+    for (std::size_t q = 0; q < out.size(); ++q) {
+      out[q].rows.insert(out[q].rows.end(), stretch[q].rows.begin(), stretch[q].rows.end());
+      out[q].block.insert(out[q].block.end(), stretch[q].block.begin(), stretch[q].block.end());
+    }
+  }
+  return out;
+}
+
+// The cost: the mean negative log density per horizon, averaged over the horizons that
+// have rows (each horizon weighs the same, however many rows it has).
+double Cost(const std::vector<HorizonRows>& rows) {
+  double sum = 0;
+  int n = 0;
+  for (const HorizonRows& h : rows) {
+    if (h.rows.empty()) continue;
+    sum += MeanLogScore(h.rows);
+    ++n;
+  }
+  return n ? sum / n : std::numeric_limits<double>::infinity();
+}
+
+int CountRows(const std::vector<HorizonRows>& rows) {
+  int n = 0;
+  for (const HorizonRows& h : rows) n += static_cast<int>(h.rows.size());
+  return n;
+}
+
+// Each block's share of the cost (its rows' terms of Cost), by block number.
+std::map<int, double> BlockTerms(const std::vector<HorizonRows>& rows) {
+  std::map<int, double> out;
+  int horizons = 0;
+  for (const HorizonRows& h : rows) horizons += !h.rows.empty();
+  for (const HorizonRows& h : rows) {
+    for (std::size_t i = 0; i < h.rows.size(); ++i)
+      out[h.block[i]] += LogScore(h.rows[i]) / (static_cast<double>(h.rows.size()) * horizons);
+  }
+  return out;
+}
+
+// Standard errors of the coordinates `free` at `v` (NaN for the others): the sandwich
+// H^-1 B H^-1 of the cost, H its Hessian (second differences), B the outer products of
+// the blocks' gradients.
+NoiseValues StandardErrors(const std::function<std::vector<HorizonRows>(const NoiseValues&)>& collect,
+                           const NoiseValues& v, double cost_at_v, const std::vector<int>& free, int* evaluations) {
+  constexpr double kStep = 0.1;
+  NoiseValues se;
+  se.fill(std::numeric_limits<double>::quiet_NaN());
+  const int n = static_cast<int>(free.size());
+  if (n == 0) return se;
+  std::vector<std::map<int, double>> up(static_cast<std::size_t>(n)), down(static_cast<std::size_t>(n));
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  std::vector<double> cost_up(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    NoiseValues a = v, b = v;
+    a[free[i]] += kStep;
+    b[free[i]] -= kStep;
+    const std::vector<HorizonRows> ra = collect(a), rb = collect(b);
+    *evaluations += 2;
+    up[i] = BlockTerms(ra);
+    down[i] = BlockTerms(rb);
+    cost_up[i] = Cost(ra);
+    h(i, i) = (cost_up[i] - 2 * cost_at_v + Cost(rb)) / (kStep * kStep);
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      NoiseValues a = v;
+      a[free[i]] += kStep;
+      a[free[j]] += kStep;
+      const double c = Cost(collect(a));
+      ++*evaluations;
+      h(i, j) = h(j, i) = (c - cost_up[i] - cost_up[j] + cost_at_v) / (kStep * kStep);
+    }
+  }
+  Eigen::MatrixXd b = Eigen::MatrixXd::Zero(n, n);
+  for (const auto& [block, unused] : up[0]) {
+    Eigen::VectorXd g(n);
+    for (int i = 0; i < n; ++i) g[i] = (up[i][block] - down[i][block]) / (2 * kStep);
+    b += g * g.transpose();
+  }
+  // Where the cost is flat or curved down along some combination (a ridge the search
+  // stopped on, e.g. a spread against its growth with speed), the parameters in it are
+  // not determined; the others' errors come from the rest (the pseudo-inverse).
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(h);
+  if (eigen.info() != Eigen::Success) return se;
+  const double tolerance = 1e-6 * std::max(eigen.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
+  Eigen::MatrixXd hi = Eigen::MatrixXd::Zero(n, n);
+  std::vector<bool> flat(static_cast<std::size_t>(n), false);
+  for (int k = 0; k < n; ++k) {
+    const Eigen::VectorXd u = eigen.eigenvectors().col(k);
+    if (eigen.eigenvalues()[k] > tolerance) {
+      hi += u * u.transpose() / eigen.eigenvalues()[k];
+    } else {
+      for (int i = 0; i < n; ++i) flat[static_cast<std::size_t>(i)] = flat[static_cast<std::size_t>(i)] || u[i] * u[i] > 0.1;
+    }
+  }
+  const Eigen::MatrixXd cov = hi * b * hi;
+  for (int i = 0; i < n; ++i)
+    if (!flat[static_cast<std::size_t>(i)]) se[free[i]] = std::sqrt(std::max(0.0, cov(i, i)));
+  return se;
+}
+
+}  // namespace
+
+bool ScoredInBlocks(const OmniBlockedStretch& s, std::size_t i, bool held_out, int horizon) {
+  const std::vector<char>& held = *s.held;
+  if (i < s.score_from || static_cast<bool>(held[i]) != held_out) return false;
+  const int start = s.log->FrameIndex(i) - horizon;
+  std::size_t j = i;
+  while (j > 0 && s.log->FrameIndex(j) > start) --j;
+  return s.log->FrameIndex(j) == start && j >= s.score_from && static_cast<bool>(held[j]) == held_out;
+}
+
+bool OmniNoiseOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& s) {
+    if (why) *why = s;
+    return false;
+  };
+  if (horizons.empty()) return fail("the noise needs at least one horizon");
+  for (int h : horizons)
+    if (h < 1) return fail("a horizon must be 1 frame or more, got " + std::to_string(h));
+  if (stride < 1 || score_stride < 1) return fail("strides must be 1 or more");
+  if (max_evaluations < 1) return fail("max_evaluations must be 1 or more");
+  return true;
+}
+
+OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                             const OmniNoiseOptions& options) {
+  if (std::string why; !options.IsValid(&why)) throw InputError(why);
+  OmniNoiseIdentification out;
+  out.model = model;
+  const NoiseValues start = Coordinates(model);
+  auto collect = [&](const NoiseValues& v, bool held_out) {
+    try {
+      return Collect(WithNoise(model, v), stretches, options, held_out);
+    } catch (const CheckFailed&) {
+      return std::vector<HorizonRows>{};  // diverged: no rows, an infinite cost
+    }
+  };
+  auto fit_rows = [&](const NoiseValues& v) { return collect(v, false); };
+  const std::vector<HorizonRows> first = fit_rows(start);
+  out.fit_rows = CountRows(first);
+  if (out.fit_rows == 0) throw InputError("the logs' fit blocks hold no predictions to identify the driving noise on");
+  out.fit_before = Cost(first);
+  int evaluations = 1;
+
+  // A pattern search: each coordinate up and down by the step, on along a direction
+  // while it pays; the step halves when a whole sweep finds nothing better. First at the
+  // same spread at every speed, then with the growth as well, from there.
+  auto search = [&](NoiseValues v, double* best, int coordinates, int budget) {
+    for (double step = std::log(2.0); step >= std::log(1.05) && evaluations < budget; step /= 2) {
+      bool moved = true;
+      while (moved && evaluations < budget) {
+        moved = false;
+        for (int i = 0; i < coordinates && evaluations < budget; ++i) {
+          for (double sign : {1.0, -1.0}) {
+            bool paid = false;
+            for (int k = 0; k < 4 && evaluations < budget; ++k) {
+              NoiseValues trial = v;
+              trial[i] += sign * step;
+              trial = Clamped(trial);
+              if (trial[i] == v[i]) break;
+              const double c = Cost(fit_rows(trial));
+              ++evaluations;
+              if (c >= *best) break;
+              *best = c, v = trial, moved = paid = true;
+            }
+            if (paid) break;
+          }
+        }
+      }
+    }
+    return v;
+  };
+  double flat_cost = out.fit_before;
+  const NoiseValues flat = search(start, &flat_cost, kPerSpeed, evaluations + options.max_evaluations);
+  double grow_cost = flat_cost;
+  const NoiseValues grow = search(flat, &grow_cost, kNoiseParams, evaluations + options.max_evaluations);
+
+  // The growth with speed only where the held-out blocks score it better than none.
+  NoiseValues v = flat;
+  out.fit_after = flat_cost;
+  std::vector<HorizonRows> held_after = collect(flat, true);
+  if (grow[kPerSpeed] > 0 || grow[kPerAcceleration] > 0) {
+    std::vector<HorizonRows> held_grow = collect(grow, true);
+    evaluations += 2;
+    if (Cost(held_grow) < Cost(held_after)) {
+      v = grow;
+      out.fit_after = grow_cost;
+      held_after = std::move(held_grow);
+    } else {
+      out.growth_note = "a spread growing with speed (" + FormatParameter(FromCoordinate(kPerSpeed, grow[kPerSpeed])) +
+                        " per m/s) and acceleration (" +
+                        FormatParameter(FromCoordinate(kPerAcceleration, grow[kPerAcceleration])) +
+                        " per m/s^2) fitted the fit blocks better but scored worse on the held-out ones: none kept";
+    }
+  }
+  std::vector<int> free;
+  for (int i = 0; i < kNoiseParams; ++i)
+    if (!IsGrowth(i) || v[i] > 0) free.push_back(i);  // no growth: not estimated, no error
+  const NoiseValues se = StandardErrors(fit_rows, v, out.fit_after, free, &evaluations);
+  out.evaluations = evaluations;
+  const std::vector<HorizonRows> held_before = collect(start, true);
+  out.held_out_rows = CountRows(held_after);
+  out.held_out_before = Cost(held_before);
+  out.held_out_after = Cost(held_after);
+  out.kept = out.held_out_rows > 0 && out.held_out_after < out.held_out_before;
+  out.model = WithNoise(model, v);
+  for (int i = 0; i < kNoiseParams; ++i) {
+    OmniNoiseParameter p;
+    p.name = kNames[i];
+    p.unit = kUnits[i];
+    p.start = FromCoordinate(i, start[i]);
+    p.value = FromCoordinate(i, v[i]);
+    p.standard_error = Slope(i, v[i]) * se[i];  // first order
+    out.parameters.push_back(p);
+  }
+  if (!out.kept) {
+    out.model = model;
+    out.note = out.held_out_rows == 0
+                   ? "no held-out rows to check the noise on: the prediction-error fit's noise is kept"
+                   : "the noise fitted for predictions ahead scored worse on the held-out blocks than the "
+                     "prediction-error fit's, which is kept";
+  }
+  return out;
+}
+
+std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                               const OmniNoiseOptions& options) {
+  if (std::string why; !options.IsValid(&why)) throw InputError(why);
+  OmniNoiseOptions scoring = options;
+  scoring.stride = options.score_stride;
+  const std::vector<HorizonRows> fit = Collect(model, stretches, scoring, false);
+  const std::vector<HorizonRows> held = Collect(model, stretches, scoring, true);
+  const double period = stretches.empty() ? 0 : stretches.front().log->frame_period;
+  std::vector<OmniCalibration> out;
+  for (std::size_t q = 0; q < options.horizons.size(); ++q) {
+    OmniCalibration c = Calibrate(held[q].rows, ConstantSpread(fit[q].rows));
+    c.frames = options.horizons[q];
+    c.seconds = c.frames * period;
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,101 @@
+// The driving noise identified for predictions ahead and for the simulation (`twinsim
+// identify` with an omni model, after the parameters; docs/identification.md, "The
+// driving noise").
+//
+// The prediction-error fit (omni_identification.h) tunes the filter's noise for the
+// best 4-frame mean: it says how much to trust the camera, not how far the robot
+// wanders. A simulator that draws the noise (driving_noise.simulated) and intervals
+// around a prediction need the wander's own size and duration. So, with the
+// identified response held, the noise's spreads (forward, sideways, turn), its
+// correlation time, the scale of the model's process noise and the camera's noise
+// (position and heading, observer.measurement_noise_*) are identified by the
+// Gaussian likelihood of the predictions 4, 16 and 63 frames ahead on the fit blocks
+// (analysis/omni_calibration.h, MeanLogScore): the observer's predictive distribution
+// must hold the measured poses at every horizon a behaviour looks ahead. A pattern
+// search in the logarithms of the seven (doubling steps, halved in log until 5 %); then
+// again with the spreads' growth with the robot's speed and acceleration
+// (driving_noise.per_speed, per_acceleration; in log(1 + g)), kept only where the
+// held-out blocks score it better than none. The result is kept only where it scores better on the held-out blocks than the
+// fit's noise; standard errors from the fit blocks' scores (the outer products of each
+// block's gradient: blocks are nearly independent, rows within one are not).
+//
+//   std::vector<OmniBlockedStretch> stretches = ...;  // identification's blocks
+//   OmniNoiseIdentification n = IdentifyDrivingNoise(model, stretches, options);
+//   if (n.kept) model = n.model;
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "analysis/omni_calibration.h"
+#include "robots/omni/omni_log.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+// A stretch of a log in identification's blocks: rows from score_from on are scored,
+// each in a fit or a held-out block (held), with the block's number (unique across logs).
+struct OmniBlockedStretch {
+  const OmniLog* log = nullptr;
+  std::size_t score_from = 0;
+  const std::vector<char>* held = nullptr;   // per row
+  const std::vector<int>* block = nullptr;   // per row
+  bool validation = false;                   // a wholly held-out log
+};
+
+// True where row i's prediction both ends and starts (`horizon` frames earlier) in
+// blocks of the given kind, after the stretch's lead-in: a fit row's prediction never
+// starts from an estimate corrected to a held-out measurement, and a held-out row's never
+// from a fit one.
+bool ScoredInBlocks(const OmniBlockedStretch& s, std::size_t i, bool held_out, int horizon);
+
+struct OmniNoiseOptions {
+  std::string backend = "analytic";
+  std::vector<int> horizons{4, 16, 63};  // frames; the longest is predicted, the rest on the way
+  int stride = 16;           // the fit predicts from every stride-th frame
+  int score_stride = 2;      // the calibration from every score_stride-th
+  double max_delay = 0.35;   // s: rows start after the longest warm-up a replay can have
+  int max_evaluations = 150;  // of the fit blocks' likelihood, per search (without and with growth)
+  int threads = 0;           // 0 = one per core; results do not depend on it
+
+  bool IsValid(std::string* why) const;
+};
+
+// One of the nine, as identify's report lists it.
+struct OmniNoiseParameter {
+  // "forward", "sideways", "turn", "correlation_time", "process_noise_scale", "camera_xy",
+  // "camera_theta", "per_speed", "per_acceleration"
+  std::string name;
+  std::string unit;         // "m/s", "rad/s", "s", "x", "m", "rad", "1/(m/s)", "1/(m/s^2)"
+  double start = 0;         // the prediction-error fit's value
+  double value = 0;         // identified
+  double standard_error = 0;  // NaN where the blocks do not determine it
+};
+
+struct OmniNoiseIdentification {
+  OmniModel model;       // the given model with the noise identified (kept or not)
+  bool kept = false;     // the held-out blocks scored better with it
+  std::vector<OmniNoiseParameter> parameters;
+  // Mean negative log density over the horizons (nats per row), fit and held-out blocks.
+  double fit_before = 0, fit_after = 0;
+  double held_out_before = 0, held_out_after = 0;
+  int fit_rows = 0, held_out_rows = 0;  // summed over the horizons
+  int evaluations = 0;
+  std::string note;
+  std::string growth_note;  // why no growth with speed and acceleration was kept, where one was fitted
+};
+
+// Identifies the noise of `model` (its response held) on `stretches`. Throws
+// InputError for invalid options or stretches without fit rows.
+OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                             const OmniNoiseOptions& options);
+
+// The calibration of `model` at each of options.horizons on the held-out rows (or the
+// validation logs where there are any), its constant-spread baseline fitted on the fit
+// rows.
+std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                               const OmniNoiseOptions& options);
+
+}  // namespace twinsim
