@@ -277,6 +277,10 @@ void Simulation::EndFrame(std::vector<FrameRecord>* records, const std::vector<B
   ++state_.frame;
 }
 
+void Simulation::SetDrivingNoiseSample(std::uint64_t seed, std::uint64_t sample) {
+  state_.drive_rng = Rng::Derived(seed, 0x64726976 + (sample << 32));  // "driv", sample 0 the constructor's
+}
+
 void Simulation::Slip(const std::vector<Twist2>& velocity_before) {
   const double dt = backend_->timing().frame_dt();
   for (int i = 0; i < num_robots(); ++i) {

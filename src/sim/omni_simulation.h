@@ -225,6 +225,11 @@ class Simulation {
   // Runs `frames` frames; `progress(done, total)` is called now and then.
   SimulationResult Run(int frames, const std::function<void(int, int)>& progress = {});
 
+  // Draws the driving noise from now on as member `sample` of an ensemble of the run
+  // seeded `seed` (the constructor's): a stream of its own per sample, sample 0 the
+  // constructor's. The camera's draws and everything else stay as they were.
+  void SetDrivingNoiseSample(std::uint64_t seed, std::uint64_t sample);
+
   // The whole state: the loop's, the backend's and every robot's behaviour (a copy of
   // each command source, so a go-to-pose source's target and the commands it remembers
   // come back too). Restoring and stepping gives what stepping from the save gave.

@@ -12,6 +12,7 @@
 #include "backends/omni_backend_factory.h"
 #include "core/math_constants.h"
 #include "io/csv_table.h"
+#include "render/renderer.h"
 #include "robots/omni/omni_model_yaml_writer.h"
 #include "scene/command_source.h"
 #include "sim/omni_simulation.h"
@@ -201,6 +202,49 @@ TEST(DrivingNoise, RunSwitchesItOnForEveryRobot) {
                                                          " --driving-noise on -q --out " + dir + "/arm");
   EXPECT_EQ(arm.exit_code, 2) << arm.err;
   EXPECT_EQ(testing::RunTwinsim("run " + scene + " --driving-noise maybe --out " + dir + "/bad").exit_code, 2);
+}
+
+// `run --samples N`: sample 0's files are the plain run's, samples.csv holds N rows per
+// frame (t,sample,x,y,theta), the same bytes on one thread and two, the samples wander
+// apart, and fan.png is drawn; refused (exit 2, nothing written) without driving noise,
+// for --jobs alone and for an arm scene.
+TEST(DrivingNoise, RunSamplesWritesSampleZeroAsAPlainRunAndTheFan) {
+  const std::string dir = testing::TempDir("run_samples");
+  const std::string scene = testing::SourcePath("scenes/drive45.yaml");
+  auto run = [&](const std::string& name, const std::string& option) {
+    return testing::RunTwinsim("run " + scene + " --backend analytic -q --out " + dir + "/" + name + " " + option);
+  };
+  ASSERT_EQ(run("plain", "--driving-noise on").exit_code, 0);
+  ASSERT_EQ(run("one", "--driving-noise on --samples 20 --jobs 1").exit_code, 0);
+  ASSERT_EQ(run("two", "--driving-noise on --samples 20 --jobs 2").exit_code, 0);
+  EXPECT_EQ(testing::ReadText(dir + "/one/trajectory.csv"), testing::ReadText(dir + "/plain/trajectory.csv"));
+  const std::string samples = testing::ReadText(dir + "/one/samples.csv");
+  EXPECT_EQ(samples, testing::ReadText(dir + "/two/samples.csv"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/one/fan.png") || !RenderingCompiled());
+  const CsvTable table = ParseCsvTable(samples, "samples.csv");
+  ASSERT_EQ(table.header, (std::vector<std::string>{"t", "sample", "x", "y", "theta"}));
+  ASSERT_EQ(table.rows.size() % 20, 0u);
+  // The last frame's 20 positions: apart by more than a centimetre.
+  double mx = 0, my = 0;
+  const std::size_t last = table.rows.size() - 20;
+  for (std::size_t k = last; k < table.rows.size(); ++k) {
+    EXPECT_EQ(table.rows[k][1], static_cast<double>(k - last));
+    mx += table.rows[k][2] / 20, my += table.rows[k][3] / 20;
+  }
+  double spread = 0;
+  for (std::size_t k = last; k < table.rows.size(); ++k)
+    spread += (std::pow(table.rows[k][2] - mx, 2) + std::pow(table.rows[k][3] - my, 2)) / 20;
+  EXPECT_GT(std::sqrt(spread), 0.01);
+  for (const auto& [name, option] : std::vector<std::pair<std::string, std::string>>{
+           {"quiet", "--driving-noise off --samples 5"}, {"jobs", "--driving-noise on --jobs 2"}}) {
+    const testing::CommandResult r = run(name, option);
+    EXPECT_EQ(r.exit_code, 2) << option << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/" + name)) << option;
+  }
+  EXPECT_EQ(testing::RunTwinsim("run " + testing::SourcePath("scenes/rrr_writing.yaml") + " --samples 3 -q --out " +
+                                dir + "/arm")
+                .exit_code,
+            2);
 }
 
 // The contract's form: t,sample,x,y,theta, N rows per input row, sample 0..N-1, the same

@@ -1,5 +1,6 @@
 // `twinsim run SCENE.yaml [--backend B] [--out DIR] [--seed N]`
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -12,6 +13,7 @@
 #include "render/renderer.h"
 #include "scene/arm_scene.h"
 #include "scene/scene.h"
+#include "scene/scene_ensemble.h"
 #include "scene/scene_run.h"
 
 namespace twinsim {
@@ -25,6 +27,8 @@ struct RunOptions {
   std::string predictor;  // for --backend learned
   std::string commands;   // a recorded match to replay (commands.csv)
   std::string driving_noise = "model";  // on | off | model: every robot's driving_noise.simulated
+  int samples = 0;  // > 0: an ensemble of this many rollouts under the driving noise
+  int jobs = 0;     // the ensemble's threads (0: one per core)
   bool quiet = false;
 };
 
@@ -63,9 +67,49 @@ int RunArm(const RunOptions& options) {
   return kExitOk;
 }
 
+// `run --samples N`: sample 0's files as a plain run writes them, then samples.csv and
+// fan.png (scene/scene_ensemble.h).
+int RunEnsemble(const Scene& scene, const std::string& backend, const RunOptions& options, const std::string& out) {
+  Progress progress("run " + scene.name + " x" + std::to_string(options.samples), !options.quiet);
+  const auto start = std::chrono::steady_clock::now();
+  OmniEnsembleOptions ensemble_options;
+  ensemble_options.samples = options.samples;
+  ensemble_options.jobs = options.jobs;
+  const OmniEnsemble ensemble = RunOmniEnsemble(scene, backend, options.predictor, ensemble_options, [&](int done, int total) {
+    progress.Update(done, total, std::to_string(done) + "/" + std::to_string(total) + " samples");
+  });
+  progress.Finish();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  OutputFiles files(out);
+  WriteOmniRunFiles(scene, ensemble.first, /*plots=*/true, &files);
+  WarnPlotsNotDrawn(options.scene, scene.plots.size() + 1);
+  files.Write("samples.csv", FormatEnsembleCsv(ensemble));
+  if (RenderingCompiled()) files.WritePng("fan.png", RenderSeriesPlot(EnsemblePlot(ensemble), *MakeDefaultRenderer()));
+  if (!options.quiet) {
+    std::printf("scene %s: %d samples of %zu robot(s) on %s under their driving noise, %d frames each, in %.2f s wall\n",
+                scene.name.c_str(), options.samples, ensemble.first.frames.size(), ensemble.first.backend.c_str(),
+                scene.num_frames(), wall);
+    // How far the samples end from each other: the spread of the first robot's last position.
+    double mx = 0, my = 0, n = 0;
+    for (const auto& path : ensemble.paths)
+      if (std::isfinite(path.back().x)) mx += path.back().x, my += path.back().y, ++n;
+    if (n > 1) {
+      mx /= n, my /= n;
+      double s2 = 0;
+      for (const auto& path : ensemble.paths)
+        if (std::isfinite(path.back().x)) s2 += std::pow(path.back().x - mx, 2) + std::pow(path.back().y - my, 2);
+      std::printf("  %s ends around x = %.3f m, y = %.3f m, %.3f m RMS apart from that\n", ensemble.robot.c_str(), mx, my,
+                  std::sqrt(s2 / n));
+    }
+    files.PrintWrote();
+  }
+  return kExitOk;
+}
+
 int Run(const RunOptions& options) {
   if (SceneRobotKind(options.scene) == "arm") {
     if (options.driving_noise != "model") throw InputError("--driving-noise is for omni robots; " + options.scene + " is an arm scene");
+    if (options.samples > 0) throw InputError("--samples draws omni robots' driving noise; " + options.scene + " is an arm scene");
     return RunArm(options);
   }
   Scene scene = LoadScene(options.scene);
@@ -74,6 +118,8 @@ int Run(const RunOptions& options) {
   if (!options.commands.empty()) ReplayCommandLog(options.commands, &scene);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
+  if (options.samples > 0) return RunEnsemble(scene, backend, options, out);
+  if (options.jobs != 0) throw InputError("--jobs runs the samples of --samples N in parallel; give --samples too");
 
   const int frames = scene.num_frames();
   Progress progress("run " + scene.name, !options.quiet);
@@ -139,6 +185,12 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
                   "Replay a recorded match: every robot sends its rows of this file (commands.csv of\n"
                   "twinsim serve; docs/serve.md), for as many frames as it holds");
   AddDrivingNoiseOption(cmd, &options->driving_noise);
+  cmd->add_option("--samples", options->samples,
+                  "Omni: N rollouts that differ only in the robots' driving noise: sample 0's files as a plain run,\n"
+                  "samples.csv (t,sample,x,y,theta: the first robot's true pose) and fan.png")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--jobs", options->jobs, "Threads for --samples (0: one per core); the files do not depend on it")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Run(*options); });
 }
