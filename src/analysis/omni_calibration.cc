@@ -157,4 +157,32 @@ double MeanLogScore(const std::vector<PredictiveError>& rows) {
   return sum / static_cast<double>(rows.size());
 }
 
+std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
+                                              std::vector<int> horizons, int stride) {
+  std::sort(horizons.begin(), horizons.end());
+  std::vector<OmniCalibration> out;
+  if (horizons.empty()) return out;
+  const int longest = horizons.back();
+  OmniReplayResult r;
+  if (log.FrameIndex(log.rows.size() - 1) > longest + kWarmUpFrames) {
+    OmniReplayOptions o;
+    o.backend = backend;
+    o.horizon = longest;
+    o.also.assign(horizons.begin(), horizons.end() - 1);
+    o.covariance = true;
+    o.stride = stride;
+    o.stride_origin = 0;
+    r = ReplayOmniLog(model, log, o);
+  }
+  for (std::size_t q = 0; q < horizons.size(); ++q) {
+    std::vector<PredictiveError> rows;
+    if (!r.predicted.empty()) rows = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q]);
+    OmniCalibration c = Calibrate(rows, ConstantSpread(rows));
+    c.frames = horizons[q];
+    c.seconds = c.frames * log.frame_period;
+    out.push_back(c);
+  }
+  return out;
+}
+
 }  // namespace twinsim

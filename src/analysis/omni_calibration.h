@@ -71,6 +71,14 @@ double ConstantSpread(const std::vector<PredictiveError>& rows);
 // Scores `rows` at one horizon, the baseline with `constant_spread` (from other rows).
 OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double constant_spread);
 
+// The calibration of `model` on `backend` (a physics one: the observer's) over a whole
+// log at each of `horizons` (frames; 4, 16 and 63 by default), predicting from every
+// `stride`-th frame after the observer's warm-up (`compare`). The constant spread is
+// fitted on the same rows: a baseline with hindsight, so a model that beats it beats any
+// constant spread. A horizon the log is too short for has no rows. Throws as ReplayOmniLog.
+std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
+                                              std::vector<int> horizons = {4, 16, 63}, int stride = 2);
+
 // The negative log density (nats) of one row's pose under its Gaussian; infinity for a
 // covariance that is not positive definite.
 double LogScore(const PredictiveError& row);

@@ -88,6 +88,30 @@ void DrawSamples(const Pose2& mean, const Eigen::Matrix3d& c, int n, Rng* rng, s
   }
 }
 
+// One frame into the filter; a divergence names the log row at or before the frame.
+void AddFrameAt(OmniObserver* observer, const OmniLog& log, const std::map<int, std::size_t>& row_of_frame, int f,
+                const std::optional<Pose2>& camera, const Twist2& command) {
+  try {
+    observer->AddFrame(camera, command);
+  } catch (const CheckFailed& e) {
+    auto at = row_of_frame.upper_bound(f);
+    const std::size_t row = at == row_of_frame.begin() ? 0 : std::prev(at)->second;
+    throw CheckFailed(log.path + ":" + std::to_string(log.line_of[row]) + ": " + e.what());
+  }
+}
+
+// Row `at` of *result from frame j (1..K) of `prediction`, its heading moved by `shift`
+// onto the log's branch, with its covariance where the result keeps them.
+void PutPrediction(const OmniPrediction& prediction, int j, std::size_t at, double shift,
+                   const std::function<void(std::size_t, const Pose2&)>& check, OmniReplayResult* result) {
+  Pose2 p = prediction.pose[static_cast<std::size_t>(j - 1)];
+  check(at, p);
+  p.theta += shift;
+  result->pose[at] = p;
+  result->predicted[at] = true;
+  if (!result->covariance.empty()) result->covariance[at] = prediction.pose_covariance[static_cast<std::size_t>(j - 1)];
+}
+
 // The observer's replay (OmniReplayOptions::state "observer"): the filter runs along the
 // log; each prediction (or the stretch's free run) starts from its estimate.
 void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
@@ -116,14 +140,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     auto here = row_of_frame.find(f);
     std::optional<Pose2> camera;
     if (here != row_of_frame.end() && log.rows[here->second].measured) camera = log.rows[here->second].pose;
-    try {
-      observer.AddFrame(camera, command_at[static_cast<std::size_t>(f)]);
-    } catch (const CheckFailed& e) {
-      // Where in the log: the row at or before this frame.
-      auto at = row_of_frame.upper_bound(f);
-      const std::size_t row = at == row_of_frame.begin() ? 0 : std::prev(at)->second;
-      throw CheckFailed(log.path + ":" + std::to_string(log.line_of[row]) + ": " + e.what());
-    }
+    AddFrameAt(&observer, log, row_of_frame, f, camera, command_at[static_cast<std::size_t>(f)]);
     if (observer.started() && start_frame < 0) start_frame = f;
     if (here == row_of_frame.end()) continue;
     const std::size_t row = here->second;
@@ -159,21 +176,12 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     if (!any) continue;
     const OmniPrediction prediction = observer.PredictAhead(k, planned(f, f + k), with_covariance);
     const double shift = unwrap_shift(row);
-    // Row `at` of `result` from the prediction's frame j (1..K).
-    auto put = [&](OmniReplayResult* result, std::size_t at, int j) {
-      Pose2 p = prediction.pose[static_cast<std::size_t>(j - 1)];
-      check(at, p);
-      p.theta += shift;
-      result->pose[at] = p;
-      result->predicted[at] = true;
-      if (with_covariance) result->covariance[at] = prediction.pose_covariance[static_cast<std::size_t>(j - 1)];
-    };
     for (std::size_t a = 0; a < options.also.size(); ++a) {
       auto at = row_of_frame.find(f + options.also[a]);
-      if (at != row_of_frame.end()) put(&out->also[a], at->second, options.also[a]);
+      if (at != row_of_frame.end()) PutPrediction(prediction, options.also[a], at->second, shift, check, &out->also[a]);
     }
     if (target == row_of_frame.end()) continue;
-    put(out, target->second, k);
+    PutPrediction(prediction, k, target->second, shift, check, out);
     if (options.samples > 0)
       DrawSamples(out->pose[target->second], prediction.pose_covariance.back(), options.samples, &draws,
                   &out->samples[target->second]);

@@ -45,6 +45,7 @@ struct Score {
   double worst_t = 0;
   int channels = 0;  // compared: the worst is picked among them
   int blocks_changed = 0, blocks_improved = 0;  // selection blocks (SquaredResiduals::selection_block)
+  int blocks = 0;                               // selection blocks in all
 };
 
 // Most of the selection blocks a candidate changes, it improves.
@@ -76,11 +77,15 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
       block_gain += gain[i];
       ++i;
     } while (i < gain.size() && blocked && before.selection_block[i] == before.selection_block[start]);
+    ++s.blocks;
     if (std::abs(block_gain) > kBlockChanged * block_before) {
       ++s.blocks_changed;
       if (block_gain > 0) ++s.blocks_improved;
     }
   }
+  // The selection blocks lie apart (fit and test blocks between them): each is one
+  // independent piece of evidence at most.
+  if (blocked) AccountForBlocks(gain, before.selection_block, &s.test);
   for (std::size_t c = 0; c < before.selection_by_channel.size() && c < after.selection_by_channel.size(); ++c) {
     const std::vector<double>& b = before.selection_by_channel[c];
     const std::vector<double>& a = after.selection_by_channel[c];

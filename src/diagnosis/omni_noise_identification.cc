@@ -204,6 +204,52 @@ NoiseValues StandardErrors(const std::function<std::vector<HorizonRows>(const No
   return se;
 }
 
+// A pattern search from `v` over its first `coordinates` coordinates: each up and down by
+// the step, on along a direction while it pays (up to four steps); the step halves when
+// a whole sweep finds nothing better, down to 5 %, or until *evaluations reaches
+// `budget`. *best holds cost(v) on entry and the best found on return.
+NoiseValues PatternSearch(const std::function<double(const NoiseValues&)>& cost, NoiseValues v, int coordinates,
+                          int budget, double* best, int* evaluations) {
+  for (double step = std::log(2.0); step >= std::log(1.05) && *evaluations < budget; step /= 2) {
+    bool moved = true;
+    while (moved && *evaluations < budget) {
+      moved = false;
+      for (int i = 0; i < coordinates && *evaluations < budget; ++i) {
+        for (double sign : {1.0, -1.0}) {
+          bool paid = false;
+          for (int k = 0; k < 4 && *evaluations < budget; ++k) {
+            NoiseValues trial = v;
+            trial[i] += sign * step;
+            trial = Clamped(trial);
+            if (trial[i] == v[i]) break;
+            const double c = cost(trial);
+            ++*evaluations;
+            if (c >= *best) break;
+            *best = c, v = trial, moved = paid = true;
+          }
+          if (paid) break;
+        }
+      }
+    }
+  }
+  return v;
+}
+
+// The report's parameters: start and identified values, errors from the coordinates'.
+std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const NoiseValues& v, const NoiseValues& se) {
+  std::vector<OmniNoiseParameter> out;
+  for (int i = 0; i < kNoiseParams; ++i) {
+    OmniNoiseParameter p;
+    p.name = kNames[i];
+    p.unit = kUnits[i];
+    p.start = FromCoordinate(i, start[i]);
+    p.value = FromCoordinate(i, v[i]);
+    p.standard_error = Slope(i, v[i]) * se[i];  // first order
+    out.push_back(p);
+  }
+  return out;
+}
+
 }  // namespace
 
 bool ScoredInBlocks(const OmniBlockedStretch& s, std::size_t i, bool held_out, int horizon) {
@@ -248,38 +294,14 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   out.fit_before = Cost(first);
   int evaluations = 1;
 
-  // A pattern search: each coordinate up and down by the step, on along a direction
-  // while it pays; the step halves when a whole sweep finds nothing better. First at the
-  // same spread at every speed, then with the growth as well, from there.
-  auto search = [&](NoiseValues v, double* best, int coordinates, int budget) {
-    for (double step = std::log(2.0); step >= std::log(1.05) && evaluations < budget; step /= 2) {
-      bool moved = true;
-      while (moved && evaluations < budget) {
-        moved = false;
-        for (int i = 0; i < coordinates && evaluations < budget; ++i) {
-          for (double sign : {1.0, -1.0}) {
-            bool paid = false;
-            for (int k = 0; k < 4 && evaluations < budget; ++k) {
-              NoiseValues trial = v;
-              trial[i] += sign * step;
-              trial = Clamped(trial);
-              if (trial[i] == v[i]) break;
-              const double c = Cost(fit_rows(trial));
-              ++evaluations;
-              if (c >= *best) break;
-              *best = c, v = trial, moved = paid = true;
-            }
-            if (paid) break;
-          }
-        }
-      }
-    }
-    return v;
-  };
+  auto fit_cost = [&](const NoiseValues& x) { return Cost(fit_rows(x)); };
   double flat_cost = out.fit_before;
-  const NoiseValues flat = search(start, &flat_cost, kPerSpeed, evaluations + options.max_evaluations);
+  // First the same spread at every speed, then with the two growths as well, from there.
+  const NoiseValues flat =
+      PatternSearch(fit_cost, start, kPerSpeed, evaluations + options.max_evaluations, &flat_cost, &evaluations);
   double grow_cost = flat_cost;
-  const NoiseValues grow = search(flat, &grow_cost, kNoiseParams, evaluations + options.max_evaluations);
+  const NoiseValues grow =
+      PatternSearch(fit_cost, flat, kNoiseParams, evaluations + options.max_evaluations, &grow_cost, &evaluations);
 
   // The growth with speed only where the held-out blocks score it better than none.
   NoiseValues v = flat;
@@ -310,15 +332,7 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   out.held_out_after = Cost(held_after);
   out.kept = out.held_out_rows > 0 && out.held_out_after < out.held_out_before;
   out.model = WithNoise(model, v);
-  for (int i = 0; i < kNoiseParams; ++i) {
-    OmniNoiseParameter p;
-    p.name = kNames[i];
-    p.unit = kUnits[i];
-    p.start = FromCoordinate(i, start[i]);
-    p.value = FromCoordinate(i, v[i]);
-    p.standard_error = Slope(i, v[i]) * se[i];  // first order
-    out.parameters.push_back(p);
-  }
+  out.parameters = Parameters(start, v, se);
   if (!out.kept) {
     out.model = model;
     out.note = out.held_out_rows == 0

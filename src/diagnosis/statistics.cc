@@ -164,6 +164,27 @@ LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth) {
   return out;
 }
 
+void AccountForBlocks(const std::vector<double>& x, const std::vector<int>& block, LongRunTest* test) {
+  if (x.size() != block.size() || x.empty()) return;
+  const double mean = MeanOf(x);
+  std::vector<double> sums;  // per block, of the deviations from the mean
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (i == 0 || block[i] != block[i - 1]) sums.push_back(0);
+    sums.back() += x[i] - mean;
+  }
+  const double b = static_cast<double>(sums.size());
+  if (b < 2) return;
+  double ss = 0;
+  for (double s : sums) ss += s * s;
+  const double cluster = std::sqrt(b / (b - 1) * ss) / static_cast<double>(x.size());
+  test->standard_error = std::max(test->standard_error, cluster);
+  test->df = std::min(test->df, b - 1);
+  if (test->standard_error > 0) {
+    test->t = test->mean / test->standard_error;
+    test->p = StudentTUpperTail(test->t, test->df);
+  }
+}
+
 std::vector<bool> HolmReject(const std::vector<double>& p, double alpha) {
   std::vector<std::size_t> order;
   for (std::size_t k = 0; k < p.size(); ++k) {

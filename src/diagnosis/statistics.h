@@ -41,6 +41,14 @@ struct LongRunTest {
 // 400 AR(1) series with phi = 0.9 were rejected at the 5 % level, measured).
 LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth);
 
+// The test of `x`'s mean made to count its blocks (`block`, one number per row; rows of
+// a block consecutive): rows from B blocks that lie apart are B pieces of evidence at
+// most, however many rows and however short their correlation looks within a block. The
+// standard error becomes the larger of the long-run one and the blocks' (the cluster-
+// robust one, sqrt(B / (B - 1) sum_b (sum_{i in b} (x_i - mean))^2) / n), the degrees of
+// freedom at most B - 1, and t and p follow. Nothing changes with fewer than 2 blocks.
+void AccountForBlocks(const std::vector<double>& x, const std::vector<int>& block, LongRunTest* test);
+
 // Holm's step-down procedure: which of the hypotheses with these p-values are rejected
 // at family-wise level alpha. NaN p-values are never rejected and do not count.
 std::vector<bool> HolmReject(const std::vector<double>& p, double alpha);

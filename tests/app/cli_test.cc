@@ -3,6 +3,7 @@
 
 #include <filesystem>
 
+#include "io/csv_table.h"
 #include "robots/omni/omni_log.h"
 #include "test_util.h"
 
@@ -170,6 +171,20 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
   const std::string errors = testing::ReadText(dir + "/compare/errors.csv");
   EXPECT_NE(errors.find("\nlearned,learned,4 frames,"), std::string::npos) << errors;
   EXPECT_NE(errors.find("\nresidual,learned,4 frames,"), std::string::npos) << errors;
+  // The physics source's predictive distribution (the observer's), the learned ones none.
+  const CsvTable calibration = ParseCsvTable(testing::ReadText(dir + "/compare/calibration.csv"), "calibration.csv");
+  ASSERT_EQ(calibration.header.size(), 14u);
+  EXPECT_EQ(calibration.header[5], "position_50");
+  ASSERT_EQ(calibration.rows.size(), 3u);  // analytic at 4, 16 and 63 frames
+  for (const auto& row : calibration.rows) {
+    EXPECT_GT(row[4], 100) << "rows";
+    // The log is the model's own plant with no driving noise, the model's default noise
+    // 0.1 m/s: its ellipses are far too wide, and hold nearly every position.
+    EXPECT_GT(row[5], 0.9);
+    EXPECT_GE(row[6], row[5]);
+    EXPECT_LE(row[6], 1.0);
+  }
+  EXPECT_EQ(testing::ReadText(dir + "/compare/calibration.csv").find("learned"), std::string::npos);
 
   // Over a changed model (same name, heavier) it is refused, naming the file.
   testing::WriteText(dir + "/heavier.yaml", "extends: " + omni4 + "\nchassis:\n  mass: 2.8\n");

@@ -69,6 +69,46 @@ TEST(DiagnosisStatistics, LongRunTestKeepsItsLevelOnCorrelatedRows) {
   EXPECT_GE(found, 360);           // a mean of 1 (long-run sd of the mean about 0.22)
 }
 
+// Gains from three selection blocks that lie apart, each shifted by its own offset (the
+// block's excitation, not an effect): within the series the rows look nearly white, so
+// the long-run test counts hundreds of degrees of freedom and finds the mean (0.13)
+// significant. Three blocks of 0.35, 0.1 and -0.05 are weak evidence of a positive mean:
+// counted by blocks (2 degrees of freedom, the blocks' spread as the error), it is not.
+TEST(DiagnosisStatistics, RowsFromThreeBlocksCountAsThreePiecesOfEvidence) {
+  Rng rng(21);
+  std::vector<double> gain;
+  std::vector<int> block;
+  int b = 0;
+  for (double offset : {0.35, 0.1, -0.05}) {
+    for (int i = 0; i < 400; ++i) {
+      gain.push_back(offset + rng.Gaussian());
+      block.push_back(b);
+    }
+    ++b;
+  }
+  LongRunTest test = LongRunMeanTest(gain, 4);
+  EXPECT_GT(test.df, 20);
+  EXPECT_LT(test.p, 0.01);
+  const LongRunTest plain = test;
+  AccountForBlocks(gain, block, &test);
+  EXPECT_EQ(test.df, 2);
+  EXPECT_GT(test.standard_error, 2 * plain.standard_error);
+  EXPECT_NEAR(test.p, StudentTUpperTail(test.mean / test.standard_error, 2), 1e-15);
+  EXPECT_GT(test.p, 0.05);
+  // The same rows with no block offsets: the blocks agree, and the evidence stays strong.
+  std::vector<double> steady;
+  for (double g : gain) steady.push_back(g);
+  for (std::size_t i = 0; i < steady.size(); ++i) steady[i] += 0.133 - (block[i] == 0 ? 0.35 : block[i] == 1 ? 0.1 : -0.05);
+  LongRunTest agree = LongRunMeanTest(steady, 4);
+  AccountForBlocks(steady, block, &agree);
+  EXPECT_LT(agree.p, 0.05);
+  // One block: nothing to count.
+  LongRunTest one = plain;
+  AccountForBlocks(gain, std::vector<int>(gain.size(), 7), &one);
+  EXPECT_EQ(one.df, plain.df);
+  EXPECT_EQ(one.p, plain.p);
+}
+
 TEST(DiagnosisStatistics, LjungBoxTellsWhiteFromCorrelated) {
   EXPECT_GT(LjungBox(Ar1(2000, 0.0, 0.0, 3), 20, 1).p, 0.01);
   EXPECT_LT(LjungBox(Ar1(2000, 0.5, 0.0, 3), 20, 1).p, 1e-6);

@@ -6,14 +6,17 @@
 #include <map>
 #include <memory>
 #include <set>
+#include <sstream>
 
 #include "analysis/arm_compare.h"
+#include "analysis/omni_calibration_report.h"
 #include "analysis/omni_compare.h"
 #include "app/commands/commands.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "engines/omni_engine.h"
+#include "io/csv_table.h"
 #include "io/output_files.h"
 #include "io/yaml_reader.h"
 #include "learning/arm_predictor.h"
@@ -256,6 +259,28 @@ int CompareArm(const CompareCliOptions& options) {
   return kExitOk;
 }
 
+// The calibration predicts 63 frames ahead from every this many frames.
+constexpr int kCalibrationStride = 4;
+
+// calibration.csv: one row per physics source and horizon.
+std::string FormatCalibrationCsv(
+    const std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>>& calibration) {
+  std::ostringstream s;
+  s << "source,backend,horizon_frames,seconds,rows,position_50,position_90,heading_50,heading_90,energy_score,"
+       "constant_spread_energy_score,constant_spread,energy_gain,log_score\n";
+  for (const auto& [source, rows] : calibration) {
+    for (const OmniCalibration& c : rows) {
+      s << source->label << "," << source->backend << "," << c.frames << "," << FormatCsvNumber(c.seconds) << ","
+        << c.rows;
+      for (double v : {c.position_50, c.position_90, c.heading_50, c.heading_90, c.energy_score,
+                       c.baseline_energy_score, c.baseline_spread, c.EnergyGain(), c.log_score})
+        s << "," << (c.rows > 0 ? FormatCsvNumber(v) : std::string());
+      s << "\n";
+    }
+  }
+  return s.str();
+}
+
 int Compare(const CompareCliOptions& options) {
   // Check everything before running or writing anything.
   const std::string kind = ModelFileRobotKind(options.models.front());
@@ -282,15 +307,30 @@ int Compare(const CompareCliOptions& options) {
   Progress progress("compare", !options.quiet);
   const OmniCompareResult result = CompareOmniLog(
       model, log, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
+
+  // The predictive distribution of every physics source (the observer's), 4, 16 and 63
+  // frames ahead (analysis/omni_calibration.h).
+  std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>> calibration;
+  for (const CompareSource& s : compare.sources) {
+    if (s.backend != "analytic" && s.backend != "ode" && s.backend != "bullet") continue;
+    progress.Update(0, 1, s.label + ", calibration");
+    calibration.emplace_back(&s, CalibrateOmniLog(model, log, s.backend, {4, 16, 63}, kCalibrationStride));
+  }
   progress.Finish();
 
   OutputFiles files(options.out);
   files.Write("errors.csv", FormatCompareErrorsCsv(result));
   files.Write("paths.csv", FormatComparePathsCsv(log, result));
+  if (!calibration.empty()) files.Write("calibration.csv", FormatCalibrationCsv(calibration));
   if (RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
     files.WritePng("paths.png", RenderPathPlot(FreeRunPlot(log, result, model.name, options.plot_seconds), *renderer));
     files.WritePng("errors.png", RenderSeriesPlot(ErrorPlot(result, frame_rate), *renderer));
+    for (const auto& [source, c] : calibration) {
+      SeriesPlot pit = PitPlot(c, false);
+      pit.title = source->label + ": " + pit.title;
+      files.WritePng("calibration_" + source->label + ".png", RenderSeriesPlot(pit, *renderer));
+    }
   } else {
     std::fprintf(stderr, "compare: warning: plots not drawn: %s\n", kRenderingNotCompiled);
   }
@@ -299,6 +339,11 @@ int Compare(const CompareCliOptions& options) {
     std::printf("compared %zu rows of %s (%g fps) through %s, delay %d frames\n\n%s\n", log.rows.size(),
                 options.log.c_str(), frame_rate, model.name.c_str(),
                 model.command_delay_frames + model.vision_delay_frames, result.FullReport().c_str());
+    for (const auto& [source, c] : calibration) {
+      std::printf("calibration of %s's predictions (the observer's; energy score against the best constant spread on "
+                  "these rows):\n%s\n",
+                  source->label.c_str(), FormatCalibrationTable(c).c_str());
+    }
     files.PrintWrote();
   }
   return kExitOk;
