@@ -68,11 +68,9 @@ RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, co
         const Eigen::Vector4d rims(w.front_right(), w.back_right(), w.back_left(), w.front_left());
         const std::optional<ProtocolWheelMap>& map = roster.robot(index).wheels;
         if (!map) {
-          SimulatorError* e = result.response.add_errors();
-          e->set_code("TWINSIM_UNSUPPORTED");
-          e->set_unsupported_capability(SIMULATOR_CAPABILITY_MOVE_WHEEL_VELOCITY);
-          e->set_message(robot + ": its wheels are not the protocol's four (one per quadrant); send local or "
-                                 "global velocity");
+          AddError(&result.response, "TWINSIM_UNSUPPORTED",
+                   robot + ": its wheels are not the protocol's four (one per quadrant); send local or global "
+                           "velocity");
           ok = false;
         } else if (!rims.allFinite() || rims.cwiseAbs().maxCoeff() > kMaxCommandSpeed) {
           AddError(&result.response, "TWINSIM_BAD_VALUE",
@@ -133,8 +131,7 @@ RobotControlResult ReadRobotControl(const std::string& bytes, TeamColor team, co
       result.ball_commands.emplace_back(index, ball);
     }
     RobotFeedback* f = result.response.add_feedback();
-    f->mutable_id()->set_id(static_cast<unsigned>(roster.robot(index).id));
-    f->mutable_id()->set_team(ProtocolTeam(team));
+    f->set_id(static_cast<unsigned>(roster.robot(index).id));
     f->set_dribbler_ball_contact(ball_contact && (*ball_contact)[static_cast<std::size_t>(index)]);
   }
   return result;

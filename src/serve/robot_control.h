@@ -15,7 +15,7 @@
 //                          kick speed, kick angle or dribbler speed out of range (the
 //                          move is still applied)
 //   TWINSIM_UNSUPPORTED    wheel velocities for a robot whose wheels are not the
-//                          protocol's four (unsupported_capability says so)
+//                          protocol's four (a three-wheel robot, say)
 //   TWINSIM_NO_BALL        a kick or the dribbler on a field without a ball (the scene
 //                          has no `ball:`; the move is still applied)
 //   TWINSIM_PORT_TAKEN     tournament mode: another address already drives this team

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
+#include <google/protobuf/any.pb.h>
 #include <google/protobuf/descriptor.h>
 
 #include "serve/robot_control.h"
+#include "ssl_simulation_custom_erforce_realism.pb.h"
 
 namespace twinsim {
 
@@ -31,6 +34,44 @@ namespace {
 // it is refused by name.
 constexpr double kMaxNoiseXy = 1;       // m, stddev_robot_p and stddev_ball_p beyond are refused
 constexpr double kMaxNoiseTheta = 3.2;  // rad, stddev_robot_phi
+
+using Refuse = std::function<void(const std::string& code, const std::string& message)>;
+
+// The camera's noise on the robots (the models' vision.noise_xy, noise_theta) and on the
+// ball (the scene's ball.vision), and the chance of a frame without the ball, from one
+// realism message into *config; `at` names it in errors ("config.realism_config.custom[0].").
+void TakeRealism(const RealismConfigErForce& realism, const std::string& at, bool has_ball, const Refuse& refuse,
+                 ConfigChange* config) {
+  auto take = [&](bool has, double v, const char* name, double most, const char* unit, bool of_ball,
+                  std::optional<double>* out) {
+    if (!has) return;
+    if (of_ball && !has_ball) {
+      refuse("TWINSIM_NO_BALL", at + name + ": the scene has no ball");
+    } else if (std::isfinite(v) && v >= 0 && v <= most) {
+      *out = v;
+    } else {
+      refuse("TWINSIM_BAD_VALUE", at + name + " " + std::to_string(v) + unit + " is not in 0.." + std::to_string(most));
+    }
+  };
+  take(realism.has_stddev_robot_p(), realism.stddev_robot_p(), "stddev_robot_p", kMaxNoiseXy, " m", false,
+       &config->robot_noise_xy);
+  take(realism.has_stddev_robot_phi(), realism.stddev_robot_phi(), "stddev_robot_phi", kMaxNoiseTheta, " rad", false,
+       &config->robot_noise_theta);
+  take(realism.has_stddev_ball_p(), realism.stddev_ball_p(), "stddev_ball_p", kMaxNoiseXy, " m", true,
+       &config->ball_noise_xy);
+  take(realism.has_missing_ball_detections(), realism.missing_ball_detections(), "missing_ball_detections", 1, "", true,
+       &config->ball_drop);
+  // Every other realism setting (delays, losses of commands and answers, ...) is named
+  // and refused.
+  static const char* const kTaken[] = {"stddev_robot_p", "stddev_robot_phi", "stddev_ball_p", "missing_ball_detections"};
+  std::vector<const google::protobuf::FieldDescriptor*> fields;
+  realism.GetReflection()->ListFields(realism, &fields);
+  for (const google::protobuf::FieldDescriptor* f : fields) {
+    if (std::find(std::begin(kTaken), std::end(kTaken), f->name()) != std::end(kTaken)) continue;
+    refuse("TWINSIM_UNSUPPORTED", at + f->name() + ": not supported; the camera takes stddev_robot_p, "
+                                  "stddev_robot_phi, stddev_ball_p and missing_ball_detections only");
+  }
+}
 
 }  // namespace
 
@@ -64,41 +105,23 @@ SimulatorCommandResult ReadSimulatorCommand(const std::string& bytes, const Team
         refuse("TWINSIM_BAD_VALUE", "config.vision_port " + std::to_string(port) + " is not in 1..65535");
       }
     }
-    if (config.has_realism_config() && config.realism_config().has_custom() &&
-        config.realism_config().custom().has_erforce()) {
-      const RealismConfigErForce& realism = config.realism_config().custom().erforce();
-      const std::string at = "config.realism_config.custom.erforce.";
-      // The camera's noise on the robots (the models' vision.noise_xy, noise_theta) and
-      // on the ball (the scene's ball.vision), and the chance of a frame without the ball.
-      auto take = [&](bool has, double v, const char* name, double most, const char* unit, bool of_ball,
-                      std::optional<double>* out) {
-        if (!has) return;
-        if (of_ball && !has_ball) {
-          refuse("TWINSIM_NO_BALL", at + name + ": the scene has no ball");
-        } else if (std::isfinite(v) && v >= 0 && v <= most) {
-          *out = v;
+    if (config.has_realism_config()) {
+      // Each payload an Any: the ER-Force realism message is taken, anything else named
+      // and refused.
+      const RealismConfig& realism_config = config.realism_config();
+      for (int k = 0; k < realism_config.custom_size(); ++k) {
+        const google::protobuf::Any& any = realism_config.custom(k);
+        const std::string at = "config.realism_config.custom[" + std::to_string(k) + "]";
+        RealismConfigErForce realism;
+        if (!any.Is<RealismConfigErForce>()) {
+          refuse("TWINSIM_UNSUPPORTED", at + ": '" + any.type_url() +
+                                            "' is not a realism config twinsim knows (type.googleapis.com/"
+                                            "RealismConfigErForce, the protocol's proto/erforce/)");
+        } else if (!any.UnpackTo(&realism)) {
+          refuse("TWINSIM_MALFORMED", at + ": its value is not a RealismConfigErForce");
         } else {
-          refuse("TWINSIM_BAD_VALUE", at + name + " " + std::to_string(v) + unit + " is not in 0.." + std::to_string(most));
+          TakeRealism(realism, at + ".", has_ball, refuse, &result.config);
         }
-      };
-      take(realism.has_stddev_robot_p(), realism.stddev_robot_p(), "stddev_robot_p", kMaxNoiseXy, " m", false,
-           &result.config.robot_noise_xy);
-      take(realism.has_stddev_robot_phi(), realism.stddev_robot_phi(), "stddev_robot_phi", kMaxNoiseTheta, " rad",
-           false, &result.config.robot_noise_theta);
-      take(realism.has_stddev_ball_p(), realism.stddev_ball_p(), "stddev_ball_p", kMaxNoiseXy, " m", true,
-           &result.config.ball_noise_xy);
-      take(realism.has_missing_ball_detections(), realism.missing_ball_detections(), "missing_ball_detections", 1, "",
-           true, &result.config.ball_drop);
-      // Every other realism setting (delays, losses of commands and answers, ...) is
-      // named and refused.
-      static const char* const kTaken[] = {"stddev_robot_p", "stddev_robot_phi", "stddev_ball_p",
-                                           "missing_ball_detections"};
-      std::vector<const google::protobuf::FieldDescriptor*> fields;
-      realism.GetReflection()->ListFields(realism, &fields);
-      for (const google::protobuf::FieldDescriptor* f : fields) {
-        if (std::find(std::begin(kTaken), std::end(kTaken), f->name()) != std::end(kTaken)) continue;
-        refuse("TWINSIM_UNSUPPORTED", at + f->name() + ": not supported; the camera takes stddev_robot_p, "
-                                      "stddev_robot_phi, stddev_ball_p and missing_ball_detections only");
       }
     }
   }

@@ -19,6 +19,7 @@
 
 #include "backends/omni_backend_factory.h"
 #include "scene/scene.h"
+#include "ssl_simulation_custom_erforce_realism.pb.h"
 #include "ssl_simulation_control.pb.h"
 #include "ssl_simulation_robot_control.pb.h"
 #include "ssl_vision_wrapper.pb.h"
@@ -836,10 +837,11 @@ TEST(LiveField, ConfigurationMovesVisionAndSetsTheCameraNoiseAndRefusesTheRest) 
         SimulatorCommand command;
         SimulatorConfig* config = command.mutable_config();
         config->set_vision_port(static_cast<unsigned>(vision2.port()));
-        RealismConfigErForce* realism = config->mutable_realism_config()->mutable_custom()->mutable_erforce();
-        realism->set_stddev_robot_p(0);
-        realism->set_stddev_robot_phi(0);
-        realism->set_robot_command_loss(0.5f);
+        RealismConfigErForce realism;
+        realism.set_stddev_robot_p(0);
+        realism.set_stddev_robot_phi(0);
+        realism.set_robot_command_loss(0.5f);
+        config->mutable_realism_config()->add_custom()->PackFrom(realism);
         RobotSpecs* specs = config->add_robot_specs();
         specs->mutable_id()->set_id(0);
         specs->mutable_id()->set_team(BLUE);
@@ -897,9 +899,10 @@ TEST(LiveField, TheBallsCameraNoiseAndMissedDetectionsAreSetOverTheProtocol) {
   LiveField field(scene, MakeSimulation(scene, "analytic"), LockstepOptions(vision.port(), frames));
   auto realism = [](float noise, float missing) {
     SimulatorCommand command;
-    RealismConfigErForce* r = command.mutable_config()->mutable_realism_config()->mutable_custom()->mutable_erforce();
-    r->set_stddev_ball_p(noise);
-    r->set_missing_ball_detections(missing);
+    RealismConfigErForce r;
+    r.set_stddev_ball_p(noise);
+    r.set_missing_ball_detections(missing);
+    command.mutable_config()->mutable_realism_config()->add_custom()->PackFrom(r);
     return command.SerializeAsString();
   };
   std::vector<SSL_DetectionFrame> seen;

@@ -11,6 +11,7 @@
 #include "serve/robot_control.h"
 #include "serve/simulator_control.h"
 #include "serve/vision_packets.h"
+#include "ssl_simulation_custom_erforce_realism.pb.h"
 #include "ssl_simulation_robot_control.pb.h"
 #include "test_util.h"
 
@@ -100,8 +101,7 @@ TEST(RobotControl, LocalAndGlobalVelocitiesBecomeMovesForTheTeamsOwnRobots) {
   EXPECT_DOUBLE_EQ(r.moves[0].second.velocity.vy, -0.5);
   EXPECT_EQ(r.response.errors_size(), 0);
   ASSERT_EQ(r.response.feedback_size(), 1);
-  EXPECT_EQ(r.response.feedback(0).id().id(), 1u);
-  EXPECT_EQ(r.response.feedback(0).id().team(), BLUE);
+  EXPECT_EQ(r.response.feedback(0).id(), 1u);
 
   RobotControl global;
   RobotCommand* c = global.add_robot_commands();
@@ -153,7 +153,8 @@ TEST(RobotControl, RefusesTheOtherTeamsRobotsUnknownIdsBadValuesAndWheels) {
                                              "TWINSIM_UNSUPPORTED", "TWINSIM_NO_BALL"}));
   EXPECT_NE(r.response.errors(0).message().find("robot 3 is a yellow robot"), std::string::npos)
       << r.response.errors(0).message();
-  EXPECT_EQ(r.response.errors(3).unsupported_capability(), SIMULATOR_CAPABILITY_MOVE_WHEEL_VELOCITY);
+  EXPECT_NE(r.response.errors(3).message().find("send local or global velocity"), std::string::npos)
+      << r.response.errors(3).message();
 }
 
 TEST(RobotControl, AnEmptyMoveCommandIsRefusedWithAnError) {
@@ -346,35 +347,44 @@ TEST(SimulatorControl, ConfigTakesTheVisionPortAndCameraNoiseAndNamesWhatItRefus
   SimulatorCommand command;
   SimulatorConfig* config = command.mutable_config();
   config->set_vision_port(10777);
-  RealismConfigErForce* realism = config->mutable_realism_config()->mutable_custom()->mutable_erforce();
+  RealismConfigErForce realism_message;
+  RealismConfigErForce* realism = &realism_message;
   realism->set_stddev_robot_p(0.002f);
   realism->set_stddev_robot_phi(0.01f);
   realism->set_stddev_ball_p(0.003f);
   realism->set_vision_delay(30000000);
+  // The realism config as the protocol sends it: a google.protobuf.Any.
+  auto pack = [&] {
+    config->mutable_realism_config()->clear_custom();
+    config->mutable_realism_config()->add_custom()->PackFrom(realism_message);
+  };
+  pack();
   const SimulatorCommandResult r = ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{});
   EXPECT_EQ(r.config.vision_port, std::optional<int>(10777));
   EXPECT_FLOAT_EQ(static_cast<float>(r.config.robot_noise_xy.value_or(-1)), 0.002f);
   EXPECT_FLOAT_EQ(static_cast<float>(r.config.robot_noise_theta.value_or(-1)), 0.01f);
   // The ball's noise on a field without a ball: no ball; the vision delay: unsupported.
   ASSERT_EQ(CodesOf(r.response), (std::vector<std::string>{"TWINSIM_NO_BALL", "TWINSIM_UNSUPPORTED"}));
-  EXPECT_NE(r.response.errors(0).message().find("config.realism_config.custom.erforce.stddev_ball_p"),
+  EXPECT_NE(r.response.errors(0).message().find("config.realism_config.custom[0].stddev_ball_p"),
             std::string::npos)
       << r.response.errors(0).message();
   EXPECT_FALSE(r.config.ball_noise_xy.has_value());
   // With a ball, the ball's camera noise and missed detections are taken; a probability
   // over 1 is a bad value.
   realism->set_missing_ball_detections(0.25f);
+  pack();
   const SimulatorCommandResult with_ball =
       ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{}, /*has_ball=*/true);
   EXPECT_EQ(CodesOf(with_ball.response), (std::vector<std::string>{"TWINSIM_UNSUPPORTED"}));
   EXPECT_FLOAT_EQ(static_cast<float>(with_ball.config.ball_noise_xy.value_or(-1)), 0.003f);
   EXPECT_FLOAT_EQ(static_cast<float>(with_ball.config.ball_drop.value_or(-1)), 0.25f);
   realism->set_missing_ball_detections(1.5f);
+  pack();
   const SimulatorCommandResult over =
       ReadSimulatorCommand(command.SerializeAsString(), roster, FieldModel{}, /*has_ball=*/true);
   EXPECT_EQ(CodesOf(over.response), (std::vector<std::string>{"TWINSIM_BAD_VALUE", "TWINSIM_UNSUPPORTED"}));
   EXPECT_FALSE(over.config.ball_drop.has_value());
-  EXPECT_NE(r.response.errors(1).message().find("config.realism_config.custom.erforce.vision_delay"),
+  EXPECT_NE(r.response.errors(1).message().find("config.realism_config.custom[0].vision_delay"),
             std::string::npos)
       << r.response.errors(1).message();
 
@@ -386,7 +396,9 @@ TEST(SimulatorControl, ConfigTakesTheVisionPortAndCameraNoiseAndNamesWhatItRefus
   c->add_robot_specs()->mutable_id()->set_id(0);
   c->mutable_robot_specs(0)->mutable_id()->set_team(BLUE);
   c->set_vision_port(70000);
-  c->mutable_realism_config()->mutable_custom()->mutable_erforce()->set_stddev_robot_p(-1);
+  RealismConfigErForce negative;
+  negative.set_stddev_robot_p(-1);
+  c->mutable_realism_config()->add_custom()->PackFrom(negative);
   const SimulatorCommandResult bad = ReadSimulatorCommand(rest.SerializeAsString(), roster, FieldModel{});
   ASSERT_TRUE(bad.parsed);
   EXPECT_EQ(CodesOf(bad.response), (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_UNSUPPORTED",
