@@ -56,12 +56,32 @@ struct RobotControlResult {
   RobotControlResponse response;
 };
 
-// Adds a SimulatorError with `code` and `message` to `errors` of any response.
+// An answer lists at most this many errors, then one TWINSIM_MORE_ERRORS counting the
+// rest: a datagram of a few kB asking for thousands of errors gets a short answer (no
+// amplification, nothing near the 64 kB a datagram can hold).
+inline constexpr int kMaxErrorsPerAnswer = 16;
+inline constexpr const char* kMoreErrors = "TWINSIM_MORE_ERRORS";
+
+// Adds a SimulatorError with `code` and `message` to `errors` of any response, or counts
+// it in the last entry once kMaxErrorsPerAnswer are listed ("... and N more errors").
 template <typename Response>
 void AddError(Response* response, const std::string& code, const std::string& message) {
-  SimulatorError* e = response->add_errors();
-  e->set_code(code);
-  e->set_message(message);
+  if (response->errors_size() < kMaxErrorsPerAnswer) {
+    SimulatorError* e = response->add_errors();
+    e->set_code(code);
+    e->set_message(message);
+    return;
+  }
+  int more = 0;
+  if (response->errors_size() == kMaxErrorsPerAnswer) {
+    response->add_errors()->set_code(kMoreErrors);
+  } else {
+    more = std::stoi(response->errors(kMaxErrorsPerAnswer).message().substr(8));  // after "... and "
+  }
+  ++more;
+  response->mutable_errors(kMaxErrorsPerAnswer)
+      ->set_message("... and " + std::to_string(more) + (more == 1 ? " more error" : " more errors") +
+                    ", not listed (the first " + std::to_string(kMaxErrorsPerAnswer) + " are)");
 }
 
 // Reads one datagram from `team`'s port. `ball_contact` (per robot index: the ball

@@ -157,6 +157,27 @@ TEST(RobotControl, RefusesTheOtherTeamsRobotsUnknownIdsBadValuesAndWheels) {
       << r.response.errors(3).message();
 }
 
+// A datagram asking for a hundred errors (unknown robots) is answered with the first 16
+// and one entry counting the other 84: the answer stays short.
+TEST(RobotControl, AnAnswerListsSixteenErrorsAndCountsTheRest) {
+  RobotControl control;
+  for (unsigned id = 20; id < 120; ++id) {
+    RobotCommand* c = control.add_robot_commands();
+    c->set_id(id);
+    c->mutable_move_command()->mutable_local_velocity()->set_forward(1);
+    c->mutable_move_command()->mutable_local_velocity()->set_left(0);
+    c->mutable_move_command()->mutable_local_velocity()->set_angular(0);
+  }
+  const std::string bytes = control.SerializeAsString();
+  const RobotControlResult r = ReadRobotControl(bytes, TeamColor::kBlue, TwoBlueOneYellow());
+  EXPECT_EQ(r.refused, 100);
+  ASSERT_EQ(r.response.errors_size(), kMaxErrorsPerAnswer + 1);
+  EXPECT_EQ(r.response.errors(15).code(), "TWINSIM_UNKNOWN_ROBOT");
+  EXPECT_EQ(r.response.errors(16).code(), "TWINSIM_MORE_ERRORS");
+  EXPECT_EQ(r.response.errors(16).message(), "... and 84 more errors, not listed (the first 16 are)");
+  EXPECT_LT(r.response.ByteSizeLong(), bytes.size());
+}
+
 TEST(RobotControl, AnEmptyMoveCommandIsRefusedWithAnError) {
   // Counted as refused and named in the answer (it was counted with no error before).
   const TeamRoster roster = TwoBlueOneYellow();
