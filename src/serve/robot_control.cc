@@ -10,8 +10,6 @@
 namespace twinsim {
 namespace {
 
-Team ProtocolTeam(TeamColor team) { return team == TeamColor::kBlue ? BLUE : YELLOW; }
-
 bool InLimits(const Twist2& v) {
   return IsFinite(v) && std::hypot(v.vx, v.vy) <= kMaxCommandSpeed && std::abs(v.omega) <= kMaxCommandOmega;
 }

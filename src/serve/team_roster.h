@@ -27,7 +27,7 @@ struct TeamRobot {
   TeamColor team = TeamColor::kBlue;
   int id = 0;  // 0..15
   // Empty: the robot's wheels are not the protocol's four (see WheelMapFor).
-  std::optional<ProtocolWheelMap> wheels;
+  std::optional<ProtocolWheelMap> wheels{};
 };
 
 struct OmniModel;

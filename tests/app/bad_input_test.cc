@@ -385,8 +385,6 @@ struct BadInputCase {
   std::string also{};  // a second substring stderr must contain
 };
 
-std::ostream& operator<<(std::ostream& os, const BadInputCase& c) { return os << c.name; }
-
 std::vector<BadInputCase> Cases() {
   return {
       {"omni_log_empty", {{"log.csv", std::string()}},

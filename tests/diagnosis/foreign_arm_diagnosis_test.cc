@@ -99,7 +99,7 @@ struct ForeignCase {
   std::string name;  // the vocabulary effect expected; "" outside the vocabulary
   int joint;         // 0-based, -1 for the payload
   testing::HiddenArmTorque hidden;
-  std::string payload_yaml;  // a payload the plant's links carry instead ("" none)
+  std::string payload_yaml{};  // a payload the plant's links carry instead ("" none)
 };
 
 void PrintTo(const ForeignCase& c, std::ostream* os) { *os << c.label; }
