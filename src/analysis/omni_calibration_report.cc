@@ -5,22 +5,14 @@
 #include <sstream>
 
 #include "io/html_text.h"
+#include "io/printf_number.h"
 
 namespace twinsim {
 
 namespace {
 
-std::string Percent(double share) {
-  char s[32];
-  std::snprintf(s, sizeof s, "%.1f", 100 * share);
-  return s;
-}
-
-std::string Millimetres(double m) {
-  char s[32];
-  std::snprintf(s, sizeof s, "%.2f", 1000 * m);
-  return s;
-}
+std::string Percent(double share) { return PrintfNumber("%.1f", 100 * share); }
+std::string Millimetres(double m) { return PrintfNumber("%.2f", 1000 * m); }
 
 std::string HorizonLabel(const OmniCalibration& c) {
   char s[64];

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "io/printf_number.h"
 #include "render/raster.h"
 
 namespace twinsim {
@@ -27,14 +28,9 @@ constexpr std::uint32_t kCandidateBlue = 0x0072b2ff;    // Okabe-Ito blue
 constexpr std::uint32_t kToleranceOrange = 0xe69f00ff;  // Okabe-Ito orange
 constexpr std::uint32_t kFrameGrey = 0xccccccff;
 
-std::string Format(const char* format, double a) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, a);
-  return buf;
-}
-std::string Mm(double metres) { return Format("%.3f", metres * 1000); }
-std::string Deg(double radians) { return Format("%.3f", radians * 180 / kPi); }
-std::string Sec(double seconds) { return Format("%.3f", seconds); }
+std::string Mm(double metres) { return PrintfNumber("%.3f", metres * 1000); }
+std::string Deg(double radians) { return PrintfNumber("%.3f", radians * 180 / kPi); }
+std::string Sec(double seconds) { return PrintfNumber("%.3f", seconds); }
 
 bool EndsWith(const std::string& s, const std::string& end) {
   return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
@@ -163,13 +159,13 @@ std::string Table(const std::vector<std::vector<std::string>>& rows) {
 bool RegressOptions::IsValid(std::string* error) const {
   std::vector<std::string> messages;
   if (!(tolerance >= 0) || !std::isfinite(tolerance))
-    messages.push_back("tolerance must be a finite distance >= 0 m, got " + Format("%g", tolerance));
+    messages.push_back("tolerance must be a finite distance >= 0 m, got " + PrintfNumber("%g", tolerance));
   if (!(heading_tolerance >= 0))
-    messages.push_back("heading tolerance must be >= 0 rad, got " + Format("%g", heading_tolerance));
+    messages.push_back("heading tolerance must be >= 0 rad, got " + PrintfNumber("%g", heading_tolerance));
   if (pixel_threshold < 0 || pixel_threshold > 255)
     messages.push_back("pixel threshold must be within 0..255 channel levels, got " + std::to_string(pixel_threshold));
   if (!(pixel_tolerance >= 0) || (pixel_tolerance > 1 && std::isfinite(pixel_tolerance)))  // inf: no image check
-    messages.push_back("pixel tolerance must be a fraction in [0, 1], got " + Format("%g", pixel_tolerance));
+    messages.push_back("pixel tolerance must be a fraction in [0, 1], got " + PrintfNumber("%g", pixel_tolerance));
   if (error) {
     error->clear();
     for (std::size_t i = 0; i < messages.size(); ++i) *error += (i ? "\n" : "") + messages[i];
@@ -559,7 +555,7 @@ std::string RegressSummary::BriefReport() const {
     if (d.verdict != RegressVerdict::kRegressed) continue;
     const bool resized = d.width != d.golden_width || d.height != d.golden_height;
     offenders.push_back(
-        d.name + (resized ? " changed size" : " changed " + Format("%.2f", 100 * d.fraction) + "% of its pixels"));
+        d.name + (resized ? " changed size" : " changed " + PrintfNumber("%.2f", 100 * d.fraction) + "% of its pixels"));
     image_offenders = true;
   }
   const std::string tolerance = Mm(options.tolerance) + " mm";
@@ -571,7 +567,7 @@ std::string RegressSummary::BriefReport() const {
     if (trajectory_offenders) limits = "tolerance " + tolerance;
     if (image_offenders && std::isfinite(options.pixel_tolerance))
       limits += (limits.empty() ? "" : ", ") + std::string("pixel tolerance ") +
-                Format("%g", 100 * options.pixel_tolerance) + "%";
+                PrintfNumber("%g", 100 * options.pixel_tolerance) + "%";
     return out + (limits.empty() ? "" : " (" + limits + ")");
   }
   std::string out =
@@ -597,7 +593,7 @@ std::string RegressSummary::FullReport() const {
   out += std::isfinite(options.heading_tolerance) ? Deg(options.heading_tolerance) + " deg" : "reported only";
   out += "; a pixel differs beyond " + std::to_string(options.pixel_threshold) + " of 255 levels, changed pixels ";
   out += std::isfinite(options.pixel_tolerance)
-             ? "regress beyond " + Format("%g", 100 * options.pixel_tolerance) + "% of an image\n"
+             ? "regress beyond " + PrintfNumber("%g", 100 * options.pixel_tolerance) + "% of an image\n"
              : "reported only\n";
 
   if (!trajectories.empty()) {
@@ -620,9 +616,9 @@ std::string RegressSummary::FullReport() const {
       if (d.verdict != RegressVerdict::kWithin && d.verdict != RegressVerdict::kRegressed) continue;
       if (d.matched_rows > 0 && (d.max_distance > 0 || d.max_heading > 0)) {
         moved += "  " + d.name + ": max " + Mm(d.max_distance) + " mm at t = " + Sec(d.max_distance_t) +
-                 " s: golden (" + Format("%.4f", d.golden_at_max.x) + ", " + Format("%.4f", d.golden_at_max.y) +
-                 ") m, candidate (" + Format("%.4f", d.candidate_at_max.x) + ", " +
-                 Format("%.4f", d.candidate_at_max.y) + ") m\n";
+                 " s: golden (" + PrintfNumber("%.4f", d.golden_at_max.x) + ", " + PrintfNumber("%.4f", d.golden_at_max.y) +
+                 ") m, candidate (" + PrintfNumber("%.4f", d.candidate_at_max.x) + ", " +
+                 PrintfNumber("%.4f", d.candidate_at_max.y) + ") m\n";
         if (d.max_heading > 0)
           moved += "    heading up to " + Deg(d.max_heading) + " deg at t = " + Sec(d.max_heading_t) + " s\n";
       }
@@ -637,7 +633,7 @@ std::string RegressSummary::FullReport() const {
         moved += "  " + d.name + ": " + std::to_string(d.extra_frames) + " frame(s) only in the candidate\n";
       if (d.max_time_offset > kTimeNoise)
         moved +=
-            "  " + d.name + ": matched frames' times differ by up to " + Format("%.3g", d.max_time_offset) + " s\n";
+            "  " + d.name + ": matched frames' times differ by up to " + PrintfNumber("%.3g", d.max_time_offset) + " s\n";
     }
     out += moved.empty() ? "nothing moved\n" : "what moved:\n" + moved;
   }
@@ -655,7 +651,7 @@ std::string RegressSummary::FullReport() const {
           size = std::to_string(d.golden_width) + "x" + std::to_string(d.golden_height) + " -> " + size;
       }
       rows.push_back({d.name, size, compared ? std::to_string(d.differing_pixels) : "-",
-                      compared ? Format("%.4f", 100 * d.fraction) : "-",
+                      compared ? PrintfNumber("%.4f", 100 * d.fraction) : "-",
                       compared ? std::to_string(d.max_channel_difference) : "-", VerdictText(d, options)});
     }
     out += Table(rows);

@@ -12,17 +12,12 @@
 #include "core/math_constants.h"
 #include "core/rng.h"
 #include "io/csv_table.h"
+#include "io/printf_number.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_integrators.h"
 
 namespace twinsim {
 namespace {
-
-std::string Format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
 
 // The mean of sign(qd_i) of the reference over [t0, t1]: +-1 unless the velocity
 // changes sign inside, then weighted by where (found by bisection).
@@ -106,7 +101,7 @@ ArmTrial RunTrial(const ArmModel& plant, const ArmTrialInput& input, const ArmTr
     for (int s = 0; s < options.substeps; ++s) Rk4Step(plant, tau, h, /*friction=*/true, &work, &q, &qd);
     if (!q.allFinite() || !qd.allFinite() || qd.cwiseAbs().maxCoeff() > 1e4)
       throw CheckFailed("trial " + std::to_string(trial) + " diverged at t = " +
-                        Format("%.4f", static_cast<double>(k + 1) * input.sample_time) + " s");
+                        PrintfNumber("%.4f", static_cast<double>(k + 1) * input.sample_time) + " s");
   }
   return out;
 }
@@ -286,8 +281,8 @@ std::string BatchAdaptiveResult::BriefReport() const {
   first.error_rms.maxCoeff(&worst);
   std::ostringstream s;
   s << (converged ? "converged after " : "not converged after ") << trials.size() << " trial(s): parameter change "
-    << Format("%.2e", last.relative_change) << ", tracking error RMS " << Format("%.4g", first.error_rms[worst] * 1e3)
-    << " -> " << Format("%.4g", last.error_rms[worst] * 1e3) << " mrad (joint " << worst + 1 << ")";
+    << PrintfNumber("%.2e", last.relative_change) << ", tracking error RMS " << PrintfNumber("%.4g", first.error_rms[worst] * 1e3)
+    << " -> " << PrintfNumber("%.4g", last.error_rms[worst] * 1e3) << " mrad (joint " << worst + 1 << ")";
   return s.str();
 }
 
@@ -297,17 +292,17 @@ std::string BatchAdaptiveResult::FullReport() const {
   s << "Batch-adaptive estimation for " << model << ": " << base.rank() << " base parameters, " << samples_per_trial
     << " samples per trial\n";
   s << "PD gains: kp";
-  for (int i = 0; i < n; ++i) s << " " << Format("%.4g", kp[i]);
+  for (int i = 0; i < n; ++i) s << " " << PrintfNumber("%.4g", kp[i]);
   s << ", kd";
-  for (int i = 0; i < n; ++i) s << " " << Format("%.4g", kd[i]);
+  for (int i = 0; i < n; ++i) s << " " << PrintfNumber("%.4g", kd[i]);
   s << "\n  trial     change";
   for (int i = 1; i <= n; ++i) s << "   rms" << i << " [mrad]";
   for (int i = 1; i <= n; ++i) s << "   fb" << i << " [N m]";
   s << "\n";
   for (const BatchAdaptiveTrial& t : trials) {
-    s << Format("  %5.0f", t.trial) << Format("   %.2e", t.relative_change);
-    for (int i = 0; i < n; ++i) s << Format("   %11.4g", t.error_rms[i] * 1e3);
-    for (int i = 0; i < n; ++i) s << Format("   %9.4g", t.feedback_rms[i]);
+    s << PrintfNumber("  %5.0f", t.trial) << PrintfNumber("   %.2e", t.relative_change);
+    for (int i = 0; i < n; ++i) s << PrintfNumber("   %11.4g", t.error_rms[i] * 1e3);
+    for (int i = 0; i < n; ++i) s << PrintfNumber("   %9.4g", t.feedback_rms[i]);
     s << "\n";
   }
   s << "estimates (initial -> final):\n";
@@ -344,7 +339,7 @@ std::string FormatBatchAdaptiveCsv(const BatchAdaptiveResult& result) {
       }
     out += ',';
     // The change is often far below FormatCsvNumber's 1e-9 resolution.
-    out += Format("%.6e", t.relative_change);
+    out += PrintfNumber("%.6e", t.relative_change);
     out += '\n';
   }
   return out;

@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "core/rng.h"
+#include "io/printf_number.h"
 #include "robots/arm/arm_dynamics.h"
 
 namespace twinsim {
@@ -26,12 +27,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // The penalties aim inside the limits by this fraction, so that the optimum, which
 // leans on them, still passes the dense check.
 constexpr double kPenaltyTightening = 0.01;
-
-std::string FormatNumber(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
 
 // The base columns that hold sign(qd_i): (joint, column).
 std::vector<std::pair<int, int>> CoulombColumns(const ArmModel& model, const BaseParameters& base) {
@@ -371,16 +366,16 @@ bool ExcitationOptions::IsValid(std::string* why) const {
   if (start_at_rest && harmonics < 2)
     return fail("starting at rest needs at least 2 harmonics (the first one is fixed by the rest conditions)");
   if (!(fundamental >= 1e-3 && fundamental <= 100))
-    return fail("fundamental must be 0.001 to 100 Hz (a period of 1000 s to 10 ms), got " + FormatNumber("%g", fundamental));
+    return fail("fundamental must be 0.001 to 100 Hz (a period of 1000 s to 10 ms), got " + PrintfNumber("%g", fundamental));
   if (!(check_sample_time >= 0 && check_sample_time * fundamental <= 0.01))
-    return fail("check_sample_time must give at least 100 samples per period, got " + FormatNumber("%g", check_sample_time) +
-                " s at " + FormatNumber("%g", fundamental) + " Hz");
+    return fail("check_sample_time must give at least 100 samples per period, got " + PrintfNumber("%g", check_sample_time) +
+                " s at " + PrintfNumber("%g", fundamental) + " Hz");
   if (samples_per_period < 2 * harmonics + 2)
     return fail("samples_per_period must be at least 2 harmonics + 2 = " + std::to_string(2 * harmonics + 2) +
                 ", got " + std::to_string(samples_per_period));
   if (!(position_margin >= 0)) return fail("position_margin must not be negative");
   for (double a : acceleration_limits)
-    if (!(a > 0 && a <= 1e6)) return fail("acceleration limits must be positive and at most 1e6, got " + FormatNumber("%g", a));
+    if (!(a > 0 && a <= 1e6)) return fail("acceleration limits must be positive and at most 1e6, got " + PrintfNumber("%g", a));
   if (!(torque_fraction >= 0) || torque_fraction > 1) return fail("torque_fraction must be in [0, 1]");
   if (starts < 1) return fail("starts must be at least 1");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
@@ -523,7 +518,7 @@ FourierTrajectory RandomFeasibleExcitation(const ArmModel& model, const Excitati
                                               options.samples_per_period, 1e3);
   if (!(largest > 0))
     throw InputError("model '" + model.name + "': the nominal torque at rest exceeds " +
-                     FormatNumber("%g", options.torque_fraction) + " of an effort limit at the start q0");
+                     PrintfNumber("%g", options.torque_fraction) + " of an effort limit at the start q0");
   return Scaled(t, largest * fill);
 }
 
@@ -653,15 +648,15 @@ double EvaluateExcitationObjective(const ArmModel& model, const ExcitationOption
 
 std::string ExcitationSummary::BriefReport() const {
   std::ostringstream s;
-  s << "condition number " << FormatNumber("%.4g", start_condition) << " -> " << FormatNumber("%.4g", final_condition)
-    << " (random feasible median " << FormatNumber("%.4g", random_condition_median) << "), " << starts.size()
-    << " starts, " << iterations << " iterations, " << FormatNumber("%.1f", seconds) << " s";
+  s << "condition number " << PrintfNumber("%.4g", start_condition) << " -> " << PrintfNumber("%.4g", final_condition)
+    << " (random feasible median " << PrintfNumber("%.4g", random_condition_median) << "), " << starts.size()
+    << " starts, " << iterations << " iterations, " << PrintfNumber("%.1f", seconds) << " s";
   return s.str();
 }
 
 std::string ExcitationSummary::FullReport() const {
   std::ostringstream s;
-  s << "Excitation design for " << model << ": " << harmonics << " harmonics of " << FormatNumber("%g", fundamental)
+  s << "Excitation design for " << model << ": " << harmonics << " harmonics of " << PrintfNumber("%g", fundamental)
     << " Hz, " << parameters << " base parameters\n";
   s << "condition number of the scaled stacked base regressor (the criterion):\n";
   s << "  start   random feasible   optimised   iterations   shrink\n";
@@ -673,13 +668,13 @@ std::string ExcitationSummary::FullReport() const {
                   static_cast<int>(k) == best_start ? "  <- best" : "");
     s << line;
   }
-  s << "design: scaled " << FormatNumber("%.4g", final_condition) << ", unscaled " << FormatNumber("%.4g", final_condition_unscaled)
-    << ", unit-norm columns " << FormatNumber("%.4g", final_condition_equilibrated) << "\n";
+  s << "design: scaled " << PrintfNumber("%.4g", final_condition) << ", unscaled " << PrintfNumber("%.4g", final_condition_unscaled)
+    << ", unit-norm columns " << PrintfNumber("%.4g", final_condition_equilibrated) << "\n";
   s << "limits (peak / limit) per joint:\n";
   s << "  joint   q range [rad]        margin [rad]   |qd| [rad/s]     |qdd| [rad/s^2]   |tau| [N m]\n";
   for (std::size_t i = 0; i < margins.size(); ++i) {
     const ExcitationJointMargins& m = margins[i];
-    auto lim = [](double v) { return std::isfinite(v) ? FormatNumber("%.3g", v) : std::string("-"); };
+    auto lim = [](double v) { return std::isfinite(v) ? PrintfNumber("%.3g", v) : std::string("-"); };
     char line[200];
     std::snprintf(line, sizeof line, "  %5zu   [%6.3f, %6.3f]   %12.4f   %5.2f / %-6s   %6.2f / %-6s   %6.2f / %-6s\n",
                   i + 1, m.q_min, m.q_max, m.position_margin(), m.velocity_peak, lim(m.velocity_limit).c_str(),
