@@ -67,18 +67,24 @@ struct HorizonRows {
   std::vector<int> block;
 };
 
+// Which rows Collect gathers: the fit blocks'; the held-out blocks' (never a validation
+// log's: they choose); or the rows that report, the validation logs' where there are
+// any, else the held-out blocks'.
+enum class Rows { kFit, kHeldOutBlocks, kReport };
+
 // Replays every stretch of the kind once (in parallel) at the longest horizon, the
-// others on the way, and gathers the rows per horizon in stretch order. Held-out rows
-// are the validation logs' where there are any, else the held-out blocks'.
+// others on the way, and gathers the rows per horizon in stretch order.
 std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
-                                 const OmniNoiseOptions& options, bool held_out) {
+                                 const OmniNoiseOptions& options, Rows rows) {
   bool any_validation = false;
   for (const OmniBlockedStretch& s : stretches) any_validation = any_validation || s.validation;
+  const bool held_out = rows != Rows::kFit;
+  const bool validation_only = rows == Rows::kReport && any_validation;
   const int longest = *std::max_element(options.horizons.begin(), options.horizons.end());
   std::vector<std::vector<HorizonRows>> per(stretches.size(), std::vector<HorizonRows>(options.horizons.size()));
   ParallelFor(static_cast<int>(stretches.size()), options.threads, [&](int k) {
     const OmniBlockedStretch& s = stretches[static_cast<std::size_t>(k)];
-    if (held_out ? (any_validation && !s.validation) : s.validation) return;
+    if (s.validation != validation_only) return;
     OmniReplayOptions o;
     o.backend = options.backend;
     o.horizon = longest;
@@ -280,9 +286,10 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   OmniNoiseIdentification out;
   out.model = model;
   const NoiseValues start = Coordinates(model);
+  // The noise is chosen on the held-out blocks; validation logs only report.
   auto collect = [&](const NoiseValues& v, bool held_out) {
     try {
-      return Collect(WithNoise(model, v), stretches, options, held_out);
+      return Collect(WithNoise(model, v), stretches, options, held_out ? Rows::kHeldOutBlocks : Rows::kFit);
     } catch (const CheckFailed&) {
       return std::vector<HorizonRows>{};  // diverged: no rows, an infinite cost
     }
@@ -348,8 +355,8 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   OmniNoiseOptions scoring = options;
   scoring.stride = options.score_stride;
-  const std::vector<HorizonRows> fit = Collect(model, stretches, scoring, false);
-  const std::vector<HorizonRows> held = Collect(model, stretches, scoring, true);
+  const std::vector<HorizonRows> fit = Collect(model, stretches, scoring, Rows::kFit);
+  const std::vector<HorizonRows> held = Collect(model, stretches, scoring, Rows::kReport);
   const double period = stretches.empty() ? 0 : stretches.front().log->frame_period;
   std::vector<OmniCalibration> out;
   for (std::size_t q = 0; q < options.horizons.size(); ++q) {

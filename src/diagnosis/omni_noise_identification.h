@@ -15,9 +15,10 @@
 // search in the logarithms of the seven (doubling steps, halved in log until 5 %); then
 // again with the spreads' growth with the robot's speed and acceleration
 // (driving_noise.per_speed, per_acceleration; in log(1 + g)), kept only where the
-// held-out blocks score it better than none. The result is kept only where it scores better on the held-out blocks than the
-// fit's noise; standard errors from the fit blocks' scores (the outer products of each
-// block's gradient: blocks are nearly independent, rows within one are not).
+// held-out blocks score it better than none. The result is kept only where the held-out
+// blocks score it better than the fit's noise (validation logs never choose: they only
+// report the calibration). Standard errors: the sandwich of the cost's Hessian and the
+// fit blocks' gradients (blocks are nearly independent, rows within one are not).
 //
 //   std::vector<OmniBlockedStretch> stretches = ...;  // identification's blocks
 //   OmniNoiseIdentification n = IdentifyDrivingNoise(model, stretches, options);
@@ -76,7 +77,7 @@ struct OmniNoiseParameter {
 
 struct OmniNoiseIdentification {
   OmniModel model;       // the given model with the noise identified (kept or not)
-  bool kept = false;     // the held-out blocks scored better with it
+  bool kept = false;     // the held-out blocks (never the validation logs) scored better with it
   std::vector<OmniNoiseParameter> parameters;
   // Mean negative log density over the horizons (nats per row), fit and held-out blocks.
   double fit_before = 0, fit_after = 0;
