@@ -2,11 +2,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <sstream>
 
 #include "core/error.h"
@@ -34,7 +34,8 @@ OmniEnsemble RunOmniEnsemble(const Scene& scene, const std::string& backend, con
   OmniEnsemble out;
   out.paths.resize(static_cast<std::size_t>(options.samples));
   std::vector<SimulationResult> first(1);
-  std::atomic<int> done{0};
+  int done = 0;
+  std::mutex progress_mutex;  // the callback is the caller's: one thread at a time
   ParallelFor(options.samples, options.jobs, [&](int k) {
     Simulation sim = MakeSimulation(scene, backend, backend_options);
     sim.SetDrivingNoiseSample(scene.seed, static_cast<std::uint64_t>(k));
@@ -45,8 +46,9 @@ OmniEnsemble RunOmniEnsemble(const Scene& scene, const std::string& backend, con
       path.push_back(f.present ? f.truth : Pose2{nan, nan, nan});
     }
     if (k == 0) first[0] = std::move(r);
-    const int finished = ++done;
-    if (progress) progress(finished, options.samples);
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    ++done;
+    if (progress) progress(done, options.samples);
   });
   out.first = std::move(first[0]);
   for (const FrameRecord& f : out.first.frames[0]) out.t.push_back(f.t);
