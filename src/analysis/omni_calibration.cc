@@ -1,11 +1,11 @@
 #include "analysis/omni_calibration.h"
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "core/covariance_root.h"
 #include "core/math_constants.h"
 
 namespace twinsim {
@@ -29,12 +29,6 @@ const std::vector<Eigen::Vector2d>& StandardDraws() {
     return z;
   }();
   return draws;
-}
-
-// A square root of a 2 x 2 covariance (its positive part where rounding made it indefinite).
-Eigen::Matrix2d Root(const Eigen::Matrix2d& c) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(0.5 * (c + c.transpose()));
-  return eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
 }
 
 // The energy score of N(0, L L^T) at the outcome y.
@@ -129,7 +123,7 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
     h50 += std::abs(z) <= z50;
     h90 += std::abs(z) <= z90;
     ++out.heading_pit[static_cast<std::size_t>(PitBin(0.5 * std::erfc(-z / std::sqrt(2.0))))];
-    es += EnergyScore(Root(cxy), exy);
+    es += EnergyScore(CovarianceRoot(cxy), exy);
     base += EnergyScore(round, exy);
   }
   const double n = static_cast<double>(rows.size());

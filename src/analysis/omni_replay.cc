@@ -1,6 +1,5 @@
 #include "analysis/omni_replay.h"
 
-#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <iterator>
 #include <map>
@@ -8,6 +7,7 @@
 #include <sstream>
 
 #include "backends/omni_backend_factory.h"
+#include "core/covariance_root.h"
 #include "core/error.h"
 #include "core/rng.h"
 
@@ -74,12 +74,9 @@ OmniPoseErrors PoseErrorsInRobotFrame(const OmniLog& log, const OmniReplayResult
 namespace {
 
 // N draws of a pose from a Gaussian of `mean` and covariance `c` (x, y, theta) into *out:
-// mean + L z with L L^T = c (a covariance the filter made slightly indefinite by rounding
-// is read as its positive part).
+// mean + L z with L L^T = c (core/covariance_root.h).
 void DrawSamples(const Pose2& mean, const Eigen::Matrix3d& c, int n, Rng* rng, std::vector<Pose2>* out) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 * (c + c.transpose()));
-  const Eigen::Matrix3d root =
-      eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  const Eigen::Matrix3d root = CovarianceRoot(c);
   out->resize(static_cast<std::size_t>(n));
   for (Pose2& p : *out) {
     const Eigen::Vector3d z(rng->Gaussian(1.0), rng->Gaussian(1.0), rng->Gaussian(1.0));

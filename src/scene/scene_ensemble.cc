@@ -1,19 +1,18 @@
 #include "scene/scene_ensemble.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
 #include <mutex>
-#include <sstream>
 
+#include "core/covariance_root.h"
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "core/parallel.h"
-#include "io/csv_table.h"
 #include "learning/omni_predictor.h"
+#include "robots/omni/omni_log.h"
 
 namespace twinsim {
 
@@ -57,17 +56,11 @@ OmniEnsemble RunOmniEnsemble(const Scene& scene, const std::string& backend, con
 }
 
 std::string FormatEnsembleCsv(const OmniEnsemble& e) {
-  std::ostringstream s;
-  s << "t,sample,x,y,theta\n";
-  for (std::size_t f = 0; f < e.t.size(); ++f) {
-    for (std::size_t k = 0; k < e.paths.size(); ++k) {
-      const Pose2& p = e.paths[k][f];
-      if (!std::isfinite(p.x)) continue;
-      s << FormatCsvNumber(e.t[f]) << "," << k << "," << FormatCsvNumber(p.x) << "," << FormatCsvNumber(p.y) << ","
-        << FormatCsvNumber(p.theta) << "\n";
-    }
-  }
-  return s.str();
+  // Per frame, the samples' poses.
+  std::vector<std::vector<Pose2>> by_frame(e.t.size());
+  for (std::size_t f = 0; f < e.t.size(); ++f)
+    for (const auto& path : e.paths) by_frame[f].push_back(path[f]);
+  return FormatPoseSamplesCsv(e.t, by_frame);
 }
 
 SeriesPlot EnsemblePlot(const OmniEnsemble& e, double mark_seconds) {
@@ -114,8 +107,7 @@ SeriesPlot EnsemblePlot(const OmniEnsemble& e, double mark_seconds) {
       const Eigen::Vector2d d = Eigen::Vector2d(path[f].x, path[f].y) - mean;
       cov += d * d.transpose() / (n - 1);
     }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(cov);
-    const Eigen::Matrix2d root = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+    const Eigen::Matrix2d root = CovarianceRoot(cov);
     for (auto [series, p] : {std::pair{&inner, 0.5}, std::pair{&outer, 0.9}}) {
       const double r = std::sqrt(-2 * std::log(1 - p));  // chi-square, 2 degrees of freedom
       for (int j = 0; j <= 48; ++j) {

@@ -286,17 +286,22 @@ void WritePoseCsv(const std::string& path, const std::vector<double>& t, const s
   WriteFileAtomically(path, out);
 }
 
-void WritePoseSamplesCsv(const std::string& path, const std::vector<double>& t,
-                         const std::vector<std::vector<Pose2>>& samples) {
+std::string FormatPoseSamplesCsv(const std::vector<double>& t, const std::vector<std::vector<Pose2>>& samples) {
   std::string out = "t,sample,x,y,theta\n";
   for (std::size_t i = 0; i < t.size(); ++i) {
     for (std::size_t k = 0; k < samples[i].size(); ++k) {
       const Pose2& p = samples[i][k];
+      if (!IsFinite(p)) continue;
       out += FormatCsvNumber(t[i]) + ',' + std::to_string(k) + ',' + FormatCsvNumber(p.x) + ',' + FormatCsvNumber(p.y) +
              ',' + FormatCsvNumber(p.theta) + '\n';
     }
   }
-  WriteFileAtomically(path, out);
+  return out;
+}
+
+void WritePoseSamplesCsv(const std::string& path, const std::vector<double>& t,
+                         const std::vector<std::vector<Pose2>>& samples) {
+  WriteFileAtomically(path, FormatPoseSamplesCsv(t, samples));
 }
 
 OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last) {

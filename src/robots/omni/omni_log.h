@@ -71,7 +71,9 @@ void WriteOmniLog(const std::string& path, const std::vector<OmniLogRow>& rows);
 // Writes `t,x,y,theta` rows (a replay's output) atomically.
 void WritePoseCsv(const std::string& path, const std::vector<double>& t, const std::vector<Pose2>& poses);
 // t,sample,x,y,theta: samples[i] holds row i's draws (each row the same number), sample
-// 0..N-1 in order, written atomically (CONTRACT.md, replay --samples).
+// 0..N-1 in order (CONTRACT.md, replay --samples; run --samples); a pose that is not
+// finite (a robot off the field) is left out. Written atomically by the second.
+std::string FormatPoseSamplesCsv(const std::vector<double>& t, const std::vector<std::vector<Pose2>>& samples);
 void WritePoseSamplesCsv(const std::string& path, const std::vector<double>& t,
                          const std::vector<std::vector<Pose2>>& samples);
 
