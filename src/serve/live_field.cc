@@ -84,11 +84,6 @@ long long UnixNanos() {
       .count();
 }
 
-template <typename Message>
-void Answer(const UdpSocket& socket, const Message& message, const UdpEndpoint& to) {
-  socket.SendTo(message.SerializeAsString(), to);
-}
-
 }  // namespace
 
 bool ServeOptions::IsValid(std::string* why) const {
@@ -131,6 +126,7 @@ bool ServeOptions::IsValid(std::string* why) const {
   if (!teams.empty() && !lockstep) return fail("--teams applies to --lockstep only");
   for (const std::string& t : teams)
     if (t != "blue" && t != "yellow") return fail("--teams: unknown team '" + t + "' (known: blue, yellow)");
+  if (receive_buffer < 0) return fail("--receive-buffer is negative");
   if (max_datagram < 64 || max_datagram > 65507) return fail("--max-datagram " + std::to_string(max_datagram) + " is not in 64..65507 bytes");
   if (!(max_rate >= 1 && max_rate <= 1e6)) return fail("--max-rate is not in 1..1e6 datagrams/s");
   if (!(geometry_period > 0 && geometry_period <= 3600)) return fail("--geometry-period is not in (0, 3600] s");
@@ -145,6 +141,8 @@ std::string ServeSummary::Brief() const {
     << (clients[0].empty() ? "-" : clients[0]) << ", yellow " << (clients[1].empty() ? "-" : clients[1]) << "; "
     << counters.refused << " refused, " << counters.malformed + counters.oversized + counters.rate_dropped
     << " bad datagrams";
+  if (counters.kernel_dropped > 0) s << ", " << counters.kernel_dropped << " dropped by the kernel";
+  if (counters.failed_sends > 0) s << ", " << counters.failed_sends << " sends failed (" << last_send_error << ")";
   return s.str();
 }
 
@@ -156,6 +154,11 @@ std::string ServeSummary::Report() const {
     << "refused " << counters.refused << ", malformed " << counters.malformed << ", oversized "
     << counters.oversized << ", over the rate limit " << counters.rate_dropped << "\n"
     << "late frames " << counters.late_frames << "\n"
+    << "dropped by the kernel (receive buffer full) " << counters.kernel_dropped << "; receive buffer "
+    << receive_buffer << " bytes per port of " << receive_buffer_asked << " asked"
+    << (receive_buffer < receive_buffer_asked ? " (raise net.core.rmem_max, or run with CAP_NET_ADMIN)" : "") << "\n"
+    << "failed sends " << counters.failed_sends << (last_send_error.empty() ? "" : " (last: " + last_send_error + ")")
+    << "\n"
     << "frame work " << timing.frame_work.Brief() << "\n"
     << "frame start lateness " << timing.start_lateness.Brief() << "\n"
     << "command latency (arrival to delay line) " << timing.command_latency.Brief() << "\n"
@@ -196,6 +199,14 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   control_ = UdpSocket(options_.listen, options_.control_port);
   teams_[0].socket = UdpSocket(options_.listen, options_.blue_port);
   teams_[1].socket = UdpSocket(options_.listen, options_.yellow_port);
+  // The kernel's default buffer (about 200 kB) drops a burst of a few hundred datagrams
+  // before the loop reads them; the rate limit can only drop what reaches it.
+  receive_buffer_asked_ = options_.receive_buffer > 0
+                              ? options_.receive_buffer
+                              : static_cast<int>(std::min(1e9, options_.max_rate * kBufferedSeconds * kDatagramCost));
+  receive_buffer_ = std::min({control_.SetReceiveBuffer(receive_buffer_asked_),
+                              teams_[0].socket.SetReceiveBuffer(receive_buffer_asked_),
+                              teams_[1].socket.SetReceiveBuffer(receive_buffer_asked_)});
   for (const std::string& t : options_.teams) teams_[t == "blue" ? 0 : 1].waited = true;
   vision_to_ = UdpEndpoint{ParseIpv4(options_.vision_address), options_.vision_port};
   // A multicast group reaches every client on the network (and this host's own: loop),
@@ -244,10 +255,11 @@ void LiveField::SendVision(const std::vector<FrameRecord>& records) {
   }
   const int k = sim_.frame();
   const double dt = result_.timing.frame_dt();
-  // Lockstep stamps simulated time (deterministic); real time, Unix time as SSL-Vision.
+  // Lockstep stamps simulated time (deterministic); real time, Unix time as SSL-Vision:
+  // the wall clock when the frame captured began, whatever the pace was since.
   double t_capture = (k - vision_delay_) * dt, t_sent = k * dt;
   if (!options_.lockstep) {
-    t_capture += unix_start_;
+    t_capture = CaptureUnixTime(k);
     t_sent = UnixNow();
   }
   std::optional<Eigen::Vector3d> ball;
@@ -257,8 +269,20 @@ void LiveField::SendVision(const std::vector<FrameRecord>& records) {
   const int every = std::max(1, static_cast<int>(std::lround(options_.geometry_period / dt)));
   if (k % every == 0) *packet.mutable_geometry() = GeometryPacket(scene_.field, options_.boundary).geometry();
   last_vision_ = packet.SerializeAsString();
-  vision_out_.SendTo(last_vision_, vision_to_);
+  Send(vision_out_, last_vision_, vision_to_);
   ++counters_.vision_packets;
+}
+
+double LiveField::CaptureUnixTime(int k) const {
+  const int captured = k - vision_delay_;
+  if (captured >= 0) return frame_unix_[static_cast<std::size_t>(captured) % frame_unix_.size()];
+  // Before frame 0 the robots stood at their starts: stamped as if frames had run.
+  return unix_start_ + captured * result_.timing.frame_dt();
+}
+
+void LiveField::Send(const UdpSocket& socket, const std::string& bytes, const UdpEndpoint& to) {
+  if (socket.SendTo(bytes, to, &last_send_error_)) return;
+  ++counters_.failed_sends;
 }
 
 void LiveField::Drain(int port) {
@@ -266,6 +290,12 @@ void LiveField::Drain(int port) {
   for (int n = 0; n < kMaxDatagramsPerDrain; ++n) {
     std::optional<Datagram> d = socket.Receive(static_cast<std::size_t>(options_.max_datagram));
     if (!d) return;
+    if (d->kernel_drops) {
+      // The kernel's count is cumulative (and wraps at 2^32).
+      std::uint32_t& seen = kernel_drops_[static_cast<std::size_t>(port)];
+      counters_.kernel_dropped += static_cast<std::uint32_t>(*d->kernel_drops - seen);
+      seen = *d->kernel_drops;
+    }
     if (port == 2) {
       HandleControl(*d);
     } else {
@@ -414,9 +444,8 @@ void LiveField::ApplyControl(const SimulatorCommandResult& read) {
   }
   if (read.config.robot_noise_xy || read.config.robot_noise_theta) {
     for (int i = 0; i < sim_.num_robots(); ++i) {
-      const OmniModel& m = sim_.robot_model(i);
-      sim_.SetVisionNoise(i, read.config.robot_noise_xy.value_or(m.vision_noise_xy),
-                          read.config.robot_noise_theta.value_or(m.vision_noise_theta));
+      const VisionNoise& now = sim_.vision_noise(i);
+      sim_.SetVisionNoise(i, read.config.robot_noise_xy.value_or(now.xy), read.config.robot_noise_theta.value_or(now.theta));
     }
   }
 }
@@ -441,6 +470,9 @@ ServeSummary LiveField::Summary() const {
   s.wall = Seconds(Clock::now() - start_);
   for (std::size_t t = 0; t < 2; ++t)
     if (teams_[t].client) s.clients[t] = teams_[t].client->ToString();
+  s.receive_buffer_asked = receive_buffer_asked_;
+  s.receive_buffer = receive_buffer_;
+  s.last_send_error = last_send_error_;
   return s;
 }
 
@@ -448,12 +480,16 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   const RealtimeScope realtime(options_.realtime_priority, options_.cpu);
   start_ = last_refill_ = Clock::now();
   unix_start_ = UnixNow();
+  frame_unix_.assign(static_cast<std::size_t>(vision_delay_) + 1, unix_start_);
   Clock::time_point frame_end = start_, next_status = start_;
   const double dt = result_.timing.frame_dt();
   const std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
     const Clock::time_point frame_start = Clock::now();
-    if (!options_.lockstep) timing_.start_lateness.Add(Seconds(frame_start - frame_end));
+    if (!options_.lockstep) {
+      timing_.start_lateness.Add(Seconds(frame_start - frame_end));
+      frame_unix_[static_cast<std::size_t>(sim_.frame()) % frame_unix_.size()] = UnixNow();
+    }
     std::vector<FrameRecord> records = sim_.BeginFrame();
     SendVision(records);
     const Clock::duration vision_work = Clock::now() - frame_start;
@@ -493,7 +529,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       // network): the frame's vision again, which a client answers as it answers any.
       if (options_.lockstep && Clock::now() >= resend) {
         if (!FrameComplete()) {
-          vision_out_.SendTo(last_vision_, vision_to_);
+          Send(vision_out_, last_vision_, vision_to_);
           ++counters_.vision_packets;
         }
         resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));

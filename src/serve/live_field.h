@@ -58,6 +58,10 @@ struct ServeOptions {
   std::vector<std::string> teams;     // lockstep: teams waited for from frame 0 ("blue", "yellow")
   bool tournament = false;            // refuse simulator control; one address per team port
   int max_datagram = 8192;            // bytes; a larger datagram is refused
+  // bytes of each port's receive buffer (the kernel's accounting); 0: enough for a
+  // quarter of a second at max_rate (kBufferedSeconds). Beyond net.core.rmem_max only
+  // with CAP_NET_ADMIN; the summary says what the kernel granted.
+  int receive_buffer = 0;
   double max_rate = 1000;             // datagrams/s per port (lockstep: also per simulated s); beyond, dropped unanswered
   double geometry_period = 1;         // s of simulated time between geometry packets
   double boundary = 0.3;              // m between the walls and the field lines
@@ -79,6 +83,8 @@ struct ServeCounters {
   long long oversized = 0;           // datagrams over the size limit (answered)
   long long rate_dropped = 0;        // datagrams over the rate limit (dropped)
   long long late_frames = 0;         // real time: frames that started after their time
+  long long kernel_dropped = 0;      // datagrams the kernel dropped, its receive buffer full (as far as seen)
+  long long failed_sends = 0;        // vision packets and answers the system refused to send
 };
 
 // How long the loop took, on the wall clock (bench/serve_bench.cc, docs/benchmarks.md).
@@ -106,6 +112,9 @@ struct ServeSummary {
   double simulated = 0;  // s
   double wall = 0;       // s
   std::array<std::string, 2> clients;  // blue, yellow: the address that last sent, "" none
+  int receive_buffer_asked = 0;        // bytes, per port
+  int receive_buffer = 0;              // bytes, per port: what the kernel granted (the smallest)
+  std::string last_send_error;         // why the last refused send was refused
   // "1234 frames (41.1 s simulated) in 41.2 s wall; blue 127.0.0.1:5000, yellow -; 0 refused".
   std::string Brief() const;
   // Every counter, one per line, and the timing's quantiles.
@@ -121,10 +130,18 @@ class LiveField {
 
   // teleport_safely leaves at least this much between the ball and every chassis.
   static constexpr double kBallMargin = 0.02;  // m
+  // The default receive buffer holds this long at max_rate, at kDatagramCost bytes of
+  // the kernel's accounting per datagram (a RobotControl of 11 robots, about 400 bytes,
+  // costs about 1.3 kB on loopback; a 2 kB one 3 kB).
+  static constexpr double kBufferedSeconds = 0.25;  // s
+  static constexpr int kDatagramCost = 3072;        // bytes
 
   int control_port() const { return control_.port(); }
   int blue_port() const { return teams_[0].socket.port(); }
   int yellow_port() const { return teams_[1].socket.port(); }
+  // bytes per port: the receive buffer asked for, and what the kernel granted.
+  int receive_buffer_asked() const { return receive_buffer_asked_; }
+  int receive_buffer() const { return receive_buffer_; }
 
   // Runs frames until `stop()` returns true (asked between datagrams and frames) or
   // max_frames have run; `status(summary)` is called about ten times a second. Throws
@@ -151,6 +168,15 @@ class LiveField {
   };
 
   void SendVision(const std::vector<FrameRecord>& records);
+  // Sends, counting a refused send (failed_sends, last_send_error).
+  void Send(const UdpSocket& socket, const std::string& bytes, const UdpEndpoint& to);
+  template <typename Message>
+  void Answer(const UdpSocket& socket, const Message& message, const UdpEndpoint& to) {
+    Send(socket, message.SerializeAsString(), to);
+  }
+  // The Unix time (s) at which frame k's vision was captured: the start of frame
+  // k - vision delay on the wall clock, as far back as the delay goes.
+  double CaptureUnixTime(int k) const;
   // Reads every datagram waiting on the socket at `port` (0, 1 teams, 2 control).
   void Drain(int port);
   void HandleTeam(TeamPort& team, const Datagram& d);
@@ -190,6 +216,12 @@ class LiveField {
   SimulationResult result_;
   std::chrono::steady_clock::time_point start_, last_refill_;
   double unix_start_ = 0;  // s, real time: the Unix time of frame 0
+  // s, real time: the Unix time each of the last vision_delay + 1 frames began (frame k
+  // at k % size), the capture times of the vision they send later.
+  std::vector<double> frame_unix_;
+  std::array<std::uint32_t, 3> kernel_drops_{};  // per port (blue, yellow, control): the kernel's count seen last
+  std::string last_send_error_;
+  int receive_buffer_asked_ = 0, receive_buffer_ = 0;  // bytes
   std::string last_vision_;  // the current frame's packet, serialized
 };
 

@@ -68,6 +68,23 @@ UdpSocket::UdpSocket(const std::string& address, int port) {
   // (refused), Receive stamps the time it reads the datagram.
   const int on = 1;
   (void)::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on);
+  // Datagrams lost to a full receive buffer are counted rather than unseen.
+  (void)::setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
+}
+
+int UdpSocket::SetReceiveBuffer(int bytes) {
+  // SO_RCVBUFFORCE passes net.core.rmem_max where the process may (CAP_NET_ADMIN);
+  // elsewhere the kernel caps SO_RCVBUF there.
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof bytes) != 0)
+    (void)::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
+  return receive_buffer();
+}
+
+int UdpSocket::receive_buffer() const {
+  int size = 0;
+  socklen_t len = sizeof size;
+  if (::getsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &size, &len) != 0) return 0;
+  return size;
 }
 
 UdpSocket::~UdpSocket() {
@@ -92,10 +109,15 @@ int UdpSocket::port() const {
   return ntohs(a.sin_port);
 }
 
-bool UdpSocket::SendTo(const std::string& bytes, const UdpEndpoint& to) const {
+bool UdpSocket::SendTo(const std::string& bytes, const UdpEndpoint& to, std::string* error) const {
   const sockaddr_in a = ToSockaddr(to);
   const ssize_t n = ::sendto(fd_, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&a), sizeof a);
-  return n == static_cast<ssize_t>(bytes.size());
+  if (n == static_cast<ssize_t>(bytes.size())) return true;
+  if (error != nullptr) {
+    *error = n < 0 ? std::string(std::strerror(errno)) : "sent " + std::to_string(n) + " of " +
+                                                              std::to_string(bytes.size()) + " bytes";
+  }
+  return false;
 }
 
 std::optional<Datagram> UdpSocket::Receive(std::size_t max_bytes) const {
@@ -103,7 +125,7 @@ std::optional<Datagram> UdpSocket::Receive(std::size_t max_bytes) const {
   d.bytes.resize(max_bytes);
   sockaddr_in a{};
   iovec data{d.bytes.data(), d.bytes.size()};
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec))];
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timespec)) + CMSG_SPACE(sizeof(std::uint32_t))];
   msghdr m{};
   m.msg_name = &a;
   m.msg_namelen = sizeof a;
@@ -123,6 +145,10 @@ std::optional<Datagram> UdpSocket::Receive(std::size_t max_bytes) const {
       std::memcpy(&t, CMSG_DATA(c), sizeof t);
       d.arrival_ns = static_cast<long long>(t.tv_sec) * 1000000000LL + t.tv_nsec;
       d.kernel_stamp = true;
+    } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+      std::uint32_t drops = 0;
+      std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
+      d.kernel_drops = drops;
     }
   }
   d.read_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -40,14 +40,19 @@ struct Datagram {
   long long arrival_ns = 0;
   bool kernel_stamp = false;  // arrival_ns is the kernel's receive time
   long long read_ns = 0;      // ns since the Unix epoch: when Receive read it
+  // Datagrams the kernel dropped on this socket (its receive buffer full) since the
+  // socket was opened, as of this one's arrival (SO_RXQ_OVFL); the kernel says so only
+  // once it has dropped one: none means none dropped yet.
+  std::optional<std::uint32_t> kernel_drops;
   bool truncated() const { return size > bytes.size(); }
 };
 
 class UdpSocket {
  public:
   // Binds to `address`:`port` (port 0: a free port the system picks) and asks the kernel
-  // to stamp each datagram's arrival. Throws InputError naming the address when the
-  // socket cannot be bound (in use, not this host's address).
+  // to stamp each datagram's arrival and to count the datagrams it drops. Throws
+  // InputError naming the address when the socket cannot be bound (in use, not this
+  // host's address).
   UdpSocket(const std::string& address, int port);
   // An unbound socket for sending only (the system binds it on the first send).
   UdpSocket();
@@ -61,8 +66,14 @@ class UdpSocket {
   int port() const;
   int fd() const { return fd_; }
 
-  // Sends one datagram; false when the system refused it (e.g. a full buffer).
-  bool SendTo(const std::string& bytes, const UdpEndpoint& to) const;
+  // Sends one datagram; false when the system refused it (a full buffer, a broadcast
+  // address, a datagram over 64 kB), with the reason in *error when given.
+  bool SendTo(const std::string& bytes, const UdpEndpoint& to, std::string* error = nullptr) const;
+  // Asks for a receive buffer of `bytes` (the kernel's accounting, which counts each
+  // datagram's overhead too): beyond net.core.rmem_max only with CAP_NET_ADMIN. Returns
+  // the size the kernel granted (as it reports it: twice the bytes it counts as payload).
+  int SetReceiveBuffer(int bytes);
+  int receive_buffer() const;
   // The next datagram waiting, at most `max_bytes` of it kept (its full size is
   // reported), or nothing when none is waiting. Never blocks.
   std::optional<Datagram> Receive(std::size_t max_bytes) const;

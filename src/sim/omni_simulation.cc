@@ -43,6 +43,7 @@ Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend
                                            r.present ? std::optional<Pose2>(r.start) : std::nullopt);
     state_.delivered.emplace_back();
     state_.last_captured.emplace_back();
+    state_.vision_noise.push_back(VisionNoise{r.model.vision_noise_xy, r.model.vision_noise_theta});
     FrameRecord first;
     first.truth = start;
     state_.last_good.push_back(first);
@@ -115,7 +116,7 @@ void Simulation::AddBall(std::unique_ptr<BallField> ball, const BallState& start
   if (!ball || ball->num_robots() != num_robots())
     throw std::invalid_argument("Simulation::AddBall: a ball field of another number of robots");
   ball_ = std::move(ball);
-  ball_vision_ = vision;
+  state_.ball_vision = vision;
   ball_->Reset(start);
   state_.ball_commands_in_flight.clear();
   for (const SimRobot& r : robots_) state_.ball_commands_in_flight.emplace_back(r.model.command_delay_frames, BallCommand{});
@@ -160,11 +161,11 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
       throw CheckFailed(msg.str());
     }
     std::optional<Eigen::Vector3d> captured = b.truth.position;
-    if (ball_vision_.any()) {
-      *captured += Eigen::Vector3d(state_.ball_rng.Gaussian(ball_vision_.noise_xy),
-                                   state_.ball_rng.Gaussian(ball_vision_.noise_xy),
-                                   state_.ball_rng.Gaussian(ball_vision_.noise_z));
-      if (state_.ball_rng.Uniform() < ball_vision_.drop_probability) captured.reset();
+    if (state_.ball_vision.any()) {
+      *captured += Eigen::Vector3d(state_.ball_rng.Gaussian(state_.ball_vision.noise_xy),
+                                   state_.ball_rng.Gaussian(state_.ball_vision.noise_xy),
+                                   state_.ball_rng.Gaussian(state_.ball_vision.noise_z));
+      if (state_.ball_rng.Uniform() < state_.ball_vision.drop_probability) captured.reset();
     }
     const std::optional<Eigen::Vector3d> arrived = state_.ball_captures_in_flight->Push(captured);
     b.observed = arrived.has_value();
@@ -183,9 +184,10 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
     // The camera: noise always drawn, so that dropping frames does not shift the stream.
     const OmniModel& m = robots_[k].model;
     Pose2 captured = rec.truth;
-    captured.x += state_.rng.Gaussian(m.vision_noise_xy);
-    captured.y += state_.rng.Gaussian(m.vision_noise_xy);
-    captured.theta = WrapAngle(captured.theta + state_.rng.Gaussian(m.vision_noise_theta));
+    const VisionNoise& noise = state_.vision_noise[k];
+    captured.x += state_.rng.Gaussian(noise.xy);
+    captured.y += state_.rng.Gaussian(noise.xy);
+    captured.theta = WrapAngle(captured.theta + state_.rng.Gaussian(noise.theta));
     const bool lost = state_.rng.Uniform() < m.vision_drop_probability;
     // A real camera now and then sends its last pose again; and stamps frames a little
     // off the frame clock. Drawn only where the model asks for them (streams unchanged).
@@ -336,9 +338,7 @@ void Simulation::Teleport(int robot, const Pose2& pose, const Twist2& velocity) 
 void Simulation::SetVisionNoise(int robot, double xy, double theta) {
   if (!(std::isfinite(xy) && xy >= 0 && std::isfinite(theta) && theta >= 0))
     throw std::invalid_argument("Simulation::SetVisionNoise: the noise must be finite and >= 0");
-  OmniModel& m = robots_.at(static_cast<std::size_t>(robot)).model;
-  m.vision_noise_xy = xy;
-  m.vision_noise_theta = theta;
+  state_.vision_noise.at(static_cast<std::size_t>(robot)) = VisionNoise{xy, theta};
 }
 
 void Simulation::SetBallVision(const BallVision& vision) {
@@ -346,7 +346,7 @@ void Simulation::SetBallVision(const BallVision& vision) {
   auto ok = [](double v) { return std::isfinite(v) && v >= 0; };
   if (!ok(vision.noise_xy) || !ok(vision.noise_z) || !ok(vision.drop_probability) || vision.drop_probability > 1)
     throw std::invalid_argument("Simulation::SetBallVision: the noise must be finite and >= 0, the probability in 0..1");
-  ball_vision_ = vision;
+  state_.ball_vision = vision;
 }
 
 void Simulation::Remove(int robot) {
@@ -405,7 +405,7 @@ SimulationState Simulation::Save() const {
 void Simulation::Restore(const SimulationState& state) {
   if (state.behaviours.size() != robots_.size() || state.commands_in_flight.size() != robots_.size() ||
       state.last_good.size() != robots_.size() || state.present.size() != robots_.size() ||
-      state.pulls.size() != robots_.size()) {
+      state.pulls.size() != robots_.size() || state.vision_noise.size() != robots_.size()) {
     throw std::invalid_argument("Simulation::Restore: state of a simulation with another number of robots");
   }
   if (state.ball.has_value() != has_ball())

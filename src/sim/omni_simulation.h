@@ -92,6 +92,12 @@ struct RobotPull {
   int frames_left = 0;
 };
 
+// A camera's noise on one robot's pose (standard deviations).
+struct VisionNoise {
+  double xy = 0;     // m, of x and of y
+  double theta = 0;  // rad
+};
+
 struct SimulationState {
   int frame = 0;
   std::vector<bool> present;                   // per robot: on the field
@@ -111,6 +117,10 @@ struct SimulationState {
   std::vector<DelayLine<BallCommand>> ball_commands_in_flight;
   std::optional<DelayLine<std::optional<Eigen::Vector3d>>> ball_captures_in_flight;
   Rng ball_rng;  // the ball camera's noise and lost frames
+  // The camera's settings now: per robot its pose noise (the model's until a live
+  // configuration changes it, SetVisionNoise), and how it sees the ball (SetBallVision).
+  std::vector<VisionNoise> vision_noise;
+  BallVision ball_vision;
   // Driving noise (OmniDrivingNoise::simulated): per robot the slip now (forward and
   // sideways m/s, turn rad/s, robot frame), drawn from a stream of its own so that the
   // camera's draws stay as they were.
@@ -191,15 +201,17 @@ class Simulation {
   // would: the commands and captures already in flight stay in flight; a move by force
   // under way ends. Throws std::logic_error for a robot off the field (Add it).
   void Teleport(int robot, const Pose2& pose, const Twist2& velocity);
-  // Sets robot i's camera noise (standard deviations: m of x and y, rad of theta), as a
-  // live configuration does (twinsim serve's SimulatorConfig): a change of the model, not
-  // of the state, so Restore() keeps it. Throws std::invalid_argument for a negative or
-  // non-finite value.
+  // Robot i's camera noise now, and a change of it (standard deviations: m of x and y,
+  // rad of theta), as a live configuration makes (twinsim serve's SimulatorConfig): a
+  // change of the state, so Save() keeps it and Restore() puts the saved one back; the
+  // robot's model (and what its observer assumes) stays. Throws std::invalid_argument for
+  // a negative or non-finite value.
+  const VisionNoise& vision_noise(int robot) const { return state_.vision_noise.at(static_cast<std::size_t>(robot)); }
   void SetVisionNoise(int robot, double xy, double theta);
-  // How the camera sees the ball, and a change of it as SetVisionNoise's (a change of
-  // the model: Restore() keeps it). Throws std::logic_error without a ball and
-  // std::invalid_argument for a negative or non-finite value or a probability over 1.
-  const BallVision& ball_vision() const { return ball_vision_; }
+  // How the camera sees the ball, and a change of it, in the state as SetVisionNoise's.
+  // Throws std::logic_error without a ball and std::invalid_argument for a negative or
+  // non-finite value or a probability over 1.
+  const BallVision& ball_vision() const { return state_.ball_vision; }
   void SetBallVision(const BallVision& vision);
   // Whether robot i is on the field now.
   bool present(int robot) const { return state_.present.at(static_cast<std::size_t>(robot)); }
@@ -254,7 +266,6 @@ class Simulation {
   std::vector<SimRobot> robots_;
   std::unique_ptr<OmniBackend> backend_;
   std::unique_ptr<BallField> ball_;
-  BallVision ball_vision_;
   SimulationState state_;
   bool frame_open_ = false;  // between BeginFrame and EndFrame
 };

@@ -14,7 +14,10 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <thread>
 
 #include "backends/omni_backend_factory.h"
@@ -358,6 +361,99 @@ TEST(LiveField, AFloodIsDroppedOverTheRateLimitWithoutStallingTheFrames) {
   EXPECT_LE(summary.counters.robot_controls, 50 + static_cast<long long>(50 * wall) + 1);
   // Frames kept coming (30 fps; half of it allowed for a loaded machine): no stall.
   EXPECT_GE(summary.counters.frames, static_cast<long long>(15 * wall) - 2);
+}
+
+// A burst larger than the receive buffer: what the kernel drops before the loop reads
+// it is counted (the count rides on the next datagram read), so every datagram sent is
+// either handled or counted as dropped.
+TEST(LiveField, DatagramsTheKernelDropsAreCounted) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), flooder("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.max_rate = 1e6;         // nothing dropped over the rate limit
+  options.receive_buffer = 4096;  // the kernel's smallest: a few datagrams
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  EXPECT_LT(field.receive_buffer(), 65536);
+  const int burst = 2000;
+  const std::string command = Local(0, Twist2{0.1, 0, 0});
+  for (int i = 0; i < burst; ++i) ASSERT_TRUE(flooder.SendTo(command, Loopback(field.blue_port())));
+  ServerThread server(&field);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // One more, after the burst was read: it carries the kernel's count.
+  ASSERT_TRUE(flooder.SendTo(command, Loopback(field.blue_port())));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const ServeSummary& summary = server.Stop();
+  EXPECT_GT(summary.counters.kernel_dropped, burst / 2);
+  EXPECT_EQ(summary.counters.robot_controls + summary.counters.kernel_dropped, burst + 1);
+  EXPECT_NE(summary.Brief().find("dropped by the kernel"), std::string::npos) << summary.Brief();
+}
+
+// The default buffer holds a quarter second at the rate limit where the kernel allows.
+TEST(LiveField, TheReceiveBufferIsSizedForTheRateLimit) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.max_rate = 400;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  EXPECT_EQ(field.receive_buffer_asked(), static_cast<int>(400 * LiveField::kBufferedSeconds * LiveField::kDatagramCost));
+  // Linux grants twice what it is asked for, up to net.core.rmem_max (more with CAP_NET_ADMIN).
+  EXPECT_GT(field.receive_buffer(), 212992 * 2 - 1) << "asked " << field.receive_buffer_asked();
+}
+
+// Vision to the broadcast address, which a socket may not send to without SO_BROADCAST:
+// every refused send is counted, with the system's reason.
+TEST(LiveField, RefusedSendsAreCountedWithTheReason) {
+  const Scene scene = TwoTeamScene();
+  ServeOptions options = LoopbackOptions(10020);
+  options.vision_address = "255.255.255.255";
+  options.max_frames = 4;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  const ServeSummary summary = field.Run([] { return false; });
+  EXPECT_EQ(summary.counters.frames, 4);
+  EXPECT_EQ(summary.counters.failed_sends, 4);
+  EXPECT_EQ(summary.last_send_error, std::strerror(EACCES));
+  EXPECT_NE(summary.Brief().find("4 sends failed (" + std::string(std::strerror(EACCES)) + ")"), std::string::npos)
+      << summary.Brief();
+}
+
+// Real time at half speed: t_capture is the wall clock when the captured frame began
+// (the time the packet of that frame was sent, less its work), not the start plus
+// simulated time, which falls behind by a frame period each frame at half speed.
+TEST(LiveField, RealTimeCaptureTimesFollowTheWallClockWhenTheSpeedChanges) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  ServeOptions options = LoopbackOptions(vision.port());
+  options.max_frames = 24;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  const int delay = field.simulation().robot_model(0).vision_delay_frames;
+  ASSERT_GT(delay, 0);
+  std::map<std::uint32_t, std::pair<double, double>> stamps;  // frame: t_capture, t_sent
+  {
+    ServerThread server(&field);
+    SimulatorCommand slow;
+    slow.mutable_control()->set_simulation_speed(0.5f);
+    ASSERT_TRUE(Ask<SimulatorResponse>(client, slow.SerializeAsString(), field.control_port()));
+    for (std::uint32_t k = 0; k < 24; ++k) {
+      std::optional<SSL_DetectionFrame> f = ReceiveFrame(vision, k);
+      ASSERT_TRUE(f) << "no vision for frame " << k;
+      const double now =
+          std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+      EXPECT_NEAR(f->t_sent(), now, 0.05) << k;
+      stamps[f->frame_number()] = {f->t_capture(), f->t_sent()};
+      k = f->frame_number();
+    }
+    server.Join();
+  }
+  int compared = 0;
+  for (const auto& [k, t] : stamps) {
+    const auto earlier = stamps.find(k - static_cast<std::uint32_t>(delay));
+    if (k < static_cast<std::uint32_t>(delay) || earlier == stamps.end()) continue;
+    // The captured frame began before its packet went out, by its capture's work.
+    EXPECT_NEAR(t.first, earlier->second.second, 0.005) << "frame " << k;
+    EXPECT_LE(t.first, earlier->second.second) << "frame " << k;
+    ++compared;
+  }
+  EXPECT_GE(compared, 15);
 }
 
 TEST(LiveField, LockstepRecoversWhenAnAnswerIsLostOverTheRateLimit) {

@@ -5,6 +5,7 @@
 // part of the saved state.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
@@ -98,6 +99,47 @@ TEST(SaveRestore, AStateOfAnotherSimulationIsRefused) {
   Simulation a(std::move(one), MakeOmniBackend("analytic", {m}, FieldModel{}, FrameTiming{}), 1);
   Simulation b(std::move(two), MakeOmniBackend("analytic", {m, m}, FieldModel{}, FrameTiming{}), 1);
   EXPECT_THROW(a.Restore(b.Save()), std::invalid_argument);
+}
+
+// A live change of the camera (serve's SimulatorConfig) is part of the state: a state
+// saved before it brings the old noise back, one saved after it keeps the new, and the
+// frames after a restore see what they saw the first time.
+TEST(SaveRestore, TheCamerasNoiseIsPartOfTheState) {
+  OmniModel m = testing::Omni4();
+  m.vision_noise_xy = 0.001;
+  m.vision_noise_theta = 0.002;
+  std::vector<SimRobot> robots;
+  robots.push_back(SimRobot{"r", m, Pose2{}, MakeCommandSource(Source("random"), 3, 0, 10, Pose2{})});
+  Simulation sim(std::move(robots), MakeOmniBackend("analytic", {m}, FieldModel{}, FrameTiming{}), 3);
+  for (int k = 0; k < 10; ++k) sim.Step();
+  const SimulationState before = sim.Save();
+  sim.SetVisionNoise(0, 0.05, 0.1);
+  const SimulationState after = sim.Save();
+  std::vector<double> first;  // seen x, from the frames the new noise reaches
+  for (int k = 0; k < 60; ++k) {
+    const FrameRecord f = sim.Step()[0];
+    if (k >= 10 && f.observed) first.push_back(f.seen.x);
+  }
+  sim.Restore(before);
+  EXPECT_EQ(sim.vision_noise(0).xy, 0.001);
+  EXPECT_EQ(sim.vision_noise(0).theta, 0.002);
+  // The model (what the robot's observer assumes) never changed.
+  EXPECT_EQ(sim.robot_model(0).vision_noise_xy, 0.001);
+  sim.Restore(after);
+  EXPECT_EQ(sim.vision_noise(0).xy, 0.05);
+  std::vector<double> second;
+  for (int k = 0; k < 60; ++k) {
+    const FrameRecord f = sim.Step()[0];
+    if (k >= 10 && f.observed) second.push_back(f.seen.x);
+  }
+  EXPECT_EQ(first, second);
+  ASSERT_GT(second.size(), 30u);
+  // The new noise is what the camera draws: the seen poses scatter by centimetres about
+  // a smooth path (the second difference of x over frames: sqrt(6) * 5 cm for white noise).
+  double sum = 0;
+  for (std::size_t i = 2; i < second.size(); ++i) sum += std::pow(second[i] - 2 * second[i - 1] + second[i - 2], 2);
+  const double scatter = std::sqrt(sum / static_cast<double>(second.size() - 2)) / std::sqrt(6.0);
+  EXPECT_NEAR(scatter, 0.05, 0.015);
 }
 
 std::string Name(const ::testing::TestParamInfo<std::tuple<std::string, std::string>>& info) {

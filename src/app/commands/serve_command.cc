@@ -64,6 +64,10 @@ int Serve(ServeCommandOptions& options) {
     if (IsMulticast(ParseIpv4(options.serve.vision_address)))
       std::printf("vision is multicast (ttl %d, interface %s)\n", options.serve.vision_ttl,
                   options.serve.vision_interface.empty() ? "by route" : options.serve.vision_interface.c_str());
+    if (field.receive_buffer() < field.receive_buffer_asked())
+      std::printf("receive buffers: %d bytes per port of %d asked; a burst of commands may be dropped by the kernel\n"
+                  "  (counted; raise net.core.rmem_max, or serve with CAP_NET_ADMIN)\n",
+                  field.receive_buffer(), field.receive_buffer_asked());
     if (options.serve.realtime_priority > 0 || options.serve.cpu >= 0)
       std::printf("serving thread: SCHED_FIFO %d, CPU %s\n", options.serve.realtime_priority,
                   options.serve.cpu >= 0 ? std::to_string(options.serve.cpu).c_str() : "any");
@@ -133,6 +137,10 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
   cmd->add_flag("--tournament", options->serve.tournament,
                 "Refuse simulator control; one client address per team port");
   cmd->add_option("--max-datagram", options->serve.max_datagram, "Largest datagram read, bytes (default 8192)");
+  cmd->add_option("--receive-buffer", options->serve.receive_buffer,
+                  "Receive buffer per port, bytes (default: a quarter second at --max-rate; beyond\n"
+                  "net.core.rmem_max only with CAP_NET_ADMIN)")
+      ->check(NonNegativeNumber());
   cmd->add_option("--max-rate", options->serve.max_rate, "Datagrams per second per port before dropping (lockstep: also per simulated second; default 1000)");
   cmd->add_option("--geometry-period", options->serve.geometry_period, "Seconds between geometry packets (default 1)");
   cmd->add_option("--boundary", options->serve.boundary, "Metres between the walls and the field lines (default 0.3)");
