@@ -5,6 +5,7 @@
 //   build/serve_bench                      # 20 s real time, 20000 lockstep frames
 //   build/serve_bench --seconds 60 --lockstep-frames 60000
 //   build/serve_bench --realtime-priority 50 --cpu 1   # as twinsim serve's options
+//   build/serve_bench --memory-minutes 120              # part 4 alone: a 2 h match's memory
 //
 // 1. Real time: scenes/serve_11v11.yaml (11 blue against 11 yellow and the ball) on ODE
 //    at 60 fps, with one client thread per team that answers every vision packet with a
@@ -16,19 +17,28 @@
 // 3. Lockstep throughput: one blue and one yellow robot on the analytic backend, a
 //    client thread per team answering each vision packet at once; simulated seconds per
 //    wall second.
+// 4. Memory over a long match (`--memory-minutes M`, alone): serve_11v11 in lockstep on
+//    analytic with the two clients, the logs streamed to a temporary folder as twinsim
+//    serve writes them (scene/run_log_stream.h) and the thinned history for the plots;
+//    the resident memory (VmRSS) every simulated minute. `--keep-all` keeps every frame
+//    in memory instead, as serve did before.
 // Everything on 127.0.0.1 with ports the system picks; never a multicast group.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/duration_histogram.h"
+#include "scene/run_log_stream.h"
 #include "scene/scene.h"
 #include "serve/live_field.h"
 #include "serve/udp_socket.h"
@@ -147,18 +157,22 @@ struct Served {
   long long sent[2] = {0, 0}, resent[2] = {0, 0}, answers[2] = {0, 0};
 };
 
-// Serves `scene` on `backend` with a client per team until `frames` frames have run.
-Served Serve(const Scene& scene, const std::string& backend, ServeOptions options, long long frames, double resend) {
+// Serves `scene` on `backend` with a client per team until `frames` frames have run;
+// `setup(field)` before it starts, `status(summary)` now and then while it runs.
+Served Serve(const Scene& scene, const std::string& backend, ServeOptions options, long long frames, double resend,
+             const std::function<void(LiveField*)>& setup = {},
+             const std::function<void(const ServeSummary&)>& status = {}) {
   VisionReader vision;
   options.control_port = options.blue_port = options.yellow_port = 0;
   options.vision_port = vision.port();
   options.max_frames = frames;
   LiveField field(scene, MakeSimulation(scene, backend), options);
+  if (setup) setup(&field);
   Served out;
   {
     TeamClient blue(&vision, field.blue_port(), TeamIds(scene, "blue"), resend);
     TeamClient yellow(&vision, field.yellow_port(), TeamIds(scene, "yellow"), resend);
-    out.summary = field.Run([] { return false; });
+    out.summary = field.Run([] { return false; }, status);
     const TeamClient* clients[2] = {&blue, &yellow};
     for (int t = 0; t < 2; ++t) {
       out.sent[t] = clients[t]->sent();
@@ -217,9 +231,57 @@ Scene OneOnOne() {
                              "serve_1v1.yaml", Source("scenes"));
 }
 
+// kB of resident memory (VmRSS in /proc/self/status), 0 where unknown.
+long long ResidentKb() {
+  std::ifstream f("/proc/self/status");
+  for (std::string line; std::getline(f, line);)
+    if (line.rfind("VmRSS:", 0) == 0) return std::atoll(line.c_str() + 6);
+  return 0;
+}
+
+// Part 4: a long lockstep match of serve_11v11 on analytic, its memory every simulated minute.
+int MemoryOverAMatch(double minutes, bool keep_all) {
+  const Scene match = LoadScene(Source("scenes/serve_11v11.yaml"));
+  const auto frames = static_cast<long long>(minutes * 60 * match.frame_rate + 0.5);
+  const std::string folder = std::filesystem::temp_directory_path().string() + "/serve_bench_logs";
+  std::printf("4. Memory over a match: %s (%zu robots, ball) in lockstep on analytic at %g fps, %g simulated minutes;"
+              " %s\n", match.name.c_str(), match.robots.size(), match.frame_rate, minutes,
+              keep_all ? "every frame kept in memory (--keep-all)" : "logs streamed to disk, plots' history thinned");
+  std::printf("  %8s %10s %10s %12s\n", "minute", "frames", "wall, s", "VmRSS, MB");
+  ServeOptions options;
+  options.lockstep = true;
+  options.teams = {"blue", "yellow"};
+  options.keep_frames = keep_all ? 0 : 2048;  // twinsim serve's (kPlotFrames)
+  std::unique_ptr<RunLogStream> logs;
+  const auto per_minute = static_cast<long long>(60 * match.frame_rate + 0.5);
+  long long done = 0;
+  const Clock::time_point start = Clock::now();
+  // From the frame sink: every frame, as it ends; a row at each simulated minute.
+  auto report = [&] {
+    if (done % per_minute != 0) return;
+    std::printf("  %8lld %10lld %10.1f %12.1f\n", done / per_minute, done,
+                std::chrono::duration<double>(Clock::now() - start).count(), static_cast<double>(ResidentKb()) / 1024);
+    std::fflush(stdout);
+  };
+  report();
+  const Served served = Serve(match, "analytic", options, frames, /*resend=*/0.02, [&](LiveField* field) {
+    if (!keep_all) logs = std::make_unique<RunLogStream>(folder, field->result().robot_names, true, match.frame_rate);
+    field->SetFrameSink([&](const std::vector<FrameRecord>& r, const BallRecord* b) {
+      if (logs) logs->Append(r, b);
+      ++done;
+      report();
+    });
+  });
+  std::printf("  %lld frames in %.1f s wall (%.1f x real time); logs in %s\n", served.summary.counters.frames,
+              served.summary.wall, served.summary.simulated / served.summary.wall, keep_all ? "-" : folder.c_str());
+  return 0;
+}
+
 int Main(int argc, char** argv) {
   double seconds = 20;
   long long lockstep_frames = 20000;
+  double memory_minutes = 0;
+  bool keep_all = false;
   ServeOptions realtime;  // part 1's serving thread: twinsim serve's --realtime-priority, --cpu
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -231,8 +293,13 @@ int Main(int argc, char** argv) {
       realtime.realtime_priority = std::atoi(argv[++i]);
     } else if (a == "--cpu" && i + 1 < argc) {
       realtime.cpu = std::atoi(argv[++i]);
+    } else if (a == "--memory-minutes" && i + 1 < argc) {
+      memory_minutes = std::atof(argv[++i]);
+    } else if (a == "--keep-all") {
+      keep_all = true;
     } else {
-      std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N] [--realtime-priority P] [--cpu C]\n");
+      std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N] [--realtime-priority P] [--cpu C]\n"
+                           "       serve_bench --memory-minutes M [--keep-all]\n");
       return 2;
     }
   }
@@ -242,6 +309,7 @@ int Main(int argc, char** argv) {
   }
   std::printf("twinsim serve on the loopback (bench/serve_bench.cc): %u cores, load average %s\n\n",
               std::thread::hardware_concurrency(), LoadAverage().c_str());
+  if (memory_minutes > 0) return MemoryOverAMatch(memory_minutes, keep_all);
 
   // 1 and 2: real time, 11 v 11 and the ball on ODE.
   const Scene match = LoadScene(Source("scenes/serve_11v11.yaml"));

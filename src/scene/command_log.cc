@@ -29,8 +29,17 @@ constexpr double kMaxLogFrames = 1e7;
 
 }  // namespace
 
+void AppendCommandRow(long long frame, const std::string& robot, const FrameRecord& f, std::string* out) {
+  if (!f.present) return;  // off the field: sent nothing
+  *out += std::to_string(frame) + ',' + FormatCsvNumber(f.t) + ',' + robot;
+  for (double v : {f.command.vx, f.command.vy, f.command.omega, f.ball_command.kick_speed, f.ball_command.kick_angle,
+                   f.ball_command.dribbler_speed})
+    *out += ',' + Exact(v);
+  *out += '\n';
+}
+
 std::string CommandsCsv(const SimulationResult& result) {
-  std::string out = "frame,t,robot,vx_cmd,vy_cmd,omega_cmd,kick_speed,kick_angle,dribbler_speed\n";
+  std::string out = kCommandsHeader;
   // Frame by frame, the robots in the field's order; a robot off the field sends
   // nothing and has no row (rows go by each record's own frame).
   std::vector<std::tuple<long long, std::size_t, const FrameRecord*>> rows;
@@ -41,13 +50,7 @@ std::string CommandsCsv(const SimulationResult& result) {
   std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
     return std::tie(std::get<0>(a), std::get<1>(a)) < std::tie(std::get<0>(b), std::get<1>(b));
   });
-  for (const auto& [frame, i, f] : rows) {
-    out += std::to_string(frame) + ',' + FormatCsvNumber(f->t) + ',' + result.robot_names[i];
-    for (double v : {f->command.vx, f->command.vy, f->command.omega, f->ball_command.kick_speed,
-                     f->ball_command.kick_angle, f->ball_command.dribbler_speed})
-      out += ',' + Exact(v);
-    out += '\n';
-  }
+  for (const auto& [frame, i, f] : rows) AppendCommandRow(frame, result.robot_names[i], *f, &out);
   return out;
 }
 

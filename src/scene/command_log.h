@@ -37,6 +37,11 @@ struct CommandLog {
 
 // commands.csv for a finished run (every robot, every frame).
 std::string CommandsCsv(const SimulationResult& result);
+// Its header, and one robot's row of frame `frame` appended to *out (nothing for a
+// robot off the field), for a file written as the run goes.
+inline constexpr const char* kCommandsHeader =
+    "frame,t,robot,vx_cmd,vy_cmd,omega_cmd,kick_speed,kick_angle,dribbler_speed\n";
+void AppendCommandRow(long long frame, const std::string& robot, const FrameRecord& record, std::string* out);
 
 // Reads robot `robot`'s rows of the file at `path` (all rows when the file has no
 // `robot` column). A row's frame is its `frame` column, else round(t * frame_rate).

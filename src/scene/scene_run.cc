@@ -1,5 +1,7 @@
 #include "scene/scene_run.h"
 
+#include <initializer_list>
+
 #include <cmath>
 
 #include "backends/arm_backend_factory.h"
@@ -18,33 +20,43 @@ namespace {
 // The ground truth of one robot: true pose and velocity at every frame it is on the
 // field (a frame off the field, SimRobot::present, has no row).
 std::string TruthCsv(const std::vector<FrameRecord>& frames) {
-  std::string out = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,vx,vy,omega\n";
-  for (const auto& f : frames) {
-    if (!f.present) continue;  // off the field: no true pose to log
-    const double v[] = {f.t, f.truth.x, f.truth.y, f.truth.theta, f.command.vx, f.command.vy, f.command.omega,
-                        f.truth_velocity.vx, f.truth_velocity.vy, f.truth_velocity.omega};
-    for (int i = 0; i < 10; ++i) {
-      if (i) out += ',';
-      out += FormatCsvNumber(v[i]);
-    }
-    out += '\n';
-  }
+  std::string out = kTruthHeader;
+  for (const auto& f : frames) AppendTruthRow(f, &out);
   return out;
+}
+
+void AppendNumbers(std::initializer_list<double> values, std::string* out) {
+  bool first = true;
+  for (double v : values) {
+    if (!first) *out += ',';
+    *out += FormatCsvNumber(v);
+    first = false;
+  }
+  *out += '\n';
 }
 
 }  // namespace
 
+void AppendTruthRow(const FrameRecord& f, std::string* out) {
+  if (!f.present) return;  // off the field: no true pose to log
+  AppendNumbers({f.t, f.truth.x, f.truth.y, f.truth.theta, f.command.vx, f.command.vy, f.command.omega,
+                 f.truth_velocity.vx, f.truth_velocity.vy, f.truth_velocity.omega},
+                out);
+}
+
+void AppendObserverRow(const FrameRecord& f, std::string* out) {
+  if (f.observed) AppendOmniLogRow(OmniLogRow{f.stamp, f.seen, f.command}, out);
+}
+
+void AppendBallRow(const BallRecord& b, std::string* out) {
+  AppendNumbers({b.t, b.truth.position.x(), b.truth.position.y(), b.truth.position.z(), b.truth.velocity.x(),
+                 b.truth.velocity.y(), b.truth.velocity.z()},
+                out);
+}
+
 std::string BallCsv(const std::vector<BallRecord>& ball) {
-  std::string out = "t,x,y,z,vx,vy,vz\n";
-  for (const BallRecord& b : ball) {
-    const double v[] = {b.t, b.truth.position.x(), b.truth.position.y(), b.truth.position.z(),
-                        b.truth.velocity.x(), b.truth.velocity.y(), b.truth.velocity.z()};
-    for (int i = 0; i < 7; ++i) {
-      if (i) out += ',';
-      out += FormatCsvNumber(v[i]);
-    }
-    out += '\n';
-  }
+  std::string out = kBallHeader;
+  for (const BallRecord& b : ball) AppendBallRow(b, &out);
   return out;
 }
 
@@ -116,13 +128,16 @@ void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, bool 
     files->Write("truth" + suffix + ".csv", TruthCsv(result.frames[i]));
   }
   if (!result.ball.empty()) files->Write("ball.csv", BallCsv(result.ball));
-  if (plots && !scene.plots.empty() && RenderingCompiled()) {
-    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    // A mixed field's name lists every robot: too long for a title; the paths say each one's.
-    const bool mixed = result.backend.rfind("mixed:", 0) == 0;
-    for (const ScenePlot& plot : ScenePlots(scene, result, mixed ? "mixed backends" : result.backend))
-      files->WritePng(plot.file, RenderScenePlot(plot, *renderer));
-  }
+  if (plots) WriteOmniRunPlots(scene, result, files);
+}
+
+void WriteOmniRunPlots(const Scene& scene, const SimulationResult& result, OutputFiles* files) {
+  if (scene.plots.empty() || !RenderingCompiled()) return;
+  std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
+  // A mixed field's name lists every robot: too long for a title; the paths say each one's.
+  const bool mixed = result.backend.rfind("mixed:", 0) == 0;
+  for (const ScenePlot& plot : ScenePlots(scene, result, mixed ? "mixed backends" : result.backend))
+    files->WritePng(plot.file, RenderScenePlot(plot, *renderer));
 }
 
 void WriteArmRunFiles(const ArmScene& scene, const TrackingTrial& trial, const std::string& backend, bool plots,

@@ -38,6 +38,15 @@ std::vector<OmniLogRow> ObserverLog(const std::vector<FrameRecord>& frames);
 // z the centre's height). What `run` writes as ball.csv when the scene has a ball.
 std::string BallCsv(const std::vector<BallRecord>& ball);
 
+// The run's files line by line, for logs written as the run goes (scene/run_log_stream.h):
+// the headers, and one frame's line appended to *out (nothing where the file has no row
+// for it: a lost observation, a robot off the field).
+inline constexpr const char* kTruthHeader = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd,vx,vy,omega\n";
+inline constexpr const char* kBallHeader = "t,x,y,z,vx,vy,vz\n";
+void AppendObserverRow(const FrameRecord& frame, std::string* out);  // trajectory.csv
+void AppendTruthRow(const FrameRecord& frame, std::string* out);     // truth.csv
+void AppendBallRow(const BallRecord& ball, std::string* out);        // ball.csv
+
 // Runs every frame of an omni scene on `backend` ("learned" with the 1-frame predictor
 // file `predictor`; empty: none). `progress(done, total)` is called as frames finish.
 // Throws InputError for an unknown or uncompiled backend or an unreadable predictor,
@@ -67,6 +76,9 @@ TrackingTrial RunArmScene(const ArmScene& scene, const std::string& backend, con
 // InputError when a file cannot be written.
 void WriteOmniRunFiles(const Scene& scene, const SimulationResult& result, bool plots,
                        OutputFiles* files);
+// The scene's PNGs alone (where rendering was compiled in), for logs written otherwise
+// (twinsim serve streams them: scene/run_log_stream.h).
+void WriteOmniRunPlots(const Scene& scene, const SimulationResult& result, OutputFiles* files);
 void WriteArmRunFiles(const ArmScene& scene, const TrackingTrial& trial, const std::string& backend, bool plots,
                       OutputFiles* files);
 

@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "serve/ball_clearance.h"
+#include "serve/grsim_packet.h"
 #include "serve/vision_packets.h"
 
 namespace twinsim {
@@ -119,6 +120,9 @@ bool ServeOptions::IsValid(std::string* why) const {
     return fail("--realtime-priority and --cpu apply to real time, not --lockstep");
   for (int port : {control_port, blue_port, yellow_port})
     if (port < 0 || port > 65535) return fail("port " + std::to_string(port) + " is not in 0..65535");
+  if (grsim_port < -1 || grsim_port > 65535) return fail("--grsim-port " + std::to_string(grsim_port) + " is not in 0..65535");
+  if (grsim_port > 0 && (grsim_port == control_port || grsim_port == blue_port || grsim_port == yellow_port))
+    return fail("--grsim-port must differ from the control, blue and yellow ports");
   if (vision_port < 1 || vision_port > 65535) return fail("--vision-port " + std::to_string(vision_port) + " is not in 1..65535");
   if ((control_port != 0 && (control_port == blue_port || control_port == yellow_port)) ||
       (blue_port != 0 && blue_port == yellow_port))
@@ -132,6 +136,7 @@ bool ServeOptions::IsValid(std::string* why) const {
   if (!(geometry_period > 0 && geometry_period <= 3600)) return fail("--geometry-period is not in (0, 3600] s");
   if (!(boundary >= 0 && boundary <= 10)) return fail("--boundary is not in 0..10 m");
   if (max_frames < 0) return fail("--frames is negative");
+  if (keep_frames < 0) return fail("keep_frames is negative");
   return true;
 }
 
@@ -150,7 +155,8 @@ std::string ServeSummary::Report() const {
   std::ostringstream s;
   s << "frames " << counters.frames << " (" << simulated << " s simulated, " << wall << " s wall)\n"
     << "vision packets sent " << counters.vision_packets << "\n"
-    << "robot controls " << counters.robot_controls << ", simulator commands " << counters.simulator_commands << "\n"
+    << "robot controls " << counters.robot_controls << ", simulator commands " << counters.simulator_commands
+    << ", grSim packets " << counters.grsim_packets << "\n"
     << "refused " << counters.refused << ", malformed " << counters.malformed << ", oversized "
     << counters.oversized << ", over the rate limit " << counters.rate_dropped << "\n"
     << "late frames " << counters.late_frames << "\n"
@@ -207,6 +213,10 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   receive_buffer_ = std::min({control_.SetReceiveBuffer(receive_buffer_asked_),
                               teams_[0].socket.SetReceiveBuffer(receive_buffer_asked_),
                               teams_[1].socket.SetReceiveBuffer(receive_buffer_asked_)});
+  if (options_.grsim_port >= 0) {
+    grsim_.emplace(options_.listen, options_.grsim_port);
+    receive_buffer_ = std::min(receive_buffer_, grsim_->SetReceiveBuffer(receive_buffer_asked_));
+  }
   for (const std::string& t : options_.teams) teams_[t == "blue" ? 0 : 1].waited = true;
   vision_to_ = UdpEndpoint{ParseIpv4(options_.vision_address), options_.vision_port};
   // A multicast group reaches every client on the network (and this host's own: loop),
@@ -223,7 +233,13 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
     result_.robot_backends.push_back(sim_.backend().robot_backend(i));
   }
   result_.frames.resize(static_cast<std::size_t>(sim_.num_robots()));
-  control_tokens_ = teams_[0].tokens = teams_[1].tokens = options_.max_rate;
+  if (options_.keep_frames > 0) {
+    // All the memory the history will take, at once: nothing grows (or is copied) in the frame loop.
+    const auto most = 2 * static_cast<std::size_t>(options_.keep_frames);
+    for (auto& f : result_.frames) f.reserve(most);
+    if (sim_.has_ball()) result_.ball.reserve(most);
+  }
+  control_tokens_ = grsim_tokens_ = teams_[0].tokens = teams_[1].tokens = options_.max_rate;
 }
 
 bool LiveField::TakeToken(double* tokens) {
@@ -233,7 +249,7 @@ bool LiveField::TakeToken(double* tokens) {
 }
 
 void LiveField::RefillTokens(double seconds) {
-  for (double* tokens : {&teams_[0].tokens, &teams_[1].tokens, &control_tokens_})
+  for (double* tokens : {&teams_[0].tokens, &teams_[1].tokens, &control_tokens_, &grsim_tokens_})
     *tokens = std::min(options_.max_rate, *tokens + seconds * options_.max_rate);
 }
 
@@ -286,7 +302,8 @@ void LiveField::Send(const UdpSocket& socket, const std::string& bytes, const Ud
 }
 
 void LiveField::Drain(int port) {
-  const UdpSocket& socket = port == 2 ? control_ : teams_[static_cast<std::size_t>(port)].socket;
+  if (port == 3 && !grsim_) return;
+  const UdpSocket& socket = port == 3 ? *grsim_ : port == 2 ? control_ : teams_[static_cast<std::size_t>(port)].socket;
   for (int n = 0; n < kMaxDatagramsPerDrain; ++n) {
     std::optional<Datagram> d = socket.Receive(static_cast<std::size_t>(options_.max_datagram));
     if (!d) return;
@@ -296,7 +313,9 @@ void LiveField::Drain(int port) {
       counters_.kernel_dropped += static_cast<std::uint32_t>(*d->kernel_drops - seen);
       seen = *d->kernel_drops;
     }
-    if (port == 2) {
+    if (port == 3) {
+      HandleGrSim(*d);
+    } else if (port == 2) {
       HandleControl(*d);
     } else {
       HandleTeam(teams_[static_cast<std::size_t>(port)], *d);
@@ -326,20 +345,29 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
     Answer(team.socket, r, d.from);
     return;
   }
-  std::vector<bool> contact;
-  if (sim_.has_ball())
-    for (int i = 0; i < sim_.num_robots(); ++i) contact.push_back(sim_.ball()->contact(i));
-  const std::vector<bool> present = Present();
-  RobotControlResult read =
-      ReadRobotControl(d.bytes, team.team, roster_, sim_.has_ball() ? &contact : nullptr, &present);
+  const RobotControlResult read = TakeRobotControl(team, d.bytes);
   if (!read.parsed) {
     ++counters_.malformed;
     Answer(team.socket, read.response, d.from);
     return;
   }
+  team.client = d.from;
+  const long long stored_ns = UnixNanos();
+  timing_.command_latency.Add(1e-9 * static_cast<double>(stored_ns - d.arrival_ns));
+  timing_.command_handling.Add(1e-9 * static_cast<double>(stored_ns - d.read_ns));
+  if (!d.kernel_stamp) ++timing_.unstamped;
+  Answer(team.socket, read.response, d.from);
+}
+
+RobotControlResult LiveField::TakeRobotControl(TeamPort& team, const std::string& bytes) {
+  std::vector<bool> contact;
+  if (sim_.has_ball())
+    for (int i = 0; i < sim_.num_robots(); ++i) contact.push_back(sim_.ball()->contact(i));
+  const std::vector<bool> present = Present();
+  RobotControlResult read = ReadRobotControl(bytes, team.team, roster_, sim_.has_ball() ? &contact : nullptr, &present);
+  if (!read.parsed) return read;
   ++counters_.robot_controls;
   counters_.refused += read.refused;
-  team.client = d.from;
   team.waited = true;
   team.answered = true;
   for (const auto& [robot, move] : read.moves) moves_[static_cast<std::size_t>(robot)] = move;
@@ -347,11 +375,63 @@ void LiveField::HandleTeam(TeamPort& team, const Datagram& d) {
     ball_commands_[static_cast<std::size_t>(robot)] = ball;
     ball_driven_[static_cast<std::size_t>(robot)] = true;
   }
-  const long long stored_ns = UnixNanos();
-  timing_.command_latency.Add(1e-9 * static_cast<double>(stored_ns - d.arrival_ns));
-  timing_.command_handling.Add(1e-9 * static_cast<double>(stored_ns - d.read_ns));
-  if (!d.kernel_stamp) ++timing_.unstamped;
-  Answer(team.socket, read.response, d.from);
+  return read;
+}
+
+SimulatorCommandResult LiveField::TakeSimulatorCommand(const std::string& bytes) {
+  const std::vector<bool> present = Present();
+  SimulatorCommandResult read = ReadSimulatorCommand(bytes, roster_, scene_.field, sim_.has_ball(), &present);
+  if (!read.parsed) return read;
+  ++counters_.simulator_commands;
+  counters_.refused += read.refused;
+  ApplyControl(read);
+  if (read.simulation_speed) {
+    if (options_.lockstep) {
+      ++counters_.refused;
+      AddError(&read.response, "TWINSIM_UNSUPPORTED", "simulation_speed: in lockstep the clients set the pace");
+    } else {
+      speed_ = *read.simulation_speed;
+    }
+  }
+  return read;
+}
+
+void LiveField::HandleGrSim(const Datagram& d) {
+  // grSim answers nothing: what is refused is counted only (the summary).
+  if (!TakeToken(&grsim_tokens_)) {
+    ++counters_.rate_dropped;
+    return;
+  }
+  if (d.truncated()) {
+    ++counters_.oversized;
+    return;
+  }
+  const GrSimPacket packet = ReadGrSimPacket(d.bytes, [this](TeamColor team, unsigned id) {
+    const int robot = roster_.Find(team, id);
+    return robot < 0 ? 0.0 : sim_.robot_model(robot).wheel_radius;
+  });
+  if (!packet.parsed) {
+    ++counters_.malformed;
+    return;
+  }
+  ++counters_.grsim_packets;
+  if (packet.commands) {
+    const std::size_t t = packet.team == TeamColor::kYellow ? 1 : 0;
+    // Tournament mode: each team's grSim commands from one address, as on its own port.
+    if (options_.tournament && grsim_clients_[t] && *grsim_clients_[t] != d.from) {
+      ++counters_.refused;
+    } else {
+      const RobotControlResult read = TakeRobotControl(teams_[t], packet.commands->SerializeAsString());
+      if (read.parsed) grsim_clients_[t] = d.from;
+    }
+  }
+  if (packet.replacement) {
+    if (options_.tournament) {
+      ++counters_.refused;  // as simulator control on the control port
+    } else {
+      TakeSimulatorCommand(packet.replacement->SerializeAsString());
+    }
+  }
 }
 
 void LiveField::HandleControl(const Datagram& d) {
@@ -374,25 +454,13 @@ void LiveField::HandleControl(const Datagram& d) {
     Answer(control_, response, d.from);
     return;
   }
-  const std::vector<bool> present = Present();
-  SimulatorCommandResult read = ReadSimulatorCommand(d.bytes, roster_, scene_.field, sim_.has_ball(), &present);
+  const SimulatorCommandResult read = TakeSimulatorCommand(d.bytes);
   if (!read.parsed) {
     ++counters_.malformed;
     Answer(control_, read.response, d.from);
     return;
   }
-  ++counters_.simulator_commands;
-  counters_.refused += read.refused;
   control_client_ = d.from;
-  ApplyControl(read);
-  if (read.simulation_speed) {
-    if (options_.lockstep) {
-      ++counters_.refused;
-      AddError(&read.response, "TWINSIM_UNSUPPORTED", "simulation_speed: in lockstep the clients set the pace");
-    } else {
-      speed_ = *read.simulation_speed;
-    }
-  }
   Answer(control_, read.response, d.from);
 }
 
@@ -462,6 +530,23 @@ void LiveField::MakeRoomForBall(const Eigen::Vector2d& target) {
   }
 }
 
+void LiveField::Record(const std::vector<FrameRecord>& records) {
+  if (sink_) sink_(records, sim_.has_ball() ? &sim_.ball_record() : nullptr);
+  if (counters_.frames % keep_stride_ != 0) return;
+  for (std::size_t k = 0; k < records.size(); ++k) result_.frames[k].push_back(records[k]);
+  if (sim_.has_ball()) result_.ball.push_back(sim_.ball_record());
+  const auto kept = static_cast<long long>(result_.frames.empty() ? result_.ball.size() : result_.frames[0].size());
+  if (options_.keep_frames == 0 || kept < 2LL * options_.keep_frames) return;
+  // Full: every other frame kept goes, and from now on every other is kept.
+  auto thin = [](auto& v) {
+    for (std::size_t i = 0; 2 * i < v.size(); ++i) v[i] = v[2 * i];
+    v.resize((v.size() + 1) / 2);
+  };
+  for (auto& f : result_.frames) thin(f);
+  thin(result_.ball);
+  keep_stride_ *= 2;
+}
+
 ServeSummary LiveField::Summary() const {
   ServeSummary s;
   s.counters = counters_;
@@ -483,7 +568,8 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   frame_unix_.assign(static_cast<std::size_t>(vision_delay_) + 1, unix_start_);
   Clock::time_point frame_end = start_, next_status = start_;
   const double dt = result_.timing.frame_dt();
-  const std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
+  std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
+  if (grsim_) sockets.push_back(&*grsim_);
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
     const Clock::time_point frame_start = Clock::now();
     if (!options_.lockstep) {
@@ -523,7 +609,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       RefillTokens(Seconds(now - last_refill_));
       last_refill_ = now;
       if (WaitReadable(sockets, wait) >= 0)
-        for (int port = 0; port < 3; ++port) Drain(port);
+        for (int port = 0; port < 4; ++port) Drain(port);
       // Lockstep: a team yet to come may have missed this frame's vision, and a team
       // waited for may have had its answer lost (dropped over the rate limit, or by the
       // network): the frame's vision again, which a client answers as it answers any.
@@ -551,8 +637,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     }
     sim_.EndFrame(&records, ball_commands);
     for (BallCommand& c : ball_commands_) c.kick_speed = 0;  // a kick is for its frame
-    for (std::size_t k = 0; k < records.size(); ++k) result_.frames[k].push_back(records[k]);
-    if (sim_.has_ball()) result_.ball.push_back(sim_.ball_record());
+    Record(records);
     ++counters_.frames;
     timing_.frame_work.Add(Seconds(vision_work + (Clock::now() - step_start)));
   }

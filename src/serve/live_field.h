@@ -28,6 +28,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/duration_histogram.h"
@@ -45,6 +46,7 @@ struct ServeOptions {
   int control_port = 10300;          // SimulatorCommand; 0: any free port
   int blue_port = 10301;             // blue team's RobotControl
   int yellow_port = 10302;           // yellow team's RobotControl
+  int grsim_port = -1;               // grSim's protocol (serve/grsim_packet.h): -1 off; 0 any free port; grSim's is 20011
   std::string vision_address = "127.0.0.1";  // SSL_WrapperPacket go here (unicast, or a multicast group)
   int vision_port = 10020;
   int vision_ttl = 1;                 // multicast vision: hops (1: this network only)
@@ -66,6 +68,11 @@ struct ServeOptions {
   double geometry_period = 1;         // s of simulated time between geometry packets
   double boundary = 0.3;              // m between the walls and the field lines
   long long max_frames = 0;           // stop after this many frames; 0: when stopped
+  // Frames result() keeps per robot: 0, every one; else a thinned history for the plots
+  // of at least this many and fewer than twice as many (every 2^j-th frame, the whole
+  // match at an even pace), so that memory stays flat however long the match (the logs
+  // go to a frame sink as the match runs: SetFrameSink, scene/run_log_stream.h).
+  int keep_frames = 0;
 
   // False (with the reason in *why) for values out of range, an address that is not
   // IPv4, multicast options for a unicast vision address, an unknown team name.
@@ -78,6 +85,7 @@ struct ServeCounters {
   long long vision_packets = 0;      // sent (detections and geometry)
   long long robot_controls = 0;      // RobotControl read
   long long simulator_commands = 0;  // SimulatorCommand read
+  long long grsim_packets = 0;       // grSim_Packet read
   long long refused = 0;             // robot commands and control requests refused (answered)
   long long malformed = 0;           // datagrams that were no message (answered)
   long long oversized = 0;           // datagrams over the size limit (answered)
@@ -139,9 +147,15 @@ class LiveField {
   int control_port() const { return control_.port(); }
   int blue_port() const { return teams_[0].socket.port(); }
   int yellow_port() const { return teams_[1].socket.port(); }
+  int grsim_port() const { return grsim_ ? grsim_->port() : -1; }
   // bytes per port: the receive buffer asked for, and what the kernel granted.
   int receive_buffer_asked() const { return receive_buffer_asked_; }
   int receive_buffer() const { return receive_buffer_; }
+
+  // Called with every frame run, as it ends: the records per robot and the ball's (null
+  // without a ball). What it throws ends Run.
+  using FrameSink = std::function<void(const std::vector<FrameRecord>&, const BallRecord*)>;
+  void SetFrameSink(FrameSink sink) { sink_ = std::move(sink); }
 
   // Runs frames until `stop()` returns true (asked between datagrams and frames) or
   // max_frames have run; `status(summary)` is called about ten times a second. Throws
@@ -149,7 +163,8 @@ class LiveField {
   ServeSummary Run(const std::function<bool()>& stop,
                    const std::function<void(const ServeSummary&)>& status = {});
 
-  // Every frame run, for the logs (scene/scene_run.h: WriteOmniRunFiles).
+  // Every frame run (thinned with keep_frames), for the logs and plots
+  // (scene/scene_run.h: WriteOmniRunFiles).
   const SimulationResult& result() const { return result_; }
   // The simulation served (for tests: who is on the field, where the robots are).
   const Simulation& simulation() const { return sim_; }
@@ -177,10 +192,16 @@ class LiveField {
   // The Unix time (s) at which frame k's vision was captured: the start of frame
   // k - vision delay on the wall clock, as far back as the delay goes.
   double CaptureUnixTime(int k) const;
-  // Reads every datagram waiting on the socket at `port` (0, 1 teams, 2 control).
+  // Reads every datagram waiting on the socket at `port` (0, 1 teams, 2 control, 3 grSim).
   void Drain(int port);
   void HandleTeam(TeamPort& team, const Datagram& d);
   void HandleControl(const Datagram& d);
+  void HandleGrSim(const Datagram& d);
+  // Applies a RobotControl `team` sent (as bytes), read and checked; returns the read.
+  RobotControlResult TakeRobotControl(TeamPort& team, const std::string& bytes);
+  // Applies a SimulatorCommand (as bytes), read and checked; returns the read, its
+  // response with the errors of what was refused (and counted).
+  SimulatorCommandResult TakeSimulatorCommand(const std::string& bytes);
   // Applies what a SimulatorCommand asked for and the reader accepted.
   void ApplyControl(const SimulatorCommandResult& read);
   // teleport_safely: moves every robot on the field whose chassis would be within
@@ -192,6 +213,8 @@ class LiveField {
   // Adds `seconds` worth of max_rate to every port's bucket (at most one second's worth).
   void RefillTokens(double seconds);
   bool FrameComplete() const;
+  // Hands frame `records` (just run) to the sink and keeps it in result_ (thinned).
+  void Record(const std::vector<FrameRecord>& records);
   ServeSummary Summary() const;
 
   const Scene& scene_;
@@ -202,6 +225,9 @@ class LiveField {
   std::array<TeamPort, 2> teams_;
   std::optional<UdpEndpoint> control_client_;
   double control_tokens_ = 0;
+  std::optional<UdpSocket> grsim_;  // grSim's protocol, when asked for
+  double grsim_tokens_ = 0;
+  std::array<std::optional<UdpEndpoint>, 2> grsim_clients_;  // tournament: per team, the one address allowed
   UdpSocket vision_out_;
   UdpEndpoint vision_to_;
   int vision_delay_ = 0;                               // frames, every robot's
@@ -214,12 +240,14 @@ class LiveField {
   ServeCounters counters_;
   ServeTiming timing_;
   SimulationResult result_;
+  FrameSink sink_;
+  long long keep_stride_ = 1;  // keep_frames: result_ keeps the frames whose number is a multiple of this
   std::chrono::steady_clock::time_point start_, last_refill_;
   double unix_start_ = 0;  // s, real time: the Unix time of frame 0
   // s, real time: the Unix time each of the last vision_delay + 1 frames began (frame k
   // at k % size), the capture times of the vision they send later.
   std::vector<double> frame_unix_;
-  std::array<std::uint32_t, 3> kernel_drops_{};  // per port (blue, yellow, control): the kernel's count seen last
+  std::array<std::uint32_t, 4> kernel_drops_{};  // per port (blue, yellow, control, grSim): the kernel's count seen last
   std::string last_send_error_;
   int receive_buffer_asked_ = 0, receive_buffer_ = 0;  // bytes
   std::string last_vision_;  // the current frame's packet, serialized

@@ -55,6 +55,57 @@ TEST(ServeCli, SigintStopsAndWritesTheLogPerRobot) {
   EXPECT_NE(out.find("frames"), std::string::npos) << out;
 }
 
+// The logs are written as the match runs: after a `kill -9` every file ends on a whole
+// line, commands.csv holds no frame the others lack, and `run --commands` replays the
+// match to the end of it, the observer's log a prefix of the served one.
+TEST(ServeCli, AfterKill9TheLogsHoldEveryFinishedFrameAndReplay) {
+  const std::string d = testing::TempDir("serve_kill9");
+  const std::string model = SourcePath("models/omni4.yaml");
+  const std::string scene = testing::WriteText(
+      d + "/s.yaml", "name: s\nbackend: analytic\nframe_rate: 60\nduration: 60\nseed: 3\nrobots:\n"
+                     "  - {name: b0, model: " + model + ", commands: {type: random}}\n"
+                     "  - {name: y0, team: yellow, model: " + model + ", start: {x: 1}, commands: {type: figure_eight}}\n");
+  UdpSocket vision("127.0.0.1", 0);
+  const std::string args = "serve " + scene + " --out " + d + "/out --control-port 0 --blue-port 0 --yellow-port 0" +
+                           " --vision-port " + std::to_string(vision.port());
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string cmd = "exec " + std::string(TWINSIM_BINARY) + " " + args + " >" + d + "/stdout 2>" + d + "/stderr";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bool flowing = false;
+  for (int i = 0; i < 100 && !flowing; ++i) flowing = WaitReadable({&vision}, 0.1) >= 0;
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(flowing) << testing::ReadText(d + "/stderr");
+  ASSERT_TRUE(WIFSIGNALED(status));
+  auto frames_in = [](const std::string& text) {
+    EXPECT_FALSE(text.empty());
+    EXPECT_EQ(text.back(), '\n') << "a file ends in the middle of a line";
+    return std::count(text.begin(), text.end(), '\n') - 1;
+  };
+  const std::string commands = testing::ReadText(d + "/out/commands.csv");
+  const auto command_rows = frames_in(commands);
+  const auto truth_rows = frames_in(testing::ReadText(d + "/out/truth.csv"));
+  frames_in(testing::ReadText(d + "/out/truth_y0.csv"));
+  const std::string served = testing::ReadText(d + "/out/trajectory.csv");
+  frames_in(served);
+  // Two robots a frame; at most the frame cut by the kill is missing from commands.csv.
+  ASSERT_EQ(command_rows % 2, 0) << commands.substr(commands.size() - 300);
+  EXPECT_GE(truth_rows, 30);
+  EXPECT_TRUE(command_rows / 2 == truth_rows || command_rows / 2 + 1 == truth_rows)
+      << command_rows << " command rows, " << truth_rows << " truth rows";
+  const testing::CommandResult replay =
+      testing::RunTwinsim("run " + scene + " --commands " + d + "/out/commands.csv --out " + d + "/replay");
+  ASSERT_EQ(replay.exit_code, 0) << replay.out << replay.err;
+  const std::string replayed = testing::ReadText(d + "/replay/trajectory.csv");
+  EXPECT_GE(replayed.size(), 1000u);
+  EXPECT_EQ(served.compare(0, replayed.size(), replayed), 0) << "the replay is not the served match";
+}
+
 // The robot list names each robot's backend; the logs are written as for one backend.
 TEST(ServeCli, ItPrintsEachRobotsBackend) {
   const std::string d = testing::TempDir("serve_mixed");

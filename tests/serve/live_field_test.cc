@@ -363,6 +363,42 @@ TEST(LiveField, AFloodIsDroppedOverTheRateLimitWithoutStallingTheFrames) {
   EXPECT_GE(summary.counters.frames, static_cast<long long>(15 * wall) - 2);
 }
 
+// keep_frames: the sink gets every frame as it ends; result() keeps an evenly thinned
+// history of the whole match (every 2^j-th frame), between keep_frames and twice as
+// many, allocated once.
+TEST(LiveField, TheSinkGetsEveryFrameAndTheHistoryIsThinnedEvenly) {
+  const Scene scene = TwoTeamScene();
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
+  ServeOptions options = LockstepOptions(vision.port(), 37);
+  options.keep_frames = 4;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  std::vector<double> sunk;  // t of each frame the sink got
+  field.SetFrameSink([&](const std::vector<FrameRecord>& records, const BallRecord* ball) {
+    EXPECT_EQ(records.size(), 2u);
+    EXPECT_EQ(ball, nullptr);
+    sunk.push_back(records[0].t);
+  });
+  const FrameRecord* first = field.result().frames[0].data();
+  EXPECT_EQ(field.result().frames[0].capacity(), 8u);
+  {
+    ServerThread server(&field);
+    for (int k = 0; k < 37; ++k) {
+      ASSERT_TRUE(ReceiveFrame(vision, static_cast<std::uint32_t>(k))) << k;
+      ASSERT_TRUE(Ask<RobotControlResponse>(client, Local(0, Twist2{0.2, 0, 0}), field.blue_port())) << k;
+    }
+    server.Join();
+  }
+  ASSERT_EQ(sunk.size(), 37u);
+  const double dt = 1 / scene.frame_rate;
+  for (std::size_t k = 0; k < sunk.size(); ++k) EXPECT_NEAR(sunk[k], k * dt, 1e-9);
+  // Room for 8: full at frame 7 (kept 0, 2, 4, 6; then every 2nd), at frame 14 (0, 4, 8,
+  // 12; every 4th) and at frame 28 (0, 8, 16, 24; every 8th); then 32.
+  const std::vector<FrameRecord>& kept = field.result().frames[0];
+  ASSERT_EQ(kept.size(), 5u);
+  for (std::size_t i = 0; i < kept.size(); ++i) EXPECT_NEAR(kept[i].t, 8.0 * i * dt, 1e-9) << i;
+  EXPECT_EQ(field.result().frames[0].data(), first) << "the history was allocated again";
+}
+
 // A burst larger than the receive buffer: what the kernel drops before the loop reads
 // it is counted (the count rides on the next datagram read), so every datagram sent is
 // either handled or counted as dropped.

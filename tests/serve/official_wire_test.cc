@@ -21,32 +21,17 @@
 #include <string>
 #include <vector>
 
+#include "serve/protobuf_wire.h"
 #include "serve/robot_control.h"
 #include "serve/simulator_control.h"
 
 namespace twinsim {
 namespace {
 
-std::string Varint(std::uint64_t v) {
-  std::string out;
-  while (v >= 0x80) {
-    out.push_back(static_cast<char>((v & 0x7f) | 0x80));
-    v >>= 7;
-  }
-  out.push_back(static_cast<char>(v));
-  return out;
-}
-std::string VarintField(int field, std::uint64_t v) { return Varint(static_cast<std::uint64_t>(field) << 3) + Varint(v); }
-std::string BytesField(int field, const std::string& payload) {
-  return Varint(static_cast<std::uint64_t>(field) << 3 | 2) + Varint(payload.size()) + payload;
-}
-std::string FloatField(int field, float f) {
-  std::uint32_t bits;
-  std::memcpy(&bits, &f, sizeof bits);
-  std::string out = Varint(static_cast<std::uint64_t>(field) << 3 | 5);
-  for (int k = 0; k < 4; ++k) out.push_back(static_cast<char>((bits >> (8 * k)) & 0xff));
-  return out;
-}
+using testing::BytesField;
+using testing::FloatField;
+using testing::Varint;
+using testing::VarintField;
 
 // One field of a message as it comes off the wire.
 struct WireField {

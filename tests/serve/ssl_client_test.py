@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """ctest Serve.PythonClient: examples/ssl_client.py drives a robot of `twinsim serve
---lockstep` to a pose over the loopback (free ports, no multicast); Ctrl-C then makes
-the server write the logs. Usage: ssl_client_test.py TWINSIM SOURCE_DIR BUILD_DIR"""
+--lockstep` to a pose over the loopback (free ports, no multicast), once over the
+league's simulation protocol and once over grSim's; Ctrl-C then ends the server. Usage: ssl_client_test.py TWINSIM SOURCE_DIR BUILD_DIR"""
 import os
 import signal
 import socket
@@ -16,20 +16,21 @@ def free_port():
         return s.getsockname()[1]
 
 
-def main():
-    twinsim, source, build = sys.argv[1:4]
+def drive(twinsim, source, build, protocol):
+    """Serves serve_2v2 in lockstep and drives blue 1 to a pose over `protocol`."""
     out = tempfile.mkdtemp(prefix="twinsim_serve_client_")
-    control, blue, yellow, vision = (free_port() for _ in range(4))
+    control, blue, yellow, vision, grsim = (free_port() for _ in range(5))
     server = subprocess.Popen(
         [twinsim, "serve", os.path.join(source, "scenes", "serve_2v2.yaml"), "--backend", "analytic", "--lockstep",
          "--teams", "blue", "--control-port", str(control), "--blue-port", str(blue), "--yellow-port", str(yellow),
-         "--vision-port", str(vision), "--out", out, "-q"],
+         "--grsim-port", str(grsim), "--vision-port", str(vision), "--out", out, "-q"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         client = subprocess.run(
             [sys.executable, os.path.join(source, "examples", "ssl_client.py"), "--vision-port", str(vision),
-             "--team-port", str(blue), "--id", "1", "--x", "0.5", "--y", "-1.0", "--theta-deg", "90",
-             "--frames", "900", "--proto-py", os.path.join(build, "proto_py")],
+             "--protocol", protocol, "--team-port", str(grsim if protocol == "grsim" else blue), "--id", "1",
+             "--x", "0.5", "--y", "-1.0", "--theta-deg", "90", "--frames", "900",
+             "--proto-py", os.path.join(build, "proto_py")],
             capture_output=True, text=True, timeout=120)
     finally:
         server.send_signal(signal.SIGINT)
@@ -45,7 +46,13 @@ def main():
     x, y = (float(v) for v in log[-1].split(",")[1:3])
     if abs(x - 0.5) > 0.05 or abs(y + 1.0) > 0.05:
         sys.exit(f"blue1 logged at ({x}, {y}), not at the target")
-    print(f"ok: {len(log) - 1} frames logged, blue1 at ({x:.3f}, {y:.3f})")
+    print(f"ok ({protocol}): {len(log) - 1} frames logged, blue1 at ({x:.3f}, {y:.3f})")
+
+
+def main():
+    twinsim, source, build = sys.argv[1:4]
+    for protocol in ("league", "grsim"):
+        drive(twinsim, source, build, protocol)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@
 
 #include "core/math_constants.h"
 #include "robots/omni/omni_model.h"
+#include "serve/grsim_packet.h"
 #include "serve/robot_control.h"
 #include "serve/simulator_control.h"
 #include "serve/vision_packets.h"
@@ -467,11 +468,23 @@ TEST(SimulatorControl, TheFuzzSeedsAreReadWithoutThrowing) {
     auto collect = [&](const auto& response) {
       for (const SimulatorError& e : response.errors()) codes.push_back(e.code());
     };
-    switch (static_cast<unsigned char>(datagram[0]) % 4) {
+    switch (static_cast<unsigned char>(datagram[0]) % 5) {
       case 0: collect(ReadRobotControl(bytes, TeamColor::kBlue, roster).response); break;
       case 1: collect(ReadRobotControl(bytes, TeamColor::kYellow, roster, &contact, &present).response); break;
       case 2: collect(ReadSimulatorCommand(bytes, roster, field, false).response); break;
-      default: collect(ReadSimulatorCommand(bytes, roster, field, true, &present).response); break;
+      case 3: collect(ReadSimulatorCommand(bytes, roster, field, true, &present).response); break;
+      default: {
+        const GrSimPacket packet = ReadGrSimPacket(bytes, [](TeamColor, unsigned id) { return id < 2 ? 0.027 : 0.0; });
+        if (packet.commands) {
+          collect(ReadRobotControl(packet.commands->SerializeAsString(), packet.team, roster, &contact, &present)
+                      .response);
+        }
+        if (packet.replacement) {
+          collect(ReadSimulatorCommand(packet.replacement->SerializeAsString(), roster, field, true, &present)
+                      .response);
+        }
+        break;
+      }
     }
     return codes;
   };
@@ -491,6 +504,11 @@ TEST(SimulatorControl, TheFuzzSeedsAreReadWithoutThrowing) {
   EXPECT_EQ(codes["simulator_config"], (std::vector<std::string>{"TWINSIM_UNSUPPORTED", "TWINSIM_NO_BALL",
                                                                  "TWINSIM_UNSUPPORTED"}));
   EXPECT_EQ(codes["control_not_present"], std::vector<std::string>{"TWINSIM_NOT_PRESENT"});
+  // grSim: yellow 0 on local velocity with a kick and the spinner, and wheels for
+  // yellow 1 (blue's id); the replacement turns yellow 3 (off already) off, puts blue 0
+  // at the centre and moves the ball, all accepted, with the same commands.
+  EXPECT_EQ(codes["grsim_commands"], std::vector<std::string>{"TWINSIM_OTHER_TEAM"});
+  EXPECT_EQ(codes["grsim_replacement"], std::vector<std::string>{"TWINSIM_OTHER_TEAM"});
 }
 
 }  // namespace

@@ -11,13 +11,17 @@
 #include "core/progress.h"
 #include "io/output_files.h"
 #include "learning/omni_predictor.h"
-#include "scene/command_log.h"
+#include "scene/run_log_stream.h"
 #include "scene/scene.h"
 #include "scene/scene_run.h"
 #include "serve/live_field.h"
 
 namespace twinsim {
 namespace {
+
+// Frames of the match the plots draw at least (a long match thinned evenly to fewer
+// than twice as many; LiveField's keep_frames).
+constexpr int kPlotFrames = 2048;
 
 struct ServeCommandOptions {
   std::string scene;
@@ -45,7 +49,14 @@ int Serve(ServeCommandOptions& options) {
   OmniBackendOptions backend_options;
   if (!options.predictor.empty())
     backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
+  // The logs go to disk frame by frame (a crash keeps every finished frame) and the
+  // field keeps a thinned history for the plots: memory stays flat for any length.
+  options.serve.keep_frames = kPlotFrames;
   LiveField field(scene, MakeSimulation(scene, backend, backend_options), options.serve);
+  RunLogStream logs(out, field.result().robot_names, field.simulation().has_ball(), scene.frame_rate);
+  field.SetFrameSink([&logs](const std::vector<FrameRecord>& records, const BallRecord* ball) {
+    logs.Append(records, ball);
+  });
 
   if (!options.quiet) {
     std::printf("serving %s: %zu robot(s) on %s at %g fps, %s\n", scene.name.c_str(), scene.robots.size(),
@@ -57,13 +68,17 @@ int Serve(ServeCommandOptions& options) {
           r.predictor ? " (" + std::filesystem::path(r.predictor_path).filename().string() + ")" : "";
       std::printf("  %s %d: %s on %s%s\n", r.team.c_str(), r.id, r.name.c_str(), backends[i].c_str(), predictor.c_str());
     }
-    std::printf("control %s:%d%s, blue %s:%d, yellow %s:%d; vision to %s:%d. Ctrl-C stops and writes the logs.\n",
+    std::printf("control %s:%d%s, blue %s:%d, yellow %s:%d; vision to %s:%d.\n",
                 options.serve.listen.c_str(), field.control_port(), options.serve.tournament ? " (refused: tournament)" : "",
                 options.serve.listen.c_str(), field.blue_port(), options.serve.listen.c_str(), field.yellow_port(),
                 options.serve.vision_address.c_str(), options.serve.vision_port);
+    std::printf("logs to %s/ as the match runs; Ctrl-C stops and draws the plots.\n", out.c_str());
     if (IsMulticast(ParseIpv4(options.serve.vision_address)))
       std::printf("vision is multicast (ttl %d, interface %s)\n", options.serve.vision_ttl,
                   options.serve.vision_interface.empty() ? "by route" : options.serve.vision_interface.c_str());
+    if (field.grsim_port() >= 0)
+      std::printf("grSim's protocol on %s:%d%s\n", options.serve.listen.c_str(), field.grsim_port(),
+                  options.serve.tournament ? " (replacement refused: tournament)" : "");
     if (field.receive_buffer() < field.receive_buffer_asked())
       std::printf("receive buffers: %d bytes per port of %d asked; a burst of commands may be dropped by the kernel\n"
                   "  (counted; raise net.core.rmem_max, or serve with CAP_NET_ADMIN)\n",
@@ -81,11 +96,10 @@ int Serve(ServeCommandOptions& options) {
   ClearInterrupt();
 
   OutputFiles files(out);
-  if (summary.counters.frames > 0) {
-    WriteOmniRunFiles(scene, field.result(), /*plots=*/true, &files);
-    // What every robot sent, exactly: `twinsim run SCENE --commands commands.csv` replays it.
-    files.Write("commands.csv", CommandsCsv(field.result()));
-  }
+  // commands.csv, what every robot sent, exactly: `twinsim run SCENE --commands
+  // commands.csv` replays it.
+  for (const std::string& name : logs.names()) files.Add(name);
+  if (summary.counters.frames > 0) WriteOmniRunPlots(scene, field.result(), &files);
   if (!options.quiet) {
     std::printf("%s\n%s", summary.Brief().c_str(), summary.Report().c_str());
     if (summary.counters.frames == 0) std::printf("no frame ran: nothing written\n");
@@ -109,9 +123,10 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
       "off the field and a teleport with present: true adds it (present: false removes one;\n"
       "by_force moves by force).\n"
       "Real time by default; --lockstep steps frame k when every connected team has sent its\n"
-      "command for it. Ctrl-C stops and writes DIR/trajectory.csv (and _NAME per further robot)\n"
-      "and DIR/truth.csv as `twinsim run` does, DIR/ball.csv when the scene has a `ball:`\n"
-      "(kicks, chips, the dribbler and ball teleports then work; docs/ball.md), and the plots.");
+      "command for it. DIR/trajectory.csv (and _NAME per further robot) and DIR/truth.csv as\n"
+      "`twinsim run` writes them, DIR/ball.csv when the scene has a `ball:` (kicks, chips, the\n"
+      "dribbler and ball teleports then work; docs/ball.md) and DIR/commands.csv are written as\n"
+      "the match runs (after a crash they hold every finished frame); Ctrl-C stops and draws the plots.");
   cmd->add_option("scene", options->scene, "Scene file (YAML, see docs/scenes.md)")->required();
   cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned (default: the scene's; robots with their own "
                   "`backend:` keep theirs)");
@@ -122,6 +137,9 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--control-port", options->serve.control_port, "Simulator control port (default 10300; 0: any free)");
   cmd->add_option("--blue-port", options->serve.blue_port, "Blue team's robot control port (default 10301)");
   cmd->add_option("--yellow-port", options->serve.yellow_port, "Yellow team's robot control port (default 10302)");
+  cmd->add_option("--grsim-port", options->serve.grsim_port,
+                  "Also take grSim's own protocol (grSim_Packet: commands and replacement) on this port\n"
+                  "(grSim's is 20011; default: off; docs/serve.md)");
   cmd->add_option("--vision-address", options->serve.vision_address,
                   "Address the vision packets go to: unicast (default 127.0.0.1), or a multicast group\n"
                   "such as the league's 224.5.23.2");

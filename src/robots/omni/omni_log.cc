@@ -260,16 +260,18 @@ OmniLog ParseOmniLog(const std::string& text, const std::string& path, const Omn
   return OmniLogFromTable(ParseCsvTable(text, path), select);
 }
 
-std::string FormatOmniLog(const std::vector<OmniLogRow>& rows) {
-  std::string out = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd\n";
-  for (const auto& r : rows) {
-    const double v[] = {r.t, r.pose.x, r.pose.y, r.pose.theta, r.command.vx, r.command.vy, r.command.omega};
-    for (int i = 0; i < 7; ++i) {
-      if (i) out += ',';
-      if (r.measured || i == 0 || i > 3) out += FormatCsvNumber(v[i]);  // no measurement: empty pose cells
-    }
-    out += '\n';
+void AppendOmniLogRow(const OmniLogRow& r, std::string* out) {
+  const double v[] = {r.t, r.pose.x, r.pose.y, r.pose.theta, r.command.vx, r.command.vy, r.command.omega};
+  for (int i = 0; i < 7; ++i) {
+    if (i) *out += ',';
+    if (r.measured || i == 0 || i > 3) *out += FormatCsvNumber(v[i]);  // no measurement: empty pose cells
   }
+  *out += '\n';
+}
+
+std::string FormatOmniLog(const std::vector<OmniLogRow>& rows) {
+  std::string out = kOmniLogHeader;
+  for (const auto& r : rows) AppendOmniLogRow(r, &out);
   return out;
 }
 

@@ -65,6 +65,11 @@ OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last);
 
 // The CSV text of a log (header and rows).
 std::string FormatOmniLog(const std::vector<OmniLogRow>& rows);
+// The log's header line, and one row's line (a row without a measurement has empty
+// pose cells), appended to *out: FormatOmniLog line by line, for a log written as it
+// runs.
+inline constexpr const char* kOmniLogHeader = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd\n";
+void AppendOmniLogRow(const OmniLogRow& row, std::string* out);
 // Writes a log atomically.
 void WriteOmniLog(const std::string& path, const std::vector<OmniLogRow>& rows);
 
