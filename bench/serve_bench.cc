@@ -6,6 +6,7 @@
 //   build/serve_bench --seconds 60 --lockstep-frames 60000
 //   build/serve_bench --realtime-priority 50 --cpu 1   # as twinsim serve's options
 //   build/serve_bench --memory-minutes 120              # part 4 alone: a 2 h match's memory
+//   build/serve_bench --cameras 2 2                      # part 1 seen by four cameras
 //
 // 1. Real time: scenes/serve_11v11.yaml (11 blue against 11 yellow and the ball) on ODE
 //    at 60 fps, with one client thread per team that answers every vision packet with a
@@ -32,6 +33,7 @@
 #include <fstream>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -282,6 +284,7 @@ int Main(int argc, char** argv) {
   long long lockstep_frames = 20000;
   double memory_minutes = 0;
   bool keep_all = false;
+  std::optional<CameraGrid> cameras;  // part 1: several cameras (columns, rows)
   ServeOptions realtime;  // part 1's serving thread: twinsim serve's --realtime-priority, --cpu
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -297,8 +300,12 @@ int Main(int argc, char** argv) {
       memory_minutes = std::atof(argv[++i]);
     } else if (a == "--keep-all") {
       keep_all = true;
+    } else if (a == "--cameras" && i + 2 < argc) {
+      cameras = CameraGrid{std::atoi(argv[i + 1]), std::atoi(argv[i + 2]), 0.4, 4};
+      i += 2;
     } else {
       std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N] [--realtime-priority P] [--cpu C]\n"
+                           "                   [--cameras COLUMNS ROWS]\n"
                            "       serve_bench --memory-minutes M [--keep-all]\n");
       return 2;
     }
@@ -312,7 +319,8 @@ int Main(int argc, char** argv) {
   if (memory_minutes > 0) return MemoryOverAMatch(memory_minutes, keep_all);
 
   // 1 and 2: real time, 11 v 11 and the ball on ODE.
-  const Scene match = LoadScene(Source("scenes/serve_11v11.yaml"));
+  Scene match = LoadScene(Source("scenes/serve_11v11.yaml"));
+  match.cameras = cameras;
   const auto frames = static_cast<long long>(seconds * match.frame_rate + 0.5);
   const Served rt = Serve(match, "ode", realtime, frames, /*resend=*/0);
   const ServeSummary& s = rt.summary;
@@ -320,8 +328,9 @@ int Main(int argc, char** argv) {
               "CPU %d (0, -1: the normal scheduler, any CPU)\n",
               match.name.c_str(), match.robots.size(), match.ball ? "ball" : "no ball", match.frame_rate, frames, seconds,
               realtime.realtime_priority, realtime.cpu);
-  std::printf("  frames run %lld in %.3f s wall (%.4f x real time); late frames %lld\n", s.counters.frames, s.wall,
-              s.simulated / s.wall, s.counters.late_frames);
+  std::printf("  frames run %lld in %.3f s wall (%.4f x real time); late frames %lld; cameras %d (vision packets %lld)\n",
+              s.counters.frames, s.wall, s.simulated / s.wall, s.counters.late_frames,
+              cameras ? cameras->columns * cameras->rows : 1, s.counters.vision_packets);
   std::printf("  robot controls read %lld (sent: blue %lld, yellow %lld), answered %lld + %lld, refused %lld, "
               "dropped/bad %lld\n",
               s.counters.robot_controls, rt.sent[0], rt.sent[1], rt.answers[0], rt.answers[1], s.counters.refused,

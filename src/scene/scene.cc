@@ -341,6 +341,16 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
     b.Finish();
     scene.ball = ball;
   }
+  if (top.Has("cameras")) {
+    YamlMap c(top.Child("cameras"), path, "cameras", &errors);
+    CameraGrid grid;
+    c.Get("columns", &grid.columns, InRange(1, 8));
+    c.Get("rows", &grid.rows, InRange(1, 8));
+    c.Get("overlap", &grid.overlap, InRange(0, 3));
+    c.Get("height", &grid.height, InRange(1, 20));
+    c.Finish();
+    scene.cameras = grid;
+  }
   scene.plots = ReadPlotSpecs(top, "plots");
   if (top.Has("tune_pid")) scene.tune_pid = top.Child("tune_pid");
   top.Finish();

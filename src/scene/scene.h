@@ -15,6 +15,7 @@
 
 #include "backends/omni_backend_factory.h"
 #include "render/plot_spec.h"
+#include "scene/camera_layout.h"
 #include "scene/command_source.h"
 #include "scene/scene_overrides.h"
 #include "sim/omni_simulation.h"
@@ -64,6 +65,9 @@ struct Scene {
   std::vector<SceneRobot> robots;
   std::vector<PlotSpec> plots;   // PNGs `twinsim run` draws (docs/rendering.md)
   std::optional<SceneBall> ball; // the `ball:` section; none: a field without a ball
+  // The `cameras:` section (scene/camera_layout.h): several cameras for twinsim serve;
+  // none: one camera seeing the whole field, its detections what the observer receives.
+  std::optional<CameraGrid> cameras;
   YAML::Node tune_pid;           // the `tune_pid:` block, read by ReadPidTuningOptions (tuning/pid_tuning.h)
 
   FrameTiming timing() const;

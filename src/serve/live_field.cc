@@ -64,6 +64,10 @@ class RealtimeScope {
 
 using Clock = std::chrono::steady_clock;
 
+// The cameras' random streams (noise and lost detections), one per camera id from this
+// on: apart from the simulation's, so that the logs stay as they are.
+constexpr std::uint64_t kCameraStream = 0x63616d00;  // "cam"
+
 // Datagrams read from one port before the loop looks at the clock again: a flood
 // cannot hold a frame.
 constexpr int kMaxDatagramsPerDrain = 256;
@@ -199,8 +203,19 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
                        "robots '" + sim_.robot_name(0) + "' and '" + sim_.robot_name(i) + "' have vision delays of " +
                            std::to_string(vision_delay_) + " and " +
                            std::to_string(sim_.robot_model(i).vision_delay_frames) +
-                           " frames; twinsim serve has one camera, with one delay");
+                           " frames; twinsim serve's cameras share one delay");
     }
+  }
+  if (scene.cameras) {
+    cameras_ = CameraViews(*scene.cameras, scene.field);
+    for (const CameraView& v : cameras_) camera_rng_.push_back(Rng::Derived(scene.seed, kCameraStream + v.id));
+    start_capture_.present.resize(static_cast<std::size_t>(sim_.num_robots()));
+    for (int i = 0; i < sim_.num_robots(); ++i) {
+      start_capture_.robots.push_back(sim_.backend().pose(i));
+      start_capture_.present[static_cast<std::size_t>(i)] = sim_.present(i);
+    }
+    if (sim_.has_ball()) start_capture_.ball = sim_.ball()->ball().position;
+    captures_.assign(static_cast<std::size_t>(vision_delay_) + 1, start_capture_);
   }
   control_ = UdpSocket(options_.listen, options_.control_port);
   teams_[0].socket = UdpSocket(options_.listen, options_.blue_port);
@@ -264,11 +279,6 @@ bool LiveField::FrameComplete() const {
 }
 
 void LiveField::SendVision(const std::vector<FrameRecord>& records) {
-  std::vector<Sighting> seen;
-  for (int i = 0; i < sim_.num_robots(); ++i) {
-    const FrameRecord& r = records[static_cast<std::size_t>(i)];
-    if (r.observed) seen.push_back(Sighting{roster_.robot(i), r.seen});
-  }
   const int k = sim_.frame();
   const double dt = result_.timing.frame_dt();
   // Lockstep stamps simulated time (deterministic); real time, Unix time as SSL-Vision:
@@ -278,15 +288,71 @@ void LiveField::SendVision(const std::vector<FrameRecord>& records) {
     t_capture = CaptureUnixTime(k);
     t_sent = UnixNow();
   }
-  std::optional<Eigen::Vector3d> ball;
-  if (sim_.has_ball() && sim_.ball_record().observed) ball = sim_.ball_record().seen;
-  SSL_WrapperPacket packet = DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent, ball);
-  // Geometry in the same packet at frame 0 and then every geometry_period.
+  std::vector<SSL_WrapperPacket> packets;
+  if (cameras_.empty()) {
+    // One camera: what the observer receives.
+    std::vector<Sighting> seen;
+    for (int i = 0; i < sim_.num_robots(); ++i) {
+      const FrameRecord& r = records[static_cast<std::size_t>(i)];
+      if (r.observed) seen.push_back(Sighting{roster_.robot(i), r.seen});
+    }
+    std::optional<Eigen::Vector3d> ball;
+    if (sim_.has_ball() && sim_.ball_record().observed) ball = sim_.ball_record().seen;
+    packets.push_back(DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent, ball));
+  } else {
+    packets = CameraPackets(k, t_capture, t_sent);
+  }
+  // Geometry in the first packet at frame 0 and then every geometry_period.
   const int every = std::max(1, static_cast<int>(std::lround(options_.geometry_period / dt)));
-  if (k % every == 0) *packet.mutable_geometry() = GeometryPacket(scene_.field, options_.boundary).geometry();
-  last_vision_ = packet.SerializeAsString();
-  Send(vision_out_, last_vision_, vision_to_);
-  ++counters_.vision_packets;
+  if (k % every == 0) *packets[0].mutable_geometry() = GeometryPacket(scene_.field, options_.boundary, cameras_).geometry();
+  last_vision_.resize(packets.size());
+  for (std::size_t c = 0; c < packets.size(); ++c) {
+    last_vision_[c] = packets[c].SerializeAsString();
+    Send(vision_out_, last_vision_[c], vision_to_);
+    ++counters_.vision_packets;
+  }
+}
+
+void LiveField::RecordCapture(const std::vector<FrameRecord>& records) {
+  Capture& c = captures_[static_cast<std::size_t>(sim_.frame()) % captures_.size()];
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    c.robots[i] = records[i].truth;
+    c.present[i] = records[i].present;
+  }
+  if (sim_.has_ball()) c.ball = sim_.ball()->ball().position;
+}
+
+std::vector<SSL_WrapperPacket> LiveField::CameraPackets(int k, double t_capture, double t_sent) {
+  const int captured = k - vision_delay_;
+  // Before frame 0 the robots stood at their starts, as the observer has seen them.
+  const Capture& c =
+      captured >= 0 ? captures_[static_cast<std::size_t>(captured) % captures_.size()] : start_capture_;
+  std::vector<SSL_WrapperPacket> packets;
+  for (std::size_t v = 0; v < cameras_.size(); ++v) {
+    const CameraView& view = cameras_[v];
+    Rng& rng = camera_rng_[v];
+    // Every draw made whether or not the camera sees the object, so that what one
+    // camera sees never shifts another's noise.
+    std::vector<Sighting> seen;
+    for (int i = 0; i < sim_.num_robots(); ++i) {
+      const auto ku = static_cast<std::size_t>(i);
+      const VisionNoise& noise = sim_.vision_noise(i);
+      const Pose2 p{c.robots[ku].x + rng.Gaussian(noise.xy), c.robots[ku].y + rng.Gaussian(noise.xy),
+                    WrapAngle(c.robots[ku].theta + rng.Gaussian(noise.theta))};
+      const bool lost = rng.Uniform() < sim_.robot_model(i).vision_drop_probability;
+      if (c.present[ku] && !lost && view.Sees(c.robots[ku].x, c.robots[ku].y)) seen.push_back(Sighting{roster_.robot(i), p});
+    }
+    std::optional<Eigen::Vector3d> ball;
+    if (sim_.has_ball()) {
+      const BallVision& b = sim_.ball_vision();
+      const Eigen::Vector3d p =
+          c.ball + Eigen::Vector3d(rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_z));
+      const bool lost = rng.Uniform() < b.drop_probability;
+      if (!lost && view.Sees(c.ball.x(), c.ball.y())) ball = p;
+    }
+    packets.push_back(DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent, ball, &view));
+  }
+  return packets;
 }
 
 double LiveField::CaptureUnixTime(int k) const {
@@ -577,6 +643,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       frame_unix_[static_cast<std::size_t>(sim_.frame()) % frame_unix_.size()] = UnixNow();
     }
     std::vector<FrameRecord> records = sim_.BeginFrame();
+    if (!cameras_.empty()) RecordCapture(records);
     SendVision(records);
     const Clock::duration vision_work = Clock::now() - frame_start;
     for (TeamPort& t : teams_) t.answered = false;
@@ -615,8 +682,10 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       // network): the frame's vision again, which a client answers as it answers any.
       if (options_.lockstep && Clock::now() >= resend) {
         if (!FrameComplete()) {
-          Send(vision_out_, last_vision_, vision_to_);
-          ++counters_.vision_packets;
+          for (const std::string& packet : last_vision_) {
+            Send(vision_out_, packet, vision_to_);
+            ++counters_.vision_packets;
+          }
         }
         resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
       }

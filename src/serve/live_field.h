@@ -32,12 +32,15 @@
 #include <vector>
 
 #include "core/duration_histogram.h"
+#include "core/rng.h"
+#include "scene/camera_layout.h"
 #include "scene/scene.h"
 #include "serve/robot_control.h"
 #include "serve/simulator_control.h"
 #include "serve/team_roster.h"
 #include "serve/udp_socket.h"
 #include "sim/omni_simulation.h"
+#include "ssl_vision_wrapper.pb.h"
 
 namespace twinsim {
 
@@ -133,7 +136,7 @@ class LiveField {
  public:
   // Opens the ports (throws InputError naming an address that cannot be bound) for
   // `sim`, built from `scene` (robots' teams and ids, field). Throws InputError when
-  // the options are not valid or the robots' vision delays differ (one camera).
+  // the options are not valid or the robots' vision delays differ (the cameras share one delay).
   LiveField(const Scene& scene, Simulation sim, const ServeOptions& options);
 
   // teleport_safely leaves at least this much between the ball and every chassis.
@@ -183,6 +186,10 @@ class LiveField {
   };
 
   void SendVision(const std::vector<FrameRecord>& records);
+  // Several cameras: keeps the true state of the frame begun (its `records`), and makes
+  // each camera's detection of frame k.
+  void RecordCapture(const std::vector<FrameRecord>& records);
+  std::vector<SSL_WrapperPacket> CameraPackets(int k, double t_capture, double t_sent);
   // Sends, counting a refused send (failed_sends, last_send_error).
   void Send(const UdpSocket& socket, const std::string& bytes, const UdpEndpoint& to);
   template <typename Message>
@@ -250,7 +257,19 @@ class LiveField {
   std::array<std::uint32_t, 4> kernel_drops_{};  // per port (blue, yellow, control, grSim): the kernel's count seen last
   std::string last_send_error_;
   int receive_buffer_asked_ = 0, receive_buffer_ = 0;  // bytes
-  std::string last_vision_;  // the current frame's packet, serialized
+  std::vector<std::string> last_vision_;  // the current frame's packets (one per camera), serialized
+  // Several cameras (the scene's `cameras:`; none: one, sending what the observer
+  // receives): each sees the true state of vision_delay frames ago in its area, with its
+  // own noise and lost detections from its own stream.
+  struct Capture {
+    std::vector<Pose2> robots;  // field frame, true
+    std::vector<bool> present;
+    Eigen::Vector3d ball = Eigen::Vector3d::Zero();  // m, true
+  };
+  std::vector<CameraView> cameras_;
+  std::vector<Rng> camera_rng_;    // per camera
+  std::vector<Capture> captures_;  // frame j's at j % (vision_delay + 1)
+  Capture start_capture_;          // before frame 0: the robots at their starts
 };
 
 }  // namespace twinsim

@@ -8,16 +8,49 @@
 namespace twinsim {
 namespace {
 
-// The one camera: above the centre, looking down, its image covering the field.
+// The one camera (when the scene names none): above the centre, looking down, its image
+// covering the field.
 constexpr double kCameraHeight = 4000;  // mm
 constexpr double kFocalLength = 390;    // pixel
 constexpr int kImageWidth = 780, kImageHeight = 580;  // pixel
 // Robots' height as SSL-Vision is configured for them.
 constexpr double kRobotHeight = 150;    // mm
 
-void Pixel(double x_mm, double y_mm, float* px, float* py) {
-  *px = static_cast<float>(kImageWidth / 2.0 + kFocalLength * x_mm / kCameraHeight);
-  *py = static_cast<float>(kImageHeight / 2.0 - kFocalLength * y_mm / kCameraHeight);
+// The one camera's view when the scene names none.
+CameraView CentreCamera() {
+  CameraView v;
+  v.position = Eigen::Vector3d(0, 0, kCameraHeight / 1000);
+  return v;
+}
+
+void Pixel(const CameraView& camera, double x_mm, double y_mm, float* px, float* py) {
+  const double h = 1000 * camera.position.z();
+  *px = static_cast<float>(kImageWidth / 2.0 + kFocalLength * (x_mm - 1000 * camera.position.x()) / h);
+  *py = static_cast<float>(kImageHeight / 2.0 - kFocalLength * (y_mm - 1000 * camera.position.y()) / h);
+}
+
+void AddCalibration(SSL_GeometryData* g, const CameraView& camera) {
+  SSL_GeometryCameraCalibration* c = g->add_calib();
+  c->set_camera_id(static_cast<unsigned>(camera.id));
+  c->set_focal_length(static_cast<float>(kFocalLength));
+  c->set_principal_point_x(kImageWidth / 2.0f);
+  c->set_principal_point_y(kImageHeight / 2.0f);
+  c->set_distortion(0);
+  // A nominal calibration (no real camera): the identity rotation, the camera at
+  // (tx, ty, tz) above its area's centre.
+  c->set_q0(1);
+  c->set_q1(0);
+  c->set_q2(0);
+  c->set_q3(0);
+  const Eigen::Vector3d mm = 1000 * camera.position;
+  c->set_tx(static_cast<float>(mm.x()));
+  c->set_ty(static_cast<float>(mm.y()));
+  c->set_tz(static_cast<float>(mm.z()));
+  c->set_derived_camera_world_tx(static_cast<float>(mm.x()));
+  c->set_derived_camera_world_ty(static_cast<float>(mm.y()));
+  c->set_derived_camera_world_tz(static_cast<float>(mm.z()));
+  c->set_pixel_image_width(kImageWidth);
+  c->set_pixel_image_height(kImageHeight);
 }
 
 void AddLine(SSL_GeometryFieldSize* f, const std::string& name, double x1, double y1, double x2, double y2,
@@ -35,13 +68,15 @@ void AddLine(SSL_GeometryFieldSize* f, const std::string& name, double x1, doubl
 }  // namespace
 
 SSL_WrapperPacket DetectionPacket(const std::vector<Sighting>& seen, std::uint32_t frame_number, double t_capture,
-                                  double t_sent, const std::optional<Eigen::Vector3d>& ball) {
+                                  double t_sent, const std::optional<Eigen::Vector3d>& ball, const CameraView* camera) {
+  static const CameraView kCentre = CentreCamera();
+  const CameraView& view = camera != nullptr ? *camera : kCentre;
   SSL_WrapperPacket packet;
   SSL_DetectionFrame* frame = packet.mutable_detection();
   frame->set_frame_number(frame_number);
   frame->set_t_capture(t_capture);
   frame->set_t_sent(t_sent);
-  frame->set_camera_id(0);
+  frame->set_camera_id(static_cast<unsigned>(view.id));
   if (ball) {
     SSL_DetectionBall* b = frame->add_balls();
     const double x = 1000 * ball->x(), y = 1000 * ball->y();
@@ -50,7 +85,7 @@ SSL_WrapperPacket DetectionPacket(const std::vector<Sighting>& seen, std::uint32
     b->set_y(static_cast<float>(y));
     b->set_z(static_cast<float>(1000 * ball->z()));
     float px, py;
-    Pixel(x, y, &px, &py);
+    Pixel(view, x, y, &px, &py);
     b->set_pixel_x(px);
     b->set_pixel_y(py);
   }
@@ -64,7 +99,7 @@ SSL_WrapperPacket DetectionPacket(const std::vector<Sighting>& seen, std::uint32
     r->set_y(static_cast<float>(y));
     r->set_orientation(static_cast<float>(s.pose.theta));
     float px, py;
-    Pixel(x, y, &px, &py);
+    Pixel(view, x, y, &px, &py);
     r->set_pixel_x(px);
     r->set_pixel_y(py);
     r->set_height(static_cast<float>(kRobotHeight));
@@ -73,7 +108,7 @@ SSL_WrapperPacket DetectionPacket(const std::vector<Sighting>& seen, std::uint32
   return packet;
 }
 
-SSL_WrapperPacket GeometryPacket(const FieldModel& field, double boundary) {
+SSL_WrapperPacket GeometryPacket(const FieldModel& field, double boundary, const std::vector<CameraView>& cameras) {
   SSL_WrapperPacket packet;
   SSL_GeometryData* g = packet.mutable_geometry();
   SSL_GeometryFieldSize* f = g->mutable_field();
@@ -111,25 +146,11 @@ SSL_WrapperPacket GeometryPacket(const FieldModel& field, double boundary) {
   circle->set_thickness(static_cast<float>(line));
   circle->set_type(CenterCircle);
 
-  SSL_GeometryCameraCalibration* c = g->add_calib();
-  c->set_camera_id(0);
-  c->set_focal_length(static_cast<float>(kFocalLength));
-  c->set_principal_point_x(kImageWidth / 2.0f);
-  c->set_principal_point_y(kImageHeight / 2.0f);
-  c->set_distortion(0);
-  // A nominal calibration (no real camera): the identity rotation, the camera at tz.
-  c->set_q0(1);
-  c->set_q1(0);
-  c->set_q2(0);
-  c->set_q3(0);
-  c->set_tx(0);
-  c->set_ty(0);
-  c->set_tz(static_cast<float>(kCameraHeight));
-  c->set_derived_camera_world_tx(0);
-  c->set_derived_camera_world_ty(0);
-  c->set_derived_camera_world_tz(static_cast<float>(kCameraHeight));
-  c->set_pixel_image_width(kImageWidth);
-  c->set_pixel_image_height(kImageHeight);
+  if (cameras.empty()) {
+    AddCalibration(g, CentreCamera());
+  } else {
+    for (const CameraView& camera : cameras) AddCalibration(g, camera);
+  }
   packet.set_source(SSL_SOURCE_OTHER);
   return packet;
 }
