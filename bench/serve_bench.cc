@@ -18,6 +18,7 @@
 // 3. Lockstep throughput: one blue and one yellow robot on the analytic backend, a
 //    client thread per team answering each vision packet at once; simulated seconds per
 //    wall second.
+//    Then the synchronous interface (TCP): one client stepping a frame per request.
 // 4. Memory over a long match (`--memory-minutes M`, alone): serve_11v11 in lockstep on
 //    analytic with the two clients, the logs streamed to a temporary folder as twinsim
 //    serve writes them (scene/run_log_stream.h) and the thinned history for the plots;
@@ -44,7 +45,9 @@
 #include "scene/scene.h"
 #include "serve/live_field.h"
 #include "serve/udp_socket.h"
+#include "serve/tcp_stream.h"
 #include "ssl_simulation_robot_control.pb.h"
+#include "ssl_simulation_synchronous.pb.h"
 
 namespace twinsim {
 namespace {
@@ -233,6 +236,42 @@ Scene OneOnOne() {
                              "serve_1v1.yaml", Source("scenes"));
 }
 
+// The synchronous interface: one client on TCP sends `frames` requests of one frame's
+// step each with a RobotControl for blue's robots (each on a circle) and reads each
+// response. Returns the field's summary.
+ServeSummary SyncThroughput(const Scene& scene, long long frames) {
+  ServeOptions options;
+  options.control_port = options.blue_port = options.yellow_port = 0;
+  options.sync_port = 0;
+  options.max_frames = frames;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), options);
+  ServeSummary summary;
+  std::thread server([&] { summary = field.Run([] { return false; }); });
+  SimulationSyncRequest request;
+  request.set_sim_step(static_cast<float>(1 / scene.frame_rate));
+  for (int id : TeamIds(scene, "blue")) {
+    RobotCommand* c = request.mutable_robot_control()->add_robot_commands();
+    c->set_id(static_cast<unsigned>(id));
+    MoveLocalVelocity* m = c->mutable_move_command()->mutable_local_velocity();
+    m->set_forward(0.4f);
+    m->set_left(0.0f);
+    m->set_angular(1.0f);
+  }
+  const std::string bytes = request.SerializeAsString();
+  TcpConnection client = TcpConnect("127.0.0.1", field.sync_port());
+  for (long long k = 0; k < frames; ++k) {
+    if (!client.WriteMessage(bytes)) break;
+    std::optional<std::string> response;
+    while (!response) {
+      if (!WaitReadableFd(client.fd(), 1) || !client.ReadAvailable()) break;
+      response = client.NextMessage(1 << 22);
+    }
+    if (!response) break;
+  }
+  server.join();
+  return summary;
+}
+
 // kB of resident memory (VmRSS in /proc/self/status), 0 where unknown.
 long long ResidentKb() {
   std::ifstream f("/proc/self/status");
@@ -353,7 +392,7 @@ int Main(int argc, char** argv) {
 
   // 3: lockstep throughput, two robots on analytic; then four (serve_2v2).
   std::printf("\n3. Lockstep throughput on analytic, a client thread per team (the default --max-rate)\n");
-  std::printf("  %-34s %8s %9s %10s %12s %8s %12s\n", "scene", "frames", "wall, s", "frames/s", "x real time", "resent",
+  std::printf("  %-40s %8s %9s %10s %12s %8s %12s\n", "scene", "frames", "wall, s", "frames/s", "x real time", "resent",
               "latency p99");
   ServeOptions lockstep;
   lockstep.lockstep = true;
@@ -375,10 +414,17 @@ int Main(int argc, char** argv) {
   for (const Row& row : rows) {
     const Served ls = Serve(*row.scene, "analytic", row.options, row.frames, /*resend=*/0.02);
     const ServeSummary& l = ls.summary;
-    std::printf("  %-34s %8lld %9.3f %10.0f %12.1f %8lld %12s\n", row.label, l.counters.frames, l.wall,
+    std::printf("  %-40s %8lld %9.3f %10.0f %12.1f %8lld %12s\n", row.label, l.counters.frames, l.wall,
                 static_cast<double>(l.counters.frames) / l.wall, l.simulated / l.wall, ls.resent[0] + ls.resent[1],
                 FormatDuration(l.timing.command_latency.Quantile(0.99)).c_str());
     if (l.counters.rate_dropped > 0) std::printf("    (%lld datagrams over the rate limit)\n", l.counters.rate_dropped);
+  }
+  // The synchronous interface (TCP), one client stepping a frame per request.
+  for (const Row& row : rows) {
+    const ServeSummary l = SyncThroughput(*row.scene, row.frames);
+    std::printf("  %-40s %8lld %9.3f %10.0f %12.1f %8s %12s\n",
+                (std::string(row.label) + ", synchronous").c_str(), l.counters.frames, l.wall,
+                static_cast<double>(l.counters.frames) / l.wall, l.simulated / l.wall, "-", "-");
   }
   return 0;
 }

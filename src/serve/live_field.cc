@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "serve/ball_clearance.h"
 #include "serve/grsim_packet.h"
+#include "ssl_simulation_synchronous.pb.h"
 #include "serve/vision_packets.h"
 
 namespace twinsim {
@@ -76,6 +77,10 @@ constexpr int kMaxDatagramsPerDrain = 256;
 constexpr double kResendPeriod = 0.25;  // s
 // The loop looks for a stop this often while it waits.
 constexpr double kPollPeriod = 0.05;    // s
+// The synchronous interface: the longest request read, and the longest step a request
+// may ask for.
+constexpr std::size_t kMaxSyncMessage = 1 << 20;  // bytes
+constexpr double kMaxSyncStep = 60;               // s
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
@@ -132,6 +137,11 @@ bool ServeOptions::IsValid(std::string* why) const {
       (blue_port != 0 && blue_port == yellow_port))
     return fail("the control, blue and yellow ports must differ");
   if (!teams.empty() && !lockstep) return fail("--teams applies to --lockstep only");
+  if (sync_port < -1 || sync_port > 65535) return fail("--sync-port " + std::to_string(sync_port) + " is not in 0..65535");
+  if (sync_port >= 0 && lockstep) return fail("--sync-port sets its own pace (the client's requests); not with --lockstep");
+  if (sync_port >= 0 && (realtime_priority > 0 || cpu >= 0))
+    return fail("--realtime-priority and --cpu apply to real time, not --sync-port");
+  if (sync_team != "blue" && sync_team != "yellow") return fail("--sync-team: unknown team '" + sync_team + "' (known: blue, yellow)");
   for (const std::string& t : teams)
     if (t != "blue" && t != "yellow") return fail("--teams: unknown team '" + t + "' (known: blue, yellow)");
   if (receive_buffer < 0) return fail("--receive-buffer is negative");
@@ -228,6 +238,7 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   receive_buffer_ = std::min({control_.SetReceiveBuffer(receive_buffer_asked_),
                               teams_[0].socket.SetReceiveBuffer(receive_buffer_asked_),
                               teams_[1].socket.SetReceiveBuffer(receive_buffer_asked_)});
+  if (options_.sync_port >= 0) sync_.emplace(options_.listen, options_.sync_port);
   if (options_.grsim_port >= 0) {
     grsim_.emplace(options_.listen, options_.grsim_port);
     receive_buffer_ = std::min(receive_buffer_, grsim_->SetReceiveBuffer(receive_buffer_asked_));
@@ -278,13 +289,14 @@ bool LiveField::FrameComplete() const {
   return any;
 }
 
-void LiveField::SendVision(const std::vector<FrameRecord>& records) {
+std::vector<SSL_WrapperPacket> LiveField::VisionPackets(const std::vector<FrameRecord>& records) {
   const int k = sim_.frame();
   const double dt = result_.timing.frame_dt();
-  // Lockstep stamps simulated time (deterministic); real time, Unix time as SSL-Vision:
-  // the wall clock when the frame captured began, whatever the pace was since.
+  // Lockstep and the synchronous interface stamp simulated time (deterministic); real
+  // time, Unix time as SSL-Vision: the wall clock when the frame captured began,
+  // whatever the pace was since.
   double t_capture = (k - vision_delay_) * dt, t_sent = k * dt;
-  if (!options_.lockstep) {
+  if (!SimulatedTime()) {
     t_capture = CaptureUnixTime(k);
     t_sent = UnixNow();
   }
@@ -305,6 +317,11 @@ void LiveField::SendVision(const std::vector<FrameRecord>& records) {
   // Geometry in the first packet at frame 0 and then every geometry_period.
   const int every = std::max(1, static_cast<int>(std::lround(options_.geometry_period / dt)));
   if (k % every == 0) *packets[0].mutable_geometry() = GeometryPacket(scene_.field, options_.boundary, cameras_).geometry();
+  return packets;
+}
+
+void LiveField::SendVision(const std::vector<FrameRecord>& records) {
+  const std::vector<SSL_WrapperPacket> packets = VisionPackets(records);
   last_vision_.resize(packets.size());
   for (std::size_t c = 0; c < packets.size(); ++c) {
     last_vision_[c] = packets[c].SerializeAsString();
@@ -452,9 +469,10 @@ SimulatorCommandResult LiveField::TakeSimulatorCommand(const std::string& bytes)
   counters_.refused += read.refused;
   ApplyControl(read);
   if (read.simulation_speed) {
-    if (options_.lockstep) {
+    if (SimulatedTime()) {
       ++counters_.refused;
-      AddError(&read.response, "TWINSIM_UNSUPPORTED", "simulation_speed: in lockstep the clients set the pace");
+      AddError(&read.response, "TWINSIM_UNSUPPORTED",
+               "simulation_speed: in lockstep and the synchronous interface the clients set the pace");
     } else {
       speed_ = *read.simulation_speed;
     }
@@ -628,6 +646,7 @@ ServeSummary LiveField::Summary() const {
 }
 
 ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status) {
+  if (sync_) return RunSync(stop, status);
   const RealtimeScope realtime(options_.realtime_priority, options_.cpu);
   start_ = last_refill_ = Clock::now();
   unix_start_ = UnixNow();
@@ -642,8 +661,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       timing_.start_lateness.Add(Seconds(frame_start - frame_end));
       frame_unix_[static_cast<std::size_t>(sim_.frame()) % frame_unix_.size()] = UnixNow();
     }
-    std::vector<FrameRecord> records = sim_.BeginFrame();
-    if (!cameras_.empty()) RecordCapture(records);
+    std::vector<FrameRecord> records = OpenFrame();
     SendVision(records);
     const Clock::duration vision_work = Clock::now() - frame_start;
     for (TeamPort& t : teams_) t.answered = false;
@@ -696,21 +714,113 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     }
     if (stopped) break;  // the begun frame is not logged: it has no commands
     const Clock::time_point step_start = Clock::now();
-    // A robot no team has commanded yet follows its scene's source, kicks included.
-    std::vector<BallCommand> ball_commands = ball_commands_;
-    for (int i = 0; i < sim_.num_robots(); ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      if (!sim_.present(i)) continue;  // off the field: sent nothing, its behaviour not asked
-      records[k].command = moves_[k] ? LocalVelocity(*moves_[k], records[k].truth.theta) : sim_.SourceCommand(i);
-      if (sim_.has_ball() && !ball_driven_[k]) ball_commands[k] = sim_.SourceBallCommand(i);
-    }
-    sim_.EndFrame(&records, ball_commands);
-    for (BallCommand& c : ball_commands_) c.kick_speed = 0;  // a kick is for its frame
-    Record(records);
-    ++counters_.frames;
+    FinishFrame(&records);
     timing_.frame_work.Add(Seconds(vision_work + (Clock::now() - step_start)));
   }
   return Summary();
+}
+
+std::vector<FrameRecord> LiveField::OpenFrame() {
+  std::vector<FrameRecord> records = sim_.BeginFrame();
+  if (!cameras_.empty()) RecordCapture(records);
+  return records;
+}
+
+void LiveField::FinishFrame(std::vector<FrameRecord>* records) {
+  // A robot no team has commanded yet follows its scene's source, kicks included.
+  std::vector<BallCommand> ball_commands = ball_commands_;
+  for (int i = 0; i < sim_.num_robots(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!sim_.present(i)) continue;  // off the field: sent nothing, its behaviour not asked
+    (*records)[k].command = moves_[k] ? LocalVelocity(*moves_[k], (*records)[k].truth.theta) : sim_.SourceCommand(i);
+    if (sim_.has_ball() && !ball_driven_[k]) ball_commands[k] = sim_.SourceBallCommand(i);
+  }
+  sim_.EndFrame(records, ball_commands);
+  for (BallCommand& c : ball_commands_) c.kick_speed = 0;  // a kick is for its frame
+  Record(*records);
+  ++counters_.frames;
+}
+
+ServeSummary LiveField::RunSync(const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status) {
+  start_ = Clock::now();
+  Clock::time_point next_status = start_;
+  std::vector<FrameRecord> records = OpenFrame();
+  std::optional<TcpConnection> client;
+  while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
+    if (status && Clock::now() >= next_status) {
+      status(Summary());
+      next_status = Clock::now() + std::chrono::milliseconds(100);
+    }
+    if (!client) {
+      // One client at a time; the field waits, frame open, for the next.
+      if (WaitReadableFd(sync_->fd(), kPollPeriod)) client = sync_->Accept();
+      continue;
+    }
+    const bool open = client->ReadAvailable();
+    bool handled = false;
+    while (std::optional<std::string> request = client->NextMessage(kMaxSyncMessage)) {
+      HandleSyncRequest(*request, &records, &*client);
+      handled = true;
+      if (options_.max_frames > 0 && counters_.frames >= options_.max_frames) break;
+    }
+    if (client->bad()) ++counters_.malformed;  // a length no message can have: the stream is lost
+    if (!open || client->bad()) {
+      client.reset();
+      continue;
+    }
+    if (!handled) WaitReadableFd(client->fd(), kPollPeriod);
+  }
+  return Summary();
+}
+
+void LiveField::HandleSyncRequest(const std::string& bytes, std::vector<FrameRecord>* records, TcpConnection* client) {
+  SimulationSyncRequest request;
+  SimulationSyncResponse response;
+  RobotControlResponse* answer = response.mutable_robot_control_response();
+  int steps = 0;
+  if (!request.ParseFromString(bytes)) {
+    ++counters_.malformed;
+    AddError(answer, "TWINSIM_MALFORMED", "the message is not a SimulationSyncRequest");
+  } else {
+    ++counters_.sync_requests;
+    // The official response has no SimulatorResponse: a simulator command's errors are
+    // listed with the robot control's.
+    if (request.has_simulator_command()) {
+      if (options_.tournament) {
+        ++counters_.refused;
+        AddError(answer, "TWINSIM_TOURNAMENT", "tournament mode: simulator control is refused");
+      } else {
+        const SimulatorCommandResult read = TakeSimulatorCommand(request.simulator_command().SerializeAsString());
+        for (const SimulatorError& e : read.response.errors()) AddError(answer, e.code(), e.message());
+      }
+    }
+    if (request.has_robot_control()) {
+      const RobotControlResult read =
+          TakeRobotControl(teams_[options_.sync_team == "yellow" ? 1 : 0], request.robot_control().SerializeAsString());
+      for (const SimulatorError& e : read.response.errors()) AddError(answer, e.code(), e.message());
+      *answer->mutable_feedback() = read.response.feedback();
+    }
+    const double step = request.sim_step(), dt = result_.timing.frame_dt();
+    if (!(std::isfinite(step) && step >= 0 && step <= kMaxSyncStep)) {
+      ++counters_.refused;
+      AddError(answer, "TWINSIM_BAD_VALUE",
+               "sim_step " + std::to_string(step) + " s is not in 0.." + std::to_string(kMaxSyncStep) + " s");
+    } else {
+      // Whole frames: a step of half a frame or more runs one.
+      steps = static_cast<int>(std::lround(step / dt));
+      if (options_.max_frames > 0) steps = static_cast<int>(std::min<long long>(steps, options_.max_frames - counters_.frames));
+    }
+  }
+  for (int j = 0; j < steps; ++j) {
+    FinishFrame(records);
+    *records = OpenFrame();
+  }
+  for (const SSL_WrapperPacket& p : VisionPackets(*records)) *response.add_detection() = p.detection();
+  counters_.vision_packets += response.detection_size();
+  if (!client->WriteMessage(response.SerializeAsString())) {
+    ++counters_.failed_sends;
+    last_send_error_ = "the synchronous client's connection failed or stalled";
+  }
 }
 
 }  // namespace twinsim

@@ -38,6 +38,7 @@
 #include "serve/robot_control.h"
 #include "serve/simulator_control.h"
 #include "serve/team_roster.h"
+#include "serve/tcp_stream.h"
 #include "serve/udp_socket.h"
 #include "sim/omni_simulation.h"
 #include "ssl_vision_wrapper.pb.h"
@@ -50,6 +51,10 @@ struct ServeOptions {
   int blue_port = 10301;             // blue team's RobotControl
   int yellow_port = 10302;           // yellow team's RobotControl
   int grsim_port = -1;               // grSim's protocol (serve/grsim_packet.h): -1 off; 0 any free port; grSim's is 20011
+  // The synchronous interface (TCP, ssl_simulation_synchronous.proto): -1 off; 0 any
+  // free port. On, the field steps only when its one client asks (no UDP is read or sent).
+  int sync_port = -1;
+  std::string sync_team = "blue";    // the team a synchronous request's RobotControl commands
   std::string vision_address = "127.0.0.1";  // SSL_WrapperPacket go here (unicast, or a multicast group)
   int vision_port = 10020;
   int vision_ttl = 1;                 // multicast vision: hops (1: this network only)
@@ -89,6 +94,7 @@ struct ServeCounters {
   long long robot_controls = 0;      // RobotControl read
   long long simulator_commands = 0;  // SimulatorCommand read
   long long grsim_packets = 0;       // grSim_Packet read
+  long long sync_requests = 0;       // SimulationSyncRequest read
   long long refused = 0;             // robot commands and control requests refused (answered)
   long long malformed = 0;           // datagrams that were no message (answered)
   long long oversized = 0;           // datagrams over the size limit (answered)
@@ -151,6 +157,7 @@ class LiveField {
   int blue_port() const { return teams_[0].socket.port(); }
   int yellow_port() const { return teams_[1].socket.port(); }
   int grsim_port() const { return grsim_ ? grsim_->port() : -1; }
+  int sync_port() const { return sync_ ? sync_->port() : -1; }
   // bytes per port: the receive buffer asked for, and what the kernel granted.
   int receive_buffer_asked() const { return receive_buffer_asked_; }
   int receive_buffer() const { return receive_buffer_; }
@@ -185,7 +192,19 @@ class LiveField {
     double tokens = 0;                     // rate limit
   };
 
+  // Each camera's detection (and the geometry, at its period) of the open frame, whose
+  // records BeginFrame gave; SendVision sends them and keeps them for resending.
+  std::vector<SSL_WrapperPacket> VisionPackets(const std::vector<FrameRecord>& records);
   void SendVision(const std::vector<FrameRecord>& records);
+  // Begins a frame (the cameras' capture kept); steps the open frame with the commands
+  // in force and logs it.
+  std::vector<FrameRecord> OpenFrame();
+  void FinishFrame(std::vector<FrameRecord>* records);
+  // The synchronous interface: the frames run as the client's requests ask.
+  ServeSummary RunSync(const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status);
+  void HandleSyncRequest(const std::string& bytes, std::vector<FrameRecord>* records, TcpConnection* client);
+  // Vision stamped with simulated time (lockstep, synchronous), else Unix time.
+  bool SimulatedTime() const { return options_.lockstep || sync_.has_value(); }
   // Several cameras: keeps the true state of the frame begun (its `records`), and makes
   // each camera's detection of frame k.
   void RecordCapture(const std::vector<FrameRecord>& records);
@@ -233,6 +252,7 @@ class LiveField {
   std::optional<UdpEndpoint> control_client_;
   double control_tokens_ = 0;
   std::optional<UdpSocket> grsim_;  // grSim's protocol, when asked for
+  std::optional<TcpListener> sync_;  // the synchronous interface, when asked for
   double grsim_tokens_ = 0;
   std::array<std::optional<UdpEndpoint>, 2> grsim_clients_;  // tournament: per team, the one address allowed
   UdpSocket vision_out_;

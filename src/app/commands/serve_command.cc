@@ -60,7 +60,8 @@ int Serve(ServeCommandOptions& options) {
 
   if (!options.quiet) {
     std::printf("serving %s: %zu robot(s) on %s at %g fps, %s\n", scene.name.c_str(), scene.robots.size(),
-                field.result().backend.c_str(), scene.frame_rate, options.serve.lockstep ? "lockstep" : "real time");
+                field.result().backend.c_str(), scene.frame_rate,
+                field.sync_port() >= 0 ? "synchronous" : options.serve.lockstep ? "lockstep" : "real time");
     const std::vector<std::string> backends = RobotBackends(scene, backend);
     for (std::size_t i = 0; i < scene.robots.size(); ++i) {
       const SceneRobot& r = scene.robots[i];
@@ -76,6 +77,9 @@ int Serve(ServeCommandOptions& options) {
     if (IsMulticast(ParseIpv4(options.serve.vision_address)))
       std::printf("vision is multicast (ttl %d, interface %s)\n", options.serve.vision_ttl,
                   options.serve.vision_interface.empty() ? "by route" : options.serve.vision_interface.c_str());
+    if (field.sync_port() >= 0)
+      std::printf("synchronous interface on %s:%d (TCP; %s's RobotControl); the UDP ports are not served\n",
+                  options.serve.listen.c_str(), field.sync_port(), options.serve.sync_team.c_str());
     if (field.grsim_port() >= 0)
       std::printf("grSim's protocol on %s:%d%s\n", options.serve.listen.c_str(), field.grsim_port(),
                   options.serve.tournament ? " (replacement refused: tournament)" : "");
@@ -140,6 +144,11 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--grsim-port", options->serve.grsim_port,
                   "Also take grSim's own protocol (grSim_Packet: commands and replacement) on this port\n"
                   "(grSim's is 20011; default: off; docs/serve.md)");
+  cmd->add_option("--sync-port", options->serve.sync_port,
+                  "Serve the protocol's synchronous interface on this TCP port instead (each\n"
+                  "SimulationSyncRequest steps the field; length-delimited messages; docs/serve.md)");
+  cmd->add_option("--sync-team", options->serve.sync_team,
+                  "Synchronous interface: the team its RobotControl commands (blue or yellow; default blue)");
   cmd->add_option("--vision-address", options->serve.vision_address,
                   "Address the vision packets go to: unicast (default 127.0.0.1), or a multicast group\n"
                   "such as the league's 224.5.23.2");
