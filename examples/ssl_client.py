@@ -18,6 +18,13 @@ grSim does:
     build/twinsim serve scenes/serve_2v2.yaml --lockstep --grsim-port 20011 &
     python3 examples/ssl_client.py --protocol grsim --team-port 20011 --x 1.0 --y 0.5
 
+With `--protocol sync` it drives the field through the protocol's synchronous
+interface (`twinsim serve --sync-port`): one TCP connection, a SimulationSyncRequest of
+one frame's step and the command per frame, the vision in each response:
+
+    build/twinsim serve scenes/serve_2v2.yaml --sync-port 10303 &
+    python3 examples/ssl_client.py --protocol sync --team-port 10303 --x 1.0 --y 0.5
+
 Exit 0 when the robot reached the pose, 1 when it did not within --frames frames.
 """
 import argparse
@@ -33,13 +40,14 @@ def load_messages(proto_py):
     sys.path.insert(0, proto_py)
     try:
         import grSim_Packet_pb2 as grsim  # noqa: E402
+        import ssl_simulation_synchronous_pb2 as sync  # noqa: E402
         import ssl_simulation_robot_control_pb2 as control  # noqa: E402
         import ssl_simulation_robot_feedback_pb2 as feedback  # noqa: E402
         import ssl_vision_wrapper_pb2 as vision  # noqa: E402
     except ImportError as e:
         sys.exit(f"{proto_py}: cannot import the generated messages ({e}); build twinsim first, give --proto-py, "
                  "and run Debian's /usr/bin/python3 with python3-protobuf")
-    return control, feedback, vision, grsim
+    return control, feedback, vision, grsim, sync
 
 
 def league_command(control_pb, robot_id, forward, left, omega):
@@ -83,14 +91,56 @@ def command_towards(pose, target, max_speed, gain, max_omega):
     return forward, left, omega
 
 
+class SyncClient:
+    """The synchronous interface: length-delimited messages (a varint length, then the
+    bytes) over one TCP connection."""
+
+    def __init__(self, address, port, sync_pb):
+        self.sync_pb = sync_pb
+        self.socket = socket.create_connection((address, port), timeout=5.0)
+        self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.buffer = b""
+
+    def step(self, seconds, robot_control=None):
+        """Sends one request and returns the SimulationSyncResponse."""
+        request = self.sync_pb.SimulationSyncRequest()
+        request.sim_step = seconds
+        if robot_control is not None:
+            request.robot_control.CopyFrom(robot_control)
+        body = request.SerializeToString()
+        length, n = b"", len(body)
+        while n >= 0x80:
+            length += bytes([(n & 0x7F) | 0x80])
+            n >>= 7
+        self.socket.sendall(length + bytes([n]) + body)
+        while True:
+            size, shift, i = 0, 0, 0
+            while i < len(self.buffer):
+                b = self.buffer[i]
+                size |= (b & 0x7F) << shift
+                shift += 7
+                i += 1
+                if not b & 0x80:
+                    if len(self.buffer) - i >= size:
+                        response = self.sync_pb.SimulationSyncResponse()
+                        response.ParseFromString(self.buffer[i:i + size])
+                        self.buffer = self.buffer[i + size:]
+                        return response
+                    break
+            chunk = self.socket.recv(65536)
+            if not chunk:
+                sys.exit("the synchronous interface closed the connection")
+            self.buffer += chunk
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--server", default="127.0.0.1", help="address twinsim serve listens on")
     p.add_argument("--listen", default="127.0.0.1", help="address the vision packets come to")
     p.add_argument("--vision-port", type=int, default=10020)
     p.add_argument("--team", choices=["blue", "yellow"], default="blue")
-    p.add_argument("--protocol", choices=["league", "grsim"], default="league",
-                   help="the league's simulation protocol (default) or grSim's")
+    p.add_argument("--protocol", choices=["league", "grsim", "sync"], default="league",
+                   help="the league's simulation protocol (default), grSim's, or the synchronous interface")
     p.add_argument("--team-port", type=int, default=None,
                    help="default 10301 (blue) or 10302 (yellow); with --protocol grsim, 20011")
     p.add_argument("--id", type=int, default=0, help="the robot's id")
@@ -103,7 +153,9 @@ def main():
     p.add_argument("--frames", type=int, default=600, help="give up after this many vision frames")
     p.add_argument("--proto-py", default=os.path.join(HERE, "..", "build", "proto_py"))
     args = p.parse_args()
-    control_pb, feedback_pb, vision_pb, grsim_pb = load_messages(args.proto_py)
+    control_pb, feedback_pb, vision_pb, grsim_pb, sync_pb = load_messages(args.proto_py)
+    if args.protocol == "sync":
+        return drive_synchronously(args, control_pb, sync_pb)
     grsim = args.protocol == "grsim"
     team_port = args.team_port or (20011 if grsim else 10301 if args.team == "blue" else 10302)
     target = (args.x, args.y, math.radians(args.theta_deg))
@@ -156,6 +208,37 @@ def main():
             held = 0
     where = f"({pose[0]:.3f}, {pose[1]:.3f})" if pose else "never seen"
     print(f"not reached after {frames} frames: robot at {where}", file=sys.stderr)
+    return 1
+
+
+def drive_synchronously(args, control_pb, sync_pb):
+    """The same drive through the synchronous interface: one frame per request."""
+    target = (args.x, args.y, math.radians(args.theta_deg))
+    client = SyncClient(args.server, args.team_port or 10303, sync_pb)
+    response = client.step(0.0)  # no step: the current frame's vision
+    pose, held = None, 0
+    for frame in range(args.frames):
+        for detection in response.detection:
+            robots = detection.robots_blue if args.team == "blue" else detection.robots_yellow
+            for r in robots:
+                if r.robot_id == args.id:
+                    pose = (r.x / 1000.0, r.y / 1000.0, r.orientation)
+        if pose and math.hypot(target[0] - pose[0], target[1] - pose[1]) < args.tolerance and \
+                abs(wrap(target[2] - pose[2])) < 0.05:
+            held += 1
+            if held >= 15:
+                print(f"reached ({pose[0]:.3f}, {pose[1]:.3f}, {math.degrees(pose[2]):.1f} deg) at frame {frame}")
+                return 0
+        else:
+            held = 0
+        forward, left, omega = command_towards(pose, target, args.max_speed, args.gain, 4.0) if pose else (0, 0, 0)
+        control = control_pb.RobotControl()
+        control.ParseFromString(league_command(control_pb, args.id, forward, left, omega))
+        response = client.step(1.0 / 60, control)
+        for e in response.robot_control_response.errors:
+            print(f"frame {frame}: {e.code}: {e.message}", file=sys.stderr)
+    where = f"({pose[0]:.3f}, {pose[1]:.3f})" if pose else "never seen"
+    print(f"not reached after {args.frames} frames: robot at {where}", file=sys.stderr)
     return 1
 
 

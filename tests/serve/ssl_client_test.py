@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
 """ctest Serve.PythonClient: examples/ssl_client.py drives a robot of `twinsim serve
 --lockstep` to a pose over the loopback (free ports, no multicast), once over the
-league's simulation protocol and once over grSim's; Ctrl-C then ends the server. Usage: ssl_client_test.py TWINSIM SOURCE_DIR BUILD_DIR"""
+league's simulation protocol, once over grSim's and once through the synchronous
+interface over TCP; Ctrl-C then ends the server. Usage: ssl_client_test.py TWINSIM SOURCE_DIR BUILD_DIR"""
 import os
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import time
 
 
 def free_port():
@@ -20,15 +22,27 @@ def drive(twinsim, source, build, protocol):
     """Serves serve_2v2 in lockstep and drives blue 1 to a pose over `protocol`."""
     out = tempfile.mkdtemp(prefix="twinsim_serve_client_")
     control, blue, yellow, vision, grsim = (free_port() for _ in range(5))
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        sync = s.getsockname()[1]
+    mode = ["--sync-port", str(sync)] if protocol == "sync" else ["--lockstep", "--teams", "blue"]
     server = subprocess.Popen(
-        [twinsim, "serve", os.path.join(source, "scenes", "serve_2v2.yaml"), "--backend", "analytic", "--lockstep",
-         "--teams", "blue", "--control-port", str(control), "--blue-port", str(blue), "--yellow-port", str(yellow),
+        [twinsim, "serve", os.path.join(source, "scenes", "serve_2v2.yaml"), "--backend", "analytic"] + mode +
+        ["--control-port", str(control), "--blue-port", str(blue), "--yellow-port", str(yellow),
          "--grsim-port", str(grsim), "--vision-port", str(vision), "--out", out, "-q"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    port = {"grsim": grsim, "sync": sync}.get(protocol, blue)
     try:
+        if protocol == "sync":  # the server's TCP port is open once it has started
+            for _ in range(100):
+                try:
+                    socket.create_connection(("127.0.0.1", sync), timeout=1).close()
+                    break
+                except OSError:
+                    time.sleep(0.05)
         client = subprocess.run(
             [sys.executable, os.path.join(source, "examples", "ssl_client.py"), "--vision-port", str(vision),
-             "--protocol", protocol, "--team-port", str(grsim if protocol == "grsim" else blue), "--id", "1",
+             "--protocol", protocol, "--team-port", str(port), "--id", "1",
              "--x", "0.5", "--y", "-1.0", "--theta-deg", "90", "--frames", "900",
              "--proto-py", os.path.join(build, "proto_py")],
             capture_output=True, text=True, timeout=120)
@@ -51,7 +65,7 @@ def drive(twinsim, source, build, protocol):
 
 def main():
     twinsim, source, build = sys.argv[1:4]
-    for protocol in ("league", "grsim"):
+    for protocol in ("league", "grsim", "sync"):
         drive(twinsim, source, build, protocol)
 
 
