@@ -7,6 +7,7 @@
 //   build/serve_bench --realtime-priority 50 --cpu 1   # as twinsim serve's options
 //   build/serve_bench --memory-minutes 120              # part 4 alone: a 2 h match's memory
 //   build/serve_bench --cameras 2 2                      # part 1 seen by four cameras
+//   build/serve_bench --seconds 7200 --stream --realtime-priority 50 --cpu 1   # a 2 h match, logs streamed
 //
 // 1. Real time: scenes/serve_11v11.yaml (11 blue against 11 yellow and the ball) on ODE
 //    at 60 fps, with one client thread per team that answers every vision packet with a
@@ -324,6 +325,7 @@ int Main(int argc, char** argv) {
   double memory_minutes = 0;
   bool keep_all = false;
   std::optional<CameraGrid> cameras;  // part 1: several cameras (columns, rows)
+  bool stream = false;                // part 1: logs streamed as twinsim serve does, memory reported
   ServeOptions realtime;  // part 1's serving thread: twinsim serve's --realtime-priority, --cpu
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -337,6 +339,8 @@ int Main(int argc, char** argv) {
       realtime.cpu = std::atoi(argv[++i]);
     } else if (a == "--memory-minutes" && i + 1 < argc) {
       memory_minutes = std::atof(argv[++i]);
+    } else if (a == "--stream") {
+      stream = true;
     } else if (a == "--keep-all") {
       keep_all = true;
     } else if (a == "--cameras" && i + 2 < argc) {
@@ -344,7 +348,7 @@ int Main(int argc, char** argv) {
       i += 2;
     } else {
       std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N] [--realtime-priority P] [--cpu C]\n"
-                           "                   [--cameras COLUMNS ROWS]\n"
+                           "                   [--cameras COLUMNS ROWS] [--stream]\n"
                            "       serve_bench --memory-minutes M [--keep-all]\n");
       return 2;
     }
@@ -361,7 +365,24 @@ int Main(int argc, char** argv) {
   Scene match = LoadScene(Source("scenes/serve_11v11.yaml"));
   match.cameras = cameras;
   const auto frames = static_cast<long long>(seconds * match.frame_rate + 0.5);
-  const Served rt = Serve(match, "ode", realtime, frames, /*resend=*/0);
+  // --stream: as twinsim serve, the logs streamed to a temporary folder and the plots'
+  // history thinned; the resident memory every simulated ten minutes.
+  std::unique_ptr<RunLogStream> logs;
+  const std::string folder = std::filesystem::temp_directory_path().string() + "/serve_bench_realtime_logs";
+  long long done = 0;
+  const auto per_ten_minutes = static_cast<long long>(600 * match.frame_rate + 0.5);
+  if (stream) realtime.keep_frames = 2048;
+  const Served rt = Serve(match, "ode", realtime, frames, /*resend=*/0, [&](LiveField* field) {
+    if (!stream) return;
+    logs = std::make_unique<RunLogStream>(folder, field->result().robot_names, true, match.frame_rate);
+    field->SetFrameSink([&](const std::vector<FrameRecord>& r, const BallRecord* b) {
+      logs->Append(r, b);
+      if (++done % per_ten_minutes == 0 || done == 3600) {
+        std::printf("  (streaming) %lld frames, VmRSS %.1f MB\n", done, static_cast<double>(ResidentKb()) / 1024);
+        std::fflush(stdout);
+      }
+    });
+  });
   const ServeSummary& s = rt.summary;
   std::printf("1. Real time: %s (%zu robots, %s) on ode at %g fps, %lld frames (%g s); serving thread SCHED_FIFO %d, "
               "CPU %d (0, -1: the normal scheduler, any CPU)\n",

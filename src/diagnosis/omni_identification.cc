@@ -756,6 +756,430 @@ const OmniGap* OmniIdentificationReport::Gap(const std::vector<OmniGap>& gaps, c
   return nullptr;
 }
 
+namespace {
+
+using InFit = std::function<bool(const OmniLog&, std::size_t)>;
+
+// What the identification carries from step to step.
+struct FitState {
+  std::array<double, kNumParams> v{};        // the parameters now
+  std::array<double, kNumParams> nominal{};  // the given model's
+  std::vector<int> free;                     // estimated, in order
+  std::map<int, std::string> pruned;         // left at a value, with why
+  std::set<int> chosen;                      // lag structures the held-out blocks chose
+  std::set<int> held;                        // held at the fit's value (collinear or flat)
+  SolveResult solved;                        // the last solve, with its standard errors
+  std::vector<double> speeds, turns;         // m/s, rad/s: the fit rows' commanded speed and turn rate, sorted
+};
+
+void CheckFramePeriods(const std::vector<OmniLog>& logs, const std::vector<OmniLog>& validation) {
+  const double period = logs.front().frame_period;
+  for (const auto* set : {&logs, &validation}) {
+    for (const OmniLog& log : *set) {
+      if (std::abs(log.frame_period - period) > 0.01 * period) {
+        throw InputError(SourceLocation{log.path, 1},
+                         "the log's frame period differs from the first log's: identify logs of one camera rate together");
+      }
+    }
+  }
+}
+
+// The start: the model's values; a lag to move from; no limits (added below if reached);
+// the lag's structures off, whatever the given model has (the logs choose them, step 5).
+std::array<double, kNumParams> StartValues(const OmniModel& nominal, double period) {
+  std::array<double, kNumParams> v = ValuesOf(nominal, period);
+  for (int a = 0; a < 3; ++a) {
+    double& lag = v[static_cast<std::size_t>(kLagX + a)];
+    if (lag <= 0) lag = kStartLag;
+  }
+  for (int p : {kSlewX, kSlewY, kSlewW}) {
+    if (v[static_cast<std::size_t>(p)] <= 0) v[static_cast<std::size_t>(p)] = kSpecs[p].upper;
+  }
+  v[kBraking] = 1;
+  v[kFieldFrame] = 0;
+  return v;
+}
+
+// Which axes the fit blocks command, and so which parameters are free. An axis the fit
+// blocks never command (below 2 % of the largest command) leaves its parameters, and the
+// couplings it drives, at the model's values: the logs say nothing of them. The
+// observer's noise is fitted with the physical parameters from the start: fitted last,
+// it let the filter absorb what a speed limit explains (w_max went unfound). Throws
+// InputError when no axis is commanded.
+std::array<bool, 3> ChooseFreeParameters(const std::vector<OmniLog>& logs, const InFit& in_fit,
+                                         const OmniIdentificationOptions& options, FitState* fit) {
+  double most[3] = {0, 0, 0};
+  for (const OmniLog& log : logs) {
+    for (std::size_t i = 0; i < log.rows.size(); ++i) {
+      if (!in_fit(log, i)) continue;
+      const Twist2& c = log.rows[i].command;
+      most[0] = std::max(most[0], std::abs(c.vx));
+      most[1] = std::max(most[1], std::abs(c.vy));
+      most[2] = std::max(most[2], std::abs(c.omega));
+    }
+  }
+  const double speed_scale = std::max({most[0], most[1], 1e-9});
+  const std::array<bool, 3> excited = {most[0] > 0.02 * speed_scale && most[0] > 0.01,
+                                       most[1] > 0.02 * speed_scale && most[1] > 0.01, most[2] > 0.02};
+  if (!excited[0] && !excited[1] && !excited[2]) {
+    throw InputError(SourceLocation{logs.front().path, 1},
+                     "the robot is never commanded to move in the fit blocks (every command under 1 cm/s and "
+                     "0.02 rad/s): a log of a robot that stood still says nothing of its response (is --robot the "
+                     "one that drove?)");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (excited[static_cast<std::size_t>(a)]) continue;
+    std::vector<int> tied = {kGainX + a, kLagX + a, kLoopX + a, kSlewX + a};
+    if (a == 0) tied.insert(tied.end(), {kTurnX, kCrossYX});
+    if (a == 1) tied.insert(tied.end(), {kTurnY, kCrossXY});
+    for (int p : tied) fit->pruned[p] = std::string("not excited: the fit blocks never command ") + kOmniAxisNames[a];
+  }
+  if (options.state != "observer") {
+    for (int p : {kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale})
+      fit->pruned[p] = "the open-loop tracker (--state tracker) has no observer";
+  }
+  for (int p = 0; p < kNumParams; ++p)
+    if (p != kVMax && p != kWMax && p != kBraking && p != kFieldFrame && !fit->pruned.count(p)) fit->free.push_back(p);
+  for (const auto& [p, why] : fit->pruned) fit->v[static_cast<std::size_t>(p)] = fit->nominal[static_cast<std::size_t>(p)];
+  return excited;
+}
+
+// Steps 1 to 3. 1: the delay on a half-frame grid (the fit below is local, and the cost
+// has a valley per frame of delay), with gains and couplings from a linear regression of
+// the measured velocity on the delayed command as the start; the regression once more at
+// the delay found. 2: everything but the speed limits, the delay included (a command
+// falling due within a physics step acts for its rest, so the cost is smooth in the
+// delay). 3: the neighbouring valleys: a longer delay trades against a faster response,
+// so the fit is restarted a frame either side and the best kept.
+void FitDelayAndResponse(const OmniIdentificationProblem& problem, const std::vector<OmniLog>& logs, const InFit& in_fit,
+                         const OmniIdentificationOptions& options, double period,
+                         const std::function<void(int, const std::string&)>& say, FitState* fit,
+                         OmniIdentificationReport* report) {
+  say(0, "delay profile");
+  std::array<double, kNumParams>& v = fit->v;
+  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, nullptr, nullptr);
+  LinearStart(logs, v[kDelay], in_fit, fit->free, &v);
+  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, &report->delay_profile_s,
+                           &report->delay_profile_rms);
+  LinearStart(logs, v[kDelay], in_fit, fit->free, &v);
+  say(1, "delay, response and couplings");
+  const SolveResult solved = Solve(problem, v, fit->free, options.max_delay, options.max_iterations, false);
+  v = solved.values;
+  report->solver_iterations += solved.iterations;
+  say(2, "neighbouring delays");
+  double best = problem.Cost(v);
+  const std::array<double, kNumParams> centre = v;
+  for (double shift : {-period, period}) {
+    std::array<double, kNumParams> trial = centre;
+    trial[kDelay] = centre[kDelay] + shift;
+    if (trial[kDelay] < 0 || trial[kDelay] > options.max_delay) continue;
+    try {
+      const SolveResult other = Solve(problem, trial, fit->free, options.max_delay, options.max_iterations / 2, false);
+      report->solver_iterations += other.iterations;
+      if (other.cost < best) {
+        best = other.cost;
+        v = other.values;
+      }
+    } catch (const CheckFailed&) {
+      // The model diverges at that delay: not a valley to try.
+    }
+  }
+}
+
+// Step 4: speed limits, where the commands go beyond what the robot reached: each is kept
+// when it lowers the fit blocks' lookahead error by more than 0.3 % (a limit touches few
+// frames, and a K-frame prediction from the observer's velocity hardly sees it).
+void FitSpeedLimits(const OmniIdentificationProblem& lookahead, const std::vector<OmniLog>& logs, const InFit& in_fit,
+                    FitState* fit) {
+  std::array<double, kNumParams>& v = fit->v;
+  for (const OmniLog& log : logs) {
+    for (std::size_t i = 0; i < log.rows.size(); ++i) {
+      if (!in_fit(log, i)) continue;
+      const Twist2& c = log.rows[i].command;
+      fit->speeds.push_back(std::hypot(v[kGainX] * c.vx + v[kCrossXY] * c.vy, v[kGainY] * c.vy + v[kCrossYX] * c.vx));
+      fit->turns.push_back(std::abs(v[kGainW] * c.omega + v[kTurnX] * c.vx + v[kTurnY] * c.vy));
+    }
+  }
+  std::sort(fit->speeds.begin(), fit->speeds.end());
+  std::sort(fit->turns.begin(), fit->turns.end());
+  double base_cost = lookahead.Cost(v);
+  for (int p : {kVMax, kWMax}) {
+    const std::vector<double>& sorted = p == kVMax ? fit->speeds : fit->turns;
+    double best_cost = base_cost, best_limit = 0;
+    for (double q : {0.6, 0.75, 0.85, 0.92, 0.96, 0.98, 0.99, 0.995}) {
+      const double limit = sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
+      if (limit < kSpecs[p].lower) continue;
+      std::array<double, kNumParams> trial = v;
+      trial[static_cast<std::size_t>(p)] = limit;
+      const double c = lookahead.Cost(trial);
+      if (c < best_cost) {
+        best_cost = c;
+        best_limit = limit;
+      }
+    }
+    if (best_limit > 0 && best_cost < 0.997 * base_cost) {
+      v[static_cast<std::size_t>(p)] = best_limit;
+      fit->free.push_back(p);
+      base_cost = best_cost;
+    }
+  }
+}
+
+// Step 6: all together, kept only where it does not predict the held-out blocks worse
+// than before it (the fit blocks can pull a misfit structure away from what generalises:
+// early stopping).
+void FitTogether(const OmniIdentificationProblem& problem, const std::vector<Segment>& segments,
+                 const OmniIdentificationOptions& options, FitState* fit, OmniIdentificationReport* report) {
+  const double before = HeldOutRmse(problem, segments, options, fit->v);
+  const SolveResult solved = Solve(problem, fit->v, fit->free, options.max_delay, options.max_iterations, false);
+  report->solver_iterations += solved.iterations;
+  const double after = HeldOutRmse(problem, segments, options, solved.values);
+  if (after <= (1 + kStructureTolerance) * before) {
+    fit->v = solved.values;
+  } else {
+    char numbers[160];
+    std::snprintf(numbers, sizeof numbers, "%.3g mm against %.3g mm", 1e3 * after, 1e3 * before);
+    report->notes.push_back(std::string("the final joint fit predicted the held-out blocks worse (") + numbers +
+                            " at the fit's horizon): the estimate before it is kept");
+  }
+}
+
+// After step 6: what ends at the edge of its range is what the data does not ask for (a
+// lag at its floor is none, a ramp at its ceiling no limit); the standard errors are
+// for the rest, parameters the logs cannot tell apart held at the fit's value; a limit
+// the fit pushed beyond every command the robot got is no limit.
+void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentificationOptions& options, FitState* fit,
+                    OmniIdentificationReport* report) {
+  for (int p : std::vector<int>(fit->free)) {
+    const ParamSpec& s = kSpecs[p];
+    double& value = fit->v[static_cast<std::size_t>(p)];
+    const double upper = p == kDelay ? options.max_delay : s.upper;
+    const bool at_lower = s.log_scale ? value <= 1.05 * s.lower : value <= s.lower + 1e-3 * (upper - s.lower);
+    const bool at_upper = s.log_scale ? value >= upper / 1.05 : value >= upper - 1e-3 * (upper - s.lower);
+    if (!at_lower && !at_upper) continue;
+    std::string& why = fit->pruned[p];
+    if (p >= kLagX && p <= kLagW && at_lower) {
+      value = 0;
+      why = "no lag beyond the controller's";
+    } else if (p >= kSlewX && p <= kSlewW && at_upper) {
+      value = 0;
+      why = "no ramp limit";
+    } else if (p >= kSlipX && p <= kSlipW && at_lower) {
+      why = "no driving noise found on this axis: the model's response explains its motion (the floor of the range is kept)";
+    } else if (p == kProcessScale && at_lower) {
+      why = "the observer trusts the model's velocity (the floor of the range is kept)";
+    } else {
+      why = "at the edge of its range (" + std::string(at_lower ? "lower" : "upper") + "): not determined";
+    }
+    fit->free.erase(std::find(fit->free.begin(), fit->free.end(), p));
+  }
+  fit->solved = Solve(problem, fit->v, fit->free, options.max_delay, 0, true);
+  report->collinearity = fit->solved.collinearity;
+  for (const HeldBack& h : fit->solved.held) {
+    fit->held.insert(h.param);
+    std::string partners;
+    for (int q : h.partners) partners += (partners.empty() ? "" : ", ") + std::string(kSpecs[q].name);
+    char index[32];
+    std::snprintf(index, sizeof index, "%.3g", h.collinearity);
+    fit->pruned[h.param] = h.partners.empty()
+                               ? std::string("held at the fit's value: the fit's error does not depend on it on these logs")
+                               : "held at the fit's value: on these logs it trades with " + partners +
+                                     " (collinearity index " + index + "); the others' standard errors take it as known";
+  }
+  for (int p : {kVMax, kWMax}) {
+    const std::vector<double>& sorted = p == kVMax ? fit->speeds : fit->turns;
+    double& limit = fit->v[static_cast<std::size_t>(p)];
+    if (limit > 0 && limit >= sorted.back()) limit = 0;
+  }
+}
+
+// The driving noise for predictions ahead and the simulation, then its calibration.
+void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificationOptions& options,
+                   const std::function<void(int, const std::string&)>& say, OmniModel* model,
+                   OmniIdentificationReport* report) {
+  if (options.state != "observer") return;
+  std::vector<OmniBlockedStretch> views;
+  for (const Segment& s : segments) views.push_back(View(s));
+  OmniNoiseOptions noise_options;
+  noise_options.backend = options.backend;
+  noise_options.max_delay = options.max_delay;
+  noise_options.threads = options.threads;
+  if (options.noise) {
+    say(6, "driving noise");
+    report->noise = IdentifyDrivingNoise(*model, views, noise_options);
+    report->noise_identified = true;
+    if (report->noise.kept) *model = report->noise.model;
+    // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
+    model->driving_noise.simulated = true;
+  }
+  report->calibration = CalibrateOnBlocks(*model, views, noise_options);
+}
+
+// The report's parameter table, the delay first, each with its standard error or why it
+// has none; the noise identified for predictions ahead replaces the fit's (the filter's
+// tuning).
+void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentificationReport* report) {
+  for (int p : {kDelay, kGainX, kGainY, kGainW, kLagX, kLagY, kLagW, kBraking, kFieldFrame, kLoopX, kLoopY, kLoopW,
+                kSlewX, kSlewY, kSlewW, kTurnX, kTurnY, kCrossYX, kCrossXY, kVMax, kWMax, kSlipX, kSlipY, kSlipW,
+                kSlipTime, kProcessScale}) {
+    IdentifiedParameter q;
+    const ParamSpec& s = kSpecs[p];
+    q.name = s.name;
+    q.key = s.key;
+    q.unit = s.unit;
+    q.meaning = s.meaning;
+    q.nominal = fit.nominal[static_cast<std::size_t>(p)];
+    q.value = fit.v[static_cast<std::size_t>(p)];
+    const auto it = std::find(fit.free.begin(), fit.free.end(), p);
+    q.estimated = it != fit.free.end();
+    q.held = fit.held.count(p) > 0;
+    if (fit.chosen.count(p)) q.estimated = q.held = true;  // a structure: chosen, then held
+    if (fit.pruned.count(p)) q.note = fit.pruned.at(p);
+    if (q.estimated && !q.held) {
+      q.standard_error = fit.solved.standard_error[static_cast<std::size_t>(it - fit.free.begin())];
+      if (!std::isfinite(q.standard_error)) q.note = "not determined by these logs alone (the fit's covariance is singular)";
+    }
+    if ((p == kVMax || p == kWMax) && q.value == 0) {
+      q.estimated = false;
+      q.note = "none found: the robot reached what it was commanded";
+    }
+    if (p == kDelay) {
+      q.note = "a log of commands and poses holds only the total; the model keeps its vision frames (" +
+               std::to_string(model.vision_delay_frames) + ") and puts the rest on the command side";
+    }
+    report->parameters.push_back(q);
+  }
+  if (!report->noise.kept) return;
+  const std::map<std::string, std::string> replaced = {{"forward.slip", "forward"},
+                                                       {"sideways.slip", "sideways"},
+                                                       {"turn.slip", "turn"},
+                                                       {"slip.correlation_time", "correlation_time"},
+                                                       {"process_noise.scale", "process_noise_scale"}};
+  for (IdentifiedParameter& q : report->parameters) {
+    auto it = replaced.find(q.name);
+    if (it == replaced.end()) continue;
+    for (const OmniNoiseParameter& n : report->noise.parameters) {
+      if (n.name != it->second) continue;
+      q.note = "identified for predictions ahead (the driving noise's likelihood at 4, 16 and 63 frames); the "
+               "4-frame fit gave " + FormatParameter(q.value);
+      q.value = n.name == "process_noise_scale" ? q.value * n.value : n.value;
+      q.standard_error = n.name == "process_noise_scale" ? q.value / n.value * n.standard_error : n.standard_error;
+      q.estimated = true;
+      q.held = !std::isfinite(q.standard_error);
+      if (q.held) q.note += "; held at this value: the likelihood is flat along it with others (no standard error)";
+    }
+  }
+}
+
+// What the table's held and undetermined parameters ask of the logs.
+void NoteUndetermined(const FitState& fit, OmniIdentificationReport* report) {
+  bool any_undetermined = false;
+  for (const auto& q : report->parameters) {
+    any_undetermined = any_undetermined || (q.estimated && !q.held && !std::isfinite(q.standard_error));
+  }
+  if (!fit.held.empty()) {
+    report->notes.push_back(std::to_string(fit.held.size()) +
+                            " parameter(s) held at the fit's value because these logs cannot tell them from others "
+                            "(their notes say which): drive every axis, alone and together, at several speeds and "
+                            "with steps as well as ramps to separate them");
+  }
+  if (any_undetermined) {
+    report->notes.push_back("the fit's covariance is singular: some parameters trade off against each other on these logs "
+                            "(drive every axis, alone and together, at several speeds to separate them)");
+  }
+}
+
+// Step 7: gaps on the held-out blocks (validation_only false) or the validation logs,
+// beside the nominal model and constant velocity, and with the observer the identified
+// model from the open-loop tracker's state (what the observer adds).
+std::vector<OmniGap> HeldOutGaps(const std::vector<Segment>& segments, const OmniModel& nominal, const OmniModel& model,
+                                 bool validation_only, const OmniIdentificationOptions& options,
+                                 OmniIdentificationReport* report) {
+  std::vector<OmniGap> out;
+  const double r = nominal.chassis_radius;
+  const HorizonSum n = ScoreHeldOut(segments, &nominal, validation_only, options, r);
+  const HorizonSum i = ScoreHeldOut(segments, &model, validation_only, options, r);
+  const HorizonSum c = ScoreHeldOut(segments, nullptr, validation_only, options, r);
+  if (i.rows == 0) return out;
+  out.push_back(ToGap(n, "nominal model"));
+  out.push_back(ToGap(i, "identified model"));
+  out.push_back(ToGap(c, "constant velocity"));
+  if (options.state == "observer") {
+    OmniIdentificationOptions tracker = options;
+    tracker.state = "tracker";
+    out.push_back(ToGap(ScoreHeldOut(segments, &model, validation_only, tracker, r), "identified model, open-loop tracker"));
+  }
+  if (!validation_only) report->held_out_rows = static_cast<int>(i.rows);
+  return out;
+}
+
+// Every horizon a simulator needs, on the validation logs if there are any: rows in
+// held-out blocks (or the validation logs), predicted from a start after the piece's
+// lead-in and the longest warm-up, wherever it lies (analysis/omni_horizons.h).
+void ScoreHorizons(const std::vector<Segment>& segments, const OmniModel& nominal, const OmniModel& model,
+                   bool on_validation, const OmniIdentificationOptions& options, double delay, double period,
+                   OmniIdentificationReport* report) {
+  const std::vector<HorizonPredictor> predictors = {{"nominal model", &nominal},
+                                                    {"identified model", &model},
+                                                    {"constant velocity", nullptr, HorizonPredictor::kConstantVelocity},
+                                                    {"integrated command", nullptr, HorizonPredictor::kIntegratedCommand}};
+  std::vector<HorizonStretch> stretches;
+  for (const Segment& s : segments) {
+    if (s.validation != on_validation) continue;
+    stretches.push_back({&s.log, s.held, s.score_from,
+                         static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames});
+  }
+  HorizonOptions ho;
+  ho.backend = options.backend;
+  ho.state = options.state;
+  ho.delay = delay;
+  ho.radius = nominal.chassis_radius;
+  ho.threads = options.threads;
+  for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
+    OmniHorizonGaps h;
+    h.label = label;
+    h.frames = frames;
+    h.seconds = frames * period;
+    const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);
+    for (std::size_t q = 0; q < predictors.size(); ++q) h.gaps.push_back(ToGap(sums[q], predictors[q].name));
+    h.rows = static_cast<int>(sums.front().rows);
+    report->horizons.push_back(h);
+  }
+  report->horizons_on = on_validation ? "validation logs" : "held-out blocks";
+}
+
+// The fit's own numbers: its rows and costs (RMS per row), the noise floor of the logs,
+// the delay profile as RMS, a note where constant velocity predicts the held-out blocks
+// as well, and the first fit log's series for the plots.
+void SummariseFit(const OmniIdentificationProblem& problem, const std::vector<Segment>& segments,
+                  const std::vector<OmniLog>& all_logs, const OmniModel& nominal, const OmniModel& model,
+                  const OmniIdentificationOptions& options, const FitState& fit, double nominal_cost,
+                  OmniIdentificationReport* report) {
+  for (const OmniPoseErrors& e : problem.Errors(problem.Build(fit.v), false, options.stride)) {
+    report->fit_rows += static_cast<int>(e.rows.size());
+  }
+  const double fit_n = std::max(1, report->fit_rows);
+  report->fit_cost_nominal = std::sqrt(nominal_cost / fit_n);
+  report->fit_cost_identified = std::sqrt(problem.Cost(fit.v) / fit_n);
+  report->noise_floor = OmniNoiseFloor(all_logs, nominal.chassis_radius);
+  for (double& rms : report->delay_profile_rms) rms = std::sqrt(rms / fit_n);
+  const OmniGap* ident = report->Gap(report->held_out, "identified model");
+  const OmniGap* cv = report->Gap(report->held_out, "constant velocity");
+  if (ident && cv && ident->rmse >= cv->rmse) {
+    report->notes.push_back("the identified model predicts no better than extrapolating the measured poses at constant "
+                            "velocity on the held-out blocks: the robot does something the model's structure cannot "
+                            "express (run diagnose on the identified model, and compare with a learned predictor)");
+  }
+  for (const Segment& s : segments) {
+    if (!s.validation) {
+      report->series.push_back(MakeSeries(s.log, nominal, model, options, fit.v[kDelay]));
+      break;
+    }
+  }
+}
+
+}  // namespace
+
 OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vector<OmniLog>& logs,
                                       const std::vector<OmniLog>& validation, const OmniIdentificationOptions& options,
                                       OmniModel* identified,
@@ -767,15 +1191,8 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   auto say = [&](int step, const std::string& what) {
     if (progress) progress(step, 8, what);
   };
+  CheckFramePeriods(logs, validation);
   const double period = logs.front().frame_period;
-  for (const auto* set : {&logs, &validation}) {
-    for (const OmniLog& log : *set) {
-      if (std::abs(log.frame_period - period) > 0.01 * period) {
-        throw InputError(SourceLocation{log.path, 1},
-                         "the log's frame period differs from the first log's: identify logs of one camera rate together");
-      }
-    }
-  }
 
   double block = 0;
   const std::vector<Segment> segments = MakeSegments(logs, validation, options, &block);
@@ -794,380 +1211,40 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   report.block_seconds = block;
   report.held_out_share = options.held_out;
 
-  // Start: the model's values; a lag to move from; no limits (added below if reached).
-  std::array<double, kNumParams> v = ValuesOf(nominal, period);
-  const std::array<double, kNumParams> nominal_values = v;
-  for (int a = 0; a < 3; ++a) {
-    double& lag = v[static_cast<std::size_t>(kLagX + a)];
-    if (lag <= 0) lag = kStartLag;
-  }
-  for (int p : {kSlewX, kSlewY, kSlewW}) {
-    if (v[static_cast<std::size_t>(p)] <= 0) v[static_cast<std::size_t>(p)] = kSpecs[p].upper;
-  }
-  // The lag's structures start off, whatever the given model has: the logs choose them (step 5).
-  v[kBraking] = 1;
-  v[kFieldFrame] = 0;
-  const double nominal_cost = problem.Cost(nominal_values);
+  FitState fit;
+  fit.nominal = ValuesOf(nominal, period);
+  fit.v = StartValues(nominal, period);
+  const double nominal_cost = problem.Cost(fit.nominal);
   if (!std::isfinite(nominal_cost)) throw CheckFailed("the model as given diverges on the logs");
-
-  // 1. The delay on a half-frame grid (the fit below is local, and the cost has a valley
-  // per frame of delay), with gains and couplings from a linear regression of the
-  // measured velocity on the delayed command as the start; the regression once more at
-  // the delay found.
-  say(0, "delay profile");
   // Nothing of the held-out blocks reaches the fit, its start or its limits.
-  auto in_fit = [&](const OmniLog& log, std::size_t i) {
+  const InFit in_fit = [&](const OmniLog& log, std::size_t i) {
     return !InHeldOutBlock(log.rows[i].t - log.rows.front().t, block, options.held_out);
   };
-  // An axis the fit blocks never command (below 2 % of the largest command) leaves its
-  // parameters, and the couplings it drives, at the model's values: the logs say nothing
-  // of them.
-  double most[3] = {0, 0, 0};
-  for (const OmniLog& log : logs) {
-    for (std::size_t i = 0; i < log.rows.size(); ++i) {
-      if (!in_fit(log, i)) continue;
-      const Twist2& c = log.rows[i].command;
-      most[0] = std::max(most[0], std::abs(c.vx));
-      most[1] = std::max(most[1], std::abs(c.vy));
-      most[2] = std::max(most[2], std::abs(c.omega));
-    }
-  }
-  const double speed_scale = std::max({most[0], most[1], 1e-9});
-  const bool excited[3] = {most[0] > 0.02 * speed_scale && most[0] > 0.01, most[1] > 0.02 * speed_scale && most[1] > 0.01,
-                           most[2] > 0.02};
-  if (!excited[0] && !excited[1] && !excited[2]) {
-    throw InputError(SourceLocation{logs.front().path, 1},
-                     "the robot is never commanded to move in the fit blocks (every command under 1 cm/s and "
-                     "0.02 rad/s): a log of a robot that stood still says nothing of its response (is --robot the "
-                     "one that drove?)");
-  }
-  std::map<int, std::string> pruned;
-  for (int a = 0; a < 3; ++a) {
-    if (excited[a]) continue;
-    std::vector<int> tied = {kGainX + a, kLagX + a, kLoopX + a, kSlewX + a};
-    if (a == 0) tied.insert(tied.end(), {kTurnX, kCrossYX});
-    if (a == 1) tied.insert(tied.end(), {kTurnY, kCrossXY});
-    for (int p : tied) pruned[p] = std::string("not excited: the fit blocks never command ") + kOmniAxisNames[a];
-  }
-  if (options.state != "observer") {
-    for (int p : {kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale}) pruned[p] = "the open-loop tracker (--state tracker) has no observer";
-  }
-  // The observer's noise is fitted with the physical parameters from the start: fitted
-  // last, it let the filter absorb what a speed limit explains (w_max went unfound).
-  std::vector<int> free;
-  for (int p = 0; p < kNumParams; ++p)
-    if (p != kVMax && p != kWMax && p != kBraking && p != kFieldFrame && !pruned.count(p)) free.push_back(p);
-  for (const auto& [p, why] : pruned) v[static_cast<std::size_t>(p)] = nominal_values[static_cast<std::size_t>(p)];
-
-  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, nullptr, nullptr);
-  LinearStart(logs, v[kDelay], in_fit, free, &v);
-  v[kDelay] = ProfileDelay(problem, v, 0, options.max_delay, period / 2, &report.delay_profile_s,
-                           &report.delay_profile_rms);
-  LinearStart(logs, v[kDelay], in_fit, free, &v);
-  // 2. Everything but the speed limits, the delay included (a command falling due
-  // within a physics step acts for its rest, so the cost is smooth in the delay).
-  say(1, "delay, response and couplings");
-  SolveResult solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
-  v = solved.values;
-  report.solver_iterations += solved.iterations;
-  // 3. The neighbouring valleys: a longer delay trades against a faster response, so the
-  // fit is restarted a frame either side and the best kept.
-  say(2, "neighbouring delays");
-  {
-    double best = problem.Cost(v);
-    const std::array<double, kNumParams> centre = v;
-    for (double shift : {-period, period}) {
-      std::array<double, kNumParams> trial = centre;
-      trial[kDelay] = centre[kDelay] + shift;
-      if (trial[kDelay] < 0 || trial[kDelay] > options.max_delay) continue;
-      try {
-        const SolveResult other = Solve(problem, trial, free, options.max_delay, options.max_iterations / 2, false);
-        report.solver_iterations += other.iterations;
-        if (other.cost < best) {
-          best = other.cost;
-          v = other.values;
-        }
-      } catch (const CheckFailed&) {
-        // The model diverges at that delay: not a valley to try.
-      }
-    }
-  }
-
-  // 4. Speed limits, where the commands go beyond what the robot reached: each is kept
-  // when it lowers the fit blocks' lookahead error by more than 0.3 % (a limit touches
-  // few frames, and a K-frame prediction from the observer's velocity hardly sees it).
+  const std::array<bool, 3> excited = ChooseFreeParameters(logs, in_fit, options, &fit);
+  FitDelayAndResponse(problem, logs, in_fit, options, period, say, &fit, &report);       // steps 1-3
   say(3, "speed limits");
-  std::vector<double> speeds, turns;
-  for (const OmniLog& log : logs) {
-    for (std::size_t i = 0; i < log.rows.size(); ++i) {
-      if (!in_fit(log, i)) continue;
-      const Twist2& c = log.rows[i].command;
-      speeds.push_back(std::hypot(v[kGainX] * c.vx + v[kCrossXY] * c.vy, v[kGainY] * c.vy + v[kCrossYX] * c.vx));
-      turns.push_back(std::abs(v[kGainW] * c.omega + v[kTurnX] * c.vx + v[kTurnY] * c.vy));
-    }
-  }
-  std::sort(speeds.begin(), speeds.end());
-  std::sort(turns.begin(), turns.end());
-  double base_cost = lookahead.Cost(v);
-  for (int p : {kVMax, kWMax}) {
-    const std::vector<double>& sorted = p == kVMax ? speeds : turns;
-    double best_cost = base_cost, best_limit = 0;
-    for (double q : {0.6, 0.75, 0.85, 0.92, 0.96, 0.98, 0.99, 0.995}) {
-      const double limit = sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
-      if (limit < kSpecs[p].lower) continue;
-      std::array<double, kNumParams> trial = v;
-      trial[static_cast<std::size_t>(p)] = limit;
-      const double c = lookahead.Cost(trial);
-      if (c < best_cost) {
-        best_cost = c;
-        best_limit = limit;
-      }
-    }
-    if (best_limit > 0 && best_cost < 0.997 * base_cost) {
-      v[static_cast<std::size_t>(p)] = best_limit;
-      free.push_back(p);
-      base_cost = best_cost;
-    }
-  }
+  FitSpeedLimits(lookahead, logs, in_fit, &fit);                                          // step 4
   // 5. Structures the held-out blocks choose: the lag held in the field frame rather than
   // the robot's, then braking at its own time constants. Each is fitted with the rest and
   // kept where it predicts the held-out blocks at least kStructureGain better.
   say(4, "lag structures");
-  std::set<int> chosen;
-  ChooseLagStructures(lookahead, segments, options, ahead, excited[2], free, &v, &pruned, &chosen);
-  // 6. All together. Then what ends at the edge of its range is what the data does not
-  // ask for: a lag at its floor is none, a ramp at its ceiling no limit; the standard
-  // errors are for the rest.
+  ChooseLagStructures(lookahead, segments, options, ahead, excited[2], fit.free, &fit.v, &fit.pruned, &fit.chosen);
   say(5, "final fit and standard errors");
-  {
-    // Kept only where it does not predict the held-out blocks worse than before it (the
-    // fit blocks can pull a misfit structure away from what generalises: early stopping).
-    const double before = HeldOutRmse(problem, segments, options, v);
-    solved = Solve(problem, v, free, options.max_delay, options.max_iterations, false);
-    report.solver_iterations += solved.iterations;
-    const double after = HeldOutRmse(problem, segments, options, solved.values);
-    if (after <= (1 + kStructureTolerance) * before) {
-      v = solved.values;
-    } else {
-      char numbers[160];
-      std::snprintf(numbers, sizeof numbers, "%.3g mm against %.3g mm", 1e3 * after, 1e3 * before);
-      report.notes.push_back(std::string("the final joint fit predicted the held-out blocks worse (") + numbers +
-                             " at the fit's horizon): the estimate before it is kept");
-    }
-  }
-  for (int p : std::vector<int>(free)) {
-    const ParamSpec& s = kSpecs[p];
-    double& value = v[static_cast<std::size_t>(p)];
-    const double upper = p == kDelay ? options.max_delay : s.upper;
-    const bool at_lower = s.log_scale ? value <= 1.05 * s.lower : value <= s.lower + 1e-3 * (upper - s.lower);
-    const bool at_upper = s.log_scale ? value >= upper / 1.05 : value >= upper - 1e-3 * (upper - s.lower);
-    if (!at_lower && !at_upper) continue;
-    if (p >= kLagX && p <= kLagW && at_lower) {
-      value = 0;
-      pruned[p] = "no lag beyond the controller's";
-    } else if (p >= kSlewX && p <= kSlewW && at_upper) {
-      value = 0;
-      pruned[p] = "no ramp limit";
-    } else if (p >= kSlipX && p <= kSlipW && at_lower) {
-      pruned[p] = "no driving noise found on this axis: the model's response explains its motion (the floor of the range is kept)";
-    } else if (p == kProcessScale && at_lower) {
-      pruned[p] = "the observer trusts the model's velocity (the floor of the range is kept)";
-    } else {
-      pruned[p] = "at the edge of its range (" + std::string(at_lower ? "lower" : "upper") + "): not determined";
-    }
-    free.erase(std::find(free.begin(), free.end(), p));
-  }
-  solved = Solve(problem, v, free, options.max_delay, 0, true);
-  report.collinearity = solved.collinearity;
-  std::set<int> held;
-  for (const HeldBack& h : solved.held) {
-    held.insert(h.param);
-    std::string partners;
-    for (int q : h.partners) partners += (partners.empty() ? "" : ", ") + std::string(kSpecs[q].name);
-    char index[32];
-    std::snprintf(index, sizeof index, "%.3g", h.collinearity);
-    pruned[h.param] = h.partners.empty()
-                          ? std::string("held at the fit's value: the fit's error does not depend on it on these logs")
-                          : "held at the fit's value: on these logs it trades with " + partners +
-                                " (collinearity index " + index + "); the others' standard errors take it as known";
-  }
-  // A limit the fit pushed beyond every command the robot got is no limit.
-  for (int p : {kVMax, kWMax}) {
-    const std::vector<double>& sorted = p == kVMax ? speeds : turns;
-    if (v[static_cast<std::size_t>(p)] > 0 && v[static_cast<std::size_t>(p)] >= sorted.back()) v[static_cast<std::size_t>(p)] = 0;
-  }
-  OmniModel model = problem.Build(v, false);
-  // The driving noise for predictions ahead and the simulation, then its calibration.
-  std::vector<OmniBlockedStretch> views;
-  for (const Segment& s : segments) views.push_back(View(s));
-  OmniNoiseOptions noise_options;
-  noise_options.backend = options.backend;
-  noise_options.max_delay = options.max_delay;
-  noise_options.threads = options.threads;
-  if (options.state == "observer" && options.noise) {
-    say(6, "driving noise");
-    report.noise = IdentifyDrivingNoise(model, views, noise_options);
-    report.noise_identified = true;
-    if (report.noise.kept) model = report.noise.model;
-    // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
-    model.driving_noise.simulated = true;
-  }
-  if (options.state == "observer") report.calibration = CalibrateOnBlocks(model, views, noise_options);
+  FitTogether(problem, segments, options, &fit, &report);                                 // step 6
+  StandardErrors(problem, options, &fit, &report);
+  OmniModel model = problem.Build(fit.v, false);
+  IdentifyNoise(segments, options, say, &model, &report);
   if (identified) *identified = model;
+  ReportParameters(fit, model, &report);
+  NoteUndetermined(fit, &report);
 
-  // Parameters for the report, the delay first.
-  for (int p : {static_cast<int>(kDelay), static_cast<int>(kGainX), static_cast<int>(kGainY), static_cast<int>(kGainW),
-                static_cast<int>(kLagX), static_cast<int>(kLagY), static_cast<int>(kLagW), static_cast<int>(kBraking),
-                static_cast<int>(kFieldFrame), static_cast<int>(kLoopX),
-                static_cast<int>(kLoopY), static_cast<int>(kLoopW), static_cast<int>(kSlewX), static_cast<int>(kSlewY),
-                static_cast<int>(kSlewW), static_cast<int>(kTurnX), static_cast<int>(kTurnY), static_cast<int>(kCrossYX),
-                static_cast<int>(kCrossXY), static_cast<int>(kVMax), static_cast<int>(kWMax), static_cast<int>(kSlipX),
-                static_cast<int>(kSlipY), static_cast<int>(kSlipW), static_cast<int>(kSlipTime),
-                static_cast<int>(kProcessScale)}) {
-    IdentifiedParameter q;
-    const ParamSpec& s = kSpecs[p];
-    q.name = s.name;
-    q.key = s.key;
-    q.unit = s.unit;
-    q.meaning = s.meaning;
-    q.nominal = nominal_values[static_cast<std::size_t>(p)];
-    q.value = v[static_cast<std::size_t>(p)];
-    const auto it = std::find(free.begin(), free.end(), p);
-    q.estimated = it != free.end();
-    q.held = held.count(p) > 0;
-    if (chosen.count(p)) q.estimated = q.held = true;  // a structure: chosen, then held
-    if (pruned.count(p)) q.note = pruned.at(p);
-    if (q.estimated && !q.held) {
-      q.standard_error = solved.standard_error[static_cast<std::size_t>(it - free.begin())];
-      if (!std::isfinite(q.standard_error)) q.note = "not determined by these logs alone (the fit's covariance is singular)";
-    }
-    if ((p == kVMax || p == kWMax) && q.value == 0) {
-      q.estimated = false;
-      q.note = "none found: the robot reached what it was commanded";
-    }
-    if (p == kDelay) {
-      q.note = "a log of commands and poses holds only the total; the model keeps its vision frames (" +
-               std::to_string(model.vision_delay_frames) + ") and puts the rest on the command side";
-    }
-    report.parameters.push_back(q);
-  }
-  // The noise identified for predictions ahead replaces the fit's (the filter's tuning).
-  if (report.noise.kept) {
-    const std::map<std::string, std::string> replaced = {{"forward.slip", "forward"},
-                                                         {"sideways.slip", "sideways"},
-                                                         {"turn.slip", "turn"},
-                                                         {"slip.correlation_time", "correlation_time"},
-                                                         {"process_noise.scale", "process_noise_scale"}};
-    for (IdentifiedParameter& q : report.parameters) {
-      auto it = replaced.find(q.name);
-      if (it == replaced.end()) continue;
-      for (const OmniNoiseParameter& n : report.noise.parameters) {
-        if (n.name != it->second) continue;
-        q.note = "identified for predictions ahead (the driving noise's likelihood at 4, 16 and 63 frames); the "
-                 "4-frame fit gave " + FormatParameter(q.value);
-        q.value = n.name == "process_noise_scale" ? q.value * n.value : n.value;
-        q.standard_error = n.name == "process_noise_scale" ? q.value / n.value * n.standard_error : n.standard_error;
-        q.estimated = true;
-        q.held = !std::isfinite(q.standard_error);
-        if (q.held) q.note += "; held at this value: the likelihood is flat along it with others (no standard error)";
-      }
-    }
-  }
-  bool any_undetermined = false;
-  for (const auto& q : report.parameters) {
-    any_undetermined = any_undetermined || (q.estimated && !q.held && !std::isfinite(q.standard_error));
-  }
-  if (!held.empty()) {
-    report.notes.push_back(std::to_string(held.size()) +
-                           " parameter(s) held at the fit's value because these logs cannot tell them from others "
-                           "(their notes say which): drive every axis, alone and together, at several speeds and "
-                           "with steps as well as ramps to separate them");
-  }
-  if (any_undetermined) {
-    report.notes.push_back("the fit's covariance is singular: some parameters trade off against each other on these logs "
-                           "(drive every axis, alone and together, at several speeds to separate them)");
-  }
-
-  // 7. Gaps on the held-out blocks and the validation logs.
-  say(7, "held-out gaps");
-  auto gaps = [&](bool validation_only) {
-    std::vector<OmniGap> out;
-    const double r = nominal.chassis_radius;
-    const HorizonSum n = ScoreHeldOut(segments, &nominal, validation_only, options, r);
-    const HorizonSum i = ScoreHeldOut(segments, &model, validation_only, options, r);
-    const HorizonSum c = ScoreHeldOut(segments, nullptr, validation_only, options, r);
-    if (i.rows == 0) return out;
-    out.push_back(ToGap(n, "nominal model"));
-    out.push_back(ToGap(i, "identified model"));
-    out.push_back(ToGap(c, "constant velocity"));
-    if (options.state == "observer") {
-      // The same model predicting from the open-loop tracker's state: what the observer adds.
-      OmniIdentificationOptions tracker = options;
-      tracker.state = "tracker";
-      out.push_back(ToGap(ScoreHeldOut(segments, &model, validation_only, tracker, r), "identified model, open-loop tracker"));
-    }
-    if (!validation_only) report.held_out_rows = static_cast<int>(i.rows);
-    return out;
-  };
-  report.held_out = gaps(false);
-  if (!validation.empty()) report.validation = gaps(true);
-  // Every horizon a simulator needs, on the validation logs if there are any: rows in
-  // held-out blocks (or the validation logs), predicted from a start after the piece's
-  // lead-in and the longest warm-up, wherever it lies (analysis/omni_horizons.h).
-  {
-    const std::vector<HorizonPredictor> predictors = {{"nominal model", &nominal},
-                                                      {"identified model", &model},
-                                                      {"constant velocity", nullptr, HorizonPredictor::kConstantVelocity},
-                                                      {"integrated command", nullptr, HorizonPredictor::kIntegratedCommand}};
-    std::vector<HorizonStretch> stretches;
-    for (const Segment& s : segments) {
-      if (s.validation != !validation.empty()) continue;
-      stretches.push_back({&s.log, s.held, s.score_from,
-                           static_cast<int>(std::ceil(options.max_delay / s.log.frame_period)) + kWarmUpFrames});
-    }
-    HorizonOptions ho;
-    ho.backend = options.backend;
-    ho.state = options.state;
-    ho.delay = v[kDelay];
-    ho.radius = nominal.chassis_radius;
-    ho.threads = options.threads;
-    for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
-      OmniHorizonGaps h;
-      h.label = label;
-      h.frames = frames;
-      h.seconds = frames * period;
-      const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);
-      for (std::size_t q = 0; q < predictors.size(); ++q) h.gaps.push_back(ToGap(sums[q], predictors[q].name));
-      h.rows = static_cast<int>(sums.front().rows);
-      report.horizons.push_back(h);
-    }
-    report.horizons_on = validation.empty() ? "held-out blocks" : "validation logs";
-  }
-  for (const OmniPoseErrors& e : problem.Errors(problem.Build(v), false, options.stride)) {
-    report.fit_rows += static_cast<int>(e.rows.size());
-  }
-  const double fit_n = std::max(1, report.fit_rows);
-  report.fit_cost_nominal = std::sqrt(nominal_cost / fit_n);
-  report.fit_cost_identified = std::sqrt(problem.Cost(v) / fit_n);
+  say(7, "held-out gaps");                                                                // step 7
+  report.held_out = HeldOutGaps(segments, nominal, model, false, options, &report);
+  if (!validation.empty()) report.validation = HeldOutGaps(segments, nominal, model, true, options, &report);
+  ScoreHorizons(segments, nominal, model, !validation.empty(), options, fit.v[kDelay], period, &report);
   std::vector<OmniLog> all = logs;
   all.insert(all.end(), validation.begin(), validation.end());
-  report.noise_floor = OmniNoiseFloor(all, nominal.chassis_radius);
-  for (std::size_t k = 0; k < report.delay_profile_rms.size(); ++k) {
-    report.delay_profile_rms[k] = std::sqrt(report.delay_profile_rms[k] / fit_n);
-  }
-  const OmniGap* ident = report.Gap(report.held_out, "identified model");
-  const OmniGap* cv = report.Gap(report.held_out, "constant velocity");
-  if (ident && cv && ident->rmse >= cv->rmse) {
-    report.notes.push_back("the identified model predicts no better than extrapolating the measured poses at constant "
-                           "velocity on the held-out blocks: the robot does something the model's structure cannot "
-                           "express (run diagnose on the identified model, and compare with a learned predictor)");
-  }
-  for (const Segment& s : segments) {
-    if (!s.validation) {
-      report.series.push_back(MakeSeries(s.log, nominal, model, options, v[kDelay]));
-      break;
-    }
-  }
+  SummariseFit(problem, segments, all, nominal, model, options, fit, nominal_cost, &report);
   report.evaluations = problem.evaluations();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   say(8, "done");

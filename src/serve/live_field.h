@@ -145,6 +145,9 @@ class LiveField {
   // the options are not valid or the robots' vision delays differ (the cameras share one delay).
   LiveField(const Scene& scene, Simulation sim, const ServeOptions& options);
 
+  // The loop looks for a stop (and, in the synchronous interface, a client) this often
+  // while it waits.
+  static constexpr double kPollPeriod = 0.05;  // s
   // teleport_safely leaves at least this much between the ball and every chassis.
   static constexpr double kBallMargin = 0.02;  // m
   // The default receive buffer holds this long at max_rate, at kDatagramCost bytes of
