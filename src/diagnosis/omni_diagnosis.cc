@@ -680,21 +680,22 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
 
 }  // namespace
 
-DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
-                             OmniModel* repaired, const std::function<void(const std::string&)>& progress) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+// Checks what diagnose is given before any work: a backend that replays a physical
+// model, finite values, one camera rate, logs long enough to hold out blocks. Returns the
+// block length (s). Throws InputError naming the file and line.
+double CheckOmniInputs(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (logs.empty()) throw InputError("diagnose needs at least one --log");
-  {
-    // Fails early, with the list of backends, for an unknown one.
-    const auto names = AvailableOmniBackends();
-    if (options.backend == "learned") throw InputError("--backend: diagnose replays a physical model (analytic, ode or bullet), not a learned one");
-    if (std::find(names.begin(), names.end(), options.backend) == names.end()) {
-      std::string known;
-      for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
-      throw InputError("--backend " + options.backend + ": unknown or not compiled (available: " + known + ")");
-    }
+  // Fails early, with the list of backends, for an unknown one.
+  const auto names = AvailableOmniBackends();
+  if (options.backend == "learned") throw InputError("--backend: diagnose replays a physical model (analytic, ode or bullet), not a learned one");
+  if (std::find(names.begin(), names.end(), options.backend) == names.end()) {
+    std::string known;
+    for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("--backend " + options.backend + ": unknown or not compiled (available: " + known + ")");
   }
   std::vector<double> durations;
   for (const OmniLog& log : logs) {
@@ -706,8 +707,6 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
       }
     }
     durations.push_back(log.rows.back().t - log.rows.front().t);
-  }
-  for (const OmniLog& log : logs) {
     if (std::abs(log.frame_period - logs.front().frame_period) > 0.01 * logs.front().frame_period) {
       throw InputError(SourceLocation{log.path, 1}, "the log's frame period differs from the first log's: diagnose logs of one camera rate together");
     }
@@ -719,26 +718,202 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     for (const OmniLogRow& r : log.rows) t.push_back(r.t);
     CheckLogHoldsOut(t, static_cast<std::size_t>(std::max(first_predicted, 0)), block, options.held_out, log.path);
   }
+  return block;
+}
 
-  // With --refit-model the effects are sought on top of the model identified on the fit
-  // blocks alone (omni_identification.h; the held-out blocks stay unseen); the gap
-  // before is still the given model's.
+// With --refit-model the effects are sought on top of the model identified on the fit
+// blocks alone (omni_identification.h; the held-out blocks stay unseen); the gap
+// before is still the given model's.
+OmniModel StartModel(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
+                     double block, const std::function<void(const std::string&)>& progress) {
   OmniModel start_model = model;
-  if (options.refit_model) {
-    if (progress) progress("identifying the model on the fit blocks");
-    OmniIdentificationOptions identify;
-    identify.state = kDiagnosisState;
-    identify.backend = options.backend;
-    identify.horizon = options.horizon;
-    identify.held_out = options.held_out;
-    identify.block_seconds = block;
-    identify.threads = options.threads;
-    identify.noise = false;  // the diagnosis scores the mean prediction; the filter's tuning is the fit's
-    IdentifyOmni(model, logs, {}, identify, &start_model);
-    start_model.name = model.name;
-    start_model.source_path = model.source_path;
+  if (!options.refit_model) return start_model;
+  if (progress) progress("identifying the model on the fit blocks");
+  OmniIdentificationOptions identify;
+  identify.state = kDiagnosisState;
+  identify.backend = options.backend;
+  identify.horizon = options.horizon;
+  identify.held_out = options.held_out;
+  identify.block_seconds = block;
+  identify.threads = options.threads;
+  identify.noise = false;  // the diagnosis scores the mean prediction; the filter's tuning is the fit's
+  IdentifyOmni(model, logs, {}, identify, &start_model);
+  start_model.name = model.name;
+  start_model.source_path = model.source_path;
+  return start_model;
+}
+
+// The measured velocity (central differences) and acceleration per row, robot frame.
+void MeasuredMotion(const OmniLog& log, std::vector<std::array<double, 3>>* v, std::vector<std::array<double, 3>>* a) {
+  const std::size_t n = log.rows.size();
+  v->assign(n, {0, 0, 0});
+  a->assign(n, {0, 0, 0});
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double h = log.rows[i + 1].t - log.rows[i - 1].t;
+    const Twist2 field{(log.rows[i + 1].pose.x - log.rows[i - 1].pose.x) / h, (log.rows[i + 1].pose.y - log.rows[i - 1].pose.y) / h,
+                       (log.rows[i + 1].pose.theta - log.rows[i - 1].pose.theta) / h};
+    const Twist2 body = FieldToBody(field, log.rows[i].pose.theta);
+    (*v)[i] = {body.vx, body.vy, body.omega};
   }
-  OmniProblem problem(start_model, logs, options, block);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double h = log.rows[i + 1].t - log.rows[i - 1].t;
+    for (std::size_t c = 0; c < 3; ++c) (*a)[i][c] = ((*v)[i + 1][c] - (*v)[i - 1][c]) / h;
+  }
+}
+
+// Adds, per axis, the lag of the measured velocity `v` behind the command less the
+// nominal model's own (its delay and controller): what the model misses in timing. The
+// model's 1-frame replay `one` gives its velocity.
+void AddResponseLag(const OmniLog& log, const OmniReplayResult& one, const std::vector<std::array<double, 3>>& v,
+                    int delay, double dt, std::vector<double>* lag_sum) {
+  const std::size_t n = log.rows.size();
+  for (int c = 0; c < 3; ++c) {
+    std::vector<double> cmd, measured, modelled;
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      if (!one.predicted[i]) continue;
+      const Twist2& u = log.rows[i].command;
+      cmd.push_back(c == 0 ? u.vx : (c == 1 ? u.vy : u.omega));
+      measured.push_back(v[i][static_cast<std::size_t>(c)]);
+      const double h = log.rows[i].t - log.rows[i - 1].t;
+      const Twist2 field{(one.pose[i].x - log.rows[i - 1].pose.x) / h, (one.pose[i].y - log.rows[i - 1].pose.y) / h,
+                         (one.pose[i].theta - log.rows[i - 1].pose.theta) / h};
+      const Twist2 body = FieldToBody(field, log.rows[i - 1].pose.theta);
+      modelled.push_back(c == 0 ? body.vx : (c == 1 ? body.vy : body.omega));
+    }
+    const int max_shift = delay + static_cast<int>(std::lround(0.3 / dt));
+    if (cmd.size() > static_cast<std::size_t>(2 * max_shift)) {
+      (*lag_sum)[static_cast<std::size_t>(c)] += ResponseLag(cmd, measured, dt, max_shift) - ResponseLag(cmd, modelled, dt, max_shift);
+    }
+  }
+}
+
+// Collects one log's residuals per axis before (`rb`) and after (`ra`) the repair, with
+// the motion at each row and whether it lies near a reversal; the first log also gives
+// the series and spectra the report plots.
+void CollectResiduals(const OmniLog& log, const ReplayResidual& rb, const ReplayResidual& ra,
+                      const std::vector<std::array<double, 3>>& v, const std::vector<std::array<double, 3>>& a,
+                      bool first_log, double dt, std::vector<ChannelSamples>* samples, std::vector<ChannelSeries>* series) {
+  const std::size_t n = log.rows.size();
+  for (std::size_t cc = 0; cc < 3; ++cc) {
+    ChannelSamples& s = (*samples)[cc];
+    ChannelSeries& plot = (*series)[cc];
+    std::vector<double> times(n), speeds(n);
+    for (std::size_t i = 0; i < n; ++i) times[i] = log.rows[i].t, speeds[i] = v[i][cc];
+    ReversalWindows reversals(times, speeds, kStandFraction, kReversalWindow);
+    std::vector<double> xb, xa;
+    for (std::size_t k = 0; k < rb.rows.size(); ++k) {
+      const std::size_t i = rb.rows[k];
+      const double e = rb.e[k][cc];
+      s.before.push_back(e);
+      s.velocity.push_back(v[i][cc]);
+      s.acceleration.push_back(a[i][cc]);
+      xb.push_back(e);
+      const double t = log.rows[i].t;
+      (reversals.Near(t) ? s.near_reversal : s.moving).push_back(e);
+      if (first_log) {
+        plot.t.push_back(t);
+        plot.before.push_back(e);
+        plot.velocity.push_back(v[i][cc]);
+      }
+    }
+    for (std::size_t k = 0; k < ra.rows.size(); ++k) {
+      s.after.push_back(ra.e[k][cc]);
+      xa.push_back(ra.e[k][cc]);
+      if (first_log) plot.after.push_back(ra.e[k][cc]);
+    }
+    if (first_log) ResidualSpectra(xb, xa, 1.0 / dt, kWelchSegmentCap, &plot);
+  }
+}
+
+// Find: the residual per axis in the robot's frame, before and after the repair, what it
+// correlates with, its lag and its spectrum; and where the analytic model's grip held.
+void FindChannels(const OmniProblem& problem, const OmniModel& model, const OmniModel& nominal_model,
+                  const OmniModel& repaired_model, const DiagnosisOptions& options, DiagnosisReport* report,
+                  GripCheck* grip) {
+  const char* names[3] = {"forward", "sideways", "rotation (at the rim)"};
+  const double dt = problem.data().front().log->frame_period;
+  std::vector<ChannelSeries> series(3);
+  std::vector<ChannelSamples> samples(3);
+  std::vector<double> lag_sum(3, 0.0);
+  for (std::size_t li = 0; li < problem.data().size(); ++li) {
+    const LogData& d = problem.data()[li];
+    const OmniLog& log = *d.log;
+    std::vector<std::array<double, 3>> v, a;
+    MeasuredMotion(log, &v, &a);
+    OmniReplayOptions free_run;
+    free_run.state = kDiagnosisState;
+    free_run.backend = options.backend;
+    free_run.horizon = 1;
+    const OmniReplayResult one = ReplayOmniLog(nominal_model, log, free_run);
+    *grip += one.grip;
+    AddResponseLag(log, one, v, model.command_delay_frames + model.vision_delay_frames, dt, &lag_sum);
+    CollectResiduals(log, problem.Residual(nominal_model, d, 1, options.horizon),
+                     problem.Residual(repaired_model, d, 1, options.horizon), v, a, li == 0, dt, &samples, &series);
+  }
+  std::vector<ChannelFinding> findings(3);
+  for (std::size_t cc = 0; cc < 3; ++cc) {
+    ChannelFinding& f = findings[cc];
+    f.channel = names[cc];
+    f.unit = "m";
+    DescribeChannel(samples[cc], series[cc], &f);
+    f.lag = lag_sum[cc] / static_cast<double>(problem.data().size());
+    f.noise = problem.channel_noise()[cc];
+  }
+  report->findings = findings;
+  report->series = series;
+}
+
+// Paths: the longest test stretch of the first log (from `first_predicted` on), run
+// freely from its start by the nominal and the repaired model, beside the measured one.
+void FreeRunPaths(const OmniProblem& problem, const OmniModel& nominal_model, const OmniModel& repaired_model,
+                  const DiagnosisOptions& options, int first_predicted, DiagnosisReport* report) {
+  const LogData& d = problem.data().front();
+  const OmniLog& log = *d.log;
+  std::size_t best_first = 0, best_len = 0;
+  for (std::size_t i = static_cast<std::size_t>(first_predicted); i < log.rows.size();) {
+    if (d.kind[i] != RowKind::kTest) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j < log.rows.size() && d.kind[j] == RowKind::kTest) ++j;
+    if (j - i > best_len) {
+      best_first = i;
+      best_len = j - i;
+    }
+    i = j;
+  }
+  if (best_len <= 2) return;
+  OmniReplayOptions o;
+  o.state = kDiagnosisState;
+  o.backend = options.backend;
+  DiagnosisPath measured{"measured", {}, {}, {}, {}};
+  DiagnosisPath nominal_path{"nominal model", {}, {}, {}, {}};
+  DiagnosisPath repaired_path{"repaired model", {}, {}, {}, {}};
+  const OmniReplayResult rn = ReplayOmniStretch(nominal_model, log, o, best_first, best_first + best_len);
+  const OmniReplayResult rr = ReplayOmniStretch(repaired_model, log, o, best_first, best_first + best_len);
+  for (std::size_t i = best_first; i < best_first + best_len; ++i) {
+    auto push = [&](DiagnosisPath& p, const Pose2& pose) {
+      p.t.push_back(log.rows[i].t);
+      p.x.push_back(pose.x);
+      p.y.push_back(pose.y);
+      p.theta.push_back(pose.theta);
+    };
+    push(measured, log.rows[i].pose);
+    push(nominal_path, rn.pose[i]);
+    push(repaired_path, rr.pose[i]);
+  }
+  report->paths = {measured, nominal_path, repaired_path};
+}
+
+}  // namespace
+
+DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
+                             OmniModel* repaired, const std::function<void(const std::string&)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const double block = CheckOmniInputs(model, logs, options);
+  const int first_predicted = model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + options.horizon;
+  OmniProblem problem(StartModel(model, logs, options, block, progress), logs, options, block);
   const SelectionResult selection = SelectEffects(problem, options, progress);
 
   DiagnosisReport report;
@@ -758,147 +933,12 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
                 &report);
   }
 
-  // Find: the residual per axis in the robot's frame, before and after.
   const OmniModel nominal_model = problem.Build({});
   const OmniModel repaired_model = problem.Build(selection.effects);
-  const char* names[3] = {"forward", "sideways", "rotation (at the rim)"};
-  const double dt = logs.front().frame_period;
-  const double radius = model.chassis_radius;
-  report.noise_floor = OmniNoiseFloor(logs, radius);
-
-  std::vector<ChannelFinding> findings(3);
-  std::vector<ChannelSeries> series(3);
-  std::vector<ChannelSamples> samples(3);
-  std::vector<double> lag_sum(3, 0.0);
+  report.noise_floor = OmniNoiseFloor(logs, model.chassis_radius);
   GripCheck grip;  // the nominal model's 1-frame replays: where the analytic model holds
-  for (std::size_t li = 0; li < problem.data().size(); ++li) {
-    const LogData& d = problem.data()[li];
-    const OmniLog& log = *d.log;
-    const ReplayResidual rb = problem.Residual(nominal_model, d, 1, options.horizon);
-    const ReplayResidual ra = problem.Residual(repaired_model, d, 1, options.horizon);
-    // Measured velocity in the robot frame (central differences), the command acting.
-    const std::size_t n = log.rows.size();
-    std::vector<std::array<double, 3>> v(n, {0, 0, 0}), a(n, {0, 0, 0});
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-      const double h = log.rows[i + 1].t - log.rows[i - 1].t;
-      const Twist2 field{(log.rows[i + 1].pose.x - log.rows[i - 1].pose.x) / h, (log.rows[i + 1].pose.y - log.rows[i - 1].pose.y) / h,
-                         (log.rows[i + 1].pose.theta - log.rows[i - 1].pose.theta) / h};
-      const Twist2 body = FieldToBody(field, log.rows[i].pose.theta);
-      v[i] = {body.vx, body.vy, body.omega};
-    }
-    for (std::size_t i = 1; i + 1 < n; ++i) {
-      const double h = log.rows[i + 1].t - log.rows[i - 1].t;
-      for (int c = 0; c < 3; ++c) a[i][static_cast<std::size_t>(c)] = (v[i + 1][static_cast<std::size_t>(c)] - v[i - 1][static_cast<std::size_t>(c)]) / h;
-    }
-    // Lag of the measured velocity behind the command, less the nominal model's own
-    // (its delay and controller): what the model misses in timing.
-    const int delay = model.command_delay_frames + model.vision_delay_frames;
-    OmniReplayOptions free_run;
-    free_run.state = kDiagnosisState;
-    free_run.backend = options.backend;
-    free_run.horizon = 1;
-    const OmniReplayResult one = ReplayOmniLog(nominal_model, log, free_run);
-    grip += one.grip;
-    for (int c = 0; c < 3; ++c) {
-      std::vector<double> cmd, measured, modelled;
-      for (std::size_t i = 1; i + 1 < n; ++i) {
-        if (!one.predicted[i]) continue;
-        const Twist2& u = log.rows[i].command;
-        cmd.push_back(c == 0 ? u.vx : (c == 1 ? u.vy : u.omega));
-        measured.push_back(v[i][static_cast<std::size_t>(c)]);
-        const double h = log.rows[i].t - log.rows[i - 1].t;
-        const Twist2 field{(one.pose[i].x - log.rows[i - 1].pose.x) / h, (one.pose[i].y - log.rows[i - 1].pose.y) / h,
-                           (one.pose[i].theta - log.rows[i - 1].pose.theta) / h};
-        const Twist2 body = FieldToBody(field, log.rows[i - 1].pose.theta);
-        modelled.push_back(c == 0 ? body.vx : (c == 1 ? body.vy : body.omega));
-      }
-      const int max_shift = delay + static_cast<int>(std::lround(0.3 / dt));
-      if (cmd.size() > static_cast<std::size_t>(2 * max_shift)) {
-        lag_sum[static_cast<std::size_t>(c)] += ResponseLag(cmd, measured, dt, max_shift) - ResponseLag(cmd, modelled, dt, max_shift);
-      }
-    }
-    for (int c = 0; c < 3; ++c) {
-      const auto cc = static_cast<std::size_t>(c);
-      std::vector<double> times(n), speeds(n);
-      for (std::size_t i = 0; i < n; ++i) times[i] = log.rows[i].t, speeds[i] = v[i][cc];
-      ReversalWindows reversals(times, speeds, kStandFraction, kReversalWindow);
-      std::vector<double> xb, xa;
-      for (std::size_t k = 0; k < rb.rows.size(); ++k) {
-        const std::size_t i = rb.rows[k];
-        const double e = rb.e[k][cc];
-        samples[cc].before.push_back(e);
-        samples[cc].velocity.push_back(v[i][cc]);
-        samples[cc].acceleration.push_back(a[i][cc]);
-        xb.push_back(e);
-        const double t = log.rows[i].t;
-        (reversals.Near(t) ? samples[cc].near_reversal : samples[cc].moving).push_back(e);
-        if (li == 0) {
-          series[cc].t.push_back(t);
-          series[cc].before.push_back(e);
-          series[cc].velocity.push_back(v[i][cc]);
-        }
-      }
-      for (std::size_t k = 0; k < ra.rows.size(); ++k) {
-        samples[cc].after.push_back(ra.e[k][cc]);
-        xa.push_back(ra.e[k][cc]);
-        if (li == 0) series[cc].after.push_back(ra.e[k][cc]);
-      }
-      if (li == 0) ResidualSpectra(xb, xa, 1.0 / dt, kWelchSegmentCap, &series[cc]);
-    }
-  }
-  for (int c = 0; c < 3; ++c) {
-    const auto cc = static_cast<std::size_t>(c);
-    ChannelFinding& f = findings[cc];
-    f.channel = names[c];
-    f.unit = "m";
-    DescribeChannel(samples[cc], series[cc], &f);
-    f.lag = lag_sum[cc] / static_cast<double>(logs.size());
-    f.noise = problem.channel_noise()[cc];
-  }
-  report.findings = findings;
-  report.series = series;
-
-  // Paths: the longest test stretch of the first log, run freely from its start.
-  {
-    const LogData& d = problem.data().front();
-    const OmniLog& log = *d.log;
-    std::size_t best_first = 0, best_len = 0;
-    for (std::size_t i = static_cast<std::size_t>(first_predicted); i < log.rows.size();) {
-      if (d.kind[i] != RowKind::kTest) {
-        ++i;
-        continue;
-      }
-      std::size_t j = i;
-      while (j < log.rows.size() && d.kind[j] == RowKind::kTest) ++j;
-      if (j - i > best_len) {
-        best_first = i;
-        best_len = j - i;
-      }
-      i = j;
-    }
-    if (best_len > 2) {
-      OmniReplayOptions o;
-      o.state = kDiagnosisState;
-      o.backend = options.backend;
-      DiagnosisPath measured{"measured", {}, {}, {}, {}};
-      DiagnosisPath nominal_path{"nominal model", {}, {}, {}, {}};
-      DiagnosisPath repaired_path{"repaired model", {}, {}, {}, {}};
-      const OmniReplayResult rn = ReplayOmniStretch(nominal_model, log, o, best_first, best_first + best_len);
-      const OmniReplayResult rr = ReplayOmniStretch(repaired_model, log, o, best_first, best_first + best_len);
-      for (std::size_t i = best_first; i < best_first + best_len; ++i) {
-        auto push = [&](DiagnosisPath& p, const Pose2& pose) {
-          p.t.push_back(log.rows[i].t);
-          p.x.push_back(pose.x);
-          p.y.push_back(pose.y);
-          p.theta.push_back(pose.theta);
-        };
-        push(measured, log.rows[i].pose);
-        push(nominal_path, rn.pose[i]);
-        push(repaired_path, rr.pose[i]);
-      }
-      report.paths = {measured, nominal_path, repaired_path};
-    }
-  }
+  FindChannels(problem, model, nominal_model, repaired_model, options, &report, &grip);
+  FreeRunPaths(problem, nominal_model, repaired_model, options, first_predicted, &report);
   for (const auto& [name, p] : ListOmniEffects(model.effects)) {
     report.notes.push_back("the model's own " + name + " was trusted, not refitted");
   }
