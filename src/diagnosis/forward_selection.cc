@@ -164,11 +164,231 @@ double Mean(const std::vector<double>& v) {
   return s / static_cast<double>(v.size());
 }
 
+namespace {
+
+// One candidate of a round, fitted beside the effects added so far and scored.
+struct CandidateTrial {
+  DiagnosisCandidate candidate;
+  double fit_reduction = 0;          // its share of the fit rows' squared residual removed
+  bool harms = false;                // it makes a channel significantly worse
+  std::vector<TrialEffect> fitted;   // the effects with it, as fitted
+};
+
+// What a round scores its candidates against.
+struct RoundBase {
+  const DiagnosisProblem* problem = nullptr;
+  const DiagnosisOptions* options = nullptr;
+  int round = 0;
+  int bandwidth = 0;                        // rows: the residuals' correlation length
+  double effective_rows = 0;                // of the selection rows
+  const std::vector<TrialEffect>* current;  // the effects added so far
+  const SquaredResiduals* residuals;        // with them
+};
+
+// Fits `candidate` beside the effects added so far and scores it. Scored with the effects
+// already added refitted too (as stepwise regression re-estimates every coefficient): an
+// effect added earlier may have absorbed part of this one (a payload fitted alone takes
+// up a torque offset's share), and only the joint fit gives the candidate its due. Kept
+// where it fits better. Effects the problem holds while scoring (HeldWhileScoring) keep
+// their fit; a candidate that removes nothing on its own is not refitted jointly (it
+// would rarely pass, and the joint fits are most of a round's time). A candidate on a
+// joint an added effect already acts on is always refitted with it: the added one may
+// have taken its share (Coulomb friction chosen first absorbs most of a viscous term;
+// viscous fitted with Coulomb held then gains nothing and would never be refitted beside
+// it). Effects of the whole robot (joint -1: a payload, every omni effect) share with
+// everything, and a joint refit beside them would credit the candidate with their
+// refinement.
+CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate) {
+  const DiagnosisProblem& problem = *base.problem;
+  CandidateTrial out;
+  DiagnosisCandidate& c = out.candidate;
+  c.round = base.round;
+  c.name = candidate.name;
+  c.joint = candidate.joint;
+  std::vector<TrialEffect> trial = *base.current;
+  trial.push_back(candidate);
+  try {
+    trial = problem.Fit(trial, {static_cast<int>(trial.size()) - 1});
+    SquaredResiduals r = problem.Evaluate(trial);
+    const int parameters = static_cast<int>(trial.back().parameters.size());
+    Score s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows);
+    std::vector<int> refit;
+    bool shares = false;
+    for (std::size_t m = 0; m < trial.size(); ++m) {
+      if (m + 1 == trial.size() || !problem.HeldWhileScoring(trial[m])) refit.push_back(static_cast<int>(m));
+      shares = shares || (m + 1 < trial.size() && trial.back().joint >= 0 && trial[m].joint == trial.back().joint);
+    }
+    if ((s.reduction > 0 || shares) && refit.size() > 1) {
+      try {
+        std::vector<TrialEffect> joint = problem.Fit(trial, refit);
+        SquaredResiduals rj = problem.Evaluate(joint);
+        if (Mean(rj.fit) < Mean(r.fit)) {
+          trial = std::move(joint), r = std::move(rj);
+          s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows);
+        }
+      } catch (const std::exception&) {
+        // the joint refit failed: the one-at-a-time fit stands
+      }
+    }
+    c.parameters = trial.back().parameters;
+    c.fit_gap = problem.Gap(Mean(r.fit));
+    c.held_out_gap = problem.Gap(Mean(r.selection));
+    c.reduction = s.reduction;
+    c.t_statistic = s.test.t;
+    c.p_value = s.test.p;
+    c.information_gain = s.information_gain;
+    c.blocks_changed = s.blocks_changed;
+    c.blocks_improved = s.blocks_improved;
+    out.fit_reduction = s.fit_reduction;
+    out.harms = HarmsAChannel(s, base.options->min_improvement, base.options->alpha);
+    if (out.harms) {
+      char why[160];
+      std::snprintf(why, sizeof why, "it makes channel %d worse by %s of its squared residual (t = %.1f)",
+                    s.worst_channel + 1, Percent(-s.worst_share).c_str(), s.worst_t);
+      c.harm = why;
+    }
+    out.fitted = std::move(trial);
+  } catch (const std::exception& e) {
+    c.note = e.what();
+    c.reduction = -std::numeric_limits<double>::infinity();
+    c.p_value = std::numeric_limits<double>::quiet_NaN();
+  }
+  return out;
+}
+
+// The candidates that pass, by information gain (one that fails the test must not hide
+// another that passes; ties go to the earlier candidate), each marked significant or not
+// by Holm's correction over the candidates that could be fitted: the best of many is held
+// to the family's level, not to one test's. *tested counts those.
+std::vector<std::size_t> PassingOrder(const DiagnosisOptions& options, std::vector<CandidateTrial>* trials, int* tested) {
+  std::vector<double> p;
+  *tested = 0;
+  for (const CandidateTrial& t : *trials) {
+    p.push_back(t.candidate.note.empty() ? t.candidate.p_value : std::numeric_limits<double>::quiet_NaN());
+    *tested += t.candidate.note.empty() ? 1 : 0;
+  }
+  const std::vector<bool> significant = HolmReject(p, options.alpha);
+  std::vector<std::size_t> order;
+  for (std::size_t k = 0; k < trials->size(); ++k) {
+    DiagnosisCandidate& c = (*trials)[k].candidate;
+    c.significant = significant[k];
+    const bool strong = c.reduction >= kStrongReduction && (*trials)[k].fit_reduction >= kStrongReduction &&
+                        c.t_statistic > 0 && MostBlocksImprove(c.blocks_changed, c.blocks_improved);
+    if (c.note.empty() && !(*trials)[k].harms && c.reduction >= options.min_improvement && c.information_gain > 0 &&
+        (significant[k] || strong))
+      order.push_back(k);
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return (*trials)[a].candidate.information_gain > (*trials)[b].candidate.information_gain;
+  });
+  return order;
+}
+
+// The best passing candidate, all added effects refitted with it, unless that makes the
+// test rows worse: the test rows choose nothing, but they veto. An effect that fits the
+// fit and selection rows and not the rows neither saw is fitted to something else (the
+// noise's peaks, a derivative filter's error); it is reported, never added. Returns its
+// index (trials->size(): none), with the effects and their residuals in *next and *r.
+std::size_t BestUnvetoed(const RoundBase& base, const std::vector<std::size_t>& order,
+                         std::vector<CandidateTrial>* trials, std::vector<TrialEffect>* next, SquaredResiduals* r) {
+  const DiagnosisProblem& problem = *base.problem;
+  for (std::size_t k : order) {
+    *next = (*trials)[k].fitted;
+    std::vector<int> all(next->size());
+    for (std::size_t m = 0; m < all.size(); ++m) all[m] = static_cast<int>(m);
+    // Refit every added effect together, a single one too (one more refinement from
+    // where it stands): the next round's candidates, scored with a joint refit, must
+    // not be credited with what more refinement of these alone would have found.
+    try {
+      *next = problem.Fit(*next, all);
+    } catch (const std::exception&) {
+      *next = (*trials)[k].fitted;  // the joint refit failed: keep the one-at-a-time fit
+    }
+    *r = problem.Evaluate(*next);
+    const double test_before = Mean(base.residuals->test), test_after = Mean(r->test);
+    if (test_after > test_before) {
+      char why[200];
+      std::snprintf(why, sizeof why, "vetoed: it makes the test rows worse (gap %s -> %s)",
+                    FormatParameter(problem.Gap(test_before)).c_str(), FormatParameter(problem.Gap(test_after)).c_str());
+      (*trials)[k].candidate.veto = why;
+      continue;
+    }
+    return k;
+  }
+  return trials->size();
+}
+
+// Backward step: an effect added earlier that the new one (`winner`) made redundant (its
+// removal, the others held, costs less than it must earn) goes out again, and the rest
+// are refitted. *current and their residuals *r are updated; the removal is recorded.
+void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::vector<TrialEffect>* current,
+                  SquaredResiduals* r, SelectionResult* out) {
+  if (current->size() <= 1) return;
+  const DiagnosisProblem& problem = *base.problem;
+  const DiagnosisOptions& options = *base.options;
+  std::size_t weakest = current->size();
+  Score weakest_score;
+  for (std::size_t m = 0; m + 1 < current->size(); ++m) {
+    std::vector<TrialEffect> without = *current;
+    without.erase(without.begin() + static_cast<std::ptrdiff_t>(m));
+    const SquaredResiduals rw = problem.Evaluate(without);
+    const Score keep = Compare(rw, *r, base.bandwidth, static_cast<int>((*current)[m].parameters.size()),
+                               EffectiveRows(rw.selection, base.bandwidth));
+    const bool earns = keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
+                       (keep.test.p <= options.alpha ||
+                        (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&
+                         MostBlocksImprove(keep.blocks_changed, keep.blocks_improved)));
+    if (!earns && (weakest == current->size() || keep.test.p > weakest_score.test.p)) {
+      weakest = m;
+      weakest_score = keep;
+    }
+  }
+  if (weakest == current->size()) return;
+  char why[320];
+  std::snprintf(why, sizeof why,
+                "round %d: %s was taken out again: beside %s it removes only %s of the selection rows' squared "
+                "error (t = %.1f, %s)",
+                base.round, EffectLabel((*current)[weakest].name, (*current)[weakest].joint).c_str(),
+                EffectLabel(winner.name, winner.joint).c_str(), Percent(weakest_score.reduction).c_str(),
+                weakest_score.test.t, PValue(weakest_score.test.p).c_str());
+  out->removed.push_back(why);
+  current->erase(current->begin() + static_cast<std::ptrdiff_t>(weakest));
+  out->evidence.erase(out->evidence.begin() + static_cast<std::ptrdiff_t>(weakest));
+  std::vector<int> rest(current->size());
+  for (std::size_t k = 0; k < rest.size(); ++k) rest[k] = static_cast<int>(k);
+  try {
+    *current = problem.Fit(*current, rest);
+  } catch (const std::exception&) {
+    // the refit failed: the others keep their parameters
+  }
+  *r = problem.Evaluate(*current);
+}
+
+// Each effect's share of the test rows' gap on top of those before it, with the
+// parameters they all end with: the shares recorded as each was added no longer add up
+// once a refit changed the earlier ones or the backward step took one out.
+std::vector<double> GapReductions(const DiagnosisProblem& problem, const SelectionResult& out) {
+  std::vector<double> shares;
+  double gap = problem.Gap(Mean(out.before.test));
+  for (std::size_t k = 1; k <= out.effects.size(); ++k) {
+    const double next =
+        k == out.effects.size()
+            ? problem.Gap(Mean(out.after.test))
+            : problem.Gap(Mean(problem.Evaluate(std::vector<TrialEffect>(out.effects.begin(),
+                                                                         out.effects.begin() + static_cast<std::ptrdiff_t>(k)))
+                                   .test));
+    shares.push_back(gap > 0 ? (gap - next) / gap : 0.0);
+    gap = next;
+  }
+  return shares;
+}
+
+}  // namespace
+
 SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOptions& options,
                               const std::function<void(const std::string&)>& progress) {
   SelectionResult out;
   out.before = problem.Evaluate({});
-  const int bandwidth = problem.ChunkRows();
   SquaredResiduals current_residuals = out.before;
   std::vector<TrialEffect> current;
   for (int round = 1; round <= options.max_effects; ++round) {
@@ -177,135 +397,25 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
     if (progress) {
       progress("round " + std::to_string(round) + ": fitting " + std::to_string(candidates.size()) + " candidates");
     }
-    const double effective_rows = EffectiveRows(current_residuals.selection, bandwidth);
-    std::vector<DiagnosisCandidate> tried(candidates.size());
-    std::vector<double> fit_reduction(candidates.size(), 0.0);
-    std::vector<char> harms(candidates.size(), 0);
-    std::vector<std::vector<TrialEffect>> fitted(candidates.size());
+    RoundBase base;
+    base.problem = &problem;
+    base.options = &options;
+    base.round = round;
+    base.bandwidth = problem.ChunkRows();
+    base.effective_rows = EffectiveRows(current_residuals.selection, base.bandwidth);
+    base.current = &current;
+    base.residuals = &current_residuals;
+    std::vector<CandidateTrial> trials(candidates.size());
     ParallelFor(static_cast<int>(candidates.size()), options.threads, [&](int i) {
-      const auto k = static_cast<std::size_t>(i);
-      DiagnosisCandidate& c = tried[k];
-      c.round = round;
-      c.name = candidates[k].name;
-      c.joint = candidates[k].joint;
-      std::vector<TrialEffect> trial = current;
-      trial.push_back(candidates[k]);
-      try {
-        trial = problem.Fit(trial, {static_cast<int>(trial.size()) - 1});
-        SquaredResiduals r = problem.Evaluate(trial);
-        // Scored with the effects already added refitted too (as stepwise regression
-        // re-estimates every coefficient): an effect added earlier may have absorbed
-        // part of this one (a payload fitted alone takes up a torque offset's share),
-        // and only the joint fit gives the candidate its due. Kept where it fits better.
-        // Effects the problem holds while scoring (HeldWhileScoring) keep their fit; a
-        // candidate that removes nothing on its own is not refitted jointly (it would
-        // rarely pass, and the joint fits are most of a round's time).
-        // A candidate on a joint an added effect already acts on is always refitted with
-        // it: the added one may have taken its share (Coulomb friction chosen first
-        // absorbs most of a viscous term; viscous fitted with Coulomb held then gains
-        // nothing and would never be refitted beside it). Effects of the whole robot
-        // (joint -1: a payload, every omni effect) share with everything, and a joint
-        // refit beside them would credit the candidate with their refinement.
-        const int parameters = static_cast<int>(trial.back().parameters.size());
-        Score s = Compare(current_residuals, r, bandwidth, parameters, effective_rows);
-        std::vector<int> refit;
-        bool shares = false;
-        for (std::size_t m = 0; m < trial.size(); ++m) {
-          if (m + 1 == trial.size() || !problem.HeldWhileScoring(trial[m])) refit.push_back(static_cast<int>(m));
-          shares = shares || (m + 1 < trial.size() && trial.back().joint >= 0 && trial[m].joint == trial.back().joint);
-        }
-        if ((s.reduction > 0 || shares) && refit.size() > 1) {
-          try {
-            std::vector<TrialEffect> joint = problem.Fit(trial, refit);
-            SquaredResiduals rj = problem.Evaluate(joint);
-            if (Mean(rj.fit) < Mean(r.fit)) {
-              trial = std::move(joint), r = std::move(rj);
-              s = Compare(current_residuals, r, bandwidth, parameters, effective_rows);
-            }
-          } catch (const std::exception&) {
-            // the joint refit failed: the one-at-a-time fit stands
-          }
-        }
-        c.parameters = trial.back().parameters;
-        c.fit_gap = problem.Gap(Mean(r.fit));
-        c.held_out_gap = problem.Gap(Mean(r.selection));
-        c.reduction = s.reduction;
-        c.t_statistic = s.test.t;
-        c.p_value = s.test.p;
-        c.information_gain = s.information_gain;
-        c.blocks_changed = s.blocks_changed;
-        c.blocks_improved = s.blocks_improved;
-        fit_reduction[k] = s.fit_reduction;
-        harms[k] = HarmsAChannel(s, options.min_improvement, options.alpha);
-        if (harms[k]) {
-          char why[160];
-          std::snprintf(why, sizeof why, "it makes channel %d worse by %s of its squared residual (t = %.1f)",
-                        s.worst_channel + 1, Percent(-s.worst_share).c_str(), s.worst_t);
-          c.harm = why;
-        }
-        fitted[k] = std::move(trial);
-      } catch (const std::exception& e) {
-        c.note = e.what();
-        c.reduction = -std::numeric_limits<double>::infinity();
-        c.p_value = std::numeric_limits<double>::quiet_NaN();
-      }
+      trials[static_cast<std::size_t>(i)] = TryCandidate(base, candidates[static_cast<std::size_t>(i)]);
     });
-    // Holm's correction over the candidates that could be fitted: the best of many is
-    // held to the family's level, not to one test's.
-    std::vector<double> p;
     int tested = 0;
-    for (const auto& c : tried) {
-      p.push_back(c.note.empty() ? c.p_value : std::numeric_limits<double>::quiet_NaN());
-      tested += c.note.empty() ? 1 : 0;
-    }
-    const std::vector<bool> significant = HolmReject(p, options.alpha);
-    auto passes_test = [&](std::size_t k) {
-      const DiagnosisCandidate& c = tried[k];
-      const bool strong = c.reduction >= kStrongReduction && fit_reduction[k] >= kStrongReduction && c.t_statistic > 0 &&
-                          MostBlocksImprove(c.blocks_changed, c.blocks_improved);
-      return c.note.empty() && !harms[k] && c.reduction >= options.min_improvement && c.information_gain > 0 &&
-             (significant[k] || strong);
-    };
-    // The candidates that pass, by information gain (one that fails the test must not
-    // hide another that passes); ties go to the earlier candidate.
-    std::vector<std::size_t> order;
-    for (std::size_t k = 0; k < tried.size(); ++k) {
-      tried[k].significant = significant[k];
-      if (passes_test(k)) order.push_back(k);
-    }
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return tried[a].information_gain > tried[b].information_gain; });
-    // The best of them, all added effects refitted with it, unless that makes the test
-    // rows worse: the test rows choose nothing, but they veto. An effect that fits the
-    // fit and selection rows and not the rows neither saw is fitted to something else
-    // (the noise's peaks, a derivative filter's error); it is reported, never added.
-    std::size_t best = tried.size();
+    const std::vector<std::size_t> order = PassingOrder(options, &trials, &tested);
     std::vector<TrialEffect> next;
     SquaredResiduals r;
-    for (std::size_t k : order) {
-      next = fitted[k];
-      std::vector<int> all(next.size());
-      for (std::size_t m = 0; m < all.size(); ++m) all[m] = static_cast<int>(m);
-      // Refit every added effect together, a single one too (one more refinement from
-      // where it stands): the next round's candidates, scored with a joint refit, must
-      // not be credited with what more refinement of these alone would have found.
-      try {
-        next = problem.Fit(next, all);
-      } catch (const std::exception&) {
-        next = fitted[k];  // the joint refit failed: keep the one-at-a-time fit
-      }
-      r = problem.Evaluate(next);
-      const double test_before = Mean(current_residuals.test), test_after = Mean(r.test);
-      if (test_after > test_before) {
-        char why[200];
-        std::snprintf(why, sizeof why, "vetoed: it makes the test rows worse (gap %s -> %s)",
-                      FormatParameter(problem.Gap(test_before)).c_str(), FormatParameter(problem.Gap(test_after)).c_str());
-        tried[k].veto = why;
-        continue;
-      }
-      best = k;
-      break;
-    }
+    const std::size_t best = BestUnvetoed(base, order, &trials, &next, &r);
+    std::vector<DiagnosisCandidate> tried;
+    for (const CandidateTrial& t : trials) tried.push_back(t.candidate);
     const bool passes = best < tried.size();
     if (passes) {
       DiagnosisCandidate& winner = tried[best];
@@ -315,47 +425,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
       std::string signature = problem.Signature(current.back());
       out.evidence.push_back(EffectLabel(winner.name, winner.joint) + ": " + evidence +
                              (signature.empty() ? "" : "; " + signature) + ".");
-      // Backward step: an effect added earlier that the new one made redundant (its
-      // removal, the others held, costs less than it must earn) goes out again.
-      if (current.size() > 1) {
-        std::size_t weakest = current.size();
-        Score weakest_score;
-        for (std::size_t m = 0; m + 1 < current.size(); ++m) {
-          std::vector<TrialEffect> without = current;
-          without.erase(without.begin() + static_cast<std::ptrdiff_t>(m));
-          const SquaredResiduals rw = problem.Evaluate(without);
-          const Score keep = Compare(rw, r, bandwidth, static_cast<int>(current[m].parameters.size()),
-                                     EffectiveRows(rw.selection, bandwidth));
-          const bool earns = keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
-                             (keep.test.p <= options.alpha ||
-                              (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&
-                               MostBlocksImprove(keep.blocks_changed, keep.blocks_improved)));
-          if (!earns && (weakest == current.size() || keep.test.p > weakest_score.test.p)) {
-            weakest = m;
-            weakest_score = keep;
-          }
-        }
-        if (weakest < current.size()) {
-          char why[320];
-          std::snprintf(why, sizeof why,
-                        "round %d: %s was taken out again: beside %s it removes only %s of the selection rows' squared "
-                        "error (t = %.1f, %s)",
-                        round, EffectLabel(current[weakest].name, current[weakest].joint).c_str(),
-                        EffectLabel(winner.name, winner.joint).c_str(), Percent(weakest_score.reduction).c_str(),
-                        weakest_score.test.t, PValue(weakest_score.test.p).c_str());
-          out.removed.push_back(why);
-          current.erase(current.begin() + static_cast<std::ptrdiff_t>(weakest));
-          out.evidence.erase(out.evidence.begin() + static_cast<std::ptrdiff_t>(weakest));
-          std::vector<int> rest(current.size());
-          for (std::size_t k = 0; k < rest.size(); ++k) rest[k] = static_cast<int>(k);
-          try {
-            current = problem.Fit(current, rest);
-          } catch (const std::exception&) {
-            // the refit failed: the others keep their parameters
-          }
-          r = problem.Evaluate(current);
-        }
-      }
+      BackwardStep(base, winner, &current, &r, &out);
       current_residuals = r;
     }
     out.candidates.insert(out.candidates.end(), tried.begin(), tried.end());
@@ -363,20 +433,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
   }
   out.effects = current;
   out.after = current_residuals;
-  // Each effect's share of the test rows' gap on top of those before it, with the
-  // parameters they all end with: the shares recorded as each was added no longer add up
-  // once a refit changed the earlier ones or the backward step took one out.
-  double gap = problem.Gap(Mean(out.before.test));
-  for (std::size_t k = 1; k <= current.size(); ++k) {
-    const double next = k == current.size()
-                            ? problem.Gap(Mean(out.after.test))
-                            : problem.Gap(Mean(problem.Evaluate(std::vector<TrialEffect>(current.begin(),
-                                                                                         current.begin() +
-                                                                                             static_cast<std::ptrdiff_t>(k)))
-                                                   .test));
-    out.gap_reductions.push_back(gap > 0 ? (gap - next) / gap : 0.0);
-    gap = next;
-  }
+  out.gap_reductions = GapReductions(problem, out);
   return out;
 }
 
