@@ -986,9 +986,12 @@ std::vector<DiagnosisSimulation> SimulateTestRows(const ArmModel& given, const A
 
 }  // namespace
 
-DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& logs, const DiagnosisOptions& options,
-                            ArmModel* repaired, const std::function<void(const std::string&)>& progress) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+// Checks what diagnose is given before any work: joints, logs that match the model and
+// hold finite numbers, logs long enough to hold out blocks. Returns the block length (s).
+// Throws InputError naming the file and line.
+double CheckArmInputs(const ArmModel& model, const std::vector<ArmLog>& logs, const DiagnosisOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (model.dof() == 0) throw InputError(SourceLocation{model.source_path}, "the model has no joints: nothing to diagnose");
@@ -1012,7 +1015,91 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
     std::vector<double> t(log.t.data(), log.t.data() + log.rows() - log.edge_samples);
     CheckLogHoldsOut(t, static_cast<std::size_t>(log.edge_samples), block, options.held_out, log.path);
   }
+  return block;
+}
 
+// Find, for joint j: the nominal and the repaired model's residuals over every log, what
+// they correlate with, the command's lag, the residual's noise (the repaired model's fast
+// content: what an added effect explains, a resonance, is not noise) and, from the first
+// log, the series and spectra the report plots.
+void FindJoint(const ArmProblem& problem, const ArmModel& model, const ArmModel& nominal_model,
+               const ArmModel& repaired_model, const std::vector<Eigen::MatrixXd>& nominal_payload,
+               const std::vector<Eigen::MatrixXd>& repaired_payload, int j, DiagnosisReport* report) {
+  const auto& data = problem.data();
+  ChannelFinding f;
+  ChannelSeries s;
+  f.channel = "joint " + std::to_string(j + 1);
+  f.unit = model.joints[static_cast<std::size_t>(j)].type == JointType::kPrismatic ? "N" : "N·m";
+  ChannelSamples x;
+  double lag_sum = 0, noise_joint = 0;
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    const LogData& d = data[k];
+    const ArmLog& log = *d.log;
+    const Eigen::VectorXd rb = problem.Residual(nominal_model, d, j, nominal_payload[k]);
+    const Eigen::VectorXd ra = problem.Residual(repaired_model, d, j, repaired_payload[k]);
+    const Eigen::VectorXd cmd = problem.Command(nominal_model, d, j, nominal_payload[k]);
+    lag_sum += CommandLag(log.t, log.tau.col(j), cmd, d.first, d.last);
+    const double rate = 1.0 / log.sample_period;
+    const double cutoff = log.derive_cutoff_hz > 0 ? 2 * log.derive_cutoff_hz : rate / 8;
+    const double sigma = HighFrequencySigma(ra.segment(d.first, d.last - d.first), rate, cutoff);
+    noise_joint += sigma * sigma;
+    // Reversals: where the velocity changes sign or the joint stands.
+    ReversalWindows reversals(std::vector<double>(log.t.data() + d.first, log.t.data() + d.last),
+                              std::vector<double>(log.qd.col(j).data() + d.first, log.qd.col(j).data() + d.last),
+                              kStandFraction, kReversalWindow);
+    for (int r = d.first; r < d.last; ++r) {
+      x.before.push_back(rb[r]);
+      x.after.push_back(ra[r]);
+      x.velocity.push_back(log.qd(r, j));
+      x.acceleration.push_back(log.qdd(r, j));
+      (reversals.Near(log.t[r]) ? x.near_reversal : x.moving).push_back(rb[r]);
+    }
+    if (k == 0) {
+      // Plots: the first log, subsampled.
+      const int step = std::max(1, (d.last - d.first) / kPlotPoints);
+      for (int r = d.first; r < d.last; r += step) {
+        s.t.push_back(log.t[r]);
+        s.before.push_back(rb[r]);
+        s.after.push_back(ra[r]);
+        s.velocity.push_back(log.qd(r, j));
+      }
+      ResidualSpectra(std::vector<double>(rb.data() + d.first, rb.data() + d.last),
+                      std::vector<double>(ra.data() + d.first, ra.data() + d.last), rate, kWelchSegmentCap, &s);
+    }
+  }
+  DescribeChannel(x, s, &f);
+  f.lag = lag_sum / static_cast<double>(data.size());
+  f.noise = std::sqrt(noise_joint / static_cast<double>(data.size()));
+  report->findings.push_back(f);
+  report->series.push_back(std::move(s));
+}
+
+// The notes on the model's own effects, and on what a simulator is for: the motion from
+// the torques on the test rows, where the repaired model follows them worse.
+void NoteTrustAndSimulation(const ArmModel& model, const ArmModel& repaired_model, const ArmProblem& problem,
+                            bool any_added, DiagnosisReport* report) {
+  if (model.effects.payload_mass > 0) report->notes.push_back("the model already has a payload: no payload candidate was tried");
+  for (const ArmEffect& e : ListArmEffects(model.effects)) {
+    report->notes.push_back("the model's own " + EffectLabel(e.name, e.joint) + " was trusted, not refitted");
+  }
+  report->simulation = SimulateTestRows(model, repaired_model, problem.data());
+  for (const DiagnosisSimulation& sim : report->simulation) {
+    std::string worse;
+    for (std::size_t j = 0; j < sim.nominal.size(); ++j)
+      if (sim.repaired[j] > sim.nominal[j]) worse += (worse.empty() ? "" : ", ") + std::to_string(j + 1);
+    if (!worse.empty() && any_added) {
+      report->notes.push_back("simulated from the torques over " + FormatParameter(sim.seconds) +
+                              " s, the repaired model follows the test rows worse than the given one on joint(s) " + worse);
+    }
+  }
+}
+
+}  // namespace
+
+DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& logs, const DiagnosisOptions& options,
+                            ArmModel* repaired, const std::function<void(const std::string&)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const double block = CheckArmInputs(model, logs, options);
   // With --refit-model the effects are sought on top of the model re-identified on the
   // fit blocks alone (the held-out blocks stay unseen); the gap before is still the
   // given model's.
@@ -1040,83 +1127,19 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   // Find: per joint, the nominal and the repaired model's residuals.
   const ArmModel nominal_model = problem.Build({});
   const ArmModel repaired_model = problem.Build(selection.effects);
-  const auto& data = problem.data();
   std::vector<Eigen::MatrixXd> nominal_payload, repaired_payload;  // per log
-  for (const LogData& d : data) {
+  for (const LogData& d : problem.data()) {
     nominal_payload.push_back(problem.PayloadTorque(nominal_model, d));
     repaired_payload.push_back(problem.PayloadTorque(repaired_model, d));
   }
   double noise_sq = 0;
   for (int j = 0; j < model.dof(); ++j) {
-    ChannelFinding f;
-    ChannelSeries s;
-    f.channel = "joint " + std::to_string(j + 1);
-    f.unit = model.joints[static_cast<std::size_t>(j)].type == JointType::kPrismatic ? "N" : "N·m";
-    ChannelSamples x;
-    double lag_sum = 0, noise_joint = 0;
-    for (std::size_t k = 0; k < data.size(); ++k) {
-      const LogData& d = data[k];
-      const ArmLog& log = *d.log;
-      const Eigen::VectorXd rb = problem.Residual(nominal_model, d, j, nominal_payload[k]);
-      const Eigen::VectorXd ra = problem.Residual(repaired_model, d, j, repaired_payload[k]);
-      const Eigen::VectorXd cmd = problem.Command(nominal_model, d, j, nominal_payload[k]);
-      lag_sum += CommandLag(log.t, log.tau.col(j), cmd, d.first, d.last);
-      const double rate = 1.0 / log.sample_period;
-      const double cutoff = log.derive_cutoff_hz > 0 ? 2 * log.derive_cutoff_hz : rate / 8;
-      // The repaired model's residual: fast content an added effect explains (a
-      // resonance) is not noise.
-      const double sigma = HighFrequencySigma(ra.segment(d.first, d.last - d.first), rate, cutoff);
-      noise_joint += sigma * sigma;
-      // Reversals: where the velocity changes sign or the joint stands.
-      ReversalWindows reversals(std::vector<double>(log.t.data() + d.first, log.t.data() + d.last),
-                                std::vector<double>(log.qd.col(j).data() + d.first, log.qd.col(j).data() + d.last),
-                                kStandFraction, kReversalWindow);
-      for (int r = d.first; r < d.last; ++r) {
-        x.before.push_back(rb[r]);
-        x.after.push_back(ra[r]);
-        x.velocity.push_back(log.qd(r, j));
-        x.acceleration.push_back(log.qdd(r, j));
-        (reversals.Near(log.t[r]) ? x.near_reversal : x.moving).push_back(rb[r]);
-      }
-      if (k == 0) {
-        // Plots: the first log, subsampled.
-        const int step = std::max(1, (d.last - d.first) / kPlotPoints);
-        for (int r = d.first; r < d.last; r += step) {
-          s.t.push_back(log.t[r]);
-          s.before.push_back(rb[r]);
-          s.after.push_back(ra[r]);
-          s.velocity.push_back(log.qd(r, j));
-        }
-        ResidualSpectra(std::vector<double>(rb.data() + d.first, rb.data() + d.last),
-                        std::vector<double>(ra.data() + d.first, ra.data() + d.last), rate, kWelchSegmentCap, &s);
-      }
-    }
-    DescribeChannel(x, s, &f);
-    f.lag = lag_sum / static_cast<double>(data.size());
-    f.noise = std::sqrt(noise_joint / static_cast<double>(data.size()));
-    noise_sq += f.noise * f.noise;
-    report.findings.push_back(f);
-    report.series.push_back(std::move(s));
+    FindJoint(problem, model, nominal_model, repaired_model, nominal_payload, repaired_payload, j, &report);
+    noise_sq += report.findings.back().noise * report.findings.back().noise;
   }
   report.noise_floor = std::sqrt(noise_sq / model.dof());
-  if (model.effects.payload_mass > 0) report.notes.push_back("the model already has a payload: no payload candidate was tried");
-  for (const ArmEffect& e : ListArmEffects(model.effects)) {
-    report.notes.push_back("the model's own " + EffectLabel(e.name, e.joint) + " was trusted, not refitted");
-  }
-  // What a simulator is for: the motion from the torques, on the test rows.
-  report.simulation = SimulateTestRows(model, repaired_model, data);
-  for (const DiagnosisSimulation& sim : report.simulation) {
-    std::string worse;
-    for (std::size_t j = 0; j < sim.nominal.size(); ++j)
-      if (sim.repaired[j] > sim.nominal[j]) worse += (worse.empty() ? "" : ", ") + std::to_string(j + 1);
-    if (!worse.empty() && !selection.effects.empty()) {
-      report.notes.push_back("simulated from the torques over " + FormatParameter(sim.seconds) +
-                             " s, the repaired model follows the test rows worse than the given one on joint(s) " + worse);
-    }
-  }
-  if (repaired) {
-    *repaired = repaired_model;
-  }
+  NoteTrustAndSimulation(model, repaired_model, problem, !selection.effects.empty(), &report);
+  if (repaired) *repaired = repaired_model;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }
