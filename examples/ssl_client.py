@@ -133,6 +133,14 @@ class SyncClient:
             self.buffer += chunk
 
 
+def arrived(pose, target, tolerance, held):
+    """Frames held at the target so far, `held` before this one: 0 when not there."""
+    if pose and math.hypot(target[0] - pose[0], target[1] - pose[1]) < tolerance and \
+            abs(wrap(target[2] - pose[2])) < 0.05:
+        return held + 1
+    return 0
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--server", default="127.0.0.1", help="address twinsim serve listens on")
@@ -198,14 +206,10 @@ def main():
                     print(f"frame {last_frame}: {e.code}: {e.message}", file=sys.stderr)
             except BlockingIOError:
                 pass
-        if pose and math.hypot(target[0] - pose[0], target[1] - pose[1]) < args.tolerance and \
-                abs(wrap(target[2] - pose[2])) < 0.05:
-            held += 1
-            if held >= 15:
-                print(f"reached ({pose[0]:.3f}, {pose[1]:.3f}, {math.degrees(pose[2]):.1f} deg) at frame {last_frame}")
-                return 0
-        else:
-            held = 0
+        held = arrived(pose, target, args.tolerance, held)
+        if held >= 15:
+            print(f"reached ({pose[0]:.3f}, {pose[1]:.3f}, {math.degrees(pose[2]):.1f} deg) at frame {last_frame}")
+            return 0
     where = f"({pose[0]:.3f}, {pose[1]:.3f})" if pose else "never seen"
     print(f"not reached after {frames} frames: robot at {where}", file=sys.stderr)
     return 1
@@ -223,14 +227,10 @@ def drive_synchronously(args, control_pb, sync_pb):
             for r in robots:
                 if r.robot_id == args.id:
                     pose = (r.x / 1000.0, r.y / 1000.0, r.orientation)
-        if pose and math.hypot(target[0] - pose[0], target[1] - pose[1]) < args.tolerance and \
-                abs(wrap(target[2] - pose[2])) < 0.05:
-            held += 1
-            if held >= 15:
-                print(f"reached ({pose[0]:.3f}, {pose[1]:.3f}, {math.degrees(pose[2]):.1f} deg) at frame {frame}")
-                return 0
-        else:
-            held = 0
+        held = arrived(pose, target, args.tolerance, held)
+        if held >= 15:
+            print(f"reached ({pose[0]:.3f}, {pose[1]:.3f}, {math.degrees(pose[2]):.1f} deg) at frame {frame}")
+            return 0
         forward, left, omega = command_towards(pose, target, args.max_speed, args.gain, 4.0) if pose else (0, 0, 0)
         control = control_pb.RobotControl()
         control.ParseFromString(league_command(control_pb, args.id, forward, left, omega))

@@ -17,6 +17,22 @@ namespace {
 namespace fs = std::filesystem;
 using testing::SourcePath;
 
+// Starts `twinsim serve SCENE` on free ports with vision to `vision`, its output in
+// DIR/stdout and DIR/stderr, and waits until vision flows (false: it never did).
+bool StartServe(const std::string& scene, const std::string& d, const UdpSocket& vision, pid_t* pid) {
+  const std::string args = "serve " + scene + " --out " + d + "/out --control-port 0 --blue-port 0 --yellow-port 0" +
+                           " --vision-port " + std::to_string(vision.port());
+  *pid = ::fork();
+  if (*pid == 0) {
+    const std::string cmd = "exec " + std::string(TWINSIM_BINARY) + " " + args + " >" + d + "/stdout 2>" + d + "/stderr";
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bool flowing = false;
+  for (int i = 0; i < 100 && !flowing; ++i) flowing = WaitReadable({&vision}, 0.1) >= 0;
+  return flowing;
+}
+
 TEST(ServeCli, SigintStopsAndWritesTheLogPerRobot) {
   const std::string d = testing::TempDir("serve_sigint");
   const std::string model = SourcePath("models/omni4.yaml");
@@ -25,17 +41,9 @@ TEST(ServeCli, SigintStopsAndWritesTheLogPerRobot) {
       d + "/s.yaml", "name: s\nbackend: analytic\nduration: 1\nrobots:\n  - {name: b0, model: " + model + ", " + hold +
                          "}\n  - {name: y0, team: yellow, model: " + model + ", start: {x: 1}, " + hold + "}\n");
   UdpSocket vision("127.0.0.1", 0);  // receives the packets, so none are refused by the host
-  const std::string args = "serve " + scene + " --out " + d + "/out --control-port 0 --blue-port 0 --yellow-port 0" +
-                           " --vision-port " + std::to_string(vision.port());
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const std::string cmd = "exec " + std::string(TWINSIM_BINARY) + " " + args + " >" + d + "/stdout 2>" + d + "/stderr";
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
+  pid_t pid = 0;
   // Vision flows once the field runs; then stop it the way a user does.
-  bool flowing = false;
-  for (int i = 0; i < 100 && !flowing; ++i) flowing = WaitReadable({&vision}, 0.1) >= 0;
+  const bool flowing = StartServe(scene, d, vision, &pid);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   ::kill(pid, SIGINT);
   int status = 0;
@@ -66,16 +74,8 @@ TEST(ServeCli, AfterKill9TheLogsHoldEveryFinishedFrameAndReplay) {
                      "  - {name: b0, model: " + model + ", commands: {type: random}}\n"
                      "  - {name: y0, team: yellow, model: " + model + ", start: {x: 1}, commands: {type: figure_eight}}\n");
   UdpSocket vision("127.0.0.1", 0);
-  const std::string args = "serve " + scene + " --out " + d + "/out --control-port 0 --blue-port 0 --yellow-port 0" +
-                           " --vision-port " + std::to_string(vision.port());
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const std::string cmd = "exec " + std::string(TWINSIM_BINARY) + " " + args + " >" + d + "/stdout 2>" + d + "/stderr";
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  bool flowing = false;
-  for (int i = 0; i < 100 && !flowing; ++i) flowing = WaitReadable({&vision}, 0.1) >= 0;
+  pid_t pid = 0;
+  const bool flowing = StartServe(scene, d, vision, &pid);
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   ::kill(pid, SIGKILL);
   int status = 0;
