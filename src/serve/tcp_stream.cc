@@ -63,8 +63,11 @@ TcpConnection& TcpConnection::operator=(TcpConnection&& other) noexcept {
 }
 
 bool TcpConnection::ReadAvailable() {
+  // At most this much waits unread: a client that floods is read at the pace its
+  // requests are answered, never into unbounded memory.
+  constexpr std::size_t kMaxBuffered = 4 << 20;  // bytes
   char chunk[65536];
-  for (;;) {
+  while (buffer_.size() < kMaxBuffered) {
     const ssize_t n = ::recv(fd_, chunk, sizeof chunk, MSG_DONTWAIT);
     if (n > 0) {
       buffer_.append(chunk, static_cast<std::size_t>(n));
@@ -74,6 +77,7 @@ bool TcpConnection::ReadAvailable() {
     if (errno == EINTR) continue;
     return errno == EAGAIN || errno == EWOULDBLOCK;
   }
+  return true;
 }
 
 std::optional<std::string> TcpConnection::NextMessage(std::size_t max_bytes) {

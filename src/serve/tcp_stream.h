@@ -25,8 +25,8 @@ class TcpConnection {
   TcpConnection& operator=(const TcpConnection&) = delete;
 
   int fd() const { return fd_; }
-  // Reads what has arrived (never blocks); false once the peer has closed the
-  // connection or it failed.
+  // Reads what has arrived, up to 4 MB waiting unread (never blocks); false once the
+  // peer has closed the connection or it failed.
   bool ReadAvailable();
   // The next whole message read, if any. A message announced longer than `max_bytes`,
   // or a length that is no varint, makes the stream unusable: bad() turns true.
