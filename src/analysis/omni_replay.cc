@@ -190,6 +190,108 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
 }
 
 // ReplayOmniLog, or with stretch_first < stretch_last the free run of ReplayOmniStretch.
+// The log's frames: the row of each frame, and the command in force at each frame (held
+// over lost frames), `delay` frames late.
+struct Timeline {
+  std::map<int, std::size_t> row_of_frame;
+  std::vector<Twist2> command_at;
+  int last_frame = 0;
+  int delay = 0;  // frames, command and vision
+  Twist2 Delayed(int frame) const {
+    return frame - delay < 0 ? Twist2{} : command_at[static_cast<std::size_t>(frame - delay)];
+  }
+};
+
+Timeline MakeTimeline(const OmniLog& log, int delay) {
+  Timeline tl;
+  tl.delay = delay;
+  const std::size_t n = log.rows.size();
+  for (std::size_t i = 0; i < n; ++i) tl.row_of_frame[log.FrameIndex(i)] = i;
+  tl.last_frame = log.FrameIndex(n - 1);
+  tl.command_at.resize(static_cast<std::size_t>(tl.last_frame) + 1);
+  for (int f = 0, row = 0; f <= tl.last_frame; ++f) {
+    while (static_cast<std::size_t>(row + 1) < n && log.FrameIndex(static_cast<std::size_t>(row + 1)) <= f) ++row;
+    tl.command_at[static_cast<std::size_t>(f)] = log.rows[static_cast<std::size_t>(row)].command;
+  }
+  return tl;
+}
+
+using PoseCheck = std::function<void(std::size_t, const Pose2&)>;
+
+// Steps the backend freely from frame `from` to frame `to`, each pose at a logged frame
+// stored (theta kept on the log's unwrapped branch from `theta`).
+void FreeRun(OmniBackend& backend, const Timeline& tl, int from, int to, double theta, const PoseCheck& check,
+             const std::function<void(int, int)>& progress, OmniReplayResult* out) {
+  for (int f = from; f < to; ++f) {
+    backend.StepFrame({tl.Delayed(f)});
+    auto it = tl.row_of_frame.find(f + 1);
+    if (it != tl.row_of_frame.end()) {
+      Pose2 p = backend.pose(0);
+      check(it->second, p);
+      p.theta = theta = theta + WrapAngle(p.theta - theta);
+      out->pose[it->second] = p;
+      out->predicted[it->second] = true;
+    }
+    if (progress && f % 64 == 0) progress(f + 1, tl.last_frame);
+  }
+}
+
+// The open-loop tracker: the backend moved to every measured pose, and from each frame on
+// the stride a K-frame prediction; or, with a stretch, a free run from its first row
+// (after the tracker's warm-up).
+void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOptions& options, const Timeline& tl,
+                   const PoseCheck& check, const std::function<void(int, int)>& progress, std::size_t stretch_first,
+                   std::size_t stretch_last, OmniReplayResult* out) {
+  const int k = options.horizon;
+  const bool stretch = stretch_first < stretch_last;
+  // The tracker starts at the first row at or after frame D that has a row before it.
+  auto first = tl.row_of_frame.lower_bound(std::max(tl.delay, log.FrameIndex(1)));
+  if (first == tl.row_of_frame.end()) return;
+  const std::size_t r0 = first->second;
+  const OmniLogRow& prev = log.rows[r0 - 1];
+  const OmniLogRow& now = log.rows[r0];
+  const double dt = now.t - prev.t;
+  const Twist2 field_v{(now.pose.x - prev.pose.x) / dt, (now.pose.y - prev.pose.y) / dt,
+                       (now.pose.theta - prev.pose.theta) / dt};
+  backend.Reset(0, now.pose, FieldToBody(field_v, now.pose.theta));
+
+  if (stretch && log.FrameIndex(stretch_first) - first->first < kWarmUpFrames) {
+    throw InputError(log.path + ":" + std::to_string(log.line_of[stretch_first]) +
+                     ": a free run must start after the tracker's warm-up of " + std::to_string(kWarmUpFrames) +
+                     " frames");
+  }
+  for (int f = first->first; f <= tl.last_frame; ++f) {
+    if (progress && f % 64 == 0) progress(f, tl.last_frame);
+    auto measured = tl.row_of_frame.find(f);
+    // Frames without a new measurement leave the tracker to its own prediction.
+    if (measured != tl.row_of_frame.end() && log.rows[measured->second].measured) {
+      backend.MoveBody(0, log.rows[measured->second].pose);
+    }
+    if (stretch && measured != tl.row_of_frame.end() && measured->second == stretch_first) {
+      // The free run: no more corrections from the measurement.
+      FreeRun(backend, tl, f, log.FrameIndex(stretch_last - 1), log.rows[stretch_first].pose.theta, check, {}, out);
+      return;
+    }
+    auto target = tl.row_of_frame.find(f + k);
+    const int since = f - first->first - kWarmUpFrames;
+    if (!stretch && measured != tl.row_of_frame.end() && target != tl.row_of_frame.end() && since >= 0 &&
+        options.OnStride(f, since)) {
+      const OmniBackendState saved = backend.Save();
+      for (int j = f; j < f + k; ++j) backend.StepFrame({tl.Delayed(j)});
+      Pose2 p = backend.pose(0);
+      check(target->second, p);
+      // Keep theta on the log's unwrapped branch.
+      const double from = log.rows[measured->second].pose.theta;
+      p.theta = from + WrapAngle(p.theta - from);
+      out->pose[target->second] = p;
+      out->predicted[target->second] = true;
+      backend.Restore(saved);
+    }
+    if (f < tl.last_frame) backend.StepFrame({tl.Delayed(f)});
+  }
+  if (progress) progress(static_cast<int>(log.rows.size()), static_cast<int>(log.rows.size()));
+}
+
 OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                         const std::function<void(int, int)>& progress, std::size_t stretch_first,
                         std::size_t stretch_last) {
@@ -203,21 +305,9 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   std::unique_ptr<OmniBackend> backend = MakeOmniBackend(options.backend, {model}, field, timing, options.backend_options);
 
   const int delay = model.command_delay_frames + model.vision_delay_frames;
-  const int k = options.horizon;
   const std::size_t n = log.rows.size();
-
-  // Frame index -> row, and the command in force at each frame (held over lost frames).
-  std::map<int, std::size_t> row_of_frame;
-  for (std::size_t i = 0; i < n; ++i) row_of_frame[log.FrameIndex(i)] = i;
-  const int last_frame = log.FrameIndex(n - 1);
-  std::vector<Twist2> command_at(static_cast<std::size_t>(last_frame) + 1);
-  for (int f = 0, row = 0; f <= last_frame; ++f) {
-    while (static_cast<std::size_t>(row + 1) < n && log.FrameIndex(static_cast<std::size_t>(row + 1)) <= f) ++row;
-    command_at[static_cast<std::size_t>(f)] = log.rows[static_cast<std::size_t>(row)].command;
-  }
-  auto delayed_command = [&](int frame) { return frame - delay < 0 ? Twist2{} : command_at[static_cast<std::size_t>(frame - delay)]; };
-
-  const std::function<void(std::size_t, const Pose2&)> check = [&](std::size_t row, const Pose2& p) {
+  const Timeline tl = MakeTimeline(log, delay);
+  const PoseCheck check = [&](std::size_t row, const Pose2& p) {
     if (!IsFinite(p)) {
       std::ostringstream msg;
       msg << log.path << ":" << log.line_of[row] << ": model " << model.name << " on " << options.backend
@@ -229,7 +319,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   OmniReplayResult out = HeldMeasurements(log);
   out.delay_frames = delay;
 
-  if (k == 0) {
+  if (options.horizon == 0) {
     out.state = "none";
     // One free run from the first row; its velocity from the first two rows.
     const OmniLogRow& a = log.rows[0];
@@ -237,24 +327,11 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     const double dt = b.t - a.t;
     const Twist2 field_v{(b.pose.x - a.pose.x) / dt, (b.pose.y - a.pose.y) / dt, (b.pose.theta - a.pose.theta) / dt};
     backend->Reset(0, a.pose, FieldToBody(field_v, a.pose.theta));
-    double last_theta = a.pose.theta;
-    for (int f = 0; f < last_frame; ++f) {
-      backend->StepFrame({delayed_command(f)});
-      auto it = row_of_frame.find(f + 1);
-      if (it != row_of_frame.end()) {
-        Pose2 p = backend->pose(0);
-        check(it->second, p);
-        p.theta = last_theta = last_theta + WrapAngle(p.theta - last_theta);
-        out.pose[it->second] = p;
-        out.predicted[it->second] = true;
-      }
-      if (progress && f % 64 == 0) progress(f + 1, last_frame);
-    }
+    FreeRun(*backend, tl, 0, tl.last_frame, a.pose.theta, check, progress, &out);
     out.grip = backend->grip();
     return out;
   }
 
-  const bool stretch = stretch_first < stretch_last;
   if (options.state == "observer" && backend->has_velocity_state()) {
     out.state = "observer";
     if (options.samples > 0) out.samples.resize(n);
@@ -265,7 +342,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
       out.also.back().state = "observer";
       if (options.covariance || options.samples > 0) out.also.back().covariance.assign(n, Eigen::Matrix3d::Zero());
     }
-    ObserverReplay(model, log, options, progress, stretch_first, stretch_last, row_of_frame, command_at, check,
+    ObserverReplay(model, log, options, progress, stretch_first, stretch_last, tl.row_of_frame, tl.command_at, check,
                    std::move(backend), &out);
     // Rows not predicted hold their measured pose in every sample.
     for (std::size_t i = 0; i < out.samples.size(); ++i)
@@ -279,67 +356,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     throw InputError("a prediction's covariance needs a physics backend with the observer's state (analytic, ode or bullet), not " +
                      options.backend);
   out.state = "tracker";
-
-  // The tracker starts at the first row at or after frame D that has a row before it.
-  auto first = row_of_frame.lower_bound(std::max(delay, log.FrameIndex(1)));
-  if (first == row_of_frame.end()) return out;
-  const std::size_t r0 = first->second;
-  const OmniLogRow& prev = log.rows[r0 - 1];
-  const OmniLogRow& now = log.rows[r0];
-  const double dt = now.t - prev.t;
-  const Twist2 field_v{(now.pose.x - prev.pose.x) / dt, (now.pose.y - prev.pose.y) / dt,
-                       (now.pose.theta - prev.pose.theta) / dt};
-  backend->Reset(0, now.pose, FieldToBody(field_v, now.pose.theta));
-
-  if (stretch && log.FrameIndex(stretch_first) - first->first < kWarmUpFrames) {
-    throw InputError(log.path + ":" + std::to_string(log.line_of[stretch_first]) +
-                     ": a free run must start after the tracker's warm-up of " + std::to_string(kWarmUpFrames) +
-                     " frames");
-  }
-  for (int f = first->first; f <= last_frame; ++f) {
-    if (progress && f % 64 == 0) progress(f, last_frame);
-    auto measured = row_of_frame.find(f);
-    // Frames without a new measurement leave the tracker to its own prediction.
-    if (measured != row_of_frame.end() && log.rows[measured->second].measured) {
-      backend->MoveBody(0, log.rows[measured->second].pose);
-    }
-    if (stretch && measured != row_of_frame.end() && measured->second == stretch_first) {
-      // The free run: no more corrections from the measurement.
-      double last_theta = log.rows[stretch_first].pose.theta;
-      const int end_frame = log.FrameIndex(stretch_last - 1);
-      for (int j = f; j < end_frame; ++j) {
-        backend->StepFrame({delayed_command(j)});
-        auto it = row_of_frame.find(j + 1);
-        if (it == row_of_frame.end()) continue;
-        Pose2 p = backend->pose(0);
-        check(it->second, p);
-        p.theta = last_theta = last_theta + WrapAngle(p.theta - last_theta);
-        out.pose[it->second] = p;
-        out.predicted[it->second] = true;
-      }
-      out.bounded_steps = backend->bounded_steps();
-      out.unseen_input_steps = backend->unseen_input_steps();
-      out.grip = backend->grip();
-      return out;
-    }
-    auto target = row_of_frame.find(f + k);
-    const int since = f - first->first - kWarmUpFrames;
-    if (!stretch && measured != row_of_frame.end() && target != row_of_frame.end() && since >= 0 &&
-        options.OnStride(f, since)) {
-      const OmniBackendState saved = backend->Save();
-      for (int j = f; j < f + k; ++j) backend->StepFrame({delayed_command(j)});
-      Pose2 p = backend->pose(0);
-      check(target->second, p);
-      // Keep theta on the log's unwrapped branch.
-      const double from = log.rows[measured->second].pose.theta;
-      p.theta = from + WrapAngle(p.theta - from);
-      out.pose[target->second] = p;
-      out.predicted[target->second] = true;
-      backend->Restore(saved);
-    }
-    if (f < last_frame) backend->StepFrame({delayed_command(f)});
-  }
-  if (progress) progress(static_cast<int>(n), static_cast<int>(n));
+  TrackerReplay(*backend, log, options, tl, check, progress, stretch_first, stretch_last, &out);
   out.bounded_steps = backend->bounded_steps();
   out.unseen_input_steps = backend->unseen_input_steps();
   out.grip = backend->grip();

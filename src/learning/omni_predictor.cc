@@ -491,19 +491,18 @@ std::pair<double, long> ResidualRollouts(const OmniPredictor& model, const Frame
 
 }  // namespace
 
-OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
-                                 const OmniTrainOptions& options, OmniTrainSummary* summary,
-                                 const std::function<void(int, int, double)>& progress) {
-  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
-  if (logs.empty()) throw InputError("no logs to train on");
+namespace {
 
+// The predictor's description before any fit: its kind, the model, the frame rate and
+// the inputs' layout; a residual predictor's nominal model, with the track that runs it
+// into *track.
+OmniPredictorInfo StartInfo(const OmniModel& model, const std::vector<OmniLog>& logs, const OmniTrainOptions& options,
+                            std::unique_ptr<NominalOmniTrack>* track) {
   OmniPredictorInfo info;
   info.kind = options.kind;
   info.model_name = model.name;
   info.frame_rate = 1.0 / logs[0].frame_period;
   info.layout = PredictorLayout(model, options.horizon);
-  const int rollout_frames = static_cast<int>(std::lround(info.frame_rate));  // 1 s
-  std::unique_ptr<NominalOmniTrack> track;
   if (options.residual) {
     info.layout.residual = true;
     info.layout.nominal_errors = options.nominal_errors;
@@ -513,122 +512,153 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
                             : info.nominal_engine == "analytic"
                                 ? std::max(1, DefaultPhysicsSubsteps(info.frame_rate) / 5)
                                 : DefaultPhysicsSubsteps(info.frame_rate);
-    track = std::make_unique<NominalOmniTrack>(model, info.nominal_engine, info.frame_rate, info.nominal_substeps,
-                                               info.layout.nominal_errors);
+    *track = std::make_unique<NominalOmniTrack>(model, info.nominal_engine, info.frame_rate, info.nominal_substeps,
+                                                info.layout.nominal_errors);
   }
+  return info;
+}
 
-  // Per log: the first part trains, the last part validates (time order kept).
-  OmniDataset train, validation;
+// Per log: the first part trains, the last part validates (time order kept). Throws
+// InputError for a log of another frame rate or too short to give windows to both.
+std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrainOptions& options, int rollout_frames,
+                                NominalOmniTrack* track, OmniPredictorInfo* info, OmniDataset* train,
+                                OmniDataset* validation) {
   std::vector<SplitLog> split;
   for (const OmniLog& log : logs) {
-    if (std::abs(1.0 / log.frame_period - info.frame_rate) > 0.01 * info.frame_rate) {
+    if (std::abs(1.0 / log.frame_period - info->frame_rate) > 0.01 * info->frame_rate) {
       std::ostringstream msg;
-      msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info.frame_rate << " fps";
+      msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info->frame_rate << " fps";
       throw InputError(SourceLocation{log.path}, msg.str());
     }
-    SplitLog part{ToFrameSequence(log, info.layout), 0, {}};
+    SplitLog part{ToFrameSequence(log, info->layout), 0, {}};
     part.cut = static_cast<int>(std::round(part.seq.frames() * (1 - options.validation_fraction)));
     int n_train = 0, n_val = 0;
     if (track) {
-      const int before_train = train.rows(), before_val = validation.rows();
+      const int before_train = train->rows(), before_val = validation->rows();
       const int stride = std::max(1, (part.seq.frames() - part.cut) / 2000);  // bounds the rollouts' cost
-      AppendResidualSamples(part.seq, info.layout, info.frame_rate, part.cut, track.get(), &train, &validation,
+      AppendResidualSamples(part.seq, info->layout, info->frame_rate, part.cut, track, train, validation,
                             rollout_frames, stride, &part.residual_starts);
-      n_train = train.rows() - before_train;
-      n_val = validation.rows() - before_val;
+      n_train = train->rows() - before_train;
+      n_val = validation->rows() - before_val;
     } else {
-      n_train = AppendSamples(part.seq, info.layout, 0, part.cut - 1 - info.layout.horizon, &train);
-      n_val = AppendSamples(part.seq, info.layout, part.cut, part.seq.frames() - 1, &validation);
+      n_train = AppendSamples(part.seq, info->layout, 0, part.cut - 1 - info->layout.horizon, train);
+      n_val = AppendSamples(part.seq, info->layout, part.cut, part.seq.frames() - 1, validation);
     }
-    const int needed = info.layout.history + info.layout.command_lag + info.layout.horizon;
+    const int needed = info->layout.history + info->layout.command_lag + info->layout.horizon;
     if (n_train < 10 || n_val < 1)
       throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows.size()) +
                                                      " rows give " + std::to_string(n_train + n_val) +
                                                      " complete windows (" + std::to_string(needed) +
                                                      " consecutive frames each; at least 10 to train on and 1 "
                                                      "held out are needed)");
-    info.logs.push_back(log.path);
+    info->logs.push_back(log.path);
     split.push_back(std::move(part));
   }
-  info.samples = train.rows() + validation.rows();
-  // The inputs' range over the training windows.
+  return split;
+}
+
+// The inputs' range over the training windows, and the bounds: the largest pose change
+// over the horizon between measured frames.
+void RangesAndBounds(const OmniDataset& train, const std::vector<SplitLog>& split, OmniPredictorInfo* info) {
   if (train.rows() > 0) {
-    info.input_low.resize(static_cast<std::size_t>(train.x.cols()));
-    info.input_high.resize(static_cast<std::size_t>(train.x.cols()));
+    info->input_low.resize(static_cast<std::size_t>(train.x.cols()));
+    info->input_high.resize(static_cast<std::size_t>(train.x.cols()));
     for (long j = 0; j < train.x.cols(); ++j) {
-      info.input_low[static_cast<std::size_t>(j)] = train.x.col(j).minCoeff();
-      info.input_high[static_cast<std::size_t>(j)] = train.x.col(j).maxCoeff();
+      info->input_low[static_cast<std::size_t>(j)] = train.x.col(j).minCoeff();
+      info->input_high[static_cast<std::size_t>(j)] = train.x.col(j).maxCoeff();
     }
   }
-  // The bounds: the largest pose change over the horizon between measured frames.
   for (const SplitLog& part : split) {
     const FrameSequence& seq = part.seq;
-    for (int f = 0; f + info.layout.horizon < seq.frames(); ++f) {
-      const auto a = static_cast<std::size_t>(f), b = static_cast<std::size_t>(f + info.layout.horizon);
+    for (int f = 0; f + info->layout.horizon < seq.frames(); ++f) {
+      const auto a = static_cast<std::size_t>(f), b = static_cast<std::size_t>(f + info->layout.horizon);
       if (!seq.observed[a] || !seq.observed[b]) continue;
       const Eigen::Vector3d d = EncodeDelta(seq.pose[a], seq.pose[b]);
-      info.max_step = std::max(info.max_step, std::hypot(d[0], d[1]));
-      info.max_turn = std::max(info.max_turn, std::abs(WrapAngle(d[2])));
+      info->max_step = std::max(info->max_step, std::hypot(d[0], d[1]));
+      info->max_turn = std::max(info->max_turn, std::abs(WrapAngle(d[2])));
     }
   }
+}
+
+// Fits the predictor on `data`. Linear: ridge regression on scaled inputs, closed form,
+// through the origin (all-zero inputs are a robot at rest with zero commands, which must
+// stay at rest). The network early-stops on the held-out one-step windows, placed last;
+// standing still (all-zero inputs, no motion) is added to what it learns: real logs hold
+// rest only under camera noise.
+OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& data, const OmniDataset& validation,
+                           const OmniTrainOptions& options, const std::function<void(int, int, double)>& progress,
+                           std::string* mlp_report) {
+  if (options.kind == "linear") {
+    Eigen::VectorXd scale;
+    const Eigen::MatrixXd w = FitRidge(data.x, data.y, options.ridge, &scale);  // in x 3
+    return MakeLinearPredictor(info, Eigen::VectorXd::Zero(w.rows()), scale, w.transpose(), Eigen::Vector3d::Zero());
+  }
+  const long rest = std::max<long>(1, data.rows() / 50);
+  Eigen::MatrixXd x(data.rows() + rest + validation.rows(), data.x.cols());
+  Eigen::MatrixXd y(x.rows(), 3);
+  x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols()), validation.x;
+  y << data.y, Eigen::MatrixXd::Zero(rest, 3), validation.y;
+  MlpOptions mlp = options.mlp;
+  mlp.validation_fraction = static_cast<double>(validation.rows()) / static_cast<double>(x.rows());
+  MlpTrainSummary s;
+  Mlp net;
+  try {
+    net = TrainMlp(x, y, mlp, &s, progress);
+  } catch (const InputError& e) {
+    throw InputError(std::string("cannot train the neural net: ") + e.what());
+  }
+  *mlp_report = s.BriefReport();
+  return MakeMlpPredictor(info, std::move(net));
+}
+
+// The 1-frame predictor on its own for `rollout_frames` from the held-out windows: the
+// RMS position error (m).
+double RolloutRmse(const OmniPredictor& predictor, const std::vector<SplitLog>& split, int rollout_frames,
+                   NominalOmniTrack* track) {
+  double sum = 0;
+  long count = 0;
+  for (const SplitLog& part : split) {
+    auto [s, c] = track ? ResidualRollouts(predictor, part.seq, part.residual_starts, rollout_frames, track)
+                        : Rollouts(predictor, part.seq, part.cut, part.seq.frames() - 1, rollout_frames);
+    sum += s;
+    count += c;
+  }
+  return count ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+}
+
+// The predictor's pose change for every window of `d` (rows x 3).
+Eigen::MatrixXd PredictAll(const OmniPredictor& predictor, const OmniDataset& d) {
+  Eigen::MatrixXd out(d.rows(), 3);
+  for (int i = 0; i < d.rows(); ++i) {
+    const Eigen::VectorXd row = d.x.row(i).transpose();
+    out.row(i) = predictor.PredictDelta(row.data()).transpose();
+  }
+  return out;
+}
+
+}  // namespace
+
+OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
+                                 const OmniTrainOptions& options, OmniTrainSummary* summary,
+                                 const std::function<void(int, int, double)>& progress) {
+  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
+  if (logs.empty()) throw InputError("no logs to train on");
+  std::unique_ptr<NominalOmniTrack> track;
+  OmniPredictorInfo info = StartInfo(model, logs, options, &track);
+  const int rollout_frames = static_cast<int>(std::lround(info.frame_rate));  // 1 s
+  OmniDataset train, validation;
+  const std::vector<SplitLog> split = SplitLogs(logs, options, rollout_frames, track.get(), &info, &train, &validation);
+  info.samples = train.rows() + validation.rows();
+  RangesAndBounds(train, split, &info);
 
   const auto start = std::chrono::steady_clock::now();
   std::string mlp_report;
-  auto fit = [&](const OmniDataset& data) {
-    if (options.kind == "linear") {
-      // Ridge regression on scaled inputs, closed form, through the origin: all-zero
-      // inputs are a robot at rest with zero commands, which must stay at rest.
-      Eigen::VectorXd scale;
-      const Eigen::MatrixXd w = FitRidge(data.x, data.y, options.ridge, &scale);  // in x 3
-      return MakeLinearPredictor(info, Eigen::VectorXd::Zero(w.rows()), scale, w.transpose(), Eigen::Vector3d::Zero());
-    }
-    // The network early-stops on the held-out one-step windows, placed last. Standing
-    // still (all-zero inputs, no motion) is added to what it learns: real logs hold rest
-    // only under camera noise.
-    const long rest = std::max<long>(1, data.rows() / 50);
-    Eigen::MatrixXd x(data.rows() + rest + validation.rows(), data.x.cols());
-    Eigen::MatrixXd y(x.rows(), 3);
-    x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols()), validation.x;
-    y << data.y, Eigen::MatrixXd::Zero(rest, 3), validation.y;
-    MlpOptions mlp = options.mlp;
-    mlp.validation_fraction = static_cast<double>(validation.rows()) / static_cast<double>(x.rows());
-    MlpTrainSummary s;
-    Mlp net;
-    try {
-      net = TrainMlp(x, y, mlp, &s, progress);
-    } catch (const InputError& e) {
-      throw InputError(std::string("cannot train the neural net: ") + e.what());
-    }
-    mlp_report = s.BriefReport();
-    return MakeMlpPredictor(info, std::move(net));
-  };
-  auto rollout_rmse = [&](const OmniPredictor& model) {
-    double sum = 0;
-    long count = 0;
-    for (const SplitLog& part : split) {
-      auto [s, c] = track ? ResidualRollouts(model, part.seq, part.residual_starts, rollout_frames, track.get())
-                          : Rollouts(model, part.seq, part.cut, part.seq.frames() - 1, rollout_frames);
-      sum += s;
-      count += c;
-    }
-    return count ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
-  };
-
-  OmniPredictor predictor = fit(train);
-  const double rollout = info.layout.horizon == 1 ? rollout_rmse(predictor) : 0.0;
-
-  auto predict_all = [&](const OmniDataset& d) {
-    Eigen::MatrixXd out(d.rows(), 3);
-    for (int i = 0; i < d.rows(); ++i) {
-      const Eigen::VectorXd row = d.x.row(i).transpose();
-      out.row(i) = predictor.PredictDelta(row.data()).transpose();
-    }
-    return out;
-  };
+  OmniPredictor predictor = FitPredictor(info, train, validation, options, progress, &mlp_report);
+  const double rollout = info.layout.horizon == 1 ? RolloutRmse(predictor, split, rollout_frames, track.get()) : 0.0;
   OmniPredictorInfo final_info = info;
   final_info.validation_rollout_rmse = rollout;
-  final_info.train_rmse = PositionRmse(predict_all(train), train.y);
-  final_info.validation_rmse = PositionRmse(predict_all(validation), validation.y);
+  final_info.train_rmse = PositionRmse(PredictAll(predictor, train), train.y);
+  final_info.validation_rmse = PositionRmse(PredictAll(predictor, validation), validation.y);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   predictor.info_ = final_info;
   if (summary) {
