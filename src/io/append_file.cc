@@ -38,11 +38,17 @@ AppendFile& AppendFile::operator=(AppendFile&& other) noexcept {
 }
 
 void AppendFile::Append(const std::string& bytes) {
+  const off_t end = ::lseek(fd_, 0, SEEK_CUR);  // where this append starts
   std::size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw InputError(SourceLocation{path_}, std::string("write failed: ") + std::strerror(errno));
+    if (n <= 0) {
+      const std::string why = n < 0 ? std::strerror(errno) : "nothing written";
+      // Part of it in (a disk that filled up): the file goes back to its last whole append.
+      if (end >= 0 && ::ftruncate(fd_, end) == 0) (void)::lseek(fd_, end, SEEK_SET);
+      throw InputError(SourceLocation{path_}, "write failed: " + why);
+    }
     done += static_cast<std::size_t>(n);
   }
 }

@@ -133,6 +133,8 @@ bool ServeOptions::IsValid(std::string* why) const {
   if (!teams.empty() && !lockstep) return fail("--teams applies to --lockstep only");
   if (sync_port < -1 || sync_port > 65535) return fail("--sync-port " + std::to_string(sync_port) + " is not in 0..65535");
   if (sync_port >= 0 && lockstep) return fail("--sync-port sets its own pace (the client's requests); not with --lockstep");
+  if (sync_port >= 0 && grsim_port >= 0) return fail("--grsim-port applies to the UDP interfaces, not --sync-port");
+  if (receive_buffer > (1 << 30)) return fail("--receive-buffer is over 1 GB");
   if (sync_port >= 0 && (realtime_priority > 0 || cpu >= 0))
     return fail("--realtime-priority and --cpu apply to real time, not --sync-port");
   if (sync_team != "blue" && sync_team != "yellow") return fail("--sync-team: unknown team '" + sync_team + "' (known: blue, yellow)");
@@ -228,7 +230,7 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
   // before the loop reads them; the rate limit can only drop what reaches it.
   receive_buffer_asked_ = options_.receive_buffer > 0
                               ? options_.receive_buffer
-                              : static_cast<int>(std::min(1e9, options_.max_rate * kBufferedSeconds * kDatagramCost));
+                              : static_cast<int>(std::min(kMaxDefaultBuffer, options_.max_rate * kBufferedSeconds * kDatagramCost));
   receive_buffer_ = std::min({control_.SetReceiveBuffer(receive_buffer_asked_),
                               teams_[0].socket.SetReceiveBuffer(receive_buffer_asked_),
                               teams_[1].socket.SetReceiveBuffer(receive_buffer_asked_)});
@@ -294,6 +296,9 @@ std::vector<SSL_WrapperPacket> LiveField::VisionPackets(const std::vector<FrameR
     t_capture = CaptureUnixTime(k);
     t_sent = UnixNow();
   }
+  // Asked again for the same frame (the synchronous interface, a request without a
+  // step): the same packets, the cameras' noise not drawn twice.
+  if (vision_frame_ == k) return vision_packets_;
   std::vector<SSL_WrapperPacket> packets;
   if (cameras_.empty()) {
     // One camera: what the observer receives.
@@ -311,6 +316,8 @@ std::vector<SSL_WrapperPacket> LiveField::VisionPackets(const std::vector<FrameR
   // Geometry in the first packet at frame 0 and then every geometry_period.
   const int every = std::max(1, static_cast<int>(std::lround(options_.geometry_period / dt)));
   if (k % every == 0) *packets[0].mutable_geometry() = GeometryPacket(scene_.field, options_.boundary, cameras_).geometry();
+  vision_frame_ = k;
+  vision_packets_ = packets;
   return packets;
 }
 
@@ -494,13 +501,13 @@ void LiveField::HandleGrSim(const Datagram& d) {
   }
   ++counters_.grsim_packets;
   if (packet.commands) {
-    const std::size_t t = packet.team == TeamColor::kYellow ? 1 : 0;
-    // Tournament mode: each team's grSim commands from one address, as on its own port.
-    if (options_.tournament && grsim_clients_[t] && *grsim_clients_[t] != d.from) {
+    TeamPort& team = teams_[packet.team == TeamColor::kYellow ? 1 : 0];
+    // Tournament mode: a team is driven from one address, over its own port or grSim's,
+    // whichever it used first.
+    if (options_.tournament && team.client && *team.client != d.from) {
       ++counters_.refused;
-    } else {
-      const RobotControlResult read = TakeRobotControl(teams_[t], packet.commands->SerializeAsString());
-      if (read.parsed) grsim_clients_[t] = d.from;
+    } else if (TakeRobotControl(team, packet.commands->SerializeAsString()).parsed) {
+      team.client = d.from;
     }
   }
   if (packet.replacement) {

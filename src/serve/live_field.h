@@ -1,8 +1,10 @@
 // A scene's field served live over the league's network protocol (twinsim serve,
-// docs/serve.md): teams drive their robots with RobotControl on their ports, a
-// controller moves robots with SimulatorCommand, and every camera frame the field sends
-// the SSL-Vision packet of what the observer receives, through the scene's delay loop
-// and camera noise (sim/omni_simulation.h).
+// docs/serve.md): teams drive their robots with RobotControl on their ports (or grSim's
+// packets on grSim's port), a controller moves robots with SimulatorCommand, and every
+// camera frame the field sends the SSL-Vision packet of what the observer receives,
+// through the scene's delay loop and camera noise (sim/omni_simulation.h), or with a
+// scene's `cameras:` one packet per camera of what it sees. The synchronous interface
+// (sync_port, serve/sync_interface.cc) steps the field on a TCP client's requests instead.
 //
 // Per camera frame k: BeginFrame (capture, vision delay) -> send the detection of frame
 // k -> take commands until the frame ends -> EndFrame (command delay, physics). A frame
@@ -46,7 +48,7 @@
 namespace twinsim {
 
 struct ServeOptions {
-  std::string listen = "127.0.0.1";  // the address the three ports listen on
+  std::string listen = "127.0.0.1";  // the address the ports listen on
   int control_port = 10300;          // SimulatorCommand; 0: any free port
   int blue_port = 10301;             // blue team's RobotControl
   int yellow_port = 10302;           // yellow team's RobotControl
@@ -71,7 +73,7 @@ struct ServeOptions {
   // bytes of each port's receive buffer (the kernel's accounting); 0: enough for a
   // quarter of a second at max_rate (kBufferedSeconds). Beyond net.core.rmem_max only
   // with CAP_NET_ADMIN; the summary says what the kernel granted.
-  int receive_buffer = 0;
+  int receive_buffer = 0;             // (at most 1 GB)
   double max_rate = 1000;             // datagrams/s per port (lockstep: also per simulated s); beyond, dropped unanswered
   double geometry_period = 1;         // s of simulated time between geometry packets
   double boundary = 0.3;              // m between the walls and the field lines
@@ -130,7 +132,7 @@ struct ServeSummary {
   double wall = 0;       // s
   std::array<std::string, 2> clients;  // blue, yellow: the address that last sent, "" none
   int receive_buffer_asked = 0;        // bytes, per port
-  int receive_buffer = 0;              // bytes, per port: what the kernel granted (the smallest)
+  int receive_buffer = 0;             // (at most 1 GB)              // bytes, per port: what the kernel granted (the smallest)
   std::string last_send_error;         // why the last refused send was refused
   // "1234 frames (41.1 s simulated) in 41.2 s wall; blue 127.0.0.1:5000, yellow -; 0 refused".
   std::string Brief() const;
@@ -155,6 +157,7 @@ class LiveField {
   // costs about 1.3 kB on loopback; a 2 kB one 3 kB).
   static constexpr double kBufferedSeconds = 0.25;  // s
   static constexpr int kDatagramCost = 3072;        // bytes
+  static constexpr double kMaxDefaultBuffer = 16 << 20;  // bytes: the default's cap, whatever the rate
 
   int control_port() const { return control_.port(); }
   int blue_port() const { return teams_[0].socket.port(); }
@@ -205,7 +208,8 @@ class LiveField {
   void FinishFrame(std::vector<FrameRecord>* records);
   // The synchronous interface: the frames run as the client's requests ask.
   ServeSummary RunSync(const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status);
-  void HandleSyncRequest(const std::string& bytes, std::vector<FrameRecord>* records, TcpConnection* client);
+  // Answers one request; false when the answer could not be written whole.
+  bool HandleSyncRequest(const std::string& bytes, std::vector<FrameRecord>* records, TcpConnection* client);
   // Vision stamped with simulated time (lockstep, synchronous), else Unix time.
   bool SimulatedTime() const { return options_.lockstep || sync_.has_value(); }
   // Several cameras: keeps the true state of the frame begun (its `records`), and makes
@@ -257,7 +261,6 @@ class LiveField {
   std::optional<UdpSocket> grsim_;  // grSim's protocol, when asked for
   std::optional<TcpListener> sync_;  // the synchronous interface, when asked for
   double grsim_tokens_ = 0;
-  std::array<std::optional<UdpEndpoint>, 2> grsim_clients_;  // tournament: per team, the one address allowed
   UdpSocket vision_out_;
   UdpEndpoint vision_to_;
   int vision_delay_ = 0;                               // frames, every robot's
@@ -281,6 +284,8 @@ class LiveField {
   std::string last_send_error_;
   int receive_buffer_asked_ = 0, receive_buffer_ = 0;  // bytes
   std::vector<std::string> last_vision_;  // the current frame's packets (one per camera), serialized
+  int vision_frame_ = -1;                     // the frame vision_packets_ are of (-1: none yet)
+  std::vector<SSL_WrapperPacket> vision_packets_;
   // Several cameras (the scene's `cameras:`; none: one, sending what the observer
   // receives): each sees the true state of vision_delay frames ago in its area, with its
   // own noise and lost detections from its own stream.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "serve/live_field.h"
 #include "ssl_simulation_synchronous.pb.h"
@@ -17,6 +18,8 @@ using Clock = std::chrono::steady_clock;
 // The longest request read, and the longest step a request may ask for.
 constexpr std::size_t kMaxSyncMessage = 1 << 20;  // bytes
 constexpr double kMaxSyncStep = 60;               // s
+// Requests answered before the loop looks for a stop, a status and more bytes again.
+constexpr int kRequestsPerPass = 64;
 
 }  // namespace
 
@@ -31,28 +34,35 @@ ServeSummary LiveField::RunSync(const std::function<bool()>& stop, const std::fu
       next_status = Clock::now() + std::chrono::milliseconds(100);
     }
     if (!client) {
-      // One client at a time; the field waits, frame open, for the next.
-      if (WaitReadableFd(sync_->fd(), kPollPeriod)) client = sync_->Accept();
+      // One client at a time; the field waits, frame open, for the next. A listener that
+      // cannot accept (out of descriptors) is not spun on.
+      if (WaitReadableFd(sync_->fd(), kPollPeriod) && !(client = sync_->Accept()))
+        std::this_thread::sleep_for(std::chrono::duration<double>(kPollPeriod));
       continue;
     }
     const bool open = client->ReadAvailable();
-    bool handled = false;
-    while (std::optional<std::string> request = client->NextMessage(kMaxSyncMessage)) {
-      HandleSyncRequest(*request, &records, &*client);
-      handled = true;
+    int handled = 0;
+    bool written = true;
+    while (handled < kRequestsPerPass && written && !stop()) {
+      std::optional<std::string> request = client->NextMessage(kMaxSyncMessage);
+      if (!request) break;
+      written = HandleSyncRequest(*request, &records, &*client);
+      ++handled;
       if (options_.max_frames > 0 && counters_.frames >= options_.max_frames) break;
     }
     if (client->bad()) ++counters_.malformed;  // a length no message can have: the stream is lost
-    if (!open || client->bad()) {
+    // Closed, unreadable, or an answer that did not go out whole (a client that does not
+    // read): the connection is dropped; the field waits for the next.
+    if (!open || client->bad() || !written) {
       client.reset();
       continue;
     }
-    if (!handled) WaitReadableFd(client->fd(), kPollPeriod);
+    if (handled == 0) WaitReadableFd(client->fd(), kPollPeriod);
   }
   return Summary();
 }
 
-void LiveField::HandleSyncRequest(const std::string& bytes, std::vector<FrameRecord>* records, TcpConnection* client) {
+bool LiveField::HandleSyncRequest(const std::string& bytes, std::vector<FrameRecord>* records, TcpConnection* client) {
   SimulationSyncRequest request;
   SimulationSyncResponse response;
   RobotControlResponse* answer = response.mutable_robot_control_response();
@@ -96,10 +106,10 @@ void LiveField::HandleSyncRequest(const std::string& bytes, std::vector<FrameRec
   }
   for (const SSL_WrapperPacket& p : VisionPackets(*records)) *response.add_detection() = p.detection();
   counters_.vision_packets += response.detection_size();
-  if (!client->WriteMessage(response.SerializeAsString())) {
-    ++counters_.failed_sends;
-    last_send_error_ = "the synchronous client's connection failed or stalled";
-  }
+  if (client->WriteMessage(response.SerializeAsString())) return true;
+  ++counters_.failed_sends;
+  last_send_error_ = "the synchronous client's connection failed or stalled (it is dropped)";
+  return false;
 }
 
 }  // namespace twinsim

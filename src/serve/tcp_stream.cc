@@ -47,7 +47,7 @@ TcpConnection::~TcpConnection() {
 }
 
 TcpConnection::TcpConnection(TcpConnection&& other) noexcept
-    : fd_(other.fd_), buffer_(std::move(other.buffer_)), bad_(other.bad_) {
+    : fd_(other.fd_), buffer_(std::move(other.buffer_)), consumed_(other.consumed_), bad_(other.bad_) {
   other.fd_ = -1;
 }
 
@@ -56,6 +56,7 @@ TcpConnection& TcpConnection::operator=(TcpConnection&& other) noexcept {
     if (fd_ >= 0) ::close(fd_);
     fd_ = other.fd_;
     buffer_ = std::move(other.buffer_);
+    consumed_ = other.consumed_;
     bad_ = other.bad_;
     other.fd_ = -1;
   }
@@ -66,6 +67,9 @@ bool TcpConnection::ReadAvailable() {
   // At most this much waits unread: a client that floods is read at the pace its
   // requests are answered, never into unbounded memory.
   constexpr std::size_t kMaxBuffered = 4 << 20;  // bytes
+  // The messages taken since the last read go in one move, not one move each.
+  buffer_.erase(0, consumed_);
+  consumed_ = 0;
   char chunk[65536];
   while (buffer_.size() < kMaxBuffered) {
     const ssize_t n = ::recv(fd_, chunk, sizeof chunk, MSG_DONTWAIT);
@@ -83,7 +87,7 @@ bool TcpConnection::ReadAvailable() {
 std::optional<std::string> TcpConnection::NextMessage(std::size_t max_bytes) {
   if (bad_) return std::nullopt;
   std::uint64_t length = 0;
-  std::size_t i = 0;
+  std::size_t i = consumed_;
   for (int shift = 0;; shift += 7) {
     if (i >= buffer_.size()) return std::nullopt;  // the length is still coming
     if (shift > 63) {
@@ -100,7 +104,7 @@ std::optional<std::string> TcpConnection::NextMessage(std::size_t max_bytes) {
   }
   if (buffer_.size() - i < length) return std::nullopt;
   std::string message = buffer_.substr(i, static_cast<std::size_t>(length));
-  buffer_.erase(0, i + static_cast<std::size_t>(length));
+  consumed_ = i + static_cast<std::size_t>(length);
   return message;
 }
 

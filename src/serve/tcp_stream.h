@@ -33,12 +33,14 @@ class TcpConnection {
   std::optional<std::string> NextMessage(std::size_t max_bytes);
   bool bad() const { return bad_; }
   // Writes `message` with its length in front, waiting (at most `timeout` s) while the
-  // peer's window is full; false when the connection failed or timed out.
+  // peer's window is full; false when the connection failed or timed out (the stream may
+  // then hold part of the message: drop the connection).
   bool WriteMessage(const std::string& message, double timeout = 5);
 
  private:
   int fd_ = -1;
-  std::string buffer_;  // bytes read, not yet a whole message
+  std::string buffer_;        // bytes read
+  std::size_t consumed_ = 0;  // of them, taken as messages (dropped at the next read)
   bool bad_ = false;
 };
 

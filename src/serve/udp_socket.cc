@@ -8,6 +8,7 @@
 #include <sys/uio.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -73,10 +74,13 @@ UdpSocket::UdpSocket(const std::string& address, int port) {
 }
 
 int UdpSocket::SetReceiveBuffer(int bytes) {
-  // SO_RCVBUFFORCE passes net.core.rmem_max where the process may (CAP_NET_ADMIN);
-  // elsewhere the kernel caps SO_RCVBUF there.
-  if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof bytes) != 0)
-    (void)::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof bytes);
+  // Linux doubles what it is given (for its bookkeeping) and reports the doubled size:
+  // half is asked, so that the size reported is `bytes`. SO_RCVBUFFORCE passes
+  // net.core.rmem_max where the process may (CAP_NET_ADMIN); elsewhere the kernel caps
+  // SO_RCVBUF there.
+  const int half = std::max(1, bytes / 2);
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &half, sizeof half) != 0)
+    (void)::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &half, sizeof half);
   return receive_buffer();
 }
 

@@ -69,9 +69,9 @@ class UdpSocket {
   // Sends one datagram; false when the system refused it (a full buffer, a broadcast
   // address, a datagram over 64 kB), with the reason in *error when given.
   bool SendTo(const std::string& bytes, const UdpEndpoint& to, std::string* error = nullptr) const;
-  // Asks for a receive buffer of `bytes` (the kernel's accounting, which counts each
-  // datagram's overhead too): beyond net.core.rmem_max only with CAP_NET_ADMIN. Returns
-  // the size the kernel granted (as it reports it: twice the bytes it counts as payload).
+  // Asks for a receive buffer of `bytes` of the kernel's accounting (which counts each
+  // datagram's overhead too, as getsockopt SO_RCVBUF reports it): beyond twice
+  // net.core.rmem_max only with CAP_NET_ADMIN. Returns the size the kernel granted.
   int SetReceiveBuffer(int bytes);
   int receive_buffer() const;
   // The next datagram waiting, at most `max_bytes` of it kept (its full size is

@@ -25,6 +25,7 @@
 #include "serve/grsim_packet.h"
 #include "serve/live_field.h"
 #include "serve/protobuf_wire.h"
+#include "ssl_simulation_robot_feedback.pb.h"
 #include "ssl_vision_wrapper.pb.h"
 #include "test_util.h"
 
@@ -231,6 +232,46 @@ TEST(GrSimPort, ReplacementTeleportsAndTournamentModeRefusesIt) {
   EXPECT_NEAR(stayed.truth.x, 1.0, 1e-6);
   EXPECT_NEAR(stayed.truth.y, 0.5, 1e-6);
   EXPECT_EQ(tournament_summary.counters.refused, 1);
+}
+
+// Tournament mode: a team is driven from one address, over its own port or grSim's;
+// another address commanding it over grSim's port is refused and moves nothing.
+TEST(GrSimPort, TournamentModeKeepsATeamToTheAddressThatDrivesIt) {
+  const Scene scene = GrSimScene();
+  UdpSocket vision("127.0.0.1", 0), blue("127.0.0.1", 0), intruder("127.0.0.1", 0);
+  ServeOptions o;
+  o.control_port = o.blue_port = o.yellow_port = 0;
+  o.grsim_port = 0;
+  o.vision_port = vision.port();
+  o.lockstep = true;
+  o.teams = {"blue"};
+  o.tournament = true;
+  o.max_frames = 20;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), o);
+  ServeSummary summary;
+  std::thread server([&] { summary = field.Run([] { return false; }); });
+  // Blue 0 told to stand, over blue's port, from blue's address.
+  const std::string stand = BytesField(
+      1, VarintField(1, 0) + BytesField(2, BytesField(2, FloatField(1, 0) + FloatField(2, 0) + FloatField(3, 0))));
+  ASSERT_TRUE(WaitForFrame(vision, 0));
+  blue.SendTo(stand, ToLoopback(field.blue_port()));
+  ASSERT_TRUE(WaitReadable({&blue}, 5) >= 0) << "no answer to blue's first command";
+  {
+    std::optional<Datagram> a = blue.Receive(65536);
+    RobotControlResponse r;
+    ASSERT_TRUE(a && r.ParseFromString(a->bytes));
+    for (const SimulatorError& e : r.errors()) ADD_FAILURE() << e.code() << ": " << e.message();
+  }
+  for (int k = 1; k < 20; ++k) {
+    ASSERT_TRUE(WaitForFrame(vision, static_cast<std::uint32_t>(k))) << k;
+    intruder.SendTo(GrSimCommands(false, GrSimCommand(0, 1.5f, 0, 0)), ToLoopback(field.grsim_port()));
+    blue.SendTo(stand, ToLoopback(field.blue_port()));
+  }
+  server.join();
+  EXPECT_GE(summary.counters.grsim_packets, 15);
+  EXPECT_EQ(summary.counters.refused, summary.counters.grsim_packets) << "every intruding packet refused";
+  const Pose2& at = field.result().frames[0].back().truth;
+  EXPECT_LT(std::hypot(at.x, at.y), 0.001) << "blue 0 was driven by the intruder";
 }
 
 }  // namespace

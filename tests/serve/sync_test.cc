@@ -6,6 +6,9 @@
 // bit for bit, for the same commands.
 #include <gtest/gtest.h>
 
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <map>
 #include <optional>
@@ -179,6 +182,63 @@ TEST(SyncInterface, BadRequestsAreAnsweredAndABrokenStreamEndsOnlyItsConnection)
   EXPECT_EQ(summary.counters.malformed, 2);  // the garbage request and the broken stream
 }
 
+// Several cameras draw their noise once per frame: asking twice for the frame the field
+// stands at (no step) gives the same bytes, and the next frame's vision does not depend
+// on how often a client asked.
+TEST(SyncInterface, AskingAgainForTheSameFrameGivesTheSameVision) {
+  Scene scene = SyncScene();
+  scene.cameras = CameraGrid{2, 2, 0.4, 4};
+  auto serve = [&](int asks) {
+    ServeOptions o = Ports();
+    o.sync_port = 0;
+    o.max_frames = 3;
+    LiveField field(scene, MakeSimulation(scene, "analytic"), o);
+    std::thread server([&] { field.Run([] { return false; }); });
+    TcpConnection c = TcpConnect("127.0.0.1", field.sync_port());
+    std::vector<std::string> seen;
+    for (int k = 0; k < 3; ++k) {
+      for (int a = 0; a < asks; ++a) seen.push_back(Ask(c, "").SerializeAsString());
+      Ask(c, FloatField(1, 1.0f / 60) + BytesField(3, BlueMove(k)));
+    }
+    server.join();
+    return seen;
+  };
+  const std::vector<std::string> once = serve(1), thrice = serve(3);
+  ASSERT_EQ(thrice.size(), 9u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(thrice[static_cast<std::size_t>(3 * k)], thrice[static_cast<std::size_t>(3 * k + 2)]) << k;
+    EXPECT_EQ(once[static_cast<std::size_t>(k)], thrice[static_cast<std::size_t>(3 * k)]) << k;
+  }
+  SimulationSyncResponse r;
+  ASSERT_TRUE(r.ParseFromString(once[1]));
+  EXPECT_EQ(r.detection_size(), 4);
+}
+
+// Messages split across reads, several in one read, and the length's varint in two.
+TEST(TcpStream, MessagesAreFramedWhateverTheReadsCut) {
+  int fds[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM, 0, fds), 0);
+  TcpConnection reader(fds[0]);
+  const std::string big(300, 'b');  // its length takes two bytes: 0xac 0x02
+  // "a" (length 1), big (length 300), an empty message, "cd" (length 2): 308 bytes.
+  const std::string stream = std::string(1, '\x01') + "a" + std::string(1, '\xac') + std::string(1, '\x02') + big +
+                             std::string(1, '\x00') + std::string(1, '\x02') + "cd";
+  std::vector<std::string> got;
+  std::size_t sent = 0;
+  for (std::size_t cut : {std::size_t{2}, std::size_t{3}, std::size_t{100}, std::size_t{305}, stream.size()}) {
+    if (cut > sent) {
+      ASSERT_EQ(::write(fds[1], stream.data() + sent, cut - sent), static_cast<ssize_t>(cut - sent));
+      sent = cut;
+    }
+    ASSERT_TRUE(reader.ReadAvailable());
+    while (std::optional<std::string> m = reader.NextMessage(1000)) got.push_back(*m);
+  }
+  EXPECT_EQ(got, (std::vector<std::string>{"a", big, "", "cd"}));
+  EXPECT_FALSE(reader.bad());
+  ::close(fds[1]);
+  EXPECT_FALSE(reader.ReadAvailable());  // closed by the peer
+}
+
 TEST(SyncInterface, OptionsAreChecked) {
   const Scene scene = SyncScene();
   ServeOptions o = Ports();
@@ -191,6 +251,10 @@ TEST(SyncInterface, OptionsAreChecked) {
   o.sync_team = "green";
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("green"), std::string::npos) << why;
+  o.sync_team = "yellow";
+  o.grsim_port = 0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("--grsim-port"), std::string::npos) << why;
 }
 
 }  // namespace
