@@ -370,21 +370,8 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     predictor = MakeLinearArmPredictor(info, x_mean.transpose(), scale, w.transpose(), y_mean.transpose());
   } else {
     // The network early-stops on the held-out windows, placed last.
-    Eigen::MatrixXd x(train.rows() + validation.rows(), train.x.cols());
-    Eigen::MatrixXd y(x.rows(), train.y.cols());
-    x << train.x, validation.x;
-    y << train.y, validation.y;
-    MlpOptions mlp = options.mlp;
-    mlp.validation_fraction = static_cast<double>(validation.rows()) / static_cast<double>(x.rows());
-    MlpTrainSummary s;
-    Mlp net;
-    try {
-      net = TrainMlp(x, y, mlp, &s, progress);
-    } catch (const InputError& e) {
-      throw InputError(std::string("cannot train the neural net: ") + e.what());
-    }
-    mlp_report = s.BriefReport();
-    predictor = MakeMlpArmPredictor(info, std::move(net));
+    predictor = MakeMlpArmPredictor(
+        info, TrainMlpHoldingOut(train.x, train.y, validation.x, validation.y, options.mlp, progress, &mlp_report));
   }
   if (options.residual) predictor.nominal_.Set(model);
 

@@ -468,4 +468,23 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
   return Mlp::FromParameters(std::move(params));
 }
 
+Mlp TrainMlpHoldingOut(const Eigen::MatrixXd& x_train, const Eigen::MatrixXd& y_train, const Eigen::MatrixXd& x_held,
+                       const Eigen::MatrixXd& y_held, MlpOptions options,
+                       const std::function<void(int, int, double)>& progress, std::string* report) {
+  Eigen::MatrixXd x(x_train.rows() + x_held.rows(), x_train.cols());
+  Eigen::MatrixXd y(x.rows(), y_train.cols());
+  x << x_train, x_held;
+  y << y_train, y_held;
+  options.validation_fraction = static_cast<double>(x_held.rows()) / static_cast<double>(x.rows());
+  MlpTrainSummary s;
+  Mlp net;
+  try {
+    net = TrainMlp(x, y, options, &s, progress);
+  } catch (const InputError& e) {
+    throw InputError(std::string("cannot train the neural net: ") + e.what());
+  }
+  *report = s.BriefReport();
+  return net;
+}
+
 }  // namespace twinsim

@@ -86,4 +86,12 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
              MlpTrainSummary* summary = nullptr,
              const std::function<void(int, int, double)>& progress = {});
 
+// A predictor's network: trained on the rows of `train` (x, y) followed by the
+// `held_out` rows it early-stops on (options' validation fraction set to their share).
+// Returns the net and its one-line report in *report. Throws InputError "cannot train
+// the neural net: ..." where TrainMlp throws it.
+Mlp TrainMlpHoldingOut(const Eigen::MatrixXd& x_train, const Eigen::MatrixXd& y_train, const Eigen::MatrixXd& x_held,
+                       const Eigen::MatrixXd& y_held, MlpOptions options,
+                       const std::function<void(int, int, double)>& progress, std::string* report);
+
 }  // namespace twinsim

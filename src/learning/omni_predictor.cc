@@ -594,21 +594,11 @@ OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& dat
     return MakeLinearPredictor(info, Eigen::VectorXd::Zero(w.rows()), scale, w.transpose(), Eigen::Vector3d::Zero());
   }
   const long rest = std::max<long>(1, data.rows() / 50);
-  Eigen::MatrixXd x(data.rows() + rest + validation.rows(), data.x.cols());
+  Eigen::MatrixXd x(data.rows() + rest, data.x.cols());
   Eigen::MatrixXd y(x.rows(), 3);
-  x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols()), validation.x;
-  y << data.y, Eigen::MatrixXd::Zero(rest, 3), validation.y;
-  MlpOptions mlp = options.mlp;
-  mlp.validation_fraction = static_cast<double>(validation.rows()) / static_cast<double>(x.rows());
-  MlpTrainSummary s;
-  Mlp net;
-  try {
-    net = TrainMlp(x, y, mlp, &s, progress);
-  } catch (const InputError& e) {
-    throw InputError(std::string("cannot train the neural net: ") + e.what());
-  }
-  *mlp_report = s.BriefReport();
-  return MakeMlpPredictor(info, std::move(net));
+  x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols());
+  y << data.y, Eigen::MatrixXd::Zero(rest, 3);
+  return MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp, progress, mlp_report));
 }
 
 // The 1-frame predictor on its own for `rollout_frames` from the held-out windows: the
