@@ -25,16 +25,19 @@ def drive(twinsim, source, build, protocol):
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
         sync = s.getsockname()[1]
-    mode = ["--sync-port", str(sync)] if protocol == "sync" else ["--lockstep", "--teams", "blue"]
+    mode = (["--sync-port", str(sync)] if protocol == "sync" else
+            ["--lockstep", "--teams", "blue", "--grsim-port", str(grsim)])
     server = subprocess.Popen(
         [twinsim, "serve", os.path.join(source, "scenes", "serve_2v2.yaml"), "--backend", "analytic"] + mode +
         ["--control-port", str(control), "--blue-port", str(blue), "--yellow-port", str(yellow),
-         "--grsim-port", str(grsim), "--vision-port", str(vision), "--out", out, "-q"],
+         "--vision-port", str(vision), "--out", out, "-q"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     port = {"grsim": grsim, "sync": sync}.get(protocol, blue)
     try:
         if protocol == "sync":  # the server's TCP port is open once it has started
             for _ in range(100):
+                if server.poll() is not None:
+                    sys.exit(f"server exited {server.returncode}: {server.stderr.read().decode()}")
                 try:
                     socket.create_connection(("127.0.0.1", sync), timeout=1).close()
                     break
