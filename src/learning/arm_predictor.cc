@@ -305,6 +305,85 @@ double QRmse(const Eigen::MatrixXd& predicted, const Eigen::MatrixXd& truth, int
 
 }  // namespace
 
+namespace {
+
+// A log's windows in time order, and the first held-out row.
+using SplitArmLog = std::pair<ArmSequence, int>;
+
+// Per log: the first part trains, the last part validates (time order kept); a residual
+// predictor's windows hold what remains after `nominal`'s step. Throws InputError for a
+// log of another sample time or too short to give windows to both.
+std::vector<SplitArmLog> SplitArmLogs(const ArmModel& model, const std::vector<ArmLog>& logs,
+                                      const ArmTrainOptions& options, ArmNominalStep* nominal, ArmPredictorInfo* info,
+                                      ArmDataset* train, ArmDataset* validation) {
+  const ArmFeatureLayout& l = info->layout;
+  std::vector<SplitArmLog> split;
+  for (const ArmLog& log : logs) {
+    CheckArmLogMatchesModel(log, model);
+    if (std::abs(log.sample_period - model.sample_time) > 0.01 * model.sample_time) {
+      std::ostringstream msg;
+      msg << "sample period " << log.sample_period << " s differs from model '" << model.name << "''s sample time "
+          << model.sample_time << " s (the predictor steps one model sample at a time)";
+      throw InputError(SourceLocation{log.path, log.line_of.empty() ? 0 : log.line_of.front()}, msg.str());
+    }
+    ArmSequence seq = ToArmSequence(log, l);
+    const int cut = static_cast<int>(std::round(seq.rows() * (1 - options.validation_fraction)));
+    const int n_train = AppendArmSamples(seq, l, 0, cut - 1 - l.horizon, train, nominal);
+    const int n_val = AppendArmSamples(seq, l, cut, seq.rows() - 1, validation, nominal);
+    if (n_train < 10 || n_val < 1) {
+      const int needed = l.command_lag + l.history + l.horizon;
+      throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows()) + " rows give " +
+                                                     std::to_string(n_train + n_val) + " windows (history " +
+                                                     std::to_string(l.history) + " + delay " +
+                                                     std::to_string(l.command_lag) + " + horizon " +
+                                                     std::to_string(l.horizon) + " = " + std::to_string(needed) +
+                                                     " consecutive rows each; at least 10 to train on and 1 held "
+                                                     "out, after the last " +
+                                                     std::to_string(static_cast<int>(options.validation_fraction * 100)) +
+                                                     " % is held out, are needed)");
+    }
+    info->logs.push_back(log.path);
+    split.emplace_back(std::move(seq), cut);
+  }
+  return split;
+}
+
+// The predictor's outputs for every window of `d` (rows x outputs).
+Eigen::MatrixXd PredictArmAll(const ArmPredictor& predictor, const ArmDataset& d, const ArmFeatureLayout& l) {
+  Eigen::MatrixXd out(d.rows(), l.num_outputs());
+  Eigen::VectorXd row(l.num_inputs()), y(l.num_outputs());
+  for (int i = 0; i < d.rows(); ++i) {
+    row = d.x.row(i).transpose();
+    predictor.PredictOutputs(row.data(), y.data());
+    out.row(i) = y.transpose();
+  }
+  return out;
+}
+
+// The model on its own over the held-out part: free runs of `rollout_seconds`, started
+// every tenth of that; the RMS joint error (infinite where a run diverged).
+double ArmRolloutRmse(const ArmPredictor& predictor, const std::vector<SplitArmLog>& split, const ArmFeatureLayout& l,
+                      double rollout_seconds) {
+  const int steps = std::max(1, static_cast<int>(std::lround(rollout_seconds / l.sample_time)));
+  const int every = std::max(1, steps / 10 * 10);
+  double sum = 0;
+  long count = 0;
+  for (const auto& [seq, cut] : split) {
+    for (int s = std::max(cut, seq.first_known_torque + l.history - 1); s + steps < seq.rows(); s += every) {
+      const Eigen::MatrixXd e = ArmRolloutError(predictor, seq, s, steps);
+      if (!e.allFinite()) {
+        sum = INFINITY;
+        continue;
+      }
+      sum += e.squaredNorm();
+      count += e.size();
+    }
+  }
+  return count ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+}
+
+}  // namespace
+
 ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>& logs, const ArmTrainOptions& options,
                                ArmTrainSummary* summary, const std::function<void(int, int, double)>& progress) {
   if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
@@ -324,37 +403,8 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
     info.nominal_parameters = StandardParameters(model);
     nominal = std::make_unique<ArmNominalStep>(model);
   }
-
-  // Per log: the first part trains, the last part validates (time order kept).
   ArmDataset train, validation;
-  std::vector<std::pair<ArmSequence, int>> split;  // sequence and first held-out row
-  for (const ArmLog& log : logs) {
-    CheckArmLogMatchesModel(log, model);
-    if (std::abs(log.sample_period - model.sample_time) > 0.01 * model.sample_time) {
-      std::ostringstream msg;
-      msg << "sample period " << log.sample_period << " s differs from model '" << model.name << "''s sample time "
-          << model.sample_time << " s (the predictor steps one model sample at a time)";
-      throw InputError(SourceLocation{log.path, log.line_of.empty() ? 0 : log.line_of.front()}, msg.str());
-    }
-    ArmSequence seq = ToArmSequence(log, l);
-    const int cut = static_cast<int>(std::round(seq.rows() * (1 - options.validation_fraction)));
-    const int n_train = AppendArmSamples(seq, l, 0, cut - 1 - l.horizon, &train, nominal.get());
-    const int n_val = AppendArmSamples(seq, l, cut, seq.rows() - 1, &validation, nominal.get());
-    if (n_train < 10 || n_val < 1) {
-      const int needed = l.command_lag + l.history + l.horizon;
-      throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows()) + " rows give " +
-                                                     std::to_string(n_train + n_val) + " windows (history " +
-                                                     std::to_string(l.history) + " + delay " +
-                                                     std::to_string(l.command_lag) + " + horizon " +
-                                                     std::to_string(l.horizon) + " = " + std::to_string(needed) +
-                                                     " consecutive rows each; at least 10 to train on and 1 held "
-                                                     "out, after the last " +
-                                                     std::to_string(static_cast<int>(options.validation_fraction * 100)) +
-                                                     " % is held out, are needed)");
-    }
-    info.logs.push_back(log.path);
-    split.emplace_back(std::move(seq), cut);
-  }
+  const std::vector<SplitArmLog> split = SplitArmLogs(model, logs, options, nominal.get(), &info, &train, &validation);
   info.samples = train.rows() + validation.rows();
 
   const auto start = std::chrono::steady_clock::now();
@@ -375,41 +425,12 @@ ArmPredictor TrainArmPredictor(const ArmModel& model, const std::vector<ArmLog>&
   }
   if (options.residual) predictor.nominal_.Set(model);
 
-  auto predict_all = [&](const ArmDataset& d) {
-    Eigen::MatrixXd out(d.rows(), l.num_outputs());
-    Eigen::VectorXd row(l.num_inputs()), y(l.num_outputs());
-    for (int i = 0; i < d.rows(); ++i) {
-      row = d.x.row(i).transpose();
-      predictor.PredictOutputs(row.data(), y.data());
-      out.row(i) = y.transpose();
-    }
-    return out;
-  };
-  info.train_rmse = QRmse(predict_all(train), train.y, n, 0);
-  const Eigen::MatrixXd val_pred = predict_all(validation);
+  info.train_rmse = QRmse(PredictArmAll(predictor, train, l), train.y, n, 0);
+  const Eigen::MatrixXd val_pred = PredictArmAll(predictor, validation, l);
   info.validation_rmse = QRmse(val_pred, validation.y, n, 0);
   info.validation_qd_rmse = QRmse(val_pred, validation.y, n, n);
-
-  // The model on its own over the held-out part: free runs of rollout_seconds, started
-  // every tenth of that.
-  if (l.horizon == 1 && options.rollout_seconds > 0) {
-    const int steps = std::max(1, static_cast<int>(std::lround(options.rollout_seconds / l.sample_time)));
-    const int every = std::max(1, steps / 10 * 10);
-    double sum = 0;
-    long count = 0;
-    for (const auto& [seq, cut] : split) {
-      for (int s = std::max(cut, seq.first_known_torque + l.history - 1); s + steps < seq.rows(); s += every) {
-        const Eigen::MatrixXd e = ArmRolloutError(predictor, seq, s, steps);
-        if (!e.allFinite()) {
-          sum = INFINITY;
-          continue;
-        }
-        sum += e.squaredNorm();
-        count += e.size();
-      }
-    }
-    info.validation_rollout_rmse = count ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
-  }
+  if (l.horizon == 1 && options.rollout_seconds > 0)
+    info.validation_rollout_rmse = ArmRolloutRmse(predictor, split, l, options.rollout_seconds);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   predictor.info_ = info;
   predictor.path_.clear();
