@@ -135,8 +135,12 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, const ArmModel& hat, const
                           options);
 }
 
-TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,
-                               const ArmReference& reference, const TrackingOptions& options) {
+namespace {
+
+// Checks a trial's inputs; throws InputError for invalid options and
+// std::invalid_argument for a missing backend or shapes that do not fit.
+void CheckTrackingInputs(const ArmModel& plant, const ArmBackend* backend, const ArmModel& hat,
+                         const ArmReference& reference, const TrackingOptions& options) {
   if (!backend) throw std::invalid_argument("RunTrackingTrial: no backend");
   std::string why;
   if (!options.IsValid(&why)) throw InputError("TrackingOptions: " + why);
@@ -156,6 +160,61 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
                                 std::to_string(feedforward->cols()) + ", the reference needs " +
                                 std::to_string(samples) + " x " + std::to_string(n));
   }
+}
+
+// The torque the plant's bodies (`body`: payload lumped) needed for the run's motion,
+// per sample (samples x n): rigid bodies plus friction over each interval; a joint that
+// does not move over the interval sticks, and then any torque within its Coulomb band
+// holds it: the closest to the applied. The last sample repeats the one before.
+Eigen::MatrixXd NeededTorque(const ArmModel& body, const ArmTrajectory& run, double sample_time) {
+  const Eigen::Index samples = run.q.rows();
+  const int n = body.dof();
+  Eigen::MatrixXd out(samples, n);
+  for (Eigen::Index i = 0; i + 1 < samples; ++i) {
+    const Eigen::VectorXd qm = 0.5 * (run.q.row(i) + run.q.row(i + 1)).transpose();
+    const Eigen::VectorXd qdm = 0.5 * (run.qd.row(i) + run.qd.row(i + 1)).transpose();
+    const Eigen::VectorXd acc = (run.qd.row(i + 1) - run.qd.row(i)).transpose() / sample_time;
+    Eigen::VectorXd needed = InverseDynamics(body, qm, qdm, acc, false);
+    for (int j = 0; j < n; ++j) {
+      const bool stuck = std::abs(run.qd(i, j)) < kStuckSpeed && std::abs(run.qd(i + 1, j)) < kStuckSpeed;
+      if (stuck) {
+        const double band = std::abs(body.joints[j].coulomb);
+        needed(j) += std::clamp(run.applied(i, j) - needed(j), -band, band);
+      } else {
+        needed(j) += ArmFrictionTorque(body, j, qdm(j));
+      }
+    }
+    out.row(i) = needed.transpose();
+  }
+  out.row(samples - 1) = out.row(samples - 2);
+  return out;
+}
+
+// The trial's scores: tracking error (RMS and largest per joint), the share of samples
+// each joint's demand reached its limit, and the torque mismatches.
+void ScoreTrial(const ArmReference& reference, const Eigen::VectorXd& limit, TrackingTrial* trial) {
+  const Eigen::MatrixXd error = reference.q - trial->q;
+  trial->error_rms = Rms(error);
+  trial->error_max = error.cwiseAbs().colwise().maxCoeff().transpose();
+  const Eigen::Index samples = trial->demand.rows();
+  trial->saturated_fraction.resize(limit.size());
+  for (Eigen::Index j = 0; j < limit.size(); ++j) {
+    trial->saturated_fraction(j) =
+        static_cast<double>((trial->demand.col(j).cwiseAbs().array() >= limit(j)).count()) / static_cast<double>(samples);
+  }
+  trial->model_vs_command_rms = Rms(trial->command - trial->model_torque);
+  trial->needed_vs_applied_rms = Rms(trial->needed - trial->applied);
+  trial->command_rms = Rms(trial->command);
+}
+
+}  // namespace
+
+TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend> backend, const ArmModel& hat,
+                               const ArmReference& reference, const TrackingOptions& options) {
+  CheckTrackingInputs(plant, backend.get(), hat, reference, options);
+  const int n = hat.dof();
+  const Eigen::Index samples = reference.t.size();
+  const Eigen::MatrixXd* feedforward = options.feedforward;
 
   ArmSimulation sim(plant, std::move(backend));
   const ArmModel& body = sim.model();  // the plant with its payload lumped
@@ -213,38 +272,8 @@ TrackingTrial RunTrackingTrial(const ArmModel& plant, std::unique_ptr<ArmBackend
   const ArmTrajectory run = sim.Run(static_cast<int>(samples), controller);
   trial.t = run.t, trial.q = run.q, trial.qd = run.qd, trial.command = run.command, trial.applied = run.applied;
 
-  trial.needed.resize(samples, n);
-  for (Eigen::Index i = 0; i + 1 < samples; ++i) {
-    const Eigen::VectorXd qm = 0.5 * (run.q.row(i) + run.q.row(i + 1)).transpose();
-    const Eigen::VectorXd qdm = 0.5 * (run.qd.row(i) + run.qd.row(i + 1)).transpose();
-    const Eigen::VectorXd acc = (run.qd.row(i + 1) - run.qd.row(i)).transpose() / plant.sample_time;
-    // Rigid bodies plus friction; a joint that does not move over the interval sticks,
-    // and then any torque within its Coulomb band holds it: the closest to the applied.
-    Eigen::VectorXd needed = InverseDynamics(body, qm, qdm, acc, false);
-    for (int j = 0; j < n; ++j) {
-      const bool stuck = std::abs(run.qd(i, j)) < kStuckSpeed && std::abs(run.qd(i + 1, j)) < kStuckSpeed;
-      if (stuck) {
-        const double band = std::abs(body.joints[j].coulomb);
-        needed(j) += std::clamp(run.applied(i, j) - needed(j), -band, band);
-      } else {
-        needed(j) += ArmFrictionTorque(body, j, qdm(j));
-      }
-    }
-    trial.needed.row(i) = needed.transpose();
-  }
-  trial.needed.row(samples - 1) = trial.needed.row(samples - 2);
-
-  const Eigen::MatrixXd error = reference.q - run.q;
-  trial.error_rms = Rms(error);
-  trial.error_max = error.cwiseAbs().colwise().maxCoeff().transpose();
-  trial.saturated_fraction.resize(n);
-  for (int j = 0; j < n; ++j) {
-    trial.saturated_fraction(j) =
-        static_cast<double>((trial.demand.col(j).cwiseAbs().array() >= limit(j)).count()) / static_cast<double>(samples);
-  }
-  trial.model_vs_command_rms = Rms(trial.command - trial.model_torque);
-  trial.needed_vs_applied_rms = Rms(trial.needed - trial.applied);
-  trial.command_rms = Rms(trial.command);
+  trial.needed = NeededTorque(body, run, plant.sample_time);
+  ScoreTrial(reference, limit, &trial);
   return trial;
 }
 
