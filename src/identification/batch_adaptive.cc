@@ -129,6 +129,75 @@ bool BatchAdaptiveOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+
+// Row block j: the mean of Y_b along the reference over [t_j, t_j+1], which is what a
+// torque held over that interval must equal (Simpson's rule; the Coulomb columns' mean
+// sign exactly, since sign(qd) jumps inside an interval). (intervals * n) x r.
+Eigen::MatrixXd HeldIntervalRegressor(const ArmModel& model, const FourierTrajectory& trajectory,
+                                      const BaseParameters& base, int intervals) {
+  const int n = model.dof(), r = base.rank();
+  const double ts = model.sample_time;
+  std::vector<std::pair<int, int>> coulomb;  // (joint, base column)
+  for (int c = 0; c < r; ++c) {
+    const int k = base.independent[static_cast<std::size_t>(c)] - kParametersPerLink * n;
+    if (k >= 0 && k % kFrictionPerJoint == 1) coulomb.emplace_back(k / kFrictionPerJoint, c);
+  }
+  auto regressor_at = [&](double t) {
+    const JointMotion m = EvaluateFourier(trajectory, t);
+    return Eigen::MatrixXd(base.Reduce(Regressor(model, m.q, m.qd, m.qdd)));
+  };
+  Eigen::MatrixXd phi(intervals * n, r);
+  Eigen::MatrixXd y_start = regressor_at(0);
+  for (int j = 0; j < intervals; ++j) {
+    const Eigen::MatrixXd y_end = regressor_at((j + 1) * ts);
+    Eigen::MatrixXd y = (y_start + 4 * regressor_at((j + 0.5) * ts) + y_end) / 6;
+    for (const auto& [joint, column] : coulomb) y(joint, column) = MeanSign(trajectory, joint, j * ts, (j + 1) * ts);
+    phi.middleRows(j * n, n) = y;
+    y_start = y_end;
+  }
+  return phi;
+}
+
+// The update's row weights over the intervals whose command was issued in the trial
+// (interval d + j for j = 0 .. samples - d - 1), per joint: 0 where the joint is slower
+// than the threshold at either end (counted in *left_out).
+Eigen::VectorXd UpdateRowWeights(const FourierTrajectory& trajectory, const BatchAdaptiveOptions& options, int n,
+                                 int samples, int d, double ts, int* left_out) {
+  Eigen::VectorXd row_weight((samples - d) * n);
+  *left_out = 0;
+  for (int j = 0; j < samples - d; ++j) {
+    const JointMotion a = EvaluateFourier(trajectory, (d + j) * ts), b = EvaluateFourier(trajectory, (d + j + 1) * ts);
+    for (int i = 0; i < n; ++i) {
+      const bool slow = std::min(std::abs(a.qd[i]), std::abs(b.qd[i])) < options.velocity_threshold;
+      row_weight[j * n + i] = slow ? 0.0 : options.joint_weights.size() ? std::sqrt(options.joint_weights[i]) : 1.0;
+      *left_out += slow;
+    }
+  }
+  return row_weight;
+}
+
+// PD gains: the options' where given, else J w^2 and 2 zeta J w, J the nominal inertia
+// each joint sees on average over a period.
+void FeedbackGains(const ArmModel& model, const FourierTrajectory& trajectory, const BatchAdaptiveOptions& options,
+                   BatchAdaptiveResult* result) {
+  if (options.kp.size()) {
+    result->kp = options.kp;
+    result->kd = options.kd;
+    return;
+  }
+  Eigen::VectorXd inertia = Eigen::VectorXd::Zero(model.dof());
+  constexpr int kInertiaSamples = 50;
+  for (int s = 0; s < kInertiaSamples; ++s)
+    inertia += MassMatrix(model, EvaluateFourier(trajectory, s * trajectory.period() / kInertiaSamples).q).diagonal();
+  inertia /= kInertiaSamples;
+  const double w = 2 * kPi * options.feedback_bandwidth;
+  result->kp = inertia * w * w;
+  result->kd = inertia * 2 * options.feedback_damping * w;
+}
+
+}  // namespace
+
 BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTrajectory& trajectory,
                                      const BatchAdaptiveOptions& options, const ArmTrialRunner& run_trial,
                                      const BatchAdaptiveProgress& progress) {
@@ -161,42 +230,10 @@ BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTraject
   const int samples = static_cast<int>(ref.t.size());
   if (samples <= d + 1) throw InputError("batch-adaptive: the trial is shorter than the command delay");
   result.samples_per_trial = samples;
-  // Row block j: the mean of Y_b along the reference over [t_j, t_j+1], which is what a
-  // torque held over that interval must equal (Simpson's rule; the Coulomb columns'
-  // mean sign exactly, since sign(qd) jumps inside an interval).
-  std::vector<std::pair<int, int>> coulomb;  // (joint, base column)
-  for (int c = 0; c < r; ++c) {
-    const int k = base.independent[static_cast<std::size_t>(c)] - kParametersPerLink * n;
-    if (k >= 0 && k % kFrictionPerJoint == 1) coulomb.emplace_back(k / kFrictionPerJoint, c);
-  }
-  auto regressor_at = [&](double t) {
-    const JointMotion m = EvaluateFourier(trajectory, t);
-    return Eigen::MatrixXd(base.Reduce(Regressor(model, m.q, m.qd, m.qdd)));
-  };
-  Eigen::MatrixXd phi((samples + d) * n, r);
-  Eigen::MatrixXd y_start = regressor_at(0);
-  for (int j = 0; j < samples + d; ++j) {
-    const Eigen::MatrixXd y_end = regressor_at((j + 1) * ts);
-    Eigen::MatrixXd y = (y_start + 4 * regressor_at((j + 0.5) * ts) + y_end) / 6;
-    for (const auto& [joint, column] : coulomb) y(joint, column) = MeanSign(trajectory, joint, j * ts, (j + 1) * ts);
-    phi.middleRows(j * n, n) = y;
-    y_start = y_end;
-  }
-  // The update's least squares over the intervals whose command was issued in the
-  // trial (j = d .. K-1), weighted per joint, solved by QR with scaled columns.
+  const Eigen::MatrixXd phi = HeldIntervalRegressor(model, trajectory, base, samples + d);
+  // The update's least squares, weighted per joint, solved by QR with scaled columns.
   const int rows = (samples - d) * n;
-  Eigen::VectorXd row_weight(rows);
-  int left_out = 0;
-  for (int j = 0; j < samples - d; ++j) {
-    // Interval d + j, from t_{d+j} to t_{d+j+1}.
-    const JointMotion a = EvaluateFourier(trajectory, (d + j) * ts), b = EvaluateFourier(trajectory, (d + j + 1) * ts);
-    for (int i = 0; i < n; ++i) {
-      const bool slow = std::min(std::abs(a.qd[i]), std::abs(b.qd[i])) < options.velocity_threshold;
-      row_weight[j * n + i] = slow ? 0.0 : options.joint_weights.size() ? std::sqrt(options.joint_weights[i]) : 1.0;
-      left_out += slow;
-    }
-  }
-  result.rows_left_out = left_out;
+  const Eigen::VectorXd row_weight = UpdateRowWeights(trajectory, options, n, samples, d, ts, &result.rows_left_out);
   const Eigen::MatrixXd fit_rows = phi.middleRows(d * n, rows);
   result.scales = (fit_rows.colwise().squaredNorm() / rows).cwiseSqrt().transpose();
   for (int c = 0; c < r; ++c)
@@ -206,21 +243,7 @@ BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTraject
   if (qr.rank() < r)
     throw InputError("batch-adaptive: the trajectory does not excite all " + std::to_string(r) +
                      " base parameters (regressor rank " + std::to_string(qr.rank()) + ")");
-
-  // PD gains: J w^2 and 2 zeta J w, J the nominal inertia each joint sees on average.
-  if (options.kp.size()) {
-    result.kp = options.kp;
-    result.kd = options.kd;
-  } else {
-    Eigen::VectorXd inertia = Eigen::VectorXd::Zero(n);
-    constexpr int kInertiaSamples = 50;
-    for (int s = 0; s < kInertiaSamples; ++s)
-      inertia += MassMatrix(model, EvaluateFourier(trajectory, s * trajectory.period() / kInertiaSamples).q).diagonal();
-    inertia /= kInertiaSamples;
-    const double w = 2 * kPi * options.feedback_bandwidth;
-    result.kp = inertia * w * w;
-    result.kd = inertia * 2 * options.feedback_damping * w;
-  }
+  FeedbackGains(model, trajectory, options, &result);
 
   ArmTrialInput input;
   input.sample_time = ts;
