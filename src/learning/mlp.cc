@@ -299,8 +299,10 @@ std::string MlpTrainSummary::BriefReport() const {
   return out;
 }
 
-Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options,
-             MlpTrainSummary* summary, const std::function<void(int, int, double)>& progress) {
+namespace {
+
+// Throws for options, shapes or values TrainMlp cannot train on (as TrainMlp says).
+void CheckTrainingData(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options) {
   if (std::string problems; !options.IsValid(&problems)) {
     throw InputError("TrainMlp: invalid options: " + problems);
   }
@@ -317,6 +319,89 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
   for (const std::string& bad : {FirstNonFinite(x, "x"), FirstNonFinite(y, "y")}) {
     if (!bad.empty()) throw InputError("TrainMlp: " + bad);
   }
+
+}
+
+// Xavier/Glorot uniform weights keep tanh units out of saturation at the start; zero biases.
+Eigen::VectorXd InitialParameters(const Layout& layout, std::uint64_t seed) {
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(layout.total);
+  Rng rng = Rng::Derived(seed, kInitStream);
+  for (int l = 0; l < layout.num_layers(); ++l) {
+    const double limit = std::sqrt(6.0 / (layout.sizes[l] + layout.sizes[l + 1]));
+    auto w = layout.Weights(theta, l);
+    for (Eigen::Index c = 0; c < w.cols(); ++c) {
+      for (Eigen::Index r = 0; r < w.rows(); ++r) w(r, c) = rng.Uniform(-limit, limit);
+    }
+  }
+  return theta;
+}
+
+// Adam's running moments and its bias corrections' powers, and the passes' scratch.
+struct Optimiser {
+  Eigen::VectorXd grad, adam_m, adam_v;
+  double beta1_power = 1, beta2_power = 1;
+  Eigen::VectorXd decay_mask;         // 1 on weights, 0 on biases: weight decay applies to weights only
+  std::vector<Eigen::MatrixXd> acts;  // per layer, the batch's activations
+  Eigen::MatrixXd delta, delta_prev;  // batch x layer width: dLoss/dPreactivation
+  Eigen::MatrixXd y_batch;            // batch x out
+};
+
+// One epoch of minibatch Adam over the training rows in `order`; returns the sum of
+// squared errors over the epoch (normalised units).
+double TrainEpoch(const Layout& layout, const RowMatrix& x_train, const RowMatrix& y_train, const std::vector<int>& order,
+                  Eigen::Index batch_size, const MlpOptions& options, Eigen::VectorXd* theta_out, Optimiser* o) {
+  Eigen::VectorXd& theta = *theta_out;
+  std::vector<Eigen::MatrixXd>& acts = o->acts;
+  Eigen::MatrixXd &delta = o->delta, &delta_prev = o->delta_prev, &y_batch = o->y_batch;
+  Eigen::VectorXd &grad = o->grad, &adam_m = o->adam_m, &adam_v = o->adam_v;
+  double &beta1_power = o->beta1_power, &beta2_power = o->beta2_power;
+  const Eigen::VectorXd& decay_mask = o->decay_mask;
+  const int n_layers = layout.num_layers();
+  const Eigen::Index n_train = x_train.rows();
+  const double n_out = static_cast<double>(y_train.cols());
+  double loss_sum = 0;  // sum of squared errors over the epoch, normalised units
+  for (Eigen::Index start = 0; start < n_train; start += batch_size) {
+    const Eigen::Index rows = std::min(batch_size, n_train - start);
+    acts[0].resize(rows, x_train.cols());
+    y_batch.resize(rows, y_train.cols());
+    for (Eigen::Index i = 0; i < rows; ++i) {
+      acts[0].row(i) = x_train.row(order[start + i]);
+      y_batch.row(i) = y_train.row(order[start + i]);
+    }
+    Forward(layout, theta, &acts);
+
+    // Loss = mean over the batch's rows and outputs of the squared error.
+    delta = acts.back() - y_batch;
+    loss_sum += delta.squaredNorm();
+    delta *= 2.0 / (static_cast<double>(rows) * n_out);
+    for (int l = n_layers - 1; l >= 0; --l) {
+      layout.Weights(grad, l).noalias() = delta.transpose() * acts[l];
+      layout.Biases(grad, l) = delta.colwise().sum().transpose();
+      if (l > 0) {
+        delta_prev.noalias() = delta * layout.Weights(theta, l);
+        delta_prev.array() *= 1.0 - acts[l].array().square();  // tanh' = 1 - tanh^2
+        std::swap(delta, delta_prev);
+      }
+    }
+    // L2 penalty (weight_decay / 2) |W|^2 added to the loss, i.e. coupled decay as in
+    // classic Adam, not AdamW.
+    grad += options.weight_decay * decay_mask.cwiseProduct(theta);
+
+    beta1_power *= kAdamBeta1;
+    beta2_power *= kAdamBeta2;
+    adam_m = kAdamBeta1 * adam_m + (1 - kAdamBeta1) * grad;
+    adam_v = kAdamBeta2 * adam_v + (1 - kAdamBeta2) * grad.cwiseAbs2();
+    theta.array() -= options.learning_rate * (adam_m.array() / (1 - beta1_power)) /
+                     ((adam_v.array() / (1 - beta2_power)).sqrt() + kAdamEpsilon);
+  }
+  return loss_sum;
+}
+
+}  // namespace
+
+Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options,
+             MlpTrainSummary* summary, const std::function<void(int, int, double)>& progress) {
+  CheckTrainingData(x, y, options);
 
   // The validation rows are the last ones, so that with time-ordered data the network is
   // judged on a later stretch than it learned from. Any positive fraction keeps >= 1 row.
@@ -347,33 +432,17 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
   const Layout layout(params.layer_sizes);
   const int n_layers = layout.num_layers();
 
-  // Xavier/Glorot uniform weights keep tanh units out of saturation at the start; zero biases.
-  Eigen::VectorXd theta = Eigen::VectorXd::Zero(layout.total);
-  {
-    Rng rng = Rng::Derived(options.seed, kInitStream);
-    for (int l = 0; l < n_layers; ++l) {
-      const double limit = std::sqrt(6.0 / (layout.sizes[l] + layout.sizes[l + 1]));
-      auto w = layout.Weights(theta, l);
-      for (Eigen::Index c = 0; c < w.cols(); ++c) {
-        for (Eigen::Index r = 0; r < w.rows(); ++r) w(r, c) = rng.Uniform(-limit, limit);
-      }
-    }
-  }
-  // 1 on weights, 0 on biases: weight decay applies to weights only.
-  Eigen::VectorXd decay_mask = Eigen::VectorXd::Zero(layout.total);
-  for (int l = 0; l < n_layers; ++l) layout.Weights(decay_mask, l).setOnes();
-
-  Eigen::VectorXd grad = Eigen::VectorXd::Zero(layout.total);
-  Eigen::VectorXd adam_m = Eigen::VectorXd::Zero(layout.total);
-  Eigen::VectorXd adam_v = Eigen::VectorXd::Zero(layout.total);
-  double beta1_power = 1, beta2_power = 1;
+  Eigen::VectorXd theta = InitialParameters(layout, options.seed);
+  Optimiser optimiser;
+  optimiser.grad = optimiser.adam_m = optimiser.adam_v = Eigen::VectorXd::Zero(layout.total);
+  optimiser.decay_mask = Eigen::VectorXd::Zero(layout.total);
+  for (int l = 0; l < n_layers; ++l) layout.Weights(optimiser.decay_mask, l).setOnes();
+  optimiser.acts.resize(static_cast<std::size_t>(n_layers) + 1);
 
   const Eigen::Index batch_size =
       options.batch_size == 0 ? n_train : std::min<Eigen::Index>(options.batch_size, n_train);
   const double n_out = static_cast<double>(y.cols());
-  std::vector<Eigen::MatrixXd> acts(n_layers + 1), eval_acts(n_layers + 1);
-  Eigen::MatrixXd delta, delta_prev;  // batch x layer width: dLoss/dPreactivation
-  Eigen::MatrixXd y_batch;            // batch x out
+  std::vector<Eigen::MatrixXd> eval_acts(n_layers + 1);
   std::vector<int> order(n_train);
   std::iota(order.begin(), order.end(), 0);
   Rng shuffle_rng = Rng::Derived(options.seed, kShuffleStream);
@@ -389,41 +458,7 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
     for (Eigen::Index i = n_train - 1; i > 0; --i) {
       std::swap(order[i], order[shuffle_rng.Index(static_cast<std::uint64_t>(i + 1))]);
     }
-    double loss_sum = 0;  // sum of squared errors over the epoch, normalised units
-    for (Eigen::Index start = 0; start < n_train; start += batch_size) {
-      const Eigen::Index rows = std::min(batch_size, n_train - start);
-      acts[0].resize(rows, x_train.cols());
-      y_batch.resize(rows, y_train.cols());
-      for (Eigen::Index i = 0; i < rows; ++i) {
-        acts[0].row(i) = x_train.row(order[start + i]);
-        y_batch.row(i) = y_train.row(order[start + i]);
-      }
-      Forward(layout, theta, &acts);
-
-      // Loss = mean over the batch's rows and outputs of the squared error.
-      delta = acts.back() - y_batch;
-      loss_sum += delta.squaredNorm();
-      delta *= 2.0 / (static_cast<double>(rows) * n_out);
-      for (int l = n_layers - 1; l >= 0; --l) {
-        layout.Weights(grad, l).noalias() = delta.transpose() * acts[l];
-        layout.Biases(grad, l) = delta.colwise().sum().transpose();
-        if (l > 0) {
-          delta_prev.noalias() = delta * layout.Weights(theta, l);
-          delta_prev.array() *= 1.0 - acts[l].array().square();  // tanh' = 1 - tanh^2
-          std::swap(delta, delta_prev);
-        }
-      }
-      // L2 penalty (weight_decay / 2) |W|^2 added to the loss, i.e. coupled decay as in
-      // classic Adam, not AdamW.
-      grad += options.weight_decay * decay_mask.cwiseProduct(theta);
-
-      beta1_power *= kAdamBeta1;
-      beta2_power *= kAdamBeta2;
-      adam_m = kAdamBeta1 * adam_m + (1 - kAdamBeta1) * grad;
-      adam_v = kAdamBeta2 * adam_v + (1 - kAdamBeta2) * grad.cwiseAbs2();
-      theta.array() -= options.learning_rate * (adam_m.array() / (1 - beta1_power)) /
-                       ((adam_v.array() / (1 - beta2_power)).sqrt() + kAdamEpsilon);
-    }
+    const double loss_sum = TrainEpoch(layout, x_train, y_train, order, batch_size, options, &theta, &optimiser);
     const double epoch_train_loss =
         loss_sum / (static_cast<double>(n_train) * n_out);  // mean over the epoch's batches' rows
 
