@@ -322,11 +322,8 @@ std::vector<SSL_WrapperPacket> LiveField::VisionPackets(const std::vector<FrameR
 }
 
 void LiveField::SendVision(const std::vector<FrameRecord>& records) {
-  const std::vector<SSL_WrapperPacket> packets = VisionPackets(records);
-  last_vision_.resize(packets.size());
-  for (std::size_t c = 0; c < packets.size(); ++c) {
-    last_vision_[c] = packets[c].SerializeAsString();
-    Send(vision_out_, last_vision_[c], vision_to_);
+  for (const SSL_WrapperPacket& packet : VisionPackets(records)) {
+    Send(vision_out_, packet.SerializeAsString(), vision_to_);
     ++counters_.vision_packets;
   }
 }
@@ -701,8 +698,8 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       // network): the frame's vision again, which a client answers as it answers any.
       if (options_.lockstep && Clock::now() >= resend) {
         if (!FrameComplete()) {
-          for (const std::string& packet : last_vision_) {
-            Send(vision_out_, packet, vision_to_);
+          for (const SSL_WrapperPacket& packet : vision_packets_) {
+            Send(vision_out_, packet.SerializeAsString(), vision_to_);
             ++counters_.vision_packets;
           }
         }

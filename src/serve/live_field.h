@@ -199,7 +199,7 @@ class LiveField {
   };
 
   // Each camera's detection (and the geometry, at its period) of the open frame, whose
-  // records BeginFrame gave; SendVision sends them and keeps them for resending.
+  // records BeginFrame gave, kept for the frame (vision_packets_); SendVision sends them.
   std::vector<SSL_WrapperPacket> VisionPackets(const std::vector<FrameRecord>& records);
   void SendVision(const std::vector<FrameRecord>& records);
   // Begins a frame (the cameras' capture kept); steps the open frame with the commands
@@ -283,8 +283,9 @@ class LiveField {
   std::array<std::uint32_t, 4> kernel_drops_{};  // per port (blue, yellow, control, grSim): the kernel's count seen last
   std::string last_send_error_;
   int receive_buffer_asked_ = 0, receive_buffer_ = 0;  // bytes
-  std::vector<std::string> last_vision_;  // the current frame's packets (one per camera), serialized
-  int vision_frame_ = -1;                     // the frame vision_packets_ are of (-1: none yet)
+  // The current frame's packets (one per camera): what a lockstep resend sends again and
+  // what a synchronous request for the same frame gets.
+  int vision_frame_ = -1;  // the frame vision_packets_ are of (-1: none yet)
   std::vector<SSL_WrapperPacket> vision_packets_;
   // Several cameras (the scene's `cameras:`; none: one, sending what the observer
   // receives): each sees the true state of vision_delay frames ago in its area, with its
