@@ -24,7 +24,8 @@ Eigen::VectorXd SecondDerivative(const Eigen::VectorXd& t, const Eigen::VectorXd
   return d;
 }
 
-// x at times t + shift, linear between rows, the last row held beyond the end.
+}  // namespace
+
 Eigen::VectorXd ShiftEarlier(const Eigen::VectorXd& t, const Eigen::VectorXd& x, double shift) {
   if (shift <= 0) return x;
   const Eigen::Index n = x.size();
@@ -43,8 +44,6 @@ Eigen::VectorXd ShiftEarlier(const Eigen::VectorXd& t, const Eigen::VectorXd& x,
   return y;
 }
 
-}  // namespace
-
 Eigen::MatrixXd PredictArmTorques(const ArmModel& model, const ArmLog& log) {
   CheckArmLogMatchesModel(log, model);
   Eigen::MatrixXd tau(log.rows(), log.dof);
@@ -54,6 +53,10 @@ Eigen::MatrixXd PredictArmTorques(const ArmModel& model, const ArmLog& log) {
                      .transpose();
   }
   return tau;
+}
+
+double JointCommandLead(const ArmModel& model, int joint) {
+  return model.delay_samples * model.sample_time + model.effects.joint(joint).time_delay;
 }
 
 Eigen::VectorXd JointCommandFromNeeded(const ArmModel& model, int joint, const Eigen::VectorXd& t,
@@ -81,7 +84,7 @@ Eigen::VectorXd JointCommandFromNeeded(const ArmModel& model, int joint, const E
     *beyond_saturation = e.saturation > 0 ? static_cast<int>((drive.array().abs() > e.saturation).count()) : 0;
   }
   // 5. Sent `shift` seconds before the joint gets it.
-  return ShiftEarlier(t, drive, model.delay_samples * model.sample_time + e.time_delay);
+  return ShiftEarlier(t, drive, JointCommandLead(model, joint));
 }
 
 Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, ArmCommandSummary* summary) {
@@ -102,7 +105,7 @@ Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, Arm
   Eigen::MatrixXd command(log.rows(), n);
   for (int j = 0; j < n; ++j) {
     command.col(j) = JointCommandFromNeeded(model, j, log.t, log.qdd.col(j), needed.col(j), &s.beyond_saturation[j]);
-    s.shift[j] = model.delay_samples * model.sample_time + model.effects.joint(j).time_delay;
+    s.shift[j] = JointCommandLead(model, j);
     s.flexible = s.flexible || model.effects.joint(j).flexible();
   }
   if (summary) *summary = s;

@@ -53,6 +53,14 @@ Eigen::VectorXd JointCommandFromNeeded(const ArmModel& model, int joint, const E
                                        const Eigen::VectorXd& qdd, Eigen::VectorXd needed,
                                        int* beyond_saturation = nullptr);
 
+// How long before joint `joint` receives a command it is sent (s): the model's delay
+// plus the joint's time_delay (step 5).
+double JointCommandLead(const ArmModel& model, int joint);
+
+// x at times t + shift (N), linear between rows, the last row held beyond the end: what
+// a signal sent `shift` early looks like in the log's time line.
+Eigen::VectorXd ShiftEarlier(const Eigen::VectorXd& t, const Eigen::VectorXd& x, double shift);
+
 // Torques Y_b(q, qd, qdd) beta at every row of `log` (N x n) straight from base
 // parameters (r of `base`), which need not belong to a real arm: how an unconstrained
 // estimate would predict. Throws InputError when the joint counts differ.

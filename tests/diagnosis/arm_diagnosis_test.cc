@@ -44,10 +44,6 @@ struct ArmCase {
 // TWINSIM_RUN_OPEN_FINDINGS=1 runs them anyway (to measure them again).
 std::string OpenFinding(const std::string& label) {
   if (std::getenv("TWINSIM_RUN_OPEN_FINDINGS")) return "";
-  if (label == "delay_18ms_joint2") {
-    return "issue 28: time_delay (joint 2) removes 21.5 % of the selection rows' squared error at t = 3, short of "
-           "Holm's level over 22 candidates with the long-run standard error (two 20 s logs)";
-  }
   if (label == "backlash_joint1") {
     return "issue 28: backlash is not seen. Joint 1's test RMS is 0.86 N·m, 3.0 times its noise (flexible joints with "
            "nothing missing reach 3.4); the memoryless learned residual removes 10 % (p 0.10) of bursts that follow each "
@@ -58,10 +54,6 @@ std::string OpenFinding(const std::string& label) {
            "1's test error (p 0.2), short of significance, and its RMS is 1.42 times its noise (4 flags on size "
            "alone). With the periodic placement before, which put fit and test blocks on the same phases of the "
            "trials, it removed 40 % (p 3e-10)";
-  }
-  if (label == "payload_and_offset_joint2") {
-    return "issue 28: the payload (0.64 kg at x = 0.42 m) absorbs the offset on the selection rows; round 2 finds no "
-           "offset on joint 2 (the test rows' gap still closes 96 %)";
   }
   return "";
 }

@@ -169,6 +169,7 @@ struct ForeignHidden {
   Hidden h;
   testing::HiddenArmTorque torque;  // empty: none
   std::string payload;             // a payload the plant's links carry
+  std::string effects;             // effects of the plant's own (a delay: the torque sent early)
 };
 
 ForeignHidden DrawForeign(const std::string& kind, int seed) {
@@ -195,6 +196,10 @@ ForeignHidden DrawForeign(const std::string& kind, int seed) {
     h.joint = -1;
     f.payload = "  - {name: payload, joint: null, mass: " + Fmt(rng.Uniform(0.3, 1.5)) + ", x: " + Fmt(rng.Uniform(0.2, 0.4)) + "}\n";
     h.description = f.payload;
+  } else if (kind == "time_delay") {
+    const double d = rng.Uniform(0.008, 0.03);
+    f.effects = "  - {name: time_delay, joint: " + std::to_string(h.joint + 1) + ", delay: " + Fmt(d) + "}\n";
+    h.description = f.effects;
   } else if (kind == "cogging" || kind == "spring") {
     h.name.clear();
     h.outside = true;
@@ -306,7 +311,7 @@ std::vector<StudyRun> Runs() {
   for (int s = 1; s <= clean; ++s) runs.push_back({"omni", "clean", s});
   if (testing::MujocoAvailable()) {
     for (int s = 1; s <= clean; ++s) runs.push_back({"arm_mujoco", "clean", s});
-    for (const char* k : {"viscous_friction", "coulomb_friction", "torque_offset", "payload", "cogging", "spring"}) {
+    for (const char* k : {"viscous_friction", "coulomb_friction", "torque_offset", "time_delay", "payload", "cogging", "spring"}) {
       for (int s = 1; s <= seeds; ++s) runs.push_back({"arm_mujoco", k, s});
     }
   }
@@ -349,7 +354,9 @@ TEST_P(DiagnoseStudy, DISABLED_Run) {
     // recorded open loop, the plant's gap from the same seeds recorded without them.
     const ForeignHidden f = DrawForeign(run.kind, run.seed);
     const ArmModel nominal = testing::RrrWith("");
-    const ArmModel plant = f.payload.empty() ? nominal : ArmPlantModel(testing::RrrWith(f.payload));
+    const ArmModel plant = !f.payload.empty() ? ArmPlantModel(testing::RrrWith(f.payload))
+                           : !f.effects.empty() ? testing::RrrWith(f.effects)
+                                                : nominal;
     testing::ForeignArmRecording how, clean;
     how.hidden = f.torque;
     how.closed_loop = clean.closed_loop = run.kind == "clean" && run.seed % 2 == 0;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 
 #include "diagnosis/arm_diagnosis.h"
 #include "diagnosis/diagnosis_plants.h"
@@ -100,6 +101,8 @@ struct ForeignCase {
   int joint;         // 0-based, -1 for the payload
   testing::HiddenArmTorque hidden;
   std::string payload_yaml{};  // a payload the plant's links carry instead ("" none)
+  std::string effects_yaml{};  // effects of the plant's own (a delay: the torque sent early) ("" none)
+  std::map<std::string, double> parameters{};  // of the named effect, each within 10 %
 };
 
 void PrintTo(const ForeignCase& c, std::ostream* os) { *os << c.label; }
@@ -111,7 +114,7 @@ TEST_P(ForeignArmEffect, IsNamedOrFlaggedAndClosesTheGap) {
   const ForeignCase& c = GetParam();
   testing::ForeignArmRecording how, clean;
   how.hidden = c.hidden;
-  const ArmModel plant = c.payload_yaml.empty() ? testing::RrrWith("") : ArmPlantModel(testing::RrrWith(c.payload_yaml));
+  const ArmModel plant = c.payload_yaml.empty() ? testing::RrrWith(c.effects_yaml) : ArmPlantModel(testing::RrrWith(c.payload_yaml));
   const std::vector<ArmLog> logs = {testing::RecordMujocoArm(plant, 3, how), testing::RecordMujocoArm(plant, 5, how)};
   const std::vector<ArmLog> without = {testing::RecordMujocoArm(testing::RrrWith(""), 3, clean),
                                        testing::RecordMujocoArm(testing::RrrWith(""), 5, clean)};
@@ -126,6 +129,9 @@ TEST_P(ForeignArmEffect, IsNamedOrFlaggedAndClosesTheGap) {
     EXPECT_EQ(report.effects[0].name, c.name);
     EXPECT_EQ(report.effects[0].joint, c.joint);
     EXPECT_GE(closed, 0.7);
+    for (const auto& [key, value] : c.parameters) {
+      EXPECT_NEAR(report.effects[0].parameters.at(key), value, 0.1 * std::abs(value)) << key;
+    }
   } else {
     const bool flagged = report.adequacy.size() == 3 && report.adequacy[static_cast<std::size_t>(c.joint)].unexplained;
     // Unexplained on its joint, or named by effects that close 70 %. A named effect
@@ -146,6 +152,11 @@ INSTANTIATE_TEST_SUITE_P(
                     testing::HiddenOnJoint(2, [](double, double qd) { return qd > 0 ? -0.37 : (qd < 0 ? 0.37 : 0.0); })},
         ForeignCase{"offset_joint1", "torque_offset", 0, testing::HiddenOnJoint(0, [](double, double) { return 0.62; })},
         ForeignCase{"payload", "payload", -1, {}, "  - {name: payload, joint: null, mass: 0.7, x: 0.33}\n"},
+        // A delay on the base joint, which carries Coulomb friction: before issue 41's fix
+        // the standstill rows were taken where the joint stands, not where the delayed
+        // command reaches it, and the fit stopped at 16 ms (closing 51 %).
+        ForeignCase{"delay_joint1", "time_delay", 0, {}, "", "  - {name: time_delay, joint: 1, delay: 0.021}\n",
+                    {{"delay", 0.021}}},
         // Cogging (issue 41: named torque_saturation, closing 0 %) and a spring.
         ForeignCase{"cogging_joint1", "", 0, testing::HiddenOnJoint(0, [](double q, double) { return 0.5 * std::sin(6 * q); })},
         ForeignCase{"spring_joint2", "", 1, testing::HiddenOnJoint(1, [](double q, double) { return -4.0 * (q - 0.4); })}),

@@ -192,18 +192,27 @@ ArmLog RecordMujocoArm(const ArmModel& plant, std::uint64_t seed, const ForeignA
   const Excitation excitation = DrawExcitation(plant, &rng);
   std::unique_ptr<Mujoco> mj = LoadMujoco(plant, seed);
 
-  // What the exact motion needs, sent `delay` early (the closed loop's feedforward);
-  // open loop the hidden torque helps the motor, which sends that much less.
+  // Each joint's own time_delay (whole samples) beside the model's delay: what joint j
+  // receives now was sent that many samples before.
+  std::vector<int> joint_delay(static_cast<std::size_t>(n));
+  for (int j = 0; j < n; ++j) joint_delay[static_cast<std::size_t>(j)] = static_cast<int>(std::lround(plant.effects.joint(j).time_delay / dt));
+
+  // What the exact motion needs, sent `delay` (and joint j its own delay) early (the
+  // closed loop's feedforward); open loop the hidden torque helps the motor, which sends
+  // that much less.
   Eigen::MatrixXd feedforward(rows, n), open_loop(rows, n), q_exact(rows, n), qd_exact(rows, n);
   for (int k = 0; k < rows; ++k) {
     Eigen::VectorXd q, qd, qdd;
     excitation.At(k * dt, &q, &qd, &qdd);
     q_exact.row(k) = q.transpose();
     qd_exact.row(k) = qd.transpose();
-    excitation.At(k * dt + delay, &q, &qd, &qdd);
-    feedforward.row(k) = Needed(plant, mj.get(), q, qd, qdd).transpose();
-    open_loop.row(k) = feedforward.row(k);
-    if (how.hidden) open_loop.row(k) -= how.hidden(k * dt + delay, q, qd).transpose();
+    for (int j = 0; j < n; ++j) {
+      const double ahead = delay + joint_delay[static_cast<std::size_t>(j)] * dt;
+      excitation.At(k * dt + ahead, &q, &qd, &qdd);
+      const Eigen::VectorXd needed = Needed(plant, mj.get(), q, qd, qdd);
+      feedforward(k, j) = needed[j];
+      open_loop(k, j) = needed[j] - (how.hidden ? how.hidden(k * dt + ahead, q, qd)[j] : 0.0);
+    }
   }
   Eigen::VectorXd sigma(n);
   for (int j = 0; j < n; ++j) sigma[j] = how.noise_share * feedforward.col(j).cwiseAbs().mean();
@@ -244,7 +253,8 @@ ArmLog RecordMujocoArm(const ArmModel& plant, std::uint64_t seed, const ForeignA
     std::vector<mjtNum> full(static_cast<std::size_t>(n * n));
     mj_fullM(m, full.data(), d->qM);
     const double w = 2 * kPi * 5;
-    std::deque<Eigen::VectorXd> sent(static_cast<std::size_t>(std::max(0, plant.delay_samples)), feedforward.row(0).transpose());
+    const int longest = plant.delay_samples + *std::max_element(joint_delay.begin(), joint_delay.end());
+    std::deque<Eigen::VectorXd> sent(static_cast<std::size_t>(std::max(0, longest)), feedforward.row(0).transpose());
     Eigen::VectorXd previous(n);
     for (int k = 0; k < rows; ++k) {
       log.t[k] = k * dt;
@@ -265,7 +275,11 @@ ArmLog RecordMujocoArm(const ArmModel& plant, std::uint64_t seed, const ForeignA
       log.q.row(k) = measured.transpose();
       log.tau.row(k) = command.transpose();
       sent.push_back(command);
-      Eigen::VectorXd applied = sent.front();
+      Eigen::VectorXd applied(n);  // joint j: what was sent its delay ago
+      for (int j = 0; j < n; ++j) {
+        const int age = plant.delay_samples + joint_delay[static_cast<std::size_t>(j)];
+        applied[j] = sent[sent.size() - 1 - static_cast<std::size_t>(age)][j];
+      }
       sent.pop_front();
       for (int j = 0; j < n; ++j) applied[j] += noise(j, applied[j]);
       if (how.hidden) applied += how.hidden(k * dt, q, qd);
