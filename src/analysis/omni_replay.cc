@@ -10,6 +10,7 @@
 #include "core/covariance_root.h"
 #include "core/error.h"
 #include "core/rng.h"
+#include "robots/omni/omni_driving_noise.h"
 
 namespace twinsim {
 
@@ -27,10 +28,9 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
   if (horizon < 0) return fail("--horizon must be 0 or more, got " + std::to_string(horizon));
   if (stride < 1) return fail("stride must be 1 or more, got " + std::to_string(stride));
   if (samples < 0) return fail("--samples must be 0 or more, got " + std::to_string(samples));
-  if (samples > 0 && (state != "observer" || horizon < 1))
-    return fail("--samples draws from the observer's prediction K >= 1 frames ahead (--state observer, --horizon 1 or more)");
-  if ((covariance || !also.empty()) && (state != "observer" || horizon < 1))
-    return fail("a prediction's covariance and shorter horizons come from the observer's prediction K >= 1 frames ahead");
+  if (samples > 0 && horizon < 1) return fail("--samples draws predictions K >= 1 frames ahead (--horizon 1 or more)");
+  if ((covariance || !also.empty()) && horizon < 1)
+    return fail("a prediction's covariance and shorter horizons come from predictions K >= 1 frames ahead");
   for (int h : also)
     if (h < 1 || h >= horizon) return fail("a shorter horizon must lie in 1.." + std::to_string(horizon - 1) + ", got " + std::to_string(h));
   return IsReplayState(state, why) && observer.IsValid(why);
@@ -239,9 +239,65 @@ void FreeRun(OmniBackend& backend, const Timeline& tl, int from, int to, double 
 // The open-loop tracker: the backend moved to every measured pose, and from each frame on
 // the stride a K-frame prediction; or, with a stretch, a free run from its first row
 // (after the tracker's warm-up).
+// The tracker's sampled predictions (OmniReplayOptions::samples): from each start, N
+// rollouts of the backend K frames ahead, each moved on by a driving noise drawn from the
+// samples' own stream (SlipPose, the slip starting at rest: the measured window already
+// holds the motion so far). Each predicted row (and each shorter horizon's) gets its N
+// poses and their covariance about the prediction's mean.
+class TrackerSamples {
+ public:
+  TrackerSamples(const OmniDrivingNoise& noise, const OmniReplayOptions& options, double dt)
+      : noise_(noise), options_(options), dt_(dt), rng_(Rng::Derived(options.seed, 0x73616d70)) {}
+
+  void Draw(OmniBackend& backend, const OmniBackendState& saved, const Timeline& tl, int f, double from,
+            const PoseCheck& check, OmniReplayResult* out) {
+    const int k = options_.horizon, n = options_.samples;
+    // Per horizon (the also ones, then K): the rows and their draws.
+    std::vector<int> horizons = options_.also;
+    horizons.push_back(k);
+    std::vector<std::vector<Pose2>> draws(horizons.size());
+    for (int m = 0; m < n; ++m) {
+      backend.Restore(saved);
+      std::array<double, 3> slip{};
+      for (int j = f; j < f + k; ++j) {
+        const Twist2 before = backend.velocity(0);
+        backend.StepFrame({tl.Delayed(j)});
+        backend.MoveBody(0, SlipPose(noise_, dt_, backend.velocity(0), before, backend.pose(0), &slip, &rng_));
+        for (std::size_t h = 0; h < horizons.size(); ++h) {
+          if (j + 1 != f + horizons[h]) continue;
+          auto at = tl.row_of_frame.find(j + 1);
+          if (at == tl.row_of_frame.end()) continue;
+          Pose2 p = backend.pose(0);
+          check(at->second, p);
+          p.theta = from + WrapAngle(p.theta - from);
+          draws[h].push_back(p);
+        }
+      }
+    }
+    for (std::size_t h = 0; h < horizons.size(); ++h) {
+      if (draws[h].empty()) continue;
+      OmniReplayResult& r = h + 1 == horizons.size() ? *out : out->also[h];
+      const std::size_t row = tl.row_of_frame.at(f + horizons[h]);
+      Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+      for (const Pose2& p : draws[h]) {
+        const Eigen::Vector3d d(p.x - r.pose[row].x, p.y - r.pose[row].y, p.theta - r.pose[row].theta);
+        c += d * d.transpose();
+      }
+      r.covariance[row] = c / static_cast<double>(draws[h].size());
+      if (h + 1 == horizons.size()) out->samples[row] = std::move(draws[h]);
+    }
+  }
+
+ private:
+  OmniDrivingNoise noise_;
+  const OmniReplayOptions& options_;
+  double dt_;
+  Rng rng_;
+};
+
 void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOptions& options, const Timeline& tl,
                    const PoseCheck& check, const std::function<void(int, int)>& progress, std::size_t stretch_first,
-                   std::size_t stretch_last, OmniReplayResult* out) {
+                   std::size_t stretch_last, TrackerSamples* samples, OmniReplayResult* out) {
   const int k = options.horizon;
   const bool stretch = stretch_first < stretch_last;
   // The tracker starts at the first row at or after frame D that has a row before it.
@@ -277,14 +333,27 @@ void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOpt
     if (!stretch && measured != tl.row_of_frame.end() && target != tl.row_of_frame.end() && since >= 0 &&
         options.OnStride(f, since)) {
       const OmniBackendState saved = backend.Save();
-      for (int j = f; j < f + k; ++j) backend.StepFrame({tl.Delayed(j)});
-      Pose2 p = backend.pose(0);
-      check(target->second, p);
       // Keep theta on the log's unwrapped branch.
       const double from = log.rows[measured->second].pose.theta;
+      for (int j = f; j < f + k; ++j) {
+        backend.StepFrame({tl.Delayed(j)});
+        for (std::size_t a = 0; a < options.also.size(); ++a) {
+          if (j + 1 != f + options.also[a]) continue;
+          auto at = tl.row_of_frame.find(j + 1);
+          if (at == tl.row_of_frame.end()) continue;
+          Pose2 p = backend.pose(0);
+          check(at->second, p);
+          p.theta = from + WrapAngle(p.theta - from);
+          out->also[a].pose[at->second] = p;
+          out->also[a].predicted[at->second] = true;
+        }
+      }
+      Pose2 p = backend.pose(0);
+      check(target->second, p);
       p.theta = from + WrapAngle(p.theta - from);
       out->pose[target->second] = p;
       out->predicted[target->second] = true;
+      if (samples) samples->Draw(backend, saved, tl, f, from, check, out);
       backend.Restore(saved);
     }
     if (f < tl.last_frame) backend.StepFrame({tl.Delayed(f)});
@@ -349,14 +418,32 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
       if (out.samples[i].empty()) out.samples[i].assign(static_cast<std::size_t>(options.samples), out.pose[i]);
     return out;
   }
-  if (options.samples > 0)
-    throw InputError("--samples needs a physics backend with the observer's state (analytic, ode or bullet), not " +
-                     options.backend);
-  if (options.covariance || !options.also.empty())
-    throw InputError("a prediction's covariance needs a physics backend with the observer's state (analytic, ode or bullet), not " +
+  if (options.covariance && options.samples == 0)
+    throw InputError("a prediction's covariance needs the observer's state (analytic, ode or bullet) or samples (--samples N) on " +
                      options.backend);
   out.state = "tracker";
-  TrackerReplay(*backend, log, options, tl, check, progress, stretch_first, stretch_last, &out);
+  std::optional<TrackerSamples> samples;
+  if (options.samples > 0) {
+    // The learned backend draws its predictor's own driving noise where it has one.
+    const OmniDrivingNoise& noise = options.backend_options.predictor && options.backend_options.predictor->info().has_driving_noise
+                                        ? options.backend_options.predictor->info().driving_noise
+                                        : model.driving_noise;
+    samples.emplace(noise, options, 1.0 / timing.frame_rate);
+    out.samples.resize(n);
+    out.covariance.assign(n, Eigen::Matrix3d::Zero());
+    const double sxy = model.ObserverNoiseXy(), sth = model.ObserverNoiseTheta();
+    out.measurement_covariance.diagonal() << sxy * sxy, sxy * sxy, sth * sth;
+  }
+  for (std::size_t a = 0; a < options.also.size(); ++a) {
+    out.also.push_back(HeldMeasurements(log));
+    out.also.back().delay_frames = delay;
+    out.also.back().state = "tracker";
+    out.also.back().measurement_covariance = out.measurement_covariance;
+    if (options.samples > 0) out.also.back().covariance.assign(n, Eigen::Matrix3d::Zero());
+  }
+  TrackerReplay(*backend, log, options, tl, check, progress, stretch_first, stretch_last, samples ? &*samples : nullptr, &out);
+  for (std::size_t i = 0; i < out.samples.size(); ++i)
+    if (out.samples[i].empty()) out.samples[i].assign(static_cast<std::size_t>(options.samples), out.pose[i]);
   out.bounded_steps = backend->bounded_steps();
   out.unseen_input_steps = backend->unseen_input_steps();
   out.grip = backend->grip();

@@ -54,17 +54,22 @@ struct OmniReplayOptions {
   // backend always uses the tracker.
   std::string state = "observer";
   OmniObserverOptions observer;
-  // With samples N > 0 (the observer's state, K >= 1), N draws of each predicted pose
-  // from the filter's prediction K frames ahead: its mean and covariance (the estimate's
-  // own uncertainty carried on, the driving noise and the model's process noise added;
-  // estimation/omni_observer.h), from a stream seeded by `seed`.
+  // With samples N > 0 (K >= 1), N draws of each predicted pose, from a stream seeded by
+  // `seed`. The observer's state: from the filter's prediction K frames ahead, its mean
+  // and covariance (the estimate's own uncertainty carried on, the driving noise and the
+  // model's process noise added; estimation/omni_observer.h). The tracker's (the learned
+  // backend's): N rollouts of the backend from the start, each moved on by a draw of the
+  // driving noise (robots/omni/omni_driving_noise.h), the predictor's own where it has
+  // one (learning/learned_noise.h), else the model's; their covariance about the
+  // prediction is the row's covariance.
   int samples = 0;
   std::uint64_t seed = 1;
-  // With covariance (the observer's state, K >= 1): each predicted row's pose covariance
-  // too (OmniReplayResult::covariance), the prediction's as the samples draw from it.
+  // With covariance (K >= 1; the tracker only with samples): each predicted row's pose
+  // covariance too (OmniReplayResult::covariance), the prediction's as the samples draw
+  // from it.
   bool covariance = false;
   // Shorter horizons (each 1..K-1) predicted from the same start frames: one K-frame
-  // prediction gives them all (OmniReplayResult::also, in this order). Observer only.
+  // prediction gives them all (OmniReplayResult::also, in this order).
   std::vector<int> also;
 
   // True when usable; else says why in *why.

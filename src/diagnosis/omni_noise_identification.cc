@@ -9,6 +9,7 @@
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/pattern_search.h"
 #include "diagnosis/diagnosis.h"
 
 namespace twinsim {
@@ -210,37 +211,6 @@ NoiseValues StandardErrors(const std::function<std::vector<HorizonRows>(const No
   return se;
 }
 
-// A pattern search from `v` over its first `coordinates` coordinates: each up and down by
-// the step, on along a direction while it pays (up to four steps); the step halves when
-// a whole sweep finds nothing better, down to 5 %, or until *evaluations reaches
-// `budget`. *best holds cost(v) on entry and the best found on return.
-NoiseValues PatternSearch(const std::function<double(const NoiseValues&)>& cost, NoiseValues v, int coordinates,
-                          int budget, double* best, int* evaluations) {
-  for (double step = std::log(2.0); step >= std::log(1.05) && *evaluations < budget; step /= 2) {
-    bool moved = true;
-    while (moved && *evaluations < budget) {
-      moved = false;
-      for (int i = 0; i < coordinates && *evaluations < budget; ++i) {
-        for (double sign : {1.0, -1.0}) {
-          bool paid = false;
-          for (int k = 0; k < 4 && *evaluations < budget; ++k) {
-            NoiseValues trial = v;
-            trial[i] += sign * step;
-            trial = Clamped(trial);
-            if (trial[i] == v[i]) break;
-            const double c = cost(trial);
-            ++*evaluations;
-            if (c >= *best) break;
-            *best = c, v = trial, moved = paid = true;
-          }
-          if (paid) break;
-        }
-      }
-    }
-  }
-  return v;
-}
-
 // The report's parameters: start and identified values, errors from the coordinates'.
 std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const NoiseValues& v, const NoiseValues& se) {
   std::vector<OmniNoiseParameter> out;
@@ -305,10 +275,10 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   double flat_cost = out.fit_before;
   // First the same spread at every speed, then with the two growths as well, from there.
   const NoiseValues flat =
-      PatternSearch(fit_cost, start, kPerSpeed, evaluations + options.max_evaluations, &flat_cost, &evaluations);
+      PatternSearch<NoiseValues>(fit_cost, Clamped, start, kPerSpeed, evaluations + options.max_evaluations, &flat_cost, &evaluations);
   double grow_cost = flat_cost;
   const NoiseValues grow =
-      PatternSearch(fit_cost, flat, kNoiseParams, evaluations + options.max_evaluations, &grow_cost, &evaluations);
+      PatternSearch<NoiseValues>(fit_cost, Clamped, flat, kNoiseParams, evaluations + options.max_evaluations, &grow_cost, &evaluations);
 
   // The growth with speed only where the held-out blocks score it better than none.
   NoiseValues v = flat;

@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "io/yaml_reader.h"
 #include "learning/predictor_file.h"
+#include "robots/omni/omni_effects.h"
 
 namespace twinsim {
 
@@ -251,6 +252,16 @@ void OmniPredictor::Save(const std::string& path) const {
     }
     out << YAML::EndMap;
   }
+  if (info_.has_driving_noise) {
+    const OmniDrivingNoise& n = info_.driving_noise;
+    out << YAML::Key << "driving_noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (int a = 0; a < 3; ++a) out << YAML::Key << kOmniAxisNames[a] << YAML::Value << n.sd[static_cast<std::size_t>(a)];
+    out << YAML::Key << "correlation_time" << YAML::Value << n.correlation_time;
+    if (n.per_speed != 0) out << YAML::Key << "per_speed" << YAML::Value << n.per_speed;
+    if (n.per_acceleration != 0) out << YAML::Key << "per_acceleration" << YAML::Value << n.per_acceleration;
+    out << YAML::Key << "simulated" << YAML::Value << n.simulated;
+    out << YAML::EndMap;
+  }
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
   WritePredictorFile(out, path);
 }
@@ -310,6 +321,18 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
     }
     b.Finish();
   }
+  if (top.Has("driving_noise")) {  // optional: files from before issue 42 and H > 1 have none
+    YamlMap d(top.Child("driving_noise"), path, "driving_noise", &errors);
+    OmniDrivingNoise& n = info.driving_noise;
+    for (int a = 0; a < 3; ++a) d.Require(kOmniAxisNames[a], &n.sd[static_cast<std::size_t>(a)], NonNegative(100));
+    d.Require("correlation_time", &n.correlation_time, InRange(1e-3, 100));
+    d.Get("per_speed", &n.per_speed, NonNegative(100));
+    d.Get("per_acceleration", &n.per_acceleration, NonNegative(100));
+    d.Require("simulated", &n.simulated);
+    d.Finish();
+    info.has_driving_noise = true;
+    if (info.layout.horizon != 1) top.Error("driving_noise", "only a predictor of one frame ahead (layout.horizon 1) drives the learned backend");
+  }
   errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();
@@ -322,6 +345,18 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
                         : MakeMlpPredictor(info, std::move(mlp));
   p.path_ = path;
   return p;
+}
+
+std::vector<OmniLog> OmniValidationParts(const std::vector<OmniLog>& logs, double fraction) {
+  std::vector<OmniLog> parts;
+  for (const OmniLog& log : logs) {
+    const int frames = log.FrameIndex(log.rows.size() - 1) + 1;
+    const int cut = static_cast<int>(std::round(frames * (1 - fraction)));
+    std::size_t first = 0;
+    while (first < log.rows.size() && log.FrameIndex(first) < cut) ++first;
+    if (log.rows.size() - first >= 2) parts.push_back(SliceOmniLog(log, first, log.rows.size()));
+  }
+  return parts;
 }
 
 bool OmniTrainOptions::IsValid(std::string* why) const {

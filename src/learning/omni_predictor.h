@@ -60,6 +60,12 @@ struct OmniPredictorInfo {
   // empty where unknown (a file from before). A window with an input beyond them by more
   // than kInputMargin of their span is one the predictor never saw the like of.
   std::vector<double> input_low, input_high;
+  // H = 1 predictors trained with a validation split: the driving noise that makes the
+  // learned backend's rollouts calibrated on the held-out rows (learning/learned_noise.h),
+  // which the learned backend then draws in place of the model's; absent (`has_driving_noise`
+  // false) in files from before issue 42 and for H > 1.
+  bool has_driving_noise = false;
+  OmniDrivingNoise driving_noise;
   // Residual predictors (layout.residual) only:
   std::string nominal_engine;       // the engine of the model it corrects: analytic, ode, bullet
   int nominal_substeps = 0;         // that model's physics steps per frame
@@ -111,6 +117,12 @@ class OmniPredictor {
   // whose parameters differ from `model`'s; `use` names the user.
   void CheckUse(const OmniModel& model, double frame_rate, int horizon, const std::string& use) const;
 
+  // Sets the driving noise the learned backend draws with this predictor (info()).
+  void SetDrivingNoise(const OmniDrivingNoise& noise) {
+    info_.has_driving_noise = true;
+    info_.driving_noise = noise;
+  }
+
   // Writes the file atomically.
   void Save(const std::string& path) const;
   // Reads and checks a file; throws InputError "path:line: what is wrong".
@@ -139,6 +151,11 @@ class OmniPredictor {
   Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs
   mutable Eigen::VectorXd scratch_;           // in, normalised inputs (linear)
 };
+
+// The rows of each log a predictor is validated on: its last `fraction` of frames, as
+// TrainOmniPredictor splits them (OmniTrainOptions::validation_fraction), each as a log of
+// its own; logs with fewer than two rows there are left out.
+std::vector<OmniLog> OmniValidationParts(const std::vector<OmniLog>& logs, double fraction);
 
 struct OmniTrainOptions {
   std::string kind = "linear";   // linear | mlp

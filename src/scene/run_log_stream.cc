@@ -4,13 +4,70 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/error.h"
 #include "scene/command_log.h"
 #include "scene/scene_run.h"
 
 namespace twinsim {
 
-RunLogStream::RunLogStream(std::string folder, std::vector<std::string> robot_names, bool ball, double frame_rate)
-    : folder_(std::move(folder)), robot_names_(std::move(robot_names)), ball_(ball), frame_rate_(frame_rate) {}
+RunLogStream::RunLogStream(std::string folder, std::vector<std::string> robot_names, bool ball, double frame_rate,
+                           bool background)
+    : folder_(std::move(folder)),
+      robot_names_(std::move(robot_names)),
+      ball_(ball),
+      frame_rate_(frame_rate),
+      background_(background) {}
+
+RunLogStream::~RunLogStream() {
+  try {
+    Finish();
+  } catch (const std::exception&) {
+    // Finish() reports it; a destructor cannot
+  }
+}
+
+void RunLogStream::Finish() {
+  if (!writer_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+  }
+  wake_.notify_one();
+  writer_.join();
+  if (!error_.empty()) throw InputError(error_);
+}
+
+void RunLogStream::Write(const std::vector<std::string>& lines) {
+  for (std::size_t f = 0; f < files_.size(); ++f)
+    if (!lines[f].empty()) files_[f].Append(lines[f]);
+}
+
+void RunLogStream::WriterLoop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    wake_.wait(lock, [this] { return done_ || !queue_.empty(); });
+    if (queue_.empty()) return;  // done, and everything written
+    std::vector<std::string> frame = std::move(queue_.front());
+    queue_.pop_front();
+    lock.unlock();
+    room_.notify_one();
+    std::string failed;
+    try {
+      Write(frame);
+    } catch (const std::exception& e) {
+      failed = e.what();
+    }
+    for (std::string& l : frame) l.clear();
+    lock.lock();
+    spare_.push_back(std::move(frame));
+    if (!failed.empty()) {
+      error_ = failed;
+      queue_.clear();
+      room_.notify_all();
+      return;
+    }
+  }
+}
 
 void RunLogStream::Open() {
   std::vector<std::pair<std::string, const char*>> files;  // name, header
@@ -27,6 +84,7 @@ void RunLogStream::Open() {
     names_.push_back(name);
   }
   lines_.resize(files_.size());
+  if (background_) writer_ = std::thread([this] { WriterLoop(); });
 }
 
 void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRecord* ball) {
@@ -42,10 +100,24 @@ void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRec
     AppendCommandRow(std::llround(records[i].t * frame_rate_), robot_names_[i], records[i], &commands);
   }
   if (ball_ && ball != nullptr) AppendBallRow(*ball, &lines_[2 * records.size()]);
-  // In file order: commands.csv last, so that it never holds a frame the others lack.
-  for (std::size_t f = 0; f < files_.size(); ++f)
-    if (!lines_[f].empty()) files_[f].Append(lines_[f]);
   ++frames_;
+  if (!background_) {
+    // In file order: commands.csv last, so that it never holds a frame the others lack.
+    Write(lines_);
+    return;
+  }
+  std::unique_lock<std::mutex> lock(mutex_);
+  room_.wait(lock, [this] { return queue_.size() < kMaxQueuedFrames || !error_.empty(); });
+  if (!error_.empty()) throw InputError(error_);
+  queue_.push_back(std::move(lines_));
+  if (spare_.empty()) {
+    lines_.assign(files_.size(), std::string());
+  } else {
+    lines_ = std::move(spare_.back());
+    spare_.pop_back();
+  }
+  lock.unlock();
+  wake_.notify_one();
 }
 
 std::vector<std::string> RunLogStream::names() const { return names_; }

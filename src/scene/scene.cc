@@ -460,6 +460,21 @@ std::string BallEngineFor(const std::vector<std::string>& backends) {
   return BallEngineFor(std::string("analytic"));
 }
 
+RobotBackendChoice RobotChoice(const SceneRobot& robot, const std::string& backend, const OmniBackendOptions& options) {
+  // A robot of its own backend brings its own predictor; the others share the field's.
+  return robot.backend.empty() ? RobotBackendChoice{backend, options.predictor}
+                               : RobotBackendChoice{robot.backend, robot.predictor};
+}
+
+OmniModel SimulatedRobotModel(const Scene& scene, const SceneRobot& robot, const RobotBackendChoice& choice) {
+  OmniModel model = robot.model;
+  if (choice.name == "learned" && choice.predictor && choice.predictor->info().has_driving_noise) {
+    model.driving_noise = choice.predictor->info().driving_noise;
+    if (scene.driving_noise != "model") model.driving_noise.simulated = scene.driving_noise == "on";
+  }
+  return model;
+}
+
 Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options,
                           const CommandSourceFactory& commands) {
   std::vector<OmniModel> models;
@@ -468,15 +483,15 @@ Simulation MakeSimulation(const Scene& scene, const std::string& backend, const 
   std::vector<std::string> labels;
   for (std::size_t i = 0; i < scene.robots.size(); ++i) {
     const SceneRobot& r = scene.robots[i];
+    const RobotBackendChoice choice = RobotChoice(r, backend, options);
+    // The backend simulates the model itself; the simulation loop draws the noise.
     models.push_back(r.model);
-    robots.push_back(SimRobot{r.name, r.model, r.start,
+    robots.push_back(SimRobot{r.name, SimulatedRobotModel(scene, r, choice), r.start,
                               commands ? commands(i)
                                        : MakeCommandSource(r.commands, scene.seed, static_cast<int>(i), scene.duration,
                                                            r.start),
                               r.present});
-    // A robot of its own backend brings its own predictor; the others share the field's.
-    choices.push_back(r.backend.empty() ? RobotBackendChoice{backend, options.predictor}
-                                        : RobotBackendChoice{r.backend, r.predictor});
+    choices.push_back(choice);
     labels.push_back(r.name);
   }
   // Where robots name their own backends, say which robots need the field's predictor

@@ -68,6 +68,9 @@ struct Scene {
   // The `cameras:` section (scene/camera_layout.h): several cameras for twinsim serve;
   // none: one camera seeing the whole field, its detections what the observer receives.
   std::optional<CameraGrid> cameras;
+  // run's and serve's --driving-noise: "on" every robot draws its driving noise, "off"
+  // none, "model" as each model (or a learned robot's predictor) says.
+  std::string driving_noise = "model";
   YAML::Node tune_pid;           // the `tune_pid:` block, read by ReadPidTuningOptions (tuning/pid_tuning.h)
 
   FrameTiming timing() const;
@@ -108,8 +111,21 @@ std::string BallEngineFor(const std::vector<std::string>& backends);
 // group of robots (GroupedOmniBackend, docs/backends.md). `commands`, when given, makes
 // robot i's command source instead of the scene's behaviour (Python's OmniSim drives
 // them from outside).
+//
+// A robot on the learned backend whose predictor carries a driving noise (`train` fits
+// one: analysis/learned_noise.h) draws that noise in place of its model's, as the
+// scene's `driving_noise` says (SimulatedRobotModel).
 using CommandSourceFactory = std::function<std::unique_ptr<CommandSource>(std::size_t robot)>;
 Simulation MakeSimulation(const Scene& scene, const std::string& backend, const OmniBackendOptions& options = {},
                           const CommandSourceFactory& commands = {});
+
+// The backend robot `robot` of `scene` runs on: its own `backend:` and `predictor:`, or
+// the field's `backend` and `options.predictor`.
+RobotBackendChoice RobotChoice(const SceneRobot& robot, const std::string& backend, const OmniBackendOptions& options);
+
+// The model robot `robot` is simulated with on `choice`: its own, or on the learned
+// backend with a predictor that carries a driving noise, that noise in place of the
+// model's, drawn as the scene's `driving_noise` says ("model": as the predictor says).
+OmniModel SimulatedRobotModel(const Scene& scene, const SceneRobot& robot, const RobotBackendChoice& choice);
 
 }  // namespace twinsim

@@ -20,15 +20,17 @@ OmniEnsemble RunOmniEnsemble(const Scene& scene, const std::string& backend, con
                              const OmniEnsembleOptions& options, const std::function<void(int, int)>& progress) {
   if (options.samples < 1) throw InputError("--samples must be 1 or more, got " + std::to_string(options.samples));
   if (options.jobs < 0) throw InputError("--jobs must be 0 (one per core) or more");
+  OmniBackendOptions backend_options;
+  if (!predictor.empty()) backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(predictor));
   bool any = false;
-  for (const SceneRobot& r : scene.robots) any = any || r.model.driving_noise.simulated;
+  for (const SceneRobot& r : scene.robots)
+    any = any || SimulatedRobotModel(scene, r, RobotChoice(r, backend, backend_options)).driving_noise.simulated;
   if (!any) {
     throw InputError(SourceLocation{scene.path},
                      "--samples needs a robot that draws driving noise, else every sample is the same run: "
-                     "--driving-noise on, or a model with driving_noise.simulated (identify writes one)");
+                     "--driving-noise on, a model with driving_noise.simulated (identify writes one), or a learned "
+                     "robot's predictor with a driving noise (train writes one)");
   }
-  OmniBackendOptions backend_options;
-  if (!predictor.empty()) backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(predictor));
   const int frames = scene.num_frames();
   OmniEnsemble out;
   out.paths.resize(static_cast<std::size_t>(options.samples));

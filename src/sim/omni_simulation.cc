@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "robots/omni/omni_driving_noise.h"
 
 namespace twinsim {
 namespace {
@@ -289,21 +290,10 @@ void Simulation::Slip(const std::vector<Twist2>& velocity_before) {
     const auto k = static_cast<std::size_t>(i);
     const OmniDrivingNoise& noise = robots_[k].model.driving_noise;
     if (!noise.simulated || !present(i) || state_.pulls[k]) continue;
-    // The Gauss-Markov process sampled exactly over a frame: s <- a s + sqrt(1 - a^2) sd w,
-    // its spread stationary at sd; the body moves on by the slip, the wheels unaware.
-    // Its spread at the speed and acceleration of the robot's own (wheel) velocity.
-    const double a = std::exp(-dt / noise.correlation_time);
-    const Twist2 v = backend_->velocity(i), v0 = velocity_before[k];
-    const double speed = std::hypot(v.vx, v.vy);
-    const double acceleration = std::hypot(v.vx - v0.vx, v.vy - v0.vy) / dt;
-    std::array<double, 3>& s = state_.slip[k];
-    for (std::size_t c = 0; c < 3; ++c) {
-      s[c] = a * s[c] + std::sqrt(1 - a * a) * state_.drive_rng.Gaussian(noise.Spread(static_cast<int>(c), speed, acceleration));
-    }
-    const Pose2 pose = backend_->pose(i);
-    const double cos_t = std::cos(pose.theta), sin_t = std::sin(pose.theta);
-    backend_->MoveBody(i, Pose2{pose.x + (cos_t * s[0] - sin_t * s[1]) * dt, pose.y + (sin_t * s[0] + cos_t * s[1]) * dt,
-                                pose.theta + s[2] * dt});
+    // The slip (robot frame) at the speed and acceleration of the robot's own (wheel)
+    // velocity; the body moves on by it, the wheels unaware.
+    backend_->MoveBody(i, SlipPose(noise, dt, backend_->velocity(i), velocity_before[k], backend_->pose(i), &state_.slip[k],
+                                   &state_.drive_rng));
   }
 }
 

@@ -1,6 +1,7 @@
 // The command line as users and scripts see it: exit codes, messages, files.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "io/csv_table.h"
@@ -146,17 +147,20 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
                 .exit_code,
             0);
   const std::string log = dir + "/drive/trajectory.csv";
-  auto trained = testing::RunTwinsim("train --model " + omni4 + " --log " + log + " --kind linear --residual --out " + dir +
-                                     "/residual.pred");
+  auto trained = testing::RunTwinsim("train --no-noise --model " + omni4 + " --log " + log +
+                                     " --kind linear --residual --out " + dir + "/residual.pred");
   ASSERT_EQ(trained.exit_code, 0) << trained.err;
   EXPECT_NE(trained.out.find("residual linear predictor of omni4, over its Newtonian model on analytic"),
             std::string::npos)
       << trained.out;
   EXPECT_EQ(testing::ReadText(dir + "/residual.pred").rfind("twinsim_predictor: 3\n", 0), 0u);
-  ASSERT_EQ(testing::RunTwinsim("train --quiet --model " + omni4 + " --log " + log + " --kind linear --out " + dir +
-                                "/seed.pred")
-                .exit_code,
-            0);
+  // A one-frame predictor carries the learned backend's driving noise, fitted on the
+  // held-out rows (issue 42), unless --no-noise.
+  EXPECT_EQ(testing::ReadText(dir + "/residual.pred").find("driving_noise"), std::string::npos);
+  auto seed = testing::RunTwinsim("train --model " + omni4 + " --log " + log + " --kind linear --out " + dir + "/seed.pred");
+  ASSERT_EQ(seed.exit_code, 0) << seed.err;
+  EXPECT_NE(seed.out.find("on the held-out rows, driving noise: forward"), std::string::npos) << seed.out;
+  EXPECT_NE(testing::ReadText(dir + "/seed.pred").find("\ndriving_noise: {forward: "), std::string::npos);
   EXPECT_EQ(testing::ReadText(dir + "/seed.pred").rfind("twinsim_predictor: 2\n", 0), 0u)
       << "the seed's predictors keep the format older builds read";
 
@@ -171,11 +175,19 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
   const std::string errors = testing::ReadText(dir + "/compare/errors.csv");
   EXPECT_NE(errors.find("\nlearned,learned,4 frames,"), std::string::npos) << errors;
   EXPECT_NE(errors.find("\nresidual,learned,4 frames,"), std::string::npos) << errors;
-  // The physics source's predictive distribution (the observer's), the learned ones none.
-  const CsvTable calibration = ParseCsvTable(testing::ReadText(dir + "/compare/calibration.csv"), "calibration.csv");
+  // The physics source's predictive distribution (the observer's) and the seed
+  // predictor's (its sampled rollouts); the residual one, without a noise, none.
+  const std::string calibration_csv = testing::ReadText(dir + "/compare/calibration.csv");
+  CsvTable calibration = ParseCsvTable(calibration_csv, "calibration.csv");
   ASSERT_EQ(calibration.header.size(), 14u);
   EXPECT_EQ(calibration.header[5], "position_50");
-  ASSERT_EQ(calibration.rows.size(), 3u);  // analytic at 4, 16 and 63 frames
+  ASSERT_EQ(calibration.rows.size(), 6u);  // analytic, then learned, at 4, 16 and 63 frames
+  EXPECT_NE(calibration_csv.find("\nlearned,learned,63,"), std::string::npos) << calibration_csv;
+  for (std::size_t i = 3; i < 6; ++i) {
+    EXPECT_GT(calibration.rows[i][4], 100) << "rows";
+    EXPECT_GT(calibration.rows[i][6], 0.5) << "the 90 % ellipses of a noise fitted on held-out rows";
+  }
+  calibration.rows.resize(3);
   for (const auto& row : calibration.rows) {
     EXPECT_GT(row[4], 100) << "rows";
     // The log is the model's own plant with no driving noise, the model's default noise
@@ -184,7 +196,17 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
     EXPECT_GE(row[6], row[5]);
     EXPECT_LE(row[6], 1.0);
   }
-  EXPECT_EQ(testing::ReadText(dir + "/compare/calibration.csv").find("learned"), std::string::npos);
+  EXPECT_EQ(calibration_csv.find("\nresidual,"), std::string::npos);
+
+  // Its rollouts sampled: replay writes t,sample,x,y,theta, three rows per input row.
+  auto sampled = testing::RunTwinsim("replay --model " + omni4 + " --log " + log + " --backend learned --predictor " + dir +
+                                     "/seed.pred --samples 3 --horizon 8 --out " + dir + "/sampled.csv");
+  ASSERT_EQ(sampled.exit_code, 0) << sampled.err;
+  const std::string sampled_csv = testing::ReadText(dir + "/sampled.csv");
+  EXPECT_EQ(sampled_csv.rfind("t,sample,x,y,theta\n", 0), 0u);
+  const std::string log_csv = testing::ReadText(log);
+  EXPECT_EQ(std::count(sampled_csv.begin(), sampled_csv.end(), '\n'),
+            1 + 3 * (std::count(log_csv.begin(), log_csv.end(), '\n') - 1));
 
   // Over a changed model (same name, heavier) it is refused, naming the file.
   testing::WriteText(dir + "/heavier.yaml", "extends: " + omni4 + "\nchassis:\n  mass: 2.8\n");

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 
+#include "core/error.h"
 #include "io/output_files.h"
 #include "scene/command_log.h"
 #include "scene/scene.h"
@@ -34,6 +35,8 @@ TEST(RunLogStream, TheStreamedFilesAreRunsFilesByteForByte) {
       "stream.yaml", ".");
   Simulation sim = MakeSimulation(scene, "analytic");
   RunLogStream stream(d + "/streamed", {"a", "b"}, /*ball=*/true, scene.frame_rate);
+  // serve's way: written by a thread of the stream's own.
+  RunLogStream background(d + "/background", {"a", "b"}, /*ball=*/true, scene.frame_rate, /*background=*/true);
   EXPECT_TRUE(stream.names().empty());
   EXPECT_FALSE(std::filesystem::exists(d + "/streamed")) << "nothing before the first frame";
   SimulationResult result;
@@ -45,12 +48,15 @@ TEST(RunLogStream, TheStreamedFilesAreRunsFilesByteForByte) {
     if (k == 50) sim.Remove(1);
     const std::vector<FrameRecord> records = sim.Step();
     stream.Append(records, &sim.ball_record());
+    background.Append(records, &sim.ball_record());
     for (std::size_t i = 0; i < 2; ++i) result.frames[i].push_back(records[i]);
     result.ball.push_back(sim.ball_record());
     lost += records[0].observed ? 0 : 1;
   }
   EXPECT_GT(lost, 5) << "the test should cover lost observations";
   EXPECT_EQ(stream.frames(), 120);
+  background.Finish();
+  background.Finish();  // a second time: nothing
   OutputFiles files(d + "/whole");
   WriteOmniRunFiles(scene, result, /*plots=*/false, &files);
   files.Write("commands.csv", CommandsCsv(result));
@@ -61,6 +67,7 @@ TEST(RunLogStream, TheStreamedFilesAreRunsFilesByteForByte) {
     const std::string whole = testing::ReadText(d + "/whole/" + name);
     EXPECT_GT(whole.size(), 100u) << name;
     EXPECT_EQ(testing::ReadText(d + "/streamed/" + name), whole) << name;
+    EXPECT_EQ(testing::ReadText(d + "/background/" + name), whole) << name;
   }
 }
 
@@ -75,6 +82,28 @@ TEST(RunLogStream, AFileThatCannotBeCreatedIsNamed) {
     EXPECT_NE(std::string(e.what()).find("in_the_way"), std::string::npos) << e.what();
   }
   EXPECT_THROW(stream.Append({FrameRecord{}, FrameRecord{}}, nullptr), std::invalid_argument);
+}
+
+// A write the system refuses on the background thread (a disk full: the trajectory
+// file is /dev/full) comes back to the caller, naming the file: from an Append after it,
+// or from Finish.
+TEST(RunLogStream, ABackgroundWriteThatFailsIsNamed) {
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string d = testing::TempDir("run_log_stream_full");
+  std::filesystem::create_directories(d + "/out");
+  std::filesystem::create_symlink("/dev/full", d + "/out/trajectory.csv");
+  bool thrown = false;
+  {
+    RunLogStream stream(d + "/out", {"a"}, false, 30, /*background=*/true);
+    try {
+      for (int k = 0; k < 10000; ++k) stream.Append({FrameRecord{}}, nullptr);
+      stream.Finish();
+    } catch (const InputError& e) {
+      thrown = true;
+      EXPECT_NE(std::string(e.what()).find(d + "/out/trajectory.csv"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(thrown);
 }
 
 }  // namespace

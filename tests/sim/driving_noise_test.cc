@@ -274,7 +274,11 @@ TEST(DrivingNoise, ReplaySamplesWritesTheContractsColumns) {
     EXPECT_EQ(table.rows[i][1], static_cast<double>(i % 3));
     EXPECT_EQ(table.rows[i][0], input.rows[i / 3][0]);
   }
-  for (const char* bad : {"--samples 3 --state tracker", "--samples 3 --horizon 0", "--samples -1"}) {
+  // The tracker's state draws rollouts under the model's driving noise instead (the
+  // learned backend's way; analysis/learned_noise_test.cc).
+  ASSERT_EQ(replay("tracker.csv", "--samples 3 --state tracker").exit_code, 0);
+  EXPECT_EQ(ParseCsvTable(testing::ReadText(dir + "/tracker.csv"), "tracker.csv").rows.size(), 3 * input.rows.size());
+  for (const char* bad : {"--samples 3 --horizon 0", "--samples -1"}) {
     EXPECT_EQ(replay("bad.csv", bad).exit_code, 2) << bad;
     EXPECT_FALSE(std::filesystem::exists(dir + "/bad.csv")) << bad;
   }

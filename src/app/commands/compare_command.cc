@@ -11,6 +11,7 @@
 #include "analysis/arm_compare.h"
 #include "analysis/omni_calibration_report.h"
 #include "analysis/omni_compare.h"
+#include "analysis/learned_noise.h"
 #include "app/commands/commands.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
@@ -308,10 +309,20 @@ int Compare(const CompareCliOptions& options) {
   const OmniCompareResult result = CompareOmniLog(
       model, log, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
 
-  // The predictive distribution of every physics source (the observer's), 4, 16 and 63
-  // frames ahead (analysis/omni_calibration.h).
+  // The predictive distribution of every physics source (the observer's), and of every
+  // learned one whose predictor has a driving noise (its sampled rollouts), 4, 16 and 63
+  // frames ahead (analysis/omni_calibration.h, analysis/learned_noise.h).
   std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>> calibration;
   for (const CompareSource& s : compare.sources) {
+    if (s.backend == "learned") {
+      const auto& predictor = s.backend_options.predictor;
+      if (!predictor || !predictor->info().has_driving_noise) continue;
+      progress.Update(0, 1, s.label + ", calibration");
+      LearnedNoiseOptions sampled;
+      sampled.stride = kCalibrationStride;
+      calibration.emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled));
+      continue;
+    }
     if (s.backend != "analytic" && s.backend != "ode" && s.backend != "bullet") continue;
     progress.Update(0, 1, s.label + ", calibration");
     calibration.emplace_back(&s, CalibrateOmniLog(model, log, s.backend, {4, 16, 63}, kCalibrationStride));
@@ -340,9 +351,10 @@ int Compare(const CompareCliOptions& options) {
                 options.log.c_str(), frame_rate, model.name.c_str(),
                 model.command_delay_frames + model.vision_delay_frames, result.FullReport().c_str());
     for (const auto& [source, c] : calibration) {
-      std::printf("calibration of %s's predictions (the observer's; energy score against the best constant spread on "
+      std::printf("calibration of %s's predictions (%s; energy score against the best constant spread on "
                   "these rows):\n%s\n",
-                  source->label.c_str(), FormatCalibrationTable(c).c_str());
+                  source->label.c_str(), source->backend == "learned" ? "its sampled rollouts" : "the observer's",
+                  FormatCalibrationTable(c).c_str());
     }
     files.PrintWrote();
   }

@@ -72,13 +72,15 @@ void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select) {
 
 void AddDrivingNoiseOption(CLI::App* cmd, std::string* value) {
   cmd->add_option("--driving-noise", *value,
-                  "on: every robot slips by its model's driving noise (docs/models.md); off: none; model: as each "
-                  "model's driving_noise.simulated says")
+                  "on: every robot slips by its model's driving noise (docs/models.md; a learned robot by its "
+                  "predictor's where it has one); off: none; model: as each model's (or predictor's) "
+                  "driving_noise.simulated says")
       ->check(CLI::IsMember({"on", "off", "model"}))
       ->capture_default_str();
 }
 
 void ApplyDrivingNoiseOption(const std::string& value, Scene* scene) {
+  scene->driving_noise = value;
   if (value == "model") return;
   for (SceneRobot& robot : scene->robots) robot.model.driving_noise.simulated = value == "on";
 }

@@ -31,7 +31,7 @@ struct ReplayOptions {
   std::string state = "observer";
   std::string predictor;
   double cutoff_hz = ArmLogOptions{}.cutoff_hz;
-  int samples = 0;             // omni: draws per row from the observer's prediction (0: the mean only)
+  int samples = 0;             // omni: draws per row (0: the mean only)
   long long seed = 1;          // their stream
   bool quiet = false;
   OmniLogSelector select;  // omni logs holding several robots
@@ -87,8 +87,6 @@ int Replay(const ReplayOptions& options) {
   replay.samples = options.samples;
   replay.seed = static_cast<std::uint64_t>(options.seed);
   if (std::string why; !replay.IsValid(&why)) throw InputError(why);
-  if (options.samples > 0 && options.backend == "learned")
-    throw InputError("--samples draws from the observer's prediction, which needs a physics backend (analytic, ode or bullet)");
   if (!options.predictor.empty())
     replay.backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
 
@@ -169,8 +167,10 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--cutoff", options->cutoff_hz, "Hz, arms: low-pass cut-off for qd/qdd derived from q")
       ->capture_default_str();
   cmd->add_option("--samples", options->samples,
-                  "Omni: N draws per row from the observer's prediction (its mean and covariance: the estimate's "
-                  "uncertainty, the driving noise and the process noise); writes t,sample,x,y,theta")
+                  "Omni: N draws per row, written as t,sample,x,y,theta. The observer's state: from its prediction "
+                  "(its mean and covariance: the estimate's uncertainty, the driving noise and the process noise). "
+                  "The tracker's (the learned backend's): N rollouts, each under its own draw of the driving noise "
+                  "(the predictor's where it has one, else the model's)")
       ->check(NonNegativeNumber());
   cmd->add_option("--seed", options->seed, "The samples' random seed")->capture_default_str()->check(NonNegativeNumber());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");

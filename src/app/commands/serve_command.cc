@@ -53,7 +53,9 @@ int Serve(ServeCommandOptions& options) {
   // field keeps a thinned history for the plots: memory stays flat for any length.
   options.serve.keep_frames = kPlotFrames;
   LiveField field(scene, MakeSimulation(scene, backend, backend_options), options.serve);
-  RunLogStream logs(out, field.result().robot_names, field.simulation().has_ball(), scene.frame_rate);
+  // Written by a thread of the stream's own: a slow write never makes a frame late.
+  RunLogStream logs(out, field.result().robot_names, field.simulation().has_ball(), scene.frame_rate,
+                    /*background=*/true);
   field.SetFrameSink([&logs](const std::vector<FrameRecord>& records, const BallRecord* ball) {
     logs.Append(records, ball);
   });
@@ -98,6 +100,7 @@ int Serve(ServeCommandOptions& options) {
                                          [&](const ServeSummary& s) { progress.Status(s.Brief()); });
   progress.Finish();
   ClearInterrupt();
+  logs.Finish();  // every frame that ran on disk (or the file a write failed on named)
 
   OutputFiles files(out);
   // commands.csv, what every robot sent, exactly: `twinsim run SCENE --commands

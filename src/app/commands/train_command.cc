@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 
+#include "analysis/learned_noise.h"
 #include "app/commands/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
@@ -31,6 +32,7 @@ struct TrainCliOptions {
   std::optional<std::string> nominal_engine;  // omni residual only
   std::optional<int> nominal_substeps;         // omni residual only
   bool quiet = false;
+  bool no_noise = false;   // omni, one frame ahead: skip the driving noise's fit
   OmniLogSelector select;  // omni logs holding several robots
 };
 
@@ -113,8 +115,19 @@ int Train(const TrainCliOptions& options) {
         progress.Update(epoch, epochs, detail);
       });
   progress.Finish();
+  // A one-frame predictor drives the learned backend: its driving noise, from the rows
+  // it was validated on (analysis/learned_noise.h).
+  OmniPredictor written = predictor;
+  std::optional<LearnedNoiseFit> noise;
+  if (train.horizon == 1 && !options.no_noise) {
+    Progress noise_progress("driving noise", !options.quiet);
+    noise = FitLearnedDrivingNoise(model, predictor, OmniValidationParts(logs, train.validation_fraction), {},
+                                   [&](int done, int total) { noise_progress.Update(done, total); });
+    noise_progress.Finish();
+    written.SetDrivingNoise(noise->noise);
+  }
   OutputFiles files;
-  predictor.Save(options.out);
+  written.Save(options.out);
   files.Add(options.out);
   if (!options.quiet) {
     const std::string over = train.residual ? ", over its Newtonian model on " + train.nominal_engine +
@@ -122,6 +135,7 @@ int Train(const TrainCliOptions& options) {
                                             : "";
     std::printf("%s predictor of %s%s, %d frame(s) ahead at %g fps: %s\n", what.c_str(), model.name.c_str(),
                 over.c_str(), train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
+    if (noise) std::printf("on the held-out rows, %s", FormatLearnedNoiseFit(*noise).c_str());
     files.PrintWrote();
   }
   return kExitOk;
@@ -180,6 +194,9 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       ->expected(1, 8);
   cmd->add_option("--patience", options->train.mlp.patience, "Epochs without held-out improvement before stopping")
       ->capture_default_str();
+  cmd->add_flag("--no-noise", options->no_noise,
+                "Omni, one frame ahead: do not fit the learned backend's driving noise on the held-out rows "
+                "(docs/learning.md); the predictor then draws the model's");
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Train(*options); });

@@ -1,0 +1,172 @@
+#include "analysis/learned_noise.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "analysis/omni_replay.h"
+#include "core/error.h"
+#include "core/pattern_search.h"
+
+namespace twinsim {
+namespace {
+
+// The search's coordinates: ln of the forward, sideways and turn spreads and of the
+// correlation time, then ln(g + kGrowthOffset) of the growths with speed and with
+// acceleration (their lower bound is a growth of 0).
+using NoiseCoordinates = std::array<double, 6>;
+constexpr int kFlat = 4;  // the coordinates of a spread the same at every speed
+constexpr double kGrowthOffset = 0.05;
+constexpr std::array<double, 6> kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0};  // m/s, m/s, rad/s, s, 1/(m/s), 1/(m/s^2)
+constexpr std::array<double, 6> kUpper{3, 3, 20, 5, 20, 20};
+
+double ToCoordinate(std::size_t i, double value) {
+  value = std::clamp(value, kLower[i], kUpper[i]);
+  return std::log(i < kFlat ? value : value + kGrowthOffset);
+}
+
+NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n) {
+  NoiseCoordinates v;
+  for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a]);
+  v[3] = ToCoordinate(3, n.correlation_time);
+  v[4] = ToCoordinate(4, n.per_speed);
+  v[5] = ToCoordinate(5, n.per_acceleration);
+  return v;
+}
+
+OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v) {
+  OmniDrivingNoise n;
+  for (std::size_t a = 0; a < 3; ++a) n.sd[a] = std::exp(v[a]);
+  n.correlation_time = std::exp(v[3]);
+  // At the lower bound a growth is 0, not the rounding left of exp(ln 0.05) - 0.05.
+  auto growth = [](double c) { return c <= std::log(kGrowthOffset) + 1e-12 ? 0.0 : std::exp(c) - kGrowthOffset; };
+  n.per_speed = growth(v[4]);
+  n.per_acceleration = growth(v[5]);
+  n.simulated = true;
+  return n;
+}
+
+NoiseCoordinates Clamp(NoiseCoordinates v) {
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::clamp(v[i], ToCoordinate(i, kLower[i]), ToCoordinate(i, kUpper[i]));
+  return v;
+}
+
+// The predicted rows of `logs` at each horizon (sorted), `predictor` drawing `noise`.
+std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, const OmniPredictor& predictor,
+                                                      const OmniDrivingNoise& noise, const std::vector<OmniLog>& logs,
+                                                      const LearnedNoiseOptions& options, std::vector<int> horizons) {
+  auto with_noise = std::make_shared<OmniPredictor>(predictor);
+  with_noise->SetDrivingNoise(noise);
+  std::vector<std::vector<PredictiveError>> rows(horizons.size());
+  for (const OmniLog& log : logs) {
+    if (log.FrameIndex(log.rows.size() - 1) <= horizons.back() + kWarmUpFrames) continue;
+    OmniReplayOptions o;
+    o.backend = "learned";
+    o.backend_options.predictor = with_noise;
+    o.horizon = horizons.back();
+    o.also.assign(horizons.begin(), horizons.end() - 1);
+    o.samples = options.samples;
+    o.seed = options.seed;
+    o.stride = options.stride;
+    const OmniReplayResult r = ReplayOmniLog(model, log, o);
+    for (std::size_t q = 0; q < horizons.size(); ++q) {
+      std::vector<PredictiveError> e = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q]);
+      rows[q].insert(rows[q].end(), e.begin(), e.end());
+    }
+  }
+  return rows;
+}
+
+double MeanCost(const std::vector<std::vector<PredictiveError>>& rows) {
+  double sum = 0;
+  for (const auto& h : rows) sum += MeanLogScore(h);
+  return sum / static_cast<double>(rows.size());
+}
+
+std::vector<int> Sorted(std::vector<int> horizons) {
+  std::sort(horizons.begin(), horizons.end());
+  horizons.erase(std::unique(horizons.begin(), horizons.end()), horizons.end());
+  if (horizons.empty() || horizons.front() < 1) throw InputError("the noise's horizons must be 1 frame or more");
+  return horizons;
+}
+
+std::vector<OmniCalibration> CalibrationOf(const std::vector<std::vector<PredictiveError>>& rows,
+                                           const std::vector<int>& horizons, double frame_period) {
+  std::vector<OmniCalibration> out;
+  for (std::size_t q = 0; q < horizons.size(); ++q) {
+    OmniCalibration c = Calibrate(rows[q], ConstantSpread(rows[q]));
+    c.frames = horizons[q];
+    c.seconds = c.frames * frame_period;
+    out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace
+
+LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredictor& predictor,
+                                       const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options,
+                                       const std::function<void(int, int)>& progress) {
+  if (predictor.info().layout.horizon != 1)
+    throw InputError("a driving noise is fitted for a predictor of one frame ahead, not " +
+                     std::to_string(predictor.info().layout.horizon));
+  const std::vector<int> horizons = Sorted(options.horizons);
+  LearnedNoiseFit out;
+  out.start = predictor.info().has_driving_noise ? predictor.info().driving_noise : model.driving_noise;
+  const int budget = 1 + options.max_evaluations + options.max_evaluations / 2;
+  auto rows_at = [&](const NoiseCoordinates& v) { return SampledRows(model, predictor, FromCoordinates(v), logs, options, horizons); };
+  std::function<double(const NoiseCoordinates&)> cost = [&](const NoiseCoordinates& v) {
+    if (progress) progress(out.evaluations, budget);
+    return MeanCost(rows_at(v));
+  };
+  const NoiseCoordinates start = ToCoordinates(out.start);
+  const std::vector<std::vector<PredictiveError>> first = rows_at(start);
+  for (const auto& h : first) out.rows += static_cast<int>(h.size());
+  if (first.back().empty()) {
+    throw InputError("the held-out rows give no prediction " + std::to_string(horizons.back()) +
+                     " frames ahead to fit the learned backend's driving noise on (a longer log, or a larger validation share)");
+  }
+  out.cost_before = MeanCost(first);
+  out.evaluations = 1;
+  double best = out.cost_before;
+  // First the same spread at every speed, then with the growths as well, from there.
+  NoiseCoordinates v =
+      PatternSearch<NoiseCoordinates>(cost, Clamp, start, kFlat, 1 + options.max_evaluations, &best, &out.evaluations);
+  v = PatternSearch<NoiseCoordinates>(cost, Clamp, v, 6, budget, &best, &out.evaluations);
+  out.cost_after = best;
+  out.noise = FromCoordinates(v);
+  out.calibration = CalibrationOf(rows_at(v), horizons, logs.front().frame_period);
+  if (progress) progress(budget, budget);
+  return out;
+}
+
+std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
+                                                     const OmniLog& log, const LearnedNoiseOptions& options) {
+  const std::vector<int> horizons = Sorted(options.horizons);
+  const OmniDrivingNoise noise = predictor.info().has_driving_noise ? predictor.info().driving_noise : model.driving_noise;
+  return CalibrationOf(SampledRows(model, predictor, noise, {log}, options, horizons), horizons, log.frame_period);
+}
+
+std::string FormatLearnedNoiseFit(const LearnedNoiseFit& fit) {
+  std::ostringstream s;
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "driving noise: forward %.3g m/s, sideways %.3g m/s, turn %.3g rad/s standing, growing by %.3g per m/s "
+                "and %.3g per m/s^2, correlation time %.3g s (%d evaluations; %.3f -> %.3f nats per row)\n",
+                fit.noise.sd[0], fit.noise.sd[1], fit.noise.sd[2], fit.noise.per_speed, fit.noise.per_acceleration,
+                fit.noise.correlation_time, fit.evaluations, fit.cost_before, fit.cost_after);
+  s << line;
+  for (const OmniCalibration& c : fit.calibration) {
+    std::snprintf(line, sizeof line,
+                  "  %2d frames (%.2f s, %d rows): 50 %% ellipse %.1f %%, 90 %% ellipse %.1f %%, energy score %.4g m "
+                  "(constant spread %.4g m)\n",
+                  c.frames, c.seconds, c.rows, 100 * c.position_50, 100 * c.position_90, c.energy_score,
+                  c.baseline_energy_score);
+    s << line;
+  }
+  return s.str();
+}
+
+}  // namespace twinsim

@@ -1,0 +1,72 @@
+// The learned backend's own driving noise (issue 42): what a learned predictor does not
+// predict, as a Gauss-Markov slip per robot axis (OmniDrivingNoise: three spreads and a
+// correlation time), chosen so that the learned backend's sampled rollouts are
+// calibrated on rows the predictor was not trained on.
+//
+// The one-step residual of a predictor is the wrong target: its inputs (the last frames)
+// already carry the slip's correlation, and the camera's noise is mixed in. So the noise
+// is fitted the way it is used. From every `stride`-th frame of the held-out logs
+// (after the tracker's warm-up) `samples` rollouts of the learned backend run K frames
+// ahead, each moved on by its own draw of the slip (analysis/omni_replay.h, the
+// tracker's samples); their covariance about the prediction, plus the camera's, is the
+// predictive distribution of the measured pose. The cost is its mean negative log
+// density at each horizon (4, 16 and 63 frames), averaged over the horizons; a pattern
+// search (core/pattern_search.h) over the logarithms of the spreads and the correlation
+// time minimises it under common random numbers (the same draws for every candidate).
+// The calibration at the end (analysis/omni_calibration.h) is on the rows it was fitted
+// on; a log the predictor never saw (`compare`) is the judge.
+//
+//   LearnedNoiseFit fit = FitLearnedDrivingNoise(model, predictor, held_out_logs, {});
+//   OmniPredictor p = *predictor;
+//   p.SetDrivingNoise(fit.noise);
+//   p.Save(path);
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "analysis/omni_calibration.h"
+#include "learning/omni_predictor.h"
+#include "robots/omni/omni_log.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+struct LearnedNoiseOptions {
+  std::vector<int> horizons{4, 16, 63};  // frames
+  int samples = 24;                      // rollouts per start
+  int stride = 4;                        // frames between starts
+  std::uint64_t seed = 1;                // of the rollouts' draws
+  int max_evaluations = 80;              // of the cost, besides the start's
+};
+
+struct LearnedNoiseFit {
+  OmniDrivingNoise noise;                    // simulated: true
+  OmniDrivingNoise start;                    // where the search began
+  std::vector<OmniCalibration> calibration;  // per horizon, on the rows fitted
+  double cost_before = 0, cost_after = 0;    // nats per row, averaged over the horizons
+  int rows = 0;                              // predicted rows scored, over the horizons
+  int evaluations = 0;
+};
+
+// Fits the driving noise of `predictor` (a one-frame one) on the learned backend over
+// `logs` (held out from its training). Throws InputError when the logs give no
+// predictions at the longest horizon.
+LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredictor& predictor,
+                                       const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options = {},
+                                       const std::function<void(int, int)>& progress = {});
+
+// The calibration of the learned backend with `predictor` (and its driving noise) on
+// `log` at each horizon, from `samples` rollouts per start (`compare`); the constant
+// spread is fitted on the same rows (a baseline with hindsight).
+std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
+                                                     const OmniLog& log, const LearnedNoiseOptions& options = {});
+
+// One line per horizon: coverage of the 50 % and 90 % ellipses, energy score against
+// the constant spread.
+std::string FormatLearnedNoiseFit(const LearnedNoiseFit& fit);
+
+}  // namespace twinsim

@@ -1,0 +1,48 @@
+// A compass (pattern) search for a few smooth-enough parameters with a costly, noisy-free
+// cost (e.g. a likelihood under common random numbers): no gradients, no line search.
+//
+// From `v`, over its first `coordinates` coordinates: each up and down by the step, on
+// along a direction while it pays (up to four steps); the step halves when a whole sweep
+// finds nothing better, from ln 2 down to ln 1.05 (the coordinates are logarithms:
+// factors of 2 down to 5 %), or until *evaluations reaches `budget`. `clamp` keeps a
+// trial within bounds. *best holds cost(v) on entry and the best found on return.
+//
+//   double best = cost(start);
+//   int evaluations = 1;
+//   auto v = PatternSearch<Values>(cost, clamp, start, 4, 80, &best, &evaluations);
+#pragma once
+
+#include <cmath>
+#include <functional>
+
+namespace twinsim {
+
+template <class V>
+V PatternSearch(const std::function<double(const V&)>& cost, const std::function<V(V)>& clamp, V v, int coordinates,
+                int budget, double* best, int* evaluations) {
+  for (double step = std::log(2.0); step >= std::log(1.05) && *evaluations < budget; step /= 2) {
+    bool moved = true;
+    while (moved && *evaluations < budget) {
+      moved = false;
+      for (int i = 0; i < coordinates && *evaluations < budget; ++i) {
+        for (double sign : {1.0, -1.0}) {
+          bool paid = false;
+          for (int k = 0; k < 4 && *evaluations < budget; ++k) {
+            V trial = v;
+            trial[i] += sign * step;
+            trial = clamp(trial);
+            if (trial[i] == v[i]) break;
+            const double c = cost(trial);
+            ++*evaluations;
+            if (c >= *best) break;
+            *best = c, v = trial, moved = paid = true;
+          }
+          if (paid) break;
+        }
+      }
+    }
+  }
+  return v;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,187 @@
+// The learned backend's driving noise (analysis/learned_noise.h; issue 42): the tracker's
+// sampled rollouts against a closed form, the predictor file carrying the noise, the
+// simulation drawing it, and a predictor's noise fitted on its held-out rows and judged
+// on a log it never saw, recorded from a wandering plant (tests/estimation/
+// wandering_plant.h: a first-order lag per axis, written apart from twinsim's models)
+// whose driving noise the fit is never told.
+#include "analysis/learned_noise.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "analysis/omni_calibration_report.h"
+#include "analysis/omni_replay.h"
+#include "estimation/wandering_plant.h"
+#include "learning/omni_predictor.h"
+#include "scene/scene.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+// A robot standing still at the origin for `seconds`, every frame measured.
+OmniLog StandingLog(double seconds, double rate) {
+  std::vector<OmniLogRow> rows;
+  for (int k = 0; k <= static_cast<int>(std::lround(seconds * rate)); ++k) rows.push_back(OmniLogRow{k / rate, Pose2{}, Twist2{}});
+  return ParseOmniLog(FormatOmniLog(rows), "standing.csv");
+}
+
+// The variance of the displacement dt sum_{k=1..K} s_k of the slip sampled exactly,
+// s_k = a s_(k-1) + sqrt(1 - a^2) sd w_k from s_0 = 0: Cov(s_i, s_j) = sd^2 a^|i-j| (1 - a^(2 min(i,j))).
+double SlipDisplacementVariance(double sd, double tau, double dt, int k) {
+  const double a = std::exp(-dt / tau);
+  double sum = 0;
+  for (int i = 1; i <= k; ++i)
+    for (int j = 1; j <= k; ++j) sum += sd * sd * std::pow(a, std::abs(i - j)) * (1 - std::pow(a, 2 * std::min(i, j)));
+  return dt * dt * sum;
+}
+
+// The tracker's samples on a robot at rest: the wheels do not see the slip, so each
+// sample's displacement is the slip's integral, whose spread is known in closed form.
+TEST(TrackerSamples, ARobotAtRestSpreadsAsItsSlipIntegrates) {
+  OmniModel model = testing::Omni4();
+  model.driving_noise.sd = {0.12, 0.05, 0.0};
+  model.driving_noise.correlation_time = 0.2;
+  const OmniLog log = StandingLog(3, 60);
+  OmniReplayOptions o;
+  o.backend = "analytic";
+  o.state = "tracker";
+  o.horizon = 30;
+  o.also = {6};
+  o.samples = 400;
+  o.stride = 40;
+  const OmniReplayResult r = ReplayOmniLog(model, log, o);
+  ASSERT_EQ(r.state, "tracker");
+  int rows = 0;
+  double vx = 0, vy = 0, vx6 = 0;
+  for (std::size_t i = 0; i < log.rows.size(); ++i) {
+    if (!r.predicted[i]) continue;
+    ++rows;
+    vx += r.covariance[i](0, 0), vy += r.covariance[i](1, 1);
+    EXPECT_EQ(r.samples[i].size(), 400u);
+    EXPECT_NEAR(r.pose[i].x, 0, 1e-9) << "the mean prediction is the plain one";
+  }
+  for (std::size_t i = 0; i < log.rows.size(); ++i)
+    if (r.also[0].predicted[i]) vx6 += r.also[0].covariance[i](0, 0) / rows;
+  ASSERT_GT(rows, 2);
+  const double dt = 1.0 / 60;
+  // 400 draws per start over `rows` starts: the variance within about 8 % (3 sigma).
+  EXPECT_NEAR(vx / rows / SlipDisplacementVariance(0.12, 0.2, dt, 30), 1, 0.08);
+  EXPECT_NEAR(vy / rows / SlipDisplacementVariance(0.05, 0.2, dt, 30), 1, 0.08);
+  EXPECT_NEAR(vx6 / SlipDisplacementVariance(0.12, 0.2, dt, 6), 1, 0.08);
+  // The same seed, the same draws; another seed, others.
+  const OmniReplayResult again = ReplayOmniLog(model, log, o);
+  o.seed = 2;
+  const OmniReplayResult other = ReplayOmniLog(model, log, o);
+  for (std::size_t i = 0; i < log.rows.size(); ++i) {
+    if (!r.predicted[i]) continue;
+    EXPECT_EQ(r.samples[i][7].x, again.samples[i][7].x);
+    EXPECT_NE(r.samples[i][7].x, other.samples[i][7].x);
+  }
+}
+
+// A wandering plant's log at 60 fps; a linear one-frame predictor trained on it.
+struct Trained {
+  OmniLog fit, unseen;
+  OmniPredictor predictor;
+};
+
+Trained TrainOnWanderingPlant(double seconds) {
+  testing::WanderingPlant plant;
+  plant.noise_sd = {0.137, 0.093, 0.71};
+  plant.noise_correlation = 0.23;
+  Trained t{testing::RecordWanderingPlant(plant, seconds, 57).log, testing::RecordWanderingPlant(plant, seconds, 58).log, {}};
+  OmniTrainOptions train;
+  train.kind = "linear";
+  train.horizon = 1;
+  t.predictor = TrainOmniPredictor(testing::Omni4(), {t.fit}, train, nullptr);
+  return t;
+}
+
+TEST(LearnedDrivingNoise, ThePredictorFileCarriesItAndTheSimulationDrawsIt) {
+  Trained t = TrainOnWanderingPlant(20);
+  EXPECT_FALSE(t.predictor.info().has_driving_noise);
+  OmniDrivingNoise n;
+  n.sd = {0.11, 0.07, 0.6};
+  n.correlation_time = 0.3;
+  n.simulated = true;
+  t.predictor.SetDrivingNoise(n);
+  const std::string dir = testing::TempDir("learned_noise");
+  const std::string path = dir + "/noisy.pred";
+  t.predictor.Save(path);
+  const OmniPredictor back = OmniPredictor::Load(path);
+  ASSERT_TRUE(back.info().has_driving_noise);
+  EXPECT_EQ(back.info().driving_noise.sd, n.sd);
+  EXPECT_EQ(back.info().driving_noise.correlation_time, n.correlation_time);
+  EXPECT_TRUE(back.info().driving_noise.simulated);
+
+  // A learned robot takes the predictor's noise; --driving-noise off turns it off; a
+  // robot on a physics backend keeps its model's.
+  Scene scene = LoadSceneFromString(
+      "name: s\nbackend: learned\nframe_rate: 60\nduration: 1\nrobots:\n  - name: a\n    model: " +
+          testing::SourcePath("models/omni4.yaml") + "\n    start: {x: 0, y: 0, theta_deg: 0}\n    commands: {type: random}\n",
+      "s.yaml", ".");
+  const auto shared = std::make_shared<const OmniPredictor>(back);
+  const SceneRobot& robot = scene.robots[0];
+  EXPECT_EQ(SimulatedRobotModel(scene, robot, {"learned", shared}).driving_noise.sd, n.sd);
+  EXPECT_TRUE(SimulatedRobotModel(scene, robot, {"learned", shared}).driving_noise.simulated);
+  EXPECT_NE(SimulatedRobotModel(scene, robot, {"analytic", shared}).driving_noise.sd, n.sd);
+  scene.driving_noise = "off";
+  EXPECT_FALSE(SimulatedRobotModel(scene, robot, {"learned", shared}).driving_noise.simulated);
+
+  // Two runs of the learned backend, the noise on: the same seed the same path, and not
+  // the path without the noise.
+  scene.driving_noise = "model";
+  OmniBackendOptions options;
+  options.predictor = shared;
+  const SimulationResult a = MakeSimulation(scene, "learned", options).Run(scene.num_frames());
+  const SimulationResult b = MakeSimulation(scene, "learned", options).Run(scene.num_frames());
+  scene.driving_noise = "off";
+  const SimulationResult c = MakeSimulation(scene, "learned", options).Run(scene.num_frames());
+  EXPECT_EQ(a.frames[0].back().truth.x, b.frames[0].back().truth.x);
+  EXPECT_NE(a.frames[0].back().truth.x, c.frames[0].back().truth.x);
+
+  // A file whose predictor looks further ahead than a frame cannot carry one.
+  std::string text = testing::ReadText(path);
+  text.replace(text.find("horizon: 1"), 10, "horizon: 4");
+  EXPECT_THROW(OmniPredictor::Load(testing::WriteText(dir + "/far.pred", text)), InputError);
+}
+
+// Fitted on the held-out 20 % of one minute, judged on another minute it never saw: the
+// 50 % and 90 % ellipses of the learned backend's sampled rollouts hold about their
+// share at 4, 16 and 63 frames. Measured: the 90 % ellipses hold 94/93/91 %, the 50 %
+// ones 62/62/52 %: the errors are more peaked than any Gaussian (a start at a frame the
+// camera lost is worse than the rest), so no spread holds both shares at short
+// horizons; the test accepts 40-65 % and 82-96 % (docs/learning.md, "The learned
+// backend's driving noise"). The spreads come out near the plant's (0.119, 0.092 m/s,
+// 0.71 rad/s against 0.137, 0.093, 0.71), the correlation time a tenth of its 0.23 s:
+// the predictor carries a slip on from the frames it sees, so a short one suffices.
+TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnAnUnseenLog) {
+  const Trained t = TrainOnWanderingPlant(60);
+  const LearnedNoiseFit fit = FitLearnedDrivingNoise(testing::Omni4(), t.predictor, OmniValidationParts({t.fit}, 0.2));
+  SCOPED_TRACE(FormatLearnedNoiseFit(fit));
+  EXPECT_LT(fit.cost_after, fit.cost_before);
+  EXPECT_TRUE(fit.noise.simulated);
+  OmniPredictor noisy = t.predictor;
+  noisy.SetDrivingNoise(fit.noise);
+  const std::vector<OmniCalibration> c = CalibrateLearnedOmniLog(testing::Omni4(), noisy, t.unseen);
+  ASSERT_EQ(c.size(), 3u);
+  SCOPED_TRACE(FormatCalibrationTable(c));
+  for (const OmniCalibration& h : c) {
+    EXPECT_GT(h.rows, 500) << h.frames;
+    EXPECT_GT(h.position_50, 0.40) << h.frames;
+    EXPECT_LT(h.position_50, 0.65) << h.frames;
+    EXPECT_GT(h.position_90, 0.82) << h.frames;
+    EXPECT_LT(h.position_90, 0.96) << h.frames;
+  }
+  // Without it (a hundredth of the spread) the intervals are far too narrow.
+  OmniDrivingNoise tiny = fit.noise;
+  for (double& s : tiny.sd) s /= 100;
+  noisy.SetDrivingNoise(tiny);
+  EXPECT_LT(CalibrateLearnedOmniLog(testing::Omni4(), noisy, t.unseen).back().position_90, 0.5);
+}
+
+}  // namespace
+}  // namespace twinsim
