@@ -307,7 +307,8 @@ int MemoryOverAMatch(double minutes, bool keep_all) {
   };
   report();
   const Served served = Serve(match, "analytic", options, frames, /*resend=*/0.02, [&](LiveField* field) {
-    if (!keep_all) logs = std::make_unique<RunLogStream>(folder, field->result().robot_names, true, match.frame_rate);
+    if (!keep_all) logs = std::make_unique<RunLogStream>(folder, field->result().robot_names, true, match.frame_rate,
+                                                               /*background=*/true);
     field->SetFrameSink([&](const std::vector<FrameRecord>& r, const BallRecord* b) {
       if (logs) logs->Append(r, b);
       ++done;
@@ -374,7 +375,7 @@ int Main(int argc, char** argv) {
   if (stream) realtime.keep_frames = 2048;
   const Served rt = Serve(match, "ode", realtime, frames, /*resend=*/0, [&](LiveField* field) {
     if (!stream) return;
-    logs = std::make_unique<RunLogStream>(folder, field->result().robot_names, true, match.frame_rate);
+    logs = std::make_unique<RunLogStream>(folder, field->result().robot_names, true, match.frame_rate, /*background=*/true);
     field->SetFrameSink([&](const std::vector<FrameRecord>& r, const BallRecord* b) {
       logs->Append(r, b);
       if (++done % per_ten_minutes == 0 || done == 3600) {

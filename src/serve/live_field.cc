@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "grSim_Robotstatus.pb.h"
 #include "serve/ball_clearance.h"
 #include "serve/grsim_packet.h"
 #include "serve/vision_packets.h"
@@ -126,6 +127,10 @@ bool ServeOptions::IsValid(std::string* why) const {
   if (grsim_port < -1 || grsim_port > 65535) return fail("--grsim-port " + std::to_string(grsim_port) + " is not in 0..65535");
   if (grsim_port > 0 && (grsim_port == control_port || grsim_port == blue_port || grsim_port == yellow_port))
     return fail("--grsim-port must differ from the control, blue and yellow ports");
+  for (const auto& [name, port] : {std::pair<const char*, int>{"--grsim-blue-status-port", grsim_blue_status_port},
+                                   {"--grsim-yellow-status-port", grsim_yellow_status_port}}) {
+    if (port < 1 || port > 65535) return fail(std::string(name) + " " + std::to_string(port) + " is not in 1..65535");
+  }
   if (vision_port < 1 || vision_port > 65535) return fail("--vision-port " + std::to_string(vision_port) + " is not in 1..65535");
   if ((control_port != 0 && (control_port == blue_port || control_port == yellow_port)) ||
       (blue_port != 0 && blue_port == yellow_port))
@@ -499,6 +504,7 @@ void LiveField::HandleGrSim(const Datagram& d) {
   ++counters_.grsim_packets;
   if (packet.commands) {
     TeamPort& team = teams_[packet.team == TeamColor::kYellow ? 1 : 0];
+    team.grsim_client = d.from;
     // Tournament mode: a team is driven from one address, over its own port or grSim's,
     // whichever it used first.
     if (options_.tournament && team.client && *team.client != d.from) {
@@ -737,6 +743,33 @@ void LiveField::FinishFrame(std::vector<FrameRecord>* records) {
   for (BallCommand& c : ball_commands_) c.kick_speed = 0;  // a kick is for its frame
   Record(*records);
   ++counters_.frames;
+  if (grsim_) SendGrSimStatus();
+}
+
+void LiveField::SendGrSimStatus() {
+  grsim_status_.resize(static_cast<std::size_t>(sim_.num_robots()), -1);
+  for (TeamPort& team : teams_) {
+    if (!team.grsim_client) continue;
+    Robots_Status status;
+    for (int i = 0; i < sim_.num_robots(); ++i) {
+      if (roster_.robot(i).team != team.team) continue;
+      const bool infrared = sim_.has_ball() && sim_.ball()->contact(i);
+      const int kick = sim_.has_ball() ? sim_.ball()->kicked(i) : 0;
+      const int now = (infrared ? 1 : 0) + (kick == 1 ? 2 : 0) + (kick == 2 ? 4 : 0);
+      int& sent = grsim_status_[static_cast<std::size_t>(i)];
+      if (now == sent) continue;
+      sent = now;
+      Robot_Status* r = status.add_robots_status();
+      r->set_robot_id(roster_.robot(i).id);
+      r->set_infrared(infrared);
+      r->set_flat_kick(kick == 1);
+      r->set_chip_kick(kick == 2);
+    }
+    if (status.robots_status_size() == 0) continue;
+    UdpEndpoint to = *team.grsim_client;
+    to.port = team.team == TeamColor::kYellow ? options_.grsim_yellow_status_port : options_.grsim_blue_status_port;
+    Answer(*grsim_, status, to);
+  }
 }
 
 }  // namespace twinsim

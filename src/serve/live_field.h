@@ -53,6 +53,11 @@ struct ServeOptions {
   int blue_port = 10301;             // blue team's RobotControl
   int yellow_port = 10302;           // yellow team's RobotControl
   int grsim_port = -1;               // grSim's protocol (serve/grsim_packet.h): -1 off; 0 any free port; grSim's is 20011
+  // grSim's robot status (Robots_Status: infrared, flat and chip kick per robot), sent with
+  // the grSim port to the address a team's last grSim packet came from, at these ports
+  // (grSim's defaults); each frame in which a robot's status changed, with those robots.
+  int grsim_blue_status_port = 30011;
+  int grsim_yellow_status_port = 30012;
   // The synchronous interface (TCP, ssl_simulation_synchronous.proto): -1 off; 0 any
   // free port. On, the field steps only when its one client asks (no UDP is read or sent).
   int sync_port = -1;
@@ -195,6 +200,7 @@ class LiveField {
     bool waited = false;                   // lockstep: named, or has sent a RobotControl
     bool answered = false;                 // has sent since this frame's vision
     std::optional<UdpEndpoint> client;     // tournament: the one address allowed; else the last
+    std::optional<UdpEndpoint> grsim_client;  // where its last grSim packet came from (its status goes there)
     double tokens = 0;                     // rate limit
   };
 
@@ -230,6 +236,9 @@ class LiveField {
   void HandleTeam(TeamPort& team, const Datagram& d);
   void HandleControl(const Datagram& d);
   void HandleGrSim(const Datagram& d);
+  // grSim's robot status after a frame: to each team that sent grSim packets, its robots
+  // whose infrared (the ball at the dribbler) or kick changed (grsim_status_).
+  void SendGrSimStatus();
   // Applies a RobotControl `team` sent (as bytes), read and checked; returns the read.
   RobotControlResult TakeRobotControl(TeamPort& team, const std::string& bytes);
   // Applies a SimulatorCommand (as bytes), read and checked; returns the read, its
@@ -261,6 +270,7 @@ class LiveField {
   std::optional<UdpSocket> grsim_;  // grSim's protocol, when asked for
   std::optional<TcpListener> sync_;  // the synchronous interface, when asked for
   double grsim_tokens_ = 0;
+  std::vector<int> grsim_status_;  // per robot, the status last sent: infrared + 2 flat + 4 chip (-1: never)
   UdpSocket vision_out_;
   UdpEndpoint vision_to_;
   int vision_delay_ = 0;                               // frames, every robot's

@@ -52,6 +52,7 @@ void BallField::Reset(const BallState& state) {
   state_.ball = engine_->GetBall();
   state_.contact.assign(robots_.size(), false);
   state_.pull.reset();
+  kicks_.clear();
 }
 
 void BallField::Pull(const Eigen::Vector2d& target) { state_.pull = BallPull{target, kPullTimeout}; }
@@ -73,6 +74,7 @@ void BallField::Restore(const BallFieldState& state) {
   if (state.contact.size() != robots_.size()) throw std::invalid_argument("BallField::Restore: another field's state");
   engine_->SetBall(state.ball);
   state_ = state;
+  kicks_.clear();
 }
 
 void BallField::AddResistance(double dt) {
@@ -114,6 +116,7 @@ void BallField::StepFrame(const std::vector<Pose2>& from, const std::vector<Pose
   // stepping on from where the state was saved.
   engine_->SetBall(state_.ball);
   std::vector<bool> kicked(n, false);  // a kicker fires once a frame
+  kicks_.assign(n, 0);
   for (int step = 0; step < steps; ++step) {
     const double t = step * dt;
     for (std::size_t i = 0; i < n; ++i) {
@@ -135,6 +138,7 @@ void BallField::StepFrame(const std::vector<Pose2>& from, const std::vector<Pose
         engine_->SetBall(kick);
         state_.ball = kick;
         kicked[i] = true;
+        kicks_[i] = c.kick_angle > 0 ? 2 : 1;
         continue;
       }
       if (c.dribbler_speed > 0) {

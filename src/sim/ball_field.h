@@ -86,6 +86,9 @@ class BallField {
   const BallState& ball() const { return state_.ball; }
   // Whether the ball touched robot i's dribbler at the end of the last frame.
   bool contact(int robot) const { return state_.contact.at(static_cast<std::size_t>(robot)); }
+  // What robot `robot`'s kicker did in the last StepFrame: 0 nothing, 1 a flat kick, 2 a
+  // chip (grSim's robot status; nothing after Reset or Restore).
+  int kicked(int robot) const { return kicks_.empty() ? 0 : kicks_.at(static_cast<std::size_t>(robot)); }
 
   // Advances one frame of `frame_dt` s: robot i moves from `from[i]` to `to[i]` (field
   // frame) at constant speed and acts on the ball with `commands[i]` (already delayed).
@@ -108,6 +111,7 @@ class BallField {
   std::unique_ptr<BallEngine> engine_;
   std::string engine_name_;
   BallFieldState state_;
+  std::vector<int> kicks_;     // per robot, kicked() of the last frame (empty: none since a reset)
   double normal_gravity_ = 0;  // m/s^2, gravity across the floor
 };
 

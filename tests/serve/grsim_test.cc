@@ -18,6 +18,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "backends/omni_backend_factory.h"
 #include "core/math_constants.h"
@@ -25,6 +26,7 @@
 #include "serve/grsim_packet.h"
 #include "serve/live_field.h"
 #include "serve/protobuf_wire.h"
+#include "grSim_Robotstatus.pb.h"
 #include "ssl_simulation_robot_feedback.pb.h"
 #include "ssl_vision_wrapper.pb.h"
 #include "test_util.h"
@@ -272,6 +274,64 @@ TEST(GrSimPort, TournamentModeKeepsATeamToTheAddressThatDrivesIt) {
   EXPECT_EQ(summary.counters.refused, summary.counters.grsim_packets) << "every intruding packet refused";
   const Pose2& at = field.result().frames[0].back().truth;
   EXPECT_LT(std::hypot(at.x, at.y), 0.001) << "blue 0 was driven by the intruder";
+}
+
+// grSim's robot status (grSim_Robotstatus.proto: Robots_Status { repeated Robot_Status
+// robots_status = 1 }, Robot_Status { robot_id = 1, infrared = 2, flat_kick = 3,
+// chip_kick = 4 }), sent to the address blue's grSim packets come from at blue's status
+// port: blue 0 drives onto a ball placed in front of it (infrared on), kicks it (a flat
+// kick, the infrared off as the ball leaves), each change once; yellow, which sent
+// nothing, hears nothing.
+TEST(GrSimPort, RobotStatusSaysWhenTheBallIsAtTheDribblerAndWhenItIsKicked) {
+  const Scene scene = GrSimScene();
+  UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0), yellow_status("127.0.0.1", 0);
+  ServeOptions o;
+  o.control_port = o.blue_port = o.yellow_port = 0;
+  o.grsim_port = 0;
+  o.grsim_blue_status_port = client.port();
+  o.grsim_yellow_status_port = yellow_status.port();
+  o.vision_port = vision.port();
+  o.lockstep = true;
+  o.teams = {"blue"};
+  o.max_frames = 60;
+  LiveField field(scene, MakeSimulation(scene, "analytic"), o);
+  std::thread server([&] { field.Run([] { return false; }); });
+  // The ball 0.25 m ahead of blue 0 (at the origin, facing +x): grSim_Replacement.ball.
+  const std::string place_ball = BytesField(2, BytesField(1, DoubleField(1, 0.25) + DoubleField(2, 0.0)));
+  std::vector<Robots_Status> heard;
+  int infrared_frame = -1, kick_frame = -1;
+  for (int k = 0; k < 60; ++k) {
+    ASSERT_TRUE(WaitForFrame(vision, static_cast<std::uint32_t>(k))) << k;
+    while (std::optional<Datagram> d = client.Receive(65536)) {
+      Robots_Status status;
+      ASSERT_TRUE(status.ParseFromString(d->bytes));
+      heard.push_back(status);
+      for (const Robot_Status& r : status.robots_status()) {
+        EXPECT_EQ(r.robot_id(), 0) << "only blue's robots";
+        if (r.infrared() && infrared_frame < 0) infrared_frame = k;
+        if (r.flat_kick()) kick_frame = k;
+        EXPECT_FALSE(r.chip_kick());
+      }
+    }
+    // Forward at 0.4 m/s until the ball is at the dribbler, then a 3 m/s flat kick.
+    const bool kick = infrared_frame >= 0 && kick_frame < 0;
+    std::string packet = GrSimCommands(false, GrSimCommand(0, infrared_frame < 0 ? 0.4f : 0.0f, 0, 0, kick ? 3.0f : 0.0f));
+    if (k == 0) packet += place_ball;
+    client.SendTo(packet, ToLoopback(field.grsim_port()));
+  }
+  server.join();
+  ASSERT_GE(infrared_frame, 0) << "the ball never reached the dribbler";
+  ASSERT_GT(kick_frame, infrared_frame) << "no flat kick reported";
+  // The first status is every blue robot's (nothing was sent before), then one per change:
+  // infrared on; the kick (and the ball gone); the kick over.
+  ASSERT_GE(heard.size(), 3u);
+  EXPECT_FALSE(heard.front().robots_status(0).infrared());
+  int kicks = 0;
+  for (const Robots_Status& s : heard) kicks += s.robots_status(0).flat_kick() ? 1 : 0;
+  EXPECT_EQ(kicks, 1);
+  EXPECT_FALSE(heard.back().robots_status(0).infrared());
+  EXPECT_FALSE(heard.back().robots_status(0).flat_kick());
+  EXPECT_FALSE(yellow_status.Receive(65536)) << "yellow sent no grSim packet";
 }
 
 }  // namespace

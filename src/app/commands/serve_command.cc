@@ -147,6 +147,13 @@ void AddServeCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--grsim-port", options->serve.grsim_port,
                   "Also take grSim's own protocol (grSim_Packet: commands and replacement) on this port\n"
                   "(grSim's is 20011; default: off; docs/serve.md)");
+  cmd->add_option("--grsim-blue-status-port", options->serve.grsim_blue_status_port,
+                  "With --grsim-port: where blue's robot status (grSim's Robots_Status) goes, at the address\n"
+                  "its grSim packets come from")
+      ->capture_default_str();
+  cmd->add_option("--grsim-yellow-status-port", options->serve.grsim_yellow_status_port,
+                  "With --grsim-port: the same for yellow")
+      ->capture_default_str();
   cmd->add_option("--sync-port", options->serve.sync_port,
                   "Serve the protocol's synchronous interface on this TCP port instead (each\n"
                   "SimulationSyncRequest steps the field; length-delimited messages; docs/serve.md)");
