@@ -106,6 +106,13 @@ std::vector<OmniCalibration> CalibrationOf(const std::vector<std::vector<Predict
 
 }  // namespace
 
+bool LongEnoughForLearnedNoise(const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options) {
+  const int longest = Sorted(options.horizons).back();
+  for (const OmniLog& log : logs)
+    if (log.rows.size() >= 2 && log.FrameIndex(log.rows.size() - 1) > longest + kWarmUpFrames) return true;
+  return false;
+}
+
 LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredictor& predictor,
                                        const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options,
                                        const std::function<void(int, int)>& progress) {

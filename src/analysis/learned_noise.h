@@ -52,6 +52,10 @@ struct LearnedNoiseFit {
   int evaluations = 0;
 };
 
+// True when some log of `logs` is long enough for a prediction at the longest horizon
+// (after the tracker's warm-up): FitLearnedDrivingNoise has rows to fit on.
+bool LongEnoughForLearnedNoise(const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options = {});
+
 // Fits the driving noise of `predictor` (a one-frame one) on the learned backend over
 // `logs` (held out from its training). Throws InputError when the logs give no
 // predictions at the longest horizon.

@@ -236,9 +236,6 @@ void FreeRun(OmniBackend& backend, const Timeline& tl, int from, int to, double 
   }
 }
 
-// The open-loop tracker: the backend moved to every measured pose, and from each frame on
-// the stride a K-frame prediction; or, with a stretch, a free run from its first row
-// (after the tracker's warm-up).
 // The tracker's sampled predictions (OmniReplayOptions::samples): from each start, N
 // rollouts of the backend K frames ahead, each moved on by a driving noise drawn from the
 // samples' own stream (SlipPose, the slip starting at rest: the measured window already
@@ -295,6 +292,11 @@ class TrackerSamples {
   Rng rng_;
 };
 
+// The open-loop tracker: the backend moved to every measured pose, and from each frame on
+// the stride a K-frame prediction; or, with a stretch, a free run from its first row
+// (after the tracker's warm-up).
+// With `samples`, each prediction's sampled rollouts too; and the shorter horizons
+// (OmniReplayOptions::also) from the same rollouts.
 void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOptions& options, const Timeline& tl,
                    const PoseCheck& check, const std::function<void(int, int)>& progress, std::size_t stretch_first,
                    std::size_t stretch_last, TrackerSamples* samples, OmniReplayResult* out) {

@@ -1125,14 +1125,11 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   const SelectionResult selection = SelectEffects(problem, options, progress);
 
   DiagnosisReport report;
-  report.robot = "arm";
-  report.model_name = model.name;
-  report.metric = "RMS over joints and held-out samples of the measured command minus the model's (N·m or N)";
-  report.block_seconds = block;
-  report.held_out_share = options.held_out;
-  for (const ArmLog& log : logs) report.logs.push_back(log.path);
-  report.guard_seconds = problem.guard_seconds();
-  ReportSelection(problem, selection, options, &report);
+  DiagnosisReportHeader header{"arm", model.name,
+                               "RMS over joints and held-out samples of the measured command minus the model's (N·m or N)",
+                               block, problem.guard_seconds(), {}};
+  for (const ArmLog& log : logs) header.logs.push_back(log.path);
+  ReportSelection(header, problem, selection, options, &report);
   if (options.refit_model) {
     ReportRefit(ArmProblem(model, logs, block, options.held_out, options.standstill),
                 "The model's own inertial parameters and friction were refitted on the fit blocks (twinsim identify's "

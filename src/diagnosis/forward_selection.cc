@@ -580,8 +580,15 @@ double ChannelGap(const DiagnosisProblem& problem, const std::vector<std::vector
 
 }  // namespace
 
-void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, const DiagnosisOptions& options,
-                     DiagnosisReport* report) {
+void ReportSelection(const DiagnosisReportHeader& header, const DiagnosisProblem& problem,
+                     const SelectionResult& selection, const DiagnosisOptions& options, DiagnosisReport* report) {
+  report->robot = header.robot;
+  report->model_name = header.model_name;
+  report->metric = header.metric;
+  report->block_seconds = header.block_seconds;
+  report->held_out_share = options.held_out;
+  report->logs = header.logs;
+  report->guard_seconds = header.guard_seconds;
   report->alpha = options.alpha;
   report->min_improvement = options.min_improvement;
   report->max_effects = options.max_effects;

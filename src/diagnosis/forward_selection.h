@@ -115,11 +115,23 @@ struct SelectionResult {
 SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOptions& options,
                               const std::function<void(const std::string&)>& progress = {});
 
-// Fills the report's gaps (test, selection and fit rows, before and after), row
-// counts, candidates, effects with their standard errors, the adequacy of the repaired
-// model and the learned yardstick, from a selection.
-void ReportSelection(const DiagnosisProblem& problem, const SelectionResult& selection, const DiagnosisOptions& options,
-                     DiagnosisReport* report);
+// What a report says of itself: the robot ("arm" or "omni"), the model, the metric, the
+// held-out blocks and the logs.
+struct DiagnosisReportHeader {
+  std::string robot;
+  std::string model_name;
+  std::string metric;
+  double block_seconds = 0;
+  double guard_seconds = 0;
+  std::vector<std::string> logs;
+};
+
+// Fills the report's header (`header`, the held-out share from `options`), its gaps
+// (test, selection and fit rows, before and after), row counts, candidates, effects with
+// their standard errors, the adequacy of the repaired model and the learned yardstick,
+// from a selection.
+void ReportSelection(const DiagnosisReportHeader& header, const DiagnosisProblem& problem,
+                     const SelectionResult& selection, const DiagnosisOptions& options, DiagnosisReport* report);
 
 // One standard error per parameter of each effect: the covariance of the fit
 // (Gauss-Newton, from numeric derivatives of FitResiduals), scaled by the residual's

@@ -917,15 +917,13 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   const SelectionResult selection = SelectEffects(problem, options, progress);
 
   DiagnosisReport report;
-  report.robot = "omni";
-  report.model_name = model.name;
-  report.metric = "RMS over held-out frames of the " + std::to_string(options.horizon) +
-                  "-frame prediction's pose error, sqrt(dx^2 + dy^2 + (r dtheta)^2) with r the chassis radius (m)";
-  report.block_seconds = block;
-  report.held_out_share = options.held_out;
-  for (const OmniLog& log : logs) report.logs.push_back(log.path);
-  report.guard_seconds = problem.guard_seconds();
-  ReportSelection(problem, selection, options, &report);
+  DiagnosisReportHeader header{"omni", model.name,
+                               "RMS over held-out frames of the " + std::to_string(options.horizon) +
+                                   "-frame prediction's pose error, sqrt(dx^2 + dy^2 + (r dtheta)^2) with r the chassis "
+                                   "radius (m)",
+                               block, problem.guard_seconds(), {}};
+  for (const OmniLog& log : logs) header.logs.push_back(log.path);
+  ReportSelection(header, problem, selection, options, &report);
   if (options.refit_model) {
     ReportRefit(OmniProblem(model, logs, options, block),
                 "The model's response was identified on the fit blocks (twinsim identify: delay, per-axis gain, lag, "

@@ -504,13 +504,13 @@ void LiveField::HandleGrSim(const Datagram& d) {
   ++counters_.grsim_packets;
   if (packet.commands) {
     TeamPort& team = teams_[packet.team == TeamColor::kYellow ? 1 : 0];
-    team.grsim_client = d.from;
     // Tournament mode: a team is driven from one address, over its own port or grSim's,
     // whichever it used first.
     if (options_.tournament && team.client && *team.client != d.from) {
       ++counters_.refused;
     } else if (TakeRobotControl(team, packet.commands->SerializeAsString()).parsed) {
       team.client = d.from;
+      team.grsim_client = d.from;  // its robots' status goes there (never to a refused address)
     }
   }
   if (packet.replacement) {

@@ -169,6 +169,17 @@ TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnAnUnseenLog) {
   const std::vector<OmniCalibration> c = CalibrateLearnedOmniLog(testing::Omni4(), noisy, t.unseen);
   ASSERT_EQ(c.size(), 3u);
   SCOPED_TRACE(FormatCalibrationTable(c));
+  // The table of docs/learning.md (scripts/learned-noise-table prints it).
+  std::string row = "{\"noise\": [" + std::to_string(fit.noise.sd[0]) + ", " + std::to_string(fit.noise.sd[1]) + ", " +
+                    std::to_string(fit.noise.sd[2]) + ", " + std::to_string(fit.noise.correlation_time) + ", " +
+                    std::to_string(fit.noise.per_speed) + "], \"horizons\": [";
+  for (const OmniCalibration& h : c) {
+    row += (&h == &c.front() ? "" : ", ") + std::string("[") + std::to_string(h.frames) + ", " + std::to_string(h.seconds) +
+           ", " + std::to_string(h.rows) + ", " + std::to_string(h.position_50) + ", " + std::to_string(h.position_90) + ", " +
+           std::to_string(h.heading_50) + ", " + std::to_string(h.heading_90) + ", " + std::to_string(h.energy_score) + ", " +
+           std::to_string(h.baseline_energy_score) + "]";
+  }
+  RecordProperty("table_row", row + "]}");
   for (const OmniCalibration& h : c) {
     EXPECT_GT(h.rows, 500) << h.frames;
     EXPECT_GT(h.position_50, 0.40) << h.frames;
