@@ -30,6 +30,8 @@ void RunLogStream::Finish() {
   if (!writer_.joinable()) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    for (std::vector<std::string>& frame : held_) queue_.push_back(std::move(frame));
+    held_.clear();
     done_ = true;
   }
   wake_.notify_one();
@@ -106,10 +108,21 @@ void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRec
     Write(lines_);
     return;
   }
-  std::unique_lock<std::mutex> lock(mutex_);
+  // The frame loop never waits on the writer: while the writer holds the queue (it may
+  // have been preempted there by a busy machine, and a real-time frame loop would wait
+  // for it: a priority inversion), the frame stays in held_ and goes with the next one.
+  // Only a queue full to its cap (the disk far behind) makes it wait.
+  held_.push_back(std::move(lines_));
+  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock() && held_.size() < kMaxQueuedFrames) {
+    lines_.assign(files_.size(), std::string());
+    return;
+  }
+  if (!lock.owns_lock()) lock.lock();
   room_.wait(lock, [this] { return queue_.size() < kMaxQueuedFrames || !error_.empty(); });
   if (!error_.empty()) throw InputError(error_);
-  queue_.push_back(std::move(lines_));
+  for (std::vector<std::string>& frame : held_) queue_.push_back(std::move(frame));
+  held_.clear();
   if (spare_.empty()) {
     lines_.assign(files_.size(), std::string());
   } else {

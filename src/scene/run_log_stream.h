@@ -8,8 +8,9 @@
 //
 // With `background`, the writes happen on a thread of the stream's own, frame by frame
 // in order: the caller (serve's frame loop) only formats the frame's lines and queues
-// them, so a slow disk or a page-cache flush does not make a frame late. The queue holds
-// at most kMaxQueuedFrames; beyond that Append waits for the disk (a log is never
+// them, never waiting for the writer (a frame the writer's lock keeps out goes with the
+// next), so a slow disk or a page-cache flush does not make a frame late. The queue
+// holds at most kMaxQueuedFrames; beyond that Append waits for the disk (a log is never
 // dropped). A write that fails is thrown by the next Append or by Finish(). After a
 // `kill -9` the files hold each frame the thread wrote, whole, commands.csv last.
 //
@@ -82,6 +83,7 @@ class RunLogStream {
   std::condition_variable wake_;  // the writer: a frame queued, or done
   std::condition_variable room_;  // the caller: the queue drained below its cap
   std::deque<std::vector<std::string>> queue_;
+  std::vector<std::vector<std::string>> held_;  // the caller's: frames not queued yet (the writer held the queue)
   std::vector<std::vector<std::string>> spare_;
   bool done_ = false;
   std::string error_;  // the first write that failed ("" none)
