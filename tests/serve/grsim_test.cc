@@ -149,6 +149,18 @@ Scene GrSimScene() {
 
 UdpEndpoint ToLoopback(int port) { return UdpEndpoint{ParseIpv4("127.0.0.1"), port}; }
 
+// `base` on free loopback ports with grSim's, vision to `vision`, in lockstep on blue's
+// commands, for `frames` frames.
+ServeOptions GrSimLockstep(ServeOptions base, const UdpSocket& vision, long long frames) {
+  base.control_port = base.blue_port = base.yellow_port = 0;
+  base.grsim_port = 0;
+  base.vision_port = vision.port();
+  base.lockstep = true;
+  base.teams = {"blue"};
+  base.max_frames = frames;
+  return base;
+}
+
 // Waits for the vision of frame k on `vision`.
 bool WaitForFrame(const UdpSocket& vision, std::uint32_t k) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
@@ -169,13 +181,7 @@ SimulationResult ServeDriven(const ServeOptions& extra, const std::function<std:
                              bool to_grsim, ServeSummary* summary = nullptr) {
   const Scene scene = GrSimScene();
   UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0);
-  ServeOptions options = extra;
-  options.control_port = options.blue_port = options.yellow_port = 0;
-  options.grsim_port = 0;
-  options.vision_port = vision.port();
-  options.lockstep = true;
-  options.teams = {"blue"};
-  options.max_frames = 30;
+  const ServeOptions options = GrSimLockstep(extra, vision, 30);
   LiveField field(scene, MakeSimulation(scene, "analytic"), options);
   std::thread server([&] {
     const ServeSummary s = field.Run([] { return false; });
@@ -242,13 +248,8 @@ TEST(GrSimPort, TournamentModeKeepsATeamToTheAddressThatDrivesIt) {
   const Scene scene = GrSimScene();
   UdpSocket vision("127.0.0.1", 0), blue("127.0.0.1", 0), intruder("127.0.0.1", 0);
   ServeOptions o;
-  o.control_port = o.blue_port = o.yellow_port = 0;
-  o.grsim_port = 0;
-  o.vision_port = vision.port();
-  o.lockstep = true;
-  o.teams = {"blue"};
   o.tournament = true;
-  o.max_frames = 20;
+  o = GrSimLockstep(o, vision, 20);
   LiveField field(scene, MakeSimulation(scene, "analytic"), o);
   ServeSummary summary;
   std::thread server([&] { summary = field.Run([] { return false; }); });
@@ -286,14 +287,9 @@ TEST(GrSimPort, RobotStatusSaysWhenTheBallIsAtTheDribblerAndWhenItIsKicked) {
   const Scene scene = GrSimScene();
   UdpSocket vision("127.0.0.1", 0), client("127.0.0.1", 0), yellow_status("127.0.0.1", 0);
   ServeOptions o;
-  o.control_port = o.blue_port = o.yellow_port = 0;
-  o.grsim_port = 0;
   o.grsim_blue_status_port = client.port();
   o.grsim_yellow_status_port = yellow_status.port();
-  o.vision_port = vision.port();
-  o.lockstep = true;
-  o.teams = {"blue"};
-  o.max_frames = 60;
+  o = GrSimLockstep(o, vision, 60);
   LiveField field(scene, MakeSimulation(scene, "analytic"), o);
   std::thread server([&] { field.Run([] { return false; }); });
   // The ball 0.25 m ahead of blue 0 (at the origin, facing +x): grSim_Replacement.ball.
