@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "analysis/omni_replay.h"
@@ -59,6 +60,11 @@ std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, co
                                                       const LearnedNoiseOptions& options, std::vector<int> horizons) {
   auto with_noise = std::make_shared<OmniPredictor>(predictor);
   with_noise->SetDrivingNoise(noise);
+  // Every stride-th frame after the warm-up, the stride grown to keep to max_starts.
+  long frames = 0;
+  for (const OmniLog& log : logs)
+    frames += std::max(0, log.FrameIndex(log.rows.size() - 1) - horizons.back() - kWarmUpFrames);
+  const int stride = std::max<long>(options.stride, (frames + options.max_starts - 1) / std::max(1, options.max_starts));
   std::vector<std::vector<PredictiveError>> rows(horizons.size());
   for (const OmniLog& log : logs) {
     if (log.FrameIndex(log.rows.size() - 1) <= horizons.back() + kWarmUpFrames) continue;
@@ -69,7 +75,7 @@ std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, co
     o.also.assign(horizons.begin(), horizons.end() - 1);
     o.samples = options.samples;
     o.seed = options.seed;
-    o.stride = options.stride;
+    o.stride = stride;
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
     for (std::size_t q = 0; q < horizons.size(); ++q) {
       std::vector<PredictiveError> e = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q]);
@@ -153,7 +159,9 @@ std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, con
                                                      const OmniLog& log, const LearnedNoiseOptions& options) {
   const std::vector<int> horizons = Sorted(options.horizons);
   const OmniDrivingNoise noise = predictor.info().has_driving_noise ? predictor.info().driving_noise : model.driving_noise;
-  return CalibrationOf(SampledRows(model, predictor, noise, {log}, options, horizons), horizons, log.frame_period);
+  LearnedNoiseOptions every = options;  // a calibration scores every stride-th frame
+  every.max_starts = std::numeric_limits<int>::max();
+  return CalibrationOf(SampledRows(model, predictor, noise, {log}, every, horizons), horizons, log.frame_period);
 }
 
 std::string FormatLearnedNoiseFit(const LearnedNoiseFit& fit) {

@@ -37,10 +37,14 @@ namespace twinsim {
 
 struct LearnedNoiseOptions {
   std::vector<int> horizons{4, 16, 63};  // frames
-  int samples = 24;                      // rollouts per start
-  int stride = 4;                        // frames between starts
+  int samples = 16;                      // rollouts per start
+  int stride = 4;                        // frames between starts at least
+  // The fit's starts over all logs at most: the stride grows on long logs (a fit's cost is
+  // starts x samples x the longest horizon per evaluation; on ten minutes at 30 fps with
+  // every 4th frame it took 3.5 minutes for a neural predictor).
+  int max_starts = 150;
   std::uint64_t seed = 1;                // of the rollouts' draws
-  int max_evaluations = 80;              // of the cost, besides the start's
+  int max_evaluations = 60;              // of the cost, besides the start's; the growths get half as many more
 };
 
 struct LearnedNoiseFit {
@@ -64,8 +68,9 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
                                        const std::function<void(int, int)>& progress = {});
 
 // The calibration of the learned backend with `predictor` (and its driving noise) on
-// `log` at each horizon, from `samples` rollouts per start (`compare`); the constant
-// spread is fitted on the same rows (a baseline with hindsight).
+// `log` at each horizon, from `samples` rollouts per start at every `stride`-th frame
+// (max_starts does not apply; `compare`); the constant spread is fitted on the same rows
+// (a baseline with hindsight).
 std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
                                                      const OmniLog& log, const LearnedNoiseOptions& options = {});
 
