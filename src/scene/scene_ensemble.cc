@@ -37,15 +37,27 @@ OmniEnsemble RunOmniEnsemble(const Scene& scene, const std::string& backend, con
   std::vector<SimulationResult> first(1);
   int done = 0;
   std::mutex progress_mutex;  // the callback is the caller's: one thread at a time
-  ParallelFor(options.samples, options.jobs, [&](int k) {
-    Simulation sim = MakeSimulation(scene, backend, backend_options);
-    sim.SetDrivingNoiseSample(scene.seed, static_cast<std::uint64_t>(k));
-    SimulationResult r = sim.Run(frames);
-    std::vector<Pose2>& path = out.paths[static_cast<std::size_t>(k)];
+  auto first_path = [](const SimulationResult& r) {
+    std::vector<Pose2> path;
     for (const FrameRecord& f : r.frames[0]) {
       const double nan = std::numeric_limits<double>::quiet_NaN();
       path.push_back(f.present ? f.truth : Pose2{nan, nan, nan});
     }
+    return path;
+  };
+  // Sample -1: no driving noise at all, the path the fan spreads around.
+  ParallelFor(options.samples + 1, options.jobs, [&](int k) {
+    if (k == options.samples) {
+      Scene still = scene;
+      still.driving_noise = "off";
+      for (SceneRobot& r : still.robots) r.model.driving_noise.simulated = false;
+      out.without_noise = first_path(MakeSimulation(still, backend, backend_options).Run(frames));
+      return;
+    }
+    Simulation sim = MakeSimulation(scene, backend, backend_options);
+    sim.SetDrivingNoiseSample(scene.seed, static_cast<std::uint64_t>(k));
+    SimulationResult r = sim.Run(frames);
+    out.paths[static_cast<std::size_t>(k)] = first_path(r);
     if (k == 0) first[0] = std::move(r);
     const std::lock_guard<std::mutex> lock(progress_mutex);
     ++done;
@@ -88,6 +100,16 @@ SeriesPlot EnsemblePlot(const OmniEnsemble& e, double mark_seconds) {
     plot.series.push_back(std::move(s));
   }
   std::rotate(plot.series.begin(), plot.series.begin() + 1, plot.series.end());  // sample 0 drawn last, on top
+  if (!e.without_noise.empty()) {
+    PlotSeries still{"without driving noise", {}, {}, false, 0x000000};
+    for (const Pose2& p : e.without_noise) {
+      still.x.push_back(p.x);
+      still.y.push_back(p.y);
+      if (!std::isfinite(p.x)) continue;
+      x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+    }
+    plot.series.push_back(std::move(still));
+  }
   // The ellipses: at each mark, a Gaussian fitted to the samples' positions.
   const double period = e.t.size() > 1 ? e.t[1] - e.t[0] : 1.0;
   const int every = std::max(1, static_cast<int>(std::lround(mark_seconds / period)));

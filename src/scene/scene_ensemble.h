@@ -33,6 +33,9 @@ struct OmniEnsemble {
   // The first robot's true pose per sample and frame ([sample][frame]); a frame the
   // robot is off the field holds NaN.
   std::vector<std::vector<Pose2>> paths;
+  // The first robot's true pose per frame with no robot drawing driving noise: the
+  // deterministic run the fan spreads around.
+  std::vector<Pose2> without_noise;
   std::string robot;                    // the first robot's name
 };
 
