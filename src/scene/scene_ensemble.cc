@@ -86,30 +86,20 @@ SeriesPlot EnsemblePlot(const OmniEnsemble& e, double mark_seconds) {
   plot.x_label = "x [m]";
   plot.y_label = "y [m]";
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-  for (std::size_t k = 0; k < e.paths.size(); ++k) {
-    PlotSeries s;
-    s.name = k == 0 ? "sample 0 (the plain run)" : "";
-    s.legend = k == 0;
-    if (k > 0) s.color = 0xbbbbbb;
-    for (const Pose2& p : e.paths[k]) {
+  // One path as a series, the bounds widened by it.
+  auto path_series = [&](const std::vector<Pose2>& path, PlotSeries s) {
+    for (const Pose2& p : path) {
       s.x.push_back(p.x);
       s.y.push_back(p.y);
-      if (!std::isfinite(p.x)) continue;
-      x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+      if (std::isfinite(p.x)) x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
     }
     plot.series.push_back(std::move(s));
-  }
+  };
+  for (std::size_t k = 0; k < e.paths.size(); ++k)
+    path_series(e.paths[k], k == 0 ? PlotSeries{"sample 0 (the plain run)", {}, {}, false, std::nullopt}
+                                   : PlotSeries{"", {}, {}, false, 0xbbbbbb, false});
   std::rotate(plot.series.begin(), plot.series.begin() + 1, plot.series.end());  // sample 0 drawn last, on top
-  if (!e.without_noise.empty()) {
-    PlotSeries still{"without driving noise", {}, {}, false, 0x000000};
-    for (const Pose2& p : e.without_noise) {
-      still.x.push_back(p.x);
-      still.y.push_back(p.y);
-      if (!std::isfinite(p.x)) continue;
-      x0 = std::min(x0, p.x), x1 = std::max(x1, p.x), y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
-    }
-    plot.series.push_back(std::move(still));
-  }
+  if (!e.without_noise.empty()) path_series(e.without_noise, PlotSeries{"without driving noise", {}, {}, false, 0x000000});
   // The ellipses: at each mark, a Gaussian fitted to the samples' positions.
   const double period = e.t.size() > 1 ? e.t[1] - e.t[0] : 1.0;
   const int every = std::max(1, static_cast<int>(std::lround(mark_seconds / period)));
