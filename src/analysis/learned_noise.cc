@@ -63,18 +63,19 @@ std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, co
   // Every stride-th frame after the warm-up, the stride grown to keep to max_starts.
   long frames = 0;
   for (const OmniLog& log : logs)
-    frames += std::max(0, log.FrameIndex(log.rows.size() - 1) - horizons.back() - kWarmUpFrames);
+    if (log.rows.size() >= 2) frames += std::max(0, log.FrameIndex(log.rows.size() - 1) - horizons.back() - kWarmUpFrames);
   const int stride = std::max<long>(options.stride, (frames + options.max_starts - 1) / std::max(1, options.max_starts));
   std::vector<std::vector<PredictiveError>> rows(horizons.size());
-  for (const OmniLog& log : logs) {
-    if (log.FrameIndex(log.rows.size() - 1) <= horizons.back() + kWarmUpFrames) continue;
+  for (std::size_t l = 0; l < logs.size(); ++l) {
+    const OmniLog& log = logs[l];
+    if (log.rows.size() < 2 || log.FrameIndex(log.rows.size() - 1) <= horizons.back() + kWarmUpFrames) continue;
     OmniReplayOptions o;
     o.backend = "learned";
     o.backend_options.predictor = with_noise;
     o.horizon = horizons.back();
     o.also.assign(horizons.begin(), horizons.end() - 1);
     o.samples = options.samples;
-    o.seed = options.seed;
+    o.seed = options.seed + 0x9e3779b97f4a7c15ULL * l;  // each log draws its own
     o.stride = stride;
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
     for (std::size_t q = 0; q < horizons.size(); ++q) {

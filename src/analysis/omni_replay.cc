@@ -239,8 +239,8 @@ void FreeRun(OmniBackend& backend, const Timeline& tl, int from, int to, double 
 // The tracker's sampled predictions (OmniReplayOptions::samples): from each start, N
 // rollouts of the backend K frames ahead, each moved on by a driving noise drawn from the
 // samples' own stream (SlipPose, the slip starting at rest: the measured window already
-// holds the motion so far). Each predicted row (and each shorter horizon's) gets its N
-// poses and their covariance about the prediction's mean.
+// holds the motion so far). Each predicted row gets its N poses, and it and each shorter
+// horizon's row the draws' covariance about the prediction without the noise.
 class TrackerSamples {
  public:
   TrackerSamples(const OmniDrivingNoise& noise, const OmniReplayOptions& options, double dt)
@@ -277,7 +277,7 @@ class TrackerSamples {
       const std::size_t row = tl.row_of_frame.at(f + horizons[h]);
       Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
       for (const Pose2& p : draws[h]) {
-        const Eigen::Vector3d d(p.x - r.pose[row].x, p.y - r.pose[row].y, p.theta - r.pose[row].theta);
+        const Eigen::Vector3d d(p.x - r.pose[row].x, p.y - r.pose[row].y, WrapAngle(p.theta - r.pose[row].theta));
         c += d * d.transpose();
       }
       r.covariance[row] = c / static_cast<double>(draws[h].size());

@@ -60,7 +60,7 @@ struct OmniReplayOptions {
   // model's process noise added; estimation/omni_observer.h). The tracker's (the learned
   // backend's): N rollouts of the backend from the start, each moved on by a draw of the
   // driving noise (robots/omni/omni_driving_noise.h), the predictor's own where it has
-  // one (learning/learned_noise.h), else the model's; their covariance about the
+  // one (analysis/learned_noise.h), else the model's; their covariance about the
   // prediction is the row's covariance.
   int samples = 0;
   std::uint64_t seed = 1;

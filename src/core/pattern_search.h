@@ -1,4 +1,4 @@
-// A compass (pattern) search for a few smooth-enough parameters with a costly, noisy-free
+// A compass (pattern) search for a few smooth-enough parameters with a costly, noise-free
 // cost (e.g. a likelihood under common random numbers): no gradients, no line search.
 //
 // From `v`, over its first `coordinates` coordinates: each up and down by the step, on

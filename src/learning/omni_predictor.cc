@@ -25,7 +25,6 @@ OmniPredictor MakeLinearPredictor(OmniPredictorInfo info, Eigen::VectorXd mean, 
   p.input_scale_ = std::move(scale);
   p.weights_ = std::move(weights);
   p.bias_ = bias;
-  p.scratch_.resize(p.input_mean_.size());
   return p;
 }
 
@@ -83,8 +82,9 @@ Eigen::Vector3d OmniPredictor::PredictDelta(const double* inputs) const {
   const long n = info_.layout.num_inputs();
   const Eigen::Map<const Eigen::VectorXd> x(inputs, n);
   if (info_.kind == "mlp") return mlp_.Predict(x) - mlp_at_rest_;
-  scratch_ = (x - input_mean_).cwiseQuotient(input_scale_);
-  return weights_ * scratch_ + bias_;
+  // No member scratch: one predictor is shared by the threads of an ensemble (run
+  // --samples --jobs) and by robots of one field.
+  return weights_ * (x - input_mean_).cwiseQuotient(input_scale_) + bias_;
 }
 
 namespace {

@@ -61,7 +61,7 @@ struct OmniPredictorInfo {
   // than kInputMargin of their span is one the predictor never saw the like of.
   std::vector<double> input_low, input_high;
   // H = 1 predictors trained with a validation split: the driving noise that makes the
-  // learned backend's rollouts calibrated on the held-out rows (learning/learned_noise.h),
+  // learned backend's rollouts calibrated on the held-out rows (analysis/learned_noise.h),
   // which the learned backend then draws in place of the model's; absent (`has_driving_noise`
   // false) in files from before issue 42 and for H > 1.
   bool has_driving_noise = false;
@@ -149,7 +149,6 @@ class OmniPredictor {
 
   Mlp mlp_;
   Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs
-  mutable Eigen::VectorXd scratch_;           // in, normalised inputs (linear)
 };
 
 // The rows of each log a predictor is validated on: its last `fraction` of frames, as

@@ -16,7 +16,12 @@ RunLogStream::RunLogStream(std::string folder, std::vector<std::string> robot_na
       robot_names_(std::move(robot_names)),
       ball_(ball),
       frame_rate_(frame_rate),
-      background_(background) {}
+      background_(background) {
+  // Started here, on the caller's thread before any frame: a thread started later from
+  // serve's frame loop would inherit its real-time priority and CPU, and write a backlog
+  // at the loop's priority, on its core.
+  if (background_) writer_ = std::thread([this] { WriterLoop(); });
+}
 
 RunLogStream::~RunLogStream() {
   try {
@@ -61,7 +66,7 @@ void RunLogStream::WriterLoop() {
     }
     for (std::string& l : frame) l.clear();
     lock.lock();
-    spare_.push_back(std::move(frame));
+    if (spare_.size() < kSpareFrames && frame.size() == files_.size()) spare_.push_back(std::move(frame));
     if (!failed.empty()) {
       error_ = failed;
       queue_.clear();
@@ -80,13 +85,21 @@ void RunLogStream::Open() {
   }
   if (ball_) files.emplace_back("ball.csv", kBallHeader);
   files.emplace_back("commands.csv", kCommandsHeader);
+  // The files are created here (a path that cannot be is named at once); the headers
+  // are written as the first frame is, by the writer thread when there is one.
+  std::vector<std::string> headers;
   for (const auto& [name, header] : files) {
     files_.emplace_back(folder_.empty() ? name : folder_ + "/" + name);
-    files_.back().Append(header);
+    headers.emplace_back(header);
     names_.push_back(name);
   }
   lines_.resize(files_.size());
-  if (background_) writer_ = std::thread([this] { WriterLoop(); });
+  if (!background_) {
+    Write(headers);
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  queue_.push_back(std::move(headers));
 }
 
 void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRecord* ball) {
@@ -113,19 +126,15 @@ void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRec
   // for it: a priority inversion), the frame stays in held_ and goes with the next one.
   // Only a queue full to its cap (the disk far behind) makes it wait.
   held_.push_back(std::move(lines_));
+  lines_.assign(files_.size(), std::string());
   std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
-  if (!lock.owns_lock() && held_.size() < kMaxQueuedFrames) {
-    lines_.assign(files_.size(), std::string());
-    return;
-  }
+  if (!lock.owns_lock() && held_.size() < kMaxQueuedFrames) return;
   if (!lock.owns_lock()) lock.lock();
-  room_.wait(lock, [this] { return queue_.size() < kMaxQueuedFrames || !error_.empty(); });
+  room_.wait(lock, [this] { return queue_.size() + held_.size() <= kMaxQueuedFrames || !error_.empty(); });
   if (!error_.empty()) throw InputError(error_);
   for (std::vector<std::string>& frame : held_) queue_.push_back(std::move(frame));
   held_.clear();
-  if (spare_.empty()) {
-    lines_.assign(files_.size(), std::string());
-  } else {
+  if (!spare_.empty()) {
     lines_ = std::move(spare_.back());
     spare_.pop_back();
   }

@@ -36,6 +36,7 @@ namespace twinsim {
 class RunLogStream {
  public:
   static constexpr std::size_t kMaxQueuedFrames = 4096;
+  static constexpr std::size_t kSpareFrames = 8;  // written frames' buffers kept for reuse
 
   // Nothing is created before the first frame (a field stopped before it writes nothing).
   RunLogStream(std::string folder, std::vector<std::string> robot_names, bool ball, double frame_rate,

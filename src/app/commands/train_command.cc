@@ -125,9 +125,9 @@ int Train(const TrainCliOptions& options) {
     // Said even with --quiet: the predictor then draws the model's noise, not its own.
     std::fprintf(stderr,
                  "train: warning: the driving noise is not fitted: the held-out rows (the last %g %% of each log) "
-                 "are too short for a prediction 63 frames ahead after the tracker's %d-frame warm-up; the learned "
+                 "are too short for a prediction %d frames ahead after the tracker's %d-frame warm-up; the learned "
                  "backend will draw the model's driving noise\n",
-                 100 * train.validation_fraction, kWarmUpFrames);
+                 100 * train.validation_fraction, LearnedNoiseOptions{}.horizons.back(), kWarmUpFrames);
   } else if (train.horizon == 1 && !options.no_noise) {
     Progress noise_progress("driving noise", !options.quiet);
     noise = FitLearnedDrivingNoise(model, predictor, held_out, {},
