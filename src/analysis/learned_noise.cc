@@ -128,7 +128,7 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
                      std::to_string(predictor.info().layout.horizon));
   const std::vector<int> horizons = Sorted(options.horizons);
   LearnedNoiseFit out;
-  out.start = predictor.info().has_driving_noise ? predictor.info().driving_noise : model.driving_noise;
+  out.start = LearnedDrivingNoise(model, &predictor);
   const int budget = 1 + options.max_evaluations + options.max_evaluations / 2;
   auto rows_at = [&](const NoiseCoordinates& v) { return SampledRows(model, predictor, FromCoordinates(v), logs, options, horizons); };
   std::function<double(const NoiseCoordinates&)> cost = [&](const NoiseCoordinates& v) {
@@ -159,7 +159,7 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
 std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
                                                      const OmniLog& log, const LearnedNoiseOptions& options) {
   const std::vector<int> horizons = Sorted(options.horizons);
-  const OmniDrivingNoise noise = predictor.info().has_driving_noise ? predictor.info().driving_noise : model.driving_noise;
+  const OmniDrivingNoise& noise = LearnedDrivingNoise(model, &predictor);
   LearnedNoiseOptions every = options;  // a calibration scores every stride-th frame
   every.max_starts = std::numeric_limits<int>::max();
   return CalibrationOf(SampledRows(model, predictor, noise, {log}, every, horizons), horizons, log.frame_period);

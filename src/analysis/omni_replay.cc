@@ -189,6 +189,30 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
   out->grip = observer.backend().grip();
 }
 
+// Sizes a replay's result in `state` for what `options` ask: per row the samples, the
+// covariances (with `covariance`), and a result of the same shape per shorter horizon
+// (its camera covariance the result's).
+void SizeResult(const OmniLog& log, const OmniReplayOptions& options, const std::string& state, bool covariance,
+                OmniReplayResult* out) {
+  const std::size_t n = log.rows.size();
+  out->state = state;
+  if (options.samples > 0) out->samples.resize(n);
+  if (covariance) out->covariance.assign(n, Eigen::Matrix3d::Zero());
+  for (std::size_t a = 0; a < options.also.size(); ++a) {
+    out->also.push_back(HeldMeasurements(log));
+    out->also.back().delay_frames = out->delay_frames;
+    out->also.back().state = state;
+    out->also.back().measurement_covariance = out->measurement_covariance;
+    if (covariance) out->also.back().covariance.assign(n, Eigen::Matrix3d::Zero());
+  }
+}
+
+// Rows not predicted hold their measured pose in every one of the `samples` samples.
+void HoldUnpredictedSamples(int samples, OmniReplayResult* out) {
+  for (std::size_t i = 0; i < out->samples.size(); ++i)
+    if (out->samples[i].empty()) out->samples[i].assign(static_cast<std::size_t>(samples), out->pose[i]);
+}
+
 // ReplayOmniLog, or with stretch_first < stretch_last the free run of ReplayOmniStretch.
 // The log's frames: the row of each frame, and the command in force at each frame (held
 // over lost frames), `delay` frames late.
@@ -236,6 +260,15 @@ void FreeRun(OmniBackend& backend, const Timeline& tl, int from, int to, double 
   }
 }
 
+// The backend's pose as the prediction of log row `row`, checked, its heading on the
+// log's unwrapped branch at `from` (rad).
+Pose2 PredictedPose(const OmniBackend& backend, std::size_t row, double from, const PoseCheck& check) {
+  Pose2 p = backend.pose(0);
+  check(row, p);
+  p.theta = from + WrapAngle(p.theta - from);
+  return p;
+}
+
 // The tracker's sampled predictions (OmniReplayOptions::samples): from each start, N
 // rollouts of the backend K frames ahead, each moved on by a driving noise drawn from the
 // samples' own stream (SlipPose, the slip starting at rest: the measured window already
@@ -264,10 +297,7 @@ class TrackerSamples {
           if (j + 1 != f + horizons[h]) continue;
           auto at = tl.row_of_frame.find(j + 1);
           if (at == tl.row_of_frame.end()) continue;
-          Pose2 p = backend.pose(0);
-          check(at->second, p);
-          p.theta = from + WrapAngle(p.theta - from);
-          draws[h].push_back(p);
+          draws[h].push_back(PredictedPose(backend, at->second, from, check));
         }
       }
     }
@@ -343,17 +373,11 @@ void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOpt
           if (j + 1 != f + options.also[a]) continue;
           auto at = tl.row_of_frame.find(j + 1);
           if (at == tl.row_of_frame.end()) continue;
-          Pose2 p = backend.pose(0);
-          check(at->second, p);
-          p.theta = from + WrapAngle(p.theta - from);
-          out->also[a].pose[at->second] = p;
+          out->also[a].pose[at->second] = PredictedPose(backend, at->second, from, check);
           out->also[a].predicted[at->second] = true;
         }
       }
-      Pose2 p = backend.pose(0);
-      check(target->second, p);
-      p.theta = from + WrapAngle(p.theta - from);
-      out->pose[target->second] = p;
+      out->pose[target->second] = PredictedPose(backend, target->second, from, check);
       out->predicted[target->second] = true;
       if (samples) samples->Draw(backend, saved, tl, f, from, check, out);
       backend.Restore(saved);
@@ -404,48 +428,23 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   }
 
   if (options.state == "observer" && backend->has_velocity_state()) {
-    out.state = "observer";
-    if (options.samples > 0) out.samples.resize(n);
-    if (options.covariance || options.samples > 0) out.covariance.assign(n, Eigen::Matrix3d::Zero());
-    for (std::size_t a = 0; a < options.also.size(); ++a) {
-      out.also.push_back(HeldMeasurements(log));
-      out.also.back().delay_frames = delay;
-      out.also.back().state = "observer";
-      if (options.covariance || options.samples > 0) out.also.back().covariance.assign(n, Eigen::Matrix3d::Zero());
-    }
+    SizeResult(log, options, "observer", options.covariance || options.samples > 0, &out);
     ObserverReplay(model, log, options, progress, stretch_first, stretch_last, tl.row_of_frame, tl.command_at, check,
                    std::move(backend), &out);
-    // Rows not predicted hold their measured pose in every sample.
-    for (std::size_t i = 0; i < out.samples.size(); ++i)
-      if (out.samples[i].empty()) out.samples[i].assign(static_cast<std::size_t>(options.samples), out.pose[i]);
+    HoldUnpredictedSamples(options.samples, &out);
     return out;
   }
   if (options.covariance && options.samples == 0)
     throw InputError("a prediction's covariance needs the observer's state (analytic, ode or bullet) or samples (--samples N) on " +
                      options.backend);
-  out.state = "tracker";
   std::optional<TrackerSamples> samples;
   if (options.samples > 0) {
-    // The learned backend draws its predictor's own driving noise where it has one.
-    const OmniDrivingNoise& noise = options.backend_options.predictor && options.backend_options.predictor->info().has_driving_noise
-                                        ? options.backend_options.predictor->info().driving_noise
-                                        : model.driving_noise;
-    samples.emplace(noise, options, 1.0 / timing.frame_rate);
-    out.samples.resize(n);
-    out.covariance.assign(n, Eigen::Matrix3d::Zero());
-    const double sxy = model.ObserverNoiseXy(), sth = model.ObserverNoiseTheta();
-    out.measurement_covariance.diagonal() << sxy * sxy, sxy * sxy, sth * sth;
+    samples.emplace(LearnedDrivingNoise(model, options.backend_options.predictor.get()), options, 1.0 / timing.frame_rate);
+    out.measurement_covariance = MeasurementCovariance(model);
   }
-  for (std::size_t a = 0; a < options.also.size(); ++a) {
-    out.also.push_back(HeldMeasurements(log));
-    out.also.back().delay_frames = delay;
-    out.also.back().state = "tracker";
-    out.also.back().measurement_covariance = out.measurement_covariance;
-    if (options.samples > 0) out.also.back().covariance.assign(n, Eigen::Matrix3d::Zero());
-  }
+  SizeResult(log, options, "tracker", options.samples > 0, &out);
   TrackerReplay(*backend, log, options, tl, check, progress, stretch_first, stretch_last, samples ? &*samples : nullptr, &out);
-  for (std::size_t i = 0; i < out.samples.size(); ++i)
-    if (out.samples[i].empty()) out.samples[i].assign(static_cast<std::size_t>(options.samples), out.pose[i]);
+  HoldUnpredictedSamples(options.samples, &out);
   out.bounded_steps = backend->bounded_steps();
   out.unseen_input_steps = backend->unseen_input_steps();
   out.grip = backend->grip();

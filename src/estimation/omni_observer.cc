@@ -46,6 +46,13 @@ FrameTiming TimingAt(double frame_rate) {
 
 }  // namespace
 
+Eigen::Matrix3d MeasurementCovariance(const OmniModel& model) {
+  const double sxy = model.ObserverNoiseXy(), sth = model.ObserverNoiseTheta();
+  Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+  r.diagonal() << sxy * sxy, sxy * sxy, sth * sth;
+  return r;
+}
+
 OmniObserver::OmniObserver(const OmniModel& model, const std::string& backend, double frame_rate,
                            const OmniObserverOptions& options)
     : OmniObserver(model, MakeFilterBackend(model, backend, TimingAt(frame_rate)), options) {}
@@ -63,8 +70,7 @@ OmniObserver::OmniObserver(const OmniModel& model, std::unique_ptr<OmniBackend> 
   if (backend_->name() != "analytic") twin_ = MakeFilterBackend(model, "analytic", timing);
   delay_ = model.command_delay_frames + model.vision_delay_frames;
   sent_.assign(static_cast<std::size_t>(delay_ + 1), Twist2{});
-  const double sxy = model.ObserverNoiseXy(), sth = model.ObserverNoiseTheta();
-  r_.diagonal() << sxy * sxy, sxy * sxy, sth * sth;
+  r_ = MeasurementCovariance(model);
   slip_decay_ = std::exp(-dt_ / model.driving_noise.correlation_time);
 }
 

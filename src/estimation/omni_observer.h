@@ -106,6 +106,10 @@ struct OmniInnovationStats {
   double last_nis = 0;
 };
 
+// The covariance of a camera pose (x, y, theta) as `model`'s observer takes it: its
+// observer noise (OmniModel::ObserverNoiseXy, ObserverNoiseTheta) squared, uncorrelated.
+Eigen::Matrix3d MeasurementCovariance(const OmniModel& model);
+
 class OmniObserver {
  public:
   // A filter for one robot of `model` on `backend` (analytic, ode or bullet) at the

@@ -347,11 +347,21 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   return p;
 }
 
+namespace {
+
+// The first frame of a log of `frames` frames that validates (the last `fraction` of them).
+int ValidationCut(int frames, double fraction) { return static_cast<int>(std::round(frames * (1 - fraction))); }
+
+}  // namespace
+
+const OmniDrivingNoise& LearnedDrivingNoise(const OmniModel& model, const OmniPredictor* predictor) {
+  return predictor && predictor->info().has_driving_noise ? predictor->info().driving_noise : model.driving_noise;
+}
+
 std::vector<OmniLog> OmniValidationParts(const std::vector<OmniLog>& logs, double fraction) {
   std::vector<OmniLog> parts;
   for (const OmniLog& log : logs) {
-    const int frames = log.FrameIndex(log.rows.size() - 1) + 1;
-    const int cut = static_cast<int>(std::round(frames * (1 - fraction)));
+    const int cut = ValidationCut(log.FrameIndex(log.rows.size() - 1) + 1, fraction);
     std::size_t first = 0;
     while (first < log.rows.size() && log.FrameIndex(first) < cut) ++first;
     if (log.rows.size() - first >= 2) parts.push_back(SliceOmniLog(log, first, log.rows.size()));
@@ -566,7 +576,7 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
       throw InputError(SourceLocation{log.path}, msg.str());
     }
     SplitLog part{ToFrameSequence(log, info->layout), 0, {}};
-    part.cut = static_cast<int>(std::round(part.seq.frames() * (1 - options.validation_fraction)));
+    part.cut = ValidationCut(part.seq.frames(), options.validation_fraction);
     int n_train = 0, n_val = 0;
     if (track) {
       const int before_train = train->rows(), before_val = validation->rows();

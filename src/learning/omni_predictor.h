@@ -156,6 +156,10 @@ class OmniPredictor {
 // its own; logs with fewer than two rows there are left out.
 std::vector<OmniLog> OmniValidationParts(const std::vector<OmniLog>& logs, double fraction);
 
+// The driving noise a robot of `model` draws on the learned backend with `predictor`
+// (null: none): the predictor's own where it has one (`train` fits it), else the model's.
+const OmniDrivingNoise& LearnedDrivingNoise(const OmniModel& model, const OmniPredictor* predictor);
+
 struct OmniTrainOptions {
   std::string kind = "linear";   // linear | mlp
   int horizon = 1;               // H, frames

@@ -35,13 +35,17 @@ void RunLogStream::Finish() {
   if (!writer_.joinable()) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    for (std::vector<std::string>& frame : held_) queue_.push_back(std::move(frame));
-    held_.clear();
+    QueueHeld();
     done_ = true;
   }
   wake_.notify_one();
   writer_.join();
   if (!error_.empty()) throw InputError(error_);
+}
+
+void RunLogStream::QueueHeld() {
+  for (std::vector<std::string>& frame : held_) queue_.push_back(std::move(frame));
+  held_.clear();
 }
 
 void RunLogStream::Write(const std::vector<std::string>& lines) {
@@ -132,8 +136,7 @@ void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRec
   if (!lock.owns_lock()) lock.lock();
   room_.wait(lock, [this] { return queue_.size() + held_.size() <= kMaxQueuedFrames || !error_.empty(); });
   if (!error_.empty()) throw InputError(error_);
-  for (std::vector<std::string>& frame : held_) queue_.push_back(std::move(frame));
-  held_.clear();
+  QueueHeld();
   if (!spare_.empty()) {
     lines_ = std::move(spare_.back());
     spare_.pop_back();

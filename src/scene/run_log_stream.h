@@ -66,6 +66,8 @@ class RunLogStream {
   // Writes one frame's lines, file by file in order (commands.csv last).
   void Write(const std::vector<std::string>& lines);
   void WriterLoop();
+  // Moves the frames the caller holds to the writer's queue (mutex_ held).
+  void QueueHeld();
 
   std::string folder_;
   std::vector<std::string> robot_names_;

@@ -468,10 +468,8 @@ RobotBackendChoice RobotChoice(const SceneRobot& robot, const std::string& backe
 
 OmniModel SimulatedRobotModel(const Scene& scene, const SceneRobot& robot, const RobotBackendChoice& choice) {
   OmniModel model = robot.model;
-  if (choice.name == "learned" && choice.predictor && choice.predictor->info().has_driving_noise) {
-    model.driving_noise = choice.predictor->info().driving_noise;
-    if (scene.driving_noise != "model") model.driving_noise.simulated = scene.driving_noise == "on";
-  }
+  if (choice.name == "learned") model.driving_noise = LearnedDrivingNoise(robot.model, choice.predictor.get());
+  if (scene.driving_noise != "model") model.driving_noise.simulated = scene.driving_noise == "on";
   return model;
 }
 

@@ -125,7 +125,8 @@ RobotBackendChoice RobotChoice(const SceneRobot& robot, const std::string& backe
 
 // The model robot `robot` is simulated with on `choice`: its own, or on the learned
 // backend with a predictor that carries a driving noise, that noise in place of the
-// model's, drawn as the scene's `driving_noise` says ("model": as the predictor says).
+// model's; its driving noise drawn as the scene's `driving_noise` says ("model": as the
+// model, or that predictor, says).
 OmniModel SimulatedRobotModel(const Scene& scene, const SceneRobot& robot, const RobotBackendChoice& choice);
 
 }  // namespace twinsim

@@ -50,7 +50,6 @@ OmniEnsemble RunOmniEnsemble(const Scene& scene, const std::string& backend, con
     if (k == options.samples) {
       Scene still = scene;
       still.driving_noise = "off";
-      for (SceneRobot& r : still.robots) r.model.driving_noise.simulated = false;
       out.without_noise = first_path(MakeSimulation(still, backend, backend_options).Run(frames));
       return;
     }

@@ -22,10 +22,9 @@ struct OmniLogSelector;
 void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select);
 
 // --driving-noise on|off|model: whether every omni robot of a scene slips by its model's
-// driving noise (docs/models.md), or as each model's driving_noise.simulated says.
-struct Scene;
+// driving noise (docs/models.md), or as each model's driving_noise.simulated says; the
+// value goes into Scene::driving_noise, which MakeSimulation applies.
 void AddDrivingNoiseOption(CLI::App* cmd, std::string* value);
-void ApplyDrivingNoiseOption(const std::string& value, Scene* scene);
 
 void AddRunCommand(CLI::App& app, int* exit_code);
 void AddReplayCommand(CLI::App& app, int* exit_code);

@@ -5,7 +5,6 @@
 
 #include "app/commands/commands.h"
 #include "robots/omni/omni_log.h"
-#include "scene/scene.h"
 
 namespace twinsim {
 namespace {
@@ -77,12 +76,6 @@ void AddDrivingNoiseOption(CLI::App* cmd, std::string* value) {
                   "driving_noise.simulated says")
       ->check(CLI::IsMember({"on", "off", "model"}))
       ->capture_default_str();
-}
-
-void ApplyDrivingNoiseOption(const std::string& value, Scene* scene) {
-  scene->driving_noise = value;
-  if (value == "model") return;
-  for (SceneRobot& robot : scene->robots) robot.model.driving_noise.simulated = value == "on";
 }
 
 }  // namespace twinsim

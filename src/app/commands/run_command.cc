@@ -113,7 +113,7 @@ int Run(const RunOptions& options) {
     return RunArm(options);
   }
   Scene scene = LoadScene(options.scene);
-  ApplyDrivingNoiseOption(options.driving_noise, &scene);
+  scene.driving_noise = options.driving_noise;
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
   if (!options.commands.empty()) ReplayCommandLog(options.commands, &scene);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;

@@ -38,7 +38,7 @@ struct ServeCommandOptions {
 int Serve(ServeCommandOptions& options) {
   Scene scene = LoadScene(options.scene);
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
-  ApplyDrivingNoiseOption(options.driving_noise, &scene);
+  scene.driving_noise = options.driving_noise;
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   const std::string out = options.out.empty() ? "out/" + scene.name : options.out;
   if (!options.teams.empty()) {

@@ -120,20 +120,22 @@ int Train(const TrainCliOptions& options) {
   // it was validated on (analysis/learned_noise.h).
   OmniPredictor written = predictor;
   std::optional<LearnedNoiseFit> noise;
-  const std::vector<OmniLog> held_out = OmniValidationParts(logs, train.validation_fraction);
-  if (train.horizon == 1 && !options.no_noise && !LongEnoughForLearnedNoise(held_out)) {
-    // Said even with --quiet: the predictor then draws the model's noise, not its own.
-    std::fprintf(stderr,
-                 "train: warning: the driving noise is not fitted: the held-out rows (the last %g %% of each log) "
-                 "are too short for a prediction %d frames ahead after the tracker's %d-frame warm-up; the learned "
-                 "backend will draw the model's driving noise\n",
-                 100 * train.validation_fraction, LearnedNoiseOptions{}.horizons.back(), kWarmUpFrames);
-  } else if (train.horizon == 1 && !options.no_noise) {
-    Progress noise_progress("driving noise", !options.quiet);
-    noise = FitLearnedDrivingNoise(model, predictor, held_out, {},
-                                   [&](int done, int total) { noise_progress.Update(done, total); });
-    noise_progress.Finish();
-    written.SetDrivingNoise(noise->noise);
+  if (train.horizon == 1 && !options.no_noise) {
+    const std::vector<OmniLog> held_out = OmniValidationParts(logs, train.validation_fraction);
+    if (!LongEnoughForLearnedNoise(held_out)) {
+      // Said even with --quiet: the predictor then draws the model's noise, not its own.
+      std::fprintf(stderr,
+                   "train: warning: the driving noise is not fitted: the held-out rows (the last %g %% of each log) "
+                   "are too short for a prediction %d frames ahead after the tracker's %d-frame warm-up; the learned "
+                   "backend will draw the model's driving noise\n",
+                   100 * train.validation_fraction, LearnedNoiseOptions{}.horizons.back(), kWarmUpFrames);
+    } else {
+      Progress noise_progress("driving noise", !options.quiet);
+      noise = FitLearnedDrivingNoise(model, predictor, held_out, {},
+                                     [&](int done, int total) { noise_progress.Update(done, total); });
+      noise_progress.Finish();
+      written.SetDrivingNoise(noise->noise);
+    }
   }
   OutputFiles files;
   written.Save(options.out);
