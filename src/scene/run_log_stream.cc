@@ -49,6 +49,14 @@ void RunLogStream::QueueHeld() {
 }
 
 void RunLogStream::Write(const std::vector<std::string>& lines) {
+  // The files are created by the first write (the headers), on the writer's thread when
+  // there is one: creating a file, or emptying a large one left by an earlier match,
+  // can take the file system a hundred milliseconds, and serve's frame loop must not wait.
+  if (files_.empty()) {
+    std::vector<AppendFile> files;  // all or none: a write after a failed one tries again
+    for (const std::string& name : names_) files.emplace_back(folder_.empty() ? name : folder_ + "/" + name);
+    files_ = std::move(files);
+  }
   for (std::size_t f = 0; f < files_.size(); ++f)
     if (!lines[f].empty()) files_[f].Append(lines[f]);
 }
@@ -70,7 +78,7 @@ void RunLogStream::WriterLoop() {
     }
     for (std::string& l : frame) l.clear();
     lock.lock();
-    if (spare_.size() < kSpareFrames && frame.size() == files_.size()) spare_.push_back(std::move(frame));
+    if (spare_.size() < kSpareFrames && frame.size() == names_.size()) spare_.push_back(std::move(frame));
     if (!failed.empty()) {
       error_ = failed;
       queue_.clear();
@@ -89,15 +97,15 @@ void RunLogStream::Open() {
   }
   if (ball_) files.emplace_back("ball.csv", kBallHeader);
   files.emplace_back("commands.csv", kCommandsHeader);
-  // The files are created here (a path that cannot be is named at once); the headers
-  // are written as the first frame is, by the writer thread when there is one.
+  // Created, headers first, by the first Write: here without a writer thread (a path
+  // that cannot be created is named at once), else by the writer (named by the next
+  // Append or by Finish).
   std::vector<std::string> headers;
   for (const auto& [name, header] : files) {
-    files_.emplace_back(folder_.empty() ? name : folder_ + "/" + name);
     headers.emplace_back(header);
     names_.push_back(name);
   }
-  lines_.resize(files_.size());
+  lines_.resize(names_.size());
   if (!background_) {
     Write(headers);
     return;
@@ -109,7 +117,7 @@ void RunLogStream::Open() {
 void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRecord* ball) {
   if (records.size() != robot_names_.size())
     throw std::invalid_argument("RunLogStream::Append: records of another number of robots");
-  if (files_.empty()) Open();
+  if (names_.empty()) Open();
   for (std::string& l : lines_) l.clear();
   std::string& commands = lines_.back();
   for (std::size_t i = 0; i < records.size(); ++i) {
@@ -130,7 +138,7 @@ void RunLogStream::Append(const std::vector<FrameRecord>& records, const BallRec
   // for it: a priority inversion), the frame stays in held_ and goes with the next one.
   // Only a queue full to its cap (the disk far behind) makes it wait.
   held_.push_back(std::move(lines_));
-  lines_.assign(files_.size(), std::string());
+  lines_.assign(names_.size(), std::string());
   std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
   if (!lock.owns_lock() && held_.size() < kMaxQueuedFrames) return;
   if (!lock.owns_lock()) lock.lock();

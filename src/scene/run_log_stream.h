@@ -47,9 +47,11 @@ class RunLogStream {
   RunLogStream& operator=(const RunLogStream&) = delete;
 
   // Appends one frame: `records` per robot (as the robot names), the ball's (null
-  // without a ball). The first call creates the folder and the files (emptying those of
-  // an earlier run), headers first. Throws InputError naming a file that cannot be
-  // created or written, std::invalid_argument for records of another number of robots.
+  // without a ball). The first frame creates the folder and the files (emptying those
+  // of an earlier run), headers first: in the background, on the writer's thread. Throws
+  // InputError naming a file that cannot be created or written (in the background, one
+  // an earlier frame's write failed on), std::invalid_argument for records of another
+  // number of robots.
   void Append(const std::vector<FrameRecord>& records, const BallRecord* ball);
 
   // Background: waits until every queued frame is written and stops the thread; throws
@@ -74,7 +76,8 @@ class RunLogStream {
   bool ball_ = false;
   double frame_rate_ = 0;  // Hz
   long long frames_ = 0;
-  // Per robot: trajectory, truth; then ball (with one) and commands.
+  // Per robot: trajectory, truth; then ball (with one) and commands. Touched only by
+  // Write (the writer thread's, with one).
   std::vector<AppendFile> files_;
   std::vector<std::string> names_;
   std::vector<std::string> lines_;  // per file, the frame's lines (kept to reuse their memory)

@@ -2,6 +2,7 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cmath>
@@ -155,6 +156,33 @@ bool ServeOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+
+// What the kernel has done to the calling thread so far.
+rusage ThreadUsage() {
+  rusage u{};
+  getrusage(RUSAGE_THREAD, &u);
+  return u;
+}
+
+// Adds b - a to `stall`'s counts.
+void AddUsage(const rusage& a, const rusage& b, ServeTiming::Stall* stall) {
+  stall->minor_faults += b.ru_minflt - a.ru_minflt;
+  stall->major_faults += b.ru_majflt - a.ru_majflt;
+  stall->voluntary += b.ru_nvcsw - a.ru_nvcsw;
+  stall->involuntary += b.ru_nivcsw - a.ru_nivcsw;
+}
+
+}  // namespace
+
+std::string ServeTiming::Stall::Brief() const {
+  if (frame < 0) return "none";
+  std::ostringstream s;
+  s << work * 1e3 << " ms at frame " << frame << " (" << vision * 1e3 << " ms of it the vision; page faults " << minor_faults << " minor, " << major_faults
+    << " major; context switches " << voluntary << " voluntary, " << involuntary << " involuntary)";
+  return s.str();
+}
+
 std::string ServeSummary::Brief() const {
   std::ostringstream s;
   s << counters.frames << " frames (" << simulated << " s simulated) in " << wall << " s wall; blue "
@@ -181,6 +209,7 @@ std::string ServeSummary::Report() const {
     << "failed sends " << counters.failed_sends << (last_send_error.empty() ? "" : " (last: " + last_send_error + ")")
     << "\n"
     << "frame work " << timing.frame_work.Brief() << "\n"
+    << "slowest frame " << timing.slowest.Brief() << "\n"
     << "frame start lateness " << timing.start_lateness.Brief() << "\n"
     << "command latency (arrival to delay line) " << timing.command_latency.Brief() << "\n"
     << "  of which after the read " << timing.command_handling.Brief() << "\n"
@@ -660,6 +689,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
   if (grsim_) sockets.push_back(&*grsim_);
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
+    const rusage usage_start = ThreadUsage();
     const Clock::time_point frame_start = Clock::now();
     if (!options_.lockstep) {
       timing_.start_lateness.Add(Seconds(frame_start - frame_end));
@@ -668,6 +698,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     std::vector<FrameRecord> records = OpenFrame();
     SendVision(records);
     const Clock::duration vision_work = Clock::now() - frame_start;
+    const rusage usage_vision = ThreadUsage();
     for (TeamPort& t : teams_) t.answered = false;
     if (!options_.lockstep) {
       frame_end += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt / speed_));
@@ -717,9 +748,20 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       }
     }
     if (stopped) break;  // the begun frame is not logged: it has no commands
+    const rusage usage_step = ThreadUsage();
     const Clock::time_point step_start = Clock::now();
     FinishFrame(&records);
-    timing_.frame_work.Add(Seconds(vision_work + (Clock::now() - step_start)));
+    const double work = Seconds(vision_work + (Clock::now() - step_start));
+    timing_.frame_work.Add(work);
+    if (work > timing_.slowest.work) {
+      ServeTiming::Stall stall;
+      stall.frame = counters_.frames - 1;
+      stall.work = work;
+      stall.vision = Seconds(vision_work);
+      AddUsage(usage_start, usage_vision, &stall);
+      AddUsage(usage_step, ThreadUsage(), &stall);
+      timing_.slowest = stall;
+    }
   }
   return Summary();
 }

@@ -128,6 +128,19 @@ struct ServeTiming {
   // datagram (parsing, checking, storing); the rest is the datagram waiting to be read.
   DurationHistogram command_handling{1e-6, 5000};
   long long unstamped = 0;  // of those, arrivals without a kernel stamp (the time recv returned)
+  // The frame whose work took longest, with what the kernel did to the serving thread
+  // meanwhile (getrusage per thread): a stall with major faults waited for the disk,
+  // one with involuntary switches was preempted, one with neither ran its own code.
+  struct Stall {
+    long long frame = -1;      // its index, -1 none yet
+    double work = 0;           // s
+    double vision = 0;         // s of it capturing and sending the vision
+    long minor_faults = 0;     // page faults served without I/O
+    long major_faults = 0;     // page faults that read from disk
+    long voluntary = 0;        // context switches the thread asked for (a blocking call)
+    long involuntary = 0;      // context switches forced on it (preemption)
+    std::string Brief() const;
+  } slowest;
 };
 
 struct ServeSummary {

@@ -84,6 +84,22 @@ TEST(RunLogStream, AFileThatCannotBeCreatedIsNamed) {
   EXPECT_THROW(stream.Append({FrameRecord{}, FrameRecord{}}, nullptr), std::invalid_argument);
 }
 
+// In the background the writer creates the files (serve's frame loop never waits for the
+// file system): a folder that cannot be made comes back from Finish, named.
+TEST(RunLogStream, ABackgroundFileThatCannotBeCreatedIsNamedByFinish) {
+  const std::string d = testing::TempDir("run_log_stream_bad_background");
+  testing::WriteText(d + "/in_the_way", "a file where the folder should be");
+  RunLogStream stream(d + "/in_the_way/out", {"a"}, false, 30, /*background=*/true);
+  try {
+    stream.Append({FrameRecord{}}, nullptr);
+    stream.Finish();
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("in_the_way"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(d + "/in_the_way/out"));
+}
+
 // A write the system refuses on the background thread (a disk full: the trajectory
 // file is /dev/full) comes back to the caller, naming the file: from an Append after it,
 // or from Finish.
