@@ -5,6 +5,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -80,6 +81,30 @@ constexpr double kResendPeriod = 0.25;  // s
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
+// What the kernel has done to the calling thread so far.
+rusage ThreadUsage() {
+  rusage u{};
+  getrusage(RUSAGE_THREAD, &u);
+  return u;
+}
+
+// The frame `frame`, whose work took `work` s (`vision` s of it the vision), with what the
+// kernel did to the thread over its two parts: from a[0] to a[1] and from b[0] to b[1].
+ServeTiming::Stall StallOf(long long frame, double work, double vision, const std::array<rusage, 2>& a,
+                           const std::array<rusage, 2>& b) {
+  ServeTiming::Stall s;
+  s.frame = frame;
+  s.work = work;
+  s.vision = vision;
+  for (const auto& [from, to] : {std::pair(a[0], a[1]), std::pair(b[0], b[1])}) {
+    s.minor_faults += to.ru_minflt - from.ru_minflt;
+    s.major_faults += to.ru_majflt - from.ru_majflt;
+    s.voluntary += to.ru_nvcsw - from.ru_nvcsw;
+    s.involuntary += to.ru_nivcsw - from.ru_nivcsw;
+  }
+  return s;
+}
+
 double UnixNow() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
@@ -154,68 +179,6 @@ bool ServeOptions::IsValid(std::string* why) const {
   if (max_frames < 0) return fail("--frames is negative");
   if (keep_frames < 0) return fail("keep_frames is negative");
   return true;
-}
-
-namespace {
-
-// What the kernel has done to the calling thread so far.
-rusage ThreadUsage() {
-  rusage u{};
-  getrusage(RUSAGE_THREAD, &u);
-  return u;
-}
-
-// Adds b - a to `stall`'s counts.
-void AddUsage(const rusage& a, const rusage& b, ServeTiming::Stall* stall) {
-  stall->minor_faults += b.ru_minflt - a.ru_minflt;
-  stall->major_faults += b.ru_majflt - a.ru_majflt;
-  stall->voluntary += b.ru_nvcsw - a.ru_nvcsw;
-  stall->involuntary += b.ru_nivcsw - a.ru_nivcsw;
-}
-
-}  // namespace
-
-std::string ServeTiming::Stall::Brief() const {
-  if (frame < 0) return "none";
-  std::ostringstream s;
-  s << work * 1e3 << " ms at frame " << frame << " (" << vision * 1e3 << " ms of it the vision; page faults " << minor_faults << " minor, " << major_faults
-    << " major; context switches " << voluntary << " voluntary, " << involuntary << " involuntary)";
-  return s.str();
-}
-
-std::string ServeSummary::Brief() const {
-  std::ostringstream s;
-  s << counters.frames << " frames (" << simulated << " s simulated) in " << wall << " s wall; blue "
-    << (clients[0].empty() ? "-" : clients[0]) << ", yellow " << (clients[1].empty() ? "-" : clients[1]) << "; "
-    << counters.refused << " refused, " << counters.malformed + counters.oversized + counters.rate_dropped
-    << " bad datagrams";
-  if (counters.kernel_dropped > 0) s << ", " << counters.kernel_dropped << " dropped by the kernel";
-  if (counters.failed_sends > 0) s << ", " << counters.failed_sends << " sends failed (" << last_send_error << ")";
-  return s.str();
-}
-
-std::string ServeSummary::Report() const {
-  std::ostringstream s;
-  s << "frames " << counters.frames << " (" << simulated << " s simulated, " << wall << " s wall)\n"
-    << "vision packets sent " << counters.vision_packets << "\n"
-    << "robot controls " << counters.robot_controls << ", simulator commands " << counters.simulator_commands
-    << ", grSim packets " << counters.grsim_packets << "\n"
-    << "refused " << counters.refused << ", malformed " << counters.malformed << ", oversized "
-    << counters.oversized << ", over the rate limit " << counters.rate_dropped << "\n"
-    << "late frames " << counters.late_frames << "\n"
-    << "dropped by the kernel (receive buffer full) " << counters.kernel_dropped << "; receive buffer "
-    << receive_buffer << " bytes per port of " << receive_buffer_asked << " asked"
-    << (receive_buffer < receive_buffer_asked ? " (raise net.core.rmem_max, or run with CAP_NET_ADMIN)" : "") << "\n"
-    << "failed sends " << counters.failed_sends << (last_send_error.empty() ? "" : " (last: " + last_send_error + ")")
-    << "\n"
-    << "frame work " << timing.frame_work.Brief() << "\n"
-    << "slowest frame " << timing.slowest.Brief() << "\n"
-    << "frame start lateness " << timing.start_lateness.Brief() << "\n"
-    << "command latency (arrival to delay line) " << timing.command_latency.Brief() << "\n"
-    << "  of which after the read " << timing.command_handling.Brief() << "\n"
-    << "blue client " << (clients[0].empty() ? "-" : clients[0]) << ", yellow client "
-    << (clients[1].empty() ? "-" : clients[1]) << "\n";
-  return s.str();
 }
 
 LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& options)
@@ -689,7 +652,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
   if (grsim_) sockets.push_back(&*grsim_);
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
-    const rusage usage_start = ThreadUsage();
+    const rusage ru_start = ThreadUsage();
     const Clock::time_point frame_start = Clock::now();
     if (!options_.lockstep) {
       timing_.start_lateness.Add(Seconds(frame_start - frame_end));
@@ -698,7 +661,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     std::vector<FrameRecord> records = OpenFrame();
     SendVision(records);
     const Clock::duration vision_work = Clock::now() - frame_start;
-    const rusage usage_vision = ThreadUsage();
+    const rusage ru_vision = ThreadUsage();
     for (TeamPort& t : teams_) t.answered = false;
     if (!options_.lockstep) {
       frame_end += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt / speed_));
@@ -748,20 +711,13 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       }
     }
     if (stopped) break;  // the begun frame is not logged: it has no commands
-    const rusage usage_step = ThreadUsage();
+    const rusage ru_step = ThreadUsage();
     const Clock::time_point step_start = Clock::now();
     FinishFrame(&records);
     const double work = Seconds(vision_work + (Clock::now() - step_start));
     timing_.frame_work.Add(work);
-    if (work > timing_.slowest.work) {
-      ServeTiming::Stall stall;
-      stall.frame = counters_.frames - 1;
-      stall.work = work;
-      stall.vision = Seconds(vision_work);
-      AddUsage(usage_start, usage_vision, &stall);
-      AddUsage(usage_step, ThreadUsage(), &stall);
-      timing_.slowest = stall;
-    }
+    if (work > timing_.slowest.work) timing_.slowest = StallOf(counters_.frames - 1, work, Seconds(vision_work),
+                                                               {ru_start, ru_vision}, {ru_step, ThreadUsage()});
   }
   return Summary();
 }
