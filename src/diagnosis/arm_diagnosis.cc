@@ -192,8 +192,8 @@ class ArmProblem : public DiagnosisProblem {
       d.kind.resize(static_cast<std::size_t>(rows));
       d.block.resize(static_cast<std::size_t>(rows));
       for (int r = 0; r < rows; ++r) {
-        d.kind[static_cast<std::size_t>(r)] = DiagnosisRowKind(log.t[r] - log.t[0], block_seconds, held_out, guard_seconds_);
-        d.block[static_cast<std::size_t>(r)] = blocks + DiagnosisBlockIndex(log.t[r] - log.t[0], block_seconds);
+        d.kind[static_cast<std::size_t>(r)] = HeldOutRowKind(log.t[r] - log.t[0], block_seconds, held_out, guard_seconds_);
+        d.block[static_cast<std::size_t>(r)] = blocks + TimeBlockIndex(log.t[r] - log.t[0], block_seconds);
       }
       blocks = d.block.back() + 1;
       data_.push_back(std::move(d));
@@ -1026,7 +1026,7 @@ double CheckArmInputs(const ArmModel& model, const std::vector<ArmLog>& logs, co
     }
     durations.push_back(log.t[log.rows() - 1] - log.t[0]);
   }
-  const double block = DiagnosisBlockSeconds(options, durations);
+  const double block = HeldOutBlockSeconds(options.block_seconds, durations);
   for (const ArmLog& log : logs) {
     std::vector<double> t(log.t.data(), log.t.data() + log.rows() - log.edge_samples);
     CheckLogHoldsOut(t, static_cast<std::size_t>(log.edge_samples), block, options.held_out, log.path);

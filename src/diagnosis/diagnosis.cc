@@ -28,84 +28,6 @@ bool DiagnosisOptions::IsValid(std::string* why) const {
   return true;
 }
 
-double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<double>& durations) {
-  if (options.block_seconds > 0) return options.block_seconds;
-  double longest = 0;
-  for (double d : durations) longest = std::max(longest, d);
-  return std::clamp(longest / 20, 0.5, 10.0);
-}
-
-int DiagnosisBlockIndex(double t, double block_seconds) {
-  return static_cast<int>(std::floor(std::max(0.0, t) / block_seconds));
-}
-
-namespace {
-
-// The golden ratio's fractional part, (sqrt 5 - 1) / 2: block k is held out where
-// frac(k g) < h (a Weyl sequence: equidistributed, never periodic).
-constexpr double kGoldenFraction = 0.6180339887498948482;
-
-bool HeldOutBlockIndex(long k, double held_out) {
-  if (k < 1) return false;  // the first block is always kept for fitting
-  const double x = static_cast<double>(k) * kGoldenFraction;
-  return x - std::floor(x) < held_out;
-}
-
-}  // namespace
-
-bool InHeldOutBlock(double t, double block_seconds, double held_out) {
-  return HeldOutBlockIndex(static_cast<long>(std::floor(t / block_seconds)), held_out);
-}
-
-RowKind DiagnosisRowKind(double t, double block_seconds, double held_out, double guard_seconds) {
-  auto kind_at = [&](double u) {
-    if (u < 0) u = 0;  // before the log: as its first block
-    const long k = static_cast<long>(std::floor(u / block_seconds));
-    if (!HeldOutBlockIndex(k, held_out)) return RowKind::kFit;
-    long before = 0;  // held-out blocks before block k
-    for (long j = 1; j < k; ++j) before += HeldOutBlockIndex(j, held_out) ? 1 : 0;
-    return before % 2 == 0 ? RowKind::kSelection : RowKind::kTest;
-  };
-  const RowKind here = kind_at(t);
-  const double guard = std::min(guard_seconds, 0.45 * block_seconds);
-  if (guard > 0 && (kind_at(t - guard) != here || kind_at(t + guard) != here)) return RowKind::kGuard;
-  return here;
-}
-
-void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double block_seconds, double held_out,
-                      const std::string& path) {
-  std::set<long> held, fit;
-  for (std::size_t i = first; i < t.size(); ++i) {
-    const long k = static_cast<long>(std::floor((t[i] - t.front()) / block_seconds));
-    (InHeldOutBlock(t[i] - t.front(), block_seconds, held_out) ? held : fit).insert(k);
-  }
-  if (held.size() < 2 || fit.size() < 2) {
-    char msg[256];
-    std::snprintf(msg, sizeof msg,
-                  "the log is %.3g s long: too short to hold out two %.3g s blocks for checking beside two for fitting "
-                  "(give a longer log, or a shorter --block)",
-                  t.empty() ? 0.0 : t.back() - t.front(), block_seconds);
-    throw InputError(SourceLocation{path, 1}, msg);
-  }
-}
-
-int CorrelationLength(const std::vector<double>& x, int max_lag) {
-  const std::size_t n = x.size();
-  if (n < 4) return 1;
-  double mean = 0;
-  for (double v : x) mean += v;
-  mean /= static_cast<double>(n);
-  double c0 = 0;
-  for (double v : x) c0 += (v - mean) * (v - mean);
-  if (c0 <= 0) return 1;
-  for (int lag = 1; lag <= max_lag && static_cast<std::size_t>(lag) < n; ++lag) {
-    double c = 0;
-    for (std::size_t i = static_cast<std::size_t>(lag); i < n; ++i) c += (x[i] - mean) * (x[i - static_cast<std::size_t>(lag)] - mean);
-    if (c / c0 < std::exp(-1.0)) return lag;
-  }
-  return max_lag;
-}
-
 ReversalWindows::ReversalWindows(const std::vector<double>& t, const std::vector<double>& v, double stand,
                                  double window)
     : window_(window) {
@@ -170,18 +92,6 @@ void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vecto
   for (double& p : *psd) p /= std::max(count, 1);
   frequency->resize(static_cast<std::size_t>(bins));
   for (int b = 0; b < bins; ++b) (*frequency)[static_cast<std::size_t>(b)] = b * rate / segment;
-}
-
-double RobustSigma(std::vector<double> x) {
-  if (x.empty()) return 0;
-  auto median = [](std::vector<double>& v) {
-    const std::size_t mid = v.size() / 2;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
-    return v[mid];
-  };
-  const double m = median(x);
-  for (double& v : x) v = std::abs(v - m);
-  return 1.4826 * median(x);
 }
 
 double Correlation(const std::vector<double>& a, const std::vector<double>& b) {

@@ -27,7 +27,9 @@
 #include <string>
 #include <vector>
 
+#include "analysis/held_out_blocks.h"
 #include "diagnosis/statistics.h"
+#include "signal/series_statistics.h"
 
 namespace twinsim {
 
@@ -274,44 +276,10 @@ void ResidualSpectra(const std::vector<double>& before, const std::vector<double
 // Root mean square of v (0 when empty).
 double Rms(const std::vector<double>& v);
 
-// The block length for logs of these durations (s) under `options`.
-double DiagnosisBlockSeconds(const DiagnosisOptions& options, const std::vector<double>& durations);
-
-// What a residual row is for. The held-out blocks (InHeldOutBlock) alternate between
-// selection (the 1st, 3rd, ... held-out block: choose the effects) and test (the 2nd,
-// 4th, ...: report the gaps, choose nothing). Rows within `guard` s of a boundary
-// between blocks of different kinds are guards, used by nothing: a zero-phase filter's
-// derivatives and a prediction's start reach across a boundary by about that much.
-enum class RowKind : char { kFit, kSelection, kTest, kGuard };
-RowKind DiagnosisRowKind(double t, double block_seconds, double held_out, double guard_seconds);
-
-// The block (0, 1, ...) the sample at time t (s from the log's start) lies in.
-int DiagnosisBlockIndex(double t, double block_seconds);
-
-// Whether the sample at time t (s from the log's start) lies in a held-out block:
-// blocks k = floor(t / block) >= 1 are held out where frac(k g) < h, g = (sqrt 5 - 1) / 2,
-// the first block always kept for fitting. A Weyl sequence: a share h of the blocks,
-// spread over the log (gaps of two or three sizes), and never periodic, so the held-out
-// blocks cannot line up with a periodic excitation (an evenly repeating pattern, every
-// 5th block for h = 0.4, put the selection blocks of a 10 s Fourier excitation cut into
-// 1 s blocks on 2 phases of it; issue 41).
-bool InHeldOutBlock(double t, double block_seconds, double held_out);
-
-// Throws InputError "path:1: ..." unless the times `t` (s, from `first` on; the rows a
-// residual exists for) span at least two held-out and two fit blocks.
-void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double block_seconds, double held_out,
-                      const std::string& path);
-
-// The first lag (rows) where the autocorrelation of x falls below 1/e, at most max_lag.
-int CorrelationLength(const std::vector<double>& x, int max_lag);
-
 // Welch's power spectral density of x sampled at `rate` Hz (Hann windows of `segment`
 // samples, half overlapping); fills frequency (Hz) and psd (unit^2/Hz).
 void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vector<double>* frequency,
               std::vector<double>* psd);
-
-// The median absolute deviation scaled to a Gaussian's standard deviation.
-double RobustSigma(std::vector<double> x);
 
 // Pearson correlation of a and b (0 when either is constant).
 double Correlation(const std::vector<double>& a, const std::vector<double>& b);

@@ -9,13 +9,14 @@
 #include <set>
 #include <stdexcept>
 
+#include "analysis/camera_noise.h"
 #include "analysis/fixed_step_cost.h"
 #include "analysis/omni_horizons.h"
 #include "analysis/omni_replay.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
 #include "diagnosis/forward_selection.h"
-#include "diagnosis/omni_identification.h"
+#include "identification/omni/omni_identification.h"
 #include "learning/omni_predictor.h"
 
 namespace twinsim {
@@ -86,8 +87,8 @@ class OmniProblem : public DiagnosisProblem {
       d.kind.resize(log.rows.size());
       d.block.resize(log.rows.size());
       for (std::size_t i = 0; i < log.rows.size(); ++i) {
-        d.kind[i] = DiagnosisRowKind(log.rows[i].t - log.rows[0].t, block_seconds, options.held_out, guard_seconds_);
-        d.block[i] = blocks + DiagnosisBlockIndex(log.rows[i].t - log.rows[0].t, block_seconds);
+        d.kind[i] = HeldOutRowKind(log.rows[i].t - log.rows[0].t, block_seconds, options.held_out, guard_seconds_);
+        d.block[i] = blocks + TimeBlockIndex(log.rows[i].t - log.rows[0].t, block_seconds);
       }
       if (!d.block.empty()) blocks = d.block.back() + 1;
       data_.push_back(std::move(d));
@@ -593,37 +594,6 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
   return out;
 }
 
-
-double OmniNoiseFloor(const std::vector<OmniLog>& logs, double radius, double* var_xy_out, double* var_theta_out) {
-  double var_xy = 0, var_theta = 0;
-  for (const OmniLog& log : logs) {
-    // Camera noise from third differences (a smooth path's are tiny): var = E[d3^2] / 20,
-    // over four consecutive frames that each hold a new measurement (a repeated or
-    // missing pose is not the camera's noise).
-    std::vector<double> d3x, d3y, d3t;
-    for (std::size_t i = 3; i < log.rows.size(); ++i) {
-      if (log.FrameIndex(i) - log.FrameIndex(i - 3) != 3) continue;
-      if (!(log.rows[i].measured && log.rows[i - 1].measured && log.rows[i - 2].measured && log.rows[i - 3].measured))
-        continue;
-      auto third = [&](auto get) {
-        return get(log.rows[i]) - 3 * get(log.rows[i - 1]) + 3 * get(log.rows[i - 2]) - get(log.rows[i - 3]);
-      };
-      d3x.push_back(third([](const OmniLogRow& r) { return r.pose.x; }));
-      d3y.push_back(third([](const OmniLogRow& r) { return r.pose.y; }));
-      d3t.push_back(third([](const OmniLogRow& r) { return r.pose.theta; }));
-    }
-    const double sx = RobustSigma(d3x), sy = RobustSigma(d3y), st = RobustSigma(d3t);
-    var_xy += (sx * sx + sy * sy) / 2 / 20;
-    var_theta += st * st / 20;
-  }
-  var_xy /= static_cast<double>(logs.size());
-  var_theta /= static_cast<double>(logs.size());
-  if (var_xy_out) *var_xy_out = var_xy;
-  if (var_theta_out) *var_theta_out = var_theta;
-  // Start and end poses both carry the camera's noise.
-  return std::sqrt(4 * var_xy + 2 * radius * radius * var_theta);
-}
-
 namespace {
 
 // The test-row gap of the given, (identified,) repaired model and the two no-model
@@ -711,7 +681,7 @@ double CheckOmniInputs(const OmniModel& model, const std::vector<OmniLog>& logs,
       throw InputError(SourceLocation{log.path, 1}, "the log's frame period differs from the first log's: diagnose logs of one camera rate together");
     }
   }
-  const double block = DiagnosisBlockSeconds(options, durations);
+  const double block = HeldOutBlockSeconds(options.block_seconds, durations);
   const int first_predicted = model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + options.horizon;
   for (const OmniLog& log : logs) {
     std::vector<double> t;

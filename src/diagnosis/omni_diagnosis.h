@@ -32,11 +32,4 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
                              OmniModel* repaired = nullptr,
                              const std::function<void(const std::string&)>& progress = {});
 
-// The metric's noise floor (m): what a perfect model's 4-frame prediction error would
-// be from the camera's noise alone, estimated from third differences of the poses over
-// four consecutive frames that each hold a new measurement. *var_xy (m^2, per
-// coordinate) and *var_theta (rad^2) receive the camera's variances where given.
-double OmniNoiseFloor(const std::vector<OmniLog>& logs, double radius, double* var_xy = nullptr,
-                      double* var_theta = nullptr);
-
 }  // namespace twinsim

@@ -190,7 +190,7 @@ TEST(DiagnosisBlocks, HeldOutBlocksMeetEveryPhaseOfAPeriodicExcitation) {
     const int blocks = 60;  // a minute of 1 s blocks; the excitation repeats every 10
     for (int k = 0; k < blocks; ++k) {
       const double t = k + 0.5;
-      const RowKind kind = DiagnosisRowKind(t, 1.0, h, 0.0);
+      const RowKind kind = HeldOutRowKind(t, 1.0, h, 0.0);
       EXPECT_EQ(kind != RowKind::kFit, InHeldOutBlock(t, 1.0, h)) << k;
       if (kind == RowKind::kFit) continue;
       ++held;
@@ -206,8 +206,8 @@ TEST(DiagnosisBlocks, HeldOutBlocksMeetEveryPhaseOfAPeriodicExcitation) {
   // Guards: rows within `guard` of a boundary between kinds belong to none.
   long first_held = 1;
   while (!InHeldOutBlock(first_held + 0.5, 1.0, 0.4)) ++first_held;
-  EXPECT_EQ(DiagnosisRowKind(first_held + 0.01, 1.0, 0.4, 0.05), RowKind::kGuard);
-  EXPECT_EQ(DiagnosisRowKind(first_held + 0.5, 1.0, 0.4, 0.05), RowKind::kSelection);
+  EXPECT_EQ(HeldOutRowKind(first_held + 0.01, 1.0, 0.4, 0.05), RowKind::kGuard);
+  EXPECT_EQ(HeldOutRowKind(first_held + 0.5, 1.0, 0.4, 0.05), RowKind::kSelection);
 }
 
 }  // namespace

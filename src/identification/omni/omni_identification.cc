@@ -1,4 +1,4 @@
-#include "diagnosis/omni_identification.h"
+#include "identification/omni/omni_identification.h"
 
 #include <ceres/ceres.h>
 
@@ -11,15 +11,17 @@
 #include <set>
 #include <sstream>
 
+#include "analysis/camera_noise.h"
 #include "analysis/fixed_step_cost.h"
+#include "analysis/held_out_blocks.h"
 #include "analysis/omni_baselines.h"
 #include "analysis/omni_horizons.h"
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/parallel.h"
-#include "diagnosis/diagnosis.h"
-#include "diagnosis/identifiability.h"
-#include "diagnosis/omni_diagnosis.h"
+#include "identification/identifiability.h"
+#include "io/printf_number.h"
+#include "signal/series_statistics.h"
 
 namespace twinsim {
 namespace {
@@ -82,7 +84,7 @@ const ParamSpec kSpecs[kNumParams] = {
 };
 
 // Which of parameters that trade against each other is held at its value (larger:
-// sooner; diagnosis/identifiability.h): the controller's loop gain and ramp before the
+// sooner; identification/identifiability.h): the controller's loop gain and ramp before the
 // lag they mimic, the filter's overall trust before the driving noise's spreads, and the
 // delay and the gains last, as the quantities a user reads first.
 double HoldPreference(int p) {
@@ -194,9 +196,7 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
                                   const OmniIdentificationOptions& options, double* block_seconds) {
   std::vector<double> durations;
   for (const OmniLog& log : logs) durations.push_back(log.rows.back().t - log.rows.front().t);
-  DiagnosisOptions blocks;
-  blocks.block_seconds = options.block_seconds;
-  const double block = DiagnosisBlockSeconds(blocks, durations);
+  const double block = HeldOutBlockSeconds(options.block_seconds, durations);
   *block_seconds = block;
   std::vector<Segment> segments;
   for (const OmniLog& log : logs) {
@@ -216,7 +216,7 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
       s.score_from = score - first;
       for (std::size_t i = first; i < last; ++i) {
         s.held.push_back(InHeldOutBlock(t[i], block, options.held_out));
-        s.block.push_back(static_cast<int>(&log - logs.data()) * kBlocksPerLog + DiagnosisBlockIndex(t[i], block));
+        s.block.push_back(static_cast<int>(&log - logs.data()) * kBlocksPerLog + TimeBlockIndex(t[i], block));
       }
       if (s.log.num_measured() >= 2 && last - first > 2) segments.push_back(std::move(s));
     }
@@ -227,7 +227,7 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
     s.held.assign(log.rows.size(), 1);
     for (const OmniLogRow& r : log.rows)
       s.block.push_back(static_cast<int>(logs.size() + static_cast<std::size_t>(&log - validation.data())) * kBlocksPerLog +
-                        DiagnosisBlockIndex(r.t - log.rows.front().t, block));
+                        TimeBlockIndex(r.t - log.rows.front().t, block));
     s.validation = true;
     segments.push_back(std::move(s));
   }
@@ -474,7 +474,7 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   if (!covariance) return out;
 
   // The sensitivities at the solution, which parameters they determine, and the
-  // covariance of those (diagnosis/identifiability.h).
+  // covariance of those (identification/identifiability.h).
   const double* at[1] = {x.data()};
   std::vector<double> residual(rows), jacobian(rows * free.size());
   double* jacobians[1] = {jacobian.data()};
@@ -1061,7 +1061,7 @@ void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentific
     for (const OmniNoiseParameter& n : report->noise.parameters) {
       if (n.name != it->second) continue;
       q.note = "identified for predictions ahead (the driving noise's likelihood at 4, 16 and 63 frames); the "
-               "4-frame fit gave " + FormatParameter(q.value);
+               "4-frame fit gave " + PrintfNumber("%.4g", q.value);
       q.value = n.name == "process_noise_scale" ? q.value * n.value : n.value;
       q.standard_error = n.name == "process_noise_scale" ? q.value / n.value * n.standard_error : n.standard_error;
       q.estimated = true;

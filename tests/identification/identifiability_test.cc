@@ -1,5 +1,5 @@
 // The identifiability analysis on sensitivity matrices whose answer is known.
-#include "diagnosis/identifiability.h"
+#include "identification/identifiability.h"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 // frames and camera noise. Identification runs on the analytic engine from the user's
 // nominal model (models/omni4.yaml) and is never told the plant; the test alone knows
 // it, and uses it for the gap a perfect model reaches on the same held-out rows.
-#include "diagnosis/omni_identification.h"
+#include "identification/omni/omni_identification.h"
 
 #include <gtest/gtest.h>
 
@@ -325,20 +325,6 @@ TEST(OpenWorldWandering, RealLikeRobotLagInTheFieldFrameBrakingAndASecondSession
 
 INSTANTIATE_TEST_SUITE_P(Identification, OpenWorldPlant, ::testing::ValuesIn(Cases()),
                          [](const auto& info) { return info.param.label; });
-
-// The camera noise estimated on a log with repeated frames and jitter is the camera's.
-TEST(OmniNoiseFloor, RightOnLogsWithRepeatedFrames) {
-  testing::OmniRecording how;
-  how.backend = "analytic";
-  how.repeat_share = 0.1;
-  how.noise_xy = 0.002;
-  how.noise_theta = 0.004;
-  const std::vector<OmniLog> logs = {testing::RecordOmniOpenWorld(testing::Omni4(), 20, 3, how)};
-  double var_xy = 0, var_theta = 0;
-  OmniNoiseFloor(logs, 0.09, &var_xy, &var_theta);
-  EXPECT_NEAR(std::sqrt(var_xy), how.noise_xy, 0.25 * how.noise_xy);
-  EXPECT_NEAR(std::sqrt(var_theta), how.noise_theta, 0.25 * how.noise_theta);
-}
 
 // A robot that stood still (or the wrong --robot): nothing of its response is in the
 // log. Refused with a message that says so, never an abort inside the solver.

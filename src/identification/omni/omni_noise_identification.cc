@@ -1,4 +1,4 @@
-#include "diagnosis/omni_noise_identification.h"
+#include "identification/omni/omni_noise_identification.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -6,11 +6,12 @@
 #include <limits>
 #include <map>
 
+#include "analysis/held_out_blocks.h"
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/pattern_search.h"
-#include "diagnosis/diagnosis.h"
+#include "io/printf_number.h"
 
 namespace twinsim {
 
@@ -292,9 +293,9 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
       out.fit_after = grow_cost;
       held_after = std::move(held_grow);
     } else {
-      out.growth_note = "a spread growing with speed (" + FormatParameter(FromCoordinate(kPerSpeed, grow[kPerSpeed])) +
-                        " per m/s) and acceleration (" +
-                        FormatParameter(FromCoordinate(kPerAcceleration, grow[kPerAcceleration])) +
+      out.growth_note = "a spread growing with speed (" +
+                        PrintfNumber("%.4g", FromCoordinate(kPerSpeed, grow[kPerSpeed])) + " per m/s) and acceleration (" +
+                        PrintfNumber("%.4g", FromCoordinate(kPerAcceleration, grow[kPerAcceleration])) +
                         " per m/s^2) fitted the fit blocks better but scored worse on the held-out ones: none kept";
     }
   }

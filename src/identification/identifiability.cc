@@ -1,4 +1,4 @@
-#include "diagnosis/identifiability.h"
+#include "identification/identifiability.h"
 
 #include <Eigen/Dense>
 #include <algorithm>

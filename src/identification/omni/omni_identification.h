@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "diagnosis/omni_noise_identification.h"
+#include "identification/omni/omni_noise_identification.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
@@ -131,7 +131,7 @@ struct OmniIdentificationReport {
   double fit_cost_nominal = 0, fit_cost_identified = 0;  // m, RMS of the fit residual
   double noise_floor = 0;     // m, the pose metric a perfect model reaches (camera noise)
   // The collinearity index of the parameters estimated with standard errors (1: their
-  // effects independent; diagnosis/identifiability.h); those it would push above 20 are
+  // effects independent; identification/identifiability.h); those it would push above 20 are
   // held at the fit's value, each with a note naming what it trades with.
   double collinearity = 1;
   std::vector<double> delay_profile_s, delay_profile_rms;  // s, m: the fit error against the delay
