@@ -400,6 +400,7 @@ int Main(int argc, char** argv) {
   PrintHistogram("frame work (vision; commands, physics, log)", s.timing.frame_work,
                  Scaled({0, 0.5, 1, 1.5, 2, 2.5, 3, 4, 6, 8, 12, 1e3 * period}, 1e-3), 1e-3, "ms");
   std::printf("  slowest frame: %s\n", s.timing.slowest.Brief().c_str());
+  std::printf("  latest start: %s\n", s.timing.latest_start.Brief().c_str());
   PrintHistogram("frame start lateness", s.timing.start_lateness,
                  Scaled({0, 0.1, 0.2, 0.5, 1, 1.5, 2, 3, 5, 10, 1e3 * period}, 1e-3), 1e-3, "ms");
   std::printf("\n2. Latency, a RobotControl's arrival (kernel stamp) to its moves stored for the delay line\n");

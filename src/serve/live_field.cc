@@ -88,13 +88,13 @@ rusage ThreadUsage() {
   return u;
 }
 
-// The frame `frame`, whose work took `work` s (`vision` s of it the vision), with what the
-// kernel did to the thread over its two parts: from a[0] to a[1] and from b[0] to b[1].
-ServeTiming::Stall StallOf(long long frame, double work, double vision, const std::array<rusage, 2>& a,
+// Frame `frame`'s stall of `seconds` (`vision` s of it the vision), with what the kernel
+// did to the thread over two spans: from a[0] to a[1] and from b[0] to b[1].
+ServeTiming::Stall StallOf(long long frame, double seconds, double vision, const std::array<rusage, 2>& a,
                            const std::array<rusage, 2>& b) {
   ServeTiming::Stall s;
   s.frame = frame;
-  s.work = work;
+  s.seconds = seconds;
   s.vision = vision;
   for (const auto& [from, to] : {std::pair(a[0], a[1]), std::pair(b[0], b[1])}) {
     s.minor_faults += to.ru_minflt - from.ru_minflt;
@@ -651,11 +651,17 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   const double dt = result_.timing.frame_dt();
   std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
   if (grsim_) sockets.push_back(&*grsim_);
+  rusage ru_worked = ThreadUsage();  // at the end of the last frame's work
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
     const rusage ru_start = ThreadUsage();
     const Clock::time_point frame_start = Clock::now();
     if (!options_.lockstep) {
-      timing_.start_lateness.Add(Seconds(frame_start - frame_end));
+      const double lateness = Seconds(frame_start - frame_end);
+      timing_.start_lateness.Add(lateness);
+      if (lateness > timing_.latest_start.seconds) {
+        timing_.latest_start = StallOf(counters_.frames, lateness, 0, {ru_worked, ru_start}, {ru_start, ru_start});
+        timing_.latest_start.woke_late = woke_late_;
+      }
       frame_unix_[static_cast<std::size_t>(sim_.frame()) % frame_unix_.size()] = UnixNow();
     }
     std::vector<FrameRecord> records = OpenFrame();
@@ -671,55 +677,62 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       }
     }
     if (options_.lockstep) RefillTokens(dt);
-    Clock::time_point resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
-    bool stopped = false;
-    for (;;) {
-      if (stop()) {
-        stopped = true;
-        break;
-      }
-      if (options_.lockstep && FrameComplete()) break;
-      const Clock::time_point now = Clock::now();
-      double wait = kPollPeriod;
-      if (!options_.lockstep) {
-        const double left = Seconds(frame_end - now);
-        if (left <= 0) break;
-        wait = std::min(wait, left);
-      }
-      // The rate limit's buckets fill at max_rate per second of wall time, up to one
-      // second's worth; in lockstep, which runs as fast as the clients answer, also per
-      // second of simulated time (at each frame's start).
-      RefillTokens(Seconds(now - last_refill_));
-      last_refill_ = now;
-      if (WaitReadable(sockets, wait) >= 0)
-        for (int port = 0; port < 4; ++port) Drain(port);
-      // Lockstep: a team yet to come may have missed this frame's vision, and a team
-      // waited for may have had its answer lost (dropped over the rate limit, or by the
-      // network): the frame's vision again, which a client answers as it answers any.
-      if (options_.lockstep && Clock::now() >= resend) {
-        if (!FrameComplete()) {
-          for (const SSL_WrapperPacket& packet : vision_packets_) {
-            Send(vision_out_, packet.SerializeAsString(), vision_to_);
-            ++counters_.vision_packets;
-          }
-        }
-        resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
-      }
-      if (status && Clock::now() >= next_status) {
-        status(Summary());
-        next_status = Clock::now() + std::chrono::milliseconds(100);
-      }
-    }
-    if (stopped) break;  // the begun frame is not logged: it has no commands
+    if (AwaitFrameEnd(frame_end, sockets, stop, status, &next_status)) break;  // stopped: not logged, no commands
     const rusage ru_step = ThreadUsage();
     const Clock::time_point step_start = Clock::now();
     FinishFrame(&records);
     const double work = Seconds(vision_work + (Clock::now() - step_start));
     timing_.frame_work.Add(work);
-    if (work > timing_.slowest.work) timing_.slowest = StallOf(counters_.frames - 1, work, Seconds(vision_work),
-                                                               {ru_start, ru_vision}, {ru_step, ThreadUsage()});
+    ru_worked = ThreadUsage();
+    if (work > timing_.slowest.seconds)
+      timing_.slowest =
+          StallOf(counters_.frames - 1, work, Seconds(vision_work), {ru_start, ru_vision}, {ru_step, ru_worked});
   }
   return Summary();
+}
+
+bool LiveField::AwaitFrameEnd(std::chrono::steady_clock::time_point frame_end,
+                              const std::vector<const UdpSocket*>& sockets, const std::function<bool()>& stop,
+                              const std::function<void(const ServeSummary&)>& status,
+                              std::chrono::steady_clock::time_point* next_status) {
+  Clock::time_point resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
+  woke_late_ = 0;
+  for (;;) {
+    if (stop()) return true;
+    if (options_.lockstep && FrameComplete()) return false;
+    const Clock::time_point now = Clock::now();
+    double wait = kPollPeriod;
+    if (!options_.lockstep) {
+      const double left = Seconds(frame_end - now);
+      if (left <= 0) return false;
+      wait = std::min(wait, left);
+    }
+    // The rate limit's buckets fill at max_rate per second of wall time, up to one
+    // second's worth; in lockstep, which runs as fast as the clients answer, also per
+    // second of simulated time (at each frame's start).
+    RefillTokens(Seconds(now - last_refill_));
+    last_refill_ = now;
+    const bool readable = WaitReadable(sockets, wait) >= 0;
+    woke_late_ = std::max(0.0, Seconds(Clock::now() - now) - wait);
+    if (readable)
+      for (int port = 0; port < 4; ++port) Drain(port);
+    // Lockstep: a team yet to come may have missed this frame's vision, and a team
+    // waited for may have had its answer lost (dropped over the rate limit, or by the
+    // network): the frame's vision again, which a client answers as it answers any.
+    if (options_.lockstep && Clock::now() >= resend) {
+      if (!FrameComplete()) {
+        for (const SSL_WrapperPacket& packet : vision_packets_) {
+          Send(vision_out_, packet.SerializeAsString(), vision_to_);
+          ++counters_.vision_packets;
+        }
+      }
+      resend = Clock::now() + std::chrono::milliseconds(static_cast<int>(1000 * kResendPeriod));
+    }
+    if (status && Clock::now() >= *next_status) {
+      status(Summary());
+      *next_status = Clock::now() + std::chrono::milliseconds(100);
+    }
+  }
 }
 
 std::vector<FrameRecord> LiveField::OpenFrame() {

@@ -128,19 +128,23 @@ struct ServeTiming {
   // datagram (parsing, checking, storing); the rest is the datagram waiting to be read.
   DurationHistogram command_handling{1e-6, 5000};
   long long unstamped = 0;  // of those, arrivals without a kernel stamp (the time recv returned)
-  // The frame whose work took longest, with what the kernel did to the serving thread
-  // meanwhile (getrusage per thread): a stall with major faults waited for the disk,
-  // one with involuntary switches was preempted, one with neither ran its own code.
+  // The frame whose work took longest, and the frame that began latest, each with what
+  // the kernel did to the serving thread meanwhile (getrusage per thread): a stall with
+  // major faults waited for the disk, one with involuntary switches was preempted, one
+  // with neither ran its own code (or, for a late start, waited in the kernel to wake).
   struct Stall {
     long long frame = -1;      // its index, -1 none yet
-    double work = 0;           // s
-    double vision = 0;         // s of it capturing and sending the vision
+    double seconds = 0;        // s: the frame's work (slowest), or how late it began (latest_start)
+    double vision = 0;         // slowest: s of the work capturing and sending the vision
+    double woke_late = 0;      // latest_start: s the last wait for datagrams returned after its time
     long minor_faults = 0;     // page faults served without I/O
     long major_faults = 0;     // page faults that read from disk
     long voluntary = 0;        // context switches the thread asked for (a blocking call)
     long involuntary = 0;      // context switches forced on it (preemption)
     std::string Brief() const;
-  } slowest;
+  };
+  Stall slowest;       // over the frame's work
+  Stall latest_start;  // over the wait before the frame (real time), from the last frame's work on
 };
 
 struct ServeSummary {
@@ -225,6 +229,12 @@ class LiveField {
   // in force and logs it.
   std::vector<FrameRecord> OpenFrame();
   void FinishFrame(std::vector<FrameRecord>* records);
+  // Reads what arrives until the frame's end (real time) or every team's answer
+  // (lockstep), resending the vision in lockstep and calling `status` every 100 ms; true
+  // when `stop` asked to stop. woke_late_ receives how late its last wait returned.
+  bool AwaitFrameEnd(std::chrono::steady_clock::time_point frame_end, const std::vector<const UdpSocket*>& sockets,
+                     const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status,
+                     std::chrono::steady_clock::time_point* next_status);
   // The synchronous interface: the frames run as the client's requests ask.
   ServeSummary RunSync(const std::function<bool()>& stop, const std::function<void(const ServeSummary&)>& status);
   // Answers one request; false when the answer could not be written whole.
@@ -299,6 +309,7 @@ class LiveField {
   FrameSink sink_;
   long long keep_stride_ = 1;  // keep_frames: result_ keeps the frames whose number is a multiple of this
   std::chrono::steady_clock::time_point start_, last_refill_;
+  double woke_late_ = 0;  // s: how much later than asked the last wait for datagrams returned
   double unix_start_ = 0;  // s, real time: the Unix time of frame 0
   // s, real time: the Unix time each of the last vision_delay + 1 frames began (frame k
   // at k % size), the capture times of the vision they send later.

@@ -8,9 +8,11 @@ namespace twinsim {
 std::string ServeTiming::Stall::Brief() const {
   if (frame < 0) return "none";
   std::ostringstream s;
-  s << work * 1e3 << " ms at frame " << frame << " (" << vision * 1e3 << " ms of it the vision; page faults "
-    << minor_faults << " minor, " << major_faults << " major; context switches " << voluntary << " voluntary, "
-    << involuntary << " involuntary)";
+  s << seconds * 1e3 << " ms at frame " << frame << " (";
+  if (vision > 0) s << vision * 1e3 << " ms of it the vision; ";
+  if (woke_late > 0) s << "the last wait woke " << woke_late * 1e3 << " ms late; ";
+  s << "page faults " << minor_faults << " minor, " << major_faults << " major; context switches " << voluntary
+    << " voluntary, " << involuntary << " involuntary)";
   return s.str();
 }
 
@@ -42,6 +44,7 @@ std::string ServeSummary::Report() const {
     << "frame work " << timing.frame_work.Brief() << "\n"
     << "slowest frame " << timing.slowest.Brief() << "\n"
     << "frame start lateness " << timing.start_lateness.Brief() << "\n"
+    << "latest start " << timing.latest_start.Brief() << "\n"
     << "command latency (arrival to delay line) " << timing.command_latency.Brief() << "\n"
     << "  of which after the read " << timing.command_handling.Brief() << "\n"
     << "blue client " << (clients[0].empty() ? "-" : clients[0]) << ", yellow client "

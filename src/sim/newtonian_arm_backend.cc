@@ -60,7 +60,7 @@ double JointFriction(const ArmJoint& nominal, const JointEffects& e, double v, d
 // M^-1 of a symmetric positive definite M (n x n) by Cholesky, M = L L', into `inverse`,
 // with `factor` as work space for L^-1: (L^-1)' L^-1. Plain loops: at an arm's size
 // (n <= 7) Eigen's blocked triangular solves cost several times the arithmetic
-// (measured: 8 % of the RRR loop).
+// (docs/benchmarks.md has the profile that chose them).
 void InverseByCholesky(const Eigen::MatrixXd& m, Eigen::MatrixXd* factor, Eigen::MatrixXd* inverse) {
   const Eigen::Index n = m.rows();
   Eigen::MatrixXd& l = *factor;
