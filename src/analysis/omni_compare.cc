@@ -171,12 +171,14 @@ CompareErrorRow MeasurePredictionErrors(const OmniLog& log, const OmniReplayResu
   return out;
 }
 
-OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options,
-                                 const std::function<void(long, long, const std::string&)>& progress) {
-  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
-  const double frame_rate = 1.0 / log.frame_period;
+// (twinsim::HorizonLabel below: in a unity batch omni_calibration_report.cc's file-local
+// HorizonLabel would hide it inside this anonymous namespace.)
+namespace {
 
-  // Every source must build before any runs: a bad name or predictor fails at once.
+// Builds every source's backend, so a bad name or predictor fails before any runs, and refuses a log too short for
+// the longest horizon.
+void CheckCompareSourcesAndHorizons(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options) {
+  const double frame_rate = 1.0 / log.frame_period;
   FrameTiming timing;
   timing.frame_rate = frame_rate;
   timing.physics_substeps = DefaultPhysicsSubsteps(frame_rate);
@@ -193,11 +195,44 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
   const int needed = FirstPredictedFrame(model, log, longest);
   if (longest > 0 && last_frame < needed) {
     std::ostringstream msg;
-    msg << "log of " << last_frame + 1 << " frames is too short to compare at the " << HorizonLabel(longest, frame_rate)
-        << " horizon (" << longest << " frames): needs at least " << needed + 1 << " frames (delay " << delay
-        << ", warm-up " << kWarmUpFrames << ", horizon " << longest << ")";
+    msg << "log of " << last_frame + 1 << " frames is too short to compare at the "
+        << twinsim::HorizonLabel(longest, frame_rate) << " horizon (" << longest << " frames): needs at least "
+        << needed + 1 << " frames (delay " << delay << ", warm-up " << kWarmUpFrames << ", horizon " << longest << ")";
     throw InputError(SourceLocation{log.path}, msg.str());
   }
+}
+
+// Adds the constant-velocity and integrated-command baselines' rows, scored on the rows the first source predicted.
+void AddCompareBaselineRows(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options,
+                            const std::vector<std::vector<bool>>& first_predicted, OmniCompareResult* out) {
+  for (const char* name : {"constant_velocity", "integrated_command"}) {
+    for (std::size_t h = 0; h < options.horizons.size(); ++h) {
+      const int k = options.horizons[h];
+      if (k == 0) continue;
+      OmniReplayResult result = std::string(name) == "constant_velocity"
+                                    ? ConstantVelocityPrediction(log, k)
+                                    : IntegratedCommandPrediction(log, k, model.TotalDelaySeconds(log.frame_period));
+      for (std::size_t i = 0; i < result.predicted.size(); ++i) {
+        result.predicted[i] = result.predicted[i] && first_predicted[h][i];
+      }
+      CompareErrorRow row = MeasurePredictionErrors(log, result);
+      row.source = name;
+      row.backend = "baseline";
+      row.horizon = twinsim::HorizonLabel(k, out->frame_rate);
+      row.horizon_frames = k;
+      out->rows.push_back(row);
+    }
+  }
+}
+
+}  // namespace
+
+OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& options,
+                                 const std::function<void(long, long, const std::string&)>& progress) {
+  if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
+  const double frame_rate = 1.0 / log.frame_period;
+  // Every source must build before any runs, and the log must be long enough for the longest horizon.
+  CheckCompareSourcesAndHorizons(model, log, options);
 
   long total = 0;
   for (std::size_t s = 0; s < options.sources.size(); ++s)
@@ -237,26 +272,7 @@ OmniCompareResult CompareOmniLog(const OmniModel& model, const OmniLog& log, con
       if (first_predicted[h].empty()) first_predicted[h] = result.predicted;
     }
   }
-  if (options.baselines) {
-    for (const char* name : {"constant_velocity", "integrated_command"}) {
-      for (std::size_t h = 0; h < options.horizons.size(); ++h) {
-        const int k = options.horizons[h];
-        if (k == 0) continue;
-        OmniReplayResult result = std::string(name) == "constant_velocity"
-                                      ? ConstantVelocityPrediction(log, k)
-                                      : IntegratedCommandPrediction(log, k, model.TotalDelaySeconds(log.frame_period));
-        for (std::size_t i = 0; i < result.predicted.size(); ++i) {
-          result.predicted[i] = result.predicted[i] && first_predicted[h][i];
-        }
-        CompareErrorRow row = MeasurePredictionErrors(log, result);
-        row.source = name;
-        row.backend = "baseline";
-        row.horizon = HorizonLabel(k, frame_rate);
-        row.horizon_frames = k;
-        out.rows.push_back(row);
-      }
-    }
-  }
+  if (options.baselines) AddCompareBaselineRows(model, log, options, first_predicted, &out);
   if (progress) progress(total, total, "");
   return out;
 }

@@ -406,6 +406,130 @@ RgbaImage DrawMovedPaths(const OmniLog& golden, const OmniLog& candidate, const 
   return image;
 }
 
+namespace {
+
+// Both folders' file lists, and the files to compare read into memory by name.
+struct RegressInputs {
+  std::vector<std::string> golden_files, candidate_files;
+  std::set<std::string> in_golden, in_candidate;
+  std::map<std::string, OmniLog> golden_logs, candidate_logs;
+  std::map<std::string, RgbaImage> golden_images, candidate_images;
+};
+
+// Lists both folders and reads every file to compare, naming all the corrupt ones at once.
+RegressInputs ReadRegressInputs(const std::string& golden, const std::string& candidate) {
+  RegressInputs in;
+  in.golden_files = ListFiles(golden);
+  in.candidate_files = ListFiles(candidate);
+  in.in_golden = std::set<std::string>(in.golden_files.begin(), in.golden_files.end());
+  in.in_candidate = std::set<std::string>(in.candidate_files.begin(), in.candidate_files.end());
+  if (std::none_of(in.golden_files.begin(), in.golden_files.end(),
+                   [](const std::string& n) { return KindOf(n) != FileKind::kOther; }))
+    throw InputError(
+        SourceLocation{golden},
+        "nothing to compare: no trajectory*.csv, truth*.csv or *.png (is it a 'twinsim run' output folder?)");
+
+  // Read every file first, so that all corrupt ones are named at once and nothing is
+  // written for a comparison that cannot be made.
+  ErrorList errors;
+  auto read_log = [](const std::string& path) { return ReadOmniLog(path); };
+  auto read = [&errors](const std::string& path, auto reader, auto& into, const std::string& name) {
+    try {
+      into.emplace(name, reader(path));
+    } catch (const InputError& e) {
+      errors.Add(e.what());
+    }
+  };
+  for (const auto& name : in.golden_files) {
+    if (KindOf(name) == FileKind::kTrajectory) read(Join(golden, name), read_log, in.golden_logs, name);
+    if (!in.in_candidate.count(name)) continue;
+    if (KindOf(name) == FileKind::kTrajectory) {
+      read(Join(candidate, name), read_log, in.candidate_logs, name);
+    } else if (KindOf(name) == FileKind::kImage) {
+      read(Join(golden, name), ReadPng, in.golden_images, name);
+      read(Join(candidate, name), ReadPng, in.candidate_images, name);
+    }
+  }
+  errors.ThrowIfAny();
+  return in;
+}
+
+// Compares the golden files by name, then lists the candidate's new ones, and marks a regression.
+void CompareRegressFiles(const RegressInputs& in, const RegressOptions& options, RegressSummary* s) {
+  for (const auto& name : in.golden_files) {
+    const FileKind kind = KindOf(name);
+    if (kind == FileKind::kOther) {
+      s->not_compared.push_back(name + " (golden)");
+    } else if (!in.in_candidate.count(name)) {
+      if (kind == FileKind::kTrajectory) {
+        TrajectoryDiff d;
+        d.name = name;
+        d.verdict = RegressVerdict::kMissing;
+        d.golden_rows = static_cast<int>(in.golden_logs.at(name).rows.size());
+        s->trajectories.push_back(d);
+      } else {
+        ImageDiff d;
+        d.name = name;
+        d.verdict = RegressVerdict::kMissing;
+        s->images.push_back(d);
+      }
+    } else if (kind == FileKind::kTrajectory) {
+      s->trajectories.push_back(
+          CompareTrajectories(name, in.golden_logs.at(name), in.candidate_logs.at(name), options));
+    } else {
+      s->images.push_back(CompareImages(name, in.golden_images.at(name), in.candidate_images.at(name), options));
+    }
+  }
+  for (const auto& name : in.candidate_files) {
+    if (in.in_golden.count(name)) continue;
+    const FileKind kind = KindOf(name);
+    if (kind == FileKind::kTrajectory) {
+      TrajectoryDiff d;
+      d.name = name;
+      d.verdict = RegressVerdict::kNew;
+      s->trajectories.push_back(d);
+    } else if (kind == FileKind::kImage) {
+      ImageDiff d;
+      d.name = name;
+      d.verdict = RegressVerdict::kNew;
+      s->images.push_back(d);
+    } else {
+      s->not_compared.push_back(name + " (candidate)");
+    }
+  }
+  for (const auto& d : s->trajectories)
+    if (d.verdict == RegressVerdict::kRegressed || d.verdict == RegressVerdict::kMissing) s->regression = true;
+  for (const auto& d : s->images)
+    if (d.verdict == RegressVerdict::kRegressed || d.verdict == RegressVerdict::kMissing) s->regression = true;
+}
+
+// Writes the candidate's regress/ folder afresh: each differing image highlighted, each regressed path drawn.
+void WriteRegressImages(const RegressInputs& in, const std::string& candidate, const RegressOptions& options,
+                        RegressSummary* s) {
+  // Old highlights would mislead: regress/ shows this comparison only.
+  const fs::path out_dir = fs::path(candidate) / "regress";
+  std::error_code ec;
+  if (fs::is_directory(out_dir, ec)) {
+    for (const auto& name : ListFiles(out_dir.string()))
+      if (KindOf(name) == FileKind::kImage) fs::remove(out_dir / name, ec);
+    fs::remove(out_dir, ec);  // only when now empty
+  }
+  for (auto& d : s->images) {
+    if (d.differing_pixels == 0) continue;
+    d.image = (out_dir / d.name).string();
+    WritePng(d.image, HighlightDifferences(in.golden_images.at(d.name), in.candidate_images.at(d.name), options));
+    s->written.push_back(d.image);
+  }
+  for (auto& d : s->trajectories) {
+    if (d.verdict != RegressVerdict::kRegressed || d.matched_rows == 0 || d.frames_over == 0) continue;
+    d.image = (out_dir / (d.name + ".png")).string();
+    WritePng(d.image, DrawMovedPaths(in.golden_logs.at(d.name), in.candidate_logs.at(d.name), d, options));
+    s->written.push_back(d.image);
+  }
+}
+
+}  // namespace
+
 RegressSummary RegressFolders(const std::string& golden, const std::string& candidate, const RegressOptions& options) {
   std::string invalid;
   if (!options.IsValid(&invalid)) throw InputError(invalid);
@@ -418,107 +542,9 @@ RegressSummary RegressFolders(const std::string& golden, const std::string& cand
   s.golden = golden;
   s.candidate = candidate;
   s.options = options;
-  const std::vector<std::string> golden_files = ListFiles(golden);
-  const std::vector<std::string> candidate_files = ListFiles(candidate);
-  const std::set<std::string> in_golden(golden_files.begin(), golden_files.end());
-  const std::set<std::string> in_candidate(candidate_files.begin(), candidate_files.end());
-  if (std::none_of(golden_files.begin(), golden_files.end(),
-                   [](const std::string& n) { return KindOf(n) != FileKind::kOther; }))
-    throw InputError(
-        SourceLocation{golden},
-        "nothing to compare: no trajectory*.csv, truth*.csv or *.png (is it a 'twinsim run' output folder?)");
-
-  // Read every file first, so that all corrupt ones are named at once and nothing is
-  // written for a comparison that cannot be made.
-  std::map<std::string, OmniLog> golden_logs, candidate_logs;
-  std::map<std::string, RgbaImage> golden_images, candidate_images;
-  auto read_log = [](const std::string& path) { return ReadOmniLog(path); };
-  auto read = [&errors](const std::string& path, auto reader, auto& into, const std::string& name) {
-    try {
-      into.emplace(name, reader(path));
-    } catch (const InputError& e) {
-      errors.Add(e.what());
-    }
-  };
-  for (const auto& name : golden_files) {
-    if (KindOf(name) == FileKind::kTrajectory) read(Join(golden, name), read_log, golden_logs, name);
-    if (!in_candidate.count(name)) continue;
-    if (KindOf(name) == FileKind::kTrajectory) {
-      read(Join(candidate, name), read_log, candidate_logs, name);
-    } else if (KindOf(name) == FileKind::kImage) {
-      read(Join(golden, name), ReadPng, golden_images, name);
-      read(Join(candidate, name), ReadPng, candidate_images, name);
-    }
-  }
-  errors.ThrowIfAny();
-
-  // Compare: golden files by name, then the candidate's new ones.
-  for (const auto& name : golden_files) {
-    const FileKind kind = KindOf(name);
-    if (kind == FileKind::kOther) {
-      s.not_compared.push_back(name + " (golden)");
-    } else if (!in_candidate.count(name)) {
-      if (kind == FileKind::kTrajectory) {
-        TrajectoryDiff d;
-        d.name = name;
-        d.verdict = RegressVerdict::kMissing;
-        d.golden_rows = static_cast<int>(golden_logs.at(name).rows.size());
-        s.trajectories.push_back(d);
-      } else {
-        ImageDiff d;
-        d.name = name;
-        d.verdict = RegressVerdict::kMissing;
-        s.images.push_back(d);
-      }
-    } else if (kind == FileKind::kTrajectory) {
-      s.trajectories.push_back(CompareTrajectories(name, golden_logs.at(name), candidate_logs.at(name), options));
-    } else {
-      s.images.push_back(CompareImages(name, golden_images.at(name), candidate_images.at(name), options));
-    }
-  }
-  for (const auto& name : candidate_files) {
-    if (in_golden.count(name)) continue;
-    const FileKind kind = KindOf(name);
-    if (kind == FileKind::kTrajectory) {
-      TrajectoryDiff d;
-      d.name = name;
-      d.verdict = RegressVerdict::kNew;
-      s.trajectories.push_back(d);
-    } else if (kind == FileKind::kImage) {
-      ImageDiff d;
-      d.name = name;
-      d.verdict = RegressVerdict::kNew;
-      s.images.push_back(d);
-    } else {
-      s.not_compared.push_back(name + " (candidate)");
-    }
-  }
-  for (const auto& d : s.trajectories)
-    if (d.verdict == RegressVerdict::kRegressed || d.verdict == RegressVerdict::kMissing) s.regression = true;
-  for (const auto& d : s.images)
-    if (d.verdict == RegressVerdict::kRegressed || d.verdict == RegressVerdict::kMissing) s.regression = true;
-
-  if (!options.write_images) return s;
-  // Old highlights would mislead: regress/ shows this comparison only.
-  const fs::path out_dir = fs::path(candidate) / "regress";
-  std::error_code ec;
-  if (fs::is_directory(out_dir, ec)) {
-    for (const auto& name : ListFiles(out_dir.string()))
-      if (KindOf(name) == FileKind::kImage) fs::remove(out_dir / name, ec);
-    fs::remove(out_dir, ec);  // only when now empty
-  }
-  for (auto& d : s.images) {
-    if (d.differing_pixels == 0) continue;
-    d.image = (out_dir / d.name).string();
-    WritePng(d.image, HighlightDifferences(golden_images.at(d.name), candidate_images.at(d.name), options));
-    s.written.push_back(d.image);
-  }
-  for (auto& d : s.trajectories) {
-    if (d.verdict != RegressVerdict::kRegressed || d.matched_rows == 0 || d.frames_over == 0) continue;
-    d.image = (out_dir / (d.name + ".png")).string();
-    WritePng(d.image, DrawMovedPaths(golden_logs.at(d.name), candidate_logs.at(d.name), d, options));
-    s.written.push_back(d.image);
-  }
+  const RegressInputs in = ReadRegressInputs(golden, candidate);
+  CompareRegressFiles(in, options, &s);
+  if (options.write_images) WriteRegressImages(in, candidate, options, &s);
   return s;
 }
 

@@ -149,6 +149,45 @@ void Work(int threads, const std::function<std::string(int)>& run) {
   SendText("", kTagFinished);
 }
 
+// Rank 0 checks the folder and tells the other ranks whether to go on; a refusal finalises MPI and throws on every
+// rank. Returns the jobs still to run (on rank 0; none elsewhere).
+std::vector<int> PrepareOnRankZero(int rank, const Sweep& sweep, const std::vector<SweepJob>& jobs,
+                                   const BatchOptions& options, std::vector<JobResult>* results, int* resumed) {
+  std::vector<int> pending;
+  std::string failure;
+  if (rank == 0) {
+    try {
+      pending = PrepareFolder(sweep, jobs, options, results, resumed);
+    } catch (const InputError& e) {
+      failure = e.what();
+    }
+  }
+  int ok = failure.empty() ? 1 : 0;
+  MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  if (!ok) {
+    MPI_Finalize();
+    if (rank == 0) throw InputError(failure);
+    throw InputError("batch: rank 0 refused the sweep (see its message)");
+  }
+  return pending;
+}
+
+// Records a result another rank sent ("index\njson"), or says in `bad_message` that it does not parse.
+void RecordRankResult(const std::string& message, const std::vector<SweepJob>& jobs, std::vector<JobResult>* results,
+                      BatchReporter* reporter, std::string* bad_message) {
+  const std::size_t newline = message.find('\n');
+  const int index = newline == std::string::npos ? -1 : std::atoi(message.substr(0, newline).c_str());
+  std::optional<JobResult> r;
+  if (index >= 0 && index < static_cast<int>(jobs.size()))
+    r = ParseJobResultJson(message.substr(newline + 1), jobs[index]);
+  if (!r) {
+    *bad_message = "a rank sent a result that does not parse: " + message.substr(0, 80);
+    return;
+  }
+  (*results)[index] = *r;
+  reporter->JobDone(r->status != "ok");
+}
+
 }  // namespace
 
 BatchSummary RunBatchMpi(const Sweep& sweep, const std::vector<SweepJob>& jobs, const BatchOptions& options) {
@@ -166,22 +205,7 @@ BatchSummary RunBatchMpi(const Sweep& sweep, const std::vector<SweepJob>& jobs, 
 
   // Rank 0 checks the folder first; the others learn whether to go on.
   std::vector<JobResult> results(jobs.size());
-  std::vector<int> pending;
-  std::string failure;
-  if (rank == 0) {
-    try {
-      pending = PrepareFolder(sweep, jobs, options, &results, &summary.resumed);
-    } catch (const InputError& e) {
-      failure = e.what();
-    }
-  }
-  int ok = failure.empty() ? 1 : 0;
-  MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  if (!ok) {
-    MPI_Finalize();
-    if (rank == 0) throw InputError(failure);
-    throw InputError("batch: rank 0 refused the sweep (see its message)");
-  }
+  const std::vector<int> pending = PrepareOnRankZero(rank, sweep, jobs, options, &results, &summary.resumed);
 
   if (rank != 0) {
     Work(summary.threads, [&](int index) {
@@ -219,17 +243,7 @@ BatchSummary RunBatchMpi(const Sweep& sweep, const std::vector<SweepJob>& jobs, 
   });
   std::string bad_message;
   Serve(ranks, next, [&] { return local_running.load() > 0; }, [&](const std::string& message) {
-    const std::size_t newline = message.find('\n');
-    const int index = newline == std::string::npos ? -1 : std::atoi(message.substr(0, newline).c_str());
-    std::optional<JobResult> r;
-    if (index >= 0 && index < static_cast<int>(jobs.size()))
-      r = ParseJobResultJson(message.substr(newline + 1), jobs[index]);
-    if (!r) {
-      bad_message = "a rank sent a result that does not parse: " + message.substr(0, 80);
-      return;
-    }
-    results[index] = *r;
-    reporter.JobDone(r->status != "ok");
+    RecordRankResult(message, jobs, &results, &reporter, &bad_message);
   });
   local.join();
   reporter.Finish();

@@ -161,6 +161,13 @@ Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& a, const Eigen::VectorX
   return a.colPivHouseholderQr().solve(b);
 }
 
+// The fit rows of the residual the other effects leave, with the per-row features the starting guesses need.
+struct GuessRows {
+  std::vector<double> r, qd, qdd, needed_dd;
+  std::vector<std::array<double, 4>> payload_rows;  // per joint row: m, mcx, mcy, mcz columns
+  std::vector<double> payload_r;
+};
+
 class ArmProblem : public DiagnosisProblem {
  public:
   ArmProblem(const ArmModel& nominal, const std::vector<ArmLog>& logs, double block_seconds, double held_out,
@@ -465,6 +472,13 @@ class ArmProblem : public DiagnosisProblem {
   std::vector<double> NoiseFloor() const;
   // Starting parameters for effects[i] from the residual the others leave.
   void InitialGuess(std::vector<TrialEffect>* effects, int i) const;
+  // The fit rows of the residual `base` leaves on effect e's joint (every joint's for a payload), with their features.
+  GuessRows GuessRowsFor(const ArmModel& base, const TrialEffect& e) const;
+  // A torque limit or a delay for effects[i]: the best of a grid on the model's cost, a delay then sample by sample.
+  void GuessOnGrid(const ArmModel& base, std::vector<TrialEffect>* effects, int i) const;
+  // A spring's stiffness and motor inertia for effects[i]: the best on the model of a grid over k, each with its
+  // linear motor inertia.
+  void GuessFlexibility(const GuessRows& fit, std::vector<TrialEffect>* effects, int i) const;
   // Ceres over every free effect's variables.
   void Refine(std::vector<TrialEffect>* effects, const std::vector<int>& free) const;
 
@@ -483,17 +497,61 @@ class ArmProblem : public DiagnosisProblem {
   double guard_seconds_ = 0;
 };
 
-void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
-  TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
-  std::vector<TrialEffect> others = *effects;
-  others.erase(others.begin() + i);
-  const ArmModel base = Build(others);
+// Coulomb friction's c_pos and c_neg: least squares on the signs of the joint's speed.
+void GuessCoulombFriction(const std::vector<double>& qd, const Eigen::Map<const Eigen::VectorXd>& rv,
+                          std::map<std::string, double>* p) {
+  const auto rows = static_cast<Eigen::Index>(qd.size());
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, 2);
+  for (Eigen::Index k = 0; k < rows; ++k) {
+    a(k, 0) = qd[static_cast<std::size_t>(k)] > 0 ? 1 : 0;
+    a(k, 1) = qd[static_cast<std::size_t>(k)] < 0 ? -1 : 0;
+  }
+  const Eigen::VectorXd c = SolveLeastSquares(a, rv);
+  (*p)["c_pos"] = std::max(0.0, c[0]);
+  (*p)["c_neg"] = std::max(0.0, c[1]);
+}
+
+// Stribeck friction's c, s and vs: least squares for each of a grid of Stribeck speeds, the best kept.
+void GuessStribeckFriction(const std::vector<double>& qd, const Eigen::Map<const Eigen::VectorXd>& rv,
+                           std::map<std::string, double>* p) {
+  const auto rows = static_cast<Eigen::Index>(qd.size());
+  double best = kInf;
+  for (double vs : {0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0}) {
+    Eigen::MatrixXd a(rows, 2);
+    for (Eigen::Index k = 0; k < rows; ++k) {
+      const double v = qd[static_cast<std::size_t>(k)], s = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+      a(k, 0) = s;
+      a(k, 1) = s * std::exp(-(v / vs) * (v / vs));
+    }
+    Eigen::VectorXd c = SolveLeastSquares(a, rv);
+    c[0] = std::max(0.0, c[0]);
+    c[1] = std::max(1e-6, c[1]);
+    const double sse = (rv - a * c).squaredNorm();
+    if (sse < best) {
+      best = sse;
+      *p = {{"c", c[0]}, {"s", c[0] + c[1]}, {"vs", vs}};
+    }
+  }
+}
+
+// A payload's mass and position from least squares on its first moments (the second moments of a point mass follow
+// from them).
+void GuessPayload(const GuessRows& fit, std::map<std::string, double>* p) {
+  const auto m = static_cast<Eigen::Index>(fit.payload_r.size());
+  Eigen::MatrixXd a(m, 4);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    for (int c = 0; c < 4; ++c) a(k, c) = fit.payload_rows[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)];
+  }
+  const Eigen::VectorXd c = SolveLeastSquares(a, Eigen::Map<const Eigen::VectorXd>(fit.payload_r.data(), m));
+  const double mass = std::max(c[0], 1e-3);
+  Eigen::Vector3d pos = c.tail<3>() / mass;
+  pos = pos.cwiseMax(-kPayloadReach).cwiseMin(kPayloadReach);
+  *p = {{"mass", mass}, {"x", pos.x()}, {"y", pos.y()}, {"z", pos.z()}};
+}
+
+GuessRows ArmProblem::GuessRowsFor(const ArmModel& base, const TrialEffect& e) const {
   const int j = e.joint;
-  // Fit rows of the residual the others leave, with the per-row features the linear
-  // friction laws and the offset need.
-  std::vector<double> r, qd, qdd, needed_dd;
-  std::vector<std::array<double, 4>> payload_rows;  // per joint row: m, mcx, mcy, mcz columns
-  std::vector<double> payload_r;
+  GuessRows fit;
   for (const LogData& d : data_) {
     const Eigen::MatrixXd payload = PayloadTorque(base, d);
     if (j >= 0) {
@@ -505,140 +563,133 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
       }
       for (int row = d.first; row < d.last; row += stride_) {
         if (d.kind[static_cast<std::size_t>(row)] != RowKind::kFit) continue;
-        r.push_back(res[row]);
-        qd.push_back(d.log->qd(row, j));
-        qdd.push_back(d.log->qdd(row, j));
-        if (ndd.size()) needed_dd.push_back(ndd[row]);
+        fit.r.push_back(res[row]);
+        fit.qd.push_back(d.log->qd(row, j));
+        fit.qdd.push_back(d.log->qdd(row, j));
+        if (ndd.size()) fit.needed_dd.push_back(ndd[row]);
       }
     } else {
       for (int jj = 0; jj < n_; ++jj) {
         const Eigen::VectorXd res = Residual(base, d, jj, payload);
         for (int row = d.first; row < d.last; row += stride_) {
           if (d.kind[static_cast<std::size_t>(row)] != RowKind::kFit) continue;
-          payload_r.push_back(res[row]);
-          payload_rows.push_back({d.payload[0](row, jj), d.payload[1](row, jj), d.payload[2](row, jj), d.payload[3](row, jj)});
+          fit.payload_r.push_back(res[row]);
+          fit.payload_rows.push_back(
+              {d.payload[0](row, jj), d.payload[1](row, jj), d.payload[2](row, jj), d.payload[3](row, jj)});
         }
       }
     }
   }
-  const auto rows = static_cast<Eigen::Index>(r.size());
-  const Eigen::Map<const Eigen::VectorXd> rv(r.data(), rows);
+  return fit;
+}
+
+void ArmProblem::GuessOnGrid(const ArmModel& base, std::vector<TrialEffect>* effects, int i) const {
+  TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+  const int j = e.joint;
+  auto& p = e.parameters;
+  // A grid on the residual's cost: quantiles of the commands, or delays.
+  std::vector<double> grid;
+  const char* key = e.name == "time_delay" ? "delay" : "limit";
+  if (e.name == "time_delay") {
+    grid = {0.0005, 0.001, 0.002, 0.003, 0.005, 0.007, 0.01, 0.015, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15};
+  } else {
+    // Quantiles of the logged commands and of what the motion needs: a joint held at
+    // its limit needs the limit while its controller's command winds up beyond it
+    // (to the effort limit, where every command may be the same number).
+    std::vector<double> u, needed;
+    for (const LogData& d : data_) {
+      const Eigen::VectorXd cmd = Command(base, d, j, PayloadTorque(base, d));
+      for (int row = d.first; row < d.last; ++row) {
+        u.push_back(std::abs(d.log->tau(row, j)));
+        needed.push_back(std::abs(cmd[row]));
+      }
+    }
+    for (std::vector<double>* v : {&u, &needed}) {
+      std::sort(v->begin(), v->end());
+      for (double q : {0.5, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995}) {
+        grid.push_back((*v)[std::min(v->size() - 1, static_cast<std::size_t>(q * static_cast<double>(v->size())))]);
+      }
+    }
+  }
+  double best = kInf;
+  auto try_value = [&](double g) {
+    if (!(g > 0)) return;
+    std::vector<TrialEffect> trial = *effects;
+    trial[static_cast<std::size_t>(i)].parameters = {{key, g}};
+    const double c = Cost(trial, {j});
+    if (c < best) {
+      best = c;
+      p = {{key, g}};
+    }
+  };
+  for (double g : grid) try_value(g);
+  if (p.empty()) throw CheckFailed("no usable starting value");
+  if (e.name == "time_delay") {
+    // Then every whole sample between the best's neighbours on the grid (at most 100
+    // steps): the cost is
+    // piecewise in the delay (the command interpolated between samples; a Coulomb
+    // step moves by rows), and the refinement does not cross a sample from a grid
+    // point (a 21 ms delay stayed at the grid's 20 ms).
+    const auto at = std::find(grid.begin(), grid.end(), p.at(key)) - grid.begin();
+    const double low = at > 0 ? grid[static_cast<std::size_t>(at - 1)] : 0.0;
+    const double high = at + 1 < static_cast<long>(grid.size()) ? grid[static_cast<std::size_t>(at + 1)] : grid.back();
+    const double step = std::max(sample_period_, (high - low) / 100);  // at most 100 evaluations
+    for (double g = step * std::ceil(low / step); g < high; g += step) try_value(g);
+  }
+}
+
+void ArmProblem::GuessFlexibility(const GuessRows& fit, std::vector<TrialEffect>* effects, int i) const {
+  TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+  const int j = e.joint;
+  auto& p = e.parameters;
+  // Without damping the spring's deflection is needed / k, so the command rises by
+  // J_m (qdd + needed'' / k): linear in J_m for each k. A grid over k picks the best.
+  const auto rows = static_cast<Eigen::Index>(fit.r.size());
+  const Eigen::Map<const Eigen::VectorXd> rv(fit.r.data(), rows);
+  const Eigen::Map<const Eigen::VectorXd> a(fit.qdd.data(), rows), ndd(fit.needed_dd.data(), rows);
+  double best = kInf;
+  for (double k = 10; k < 2e6; k *= 2) {
+    const Eigen::VectorXd x = a + ndd / k;
+    const double jm = x.squaredNorm() > 0 ? -rv.dot(x) / x.squaredNorm() : 0.0;
+    if (!(jm > 0)) continue;
+    // Scored on the model itself: the linearisation misleads where the spring is soft.
+    std::vector<TrialEffect> trial = *effects;
+    trial[static_cast<std::size_t>(i)].parameters = {{"k", k}, {"damping", 0.0}, {"motor_inertia", jm}};
+    const double cost = Cost(trial, {j});
+    if (cost < best) {
+      best = cost;
+      p = trial[static_cast<std::size_t>(i)].parameters;
+    }
+  }
+  if (p.empty()) throw CheckFailed("no motor inertia explains the residual");
+}
+
+void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
+  TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+  std::vector<TrialEffect> others = *effects;
+  others.erase(others.begin() + i);
+  const ArmModel base = Build(others);
+  const GuessRows fit = GuessRowsFor(base, e);
+  const auto rows = static_cast<Eigen::Index>(fit.r.size());
+  const Eigen::Map<const Eigen::VectorXd> rv(fit.r.data(), rows);
   auto& p = e.parameters;
   if (e.name == "viscous_friction") {
     // The command rises by b qd: the residual falls by it.
-    const Eigen::Map<const Eigen::VectorXd> v(qd.data(), rows);
+    const Eigen::Map<const Eigen::VectorXd> v(fit.qd.data(), rows);
     p["b"] = std::max(0.0, v.squaredNorm() > 0 ? rv.dot(v) / v.squaredNorm() : 0.0);
   } else if (e.name == "coulomb_friction") {
-    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(rows, 2);
-    for (Eigen::Index k = 0; k < rows; ++k) {
-      a(k, 0) = qd[static_cast<std::size_t>(k)] > 0 ? 1 : 0;
-      a(k, 1) = qd[static_cast<std::size_t>(k)] < 0 ? -1 : 0;
-    }
-    const Eigen::VectorXd c = SolveLeastSquares(a, rv);
-    p["c_pos"] = std::max(0.0, c[0]);
-    p["c_neg"] = std::max(0.0, c[1]);
+    GuessCoulombFriction(fit.qd, rv, &p);
   } else if (e.name == "stribeck_friction") {
-    double best = kInf;
-    for (double vs : {0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0}) {
-      Eigen::MatrixXd a(rows, 2);
-      for (Eigen::Index k = 0; k < rows; ++k) {
-        const double v = qd[static_cast<std::size_t>(k)], s = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
-        a(k, 0) = s;
-        a(k, 1) = s * std::exp(-(v / vs) * (v / vs));
-      }
-      Eigen::VectorXd c = SolveLeastSquares(a, rv);
-      c[0] = std::max(0.0, c[0]);
-      c[1] = std::max(1e-6, c[1]);
-      const double sse = (rv - a * c).squaredNorm();
-      if (sse < best) {
-        best = sse;
-        p = {{"c", c[0]}, {"s", c[0] + c[1]}, {"vs", vs}};
-      }
-    }
+    GuessStribeckFriction(fit.qd, rv, &p);
   } else if (e.name == "torque_offset") {
     // The joint receives the command plus tau0: the residual rises by it.
     p["tau0"] = rows ? -rv.mean() : 0.0;
   } else if (e.name == "torque_saturation" || e.name == "time_delay") {
-    // A grid on the residual's cost: quantiles of the commands, or delays.
-    std::vector<double> grid;
-    const char* key = e.name == "time_delay" ? "delay" : "limit";
-    if (e.name == "time_delay") {
-      grid = {0.0005, 0.001, 0.002, 0.003, 0.005, 0.007, 0.01, 0.015, 0.02, 0.03, 0.05, 0.07, 0.1, 0.15};
-    } else {
-      // Quantiles of the logged commands and of what the motion needs: a joint held at
-      // its limit needs the limit while its controller's command winds up beyond it
-      // (to the effort limit, where every command may be the same number).
-      std::vector<double> u, needed;
-      for (const LogData& d : data_) {
-        const Eigen::VectorXd cmd = Command(base, d, j, PayloadTorque(base, d));
-        for (int row = d.first; row < d.last; ++row) {
-          u.push_back(std::abs(d.log->tau(row, j)));
-          needed.push_back(std::abs(cmd[row]));
-        }
-      }
-      for (std::vector<double>* v : {&u, &needed}) {
-        std::sort(v->begin(), v->end());
-        for (double q : {0.5, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995}) {
-          grid.push_back((*v)[std::min(v->size() - 1, static_cast<std::size_t>(q * static_cast<double>(v->size())))]);
-        }
-      }
-    }
-    double best = kInf;
-    auto try_value = [&](double g) {
-      if (!(g > 0)) return;
-      std::vector<TrialEffect> trial = *effects;
-      trial[static_cast<std::size_t>(i)].parameters = {{key, g}};
-      const double c = Cost(trial, {j});
-      if (c < best) {
-        best = c;
-        p = {{key, g}};
-      }
-    };
-    for (double g : grid) try_value(g);
-    if (p.empty()) throw CheckFailed("no usable starting value");
-    if (e.name == "time_delay") {
-      // Then every whole sample between the best's neighbours on the grid (at most 100
-      // steps): the cost is
-      // piecewise in the delay (the command interpolated between samples; a Coulomb
-      // step moves by rows), and the refinement does not cross a sample from a grid
-      // point (a 21 ms delay stayed at the grid's 20 ms).
-      const auto at = std::find(grid.begin(), grid.end(), p.at(key)) - grid.begin();
-      const double low = at > 0 ? grid[static_cast<std::size_t>(at - 1)] : 0.0;
-      const double high = at + 1 < static_cast<long>(grid.size()) ? grid[static_cast<std::size_t>(at + 1)] : grid.back();
-      const double step = std::max(sample_period_, (high - low) / 100);  // at most 100 evaluations
-      for (double g = step * std::ceil(low / step); g < high; g += step) try_value(g);
-    }
+    GuessOnGrid(base, effects, i);
   } else if (e.name == "joint_flexibility") {
-    // Without damping the spring's deflection is needed / k, so the command rises by
-    // J_m (qdd + needed'' / k): linear in J_m for each k. A grid over k picks the best.
-    const Eigen::Map<const Eigen::VectorXd> a(qdd.data(), rows), ndd(needed_dd.data(), rows);
-    double best = kInf;
-    for (double k = 10; k < 2e6; k *= 2) {
-      const Eigen::VectorXd x = a + ndd / k;
-      const double jm = x.squaredNorm() > 0 ? -rv.dot(x) / x.squaredNorm() : 0.0;
-      if (!(jm > 0)) continue;
-      // Scored on the model itself: the linearisation misleads where the spring is soft.
-      std::vector<TrialEffect> trial = *effects;
-      trial[static_cast<std::size_t>(i)].parameters = {{"k", k}, {"damping", 0.0}, {"motor_inertia", jm}};
-      const double cost = Cost(trial, {j});
-      if (cost < best) {
-        best = cost;
-        p = trial[static_cast<std::size_t>(i)].parameters;
-      }
-    }
-    if (p.empty()) throw CheckFailed("no motor inertia explains the residual");
+    GuessFlexibility(fit, effects, i);
   } else if (e.name == "payload") {
-    // First moments only (the second moments of a point mass follow from them).
-    const auto m = static_cast<Eigen::Index>(payload_r.size());
-    Eigen::MatrixXd a(m, 4);
-    for (Eigen::Index k = 0; k < m; ++k) {
-      for (int c = 0; c < 4; ++c) a(k, c) = payload_rows[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)];
-    }
-    const Eigen::VectorXd c = SolveLeastSquares(a, Eigen::Map<const Eigen::VectorXd>(payload_r.data(), m));
-    const double mass = std::max(c[0], 1e-3);
-    Eigen::Vector3d pos = c.tail<3>() / mass;
-    pos = pos.cwiseMax(-kPayloadReach).cwiseMin(kPayloadReach);
-    p = {{"mass", mass}, {"x", pos.x()}, {"y", pos.y()}, {"z", pos.z()}};
+    GuessPayload(fit, &p);
   }
 }
 

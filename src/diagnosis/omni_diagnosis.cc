@@ -508,6 +508,63 @@ std::vector<OmniLog> FitStretches(const std::vector<LogData>& data, std::size_t 
   return out;
 }
 
+// The seed's linear predictor as a residual on this model (twinsim train --residual
+// --kind linear), one frame ahead, trained on the fit blocks only; rolled out over
+// the horizon by the learned backend as replay does. Null, saying why in `learner`, when it cannot be trained.
+std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel& model, const std::string& backend,
+                                                                const std::vector<LogData>& data,
+                                                                std::string* learner) {
+  std::shared_ptr<const OmniPredictor> predictor;
+  OmniTrainOptions train;
+  train.kind = "linear";
+  train.horizon = 1;
+  train.residual = true;
+  train.nominal_engine = backend;
+  const FeatureLayout layout = PredictorLayout(model, 1);
+  const std::size_t least = static_cast<std::size_t>(
+      layout.history + model.command_delay_frames + model.vision_delay_frames + 35);
+  const std::vector<OmniLog> stretches = FitStretches(data, least);
+  OmniTrainSummary summary;
+  try {
+    if (!stretches.empty()) {
+      predictor = std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, stretches, train, &summary));
+      *learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
+                 "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
+                 " fit rows";
+    }
+  } catch (const InputError& e) {
+    *learner = std::string("no learned residual: ") + e.what();
+  }
+  return predictor;
+}
+
+// Each log's pose errors replayed by the learned predictor; a replay that fails drops the predictor, saying why in
+// `learner`, as does a note of the steps held to its training bounds.
+std::vector<ReplayResidual> ReplayLearnedResidual(const OmniModel& model, const std::vector<LogData>& data,
+                                                  int horizon, double radius,
+                                                  std::shared_ptr<const OmniPredictor>* predictor, std::string* learner) {
+  std::vector<ReplayResidual> learned(data.size());
+  long bounded = 0;  // learned steps held to the predictor's training bounds
+  try {
+    for (std::size_t k = 0; k < data.size(); ++k) {
+      OmniReplayOptions o;
+      o.backend = "learned";
+      o.backend_options.predictor = *predictor;
+      o.horizon = horizon;
+      const OmniReplayResult replayed = ReplayOmniLog(model, *data[k].log, o);
+      bounded += replayed.bounded_steps;
+      learned[k] = PoseErrorsInRobotFrame(*data[k].log, replayed, radius);
+    }
+  } catch (const CheckFailed& e) {
+    predictor->reset();
+    *learner = std::string("no learned residual: ") + e.what();
+  }
+  if (*predictor && bounded > 0) {
+    *learner += "; held to the bounds of its training data on " + std::to_string(bounded) + " steps";
+  }
+  return learned;
+}
+
 }  // namespace
 
 TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool learn) const {
@@ -521,52 +578,11 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
   out.step = std::max(1, options_.horizon);
   out.rate = 1.0 / frame_period_;
   std::shared_ptr<const OmniPredictor> predictor;
-  if (learn) {
-    // The seed's linear predictor as a residual on this model (twinsim train --residual
-    // --kind linear), one frame ahead, trained on the fit blocks only; rolled out over
-    // the horizon by the learned backend as replay does.
-    OmniTrainOptions train;
-    train.kind = "linear";
-    train.horizon = 1;
-    train.residual = true;
-    train.nominal_engine = options_.backend;
-    const FeatureLayout layout = PredictorLayout(model, 1);
-    const std::size_t least = static_cast<std::size_t>(
-        layout.history + model.command_delay_frames + model.vision_delay_frames + 35);
-    const std::vector<OmniLog> stretches = FitStretches(data_, least);
-    OmniTrainSummary summary;
-    try {
-      if (!stretches.empty()) {
-        predictor = std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, stretches, train, &summary));
-        out.learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
-                      "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
-                      " fit rows";
-      }
-    } catch (const InputError& e) {
-      out.learner = std::string("no learned residual: ") + e.what();
-    }
-  }
+  if (learn) predictor = TrainTestResidualPredictor(model, options_.backend, data_, &out.learner);
   // The learned replays first: a predictor that runs away somewhere is no yardstick.
   std::vector<ReplayResidual> learned(data_.size());
-  long bounded = 0;  // learned steps held to the predictor's training bounds
   if (predictor) {
-    try {
-      for (std::size_t k = 0; k < data_.size(); ++k) {
-        OmniReplayOptions o;
-        o.backend = "learned";
-        o.backend_options.predictor = predictor;
-        o.horizon = options_.horizon;
-        const OmniReplayResult replayed = ReplayOmniLog(model, *data_[k].log, o);
-        bounded += replayed.bounded_steps;
-        learned[k] = PoseErrorsInRobotFrame(*data_[k].log, replayed, nominal_.chassis_radius);
-      }
-    } catch (const CheckFailed& e) {
-      predictor.reset();
-      out.learner = std::string("no learned residual: ") + e.what();
-    }
-    if (predictor && bounded > 0) {
-      out.learner += "; held to the bounds of its training data on " + std::to_string(bounded) + " steps";
-    }
+    learned = ReplayLearnedResidual(model, data_, options_.horizon, nominal_.chassis_radius, &predictor, &out.learner);
   }
   if (predictor) out.learned.resize(3);
   for (std::size_t li = 0; li < data_.size(); ++li) {

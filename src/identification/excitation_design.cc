@@ -171,16 +171,14 @@ double Penalty(double v, double lo, double hi, double scale, double mu, double* 
   return 2 * mu * r / scale;
 }
 
-// log(cond(W S^-1)) + mu * (limit penalties) of a trajectory, and where `gradient` is
-// given, its derivatives with respect to q0, a and b (in the same shapes). NaN when W
-// is rank deficient.
-double Objective(const DesignSetup& s_, const FourierTrajectory& t, double mu, FourierTrajectory* gradient) {
+// Samples the trajectory's joint motion over one period into `motion` and returns the stacked regressor W S^-1.
+Eigen::MatrixXd SampleDesignMotion(const DesignSetup& s_, const FourierTrajectory& t,
+                                   std::vector<JointMotion>* motion) {
   const int n = s_.n, r = s_.base.rank(), m = s_.samples, nh = s_.harmonics;
-  std::vector<JointMotion> motion(static_cast<std::size_t>(m));
   Eigen::MatrixXd w(m * n, r);
   const Eigen::VectorXd inv_scale = s_.scales.cwiseInverse();
   for (int k = 0; k < m; ++k) {
-    JointMotion& mo = motion[static_cast<std::size_t>(k)];
+    JointMotion& mo = (*motion)[static_cast<std::size_t>(k)];
     mo.q = t.q0;
     mo.qd = Eigen::VectorXd::Zero(n);
     mo.qdd = Eigen::VectorXd::Zero(n);
@@ -192,6 +190,64 @@ double Objective(const DesignSetup& s_, const FourierTrajectory& t, double mu, F
     }
     w.middleRows(k * n, n) = s_.DesignRegressor(mo.q, mo.qd, mo.qdd) * inv_scale.asDiagonal();
   }
+  return w;
+}
+
+// Adds to gq, gqd, gqdd the cost's sensitivity through the regressor: d<h, Y(q, qd, qdd)> / d(q, qd, qdd) per sample.
+void AddRegressorSensitivity(const DesignSetup& s_, const std::vector<JointMotion>& motion,
+                             const std::vector<Eigen::MatrixXd>& h, Eigen::MatrixXd* gq, Eigen::MatrixXd* gqd,
+                             Eigen::MatrixXd* gqdd) {
+  const int n = s_.n, m = s_.samples;
+  // d<h, Y(q, qd, qdd)> / d(q, qd, qdd): central differences in q and qd, and an exact
+  // forward difference in qdd (the regressor is affine in qdd).
+  constexpr double kStep = 1e-6;
+  for (int k = 0; k < m; ++k) {
+    const JointMotion& mo = motion[static_cast<std::size_t>(k)];
+    const Eigen::MatrixXd& hk = h[static_cast<std::size_t>(k)];
+    auto dot = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) {
+      return hk.cwiseProduct(s_.DesignRegressor(q, qd, qdd)).sum();
+    };
+    const double centre = dot(mo.q, mo.qd, mo.qdd);
+    for (int i = 0; i < n; ++i) {
+      Eigen::VectorXd a = mo.q, b = mo.q;
+      a[i] += kStep;
+      b[i] -= kStep;
+      (*gq)(k, i) += (dot(a, mo.qd, mo.qdd) - dot(b, mo.qd, mo.qdd)) / (2 * kStep);
+      a = mo.qd;
+      b = mo.qd;
+      a[i] += kStep;
+      b[i] -= kStep;
+      (*gqd)(k, i) += (dot(mo.q, a, mo.qdd) - dot(mo.q, b, mo.qdd)) / (2 * kStep);
+      a = mo.qdd;
+      a[i] += 1.0;
+      (*gqdd)(k, i) += dot(mo.q, mo.qd, a) - centre;
+    }
+  }
+}
+
+// The gradient with respect to q0, a and b, through the Fourier basis, from the per-sample gq, gqd and gqdd.
+FourierTrajectory FourierGradient(const DesignSetup& s_, const FourierTrajectory& t, const Eigen::MatrixXd& gq,
+                                  const Eigen::MatrixXd& gqd, const Eigen::MatrixXd& gqdd) {
+  const int n = s_.n, nh = s_.harmonics;
+  FourierTrajectory gradient = ZeroFourierTrajectory(n, nh, t.fundamental);
+  gradient.q0 = gq.colwise().sum().transpose();
+  for (int l = 0; l < nh; ++l) {
+    const double wl = s_.omega * (l + 1);
+    const Eigen::VectorXd sn = s_.sin_table.col(l), cs = s_.cos_table.col(l);
+    gradient.a.col(l) = gq.transpose() * sn / wl + gqd.transpose() * cs - gqdd.transpose() * sn * wl;
+    gradient.b.col(l) = -gq.transpose() * cs / wl + gqd.transpose() * sn + gqdd.transpose() * cs * wl;
+  }
+  return gradient;
+}
+
+// log(cond(W S^-1)) + mu * (limit penalties) of a trajectory, and where `gradient` is
+// given, its derivatives with respect to q0, a and b (in the same shapes). NaN when W
+// is rank deficient.
+double Objective(const DesignSetup& s_, const FourierTrajectory& t, double mu, FourierTrajectory* gradient) {
+  const int n = s_.n, r = s_.base.rank(), m = s_.samples;
+  std::vector<JointMotion> motion(static_cast<std::size_t>(m));
+  const Eigen::VectorXd inv_scale = s_.scales.cwiseInverse();
+  const Eigen::MatrixXd w = SampleDesignMotion(s_, t, &motion);
   const Eigen::MatrixXd gram = w.transpose() * w;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram);
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -231,40 +287,8 @@ double Objective(const DesignSetup& s_, const FourierTrajectory& t, double mu, F
   }
   if (!gradient) return f;
 
-  // d<h, Y(q, qd, qdd)> / d(q, qd, qdd): central differences in q and qd, and an exact
-  // forward difference in qdd (the regressor is affine in qdd).
-  constexpr double kStep = 1e-6;
-  for (int k = 0; k < m; ++k) {
-    const JointMotion& mo = motion[static_cast<std::size_t>(k)];
-    const Eigen::MatrixXd& hk = h[static_cast<std::size_t>(k)];
-    auto dot = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) {
-      return hk.cwiseProduct(s_.DesignRegressor(q, qd, qdd)).sum();
-    };
-    const double centre = dot(mo.q, mo.qd, mo.qdd);
-    for (int i = 0; i < n; ++i) {
-      Eigen::VectorXd a = mo.q, b = mo.q;
-      a[i] += kStep;
-      b[i] -= kStep;
-      gq(k, i) += (dot(a, mo.qd, mo.qdd) - dot(b, mo.qd, mo.qdd)) / (2 * kStep);
-      a = mo.qd;
-      b = mo.qd;
-      a[i] += kStep;
-      b[i] -= kStep;
-      gqd(k, i) += (dot(mo.q, a, mo.qdd) - dot(mo.q, b, mo.qdd)) / (2 * kStep);
-      a = mo.qdd;
-      a[i] += 1.0;
-      gqdd(k, i) += dot(mo.q, mo.qd, a) - centre;
-    }
-  }
-  // Through the Fourier basis to q0, a and b.
-  *gradient = ZeroFourierTrajectory(n, nh, t.fundamental);
-  gradient->q0 = gq.colwise().sum().transpose();
-  for (int l = 0; l < nh; ++l) {
-    const double wl = s_.omega * (l + 1);
-    const Eigen::VectorXd sn = s_.sin_table.col(l), cs = s_.cos_table.col(l);
-    gradient->a.col(l) = gq.transpose() * sn / wl + gqd.transpose() * cs - gqdd.transpose() * sn * wl;
-    gradient->b.col(l) = -gq.transpose() * cs / wl + gqd.transpose() * sn + gqdd.transpose() * cs * wl;
-  }
+  AddRegressorSensitivity(s_, motion, h, &gq, &gqd, &gqdd);
+  *gradient = FourierGradient(s_, t, gq, gqd, gqdd);
   return f;
 }
 
@@ -522,6 +546,84 @@ FourierTrajectory RandomFeasibleExcitation(const ArmModel& model, const Excitati
   return Scaled(t, largest * fill);
 }
 
+namespace {
+
+// One start of the design: a random feasible excitation optimised by L-BFGS under growing limit penalties, shrunk
+// where it still touches a limit between the samples; its record goes into `st`.
+FourierTrajectory RunExcitationStart(const ArmModel& model, const ExcitationOptions& options, const DesignSetup& s,
+                                     double check_dt, int check_samples, int k, ExcitationStart* st) {
+  const FourierTrajectory initial = RandomFeasibleExcitation(model, options, StartSeed(options.seed, k));
+  st->initial_condition = ExcitationCondition(model, s.base, s.scales, initial, s.samples);
+  Eigen::VectorXd x = s.FromTrajectory(initial);
+  ceres::GradientProblemSolver::Options solver;
+  solver.line_search_direction_type = ceres::LBFGS;
+  solver.max_num_iterations = options.max_iterations;
+  solver.logging_type = ceres::SILENT;
+  solver.minimizer_progress_to_stdout = false;
+  solver.function_tolerance = 1e-9;
+  solver.gradient_tolerance = 1e-9;
+  solver.parameter_tolerance = 1e-10;
+  double mu = 10;
+  for (int round = 0; round < options.penalty_rounds; ++round, mu *= 10) {
+    ceres::GradientProblem problem(new DesignCriterion(s, mu));
+    ceres::GradientProblemSolver::Summary result;
+    ceres::Solve(solver, problem, x.data(), &result);
+    st->iterations += static_cast<int>(result.iterations.size()) - 1;
+  }
+  FourierTrajectory t = s.ToTrajectory(x.data());
+  t.joint_names = initial.joint_names;
+  t.model = model.name;
+  // The penalties leave the optimum a little inside the limits; where it still
+  // touches one between the samples, shrink the oscillation until it passes.
+  if (!Feasible(model, t, s.limits, check_dt, check_samples)) {
+    st->shrink = LargestFeasibleScale(model, t, s.limits, check_dt, check_samples, 1.0);
+    t = Scaled(t, st->shrink);
+  }
+  st->feasible = st->shrink > 0;
+  st->final_condition = ExcitationCondition(model, s.base, s.scales, t, s.samples);
+  return t;
+}
+
+// The feasible start with the lowest final condition number; throws when no start ended inside the limits.
+int BestExcitationStart(const std::vector<ExcitationStart>& starts) {
+  int best = -1;
+  for (int k = 0; k < static_cast<int>(starts.size()); ++k) {
+    const ExcitationStart& st = starts[static_cast<std::size_t>(k)];
+    if (st.feasible && (best < 0 || st.final_condition < starts[static_cast<std::size_t>(best)].final_condition))
+      best = k;
+  }
+  if (best < 0) throw CheckFailed("excitation design: no start ended inside the limits");
+  return best;
+}
+
+// The design's summary: every start, the best one's condition numbers and its margins to the limits.
+ExcitationSummary SummariseExcitation(const ArmModel& model, const ExcitationOptions& options, const DesignSetup& s,
+                                      const std::vector<ExcitationStart>& starts, int best,
+                                      const FourierTrajectory& design, double check_dt) {
+  ExcitationSummary out;
+  out.model = model.name;
+  out.harmonics = options.harmonics;
+  out.fundamental = options.fundamental;
+  out.parameters = s.base.rank();
+  out.best_start = best;
+  out.starts = starts;
+  out.start_condition = starts[static_cast<std::size_t>(best)].initial_condition;
+  out.final_condition = starts[static_cast<std::size_t>(best)].final_condition;
+  std::vector<double> initial;
+  for (const ExcitationStart& st : starts) {
+    initial.push_back(st.initial_condition);
+    out.iterations += st.iterations;
+  }
+  out.random_condition_median = Median(initial);
+  const Eigen::MatrixXd w = StackedBaseRegressor(model, s.base, design, s.samples);
+  out.final_condition_unscaled = ConditionOf(w);
+  out.final_condition_equilibrated = ConditionOf(w * w.colwise().norm().cwiseInverse().asDiagonal());
+  out.margins = CheckExcitationLimits(model, design, s.limits, check_dt);
+  return out;
+}
+
+}  // namespace
+
 FourierTrajectory DesignExcitation(const ArmModel& model, const ExcitationOptions& options, ExcitationSummary* summary,
                                    const ExcitationProgress& progress) {
   const auto started = std::chrono::steady_clock::now();
@@ -539,44 +641,11 @@ FourierTrajectory DesignExcitation(const ArmModel& model, const ExcitationOption
   double best_so_far = kInf;
   std::exception_ptr failure;
 
-  auto run_start = [&](int k) {
-    ExcitationStart& st = starts[static_cast<std::size_t>(k)];
-    const FourierTrajectory initial = RandomFeasibleExcitation(model, options, StartSeed(options.seed, k));
-    st.initial_condition = ExcitationCondition(model, s.base, s.scales, initial, s.samples);
-    Eigen::VectorXd x = s.FromTrajectory(initial);
-    ceres::GradientProblemSolver::Options solver;
-    solver.line_search_direction_type = ceres::LBFGS;
-    solver.max_num_iterations = options.max_iterations;
-    solver.logging_type = ceres::SILENT;
-    solver.minimizer_progress_to_stdout = false;
-    solver.function_tolerance = 1e-9;
-    solver.gradient_tolerance = 1e-9;
-    solver.parameter_tolerance = 1e-10;
-    double mu = 10;
-    for (int round = 0; round < options.penalty_rounds; ++round, mu *= 10) {
-      ceres::GradientProblem problem(new DesignCriterion(s, mu));
-      ceres::GradientProblemSolver::Summary result;
-      ceres::Solve(solver, problem, x.data(), &result);
-      st.iterations += static_cast<int>(result.iterations.size()) - 1;
-    }
-    FourierTrajectory t = s.ToTrajectory(x.data());
-    t.joint_names = initial.joint_names;
-    t.model = model.name;
-    // The penalties leave the optimum a little inside the limits; where it still
-    // touches one between the samples, shrink the oscillation until it passes.
-    if (!Feasible(model, t, s.limits, check_dt, check_samples)) {
-      st.shrink = LargestFeasibleScale(model, t, s.limits, check_dt, check_samples, 1.0);
-      t = Scaled(t, st.shrink);
-    }
-    st.feasible = st.shrink > 0;
-    st.final_condition = ExcitationCondition(model, s.base, s.scales, t, s.samples);
-    finals[static_cast<std::size_t>(k)] = std::move(t);
-  };
-
   auto worker = [&]() {
     for (int k = next++; k < options.starts; k = next++) {
       try {
-        run_start(k);
+        finals[static_cast<std::size_t>(k)] =
+            RunExcitationStart(model, options, s, check_dt, check_samples, k, &starts[static_cast<std::size_t>(k)]);
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex);
         if (!failure) failure = std::current_exception();
@@ -599,37 +668,11 @@ FourierTrajectory DesignExcitation(const ArmModel& model, const ExcitationOption
   }
   if (failure) std::rethrow_exception(failure);
 
-  int best = -1;
-  for (int k = 0; k < options.starts; ++k) {
-    const ExcitationStart& st = starts[static_cast<std::size_t>(k)];
-    if (st.feasible && (best < 0 || st.final_condition < starts[static_cast<std::size_t>(best)].final_condition))
-      best = k;
-  }
-  if (best < 0) throw CheckFailed("excitation design: no start ended inside the limits");
+  const int best = BestExcitationStart(starts);
   const FourierTrajectory& design = finals[static_cast<std::size_t>(best)];
-
   if (summary) {
-    ExcitationSummary& out = *summary;
-    out = ExcitationSummary{};
-    out.model = model.name;
-    out.harmonics = options.harmonics;
-    out.fundamental = options.fundamental;
-    out.parameters = s.base.rank();
-    out.best_start = best;
-    out.starts = starts;
-    out.start_condition = starts[static_cast<std::size_t>(best)].initial_condition;
-    out.final_condition = starts[static_cast<std::size_t>(best)].final_condition;
-    std::vector<double> initial;
-    for (const ExcitationStart& st : starts) {
-      initial.push_back(st.initial_condition);
-      out.iterations += st.iterations;
-    }
-    out.random_condition_median = Median(initial);
-    const Eigen::MatrixXd w = StackedBaseRegressor(model, s.base, design, s.samples);
-    out.final_condition_unscaled = ConditionOf(w);
-    out.final_condition_equilibrated = ConditionOf(w * w.colwise().norm().cwiseInverse().asDiagonal());
-    out.margins = CheckExcitationLimits(model, design, s.limits, check_dt);
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    *summary = SummariseExcitation(model, options, s, starts, best, design, check_dt);
+    summary->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   }
   return design;
 }

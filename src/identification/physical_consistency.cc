@@ -188,6 +188,53 @@ struct Barrier {
   }
 };
 
+// The Newton step for gradient g and curvature d (all but the data term's) plus the data term's 2 t A'A, solved in
+// (row space, null space) coordinates: the huge data curvature 2 t S^2 sits only in the row-space block, which is
+// solved after eliminating the null-space block, each with diagonal scaling.
+Eigen::VectorXd ConsistentNewtonStep(const Eigen::VectorXd& g, const Eigen::MatrixXd& d, double t,
+                                     const Eigen::VectorXd& s2, const Eigen::MatrixXd& row_space,
+                                     const Eigen::MatrixXd& null_space) {
+  const bool has_null_space = null_space.cols() > 0;
+  const Eigen::MatrixXd hvv = (2 * t * s2).asDiagonal().toDenseMatrix() + row_space.transpose() * d * row_space;
+  const Eigen::MatrixXd hvw = row_space.transpose() * d * null_space;
+  const Eigen::MatrixXd hww = null_space.transpose() * d * null_space;
+  const Eigen::VectorXd gv = row_space.transpose() * g, gw = null_space.transpose() * g;
+  Eigen::MatrixXd schur = hvv;
+  Eigen::VectorXd rhs = -gv;
+  Eigen::LDLT<Eigen::MatrixXd> ww;
+  if (has_null_space) {
+    ww.compute(hww);
+    schur -= hvw * ww.solve(hvw.transpose());
+    rhs += hvw * ww.solve(gw);
+  }
+  const Eigen::VectorXd scale = schur.diagonal().cwiseAbs().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
+  const Eigen::VectorXd dv =
+      scale.asDiagonal() * (scale.asDiagonal() * schur * scale.asDiagonal()).ldlt().solve(scale.asDiagonal() * rhs);
+  Eigen::VectorXd delta = row_space * dv;
+  if (has_null_space) delta += null_space * ww.solve(-gw - hvw.transpose() * dv);
+  return delta;
+}
+
+// Backtracking along delta: stay strictly inside, then sufficient decrease (the quadratic parts' change computed
+// exactly, not as a difference of large numbers); returns whether y moved.
+bool BacktrackInside(const Barrier& barrier, const Eigen::MatrixXd& a, const Eigen::VectorXd& residual,
+                     const Eigen::VectorXd& y0, double t, double pull, double value, double decrement,
+                     const Eigen::VectorXd& delta, Eigen::VectorXd* y) {
+  const Eigen::VectorXd a_delta = a * delta;
+  double alpha = 1, candidate_value = 0;
+  for (int halving = 0; halving < 60; ++halving, alpha *= 0.5) {
+    const Eigen::VectorXd candidate = *y + alpha * delta;
+    if (!barrier.Evaluate(candidate, &candidate_value, nullptr, nullptr)) continue;
+    const double change = t * (2 * alpha * residual.dot(a_delta) + alpha * alpha * a_delta.squaredNorm()) +
+                          pull * ((candidate - y0).squaredNorm() - (*y - y0).squaredNorm()) + candidate_value - value;
+    if (change <= -0.25 * alpha * decrement) {
+      *y = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 ConsistentFit FitConsistentParameters(const ArmModel& a_priori, const Eigen::MatrixXd& k, const Eigen::MatrixXd& r,
@@ -223,52 +270,17 @@ ConsistentFit FitConsistentParameters(const ArmModel& a_priori, const Eigen::Mat
   for (int outer = 0; outer < 400; ++outer) {
     for (int step = 0; step < 100; ++step) {
       ++fit.iterations;
-      double value;
+      double value = 0;
       Eigen::VectorXd gb;
       Eigen::MatrixXd hb;
       barrier.Evaluate(y, &value, &gb, &hb);
       const Eigen::VectorXd residual = a * y - b;
       const Eigen::VectorXd g = 2 * t * a.transpose() * residual + 2 * options.pull * (y - y0) + gb;
       const Eigen::MatrixXd d = hb + 2 * options.pull * Eigen::MatrixXd::Identity(p, p);
-      // Newton step in (row space, null space) coordinates: the huge data curvature
-      // 2 t S^2 sits only in the row-space block, which is solved after eliminating the
-      // null-space block, each with diagonal scaling.
-      const Eigen::MatrixXd hvv = (2 * t * s2).asDiagonal().toDenseMatrix() + row_space.transpose() * d * row_space;
-      const Eigen::MatrixXd hvw = row_space.transpose() * d * null_space;
-      const Eigen::MatrixXd hww = null_space.transpose() * d * null_space;
-      const Eigen::VectorXd gv = row_space.transpose() * g, gw = null_space.transpose() * g;
-      Eigen::MatrixXd schur = hvv;
-      Eigen::VectorXd rhs = -gv;
-      Eigen::LDLT<Eigen::MatrixXd> ww;
-      if (p > rank) {
-        ww.compute(hww);
-        schur -= hvw * ww.solve(hvw.transpose());
-        rhs += hvw * ww.solve(gw);
-      }
-      const Eigen::VectorXd scale = schur.diagonal().cwiseAbs().cwiseSqrt().cwiseMax(1e-300).cwiseInverse();
-      const Eigen::VectorXd dv =
-          scale.asDiagonal() * (scale.asDiagonal() * schur * scale.asDiagonal()).ldlt().solve(scale.asDiagonal() * rhs);
-      Eigen::VectorXd delta = row_space * dv;
-      if (p > rank) delta += null_space * ww.solve(-gw - hvw.transpose() * dv);
+      const Eigen::VectorXd delta = ConsistentNewtonStep(g, d, t, s2, row_space, null_space);
       const double decrement = -g.dot(delta);
       if (!(decrement > 1e-10)) break;
-      // Backtracking: stay strictly inside, then sufficient decrease (the quadratic
-      // parts' change computed exactly, not as a difference of large numbers).
-      const Eigen::VectorXd a_delta = a * delta;
-      double alpha = 1, candidate_value = 0;
-      bool moved = false;
-      for (int halving = 0; halving < 60; ++halving, alpha *= 0.5) {
-        const Eigen::VectorXd candidate = y + alpha * delta;
-        if (!barrier.Evaluate(candidate, &candidate_value, nullptr, nullptr)) continue;
-        const double change = t * (2 * alpha * residual.dot(a_delta) + alpha * alpha * a_delta.squaredNorm()) +
-                              options.pull * ((candidate - y0).squaredNorm() - (y - y0).squaredNorm()) +
-                              candidate_value - value;
-        if (change <= -0.25 * alpha * decrement) {
-          y = candidate;
-          moved = true;
-          break;
-        }
-      }
+      const bool moved = BacktrackInside(barrier, a, residual, y0, t, options.pull, value, decrement, delta, &y);
       if (!moved || decrement < 1e-9) break;
     }
     // Within dims / t of the best misfit, or the misfit itself that small.

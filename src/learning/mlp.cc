@@ -397,14 +397,18 @@ double TrainEpoch(const Layout& layout, const RowMatrix& x_train, const RowMatri
   return loss_sum;
 }
 
-}  // namespace
+// The training and the validation rows, each normalised by the training rows' statistics.
+struct MlpSplit {
+  Eigen::Index n_train = 0, n_val = 0;
+  RowMatrix x_train, y_train, x_val, y_val;
+};
 
-Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options,
-             MlpTrainSummary* summary, const std::function<void(int, int, double)>& progress) {
-  CheckTrainingData(x, y, options);
-
+// Holds out the last rows for validation and normalises both splits, keeping the statistics in `params`.
+MlpSplit SplitAndNormalise(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options,
+                           Mlp::Parameters* params) {
   // The validation rows are the last ones, so that with time-ordered data the network is
   // judged on a later stretch than it learned from. Any positive fraction keeps >= 1 row.
+  MlpSplit split;
   const Eigen::Index n_rows = x.rows();
   Eigen::Index n_val = static_cast<Eigen::Index>(
       std::llround(static_cast<double>(n_rows) * options.validation_fraction));
@@ -416,15 +420,94 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
                      " for validation); need at least " +
                      std::to_string(kMinTrainingRows));
   }
+  split.n_train = n_train;
+  split.n_val = n_val;
 
   // Normalisation from the training rows only, so nothing of the validation split leaks in.
+  ColumnStats(x.topRows(n_train), &params->input_mean, &params->input_scale);
+  ColumnStats(y.topRows(n_train), &params->output_mean, &params->output_scale);
+  split.x_train = Normalise(x.topRows(n_train), params->input_mean, params->input_scale);
+  split.y_train = Normalise(y.topRows(n_train), params->output_mean, params->output_scale);
+  split.x_val = Normalise(x.bottomRows(n_val), params->input_mean, params->input_scale);
+  split.y_val = Normalise(y.bottomRows(n_val), params->output_mean, params->output_scale);
+  return split;
+}
+
+// Adam's state at zero, with weight decay on the weights only and room for every layer's activations.
+Optimiser StartOptimiser(const Layout& layout) {
+  const int n_layers = layout.num_layers();
+  Optimiser optimiser;
+  optimiser.grad = optimiser.adam_m = optimiser.adam_v = Eigen::VectorXd::Zero(layout.total);
+  optimiser.decay_mask = Eigen::VectorXd::Zero(layout.total);
+  for (int l = 0; l < n_layers; ++l) layout.Weights(optimiser.decay_mask, l).setOnes();
+  optimiser.acts.resize(static_cast<std::size_t>(n_layers) + 1);
+  return optimiser;
+}
+
+// Where the early-stopping loop ended: its last epoch and the best validation epoch's parameters.
+struct MlpStop {
+  Eigen::VectorXd best_theta;
+  double best_val = std::numeric_limits<double>::infinity();
+  int best_epoch = 0;
+  int epoch = 0;
+  bool diverged = false;
+};
+
+// Trains epoch after epoch until max_epochs, a non-finite loss or `patience` epochs without a better validation loss.
+MlpStop TrainUntilStopped(const Layout& layout, const MlpSplit& split, const MlpOptions& options,
+                          const std::function<void(int, int, double)>& progress, Eigen::VectorXd* theta,
+                          std::vector<Eigen::MatrixXd>* eval_acts) {
+  const Eigen::Index n_train = split.n_train;
+  Optimiser optimiser = StartOptimiser(layout);
+  const Eigen::Index batch_size =
+      options.batch_size == 0 ? n_train : std::min<Eigen::Index>(options.batch_size, n_train);
+  const double n_out = static_cast<double>(split.y_train.cols());
+  std::vector<int> order(n_train);
+  std::iota(order.begin(), order.end(), 0);
+  Rng shuffle_rng = Rng::Derived(options.seed, kShuffleStream);
+
+  const bool has_validation = split.n_val > 0;
+  MlpStop stop;
+  while (stop.epoch < options.max_epochs) {
+    ++stop.epoch;
+    for (Eigen::Index i = n_train - 1; i > 0; --i) {
+      std::swap(order[i], order[shuffle_rng.Index(static_cast<std::uint64_t>(i + 1))]);
+    }
+    const double loss_sum =
+        TrainEpoch(layout, split.x_train, split.y_train, order, batch_size, options, theta, &optimiser);
+    const double epoch_train_loss =
+        loss_sum / (static_cast<double>(n_train) * n_out);  // mean over the epoch's batches' rows
+
+    double reported = epoch_train_loss;
+    if (has_validation) {
+      const double val = MeanSquaredError(layout, *theta, split.x_val, split.y_val, eval_acts);
+      reported = val;
+      if (val < stop.best_val) {
+        stop.best_val = val;
+        stop.best_epoch = stop.epoch;
+        stop.best_theta = *theta;
+      }
+    } else {
+      stop.best_epoch = stop.epoch;
+    }
+    if (progress) progress(stop.epoch, options.max_epochs, reported);
+    // A non-finite loss means the weights have blown up; later epochs cannot recover.
+    if (!std::isfinite(reported)) {
+      stop.diverged = true;
+      break;
+    }
+    if (has_validation && stop.epoch - stop.best_epoch >= options.patience) break;
+  }
+  return stop;
+}
+
+}  // namespace
+
+Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOptions& options,
+             MlpTrainSummary* summary, const std::function<void(int, int, double)>& progress) {
+  CheckTrainingData(x, y, options);
   Mlp::Parameters params;
-  ColumnStats(x.topRows(n_train), &params.input_mean, &params.input_scale);
-  ColumnStats(y.topRows(n_train), &params.output_mean, &params.output_scale);
-  const RowMatrix x_train = Normalise(x.topRows(n_train), params.input_mean, params.input_scale);
-  const RowMatrix y_train = Normalise(y.topRows(n_train), params.output_mean, params.output_scale);
-  const RowMatrix x_val = Normalise(x.bottomRows(n_val), params.input_mean, params.input_scale);
-  const RowMatrix y_val = Normalise(y.bottomRows(n_val), params.output_mean, params.output_scale);
+  const MlpSplit split = SplitAndNormalise(x, y, options, &params);
 
   params.layer_sizes.push_back(static_cast<int>(x.cols()));
   params.layer_sizes.insert(params.layer_sizes.end(), options.hidden.begin(), options.hidden.end());
@@ -433,60 +516,14 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
   const int n_layers = layout.num_layers();
 
   Eigen::VectorXd theta = InitialParameters(layout, options.seed);
-  Optimiser optimiser;
-  optimiser.grad = optimiser.adam_m = optimiser.adam_v = Eigen::VectorXd::Zero(layout.total);
-  optimiser.decay_mask = Eigen::VectorXd::Zero(layout.total);
-  for (int l = 0; l < n_layers; ++l) layout.Weights(optimiser.decay_mask, l).setOnes();
-  optimiser.acts.resize(static_cast<std::size_t>(n_layers) + 1);
-
-  const Eigen::Index batch_size =
-      options.batch_size == 0 ? n_train : std::min<Eigen::Index>(options.batch_size, n_train);
-  const double n_out = static_cast<double>(y.cols());
   std::vector<Eigen::MatrixXd> eval_acts(n_layers + 1);
-  std::vector<int> order(n_train);
-  std::iota(order.begin(), order.end(), 0);
-  Rng shuffle_rng = Rng::Derived(options.seed, kShuffleStream);
+  const MlpStop stop = TrainUntilStopped(layout, split, options, progress, &theta, &eval_acts);
 
-  const bool has_validation = n_val > 0;
-  Eigen::VectorXd best_theta;
-  double best_val = std::numeric_limits<double>::infinity();
-  int best_epoch = 0;
-  int epoch = 0;
-  bool diverged = false;
-  while (epoch < options.max_epochs) {
-    ++epoch;
-    for (Eigen::Index i = n_train - 1; i > 0; --i) {
-      std::swap(order[i], order[shuffle_rng.Index(static_cast<std::uint64_t>(i + 1))]);
-    }
-    const double loss_sum = TrainEpoch(layout, x_train, y_train, order, batch_size, options, &theta, &optimiser);
-    const double epoch_train_loss =
-        loss_sum / (static_cast<double>(n_train) * n_out);  // mean over the epoch's batches' rows
-
-    double reported = epoch_train_loss;
-    if (has_validation) {
-      const double val = MeanSquaredError(layout, theta, x_val, y_val, &eval_acts);
-      reported = val;
-      if (val < best_val) {
-        best_val = val;
-        best_epoch = epoch;
-        best_theta = theta;
-      }
-    } else {
-      best_epoch = epoch;
-    }
-    if (progress) progress(epoch, options.max_epochs, reported);
-    // A non-finite loss means the weights have blown up; later epochs cannot recover.
-    if (!std::isfinite(reported)) {
-      diverged = true;
-      break;
-    }
-    if (has_validation && epoch - best_epoch >= options.patience) break;
-  }
-
-  const Eigen::VectorXd& kept = has_validation ? best_theta : theta;
-  if (kept.size() != layout.total || !kept.allFinite() || (diverged && !has_validation)) {
+  const bool has_validation = split.n_val > 0;
+  const Eigen::VectorXd& kept = has_validation ? stop.best_theta : theta;
+  if (kept.size() != layout.total || !kept.allFinite() || (stop.diverged && !has_validation)) {
     throw InputError("TrainMlp: training diverged (non-finite loss at epoch " +
-                     std::to_string(epoch) + "); lower learning_rate (now " +
+                     std::to_string(stop.epoch) + "); lower learning_rate (now " +
                      Number(options.learning_rate) + ")");
   }
   for (int l = 0; l < n_layers; ++l) {
@@ -494,11 +531,11 @@ Mlp TrainMlp(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const MlpOption
     params.biases.emplace_back(layout.Biases(kept, l));
   }
   if (summary) {
-    summary->epochs = epoch;
-    summary->best_epoch = best_epoch;
-    summary->train_mse = MeanSquaredError(layout, kept, x_train, y_train, &eval_acts);
-    summary->validation_mse = has_validation ? best_val : std::numeric_limits<double>::quiet_NaN();
-    summary->stopped_early = epoch < options.max_epochs;
+    summary->epochs = stop.epoch;
+    summary->best_epoch = stop.best_epoch;
+    summary->train_mse = MeanSquaredError(layout, kept, split.x_train, split.y_train, &eval_acts);
+    summary->validation_mse = has_validation ? stop.best_val : std::numeric_limits<double>::quiet_NaN();
+    summary->stopped_early = stop.epoch < options.max_epochs;
   }
   return Mlp::FromParameters(std::move(params));
 }

@@ -95,47 +95,105 @@ SeriesPlot TrackingPlot(const ArmModel& model, const BatchAdaptiveResult& r) {
   return plot;
 }
 
+// Checks the options against the model and loads the plant, if given, before anything runs or is written.
+std::unique_ptr<ArmModel> CheckExciteOptions(const ArmModel& model, ExciteCliOptions* options,
+                                             ArmTrialOptions* plant_options) {
+  const int n = model.dof();
+  if (!options->acceleration_limits.empty()) {
+    if (options->acceleration_limits.size() == 1)
+      options->acceleration_limits.assign(static_cast<std::size_t>(n), options->acceleration_limits[0]);
+    options->design.acceleration_limits = options->acceleration_limits;
+  }
+  std::string invalid;
+  if (!options->design.IsValid(&invalid)) throw InputError("excite: " + invalid);
+  ResolveExcitationLimits(model, options->design);
+  std::unique_ptr<ArmModel> plant;
+  if (!options->plant.empty()) {
+    plant = std::make_unique<ArmModel>(LoadArmModel(options->plant));
+    if (plant->dof() != n)
+      throw InputError(options->plant + ": the plant has " + std::to_string(plant->dof()) + " joint(s) but model '" +
+                       model.name + "' has " + std::to_string(n));
+    if (!options->adaptive.IsValid(&invalid)) throw InputError("excite: " + invalid);
+    plant_options->encoder_resolution = options->encoder_resolution;
+    plant_options->torque_noise = Eigen::VectorXd::Constant(n, options->torque_noise);
+    plant_options->seed = options->design.seed;
+    if (!plant_options->IsValid(&invalid)) throw InputError("excite: " + invalid);
+  }
+  return plant;
+}
+
+// Designs the excitation with a progress line, or loads --trajectory and checks it fits the model.
+FourierTrajectory DesignOrLoadExcitation(const ArmModel& model, const ExciteCliOptions& options,
+                                         ExcitationSummary* summary) {
+  if (!options.trajectory.empty()) {
+    FourierTrajectory trajectory = LoadFourierTrajectory(options.trajectory);
+    CheckTrajectoryFitsModel(trajectory, model, options.trajectory);
+    return trajectory;
+  }
+  Progress progress("excite", !options.quiet);
+  FourierTrajectory trajectory =
+      DesignExcitation(model, options.design, summary, [&](int done, int total, double best) {
+        char detail[64];
+        std::snprintf(detail, sizeof detail, "start %d/%d, best condition %.4g", done, total, best);
+        progress.Update(done, total, detail);
+      });
+  progress.Finish();
+  return trajectory;
+}
+
+// Draws excitation.png and, after a batch-adaptive run, its parameter and tracking plots; returns the parameters the
+// parameter plot leaves out.
+int DrawExcitePlots(const ArmModel& model, const FourierTrajectory& trajectory, const BatchAdaptiveResult* adaptive,
+                    OutputFiles* files) {
+  int parameters_left_out = 0;
+  if (!RenderingCompiled()) {
+    std::fprintf(stderr, "excite: warning: plots not drawn: %s\n", kRenderingNotCompiled);
+    return parameters_left_out;
+  }
+  std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
+  char title[160];
+  std::snprintf(title, sizeof title, "Excitation of %s: %d harmonics of %g Hz", model.name.c_str(),
+                trajectory.harmonics(), trajectory.fundamental);
+  files->WritePng("excitation.png", RenderSeriesPlot(TrajectoryPlot(model, trajectory, title), *renderer));
+  if (adaptive) {
+    files->WritePng("adaptive_parameters.png",
+                    RenderSeriesPlot(ParameterPlot(*adaptive, &parameters_left_out), *renderer));
+    files->WritePng("adaptive_tracking.png", RenderSeriesPlot(TrackingPlot(model, *adaptive), *renderer));
+  }
+  return parameters_left_out;
+}
+
+// Prints the design's summary, or a loaded excitation's condition number, and the batch-adaptive report.
+void PrintExciteSummary(const ArmModel& model, const ExciteCliOptions& options, const FourierTrajectory& trajectory,
+                        const ExcitationSummary& summary, const BatchAdaptiveResult* adaptive,
+                        int parameters_left_out) {
+  if (options.trajectory.empty()) {
+    std::printf("%s", summary.FullReport().c_str());
+  } else {
+    const BaseParameters base = FindBaseParameters(model);
+    const ExcitationLimits limits = ResolveExcitationLimits(model, options.design);
+    const int samples = options.design.samples_per_period;
+    std::printf("excitation %s: condition number %.4g (scaled columns, %d samples per period)\n",
+                options.trajectory.c_str(),
+                ExcitationCondition(model, base, ExcitationColumnScales(model, base, limits), trajectory, samples),
+                samples);
+  }
+  if (adaptive) {
+    std::printf("\n%s", adaptive->FullReport().c_str());
+    if (parameters_left_out > 0)
+      std::printf("(adaptive_parameters.png leaves out %d parameter(s) causing under 1 %% of the largest torque)\n",
+                  parameters_left_out);
+  }
+}
+
 int Excite(ExciteCliOptions options) {
   // Check everything before running or writing anything.
   const ArmModel model = LoadArmModel(options.model);
-  const int n = model.dof();
-  if (!options.acceleration_limits.empty()) {
-    if (options.acceleration_limits.size() == 1)
-      options.acceleration_limits.assign(static_cast<std::size_t>(n), options.acceleration_limits[0]);
-    options.design.acceleration_limits = options.acceleration_limits;
-  }
-  std::string invalid;
-  if (!options.design.IsValid(&invalid)) throw InputError("excite: " + invalid);
-  ResolveExcitationLimits(model, options.design);
-  std::unique_ptr<ArmModel> plant;
   ArmTrialOptions plant_options;
-  if (!options.plant.empty()) {
-    plant = std::make_unique<ArmModel>(LoadArmModel(options.plant));
-    if (plant->dof() != n)
-      throw InputError(options.plant + ": the plant has " + std::to_string(plant->dof()) + " joint(s) but model '" +
-                       model.name + "' has " + std::to_string(n));
-    if (!options.adaptive.IsValid(&invalid)) throw InputError("excite: " + invalid);
-    plant_options.encoder_resolution = options.encoder_resolution;
-    plant_options.torque_noise = Eigen::VectorXd::Constant(n, options.torque_noise);
-    plant_options.seed = options.design.seed;
-    if (!plant_options.IsValid(&invalid)) throw InputError("excite: " + invalid);
-  }
+  const std::unique_ptr<ArmModel> plant = CheckExciteOptions(model, &options, &plant_options);
 
-  FourierTrajectory trajectory;
   ExcitationSummary summary;
-  const bool designed = options.trajectory.empty();
-  if (designed) {
-    Progress progress("excite", !options.quiet);
-    trajectory = DesignExcitation(model, options.design, &summary, [&](int done, int total, double best) {
-      char detail[64];
-      std::snprintf(detail, sizeof detail, "start %d/%d, best condition %.4g", done, total, best);
-      progress.Update(done, total, detail);
-    });
-    progress.Finish();
-  } else {
-    trajectory = LoadFourierTrajectory(options.trajectory);
-    CheckTrajectoryFitsModel(trajectory, model, options.trajectory);
-  }
+  const FourierTrajectory trajectory = DesignOrLoadExcitation(model, options, &summary);
 
   OutputFiles files(options.out);
   SaveFourierTrajectory(trajectory, files.Path("excitation.yaml"));
@@ -156,40 +214,9 @@ int Excite(ExciteCliOptions options) {
     files.Write("adaptive.csv", FormatBatchAdaptiveCsv(*adaptive));
   }
 
-  int parameters_left_out = 0;
-  if (RenderingCompiled()) {
-    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-    char title[160];
-    std::snprintf(title, sizeof title, "Excitation of %s: %d harmonics of %g Hz", model.name.c_str(),
-                  trajectory.harmonics(), trajectory.fundamental);
-    files.WritePng("excitation.png", RenderSeriesPlot(TrajectoryPlot(model, trajectory, title), *renderer));
-    if (adaptive) {
-      files.WritePng("adaptive_parameters.png",
-                     RenderSeriesPlot(ParameterPlot(*adaptive, &parameters_left_out), *renderer));
-      files.WritePng("adaptive_tracking.png", RenderSeriesPlot(TrackingPlot(model, *adaptive), *renderer));
-    }
-  } else {
-    std::fprintf(stderr, "excite: warning: plots not drawn: %s\n", kRenderingNotCompiled);
-  }
-
+  const int parameters_left_out = DrawExcitePlots(model, trajectory, adaptive.get(), &files);
   if (!options.quiet) {
-    if (designed) {
-      std::printf("%s", summary.FullReport().c_str());
-    } else {
-      const BaseParameters base = FindBaseParameters(model);
-      const ExcitationLimits limits = ResolveExcitationLimits(model, options.design);
-      const int samples = options.design.samples_per_period;
-      std::printf("excitation %s: condition number %.4g (scaled columns, %d samples per period)\n",
-                  options.trajectory.c_str(),
-                  ExcitationCondition(model, base, ExcitationColumnScales(model, base, limits), trajectory, samples),
-                  samples);
-    }
-    if (adaptive) {
-      std::printf("\n%s", adaptive->FullReport().c_str());
-      if (parameters_left_out > 0)
-        std::printf("(adaptive_parameters.png leaves out %d parameter(s) causing under 1 %% of the largest torque)\n",
-                    parameters_left_out);
-    }
+    PrintExciteSummary(model, options, trajectory, summary, adaptive.get(), parameters_left_out);
     files.PrintWrote();
   }
   return kExitOk;

@@ -123,15 +123,15 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
   return kExitOk;
 }
 
-int Identify(const IdentifyCliOptions& options) {
-  if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
+// Refuses omni-only options, a non-YAML --out and bad settings; returns the weighted least squares' options.
+WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& options,
+                                                 ArmOutputErrorOptions* output_error) {
   for (const char* omni_only :
        {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--robot", "--team", "--state",
         "--no-noise"}) {
     if (std::find(options.given.begin(), options.given.end(), omni_only) != options.given.end())
       throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
   }
-  // Check everything before identifying or writing.
   if (!EndsWithYaml(options.out))
     throw InputError("--out " + options.out + ": the identified model is written as YAML; give a .yaml or .yml path");
   if (ModelFileRobotKind(options.model) != "arm")
@@ -141,43 +141,32 @@ int Identify(const IdentifyCliOptions& options) {
   identification.torque_offsets = options.offsets;
   std::string why;
   if (!identification.IsValid(&why)) throw InputError(why);
-  ArmOutputErrorOptions output_error;
-  output_error.horizon = options.output_error;
-  output_error.offsets = options.offsets;
-  output_error.stribeck = options.stribeck;
-  output_error.threads = options.omni.threads;
-  if (options.output_error != 0 && !output_error.IsValid(&why)) throw InputError("--output-error: " + why);
+  output_error->horizon = options.output_error;
+  output_error->offsets = options.offsets;
+  output_error->stribeck = options.stribeck;
+  output_error->threads = options.omni.threads;
+  if (options.output_error != 0 && !output_error->IsValid(&why)) throw InputError("--output-error: " + why);
   if (options.stribeck && options.output_error <= 0)
     throw InputError("--stribeck refines by output error: give --output-error S as well");
   if (options.omni.threads < 0) throw InputError("--threads must be 0 (one per core) or more");
-  const ArmModel model = LoadArmModel(options.model);
+  return identification;
+}
+
+// Reads each arm log and checks it matches the model's joints.
+std::vector<ArmLog> ReadArmLogsForModel(const std::vector<std::string>& paths, const ArmLogOptions& log_options,
+                                        const ArmModel& model) {
   std::vector<ArmLog> logs;
-  for (const auto& path : options.logs) {
-    logs.push_back(ReadArmLog(path, options.log));
+  for (const auto& path : paths) {
+    logs.push_back(ReadArmLog(path, log_options));
     CheckArmLogMatchesModel(logs.back(), model);
   }
+  return logs;
+}
 
-  std::vector<ArmLog> held_out;
-  for (const auto& path : options.validate) {
-    held_out.push_back(ReadArmLog(path, options.log));
-    CheckArmLogMatchesModel(held_out.back(), model);
-  }
-
-  WlsIdentificationSummary summary;
-  const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
-  // --output-error: the inverse-dynamics estimate refined on the logs' simulation error.
-  ArmOutputErrorSummary refinement;
-  const ArmModel identified = options.output_error > 0
-                                  ? RefineArmByOutputError(inverse_dynamics, logs, output_error, &refinement)
-                                  : inverse_dynamics;
-
-  // Held-out logs: the torque errors of the a-priori, the identified and the
-  // unconstrained model, and the motion they simulate (with --output-error the
-  // inverse-dynamics estimate's too).
-  IdentificationValidation validation = ValidateIdentification(model, identified, summary, identification, held_out);
-  if (options.output_error > 0) AddSimulatedModel(&validation, "inverse dynamics", inverse_dynamics, held_out);
-
-  std::string comment = "Identified by twinsim identify from " + std::to_string(logs.size()) + " log(s):";
+// The identified model file's comment: the logs, the starting model and how the estimate was refined.
+std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t logs,
+                                 const WlsIdentificationSummary& summary, const ArmOutputErrorSummary& refinement) {
+  std::string comment = "Identified by twinsim identify from " + std::to_string(logs) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
   comment += "\nstarting from " + options.model + "; " + summary.BriefReport();
   if (options.output_error > 0) {
@@ -195,28 +184,61 @@ int Identify(const IdentifyCliOptions& options) {
                        "the held-out windows";
     }
   }
-  OutputFiles files;
-  files.Write(options.out, FormatArmModelYaml(identified, comment));
+  return comment;
+}
 
+// Writes --report's tables and, where rendering is compiled, the first log's torque plot per joint.
+void WriteArmIdentifyReport(const std::string& report_dir, const ArmModel& model, const ArmModel& identified,
+                            const ArmLog& first_log, const WlsIdentificationSummary& summary,
+                            const IdentificationValidation& validation, bool held_out, OutputFiles* files) {
+  const std::string report = report_dir + "/";
+  files->Write(report + "parameters.csv", FormatIdentifiedParametersCsv(summary));
+  files->Write(report + "joints.csv", FormatIdentifiedJointsCsv(summary));
+  if (held_out) {
+    files->Write(report + "validation.csv", FormatIdentificationValidationCsv(validation));
+    files->Write(report + "simulation.csv", FormatArmSimulationScoresCsv(validation.simulated));
+  }
+  if (RenderingCompiled()) {
+    std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
+    const Eigen::MatrixXd before = PredictArmCommands(model, first_log);
+    const Eigen::MatrixXd after = PredictArmCommands(identified, first_log);
+    for (int j = 0; j < model.dof(); ++j) {
+      files->WritePng(report + "torque_joint" + std::to_string(j + 1) + ".png",
+                      RenderSeriesPlot(TorquePlot(first_log, j, before, after, model.name), *renderer));
+    }
+  } else {
+    std::fprintf(stderr, "identify: warning: plots not drawn: %s\n", kRenderingNotCompiled);
+  }
+}
+
+int Identify(const IdentifyCliOptions& options) {
+  if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
+  // Check everything before identifying or writing.
+  ArmOutputErrorOptions output_error;
+  const WlsIdentificationOptions identification = CheckArmIdentifyOptions(options, &output_error);
+  const ArmModel model = LoadArmModel(options.model);
+  std::vector<ArmLog> logs = ReadArmLogsForModel(options.logs, options.log, model);
+  std::vector<ArmLog> held_out = ReadArmLogsForModel(options.validate, options.log, model);
+
+  WlsIdentificationSummary summary;
+  const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
+  // --output-error: the inverse-dynamics estimate refined on the logs' simulation error.
+  ArmOutputErrorSummary refinement;
+  const ArmModel identified = options.output_error > 0
+                                  ? RefineArmByOutputError(inverse_dynamics, logs, output_error, &refinement)
+                                  : inverse_dynamics;
+
+  // Held-out logs: the torque errors of the a-priori, the identified and the
+  // unconstrained model, and the motion they simulate (with --output-error the
+  // inverse-dynamics estimate's too).
+  IdentificationValidation validation = ValidateIdentification(model, identified, summary, identification, held_out);
+  if (options.output_error > 0) AddSimulatedModel(&validation, "inverse dynamics", inverse_dynamics, held_out);
+
+  OutputFiles files;
+  files.Write(options.out,
+              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement)));
   if (!options.report.empty()) {
-    const std::string report = options.report + "/";
-    files.Write(report + "parameters.csv", FormatIdentifiedParametersCsv(summary));
-    files.Write(report + "joints.csv", FormatIdentifiedJointsCsv(summary));
-    if (!held_out.empty()) {
-      files.Write(report + "validation.csv", FormatIdentificationValidationCsv(validation));
-      files.Write(report + "simulation.csv", FormatArmSimulationScoresCsv(validation.simulated));
-    }
-    if (RenderingCompiled()) {
-      std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
-      const Eigen::MatrixXd before = PredictArmCommands(model, logs[0]);
-      const Eigen::MatrixXd after = PredictArmCommands(identified, logs[0]);
-      for (int j = 0; j < model.dof(); ++j) {
-        files.WritePng(report + "torque_joint" + std::to_string(j + 1) + ".png",
-                       RenderSeriesPlot(TorquePlot(logs[0], j, before, after, model.name), *renderer));
-      }
-    } else {
-      std::fprintf(stderr, "identify: warning: plots not drawn: %s\n", kRenderingNotCompiled);
-    }
+    WriteArmIdentifyReport(options.report, model, identified, logs[0], summary, validation, !held_out.empty(), &files);
   }
 
   if (!options.quiet) {

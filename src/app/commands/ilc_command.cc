@@ -33,11 +33,63 @@ struct IlcCommandOptions {
 
 std::string Num(double v) { return FormatCsvNumber(v); }
 
+// Prints the measured frequency responses' range and each joint's learning filter and convergence.
+void PrintIlcFilters(const ArmScene& scene, const IlcSceneRun& run) {
+  const ClosedLoopFrf& frf = run.frf;
+  const IlcOptions& o = run.options;
+  std::string q = "none";
+  if (o.q_order > 0) {
+    q = "order " + std::to_string(o.q_order) +
+        (o.q_cutoffs.empty() ? " at " + Num(o.q_cutoff) + " Hz" : ", cutoff per joint by the convergence criterion") +
+        " (zero phase)";
+  }
+  std::printf("ilc %s: %d postures, PS measured %g..%g Hz in %.2f s; learning filter %s, %s update, gain %g, Q %s\n",
+              scene.name.c_str(), static_cast<int>(run.postures.size()), frf.frequency[0],
+              frf.frequency[frf.frequency.size() - 1], run.frf_seconds, scene.ilc.learning_filter.c_str(),
+              o.update == "norm_optimal" ? "norm-optimal" : "standard", o.gain, q.c_str());
+  for (int j = 0; j < scene.plant.dof(); ++j) {
+    const double limit = LearningLimitFrequency(frf, j, run.filters[j], o.gain);
+    std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; %s, worst |Q|^2 |1 - gain PS S| %.3g\n", j + 1,
+                run.filters[j].Summary().c_str(), std::isfinite(limit) ? (Num(limit) + " Hz").c_str() : "every line",
+                o.q_order > 0 ? ("Q at " + Num(o.Cutoff(j)) + " Hz").c_str() : "no Q",
+                ConvergenceFactor(frf, j, run.filters[j], o).maxCoeff());
+  }
+}
+
+// Prints one trial's RMS and largest tracking error per joint.
+void PrintIlcTrial(int trial, const TrackingTrial& t) {
+  std::printf("  trial %2d: RMS error [mrad]", trial);
+  for (Eigen::Index j = 0; j < t.error_rms.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_rms[j]);
+  std::printf("   max [mrad]");
+  for (Eigen::Index j = 0; j < t.error_max.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_max[j]);
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
+// Writes the report (its tables, plots and report.html) into `files`.
+void WriteIlcReport(const ArmScene& scene, const IlcSceneRun& run, const std::string& scene_path, OutputFiles* files) {
+  if (!RenderingCompiled()) {
+    std::fprintf(stderr, "%s: warning: plots and report not drawn: %s\n", scene_path.c_str(), kRenderingNotCompiled);
+  }
+  const std::unique_ptr<Renderer> renderer = RenderingCompiled() ? MakeDefaultRenderer() : nullptr;
+  IlcReportSetup setup;
+  setup.name = scene.name;
+  setup.backend = run.backend;
+  setup.hat = scene.hat.name;
+  setup.tracking = run.tracking;
+  setup.frf = scene.ilc.frf;
+  setup.learning_filter = scene.ilc.learning_filter;
+  setup.options = run.options;
+  setup.tool = scene.task.writing.tool;
+  for (const auto& [file, bytes] :
+       MakeIlcReport(setup, scene.plant, run.reference.t, run.frf, run.filters, run.result, renderer.get())) {
+    files->Write(file, bytes);
+  }
+}
+
 int RunIlcCommand(const IlcCommandOptions& options) {
   const ArmScene scene = LoadArmScene(options.scene);
   const std::string out = options.out.empty() ? "out/" + scene.name + "_ilc" : options.out;
-  const IlcSpec& spec = scene.ilc;
-  const int n = scene.plant.dof();
 
   Progress frf_progress("ilc " + scene.name + ": frequency responses", !options.quiet);
   IlcSceneCallbacks callbacks;
@@ -46,63 +98,17 @@ int RunIlcCommand(const IlcCommandOptions& options) {
   };
   callbacks.filters_ready = [&](const IlcSceneRun& run) {
     frf_progress.Finish();
-    if (options.quiet) return;
-    const ClosedLoopFrf& frf = run.frf;
-    const IlcOptions& o = run.options;
-    std::string q = "none";
-    if (o.q_order > 0) {
-      q = "order " + std::to_string(o.q_order) +
-          (o.q_cutoffs.empty() ? " at " + Num(o.q_cutoff) + " Hz" : ", cutoff per joint by the convergence criterion") +
-          " (zero phase)";
-    }
-    std::printf("ilc %s: %d postures, PS measured %g..%g Hz in %.2f s; learning filter %s, %s update, gain %g, Q %s\n",
-                scene.name.c_str(), static_cast<int>(run.postures.size()), frf.frequency[0],
-                frf.frequency[frf.frequency.size() - 1], run.frf_seconds, spec.learning_filter.c_str(),
-                o.update == "norm_optimal" ? "norm-optimal" : "standard", o.gain, q.c_str());
-    for (int j = 0; j < n; ++j) {
-      const double limit = LearningLimitFrequency(frf, j, run.filters[j], o.gain);
-      std::printf("  joint %d: %s; |1 - gain PS L| < 1 up to %s; %s, worst |Q|^2 |1 - gain PS S| %.3g\n", j + 1,
-                  run.filters[j].Summary().c_str(), std::isfinite(limit) ? (Num(limit) + " Hz").c_str() : "every line",
-                  o.q_order > 0 ? ("Q at " + Num(o.Cutoff(j)) + " Hz").c_str() : "no Q",
-                  ConvergenceFactor(frf, j, run.filters[j], o).maxCoeff());
-    }
+    if (!options.quiet) PrintIlcFilters(scene, run);
   };
   callbacks.trial_done = [&](int trial, const TrackingTrial& t) {
-    if (options.quiet) return;
-    std::printf("  trial %2d: RMS error [mrad]", trial);
-    for (Eigen::Index j = 0; j < t.error_rms.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_rms[j]);
-    std::printf("   max [mrad]");
-    for (Eigen::Index j = 0; j < t.error_max.size(); ++j) std::printf(" %9.4g", 1e3 * t.error_max[j]);
-    std::printf("\n");
-    std::fflush(stdout);
+    if (!options.quiet) PrintIlcTrial(trial, t);
   };
   const IlcSceneRun run = RunIlcScene(scene, options.backend, options.trials, callbacks, options.predictor);
   const IlcResult& result = run.result;
-  const std::string& backend = run.backend;
-  const TrackingOptions& tracking = run.tracking;
-  const ClosedLoopFrf& frf = run.frf;
-  const std::vector<LearningFilter>& filters = run.filters;
-  const ArmReference& reference = run.reference;
 
   // The report: the tables, the plots and report.html.
-  if (!RenderingCompiled()) {
-    std::fprintf(stderr, "%s: warning: plots and report not drawn: %s\n", options.scene.c_str(), kRenderingNotCompiled);
-  }
-  const std::unique_ptr<Renderer> renderer = RenderingCompiled() ? MakeDefaultRenderer() : nullptr;
-  IlcReportSetup setup;
-  setup.name = scene.name;
-  setup.backend = backend;
-  setup.hat = scene.hat.name;
-  setup.tracking = tracking;
-  setup.frf = spec.frf;
-  setup.learning_filter = spec.learning_filter;
-  setup.options = run.options;
-  setup.tool = scene.task.writing.tool;
   OutputFiles files(out);
-  for (const auto& [file, bytes] :
-       MakeIlcReport(setup, scene.plant, reference.t, frf, filters, result, renderer.get())) {
-    files.Write(file, bytes);
-  }
+  WriteIlcReport(scene, run, options.scene, &files);
 
   const int last = static_cast<int>(result.error_rms.size()) - 1;
   if (!options.quiet) {
