@@ -196,12 +196,10 @@ void FeedbackGains(const ArmModel& model, const FourierTrajectory& trajectory, c
   result->kd = inertia * 2 * options.feedback_damping * w;
 }
 
-}  // namespace
-
-BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTrajectory& trajectory,
-                                     const BatchAdaptiveOptions& options, const ArmTrialRunner& run_trial,
-                                     const BatchAdaptiveProgress& progress) {
-  const auto started = std::chrono::steady_clock::now();
+// Throws InputError where the options do not fit the model or are invalid, or the
+// trajectory does not fit the model.
+void CheckBatchAdaptiveInputs(const ArmModel& model, const FourierTrajectory& trajectory,
+                              const BatchAdaptiveOptions& options) {
   std::string invalid;
   if (!options.IsValid(&invalid)) throw InputError("batch-adaptive options: " + invalid);
   CheckTrajectoryFitsModel(trajectory, model, "batch-adaptive");
@@ -210,6 +208,34 @@ BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTraject
     throw InputError("batch-adaptive options: kp and kd need " + std::to_string(n) + " values");
   if (options.joint_weights.size() && options.joint_weights.size() != n)
     throw InputError("batch-adaptive options: joint weights need " + std::to_string(n) + " values");
+}
+
+// Trial k's record before its update: the estimate it ran with, its tracking error
+// against `q_ref` (samples x n) and its feedback's RMS. Throws std::invalid_argument
+// for a trial record of another shape than the reference.
+BatchAdaptiveTrial TrialRecord(int k, const Eigen::VectorXd& beta, const Eigen::MatrixXd& q_ref, const ArmTrial& trial) {
+  const auto samples = q_ref.rows();
+  if (trial.feedback.rows() != samples || trial.feedback.cols() != q_ref.cols() ||
+      trial.q_measured.rows() != samples || trial.q_measured.cols() != q_ref.cols())
+    throw std::invalid_argument("batch-adaptive: trial " + std::to_string(k) + " returned a record of the wrong shape");
+  BatchAdaptiveTrial record;
+  record.trial = k;
+  record.beta_used = beta;
+  const Eigen::MatrixXd error = q_ref - trial.q_measured;
+  record.error_rms = (error.colwise().squaredNorm() / static_cast<double>(samples)).cwiseSqrt().transpose();
+  record.error_max = error.cwiseAbs().colwise().maxCoeff().transpose();
+  record.feedback_rms = (trial.feedback.colwise().squaredNorm() / static_cast<double>(samples)).cwiseSqrt().transpose();
+  return record;
+}
+
+}  // namespace
+
+BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTrajectory& trajectory,
+                                     const BatchAdaptiveOptions& options, const ArmTrialRunner& run_trial,
+                                     const BatchAdaptiveProgress& progress) {
+  const auto started = std::chrono::steady_clock::now();
+  CheckBatchAdaptiveInputs(model, trajectory, options);
+  const int n = model.dof();
 
   BatchAdaptiveResult result;
   result.model = model.name;
@@ -262,18 +288,7 @@ BatchAdaptiveResult RunBatchAdaptive(const ArmModel& model, const FourierTraject
     for (int j = 0; j < samples; ++j) input.feedforward.row(j) = (phi.middleRows((j + d) * n, n) * beta).transpose();
     input.hold_command = hold_regressor * beta;
     const ArmTrial trial = run_trial(input, k);
-    if (trial.feedback.rows() != samples || trial.feedback.cols() != n || trial.q_measured.rows() != samples ||
-        trial.q_measured.cols() != n)
-      throw std::invalid_argument("batch-adaptive: trial " + std::to_string(k) +
-                                  " returned a record of the wrong shape");
-
-    BatchAdaptiveTrial record;
-    record.trial = k;
-    record.beta_used = beta;
-    const Eigen::MatrixXd error = ref.q - trial.q_measured;
-    record.error_rms = (error.colwise().squaredNorm() / samples).cwiseSqrt().transpose();
-    record.error_max = error.cwiseAbs().colwise().maxCoeff().transpose();
-    record.feedback_rms = (trial.feedback.colwise().squaredNorm() / samples).cwiseSqrt().transpose();
+    BatchAdaptiveTrial record = TrialRecord(k, beta, ref.q, trial);
     // U_fb: the feedback issued at t_{j-d}, which acted over interval j.
     Eigen::VectorXd u_fb(rows);
     for (int j = 0; j < samples - d; ++j) u_fb.segment(j * n, n) = trial.feedback.row(j).transpose();
