@@ -316,6 +316,17 @@ TEST(LiveField, RefusalsAreAnsweredAndCountedAndTheFieldRunsOn) {
   EXPECT_EQ(summary.timing.frame_work.count(), summary.counters.frames);
   EXPECT_GE(summary.timing.start_lateness.count(), summary.counters.frames);
   EXPECT_LE(summary.timing.start_lateness.count(), summary.counters.frames + 1);
+  // The slowest frame and the latest start are the histograms' largest, named by frame.
+  EXPECT_EQ(summary.timing.slowest.seconds, summary.timing.frame_work.max());
+  EXPECT_GE(summary.timing.slowest.frame, 0);
+  EXPECT_LT(summary.timing.slowest.frame, summary.counters.frames);
+  EXPECT_GT(summary.timing.slowest.vision, 0);
+  EXPECT_LE(summary.timing.slowest.vision, summary.timing.slowest.seconds);
+  EXPECT_EQ(summary.timing.latest_start.seconds, summary.timing.start_lateness.max());
+  EXPECT_GE(summary.timing.latest_start.frame, 0);
+  EXPECT_LE(summary.timing.latest_start.frame, summary.counters.frames);
+  EXPECT_GE(summary.timing.latest_start.woke_late, 0);
+  EXPECT_NE(summary.Report().find("slowest frame " + summary.timing.slowest.Brief()), std::string::npos);
   // A latency for each RobotControl read, refused robots or not; none for bad datagrams.
   EXPECT_EQ(summary.timing.command_latency.count(), summary.counters.robot_controls);
 }
