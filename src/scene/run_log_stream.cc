@@ -107,7 +107,13 @@ void RunLogStream::Open() {
   }
   lines_.resize(names_.size());
   if (!background_) {
-    Write(headers);
+    try {
+      Write(headers);
+    } catch (...) {
+      names_.clear();  // the next frame tries again, headers first
+      lines_.clear();
+      throw;
+    }
     return;
   }
   std::lock_guard<std::mutex> lock(mutex_);

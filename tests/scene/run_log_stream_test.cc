@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "core/error.h"
@@ -82,6 +83,13 @@ TEST(RunLogStream, AFileThatCannotBeCreatedIsNamed) {
     EXPECT_NE(std::string(e.what()).find("in_the_way"), std::string::npos) << e.what();
   }
   EXPECT_THROW(stream.Append({FrameRecord{}, FrameRecord{}}, nullptr), std::invalid_argument);
+  // Out of the way, the next frame creates the files, headers first.
+  std::filesystem::remove(d + "/in_the_way");
+  stream.Append({FrameRecord{}}, nullptr);
+  EXPECT_EQ(testing::ReadText(d + "/in_the_way/out/trajectory.csv"), kOmniLogHeader);  // a frame not seen: no row
+  const std::string commands = testing::ReadText(d + "/in_the_way/out/commands.csv");
+  EXPECT_EQ(commands.rfind(kCommandsHeader, 0), 0u) << commands;
+  EXPECT_EQ(std::count(commands.begin(), commands.end(), '\n'), 2) << commands;
 }
 
 // In the background the writer creates the files (serve's frame loop never waits for the
