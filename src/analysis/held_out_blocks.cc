@@ -35,13 +35,12 @@ bool IsHeldOutBlock(long k, double held_out) {
 }  // namespace
 
 bool InHeldOutBlock(double t, double block_seconds, double held_out) {
-  return IsHeldOutBlock(static_cast<long>(std::floor(t / block_seconds)), held_out);
+  return IsHeldOutBlock(TimeBlockIndex(t, block_seconds), held_out);
 }
 
 RowKind HeldOutRowKind(double t, double block_seconds, double held_out, double guard_seconds) {
   auto kind_at = [&](double u) {
-    if (u < 0) u = 0;  // before the log: as its first block
-    const long k = static_cast<long>(std::floor(u / block_seconds));
+    const long k = TimeBlockIndex(u, block_seconds);  // before the log: as its first block
     if (!IsHeldOutBlock(k, held_out)) return RowKind::kFit;
     long before = 0;  // held-out blocks before block k
     for (long j = 1; j < k; ++j) before += IsHeldOutBlock(j, held_out) ? 1 : 0;
@@ -57,8 +56,8 @@ void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double bl
                       const std::string& path) {
   std::set<long> held, fit;
   for (std::size_t i = first; i < t.size(); ++i) {
-    const long k = static_cast<long>(std::floor((t[i] - t.front()) / block_seconds));
-    (InHeldOutBlock(t[i] - t.front(), block_seconds, held_out) ? held : fit).insert(k);
+    const long k = TimeBlockIndex(t[i] - t.front(), block_seconds);
+    (IsHeldOutBlock(k, held_out) ? held : fit).insert(k);
   }
   if (held.size() < 2 || fit.size() < 2) {
     char msg[256];

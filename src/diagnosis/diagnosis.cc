@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "core/math_constants.h"
+#include "io/printf_number.h"
 #include <unsupported/Eigen/FFT>
 
 namespace twinsim {
@@ -134,11 +135,7 @@ void DescribeChannel(const ChannelSamples& x, const ChannelSeries& s, ChannelFin
   f->dominant_frequency = s.frequency.size() > peak ? s.frequency[peak] : 0.0;
 }
 
-std::string FormatParameter(double value) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", value);
-  return buf;
-}
+std::string FormatParameter(double value) { return PrintfNumber("%.4g", value); }
 
 std::string EffectLabel(const std::string& name, int joint) {
   return joint >= 0 ? name + " (joint " + std::to_string(joint + 1) + ")" : name;

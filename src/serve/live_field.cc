@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <sstream>
 
 #include "core/error.h"
@@ -89,14 +90,14 @@ rusage ThreadUsage() {
 }
 
 // Frame `frame`'s stall of `seconds` (`vision` s of it the vision), with what the kernel
-// did to the thread over two spans: from a[0] to a[1] and from b[0] to b[1].
-ServeTiming::Stall StallOf(long long frame, double seconds, double vision, const std::array<rusage, 2>& a,
-                           const std::array<rusage, 2>& b) {
+// did to the thread over the spans given, each from its [0] to its [1].
+ServeTiming::Stall StallOf(long long frame, double seconds, double vision,
+                           std::initializer_list<std::array<rusage, 2>> spans) {
   ServeTiming::Stall s;
   s.frame = frame;
   s.seconds = seconds;
   s.vision = vision;
-  for (const auto& [from, to] : {std::pair(a[0], a[1]), std::pair(b[0], b[1])}) {
+  for (const auto& [from, to] : spans) {
     s.minor_faults += to.ru_minflt - from.ru_minflt;
     s.major_faults += to.ru_majflt - from.ru_majflt;
     s.voluntary += to.ru_nvcsw - from.ru_nvcsw;
@@ -659,7 +660,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
       const double lateness = Seconds(frame_start - frame_end);
       timing_.start_lateness.Add(lateness);
       if (lateness > timing_.latest_start.seconds) {
-        timing_.latest_start = StallOf(counters_.frames, lateness, 0, {ru_worked, ru_start}, {ru_start, ru_start});
+        timing_.latest_start = StallOf(counters_.frames, lateness, 0, {{ru_worked, ru_start}});
         timing_.latest_start.woke_late = woke_late_;
       }
       frame_unix_[static_cast<std::size_t>(sim_.frame()) % frame_unix_.size()] = UnixNow();
@@ -686,7 +687,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     ru_worked = ThreadUsage();
     if (work > timing_.slowest.seconds)
       timing_.slowest =
-          StallOf(counters_.frames - 1, work, Seconds(vision_work), {ru_start, ru_vision}, {ru_step, ru_worked});
+          StallOf(counters_.frames - 1, work, Seconds(vision_work), {{ru_start, ru_vision}, {ru_step, ru_worked}});
   }
   return Summary();
 }
