@@ -325,7 +325,7 @@ int Main(int argc, char** argv) {
   long long lockstep_frames = 20000;
   double memory_minutes = 0;
   bool keep_all = false;
-  std::optional<CameraGrid> cameras;  // part 1: several cameras (columns, rows)
+  std::optional<CameraSetup> cameras;  // part 1: several cameras (columns, rows)
   bool stream = false;                // part 1: logs streamed as twinsim serve does, memory reported
   ServeOptions realtime;  // part 1's serving thread: twinsim serve's --realtime-priority, --cpu
   for (int i = 1; i < argc; ++i) {
@@ -345,7 +345,7 @@ int Main(int argc, char** argv) {
     } else if (a == "--keep-all") {
       keep_all = true;
     } else if (a == "--cameras" && i + 2 < argc) {
-      cameras = CameraGrid{std::atoi(argv[i + 1]), std::atoi(argv[i + 2]), 0.4, 4};
+      cameras.emplace().grid = CameraGrid{std::atoi(argv[i + 1]), std::atoi(argv[i + 2]), 0.4, 4};
       i += 2;
     } else {
       std::fprintf(stderr, "usage: serve_bench [--seconds S] [--lockstep-frames N] [--realtime-priority P] [--cpu C]\n"
@@ -391,7 +391,7 @@ int Main(int argc, char** argv) {
               realtime.realtime_priority, realtime.cpu);
   std::printf("  frames run %lld in %.3f s wall (%.4f x real time); late frames %lld; cameras %d (vision packets %lld)\n",
               s.counters.frames, s.wall, s.simulated / s.wall, s.counters.late_frames,
-              cameras ? cameras->columns * cameras->rows : 1, s.counters.vision_packets);
+              cameras ? cameras->grid.columns * cameras->grid.rows : 1, s.counters.vision_packets);
   std::printf("  robot controls read %lld (sent: blue %lld, yellow %lld), answered %lld + %lld, refused %lld, "
               "dropped/bad %lld\n",
               s.counters.robot_controls, rt.sent[0], rt.sent[1], rt.answers[0], rt.answers[1], s.counters.refused,

@@ -174,7 +174,12 @@ def main():
     commands = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     commands.setblocking(False)
 
-    last_frame, held, frames = -1, 0, 0
+    # Several cameras (a scene's `cameras:`) each send their own frames, numbered by
+    # their own clocks: frames are told apart per camera, the robot's newest sighting by
+    # any camera is used, and a command goes out once the field's last camera (the
+    # geometry's count) has sent its frame.
+    last_frame, cameras, newest = {}, 1, -math.inf
+    held, frames = 0, 0
     pose = None
     while frames < args.frames:
         try:
@@ -183,15 +188,20 @@ def main():
             sys.exit("no vision for 5 s: is twinsim serve running and sending to this port?")
         packet = vision_pb.SSL_WrapperPacket()
         packet.ParseFromString(data)
-        if not packet.HasField("detection") or packet.detection.frame_number <= last_frame:
+        if packet.HasField("geometry"):
+            cameras = max(1, len(packet.geometry.calib))
+        detection = packet.detection
+        if not packet.HasField("detection") or detection.frame_number <= last_frame.get(detection.camera_id, -1):
             continue  # geometry alone, or a frame sent again
-        last_frame = packet.detection.frame_number
-        frames += 1
-        robots = packet.detection.robots_blue if args.team == "blue" else packet.detection.robots_yellow
+        last_frame[detection.camera_id] = detection.frame_number
+        robots = detection.robots_blue if args.team == "blue" else detection.robots_yellow
         mine = [r for r in robots if r.robot_id == args.id]
-        if mine:
-            r = mine[0]
+        if mine and detection.t_capture >= newest:
+            r, newest = mine[0], detection.t_capture
             pose = (r.x / 1000.0, r.y / 1000.0, r.orientation)
+        if detection.camera_id + 1 < cameras:
+            continue
+        frames += 1
         # One command per vision frame (lockstep waits for it), also when lost.
         forward, left, omega = command_towards(pose, target, args.max_speed, args.gain, 4.0) if pose else (0, 0, 0)
         if grsim:  # grSim answers nothing
@@ -203,12 +213,12 @@ def main():
                 response = feedback_pb.RobotControlResponse()
                 response.ParseFromString(commands.recv(65536))
                 for e in response.errors:
-                    print(f"frame {last_frame}: {e.code}: {e.message}", file=sys.stderr)
+                    print(f"frame {frames}: {e.code}: {e.message}", file=sys.stderr)
             except BlockingIOError:
                 pass
         held = arrived(pose, target, args.tolerance, held)
         if held >= 15:
-            print(f"reached ({pose[0]:.3f}, {pose[1]:.3f}, {math.degrees(pose[2]):.1f} deg) at frame {last_frame}")
+            print(f"reached ({pose[0]:.3f}, {pose[1]:.3f}, {math.degrees(pose[2]):.1f} deg) at frame {frames}")
             return 0
     where = f"({pose[0]:.3f}, {pose[1]:.3f})" if pose else "never seen"
     print(f"not reached after {frames} frames: robot at {where}", file=sys.stderr)

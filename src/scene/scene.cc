@@ -167,6 +167,68 @@ void ReadRobotBackend(YamlMap& r, const fs::path& base_dir,
 // A robot's backend against the rest of the scene: a learned robot has a predictor that
 // fits its model and the frame rate (as the learned backend checks it), and a predictor
 // belongs to a learned robot.
+// One camera of `cameras: {list: [...]}` (scene/camera_layout.h).
+CameraPlacement ReadCameraPlacement(const YAML::Node& node, const std::string& path, const std::string& context,
+                                    const FieldModel& field, ErrorList* errors) {
+  YamlMap m(node, path, context, errors);
+  CameraPlacement p;
+  std::vector<double> position, fov, area;
+  if (m.Require("position", &position, 2, InRange(-100, 100))) p.position = Eigen::Vector2d(position[0], position[1]);
+  m.Get("height", &p.height, InRange(1, 20));
+  const bool has_fov = m.Get("field_of_view", &fov, 2, InRange(1, 170));
+  if (has_fov) p.field_of_view = Eigen::Vector2d(fov[0], fov[1]);
+  const bool has_area = m.Get("area", &area, 4, InRange(-100, 100));
+  if (has_area) {
+    p.area_low = Eigen::Vector2d(area[0], area[1]);
+    p.area_high = Eigen::Vector2d(area[2], area[3]);
+    if (area[0] >= area[2] || area[1] >= area[3]) m.Error("area", "expected [x_low, y_low, x_high, y_high] with low < high");
+  }
+  if (m.valid() && !m.Has("field_of_view") && !m.Has("area")) {
+    m.Error("field_of_view", "a camera needs its field_of_view (degrees across x and y) or the area it sees");
+  } else if (m.Has("field_of_view") && m.Has("area")) {
+    m.Error("area", "give the field_of_view or the area, not both");
+  }
+  m.Finish();
+  if (m.valid() && (has_fov || has_area)) {
+    const CameraView v = PlacedCamera(p, field);
+    if (!(v.low.x() < v.high.x() && v.low.y() < v.high.y())) {
+      std::ostringstream msg;
+      msg << context << " sees nothing inside the walls (" << field.length << " x " << field.width << " m)";
+      errors->Add(m.Where(), msg.str());
+    }
+  }
+  return p;
+}
+
+// The scene's `cameras:` (scene/camera_layout.h): a grid, a league layout or a list.
+CameraSetup ReadCameras(const YAML::Node& node, const std::string& path, const FieldModel& field,
+                        ErrorList* errors) {
+  YamlMap c(node, path, "cameras", errors);
+  CameraSetup setup;
+  std::string layout, capture = "synchronous";
+  if (c.Get("layout", &layout, LeagueCameraLayoutNames())) setup.grid = *LeagueCameraLayout(layout);
+  c.Get("columns", &setup.grid.columns, InRange(1, 8));
+  c.Get("rows", &setup.grid.rows, InRange(1, 8));
+  c.Get("overlap", &setup.grid.overlap, InRange(0, 3));
+  c.Get("height", &setup.grid.height, InRange(1, 20));
+  c.Get("capture", &capture, {"synchronous", "staggered"});
+  setup.staggered = capture == "staggered";
+  const bool grid_keys = c.Has("columns") || c.Has("rows") || c.Has("overlap") || c.Has("height");
+  if (c.Has("layout") && grid_keys) c.Error("layout", "a layout is a grid of its own: give it or columns/rows/overlap/height");
+  if (c.Has("list")) {
+    const YAML::Node list = c.Child("list");
+    if (c.Has("layout") || grid_keys) c.Error("list", "listed cameras take no layout or grid keys (columns, rows, overlap, height)");
+    if (!list.IsSequence() || list.size() == 0 || list.size() > 16) {
+      c.Error("list", "expected a list of 1 to 16 cameras");
+    } else {
+      for (std::size_t i = 0; i < list.size(); ++i)
+        setup.placements.push_back(ReadCameraPlacement(list[i], path, "camera " + std::to_string(i), field, errors));
+    }
+  }
+  c.Finish();
+  return setup;
+}
+
 void CheckRobotBackend(const Scene& scene, std::size_t i, const RobotBackendAt& at, ErrorList* errors) {
   const SceneRobot& r = scene.robots[i];
   const std::string context = "robots[" + std::to_string(i) + "]";
@@ -341,16 +403,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
     b.Finish();
     scene.ball = ball;
   }
-  if (top.Has("cameras")) {
-    YamlMap c(top.Child("cameras"), path, "cameras", &errors);
-    CameraGrid grid;
-    c.Get("columns", &grid.columns, InRange(1, 8));
-    c.Get("rows", &grid.rows, InRange(1, 8));
-    c.Get("overlap", &grid.overlap, InRange(0, 3));
-    c.Get("height", &grid.height, InRange(1, 20));
-    c.Finish();
-    scene.cameras = grid;
-  }
+  if (top.Has("cameras")) scene.cameras = ReadCameras(top.Child("cameras"), path, scene.field, &errors);
   scene.plots = ReadPlotSpecs(top, "plots");
   if (top.Has("tune_pid")) scene.tune_pid = top.Child("tune_pid");
   top.Finish();

@@ -67,7 +67,7 @@ struct Scene {
   std::optional<SceneBall> ball; // the `ball:` section; none: a field without a ball
   // The `cameras:` section (scene/camera_layout.h): several cameras for twinsim serve;
   // none: one camera seeing the whole field, its detections what the observer receives.
-  std::optional<CameraGrid> cameras;
+  std::optional<CameraSetup> cameras;
   // run's and serve's --driving-noise: "on" every robot draws its driving noise, "off"
   // none, "model" as each model (or a learned robot's predictor) says.
   std::string driving_noise = "model";

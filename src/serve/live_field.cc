@@ -68,10 +68,6 @@ class RealtimeScope {
 
 using Clock = std::chrono::steady_clock;
 
-// The cameras' random streams (noise and lost detections), one per camera id from this
-// on: apart from the simulation's, so that the logs stay as they are.
-constexpr std::uint64_t kCameraStream = 0x63616d00;  // "cam"
-
 // Datagrams read from one port before the loop looks at the clock again: a flood
 // cannot hold a frame.
 constexpr int kMaxDatagramsPerDrain = 256;
@@ -210,17 +206,7 @@ LiveField::LiveField(const Scene& scene, Simulation sim, const ServeOptions& opt
                            " frames; twinsim serve's cameras share one delay");
     }
   }
-  if (scene.cameras) {
-    cameras_ = CameraViews(*scene.cameras, scene.field);
-    for (const CameraView& v : cameras_) camera_rng_.push_back(Rng::Derived(scene.seed, kCameraStream + v.id));
-    start_capture_.present.resize(static_cast<std::size_t>(sim_.num_robots()));
-    for (int i = 0; i < sim_.num_robots(); ++i) {
-      start_capture_.robots.push_back(sim_.backend().pose(i));
-      start_capture_.present[static_cast<std::size_t>(i)] = sim_.present(i);
-    }
-    if (sim_.has_ball()) start_capture_.ball = sim_.ball()->ball().position;
-    captures_.assign(static_cast<std::size_t>(vision_delay_) + 1, start_capture_);
-  }
+  cameras_ = CameraRig(scene, sim_, vision_delay_);
   control_ = UdpSocket(options_.listen, options_.control_port);
   teams_[0].socket = UdpSocket(options_.listen, options_.blue_port);
   teams_[1].socket = UdpSocket(options_.listen, options_.yellow_port);
@@ -291,7 +277,7 @@ std::vector<SSL_WrapperPacket> LiveField::VisionPackets(const std::vector<FrameR
   // whatever the pace was since.
   double t_capture = (k - vision_delay_) * dt, t_sent = k * dt;
   if (!SimulatedTime()) {
-    t_capture = CaptureUnixTime(k);
+    t_capture = FrameUnixTime(k - vision_delay_);
     t_sent = UnixNow();
   }
   // Asked again for the same frame (the synchronous interface, a request without a
@@ -309,11 +295,12 @@ std::vector<SSL_WrapperPacket> LiveField::VisionPackets(const std::vector<FrameR
     if (sim_.has_ball() && sim_.ball_record().observed) ball = sim_.ball_record().seen;
     packets.push_back(DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent, ball));
   } else {
-    packets = CameraPackets(k, t_capture, t_sent);
+    const auto frame_time = [&](int j) { return SimulatedTime() ? j * dt : FrameUnixTime(j); };
+    packets = cameras_.Packets(k, frame_time, t_sent, sim_, roster_);
   }
   // Geometry in the first packet at frame 0 and then every geometry_period.
   const int every = std::max(1, static_cast<int>(std::lround(options_.geometry_period / dt)));
-  if (k % every == 0) *packets[0].mutable_geometry() = GeometryPacket(scene_.field, options_.boundary, cameras_).geometry();
+  if (k % every == 0) *packets[0].mutable_geometry() = GeometryPacket(scene_.field, options_.boundary, cameras_.views()).geometry();
   vision_frame_ = k;
   vision_packets_ = packets;
   return packets;
@@ -326,53 +313,10 @@ void LiveField::SendVision(const std::vector<FrameRecord>& records) {
   }
 }
 
-void LiveField::RecordCapture(const std::vector<FrameRecord>& records) {
-  Capture& c = captures_[static_cast<std::size_t>(sim_.frame()) % captures_.size()];
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    c.robots[i] = records[i].truth;
-    c.present[i] = records[i].present;
-  }
-  if (sim_.has_ball()) c.ball = sim_.ball()->ball().position;
-}
-
-std::vector<SSL_WrapperPacket> LiveField::CameraPackets(int k, double t_capture, double t_sent) {
-  const int captured = k - vision_delay_;
-  // Before frame 0 the robots stood at their starts, as the observer has seen them.
-  const Capture& c =
-      captured >= 0 ? captures_[static_cast<std::size_t>(captured) % captures_.size()] : start_capture_;
-  std::vector<SSL_WrapperPacket> packets;
-  for (std::size_t v = 0; v < cameras_.size(); ++v) {
-    const CameraView& view = cameras_[v];
-    Rng& rng = camera_rng_[v];
-    // Every draw made whether or not the camera sees the object, so that what one
-    // camera sees never shifts another's noise.
-    std::vector<Sighting> seen;
-    for (int i = 0; i < sim_.num_robots(); ++i) {
-      const auto ku = static_cast<std::size_t>(i);
-      const VisionNoise& noise = sim_.vision_noise(i);
-      const Pose2 p{c.robots[ku].x + rng.Gaussian(noise.xy), c.robots[ku].y + rng.Gaussian(noise.xy),
-                    WrapAngle(c.robots[ku].theta + rng.Gaussian(noise.theta))};
-      const bool lost = rng.Uniform() < sim_.robot_model(i).vision_drop_probability;
-      if (c.present[ku] && !lost && view.Sees(c.robots[ku].x, c.robots[ku].y)) seen.push_back(Sighting{roster_.robot(i), p});
-    }
-    std::optional<Eigen::Vector3d> ball;
-    if (sim_.has_ball()) {
-      const BallVision& b = sim_.ball_vision();
-      const Eigen::Vector3d p =
-          c.ball + Eigen::Vector3d(rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_z));
-      const bool lost = rng.Uniform() < b.drop_probability;
-      if (!lost && view.Sees(c.ball.x(), c.ball.y())) ball = p;
-    }
-    packets.push_back(DetectionPacket(seen, static_cast<std::uint32_t>(k), t_capture, t_sent, ball, &view));
-  }
-  return packets;
-}
-
-double LiveField::CaptureUnixTime(int k) const {
-  const int captured = k - vision_delay_;
-  if (captured >= 0) return frame_unix_[static_cast<std::size_t>(captured) % frame_unix_.size()];
+double LiveField::FrameUnixTime(int frame) const {
+  if (frame >= 0) return frame_unix_[static_cast<std::size_t>(frame) % frame_unix_.size()];
   // Before frame 0 the robots stood at their starts: stamped as if frames had run.
-  return unix_start_ + captured * result_.timing.frame_dt();
+  return unix_start_ + frame * result_.timing.frame_dt();
 }
 
 void LiveField::Send(const UdpSocket& socket, const std::string& bytes, const UdpEndpoint& to) {
@@ -647,7 +591,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   const RealtimeScope realtime(options_.realtime_priority, options_.cpu);
   start_ = last_refill_ = Clock::now();
   unix_start_ = UnixNow();
-  frame_unix_.assign(static_cast<std::size_t>(vision_delay_) + 1, unix_start_);
+  frame_unix_.assign(static_cast<std::size_t>(vision_delay_) + 2, unix_start_);
   Clock::time_point frame_end = start_, next_status = start_;
   const double dt = result_.timing.frame_dt();
   std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
@@ -738,7 +682,7 @@ bool LiveField::AwaitFrameEnd(std::chrono::steady_clock::time_point frame_end,
 
 std::vector<FrameRecord> LiveField::OpenFrame() {
   std::vector<FrameRecord> records = sim_.BeginFrame();
-  if (!cameras_.empty()) RecordCapture(records);
+  cameras_.Record(sim_.frame(), records, sim_);
   return records;
 }
 

@@ -36,6 +36,7 @@
 #include "core/duration_histogram.h"
 #include "core/rng.h"
 #include "scene/camera_layout.h"
+#include "serve/camera_rig.h"
 #include "scene/scene.h"
 #include "serve/robot_control.h"
 #include "serve/simulator_control.h"
@@ -206,6 +207,8 @@ class LiveField {
   const SimulationResult& result() const { return result_; }
   // The simulation served (for tests: who is on the field, where the robots are).
   const Simulation& simulation() const { return sim_; }
+  // The scene's cameras (none: one camera, sending what the observer receives).
+  const std::vector<CameraView>& cameras() const { return cameras_.views(); }
   // Where vision goes now (--vision-port, or SimulatorConfig.vision_port).
   const UdpEndpoint& vision_to() const { return vision_to_; }
 
@@ -241,19 +244,15 @@ class LiveField {
   bool HandleSyncRequest(const std::string& bytes, std::vector<FrameRecord>* records, TcpConnection* client);
   // Vision stamped with simulated time (lockstep, synchronous), else Unix time.
   bool SimulatedTime() const { return options_.lockstep || sync_.has_value(); }
-  // Several cameras: keeps the true state of the frame begun (its `records`), and makes
-  // each camera's detection of frame k.
-  void RecordCapture(const std::vector<FrameRecord>& records);
-  std::vector<SSL_WrapperPacket> CameraPackets(int k, double t_capture, double t_sent);
   // Sends, counting a refused send (failed_sends, last_send_error).
   void Send(const UdpSocket& socket, const std::string& bytes, const UdpEndpoint& to);
   template <typename Message>
   void Answer(const UdpSocket& socket, const Message& message, const UdpEndpoint& to) {
     Send(socket, message.SerializeAsString(), to);
   }
-  // The Unix time (s) at which frame k's vision was captured: the start of frame
-  // k - vision delay on the wall clock, as far back as the delay goes.
-  double CaptureUnixTime(int k) const;
+  // The Unix time (s) at which `frame` began on the wall clock, as far back as the
+  // vision delay and a frame before it go: the capture times of the vision.
+  double FrameUnixTime(int frame) const;
   // Reads every datagram waiting on the socket at `port` (0, 1 teams, 2 control, 3 grSim).
   void Drain(int port);
   void HandleTeam(TeamPort& team, const Datagram& d);
@@ -311,7 +310,7 @@ class LiveField {
   std::chrono::steady_clock::time_point start_, last_refill_;
   double woke_late_ = 0;  // s: how much later than asked the last wait for datagrams returned
   double unix_start_ = 0;  // s, real time: the Unix time of frame 0
-  // s, real time: the Unix time each of the last vision_delay + 1 frames began (frame k
+  // s, real time: the Unix time each of the last vision_delay + 2 frames began (frame k
   // at k % size), the capture times of the vision they send later.
   std::vector<double> frame_unix_;
   std::array<std::uint32_t, 4> kernel_drops_{};  // per port (blue, yellow, control, grSim): the kernel's count seen last
@@ -322,17 +321,8 @@ class LiveField {
   int vision_frame_ = -1;  // the frame vision_packets_ are of (-1: none yet)
   std::vector<SSL_WrapperPacket> vision_packets_;
   // Several cameras (the scene's `cameras:`; none: one, sending what the observer
-  // receives): each sees the true state of vision_delay frames ago in its area, with its
-  // own noise and lost detections from its own stream.
-  struct Capture {
-    std::vector<Pose2> robots;  // field frame, true
-    std::vector<bool> present;
-    Eigen::Vector3d ball = Eigen::Vector3d::Zero();  // m, true
-  };
-  std::vector<CameraView> cameras_;
-  std::vector<Rng> camera_rng_;    // per camera
-  std::vector<Capture> captures_;  // frame j's at j % (vision_delay + 1)
-  Capture start_capture_;          // before frame 0: the robots at their starts
+  // receives).
+  CameraRig cameras_;
 };
 
 }  // namespace twinsim

@@ -23,21 +23,23 @@ CameraView CentreCamera() {
   return v;
 }
 
+double FocalLength(const CameraView& camera) { return camera.focal_length > 0 ? camera.focal_length : kFocalLength; }
+
 void Pixel(const CameraView& camera, double x_mm, double y_mm, float* px, float* py) {
-  const double h = 1000 * camera.position.z();
-  *px = static_cast<float>(kImageWidth / 2.0 + kFocalLength * (x_mm - 1000 * camera.position.x()) / h);
-  *py = static_cast<float>(kImageHeight / 2.0 - kFocalLength * (y_mm - 1000 * camera.position.y()) / h);
+  const double h = 1000 * camera.position.z(), f = FocalLength(camera);
+  *px = static_cast<float>(kImageWidth / 2.0 + f * (x_mm - 1000 * camera.position.x()) / h);
+  *py = static_cast<float>(kImageHeight / 2.0 - f * (y_mm - 1000 * camera.position.y()) / h);
 }
 
 void AddCalibration(SSL_GeometryData* g, const CameraView& camera) {
   SSL_GeometryCameraCalibration* c = g->add_calib();
   c->set_camera_id(static_cast<unsigned>(camera.id));
-  c->set_focal_length(static_cast<float>(kFocalLength));
+  c->set_focal_length(static_cast<float>(FocalLength(camera)));
   c->set_principal_point_x(kImageWidth / 2.0f);
   c->set_principal_point_y(kImageHeight / 2.0f);
   c->set_distortion(0);
   // A nominal calibration (no real camera): the identity rotation, the camera at
-  // (tx, ty, tz) above its area's centre.
+  // (tx, ty, tz), looking straight down.
   c->set_q0(1);
   c->set_q1(0);
   c->set_q2(0);

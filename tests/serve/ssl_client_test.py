@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """ctest Serve.PythonClient: examples/ssl_client.py drives a robot of `twinsim serve
 --lockstep` to a pose over the loopback (free ports, no multicast), once over the
-league's simulation protocol, once over grSim's and once through the synchronous
+league's simulation protocol (with one camera, and with four staggered cameras, each
+numbering its own frames), once over grSim's and once through the synchronous
 interface over TCP; Ctrl-C then ends the server. Usage: ssl_client_test.py TWINSIM SOURCE_DIR BUILD_DIR"""
 import os
 import signal
@@ -18,9 +19,20 @@ def free_port():
         return s.getsockname()[1]
 
 
-def drive(twinsim, source, build, protocol):
+def camera_scene(source, out):
+    """serve_2v2 seen by the league's division B layout, the cameras staggered."""
+    text = open(os.path.join(source, "scenes", "serve_2v2.yaml")).read()
+    text = text.replace("../models/", os.path.join(source, "models") + "/")
+    path = os.path.join(out, "serve_2v2_cameras.yaml")
+    with open(path, "w") as f:
+        f.write(text + "cameras: {layout: division_b, capture: staggered}\n")
+    return path
+
+
+def drive(twinsim, source, build, protocol, cameras=False):
     """Serves serve_2v2 in lockstep and drives blue 1 to a pose over `protocol`."""
     out = tempfile.mkdtemp(prefix="twinsim_serve_client_")
+    scene = camera_scene(source, out) if cameras else os.path.join(source, "scenes", "serve_2v2.yaml")
     control, blue, yellow, vision, grsim = (free_port() for _ in range(5))
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
@@ -28,7 +40,7 @@ def drive(twinsim, source, build, protocol):
     mode = (["--sync-port", str(sync)] if protocol == "sync" else
             ["--lockstep", "--teams", "blue", "--grsim-port", str(grsim)])
     server = subprocess.Popen(
-        [twinsim, "serve", os.path.join(source, "scenes", "serve_2v2.yaml"), "--backend", "analytic"] + mode +
+        [twinsim, "serve", scene, "--backend", "analytic"] + mode +
         ["--control-port", str(control), "--blue-port", str(blue), "--yellow-port", str(yellow),
          "--vision-port", str(vision), "--out", out, "-q"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
@@ -63,13 +75,14 @@ def drive(twinsim, source, build, protocol):
     x, y = (float(v) for v in log[-1].split(",")[1:3])
     if abs(x - 0.5) > 0.05 or abs(y + 1.0) > 0.05:
         sys.exit(f"blue1 logged at ({x}, {y}), not at the target")
-    print(f"ok ({protocol}): {len(log) - 1} frames logged, blue1 at ({x:.3f}, {y:.3f})")
+    print(f"ok ({protocol}{', four cameras' if cameras else ''}): {len(log) - 1} frames logged, blue1 at ({x:.3f}, {y:.3f})")
 
 
 def main():
     twinsim, source, build = sys.argv[1:4]
     for protocol in ("league", "grsim", "sync"):
         drive(twinsim, source, build, protocol)
+    drive(twinsim, source, build, "league", cameras=True)
 
 
 if __name__ == "__main__":

@@ -187,7 +187,7 @@ TEST(SyncInterface, BadRequestsAreAnsweredAndABrokenStreamEndsOnlyItsConnection)
 // on how often a client asked.
 TEST(SyncInterface, AskingAgainForTheSameFrameGivesTheSameVision) {
   Scene scene = SyncScene();
-  scene.cameras = CameraGrid{2, 2, 0.4, 4};
+  scene.cameras.emplace().grid = CameraGrid{2, 2, 0.4, 4};
   auto serve = [&](int asks) {
     ServeOptions o = Ports();
     o.sync_port = 0;

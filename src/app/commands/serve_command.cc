@@ -76,6 +76,13 @@ int Serve(ServeCommandOptions& options) {
                 options.serve.listen.c_str(), field.blue_port(), options.serve.listen.c_str(), field.yellow_port(),
                 options.serve.vision_address.c_str(), options.serve.vision_port);
     std::printf("logs to %s/ as the match runs; Ctrl-C stops and draws the plots.\n", out.c_str());
+    if (!field.cameras().empty()) {
+      const double unseen = UnseenShare(field.cameras(), scene.field);
+      std::printf("%zu cameras, capture %s", field.cameras().size(),
+                  scene.cameras->staggered ? "staggered (each camera its own clock)" : "synchronous");
+      if (unseen > 0) std::printf("; %.1f %% of the field inside the walls is seen by none", 100 * unseen);
+      std::printf("\n");
+    }
     if (IsMulticast(ParseIpv4(options.serve.vision_address)))
       std::printf("vision is multicast (ttl %d, interface %s)\n", options.serve.vision_ttl,
                   options.serve.vision_interface.empty() ? "by route" : options.serve.vision_interface.c_str());

@@ -1,0 +1,105 @@
+#include "serve/camera_rig.h"
+
+#include <cmath>
+#include <cstdint>
+#include <optional>
+
+#include "core/pose.h"
+#include "serve/vision_packets.h"
+
+namespace twinsim {
+namespace {
+
+// The cameras' random streams (noise and lost detections), one per camera id from this
+// base, derived from the scene's seed: never the simulation's own streams.
+constexpr std::uint64_t kCameraStream = 0x63616d00;  // "cam"
+// A step faster than this between two frames is a teleport, which a staggered camera's
+// capture does not interpolate across (nothing on the field moves faster: the commands'
+// and the kicks' limits are 20 m/s).
+constexpr double kTeleportSpeed = 25;  // m/s
+
+// What a camera that captures a share `a` of a frame early sees: the true pose between
+// frame j's (`now`, a = 0) and frame j - 1's (`before`, a = 1).
+Pose2 CapturedPose(const Pose2& now, const Pose2& before, double a, double max_step) {
+  if (std::hypot(now.x - before.x, now.y - before.y) > max_step) return now;
+  return Pose2{now.x + a * (before.x - now.x), now.y + a * (before.y - now.y),
+               WrapAngle(now.theta + a * WrapAngle(before.theta - now.theta))};
+}
+
+Eigen::Vector3d CapturedBall(const Eigen::Vector3d& now, const Eigen::Vector3d& before, double a, double max_step) {
+  if ((now - before).norm() > max_step) return now;
+  return now + a * (before - now);
+}
+
+}  // namespace
+
+CameraRig::CameraRig(const Scene& scene, const Simulation& sim, int vision_delay)
+    : vision_delay_(vision_delay), frame_dt_(1 / scene.frame_rate) {
+  if (!scene.cameras) return;
+  views_ = CameraViews(*scene.cameras, scene.field, scene.frame_rate, scene.seed);
+  for (const CameraView& v : views_) rng_.push_back(Rng::Derived(scene.seed, kCameraStream + v.id));
+  start_.present.resize(static_cast<std::size_t>(sim.num_robots()));
+  for (int i = 0; i < sim.num_robots(); ++i) {
+    start_.robots.push_back(sim.backend().pose(i));
+    start_.present[static_cast<std::size_t>(i)] = sim.present(i);
+  }
+  if (sim.has_ball()) start_.ball = sim.ball()->ball().position;
+  captures_.assign(static_cast<std::size_t>(vision_delay) + 2, start_);
+}
+
+void CameraRig::Record(int frame, const std::vector<FrameRecord>& records, const Simulation& sim) {
+  if (empty()) return;
+  Capture& c = captures_[static_cast<std::size_t>(frame) % captures_.size()];
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    c.robots[i] = records[i].truth;
+    c.present[i] = records[i].present;
+  }
+  if (sim.has_ball()) c.ball = sim.ball()->ball().position;
+}
+
+const CameraRig::Capture& CameraRig::CaptureOf(int frame) const {
+  // Before frame 0 the robots stood at their starts, as the observer has seen them.
+  return frame >= 0 ? captures_[static_cast<std::size_t>(frame) % captures_.size()] : start_;
+}
+
+std::vector<SSL_WrapperPacket> CameraRig::Packets(int k, const std::function<double(int)>& frame_time, double t_sent,
+                                                  const Simulation& sim, const TeamRoster& roster) {
+  const int captured = k - vision_delay_;
+  const Capture& now = CaptureOf(captured);
+  const Capture& before = CaptureOf(captured - 1);
+  const double max_step = kTeleportSpeed * frame_dt_;
+  std::vector<SSL_WrapperPacket> packets;
+  for (std::size_t v = 0; v < views_.size(); ++v) {
+    const CameraView& view = views_[v];
+    Rng& rng = rng_[v];
+    const double a = view.capture_lead / frame_dt_;  // 0: at the frame
+    double t_capture = frame_time(captured);
+    if (a > 0) t_capture = (1 - a) * t_capture + a * frame_time(captured - 1);
+    // Every draw made whether or not the camera sees the object, so that what one
+    // camera sees never shifts another's noise.
+    std::vector<Sighting> seen;
+    for (int i = 0; i < sim.num_robots(); ++i) {
+      const auto ku = static_cast<std::size_t>(i);
+      const Pose2 truth = a > 0 ? CapturedPose(now.robots[ku], before.robots[ku], a, max_step) : now.robots[ku];
+      const VisionNoise& noise = sim.vision_noise(i);
+      const Pose2 p{truth.x + rng.Gaussian(noise.xy), truth.y + rng.Gaussian(noise.xy),
+                    WrapAngle(truth.theta + rng.Gaussian(noise.theta))};
+      const bool lost = rng.Uniform() < sim.robot_model(i).vision_drop_probability;
+      if (now.present[ku] && !lost && view.Sees(truth.x, truth.y)) seen.push_back(Sighting{roster.robot(i), p});
+    }
+    std::optional<Eigen::Vector3d> ball;
+    if (sim.has_ball()) {
+      const BallVision& b = sim.ball_vision();
+      const Eigen::Vector3d truth = a > 0 ? CapturedBall(now.ball, before.ball, a, max_step) : now.ball;
+      const Eigen::Vector3d p =
+          truth + Eigen::Vector3d(rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_z));
+      const bool lost = rng.Uniform() < b.drop_probability;
+      if (!lost && view.Sees(truth.x(), truth.y())) ball = p;
+    }
+    packets.push_back(
+        DetectionPacket(seen, view.first_frame + static_cast<std::uint32_t>(k), t_capture, t_sent, ball, &view));
+  }
+  return packets;
+}
+
+}  // namespace twinsim

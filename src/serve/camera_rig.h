@@ -1,0 +1,60 @@
+// The cameras of a served field (the scene's `cameras:`, scene/camera_layout.h;
+// docs/serve.md "Several cameras"): each sees the true state of `vision_delay` frames
+// ago in its area, with its own noise and lost detections from its own random stream,
+// captured at its own instant (a staggered camera: up to a frame period earlier, the
+// state interpolated between the two frames around it) and numbered by its own clock.
+// The cameras' draws never touch the simulation's streams, so the observer's logs are
+// the same with cameras or without.
+//
+//   CameraRig rig(scene, sim, vision_delay);
+//   per frame k: rig.Record(k, sim.BeginFrame()); ...; rig.Packets(k, frame_time, t_sent, sim, roster);
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <vector>
+
+#include "core/rng.h"
+#include "scene/camera_layout.h"
+#include "scene/scene.h"
+#include "serve/team_roster.h"
+#include "sim/omni_simulation.h"
+#include "ssl_vision_wrapper.pb.h"
+
+namespace twinsim {
+
+class CameraRig {
+ public:
+  CameraRig() = default;  // no cameras: the field sends what the observer receives
+  // The scene's cameras over `sim` (the scene's simulation, before its first frame),
+  // whose robots share a vision delay of `vision_delay` frames.
+  CameraRig(const Scene& scene, const Simulation& sim, int vision_delay);
+
+  bool empty() const { return views_.empty(); }
+  const std::vector<CameraView>& views() const { return views_; }
+
+  // Keeps the true state of frame `frame` (`records`: the frame as begun).
+  void Record(int frame, const std::vector<FrameRecord>& records, const Simulation& sim);
+  // Each camera's detection sent at frame k, one packet per camera in id order.
+  // `frame_time(j)`: the time frame j began (s; j may be negative: before frame 0, frames
+  // stamped as if they had run), the capture times' clock; `t_sent` the send time.
+  std::vector<SSL_WrapperPacket> Packets(int k, const std::function<double(int)>& frame_time, double t_sent,
+                                         const Simulation& sim, const TeamRoster& roster);
+
+ private:
+  struct Capture {
+    std::vector<Pose2> robots;  // field frame, true
+    std::vector<bool> present;
+    Eigen::Vector3d ball = Eigen::Vector3d::Zero();  // m, true
+  };
+  const Capture& CaptureOf(int frame) const;
+
+  std::vector<CameraView> views_;
+  std::vector<Rng> rng_;           // per camera
+  std::vector<Capture> captures_;  // frame j's at j % (vision_delay + 2)
+  Capture start_;                  // before frame 0: the robots at their starts
+  int vision_delay_ = 0;
+  double frame_dt_ = 0;  // s
+};
+
+}  // namespace twinsim
