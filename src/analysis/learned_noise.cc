@@ -19,6 +19,7 @@ namespace {
 // acceleration (their lower bound is a growth of 0).
 using NoiseCoordinates = std::array<double, 6>;
 constexpr int kFlat = 4;  // the coordinates of a spread the same at every speed
+constexpr int kPerSpeed = 4, kPerAcceleration = 5;
 constexpr double kGrowthOffset = 0.05;
 constexpr std::array<double, 6> kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0};  // m/s, m/s, rad/s, s, 1/(m/s), 1/(m/s^2)
 constexpr std::array<double, 6> kUpper{3, 3, 20, 5, 20, 20};
@@ -28,25 +29,45 @@ double ToCoordinate(std::size_t i, double value) {
   return std::log(i < kFlat ? value : value + kGrowthOffset);
 }
 
-NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n) {
+// The spreads' coordinates are those at `typical_speed` (m/s, the logs'), not standing
+// still: a growth with speed then tilts the spreads about that speed instead of raising
+// them at every speed, so the search meets no ridge of a spread against its growth (with
+// the spreads standing still as coordinates it stopped at no growth where the rollouts
+// were a third too wide at low speed).
+NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, double typical_speed) {
   NoiseCoordinates v;
-  for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a]);
+  for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a] * (1 + n.per_speed * typical_speed));
   v[3] = ToCoordinate(3, n.correlation_time);
-  v[4] = ToCoordinate(4, n.per_speed);
-  v[5] = ToCoordinate(5, n.per_acceleration);
+  v[kPerSpeed] = ToCoordinate(kPerSpeed, n.per_speed);
+  v[kPerAcceleration] = ToCoordinate(kPerAcceleration, n.per_acceleration);
   return v;
 }
 
-OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v) {
+OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, double typical_speed) {
   OmniDrivingNoise n;
-  for (std::size_t a = 0; a < 3; ++a) n.sd[a] = std::exp(v[a]);
   n.correlation_time = std::exp(v[3]);
   // At the lower bound a growth is 0, not the rounding left of exp(ln 0.05) - 0.05.
   auto growth = [](double c) { return c <= std::log(kGrowthOffset) + 1e-12 ? 0.0 : std::exp(c) - kGrowthOffset; };
-  n.per_speed = growth(v[4]);
-  n.per_acceleration = growth(v[5]);
+  n.per_speed = growth(v[kPerSpeed]);
+  n.per_acceleration = growth(v[kPerAcceleration]);
+  for (std::size_t a = 0; a < 3; ++a) n.sd[a] = std::exp(v[a]) / (1 + n.per_speed * typical_speed);
   n.simulated = true;
   return n;
+}
+
+// The mean translational speed (m/s) between consecutive measured rows of `logs`.
+double TypicalSpeed(const std::vector<OmniLog>& logs) {
+  double sum = 0;
+  long count = 0;
+  for (const OmniLog& log : logs) {
+    for (std::size_t i = 1; i < log.rows.size(); ++i) {
+      const OmniLogRow &a = log.rows[i - 1], &b = log.rows[i];
+      if (!a.measured || !b.measured || b.t <= a.t) continue;
+      sum += std::hypot(b.pose.x - a.pose.x, b.pose.y - a.pose.y) / (b.t - a.t);
+      ++count;
+    }
+  }
+  return count > 0 ? std::min(sum / static_cast<double>(count), 3.0) : 0;
 }
 
 NoiseCoordinates Clamp(NoiseCoordinates v) {
@@ -130,12 +151,15 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
   LearnedNoiseFit out;
   out.start = LearnedDrivingNoise(model, &predictor);
   const int budget = 1 + options.max_evaluations + options.max_evaluations / 2;
-  auto rows_at = [&](const NoiseCoordinates& v) { return SampledRows(model, predictor, FromCoordinates(v), logs, options, horizons); };
+  const double typical = TypicalSpeed(logs);
+  auto rows_at = [&](const NoiseCoordinates& v) {
+    return SampledRows(model, predictor, FromCoordinates(v, typical), logs, options, horizons);
+  };
   std::function<double(const NoiseCoordinates&)> cost = [&](const NoiseCoordinates& v) {
     if (progress) progress(out.evaluations, budget);
     return MeanCost(rows_at(v));
   };
-  const NoiseCoordinates start = ToCoordinates(out.start);
+  const NoiseCoordinates start = ToCoordinates(out.start, typical);
   const std::vector<std::vector<PredictiveError>> first = rows_at(start);
   for (const auto& h : first) out.rows += static_cast<int>(h.size());
   if (first.back().empty()) {
@@ -145,12 +169,12 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
   out.cost_before = MeanCost(first);
   out.evaluations = 1;
   double best = out.cost_before;
-  // First the same spread at every speed, then with the growths as well, from there.
+  // First the same spread at every speed, then the growths about the typical motion.
   NoiseCoordinates v =
       PatternSearch<NoiseCoordinates>(cost, Clamp, start, kFlat, 1 + options.max_evaluations, &best, &out.evaluations);
-  v = PatternSearch<NoiseCoordinates>(cost, Clamp, v, 6, budget, &best, &out.evaluations);
+  v = PatternSearch<NoiseCoordinates>(cost, Clamp, v, kFlat, kPerAcceleration + 1, budget, &best, &out.evaluations);
   out.cost_after = best;
-  out.noise = FromCoordinates(v);
+  out.noise = FromCoordinates(v, typical);
   out.calibration = CalibrationOf(rows_at(v), horizons, logs.front().frame_period);
   if (progress) progress(budget, budget);
   return out;

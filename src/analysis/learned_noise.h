@@ -44,7 +44,7 @@ struct LearnedNoiseOptions {
   // every 4th frame it took 3.5 minutes for a neural predictor).
   int max_starts = 150;
   std::uint64_t seed = 1;                // of the rollouts' draws
-  int max_evaluations = 60;              // of the cost, besides the start's; the growths get half as many more
+  int max_evaluations = 90;              // of the cost, besides the start's; the growths get half as many more
 };
 
 struct LearnedNoiseFit {

@@ -1,6 +1,8 @@
 #include "analysis/omni_calibration.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <unsupported/Eigen/SpecialFunctions>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -52,6 +54,23 @@ double MeanConstantEnergy(const std::vector<PredictiveError>& rows, double s) {
 
 int PitBin(double u) { return std::clamp(static_cast<int>(u * kPitBins), 0, kPitBins - 1); }
 
+// P(D^2 <= d2) for a position's squared Mahalanobis distance under its covariance:
+// chi-square with 2 degrees of freedom for a known covariance; with one estimated from n
+// draws, F: d2 (n - 1) / (2 n) is F(2, n - 1), whose distribution function has this
+// closed form.
+double PositionPit(double d2, double n) {
+  if (std::isinf(n)) return 1 - std::exp(-0.5 * d2);
+  return 1 - std::pow(1 + d2 / n, -0.5 * (n - 1));
+}
+
+// Student's t distribution function with nu degrees of freedom (the standard normal's
+// for infinitely many), through the regularised incomplete beta function.
+double StudentCdf(double t, double nu) {
+  if (std::isinf(nu)) return 0.5 * std::erfc(-t / std::sqrt(2.0));
+  const double tail = 0.5 * Eigen::numext::betainc(0.5 * nu, 0.5, nu / (nu + t * t));
+  return t > 0 ? 1 - tail : tail;
+}
+
 }  // namespace
 
 std::vector<PredictiveError> PredictiveErrors(const OmniLog& log, const OmniReplayResult& result,
@@ -70,7 +89,27 @@ PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& re
   PredictiveError p;
   p.e << m.x - result.pose[i].x, m.y - result.pose[i].y, m.theta - result.pose[i].theta;
   p.c = result.covariance[i] + result.measurement_covariance;
+  if (result.covariance_draws > 0) {
+    p.draws = result.covariance_draws;
+    p.drawn = result.covariance[i];
+  }
   return p;
+}
+
+double EffectiveDraws(const PredictiveError& row, int p, bool heading) {
+  constexpr double kKnown = std::numeric_limits<double>::infinity();
+  if (row.draws <= 0) return kKnown;
+  double whole = 0, drawn = 0;
+  if (heading) {
+    whole = row.c(2, 2), drawn = row.drawn(2, 2), p = 1;
+  } else if (p == 2) {
+    whole = row.c.topLeftCorner<2, 2>().determinant(), drawn = row.drawn.topLeftCorner<2, 2>().determinant();
+  } else {
+    whole = row.c.determinant(), drawn = row.drawn.determinant();
+  }
+  // Nothing drawn there (a held row, an axis without noise): the known part alone.
+  if (!(drawn > 0) || !(whole > 0)) return kKnown;
+  return row.draws * std::pow(whole / drawn, 2.0 / p);
 }
 
 double OmniCalibration::EnergyGain() const {
@@ -116,13 +155,24 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
     const Eigen::Matrix2d cxy = r.c.topLeftCorner<2, 2>();
     const Eigen::Vector2d exy = r.e.head<2>();
     const double d2 = exy.dot(cxy.ldlt().solve(exy));
-    in50 += d2 <= d50;
-    in90 += d2 <= d90;
-    ++out.position_pit[static_cast<std::size_t>(PitBin(1 - std::exp(-0.5 * d2)))];
     const double z = r.e[2] / std::sqrt(std::max(r.c(2, 2), 1e-300));
-    h50 += std::abs(z) <= z50;
-    h90 += std::abs(z) <= z90;
-    ++out.heading_pit[static_cast<std::size_t>(PitBin(0.5 * std::erfc(-z / std::sqrt(2.0))))];
+    if (r.draws == 0) {
+      in50 += d2 <= d50;
+      in90 += d2 <= d90;
+      h50 += std::abs(z) <= z50;
+      h90 += std::abs(z) <= z90;
+      ++out.position_pit[static_cast<std::size_t>(PitBin(1 - std::exp(-0.5 * d2)))];
+      ++out.heading_pit[static_cast<std::size_t>(PitBin(0.5 * std::erfc(-z / std::sqrt(2.0))))];
+    } else {
+      // A covariance estimated from draws: Student's t (PredictiveError).
+      const double u = PositionPit(d2, EffectiveDraws(r, 2)), v = StudentCdf(z, EffectiveDraws(r, 1, true));
+      in50 += u <= 0.5;
+      in90 += u <= 0.9;
+      h50 += std::abs(2 * v - 1) <= 0.5;
+      h90 += std::abs(2 * v - 1) <= 0.9;
+      ++out.position_pit[static_cast<std::size_t>(PitBin(u))];
+      ++out.heading_pit[static_cast<std::size_t>(PitBin(v))];
+    }
     es += EnergyScore(CovarianceRoot(cxy), exy);
     base += EnergyScore(round, exy);
   }
@@ -141,7 +191,13 @@ double LogScore(const PredictiveError& r) {
   const Eigen::Vector3d w = llt.matrixL().solve(r.e);
   double log_det = 0;
   for (int i = 0; i < 3; ++i) log_det += 2 * std::log(llt.matrixL()(i, i));
-  return 0.5 * (w.squaredNorm() + log_det + 3 * std::log(2 * kPi));
+  const double n = EffectiveDraws(r, 3);
+  if (std::isinf(n) || n <= 3) return 0.5 * (w.squaredNorm() + log_det + 3 * std::log(2 * kPi));
+  // Student's t in 3 dimensions: nu = n - 2 degrees of freedom, scale n C / nu, so that
+  // e' scale^-1 e / nu = e' C^-1 e / n.
+  const double nu = n - 2;
+  return std::lgamma(0.5 * nu) - std::lgamma(0.5 * (nu + 3)) + 1.5 * std::log(nu * kPi) +
+         0.5 * (log_det + 3 * std::log(n / nu)) + 0.5 * (nu + 3) * std::log1p(w.squaredNorm() / n);
 }
 
 double MeanLogScore(const std::vector<PredictiveError>& rows) {

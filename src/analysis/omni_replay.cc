@@ -311,6 +311,7 @@ class TrackerSamples {
         c += d * d.transpose();
       }
       r.covariance[row] = c / static_cast<double>(draws[h].size());
+      r.covariance_draws = static_cast<int>(draws[h].size());
       if (h + 1 == horizons.size()) out->samples[row] = std::move(draws[h]);
     }
   }
@@ -400,7 +401,6 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   std::unique_ptr<OmniBackend> backend = MakeOmniBackend(options.backend, {model}, field, timing, options.backend_options);
 
   const int delay = model.command_delay_frames + model.vision_delay_frames;
-  const std::size_t n = log.rows.size();
   const Timeline tl = MakeTimeline(log, delay);
   const PoseCheck check = [&](std::size_t row, const Pose2& p) {
     if (!IsFinite(p)) {

@@ -103,6 +103,9 @@ struct OmniReplayResult {
   // prediction's plus this).
   std::vector<Eigen::Matrix3d> covariance;
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
+  // How many draws each row's covariance was estimated from (the samples' mean square
+  // about the prediction); 0: it is the filter's own, known (the observer's).
+  int covariance_draws = 0;
   // With OmniReplayOptions::also: one result per shorter horizon, in its order (the same
   // fields; their own `also` empty).
   std::vector<OmniReplayResult> also;

@@ -1,11 +1,12 @@
 // A compass (pattern) search for a few smooth-enough parameters with a costly, noise-free
 // cost (e.g. a likelihood under common random numbers): no gradients, no line search.
 //
-// From `v`, over its first `coordinates` coordinates: each up and down by the step, on
-// along a direction while it pays (up to four steps); the step halves when a whole sweep
-// finds nothing better, from ln 2 down to ln 1.05 (the coordinates are logarithms:
-// factors of 2 down to 5 %), or until *evaluations reaches `budget`. `clamp` keeps a
-// trial within bounds. *best holds cost(v) on entry and the best found on return.
+// From `v`, over its coordinates [first, last) (or its first `coordinates`): each up and
+// down by the step, on along a direction while it pays (up to four steps); the step
+// halves when a whole sweep finds nothing better, from ln 2 down to ln 1.05 (the
+// coordinates are logarithms: factors of 2 down to 5 %), or until *evaluations reaches
+// `budget`. `clamp` keeps a trial within bounds. *best holds cost(v) on entry and the
+// best found on return.
 //
 //   double best = cost(start);
 //   int evaluations = 1;
@@ -18,13 +19,13 @@
 namespace twinsim {
 
 template <class V>
-V PatternSearch(const std::function<double(const V&)>& cost, const std::function<V(V)>& clamp, V v, int coordinates,
+V PatternSearch(const std::function<double(const V&)>& cost, const std::function<V(V)>& clamp, V v, int first, int last,
                 int budget, double* best, int* evaluations) {
   for (double step = std::log(2.0); step >= std::log(1.05) && *evaluations < budget; step /= 2) {
     bool moved = true;
     while (moved && *evaluations < budget) {
       moved = false;
-      for (int i = 0; i < coordinates && *evaluations < budget; ++i) {
+      for (int i = first; i < last && *evaluations < budget; ++i) {
         for (double sign : {1.0, -1.0}) {
           bool paid = false;
           for (int k = 0; k < 4 && *evaluations < budget; ++k) {
@@ -43,6 +44,12 @@ V PatternSearch(const std::function<double(const V&)>& cost, const std::function
     }
   }
   return v;
+}
+
+template <class V>
+V PatternSearch(const std::function<double(const V&)>& cost, const std::function<V(V)>& clamp, V v, int coordinates,
+                int budget, double* best, int* evaluations) {
+  return PatternSearch<V>(cost, clamp, v, 0, coordinates, budget, best, evaluations);
 }
 
 }  // namespace twinsim

@@ -151,13 +151,13 @@ TEST(LearnedDrivingNoise, ThePredictorFileCarriesItAndTheSimulationDrawsIt) {
 
 // Fitted on the held-out 20 % of one minute, judged on another minute it never saw: the
 // 50 % and 90 % ellipses of the learned backend's sampled rollouts hold about their
-// share at 4, 16 and 63 frames. Measured: the 90 % ellipses hold 92/91/90 %, the 50 %
-// ones 60/61/54 %: the errors are more peaked than any Gaussian (a start at a frame the
-// camera lost is worse than the rest), so no spread holds both shares at short
-// horizons; the test accepts 40-65 % and 82-96 % (docs/learning.md, "The learned
-// backend's driving noise"). The spreads come out near the plant's (0.109, 0.092 m/s,
-// 0.71 rad/s against 0.137, 0.093, 0.71), the correlation time an eighth of its 0.23 s:
-// the predictor carries a slip on from the frames it sees, so a short one suffices.
+// share at 4, 16 and 63 frames. Measured: the 50 % ellipses hold 53.0/55.3/48.1 %, the
+// 90 % ones 91.1/91.3/89.3 % (docs/learning.md, "The learned backend's driving noise").
+// Before the rollouts' covariance was scored as the Student t its 16 draws imply and the
+// growth with speed was searched about the logs' typical speed, they held 60/61/54 % and
+// 92/91/90 %. The fit's 115 rows per horizon leave a share about 5 % uncertain, so the
+// test accepts 44-60 % and 85-95 %. The correlation time comes out an eighth of the
+// plant's 0.23 s: the predictor carries a slip on from the frames it sees.
 TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnAnUnseenLog) {
   const Trained t = TrainOnWanderingPlant(60);
   const LearnedNoiseFit fit = FitLearnedDrivingNoise(testing::Omni4(), t.predictor, OmniValidationParts({t.fit}, 0.2));
@@ -182,10 +182,10 @@ TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnAnUnseenLog) {
   RecordProperty("table_row", row + "]}");
   for (const OmniCalibration& h : c) {
     EXPECT_GT(h.rows, 500) << h.frames;
-    EXPECT_GT(h.position_50, 0.40) << h.frames;
-    EXPECT_LT(h.position_50, 0.65) << h.frames;
-    EXPECT_GT(h.position_90, 0.82) << h.frames;
-    EXPECT_LT(h.position_90, 0.96) << h.frames;
+    EXPECT_GT(h.position_50, 0.44) << h.frames;
+    EXPECT_LT(h.position_50, 0.60) << h.frames;
+    EXPECT_GT(h.position_90, 0.85) << h.frames;
+    EXPECT_LT(h.position_90, 0.95) << h.frames;
   }
   // Without it (a hundredth of the spread) the intervals are far too narrow.
   OmniDrivingNoise tiny = fit.noise;

@@ -9,6 +9,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <limits>
 
 #include "core/math_constants.h"
 #include "core/rng.h"
@@ -70,6 +71,66 @@ TEST(Calibration, RowsTwiceAsWideAsStatedShowAsAU) {
   EXPECT_GT(c.position_pit[kPitBins - 1], 4 * c.position_pit[kPitBins / 2]);
   EXPECT_GT(c.heading_pit[0], 2 * c.heading_pit[kPitBins / 2]);
   EXPECT_GT(c.heading_pit[kPitBins - 1], 2 * c.heading_pit[kPitBins / 2]);
+}
+
+// Rows whose covariance is the mean square of n = 16 draws about the known mean (the
+// learned backend's rollouts), plus a known camera part: scored as Gaussians they are too
+// narrow (F(2, 15) against chi-square: the 50 % ellipse holds about 45 %, the 90 % one
+// 84 %); scored as the Student t the estimate implies they hold their shares, and the t
+// log density is least at the true spread, where the Gaussian one asks for a third more
+// variance (n / (n - p - 1) = 16 / 12).
+TEST(Calibration, ACovarianceEstimatedFromDrawsIsScoredAsStudentsT) {
+  constexpr int kDraws = 16;
+  const std::vector<PredictiveError> truth = DrawnRows(20000, 1.0, 7);
+  const Eigen::Matrix3d camera = Eigen::Vector3d(1e-8, 1e-8, 1e-6).asDiagonal();  // 0.1 mm, 1 mrad: small
+  Rng rng(8);
+  std::vector<PredictiveError> estimated;
+  for (const PredictiveError& t : truth) {
+    const Eigen::Matrix3d l = t.c.llt().matrixL();
+    Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < kDraws; ++k) {
+      const Eigen::Vector3d d = l * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+      s += d * d.transpose() / kDraws;
+    }
+    PredictiveError row;
+    const Eigen::Matrix3d lc = (t.c + camera).llt().matrixL();
+    row.e = lc * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+    row.c = s + camera;
+    row.draws = kDraws;
+    row.drawn = s;
+    estimated.push_back(row);
+  }
+  const OmniCalibration c = Calibrate(estimated, 0.005);
+  EXPECT_NEAR(c.position_50, 0.5, 0.014);
+  EXPECT_NEAR(c.position_90, 0.9, 0.009);
+  EXPECT_NEAR(c.heading_50, 0.5, 0.014);
+  EXPECT_NEAR(c.heading_90, 0.9, 0.009);
+  for (int b = 0; b < kPitBins; ++b) EXPECT_NEAR(c.position_pit[b] / 20000.0, 0.1, 0.009) << b;
+  // The same rows taken as known Gaussians: too narrow.
+  std::vector<PredictiveError> as_known = estimated;
+  for (PredictiveError& r : as_known) r.draws = 0;
+  const OmniCalibration g = Calibrate(as_known, 0.005);
+  EXPECT_NEAR(g.position_50, 0.45, 0.02);  // F(2, 15): 1 - (1 + 1.386 / 16)^-7.5 = 0.46
+  EXPECT_NEAR(g.position_90, 0.85, 0.02);  // 1 - (1 + 4.605 / 16)^-7.5 = 0.85
+  // The variance scale each log density likes best (a scan of k in c -> k c).
+  auto best_scale = [](std::vector<PredictiveError> rows) {
+    double best = 0, best_cost = std::numeric_limits<double>::infinity();
+    for (double k = 0.7; k <= 1.8; k += 0.01) {
+      std::vector<PredictiveError> scaled = rows;
+      for (PredictiveError& r : scaled) r.c *= k, r.drawn *= k;
+      const double cost = MeanLogScore(scaled);
+      if (cost < best_cost) best_cost = cost, best = k;
+    }
+    return best;
+  };
+  EXPECT_NEAR(best_scale(estimated), 1.0, 0.05);
+  EXPECT_NEAR(best_scale(as_known), 16.0 / 12, 0.07);
+  // A row without draws, or whose drawn part is nothing, is a known Gaussian.
+  EXPECT_TRUE(std::isinf(EffectiveDraws(truth[0], 2)));
+  PredictiveError held = estimated[0];
+  held.drawn.setZero();
+  EXPECT_TRUE(std::isinf(EffectiveDraws(held, 3)));
+  EXPECT_GT(EffectiveDraws(estimated[0], 2), kDraws);  // the camera's known part adds some
 }
 
 // For round Gaussian rows the energy score is proper: the spread that scores best is the
