@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "grSim_Robotstatus.pb.h"
 #include "serve/ball_clearance.h"
+#include "serve/cpu_time.h"
 #include "serve/grsim_packet.h"
 #include "serve/vision_packets.h"
 
@@ -78,26 +79,36 @@ constexpr double kResendPeriod = 0.25;  // s
 
 double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
-// What the kernel has done to the calling thread so far.
-rusage ThreadUsage() {
-  rusage u{};
-  getrusage(RUSAGE_THREAD, &u);
+// What the kernel has done to the calling thread so far, and to its CPU.
+struct Usage {
+  rusage thread{};
+  CpuTicks cpu;
+};
+
+Usage UsageNow(const CpuTime& cpu) {
+  Usage u;
+  getrusage(RUSAGE_THREAD, &u.thread);
+  u.cpu = cpu.Now();
   return u;
 }
 
 // Frame `frame`'s stall of `seconds` (`vision` s of it the vision), with what the kernel
-// did to the thread over the spans given, each from its [0] to its [1].
-ServeTiming::Stall StallOf(long long frame, double seconds, double vision,
-                           std::initializer_list<std::array<rusage, 2>> spans) {
+// did to the thread and `cpu` over the spans given, each from its [0] to its [1].
+ServeTiming::Stall StallOf(long long frame, double seconds, double vision, const CpuTime& cpu,
+                           std::initializer_list<std::array<Usage, 2>> spans) {
   ServeTiming::Stall s;
   s.frame = frame;
   s.seconds = seconds;
   s.vision = vision;
+  if (cpu.ok()) s.stolen = s.interrupts = 0;
   for (const auto& [from, to] : spans) {
-    s.minor_faults += to.ru_minflt - from.ru_minflt;
-    s.major_faults += to.ru_majflt - from.ru_majflt;
-    s.voluntary += to.ru_nvcsw - from.ru_nvcsw;
-    s.involuntary += to.ru_nivcsw - from.ru_nivcsw;
+    s.minor_faults += to.thread.ru_minflt - from.thread.ru_minflt;
+    s.major_faults += to.thread.ru_majflt - from.thread.ru_majflt;
+    s.voluntary += to.thread.ru_nvcsw - from.thread.ru_nvcsw;
+    s.involuntary += to.thread.ru_nivcsw - from.thread.ru_nivcsw;
+    if (!cpu.ok()) continue;
+    s.stolen += cpu.Seconds(to.cpu.steal - from.cpu.steal);
+    s.interrupts += cpu.Seconds(to.cpu.interrupts - from.cpu.interrupts);
   }
   return s;
 }
@@ -596,15 +607,17 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   const double dt = result_.timing.frame_dt();
   std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
   if (grsim_) sockets.push_back(&*grsim_);
-  rusage ru_worked = ThreadUsage();  // at the end of the last frame's work
+  // The serving CPU's accounting (all CPUs' when the thread is not pinned to one).
+  const CpuTime cpu(options_.cpu);
+  Usage worked = UsageNow(cpu);  // at the end of the last frame's work
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
-    const rusage ru_start = ThreadUsage();
+    const Usage started = UsageNow(cpu);
     const Clock::time_point frame_start = Clock::now();
     if (!options_.lockstep) {
       const double lateness = Seconds(frame_start - frame_end);
       timing_.start_lateness.Add(lateness);
       if (lateness > timing_.latest_start.seconds) {
-        timing_.latest_start = StallOf(counters_.frames, lateness, 0, {{ru_worked, ru_start}});
+        timing_.latest_start = StallOf(counters_.frames, lateness, 0, cpu, {{worked, started}});
         timing_.latest_start.woke_late = woke_late_;
       }
       frame_unix_[static_cast<std::size_t>(sim_.frame()) % frame_unix_.size()] = UnixNow();
@@ -612,7 +625,7 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     std::vector<FrameRecord> records = OpenFrame();
     SendVision(records);
     const Clock::duration vision_work = Clock::now() - frame_start;
-    const rusage ru_vision = ThreadUsage();
+    const Usage sent = UsageNow(cpu);
     for (TeamPort& t : teams_) t.answered = false;
     if (!options_.lockstep) {
       frame_end += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(dt / speed_));
@@ -623,15 +636,15 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
     }
     if (options_.lockstep) RefillTokens(dt);
     if (AwaitFrameEnd(frame_end, sockets, stop, status, &next_status)) break;  // stopped: not logged, no commands
-    const rusage ru_step = ThreadUsage();
+    const Usage stepping = UsageNow(cpu);
     const Clock::time_point step_start = Clock::now();
     FinishFrame(&records);
     const double work = Seconds(vision_work + (Clock::now() - step_start));
     timing_.frame_work.Add(work);
-    ru_worked = ThreadUsage();
+    worked = UsageNow(cpu);
     if (work > timing_.slowest.seconds)
       timing_.slowest =
-          StallOf(counters_.frames - 1, work, Seconds(vision_work), {{ru_start, ru_vision}, {ru_step, ru_worked}});
+          StallOf(counters_.frames - 1, work, Seconds(vision_work), cpu, {{started, sent}, {stepping, worked}});
   }
   return Summary();
 }

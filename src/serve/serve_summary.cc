@@ -12,7 +12,9 @@ std::string ServeTiming::Stall::Brief() const {
   if (vision > 0) s << vision * 1e3 << " ms of it the vision; ";
   if (woke_late > 0) s << "the last wait woke " << woke_late * 1e3 << " ms late; ";
   s << "page faults " << minor_faults << " minor, " << major_faults << " major; context switches " << voluntary
-    << " voluntary, " << involuntary << " involuntary)";
+    << " voluntary, " << involuntary << " involuntary";
+  if (stolen >= 0) s << "; CPU stolen " << stolen * 1e3 << " ms, in interrupts " << interrupts * 1e3 << " ms";
+  s << ")";
   return s.str();
 }
 
