@@ -232,10 +232,14 @@ def drive_synchronously(args, control_pb, sync_pb):
     response = client.step(0.0)  # no step: the current frame's vision
     pose, held = None, 0
     for frame in range(args.frames):
+        # Every camera's detection of the frame: the robot's newest sighting (staggered
+        # cameras capture at their own instants).
+        newest = -math.inf
         for detection in response.detection:
             robots = detection.robots_blue if args.team == "blue" else detection.robots_yellow
             for r in robots:
-                if r.robot_id == args.id:
+                if r.robot_id == args.id and detection.t_capture >= newest:
+                    newest = detection.t_capture
                     pose = (r.x / 1000.0, r.y / 1000.0, r.orientation)
         held = arrived(pose, target, args.tolerance, held)
         if held >= 15:

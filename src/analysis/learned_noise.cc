@@ -21,7 +21,9 @@ using NoiseCoordinates = std::array<double, 6>;
 constexpr int kFlat = 4;  // the coordinates of a spread the same at every speed
 constexpr int kPerSpeed = 4, kPerAcceleration = 5;
 constexpr double kGrowthOffset = 0.05;
-constexpr std::array<double, 6> kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0};  // m/s, m/s, rad/s, s, 1/(m/s), 1/(m/s^2)
+// The bounds of the coordinates' values: the spreads at the typical speed (m/s, m/s,
+// rad/s), the correlation time (s), the growths (1/(m/s), 1/(m/s^2)).
+constexpr std::array<double, 6> kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0};
 constexpr std::array<double, 6> kUpper{3, 3, 20, 5, 20, 20};
 
 double ToCoordinate(std::size_t i, double value) {

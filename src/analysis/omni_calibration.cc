@@ -96,14 +96,15 @@ PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& re
   return p;
 }
 
-double EffectiveDraws(const PredictiveError& row, int p, bool heading) {
+double EffectiveDraws(const PredictiveError& row, PosePart part) {
   constexpr double kKnown = std::numeric_limits<double>::infinity();
   if (row.draws <= 0) return kKnown;
   double whole = 0, drawn = 0;
-  if (heading) {
+  int p = 3;
+  if (part == PosePart::kHeading) {
     whole = row.c(2, 2), drawn = row.drawn(2, 2), p = 1;
-  } else if (p == 2) {
-    whole = row.c.topLeftCorner<2, 2>().determinant(), drawn = row.drawn.topLeftCorner<2, 2>().determinant();
+  } else if (part == PosePart::kPosition) {
+    whole = row.c.topLeftCorner<2, 2>().determinant(), drawn = row.drawn.topLeftCorner<2, 2>().determinant(), p = 2;
   } else {
     whole = row.c.determinant(), drawn = row.drawn.determinant();
   }
@@ -165,7 +166,8 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
       ++out.heading_pit[static_cast<std::size_t>(PitBin(0.5 * std::erfc(-z / std::sqrt(2.0))))];
     } else {
       // A covariance estimated from draws: Student's t (PredictiveError).
-      const double u = PositionPit(d2, EffectiveDraws(r, 2)), v = StudentCdf(z, EffectiveDraws(r, 1, true));
+      const double u = PositionPit(d2, EffectiveDraws(r, PosePart::kPosition));
+      const double v = StudentCdf(z, EffectiveDraws(r, PosePart::kHeading));
       in50 += u <= 0.5;
       in90 += u <= 0.9;
       h50 += std::abs(2 * v - 1) <= 0.5;
@@ -191,7 +193,7 @@ double LogScore(const PredictiveError& r) {
   const Eigen::Vector3d w = llt.matrixL().solve(r.e);
   double log_det = 0;
   for (int i = 0; i < 3; ++i) log_det += 2 * std::log(llt.matrixL()(i, i));
-  const double n = EffectiveDraws(r, 3);
+  const double n = EffectiveDraws(r, PosePart::kPose);
   if (std::isinf(n) || n <= 3) return 0.5 * (w.squaredNorm() + log_det + 3 * std::log(2 * kPi));
   // Student's t in 3 dimensions: nu = n - 2 degrees of freedom, scale n C / nu, so that
   // e' scale^-1 e / nu = e' C^-1 e / n.

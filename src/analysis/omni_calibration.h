@@ -43,8 +43,8 @@ namespace twinsim {
 // Student's t, not N(0, S) (the posterior predictive; in p dimensions t with n - p + 1
 // degrees of freedom and scale n S / (n - p + 1)): e' S^-1 e (n - p + 1) / (p n) is
 // F(p, n - p + 1) distributed. Scored as a Gaussian, 16 draws make the 50 % ellipse hold
-// about 45 % and the 90 % one 84 %, and a noise fitted by the Gaussian log density
-// comes out about 15 % too wide to make up for it. With the camera's known covariance
+// 46 % and the 90 % one 85 %, and a noise fitted by the Gaussian log density comes out
+// a third too wide in variance (n / (n - p - 1)) to make up for it. With the camera's known covariance
 // added, the degrees of freedom are those of the sum (Satterthwaite: n (|S + C| / |S|)^(2/p)).
 struct PredictiveError {
   Eigen::Vector3d e = Eigen::Vector3d::Zero();  // x, y in the field frame (m); theta (rad)
@@ -53,10 +53,11 @@ struct PredictiveError {
   Eigen::Matrix3d drawn = Eigen::Matrix3d::Zero();  // that part (c minus the camera's)
 };
 
-// The degrees of freedom behind a row's covariance restricted to its first `p` coordinates
-// (2: the position, 3: the pose) or to the heading alone (p = 1 with `heading`): the
-// draws, grown where the camera's known part dominates; infinity for a known covariance.
-double EffectiveDraws(const PredictiveError& row, int p, bool heading = false);
+// The part of a pose a row's covariance is taken over.
+enum class PosePart { kPosition, kHeading, kPose };
+// The degrees of freedom behind a row's covariance over `part`: the draws, grown where
+// the camera's known part dominates; infinity for a known covariance.
+double EffectiveDraws(const PredictiveError& row, PosePart part);
 
 // Row i of a replay run with `covariance` (predicted, with a measurement).
 PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& result, std::size_t i);
@@ -99,8 +100,9 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
 std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
                                               std::vector<int> horizons = {4, 16, 63}, int stride = 2);
 
-// The negative log density (nats) of one row's pose under its Gaussian; infinity for a
-// covariance that is not positive definite.
+// The negative log density (nats) of one row's pose under its distribution (its Gaussian,
+// or the Student t of a covariance estimated from draws); infinity for a covariance that
+// is not positive definite.
 double LogScore(const PredictiveError& row);
 // Its mean over `rows` (0 without rows): the cost the driving noise is identified by.
 double MeanLogScore(const std::vector<PredictiveError>& rows);

@@ -164,9 +164,6 @@ void ReadRobotBackend(YamlMap& r, const fs::path& base_dir,
   at->push_back(where);
 }
 
-// A robot's backend against the rest of the scene: a learned robot has a predictor that
-// fits its model and the frame rate (as the learned backend checks it), and a predictor
-// belongs to a learned robot.
 // One camera of `cameras: {list: [...]}` (scene/camera_layout.h).
 CameraPlacement ReadCameraPlacement(const YAML::Node& node, const std::string& path, const std::string& context,
                                     const FieldModel& field, ErrorList* errors) {
@@ -177,19 +174,24 @@ CameraPlacement ReadCameraPlacement(const YAML::Node& node, const std::string& p
   m.Get("height", &p.height, InRange(1, 20));
   const bool has_fov = m.Get("field_of_view", &fov, 2, InRange(1, 170));
   if (has_fov) p.field_of_view = Eigen::Vector2d(fov[0], fov[1]);
-  const bool has_area = m.Get("area", &area, 4, InRange(-100, 100));
+  bool has_area = m.Get("area", &area, 4, InRange(-100, 100));
   if (has_area) {
     p.area_low = Eigen::Vector2d(area[0], area[1]);
     p.area_high = Eigen::Vector2d(area[2], area[3]);
-    if (area[0] >= area[2] || area[1] >= area[3]) m.Error("area", "expected [x_low, y_low, x_high, y_high] with low < high");
+    if (area[0] >= area[2] || area[1] >= area[3]) {
+      m.Error("area", "expected [x_low, y_low, x_high, y_high] with low < high");
+      has_area = false;
+    }
   }
+  bool one = true;  // of the field of view and the area
   if (m.valid() && !m.Has("field_of_view") && !m.Has("area")) {
     m.Error("field_of_view", "a camera needs its field_of_view (degrees across x and y) or the area it sees");
   } else if (m.Has("field_of_view") && m.Has("area")) {
     m.Error("area", "give the field_of_view or the area, not both");
+    one = false;
   }
   m.Finish();
-  if (m.valid() && (has_fov || has_area)) {
+  if (m.valid() && one && (has_fov || has_area)) {
     const CameraView v = PlacedCamera(p, field);
     if (!(v.low.x() < v.high.x() && v.low.y() < v.high.y())) {
       std::ostringstream msg;
@@ -215,7 +217,10 @@ CameraSetup ReadCameras(const YAML::Node& node, const std::string& path, const F
   setup.staggered = capture == "staggered";
   const bool grid_keys = c.Has("columns") || c.Has("rows") || c.Has("overlap") || c.Has("height");
   if (c.Has("layout") && grid_keys) c.Error("layout", "a layout is a grid of its own: give it or columns/rows/overlap/height");
-  if (c.Has("list")) {
+  if (node.IsMap() && node["list"].IsDefined() && node["list"].IsNull()) {
+    c.Child("list");
+    c.Error("list", "expected a list of 1 to 16 cameras, got nothing");  // not one camera by default
+  } else if (c.Has("list")) {
     const YAML::Node list = c.Child("list");
     if (c.Has("layout") || grid_keys) c.Error("list", "listed cameras take no layout or grid keys (columns, rows, overlap, height)");
     if (!list.IsSequence() || list.size() == 0 || list.size() > 16) {
@@ -229,6 +234,9 @@ CameraSetup ReadCameras(const YAML::Node& node, const std::string& path, const F
   return setup;
 }
 
+// A robot's backend against the rest of the scene: a learned robot has a predictor that
+// fits its model and the frame rate (as the learned backend checks it), and a predictor
+// belongs to a learned robot.
 void CheckRobotBackend(const Scene& scene, std::size_t i, const RobotBackendAt& at, ErrorList* errors) {
   const SceneRobot& r = scene.robots[i];
   const std::string context = "robots[" + std::to_string(i) + "]";

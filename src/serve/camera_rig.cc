@@ -13,21 +13,25 @@ namespace {
 // The cameras' random streams (noise and lost detections), one per camera id from this
 // base, derived from the scene's seed: never the simulation's own streams.
 constexpr std::uint64_t kCameraStream = 0x63616d00;  // "cam"
-// A step faster than this between two frames is a teleport, which a staggered camera's
-// capture does not interpolate across (nothing on the field moves faster: the commands'
-// and the kicks' limits are 20 m/s).
-constexpr double kTeleportSpeed = 25;  // m/s
+// A step faster than these between two frames is a teleport (a robot taken off or put
+// on the field is parked far away), which a staggered camera's capture does not
+// interpolate across: it sees the frame's pose. Robots are commanded at 20 m/s and
+// 100 rad/s at most; a ball is kicked at 20 m/s at most, from a robot that may drive.
+constexpr double kTeleportSpeed = 25;      // m/s, a robot
+constexpr double kTeleportTurn = 110;      // rad/s
+constexpr double kTeleportBallSpeed = 45;  // m/s
 
 // What a camera that captures a share `a` of a frame early sees: the true pose between
 // frame j's (`now`, a = 0) and frame j - 1's (`before`, a = 1).
-Pose2 CapturedPose(const Pose2& now, const Pose2& before, double a, double max_step) {
-  if (std::hypot(now.x - before.x, now.y - before.y) > max_step) return now;
-  return Pose2{now.x + a * (before.x - now.x), now.y + a * (before.y - now.y),
-               WrapAngle(now.theta + a * WrapAngle(before.theta - now.theta))};
+Pose2 CapturedPose(const Pose2& now, const Pose2& before, double a, double dt) {
+  const double turn = WrapAngle(before.theta - now.theta);
+  if (std::hypot(now.x - before.x, now.y - before.y) > kTeleportSpeed * dt || std::abs(turn) > kTeleportTurn * dt)
+    return now;
+  return Pose2{now.x + a * (before.x - now.x), now.y + a * (before.y - now.y), WrapAngle(now.theta + a * turn)};
 }
 
-Eigen::Vector3d CapturedBall(const Eigen::Vector3d& now, const Eigen::Vector3d& before, double a, double max_step) {
-  if ((now - before).norm() > max_step) return now;
+Eigen::Vector3d CapturedBall(const Eigen::Vector3d& now, const Eigen::Vector3d& before, double a, double dt) {
+  if ((now - before).norm() > kTeleportBallSpeed * dt) return now;
   return now + a * (before - now);
 }
 
@@ -67,7 +71,6 @@ std::vector<SSL_WrapperPacket> CameraRig::Packets(int k, const std::function<dou
   const int captured = k - vision_delay_;
   const Capture& now = CaptureOf(captured);
   const Capture& before = CaptureOf(captured - 1);
-  const double max_step = kTeleportSpeed * frame_dt_;
   std::vector<SSL_WrapperPacket> packets;
   for (std::size_t v = 0; v < views_.size(); ++v) {
     const CameraView& view = views_[v];
@@ -80,7 +83,7 @@ std::vector<SSL_WrapperPacket> CameraRig::Packets(int k, const std::function<dou
     std::vector<Sighting> seen;
     for (int i = 0; i < sim.num_robots(); ++i) {
       const auto ku = static_cast<std::size_t>(i);
-      const Pose2 truth = a > 0 ? CapturedPose(now.robots[ku], before.robots[ku], a, max_step) : now.robots[ku];
+      const Pose2 truth = a > 0 ? CapturedPose(now.robots[ku], before.robots[ku], a, frame_dt_) : now.robots[ku];
       const VisionNoise& noise = sim.vision_noise(i);
       const Pose2 p{truth.x + rng.Gaussian(noise.xy), truth.y + rng.Gaussian(noise.xy),
                     WrapAngle(truth.theta + rng.Gaussian(noise.theta))};
@@ -90,7 +93,7 @@ std::vector<SSL_WrapperPacket> CameraRig::Packets(int k, const std::function<dou
     std::optional<Eigen::Vector3d> ball;
     if (sim.has_ball()) {
       const BallVision& b = sim.ball_vision();
-      const Eigen::Vector3d truth = a > 0 ? CapturedBall(now.ball, before.ball, a, max_step) : now.ball;
+      const Eigen::Vector3d truth = a > 0 ? CapturedBall(now.ball, before.ball, a, frame_dt_) : now.ball;
       const Eigen::Vector3d p =
           truth + Eigen::Vector3d(rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_xy), rng.Gaussian(b.noise_z));
       const bool lost = rng.Uniform() < b.drop_probability;

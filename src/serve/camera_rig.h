@@ -7,7 +7,7 @@
 // the same with cameras or without.
 //
 //   CameraRig rig(scene, sim, vision_delay);
-//   per frame k: rig.Record(k, sim.BeginFrame()); ...; rig.Packets(k, frame_time, t_sent, sim, roster);
+//   per frame k: rig.Record(k, sim.BeginFrame(), sim); ...; rig.Packets(k, frame_time, t_sent, sim, roster);
 #pragma once
 
 #include <Eigen/Core>

@@ -100,13 +100,16 @@ ServeTiming::Stall StallOf(long long frame, double seconds, double vision, const
   s.frame = frame;
   s.seconds = seconds;
   s.vision = vision;
-  if (cpu.ok()) s.stolen = s.interrupts = 0;
+  // The CPU's accounting where every span stayed on one CPU that could be read.
+  bool cpu_known = true;
+  for (const auto& [from, to] : spans) cpu_known = cpu_known && from.cpu.cpu >= 0 && from.cpu.cpu == to.cpu.cpu;
+  if (cpu_known) s.stolen = s.interrupts = 0;
   for (const auto& [from, to] : spans) {
     s.minor_faults += to.thread.ru_minflt - from.thread.ru_minflt;
     s.major_faults += to.thread.ru_majflt - from.thread.ru_majflt;
     s.voluntary += to.thread.ru_nvcsw - from.thread.ru_nvcsw;
     s.involuntary += to.thread.ru_nivcsw - from.thread.ru_nivcsw;
-    if (!cpu.ok()) continue;
+    if (!cpu_known) continue;
     s.stolen += cpu.Seconds(to.cpu.steal - from.cpu.steal);
     s.interrupts += cpu.Seconds(to.cpu.interrupts - from.cpu.interrupts);
   }
@@ -607,8 +610,8 @@ ServeSummary LiveField::Run(const std::function<bool()>& stop, const std::functi
   const double dt = result_.timing.frame_dt();
   std::vector<const UdpSocket*> sockets{&teams_[0].socket, &teams_[1].socket, &control_};
   if (grsim_) sockets.push_back(&*grsim_);
-  // The serving CPU's accounting (all CPUs' when the thread is not pinned to one).
-  const CpuTime cpu(options_.cpu);
+  // The serving CPU's accounting, of the CPU the thread runs on at each reading.
+  const CpuTime cpu;
   Usage worked = UsageNow(cpu);  // at the end of the last frame's work
   while (!stop() && (options_.max_frames == 0 || counters_.frames < options_.max_frames)) {
     const Usage started = UsageNow(cpu);

@@ -142,9 +142,9 @@ struct ServeTiming {
     long major_faults = 0;     // page faults that read from disk
     long voluntary = 0;        // context switches the thread asked for (a blocking call)
     long involuntary = 0;      // context switches forced on it (preemption)
-    // s the hypervisor ran something else on the serving CPU (steal time), and s the CPU
-    // spent in interrupts, meanwhile: /proc/stat's 10 ms ticks, over all CPUs unless the
-    // thread is pinned (--cpu); -1 unknown (serve/cpu_time.h).
+    // s the hypervisor ran something else on the serving thread's CPU (steal time), and s
+    // that CPU spent in interrupts, meanwhile: /proc/stat's 10 ms ticks; -1 unknown (no
+    // /proc/stat, or the thread moved to another CPU: serve/cpu_time.h).
     double stolen = -1;
     double interrupts = -1;
     std::string Brief() const;

@@ -155,7 +155,7 @@ TEST(LearnedDrivingNoise, ThePredictorFileCarriesItAndTheSimulationDrawsIt) {
 // 90 % ones 91.1/91.3/89.3 % (docs/learning.md, "The learned backend's driving noise").
 // Before the rollouts' covariance was scored as the Student t its 16 draws imply and the
 // growth with speed was searched about the logs' typical speed, they held 60/61/54 % and
-// 92/91/90 %. The fit's 115 rows per horizon leave a share about 5 % uncertain, so the
+// 92/91/90 %. The fit's 110 or so rows per horizon leave a share about 5 % uncertain, so the
 // test accepts 44-60 % and 85-95 %. The correlation time comes out an eighth of the
 // plant's 0.23 s: the predictor carries a slip on from the frames it sees.
 TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnAnUnseenLog) {

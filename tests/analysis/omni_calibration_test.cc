@@ -75,8 +75,8 @@ TEST(Calibration, RowsTwiceAsWideAsStatedShowAsAU) {
 
 // Rows whose covariance is the mean square of n = 16 draws about the known mean (the
 // learned backend's rollouts), plus a known camera part: scored as Gaussians they are too
-// narrow (F(2, 15) against chi-square: the 50 % ellipse holds about 45 %, the 90 % one
-// 84 %); scored as the Student t the estimate implies they hold their shares, and the t
+// narrow (F(2, 15) against chi-square: the 50 % ellipse holds 46 %, the 90 % one 85 %);
+// scored as the Student t the estimate implies they hold their shares, and the t
 // log density is least at the true spread, where the Gaussian one asks for a third more
 // variance (n / (n - p - 1) = 16 / 12).
 TEST(Calibration, ACovarianceEstimatedFromDrawsIsScoredAsStudentsT) {
@@ -126,11 +126,45 @@ TEST(Calibration, ACovarianceEstimatedFromDrawsIsScoredAsStudentsT) {
   EXPECT_NEAR(best_scale(estimated), 1.0, 0.05);
   EXPECT_NEAR(best_scale(as_known), 16.0 / 12, 0.07);
   // A row without draws, or whose drawn part is nothing, is a known Gaussian.
-  EXPECT_TRUE(std::isinf(EffectiveDraws(truth[0], 2)));
+  EXPECT_TRUE(std::isinf(EffectiveDraws(truth[0], PosePart::kPosition)));
   PredictiveError held = estimated[0];
   held.drawn.setZero();
-  EXPECT_TRUE(std::isinf(EffectiveDraws(held, 3)));
-  EXPECT_GT(EffectiveDraws(estimated[0], 2), kDraws);  // the camera's known part adds some
+  EXPECT_TRUE(std::isinf(EffectiveDraws(held, PosePart::kPose)));
+  // The camera's known part adds degrees of freedom: with one as large as the drawn part
+  // the sum's are four times the draws (Satterthwaite), and the shares still hold.
+  PredictiveError even = estimated[0];
+  even.c = 2 * even.drawn;
+  EXPECT_NEAR(EffectiveDraws(even, PosePart::kPosition), 4 * kDraws, 1e-9);
+  EXPECT_NEAR(EffectiveDraws(even, PosePart::kHeading), 4 * kDraws, 1e-9);
+}
+
+// As above with a camera part as large as the prediction's (the degrees of freedom of
+// the sum from Satterthwaite's approximation): the shares within 2 %.
+TEST(Calibration, AnEstimatedCovarianceWithAnEqualKnownPartHoldsItsShares) {
+  constexpr int kDraws = 16;
+  const std::vector<PredictiveError> truth = DrawnRows(20000, 1.0, 11);
+  Rng rng(12);
+  std::vector<PredictiveError> rows;
+  for (const PredictiveError& t : truth) {
+    const Eigen::Matrix3d l = t.c.llt().matrixL();
+    Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < kDraws; ++k) {
+      const Eigen::Vector3d d = l * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+      s += d * d.transpose() / kDraws;
+    }
+    PredictiveError row;
+    const Eigen::Matrix3d lc = (2 * t.c).llt().matrixL();  // the camera's part: as large again
+    row.e = lc * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+    row.c = s + t.c;
+    row.draws = kDraws;
+    row.drawn = s;
+    rows.push_back(row);
+  }
+  const OmniCalibration c = Calibrate(rows, 0.005);
+  EXPECT_NEAR(c.position_50, 0.5, 0.02);
+  EXPECT_NEAR(c.position_90, 0.9, 0.015);
+  EXPECT_NEAR(c.heading_50, 0.5, 0.02);
+  EXPECT_NEAR(c.heading_90, 0.9, 0.015);
 }
 
 // For round Gaussian rows the energy score is proper: the spread that scores best is the

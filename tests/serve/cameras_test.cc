@@ -168,6 +168,7 @@ TEST(CameraLayout, ListedCamerasAreReadAndChecked) {
            {"{layout: division_a, columns: 3}", "a layout is a grid of its own"},
            {"{columns: 2, list: [{position: [0, 0], field_of_view: [60, 60]}]}", "take no layout or grid keys"},
            {"{list: []}", "1 to 16 cameras"},
+           {"{list: }", "got nothing"},
            {"{list: [{position: [0, 0]}]}", "needs its field_of_view"},
            {"{list: [{position: [0, 0], field_of_view: [60, 60], area: [0, 0, 1, 1]}]}", "not both"},
            {"{list: [{position: [0, 0], area: [1, 0, 0, 1]}]}", "low < high"},
@@ -179,6 +180,10 @@ TEST(CameraLayout, ListedCamerasAreReadAndChecked) {
     EXPECT_NE(message.find(":5:"), std::string::npos) << bad.cameras << ": " << message;
     EXPECT_NE(message.find(bad.says), std::string::npos) << bad.cameras << ": " << message;
   }
+  // One problem, one message: an inverted area is not also said to see nothing.
+  const std::string inverted =
+      testing::SceneError("name: c\n" + robots + "cameras: {list: [{position: [0, 0], area: [1, 0, 0, 1]}]}\n");
+  EXPECT_EQ(inverted.find("sees nothing"), std::string::npos) << inverted;
 }
 
 // Three robots: blue 0 at the centre (all four cameras), blue 1 deep in camera 3's

@@ -35,6 +35,51 @@ struct ServeCommandOptions {
   ServeOptions serve;
 };
 
+// What serve prints when it starts: the scene, the robots, the ports and the options
+// that change how it serves.
+void PrintServing(const Scene& scene, const std::string& backend, const std::string& out,
+                  const ServeCommandOptions& options, const LiveField& field) {
+  std::printf("serving %s: %zu robot(s) on %s at %g fps, %s\n", scene.name.c_str(), scene.robots.size(),
+              field.result().backend.c_str(), scene.frame_rate,
+              field.sync_port() >= 0 ? "synchronous" : options.serve.lockstep ? "lockstep" : "real time");
+  const std::vector<std::string> backends = RobotBackends(scene, backend);
+  for (std::size_t i = 0; i < scene.robots.size(); ++i) {
+    const SceneRobot& r = scene.robots[i];
+    const std::string predictor =
+        r.predictor ? " (" + std::filesystem::path(r.predictor_path).filename().string() + ")" : "";
+    std::printf("  %s %d: %s on %s%s\n", r.team.c_str(), r.id, r.name.c_str(), backends[i].c_str(), predictor.c_str());
+  }
+  std::printf("control %s:%d%s, blue %s:%d, yellow %s:%d; vision to %s:%d.\n",
+              options.serve.listen.c_str(), field.control_port(), options.serve.tournament ? " (refused: tournament)" : "",
+              options.serve.listen.c_str(), field.blue_port(), options.serve.listen.c_str(), field.yellow_port(),
+              options.serve.vision_address.c_str(), options.serve.vision_port);
+  std::printf("logs to %s/ as the match runs; Ctrl-C stops and draws the plots.\n", out.c_str());
+  if (!field.cameras().empty()) {
+    const double unseen = UnseenShare(field.cameras(), scene.field);
+    std::printf("%zu cameras, capture %s", field.cameras().size(),
+                scene.cameras->staggered ? "staggered (each camera its own clock)" : "synchronous");
+    if (unseen > 0) std::printf("; %.1f %% of the field inside the walls is seen by none", 100 * unseen);
+    std::printf("\n");
+  }
+  if (IsMulticast(ParseIpv4(options.serve.vision_address)))
+    std::printf("vision is multicast (ttl %d, interface %s)\n", options.serve.vision_ttl,
+                options.serve.vision_interface.empty() ? "by route" : options.serve.vision_interface.c_str());
+  if (field.sync_port() >= 0)
+    std::printf("synchronous interface on %s:%d (TCP; %s's RobotControl); the UDP ports are not served\n",
+                options.serve.listen.c_str(), field.sync_port(), options.serve.sync_team.c_str());
+  if (field.grsim_port() >= 0)
+    std::printf("grSim's protocol on %s:%d%s\n", options.serve.listen.c_str(), field.grsim_port(),
+                options.serve.tournament ? " (replacement refused: tournament)" : "");
+  if (field.receive_buffer() < field.receive_buffer_asked())
+    std::printf("receive buffers: %d bytes per port of %d asked; a burst of commands may be dropped by the kernel\n"
+                "  (counted; raise net.core.rmem_max, or serve with CAP_NET_ADMIN)\n",
+                field.receive_buffer(), field.receive_buffer_asked());
+  if (options.serve.realtime_priority > 0 || options.serve.cpu >= 0)
+    std::printf("serving thread: SCHED_FIFO %d, CPU %s\n", options.serve.realtime_priority,
+                options.serve.cpu >= 0 ? std::to_string(options.serve.cpu).c_str() : "any");
+  std::fflush(stdout);
+}
+
 int Serve(ServeCommandOptions& options) {
   Scene scene = LoadScene(options.scene);
   if (options.seed >= 0) scene.seed = static_cast<std::uint64_t>(options.seed);
@@ -60,47 +105,7 @@ int Serve(ServeCommandOptions& options) {
     logs.Append(records, ball);
   });
 
-  if (!options.quiet) {
-    std::printf("serving %s: %zu robot(s) on %s at %g fps, %s\n", scene.name.c_str(), scene.robots.size(),
-                field.result().backend.c_str(), scene.frame_rate,
-                field.sync_port() >= 0 ? "synchronous" : options.serve.lockstep ? "lockstep" : "real time");
-    const std::vector<std::string> backends = RobotBackends(scene, backend);
-    for (std::size_t i = 0; i < scene.robots.size(); ++i) {
-      const SceneRobot& r = scene.robots[i];
-      const std::string predictor =
-          r.predictor ? " (" + std::filesystem::path(r.predictor_path).filename().string() + ")" : "";
-      std::printf("  %s %d: %s on %s%s\n", r.team.c_str(), r.id, r.name.c_str(), backends[i].c_str(), predictor.c_str());
-    }
-    std::printf("control %s:%d%s, blue %s:%d, yellow %s:%d; vision to %s:%d.\n",
-                options.serve.listen.c_str(), field.control_port(), options.serve.tournament ? " (refused: tournament)" : "",
-                options.serve.listen.c_str(), field.blue_port(), options.serve.listen.c_str(), field.yellow_port(),
-                options.serve.vision_address.c_str(), options.serve.vision_port);
-    std::printf("logs to %s/ as the match runs; Ctrl-C stops and draws the plots.\n", out.c_str());
-    if (!field.cameras().empty()) {
-      const double unseen = UnseenShare(field.cameras(), scene.field);
-      std::printf("%zu cameras, capture %s", field.cameras().size(),
-                  scene.cameras->staggered ? "staggered (each camera its own clock)" : "synchronous");
-      if (unseen > 0) std::printf("; %.1f %% of the field inside the walls is seen by none", 100 * unseen);
-      std::printf("\n");
-    }
-    if (IsMulticast(ParseIpv4(options.serve.vision_address)))
-      std::printf("vision is multicast (ttl %d, interface %s)\n", options.serve.vision_ttl,
-                  options.serve.vision_interface.empty() ? "by route" : options.serve.vision_interface.c_str());
-    if (field.sync_port() >= 0)
-      std::printf("synchronous interface on %s:%d (TCP; %s's RobotControl); the UDP ports are not served\n",
-                  options.serve.listen.c_str(), field.sync_port(), options.serve.sync_team.c_str());
-    if (field.grsim_port() >= 0)
-      std::printf("grSim's protocol on %s:%d%s\n", options.serve.listen.c_str(), field.grsim_port(),
-                  options.serve.tournament ? " (replacement refused: tournament)" : "");
-    if (field.receive_buffer() < field.receive_buffer_asked())
-      std::printf("receive buffers: %d bytes per port of %d asked; a burst of commands may be dropped by the kernel\n"
-                  "  (counted; raise net.core.rmem_max, or serve with CAP_NET_ADMIN)\n",
-                  field.receive_buffer(), field.receive_buffer_asked());
-    if (options.serve.realtime_priority > 0 || options.serve.cpu >= 0)
-      std::printf("serving thread: SCHED_FIFO %d, CPU %s\n", options.serve.realtime_priority,
-                  options.serve.cpu >= 0 ? std::to_string(options.serve.cpu).c_str() : "any");
-    std::fflush(stdout);
-  }
+  if (!options.quiet) PrintServing(scene, backend, out, options, field);
   Progress progress("serve " + scene.name, !options.quiet);
   // Ctrl-C (or SIGTERM) is how a served field ends: the frames run so far are written.
   const ServeSummary summary = field.Run([] { return InterruptSignal() != 0; },
