@@ -19,20 +19,10 @@ def free_port():
         return s.getsockname()[1]
 
 
-def camera_scene(source, out):
-    """serve_2v2 seen by the league's division B layout, the cameras staggered."""
-    text = open(os.path.join(source, "scenes", "serve_2v2.yaml")).read()
-    text = text.replace("../models/", os.path.join(source, "models") + "/")
-    path = os.path.join(out, "serve_2v2_cameras.yaml")
-    with open(path, "w") as f:
-        f.write(text + "cameras: {layout: division_b, capture: staggered}\n")
-    return path
-
-
 def drive(twinsim, source, build, protocol, cameras=False):
     """Serves serve_2v2 in lockstep and drives blue 1 to a pose over `protocol`."""
     out = tempfile.mkdtemp(prefix="twinsim_serve_client_")
-    scene = camera_scene(source, out) if cameras else os.path.join(source, "scenes", "serve_2v2.yaml")
+    scene = os.path.join(source, "scenes", "serve_2v2_cameras.yaml" if cameras else "serve_2v2.yaml")
     control, blue, yellow, vision, grsim = (free_port() for _ in range(5))
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
         s.bind(("127.0.0.1", 0))
