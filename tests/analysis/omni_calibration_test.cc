@@ -9,6 +9,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "core/math_constants.h"
@@ -73,6 +74,34 @@ TEST(Calibration, RowsTwiceAsWideAsStatedShowAsAU) {
   EXPECT_GT(c.heading_pit[kPitBins - 1], 2 * c.heading_pit[kPitBins / 2]);
 }
 
+// Rows as the learned backend makes them: for each of `truth`'s rows, the covariance is
+// the mean square of kSampleDraws draws from it (about the known mean) plus the known
+// `camera` part, and the error is drawn from the truth plus the camera.
+constexpr int kSampleDraws = 16;
+std::vector<PredictiveError> EstimatedRows(const std::vector<PredictiveError>& truth,
+                                           const std::function<Eigen::Matrix3d(const PredictiveError&)>& camera,
+                                           std::uint64_t seed) {
+  Rng rng(seed);
+  std::vector<PredictiveError> rows;
+  for (const PredictiveError& t : truth) {
+    const Eigen::Matrix3d l = t.c.llt().matrixL();
+    Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < kSampleDraws; ++k) {
+      const Eigen::Vector3d d = l * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+      s += d * d.transpose() / kSampleDraws;
+    }
+    PredictiveError row;
+    const Eigen::Matrix3d known = camera(t);
+    const Eigen::Matrix3d lc = (t.c + known).llt().matrixL();
+    row.e = lc * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+    row.c = s + known;
+    row.draws = kSampleDraws;
+    row.drawn = s;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 // Rows whose covariance is the mean square of n = 16 draws about the known mean (the
 // learned backend's rollouts), plus a known camera part: scored as Gaussians they are too
 // narrow (F(2, 15) against chi-square: the 50 % ellipse holds 46 %, the 90 % one 85 %);
@@ -80,26 +109,11 @@ TEST(Calibration, RowsTwiceAsWideAsStatedShowAsAU) {
 // log density is least at the true spread, where the Gaussian one asks for a third more
 // variance (n / (n - p - 1) = 16 / 12).
 TEST(Calibration, ACovarianceEstimatedFromDrawsIsScoredAsStudentsT) {
-  constexpr int kDraws = 16;
+  constexpr int kDraws = kSampleDraws;
   const std::vector<PredictiveError> truth = DrawnRows(20000, 1.0, 7);
   const Eigen::Matrix3d camera = Eigen::Vector3d(1e-8, 1e-8, 1e-6).asDiagonal();  // 0.1 mm, 1 mrad: small
-  Rng rng(8);
-  std::vector<PredictiveError> estimated;
-  for (const PredictiveError& t : truth) {
-    const Eigen::Matrix3d l = t.c.llt().matrixL();
-    Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
-    for (int k = 0; k < kDraws; ++k) {
-      const Eigen::Vector3d d = l * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
-      s += d * d.transpose() / kDraws;
-    }
-    PredictiveError row;
-    const Eigen::Matrix3d lc = (t.c + camera).llt().matrixL();
-    row.e = lc * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
-    row.c = s + camera;
-    row.draws = kDraws;
-    row.drawn = s;
-    estimated.push_back(row);
-  }
+  const std::vector<PredictiveError> estimated =
+      EstimatedRows(truth, [&](const PredictiveError&) { return camera; }, 8);
   const OmniCalibration c = Calibrate(estimated, 0.005);
   EXPECT_NEAR(c.position_50, 0.5, 0.014);
   EXPECT_NEAR(c.position_90, 0.9, 0.009);
@@ -141,25 +155,9 @@ TEST(Calibration, ACovarianceEstimatedFromDrawsIsScoredAsStudentsT) {
 // As above with a camera part as large as the prediction's (the degrees of freedom of
 // the sum from Satterthwaite's approximation): the shares within 2 %.
 TEST(Calibration, AnEstimatedCovarianceWithAnEqualKnownPartHoldsItsShares) {
-  constexpr int kDraws = 16;
-  const std::vector<PredictiveError> truth = DrawnRows(20000, 1.0, 11);
-  Rng rng(12);
-  std::vector<PredictiveError> rows;
-  for (const PredictiveError& t : truth) {
-    const Eigen::Matrix3d l = t.c.llt().matrixL();
-    Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
-    for (int k = 0; k < kDraws; ++k) {
-      const Eigen::Vector3d d = l * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
-      s += d * d.transpose() / kDraws;
-    }
-    PredictiveError row;
-    const Eigen::Matrix3d lc = (2 * t.c).llt().matrixL();  // the camera's part: as large again
-    row.e = lc * Eigen::Vector3d(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
-    row.c = s + t.c;
-    row.draws = kDraws;
-    row.drawn = s;
-    rows.push_back(row);
-  }
+  // The camera's part: as large as the prediction's.
+  const std::vector<PredictiveError> rows =
+      EstimatedRows(DrawnRows(20000, 1.0, 11), [](const PredictiveError& t) { return t.c; }, 12);
   const OmniCalibration c = Calibrate(rows, 0.005);
   EXPECT_NEAR(c.position_50, 0.5, 0.02);
   EXPECT_NEAR(c.position_90, 0.9, 0.015);
