@@ -21,8 +21,8 @@ constexpr double kTeleportSpeed = 25;      // m/s, a robot
 constexpr double kTeleportTurn = 110;      // rad/s
 constexpr double kTeleportBallSpeed = 45;  // m/s
 
-// What a camera that captures a share `a` of a frame early sees: the true pose between
-// frame j's (`now`, a = 0) and frame j - 1's (`before`, a = 1).
+}  // namespace
+
 Pose2 CapturedPose(const Pose2& now, const Pose2& before, double a, double dt) {
   const double turn = WrapAngle(before.theta - now.theta);
   if (std::hypot(now.x - before.x, now.y - before.y) > kTeleportSpeed * dt || std::abs(turn) > kTeleportTurn * dt)
@@ -34,8 +34,6 @@ Eigen::Vector3d CapturedBall(const Eigen::Vector3d& now, const Eigen::Vector3d& 
   if ((now - before).norm() > kTeleportBallSpeed * dt) return now;
   return now + a * (before - now);
 }
-
-}  // namespace
 
 CameraRig::CameraRig(const Scene& scene, const Simulation& sim, int vision_delay)
     : vision_delay_(vision_delay), frame_dt_(1 / scene.frame_rate) {

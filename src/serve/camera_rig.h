@@ -23,6 +23,14 @@
 
 namespace twinsim {
 
+// What a camera that captures a share `a` (0..1) of a frame of `dt` s early sees: the
+// true pose between frame j's (`now`, a = 0) and frame j - 1's (`before`, a = 1), the
+// heading the short way round. A step faster than 25 m/s or 110 rad/s (a teleport, or a
+// robot taken off or put on the field) is not interpolated across: `now`.
+Pose2 CapturedPose(const Pose2& now, const Pose2& before, double a, double dt);
+// The ball's, a step faster than 45 m/s not interpolated across.
+Eigen::Vector3d CapturedBall(const Eigen::Vector3d& now, const Eigen::Vector3d& before, double a, double dt);
+
 class CameraRig {
  public:
   CameraRig() = default;  // no cameras: the field sends what the observer receives

@@ -16,6 +16,7 @@
 #include "core/math_constants.h"
 #include "scene/camera_layout.h"
 #include "scene/scene.h"
+#include "serve/camera_rig.h"
 #include "serve/live_field.h"
 #include "ssl_simulation_robot_control.pb.h"
 #include "ssl_vision_wrapper.pb.h"
@@ -309,6 +310,28 @@ TEST(Cameras, TheObserversLogsAreAsWithOneCameraAndTheCamerasAreDeterministic) {
   ASSERT_EQ(four.packets.size(), again.packets.size());
   for (std::size_t p = 0; p < four.packets.size(); ++p)
     EXPECT_EQ(four.packets[p].SerializeAsString(), again.packets[p].SerializeAsString()) << p;
+}
+
+// A staggered capture between two frames: interpolated, the heading the short way round
+// across +-pi, and never across a teleport (a jump no robot or ball makes in a frame).
+TEST(Cameras, AStaggeredCaptureInterpolatesButNotAcrossATeleport) {
+  const double dt = 1.0 / 60;
+  const Pose2 p = CapturedPose(Pose2{1.0, 2.0, 0.5}, Pose2{0.98, 2.01, 0.4}, 0.25, dt);
+  EXPECT_NEAR(p.x, 0.995, 1e-12);
+  EXPECT_NEAR(p.y, 2.0025, 1e-12);
+  EXPECT_NEAR(p.theta, 0.475, 1e-12);
+  // Across the wrap: 3.1 now, -3.1 before (0.083 rad apart the short way).
+  const Pose2 w = CapturedPose(Pose2{0, 0, 3.1}, Pose2{0, 0, -3.1}, 0.5, dt);
+  EXPECT_NEAR(std::abs(w.theta), kPi, 1e-9);
+  // 2 m in a frame (a teleport, or a robot parked off the field), and a turn of 2.5 rad
+  // (150 rad/s): the frame's own pose.
+  const Pose2 moved = CapturedPose(Pose2{1, 1, 0}, Pose2{3, 1, 0}, 0.5, dt);
+  EXPECT_EQ(moved.x, 1);
+  const Pose2 turned = CapturedPose(Pose2{1, 1, 0}, Pose2{1, 1, 2.5}, 0.5, dt);
+  EXPECT_EQ(turned.theta, 0);
+  // A kicked ball at 30 m/s is interpolated; one placed 2 m away is not.
+  EXPECT_NEAR(CapturedBall(Eigen::Vector3d(0.5, 0, 0.02), Eigen::Vector3d(0, 0, 0.02), 0.5, dt).x(), 0.25, 1e-12);
+  EXPECT_EQ(CapturedBall(Eigen::Vector3d(2, 0, 0.02), Eigen::Vector3d(0, 0, 0.02), 0.5, dt).x(), 2);
 }
 
 // Four staggered cameras over a robot driving at 1.5 m/s: camera c captures c/4 of a
