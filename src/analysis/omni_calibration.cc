@@ -55,9 +55,9 @@ double MeanConstantEnergy(const std::vector<PredictiveError>& rows, double s) {
 int PitBin(double u) { return std::clamp(static_cast<int>(u * kPitBins), 0, kPitBins - 1); }
 
 // P(D^2 <= d2) for a position's squared Mahalanobis distance under its covariance:
-// chi-square with 2 degrees of freedom for a known covariance; with one estimated from n
-// draws, F: d2 (n - 1) / (2 n) is F(2, n - 1), whose distribution function has this
-// closed form.
+// chi-square with 2 degrees of freedom for a known covariance (n infinite); with one
+// estimated from n draws, F: d2 (n - 1) / (2 n) is F(2, n - 1), whose distribution
+// function has this closed form.
 double PositionPit(double d2, double n) {
   if (std::isinf(n)) return 1 - std::exp(-0.5 * d2);
   return 1 - std::pow(1 + d2 / n, -0.5 * (n - 1));
@@ -147,8 +147,6 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
   out.rows = static_cast<int>(rows.size());
   out.baseline_spread = constant_spread;
   if (rows.empty()) return out;
-  const double d50 = -2 * std::log(0.5), d90 = -2 * std::log(0.1);  // chi-square, 2 degrees of freedom
-  const double z50 = 0.6744897501960817, z90 = 1.6448536269514722;   // normal quantiles of 0.75, 0.95
   int in50 = 0, in90 = 0, h50 = 0, h90 = 0;
   double es = 0, base = 0;
   const Eigen::Matrix2d round = constant_spread * Eigen::Matrix2d::Identity();
@@ -157,24 +155,17 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
     const Eigen::Vector2d exy = r.e.head<2>();
     const double d2 = exy.dot(cxy.ldlt().solve(exy));
     const double z = r.e[2] / std::sqrt(std::max(r.c(2, 2), 1e-300));
-    if (r.draws == 0) {
-      in50 += d2 <= d50;
-      in90 += d2 <= d90;
-      h50 += std::abs(z) <= z50;
-      h90 += std::abs(z) <= z90;
-      ++out.position_pit[static_cast<std::size_t>(PitBin(1 - std::exp(-0.5 * d2)))];
-      ++out.heading_pit[static_cast<std::size_t>(PitBin(0.5 * std::erfc(-z / std::sqrt(2.0))))];
-    } else {
-      // A covariance estimated from draws: Student's t (PredictiveError).
-      const double u = PositionPit(d2, EffectiveDraws(r, PosePart::kPosition));
-      const double v = StudentCdf(z, EffectiveDraws(r, PosePart::kHeading));
-      in50 += u <= 0.5;
-      in90 += u <= 0.9;
-      h50 += std::abs(2 * v - 1) <= 0.5;
-      h90 += std::abs(2 * v - 1) <= 0.9;
-      ++out.position_pit[static_cast<std::size_t>(PitBin(u))];
-      ++out.heading_pit[static_cast<std::size_t>(PitBin(v))];
-    }
+    // The PITs: chi-square and normal for a known covariance, F and Student's t for one
+    // estimated from draws (PredictiveError); inside a central interval where the PIT
+    // (the heading's folded about its middle) is within its share.
+    const double u = PositionPit(d2, EffectiveDraws(r, PosePart::kPosition));
+    const double v = StudentCdf(z, EffectiveDraws(r, PosePart::kHeading));
+    in50 += u <= 0.5;
+    in90 += u <= 0.9;
+    h50 += std::abs(2 * v - 1) <= 0.5;
+    h90 += std::abs(2 * v - 1) <= 0.9;
+    ++out.position_pit[static_cast<std::size_t>(PitBin(u))];
+    ++out.heading_pit[static_cast<std::size_t>(PitBin(v))];
     es += EnergyScore(CovarianceRoot(cxy), exy);
     base += EnergyScore(round, exy);
   }

@@ -44,8 +44,9 @@ namespace twinsim {
 // degrees of freedom and scale n S / (n - p + 1)): e' S^-1 e (n - p + 1) / (p n) is
 // F(p, n - p + 1) distributed. Scored as a Gaussian, 16 draws make the 50 % ellipse hold
 // 46 % and the 90 % one 85 %, and a noise fitted by the Gaussian log density comes out
-// a third too wide in variance (n / (n - p - 1)) to make up for it. With the camera's known covariance
-// added, the degrees of freedom are those of the sum (Satterthwaite: n (|S + C| / |S|)^(2/p)).
+// a third too wide in variance (n / (n - p - 1)) to make up for it. With the camera's
+// known covariance added, the degrees of freedom are those of the sum (Satterthwaite:
+// n (|S + C| / |S|)^(2/p)).
 struct PredictiveError {
   Eigen::Vector3d e = Eigen::Vector3d::Zero();  // x, y in the field frame (m); theta (rad)
   Eigen::Matrix3d c = Eigen::Matrix3d::Zero();  // its covariance: the prediction's plus the camera's

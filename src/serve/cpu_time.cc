@@ -5,7 +5,8 @@
 #include <unistd.h>
 
 #include <array>
-#include <sstream>
+#include <charconv>
+#include <cstdio>
 
 namespace twinsim {
 namespace {
@@ -30,21 +31,31 @@ CpuTicks CpuTime::Now() const {
   if (fd_ < 0 || cpu < 0) return {};
   const ssize_t n = pread(fd_, buffer_.data(), buffer_.size(), 0);
   if (n <= 0) return {};
-  return Parse(std::string(buffer_.data(), static_cast<std::size_t>(n)), cpu);
+  return Parse(std::string_view(buffer_.data(), static_cast<std::size_t>(n)), cpu);
 }
 
-CpuTicks CpuTime::Parse(const std::string& text, int cpu) {
-  // "cpuN user nice system idle iowait irq softirq steal guest guest_nice" (proc(5)).
-  const std::string label = "cpu" + std::to_string(cpu) + " ";
-  std::size_t at = text.rfind("\n" + label);
-  at = at == std::string::npos ? (text.compare(0, label.size(), label) == 0 ? 0 : at) : at + 1;
-  if (at == std::string::npos) return {};
+CpuTicks CpuTime::Parse(std::string_view text, int cpu) {
+  // "cpuN user nice system idle iowait irq softirq steal guest guest_nice" (proc(5)),
+  // read in place: the serving loop reads it each frame, so nothing is allocated.
+  char label[24];
+  const int length = std::snprintf(label, sizeof label, "cpu%d ", cpu);
+  std::size_t at = 0;
+  while (at < text.size() && text.compare(at, static_cast<std::size_t>(length), label) != 0) {
+    at = text.find('\n', at);
+    if (at == std::string_view::npos) return {};
+    ++at;
+  }
   const std::size_t end = text.find('\n', at);
-  if (end == std::string::npos) return {};  // cut short by the read
-  std::istringstream fields(text.substr(at + label.size(), end - at - label.size()));
+  if (at >= text.size() || end == std::string_view::npos) return {};  // absent, or cut short by the read
+  const char* p = text.data() + at + length;
+  const char* const stop = text.data() + end;
   std::array<long long, 8> v{};
-  for (long long& x : v) fields >> x;
-  if (!fields) return {};
+  for (long long& x : v) {
+    while (p < stop && *p == ' ') ++p;
+    const std::from_chars_result r = std::from_chars(p, stop, x);
+    if (r.ec != std::errc()) return {};
+    p = r.ptr;
+  }
   return CpuTicks{cpu, v[7], v[5] + v[6]};
 }
 

@@ -12,7 +12,7 @@
 //   if (after.cpu >= 0 && after.cpu == before.cpu) stolen = cpu.Seconds(after.steal - before.steal);
 #pragma once
 
-#include <string>
+#include <string_view>
 #include <vector>
 
 namespace twinsim {
@@ -38,7 +38,7 @@ class CpuTime {
 
   // The counters of CPU `cpu`'s line of a /proc/stat text; cpu -1 when the line is absent
   // or not whole.
-  static CpuTicks Parse(const std::string& text, int cpu);
+  static CpuTicks Parse(std::string_view text, int cpu);
 
  private:
   int fd_ = -1;
