@@ -17,12 +17,28 @@ constexpr double kImageHalfWidth = 390, kImageHalfHeight = 290;  // pixel
 constexpr std::uint64_t kCameraClockStream = 0x636c6b00;  // "clk"
 constexpr std::uint32_t kFirstFrameRange = 100000;
 
+// The grids `layout:` names (camera_layout.h).
+struct NamedLayout {
+  const char* name;
+  CameraGrid grid;
+};
+constexpr NamedLayout kLeagueLayouts[] = {{"division_a", {4, 2, 0.4, 6}}, {"division_b", {2, 2, 0.4, 4}}};
+
 }  // namespace
 
 std::optional<CameraGrid> LeagueCameraLayout(const std::string& name) {
-  if (name == "division_b") return CameraGrid{2, 2, 0.4, 4};
-  if (name == "division_a") return CameraGrid{4, 2, 0.4, 6};
+  for (const NamedLayout& l : kLeagueLayouts)
+    if (name == l.name) return l.grid;
   return std::nullopt;
+}
+
+const std::vector<std::string>& LeagueCameraLayoutNames() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const NamedLayout& l : kLeagueLayouts) n.emplace_back(l.name);
+    return n;
+  }();
+  return names;
 }
 
 std::vector<CameraView> CameraViews(const CameraGrid& grid, const FieldModel& field) {

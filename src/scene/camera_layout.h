@@ -46,10 +46,8 @@ struct CameraGrid {
 // The league-like grids `layout:` names: division_b four cameras (2 x 2, 4 m up),
 // division_a eight (4 x 2, 6 m up), each with 0.4 m of overlap. nullopt for another name.
 std::optional<CameraGrid> LeagueCameraLayout(const std::string& name);
-inline const std::vector<std::string>& LeagueCameraLayoutNames() {
-  static const std::vector<std::string> names{"division_a", "division_b"};
-  return names;
-}
+// Their names, for messages.
+const std::vector<std::string>& LeagueCameraLayoutNames();
 
 // One camera of a `list:`.
 struct CameraPlacement {
