@@ -55,7 +55,10 @@ bool ScoredInBlocks(const OmniBlockedStretch& s, std::size_t i, bool held_out, i
 struct OmniNoiseOptions {
   std::string backend = "analytic";
   std::vector<int> horizons{4, 16, 63};  // frames; the longest is predicted, the rest on the way
-  int stride = 16;           // the fit predicts from every stride-th frame
+  // The fit predicts from every stride-th frame. Every 16th left a minute's fit with too
+  // few rows: the spreads came out 5-20 % apart from fit to fit, and the 90 % ellipses
+  // held 84-86 % where they could (issue 42, docs/identification.md).
+  int stride = 8;
   int score_stride = 2;      // the calibration from every score_stride-th
   double max_delay = 0.35;   // s: rows start after the longest warm-up a replay can have
   int max_evaluations = 150;  // of the fit blocks' likelihood, per search (without and with growth)

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "analysis/pooled_calibration.h"
 #include "identification/omni/omni_identification.h"
 #include "estimation/wandering_plant.h"
 #include "test_util.h"
@@ -42,14 +43,33 @@ NoiseRun Identify(const testing::WanderingPlant& plant) {
   return run;
 }
 
-// Measured: forward 0.183 m/s, sideways 0.093, turn 0.65 rad/s, 0.27 s (truth 0.137,
-// 0.093, 0.71, 0.23 s); on the validation log the 50 % ellipses hold 49-52 % and the
-// 90 % ones 86-90 % at 4, 16 and 63 frames. Two numbers fall short of the issue's: the
-// forward spread is 34 % high (30 % asked), since the model's forward response differs
-// from the plant's (PID and wheels against a first-order lag) and what it misses looks
-// like more wander; and the 90 % ellipses hold 86 % at 4 and 16 frames (87-93 % asked),
-// since those errors are heavier-tailed than any Gaussian. The test accepts 40 % and
-// 82 %; docs/identification.md records both.
+// The identified model's calibration pooled over eight unseen minutes (the validation
+// log and seven more; testing/pooled_calibration.h says why one is not enough), recorded
+// for scripts/noise-calibration-table under `name`.
+std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(const testing::WanderingPlant& plant, const NoiseRun& run,
+                                                                 const std::string& name) {
+  std::vector<std::vector<OmniCalibration>> minutes;
+  for (int seed : {58, 100, 101, 102, 103, 104, 105, 106})
+    minutes.push_back(CalibrateOmniLog(run.model, testing::RecordWanderingPlant(plant, 60, seed).log, "analytic"));
+  const std::vector<testing::PooledCalibration> pooled = testing::PoolCalibrations(minutes);
+  const OmniDrivingNoise& n = run.model.driving_noise;
+  ::testing::Test::RecordProperty(name, "{\"noise\": [" + std::to_string(n.sd[0]) + ", " + std::to_string(n.sd[1]) + ", " +
+                           std::to_string(n.sd[2]) + ", " + std::to_string(n.correlation_time) + ", " +
+                           std::to_string(n.per_speed) + ", " + std::to_string(n.per_acceleration) +
+                           "], \"truth\": [" + std::to_string(plant.noise_sd[0]) + ", " + std::to_string(plant.noise_sd[1]) +
+                           ", " + std::to_string(plant.noise_sd[2]) + ", " + std::to_string(plant.noise_correlation) +
+                           "], \"minutes\": " + std::to_string(minutes.size()) +
+                           ", \"horizons\": " + testing::PooledCalibrationJson(pooled) + "}");
+  return pooled;
+}
+
+// Measured: forward 0.154 m/s, sideways 0.093, turn 0.60 rad/s, 0.27 s (truth 0.137,
+// 0.093, 0.71, 0.23 s: within 12, 1, 16 and 18 %); a growth with acceleration of 0.09
+// per m/s^2 kept. Over eight unseen minutes the 50 % ellipses hold 51-53 % and the 90 %
+// ones 90-91 % at 4, 16 and 63 frames, a single minute's shares 1-5 % apart. Fitted
+// from every 16th frame instead of every 8th, the forward spread came out 0.183 (34 %
+// high) and the 90 % ellipses held 86 % on the validation minute alone, which was read
+// as heavy tails; over eight minutes that fit holds 89-92 %.
 TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsIntervalsCalibrated) {
   const testing::WanderingPlant plant = OffGridPlant();
   const NoiseRun run = Identify(plant);
@@ -61,18 +81,19 @@ TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsI
   const char* axes[3] = {"forward", "sideways", "turn"};
   for (int a = 0; a < 3; ++a) {
     const double truth = plant.noise_sd[static_cast<std::size_t>(a)];
-    EXPECT_NEAR(run.model.driving_noise.sd[static_cast<std::size_t>(a)], truth, (a == 0 ? 0.4 : 0.3) * truth) << axes[a];
+    EXPECT_NEAR(run.model.driving_noise.sd[static_cast<std::size_t>(a)], truth, 0.3 * truth) << axes[a];
     EXPECT_NEAR(Parameter(r, axes[a]).value, run.model.driving_noise.sd[static_cast<std::size_t>(a)], 1e-12);
   }
   EXPECT_NEAR(run.model.driving_noise.correlation_time, plant.noise_correlation, 0.3 * plant.noise_correlation);
   EXPECT_LT(run.model.driving_noise.per_speed, 0.3);  // the plant's spread is the same at every speed
   EXPECT_TRUE(run.model.driving_noise.simulated);
   ASSERT_EQ(r.calibration.size(), 3u);
-  for (const OmniCalibration& c : r.calibration) {
-    EXPECT_GT(c.rows, 1000) << c.frames;
-    EXPECT_NEAR(c.position_50, 0.5, 0.05) << c.frames;
-    EXPECT_GT(c.position_90, 0.82) << c.frames;
-    EXPECT_LT(c.position_90, 0.94) << c.frames;
+  for (const OmniCalibration& c : r.calibration) EXPECT_GT(c.rows, 1000) << c.frames;
+  // The bands, on eight minutes the fit never saw.
+  for (const testing::PooledCalibration& p : CalibrateOnUnseenMinutes(plant, run, "same_spread")) {
+    EXPECT_GT(p.pooled.rows, 8000) << p.pooled.frames;
+    EXPECT_NEAR(p.pooled.position_50, 0.5, 0.05) << p.pooled.frames;
+    EXPECT_NEAR(p.pooled.position_90, 0.9, 0.03) << p.pooled.frames;
   }
   // The model file carries it; the report names every parameter with an error or none.
   EXPECT_EQ(run.model.Validate(), "");
@@ -82,9 +103,11 @@ TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsI
 // A robot that wanders more the faster it drives (a quarter of the spread standing,
 // all of it from 1 m/s on, growing as the square): identify selects a spread growing
 // with speed, which scores better on the held-out blocks than none, and which at 1 m/s
-// is the plant's within 30 % for the translation. Measured: per_speed 1.0-1.2, forward
-// 0.064 standing and 0.14 at 1 m/s (the plant's 0.034 and 0.137), sideways 0.038 and
-// 0.082 (0.023 and 0.093).
+// is the plant's within 30 % for the translation. Measured: per_speed 1.8, forward
+// 0.059 standing and 0.167 at 1 m/s (the plant's 0.034 and 0.137), sideways 0.032 and
+// 0.090 (0.023 and 0.093). Over eight unseen minutes the 90 % ellipses hold 90-91 %;
+// the 50 % ones 54-57 %, a little wide: the spread grows linearly with speed, the
+// plant's as the square, and the likelihood trades the two shares.
 TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
   testing::WanderingPlant plant = OffGridPlant();
   plant.noise_still = 0.25;
@@ -99,6 +122,11 @@ TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
     const double truth = plant.noise_sd[static_cast<std::size_t>(a)];
     EXPECT_NEAR(at_speed, truth, 0.3 * truth) << a;
     EXPECT_LT(run.model.driving_noise.sd[static_cast<std::size_t>(a)], 0.6 * truth) << a;
+  }
+  for (const testing::PooledCalibration& p : CalibrateOnUnseenMinutes(plant, run, "growing_spread")) {
+    EXPECT_GT(p.pooled.position_50, 0.45) << p.pooled.frames;
+    EXPECT_LT(p.pooled.position_50, 0.60) << p.pooled.frames;
+    EXPECT_NEAR(p.pooled.position_90, 0.9, 0.03) << p.pooled.frames;
   }
 }
 
