@@ -294,6 +294,7 @@ class ArmProblem : public DiagnosisProblem {
     const ArmModel trial = Build(effects);
     SquaredResiduals out;
     out.selection_by_channel.resize(static_cast<std::size_t>(n_));
+    out.fit_by_channel.resize(static_cast<std::size_t>(n_));
     for (const LogData& d : data_) {
       const Eigen::MatrixXd payload = PayloadTorque(trial, d);
       Eigen::MatrixXd squared(d.log->rows(), n_);
@@ -301,7 +302,10 @@ class ArmProblem : public DiagnosisProblem {
       const Eigen::VectorXd sum = squared.rowwise().sum();
       for (int r = d.first; r < d.last; ++r) {
         switch (d.kind[static_cast<std::size_t>(r)]) {
-          case RowKind::kFit: out.fit.push_back(sum[r]); break;
+          case RowKind::kFit:
+            out.fit.push_back(sum[r]);
+            for (int j = 0; j < n_; ++j) out.fit_by_channel[static_cast<std::size_t>(j)].push_back(squared(r, j));
+            break;
           case RowKind::kSelection:
             out.selection.push_back(sum[r]);
             out.selection_block.push_back(d.block[static_cast<std::size_t>(r)]);
@@ -367,6 +371,8 @@ class ArmProblem : public DiagnosisProblem {
   // patch the approximation (measured: a 3.7 N·m saturation "found" at t = 6 beside a
   // flexible elbow that has none).
   bool HeldWhileScoring(const TrialEffect& e) const override { return e.name == "joint_flexibility"; }
+  // A joint's effect changes that joint's command alone (Residual): scored on it.
+  int ChannelOf(const TrialEffect& e) const override { return e.joint; }
 
   // Throws CheckFailed when a fitted effect lies where the logs cannot see it:
   // what it then explains is something else (the derivative filter's error, noise).

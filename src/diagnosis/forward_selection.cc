@@ -51,21 +51,43 @@ struct Score {
 // Most of the selection blocks a candidate changes, it improves.
 bool MostBlocksImprove(int changed, int improved) { return 2 * improved > changed; }
 
-// `after` against `before` on the selection rows; `parameters` counted against an
-// effective row count `effective_rows`.
+// The effective number of independent rows in a residual series.
+double EffectiveRows(const std::vector<double>& squared, int min_bandwidth) {
+  return LongRunMeanTest(squared, min_bandwidth).effective_rows;
+}
+
+// True when both hold `channel` (>= 0) of their selection rows, and of their fit rows
+// where `fit` asks.
+bool HasChannel(const SquaredResiduals& before, const SquaredResiduals& after, int channel, bool fit) {
+  const auto c = static_cast<std::size_t>(channel);
+  if (channel < 0 || c >= before.selection_by_channel.size() || c >= after.selection_by_channel.size()) return false;
+  return !fit || (c < before.fit_by_channel.size() && c < after.fit_by_channel.size());
+}
+
+// `after` against `before` on the selection rows, summed over the channels or on
+// `channel` alone (>= 0: DiagnosisProblem::ChannelOf); `parameters` counted against the
+// effective row count of those rows (`effective_rows` for the sum).
 Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int min_bandwidth, int parameters,
-              double effective_rows) {
+              double effective_rows, int channel = -1) {
   Score s;
-  const double mse = Mean(before.selection);
-  if (mse <= 0 || before.selection.size() != after.selection.size()) return s;
-  const std::vector<double> gain = Gains(before.selection, after.selection);
+  const bool own = HasChannel(before, after, channel, false);
+  const auto c = static_cast<std::size_t>(std::max(channel, 0));
+  const std::vector<double>& selection_before = own ? before.selection_by_channel[c] : before.selection;
+  const std::vector<double>& selection_after = own ? after.selection_by_channel[c] : after.selection;
+  const bool own_fit = own && HasChannel(before, after, channel, true);
+  const std::vector<double>& fit_before = own_fit ? before.fit_by_channel[c] : before.fit;
+  const std::vector<double>& fit_after = own_fit ? after.fit_by_channel[c] : after.fit;
+  if (own) effective_rows = EffectiveRows(selection_before, min_bandwidth);
+  const double mse = Mean(selection_before);
+  if (mse <= 0 || selection_before.size() != selection_after.size()) return s;
+  const std::vector<double> gain = Gains(selection_before, selection_after);
   s.reduction = Mean(gain) / mse;
   s.test = LongRunMeanTest(gain, min_bandwidth);
-  const double mse_after = Mean(after.selection);
+  const double mse_after = Mean(selection_after);
   s.information_gain = mse_after > 0 ? effective_rows * std::log(mse / mse_after) - 2.0 * parameters
                                      : std::numeric_limits<double>::infinity();
-  const double fit_mse = Mean(before.fit);
-  if (fit_mse > 0) s.fit_reduction = (fit_mse - Mean(after.fit)) / fit_mse;
+  const double fit_mse = Mean(fit_before);
+  if (fit_mse > 0) s.fit_reduction = (fit_mse - Mean(fit_after)) / fit_mse;
   // Per selection block, the squared error before and the gain (blocks in row order).
   const bool blocked = before.selection_block.size() == gain.size();
   std::size_t i = 0;
@@ -73,7 +95,7 @@ Score Compare(const SquaredResiduals& before, const SquaredResiduals& after, int
     double block_before = 0, block_gain = 0;
     const std::size_t start = i;
     do {
-      block_before += before.selection[i];
+      block_before += selection_before[i];
       block_gain += gain[i];
       ++i;
     } while (i < gain.size() && blocked && before.selection_block[i] == before.selection_block[start]);
@@ -126,7 +148,9 @@ std::string PValue(double p) {
 
 // "it removed 64 % of the selection rows' squared error (t = 23, p < 1e-4, Holm-corrected
 // over 22 candidates), the closest alternatives coulomb_friction (joint 2) 41 % and ...".
-std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const DiagnosisCandidate& best, int tested) {
+// `own_channel`: the winner was scored on the channel it acts on alone (ChannelOf).
+std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const DiagnosisCandidate& best, int tested,
+                          bool own_channel) {
   std::vector<const DiagnosisCandidate*> others;
   for (const auto& c : round) {
     if (&c != &best && c.note.empty()) others.push_back(&c);
@@ -134,8 +158,8 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
   std::sort(others.begin(), others.end(),
             [](const DiagnosisCandidate* a, const DiagnosisCandidate* b) { return a->reduction > b->reduction; });
   char head[256];
-  std::snprintf(head, sizeof head, "it removed %s of the selection rows' squared error (t = %.1f, %s; %s)",
-                Percent(best.reduction).c_str(), best.t_statistic, PValue(best.p_value).c_str(),
+  std::snprintf(head, sizeof head, "it removed %s of %s squared error (t = %.1f, %s; %s)",
+                Percent(best.reduction).c_str(), own_channel ? "its joint's selection rows'" : "the selection rows'", best.t_statistic, PValue(best.p_value).c_str(),
                 best.significant ? ("significant after Holm's correction over " + std::to_string(tested) + " candidates").c_str()
                                  : ("a quarter and more on fit and selection rows alike, lower in " +
                                     std::to_string(best.blocks_improved) + " of the " +
@@ -148,11 +172,6 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
     s += EffectLabel(others[k]->name, others[k]->joint) + " " + Percent(std::max(0.0, others[k]->reduction));
   }
   return s;
-}
-
-// The effective number of independent rows in a residual series.
-double EffectiveRows(const std::vector<double>& squared, int min_bandwidth) {
-  return LongRunMeanTest(squared, min_bandwidth).effective_rows;
 }
 
 }  // namespace
@@ -171,6 +190,9 @@ struct CandidateTrial {
   DiagnosisCandidate candidate;
   double fit_reduction = 0;          // its share of the fit rows' squared residual removed
   bool harms = false;                // it makes a channel significantly worse
+  // Its information gain on the rows of every channel: what candidates scored on
+  // different channels compete on (a channel's own gain is larger the smaller its share).
+  double rank_gain = 0;
   std::vector<TrialEffect> fitted;   // the effects with it, as fitted
 };
 
@@ -211,7 +233,8 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
     trial = problem.Fit(trial, {static_cast<int>(trial.size()) - 1});
     SquaredResiduals r = problem.Evaluate(trial);
     const int parameters = static_cast<int>(trial.back().parameters.size());
-    Score s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows);
+    const int channel = problem.ChannelOf(candidate);
+    Score s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows, channel);
     std::vector<int> refit;
     bool shares = false;
     for (std::size_t m = 0; m < trial.size(); ++m) {
@@ -224,12 +247,14 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
         SquaredResiduals rj = problem.Evaluate(joint);
         if (Mean(rj.fit) < Mean(r.fit)) {
           trial = std::move(joint), r = std::move(rj);
-          s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows);
+          s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows, channel);
         }
       } catch (const std::exception&) {
         // the joint refit failed: the one-at-a-time fit stands
       }
     }
+    out.rank_gain = channel < 0 ? s.information_gain
+                                : Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows).information_gain;
     c.parameters = trial.back().parameters;
     c.fit_gap = problem.Gap(Mean(r.fit));
     c.held_out_gap = problem.Gap(Mean(r.selection));
@@ -256,7 +281,7 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
   return out;
 }
 
-// The candidates that pass, by information gain (one that fails the test must not hide
+// The candidates that pass, by information gain over every channel (one that fails the test must not hide
 // another that passes; ties go to the earlier candidate), each marked significant or not
 // by Holm's correction over the candidates that could be fitted: the best of many is held
 // to the family's level, not to one test's. *tested counts those.
@@ -279,7 +304,7 @@ std::vector<std::size_t> PassingOrder(const DiagnosisOptions& options, std::vect
       order.push_back(k);
   }
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return (*trials)[a].candidate.information_gain > (*trials)[b].candidate.information_gain;
+    return (*trials)[a].rank_gain > (*trials)[b].rank_gain;
   });
   return order;
 }
@@ -333,7 +358,7 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
     without.erase(without.begin() + static_cast<std::ptrdiff_t>(m));
     const SquaredResiduals rw = problem.Evaluate(without);
     const Score keep = Compare(rw, *r, base.bandwidth, static_cast<int>((*current)[m].parameters.size()),
-                               EffectiveRows(rw.selection, base.bandwidth));
+                               EffectiveRows(rw.selection, base.bandwidth), problem.ChannelOf((*current)[m]));
     const bool earns = keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
                        (keep.test.p <= options.alpha ||
                         (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&
@@ -346,10 +371,11 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
   if (weakest == current->size()) return;
   char why[320];
   std::snprintf(why, sizeof why,
-                "round %d: %s was taken out again: beside %s it removes only %s of the selection rows' squared "
+                "round %d: %s was taken out again: beside %s it removes only %s of %s squared "
                 "error (t = %.1f, %s)",
                 base.round, EffectLabel((*current)[weakest].name, (*current)[weakest].joint).c_str(),
                 EffectLabel(winner.name, winner.joint).c_str(), Percent(weakest_score.reduction).c_str(),
+                problem.ChannelOf((*current)[weakest]) >= 0 ? "its joint's selection rows'" : "the selection rows'",
                 weakest_score.test.t, PValue(weakest_score.test.p).c_str());
   out->removed.push_back(why);
   current->erase(current->begin() + static_cast<std::ptrdiff_t>(weakest));
@@ -420,7 +446,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
     if (passes) {
       DiagnosisCandidate& winner = tried[best];
       winner.selected = true;
-      const std::string evidence = RoundEvidence(tried, winner, tested);
+      const std::string evidence = RoundEvidence(tried, winner, tested, problem.ChannelOf(next.back()) >= 0);
       current = next;
       std::string signature = problem.Signature(current.back());
       out.evidence.push_back(EffectLabel(winner.name, winner.joint) + ": " + evidence +

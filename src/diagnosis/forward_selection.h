@@ -40,6 +40,7 @@ struct SquaredResiduals {
   std::vector<double> selection;
   std::vector<double> test;
   std::vector<std::vector<double>> selection_by_channel;  // channel x selection row, unsummed
+  std::vector<std::vector<double>> fit_by_channel;        // channel x fit row, unsummed (may be empty)
   // Per selection row, the block it lies in (numbered over every log; rows of one block
   // share it): the 25 % rule asks most blocks an effect changes to improve. Empty: one
   // block per row.
@@ -98,6 +99,12 @@ class DiagnosisProblem {
   // True when `effect`, already added, keeps its fit while the next candidates are
   // scored (the others are refitted with each candidate).
   virtual bool HeldWhileScoring(const TrialEffect& effect) const { return false; }
+  // The one channel `effect` acts on, where it is scored (its share of that channel's
+  // squared residual, its parameters against that channel's rows); -1 where it acts on
+  // several, scored on their sum. An arm joint's effect changes that joint's torque
+  // alone: scored on the sum, a wrist's delay that removes a third of the wrist's error
+  // is 1 % of an error the shoulder's noise dominates (issue 41).
+  virtual int ChannelOf(const TrialEffect& effect) const { return -1; }
 };
 
 struct SelectionResult {

@@ -44,7 +44,7 @@ NoiseRun Identify(const testing::WanderingPlant& plant) {
 }
 
 // The identified model's calibration pooled over eight unseen minutes (the validation
-// log and seven more; testing/pooled_calibration.h says why one is not enough), recorded
+// log and seven more; tests/analysis/pooled_calibration.h says why one is not enough), recorded
 // for scripts/noise-calibration-table under `name`.
 std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(const testing::WanderingPlant& plant, const NoiseRun& run,
                                                                  const std::string& name) {
