@@ -75,11 +75,13 @@ struct DiagnosisCandidate {
   std::map<std::string, double> parameters;  // model-file keys, SI units
   double fit_gap = 0;                        // metric on the fit rows with it added
   double held_out_gap = 0;                   // metric on the held-out rows with it added
-  double reduction = 0;                      // share of the round's selection-row MSE it removed
+  // share of the round's selection-row MSE it removed (of its joint's, for an effect on
+  // one arm joint: DiagnosisProblem::ChannelOf)
+  double reduction = 0;
   double t_statistic = 0;                    // of that reduction (long-run standard error)
   double p_value = 1;                        // one-sided, before the Holm correction
   bool significant = false;                  // after the Holm correction over the round
-  double information_gain = 0;               // n_eff ln(MSE before / after) - 2 k; > 0 to be added
+  double information_gain = 0;               // n_eff ln(MSE before / after) - 2 k, on the same rows; > 0 to be added
   // Selection blocks whose squared error it changed, and of those the ones it lowered:
   // the 25 % rule (a large share removed, significant or not) asks for most of them.
   int blocks_changed = 0, blocks_improved = 0;

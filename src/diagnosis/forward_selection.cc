@@ -64,6 +64,17 @@ bool HasChannel(const SquaredResiduals& before, const SquaredResiduals& after, i
   return !fit || (c < before.fit_by_channel.size() && c < after.fit_by_channel.size());
 }
 
+// True when `after` differs from `before` on no channel's selection rows but `channel`'s
+// (a joint's effect fitted alone, or refitted beside others on the same joint; a refit
+// beside a payload moves every joint).
+bool OnlyChannelChanged(const SquaredResiduals& before, const SquaredResiduals& after, int channel) {
+  if (!HasChannel(before, after, channel, false) || before.selection_by_channel.size() != after.selection_by_channel.size())
+    return false;
+  for (std::size_t c = 0; c < before.selection_by_channel.size(); ++c)
+    if (static_cast<int>(c) != channel && before.selection_by_channel[c] != after.selection_by_channel[c]) return false;
+  return true;
+}
+
 // `after` against `before` on the selection rows, summed over the channels or on
 // `channel` alone (>= 0: DiagnosisProblem::ChannelOf); `parameters` counted against the
 // effective row count of those rows (`effective_rows` for the sum).
@@ -159,7 +170,8 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
             [](const DiagnosisCandidate* a, const DiagnosisCandidate* b) { return a->reduction > b->reduction; });
   char head[256];
   std::snprintf(head, sizeof head, "it removed %s of %s squared error (t = %.1f, %s; %s)",
-                Percent(best.reduction).c_str(), own_channel ? "its joint's selection rows'" : "the selection rows'", best.t_statistic, PValue(best.p_value).c_str(),
+                Percent(best.reduction).c_str(), own_channel ? "its joint's selection rows'" : "the selection rows'",
+                best.t_statistic, PValue(best.p_value).c_str(),
                 best.significant ? ("significant after Holm's correction over " + std::to_string(tested) + " candidates").c_str()
                                  : ("a quarter and more on fit and selection rows alike, lower in " +
                                     std::to_string(best.blocks_improved) + " of the " +
@@ -193,6 +205,7 @@ struct CandidateTrial {
   // Its information gain on the rows of every channel: what candidates scored on
   // different channels compete on (a channel's own gain is larger the smaller its share).
   double rank_gain = 0;
+  bool own_channel = false;          // scored on the one channel it changed (ChannelOf)
   std::vector<TrialEffect> fitted;   // the effects with it, as fitted
 };
 
@@ -253,8 +266,12 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
         // the joint refit failed: the one-at-a-time fit stands
       }
     }
-    out.rank_gain = channel < 0 ? s.information_gain
-                                : Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows).information_gain;
+    // Scored on its joint only where it changed that joint alone.
+    const bool own = channel >= 0 && OnlyChannelChanged(*base.residuals, r, channel);
+    if (channel >= 0 && !own) s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows);
+    out.own_channel = own;
+    out.rank_gain = own ? Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows).information_gain
+                        : s.information_gain;
     c.parameters = trial.back().parameters;
     c.fit_gap = problem.Gap(Mean(r.fit));
     c.held_out_gap = problem.Gap(Mean(r.selection));
@@ -281,8 +298,8 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
   return out;
 }
 
-// The candidates that pass, by information gain over every channel (one that fails the test must not hide
-// another that passes; ties go to the earlier candidate), each marked significant or not
+// The candidates that pass, by information gain over every channel (one that fails the
+// test must not hide another that passes; ties go to the earlier candidate), each marked significant or not
 // by Holm's correction over the candidates that could be fitted: the best of many is held
 // to the family's level, not to one test's. *tested counts those.
 std::vector<std::size_t> PassingOrder(const DiagnosisOptions& options, std::vector<CandidateTrial>* trials, int* tested) {
@@ -353,12 +370,14 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
   const DiagnosisOptions& options = *base.options;
   std::size_t weakest = current->size();
   Score weakest_score;
+  bool weakest_own = false;  // scored on its joint
   for (std::size_t m = 0; m + 1 < current->size(); ++m) {
     std::vector<TrialEffect> without = *current;
     without.erase(without.begin() + static_cast<std::ptrdiff_t>(m));
     const SquaredResiduals rw = problem.Evaluate(without);
+    const int channel = problem.ChannelOf((*current)[m]);
     const Score keep = Compare(rw, *r, base.bandwidth, static_cast<int>((*current)[m].parameters.size()),
-                               EffectiveRows(rw.selection, base.bandwidth), problem.ChannelOf((*current)[m]));
+                               EffectiveRows(rw.selection, base.bandwidth), OnlyChannelChanged(rw, *r, channel) ? channel : -1);
     const bool earns = keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
                        (keep.test.p <= options.alpha ||
                         (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&
@@ -366,6 +385,7 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
     if (!earns && (weakest == current->size() || keep.test.p > weakest_score.test.p)) {
       weakest = m;
       weakest_score = keep;
+      weakest_own = OnlyChannelChanged(rw, *r, channel);
     }
   }
   if (weakest == current->size()) return;
@@ -375,7 +395,7 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
                 "error (t = %.1f, %s)",
                 base.round, EffectLabel((*current)[weakest].name, (*current)[weakest].joint).c_str(),
                 EffectLabel(winner.name, winner.joint).c_str(), Percent(weakest_score.reduction).c_str(),
-                problem.ChannelOf((*current)[weakest]) >= 0 ? "its joint's selection rows'" : "the selection rows'",
+                weakest_own ? "its joint's selection rows'" : "the selection rows'",
                 weakest_score.test.t, PValue(weakest_score.test.p).c_str());
   out->removed.push_back(why);
   current->erase(current->begin() + static_cast<std::ptrdiff_t>(weakest));
@@ -446,7 +466,7 @@ SelectionResult SelectEffects(const DiagnosisProblem& problem, const DiagnosisOp
     if (passes) {
       DiagnosisCandidate& winner = tried[best];
       winner.selected = true;
-      const std::string evidence = RoundEvidence(tried, winner, tested, problem.ChannelOf(next.back()) >= 0);
+      const std::string evidence = RoundEvidence(tried, winner, tested, trials[best].own_channel);
       current = next;
       std::string signature = problem.Signature(current.back());
       out.evidence.push_back(EffectLabel(winner.name, winner.joint) + ": " + evidence +

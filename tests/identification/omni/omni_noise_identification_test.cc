@@ -106,8 +106,8 @@ TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsI
 // is the plant's within 30 % for the translation. Measured: per_speed 1.8, forward
 // 0.059 standing and 0.167 at 1 m/s (the plant's 0.034 and 0.137), sideways 0.032 and
 // 0.090 (0.023 and 0.093). Over eight unseen minutes the 90 % ellipses hold 90-91 %;
-// the 50 % ones 54-57 %, a little wide: the spread grows linearly with speed, the
-// plant's as the square, and the likelihood trades the two shares.
+// the 50 % ones 53-57 %, a little wide: the model's spread grows linearly with speed
+// without end, the plant's stops growing at 1 m/s, and the likelihood trades the shares.
 TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
   testing::WanderingPlant plant = OffGridPlant();
   plant.noise_still = 0.25;
