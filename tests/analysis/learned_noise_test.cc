@@ -157,11 +157,11 @@ TEST(LearnedDrivingNoise, ThePredictorFileCarriesItAndTheSimulationDrawsIt) {
 
 // Fitted on the held-out 20 % of one minute, judged on eight minutes it never saw: the
 // 50 % and 90 % ellipses of the learned backend's sampled rollouts hold about their
-// share at 4, 16 and 63 frames. Measured: the 50 % ellipses hold 53/57/52 %, the 90 %
-// ones 91/93/90 % (docs/learning.md, "The learned backend's driving noise"). The fit's
+// share at 4, 16 and 63 frames. Measured: the 50 % ellipses hold 52/56/51 %, the 90 %
+// ones 91/92/90 % (docs/learning.md, "The learned backend's driving noise"). The fit's
 // 12 s hold some 50 independent stretches of the wander, so the fitted spread is
-// uncertain by about 10 %: fitted on four other minutes the 16-frame 50 % ellipse held
-// 42 to 57 % (docs/learning.md), so the test accepts 44-60 % and 86-95 %. The correlation
+// uncertain by about 10 %: fitted on this minute and three others, the 16-frame 50 %
+// ellipse held 42 to 57 % (docs/learning.md), so the test accepts 44-60 % and 86-95 %. The correlation
 // time comes out an eighth of the plant's 0.23 s: the predictor carries a slip on from
 // the frames it sees.
 TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnUnseenMinutes) {

@@ -64,12 +64,12 @@ std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(const testing::
 }
 
 // Measured: forward 0.154 m/s, sideways 0.093, turn 0.60 rad/s, 0.27 s (truth 0.137,
-// 0.093, 0.71, 0.23 s: within 12, 1, 16 and 18 %); a growth with acceleration of 0.09
-// per m/s^2 kept. Over eight unseen minutes the 50 % ellipses hold 51-53 % and the 90 %
-// ones 90-91 % at 4, 16 and 63 frames, a single minute's shares 1-5 % apart. Fitted
-// from every 16th frame instead of every 8th, the forward spread came out 0.183 (34 %
-// high) and the 90 % ellipses held 86 % on the validation minute alone, which was read
-// as heavy tails; over eight minutes that fit holds 89-92 %.
+// 0.093, 0.71, 0.23 s: within 12, 0, 16 and 18 %); a growth with acceleration of 0.09
+// per m/s^2 kept. Over eight unseen minutes the 50 % ellipses hold 51-52 % and the 90 %
+// ones 90 % at 4, 16 and 63 frames, a single minute's shares 1-5 % apart. Fitted from
+// every 16th frame instead of every 8th, the forward spread came out 0.183 (34 % high)
+// and the 90 % ellipses held 86 % on the validation minute alone, which was read as
+// heavy tails; over twelve other minutes that fit held 89-92 %.
 TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsIntervalsCalibrated) {
   const testing::WanderingPlant plant = OffGridPlant();
   const NoiseRun run = Identify(plant);
@@ -105,7 +105,7 @@ TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsI
 // with speed, which scores better on the held-out blocks than none, and which at 1 m/s
 // is the plant's within 30 % for the translation. Measured: per_speed 1.8, forward
 // 0.059 standing and 0.167 at 1 m/s (the plant's 0.034 and 0.137), sideways 0.032 and
-// 0.090 (0.023 and 0.093). Over eight unseen minutes the 90 % ellipses hold 90-91 %;
+// 0.090 (0.023 and 0.093). Over eight unseen minutes the 90 % ellipses hold 90 %;
 // the 50 % ones 53-57 %, a little wide: the model's spread grows linearly with speed
 // without end, the plant's stops growing at 1 m/s, and the likelihood trades the shares.
 TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
