@@ -100,10 +100,11 @@ class DiagnosisProblem {
   // scored (the others are refitted with each candidate).
   virtual bool HeldWhileScoring(const TrialEffect& effect) const { return false; }
   // The one channel `effect` acts on, where it is scored (its share of that channel's
-  // squared residual, its parameters against that channel's rows); -1 where it acts on
-  // several, scored on their sum. An arm joint's effect changes that joint's torque
-  // alone: scored on the sum, a wrist's delay that removes a third of the wrist's error
-  // is 1 % of an error the shoulder's noise dominates (issue 41).
+  // squared residual, its parameters against that channel's rows) wherever no other
+  // channel's residual moved with it (a refit beside a payload moves them all: then the
+  // sum); -1 where it acts on several, scored on their sum. An arm joint's effect changes
+  // that joint's torque alone: scored on the sum, a wrist's delay that removes a third of
+  // the wrist's error is 1 % of an error the shoulder's noise dominates (issue 41).
   virtual int ChannelOf(const TrialEffect& effect) const { return -1; }
 };
 
