@@ -157,6 +157,10 @@ std::string PValue(double p) {
   return buf;
 }
 
+// Whose squared error a share is of: the selection rows', or those of the one joint an
+// effect was scored on (ChannelOf).
+const char* ScoredRows(bool own_channel) { return own_channel ? "its joint's selection rows'" : "the selection rows'"; }
+
 // "it removed 64 % of the selection rows' squared error (t = 23, p < 1e-4, Holm-corrected
 // over 22 candidates), the closest alternatives coulomb_friction (joint 2) 41 % and ...".
 // `own_channel`: the winner was scored on the channel it acts on alone (ChannelOf).
@@ -170,7 +174,7 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
             [](const DiagnosisCandidate* a, const DiagnosisCandidate* b) { return a->reduction > b->reduction; });
   char head[256];
   std::snprintf(head, sizeof head, "it removed %s of %s squared error (t = %.1f, %s; %s)",
-                Percent(best.reduction).c_str(), own_channel ? "its joint's selection rows'" : "the selection rows'",
+                Percent(best.reduction).c_str(), ScoredRows(own_channel),
                 best.t_statistic, PValue(best.p_value).c_str(),
                 best.significant ? ("significant after Holm's correction over " + std::to_string(tested) + " candidates").c_str()
                                  : ("a quarter and more on fit and selection rows alike, lower in " +
@@ -376,8 +380,9 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
     without.erase(without.begin() + static_cast<std::ptrdiff_t>(m));
     const SquaredResiduals rw = problem.Evaluate(without);
     const int channel = problem.ChannelOf((*current)[m]);
+    const bool own = OnlyChannelChanged(rw, *r, channel);
     const Score keep = Compare(rw, *r, base.bandwidth, static_cast<int>((*current)[m].parameters.size()),
-                               EffectiveRows(rw.selection, base.bandwidth), OnlyChannelChanged(rw, *r, channel) ? channel : -1);
+                               EffectiveRows(rw.selection, base.bandwidth), own ? channel : -1);
     const bool earns = keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
                        (keep.test.p <= options.alpha ||
                         (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&
@@ -385,7 +390,7 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
     if (!earns && (weakest == current->size() || keep.test.p > weakest_score.test.p)) {
       weakest = m;
       weakest_score = keep;
-      weakest_own = OnlyChannelChanged(rw, *r, channel);
+      weakest_own = own;
     }
   }
   if (weakest == current->size()) return;
@@ -395,7 +400,7 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
                 "error (t = %.1f, %s)",
                 base.round, EffectLabel((*current)[weakest].name, (*current)[weakest].joint).c_str(),
                 EffectLabel(winner.name, winner.joint).c_str(), Percent(weakest_score.reduction).c_str(),
-                weakest_own ? "its joint's selection rows'" : "the selection rows'",
+                ScoredRows(weakest_own),
                 weakest_score.test.t, PValue(weakest_score.test.p).c_str());
   out->removed.push_back(why);
   current->erase(current->begin() + static_cast<std::ptrdiff_t>(weakest));

@@ -179,10 +179,7 @@ TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnUnseenMinutes) {
   ASSERT_EQ(c.size(), 3u);
   SCOPED_TRACE(FormatCalibrationTable(minutes.front()));
   // The table of docs/learning.md (scripts/noise-calibration-table prints it).
-  RecordProperty("table_row", "{\"noise\": [" + std::to_string(fit.noise.sd[0]) + ", " + std::to_string(fit.noise.sd[1]) +
-                                  ", " + std::to_string(fit.noise.sd[2]) + ", " + std::to_string(fit.noise.correlation_time) +
-                                  ", " + std::to_string(fit.noise.per_speed) + "], \"minutes\": " +
-                                  std::to_string(minutes.size()) + ", \"horizons\": " + testing::PooledCalibrationJson(c) + "}");
+  RecordProperty("table_row", testing::NoiseTableRow(fit.noise, {}, static_cast<int>(minutes.size()), c));
   for (const testing::PooledCalibration& p : c) {
     const OmniCalibration& h = p.pooled;
     EXPECT_GT(h.rows, 4000) << h.frames;

@@ -11,6 +11,7 @@
 
 #include "analysis/omni_calibration.h"
 #include "io/printf_number.h"
+#include "robots/omni/omni_model.h"
 
 namespace twinsim::testing {
 
@@ -72,6 +73,22 @@ inline std::string PooledCalibrationJson(const std::vector<PooledCalibration>& p
     out += "]";
   }
   return out + "]";
+}
+
+// The row scripts/noise-calibration-table prints a table from: the fitted `noise`
+// (spreads, correlation time, growths), the plant's `truth` where known ({} otherwise:
+// spreads and correlation time), how many minutes were pooled, and PooledCalibrationJson.
+inline std::string NoiseTableRow(const OmniDrivingNoise& noise, const std::vector<double>& truth, int minutes,
+                                 const std::vector<PooledCalibration>& pooled) {
+  auto list = [](const std::vector<double>& v) {
+    std::string out = "[";
+    for (std::size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + PrintfNumber("%.6g", v[i]);
+    return out + "]";
+  };
+  std::string row = "{\"noise\": " + list({noise.sd[0], noise.sd[1], noise.sd[2], noise.correlation_time, noise.per_speed,
+                                            noise.per_acceleration});
+  if (!truth.empty()) row += ", \"truth\": " + list(truth);
+  return row + ", \"minutes\": " + std::to_string(minutes) + ", \"horizons\": " + PooledCalibrationJson(pooled) + "}";
 }
 
 }  // namespace twinsim::testing

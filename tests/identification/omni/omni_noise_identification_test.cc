@@ -52,14 +52,9 @@ std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(const testing::
   for (int seed : {58, 100, 101, 102, 103, 104, 105, 106})
     minutes.push_back(CalibrateOmniLog(run.model, testing::RecordWanderingPlant(plant, 60, seed).log, "analytic"));
   const std::vector<testing::PooledCalibration> pooled = testing::PoolCalibrations(minutes);
-  const OmniDrivingNoise& n = run.model.driving_noise;
-  ::testing::Test::RecordProperty(name, "{\"noise\": [" + std::to_string(n.sd[0]) + ", " + std::to_string(n.sd[1]) + ", " +
-                           std::to_string(n.sd[2]) + ", " + std::to_string(n.correlation_time) + ", " +
-                           std::to_string(n.per_speed) + ", " + std::to_string(n.per_acceleration) +
-                           "], \"truth\": [" + std::to_string(plant.noise_sd[0]) + ", " + std::to_string(plant.noise_sd[1]) +
-                           ", " + std::to_string(plant.noise_sd[2]) + ", " + std::to_string(plant.noise_correlation) +
-                           "], \"minutes\": " + std::to_string(minutes.size()) +
-                           ", \"horizons\": " + testing::PooledCalibrationJson(pooled) + "}");
+  const std::vector<double> truth{plant.noise_sd[0], plant.noise_sd[1], plant.noise_sd[2], plant.noise_correlation};
+  ::testing::Test::RecordProperty(name, testing::NoiseTableRow(run.model.driving_noise, truth,
+                                                               static_cast<int>(minutes.size()), pooled));
   return pooled;
 }
 
