@@ -8,9 +8,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
+#include <string>
+
 #include "analysis/pooled_calibration.h"
 #include "identification/omni/omni_identification.h"
 #include "estimation/wandering_plant.h"
+#include "io/printf_number.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -34,13 +39,25 @@ struct NoiseRun {
   OmniModel model;
 };
 
-// Identified on 60 s, calibrated on another 60 s of the same robot.
-NoiseRun Identify(const testing::WanderingPlant& plant) {
+// Identified on 60 s (the minute drawn with `fit_seed`), calibrated on another 60 s of
+// the same robot.
+NoiseRun Identify(const testing::WanderingPlant& plant, std::uint64_t fit_seed = 57) {
   NoiseRun run;
-  const OmniLog fit = testing::RecordWanderingPlant(plant, 60, 57).log;
+  const OmniLog fit = testing::RecordWanderingPlant(plant, 60, fit_seed).log;
   const OmniLog validation = testing::RecordWanderingPlant(plant, 60, 58).log;
   run.report = IdentifyOmni(testing::Omni4(), {fit}, {validation}, OmniIdentificationOptions{}, &run.model);
   return run;
+}
+
+// The standard errors identify reports for the noise, as JSON for
+// scripts/noise-calibration-table (null where the blocks do not determine one).
+std::string StandardErrorsJson(const OmniIdentificationReport& r) {
+  std::string out;
+  for (const OmniNoiseParameter& p : r.noise.parameters) {
+    out += (out.empty() ? "{\"" : ", \"") + p.name +
+           "\": " + (std::isfinite(p.standard_error) ? PrintfNumber("%.4g", p.standard_error) : std::string("null"));
+  }
+  return out + "}";
 }
 
 // The identified model's calibration pooled over eight unseen minutes (the validation
@@ -85,6 +102,7 @@ TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsI
   ASSERT_EQ(r.calibration.size(), 3u);
   for (const OmniCalibration& c : r.calibration) EXPECT_GT(c.rows, 1000) << c.frames;
   // The issue's bands, on eight minutes the fit never saw.
+  ::testing::Test::RecordProperty("same_spread_errors", StandardErrorsJson(r));
   for (const testing::PooledCalibration& p : CalibrateOnUnseenMinutes(plant, run, "same_spread")) {
     EXPECT_GT(p.pooled.rows, 8000) << p.pooled.frames;
     EXPECT_NEAR(p.pooled.position_50, 0.5, 0.05) << p.pooled.frames;
@@ -122,6 +140,25 @@ TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
     EXPECT_GT(p.pooled.position_50, 0.45) << p.pooled.frames;
     EXPECT_LT(p.pooled.position_50, 0.60) << p.pooled.frames;
     EXPECT_NEAR(p.pooled.position_90, 0.9, 0.03) << p.pooled.frames;
+  }
+}
+
+// The same robot fitted on other minutes (run by `scripts/noise-calibration-table
+// minutes`, some 8 minutes; not in the suites): how far one minute's fit strays, beside
+// the standard errors identify reports for it. Measured (2026-11-29): turn 0.723 +- 0.040
+// and 0.707 +- 0.037 rad/s, correlation time 0.222 +- 0.016 and 0.201 +- 0.017 s, where
+// seed 57's fit found 0.598 +- 0.035 and 0.271 +- 0.021 (truth 0.71, 0.23): the minutes'
+// fits differ by more than three of their standard errors. Headings then hold 89-90 % in
+// the 90 % intervals at 4 frames (seed 57's fit 85 %), positions 83-84 % at 63 frames
+// (seed 57's fit 90 %). Nothing is asserted on the numbers: it measures.
+TEST(DrivingNoiseIdentification, DISABLED_FittedOnOtherMinutes) {
+  const testing::WanderingPlant plant = OffGridPlant();
+  for (std::uint64_t seed : {61, 65}) {
+    const NoiseRun run = Identify(plant, seed);
+    const std::string name = "fit_seed_" + std::to_string(seed);
+    ::testing::Test::RecordProperty(name + "_errors", StandardErrorsJson(run.report));
+    const std::vector<testing::PooledCalibration> pooled = CalibrateOnUnseenMinutes(plant, run, name);
+    EXPECT_EQ(pooled.size(), 3u);
   }
 }
 
