@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "analysis/pooled_calibration.h"
 #include "identification/omni/omni_identification.h"
@@ -39,14 +40,19 @@ struct NoiseRun {
   OmniModel model;
 };
 
-// Identified on 60 s (the minute drawn with `fit_seed`), calibrated on another 60 s of
-// the same robot.
-NoiseRun Identify(const testing::WanderingPlant& plant, std::uint64_t fit_seed = 57) {
+// Identified on a minute of the robot per seed, calibrated on another minute (seed 58).
+NoiseRun Identify(const testing::WanderingPlant& plant, const std::vector<std::uint64_t>& fit_seeds) {
   NoiseRun run;
-  const OmniLog fit = testing::RecordWanderingPlant(plant, 60, fit_seed).log;
+  std::vector<OmniLog> fit;
+  for (std::uint64_t seed : fit_seeds) fit.push_back(testing::RecordWanderingPlant(plant, 60, seed).log);
   const OmniLog validation = testing::RecordWanderingPlant(plant, 60, 58).log;
-  run.report = IdentifyOmni(testing::Omni4(), {fit}, {validation}, OmniIdentificationOptions{}, &run.model);
+  run.report = IdentifyOmni(testing::Omni4(), fit, {validation}, OmniIdentificationOptions{}, &run.model);
   return run;
+}
+
+// Identified on the minute drawn with `fit_seed`.
+NoiseRun Identify(const testing::WanderingPlant& plant, std::uint64_t fit_seed = 57) {
+  return Identify(plant, std::vector<std::uint64_t>{fit_seed});
 }
 
 // The standard errors identify reports for the noise, as JSON for
@@ -81,7 +87,9 @@ std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(const testing::
 // ones 90 % at 4, 16 and 63 frames, a single minute's shares 1-5 % apart. Fitted from
 // every 16th frame instead of every 8th, the forward spread came out 0.183 (34 % high)
 // and the 90 % ellipses held 86 % on the validation minute alone, which was read as
-// heavy tails; over twelve other minutes that fit held 89-92 %.
+// heavy tails; over twelve other minutes that fit held 89-92 %. The bands hold for this
+// fit, not for every minute's: fitted on others (DISABLED_FittedOnOtherMinutes below) the
+// 90 % ellipses hold 84-86 % at 16 and 63 frames (docs/identification.md).
 TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsIntervalsCalibrated) {
   const testing::WanderingPlant plant = OffGridPlant();
   const NoiseRun run = Identify(plant);
@@ -143,19 +151,22 @@ TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
   }
 }
 
-// The same robot fitted on other minutes (run by `scripts/noise-calibration-table
-// minutes`, some 8 minutes; not in the suites): how far one minute's fit strays, beside
-// the standard errors identify reports for it. Measured (2026-11-29): turn 0.723 +- 0.040
-// and 0.707 +- 0.037 rad/s, correlation time 0.222 +- 0.016 and 0.201 +- 0.017 s, where
-// seed 57's fit found 0.598 +- 0.035 and 0.271 +- 0.021 (truth 0.71, 0.23): the minutes'
-// fits differ by more than three of their standard errors. Headings then hold 89-90 % in
-// the 90 % intervals at 4 frames (seed 57's fit 85 %), positions 83-84 % at 63 frames
-// (seed 57's fit 90 %). Nothing is asserted on the numbers: it measures.
+// The same robot fitted on two other minutes and on three (run by
+// `scripts/noise-calibration-table minutes`, some 10 minutes; not in the suites): how far
+// one minute's fit strays, beside the standard errors identify reports for it. Measured
+// (2026-11-29): turn 0.723 +- 0.040 and 0.707 +- 0.037 rad/s, correlation time 0.222 +-
+// 0.016 and 0.201 +- 0.017 s, where seed 57's fit found 0.598 +- 0.035 and 0.271 +- 0.021
+// (truth 0.71, 0.23): the minutes' fits differ by more than three of their standard
+// errors. Headings then hold 89-90 % in the 90 % intervals at 4 frames (seed 57's fit
+// 85 %), positions 83-84 % at 63 frames (seed 57's fit 90 %). On three minutes: turn
+// 0.709, 0.223 s, translation 6 and 9 % low; headings 89-90 %, positions 89.5 / 85.6 /
+// 83.9 % at 4 / 16 / 63 frames. Nothing is asserted on the numbers: it measures.
 TEST(DrivingNoiseIdentification, DISABLED_FittedOnOtherMinutes) {
   const testing::WanderingPlant plant = OffGridPlant();
-  for (std::uint64_t seed : {61, 65}) {
-    const NoiseRun run = Identify(plant, seed);
-    const std::string name = "fit_seed_" + std::to_string(seed);
+  const std::vector<std::vector<std::uint64_t>> fits{{61}, {65}, {61, 65, 71}};
+  for (const std::vector<std::uint64_t>& seeds : fits) {
+    const NoiseRun run = Identify(plant, seeds);
+    const std::string name = seeds.size() == 1 ? "fit_seed_" + std::to_string(seeds[0]) : "fit_three_minutes";
     ::testing::Test::RecordProperty(name + "_errors", StandardErrorsJson(run.report));
     const std::vector<testing::PooledCalibration> pooled = CalibrateOnUnseenMinutes(plant, run, name);
     EXPECT_EQ(pooled.size(), 3u);
