@@ -109,8 +109,8 @@ TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsI
   EXPECT_TRUE(run.model.driving_noise.simulated);
   ASSERT_EQ(r.calibration.size(), 3u);
   for (const OmniCalibration& c : r.calibration) EXPECT_GT(c.rows, 1000) << c.frames;
-  // The bands, on eight minutes the fit never saw.
   ::testing::Test::RecordProperty("same_spread_errors", StandardErrorsJson(r));
+  // The bands, on eight minutes the fit never saw.
   for (const testing::PooledCalibration& p : CalibrateOnUnseenMinutes(plant, run, "same_spread")) {
     EXPECT_GT(p.pooled.rows, 8000) << p.pooled.frames;
     EXPECT_NEAR(p.pooled.position_50, 0.5, 0.05) << p.pooled.frames;
