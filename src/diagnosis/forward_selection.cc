@@ -258,21 +258,21 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
       if (m + 1 == trial.size() || !problem.HeldWhileScoring(trial[m])) refit.push_back(static_cast<int>(m));
       shares = shares || (m + 1 < trial.size() && trial.back().joint >= 0 && trial[m].joint == trial.back().joint);
     }
+    bool refitted = false;
     if ((s.reduction > 0 || shares) && refit.size() > 1) {
       try {
         std::vector<TrialEffect> joint = problem.Fit(trial, refit);
         SquaredResiduals rj = problem.Evaluate(joint);
-        if (Mean(rj.fit) < Mean(r.fit)) {
-          trial = std::move(joint), r = std::move(rj);
-          s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows, channel);
-        }
+        if (Mean(rj.fit) < Mean(r.fit)) trial = std::move(joint), r = std::move(rj), refitted = true;
       } catch (const std::exception&) {
         // the joint refit failed: the one-at-a-time fit stands
       }
     }
-    // Scored on its joint only where it changed that joint alone.
+    // Scored on its joint only where it changed that joint alone; scored again only where
+    // the refit moved it or the score above was its joint's and may not be.
     const bool own = channel >= 0 && OnlyChannelChanged(*base.residuals, r, channel);
-    if (channel >= 0 && !own) s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows);
+    if (refitted || (channel >= 0 && !own))
+      s = Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows, own ? channel : -1);
     out.own_channel = own;
     out.rank_gain = own ? Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows).information_gain
                         : s.information_gain;
