@@ -166,14 +166,17 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     if (!observer.started()) continue;
     const int since = f - start_frame - kWarmUpFrames;
     if (stretch || since < 0 || !options.OnStride(f, since)) continue;
-    // The rows this start predicts: K frames on, and each shorter horizon's.
-    auto target = row_of_frame.find(f + k);
+    const int reach = options.reach ? std::min(k, options.reach(f)) : k;
+    if (reach <= 0) continue;
+    // The rows this start predicts: K frames on, and each shorter horizon's (within reach).
+    auto target = reach == k ? row_of_frame.find(f + k) : row_of_frame.end();
     bool any = target != row_of_frame.end();
-    for (int h : options.also) any = any || row_of_frame.count(f + h) > 0;
+    for (int h : options.also) any = any || (h <= reach && row_of_frame.count(f + h) > 0);
     if (!any) continue;
-    const OmniPrediction prediction = observer.PredictAhead(k, planned(f, f + k), with_covariance);
+    const OmniPrediction prediction = observer.PredictAhead(reach, planned(f, f + reach), with_covariance);
     const double shift = unwrap_shift(row);
     for (std::size_t a = 0; a < options.also.size(); ++a) {
+      if (options.also[a] > reach) continue;
       auto at = row_of_frame.find(f + options.also[a]);
       if (at != row_of_frame.end()) PutPrediction(prediction, options.also[a], at->second, shift, check, &out->also[a]);
     }
@@ -364,7 +367,7 @@ void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOpt
     auto target = tl.row_of_frame.find(f + k);
     const int since = f - first->first - kWarmUpFrames;
     if (!stretch && measured != tl.row_of_frame.end() && target != tl.row_of_frame.end() && since >= 0 &&
-        options.OnStride(f, since)) {
+        options.OnStride(f, since) && (!options.reach || options.reach(f) > 0)) {
       const OmniBackendState saved = backend.Save();
       // Keep theta on the log's unwrapped branch.
       const double from = log.rows[measured->second].pose.theta;

@@ -50,6 +50,11 @@ struct OmniReplayOptions {
   // the model's delay for the tracker); a frame index, the same frames for every model
   // (scores that compare models on the same rows).
   int stride_origin = -1;
+  // Where set, how many frames ahead the prediction from each frame on the stride (its
+  // index from the log's first frame) must reach: none where 0, only the horizons up to
+  // it (K and `also`) where less than K. Fits that score some blocks only predict nothing
+  // they throw away. The tracker predicts all K wherever it is not 0.
+  std::function<int(int)> reach;
   // How the start state is estimated: "observer" or "tracker" (see above). The learned
   // backend always uses the tracker.
   std::string state = "observer";

@@ -1012,7 +1012,9 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
     model->driving_noise.simulated = true;
   }
-  report->calibration = CalibrateOnBlocks(*model, views, noise_options);
+  // A noise fitted on the held-out blocks is calibrated there only across the halves.
+  report->calibration =
+      CalibrateOnBlocks(*model, views, noise_options, report->noise.kept ? &report->noise.crossed : nullptr);
 }
 
 // The report's parameter table, the delay first, each with its standard error or why it

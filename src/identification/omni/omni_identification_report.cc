@@ -252,7 +252,10 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
     }
   }
   if (!r.calibration.empty()) {
-    s << "calibration of the predictions (" << (r.validation.empty() ? "held-out blocks" : "validation logs")
+    s << "calibration of the predictions ("
+      << (!r.validation.empty() ? "validation logs"
+          : r.noise.kept        ? "held-out blocks, each half with the noise fitted on the other"
+                                : "held-out blocks")
       << "; energy score against a constant spread):\n"
       << FormatCalibrationTable(r.calibration);
   }
@@ -314,9 +317,11 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   if (r.noise_identified) {
     h << "<h2>Driving noise</h2>\n<p>How far and how long the robot wanders from what its wheels do, with the "
          "camera's noise and the model's process noise: identified by the likelihood of the predictions 4, 16 and 63 "
-         "frames ahead on the fit blocks, "
-      << (r.noise.kept ? "kept: the held-out blocks score it better than the prediction-error fit's (log score "
-                       : "not kept: the held-out blocks score it worse than the prediction-error fit's (log score ")
+         "frames ahead on the held-out blocks (rows the response was not fitted on), "
+      << (r.noise.kept ? "kept: fitted on each half of those blocks, it scores the other half better than the "
+                         "prediction-error fit's noise (log score "
+                       : "not kept: fitted on each half of those blocks, it scores the other half worse than the "
+                         "prediction-error fit's noise (log score ")
       << Number(r.noise.held_out_before) << " &rarr; " << Number(r.noise.held_out_after)
       << " nats per row). The identified model draws its noise in <code>run</code> and <code>serve</code> "
          "(<code>driving_noise.simulated</code>; <code>--driving-noise off</code> turns it off)."
@@ -331,7 +336,9 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   }
   if (!r.calibration.empty()) {
     h << "<h2>Calibration</h2>\n<p>The identified model's predictive distribution on the "
-      << (r.validation.empty() ? "held-out blocks" : "validation logs")
+      << (!r.validation.empty() ? "validation logs"
+          : r.noise.kept        ? "held-out blocks (each half with the noise fitted on the other)"
+                                : "held-out blocks")
       << ": the share of measured positions inside its central 50 % and 90 % ellipses (and of headings inside the "
          "intervals), which a calibrated model holds at 50 % and 90 %; the energy score of the position beside the "
          "same mean with one round spread per horizon (fitted on the fit blocks), lower is better.</p>\n"

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 
 #include "analysis/held_out_blocks.h"
 #include "analysis/omni_replay.h"
@@ -71,27 +72,51 @@ struct HorizonRows {
 
 // Which rows Collect gathers: the fit blocks'; the held-out blocks' (never a validation
 // log's: they choose); or the rows that report, the validation logs' where there are
-// any, else the held-out blocks'.
+// any, else the held-out blocks'. With `blocks`, only rows that start and end in one of
+// those blocks.
 enum class Rows { kFit, kHeldOutBlocks, kReport };
+struct RowSelection {
+  Rows rows = Rows::kFit;
+  const std::set<int>* blocks = nullptr;  // block numbers; nullptr: every block of the kind
+};
 
 // Replays every stretch of the kind once (in parallel) at the longest horizon, the
-// others on the way, and gathers the rows per horizon in stretch order.
+// others on the way, predicting only from frames the selection scores, and gathers the
+// rows per horizon in stretch order.
 std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
-                                 const OmniNoiseOptions& options, Rows rows) {
+                                 const OmniNoiseOptions& options, RowSelection selection) {
   bool any_validation = false;
   for (const OmniBlockedStretch& s : stretches) any_validation = any_validation || s.validation;
-  const bool held_out = rows != Rows::kFit;
-  const bool validation_only = rows == Rows::kReport && any_validation;
+  const bool held_out = selection.rows != Rows::kFit;
+  const bool validation_only = selection.rows == Rows::kReport && any_validation;
   const int longest = *std::max_element(options.horizons.begin(), options.horizons.end());
   std::vector<std::vector<HorizonRows>> per(stretches.size(), std::vector<HorizonRows>(options.horizons.size()));
   ParallelFor(static_cast<int>(stretches.size()), options.threads, [&](int k) {
     const OmniBlockedStretch& s = stretches[static_cast<std::size_t>(k)];
     if (s.validation != validation_only) return;
+    auto in_selection = [&](std::size_t row) {
+      return row >= s.score_from && static_cast<bool>((*s.held)[row]) == held_out &&
+             (!selection.blocks || selection.blocks->count((*s.block)[row]) > 0);
+    };
+    // The frames in the selection; a prediction from one reaches the longest horizon that
+    // ends in one too.
+    const int frames = s.log->FrameIndex(s.log->rows.size() - 1) + 1;
+    std::vector<char> selected(static_cast<std::size_t>(frames), 0);
+    for (std::size_t row = 0; row < s.log->rows.size(); ++row)
+      selected[static_cast<std::size_t>(s.log->FrameIndex(row))] = in_selection(row);
+    auto is_selected = [&](int frame) { return frame >= 0 && frame < frames && selected[static_cast<std::size_t>(frame)]; };
     OmniReplayOptions o;
     o.backend = options.backend;
     o.horizon = longest;
     o.stride = options.stride;
     o.stride_origin = 0;
+    o.reach = [&](int frame) {
+      int reach = 0;
+      if (!is_selected(frame)) return reach;
+      for (int h : options.horizons)
+        if (is_selected(frame + h)) reach = std::max(reach, h);
+      return reach;
+    };
     o.covariance = true;
     for (int h : options.horizons)
       if (h != longest) o.also.push_back(h);
@@ -103,7 +128,9 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
       HorizonRows& out = per[static_cast<std::size_t>(k)][q];
       for (std::size_t row = 0; row < s.log->rows.size(); ++row) {
         if (!PredictedAndMeasured(*s.log, at, row) || s.log->FrameIndex(row) < warm + h) continue;
-        if (!ScoredInBlocks(s, row, held_out, h)) continue;
+        if (!ScoredInBlocks(s, row, held_out, h) || !in_selection(row)) continue;
+        // The start lies in the selection's blocks too (ScoredInBlocks found it of the kind).
+        if (selection.blocks && !is_selected(s.log->FrameIndex(row) - h)) continue;
         out.rows.push_back(PredictiveErrorAt(*s.log, at, row));
         out.block.push_back((*s.block)[row]);
       }
@@ -227,6 +254,101 @@ std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const Noise
   return out;
 }
 
+// The noise fitted on some held-out blocks: the same spread at every speed, then with the
+// two growths as well, from there (each search within options.max_evaluations).
+struct NoiseFit {
+  NoiseValues flat{}, grow{};
+  double flat_cost = 0, grow_cost = 0;
+  bool grows() const { return grow[kPerSpeed] > 0 || grow[kPerAcceleration] > 0; }
+};
+
+// The held-out blocks' rows (those of `blocks` only, where given) with the noise `v`.
+std::vector<HorizonRows> CollectHeldOut(const OmniModel& model, const NoiseValues& v,
+                                        const std::vector<OmniBlockedStretch>& stretches, const OmniNoiseOptions& options,
+                                        const std::set<int>* blocks) {
+  try {
+    return Collect(WithNoise(model, v), stretches, options, {Rows::kHeldOutBlocks, blocks});
+  } catch (const CheckFailed&) {
+    return {};  // diverged: no rows, an infinite cost
+  }
+}
+
+using CollectNoise = std::function<std::vector<HorizonRows>(const NoiseValues&, const std::set<int>*)>;
+
+NoiseFit FitNoise(const CollectNoise& collect, const NoiseValues& start, const std::set<int>* blocks,
+                  const OmniNoiseOptions& options, int* evaluations) {
+  const std::function<double(const NoiseValues&)> cost = [&](const NoiseValues& x) { return Cost(collect(x, blocks)); };
+  NoiseFit f;
+  f.flat_cost = cost(start);
+  ++*evaluations;
+  int used = 1;
+  f.flat = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, options.max_evaluations, &f.flat_cost, &used);
+  f.grow_cost = f.flat_cost;
+  *evaluations += used - 1;
+  used = 0;
+  f.grow = PatternSearch<NoiseValues>(cost, Clamped, f.flat, kNoiseParams, options.max_evaluations, &f.grow_cost, &used);
+  *evaluations += used;
+  return f;
+}
+
+// The held-out blocks (of the logs that are not wholly held out) in two halves, every
+// other block in time order of each log.
+std::array<std::set<int>, 2> HeldOutHalves(const std::vector<OmniBlockedStretch>& stretches) {
+  std::array<std::set<int>, 2> halves;
+  for (const OmniBlockedStretch& s : stretches) {
+    if (s.validation) continue;
+    std::vector<int> seen;
+    for (std::size_t row = s.score_from; row < s.log->rows.size(); ++row) {
+      const int b = (*s.block)[row];
+      if ((*s.held)[row] && std::find(seen.begin(), seen.end(), b) == seen.end()) seen.push_back(b);
+    }
+    for (std::size_t k = 0; k < seen.size(); ++k) halves[k % 2].insert(seen[k]);
+  }
+  return halves;
+}
+
+// The noise fitted on every held-out block (first) and on each half, side by side (each
+// replays its logs in turn).
+std::array<NoiseFit, 3> FitAllAndHalves(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                        const OmniNoiseOptions& options, const NoiseValues& start,
+                                        const std::array<std::set<int>, 2>& halves, int* evaluations) {
+  std::array<NoiseFit, 3> fits;
+  std::array<int, 3> used{};
+  ParallelFor(3, options.threads, [&](int k) {
+    const std::set<int>* blocks = k == 0 ? nullptr : &halves[static_cast<std::size_t>(k - 1)];
+    OmniNoiseOptions one = options;
+    one.threads = 1;
+    const CollectNoise collect = [&](const NoiseValues& v, const std::set<int>* b) {
+      return CollectHeldOut(model, v, stretches, one, b);
+    };
+    fits[static_cast<std::size_t>(k)] = FitNoise(collect, start, blocks, one, &used[static_cast<std::size_t>(k)]);
+  });
+  for (int u : used) *evaluations += u;
+  return fits;
+}
+
+// Each half's fits scored on the other half, averaged over the halves: rows that neither
+// the response nor the noise was fitted on. `grow` is `flat` where a half's growth
+// search found none.
+struct CrossedScores {
+  double before = 0, flat = 0, grow = 0;
+};
+
+CrossedScores ScoreCrossed(const CollectNoise& collect, const NoiseValues& start, const std::array<NoiseFit, 3>& fits,
+                           const std::array<std::set<int>, 2>& halves, int* evaluations) {
+  CrossedScores c;
+  for (int k = 0; k < 2; ++k) {
+    const std::set<int>* other = &halves[static_cast<std::size_t>(1 - k)];
+    const NoiseFit& f = fits[static_cast<std::size_t>(1 + k)];
+    const double flat = Cost(collect(f.flat, other));
+    c.before += Cost(collect(start, other)) / 2;
+    c.flat += flat / 2;
+    c.grow += (f.grows() ? Cost(collect(f.grow, other)) : flat) / 2;
+    *evaluations += 2 + f.grows();
+  }
+  return c;
+}
+
 }  // namespace
 
 bool ScoredInBlocks(const OmniBlockedStretch& s, std::size_t i, bool held_out, int horizon) {
@@ -257,77 +379,82 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   OmniNoiseIdentification out;
   out.model = model;
   const NoiseValues start = Coordinates(model);
-  // The noise is chosen on the held-out blocks; validation logs only report.
-  auto collect = [&](const NoiseValues& v, bool held_out) {
-    try {
-      return Collect(WithNoise(model, v), stretches, options, held_out ? Rows::kHeldOutBlocks : Rows::kFit);
-    } catch (const CheckFailed&) {
-      return std::vector<HorizonRows>{};  // diverged: no rows, an infinite cost
-    }
+  // The noise is fitted on the held-out blocks, rows the response never saw; validation
+  // logs only report.
+  const CollectNoise collect = [&](const NoiseValues& v, const std::set<int>* blocks) {
+    return CollectHeldOut(model, v, stretches, options, blocks);
   };
-  auto fit_rows = [&](const NoiseValues& v) { return collect(v, false); };
-  const std::vector<HorizonRows> first = fit_rows(start);
+  const std::vector<HorizonRows> first = collect(start, nullptr);
   out.fit_rows = CountRows(first);
-  if (out.fit_rows == 0) throw InputError("the logs' fit blocks hold no predictions to identify the driving noise on");
+  if (out.fit_rows == 0) {
+    out.note = "no held-out rows to fit the noise on: the prediction-error fit's noise is kept";
+    NoiseValues none;
+    none.fill(std::numeric_limits<double>::quiet_NaN());
+    out.parameters = Parameters(start, start, none);
+    return out;
+  }
   out.fit_before = Cost(first);
   int evaluations = 1;
-
-  auto fit_cost = [&](const NoiseValues& x) { return Cost(fit_rows(x)); };
-  double flat_cost = out.fit_before;
-  // First the same spread at every speed, then with the two growths as well, from there.
-  const NoiseValues flat =
-      PatternSearch<NoiseValues>(fit_cost, Clamped, start, kPerSpeed, evaluations + options.max_evaluations, &flat_cost, &evaluations);
-  double grow_cost = flat_cost;
-  const NoiseValues grow =
-      PatternSearch<NoiseValues>(fit_cost, Clamped, flat, kNoiseParams, evaluations + options.max_evaluations, &grow_cost, &evaluations);
-
-  // The growth with speed only where the held-out blocks score it better than none.
-  NoiseValues v = flat;
-  out.fit_after = flat_cost;
-  std::vector<HorizonRows> held_after = collect(flat, true);
-  if (grow[kPerSpeed] > 0 || grow[kPerAcceleration] > 0) {
-    std::vector<HorizonRows> held_grow = collect(grow, true);
-    evaluations += 2;
-    if (Cost(held_grow) < Cost(held_after)) {
-      v = grow;
-      out.fit_after = grow_cost;
-      held_after = std::move(held_grow);
-    } else {
-      out.growth_note = "a spread growing with speed (" +
-                        PrintfNumber("%.4g", FromCoordinate(kPerSpeed, grow[kPerSpeed])) + " per m/s) and acceleration (" +
-                        PrintfNumber("%.4g", FromCoordinate(kPerAcceleration, grow[kPerAcceleration])) +
-                        " per m/s^2) fitted the fit blocks better but scored worse on the held-out ones: none kept";
-    }
+  const std::array<std::set<int>, 2> halves = HeldOutHalves(stretches);
+  const std::array<NoiseFit, 3> fits = FitAllAndHalves(model, stretches, options, start, halves, &evaluations);
+  const CrossedScores crossed = ScoreCrossed(collect, start, fits, halves, &evaluations);
+  const bool growth = fits[0].grows() && crossed.grow < crossed.flat;
+  if (fits[0].grows() && !growth) {
+    out.growth_note = "a spread growing with speed (" +
+                      PrintfNumber("%.4g", FromCoordinate(kPerSpeed, fits[0].grow[kPerSpeed])) + " per m/s) and acceleration (" +
+                      PrintfNumber("%.4g", FromCoordinate(kPerAcceleration, fits[0].grow[kPerAcceleration])) +
+                      " per m/s^2) fitted better but each half of the held-out blocks scored the other half's worse: "
+                      "none kept";
   }
+  const NoiseValues v = growth ? fits[0].grow : fits[0].flat;
+  out.fit_after = growth ? fits[0].grow_cost : fits[0].flat_cost;
   std::vector<int> free;
   for (int i = 0; i < kNoiseParams; ++i)
     if (!IsGrowth(i) || v[i] > 0) free.push_back(i);  // no growth: not estimated, no error
-  const NoiseValues se = StandardErrors(fit_rows, v, out.fit_after, free, &evaluations);
+  const NoiseValues se =
+      StandardErrors([&](const NoiseValues& x) { return collect(x, nullptr); }, v, out.fit_after, free, &evaluations);
   out.evaluations = evaluations;
-  const std::vector<HorizonRows> held_before = collect(start, true);
-  out.held_out_rows = CountRows(held_after);
-  out.held_out_before = Cost(held_before);
-  out.held_out_after = Cost(held_after);
-  out.kept = out.held_out_rows > 0 && out.held_out_after < out.held_out_before;
+  out.held_out_rows = out.fit_rows;
+  out.held_out_before = crossed.before;
+  out.held_out_after = growth ? crossed.grow : crossed.flat;
+  out.kept = out.held_out_after < out.held_out_before;
   out.model = WithNoise(model, v);
   out.parameters = Parameters(start, v, se);
+  for (int k = 0; k < 2; ++k) {
+    const NoiseFit& f = fits[static_cast<std::size_t>(1 + k)];
+    out.crossed[static_cast<std::size_t>(k)].model = WithNoise(model, growth ? f.grow : f.flat);
+    out.crossed[static_cast<std::size_t>(k)].blocks = halves[static_cast<std::size_t>(k)];
+  }
   if (!out.kept) {
     out.model = model;
-    out.note = out.held_out_rows == 0
-                   ? "no held-out rows to check the noise on: the prediction-error fit's noise is kept"
-                   : "the noise fitted for predictions ahead scored worse on the held-out blocks than the "
-                     "prediction-error fit's, which is kept";
+    out.note = "the noise fitted on each half of the held-out blocks scored the other half worse than the "
+               "prediction-error fit's, which is kept";
   }
   return out;
 }
 
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
-                                               const OmniNoiseOptions& options) {
+                                               const OmniNoiseOptions& options,
+                                               const std::array<OmniCrossedNoise, 2>* crossed) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   OmniNoiseOptions scoring = options;
   scoring.stride = options.score_stride;
-  const std::vector<HorizonRows> fit = Collect(model, stretches, scoring, Rows::kFit);
-  const std::vector<HorizonRows> held = Collect(model, stretches, scoring, Rows::kReport);
+  bool any_validation = false;
+  for (const OmniBlockedStretch& s : stretches) any_validation = any_validation || s.validation;
+  const std::vector<HorizonRows> fit = Collect(model, stretches, scoring, {Rows::kFit});
+  std::vector<HorizonRows> held;
+  if (crossed && !any_validation) {
+    held.resize(options.horizons.size());
+    for (int k = 0; k < 2; ++k) {
+      const OmniCrossedNoise& other = (*crossed)[static_cast<std::size_t>(1 - k)];
+      const std::vector<HorizonRows> half =
+          Collect(other.model, stretches, scoring, {Rows::kReport, &(*crossed)[static_cast<std::size_t>(k)].blocks});
+      for (std::size_t q = 0; q < held.size(); ++q)
+        held[q].rows.insert(held[q].rows.end(), half[q].rows.begin(), half[q].rows.end());
+    }
+  } else {
+    held = Collect(model, stretches, scoring, {Rows::kReport});
+  }
   const double period = stretches.empty() ? 0 : stretches.front().log->frame_period;
   std::vector<OmniCalibration> out;
   for (std::size_t q = 0; q < options.horizons.size(); ++q) {
