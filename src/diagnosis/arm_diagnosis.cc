@@ -371,6 +371,10 @@ class ArmProblem : public DiagnosisProblem {
   // patch the approximation (measured: a 3.7 N·m saturation "found" at t = 6 beside a
   // flexible elbow that has none).
   bool HeldWhileScoring(const TrialEffect& e) const override { return e.name == "joint_flexibility"; }
+  std::vector<std::string> MustBeDetermined(const TrialEffect& e) const override {
+    if (e.name == "torque_saturation") return {"limit"};
+    return {};
+  }
   // A joint's effect changes that joint's command alone (Residual): scored on it.
   int ChannelOf(const TrialEffect& e) const override { return e.joint; }
 

@@ -335,6 +335,21 @@ std::vector<std::size_t> PassingOrder(const DiagnosisOptions& options, std::vect
 // fit and selection rows and not the rows neither saw is fitted to something else (the
 // noise's peaks, a derivative filter's error); it is reported, never added. Returns its
 // index (trials->size(): none), with the effects and their residuals in *next and *r.
+// Why the last of `effects` is not added for a parameter the logs do not determine
+// (DiagnosisProblem::MustBeDetermined), or "".
+std::string Undetermined(const DiagnosisProblem& problem, const std::vector<TrialEffect>& effects) {
+  const std::vector<std::string> keys = problem.MustBeDetermined(effects.back());
+  if (keys.empty()) return "";
+  const std::map<std::string, double> errors = StandardErrors(problem, effects).back();
+  for (const std::string& key : keys) {
+    const double value = effects.back().parameters.at(key), error = errors.at(key);
+    if (std::isfinite(error) && error < std::abs(value)) continue;
+    return "vetoed: the logs do not determine its " + key + " (" + FormatParameter(value) + ", standard error " +
+           (std::isfinite(error) ? FormatParameter(error) : std::string("none")) + ")";
+  }
+  return "";
+}
+
 std::size_t BestUnvetoed(const RoundBase& base, const std::vector<std::size_t>& order,
                          std::vector<CandidateTrial>* trials, std::vector<TrialEffect>* next, SquaredResiduals* r) {
   const DiagnosisProblem& problem = *base.problem;
@@ -357,6 +372,10 @@ std::size_t BestUnvetoed(const RoundBase& base, const std::vector<std::size_t>& 
       std::snprintf(why, sizeof why, "vetoed: it makes the test rows worse (gap %s -> %s)",
                     FormatParameter(problem.Gap(test_before)).c_str(), FormatParameter(problem.Gap(test_after)).c_str());
       (*trials)[k].candidate.veto = why;
+      continue;
+    }
+    if (std::string undetermined = Undetermined(problem, *next); !undetermined.empty()) {
+      (*trials)[k].candidate.veto = undetermined;
       continue;
     }
     return k;

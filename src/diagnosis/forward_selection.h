@@ -106,6 +106,11 @@ class DiagnosisProblem {
   // that joint's torque alone: scored on the sum, a wrist's delay that removes a third of
   // the wrist's error is 1 % of an error the shoulder's noise dominates (issue 41).
   virtual int ChannelOf(const TrialEffect& effect) const { return -1; }
+  // The parameters of `effect` the logs must determine for it to be added (its standard
+  // error under its value; none where empty): an effect whose fit the data does not pin down
+  // stands for something else (a torque limit under most commands fits a model that
+  // needs too little torque on its joint; issue 41, the KUKA's joint 5).
+  virtual std::vector<std::string> MustBeDetermined(const TrialEffect& effect) const { return {}; }
 };
 
 struct SelectionResult {

@@ -177,6 +177,59 @@ TEST(ForwardSelection, AnEffectThatMakesTheTestRowsWorseIsVetoed) {
   EXPECT_NEAR(std::sqrt(Mean(s.after.test)), 1.0, 0.1);
 }
 
+// A saturation whose limit must be determined, on fit rows whose residual carries extra
+// noise of `fit_noise` (30: the limit's standard error is larger than the limit, though
+// the selection and test rows favour the effect).
+class UndeterminedLimitProblem : public LinearProblem {
+ public:
+  UndeterminedLimitProblem(std::vector<double> y, std::vector<Feature> features, double fit_noise)
+      : LinearProblem(std::move(y), std::move(features)) {
+    Rng rng(11);
+    for (int i = 0; i < 4000; ++i) noise_.push_back(fit_noise * rng.Gaussian());
+  }
+  std::vector<double> FitResiduals(const std::vector<TrialEffect>& effects) const override {
+    std::vector<double> r = LinearProblem::FitResiduals(effects);
+    for (std::size_t i = 0; i < r.size(); ++i) r[i] += noise_[i];
+    return r;
+  }
+  std::vector<std::string> MustBeDetermined(const TrialEffect& e) const override {
+    if (e.name == "torque_saturation") return {"theta"};
+    return {};
+  }
+
+ private:
+  std::vector<double> noise_;
+};
+
+// The saturation's limit is not determined by the logs: vetoed, never added, however much
+// the rows that score it gain; the effect beside it, which need not be, is added (issue
+// 41: a torque limit of 0.19 ± 0.29 N·m under most of a real KUKA joint's commands).
+TEST(ForwardSelection, AnEffectWhoseLimitTheLogsDoNotDetermineIsVetoed) {
+  Rng rng(7);
+  const std::size_t n = 4000;
+  std::vector<double> y(n), limit(n), real(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    limit[i] = std::sin(0.013 * static_cast<double>(i));
+    real[i] = std::cos(0.05 * static_cast<double>(i));
+    y[i] = 0.2 * rng.Gaussian() + 0.5 * limit[i] + 0.8 * real[i];
+  }
+  const UndeterminedLimitProblem problem(y, {{"torque_saturation", 1, limit}, {"viscous_friction", 0, real}}, 30);
+  const SelectionResult s = SelectEffects(problem, Options());
+  ASSERT_EQ(s.effects.size(), 1u);
+  EXPECT_EQ(s.effects[0].name, "viscous_friction");
+  bool vetoed = false;
+  for (const DiagnosisCandidate& c : s.candidates) {
+    if (c.name != "torque_saturation" || c.veto.empty()) continue;
+    vetoed = true;
+    EXPECT_FALSE(c.selected);
+    EXPECT_NE(c.veto.find("do not determine its theta"), std::string::npos) << c.veto;
+  }
+  EXPECT_TRUE(vetoed);
+  // The same logs without the fit rows' extra noise: the limit is determined and added.
+  const UndeterminedLimitProblem quiet(y, {{"torque_saturation", 1, limit}, {"viscous_friction", 0, real}}, 0);
+  EXPECT_EQ(SelectEffects(quiet, Options()).effects.size(), 2u);
+}
+
 // Two look-alike effects on one joint (Coulomb and viscous friction: sign(v) and v
 // correlate 0.85 here). The first added (viscous) takes part of the second's share;
 // the second, fitted with the first held, makes the selection rows worse (-25 %: the
