@@ -403,8 +403,8 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
     out.growth_note = "a spread growing with speed (" +
                       PrintfNumber("%.4g", FromCoordinate(kPerSpeed, fits[0].grow[kPerSpeed])) + " per m/s) and acceleration (" +
                       PrintfNumber("%.4g", FromCoordinate(kPerAcceleration, fits[0].grow[kPerAcceleration])) +
-                      " per m/s^2) fitted better but each half of the held-out blocks scored the other half's worse: "
-                      "none kept";
+                      " per m/s^2) fitted the held-out blocks better, but fitted on each half of them it did not "
+                      "score the other half better: none kept";
   }
   const NoiseValues v = growth ? fits[0].grow : fits[0].flat;
   out.fit_after = growth ? fits[0].grow_cost : fits[0].flat_cost;
