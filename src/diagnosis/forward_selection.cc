@@ -330,11 +330,6 @@ std::vector<std::size_t> PassingOrder(const DiagnosisOptions& options, std::vect
   return order;
 }
 
-// The best passing candidate, all added effects refitted with it, unless that makes the
-// test rows worse: the test rows choose nothing, but they veto. An effect that fits the
-// fit and selection rows and not the rows neither saw is fitted to something else (the
-// noise's peaks, a derivative filter's error); it is reported, never added. Returns its
-// index (trials->size(): none), with the effects and their residuals in *next and *r.
 // Why the last of `effects` is not added for a parameter the logs do not determine
 // (DiagnosisProblem::MustBeDetermined), or "".
 std::string Undetermined(const DiagnosisProblem& problem, const std::vector<TrialEffect>& effects) {
@@ -350,6 +345,13 @@ std::string Undetermined(const DiagnosisProblem& problem, const std::vector<Tria
   return "";
 }
 
+// The best passing candidate, all added effects refitted with it, unless that makes the
+// test rows worse: the test rows choose nothing, but they veto. An effect that fits the
+// fit and selection rows and not the rows neither saw is fitted to something else (the
+// noise's peaks, a derivative filter's error); it is reported, never added. So is one
+// whose parameters the problem asks to be determined and the logs do not determine
+// (Undetermined). Returns its index (trials->size(): none), with the effects and their
+// residuals in *next and *r.
 std::size_t BestUnvetoed(const RoundBase& base, const std::vector<std::size_t>& order,
                          std::vector<CandidateTrial>* trials, std::vector<TrialEffect>* next, SquaredResiduals* r) {
   const DiagnosisProblem& problem = *base.problem;

@@ -25,6 +25,7 @@
 // prediction-error fit's (validation logs never choose: they only report the
 // calibration). Standard errors: the sandwich of the cost's Hessian and the held-out
 // blocks' gradients (blocks are nearly independent, rows within one are not).
+//
 //   std::vector<OmniBlockedStretch> stretches = ...;  // identification's blocks
 //   OmniNoiseIdentification n = IdentifyDrivingNoise(model, stretches, options);
 //   if (n.kept) model = n.model;
