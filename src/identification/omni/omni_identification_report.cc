@@ -40,6 +40,13 @@ ordered_json GapsJson(const std::vector<OmniGap>& gaps) {
 }
 
 // "identified 6.1 mm: 0.52x the constant-velocity extrapolation's 11.8 mm"
+// The rows the report's calibration is on: a noise fitted on the held-out blocks is
+// judged there only across their halves.
+std::string CalibratedOn(const OmniIdentificationReport& r) {
+  if (!r.validation.empty()) return "validation logs";
+  return r.noise.kept ? "held-out blocks, each half with the noise fitted on the other" : "held-out blocks";
+}
+
 ordered_json NoiseJson(const OmniIdentificationReport& r) {
   const OmniNoiseIdentification& n = r.noise;
   ordered_json j;
@@ -253,9 +260,7 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   }
   if (!r.calibration.empty()) {
     s << "calibration of the predictions ("
-      << (!r.validation.empty() ? "validation logs"
-          : r.noise.kept        ? "held-out blocks, each half with the noise fitted on the other"
-                                : "held-out blocks")
+      << CalibratedOn(r)
       << "; energy score against a constant spread):\n"
       << FormatCalibrationTable(r.calibration);
   }
@@ -336,9 +341,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   }
   if (!r.calibration.empty()) {
     h << "<h2>Calibration</h2>\n<p>The identified model's predictive distribution on the "
-      << (!r.validation.empty() ? "validation logs"
-          : r.noise.kept        ? "held-out blocks (each half with the noise fitted on the other)"
-                                : "held-out blocks")
+      << CalibratedOn(r)
       << ": the share of measured positions inside its central 50 % and 90 % ellipses (and of headings inside the "
          "intervals), which a calibrated model holds at 50 % and 90 %; the energy score of the position beside the "
          "same mean with one round spread per horizon (fitted on the fit blocks), lower is better.</p>\n"

@@ -128,9 +128,9 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
       HorizonRows& out = per[static_cast<std::size_t>(k)][q];
       for (std::size_t row = 0; row < s.log->rows.size(); ++row) {
         if (!PredictedAndMeasured(*s.log, at, row) || s.log->FrameIndex(row) < warm + h) continue;
-        if (!ScoredInBlocks(s, row, held_out, h) || !in_selection(row)) continue;
-        // The start lies in the selection's blocks too (ScoredInBlocks found it of the kind).
-        if (selection.blocks && !is_selected(s.log->FrameIndex(row) - h)) continue;
+        if (!ScoredInBlocks(s, row, held_out, h)) continue;
+        // With blocks, the prediction ends and starts in them too.
+        if (selection.blocks && (!in_selection(row) || !is_selected(s.log->FrameIndex(row) - h))) continue;
         out.rows.push_back(PredictiveErrorAt(*s.log, at, row));
         out.block.push_back((*s.block)[row]);
       }
@@ -258,7 +258,7 @@ std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const Noise
 // two growths as well, from there (each search within options.max_evaluations).
 struct NoiseFit {
   NoiseValues flat{}, grow{};
-  double flat_cost = 0, grow_cost = 0;
+  double start_cost = 0, flat_cost = 0, grow_cost = 0;  // the cost at the start, after each search
   bool grows() const { return grow[kPerSpeed] > 0 || grow[kPerAcceleration] > 0; }
 };
 
@@ -279,7 +279,7 @@ NoiseFit FitNoise(const CollectNoise& collect, const NoiseValues& start, const s
                   const OmniNoiseOptions& options, int* evaluations) {
   const std::function<double(const NoiseValues&)> cost = [&](const NoiseValues& x) { return Cost(collect(x, blocks)); };
   NoiseFit f;
-  f.flat_cost = cost(start);
+  f.start_cost = f.flat_cost = cost(start);
   ++*evaluations;
   int used = 1;
   f.flat = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, options.max_evaluations, &f.flat_cost, &used);
@@ -297,10 +297,10 @@ std::array<std::set<int>, 2> HeldOutHalves(const std::vector<OmniBlockedStretch>
   std::array<std::set<int>, 2> halves;
   for (const OmniBlockedStretch& s : stretches) {
     if (s.validation) continue;
-    std::vector<int> seen;
+    std::vector<int> seen;  // a block's rows are consecutive
     for (std::size_t row = s.score_from; row < s.log->rows.size(); ++row) {
       const int b = (*s.block)[row];
-      if ((*s.held)[row] && std::find(seen.begin(), seen.end(), b) == seen.end()) seen.push_back(b);
+      if ((*s.held)[row] && (seen.empty() || seen.back() != b)) seen.push_back(b);
     }
     for (std::size_t k = 0; k < seen.size(); ++k) halves[k % 2].insert(seen[k]);
   }
@@ -328,23 +328,23 @@ std::array<NoiseFit, 3> FitAllAndHalves(const OmniModel& model, const std::vecto
 }
 
 // Each half's fits scored on the other half, averaged over the halves: rows that neither
-// the response nor the noise was fitted on. `grow` is `flat` where a half's growth
-// search found none.
+// the response nor the noise was fitted on. `before`, the start's, each half's fit has
+// already scored; `grow` is `flat` where a half's growth search found none.
 struct CrossedScores {
   double before = 0, flat = 0, grow = 0;
 };
 
-CrossedScores ScoreCrossed(const CollectNoise& collect, const NoiseValues& start, const std::array<NoiseFit, 3>& fits,
+CrossedScores ScoreCrossed(const CollectNoise& collect, const std::array<NoiseFit, 3>& fits,
                            const std::array<std::set<int>, 2>& halves, int* evaluations) {
   CrossedScores c;
   for (int k = 0; k < 2; ++k) {
     const std::set<int>* other = &halves[static_cast<std::size_t>(1 - k)];
     const NoiseFit& f = fits[static_cast<std::size_t>(1 + k)];
     const double flat = Cost(collect(f.flat, other));
-    c.before += Cost(collect(start, other)) / 2;
+    c.before += fits[static_cast<std::size_t>(2 - k)].start_cost / 2;  // the other half's fit, at the start
     c.flat += flat / 2;
     c.grow += (f.grows() ? Cost(collect(f.grow, other)) : flat) / 2;
-    *evaluations += 2 + f.grows();
+    *evaluations += 1 + f.grows();
   }
   return c;
 }
@@ -397,7 +397,7 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   int evaluations = 1;
   const std::array<std::set<int>, 2> halves = HeldOutHalves(stretches);
   const std::array<NoiseFit, 3> fits = FitAllAndHalves(model, stretches, options, start, halves, &evaluations);
-  const CrossedScores crossed = ScoreCrossed(collect, start, fits, halves, &evaluations);
+  const CrossedScores crossed = ScoreCrossed(collect, fits, halves, &evaluations);
   const bool growth = fits[0].grows() && crossed.grow < crossed.flat;
   if (fits[0].grows() && !growth) {
     out.growth_note = "a spread growing with speed (" +
