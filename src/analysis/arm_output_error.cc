@@ -12,6 +12,7 @@
 #include "analysis/fixed_step_cost.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
+#include "identification/wls_identification.h"
 #include "sim/arm_simulation.h"
 
 namespace twinsim {
@@ -96,19 +97,15 @@ class OutputErrorProblem {
           velocity2 += (ConstantVelocityQ(log, s, r + 1) - log.q.row(s + 1 + r)).array().square().transpose();
         rows += length;
       }
-      const int first = log.edge_samples, last = log.rows() - log.edge_samples;
       tau2 += log.tau.array().square().colwise().sum().transpose();
       qd2 += log.qd.array().square().colwise().sum().transpose();
-      torque_error2 += (PredictArmCommands(start_, log) - log.tau)
-                           .middleRows(first, last - first)
-                           .array()
-                           .square()
-                           .colwise()
-                           .sum()
-                           .transpose();
       samples += log.rows();
-      torque_rows_ += static_cast<std::size_t>(last - first);
+      torque_rows_ += static_cast<std::size_t>(log.rows() - 2 * log.edge_samples);
     }
+    const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs_, WlsIdentificationOptions{}.rest_share);
+    for (const ArmLog& log : logs_) rest_.push_back(ArmRestRows(log, rest_speed));
+    for (std::size_t k = 0; k < logs_.size(); ++k)
+      TorqueErrors(start_, k, [&](int j, double e) { torque_error2[j] += e * e; });
     if (window < 4) {
       throw InputError(SourceLocation{logs_.empty() ? std::string("(no log)") : logs_.front().path, 1},
                        "the logs are too short for the output-error fit: it needs at least 4 windows of the horizon "
@@ -198,11 +195,19 @@ class OutputErrorProblem {
       for (Eigen::Index r = 0; r < q.rows(); ++r)
         for (int j = 0; j < n_; ++j) out[i++] = (q(r, j) - log.q(s + 1 + r, j)) * weight_[j];
     });
-    for (const ArmLog& log : logs_) {
-      const Eigen::MatrixXd tau = PredictArmCommands(model, log);
-      for (int r = log.edge_samples; r < log.rows() - log.edge_samples; ++r)
-        for (int j = 0; j < n_; ++j) out[i++] = (tau(r, j) - log.tau(r, j)) * torque_weight_[j];
-    }
+    for (std::size_t k = 0; k < logs_.size(); ++k)
+      TorqueErrors(model, k, [&](int j, double e) { out[i++] = e * torque_weight_[j]; });
+  }
+
+  // The torque rows' errors of `model` on log k, row by row, joint by joint, as
+  // identification fits them: 0 where the joint is at rest or near it (its friction
+  // anywhere in its band; ArmRestRows).
+  template <typename Visit>
+  void TorqueErrors(const ArmModel& model, std::size_t k, const Visit& visit) const {
+    const ArmLog& log = logs_[k];
+    const Eigen::MatrixXd tau = PredictArmCommands(model, log);
+    for (int r = log.edge_samples; r < log.rows() - log.edge_samples; ++r)
+      for (int j = 0; j < n_; ++j) visit(j, rest_[k](r, j) ? 0.0 : tau(r, j) - log.tau(r, j));
   }
 
   // Per joint, the position RMSE of the fit windows (`check` false) or the held-out ones.
@@ -248,6 +253,7 @@ class OutputErrorProblem {
   int fit_windows_ = 0, check_windows_ = 0;
   std::size_t simulated_rows_ = 0, torque_rows_ = 0;
   Eigen::VectorXd constant_velocity_, weight_, torque_weight_, viscous_unit_, coulomb_unit_, offset_unit_;
+  std::vector<Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>> rest_;  // per log: rows at rest, not scored
   Eigen::VectorXd breakaway_unit_, stribeck_velocity_unit_;
 };
 

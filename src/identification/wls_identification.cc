@@ -75,6 +75,8 @@ bool WlsIdentificationOptions::IsValid(std::string* why) const {
     s << "decimate must be at least 1, got " << decimate;
   } else if (!(still_range >= 0) || !std::isfinite(still_range)) {
     s << "still_range must not be negative, got " << still_range;
+  } else if (!(rest_share >= 0 && rest_share < 1)) {
+    s << "rest_share must lie in [0, 1), got " << rest_share;
   } else if (!(max_condition_number > 1)) {
     s << "max_condition_number must be above 1, got " << max_condition_number;
   } else if (base_samples < 10) {
@@ -82,6 +84,38 @@ bool WlsIdentificationOptions::IsValid(std::string* why) const {
   }
   if (why) *why = s.str();
   return s.str().empty();
+}
+
+Eigen::VectorXd ArmRestSpeeds(const std::vector<ArmLog>& logs, double share, int decimate, bool skip_edges) {
+  const int n = logs.empty() ? 0 : logs.front().dof;
+  Eigen::VectorXd square = Eigen::VectorXd::Zero(n);
+  int rows = 0;
+  for (const ArmLog& log : logs) {
+    const int edge = skip_edges ? log.edge_samples : 0;
+    for (int row = edge; row < log.rows() - edge; row += decimate, ++rows) square += log.qd.row(row).transpose().cwiseAbs2();
+  }
+  return share * (square / std::max(rows, 1)).cwiseSqrt();
+}
+
+Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ArmRestRows(const ArmLog& log, const Eigen::VectorXd& rest_speed) {
+  const int rows = log.rows(), n = log.dof;
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> rest(rows, n);
+  const int reach = log.qd_logged || !(log.derive_cutoff_hz > 0)
+                        ? 0
+                        : static_cast<int>(std::ceil(1 / (log.derive_cutoff_hz * log.sample_period)));
+  for (int j = 0; j < n; ++j) {
+    int last_rest = -1 - reach;  // the latest row at rest so far
+    for (int r = 0; r < rows; ++r) {
+      if (std::abs(log.qd(r, j)) < rest_speed[j]) last_rest = r;
+      rest(r, j) = r - last_rest <= reach;
+    }
+    int next_rest = rows + reach;  // the next row at rest, from the end
+    for (int r = rows - 1; r >= 0; --r) {
+      if (std::abs(log.qd(r, j)) < rest_speed[j]) next_rest = r;
+      rest(r, j) = rest(r, j) || next_rest - r <= reach;
+    }
+  }
+  return rest;
 }
 
 BaseParameters IdentificationBase(const ArmModel& model, const WlsIdentificationOptions& options) {
@@ -164,8 +198,8 @@ struct JointSystems {
   std::vector<Eigen::MatrixXd> r_of;
   std::vector<Eigen::VectorXd> z_of;
   Eigen::VectorXd rho2;
-  int rows = 0;     // sum of m_j
-  int samples = 0;  // samples per joint
+  int rows = 0;             // sum of m_j
+  Eigen::VectorXi samples;  // per joint: the rows in its equations
 
   int dof() const { return static_cast<int>(r_of.size()); }
   // Joint j's rows weighted by weight[j], stacked: *a (rows x cols) and *b (rows).
@@ -187,13 +221,25 @@ struct JointSystems {
   // Torque error RMS per joint (N·m or N) for the unknowns x.
   Eigen::VectorXd ErrorRms(const Eigen::VectorXd& x) const {
     Eigen::VectorXd e(dof());
-    for (int j = 0; j < dof(); ++j) e[j] = std::sqrt(std::max(0.0, Rss(j, x)) / samples);
+    for (int j = 0; j < dof(); ++j) e[j] = std::sqrt(std::max(0.0, Rss(j, x)) / samples[j]);
     return e;
   }
 };
 
+// Each moving joint's speed below which a row is at rest (summary->rest_speed); a joint
+// that never moves keeps every row (its q̇ is taken as 0).
+Eigen::VectorXd RestSpeeds(const std::vector<ArmLog>& logs, int n, const WlsIdentificationOptions& options,
+                           const JointSpans& spans) {
+  Eigen::VectorXd speed = ArmRestSpeeds(logs, options.rest_share, options.decimate, options.skip_filter_edges);
+  for (int j = 0; j < n; ++j)
+    if (spans.still[static_cast<std::size_t>(j)]) speed[j] = 0;
+  return speed;
+}
+
 // Accumulates the regressor rows of every log sample, joint by joint, into JointSystems
-// and sets summary->samples and torque_rms; throws InputError for too few samples.
+// (a joint's rows at rest, below summary->rest_speed or near it, left out of its own
+// equations) and sets summary->samples, rest_rows and torque_rms; throws InputError for
+// too few samples.
 JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base, int offsets,
                             const std::vector<ArmLog>& logs, const WlsIdentificationOptions& options,
                             const JointSpans& spans, const std::string& where, WlsIdentificationSummary* summary) {
@@ -217,9 +263,11 @@ JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base
 
   Eigen::VectorXd torque_square = Eigen::VectorXd::Zero(n);
   int samples = 0;
+  Eigen::VectorXi joint_samples = Eigen::VectorXi::Zero(n);
   Eigen::VectorXd q(n), qd(n), qdd(n);
   for (const ArmLog& log : logs) {
     const int edge = options.skip_filter_edges ? log.edge_samples : 0;
+    const Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> rest = ArmRestRows(log, summary->rest_speed);
     for (int row = edge; row < log.rows() - edge; row += options.decimate) {
       q = log.q.row(row).transpose();
       qd = log.qd.row(row).transpose();
@@ -229,6 +277,8 @@ JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base
       }
       const Eigen::MatrixXd y = Regressor(a_priori, q, qd, qdd);
       for (int j = 0; j < n; ++j) {
+        if (rest(row, j)) continue;
+        ++joint_samples[j];
         const auto& cols = columns[static_cast<std::size_t>(j)];
         auto next = factors[static_cast<std::size_t>(j)].Next();
         for (std::size_t c = 0; c < cols.size(); ++c) {
@@ -243,18 +293,19 @@ JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base
     }
   }
   summary->samples = samples;
-  if (samples * n < 2 * cols_total) {
+  summary->rest_rows = Eigen::VectorXi::Constant(n, samples) - joint_samples;
+  if (joint_samples.sum() < 2 * cols_total || joint_samples.minCoeff() == 0) {
     throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(cols_total) +
                                                 " parameters: " + std::to_string(samples) + " samples of " +
                                                 std::to_string(n) + " joints");
   }
-  summary->torque_rms = (torque_square / samples).cwiseSqrt();
+  summary->torque_rms = torque_square.cwiseQuotient(joint_samples.cast<double>()).cwiseSqrt();
 
   JointSystems systems;
   systems.r_of.resize(static_cast<std::size_t>(n));
   systems.z_of.resize(static_cast<std::size_t>(n));
   systems.rho2.resize(n);
-  systems.samples = samples;
+  systems.samples = joint_samples;
   for (int j = 0; j < n; ++j) {
     auto& f = factors[static_cast<std::size_t>(j)];
     f.Flush();
@@ -342,15 +393,15 @@ struct WeightedSolution {
 WeightedSolution Solve(const JointSystems& systems, const Eigen::MatrixXd& a, const Eigen::VectorXd& b,
                        const WlsIdentificationOptions& options, WlsIdentificationSummary* summary) {
   const int n = systems.dof();
-  const int samples = systems.samples;
+  const int samples = systems.samples.sum();
   const int cols_total = static_cast<int>(a.cols());
   summary->ordinary = a.householderQr().solve(b);
   summary->joint_sigma.resize(n);
-  const double dof_per_joint = std::max(1.0, samples - static_cast<double>(cols_total) / n);
   for (int j = 0; j < n; ++j) {
+    const double dof_of_joint = std::max(1.0, systems.samples[j] - static_cast<double>(cols_total) / n);
     const double floor = 1e-12 * std::max(summary->torque_rms[j], 1e-12);
     summary->joint_sigma[j] =
-        std::max(floor, std::sqrt(std::max(0.0, systems.Rss(j, summary->ordinary)) / dof_per_joint));
+        std::max(floor, std::sqrt(std::max(0.0, systems.Rss(j, summary->ordinary)) / dof_of_joint));
   }
   const Eigen::VectorXd weights =
       options.weighted ? Eigen::VectorXd(summary->joint_sigma.cwiseInverse()) : Eigen::VectorXd::Ones(n);
@@ -368,7 +419,7 @@ WeightedSolution Solve(const JointSystems& systems, const Eigen::MatrixXd& a, co
   }
   double weighted_rss = 0;
   for (int j = 0; j < n; ++j) weighted_rss += weights[j] * weights[j] * systems.Rss(j, summary->identified);
-  const double variance = weighted_rss / std::max(1, samples * n - cols_total);
+  const double variance = weighted_rss / std::max(1, samples - cols_total);
   const Eigen::MatrixXd rinv =
       solution.rw.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(cols_total, cols_total));
   solution.std_dev = (variance * rinv.rowwise().squaredNorm()).cwiseSqrt();
@@ -492,6 +543,7 @@ ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
   const int offsets = options.torque_offsets ? n : 0;
   DescribeUnknowns(a_priori, base, offsets, &summary);
   const JointSpans spans = FindStillJoints(logs, n, options.still_range, &summary);
+  summary.rest_speed = RestSpeeds(logs, n, options, spans);
   const JointSystems systems = AccumulateRows(a_priori, base, offsets, logs, options, spans, where, &summary);
   Eigen::MatrixXd a;
   Eigen::VectorXd b;
@@ -552,6 +604,14 @@ std::string WlsIdentificationSummary::FullReport() const {
     s << line;
   }
   s << "(torque RMS error per joint in N·m or N over the samples used; sigma: the weight's standard deviation)\n";
+  if (rest_rows.size() && rest_rows.sum() > 0) {
+    s << "rows at rest left out of a joint's equations (it holds anywhere within its friction band there):";
+    for (int j = 0; j < dof; ++j) {
+      std::snprintf(line, sizeof line, " joint %d %d (%.1f %%, |qd| < %.3g)", j + 1, rest_rows[j],
+                    100.0 * rest_rows[j] / std::max(samples, 1), rest_speed[j]);
+      s << line << (j + 1 < dof ? ";" : "\n");
+    }
+  }
   if (consistency_fixed) {
     s << "\nThe minimum-norm standard parameters were not physical:\n";
     for (const auto& note : consistency_notes) s << "  " << note << "\n";

@@ -46,6 +46,11 @@ struct WlsIdentificationOptions {
   // (a torque sensor's bias; the contract's torque_offset effect is minus this).
   bool torque_offsets = false;
   double still_range = 1e-3;         // rad or m: a joint whose q spans less than this never moves
+  // A moving joint's rows where |q̇| is below this share of its RMS speed (over all logs)
+  // are left out of its own equations: at rest a joint holds anywhere within its friction
+  // band, where the model's c sign(q̇) says nothing (a drive that dwells between moves
+  // otherwise trades its Coulomb friction for viscous). 0: every row.
+  double rest_share = 0.02;
   double max_condition_number = 1e5; // of the column-scaled stacked regressor; above: parameters not excited
   int base_samples = 200;            // random states for finding the base parameters
   std::uint64_t base_seed = 1;
@@ -57,6 +62,8 @@ struct WlsIdentificationSummary {
   int dof = 0;
   int logs = 0;
   int samples = 0;                     // samples used (all logs, after trimming and decimation)
+  Eigen::VectorXi rest_rows;           // per joint: of those, rows at rest left out of its equations
+  Eigen::VectorXd rest_speed;          // per joint: the speed below which a row counts as at rest (rad/s or m/s)
   int base_parameters = 0;             // r; the vectors below hold r base parameters, then the offsets
   std::vector<std::string> names;      // base parameters, each as its standard combination; "offset<j>"
   std::vector<std::string> descriptions;  // the same in words ("Coulomb friction of joint 3")
@@ -94,6 +101,17 @@ struct WlsIdentificationSummary {
 // no valid arm, or an a-priori model that is not physical.
 ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
                      const WlsIdentificationOptions& options, WlsIdentificationSummary* summary = nullptr);
+
+// Per joint, the speed below which a row of `logs` counts as at rest: `share` of the
+// joint's RMS speed over the rows between each log's edge_samples (all rows without
+// skip_edges), every decimate-th. Such rows say nothing of c sign(q̇).
+Eigen::VectorXd ArmRestSpeeds(const std::vector<ArmLog>& logs, double share, int decimate = 1, bool skip_edges = true);
+
+// Per row and joint (rows x dof), true where `log`'s joint is at rest or near it: |q̇|
+// below rest_speed, and where q̇ is derived, every row within one period of the
+// derivatives' cut-off of such a row (the zero-phase filter smears a stop over that
+// reach, so the derived q̇ there still moves while the joint already sticks).
+Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ArmRestRows(const ArmLog& log, const Eigen::VectorXd& rest_speed);
 
 // The identification's base parameters of `model` (FindBaseParameters with the options' samples and seed).
 BaseParameters IdentificationBase(const ArmModel& model, const WlsIdentificationOptions& options);

@@ -1,7 +1,9 @@
 #include "diagnosis/mujoco_arm_plant.h"
+#include "diagnosis/mujoco_model.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <deque>
@@ -12,12 +14,11 @@
 #include <stdexcept>
 #include <vector>
 
+#include <unistd.h>
+
 #include "core/math_constants.h"
 #include "core/rng.h"
 
-#ifdef TWINSIM_HAVE_MUJOCO
-#include <mujoco/mujoco.h>
-#endif
 
 namespace twinsim {
 namespace testing {
@@ -71,6 +72,27 @@ ArmLog RecordMujocoArm(const ArmModel&, std::uint64_t, const ForeignArmRecording
 #else
 
 bool MujocoAvailable() { return true; }
+
+MujocoModel::~MujocoModel() {
+  if (data) mj_deleteData(data);
+  if (model) mj_deleteModel(model);
+}
+
+std::unique_ptr<MujocoModel> LoadMujocoText(const std::string& text, const std::string& extension,
+                                            const std::string& what) {
+  static std::atomic<int> count{0};
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("twinsim_mujoco_" + std::to_string(::getpid()) + "_" + std::to_string(count++) + extension))
+                               .string();
+  std::ofstream(path) << text;
+  auto m = std::make_unique<MujocoModel>();
+  char error[1000] = "";
+  m->model = mj_loadXML(path.c_str(), nullptr, error, sizeof error);
+  std::filesystem::remove(path);
+  if (!m->model) throw std::runtime_error("MuJoCo cannot load " + what + ": " + error);
+  m->data = mj_makeData(m->model);
+  return m;
+}
 
 namespace {
 
@@ -133,30 +155,13 @@ Excitation DrawExcitation(const ArmModel& model, Rng* rng) {
   return e;
 }
 
-struct Mujoco {
-  mjModel* model = nullptr;
-  mjData* data = nullptr;
-  ~Mujoco() {
-    if (data) mj_deleteData(data);
-    if (model) mj_deleteModel(model);
-  }
-};
-
-std::unique_ptr<Mujoco> LoadMujoco(const ArmModel& plant, std::uint64_t seed) {
-  auto m = std::make_unique<Mujoco>();
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("twinsim_mujoco_plant_" + std::to_string(seed) + ".urdf")).string();
-  std::ofstream(path) << ArmUrdf(plant);
-  char error[1000] = "";
-  m->model = mj_loadXML(path.c_str(), nullptr, error, sizeof error);
-  std::filesystem::remove(path);
-  if (!m->model) throw std::runtime_error(std::string("MuJoCo cannot load the plant: ") + error);
+std::unique_ptr<MujocoModel> LoadMujoco(const ArmModel& plant) {
+  std::unique_ptr<MujocoModel> m = LoadMujocoText(ArmUrdf(plant), ".urdf", "the plant");
   if (m->model->nv != plant.dof()) throw std::runtime_error("MuJoCo's plant has another number of joints");
   m->model->opt.timestep = plant.sample_time;
   m->model->opt.integrator = mjINT_RK4;
   m->model->opt.disableflags |= mjDSBL_CONTACT;
   for (int i = 0; i < plant.dof(); ++i) m->model->dof_damping[i] = m->model->dof_frictionloss[i] = m->model->dof_armature[i] = 0;
-  m->data = mj_makeData(m->model);
   return m;
 }
 
@@ -164,7 +169,7 @@ double Sign(double v) { return v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0); }
 
 // MuJoCo's inverse dynamics of the motion, plus the plant's joint friction (viscous and
 // Coulomb, as the model file states them).
-Eigen::VectorXd Needed(const ArmModel& plant, Mujoco* mj, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+Eigen::VectorXd Needed(const ArmModel& plant, MujocoModel* mj, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                        const Eigen::VectorXd& qdd) {
   const int n = plant.dof();
   std::copy_n(q.data(), n, mj->data->qpos);
@@ -190,7 +195,7 @@ ArmLog RecordMujocoArm(const ArmModel& plant, std::uint64_t seed, const ForeignA
   const double delay = plant.delay_samples * dt;
   Rng rng(0x6d756a6f + 7919 * seed);
   const Excitation excitation = DrawExcitation(plant, &rng);
-  std::unique_ptr<Mujoco> mj = LoadMujoco(plant, seed);
+  std::unique_ptr<MujocoModel> mj = LoadMujoco(plant);
 
   // Each joint's own time_delay (whole samples) beside the model's delay: what joint j
   // receives now was sent that many samples before.

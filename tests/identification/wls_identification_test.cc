@@ -230,5 +230,47 @@ TEST(WlsIdentification, DescribesParametersInWords) {
   EXPECT_TRUE(friction);
 }
 
+// A joint that moves, stops for a second and moves again, logged at 1 kHz as q alone: the
+// dwell's rows are at rest, and so is every row within one cut-off period (0.1 s at
+// 10 Hz) of them, where the derived q̇ still moves while the joint already sticks.
+TEST(WlsIdentification, RowsAtRestAndWithinOneCutOffPeriodOfThemAreMarked) {
+  std::string csv = "t,q1,tau1\n";
+  double q = 0;
+  for (int k = 0; k <= 3000; ++k) {
+    if (k < 1000 || k >= 2000) q += 0.1e-3;  // 0.1 m/s, then still, then 0.1 m/s
+    csv += std::to_string(k * 1e-3) + "," + std::to_string(q) + ",1\n";
+  }
+  ArmLogOptions options;
+  options.cutoff_hz = 10;
+  const ArmLog log = ParseArmLog(csv, "stop.csv", options);
+  const Eigen::VectorXd speed = ArmRestSpeeds({log}, 0.02);
+  EXPECT_NEAR(speed[0], 0.02 * 0.1 * std::sqrt(2.0 / 3), 2e-4);  // 2 % of the RMS speed
+  const auto rest = ArmRestRows(log, speed);
+  EXPECT_TRUE(rest(1500, 0));
+  // The derived q̇ falls below 2 % about 30 ms inside the dwell (measured: rows 1029 and
+  // 1969); the 0.1 s before and after are marked (929 to 2069), beyond 0.15 s nothing.
+  EXPECT_TRUE(rest(1000 - 60, 0));
+  EXPECT_TRUE(rest(2000 + 60, 0));
+  EXPECT_FALSE(rest(1000 - 150, 0));
+  EXPECT_FALSE(rest(2000 + 150, 0));
+  EXPECT_FALSE(rest(500, 0));
+  // A logged q̇ is not smeared: only its own rows below the speed.
+  ArmLog logged = log;
+  logged.qd_logged = true;
+  logged.qd.col(0).setConstant(0.1);
+  logged.qd.block(1000, 0, 1000, 1).setZero();
+  const auto sharp = ArmRestRows(logged, speed);
+  EXPECT_TRUE(sharp(1000, 0) && sharp(1999, 0));
+  EXPECT_FALSE(sharp(999, 0) || sharp(2000, 0));
+
+  WlsIdentificationOptions bad;
+  bad.rest_share = 1;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("rest_share"), std::string::npos) << why;
+  bad.rest_share = -0.1;
+  EXPECT_FALSE(bad.IsValid(&why));
+}
+
 }  // namespace
 }  // namespace twinsim

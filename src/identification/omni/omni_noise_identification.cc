@@ -105,6 +105,7 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
     for (std::size_t row = 0; row < s.log->rows.size(); ++row)
       selected[static_cast<std::size_t>(s.log->FrameIndex(row))] = in_selection(row);
     auto is_selected = [&](int frame) { return frame >= 0 && frame < frames && selected[static_cast<std::size_t>(frame)]; };
+    if (std::find(selected.begin(), selected.end(), 1) == selected.end()) return;  // nothing to score: not replayed
     OmniReplayOptions o;
     o.backend = options.backend;
     o.horizon = longest;
@@ -291,18 +292,19 @@ NoiseFit FitNoise(const CollectNoise& collect, const NoiseValues& start, const s
   return f;
 }
 
-// The held-out blocks (of the logs that are not wholly held out) in two halves, every
-// other block in time order of each log.
+// The held-out blocks (of the logs that are not wholly held out) in two halves: every
+// other block in time order over all stretches (a log cut into stretches of one or two
+// blocks each would otherwise put each stretch's first block in the same half), a block
+// that two stretches share counted once.
 std::array<std::set<int>, 2> HeldOutHalves(const std::vector<OmniBlockedStretch>& stretches) {
   std::array<std::set<int>, 2> halves;
+  std::size_t next = 0;
   for (const OmniBlockedStretch& s : stretches) {
     if (s.validation) continue;
-    std::vector<int> seen;  // a block's rows are consecutive
     for (std::size_t row = s.score_from; row < s.log->rows.size(); ++row) {
       const int b = (*s.block)[row];
-      if ((*s.held)[row] && (seen.empty() || seen.back() != b)) seen.push_back(b);
+      if ((*s.held)[row] && halves[0].count(b) == 0 && halves[1].count(b) == 0) halves[next++ % 2].insert(b);
     }
-    for (std::size_t k = 0; k < seen.size(); ++k) halves[k % 2].insert(seen[k]);
   }
   return halves;
 }

@@ -1,0 +1,48 @@
+// A linear drive made elsewhere, as the EMPS benchmark's (Janot, Gautier and Brunot,
+// "Data set and reference models of EMPS", 2019) describes it: a prismatic axis (a cart
+// of 95.1 kg on a ball screw) under a cascade of a proportional position loop and a
+// proportional velocity loop, sampled at 1 kHz, logged as the encoder's position and the
+// force the drive received. MuJoCo integrates it (its own integrator, joint damping and
+// friction loss: a dry friction that holds the cart at rest, where the project's model
+// has sign(q̇)); the logged force is the controller's output through a quantised
+// converter, the encoder quantised at a micrometre. The held-out run adds force pulses
+// to the controller's output, as the benchmark's test run does.
+//
+// The parameters are Janot's published ones for the real drive; what a fit should find
+// is in EmpsLikeTruth. The identification under test gets the log's CSV text alone.
+//
+// Built where MuJoCo was found at configure time (TWINSIM_HAVE_MUJOCO); elsewhere
+// RecordEmpsLike throws and the tests that need it skip (MujocoAvailable()).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace twinsim {
+namespace testing {
+
+struct EmpsLikeTruth {
+  double mass = 95.1089;     // kg
+  double viscous = 203.5034;  // N s/m
+  double coulomb = 20.3935;   // N (MuJoCo's friction loss: it also holds the cart at rest)
+  double offset = -3.1648;    // N, a constant force on the cart (the drive's offset)
+};
+
+struct EmpsLikeRecording {
+  double seconds = 24.8;
+  bool pulses = false;         // the held-out run: force pulses added to the controller's output
+  double quantum = 1e-6;       // m, the encoder's resolution
+  double force_noise = 0.3;    // N, white noise on the logged force
+  EmpsLikeTruth truth;
+};
+
+// The log's CSV text (t,q1,tau1) of one run, the reference drawn from `seed`: moves
+// between 0.02 and 0.22 m at 0.05 to 0.35 m/s with dwells between them.
+std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how = {});
+
+// The a-priori model a user would write for it: a 90 kg cart on a prismatic joint along
+// x, no friction (YAML text).
+std::string EmpsLikeNominalYaml();
+
+}  // namespace testing
+}  // namespace twinsim
