@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "core/rng.h"
-
 #include "diagnosis/mujoco_model.h"
 
 namespace twinsim {
