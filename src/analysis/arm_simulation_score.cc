@@ -93,6 +93,9 @@ bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int st
   for (int r = 0; r < steps; ++r) {
     try {
       sim->Step(replay);
+      // A state that left the numbers before the step's own checks saw it runs away too.
+      if (!sim->backend().q().allFinite())
+        throw CheckFailed("the simulated q is not finite at row " + std::to_string(start + 1 + r) + " of " + log.path);
     } catch (const CheckFailed&) {
       if (!hold_on_runaway) throw;
       const Eigen::RowVectorXd last = r > 0 ? Eigen::RowVectorXd(q->row(r - 1)) : Eigen::RowVectorXd(log.q.row(start));
