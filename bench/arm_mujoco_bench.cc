@@ -23,7 +23,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -34,6 +33,7 @@
 
 #include "core/rng.h"
 #include "diagnosis/mujoco_arm_plant.h"
+#include "diagnosis/mujoco_model.h"
 #include "engines/arm_engine.h"
 #include "robots/arm/arm_dynamics.h"
 #include "robots/arm/arm_integrators.h"
@@ -63,14 +63,8 @@ std::string KukaUrdf() {
 struct Arm {
   std::string name;
   ArmModel model;  // twinsim's, joint friction off
-  mjModel* mj = nullptr;
-  mjData* data = nullptr;
+  std::unique_ptr<testing::MujocoModel> mujoco;
   Eigen::VectorXd q0, qd0, tau;  // a test state and a constant torque
-
-  ~Arm() {
-    if (data) mj_deleteData(data);
-    if (mj) mj_deleteModel(mj);
-  }
 };
 
 std::unique_ptr<Arm> LoadArm(const std::string& name, const std::string& urdf) {
@@ -78,20 +72,15 @@ std::unique_ptr<Arm> LoadArm(const std::string& name, const std::string& urdf) {
   arm->name = name;
   arm->model = LoadArmModelFromUrdfString(urdf, name);
   for (ArmJoint& j : arm->model.joints) j.viscous = j.coulomb = 0;
-  const std::string path = (std::filesystem::temp_directory_path() / ("twinsim_mujoco_" + name + ".urdf")).string();
-  std::ofstream(path) << urdf;
-  char error[1000] = "";
-  arm->mj = mj_loadXML(path.c_str(), nullptr, error, sizeof error);
-  std::filesystem::remove(path);
-  if (!arm->mj) throw std::runtime_error("MuJoCo cannot load " + name + ": " + error);
+  arm->mujoco = testing::LoadMujocoText(urdf, ".urdf", name);
+  mjModel* m = arm->mujoco->model;
   const int n = arm->model.dof();
-  if (arm->mj->nv != n) throw std::runtime_error(name + ": MuJoCo has " + std::to_string(arm->mj->nv) + " dof");
-  arm->mj->opt.timestep = kStep;
-  arm->mj->opt.disableflags |= mjDSBL_CONTACT | mjDSBL_CONSTRAINT | mjDSBL_PASSIVE;
+  if (m->nv != n) throw std::runtime_error(name + ": MuJoCo has " + std::to_string(m->nv) + " dof");
+  m->opt.timestep = kStep;
+  m->opt.disableflags |= mjDSBL_CONTACT | mjDSBL_CONSTRAINT | mjDSBL_PASSIVE;
   // The URDF's <dynamics damping friction>: off (mj_Euler would treat damping
   // implicitly even with passive forces disabled).
-  for (int i = 0; i < n; ++i) arm->mj->dof_damping[i] = arm->mj->dof_frictionloss[i] = arm->mj->dof_armature[i] = 0;
-  arm->data = mj_makeData(arm->mj);
+  for (int i = 0; i < n; ++i) m->dof_damping[i] = m->dof_frictionloss[i] = m->dof_armature[i] = 0;
   Rng rng(7);
   arm->q0.resize(n);
   arm->qd0.resize(n);
@@ -109,12 +98,12 @@ std::unique_ptr<Arm> LoadArm(const std::string& name, const std::string& urdf) {
 void CheckSameModel(const Arm& arm) {
   const int n = arm.model.dof();
   Eigen::VectorXd qdd = Eigen::VectorXd::LinSpaced(n, -2, 2);
-  std::copy_n(arm.q0.data(), n, arm.data->qpos);
-  std::copy_n(arm.qd0.data(), n, arm.data->qvel);
-  std::copy_n(qdd.data(), n, arm.data->qacc);
-  mj_inverse(arm.mj, arm.data);
+  std::copy_n(arm.q0.data(), n, arm.mujoco->data->qpos);
+  std::copy_n(arm.qd0.data(), n, arm.mujoco->data->qvel);
+  std::copy_n(qdd.data(), n, arm.mujoco->data->qacc);
+  mj_inverse(arm.mujoco->model, arm.mujoco->data);
   const Eigen::VectorXd ours = InverseDynamics(arm.model, arm.q0, arm.qd0, qdd, false);
-  const Eigen::VectorXd theirs = Eigen::Map<const Eigen::VectorXd>(arm.data->qfrc_inverse, n);
+  const Eigen::VectorXd theirs = Eigen::Map<const Eigen::VectorXd>(arm.mujoco->data->qfrc_inverse, n);
   if ((ours - theirs).norm() > 1e-9 * ours.norm()) {
     std::ostringstream msg;
     msg << arm.name << ": twinsim and MuJoCo disagree on inverse dynamics: " << ours.transpose() << " vs "
@@ -139,10 +128,10 @@ Arm* GetArm(int index) {
 // Sets MuJoCo's state to (q, qd) with the constant torque applied.
 void SetMujocoState(const Arm& arm, const Eigen::VectorXd& q, const Eigen::VectorXd& qd) {
   const int n = arm.model.dof();
-  mj_resetData(arm.mj, arm.data);
-  std::copy_n(q.data(), n, arm.data->qpos);
-  std::copy_n(qd.data(), n, arm.data->qvel);
-  std::copy_n(arm.tau.data(), n, arm.data->qfrc_applied);
+  mj_resetData(arm.mujoco->model, arm.mujoco->data);
+  std::copy_n(q.data(), n, arm.mujoco->data->qpos);
+  std::copy_n(qd.data(), n, arm.mujoco->data->qvel);
+  std::copy_n(arm.tau.data(), n, arm.mujoco->data->qfrc_applied);
 }
 
 #define ARM_OR_SKIP(state)                                            \
@@ -163,11 +152,11 @@ void BM_Twinsim_InverseDynamics(benchmark::State& state) {
 void BM_Mujoco_InverseDynamics(benchmark::State& state) {
   ARM_OR_SKIP(state);
   SetMujocoState(*arm, arm->q0, arm->qd0);
-  std::fill_n(arm->data->qacc, arm->mj->nv, 0.5);
+  std::fill_n(arm->mujoco->data->qacc, arm->mujoco->model->nv, 0.5);
   for (auto _ : state) {
-    mj_inverse(arm->mj, arm->data);
-    benchmark::DoNotOptimize(arm->data->qfrc_inverse[0]);
-    arm->data->qpos[0] += 1e-9;
+    mj_inverse(arm->mujoco->model, arm->mujoco->data);
+    benchmark::DoNotOptimize(arm->mujoco->data->qfrc_inverse[0]);
+    arm->mujoco->data->qpos[0] += 1e-9;
   }
 }
 
@@ -185,9 +174,9 @@ void BM_Mujoco_ForwardDynamics(benchmark::State& state) {
   ARM_OR_SKIP(state);
   SetMujocoState(*arm, arm->q0, arm->qd0);
   for (auto _ : state) {
-    mj_forward(arm->mj, arm->data);
-    benchmark::DoNotOptimize(arm->data->qacc[0]);
-    arm->data->qpos[0] += 1e-9;
+    mj_forward(arm->mujoco->model, arm->mujoco->data);
+    benchmark::DoNotOptimize(arm->mujoco->data->qacc[0]);
+    arm->mujoco->data->qpos[0] += 1e-9;
   }
 }
 
@@ -220,13 +209,13 @@ void BM_Twinsim_StepEuler(benchmark::State& state) {
 
 void MujocoStep(benchmark::State& state, int integrator) {
   ARM_OR_SKIP(state);
-  arm->mj->opt.integrator = integrator;
+  arm->mujoco->model->opt.integrator = integrator;
   int k = 0;
   for (auto _ : state) {
     if (k++ % kStepsPerStart == 0) SetMujocoState(*arm, arm->q0, arm->qd0);
-    mj_step(arm->mj, arm->data);
+    mj_step(arm->mujoco->model, arm->mujoco->data);
   }
-  benchmark::DoNotOptimize(arm->data->qpos[0]);
+  benchmark::DoNotOptimize(arm->mujoco->data->qpos[0]);
 }
 
 void BM_Mujoco_StepRk4(benchmark::State& state) { MujocoStep(state, mjINT_RK4); }
@@ -252,12 +241,12 @@ Eigen::MatrixXd TwinsimRun(const Arm& arm, bool rk4, double h) {
 }
 
 Eigen::MatrixXd MujocoRun(const Arm& arm, int integrator) {
-  arm.mj->opt.integrator = integrator;
+  arm.mujoco->model->opt.integrator = integrator;
   SetMujocoState(arm, arm.q0, arm.qd0);
   Eigen::MatrixXd out(kStepsPerStart, arm.model.dof());
   for (int k = 0; k < kStepsPerStart; ++k) {
-    mj_step(arm.mj, arm.data);
-    out.row(k) = Eigen::Map<const Eigen::VectorXd>(arm.data->qpos, arm.model.dof()).transpose();
+    mj_step(arm.mujoco->model, arm.mujoco->data);
+    out.row(k) = Eigen::Map<const Eigen::VectorXd>(arm.mujoco->data->qpos, arm.model.dof()).transpose();
   }
   return out;
 }

@@ -19,7 +19,6 @@
 #include "core/math_constants.h"
 #include "core/rng.h"
 
-
 namespace twinsim {
 namespace testing {
 

@@ -39,7 +39,6 @@ ordered_json GapsJson(const std::vector<OmniGap>& gaps) {
   return out;
 }
 
-// "identified 6.1 mm: 0.52x the constant-velocity extrapolation's 11.8 mm"
 // The rows the report's calibration is on: a noise fitted on the held-out blocks is
 // judged there only across their halves.
 std::string CalibratedOn(const OmniIdentificationReport& r) {
