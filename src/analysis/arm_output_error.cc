@@ -34,6 +34,10 @@ bool ArmOutputErrorOptions::IsValid(std::string* why) const {
     *why = "threads must be 0 (one per core) or more";
     return false;
   }
+  if (!(rest_share >= 0 && rest_share < 1)) {
+    *why = "the rest share must lie in [0, 1)";
+    return false;
+  }
   return true;
 }
 
@@ -102,7 +106,7 @@ class OutputErrorProblem {
       samples += log.rows();
       torque_rows_ += static_cast<std::size_t>(log.rows() - 2 * log.edge_samples);
     }
-    const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs_, WlsIdentificationOptions{}.rest_share);
+    const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs_, options_.rest_share);
     for (const ArmLog& log : logs_) rest_.push_back(ArmRestRows(log, rest_speed));
     for (std::size_t k = 0; k < logs_.size(); ++k)
       TorqueErrors(start_, k, [&](int j, double e) { torque_error2[j] += e * e; });

@@ -50,6 +50,9 @@ struct ArmOutputErrorOptions {
   // the plain refinement.
   bool stribeck = false;
   double torque_weight = 1;   // the torque rows' weight beside the simulated rows' (0: none)
+  // The torque rows at rest are left out as the identification leaves them out
+  // (WlsIdentificationOptions::rest_share, ArmRestRows): this share of a joint's RMS speed.
+  double rest_share = 0.02;
   std::string backend = "analytic";
   int threads = 0;            // 0: one per core
   // True when usable; else says why in *why.

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "robots/arm/arm_log.h"
 
 namespace twinsim {
 
@@ -67,6 +68,36 @@ void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double bl
                   t.empty() ? 0.0 : t.back() - t.front(), block_seconds);
     throw InputError(SourceLocation{path, 1}, msg);
   }
+}
+
+std::vector<ArmLog> ArmFitBlockLogs(const std::vector<ArmLog>& logs, double block, double held_out) {
+  std::vector<ArmLog> parts;
+  for (const ArmLog& log : logs) {
+    int r = log.edge_samples;
+    const int end = log.rows() - log.edge_samples;
+    while (r < end) {
+      while (r < end && InHeldOutBlock(log.t[r] - log.t[0], block, held_out)) ++r;
+      const int first = r;
+      while (r < end && !InHeldOutBlock(log.t[r] - log.t[0], block, held_out)) ++r;
+      const int rows = r - first;
+      if (rows < 3) continue;
+      ArmLog part = log;
+      part.t = log.t.segment(first, rows);
+      part.q = log.q.middleRows(first, rows);
+      part.qd = log.qd.middleRows(first, rows);
+      part.qdd = log.qdd.middleRows(first, rows);
+      part.tau = log.tau.middleRows(first, rows);
+      if (log.qref.rows() > 0) part.qref = log.qref.middleRows(first, rows);
+      if (static_cast<int>(log.line_of.size()) == log.rows()) {
+        part.line_of.assign(log.line_of.begin() + first, log.line_of.begin() + first + rows);
+      } else {
+        part.line_of.clear();  // a log made in memory has no file lines
+      }
+      part.edge_samples = 0;
+      parts.push_back(std::move(part));
+    }
+  }
+  return parts;
 }
 
 }  // namespace twinsim

@@ -16,6 +16,8 @@
 
 namespace twinsim {
 
+struct ArmLog;
+
 // The block length (s) for logs of these durations (s): `block_seconds` where it is
 // positive, else a twentieth of the longest log, within 0.5..10 s.
 double HeldOutBlockSeconds(double block_seconds, const std::vector<double>& durations);
@@ -44,5 +46,10 @@ bool InHeldOutBlock(double t, double block_seconds, double held_out);
 // residual exists for) span at least two held-out and two fit blocks.
 void CheckLogHoldsOut(const std::vector<double>& t, std::size_t first, double block_seconds, double held_out,
                       const std::string& path);
+
+// The rows of arm `logs` outside the held-out blocks (InHeldOutBlock) and each log's
+// edge_samples, one log per contiguous stretch of at least 3 rows (edge_samples 0):
+// what an identification may fit on while the held-out blocks judge it.
+std::vector<ArmLog> ArmFitBlockLogs(const std::vector<ArmLog>& logs, double block_seconds, double held_out);
 
 }  // namespace twinsim

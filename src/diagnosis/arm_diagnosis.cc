@@ -973,44 +973,12 @@ Eigen::Matrix<double, 10, 1> PointMassParameters(double mass, const Eigen::Vecto
 
 namespace {
 
-// The rows of `logs` outside the held-out blocks (and the derivative filter's edges),
-// one log per contiguous stretch, for identification on data the scores never see.
-std::vector<ArmLog> FitBlockLogs(const std::vector<ArmLog>& logs, double block, double held_out) {
-  std::vector<ArmLog> parts;
-  for (const ArmLog& log : logs) {
-    int r = log.edge_samples;
-    const int end = log.rows() - log.edge_samples;
-    while (r < end) {
-      while (r < end && InHeldOutBlock(log.t[r] - log.t[0], block, held_out)) ++r;
-      const int first = r;
-      while (r < end && !InHeldOutBlock(log.t[r] - log.t[0], block, held_out)) ++r;
-      const int rows = r - first;
-      if (rows < 3) continue;
-      ArmLog part = log;
-      part.t = log.t.segment(first, rows);
-      part.q = log.q.middleRows(first, rows);
-      part.qd = log.qd.middleRows(first, rows);
-      part.qdd = log.qdd.middleRows(first, rows);
-      part.tau = log.tau.middleRows(first, rows);
-      if (log.qref.rows() > 0) part.qref = log.qref.middleRows(first, rows);
-      if (static_cast<int>(log.line_of.size()) == log.rows()) {
-        part.line_of.assign(log.line_of.begin() + first, log.line_of.begin() + first + rows);
-      } else {
-        part.line_of.clear();  // a log made in memory has no file lines
-      }
-      part.edge_samples = 0;
-      parts.push_back(std::move(part));
-    }
-  }
-  return parts;
-}
-
 // `model` with its base parameters and friction identified on the fit blocks.
 ArmModel RefitOnFitBlocks(const ArmModel& model, const std::vector<ArmLog>& logs, double block, double held_out) {
   WlsIdentificationOptions wls;
-  wls.skip_filter_edges = false;  // FitBlockLogs left the edges out
+  wls.skip_filter_edges = false;  // ArmFitBlockLogs left the edges out
   try {
-    ArmModel refitted = IdentifyArm(model, FitBlockLogs(logs, block, held_out), wls);
+    ArmModel refitted = IdentifyArm(model, ArmFitBlockLogs(logs, block, held_out), wls);
     refitted.name = model.name, refitted.source_path = model.source_path;
     return refitted;
   } catch (const InputError& e) {

@@ -236,6 +236,27 @@ Eigen::VectorXd RestSpeeds(const std::vector<ArmLog>& logs, int n, const WlsIden
   return speed;
 }
 
+// Throws InputError unless every joint has rows left beside its rows at rest
+// (`joint_samples`, per joint) and all joints together at least twice `columns`.
+void CheckEnoughRows(const Eigen::VectorXi& joint_samples, int columns, double rest_share, const std::string& where,
+                     const WlsIdentificationSummary& summary) {
+  const int samples = summary.samples, n = static_cast<int>(joint_samples.size());
+  for (int j = 0; j < n && samples > 0; ++j) {
+    if (joint_samples[j] > 0) continue;
+    char msg[240];
+    std::snprintf(msg, sizeof msg,
+                  "joint %d is at rest or near it on every one of the %d samples (|qd| under %.3g, %g %% of its RMS "
+                  "speed, or within one cut-off period of such a row): nothing to identify its parameters from",
+                  j + 1, samples, summary.rest_speed[j], 100 * rest_share);
+    throw InputError(SourceLocation{where}, msg);
+  }
+  if (joint_samples.sum() < 2 * columns || joint_samples.minCoeff() == 0) {
+    throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(columns) +
+                                                " parameters: " + std::to_string(samples) + " samples of " +
+                                                std::to_string(n) + " joints");
+  }
+}
+
 // Accumulates the regressor rows of every log sample, joint by joint, into JointSystems
 // (a joint's rows at rest, below summary->rest_speed or near it, left out of its own
 // equations) and sets summary->samples, rest_rows and torque_rms; throws InputError for
@@ -294,11 +315,7 @@ JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base
   }
   summary->samples = samples;
   summary->rest_rows = Eigen::VectorXi::Constant(n, samples) - joint_samples;
-  if (joint_samples.sum() < 2 * cols_total || joint_samples.minCoeff() == 0) {
-    throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(cols_total) +
-                                                " parameters: " + std::to_string(samples) + " samples of " +
-                                                std::to_string(n) + " joints");
-  }
+  CheckEnoughRows(joint_samples, cols_total, options.rest_share, where, *summary);
   summary->torque_rms = torque_square.cwiseQuotient(joint_samples.cast<double>()).cwiseSqrt();
 
   JointSystems systems;

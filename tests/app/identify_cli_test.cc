@@ -95,6 +95,24 @@ TEST(IdentifyCli, IdentifiesWritesALoadableModelAndReplaysIt) {
   }
 }
 
+TEST(IdentifyCli, TheCutoffIsChosenFromTheLogsByDefaultAndSaidWhere) {
+  const std::string dir = testing::TempDir("identify_cutoff");
+  const std::string log = WriteLog(dir, "run.csv");
+  const std::string model = SourcePath("models/rrr.yaml");
+  auto chosen = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/auto.yaml");
+  ASSERT_EQ(chosen.exit_code, 0) << chosen.err;
+  // Every candidate from 10 Hz up in octaves to a quarter of the 500 Hz rate, scored.
+  EXPECT_NE(chosen.out.find("(held-out torque error per candidate: 10 Hz "), std::string::npos) << chosen.out;
+  EXPECT_NE(chosen.out.find(", 80 Hz "), std::string::npos) << chosen.out;
+  const std::string comment = testing::ReadText(dir + "/auto.yaml");
+  EXPECT_NE(comment.find(" Hz (auto); "), std::string::npos) << comment;
+  // A number is used as given, and nothing is chosen.
+  auto fixed = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/fixed.yaml --cutoff 15");
+  ASSERT_EQ(fixed.exit_code, 0) << fixed.err;
+  EXPECT_EQ(fixed.out.find("per candidate"), std::string::npos) << fixed.out;
+  EXPECT_NE(testing::ReadText(dir + "/fixed.yaml").find("; derivatives at 15 Hz; "), std::string::npos);
+}
+
 TEST(IdentifyCli, OffsetsAndHeldOutValidation) {
   const std::string dir = testing::TempDir("identify_validate");
   const std::string log = WriteLog(dir, "run.csv");

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/derivative_cutoff.h"
 #include "core/math_constants.h"
 #include "core/rng.h"
 #include "diagnosis/arm_diagnosis.h"
@@ -327,6 +328,14 @@ std::vector<StudyRun> Runs() {
   return runs;
 }
 
+// The logs derived as `twinsim diagnose` derives them by default (--cutoff auto): at the
+// cut-off chosen from *logs, *alike (the same runs otherwise recorded) at the same.
+void AtTheCutoffDiagnoseChooses(const ArmModel& nominal, std::vector<ArmLog>* logs, std::vector<ArmLog>* alike) {
+  const double cutoff = DeriveAtChosenCutoff(nominal, logs, {}).cutoff_hz;
+  if (cutoff <= 0) return;
+  for (ArmLog& log : *alike) DeriveArmLog({cutoff}, &log);
+}
+
 class DiagnoseStudy : public ::testing::TestWithParam<StudyRun> {};
 
 TEST_P(DiagnoseStudy, DISABLED_Run) {
@@ -343,8 +352,9 @@ TEST_P(DiagnoseStudy, DISABLED_Run) {
     if (h.torque) how.disturbance = testing::OnJoint(h.joint, h.torque);
     const std::uint64_t s = 2 * static_cast<std::uint64_t>(run.seed);
     std::vector<ArmLog> received(2);  // with the torque the plant received: a disturbance's own floor
-    const std::vector<ArmLog> logs = {testing::RecordArmPlant(plant, nominal, s + 1, 20, how, &received[0]),
-                                      testing::RecordArmPlant(plant, nominal, s + 2, 20, how, &received[1])};
+    std::vector<ArmLog> logs = {testing::RecordArmPlant(plant, nominal, s + 1, 20, how, &received[0]),
+                                testing::RecordArmPlant(plant, nominal, s + 2, 20, how, &received[1])};
+    AtTheCutoffDiagnoseChooses(nominal, &logs, &received);
     const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
     const double plant_gap =
         h.torque ? DiagnoseArm(nominal, received, none).gap_before : DiagnoseArm(plant, logs, none).gap_before;
@@ -361,14 +371,12 @@ TEST_P(DiagnoseStudy, DISABLED_Run) {
     how.hidden = f.torque;
     how.closed_loop = clean.closed_loop = run.kind == "clean" && run.seed % 2 == 0;
     const std::uint64_t s = 2 * static_cast<std::uint64_t>(run.seed);
-    const std::vector<ArmLog> logs = {testing::RecordMujocoArm(plant, s, how), testing::RecordMujocoArm(plant, s + 1, how)};
+    std::vector<ArmLog> logs = {testing::RecordMujocoArm(plant, s, how), testing::RecordMujocoArm(plant, s + 1, how)};
+    std::vector<ArmLog> without;
+    if (run.kind != "clean") without = {testing::RecordMujocoArm(nominal, s, clean), testing::RecordMujocoArm(nominal, s + 1, clean)};
+    AtTheCutoffDiagnoseChooses(nominal, &logs, &without);
     const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
-    const double plant_gap =
-        run.kind == "clean"
-            ? report.gap_before
-            : DiagnoseArm(nominal, {testing::RecordMujocoArm(nominal, s, clean), testing::RecordMujocoArm(nominal, s + 1, clean)},
-                          none)
-                  .gap_before;
+    const double plant_gap = run.kind == "clean" ? report.gap_before : DiagnoseArm(nominal, without, none).gap_before;
     WriteRow(run, f.h, report, plant_gap, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   } else {
     const Hidden h = DrawOmni(run.kind, run.seed);

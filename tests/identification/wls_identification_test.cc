@@ -11,6 +11,8 @@
 #include "analysis/arm_replay.h"
 #include "core/error.h"
 #include "identification/synthetic_arm_data.h"
+#include "robots/arm/arm_log.h"
+#include "robots/arm/arm_model.h"
 #include "robots/arm/arm_regressor.h"
 #include "test_util.h"
 
@@ -270,6 +272,32 @@ TEST(WlsIdentification, RowsAtRestAndWithinOneCutOffPeriodOfThemAreMarked) {
   EXPECT_NE(why.find("rest_share"), std::string::npos) << why;
   bad.rest_share = -0.1;
   EXPECT_FALSE(bad.IsValid(&why));
+}
+
+TEST(WlsIdentification, AJointAtRestOnEveryRowIsNamed) {
+  // Steps of 0.5 mm every 0.4 s: each 50 ms move lies within one period of the 10 Hz
+  // cut-off of the rest before or after it.
+  std::string csv = "t,q1,tau1\n";
+  double q = 0;
+  for (int k = 0; k <= 6000; ++k) {
+    if (k % 400 < 50) q += 0.5e-3 / 50;
+    csv += std::to_string(k * 1e-3) + "," + std::to_string(q) + "," + std::to_string(k % 400 < 50 ? 5 : 0) + "\n";
+  }
+  const ArmModel cart = LoadArmModelFromYamlString(R"(robot: arm
+name: cart
+gravity: [0, 0, -9.81]
+joints:
+  - {name: axis, type: prismatic, axis: [1, 0, 0], lower: -1, upper: 1,
+     link: {name: cart, mass: 8, com: [0, 0, 0], inertia: [1, 1, 1, 0, 0, 0]}}
+)",
+                                                   "cart.yaml");
+  try {
+    IdentifyArm(cart, {ParseArmLog(csv, "steps.csv")}, {});
+    FAIL() << "identified a joint that never left rest";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("joint 1 is at rest or near it on every one of the"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
 namespace twinsim {
 
@@ -25,6 +26,21 @@ void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select);
 // driving noise (docs/models.md), or as each model's driving_noise.simulated says; the
 // value goes into Scene::driving_noise, which MakeSimulation applies.
 void AddDrivingNoiseOption(CLI::App* cmd, std::string* value);
+
+// --cutoff auto|HZ: the low-pass cut-off for an arm log's qd/qdd derived from q
+// (robots/arm/arm_log.h); auto (the default) chooses it from the logs
+// (analysis/derivative_cutoff.h).
+void AddDerivativeCutoffOption(CLI::App* cmd, std::string* value);
+// The arm logs at `paths`, each checked against `model`, derived at the cut-off `value`
+// names: a number of Hz, or auto, chosen for `model` identified with `identification`.
+// *cutoff_hz (if given) receives the cut-off used (Hz), *brief (if given) a line saying
+// how auto chose it (empty for a number). Throws InputError.
+struct ArmLog;
+struct ArmModel;
+struct WlsIdentificationOptions;
+std::vector<ArmLog> ReadArmLogsAtCutoff(const std::vector<std::string>& paths, const std::string& value,
+                                        const ArmModel& model, const WlsIdentificationOptions& identification,
+                                        double* cutoff_hz = nullptr, std::string* brief = nullptr);
 
 void AddRunCommand(CLI::App& app, int* exit_code);
 void AddReplayCommand(CLI::App& app, int* exit_code);

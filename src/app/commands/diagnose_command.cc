@@ -9,6 +9,7 @@
 #include "diagnosis/arm_diagnosis.h"
 #include "diagnosis/diagnosis_report.h"
 #include "diagnosis/omni_diagnosis.h"
+#include "identification/wls_identification.h"
 #include "io/atomic_file.h"
 #include "render/renderer.h"
 #include "robots/arm/arm_log.h"
@@ -24,7 +25,7 @@ struct DiagnoseCliOptions {
   std::vector<std::string> logs;
   std::string out;
   DiagnosisOptions diagnosis;
-  ArmLogOptions arm_log;
+  std::string cutoff = "auto";  // arm: Hz, or auto (AddDerivativeCutoffOption)
   bool quiet = false;
   OmniLogSelector select;  // omni logs holding several robots
 };
@@ -32,7 +33,6 @@ struct DiagnoseCliOptions {
 int Diagnose(const DiagnoseCliOptions& options) {
   std::string why;
   if (!options.diagnosis.IsValid(&why)) throw InputError(why);
-  if (!options.arm_log.IsValid(&why)) throw InputError(why);
   if (std::filesystem::exists(options.out) && !std::filesystem::is_directory(options.out)) {
     throw InputError("--out " + options.out + ": exists and is not a folder");
   }
@@ -50,10 +50,12 @@ int Diagnose(const DiagnoseCliOptions& options) {
   for (const auto& log : options.logs) comment += "\n  " + log;
   if (kind == "arm") {
     const ArmModel model = LoadArmModel(options.model);
-    std::vector<ArmLog> logs;
-    for (const auto& path : options.logs) logs.push_back(ReadArmLog(path, options.arm_log));
+    std::string cutoff_brief;
+    const std::vector<ArmLog> logs = ReadArmLogsAtCutoff(options.logs, options.cutoff, model, {}, nullptr, &cutoff_brief);
+    if (!options.quiet && !cutoff_brief.empty()) std::printf("%s\n", cutoff_brief.c_str());
     ArmModel repaired;
     report = DiagnoseArm(model, logs, options.diagnosis, &repaired, report_progress);
+    if (!cutoff_brief.empty()) comment += "\n" + cutoff_brief;
     model_yaml = FormatArmModelYaml(repaired, comment + "\n" + DiagnosisVerdict(report));
   } else if (kind == "omni") {
     const OmniModel model = LoadOmniModel(options.model);
@@ -120,8 +122,7 @@ void AddDiagnoseCommand(CLI::App& app, int* exit_code) {
                 "Refit the model's own parameters on the fit blocks first (arm: inertial parameters and friction; "
                 "omni: twinsim identify's delay, per-axis response and couplings). Default: trust them, so that "
                 "an arm's payload is named, not absorbed");
-  cmd->add_option("--cutoff", options->arm_log.cutoff_hz, "Arm: Hz, low-pass cut-off for qd/qdd derived from q")
-      ->capture_default_str();
+  AddDerivativeCutoffOption(cmd, &options->cutoff);
   cmd->add_option("--threads", options->diagnosis.threads, "Worker threads (0: one per core); results do not depend on it")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", options->quiet, "No table and no progress");

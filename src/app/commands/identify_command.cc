@@ -31,7 +31,7 @@ struct IdentifyCliOptions {
   std::vector<std::string> validate;
   std::string out;
   std::string report;
-  ArmLogOptions log;
+  std::string cutoff = "auto";  // Hz, or auto (AddDerivativeCutoffOption)
   WlsIdentificationOptions identification;
   bool unweighted = false;
   bool offsets = false;
@@ -145,6 +145,7 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   output_error->offsets = options.offsets;
   output_error->stribeck = options.stribeck;
   output_error->threads = options.omni.threads;
+  output_error->rest_share = identification.rest_share;
   if (options.output_error != 0 && !output_error->IsValid(&why)) throw InputError("--output-error: " + why);
   if (options.stribeck && options.output_error <= 0)
     throw InputError("--stribeck refines by output error: give --output-error S as well");
@@ -152,23 +153,17 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   return identification;
 }
 
-// Reads each arm log and checks it matches the model's joints.
-std::vector<ArmLog> ReadArmLogsForModel(const std::vector<std::string>& paths, const ArmLogOptions& log_options,
-                                        const ArmModel& model) {
-  std::vector<ArmLog> logs;
-  for (const auto& path : paths) {
-    logs.push_back(ReadArmLog(path, log_options));
-    CheckArmLogMatchesModel(logs.back(), model);
-  }
-  return logs;
-}
-
 // The identified model file's comment: the logs, the starting model and how the estimate was refined.
 std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t logs,
-                                 const WlsIdentificationSummary& summary, const ArmOutputErrorSummary& refinement) {
+                                 const WlsIdentificationSummary& summary, const ArmOutputErrorSummary& refinement,
+                                 double cutoff_hz) {  // Hz, 0: nothing derived
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
-  comment += "\nstarting from " + options.model + "; " + summary.BriefReport();
+  char cutoff[96] = "";
+  if (cutoff_hz > 0) {
+    std::snprintf(cutoff, sizeof cutoff, "; derivatives at %g Hz%s", cutoff_hz, options.cutoff == "auto" ? " (auto)" : "");
+  }
+  comment += "\nstarting from " + options.model + cutoff + "; " + summary.BriefReport();
   if (options.output_error > 0) {
     char refined[160];
     std::snprintf(refined, sizeof refined,
@@ -217,8 +212,11 @@ int Identify(const IdentifyCliOptions& options) {
   ArmOutputErrorOptions output_error;
   const WlsIdentificationOptions identification = CheckArmIdentifyOptions(options, &output_error);
   const ArmModel model = LoadArmModel(options.model);
-  std::vector<ArmLog> logs = ReadArmLogsForModel(options.logs, options.log, model);
-  std::vector<ArmLog> held_out = ReadArmLogsForModel(options.validate, options.log, model);
+  double cutoff_hz = 0;
+  std::string cutoff_brief;
+  std::vector<ArmLog> logs = ReadArmLogsAtCutoff(options.logs, options.cutoff, model, identification, &cutoff_hz, &cutoff_brief);
+  // The held-out logs derived as the fitted ones were.
+  std::vector<ArmLog> held_out = ReadArmLogsAtCutoff(options.validate, std::to_string(cutoff_hz), model, identification);
 
   WlsIdentificationSummary summary;
   const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
@@ -236,14 +234,15 @@ int Identify(const IdentifyCliOptions& options) {
 
   OutputFiles files;
   files.Write(options.out,
-              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement)));
+              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement, logs.front().derive_cutoff_hz)));
   if (!options.report.empty()) {
     WriteArmIdentifyReport(options.report, model, identified, logs[0], summary, validation, !held_out.empty(), &files);
   }
 
   if (!options.quiet) {
-    std::printf("identified %s (%d joints) from %zu log(s)\n\n%s", model.name.c_str(), model.dof(), logs.size(),
-                summary.FullReport().c_str());
+    std::printf("identified %s (%d joints) from %zu log(s)\n", model.name.c_str(), model.dof(), logs.size());
+    if (!cutoff_brief.empty()) std::printf("%s\n", cutoff_brief.c_str());
+    std::printf("\n%s", summary.FullReport().c_str());
     if (summary.offsets.size() > 0) {
       std::printf("torque offsets (measured - model), written as torque_offset effects with tau0 = -offset:");
       for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
@@ -285,9 +284,7 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--log", options->logs, "Measured arm log(s) (repeat --log)")->required();
   cmd->add_option("--out", options->out, "Identified model to write (.yaml); omni: or a folder for model.yaml and reports")
       ->required();
-  cmd->add_option("--cutoff", options->log.cutoff_hz,
-                  "Hz, low-pass cut-off for qd/qdd derived from q (well above the motion's bandwidth)")
-      ->capture_default_str();
+  AddDerivativeCutoffOption(cmd, &options->cutoff);
   cmd->add_option("--decimate", options->identification.decimate, "Use every k-th sample")->capture_default_str();
   cmd->add_option("--max-condition", options->identification.max_condition_number,
                   "Largest condition number of the scaled regressor before parameters count as not excited")

@@ -4,6 +4,9 @@
 #include <string>
 
 #include "app/commands/commands.h"
+#include "analysis/derivative_cutoff.h"
+#include "core/error.h"
+#include "robots/arm/arm_log.h"
 #include "robots/omni/omni_log.h"
 
 namespace twinsim {
@@ -76,6 +79,49 @@ void AddDrivingNoiseOption(CLI::App* cmd, std::string* value) {
                   "driving_noise.simulated says")
       ->check(CLI::IsMember({"on", "off", "model"}))
       ->capture_default_str();
+}
+
+void AddDerivativeCutoffOption(CLI::App* cmd, std::string* value) {
+  cmd->add_option("--cutoff", *value,
+                  "Arm: Hz, low-pass cut-off for qd/qdd derived from q, or auto: the lowest from 10 Hz up in octaves "
+                  "whose derivatives let the identified model predict held-out torques within 5 % of the best")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            double v = 0;
+            if (text == "auto") return {};
+            if (!ParseNumber(text, &v)) return "the cut-off must be auto or a number of Hz, got '" + text + "'";
+            if (v > 0 && v <= 1e6) return {};
+            return "the cut-off must be auto or a positive number of Hz up to 1e6, got " + text;
+          },
+          "auto|HZ", "cut-off"))
+      ->capture_default_str();
+}
+
+std::vector<ArmLog> ReadArmLogsAtCutoff(const std::vector<std::string>& paths, const std::string& value,
+                                        const ArmModel& model, const WlsIdentificationOptions& identification,
+                                        double* cutoff_hz, std::string* brief) {
+  ArmLogOptions log_options;
+  const bool automatic = value == "auto";
+  if (!automatic && !ParseNumber(value, &log_options.cutoff_hz)) {
+    throw InputError("--cutoff: expected auto or a number of Hz, got '" + value + "'");
+  }
+  std::string why;
+  if (!log_options.IsValid(&why)) throw InputError("--cutoff: " + why);
+  std::vector<ArmLog> logs;
+  for (const std::string& path : paths) {
+    logs.push_back(ReadArmLog(path, log_options));
+    CheckArmLogMatchesModel(logs.back(), model);
+  }
+  if (brief) brief->clear();
+  if (automatic && !logs.empty()) {
+    DerivativeCutoffOptions options;
+    options.identification = identification;
+    const DerivativeCutoffChoice choice = DeriveAtChosenCutoff(model, &logs, options);
+    if (choice.cutoff_hz > 0) log_options.cutoff_hz = choice.cutoff_hz;
+    if (brief) *brief = choice.Brief();
+  }
+  if (cutoff_hz) *cutoff_hz = log_options.cutoff_hz;
+  return logs;
 }
 
 }  // namespace twinsim

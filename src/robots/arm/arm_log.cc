@@ -160,30 +160,34 @@ ArmLog ArmLogFromTable(const CsvTable& table, const ArmLogOptions& options) {
     log.qdd = Columns(table, "qdd", nq);
     CheckMagnitude(table, log.qdd, "qdd", 1e9);
   }
-  if (!log.qd_logged || !log.qdd_logged) {
-    // Stamps jitter around a fixed rate (the controller's); differentiate on the uniform
-    // grid of the log's average step rather than on the stamps (signal/butterworth.h).
-    const double step = (log.t[rows - 1] - log.t[0]) / (rows - 1);
-    const double rate = 1 / step;
-    log.derive_cutoff_hz = std::min(options.cutoff_hz, 0.25 * rate);
-    const ButterworthFilter filter = DesignButterworthLowPass(options.filter_order, log.derive_cutoff_hz, rate);
-    // Odd reflection keeps value and slope at the ends, not curvature: qdd is off there
-    // for about four periods of the cut-off (the filter's slowest pole decays e^-10 by then).
-    log.edge_samples = std::min(rows / 4, static_cast<int>(std::ceil(4 * rate / log.derive_cutoff_hz)));
-    if (!log.qd_logged) log.qd.resize(rows, nq);
-    if (!log.qdd_logged) log.qdd.resize(rows, nq);
-    for (int j = 0; j < nq; ++j) {
-      if (log.qd_logged) {
-        // Differentiate the logged velocity once rather than the position twice.
-        log.qdd.col(j) = FilteredDerivatives(filter, step, log.qd.col(j)).first;
-        continue;
-      }
-      const SignalDerivatives d = FilteredDerivatives(filter, step, log.q.col(j));
-      log.qd.col(j) = d.first;
-      if (!log.qdd_logged) log.qdd.col(j) = d.second;
-    }
-  }
+  DeriveArmLog(options, &log);
   return log;
+}
+
+void DeriveArmLog(const ArmLogOptions& options, ArmLog* log) {
+  if (log->qd_logged && log->qdd_logged) return;
+  const int rows = log->rows(), n = log->dof;
+  // Stamps jitter around a fixed rate (the controller's); differentiate on the uniform
+  // grid of the log's average step rather than on the stamps (signal/butterworth.h).
+  const double step = (log->t[rows - 1] - log->t[0]) / (rows - 1);
+  const double rate = 1 / step;
+  log->derive_cutoff_hz = std::min(options.cutoff_hz, 0.25 * rate);
+  const ButterworthFilter filter = DesignButterworthLowPass(options.filter_order, log->derive_cutoff_hz, rate);
+  // Odd reflection keeps value and slope at the ends, not curvature: qdd is off there
+  // for about four periods of the cut-off (the filter's slowest pole decays e^-10 by then).
+  log->edge_samples = std::min(rows / 4, static_cast<int>(std::ceil(4 * rate / log->derive_cutoff_hz)));
+  if (!log->qd_logged) log->qd.resize(rows, n);
+  if (!log->qdd_logged) log->qdd.resize(rows, n);
+  for (int j = 0; j < n; ++j) {
+    if (log->qd_logged) {
+      // Differentiate the logged velocity once rather than the position twice.
+      log->qdd.col(j) = FilteredDerivatives(filter, step, log->qd.col(j)).first;
+      continue;
+    }
+    const SignalDerivatives d = FilteredDerivatives(filter, step, log->q.col(j));
+    log->qd.col(j) = d.first;
+    if (!log->qdd_logged) log->qdd.col(j) = d.second;
+  }
 }
 
 bool ArmLogOptions::IsValid(std::string* why) const {

@@ -62,6 +62,11 @@ ArmLog ReadArmLog(const std::string& path, const ArmLogOptions& options = {});
 ArmLog ArmLogFromTable(const CsvTable& table, const ArmLogOptions& options = {});
 ArmLog ParseArmLog(const std::string& text, const std::string& path, const ArmLogOptions& options = {});
 
+// Derives (again) the velocities and accelerations `log` does not hold as logged, from
+// its q at `options`' cut-off (ArmLogFromTable does this once): qd, qdd,
+// derive_cutoff_hz and edge_samples change; a log with both logged is left as it is.
+void DeriveArmLog(const ArmLogOptions& options, ArmLog* log);
+
 // Throws InputError "path:1: the log has 3 joints (q1..q3, tau1..tau3) but the model
 // 'kuka-lwr' has 7" when the counts differ.
 void CheckArmLogMatchesModel(const ArmLog& log, const ArmModel& model);

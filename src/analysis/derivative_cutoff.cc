@@ -1,0 +1,138 @@
+#include "analysis/derivative_cutoff.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include "analysis/arm_replay.h"
+#include "analysis/held_out_blocks.h"
+#include "core/error.h"
+
+namespace twinsim {
+
+bool DerivativeCutoffOptions::IsValid(std::string* why) const {
+  std::ostringstream s;
+  std::string inner;
+  if (!(lowest_hz > 0 && std::isfinite(lowest_hz))) {
+    s << "the lowest cut-off must be a positive number of Hz, got " << lowest_hz;
+  } else if (!(tolerance >= 0 && tolerance < 1)) {
+    s << "the tolerance must lie in [0, 1), got " << tolerance;
+  } else if (!(held_out > 0 && held_out < 1)) {
+    s << "the held-out share must lie in (0, 1), got " << held_out;
+  } else if (!(block_seconds >= 0 && std::isfinite(block_seconds))) {
+    s << "the block length must be a non-negative number of seconds, got " << block_seconds;
+  } else if (!identification.IsValid(&inner)) {
+    s << inner;
+  }
+  if (why) *why = s.str();
+  return s.str().empty();
+}
+
+std::string DerivativeCutoffChoice::Brief() const {
+  if (cutoff_hz <= 0) return "derivatives: every log holds qd and qdd";
+  std::ostringstream s;
+  s << "derivative cut-off " << cutoff_hz << " Hz (held-out torque error per candidate:";
+  for (std::size_t k = 0; k < candidates_hz.size(); ++k) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%s %g Hz %.4g", k ? "," : "", candidates_hz[k], held_out_error[k]);
+    s << buf;
+  }
+  s << ")";
+  if (!note.empty()) s << "; " << note;
+  return s.str();
+}
+
+namespace {
+
+// The held-out error of `model` on `logs`: per joint, the sum of squared errors and of
+// squared measured torques over the held-out rows in [edge[i], rows - edge[i]).
+double HeldOutError(const ArmModel& model, const std::vector<ArmLog>& logs, const std::vector<int>& edge, double block,
+                    double held_out) {
+  const int n = model.dof();
+  Eigen::VectorXd error = Eigen::VectorXd::Zero(n), torque = Eigen::VectorXd::Zero(n);
+  for (std::size_t i = 0; i < logs.size(); ++i) {
+    const ArmLog& log = logs[i];
+    const Eigen::MatrixXd predicted = PredictArmCommands(model, log);
+    for (int r = edge[i]; r < log.rows() - edge[i]; ++r) {
+      if (!InHeldOutBlock(log.t[r] - log.t[0], block, held_out)) continue;
+      error += (log.tau.row(r) - predicted.row(r)).transpose().cwiseAbs2();
+      torque += log.tau.row(r).transpose().cwiseAbs2();
+    }
+  }
+  double sum = 0;
+  for (int j = 0; j < n; ++j) sum += torque[j] > 0 ? error[j] / torque[j] : 0;
+  return sum / n;
+}
+
+}  // namespace
+
+DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::vector<ArmLog>& logs,
+                                              const DerivativeCutoffOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  DerivativeCutoffChoice choice;
+  double rate = std::numeric_limits<double>::infinity();
+  std::vector<double> durations;
+  bool derived = false;
+  for (const ArmLog& log : logs) {
+    CheckArmLogMatchesModel(log, model);
+    derived = derived || !log.qd_logged || !log.qdd_logged;
+    rate = std::min(rate, (log.rows() - 1) / (log.t[log.rows() - 1] - log.t[0]));
+    durations.push_back(log.t[log.rows() - 1] - log.t[0]);
+  }
+  if (!derived) return choice;
+  const double block = HeldOutBlockSeconds(options.block_seconds, durations);
+  for (double hz = options.lowest_hz; hz <= 0.25 * rate * (1 + 1e-9); hz *= 2) choice.candidates_hz.push_back(hz);
+  if (choice.candidates_hz.empty()) choice.candidates_hz.push_back(options.lowest_hz);
+
+  // Every candidate is scored on the rows the lowest cut-off leaves (its edges are the widest).
+  std::vector<int> edge;
+  std::vector<ArmLog> derived_logs = logs;
+  for (ArmLog& log : derived_logs) {
+    DeriveArmLog({choice.candidates_hz.front()}, &log);
+    edge.push_back(log.edge_samples);
+  }
+  WlsIdentificationOptions identification = options.identification;
+  identification.skip_filter_edges = false;  // ArmFitBlockLogs leaves the edges out
+  double best = std::numeric_limits<double>::infinity();
+  for (double hz : choice.candidates_hz) {
+    for (ArmLog& log : derived_logs) DeriveArmLog({hz}, &log);
+    double error = std::numeric_limits<double>::quiet_NaN();
+    try {
+      const ArmModel identified = IdentifyArm(model, ArmFitBlockLogs(derived_logs, block, options.held_out), identification);
+      error = HeldOutError(identified, derived_logs, edge, block, options.held_out);
+    } catch (const InputError& e) {
+      if (choice.note.empty()) choice.note = std::string("at ") + std::to_string(hz) + " Hz: " + e.what();
+    }
+    choice.held_out_error.push_back(error);
+    if (std::isfinite(error)) best = std::min(best, error);
+  }
+  choice.cutoff_hz = options.lowest_hz;
+  if (!std::isfinite(best)) {
+    choice.note = "no candidate could be identified, so the lowest is kept (" + choice.note + ")";
+    return choice;
+  }
+  choice.note.clear();
+  for (std::size_t k = 0; k < choice.candidates_hz.size(); ++k) {
+    if (choice.held_out_error[k] <= (1 + options.tolerance) * best) {
+      choice.cutoff_hz = choice.candidates_hz[k];
+      break;
+    }
+  }
+  return choice;
+}
+
+DerivativeCutoffChoice DeriveAtChosenCutoff(const ArmModel& model, std::vector<ArmLog>* logs,
+                                            const DerivativeCutoffOptions& options) {
+  const DerivativeCutoffChoice choice = ChooseDerivativeCutoff(model, *logs, options);
+  if (choice.cutoff_hz > 0) {
+    for (ArmLog& log : *logs) {
+      if (log.derive_cutoff_hz != choice.cutoff_hz) DeriveArmLog({choice.cutoff_hz}, &log);
+    }
+  }
+  return choice;
+}
+
+}  // namespace twinsim
