@@ -10,6 +10,7 @@
 #include "app/commands/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "identification/wls_identification.h"
 #include "io/output_files.h"
 #include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
@@ -30,7 +31,7 @@ struct ReplayOptions {
   int horizon = 4;
   std::string state = "observer";
   std::string predictor;
-  double cutoff_hz = ArmLogOptions{}.cutoff_hz;
+  std::string cutoff = "10";  // arms: Hz, or auto (AddDerivativeCutoffOption)
   int samples = 0;             // omni: draws per row (0: the mean only)
   long long seed = 1;          // their stream
   bool quiet = false;
@@ -42,16 +43,15 @@ struct ReplayOptions {
 int ReplayArm(const ReplayOptions& options) {
   if (options.samples > 0) throw InputError("--samples is for omni robots: an arm replay writes the model's torques");
   const ArmModel model = LoadArmModel(options.model);
-  ArmLogOptions log_options;
-  log_options.cutoff_hz = options.cutoff_hz;
-  const ArmLog log = ReadArmLog(options.log, log_options);
-  CheckArmLogMatchesModel(log, model);
+  std::string cutoff_brief;
+  const ArmLog log = ReadArmLogsAtCutoff({options.log}, options.cutoff, model, {}, nullptr, &cutoff_brief).front();
   ArmCommandSummary what;
   const Eigen::MatrixXd tau = PredictArmCommands(model, log, &what);
   OutputFiles files;
   WriteArmTorqueCsv(options.out, log.t, tau);
   files.Add(options.out);
   if (!options.quiet) {
+    if (!cutoff_brief.empty()) std::printf("%s\n", cutoff_brief.c_str());
     const TorqueErrors e = CompareArmTorques(model, log, tau);
     const int effects = static_cast<int>(ListArmEffects(model.effects).size());
     std::printf("replayed %d rows of %s through %s (inverse dynamics with friction, %d effect(s)%s%s)\n", log.rows(),
@@ -164,8 +164,7 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--state", options->state, "Omni: how the measured state is estimated: observer or tracker")
       ->capture_default_str()
       ->check(CLI::IsMember({"observer", "tracker"}));
-  cmd->add_option("--cutoff", options->cutoff_hz, "Hz, arms: low-pass cut-off for qd/qdd derived from q")
-      ->capture_default_str();
+  AddDerivativeCutoffOption(cmd, &options->cutoff);
   cmd->add_option("--samples", options->samples,
                   "Omni: N draws per row, written as t,sample,x,y,theta. The observer's state: from its prediction "
                   "(its mean and covariance: the estimate's uncertainty, the driving noise and the process noise). "
