@@ -101,10 +101,13 @@ DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::
     for (ArmLog& log : derived_logs) DeriveArmLog({hz}, &log);
     double error = std::numeric_limits<double>::quiet_NaN();
     try {
-      const ArmModel identified = IdentifyArm(model, ArmFitBlockLogs(derived_logs, block, options.held_out), identification);
+      const std::vector<ArmLog> fit = ArmFitBlockLogs(derived_logs, block, options.held_out);
+      const ArmModel identified = IdentifyArm(model, fit, identification);
       error = HeldOutError(identified, derived_logs, edge, block, options.held_out);
     } catch (const InputError& e) {
-      if (choice.note.empty()) choice.note = std::string("at ") + std::to_string(hz) + " Hz: " + e.what();
+      char at[48];
+      std::snprintf(at, sizeof at, "at %g Hz: ", hz);
+      if (choice.note.empty()) choice.note = at + std::string(e.what());
     }
     choice.held_out_error.push_back(error);
     if (std::isfinite(error)) best = std::min(best, error);
@@ -114,7 +117,6 @@ DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::
     choice.note = "no candidate could be identified, so the lowest is kept (" + choice.note + ")";
     return choice;
   }
-  choice.note.clear();
   for (std::size_t k = 0; k < choice.candidates_hz.size(); ++k) {
     if (choice.held_out_error[k] <= (1 + options.tolerance) * best) {
       choice.cutoff_hz = choice.candidates_hz[k];

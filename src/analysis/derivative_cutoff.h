@@ -42,14 +42,15 @@ struct DerivativeCutoffChoice {
   // Per candidate, the held-out torque error: per joint the error's mean square over the
   // measured torque's, averaged over joints (NaN where the identification failed).
   std::vector<double> held_out_error;
-  std::string note;  // why the choice fell back to lowest_hz, if it did
+  std::string note;  // the first candidate whose identification failed, and why (if one did)
   // One line: the choice and each candidate's error.
   std::string Brief() const;
 };
 
 // Chooses the cut-off for `logs` (read at any cut-off; each is derived again per
-// candidate, their copies only) and the a-priori `model`. Falls back to lowest_hz, with
-// a note, where no candidate can be identified. Throws InputError for invalid options
+// candidate, their copies only) and the a-priori `model`. A candidate whose
+// identification fails is skipped (its error NaN); where every one fails, lowest_hz is
+// kept and the note says why. Throws InputError for invalid options
 // or logs whose joint count differs from the model's.
 DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::vector<ArmLog>& logs,
                                               const DerivativeCutoffOptions& options);

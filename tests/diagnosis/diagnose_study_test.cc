@@ -373,7 +373,9 @@ TEST_P(DiagnoseStudy, DISABLED_Run) {
     const std::uint64_t s = 2 * static_cast<std::uint64_t>(run.seed);
     std::vector<ArmLog> logs = {testing::RecordMujocoArm(plant, s, how), testing::RecordMujocoArm(plant, s + 1, how)};
     std::vector<ArmLog> without;
-    if (run.kind != "clean") without = {testing::RecordMujocoArm(nominal, s, clean), testing::RecordMujocoArm(nominal, s + 1, clean)};
+    if (run.kind != "clean") {
+      without = {testing::RecordMujocoArm(nominal, s, clean), testing::RecordMujocoArm(nominal, s + 1, clean)};
+    }
     AtTheCutoffDiagnoseChooses(nominal, &logs, &without);
     const DiagnosisReport report = DiagnoseArm(nominal, logs, DiagnosisOptions{});
     const double plant_gap = run.kind == "clean" ? report.gap_before : DiagnoseArm(nominal, without, none).gap_before;

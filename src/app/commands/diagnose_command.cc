@@ -51,7 +51,8 @@ int Diagnose(const DiagnoseCliOptions& options) {
   if (kind == "arm") {
     const ArmModel model = LoadArmModel(options.model);
     std::string cutoff_brief;
-    const std::vector<ArmLog> logs = ReadArmLogsAtCutoff(options.logs, options.cutoff, model, {}, nullptr, &cutoff_brief);
+    const std::vector<ArmLog> logs =
+        ReadArmLogsAtCutoff(options.logs, options.cutoff, model, {}, nullptr, &cutoff_brief);
     if (!options.quiet && !cutoff_brief.empty()) std::printf("%s\n", cutoff_brief.c_str());
     ArmModel repaired;
     report = DiagnoseArm(model, logs, options.diagnosis, &repaired, report_progress);

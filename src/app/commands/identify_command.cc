@@ -161,7 +161,8 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
   for (const auto& path : options.logs) comment += "\n  " + path;
   char cutoff[96] = "";
   if (cutoff_hz > 0) {
-    std::snprintf(cutoff, sizeof cutoff, "; derivatives at %g Hz%s", cutoff_hz, options.cutoff == "auto" ? " (auto)" : "");
+    std::snprintf(cutoff, sizeof cutoff, "; derivatives at %g Hz%s", cutoff_hz,
+                  options.cutoff == "auto" ? " (auto)" : "");
   }
   comment += "\nstarting from " + options.model + cutoff + "; " + summary.BriefReport();
   if (options.output_error > 0) {
@@ -214,9 +215,12 @@ int Identify(const IdentifyCliOptions& options) {
   const ArmModel model = LoadArmModel(options.model);
   double cutoff_hz = 0;
   std::string cutoff_brief;
-  std::vector<ArmLog> logs = ReadArmLogsAtCutoff(options.logs, options.cutoff, model, identification, &cutoff_hz, &cutoff_brief);
+  std::vector<ArmLog> logs =
+      ReadArmLogsAtCutoff(options.logs, options.cutoff, model, identification, &cutoff_hz, &cutoff_brief);
   // The held-out logs derived as the fitted ones were.
-  std::vector<ArmLog> held_out = ReadArmLogsAtCutoff(options.validate, std::to_string(cutoff_hz), model, identification);
+  char chosen[32];
+  std::snprintf(chosen, sizeof chosen, "%.17g", cutoff_hz);
+  std::vector<ArmLog> held_out = ReadArmLogsAtCutoff(options.validate, chosen, model, identification);
 
   WlsIdentificationSummary summary;
   const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
@@ -234,7 +238,8 @@ int Identify(const IdentifyCliOptions& options) {
 
   OutputFiles files;
   files.Write(options.out,
-              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement, logs.front().derive_cutoff_hz)));
+              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement,
+                                                                  logs.front().derive_cutoff_hz)));
   if (!options.report.empty()) {
     WriteArmIdentifyReport(options.report, model, identified, logs[0], summary, validation, !held_out.empty(), &files);
   }
