@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "analysis/derivative_cutoff.h"
 #include "identification/wls_identification.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
@@ -15,6 +16,8 @@ int main(int argc, char** argv) {
     const twinsim::ArmModel a_priori = twinsim::LoadArmModel(argv[1]);
     std::vector<twinsim::ArmLog> logs;
     for (int i = 2; i < argc; ++i) logs.push_back(twinsim::ReadArmLog(argv[i]));
+    // The derivatives' cut-off chosen from the logs, as --cutoff auto does.
+    std::printf("%s\n", twinsim::DeriveAtChosenCutoff(a_priori, &logs, {}).Brief().c_str());
     twinsim::WlsIdentificationSummary summary;
     const twinsim::ArmModel identified = twinsim::IdentifyArm(a_priori, logs, {}, &summary);
     for (int k = 0; k < summary.base_parameters; ++k) {
