@@ -88,6 +88,10 @@ TEST(DiagnoseCli, ArmWithAHiddenPayloadWritesJointNullAndLoads) {
   const ArmModel repaired = LoadArmModel(dir + "/out/model.yaml");
   EXPECT_NEAR(repaired.effects.payload_mass, 1.0, 0.15);
   EXPECT_NEAR(repaired.effects.joint(2).torque_offset, 0.8, 0.12);
+  // The derivatives' cut-off, chosen from the logs by default, is said in the report and the model.
+  ASSERT_FALSE(report["notes"].empty());
+  EXPECT_EQ(report["notes"][0].get<std::string>().rfind("The logs' derivative cut-off ", 0), 0u) << report["notes"];
+  EXPECT_NE(testing::ReadText(dir + "/out/model.yaml").find("derivative cut-off "), std::string::npos);
 }
 
 TEST(DiagnoseCli, BadInputExitsTwoAndWritesNothing) {

@@ -56,6 +56,7 @@ int Diagnose(const DiagnoseCliOptions& options) {
     if (!options.quiet && !cutoff_brief.empty()) std::printf("%s\n", cutoff_brief.c_str());
     ArmModel repaired;
     report = DiagnoseArm(model, logs, options.diagnosis, &repaired, report_progress);
+    if (!cutoff_brief.empty()) report.notes.insert(report.notes.begin(), "The logs' " + cutoff_brief + ".");
     if (!cutoff_brief.empty()) comment += "\n" + cutoff_brief;
     model_yaml = FormatArmModelYaml(repaired, comment + "\n" + DiagnosisVerdict(report));
   } else if (kind == "omni") {
