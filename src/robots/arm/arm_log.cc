@@ -165,6 +165,8 @@ ArmLog ArmLogFromTable(const CsvTable& table, const ArmLogOptions& options) {
 }
 
 void DeriveArmLog(const ArmLogOptions& options, ArmLog* log) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
   if (log->qd_logged && log->qdd_logged) return;
   const int rows = log->rows(), n = log->dof;
   // Stamps jitter around a fixed rate (the controller's); differentiate on the uniform

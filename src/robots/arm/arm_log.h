@@ -65,6 +65,7 @@ ArmLog ParseArmLog(const std::string& text, const std::string& path, const ArmLo
 // Derives (again) the velocities and accelerations `log` does not hold as logged, from
 // its q at `options`' cut-off (ArmLogFromTable does this once): qd, qdd,
 // derive_cutoff_hz and edge_samples change; a log with both logged is left as it is.
+// Throws InputError for invalid options.
 void DeriveArmLog(const ArmLogOptions& options, ArmLog* log);
 
 // Throws InputError "path:1: the log has 3 joints (q1..q3, tau1..tau3) but the model
