@@ -87,18 +87,17 @@ DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::
   for (double hz = options.lowest_hz; hz <= 0.25 * rate * (1 + 1e-9); hz *= 2) choice.candidates_hz.push_back(hz);
   if (choice.candidates_hz.empty()) choice.candidates_hz.push_back(options.lowest_hz);
 
-  // Every candidate is scored on the rows the lowest cut-off leaves (its edges are the widest).
-  std::vector<int> edge;
-  std::vector<ArmLog> derived_logs = logs;
-  for (ArmLog& log : derived_logs) {
-    DeriveArmLog({choice.candidates_hz.front()}, &log);
-    edge.push_back(log.edge_samples);
-  }
   WlsIdentificationOptions identification = options.identification;
   identification.skip_filter_edges = false;  // ArmFitBlockLogs leaves the edges out
+  std::vector<ArmLog> derived_logs = logs;
+  std::vector<int> edge;  // per log: the first (lowest) candidate's edges, the widest
   double best = std::numeric_limits<double>::infinity();
   for (double hz : choice.candidates_hz) {
     for (ArmLog& log : derived_logs) DeriveArmLog({hz}, &log);
+    // Every candidate is scored on the rows the lowest cut-off leaves.
+    if (edge.empty()) {
+      for (const ArmLog& log : derived_logs) edge.push_back(log.edge_samples);
+    }
     double error = std::numeric_limits<double>::quiet_NaN();
     try {
       const std::vector<ArmLog> fit = ArmFitBlockLogs(derived_logs, block, options.held_out);

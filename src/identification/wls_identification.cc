@@ -250,7 +250,7 @@ void CheckEnoughRows(const Eigen::VectorXi& joint_samples, int columns, double r
                   j + 1, samples, summary.rest_speed[j], 100 * rest_share);
     throw InputError(SourceLocation{where}, msg);
   }
-  if (joint_samples.sum() < 2 * columns || joint_samples.minCoeff() == 0) {
+  if (joint_samples.sum() < 2 * columns) {
     throw InputError(SourceLocation{where}, "too few samples to identify " + std::to_string(columns) +
                                                 " parameters: " + std::to_string(samples) + " samples of " +
                                                 std::to_string(n) + " joints");

@@ -1,4 +1,5 @@
-// The checks every command's options share (commands.h).
+// The checks every command's options share, and the reading of arm logs at the cut-off
+// --cutoff names (commands.h).
 #include <cmath>
 #include <cstdlib>
 #include <string>
