@@ -131,7 +131,7 @@ Metrics Replay(const JobInputs& in, OutputFiles* files) {
   const OmniModel model = LoadOmniModel(in.model, in.model_overrides);
   const OmniLog log = ReadOmniLog(JobLog(in, kind, files));
   OmniReplayOptions replay;
-  replay.backend = in.backend.empty() ? "ode" : in.backend;
+  replay.backend = ReplayEngineFor(model, in.backend, "ode");
   replay.horizon = in.horizon;
   if (!in.predictor.empty())
     replay.backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(in.predictor));

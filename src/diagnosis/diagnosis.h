@@ -46,7 +46,9 @@ struct DiagnosisOptions {
   double alpha = 0.05;
   // ... and it earns its parameters: n_eff ln(MSE before / MSE after) > 2 k, with n_eff
   // the selection rows' effective count and k the effect's parameters (docs/diagnose.md).
-  std::string backend = "analytic";  // omni: the physics that replays the model
+  // Omni: the physics that replays the model; "" = the engine it was fitted on
+  // (OmniModel::fitted_on), else analytic.
+  std::string backend;
   int horizon = 4;                   // omni: frames predicted ahead (the contract's replay K)
   // Arm: rad/s (m/s) below which a joint counts as standing still, where its friction
   // is anything up to the static level (stiction) rather than the friction law's value.
@@ -197,6 +199,16 @@ struct DiagnosisSimulation {
   std::vector<double> nominal, repaired, constant_velocity;  // per joint: position RMSE, rad or m
 };
 
+// One change found in a log, for report.json's `changes` and the verdict.
+struct ResponseChange {
+  std::string log;       // the path as given
+  double t = 0;          // s, the log's own clock
+  std::string quantity;  // "velocity scale" or "turn-rate scale"
+  double before = 0, after = 0;
+  double t_stat = 0;
+  std::string what;      // one sentence: "the velocity scale fell from 0.67 to 0.34 at t = 4.2 s"
+};
+
 struct DiagnosisReport {
   std::string robot;                    // "omni" or "arm"
   std::string model_name;
@@ -228,6 +240,12 @@ struct DiagnosisReport {
   std::vector<ChannelSeries> series;    // one per finding
   std::vector<DiagnosisPath> paths;    // omni: measured, nominal and repaired over one held-out stretch
   std::vector<std::string> notes;       // what the user should know (skipped candidates, limits)
+  // Where the response changes part way through a log (CONTRACT.md's `changes`): omni
+  // robots (response_changes.h); arms are not searched and list none.
+  std::vector<ResponseChange> changes;
+  // Where the written model predicts worse than the given one anywhere (omni: a horizon of
+  // the test rows), one sentence with the numbers: said first in the verdict.
+  std::string caution;
   // Omni: the test-row gap at the report's horizon, 0.25 s, 1 s and 3 s (rows whose
   // prediction ends on a test row, started wherever); empty for arms.
   std::vector<DiagnosisHorizon> horizons;

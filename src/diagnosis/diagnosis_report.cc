@@ -60,13 +60,26 @@ double ShareClosed(const DiagnosisReport& r) {
   return room > 0 ? (r.gap_before - r.gap_after) / room : std::nan("");
 }
 
+// The response's changes part way through the logs, first: every model fitted across a
+// change fits neither side, and the effects named after it average the two.
+std::string ChangesSentence(const DiagnosisReport& r) {
+  if (r.changes.empty()) return "";
+  std::string s = "The response changes part way: ";
+  for (std::size_t k = 0; k < r.changes.size(); ++k) {
+    const ResponseChange& c = r.changes[k];
+    if (k > 0) s += "; ";
+    if (k == 0 || c.log != r.changes[k - 1].log) s += c.log + ": ";
+    s += c.what;
+  }
+  return s + " (the model below is fitted across the change). ";
+}
+
 }  // namespace
 
 std::string DiagnosisVerdict(const DiagnosisReport& r) {
   const bool refit = std::isfinite(r.refit_gap);
-  std::string s = refit ? "Refitting the model's own parameters took the test-row gap from " + Num(r.gap_before) + " to " +
-                              Num(r.refit_gap) + ". "
-                        : std::string();
+  std::string s = r.caution + ChangesSentence(r);
+  if (refit) s += "Refitting the model's own parameters took the test-row gap from " + Num(r.gap_before) + " to " + Num(r.refit_gap) + ". ";
   if (r.effects.empty()) {
     s += "No effect of the vocabulary passes the tests: the test-row gap stays at " + Num(r.gap_after) +
          " (noise floor about " + Num(r.noise_floor) + ").";
@@ -215,6 +228,19 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     effects.push_back(x);
   }
   j["effects"] = effects;
+  ordered_json changes = ordered_json::array();
+  for (const ResponseChange& c : r.changes) {
+    ordered_json x;
+    x["log"] = c.log;
+    x["t"] = c.t;
+    x["what"] = c.what;
+    x["quantity"] = c.quantity;
+    x["before"] = c.before;
+    x["after"] = c.after;
+    x["t_statistic"] = c.t_stat;
+    changes.push_back(x);
+  }
+  j["changes"] = changes;
   // Beyond the contract: what a reader needs to judge the result.
   j["model"] = r.model_name;
   j["verdict"] = DiagnosisVerdict(r);
@@ -609,6 +635,14 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     h << "<h3>Backward steps</h3><ul>\n";
     for (const auto& n : r.removed) h << "<li>" << HtmlEscape(n) << "</li>\n";
     h << "</ul>\n";
+  }
+  if (!r.changes.empty()) {
+    h << "<h2>Changes part way</h2><table><tr><th>log</th><th>t (s)</th><th>what</th><th>t statistic</th></tr>\n";
+    for (const ResponseChange& c : r.changes) {
+      h << "<tr><td>" << HtmlEscape(c.log) << "</td><td>" << Num(c.t, "%.2f") << "</td><td>" << HtmlEscape(c.what)
+        << "</td><td>" << Num(c.t_stat, "%.1f") << "</td></tr>\n";
+    }
+    h << "</table>\n";
   }
   if (!r.notes.empty()) {
     h << "<h2>Notes</h2><ul>\n";

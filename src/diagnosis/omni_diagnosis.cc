@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -16,6 +17,7 @@
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
 #include "diagnosis/forward_selection.h"
+#include "diagnosis/response_changes.h"
 #include "identification/omni/omni_identification.h"
 #include "learning/omni_predictor.h"
 
@@ -664,6 +666,114 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   }
 }
 
+// How much worse (share of the error) a longer horizon may get before a change is not
+// kept: the selection rows' horizons are estimates, and the named effects answer to the
+// `horizon`-frame prediction they were chosen on.
+constexpr double kWorseTolerance = 0.05;
+
+// Each model's gap at the report's horizons on the selection rows (chose the effects,
+// report nothing), predicting from its observer's estimate as replay does.
+std::vector<std::vector<double>> SelectionHorizonGaps(const OmniProblem& problem,
+                                                      const std::vector<const OmniModel*>& models,
+                                                      const DiagnosisOptions& options,
+                                                      std::vector<std::string>* labels) {
+  std::vector<HorizonPredictor> predictors;
+  int min_start = 0;
+  for (const OmniModel* m : models) {
+    predictors.push_back({m->name, m});
+    min_start = std::max(min_start, m->command_delay_frames + m->vision_delay_frames + kWarmUpFrames);
+  }
+  std::vector<HorizonStretch> stretches;
+  for (const LogData& d : problem.data()) {
+    std::vector<char> scored(d.kind.size());
+    for (std::size_t i = 0; i < scored.size(); ++i) scored[i] = d.kind[i] == RowKind::kSelection;
+    stretches.push_back({d.log, std::move(scored), 0, min_start});
+  }
+  const double period = problem.data().front().log->frame_period;
+  HorizonOptions ho;
+  ho.backend = options.backend;
+  ho.state = kReportState;
+  ho.radius = models.front()->chassis_radius;
+  ho.threads = options.threads;
+  std::vector<std::vector<double>> gaps(models.size());
+  for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
+    const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);
+    if (sums.front().rows == 0) continue;
+    labels->push_back(label);
+    for (std::size_t q = 0; q < models.size(); ++q) gaps[q].push_back(sums[q].PoseRms());
+  }
+  return gaps;
+}
+
+// The first horizon at which `after` predicts worse than `before` by more than the
+// tolerance, said with the numbers; "" when none.
+std::string WorseAt(const std::vector<std::string>& labels, const std::vector<double>& before,
+                    const std::vector<double>& after) {
+  for (std::size_t h = 0; h < labels.size(); ++h) {
+    if (after[h] > (1 + kWorseTolerance) * before[h]) {
+      char text[160];
+      std::snprintf(text, sizeof text, "%.3g against %.3g mm at %s", 1000 * after[h], 1000 * before[h], labels[h].c_str());
+      return text;
+    }
+  }
+  return "";
+}
+
+// Nothing is written worse than what came in (issue 63): the named effects are kept only
+// where the model with them predicts no horizon of the selection rows worse than the
+// model they were added to, and a refit only where it predicts none worse than the given
+// model. Returns what was not kept, one sentence each; clears `selection`'s effects and
+// sets *keep_refit accordingly.
+std::vector<std::string> KeepNothingWorse(const OmniProblem& problem, const OmniModel& given, const OmniModel& start,
+                                          const DiagnosisOptions& options, SelectionResult* selection,
+                                          bool* keep_refit) {
+  std::vector<std::string> dropped;
+  *keep_refit = options.refit_model;
+  if (selection->effects.empty() && !options.refit_model) return dropped;
+  const OmniModel repaired = problem.Build(selection->effects);
+  std::vector<const OmniModel*> models = {&given, &start, &repaired};
+  std::vector<std::string> labels;
+  const std::vector<std::vector<double>> gaps = SelectionHorizonGaps(problem, models, options, &labels);
+  if (!selection->effects.empty()) {
+    if (const std::string worse = WorseAt(labels, gaps[1], gaps[2]); !worse.empty()) {
+      std::string names;
+      for (const TrialEffect& e : selection->effects) names += (names.empty() ? "" : ", ") + e.name;
+      dropped.push_back("the named effects (" + names + ") were not kept: on the selection rows the model with them "
+                        "predicts worse than without (" + worse + "), through the observer as replay predicts");
+      selection->removed.push_back(dropped.back());
+      selection->effects.clear();
+      selection->gap_reductions.clear();
+      selection->evidence.clear();
+      selection->after = selection->before;
+    }
+  }
+  if (options.refit_model) {
+    if (const std::string worse = WorseAt(labels, gaps[0], gaps[1]); !worse.empty()) {
+      dropped.push_back("the refit was not kept: on the selection rows the identified model predicts worse than the "
+                        "given one (" + worse + "); the given model is written, with nothing added");
+      *keep_refit = false;
+    }
+  }
+  return dropped;
+}
+
+// The horizons of the test rows at which the written model predicts worse than the given
+// one: said first in the verdict, with the numbers ("" when none).
+std::string WorseThanGiven(const DiagnosisReport& report) {
+  std::string out;
+  for (const DiagnosisHorizon& h : report.horizons) {
+    const std::size_t written = h.predictors.size() >= 5 ? 2 : 1;  // [given, (identified,) repaired, ...]
+    if (h.rows == 0 || h.gaps.size() <= written) continue;
+    if (h.gaps[written] > (1 + kWorseTolerance) * h.gaps[0]) {
+      char text[120];
+      std::snprintf(text, sizeof text, "%s%.3g against %.3g mm at %s", out.empty() ? "" : ", ", 1000 * h.gaps[written],
+                    1000 * h.gaps[0], h.label.c_str());
+      out += text;
+    }
+  }
+  return out.empty() ? "" : "The written model predicts the test rows worse than the given one: " + out + ". ";
+}
+
 }  // namespace
 
 namespace {
@@ -715,14 +825,17 @@ OmniModel StartModel(const OmniModel& model, const std::vector<OmniLog>& logs, c
   OmniModel start_model = model;
   if (!options.refit_model) return start_model;
   if (progress) progress("identifying the model on the fit blocks");
+  // identify's whole result, as `twinsim identify` writes it: the response fitted through
+  // the observer a user replays with, and the driving noise that tunes that observer.
+  // Fitted through the tracker without the noise step (before issue 63), the model had
+  // no observer section and the contract's replay filtered it with defaults: 470 mm at
+  // four frames on a real robot against identify's 6.6.
   OmniIdentificationOptions identify;
-  identify.state = kDiagnosisState;
   identify.backend = options.backend;
   identify.horizon = options.horizon;
   identify.held_out = options.held_out;
   identify.block_seconds = block;
   identify.threads = options.threads;
-  identify.noise = false;  // the diagnosis scores the mean prediction; the filter's tuning is the fit's
   IdentifyOmni(model, logs, {}, identify, &start_model);
   start_model.name = model.name;
   start_model.source_path = model.source_path;
@@ -894,35 +1007,55 @@ void FreeRunPaths(const OmniProblem& problem, const OmniModel& nominal_model, co
 
 }  // namespace
 
-DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
+DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& asked,
                              OmniModel* repaired, const std::function<void(const std::string&)>& progress) {
   const auto start = std::chrono::steady_clock::now();
+  DiagnosisOptions options = asked;
+  std::string engine_note;
+  options.backend = ReplayEngineFor(model, asked.backend, "analytic", &engine_note);
   const double block = CheckOmniInputs(model, logs, options);
   const int first_predicted = model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + options.horizon;
-  OmniProblem problem(StartModel(model, logs, options, block, progress), logs, options, block);
-  const SelectionResult selection = SelectEffects(problem, options, progress);
+  const OmniModel start_model = StartModel(model, logs, options, block, progress);
+  std::optional<OmniProblem> problem(std::in_place, start_model, logs, options, block);
+  SelectionResult selection = SelectEffects(*problem, options, progress);
+  if (progress) progress("every horizon on the selection rows");
+  bool keep_refit = false;
+  const std::vector<std::string> not_kept = KeepNothingWorse(*problem, model, start_model, options, &selection, &keep_refit);
+  if (options.refit_model && !keep_refit) {
+    // The given model is written: the report describes it, with nothing added.
+    std::vector<DiagnosisCandidate> candidates = std::move(selection.candidates);
+    std::vector<std::string> removed = std::move(selection.removed);
+    options.refit_model = false;
+    problem.emplace(model, logs, options, block);
+    selection = SelectionResult{};
+    selection.before = selection.after = problem->Evaluate({});
+    selection.candidates = std::move(candidates);
+    selection.removed = std::move(removed);
+  }
 
   DiagnosisReport report;
   DiagnosisReportHeader header{"omni", model.name,
                                "RMS over held-out frames of the " + std::to_string(options.horizon) +
                                    "-frame prediction's pose error, sqrt(dx^2 + dy^2 + (r dtheta)^2) with r the chassis "
                                    "radius (m)",
-                               block, problem.guard_seconds(), {}};
+                               block, problem->guard_seconds(), {}};
   for (const OmniLog& log : logs) header.logs.push_back(log.path);
-  ReportSelection(header, problem, selection, options, &report);
+  ReportSelection(header, *problem, selection, options, &report);
   if (options.refit_model) {
     ReportRefit(OmniProblem(model, logs, options, block),
                 "The model's response was identified on the fit blocks (twinsim identify: delay, per-axis gain, lag, "
-                "loop gain, ramp and limits, couplings)",
+                "loop gain, ramp and limits, couplings, driving noise and observer)",
                 &report);
   }
 
-  const OmniModel nominal_model = problem.Build({});
-  const OmniModel repaired_model = problem.Build(selection.effects);
+  const OmniModel nominal_model = problem->Build({});
+  const OmniModel repaired_model = problem->Build(selection.effects);
   report.noise_floor = OmniNoiseFloor(logs, model.chassis_radius);
   GripCheck grip;  // the nominal model's 1-frame replays: where the analytic model holds
-  FindChannels(problem, model, nominal_model, repaired_model, options, &report, &grip);
-  FreeRunPaths(problem, nominal_model, repaired_model, options, first_predicted, &report);
+  FindChannels(*problem, model, nominal_model, repaired_model, options, &report, &grip);
+  FreeRunPaths(*problem, nominal_model, repaired_model, options, first_predicted, &report);
+  report.notes.insert(report.notes.begin(), not_kept.begin(), not_kept.end());
+  if (!engine_note.empty()) report.notes.insert(report.notes.begin(), engine_note);
   for (const auto& [name, p] : ListOmniEffects(model.effects)) {
     report.notes.push_back("the model's own " + name + " was trusted, not refitted");
   }
@@ -930,8 +1063,15 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     report.notes.push_back("replaying the logs, " + text + "; an effect named from those rows may stand for the slip");
   }
   if (progress) progress("every horizon");
-  ScoreHorizons(problem, model, nominal_model, repaired_model, options, &report);
-  if (repaired) *repaired = repaired_model;
+  ScoreHorizons(*problem, model, nominal_model, repaired_model, options, &report);
+  report.caution = WorseThanGiven(report);
+  if (progress) progress("changes part way");
+  report.changes = FindOmniResponseChanges(model, logs, options.backend);
+  if (repaired) {
+    *repaired = repaired_model;
+    // Its response (the refit, the effects) was fitted on this engine.
+    if (options.refit_model || !selection.effects.empty()) repaired->fitted_on = options.backend;
+  }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

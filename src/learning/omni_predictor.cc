@@ -569,6 +569,8 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
                                 NominalOmniTrack* track, OmniPredictorInfo* info, OmniDataset* train,
                                 OmniDataset* validation) {
   std::vector<SplitLog> split;
+  int total_train = 0, total_val = 0;
+  std::size_t total_rows = 0;
   for (const OmniLog& log : logs) {
     if (std::abs(1.0 / log.frame_period - info->frame_rate) > 0.01 * info->frame_rate) {
       std::ostringstream msg;
@@ -589,15 +591,25 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
       n_train = AppendSamples(part.seq, info->layout, 0, part.cut - 1 - info->layout.horizon, train);
       n_val = AppendSamples(part.seq, info->layout, part.cut, part.seq.frames() - 1, validation);
     }
-    const int needed = info->layout.history + info->layout.command_lag + info->layout.horizon;
-    if (n_train < 10 || n_val < 1)
-      throw InputError(SourceLocation{log.path}, "log too short: " + std::to_string(log.rows.size()) +
-                                                     " rows give " + std::to_string(n_train + n_val) +
-                                                     " complete windows (" + std::to_string(needed) +
-                                                     " consecutive frames each; at least 10 to train on and 1 "
-                                                     "held out are needed)");
+    // Logs are pooled: a short stretch between missed frames gives what windows it has,
+    // and only all logs together must give enough (a real camera's log, cut into the fit
+    // blocks of a diagnosis, has stretches too short to train on alone).
+    total_train += n_train;
+    total_val += n_val;
+    total_rows += log.rows.size();
+    if (n_train + n_val == 0) continue;
     info->logs.push_back(log.path);
     split.push_back(std::move(part));
+  }
+  if (total_train < 10 || total_val < 1) {
+    const int needed = info->layout.history + info->layout.command_lag + info->layout.horizon;
+    const std::string what = std::to_string(total_rows) + " rows" +
+                             (logs.size() > 1 ? " of " + std::to_string(logs.size()) + " logs" : std::string()) +
+                             " give " + std::to_string(total_train) + " training and " + std::to_string(total_val) +
+                             " held-out windows (" + std::to_string(needed) +
+                             " consecutive frames each, a few missed frames bridged; at least 10 to train on and 1 "
+                             "held out are needed)";
+    throw InputError(SourceLocation{logs.front().path}, "log too short: " + what);
   }
   return split;
 }

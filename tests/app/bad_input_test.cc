@@ -453,7 +453,7 @@ std::vector<BadInputCase> Cases() {
        "replay --model {src}/models/omni4.yaml --log {d}/log.csv --backend analytic --out {d}/o.csv", 2, "{d}/log.csv:", "o.csv", 5.0, ""},
       {"omni_log_times_x1e20", {{"log.csv", (std::string(kOmniHeader) + OmniRows(120, 1.0 / 30, 1e+20))}},
        "replay --model {src}/models/omni4.yaml --log {d}/log.csv --backend analytic --out {d}/o.csv", 2, "{d}/log.csv:", "o.csv"},
-      {"omni_log_irregular_frames", {{"log.csv", (std::string(kOmniHeader) + OmniRows(10, 1.0 / 30, 1) + std::string("0.35,0,0,0,0,0,0\n") + std::string("0.4,0,0,0,0,0,0\n"))}},
+      {"omni_log_irregular_frames", {{"log.csv", (std::string(kOmniHeader) + OmniRows(10, 1.0 / 30, 1) + std::string("0.31,0,0,0,0,0,0\n") + std::string("0.35,0,0,0,0,0,0\n"))}},
        "replay --model {src}/models/omni4.yaml --log {d}/log.csv --backend analytic --out {d}/o.csv", 2, "{d}/log.csv:12:", "o.csv"},
       {"omni_log_utf16", {{"log.csv", (std::string(std::string("\377\376t\000,\000x\000\n" "\0000\000,\0000\000\n" "\000", 18)))}},
        "replay --model {src}/models/omni4.yaml --log {d}/log.csv --backend analytic --out {d}/o.csv", 2, "{d}/log.csv:#:", "o.csv"},

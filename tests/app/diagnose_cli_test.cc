@@ -26,6 +26,13 @@ void ExpectContractReport(const json& r, const std::string& robot) {
   EXPECT_TRUE(r.at("gap_after").is_number());
   EXPECT_LE(r.at("gap_after").get<double>(), r.at("gap_before").get<double>());
   ASSERT_TRUE(r.at("effects").is_array());
+  // CONTRACT.md: the changes part way through a log, an empty list when none.
+  ASSERT_TRUE(r.at("changes").is_array());
+  for (const json& c : r.at("changes")) {
+    EXPECT_TRUE(c.at("log").is_string());
+    EXPECT_TRUE(c.at("t").is_number());
+    EXPECT_FALSE(c.at("what").get<std::string>().empty());
+  }
   for (const json& e : r.at("effects")) {
     EXPECT_TRUE(e.at("name").is_string());
     EXPECT_TRUE(e.at("joint").is_null() || e.at("joint").is_number_integer());

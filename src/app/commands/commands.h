@@ -21,6 +21,10 @@ void CheckNumberOptions(CLI::App* app);
 // (robots/omni/omni_log.h).
 struct OmniLogSelector;
 void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select);
+// ReadOmniLog, and a note on stderr where the log's clock has holes (frames the logger
+// never wrote, read as frames without a measurement): said once per log read.
+struct OmniLog;
+OmniLog ReadOmniLogSayingHoles(const std::string& path, const OmniLogSelector& select);
 
 // --driving-noise on|off|model: whether every omni robot of a scene slips by its model's
 // driving noise (docs/models.md), or as each model's driving_noise.simulated says; the

@@ -298,7 +298,7 @@ int Compare(const CompareCliOptions& options) {
                      std::to_string(options.models.size()));
   if (!options.horizons.empty()) throw InputError("compare: --horizon is for arm models (omni horizons are fixed)");
   const OmniModel model = LoadOmniModel(options.models.front());
-  const OmniLog log = ReadOmniLog(options.log, options.select);
+  const OmniLog log = ReadOmniLogSayingHoles(options.log, options.select);
   const double frame_rate = 1.0 / log.frame_period;
 
   std::vector<std::shared_ptr<const OmniPredictor>> predictors;

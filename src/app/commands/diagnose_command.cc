@@ -62,7 +62,7 @@ int Diagnose(const DiagnoseCliOptions& options) {
   } else if (kind == "omni") {
     const OmniModel model = LoadOmniModel(options.model);
     std::vector<OmniLog> logs;
-    for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path, options.select));
+    for (const auto& path : options.logs) logs.push_back(ReadOmniLogSayingHoles(path, options.select));
     OmniModel repaired;
     report = DiagnoseOmni(model, logs, options.diagnosis, &repaired, report_progress);
     model_yaml = FormatOmniModelYaml(repaired, comment + "\n" + DiagnosisVerdict(report));
@@ -114,8 +114,9 @@ void AddDiagnoseCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--alpha", options->diagnosis.alpha,
                   "Family-wise level of the tests (Holm over each round's candidates; the adequacy checks)")
       ->capture_default_str();
-  cmd->add_option("--backend", options->diagnosis.backend, "Omni: physics that replays the model (analytic, ode, bullet)")
-      ->capture_default_str();
+  cmd->add_option("--backend", options->diagnosis.backend,
+                  "Omni: physics that replays the model (analytic, ode, bullet; default: the engine the model was "
+                  "fitted on, its fitted_on, else analytic)");
   cmd->add_option("--horizon", options->diagnosis.horizon, "Omni: frames predicted ahead")->capture_default_str();
   cmd->add_option("--standstill", options->diagnosis.standstill,
                   "Arm: rad/s (m/s) below which a joint sticks, its friction anything up to the static level")

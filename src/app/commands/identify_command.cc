@@ -85,8 +85,8 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
     throw InputError("--out " + options.out + ": exists and is not a folder (give a folder, or a .yaml path for the model)");
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs, validation;
-  for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path, options.select));
-  for (const auto& path : options.validate) validation.push_back(ReadOmniLog(path, options.select));
+  for (const auto& path : options.logs) logs.push_back(ReadOmniLogSayingHoles(path, options.select));
+  for (const auto& path : options.validate) validation.push_back(ReadOmniLogSayingHoles(path, options.select));
 
   Progress progress("identify", !options.quiet);
   OmniModel identified;

@@ -1,6 +1,7 @@
 // The checks every command's options share, and the reading of arm logs at the cut-off
 // --cutoff names (commands.h).
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -71,6 +72,13 @@ void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select) {
   cmd->add_option("--robot", select->robot,
                   "Omni log holding several robots: the robot id to read (column robot_id, robot or id)");
   cmd->add_option("--team", select->team, "Omni log holding several robots: the team to read (column team)");
+}
+
+OmniLog ReadOmniLogSayingHoles(const std::string& path, const OmniLogSelector& select) {
+  OmniLog log = ReadOmniLog(path, select);
+  // Said even with --quiet, on stderr: the rows a user counts are not the frames replayed.
+  if (const std::string holes = DescribeClockHoles(log); !holes.empty()) std::fprintf(stderr, "note: %s\n", holes.c_str());
+  return log;
 }
 
 void AddDrivingNoiseOption(CLI::App* cmd, std::string* value) {

@@ -27,7 +27,7 @@ struct ReplayOptions {
   std::string model;
   std::string log;
   std::string out;
-  std::string backend = "ode";
+  std::string backend;  // "": the engine the model was fitted on, else ode
   int horizon = 4;
   std::string state = "observer";
   std::string predictor;
@@ -79,9 +79,12 @@ int Replay(const ReplayOptions& options) {
     throw InputError(SourceLocation{options.model},
                      "replay of '" + kind + "' models is not available in this build (known: omni, arm)");
   const OmniModel model = LoadOmniModel(options.model);
-  const OmniLog log = ReadOmniLog(options.log, options.select);
+  const OmniLog log = ReadOmniLogSayingHoles(options.log, options.select);
   OmniReplayOptions replay;
-  replay.backend = options.backend;
+  std::string engine_note;
+  replay.backend = ReplayEngineFor(model, options.backend, "ode", &engine_note);
+  // Said even with --quiet: the predictions are not those of the engine the model was fitted on.
+  if (!engine_note.empty()) std::fprintf(stderr, "note: %s\n", engine_note.c_str());
   replay.horizon = options.horizon;
   replay.state = options.state;
   replay.samples = options.samples;
@@ -122,7 +125,7 @@ int Replay(const ReplayOptions& options) {
     std::printf(
         "replayed %zu rows of %s through %s on %s (K = %d, delay %d frames, state from the %s): %d predicted, position "
         "RMSE %.4f m\n",
-        log.rows.size(), options.log.c_str(), model.name.c_str(), options.backend.c_str(), options.horizon,
+        log.rows.size(), options.log.c_str(), model.name.c_str(), replay.backend.c_str(), options.horizon,
         result.delay_frames, result.state == "none" ? "first two rows" : result.state.c_str(), result.num_predicted(),
         PositionRmse(log, result));
     files.PrintWrote();
@@ -156,7 +159,9 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
                   "Measured log (omni: t,x,y,theta,vx_cmd,vy_cmd,omega_cmd; arm: t,q1..qn,tau1..taun[,qd..,qdd..])")
       ->required();
   cmd->add_option("--out", options->out, "Output CSV")->required();
-  cmd->add_option("--backend", options->backend, "Backend: ode, bullet, analytic or learned")->capture_default_str();
+  cmd->add_option("--backend", options->backend,
+                  "Backend: ode, bullet, analytic or learned (default: the engine an omni model was fitted on, its "
+                  "fitted_on, else ode)");
   cmd->add_option("--predictor", options->predictor, "1-frame predictor for --backend learned (from twinsim train)");
   cmd->add_option("--horizon", options->horizon, "K, frames predicted ahead (0: free run)")
       ->capture_default_str()

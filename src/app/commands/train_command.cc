@@ -93,7 +93,7 @@ int Train(const TrainCliOptions& options) {
   // Read and check everything before training or writing.
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs;
-  for (const auto& path : options.logs) logs.push_back(ReadOmniLog(path, options.select));
+  for (const auto& path : options.logs) logs.push_back(ReadOmniLogSayingHoles(path, options.select));
   OmniTrainOptions train = options.train;
   train.residual = options.residual;
   if (options.nominal_engine) train.nominal_engine = *options.nominal_engine;

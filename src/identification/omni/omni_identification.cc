@@ -1236,6 +1236,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   StandardErrors(problem, options, &fit, &report);
   OmniModel model = problem.Build(fit.v, false);
   IdentifyNoise(segments, options, say, &model, &report);
+  model.fitted_on = options.backend;  // the engines part near the wheels' grip: replay on this one
   if (identified) *identified = model;
   ReportParameters(fit, model, &report);
   NoteUndetermined(fit, &report);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 
@@ -13,8 +14,14 @@
 namespace twinsim {
 namespace {
 
-// A gap between rows may be a whole number of frames give or take this fraction.
-constexpr double kFrameJitter = 0.3;
+// Rows closer than this share of the frame period are not two camera frames. Any gap
+// longer is a whole number of frames, rounded: a real logger's clock jitters by up to
+// a third of a frame (the Robotino's: 0.7 to 1.66 periods between rows), and a gap that
+// rounds to two frames or more is a hole, frames the logger never wrote.
+constexpr double kMinFrameStep = 0.5;
+// The longest hole the observer carries the state across (the commands held): longer,
+// nothing of the robot's velocity is left, and the log is two logs.
+constexpr double kMaxHoleSeconds = 5.0;
 // What a camera over a field can report. Beyond these a log is not a robot's (a unit
 // mistake, a corrupted file), and replaying it would take hours or overflow the engines.
 constexpr double kMinFramePeriod = 1e-4;  // s (10 kHz)
@@ -221,14 +228,27 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
         << " are replayed (split the log)";
     throw InputError(SourceLocation{table.path, log.line_of.back(), 1}, msg.str());
   }
+  // Each row's frame counted from the one before (a real clock jitters: counted from the
+  // first row, jitter that does not average out would put two rows on one frame).
+  log.frame_of.assign(log.rows.size(), 0);
   for (std::size_t i = 0; i < dts.size(); ++i) {
     const double frames = dts[i] / log.frame_period;
-    if (std::abs(frames - std::round(frames)) > kFrameJitter) {
+    if (frames < kMinFrameStep) {
       std::ostringstream msg;
-      msg << "irregular frame time: " << dts[i] << " s after the previous row, the frame period is "
-          << log.frame_period << " s";
+      msg << "irregular frame time: " << dts[i] << " s after the previous row, under half the frame period "
+          << log.frame_period << " s (two rows for one camera frame?)";
       throw InputError(SourceLocation{table.path, log.line_of[i + 1], 1}, msg.str());
     }
+    const int step = std::max(1, static_cast<int>(std::lround(frames)));
+    log.frame_of[i + 1] = log.frame_of[i] + step;
+    if (step < 2) continue;
+    if (dts[i] > kMaxHoleSeconds) {
+      std::ostringstream msg;
+      msg << "a hole of " << dts[i] << " s in the clock (no row for " << step - 1 << " frames); holes up to "
+          << kMaxHoleSeconds << " s read as frames without a measurement, a longer one is two logs: split it here";
+      throw InputError(SourceLocation{table.path, log.line_of[i + 1], 1}, msg.str());
+    }
+    log.holes.push_back({i + 1, dts[i], step - 1});
   }
 
   // Unwrap theta: successive measurements never turn by more than half a turn.
@@ -243,6 +263,22 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
   return log;
 }
 
+std::string DescribeClockHoles(const OmniLog& log) {
+  if (log.holes.empty()) return "";
+  const ClockHole* longest = &log.holes.front();
+  int frames = 0;
+  for (const ClockHole& h : log.holes) {
+    frames += h.frames;
+    if (h.seconds > longest->seconds) longest = &h;
+  }
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "%s: the clock has %zu hole(s) where the logger wrote no row (%d frame(s) in all, the longest %.3g s "
+                "before line %d): read as frames without a measurement, the command held",
+                log.path.c_str(), log.holes.size(), frames, longest->seconds, log.line_of[longest->row]);
+  return text;
+}
+
 int OmniLog::num_measured() const {
   int n = 0;
   for (const OmniLogRow& r : rows) n += r.measured;
@@ -250,6 +286,7 @@ int OmniLog::num_measured() const {
 }
 
 int OmniLog::FrameIndex(std::size_t row) const {
+  if (frame_of.size() == rows.size()) return frame_of[row];
   return static_cast<int>(std::lround((rows[row].t - rows[0].t) / frame_period));
 }
 
@@ -313,6 +350,14 @@ OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last) {
   out.frame_period = log.frame_period;
   out.rows.assign(log.rows.begin() + static_cast<long>(first), log.rows.begin() + static_cast<long>(last));
   out.line_of.assign(log.line_of.begin() + static_cast<long>(first), log.line_of.begin() + static_cast<long>(last));
+  if (log.frame_of.size() == log.rows.size()) {
+    for (std::size_t i = first; i < last; ++i) out.frame_of.push_back(log.frame_of[i] - log.frame_of[first]);
+  }
+  for (ClockHole h : log.holes) {
+    if (h.row <= first || h.row >= last) continue;  // a hole before the slice's first row is not in it
+    h.row -= first;
+    out.holes.push_back(h);
+  }
   return out;
 }
 

@@ -1,9 +1,10 @@
 // The omni robot log of CONTRACT.md: `t,x,y,theta,vx_cmd,vy_cmd,omega_cmd`, one row per
 // camera frame, SI units, extra columns ignored. One module reads and writes it.
 //
-// Reading checks every value (file:line:column), that t strictly increases and is
-// nearly uniform (gaps of whole frames, i.e. dropped frames, are fine; so is jitter of
-// a few per cent of the period), and unwraps theta. A row whose x, y, theta cells are
+// Reading checks every value (file:line:column), that t strictly increases by at least
+// half a frame period between rows (each gap is read as a whole number of frames; one
+// that rounds to two or more is a hole in the clock, frames without a measurement, up
+// to 5 s), and unwraps theta. A row whose x, y, theta cells are
 // all empty, or whose pose repeats the last measured pose exactly, is a frame with a
 // command and no new measurement (OmniLogRow::measured false): cameras miss frames.
 // A file holding several robots (a `robot_id`, `robot` or `id` column, and optionally
@@ -39,14 +40,28 @@ struct OmniLogSelector {
   bool empty() const { return robot.empty() && team.empty(); }
 };
 
+// Frames the logger never wrote: a gap of two or more frame periods between rows (any
+// fraction of a frame: a stalled logger resumes off the beat). Its frames read as frames
+// without a measurement, the last row's command held.
+struct ClockHole {
+  std::size_t row = 0;  // the row after the hole
+  double seconds = 0;   // from the row before to `row`
+  int frames = 0;       // frames missing, rounded
+};
+
 struct OmniLog {
   std::string path;
   std::vector<OmniLogRow> rows;
   std::vector<int> line_of;  // file line of each row
   double frame_period = 0;   // s, the median time between rows
   std::string robot;         // which robot of the file, as selected ("" = the file's only one)
+  std::vector<ClockHole> holes;  // in row order
+  // Each row's frame from row 0, counted gap by gap as the reader found them (each gap
+  // rounded to whole frames, at least one); empty for a log built in code, whose frames
+  // FrameIndex counts from the time.
+  std::vector<int> frame_of;
 
-  // The frame index of row i counted from row 0 (dropped frames leave gaps).
+  // The frame index of row i counted from row 0 (dropped frames and holes leave gaps).
   int FrameIndex(std::size_t row) const;
   // Rows with a new measurement.
   int num_measured() const;
@@ -59,6 +74,10 @@ struct OmniLog {
 OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select = {});
 OmniLog ReadOmniLog(const std::string& path, const OmniLogSelector& select = {});
 OmniLog ParseOmniLog(const std::string& text, const std::string& path, const OmniLogSelector& select = {});
+
+// One sentence for the user on the log's clock holes ("" when it has none): how many,
+// how many frames in all, the longest and where. Commands say it once per log.
+std::string DescribeClockHoles(const OmniLog& log);
 
 // Rows [first, last) of `log` as a log of their own (path, robot and frame period kept).
 OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last);

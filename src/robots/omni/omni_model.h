@@ -94,6 +94,11 @@ struct OmniObserverModel {
 struct OmniModel {
   std::string name;
   std::string source_path;  // file it was loaded from ("" when built in code)
+  // The engine (analytic, ode, bullet) the model's response was fitted on by identify or
+  // diagnose; "" for a model from a data sheet. The engines part where wheels near their
+  // grip, so replay, compare, diagnose and train use this one unless told otherwise
+  // (ReplayEngineFor, omni_model.h), and say so when told.
+  std::string fitted_on;
 
   // Chassis (everything but the wheels).
   double chassis_mass = 2.3;        // kg
@@ -206,6 +211,13 @@ OmniModel LoadOmniModel(const std::string& path);
 OmniModel LoadOmniModel(const std::string& path, const YamlOverrides& overrides);
 // As LoadOmniModel, from YAML text; `name` stands for the file in messages.
 OmniModel LoadOmniModelFromString(const std::string& yaml, const std::string& name);
+
+// The engine a command replays `model` on: `asked` (its --backend) where given, else the
+// engine the model was fitted on, else `fallback` (the command's own default). Where
+// `asked` is a physics engine other than the one the model was fitted on, *note (if
+// given) receives one sentence saying so; else it is cleared.
+std::string ReplayEngineFor(const OmniModel& model, const std::string& asked, const std::string& fallback,
+                            std::string* note = nullptr);
 
 inline constexpr double kGravity = 9.81;  // m/s^2
 

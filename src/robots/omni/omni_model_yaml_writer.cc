@@ -74,6 +74,7 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   }
   line("robot", "omni");
   line("name", Text(model.name));
+  if (!model.fitted_on.empty()) line("fitted_on", model.fitted_on, "the engine the response was fitted on");
   s << "chassis:\n";
   line("  mass", YamlNumber(model.chassis_mass), "kg, without wheels");
   line("  radius", YamlNumber(model.chassis_radius), "m");

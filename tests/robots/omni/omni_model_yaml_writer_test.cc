@@ -20,6 +20,7 @@ void ExpectSamePid(const PidGains& a, const PidGains& b) {
 // Every field with ==: the numbers must come back as the same doubles.
 void ExpectSameModel(const OmniModel& a, const OmniModel& b) {
   EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.fitted_on, b.fitted_on);
   EXPECT_EQ(a.chassis_mass, b.chassis_mass);
   EXPECT_EQ(a.chassis_radius, b.chassis_radius);
   EXPECT_EQ(a.chassis_height, b.chassis_height);
@@ -154,6 +155,35 @@ TEST(OmniModelYamlWriter, DrivingNoiseAndObserverRoundTripAndAreLeftOutAtTheirDe
   }
   EXPECT_THROW(LoadOmniModelFromString(base + "observer: {process_noise: {sideways: 0}}\n", "bad.yaml"), InputError);
   EXPECT_THROW(LoadOmniModelFromString(base + "observer: {slip: 1}\n", "bad.yaml"), InputError);
+}
+
+// Issue 63: a fitted model names the engine it was fitted on, and commands replay it
+// there unless told otherwise, saying so when told.
+TEST(OmniModelYamlWriter, TheEngineAModelWasFittedOnRoundTripsAndChoosesTheReplaysEngine) {
+  OmniModel m = testing::Omni4();
+  EXPECT_EQ(FormatOmniModelYaml(m).find("fitted_on"), std::string::npos);
+  EXPECT_EQ(ReplayEngineFor(m, "", "ode"), "ode");
+  m.fitted_on = "analytic";
+  const OmniModel back = RoundTrip(m);
+  EXPECT_EQ(back.fitted_on, "analytic");
+  EXPECT_EQ(FormatOmniModelYaml(back), FormatOmniModelYaml(m));
+  std::string note = "stale";
+  EXPECT_EQ(ReplayEngineFor(back, "", "ode", &note), "analytic");
+  EXPECT_EQ(note, "");
+  EXPECT_EQ(ReplayEngineFor(back, "analytic", "ode", &note), "analytic");
+  EXPECT_EQ(note, "");
+  EXPECT_EQ(ReplayEngineFor(back, "bullet", "ode", &note), "bullet");
+  EXPECT_NE(note.find("was fitted on the analytic engine (fitted_on); replaying it on bullet as asked"),
+            std::string::npos) << note;
+  EXPECT_EQ(ReplayEngineFor(back, "learned", "ode", &note), "learned");
+  EXPECT_EQ(note, "");  // a learned backend is not an engine of the model's physics
+  const std::string base = "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n";
+  try {
+    LoadOmniModelFromString(base + "fitted_on: mujoco\n", "bad.yaml");
+    ADD_FAILURE() << "an unknown engine loads";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:3:"), std::string::npos) << e.what();
+  }
 }
 
 TEST(OmniModelYamlWriter, EachEffectAloneRoundTripsAndNoneWritesNoBlock) {

@@ -1,0 +1,96 @@
+// The real Festo Robotino of ../shared/realdata/robotino (168 runs on four floors and
+// across two; skipped when ../shared is absent): every run reads, clock holes included,
+// and the diagnosis's change finder lists the floor changes and not the single floors.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "diagnosis/response_changes.h"
+#include "robots/omni/omni_log.h"
+#include "robots/omni/omni_model.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+std::string RobotinoDir() { return testing::SourcePath("../shared/realdata/robotino"); }
+
+// The runs of one folder ("gray_surface"), sorted, whose file name starts with `prefix`.
+std::vector<std::string> Runs(const std::string& folder, const std::string& prefix = "v") {
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::directory_iterator(RobotinoDir() + "/" + folder)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) == 0 && e.path().extension() == ".csv") out.push_back(e.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+#define SKIP_WITHOUT_ROBOTINO()                                             \
+  if (!std::filesystem::exists(RobotinoDir() + "/README.md")) GTEST_SKIP() \
+      << "no real data at " << RobotinoDir()
+
+TEST(Robotino, EveryRunReadsAndTheLoggersStallsAreHoles) {
+  SKIP_WITHOUT_ROBOTINO();
+  int runs = 0, stalled = 0;
+  for (const char* folder : {"gray_surface", "green_surface", "table_surface", "brown_surface", "across_green_table",
+                             "across_table_gray"}) {
+    for (const std::string& path : Runs(folder)) {
+      const OmniLog log = ReadOmniLog(path);  // before issue 63, 7 runs were refused: "irregular frame time"
+      ++runs;
+      // The README: stalls of 6-8 frame periods (5 to 7 frames without a row); besides,
+      // the clock jitters to 1.66 periods, a missed frame.
+      bool stall = false;
+      for (const ClockHole& h : log.holes) {
+        EXPECT_LE(h.frames, 7) << path;
+        stall = stall || h.frames >= 4;
+      }
+      stalled += stall;
+    }
+  }
+  EXPECT_EQ(runs, 168);
+  EXPECT_EQ(stalled, 7);
+}
+
+// Issue 63's numbers: a change listed on at least 80 % of the runs across green and
+// table at 0.2 and 0.3 m/s (measured: 22 of 24; both misses drive at 30 degrees, where
+// the two floors differ least), on at most 3 of the 60 single-floor runs of gray, table
+// and brown (measured: none).
+TEST(Robotino, TheChangeFinderListsFloorChangesAndNotSingleFloors) {
+  SKIP_WITHOUT_ROBOTINO();
+  const OmniModel model = LoadOmniModel(testing::SourcePath("models/robotino.yaml"));
+  int across = 0, found = 0;
+  for (const char* speed : {"v0.2", "v0.3"}) {
+    for (const std::string& path : Runs("across_green_table", speed)) {
+      ++across;
+      const std::vector<ResponseChange> c = FindOmniResponseChanges(model, {ReadOmniLog(path)}, "analytic");
+      found += !c.empty();
+      for (const ResponseChange& x : c) {
+        EXPECT_EQ(x.quantity, "velocity scale") << path;  // omega is never commanded
+        EXPECT_GT(x.t, 0.5) << path;
+      }
+    }
+  }
+  EXPECT_EQ(across, 24);
+  EXPECT_GE(found, 20) << "of " << across << " runs across green and table at 0.2 and 0.3 m/s";
+  int single = 0, flagged = 0;
+  for (const char* folder : {"gray_surface", "table_surface", "brown_surface"}) {
+    for (const std::string& path : Runs(folder)) {
+      ++single;
+      const std::vector<ResponseChange> c = FindOmniResponseChanges(model, {ReadOmniLog(path)}, "analytic");
+      flagged += !c.empty();
+      for (const ResponseChange& x : c) std::printf("on one floor: %s: %s\n", x.log.c_str(), x.what.c_str());
+    }
+  }
+  std::printf("changes listed on %d of %d runs across green and table, on %d of %d single-floor runs\n", found, across,
+              flagged, single);
+  EXPECT_EQ(single, 60);
+  EXPECT_LE(flagged, 3) << "of " << single << " single-floor runs";
+}
+
+}  // namespace
+}  // namespace twinsim
