@@ -492,27 +492,13 @@ double ResponseLag(const std::vector<double>& command, const std::vector<double>
   return best_shift * dt;
 }
 
-// The rows of each stretch of fit blocks, as logs of their own (long enough to train on).
-std::vector<OmniLog> FitStretches(const std::vector<LogData>& data, std::size_t least) {
-  std::vector<OmniLog> out;
-  for (const LogData& d : data) {
-    for (std::size_t i = 0; i < d.kind.size();) {
-      if (d.kind[i] != RowKind::kFit) {
-        ++i;
-        continue;
-      }
-      std::size_t j = i;
-      while (j < d.kind.size() && d.kind[j] == RowKind::kFit) ++j;
-      if (j - i >= least) out.push_back(SliceOmniLog(*d.log, i, j));
-      i = j;
-    }
-  }
-  return out;
-}
-
 // The seed's linear predictor as a residual on this model (twinsim train --residual
-// --kind linear), one frame ahead, trained on the fit blocks only; rolled out over
-// the horizon by the learned backend as replay does. Null, saying why in `learner`, when it cannot be trained.
+// --kind linear), one frame ahead, trained on windows wholly in fit rows (its nominal
+// track runs along each whole log, corrected by every measurement, as replay's does);
+// rolled out over the horizon by the learned backend as replay does. Null, saying why in
+// `learner`, when it cannot be trained. Until issue 63 it trained on each stretch of
+// consecutive fit blocks as a log of its own, which a short or lossy real log left
+// without one long enough.
 std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel& model, const std::string& backend,
                                                                 const std::vector<LogData>& data,
                                                                 std::string* learner) {
@@ -522,18 +508,19 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
   train.horizon = 1;
   train.residual = true;
   train.nominal_engine = backend;
-  const FeatureLayout layout = PredictorLayout(model, 1);
-  const std::size_t least = static_cast<std::size_t>(
-      layout.history + model.command_delay_frames + model.vision_delay_frames + 35);
-  const std::vector<OmniLog> stretches = FitStretches(data, least);
+  std::vector<OmniLog> logs;
+  for (const LogData& d : data) {
+    logs.push_back(*d.log);
+    std::vector<char> fit(d.kind.size());
+    for (std::size_t i = 0; i < fit.size(); ++i) fit[i] = d.kind[i] == RowKind::kFit;
+    train.sample_rows.push_back(std::move(fit));
+  }
   OmniTrainSummary summary;
   try {
-    if (!stretches.empty()) {
-      predictor = std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, stretches, train, &summary));
-      *learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
-                 "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
-                 " fit rows";
-    }
+    predictor = std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, logs, train, &summary));
+    *learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
+               "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
+               " windows of fit rows";
   } catch (const InputError& e) {
     *learner = std::string("no learned residual: ") + e.what();
   }

@@ -269,6 +269,14 @@ std::vector<ScaleChange> FindScaleChanges(const std::vector<double>& t, const st
     stretches.push_back({b, last});
   }
   std::sort(out.begin(), out.end(), [](const ScaleChange& p, const ScaleChange& q) { return p.row < q.row; });
+  // Each change said between the scales of the final pieces either side of it: a piece
+  // split again after its change was found no longer has the scale it was found with.
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const std::size_t from = k == 0 ? 0 : out[k - 1].row;
+    const std::size_t to = k + 1 < out.size() ? out[k + 1].row : t.size();
+    out[k].before = sums.Of(from, out[k].row).Scale();
+    out[k].after = sums.Of(out[k].row, to).Scale();
+  }
   return out;
 }
 

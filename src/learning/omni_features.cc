@@ -67,6 +67,13 @@ bool FrameSequence::Complete(int from, int to) const {
   return true;
 }
 
+bool FrameSequence::Sampled(int from, int to) const {
+  if (sampled.empty()) return true;
+  for (int f = std::max(from, 0); f <= to && f < frames(); ++f)
+    if (!sampled[static_cast<std::size_t>(f)]) return false;
+  return true;
+}
+
 bool FrameSequence::Usable(int from, int to) const {
   if (from < 0 || to >= frames() || !observed[static_cast<std::size_t>(from)] || !observed[static_cast<std::size_t>(to)]) {
     return false;
@@ -138,7 +145,10 @@ int AppendSamples(const FrameSequence& seq, const FeatureLayout& layout, int fir
   for (int i = std::max(first, layout.history - 1); i <= last && i + layout.horizon < seq.frames(); ++i) {
     const int start = i - layout.history + 1;
     if (start < seq.first_known_command) continue;
-    if (!seq.Usable(start, i) || !seq.observed[static_cast<std::size_t>(i + layout.horizon)]) continue;
+    if (!seq.Usable(start, i) || !seq.observed[static_cast<std::size_t>(i + layout.horizon)] ||
+        !seq.Sampled(start, i + layout.horizon)) {
+      continue;
+    }
     ends.push_back(i);
   }
   Eigen::MatrixXd x(static_cast<long>(ends.size()), layout.num_inputs());

@@ -93,6 +93,12 @@ struct FrameSequence {
   // True when frames [from, to] may form a window: `to` and `from` observed, at most
   // kMaxLostInWindow frames between them not.
   bool Usable(int from, int to) const;
+  // Frames a sample may use (its window and its target); empty: every frame. A caller
+  // that holds rows out (the diagnosis's test blocks) leaves them out here, while the
+  // frames around them still carry a residual predictor's nominal track along the log.
+  std::vector<char> sampled;
+  // True when frames [from, to] may all be used by a sample.
+  bool Sampled(int from, int to) const;
 };
 FrameSequence ToFrameSequence(const OmniLog& log, const FeatureLayout& layout);
 

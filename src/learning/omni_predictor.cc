@@ -427,7 +427,7 @@ std::pair<double, long> Rollouts(const OmniPredictor& model, const FrameSequence
   double sum = 0;
   long count = 0;
   for (int s = std::max(first, seq.first_known_command + h - 1); s + frames <= last; ++s) {
-    if (!seq.Complete(s - h + 1, s + frames)) continue;
+    if (!seq.Complete(s - h + 1, s + frames) || !seq.Sampled(s - h + 1, s + frames)) continue;
     for (int j = 0; j < h; ++j) window[static_cast<std::size_t>(j)] = seq.pose[static_cast<std::size_t>(s - h + 1 + j)];
     for (int t = 0; t < frames; ++t) {
       const int i = s + t;
@@ -468,13 +468,14 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
     if (seq.observed[uf]) track->Correct(seq.pose[uf]);
     const int start = f - h + 1;
     const bool usable = f >= f0 + kNominalWarmUpFrames && start >= seq.first_known_command && f + horizon < frames &&
-                        seq.Usable(start, f) && seq.observed[static_cast<std::size_t>(f + horizon)];
+                        seq.Usable(start, f) && seq.observed[static_cast<std::size_t>(f + horizon)] &&
+                        seq.Sampled(start, f + horizon);
     const bool for_training = usable && f + horizon < cut;
     const bool for_validation = usable && f >= cut;
     bool stepped = false;
     if (for_training || for_validation) {
       if (for_validation && validation_windows++ % stride == 0 && seq.Complete(start, std::min(f + rollout_frames, frames - 1)) &&
-          f + rollout_frames < frames)
+          f + rollout_frames < frames && seq.Sampled(start, f + rollout_frames))
         starts->push_back({f, track->Save()});
       const Pose2& now = seq.pose[uf];
       const Twist2 velocity = track->velocity();
@@ -563,6 +564,17 @@ OmniPredictorInfo StartInfo(const OmniModel& model, const std::vector<OmniLog>& 
   return info;
 }
 
+// The frames of `log` a sample may use: those of its rows marked in `rows` (one per
+// row), and the frames without a row after each (they take the row before's mark).
+void SetSampledFrames(const OmniLog& log, const std::vector<char>& rows, FrameSequence* seq) {
+  seq->sampled.assign(static_cast<std::size_t>(seq->frames()), 0);
+  for (std::size_t i = 0; i < log.rows.size() && i < rows.size(); ++i) {
+    const int from = log.FrameIndex(i);
+    const int to = i + 1 < log.rows.size() ? log.FrameIndex(i + 1) : seq->frames();
+    for (int f = from; f < to && f < seq->frames(); ++f) seq->sampled[static_cast<std::size_t>(f)] = rows[i];
+  }
+}
+
 // Per log: the first part trains, the last part validates (time order kept). Throws
 // InputError for a log of another frame rate or too short to give windows to both.
 std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrainOptions& options, int rollout_frames,
@@ -571,13 +583,17 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
   std::vector<SplitLog> split;
   int total_train = 0, total_val = 0;
   std::size_t total_rows = 0;
-  for (const OmniLog& log : logs) {
+  if (!options.sample_rows.empty() && options.sample_rows.size() != logs.size())
+    throw std::invalid_argument("OmniTrainOptions::sample_rows: one row mask per log");
+  for (std::size_t k = 0; k < logs.size(); ++k) {
+    const OmniLog& log = logs[k];
     if (std::abs(1.0 / log.frame_period - info->frame_rate) > 0.01 * info->frame_rate) {
       std::ostringstream msg;
       msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info->frame_rate << " fps";
       throw InputError(SourceLocation{log.path}, msg.str());
     }
     SplitLog part{ToFrameSequence(log, info->layout), 0, {}};
+    if (!options.sample_rows.empty()) SetSampledFrames(log, options.sample_rows[k], &part.seq);
     part.cut = ValidationCut(part.seq.frames(), options.validation_fraction);
     int n_train = 0, n_val = 0;
     if (track) {
@@ -629,7 +645,7 @@ void RangesAndBounds(const OmniDataset& train, const std::vector<SplitLog>& spli
     const FrameSequence& seq = part.seq;
     for (int f = 0; f + info->layout.horizon < seq.frames(); ++f) {
       const auto a = static_cast<std::size_t>(f), b = static_cast<std::size_t>(f + info->layout.horizon);
-      if (!seq.observed[a] || !seq.observed[b]) continue;
+      if (!seq.observed[a] || !seq.observed[b] || !seq.Sampled(f, f + info->layout.horizon)) continue;
       const Eigen::Vector3d d = EncodeDelta(seq.pose[a], seq.pose[b]);
       info->max_step = std::max(info->max_step, std::hypot(d[0], d[1]));
       info->max_turn = std::max(info->max_turn, std::abs(WrapAngle(d[2])));

@@ -174,6 +174,10 @@ struct OmniTrainOptions {
   int nominal_errors = 0;
   double ridge = 1e-3;           // linear: L2 weight on standardised inputs, per sample
   double validation_fraction = 0.2;  // held out from the end of every log
+  // Per log, per row: may a sample (its window of poses and its target) use the row?
+  // Empty: every row. The diagnosis marks its fit blocks, so that its learned yardstick
+  // sees no held-out row while a residual's nominal track runs along the whole log.
+  std::vector<std::vector<char>> sample_rows;
   MlpOptions mlp;
 
   // True when usable; else says why in *why.

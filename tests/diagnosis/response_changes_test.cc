@@ -57,8 +57,10 @@ TEST(ScaleChanges, FindsTwoChangesInTimeOrder) {
   ASSERT_EQ(c.size(), 2u);
   EXPECT_NEAR(c[0].t, 4, 0.3);
   EXPECT_NEAR(c[1].t, 9, 0.3);
-  EXPECT_LT(c[0].after, c[0].before);
-  EXPECT_GT(c[1].after, c[1].before);
+  EXPECT_NEAR(c[0].before, 1.0, 0.1);
+  EXPECT_NEAR(c[0].after, 0.5, 0.1);
+  EXPECT_EQ(c[1].before, c[0].after);  // one piece between them, one scale
+  EXPECT_NEAR(c[1].after, 1.0, 0.1);
 }
 
 TEST(ScaleChanges, KeepsItsLevelOnCorrelatedNoiseWithoutAChange) {
