@@ -790,7 +790,7 @@ double CheckOmniInputs(const OmniModel& model, const std::vector<OmniLog>& logs,
       }
     }
     durations.push_back(log.rows.back().t - log.rows.front().t);
-    if (std::abs(log.frame_period - logs.front().frame_period) > 0.01 * logs.front().frame_period) {
+    if (std::abs(log.frame_period - logs.front().frame_period) > kSameCameraRate * logs.front().frame_period) {
       throw InputError(SourceLocation{log.path, 1}, "the log's frame period differs from the first log's: diagnose logs of one camera rate together");
     }
   }

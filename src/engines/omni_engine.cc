@@ -18,8 +18,10 @@ std::string DescribeGrip(const GripCheck& grip) {
   char text[400];
   std::snprintf(text, sizeof text,
                 "the analytic model's wheels needed more grip than they have (wheel_friction times their load) on "
-                "%.2g %% of the steps simulated, up to %.2g times it: a real robot slips there and the analytic model, "
-                "which cannot, is not valid there (--backend ode or bullet simulates the slip; docs/backends.md)",
+                "%.2g %% of the steps simulated, up to %.2g times it: a robot of the model's grip slips there and the "
+                "analytic model cannot. Where a logged robot made those motions, its grip is larger than the model "
+                "says (wheels.friction, or mass and inertia from a data sheet), and ode or bullet, which slip there, "
+                "follow it less well; where it slipped, they simulate the slip (docs/backends.md)",
                 100.0 * static_cast<double>(grip.beyond) / static_cast<double>(grip.steps), grip.worst);
   return text;
 }

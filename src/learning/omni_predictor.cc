@@ -587,7 +587,7 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
     throw std::invalid_argument("OmniTrainOptions::sample_rows: one row mask per log");
   for (std::size_t k = 0; k < logs.size(); ++k) {
     const OmniLog& log = logs[k];
-    if (std::abs(1.0 / log.frame_period - info->frame_rate) > 0.01 * info->frame_rate) {
+    if (std::abs(1.0 / log.frame_period - info->frame_rate) > kSameCameraRate * info->frame_rate) {
       std::ostringstream msg;
       msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info->frame_rate << " fps";
       throw InputError(SourceLocation{log.path}, msg.str());

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "diagnosis/response_changes.h"
+#include "identification/omni/omni_identification.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 #include "test_util.h"
@@ -90,6 +91,32 @@ TEST(Robotino, TheChangeFinderListsFloorChangesAndNotSingleFloors) {
               flagged, single);
   EXPECT_EQ(single, 60);
   EXPECT_LE(flagged, 3) << "of " << single << " single-floor runs";
+}
+
+// identify on some runs of a floor predicts the others (issue 63): four runs of gray at
+// 0.2 m/s fitted, four other directions held out wholly. Measured: position error 2.8 mm
+// at 4 frames against 5.5 for constant velocity and 6.2 for the published geometry, 12.2
+// against 34.4 and 72.3 mm at 1 s; 20 s on two cores.
+TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
+  SKIP_WITHOUT_ROBOTINO();
+  const std::string gray = RobotinoDir() + "/gray_surface/";
+  std::vector<OmniLog> fit, held;
+  for (const char* d : {"d000", "d090", "d180", "d270"}) fit.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+  for (const char* d : {"d030", "d120", "d210", "d300"}) held.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+  OmniModel identified;
+  const OmniIdentificationReport report =
+      IdentifyOmni(LoadOmniModel(testing::SourcePath("models/robotino.yaml")), fit, held, {}, &identified);
+  SCOPED_TRACE(FormatOmniIdentificationTable(report));
+  EXPECT_EQ(identified.fitted_on, "analytic");
+  ASSERT_GE(report.horizons.size(), 3u);
+  for (const OmniHorizonGaps& h : report.horizons) {
+    const OmniGap* ident = report.Gap(h.gaps, "identified model");
+    const OmniGap* cv = report.Gap(h.gaps, "constant velocity");
+    const OmniGap* nominal = report.Gap(h.gaps, "nominal model");
+    ASSERT_TRUE(ident && cv && nominal);
+    EXPECT_LT(ident->rmse, nominal->rmse) << h.label;
+    EXPECT_LT(ident->rmse, (h.frames <= 4 ? 0.65 : 0.5) * cv->rmse) << h.label;
+  }
 }
 
 }  // namespace

@@ -776,9 +776,11 @@ void CheckFramePeriods(const std::vector<OmniLog>& logs, const std::vector<OmniL
   const double period = logs.front().frame_period;
   for (const auto* set : {&logs, &validation}) {
     for (const OmniLog& log : *set) {
-      if (std::abs(log.frame_period - period) > 0.01 * period) {
+      if (std::abs(log.frame_period - period) > kSameCameraRate * period) {
         throw InputError(SourceLocation{log.path, 1},
-                         "the log's frame period differs from the first log's: identify logs of one camera rate together");
+                         "the log's frame period (" + std::to_string(log.frame_period) + " s) differs from the first "
+                         "log's (" + std::to_string(period) + " s) by more than 5 %: identify logs of one camera rate "
+                         "together");
       }
     }
   }
