@@ -76,6 +76,23 @@ std::string ChangesSentence(const DiagnosisReport& r) {
 
 }  // namespace
 
+std::string WorseThanGiven(const DiagnosisReport& report, double tolerance) {
+  std::string out;
+  for (const DiagnosisHorizon& h : report.horizons) {
+    // Predictors: given model, [identified model,] repaired model, constant velocity, ...
+    const auto it = std::find(h.predictors.begin(), h.predictors.end(), "repaired model");
+    if (h.rows == 0 || h.predictors.empty() || h.predictors.front() != "given model" || it == h.predictors.end()) continue;
+    const double written = h.gaps[static_cast<std::size_t>(it - h.predictors.begin())];
+    if (written > (1 + tolerance) * h.gaps.front()) {
+      char text[120];
+      std::snprintf(text, sizeof text, "%s%.3g against %.3g mm at %s", out.empty() ? "" : ", ", 1000 * written,
+                    1000 * h.gaps.front(), h.label.c_str());
+      out += text;
+    }
+  }
+  return out.empty() ? "" : "The written model predicts the test rows worse than the given one: " + out + ". ";
+}
+
 std::string DiagnosisVerdict(const DiagnosisReport& r) {
   const bool refit = std::isfinite(r.refit_gap);
   std::string s = r.caution + ChangesSentence(r);

@@ -20,6 +20,10 @@ namespace twinsim {
 // residual still predicts part of it: channel, band, what it correlates with); and the
 // share of the predictable gap the named physics explains.
 std::string DiagnosisVerdict(const DiagnosisReport& report);
+// Omni: the report horizons at which the written (repaired) model predicts the test rows
+// worse than the given one by more than `tolerance` of the given's error, as one sentence
+// with the numbers for DiagnosisReport::caution; "" where it is nowhere worse.
+std::string WorseThanGiven(const DiagnosisReport& report, double tolerance);
 
 // Every rule the selection and the adequacy checks followed, with the numbers used.
 std::string DiagnosisMethod(const DiagnosisReport& report);

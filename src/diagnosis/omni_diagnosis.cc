@@ -16,6 +16,7 @@
 #include "analysis/omni_replay.h"
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
+#include "diagnosis/diagnosis_report.h"
 #include "diagnosis/forward_selection.h"
 #include "diagnosis/response_changes.h"
 #include "identification/omni/omni_identification.h"
@@ -744,23 +745,6 @@ std::vector<std::string> KeepNothingWorse(const OmniProblem& problem, const Omni
   return dropped;
 }
 
-// The horizons of the test rows at which the written model predicts worse than the given
-// one: said first in the verdict, with the numbers ("" when none).
-std::string WorseThanGiven(const DiagnosisReport& report) {
-  std::string out;
-  for (const DiagnosisHorizon& h : report.horizons) {
-    const std::size_t written = h.predictors.size() >= 5 ? 2 : 1;  // [given, (identified,) repaired, ...]
-    if (h.rows == 0 || h.gaps.size() <= written) continue;
-    if (h.gaps[written] > (1 + kWorseTolerance) * h.gaps[0]) {
-      char text[120];
-      std::snprintf(text, sizeof text, "%s%.3g against %.3g mm at %s", out.empty() ? "" : ", ", 1000 * h.gaps[written],
-                    1000 * h.gaps[0], h.label.c_str());
-      out += text;
-    }
-  }
-  return out.empty() ? "" : "The written model predicts the test rows worse than the given one: " + out + ". ";
-}
-
 }  // namespace
 
 namespace {
@@ -1051,7 +1035,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   }
   if (progress) progress("every horizon");
   ScoreHorizons(*problem, model, nominal_model, repaired_model, options, &report);
-  report.caution = WorseThanGiven(report);
+  report.caution = WorseThanGiven(report, kWorseTolerance);
   if (progress) progress("changes part way");
   report.changes = FindOmniResponseChanges(model, logs, options.backend);
   if (repaired) {

@@ -92,6 +92,27 @@ TEST(Cli, ReplayWritesOneRowPerInputRow) {
   EXPECT_EQ(static_cast<std::size_t>(std::count(out.begin(), out.end(), '\n')), in.rows.size() + 1);
 }
 
+// Issue 63: a model fitted on one engine is replayed there unless told otherwise, and the
+// replay says so when told; the same bytes as that engine asked by name.
+TEST(Cli, ReplayUsesTheEngineTheModelWasFittedOnAndSaysWhenToldOtherwise) {
+  const std::string dir = TempDir("replay_fitted_on");
+  ASSERT_EQ(RunTwinsim("run " + SourcePath("scenes/steps.yaml") + " --backend analytic --quiet --out " + dir).exit_code, 0);
+  WriteText(dir + "/fitted.yaml", "extends: " + SourcePath("models/omni4.yaml") + "\nfitted_on: analytic\n");
+  const std::string replay = "replay --model " + dir + "/fitted.yaml --log " + dir + "/trajectory.csv --out ";
+  const auto plain = RunTwinsim(replay + dir + "/plain.csv");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_NE(plain.out.find(" on analytic "), std::string::npos) << plain.out;
+  EXPECT_EQ(plain.err.find("fitted_on"), std::string::npos) << plain.err;
+  const auto named = RunTwinsim(replay + dir + "/named.csv --backend analytic");
+  ASSERT_EQ(named.exit_code, 0) << named.err;
+  EXPECT_EQ(ReadText(dir + "/plain.csv"), ReadText(dir + "/named.csv"));
+  const auto other = RunTwinsim(replay + dir + "/ode.csv --backend ode --quiet");
+  ASSERT_EQ(other.exit_code, 0) << other.err;
+  EXPECT_NE(other.err.find("note: omni4 was fitted on the analytic engine (fitted_on); replaying it on ode as asked"),
+            std::string::npos)
+      << other.err;
+}
+
 }  // namespace
 }  // namespace twinsim
 
