@@ -602,6 +602,33 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
 
 namespace {
 
+// Each log's rows of one kind as the stretches a horizon is scored on, predictions
+// starting once every model's estimate has warmed up.
+std::vector<HorizonStretch> StretchesOf(const OmniProblem& problem, RowKind kind,
+                                        const std::vector<const OmniModel*>& models) {
+  int min_start = 0;
+  for (const OmniModel* m : models) {
+    min_start = std::max(min_start, m->command_delay_frames + m->vision_delay_frames + kWarmUpFrames);
+  }
+  std::vector<HorizonStretch> stretches;
+  for (const LogData& d : problem.data()) {
+    std::vector<char> scored(d.kind.size());
+    for (std::size_t i = 0; i < scored.size(); ++i) scored[i] = d.kind[i] == kind;
+    stretches.push_back({d.log, std::move(scored), 0, min_start});
+  }
+  return stretches;
+}
+
+// Predictions from each model's observer on the diagnosis's engine, as replay makes them.
+HorizonOptions ReportHorizonOptions(const DiagnosisOptions& options, double radius) {
+  HorizonOptions ho;
+  ho.backend = options.backend;
+  ho.state = kReportState;
+  ho.radius = radius;
+  ho.threads = options.threads;
+  return ho;
+}
+
 // The test-row gap of the given, (identified,) repaired model and the two no-model
 // baselines at the report's horizon, 0.25 s, 1 s and 3 s, each model predicting from
 // its observer's estimate (kReportState); a note where the named effects
@@ -615,23 +642,10 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   predictors.push_back({"constant velocity", nullptr, HorizonPredictor::kConstantVelocity});
   predictors.push_back({"integrated command", nullptr, HorizonPredictor::kIntegratedCommand});
   const std::size_t from = options.refit_model ? 1 : 0, to = from + 1;  // the repaired model against its start
-  std::vector<HorizonStretch> stretches;
-  int min_start = 0;
-  for (const OmniModel* m : {&given, &start, &repaired}) {
-    min_start = std::max(min_start, m->command_delay_frames + m->vision_delay_frames + kWarmUpFrames);
-  }
-  for (const LogData& d : problem.data()) {
-    std::vector<char> scored(d.kind.size());
-    for (std::size_t i = 0; i < scored.size(); ++i) scored[i] = d.kind[i] == RowKind::kTest;
-    stretches.push_back({d.log, std::move(scored), 0, min_start});
-  }
+  const std::vector<HorizonStretch> stretches = StretchesOf(problem, RowKind::kTest, {&given, &start, &repaired});
   const double period = problem.data().front().log->frame_period;
-  HorizonOptions ho;
-  ho.backend = options.backend;
-  ho.state = kReportState;
+  HorizonOptions ho = ReportHorizonOptions(options, given.chassis_radius);
   ho.delay = repaired.TotalDelaySeconds(period);
-  ho.radius = given.chassis_radius;
-  ho.threads = options.threads;
   for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
     const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);
     DiagnosisHorizon h;
@@ -666,23 +680,10 @@ std::vector<std::vector<double>> SelectionHorizonGaps(const OmniProblem& problem
                                                       const DiagnosisOptions& options,
                                                       std::vector<std::string>* labels) {
   std::vector<HorizonPredictor> predictors;
-  int min_start = 0;
-  for (const OmniModel* m : models) {
-    predictors.push_back({m->name, m});
-    min_start = std::max(min_start, m->command_delay_frames + m->vision_delay_frames + kWarmUpFrames);
-  }
-  std::vector<HorizonStretch> stretches;
-  for (const LogData& d : problem.data()) {
-    std::vector<char> scored(d.kind.size());
-    for (std::size_t i = 0; i < scored.size(); ++i) scored[i] = d.kind[i] == RowKind::kSelection;
-    stretches.push_back({d.log, std::move(scored), 0, min_start});
-  }
+  for (const OmniModel* m : models) predictors.push_back({m->name, m});
+  const std::vector<HorizonStretch> stretches = StretchesOf(problem, RowKind::kSelection, models);
   const double period = problem.data().front().log->frame_period;
-  HorizonOptions ho;
-  ho.backend = options.backend;
-  ho.state = kReportState;
-  ho.radius = models.front()->chassis_radius;
-  ho.threads = options.threads;
+  const HorizonOptions ho = ReportHorizonOptions(options, models.front()->chassis_radius);
   std::vector<std::vector<double>> gaps(models.size());
   for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
     const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);

@@ -15,7 +15,7 @@ namespace twinsim {
 
 std::string DescribeGrip(const GripCheck& grip) {
   if (grip.beyond == 0 || grip.steps == 0) return "";
-  char text[400];
+  char text[640];
   std::snprintf(text, sizeof text,
                 "the analytic model's wheels needed more grip than they have (wheel_friction times their load) on "
                 "%.2g %% of the steps simulated, up to %.2g times it: a robot of the model's grip slips there and the "

@@ -148,6 +148,34 @@ void FillUnmeasured(OmniLog* log, const std::vector<char>& empty) {
     if (empty[k]) rows[k].pose = rows[previous].pose;
 }
 
+// Each row's frame counted from the one before (a real clock jitters: counted from the
+// first row, jitter that does not average out would put two rows on one frame), and the
+// holes in the clock. `dts` are the gaps between rows. Throws InputError for two rows
+// under half a period apart and for a hole too long to bridge.
+void CountFrames(const std::vector<double>& dts, const std::string& path, OmniLog* log_out) {
+  OmniLog& log = *log_out;
+  log.frame_of.assign(log.rows.size(), 0);
+  for (std::size_t i = 0; i < dts.size(); ++i) {
+    const double frames = dts[i] / log.frame_period;
+    if (frames < kMinFrameStep) {
+      std::ostringstream msg;
+      msg << "irregular frame time: " << dts[i] << " s after the previous row, under half the frame period "
+          << log.frame_period << " s (two rows for one camera frame?)";
+      throw InputError(SourceLocation{path, log.line_of[i + 1], 1}, msg.str());
+    }
+    const int step = std::max(1, static_cast<int>(std::lround(frames)));
+    log.frame_of[i + 1] = log.frame_of[i] + step;
+    if (step < 2) continue;
+    if (dts[i] > kMaxHoleSeconds) {
+      std::ostringstream msg;
+      msg << "a hole of " << dts[i] << " s in the clock (no row for " << step - 1 << " frames); holes up to "
+          << kMaxHoleSeconds << " s read as frames without a measurement, a longer one is two logs: split it here";
+      throw InputError(SourceLocation{path, log.line_of[i + 1], 1}, msg.str());
+    }
+    log.holes.push_back({i + 1, dts[i], step - 1});
+  }
+}
+
 }  // namespace
 
 OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
@@ -228,28 +256,7 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
         << " are replayed (split the log)";
     throw InputError(SourceLocation{table.path, log.line_of.back(), 1}, msg.str());
   }
-  // Each row's frame counted from the one before (a real clock jitters: counted from the
-  // first row, jitter that does not average out would put two rows on one frame).
-  log.frame_of.assign(log.rows.size(), 0);
-  for (std::size_t i = 0; i < dts.size(); ++i) {
-    const double frames = dts[i] / log.frame_period;
-    if (frames < kMinFrameStep) {
-      std::ostringstream msg;
-      msg << "irregular frame time: " << dts[i] << " s after the previous row, under half the frame period "
-          << log.frame_period << " s (two rows for one camera frame?)";
-      throw InputError(SourceLocation{table.path, log.line_of[i + 1], 1}, msg.str());
-    }
-    const int step = std::max(1, static_cast<int>(std::lround(frames)));
-    log.frame_of[i + 1] = log.frame_of[i] + step;
-    if (step < 2) continue;
-    if (dts[i] > kMaxHoleSeconds) {
-      std::ostringstream msg;
-      msg << "a hole of " << dts[i] << " s in the clock (no row for " << step - 1 << " frames); holes up to "
-          << kMaxHoleSeconds << " s read as frames without a measurement, a longer one is two logs: split it here";
-      throw InputError(SourceLocation{table.path, log.line_of[i + 1], 1}, msg.str());
-    }
-    log.holes.push_back({i + 1, dts[i], step - 1});
-  }
+  CountFrames(dts, table.path, &log);
 
   // Unwrap theta: successive measurements never turn by more than half a turn.
   const OmniLogRow* prev = nullptr;
@@ -271,12 +278,12 @@ std::string DescribeClockHoles(const OmniLog& log) {
     frames += h.frames;
     if (h.seconds > longest->seconds) longest = &h;
   }
-  char text[400];
+  char text[320];
   std::snprintf(text, sizeof text,
-                "%s: the clock has %zu hole(s) where the logger wrote no row (%d frame(s) in all, the longest %.3g s "
+                ": the clock has %zu hole(s) where the logger wrote no row (%d frame(s) in all, the longest %.3g s "
                 "before line %d): read as frames without a measurement, the command held",
-                log.path.c_str(), log.holes.size(), frames, longest->seconds, log.line_of[longest->row]);
-  return text;
+                log.holes.size(), frames, longest->seconds, log.line_of[longest->row]);
+  return log.path + text;  // the path apart: it may be longer than any buffer
 }
 
 int OmniLog::num_measured() const {
