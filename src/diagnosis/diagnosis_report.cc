@@ -71,7 +71,7 @@ std::string ChangesSentence(const DiagnosisReport& r) {
     if (k == 0 || c.log != r.changes[k - 1].log) s += c.log + ": ";
     s += c.what;
   }
-  return s + " (the model below is fitted across the change). ";
+  return s + " (a model fitted across a change fits neither side). ";
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -522,7 +523,7 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
     *learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
                "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
                " windows of fit rows";
-  } catch (const InputError& e) {
+  } catch (const std::runtime_error& e) {  // InputError (too few windows) or CheckFailed (its track diverged)
     *learner = std::string("no learned residual: ") + e.what();
   }
   return predictor;
@@ -545,7 +546,7 @@ std::vector<ReplayResidual> ReplayLearnedResidual(const OmniModel& model, const 
       bounded += replayed.bounded_steps;
       learned[k] = PoseErrorsInRobotFrame(*data[k].log, replayed, radius);
     }
-  } catch (const CheckFailed& e) {
+  } catch (const std::runtime_error& e) {  // CheckFailed (it ran away) or InputError (a log it refuses)
     predictor->reset();
     *learner = std::string("no learned residual: ") + e.what();
   }
@@ -698,7 +699,7 @@ std::vector<std::vector<double>> SelectionHorizonGaps(const OmniProblem& problem
 // tolerance, said with the numbers; "" when none.
 std::string WorseAt(const std::vector<std::string>& labels, const std::vector<double>& before,
                     const std::vector<double>& after) {
-  for (std::size_t h = 0; h < labels.size(); ++h) {
+  for (std::size_t h = 0; h < labels.size() && h < before.size() && h < after.size(); ++h) {
     if (after[h] > (1 + kWorseTolerance) * before[h]) {
       char text[160];
       std::snprintf(text, sizeof text, "%.3g against %.3g mm at %s", 1000 * after[h], 1000 * before[h], labels[h].c_str());
@@ -722,14 +723,37 @@ std::vector<std::string> KeepNothingWorse(const OmniProblem& problem, const Omni
   const OmniModel repaired = problem.Build(selection->effects);
   std::vector<const OmniModel*> models = {&given, &start, &repaired};
   std::vector<std::string> labels;
-  const std::vector<std::vector<double>> gaps = SelectionHorizonGaps(problem, models, options, &labels);
+  std::vector<std::vector<double>> gaps;
+  try {
+    gaps = SelectionHorizonGaps(problem, models, options, &labels);
+  } catch (const CheckFailed& e) {
+    // A model that diverges on the selection rows is worse than one that does not at
+    // every horizon; each is scored alone to tell which.
+    gaps.assign(models.size(), {});
+    labels.clear();
+    std::vector<bool> diverged(models.size(), false);
+    for (std::size_t q = 0; q < models.size(); ++q) {
+      std::vector<std::string> own;
+      try {
+        gaps[q] = SelectionHorizonGaps(problem, {models[q]}, options, &own).front();
+        if (labels.empty()) labels = own;
+      } catch (const CheckFailed&) {
+        diverged[q] = true;
+      }
+    }
+    if (diverged[0] || labels.empty()) {
+      return {std::string("the written model was not checked against the given one at every horizon: ") + e.what()};
+    }
+    for (std::size_t q = 1; q < models.size(); ++q) {
+      if (diverged[q]) gaps[q].assign(labels.size(), std::numeric_limits<double>::infinity());
+    }
+  }
   if (!selection->effects.empty()) {
     if (const std::string worse = WorseAt(labels, gaps[1], gaps[2]); !worse.empty()) {
       std::string names;
       for (const TrialEffect& e : selection->effects) names += (names.empty() ? "" : ", ") + e.name;
       dropped.push_back("the named effects (" + names + ") were not kept: on the selection rows the model with them "
                         "predicts worse than without (" + worse + "), through the observer as replay predicts");
-      selection->removed.push_back(dropped.back());
       selection->effects.clear();
       selection->gap_reductions.clear();
       selection->evidence.clear();
@@ -739,7 +763,8 @@ std::vector<std::string> KeepNothingWorse(const OmniProblem& problem, const Omni
   if (options.refit_model) {
     if (const std::string worse = WorseAt(labels, gaps[0], gaps[1]); !worse.empty()) {
       dropped.push_back("the refit was not kept: on the selection rows the identified model predicts worse than the "
-                        "given one (" + worse + "); the given model is written, with nothing added");
+                        "given one (" + worse + "); the given model is written, with nothing added (the candidates below were "
+                        "tried on the refit)");
       *keep_refit = false;
     }
   }
@@ -1038,7 +1063,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   ScoreHorizons(*problem, model, nominal_model, repaired_model, options, &report);
   report.caution = WorseThanGiven(report, kWorseTolerance);
   if (progress) progress("changes part way");
-  report.changes = FindOmniResponseChanges(model, logs, options.backend);
+  report.changes = FindOmniResponseChanges(model, logs, options.backend, {}, &report.notes);
   if (repaired) {
     *repaired = repaired_model;
     // Its response (the refit, the effects) was fitted on this engine.

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "analysis/omni_replay.h"
+#include "core/error.h"
 #include "diagnosis/statistics.h"
 
 namespace twinsim {
@@ -281,13 +282,20 @@ std::vector<ScaleChange> FindScaleChanges(const std::vector<double>& t, const st
 }
 
 std::vector<ResponseChange> FindOmniResponseChanges(const OmniModel& model, const std::vector<OmniLog>& logs,
-                                                    const std::string& backend, const ScaleChangeOptions& options) {
+                                                    const std::string& backend, const ScaleChangeOptions& options,
+                                                    std::vector<std::string>* notes) {
   std::vector<ResponseChange> out;
   for (const OmniLog& log : logs) {
     OmniReplayOptions free_run;
     free_run.backend = backend;
     free_run.horizon = 0;
-    const OmniReplayResult run = ReplayOmniLog(model, log, free_run);
+    OmniReplayResult run;
+    try {
+      run = ReplayOmniLog(model, log, free_run);
+    } catch (const CheckFailed& e) {
+      if (notes) notes->push_back(log.path + ": changes part way not searched: the model's free run diverged: " + e.what());
+      continue;
+    }
     const int half = std::max(1, static_cast<int>(std::lround(kHalfWindowSeconds / log.frame_period)));
     const VelocityPairs v = PairVelocities(log, run, half);
     double top_speed = 0, top_turn = 0;

@@ -53,8 +53,11 @@ std::vector<ScaleChange> FindScaleChanges(const std::vector<double>& t, const st
 // (poses differenced over about 0.3 s, measured frames only, in the measured robot
 // frame) is regressed on it along its direction, on rows where the model moves at half
 // its largest speed (turn rate) or more.
+// A log on which the model's free run diverges is not searched; *notes (if given) hears
+// which and why.
 std::vector<ResponseChange> FindOmniResponseChanges(const OmniModel& model, const std::vector<OmniLog>& logs,
                                                     const std::string& backend,
-                                                    const ScaleChangeOptions& options = {});
+                                                    const ScaleChangeOptions& options = {},
+                                                    std::vector<std::string>* notes = nullptr);
 
 }  // namespace twinsim

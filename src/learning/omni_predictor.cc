@@ -195,7 +195,7 @@ void OmniPredictor::CheckUse(const OmniModel& model, double frame_rate, int hori
   if (info_.model_name != model.name)
     throw InputError(where, "predictor was trained for model '" + info_.model_name + "', not '" + model.name +
                                 "' (" + use + ")");
-  if (std::abs(info_.frame_rate - frame_rate) > 0.01 * frame_rate) {
+  if (std::abs(info_.frame_rate - frame_rate) > kSameCameraRate * frame_rate) {
     std::ostringstream msg;
     msg << "predictor was trained at " << info_.frame_rate << " fps, " << use << " runs at " << frame_rate << " fps";
     throw InputError(where, msg.str());
@@ -625,7 +625,8 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
                              " held-out windows (" + std::to_string(needed) +
                              " consecutive frames each, a few missed frames bridged; at least 10 to train on and 1 "
                              "held out are needed)";
-    throw InputError(SourceLocation{logs.front().path}, "log too short: " + what);
+    if (logs.size() == 1) throw InputError(SourceLocation{logs.front().path}, "log too short: " + what);
+    throw InputError("logs too short: " + what);
   }
   return split;
 }

@@ -87,8 +87,12 @@ void NominalOmniTrack::Restore(const NominalTrackState& state) {
 
 std::string NominalModelFingerprint(const OmniModel& model) {
   // FNV-1a (64 bit) of the complete model file, which names every parameter.
+  // Which engine the model was fitted on is not a parameter of its physics: a model whose
+  // fitted_on alone differs keeps its residual predictors.
+  OmniModel physics = model;
+  physics.fitted_on.clear();
   std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : FormatOmniModelYaml(model)) {
+  for (unsigned char c : FormatOmniModelYaml(physics)) {
     h ^= c;
     h *= 1099511628211ull;
   }

@@ -116,6 +116,13 @@ int Train(const TrainCliOptions& options) {
         progress.Update(epoch, epochs, detail);
       });
   progress.Finish();
+  // Logs are pooled: one too short or too lossy to fill a window adds none. Said even
+  // with --quiet: the predictor did not learn from it.
+  for (const OmniLog& log : logs) {
+    const std::vector<std::string>& used = predictor.info().logs;
+    if (std::find(used.begin(), used.end(), log.path) == used.end())
+      std::fprintf(stderr, "train: note: %s gave no complete window and was left out\n", log.path.c_str());
+  }
   // A one-frame predictor drives the learned backend: its driving noise, from the rows
   // it was validated on (analysis/learned_noise.h).
   OmniPredictor written = predictor;

@@ -257,6 +257,12 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
     throw InputError(SourceLocation{table.path, log.line_of.back(), 1}, msg.str());
   }
   CountFrames(dts, table.path, &log);
+  if (log.frame_of.back() > kMaxFrames) {
+    std::ostringstream msg;
+    msg << "the log spans " << log.frame_of.back() << " frames of " << log.frame_period << " s; at most " << kMaxFrames
+        << " are replayed (split the log)";
+    throw InputError(SourceLocation{table.path, log.line_of.back(), 1}, msg.str());
+  }
 
   // Unwrap theta: successive measurements never turn by more than half a turn.
   const OmniLogRow* prev = nullptr;

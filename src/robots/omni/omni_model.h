@@ -96,8 +96,8 @@ struct OmniModel {
   std::string source_path;  // file it was loaded from ("" when built in code)
   // The engine (analytic, ode, bullet) the model's response was fitted on by identify or
   // diagnose; "" for a model from a data sheet. The engines part where wheels near their
-  // grip, so replay, compare, diagnose and train use this one unless told otherwise
-  // (ReplayEngineFor, omni_model.h), and say so when told.
+  // grip, so replay, diagnose and batch replays use this one unless told otherwise
+  // (ReplayEngineFor, below), and say so when told.
   std::string fitted_on;
 
   // Chassis (everything but the wheels).
