@@ -73,6 +73,13 @@ struct LogData {
   std::vector<int> block;     // per row: its block, numbered over every log
 };
 
+// Per row of the log: is it of `kind`?
+std::vector<char> RowsOfKind(const LogData& d, RowKind kind) {
+  std::vector<char> out(d.kind.size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = d.kind[i] == kind;
+  return out;
+}
+
 // The residual of one replay: per predicted row (forward, sideways, r * dtheta), m.
 using ReplayResidual = OmniPoseErrors;
 
@@ -513,9 +520,7 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
   std::vector<OmniLog> logs;
   for (const LogData& d : data) {
     logs.push_back(*d.log);
-    std::vector<char> fit(d.kind.size());
-    for (std::size_t i = 0; i < fit.size(); ++i) fit[i] = d.kind[i] == RowKind::kFit;
-    train.sample_rows.push_back(std::move(fit));
+    train.sample_rows.push_back(RowsOfKind(d, RowKind::kFit));
   }
   OmniTrainSummary summary;
   try {
@@ -612,11 +617,7 @@ std::vector<HorizonStretch> StretchesOf(const OmniProblem& problem, RowKind kind
     min_start = std::max(min_start, m->command_delay_frames + m->vision_delay_frames + kWarmUpFrames);
   }
   std::vector<HorizonStretch> stretches;
-  for (const LogData& d : problem.data()) {
-    std::vector<char> scored(d.kind.size());
-    for (std::size_t i = 0; i < scored.size(); ++i) scored[i] = d.kind[i] == kind;
-    stretches.push_back({d.log, std::move(scored), 0, min_start});
-  }
+  for (const LogData& d : problem.data()) stretches.push_back({d.log, RowsOfKind(d, kind), 0, min_start});
   return stretches;
 }
 

@@ -115,18 +115,23 @@ double Ar1LongRunVariance(const std::vector<double>& e) {
   return innovation / ((1 - phi) * (1 - phi));
 }
 
-// The t statistic of the split's change in scale: the residual's long-run variance over
-// the stretch, the scales' variances sigma^2 / sum(x^2) on each side.
+// |s_a - s_b| over its standard error, sigma_lr^2 (1 / sum_a x^2 + 1 / sum_b x^2), with
+// sigma_lr^2 the long-run variance of the residual the fitted scales leave.
+double DifferenceT(const std::vector<double>& residual, const Sums& a, const Sums& b, int bandwidth_rows) {
+  const double long_run_variance = std::max(BartlettLongRunVariance(residual, bandwidth_rows),
+                                            Ar1LongRunVariance(residual));
+  const double se = std::sqrt(long_run_variance * (1 / a.xx + 1 / b.xx));
+  return se > 0 ? std::abs(a.Scale() - b.Scale()) / se : 0;
+}
+
+// The t statistic of the split's change in scale over the stretch [first, last).
 double ChangeT(const std::vector<double>& x, const std::vector<double>& y, std::size_t first, std::size_t last,
                const Split& split, int bandwidth_rows) {
   std::vector<double> residual;
   residual.reserve(last - first);
   const double before = split.left.Scale(), after = split.right.Scale();
   for (std::size_t i = first; i < last; ++i) residual.push_back(y[i] - (i < split.row ? before : after) * x[i]);
-  const double long_run_variance = std::max(BartlettLongRunVariance(residual, bandwidth_rows),
-                                            Ar1LongRunVariance(residual));
-  const double se = std::sqrt(long_run_variance * (1 / split.left.xx + 1 / split.right.xx));
-  return se > 0 ? std::abs(after - before) / se : 0;
+  return DifferenceT(residual, split.left, split.right, bandwidth_rows);
 }
 
 // The same for a middle stretch [a, b) of [first, last) against both ends pooled: the
@@ -141,10 +146,7 @@ double MiddleT(const std::vector<double>& x, const std::vector<double>& y, const
     const double scale = i < a ? left.Scale() : (i < b ? middle.Scale() : right.Scale());
     residual.push_back(y[i] - scale * x[i]);
   }
-  const double long_run_variance = std::max(BartlettLongRunVariance(residual, bandwidth_rows),
-                                            Ar1LongRunVariance(residual));
-  const double se = std::sqrt(long_run_variance * (1 / middle.xx + 1 / ends.xx));
-  return se > 0 ? std::abs(middle.Scale() - ends.Scale()) / se : 0;
+  return DifferenceT(residual, middle, ends, bandwidth_rows);
 }
 
 double MedianStep(const std::vector<double>& t) {

@@ -249,20 +249,18 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
         << kMinFramePeriod << " to " << kMaxFramePeriod << " s between frames (is 't' in seconds?)";
     throw InputError(SourceLocation{table.path, log.line_of[0], 1}, msg.str());
   }
-  const double span = (log.rows.back().t - log.rows.front().t) / log.frame_period;
-  if (span > kMaxFrames) {
+  // The frames a replay runs through, bounded before (by the clock) and after (as
+  // counted gap by gap, each gap at least one frame) counting them.
+  auto refuse_beyond_max_frames = [&](auto frames) {  // printed as given: the clock's span, or a count
+    if (frames <= kMaxFrames) return;
     std::ostringstream msg;
-    msg << "the log spans " << span << " frames of " << log.frame_period << " s; at most " << kMaxFrames
+    msg << "the log spans " << frames << " frames of " << log.frame_period << " s; at most " << kMaxFrames
         << " are replayed (split the log)";
     throw InputError(SourceLocation{table.path, log.line_of.back(), 1}, msg.str());
-  }
+  };
+  refuse_beyond_max_frames((log.rows.back().t - log.rows.front().t) / log.frame_period);
   CountFrames(dts, table.path, &log);
-  if (log.frame_of.back() > kMaxFrames) {
-    std::ostringstream msg;
-    msg << "the log spans " << log.frame_of.back() << " frames of " << log.frame_period << " s; at most " << kMaxFrames
-        << " are replayed (split the log)";
-    throw InputError(SourceLocation{table.path, log.line_of.back(), 1}, msg.str());
-  }
+  refuse_beyond_max_frames(log.frame_of.back());
 
   // Unwrap theta: successive measurements never turn by more than half a turn.
   const OmniLogRow* prev = nullptr;

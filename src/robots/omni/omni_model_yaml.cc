@@ -223,18 +223,6 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
 }  // namespace
 
-std::string ReplayEngineFor(const OmniModel& model, const std::string& asked, const std::string& fallback,
-                            std::string* note) {
-  if (note) note->clear();
-  if (asked.empty()) return model.fitted_on.empty() ? fallback : model.fitted_on;
-  if (note && !model.fitted_on.empty() && asked != model.fitted_on && asked != "learned") {
-    *note = model.name + " was fitted on the " + model.fitted_on + " engine (fitted_on); replaying it on " + asked +
-            " as asked: the engines part where the wheels near their grip (fast turns, hard stops), and there " + asked +
-            " does not follow the fitted response";
-  }
-  return asked;
-}
-
 OmniModel LoadOmniModel(const std::string& path) { return ReadOmniModel(LoadYamlFile(path), path, 0); }
 
 OmniModel LoadOmniModel(const std::string& path, const YamlOverrides& overrides) {
