@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -376,7 +377,10 @@ bool OmniTrainOptions::IsValid(std::string* why) const {
   };
   if (kind != "linear" && kind != "mlp") return fail("--kind must be linear or mlp, got '" + kind + "'");
   if (horizon < 1 || horizon > 30) return fail("--horizon must be 1 to 30 frames, got " + std::to_string(horizon));
-  if (ridge < 0) return fail("ridge must not be negative");
+  if (!(ridge >= 0) || !std::isfinite(ridge)) return fail("ridge must be finite and not negative");
+  if (residual && kind == "linear" && residual_ridges.empty()) return fail("no residual ridge to try");
+  for (double r : residual_ridges)
+    if (!(r >= 0) || !std::isfinite(r)) return fail("residual ridges must be finite and not negative");
   if (validation_fraction <= 0 || validation_fraction >= 0.9) return fail("validation fraction must be in (0, 0.9)");
   if (residual) {
     if (nominal_engine != "analytic" && nominal_engine != "ode" && nominal_engine != "bullet")
@@ -396,6 +400,16 @@ std::string OmniTrainSummary::BriefReport() const {
     << " mm on training, " << validation_rmse * 1000 << " mm held out, " << seconds << " s";
   if (validation_rollout_rmse > 0)
     s << "; on its own for 1 s: " << validation_rollout_rmse * 1000 << " mm held out";
+  if (ridge.maxCoeff() > 0) {
+    s << "; ridge chosen by cross-validation over " << ridge_folds << " (forward, sideways, turn): ";
+    for (int j = 0; j < 3; ++j) {
+      s << (j ? ", " : "");
+      if (std::isinf(ridge[j]))
+        s << "no correction";
+      else
+        s << ridge[j];
+    }
+  }
   if (!mlp_report.empty()) s << "; " << mlp_report;
   return s.str();
 }
@@ -413,6 +427,7 @@ struct SplitLog {
   FrameSequence seq;
   int cut = 0;
   std::vector<ResidualStart> residual_starts;  // residual predictors: the held-out rollouts' starts
+  int train_windows = 0, validation_windows = 0;  // the windows it gave each dataset
 };
 
 // Runs the 1-frame model on its own from every window ending in [first, last - frames],
@@ -592,7 +607,7 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
       msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info->frame_rate << " fps";
       throw InputError(SourceLocation{log.path}, msg.str());
     }
-    SplitLog part{ToFrameSequence(log, info->layout), 0, {}};
+    SplitLog part{ToFrameSequence(log, info->layout), 0, {}, 0, 0};
     if (!options.sample_rows.empty()) SetSampledFrames(log, options.sample_rows[k], &part.seq);
     part.cut = ValidationCut(part.seq.frames(), options.validation_fraction);
     int n_train = 0, n_val = 0;
@@ -614,6 +629,8 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
     total_val += n_val;
     total_rows += log.rows.size();
     if (n_train + n_val == 0) continue;
+    part.train_windows = n_train;
+    part.validation_windows = n_val;
     info->logs.push_back(log.path);
     split.push_back(std::move(part));
   }
@@ -654,14 +671,113 @@ void RangesAndBounds(const OmniDataset& train, const std::vector<SplitLog>& spli
   }
 }
 
+// The predictor's pose change for every window of `d` (rows x 3).
+Eigen::MatrixXd PredictAll(const OmniPredictor& predictor, const OmniDataset& d) {
+  Eigen::MatrixXd out(d.rows(), 3);
+  for (int i = 0; i < d.rows(); ++i) {
+    const Eigen::VectorXd row = d.x.row(i).transpose();
+    out.row(i) = predictor.PredictDelta(row.data()).transpose();
+  }
+  return out;
+}
+
+// Which fold of the ridge's cross-validation each window belongs to, the training
+// windows of all parts first, then the held-out ones (as in JoinedWindows): one fold a log
+// where there are several (a new log is what a predictor meets next: another direction,
+// another day), else five stretches of the one log's time.
+std::vector<int> RidgeFolds(const std::vector<SplitLog>& split) {
+  std::vector<int> fold;
+  if (split.size() >= 2) {
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t k = 0; k < split.size(); ++k)
+        fold.insert(fold.end(), static_cast<std::size_t>(pass == 0 ? split[k].train_windows : split[k].validation_windows),
+                    static_cast<int>(k));
+    return fold;
+  }
+  const int n = split.empty() ? 0 : split[0].train_windows + split[0].validation_windows;
+  for (int i = 0; i < n; ++i) fold.push_back(static_cast<int>(5L * i / n));
+  return fold;
+}
+
+// The training windows followed by the held-out ones.
+OmniDataset JoinedWindows(const OmniDataset& train, const OmniDataset& validation) {
+  OmniDataset all = train;
+  if (validation.rows() > 0) AppendRows(validation.x, validation.y, &all);
+  return all;
+}
+
+// The mean squared error per output (forward, sideways, turn; columns) of a ridge fit
+// predicting each fold of `all` from the others, one row per fold with a window to
+// predict; an infinite ridge is no correction (a residual predictor's physics alone).
+Eigen::MatrixXd CrossValidatedErrors(const OmniDataset& all, const std::vector<int>& fold, double ridge) {
+  const int folds = fold.empty() ? 0 : *std::max_element(fold.begin(), fold.end()) + 1;
+  std::vector<Eigen::Vector3d> rows;
+  for (int f = 0; f < folds; ++f) {
+    std::vector<int> fit_rows, test_rows;
+    for (int i = 0; i < all.rows(); ++i) (fold[static_cast<std::size_t>(i)] == f ? test_rows : fit_rows).push_back(i);
+    if (test_rows.empty() || fit_rows.size() < 10) continue;
+    Eigen::MatrixXd predicted = Eigen::MatrixXd::Zero(static_cast<long>(test_rows.size()), 3);
+    if (std::isfinite(ridge)) {
+      Eigen::VectorXd scale;
+      const Eigen::MatrixXd w = FitRidge(all.x(fit_rows, Eigen::all), all.y(fit_rows, Eigen::all), ridge, &scale);
+      predicted = (all.x(test_rows, Eigen::all).array().rowwise() / scale.transpose().array()).matrix() * w;
+    }
+    rows.push_back((predicted - all.y(test_rows, Eigen::all)).colwise().squaredNorm().transpose() /
+                   static_cast<double>(test_rows.size()));
+  }
+  Eigen::MatrixXd out(static_cast<long>(rows.size()), 3);
+  for (std::size_t k = 0; k < rows.size(); ++k) out.row(static_cast<long>(k)) = rows[k].transpose();
+  return out;
+}
+
+// A residual predictor's ridge regression on scaled inputs, closed form, through the
+// origin, fitted on `data`, each output (forward, sideways, turn) with a ridge of
+// `ridges` or none chosen by cross-validation over `folds` of `all` by the
+// one-standard-error rule: the largest ridge whose mean fold error lies within one
+// standard error (over the folds) of the best one's, no correction (ridge infinite)
+// counting as the largest. Shrinking a residual's weights moves it toward its physics,
+// and a correction's error compounds over the steps that follow, so one that wins a
+// frame by less than the folds' scatter is not worth its weights (measured on the
+// Robotino: docs/learning.md).
+OmniPredictor FitResidualChoosingRidge(const OmniPredictorInfo& info, const OmniDataset& data, const OmniDataset& all,
+                                     const std::vector<int>& folds, std::vector<double> ridges, Eigen::Vector3d* chosen) {
+  std::sort(ridges.begin(), ridges.end());
+  ridges.push_back(std::numeric_limits<double>::infinity());
+  std::vector<Eigen::MatrixXd> errors;
+  for (double r : ridges) errors.push_back(CrossValidatedErrors(all, folds, r));
+  const long n = data.x.cols();
+  Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(3, n);
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(n);
+  for (int j = 0; j < 3; ++j) {
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < ridges.size(); ++k)
+      if (errors[k].col(j).mean() < errors[best].col(j).mean()) best = k;
+    const Eigen::VectorXd e = errors[best].col(j);
+    const double se = e.size() > 1 ? std::sqrt((e.array() - e.mean()).square().sum() / static_cast<double>(e.size() - 1) /
+                                               static_cast<double>(e.size()))
+                                   : 0.0;
+    std::size_t keep = best;
+    for (std::size_t k = best; k < ridges.size(); ++k)
+      if (errors[k].rows() > 0 && errors[k].col(j).mean() <= e.mean() + se) keep = k;  // ridges ascend
+    (*chosen)[j] = ridges[keep];
+    if (std::isinf(ridges[keep])) continue;
+    weights.row(j) = FitRidge(data.x, data.y.col(j), ridges[keep], &scale).transpose();  // the same scale each time
+  }
+  return MakeLinearPredictor(info, Eigen::VectorXd::Zero(n), scale, weights, Eigen::Vector3d::Zero());
+}
+
 // Fits the predictor on `data`. Linear: ridge regression on scaled inputs, closed form,
 // through the origin (all-zero inputs are a robot at rest with zero commands, which must
-// stay at rest). The network early-stops on the held-out one-step windows, placed last;
+// stay at rest), a residual one's ridges chosen by FitResidualChoosingRidge (*chosen_ridge;
+// zero otherwise). The network early-stops on the held-out one-step windows, placed last;
 // standing still (all-zero inputs, no motion) is added to what it learns: real logs hold
 // rest only under camera noise.
 OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& data, const OmniDataset& validation,
                            const OmniTrainOptions& options, const std::function<void(int, int, double)>& progress,
-                           std::string* mlp_report) {
+                           const std::vector<SplitLog>& split, std::string* mlp_report, Eigen::Vector3d* chosen_ridge) {
+  if (options.kind == "linear" && info.layout.residual)
+    return FitResidualChoosingRidge(info, data, JoinedWindows(data, validation), RidgeFolds(split),
+                                    options.residual_ridges, chosen_ridge);
   if (options.kind == "linear") {
     Eigen::VectorXd scale;
     const Eigen::MatrixXd w = FitRidge(data.x, data.y, options.ridge, &scale);  // in x 3
@@ -690,16 +806,6 @@ double RolloutRmse(const OmniPredictor& predictor, const std::vector<SplitLog>& 
   return count ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
 }
 
-// The predictor's pose change for every window of `d` (rows x 3).
-Eigen::MatrixXd PredictAll(const OmniPredictor& predictor, const OmniDataset& d) {
-  Eigen::MatrixXd out(d.rows(), 3);
-  for (int i = 0; i < d.rows(); ++i) {
-    const Eigen::VectorXd row = d.x.row(i).transpose();
-    out.row(i) = predictor.PredictDelta(row.data()).transpose();
-  }
-  return out;
-}
-
 }  // namespace
 
 OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
@@ -717,7 +823,8 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
 
   const auto start = std::chrono::steady_clock::now();
   std::string mlp_report;
-  OmniPredictor predictor = FitPredictor(info, train, validation, options, progress, &mlp_report);
+  Eigen::Vector3d ridge = Eigen::Vector3d::Zero();
+  OmniPredictor predictor = FitPredictor(info, train, validation, options, progress, split, &mlp_report, &ridge);
   const double rollout = info.layout.horizon == 1 ? RolloutRmse(predictor, split, rollout_frames, track.get()) : 0.0;
   OmniPredictorInfo final_info = info;
   final_info.validation_rollout_rmse = rollout;
@@ -733,6 +840,8 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     summary->seconds = seconds;
     summary->mlp_report = mlp_report;
     summary->validation_rollout_rmse = rollout;
+    summary->ridge = ridge;
+    summary->ridge_folds = split.size() >= 2 ? std::to_string(split.size()) + " logs" : "5 stretches of the log";
   }
   return predictor;
 }

@@ -172,7 +172,13 @@ struct OmniTrainOptions {
   // Residual: the model's last one-frame errors among the inputs. 0 by default: on logs
   // with camera noise they made every predictor measured worse (docs/learning.md).
   int nominal_errors = 0;
-  double ridge = 1e-3;           // linear: L2 weight on standardised inputs, per sample
+  double ridge = 1e-3;  // linear: L2 weight on standardised inputs, per sample (the seed's)
+  // A residual linear predictor's ridges instead, tried per output (forward, sideways,
+  // turn) with no correction at all, and chosen by cross-validation over the logs (one
+  // log: stretches of its time) by the one-standard-error rule (FitResidualChoosingRidge
+  // in omni_predictor.cc): where nothing learned clearly helps a left-out log, the hybrid
+  // is its physics alone, never worse than it there.
+  std::vector<double> residual_ridges = {1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1e3, 1e4};
   double validation_fraction = 0.2;  // held out from the end of every log
   // Per log, per row: may a sample (its window of poses and its target) use the row?
   // Empty: every row. The diagnosis marks its fit blocks, so that its learned yardstick
@@ -190,6 +196,12 @@ struct OmniTrainSummary {
   double train_rmse = 0;       // m
   double validation_rmse = 0;  // m
   double validation_rollout_rmse = 0;  // m, H = 1: the model on its own for 1 s, held out
+  // A residual linear predictor: the ridge chosen per output (forward, sideways, turn) by
+  // cross-validation over `ridge_folds` (several logs: one fold each; one log: five
+  // stretches of its time); infinite where it keeps no correction (none predicted a
+  // left-out fold clearly better than the physics alone). Zero otherwise.
+  Eigen::Vector3d ridge = Eigen::Vector3d::Zero();
+  std::string ridge_folds;
   double seconds = 0;          // wall time of the fit
   std::string mlp_report;
   std::string BriefReport() const;
