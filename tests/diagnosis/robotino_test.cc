@@ -140,7 +140,7 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
   // in another direction. Its ridges, chosen by cross-validation over the fit runs with
   // no correction among them, keep it within 1.2x of the physics on every run at 4 frames
   // and 1 s (measured: at most 1.13x, on the 120-degree run at 1 s). With the fixed
-  // ridge of before it was 2.4x the physics at 1 s on the 300-degree run (8.9 against
+  // ridge of before it was 2.3x the physics at 1 s on the 300-degree run (8.6 against
   // 3.7 mm).
   OmniTrainOptions train;
   train.residual = true;
