@@ -47,6 +47,10 @@ std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretche
         o.state = options.state;
         o.stride = std::max(1, frames / 24);
         o.stride_origin = 0;  // every model predicts from the same frames
+        if (p.learned) {
+          o.backend = "learned";
+          o.backend_options.predictor = p.learned;
+        }
         results.push_back(ReplayOmniLog(*p.model, log, o));
       }
     }

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,11 +18,13 @@
 
 namespace twinsim {
 
-// One predictor: a model replayed, or a baseline when model is null.
+// One predictor: a model replayed, or a baseline when model is null; with `learned`, the
+// model's robot on the learned backend with that predictor (its own state, the tracker).
 struct HorizonPredictor {
   std::string name;
   const OmniModel* model = nullptr;
   enum Baseline { kNone, kConstantVelocity, kIntegratedCommand } baseline = kNone;
+  std::shared_ptr<const OmniPredictor> learned;
 };
 
 // A log and which of its rows a prediction may end on (`scored`, one per row) and start

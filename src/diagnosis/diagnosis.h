@@ -185,7 +185,9 @@ struct DiagnosisHorizon {
   std::string label;          // "4 frames", "0.25 s", "1 s", "3 s"
   double seconds = 0;
   int rows = 0;               // test rows scored
-  std::vector<std::string> predictors;  // given model, [identified model,] repaired model, constant velocity, integrated command
+  // given model, [identified model,] repaired model, constant velocity, integrated command
+  // [, linear predictor: the seed's, trained on the fit rows]
+  std::vector<std::string> predictors;
   std::vector<double> gaps;   // the report's metric (m), one per predictor
 };
 

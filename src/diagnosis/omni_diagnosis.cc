@@ -631,6 +631,26 @@ HorizonOptions ReportHorizonOptions(const DiagnosisOptions& options, double radi
   return ho;
 }
 
+// The seed's linear predictor (twinsim train --kind linear, one frame, rolled out by the
+// learned backend) with `model`'s delay as its command lag, trained on windows wholly in
+// fit rows: what a user would try instead of the physics. Null, saying why in a note,
+// where it cannot be trained.
+std::shared_ptr<const OmniPredictor> TrainLinearBaseline(const OmniProblem& problem, const OmniModel& model,
+                                                         DiagnosisReport* report) {
+  OmniTrainOptions train;
+  std::vector<OmniLog> logs;
+  for (const LogData& d : problem.data()) {
+    logs.push_back(*d.log);
+    train.sample_rows.push_back(RowsOfKind(d, RowKind::kFit));
+  }
+  try {
+    return std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, logs, train));
+  } catch (const std::runtime_error& e) {  // InputError: too few windows in the fit rows
+    report->notes.push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") + e.what());
+    return nullptr;
+  }
+}
+
 // The test-row gap of the given, (identified,) repaired model and the two no-model
 // baselines at the report's horizon, 0.25 s, 1 s and 3 s, each model predicting from
 // its observer's estimate (kReportState); a note where the named effects
@@ -643,13 +663,28 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   predictors.push_back({"repaired model", &repaired});
   predictors.push_back({"constant velocity", nullptr, HorizonPredictor::kConstantVelocity});
   predictors.push_back({"integrated command", nullptr, HorizonPredictor::kIntegratedCommand});
+  if (auto linear = TrainLinearBaseline(problem, repaired, report))
+    predictors.push_back({"linear predictor", &repaired, HorizonPredictor::kNone, linear});
   const std::size_t from = options.refit_model ? 1 : 0, to = from + 1;  // the repaired model against its start
   const std::vector<HorizonStretch> stretches = StretchesOf(problem, RowKind::kTest, {&given, &start, &repaired});
   const double period = problem.data().front().log->frame_period;
   HorizonOptions ho = ReportHorizonOptions(options, given.chassis_radius);
   ho.delay = repaired.TotalDelaySeconds(period);
   for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
-    const std::vector<HorizonSum> sums = ScoreHorizon(stretches, predictors, frames, ho);
+    std::vector<HorizonSum> sums;
+    try {
+      sums = ScoreHorizon(stretches, predictors, frames, ho);
+    } catch (const CheckFailed& e) {  // the linear predictor ran away on a test row
+      if (!predictors.back().learned) throw;
+      report->notes.push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") +
+                              e.what());
+      predictors.pop_back();
+      for (DiagnosisHorizon& done : report->horizons) {
+        done.predictors.resize(predictors.size());
+        done.gaps.resize(predictors.size());
+      }
+      sums = ScoreHorizon(stretches, predictors, frames, ho);
+    }
     DiagnosisHorizon h;
     h.label = label;
     h.seconds = frames * period;
@@ -668,6 +703,18 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
     }
     report->horizons.push_back(h);
   }
+  std::string loses;  // where the seed's linear predictor beats the repaired model
+  for (const DiagnosisHorizon& h : report->horizons) {
+    if (h.rows == 0 || h.predictors.back() != "linear predictor" || h.gaps.back() >= h.gaps[to]) continue;
+    char cell[96];
+    std::snprintf(cell, sizeof cell, "%s%s (%.3g against %.3g mm)", loses.empty() ? "" : ", ", h.label.c_str(),
+                  1000 * h.gaps.back(), 1000 * h.gaps[to]);
+    loses += cell;
+  }
+  if (!loses.empty())
+    report->notes.push_back("the seed's linear predictor, trained on the fit rows, predicts the test rows better than "
+                            "the repaired model at " + loses + ": the physics misses something there (train --residual "
+                            "learns it on top)");
 }
 
 // How much worse (share of the error) a longer horizon may get before a change is not

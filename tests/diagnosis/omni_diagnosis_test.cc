@@ -96,8 +96,9 @@ TEST_P(OmniDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
   // where nothing was added.
   ASSERT_EQ(report.horizons.size(), 4u);
   for (const DiagnosisHorizon& h : report.horizons) {
-    ASSERT_EQ(h.predictors.size(), 4u);
+    ASSERT_EQ(h.predictors.size(), 5u);
     EXPECT_EQ(h.predictors[1], "repaired model");
+    EXPECT_EQ(h.predictors[4], "linear predictor");  // the seed's, trained on the fit rows
     EXPECT_GT(h.rows, 10) << h.label;
     if (c.expected.empty()) {
       EXPECT_EQ(h.gaps[1], h.gaps[0]) << h.label;

@@ -71,14 +71,15 @@ std::vector<OpenWorldCase> Cases() {
 // held name what they trade with (or that the fit ignores them), and the determined set
 // is below the collinearity limit.
 // At the report's horizon, 0.25 s, 1 s and 3 s, on rows enough to say so, the identified
-// model predicts better than the nominal one, constant velocity and the integrated
-// command.
+// model predicts better than the nominal one, constant velocity, the integrated command
+// and the seed's linear predictor trained on the fit blocks.
 void ExpectIdentifiedBestAtEveryHorizon(const OmniIdentificationReport& report) {
   ASSERT_EQ(report.horizons.size(), 4u);
   for (const OmniHorizonGaps& h : report.horizons) {
     EXPECT_GT(h.rows, 40) << h.label;  // the fewest measured: 46, at 3 s (a prediction every K / 24 frames)
-    ASSERT_EQ(h.gaps.size(), 4u);
+    ASSERT_EQ(h.gaps.size(), 5u);
     EXPECT_EQ(h.gaps[1].name, "identified model");
+    EXPECT_EQ(h.gaps[4].name, "linear predictor");
     for (const OmniGap& g : h.gaps) {
       if (&g != &h.gaps[1]) {
         EXPECT_LT(h.gaps[1].rmse, g.rmse) << h.label << ": " << g.name;

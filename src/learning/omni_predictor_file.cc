@@ -1,0 +1,151 @@
+// The predictor file of an omni robot's predictor: OmniPredictor::Save and Load
+// (docs/learning.md, "Predictor files"; the shared parts in predictor_file.h).
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/error.h"
+#include "io/yaml_reader.h"
+#include "learning/omni_predictor.h"
+#include "learning/predictor_file.h"
+#include "robots/omni/omni_effects.h"
+
+namespace twinsim {
+
+void OmniPredictor::Save(const std::string& path) const {
+  YAML::Emitter out;
+  BeginPredictorFile(out, residual() ? kResidualPredictorFormatVersion : kPredictorFormatVersion);
+  out << YAML::Key << "kind" << YAML::Value << info_.kind;
+  out << YAML::Key << "model" << YAML::Value << info_.model_name;
+  out << YAML::Key << "frame_rate" << YAML::Value << info_.frame_rate;
+  out << YAML::Key << "layout" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "history" << YAML::Value << info_.layout.history;
+  out << YAML::Key << "horizon" << YAML::Value << info_.layout.horizon;
+  out << YAML::Key << "command_lag" << YAML::Value << info_.layout.command_lag;
+  out << YAML::Key << "inputs" << YAML::Value << info_.layout.num_inputs();
+  out << YAML::Key << "outputs" << YAML::Value << FeatureLayout::kNumOutputs;
+  if (residual()) {
+    out << YAML::Key << "residual" << YAML::Value << true;
+    out << YAML::Key << "nominal_errors" << YAML::Value << info_.layout.nominal_errors;
+  }
+  out << YAML::EndMap;
+  if (residual()) {
+    out << YAML::Key << "nominal" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "engine" << YAML::Value << info_.nominal_engine;
+    out << YAML::Key << "substeps" << YAML::Value << info_.nominal_substeps;
+    out << YAML::Key << "model_fingerprint" << YAML::Value << info_.nominal_fingerprint;
+    out << YAML::EndMap;
+  }
+  EmitTrainedOn(out, info_.logs, info_.samples,
+                {{"train_rmse", info_.train_rmse},
+                 {"validation_rmse", info_.validation_rmse},
+                 {"validation_rollout_rmse", info_.validation_rollout_rmse}});
+  if (info_.max_step > 0 || info_.max_turn > 0) {
+    out << YAML::Key << "bounds" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "max_step" << YAML::Value << info_.max_step;
+    out << YAML::Key << "max_turn" << YAML::Value << info_.max_turn;
+    if (!info_.input_low.empty()) {
+      out << YAML::Key << "input_low" << YAML::Value << YAML::Flow << info_.input_low;
+      out << YAML::Key << "input_high" << YAML::Value << YAML::Flow << info_.input_high;
+    }
+    out << YAML::EndMap;
+  }
+  if (info_.has_driving_noise) {
+    const OmniDrivingNoise& n = info_.driving_noise;
+    out << YAML::Key << "driving_noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (int a = 0; a < 3; ++a) out << YAML::Key << kOmniAxisNames[a] << YAML::Value << n.sd[static_cast<std::size_t>(a)];
+    out << YAML::Key << "correlation_time" << YAML::Value << n.correlation_time;
+    if (n.per_speed != 0) out << YAML::Key << "per_speed" << YAML::Value << n.per_speed;
+    if (n.per_acceleration != 0) out << YAML::Key << "per_acceleration" << YAML::Value << n.per_acceleration;
+    out << YAML::Key << "simulated" << YAML::Value << n.simulated;
+    out << YAML::EndMap;
+  }
+  EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
+  WritePredictorFile(out, path);
+}
+
+OmniPredictor OmniPredictor::Load(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  CheckPredictorRobot(root, path, "omni");
+  ErrorList errors;
+  YamlMap top(root, path, "", &errors);
+  const int version = ReadPredictorVersion(top, "predictor", kPredictorFormatVersion, kResidualPredictorFormatVersion);
+  OmniPredictorInfo info;
+  top.Require("kind", &info.kind, std::vector<std::string>{"linear", "mlp"});
+  top.Require("model", &info.model_name);
+  top.Require("frame_rate", &info.frame_rate, Positive());
+  if (top.Has("layout")) {
+    YamlMap l(top.Child("layout"), path, "layout", &errors);
+    l.Require("history", &info.layout.history, InRange(1, 100));
+    l.Require("horizon", &info.layout.horizon, InRange(1, 100));
+    l.Require("command_lag", &info.layout.command_lag, InRange(0, 100));
+    if (version >= 3) {
+      l.Get("residual", &info.layout.residual);
+      if (info.layout.residual) l.Require("nominal_errors", &info.layout.nominal_errors, InRange(0, 100));
+    }
+    int inputs = 0, outputs = 0;
+    if (l.Require("inputs", &inputs) && inputs != info.layout.num_inputs())
+      l.Error("inputs", "does not match history and horizon (expected " + std::to_string(info.layout.num_inputs()) + ")");
+    if (l.Require("outputs", &outputs) && outputs != FeatureLayout::kNumOutputs)
+      l.Error("outputs", "expected 3");
+    l.Finish();
+  } else {
+    top.Missing("layout");
+  }
+  if (info.layout.residual) {
+    if (top.Has("nominal")) {
+      YamlMap n(top.Child("nominal"), path, "nominal", &errors);
+      n.Require("engine", &info.nominal_engine, std::vector<std::string>{"analytic", "ode", "bullet"});
+      n.Require("substeps", &info.nominal_substeps, InRange(1, 1000));
+      n.Require("model_fingerprint", &info.nominal_fingerprint);
+      n.Finish();
+    } else {
+      top.Missing("nominal");
+    }
+  }
+  ReadTrainedOn(top, &info.logs, &info.samples,
+                {{"train_rmse", &info.train_rmse},
+                 {"validation_rmse", &info.validation_rmse},
+                 {"validation_rollout_rmse", &info.validation_rollout_rmse}});
+  if (top.Has("bounds")) {  // optional: files from before issue 40 have none
+    YamlMap b(top.Child("bounds"), path, "bounds", &errors);
+    b.Require("max_step", &info.max_step, Positive());
+    b.Require("max_turn", &info.max_turn, NonNegative());
+    const int n = info.layout.num_inputs();
+    if (b.Has("input_low") || b.Has("input_high")) {  // optional: files from before have none
+      b.Get("input_low", &info.input_low, n);
+      b.Get("input_high", &info.input_high, n);
+      if (info.input_low.size() != info.input_high.size()) b.Missing(info.input_low.empty() ? "input_low" : "input_high");
+    }
+    b.Finish();
+  }
+  if (top.Has("driving_noise")) {  // optional: files from before issue 42 and H > 1 have none
+    YamlMap d(top.Child("driving_noise"), path, "driving_noise", &errors);
+    OmniDrivingNoise& n = info.driving_noise;
+    for (int a = 0; a < 3; ++a) d.Require(kOmniAxisNames[a], &n.sd[static_cast<std::size_t>(a)], NonNegative(100));
+    d.Require("correlation_time", &n.correlation_time, InRange(1e-3, 100));
+    d.Get("per_speed", &n.per_speed, NonNegative(100));
+    d.Get("per_acceleration", &n.per_acceleration, NonNegative(100));
+    d.Require("simulated", &n.simulated);
+    d.Finish();
+    info.has_driving_noise = true;
+    if (info.layout.horizon != 1) top.Error("driving_noise", "only a predictor of one frame ahead (layout.horizon 1) drives the learned backend");
+  }
+  errors.ThrowIfAny();
+
+  const int in = info.layout.num_inputs();
+  LinearPredictorParameters linear;
+  Mlp mlp;
+  ReadPredictorModel(top, info.kind, in, FeatureLayout::kNumOutputs, path, &errors, &linear, &mlp);
+  OmniPredictor p = info.kind == "linear"
+                        ? MakeLinearPredictor(info, linear.input_mean, linear.input_scale, linear.weights,
+                                              Eigen::Vector3d(linear.bias))
+                        : MakeMlpPredictor(info, std::move(mlp));
+  p.path_ = path;
+  return p;
+}
+
+}  // namespace twinsim
