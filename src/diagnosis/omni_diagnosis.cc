@@ -102,7 +102,8 @@ int SelectionHorizon(const DiagnosisOptions& options, double frame_period) {
 // logs show it (OmniNoiseFloor's variances) drawn from a fixed seed, make a log that the
 // model's observer then predicts as the diagnosis does. The camera's noise alone (the
 // floor of before) is a fraction of it: the estimate's error at the start, carried over
-// the horizon, is most of a perfect model's error half a second ahead.
+// the horizon, is most of a perfect model's error half a second ahead. A log on which the
+// model's free run runs away is left out; where every one is, the camera's part alone.
 std::vector<double> ObserverNoiseFloor(const OmniModel& model, const std::vector<OmniLog>& logs,
                                        const std::string& backend, int horizon) {
   double var_xy = 0, var_theta = 0;
@@ -114,7 +115,12 @@ std::vector<double> ObserverNoiseFloor(const OmniModel& model, const std::vector
     free_run.backend = backend;
     free_run.state = kFreeRunState;
     free_run.horizon = 0;
-    const OmniReplayResult motion = ReplayOmniLog(model, logs[k], free_run);
+    OmniReplayResult motion;
+    try {
+      motion = ReplayOmniLog(model, logs[k], free_run);
+    } catch (const CheckFailed&) {  // its free run runs away on this log: no motion of its own to see
+      continue;
+    }
     OmniLog seen = logs[k];
     std::mt19937_64 rng(0x5eedf100 + k);
     std::normal_distribution<double> unit(0.0, 1.0);
@@ -128,13 +134,22 @@ std::vector<double> ObserverNoiseFloor(const OmniModel& model, const std::vector
     o.backend = backend;
     o.horizon = horizon;
     o.state = kDiagnosisState;
-    for (const auto& e : PoseErrorsInRobotFrame(seen, ReplayOmniLog(model, seen, o), model.chassis_radius).e) {
+    OmniReplayResult predicted;
+    try {
+      predicted = ReplayOmniLog(model, seen, o);
+    } catch (const CheckFailed&) {
+      continue;
+    }
+    for (const auto& e : PoseErrorsInRobotFrame(seen, predicted, model.chassis_radius).e) {
       for (std::size_t c = 0; c < 3; ++c) sum[c] += e[c] * e[c];
       ++rows;
     }
   }
+  if (rows == 0) {  // no log gave a free run: the camera's part alone, for the tracker's 4 frames (before issue 63)
+    const double xy = std::sqrt(2 * var_xy), rim = model.chassis_radius * std::sqrt(2 * var_theta);
+    return {xy, xy, rim, std::sqrt(2 * xy * xy + rim * rim)};
+  }
   std::vector<double> out(4, 0.0);
-  if (rows == 0) return out;
   for (std::size_t c = 0; c < 3; ++c) {
     out[c] = std::sqrt(sum[c] / static_cast<double>(rows));
     out[3] += sum[c] / static_cast<double>(rows);
