@@ -39,7 +39,8 @@ constexpr const char* kDiagnosisState = "observer";
 constexpr double kSelectionSeconds = 0.5;
 // The free runs beside the residuals (the response's lag, the report's paths) start
 // from the tracker: a free run never sees a measurement after its start.
-constexpr const char* kFreeRunState = "tracker";
+constexpr const char* kTrackerState = "tracker";
+constexpr const char* kFreeRunState = kTrackerState;
 // The report's every-horizon table, though, is what a user's replay gives: predictions
 // from the observer's estimate, as the contract's replay makes them.
 constexpr const char* kReportState = "observer";
@@ -207,11 +208,12 @@ class OmniProblem : public DiagnosisProblem {
     return m;
   }
 
-  ReplayResidual Residual(const OmniModel& model, const LogData& d, int stride, int horizon) const {
+  ReplayResidual Residual(const OmniModel& model, const LogData& d, int stride, int horizon,
+                          const char* state = kDiagnosisState) const {
     OmniReplayOptions o;
     o.backend = options_.backend;
     o.horizon = horizon;
-    o.state = kDiagnosisState;
+    o.state = state;
     o.stride = stride;
     return PoseErrorsInRobotFrame(*d.log, ReplayOmniLog(model, *d.log, o), nominal_.chassis_radius);
   }
@@ -662,7 +664,14 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
     const LogData& d = data_[li];
     const ReplayResidual r = Residual(model, d, 1, selection_horizon_);
     const ReplayResidual& l = learned[li];
-    std::size_t m = 0;  // walks l.rows alongside
+    // The learned backend starts from its own tracker's state, the physics here from the
+    // observer's; the yardstick is the learned correction (the learned prediction minus
+    // the physics' from the same tracker state) added to the observer's prediction:
+    // e = e_observer + e_learned - e_tracker. Compared as they come, a noise-free plant's
+    // tracker, whose velocity is the model's own, beat the observer's noisy estimate and
+    // passed for physics the model lacks.
+    const ReplayResidual t = predictor ? Residual(model, d, 1, selection_horizon_, kTrackerState) : ReplayResidual{};
+    std::size_t m = 0, n = 0;  // walk l.rows and t.rows alongside
     for (std::size_t k = 0; k < r.rows.size(); ++k) {
       const std::size_t i = r.rows[k];
       if (d.kind[i] != RowKind::kTest) continue;
@@ -675,8 +684,9 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
         // A row the learned replay does not predict (its window still filling) keeps the
         // physics' residual: no correction.
         while (m < l.rows.size() && l.rows[m] < i) ++m;
-        const bool both = m < l.rows.size() && l.rows[m] == i;
-        for (std::size_t c = 0; c < 3; ++c) out.learned[c].push_back(both ? l.e[m][c] : r.e[k][c]);
+        while (n < t.rows.size() && t.rows[n] < i) ++n;
+        const bool all = m < l.rows.size() && l.rows[m] == i && n < t.rows.size() && t.rows[n] == i;
+        for (std::size_t c = 0; c < 3; ++c) out.learned[c].push_back(all ? r.e[k][c] + l.e[m][c] - t.e[n][c] : r.e[k][c]);
       }
     }
   }
