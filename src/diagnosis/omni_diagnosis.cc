@@ -1183,7 +1183,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
 
   const OmniModel nominal_model = problem->Build({});
   const OmniModel repaired_model = problem->Build(selection.effects);
-  report.noise_floor = ObserverNoiseFloor(model, logs, options.backend, problem->selection_horizon()).back();
+  report.noise_floor = ObserverNoiseFloor(nominal_model, logs, options.backend, problem->selection_horizon()).back();
   GripCheck grip;  // the nominal model's 1-frame replays: where the analytic model holds
   FindChannels(*problem, model, nominal_model, repaired_model, options, &report, &grip);
   FreeRunPaths(*problem, nominal_model, repaired_model, options, first_predicted, &report);
