@@ -6,6 +6,8 @@
 #include <sstream>
 
 #include "analysis/omni_baselines.h"
+#include "core/error.h"
+#include "learning/omni_predictor.h"
 #include "io/html_text.h"
 #include "core/parallel.h"
 
@@ -76,6 +78,49 @@ std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretche
   for (const auto& per_stretch : sums)
     for (std::size_t q = 0; q < predictors.size(); ++q) out[q].Add(per_stretch[q]);
   return out;
+}
+
+std::shared_ptr<const OmniPredictor> TrainLinearBaseline(const OmniModel& model, const std::vector<OmniLog>& logs,
+                                                         std::vector<std::vector<char>> rows,
+                                                         std::vector<std::string>* notes) {
+  OmniTrainOptions train;
+  train.sample_rows = std::move(rows);
+  try {
+    return std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, logs, train));
+  } catch (const std::runtime_error& e) {  // InputError: too few windows in the marked rows
+    notes->push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") + e.what());
+    return nullptr;
+  }
+}
+
+std::vector<HorizonSum> ScoreHorizonWithoutRunaway(const std::vector<HorizonStretch>& stretches,
+                                                   std::vector<HorizonPredictor>* predictors, int frames,
+                                                   const HorizonOptions& options, std::vector<std::string>* notes) {
+  try {
+    return ScoreHorizon(stretches, *predictors, frames, options);
+  } catch (const CheckFailed& e) {  // the learned baseline ran away on a scored row
+    if (predictors->empty() || !predictors->back().learned) throw;
+    notes->push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") + e.what());
+    predictors->pop_back();
+    return ScoreHorizon(stretches, *predictors, frames, options);
+  }
+}
+
+std::string LinearPredictorWinsNote(const std::string& trained_on, const std::string& scored_on,
+                                    const std::string& model_name, const std::vector<std::string>& labels,
+                                    const std::vector<int>& rows, const std::vector<double>& linear,
+                                    const std::vector<double>& model) {
+  std::string where;
+  for (std::size_t h = 0; h < labels.size(); ++h) {
+    if (rows[h] == 0 || linear[h] >= model[h]) continue;
+    char cell[96];
+    std::snprintf(cell, sizeof cell, "%s%s (%.3g against %.3g mm)", where.empty() ? "" : ", ", labels[h].c_str(),
+                  1000 * linear[h], 1000 * model[h]);
+    where += cell;
+  }
+  if (where.empty()) return "";
+  return "the seed's linear predictor, trained on " + trained_on + ", predicts " + scored_on + " better than " +
+         model_name + " at " + where + ": the physics misses something there (train --residual learns it on top)";
 }
 
 int HorizonTable::Best(std::size_t h) const {

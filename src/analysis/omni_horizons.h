@@ -24,7 +24,7 @@ struct HorizonPredictor {
   std::string name;
   const OmniModel* model = nullptr;
   enum Baseline { kNone, kConstantVelocity, kIntegratedCommand } baseline = kNone;
-  std::shared_ptr<const OmniPredictor> learned;
+  std::shared_ptr<const OmniPredictor> learned = nullptr;
 };
 
 // A log and which of its rows a prediction may end on (`scored`, one per row) and start
@@ -62,6 +62,31 @@ struct HorizonSum {
 std::vector<HorizonSum> ScoreHorizon(const std::vector<HorizonStretch>& stretches,
                                      const std::vector<HorizonPredictor>& predictors, int frames,
                                      const HorizonOptions& options);
+
+// The seed's linear predictor (twinsim train --kind linear, one frame, rolled out by the
+// learned backend) with `model`'s delay as its command lag, trained on the rows of `logs`
+// marked in `rows` (one mask per log): what a user would try instead of the physics, for
+// identify's and diagnose's every-horizon tables. Null, saying why in `notes`, where it
+// cannot be trained (too few windows in the marked rows).
+std::shared_ptr<const OmniPredictor> TrainLinearBaseline(const OmniModel& model, const std::vector<OmniLog>& logs,
+                                                         std::vector<std::vector<char>> rows,
+                                                         std::vector<std::string>* notes);
+
+// ScoreHorizon, where the last of `predictors` may be a learned baseline that runs away
+// on a scored row: then it is dropped from `predictors`, said in `notes`, and the rest
+// are scored. Throws as ScoreHorizon otherwise.
+std::vector<HorizonSum> ScoreHorizonWithoutRunaway(const std::vector<HorizonStretch>& stretches,
+                                                   std::vector<HorizonPredictor>* predictors, int frames,
+                                                   const HorizonOptions& options, std::vector<std::string>* notes);
+
+// The note where the seed's linear predictor (trained on `trained_on`) predicts `scored_on`
+// better than `model_name` at some horizon: `linear` and `model` are their errors (m) per
+// horizon, labelled `labels`, over `rows` rows (a horizon without rows says nothing); ""
+// when it is better nowhere.
+std::string LinearPredictorWinsNote(const std::string& trained_on, const std::string& scored_on,
+                                    const std::string& model_name, const std::vector<std::string>& labels,
+                                    const std::vector<int>& rows, const std::vector<double>& linear,
+                                    const std::vector<double>& model);
 
 // A report's table of errors, predictors down and horizons across.
 struct HorizonTable {

@@ -193,7 +193,8 @@ class OmniProblem : public DiagnosisProblem {
       }
     }
     channel_noise_ = ObserverNoiseFloor(nominal, logs, options.backend, selection_horizon_);
-    channel_noise_.pop_back();  // the total
+    noise_floor_ = channel_noise_.back();
+    channel_noise_.pop_back();
     std::sort(speeds_.begin(), speeds_.end());
     std::sort(turn_rates_.begin(), turn_rates_.end());
   }
@@ -299,6 +300,7 @@ class OmniProblem : public DiagnosisProblem {
   double guard_seconds() const { return guard_seconds_; }
   const std::vector<double>& channel_noise() const { return channel_noise_; }
   int selection_horizon() const { return selection_horizon_; }
+  double noise_floor() const { return noise_floor_; }  // m, ObserverNoiseFloor's total for Build({})
 
  private:
   double Quantile(const std::vector<double>& sorted, double q) const {
@@ -315,6 +317,7 @@ class OmniProblem : public DiagnosisProblem {
   DiagnosisOptions options_;
   double guard_seconds_ = 0;
   std::vector<double> channel_noise_;  // m, per axis: ObserverNoiseFloor's
+  double noise_floor_ = 0;             // m, its total
   int selection_horizon_ = 4;          // frames: the residuals' horizon (SelectionHorizon)
   std::vector<LogData> data_;
   double frame_period_ = 1.0 / 30;
@@ -718,26 +721,6 @@ HorizonOptions ReportHorizonOptions(const DiagnosisOptions& options, double radi
   return ho;
 }
 
-// The seed's linear predictor (twinsim train --kind linear, one frame, rolled out by the
-// learned backend) with `model`'s delay as its command lag, trained on windows wholly in
-// fit rows: what a user would try instead of the physics. Null, saying why in a note,
-// where it cannot be trained.
-std::shared_ptr<const OmniPredictor> TrainLinearBaseline(const OmniProblem& problem, const OmniModel& model,
-                                                         DiagnosisReport* report) {
-  OmniTrainOptions train;
-  std::vector<OmniLog> logs;
-  for (const LogData& d : problem.data()) {
-    logs.push_back(*d.log);
-    train.sample_rows.push_back(RowsOfKind(d, RowKind::kFit));
-  }
-  try {
-    return std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, logs, train));
-  } catch (const std::runtime_error& e) {  // InputError: too few windows in the fit rows
-    report->notes.push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") + e.what());
-    return nullptr;
-  }
-}
-
 // The test-row gap of the given, (identified,) repaired model and the two no-model
 // baselines at the report's horizon, 0.25 s, 1 s and 3 s, each model predicting from
 // its observer's estimate (kReportState); a note where the named effects
@@ -750,7 +733,13 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   predictors.push_back({"repaired model", &repaired});
   predictors.push_back({"constant velocity", nullptr, HorizonPredictor::kConstantVelocity});
   predictors.push_back({"integrated command", nullptr, HorizonPredictor::kIntegratedCommand});
-  if (auto linear = TrainLinearBaseline(problem, repaired, report))
+  std::vector<OmniLog> logs;
+  std::vector<std::vector<char>> fit_rows;
+  for (const LogData& d : problem.data()) {
+    logs.push_back(*d.log);
+    fit_rows.push_back(RowsOfKind(d, RowKind::kFit));
+  }
+  if (auto linear = TrainLinearBaseline(repaired, logs, std::move(fit_rows), &report->notes))
     predictors.push_back({"linear predictor", &repaired, HorizonPredictor::kNone, linear});
   const std::size_t from = options.refit_model ? 1 : 0, to = from + 1;  // the repaired model against its start
   const std::vector<HorizonStretch> stretches = StretchesOf(problem, RowKind::kTest, {&given, &start, &repaired});
@@ -758,19 +747,10 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   HorizonOptions ho = ReportHorizonOptions(options, given.chassis_radius);
   ho.delay = repaired.TotalDelaySeconds(period);
   for (const auto& [label, frames] : ReportHorizons(options.horizon, period)) {
-    std::vector<HorizonSum> sums;
-    try {
-      sums = ScoreHorizon(stretches, predictors, frames, ho);
-    } catch (const CheckFailed& e) {  // the linear predictor ran away on a test row
-      if (!predictors.back().learned) throw;
-      report->notes.push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") +
-                              e.what());
-      predictors.pop_back();
-      for (DiagnosisHorizon& done : report->horizons) {
-        done.predictors.resize(predictors.size());
-        done.gaps.resize(predictors.size());
-      }
-      sums = ScoreHorizon(stretches, predictors, frames, ho);
+    const std::vector<HorizonSum> sums = ScoreHorizonWithoutRunaway(stretches, &predictors, frames, ho, &report->notes);
+    for (DiagnosisHorizon& done : report->horizons) {  // the same predictors
+      done.predictors.resize(predictors.size());
+      done.gaps.resize(predictors.size());
     }
     DiagnosisHorizon h;
     h.label = label;
@@ -790,18 +770,19 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
     }
     report->horizons.push_back(h);
   }
-  std::string loses;  // where the seed's linear predictor beats the repaired model
+  if (!predictors.back().learned) return;
+  std::vector<std::string> labels;
+  std::vector<int> rows;
+  std::vector<double> linear, written;
   for (const DiagnosisHorizon& h : report->horizons) {
-    if (h.rows == 0 || h.predictors.back() != "linear predictor" || h.gaps.back() >= h.gaps[to]) continue;
-    char cell[96];
-    std::snprintf(cell, sizeof cell, "%s%s (%.3g against %.3g mm)", loses.empty() ? "" : ", ", h.label.c_str(),
-                  1000 * h.gaps.back(), 1000 * h.gaps[to]);
-    loses += cell;
+    labels.push_back(h.label);
+    rows.push_back(h.rows);
+    linear.push_back(h.gaps.back());
+    written.push_back(h.gaps[to]);
   }
-  if (!loses.empty())
-    report->notes.push_back("the seed's linear predictor, trained on the fit rows, predicts the test rows better than "
-                            "the repaired model at " + loses + ": the physics misses something there (train --residual "
-                            "learns it on top)");
+  const std::string wins =
+      LinearPredictorWinsNote("the fit rows", "the test rows", "the repaired model", labels, rows, linear, written);
+  if (!wins.empty()) report->notes.push_back(wins);
 }
 
 // How much worse (share of the error) a longer horizon may get before a change is not
@@ -1183,7 +1164,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
 
   const OmniModel nominal_model = problem->Build({});
   const OmniModel repaired_model = problem->Build(selection.effects);
-  report.noise_floor = ObserverNoiseFloor(nominal_model, logs, options.backend, problem->selection_horizon()).back();
+  report.noise_floor = problem->noise_floor();  // of nominal_model, the model the problem starts from
   GripCheck grip;  // the nominal model's 1-frame replays: where the analytic model holds
   FindChannels(*problem, model, nominal_model, repaired_model, options, &report, &grip);
   FreeRunPaths(*problem, nominal_model, repaired_model, options, first_predicted, &report);

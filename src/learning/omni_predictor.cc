@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -549,10 +548,13 @@ Eigen::MatrixXd PredictAll(const OmniPredictor& predictor, const OmniDataset& d)
   return out;
 }
 
+// With one log, the ridge's cross-validation folds are this many stretches of its time.
+constexpr int kRidgeStretches = 5;
+
 // Which fold of the ridge's cross-validation each window belongs to, the training
 // windows of all parts first, then the held-out ones (as in JoinedWindows): one fold a log
 // where there are several (a new log is what a predictor meets next: another direction,
-// another day), else five stretches of the one log's time.
+// another day), else kRidgeStretches stretches of the one log's time.
 std::vector<int> RidgeFolds(const std::vector<SplitLog>& split) {
   std::vector<int> fold;
   if (split.size() >= 2) {
@@ -563,7 +565,7 @@ std::vector<int> RidgeFolds(const std::vector<SplitLog>& split) {
     return fold;
   }
   const int n = split.empty() ? 0 : split[0].train_windows + split[0].validation_windows;
-  for (int i = 0; i < n; ++i) fold.push_back(static_cast<int>(5L * i / n));
+  for (int i = 0; i < n; ++i) fold.push_back(static_cast<int>(static_cast<long>(kRidgeStretches) * i / n));
   return fold;
 }
 
@@ -673,7 +675,8 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     summary->mlp_report = mlp_report;
     summary->validation_rollout_rmse = rollout;
     summary->ridge = ridge;
-    summary->ridge_folds = split.size() >= 2 ? std::to_string(split.size()) + " logs" : "5 stretches of the log";
+    summary->ridge_folds = split.size() >= 2 ? std::to_string(split.size()) + " logs"
+                                             : std::to_string(kRidgeStretches) + " stretches of the log";
   }
   return predictor;
 }

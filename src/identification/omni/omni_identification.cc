@@ -20,7 +20,6 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "identification/identifiability.h"
-#include "learning/omni_predictor.h"
 #include "io/printf_number.h"
 #include "signal/series_statistics.h"
 
@@ -1118,26 +1117,6 @@ std::vector<OmniGap> HeldOutGaps(const std::vector<Segment>& segments, const Omn
   return out;
 }
 
-// The seed's linear predictor (twinsim train --kind linear, one frame, rolled out over
-// the horizon by the learned backend) with `model`'s delay as its command lag, trained on
-// the fit blocks' rows alone: what a user would try instead of the physics, beside it in
-// the every-horizon table. Null, saying why in a note, where it cannot be trained.
-std::shared_ptr<const OmniPredictor> TrainLinearBaseline(const std::vector<OmniLog>& logs, const OmniModel& model,
-                                                         const InFit& in_fit, OmniIdentificationReport* report) {
-  OmniTrainOptions train;
-  for (const OmniLog& log : logs) {
-    std::vector<char> rows(log.rows.size());
-    for (std::size_t i = 0; i < rows.size(); ++i) rows[i] = in_fit(log, i);
-    train.sample_rows.push_back(std::move(rows));
-  }
-  try {
-    return std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, logs, train));
-  } catch (const std::runtime_error& e) {  // InputError: too few windows in the fit blocks
-    report->notes.push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") + e.what());
-    return nullptr;
-  }
-}
-
 // Every horizon a simulator needs, on the validation logs if there are any: rows in
 // held-out blocks (or the validation logs), predicted from a start after the piece's
 // lead-in and the longest warm-up, wherever it lies (analysis/omni_horizons.h); the
@@ -1168,34 +1147,26 @@ void ScoreHorizons(const std::vector<Segment>& segments, const OmniModel& nomina
     h.label = label;
     h.frames = frames;
     h.seconds = frames * period;
-    std::vector<HorizonSum> sums;
-    try {
-      sums = ScoreHorizon(stretches, predictors, frames, ho);
-    } catch (const CheckFailed& e) {  // the linear predictor ran away on a held-out row
-      if (!predictors.back().learned) throw;
-      report->notes.push_back(std::string("the seed's linear predictor is left out of the every-horizon table: ") +
-                              e.what());
-      predictors.pop_back();
-      for (OmniHorizonGaps& done : report->horizons) done.gaps.resize(predictors.size());
-      sums = ScoreHorizon(stretches, predictors, frames, ho);
-    }
+    const std::vector<HorizonSum> sums = ScoreHorizonWithoutRunaway(stretches, &predictors, frames, ho, &report->notes);
+    for (OmniHorizonGaps& done : report->horizons) done.gaps.resize(predictors.size());  // the same predictors
     for (std::size_t q = 0; q < predictors.size(); ++q) h.gaps.push_back(ToGap(sums[q], predictors[q].name));
     h.rows = static_cast<int>(sums.front().rows);
     report->horizons.push_back(h);
   }
   report->horizons_on = on_validation ? "validation logs" : "held-out blocks";
-  std::string loses;  // where the seed's linear predictor beats the identified model
+  if (!predictors.back().learned) return;
+  std::vector<std::string> labels;
+  std::vector<int> rows;
+  std::vector<double> learned, identified;
   for (const OmniHorizonGaps& h : report->horizons) {
-    if (h.rows == 0 || h.gaps.back().name != "linear predictor" || h.gaps.back().rmse >= h.gaps[1].rmse) continue;
-    char cell[96];
-    std::snprintf(cell, sizeof cell, "%s%s (%.3g against %.3g mm)", loses.empty() ? "" : ", ", h.label.c_str(),
-                  1000 * h.gaps.back().rmse, 1000 * h.gaps[1].rmse);
-    loses += cell;
+    labels.push_back(h.label);
+    rows.push_back(h.rows);
+    learned.push_back(h.gaps.back().rmse);
+    identified.push_back(h.gaps[1].rmse);
   }
-  if (!loses.empty())
-    report->notes.push_back("the seed's linear predictor, trained on the fit blocks, predicts the " +
-                            report->horizons_on + " better than the identified model at " + loses +
-                            ": the physics misses something there (train --residual learns it on top)");
+  const std::string wins = LinearPredictorWinsNote("the fit blocks", "the " + report->horizons_on,
+                                                   "the identified model", labels, rows, learned, identified);
+  if (!wins.empty()) report->notes.push_back(wins);
 }
 
 // The fit's own numbers: its rows and costs (RMS per row), the noise floor of the logs,
@@ -1292,8 +1263,13 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   say(7, "held-out gaps");                                                                // step 7
   report.held_out = HeldOutGaps(segments, nominal, model, false, options, &report);
   if (!validation.empty()) report.validation = HeldOutGaps(segments, nominal, model, true, options, &report);
-  ScoreHorizons(segments, nominal, model, TrainLinearBaseline(logs, model, in_fit, &report), !validation.empty(), options,
-                fit.v[kDelay], period, &report);
+  std::vector<std::vector<char>> fit_rows;
+  for (const OmniLog& log : logs) {
+    fit_rows.emplace_back(log.rows.size());
+    for (std::size_t i = 0; i < log.rows.size(); ++i) fit_rows.back()[i] = in_fit(log, i);
+  }
+  ScoreHorizons(segments, nominal, model, TrainLinearBaseline(model, logs, std::move(fit_rows), &report.notes),
+                !validation.empty(), options, fit.v[kDelay], period, &report);
   std::vector<OmniLog> all = logs;
   all.insert(all.end(), validation.begin(), validation.end());
   SummariseFit(problem, segments, all, nominal, model, options, fit, nominal_cost, &report);
