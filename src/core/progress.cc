@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "core/interrupt.h"
@@ -16,6 +17,7 @@ Progress::~Progress() { Finish(); }
 void Progress::Update(long done, long total, const std::string& detail) {
   ThrowIfInterrupted();  // every long job reports progress: the place to notice Ctrl-C
   if (!enabled_ || total <= 0) return;
+  done = std::clamp(done, 0L, total);  // a caller's late step fills the bar, never overruns it
   const auto now = std::chrono::steady_clock::now();
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   if (elapsed < 1.0 || (drawn_ && now - last_draw_ < std::chrono::milliseconds(100) && done < total)) return;

@@ -949,7 +949,9 @@ OmniModel StartModel(const OmniModel& model, const std::vector<OmniLog>& logs, c
   identify.held_out = options.held_out;
   identify.block_seconds = block;
   identify.threads = options.threads;
-  IdentifyOmni(model, logs, {}, identify, &start_model);
+  IdentifyOmni(model, logs, {}, identify, &start_model, [&](int, int, const std::string& step) {
+    if (progress) progress("identifying the model on the fit blocks: " + step);
+  });
   start_model.name = model.name;
   start_model.source_path = model.source_path;
   return start_model;

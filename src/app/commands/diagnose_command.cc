@@ -5,6 +5,7 @@
 
 #include "app/commands/commands.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/progress.h"
 #include "diagnosis/arm_diagnosis.h"
 #include "diagnosis/diagnosis_report.h"
@@ -38,10 +39,11 @@ int Diagnose(const DiagnoseCliOptions& options) {
   }
   const std::string kind = ModelFileRobotKind(options.model);
   Progress progress("diagnose", !options.quiet);
-  int round = 0;
+  // The steps (identification, rounds of effects, the tables) are not known ahead: the
+  // line shows the step and the time, not a bar.
   auto report_progress = [&](const std::string& what) {
-    progress.Update(round, options.diagnosis.max_effects, what);
-    ++round;
+    ThrowIfInterrupted();
+    progress.Status(what);
   };
 
   DiagnosisReport report;

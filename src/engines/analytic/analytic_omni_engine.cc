@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "robots/omni/omni_kinematics.h"
 
@@ -21,7 +22,14 @@ struct AnalyticRobot {
   Eigen::Matrix3d inverse_mass;  // (M + J^T I_w J)^{-1}
   Eigen::Matrix<double, 6, 1> x;  // x, y, theta, vx, vy, omega
   Eigen::VectorXd torques;        // n, N·m
+  Eigen::Vector3d wrench;         // N, N, N·m: the torques' body wrench, J^T tau
   Eigen::Vector2d downhill;       // N, the weight's pull along a sloping floor (field frame)
+  // Per wheel: the axle's direction (cos a_i, sin a_i), the rollers' friction limit and
+  // the grip; fixed for a model, so the derivative spends no trigonometry on them.
+  struct Wheel {
+    double c, s, roller_limit, grip;
+  };
+  std::vector<Wheel> wheels;
 
   AnalyticRobot(const OmniModel& m, const FieldModel& field) : model(m), kin(m) {
     downhill = m.total_mass * field.Gravity().head<2>();
@@ -31,16 +39,25 @@ struct AnalyticRobot {
     inverse_mass = mass.inverse();
     x.setZero();
     torques.setZero(m.num_wheels());
+    wrench.setZero();
+    for (int i = 0; i < m.num_wheels(); ++i)
+      wheels.push_back({std::cos(m.wheel_angles[i]), std::sin(m.wheel_angles[i]),
+                        m.roller_friction * m.wheel_load[i], m.wheel_friction * m.wheel_load[i]});
+  }
+
+  void SetTorques(const Eigen::VectorXd& t) {
+    torques = t;
+    wrench = kin.Wrench(torques);
   }
 
   Eigen::Matrix<double, 6, 1> Derivative(const Eigen::Matrix<double, 6, 1>& s) const {
     const double th = s[2], vx = s[3], vy = s[4], w = s[5];
     const Eigen::Vector3d p = rigid_mass * Eigen::Vector3d(vx, vy, w);
     Eigen::Vector3d force(w * p[1], -w * p[0], vy * p[0] - vx * p[1]);
-    force += kin.Wrench(torques);
+    force += wrench;
+    const double c = std::cos(th), sn = std::sin(th);
     // A sloping floor: the weight's share along it, at the centre of mass.
     if (!downhill.isZero()) {
-      const double c = std::cos(th), sn = std::sin(th);
       const Eigen::Vector2d f(c * downhill.x() + sn * downhill.y(), -sn * downhill.x() + c * downhill.y());
       force[0] += f.x();
       force[1] += f.y();
@@ -48,17 +65,15 @@ struct AnalyticRobot {
     }
     // Rollers: each wheel slides radially at (cos a, sin a) . v; the friction acts
     // along the axle, through the centre, so it makes no torque.
-    for (int i = 0; i < model.num_wheels(); ++i) {
-      const double c = std::cos(model.wheel_angles[i]), sn = std::sin(model.wheel_angles[i]);
-      const double slip = c * vx + sn * vy;
-      const double f = -model.roller_friction * model.wheel_load[i] *
-                       std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
-      force[0] += f * c;
-      force[1] += f * sn;
+    for (const Wheel& wheel : wheels) {
+      const double slip = wheel.c * vx + wheel.s * vy;
+      const double f = -wheel.roller_limit * std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
+      force[0] += f * wheel.c;
+      force[1] += f * wheel.s;
     }
     const Eigen::Vector3d acc = inverse_mass * force;
     Eigen::Matrix<double, 6, 1> d;
-    d << std::cos(th) * vx - std::sin(th) * vy, std::sin(th) * vx + std::cos(th) * vy, w, acc;
+    d << c * vx - sn * vy, sn * vx + c * vy, w, acc;
     return d;
   }
 
@@ -67,14 +82,16 @@ struct AnalyticRobot {
   // the motor's torque does not spend on the wheel's own spin, F_i = (tau_i - I_w
   // dw_i/dt) / r with dw/dt = J dv/dt; across it the rollers' friction.
   double GripNeeded(const Eigen::Matrix<double, 6, 1>& s, const Eigen::Matrix<double, 6, 1>& ds) const {
-    const Eigen::VectorXd spin = kin.wheels_from_body() * ds.tail<3>();
+    const auto& j = kin.wheels_from_body();
     double worst = 0;
     for (int i = 0; i < model.num_wheels(); ++i) {
-      const double rolling = (torques[i] - model.wheel_spin_inertia * spin[i]) / model.wheel_radius;
-      const double slip = std::cos(model.wheel_angles[i]) * s[3] + std::sin(model.wheel_angles[i]) * s[4];
-      const double across = model.roller_friction * model.wheel_load[i] * std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
-      const double grip = model.wheel_friction * model.wheel_load[i];
-      if (grip > 0) worst = std::max(worst, std::hypot(rolling, across) / grip);
+      const Wheel& wheel = wheels[static_cast<std::size_t>(i)];
+      if (wheel.grip <= 0) continue;
+      const double spin = j(i, 0) * ds[3] + j(i, 1) * ds[4] + j(i, 2) * ds[5];
+      const double rolling = (torques[i] - model.wheel_spin_inertia * spin) / model.wheel_radius;
+      const double slip = wheel.c * s[3] + wheel.s * s[4];
+      const double across = wheel.roller_limit * std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
+      worst = std::max(worst, std::sqrt(rolling * rolling + across * across) / wheel.grip);
     }
     return worst;
   }
@@ -104,11 +121,17 @@ class AnalyticOmniEngine final : public OmniEngine {
     return s;
   }
 
+  void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const override {
+    const AnalyticRobot& r = robots_.at(static_cast<std::size_t>(Check(robot)));
+    out->resize(r.model.num_wheels());
+    out->noalias() = r.kin.wheels_from_body() * r.x.tail<3>();
+  }
+
   void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override {
     AnalyticRobot& r = At(robot);
     if (torques.size() != r.model.num_wheels())
       throw std::invalid_argument("analytic engine: wrong number of wheel torques");
-    r.torques = torques;
+    r.SetTorques(torques);
   }
 
   GripCheck grip() const override { return grip_; }

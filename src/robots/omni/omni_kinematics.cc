@@ -25,6 +25,11 @@ Eigen::VectorXd OmniKinematics::WheelTorques(const Eigen::Vector3d& wrench) cons
   return torques_from_wrench_ * wrench;
 }
 
+void OmniKinematics::WheelTorques(const Eigen::Vector3d& wrench, Eigen::VectorXd* out) const {
+  out->resize(torques_from_wrench_.rows());
+  out->noalias() = torques_from_wrench_ * wrench;
+}
+
 Eigen::Vector3d OmniKinematics::Wrench(const Eigen::VectorXd& torques) const {
   return wheels_from_body_.transpose() * torques;
 }

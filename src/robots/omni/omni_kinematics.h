@@ -27,6 +27,8 @@ class OmniKinematics {
   Twist2 BodyVelocity(const Eigen::VectorXd& wheel_speeds) const;
   // The least-norm wheel torques (N·m) that produce the body wrench (N, N, N·m).
   Eigen::VectorXd WheelTorques(const Eigen::Vector3d& wrench) const;
+  // The same into `out` (resized to n), without allocating once it has the size.
+  void WheelTorques(const Eigen::Vector3d& wrench, Eigen::VectorXd* out) const;
   // The body wrench produced by wheel torques (N, N, N·m).
   Eigen::Vector3d Wrench(const Eigen::VectorXd& torques) const;
 

@@ -40,7 +40,8 @@ const Eigen::VectorXd& ControllerTick(const OmniModel& model, const OmniKinemati
                                       const Twist2& command, double dt,
                                       OnboardControllerState* s) {
   const int n = model.num_wheels();
-  Eigen::VectorXd speeds(n);
+  thread_local Eigen::VectorXd speeds;  // scratch: a tick runs a thousand times a simulated second
+  speeds.resize(n);
   for (int i = 0; i < n; ++i) {
     const double reading = EncoderReading(model, s->wheel_angle[i]);
     speeds[i] = (reading - s->last_reading[i]) / dt;
@@ -66,7 +67,7 @@ const Eigen::VectorXd& ControllerTick(const OmniModel& model, const OmniKinemati
     const double output_limit = g.output_limit > 0 ? g.output_limit : kUnlimited;
     wrench[a] = std::clamp(g.kp * error + st.integral + derivative, -output_limit, output_limit);
   }
-  s->torque_command = kin.WheelTorques(wrench);
+  kin.WheelTorques(wrench, &s->torque_command);
   return s->torque_command;
 }
 
