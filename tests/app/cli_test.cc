@@ -113,9 +113,6 @@ TEST(Cli, ReplayUsesTheEngineTheModelWasFittedOnAndSaysWhenToldOtherwise) {
       << other.err;
 }
 
-}  // namespace
-}  // namespace twinsim
-
 namespace twinsim {
 namespace {
 
@@ -249,6 +246,45 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
   EXPECT_EQ(steps.exit_code, 2);
   EXPECT_NE(steps.err.find("--nominal-substeps must be 1 to 1000"), std::string::npos) << steps.err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/x.pred"));
+}
+
+}  // namespace
+}  // namespace twinsim
+
+// `replay --samples` on a log with measurements prints how well the samples' distribution
+// holds them; drawn on another engine than the model was fitted on, it warns where that
+// engine's predictions leave the fitted engine's 90 % regions (issue 64). A robot with
+// little grip (wheel friction 0.1) driven hard: the analytic engine, which does not
+// simulate slip, is the one it was "fitted" on; ODE's wheels slip.
+TEST(Cli, ReplaySamplesSayTheirCoverageAndAnEngineOffItsFit) {
+  const std::string dir = testing::TempDir("replay_samples_coverage");
+  ASSERT_EQ(testing::RunTwinsim("run " + testing::SourcePath("scenes/record_slipping_plant.yaml") + " --quiet --out " +
+                                dir + "/plant")
+                .exit_code,
+            0);
+  const std::string log = dir + "/plant/trajectory.csv";
+  testing::WriteText(dir + "/low_grip.yaml", "extends: " + testing::SourcePath("models/omni4.yaml") +
+                                                 "\nname: low_grip\nfitted_on: analytic\nwheels:\n  friction: 0.1\n");
+  auto replay = [&](const std::string& backend) {
+    return testing::RunTwinsim("replay --model " + dir + "/low_grip.yaml --log " + log +
+                               " --samples 4 --horizon 8 --backend " + backend + " --out " + dir + "/" + backend + ".csv");
+  };
+  const auto analytic = replay("analytic");
+  ASSERT_EQ(analytic.exit_code, 0) << analytic.err;
+  EXPECT_NE(analytic.out.find("calibration of the samples' distribution"), std::string::npos) << analytic.out;
+  EXPECT_NE(analytic.out.find("  8 frames (0.27 s)"), std::string::npos) << analytic.out;
+  EXPECT_EQ(analytic.err.find("warning: on"), std::string::npos) << analytic.err;
+  const auto ode = replay("ode");
+  ASSERT_EQ(ode.exit_code, 0) << ode.err;
+  EXPECT_NE(ode.err.find("warning: on ode the predicted positions lie outside the analytic engine's 90 % region"),
+            std::string::npos)
+      << ode.err;
+  // The default omni4 (no fitted_on): no engine to hold the samples against, no check.
+  const auto plain = testing::RunTwinsim("replay --model " + testing::SourcePath("models/omni4.yaml") + " --log " + log +
+                                         " --samples 4 --horizon 8 --backend ode --out " + dir + "/plain.csv");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("engine's 90 % region"), std::string::npos) << plain.out;
+  EXPECT_EQ(plain.err.find("engine's 90 % region"), std::string::npos) << plain.err;
 }
 
 }  // namespace

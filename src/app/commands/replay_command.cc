@@ -1,4 +1,5 @@
 // `twinsim replay --model MODEL --log LOG.csv --out OUT.csv [--backend B] [--horizon K]`
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -6,12 +7,15 @@
 #include <memory>
 
 #include "analysis/arm_replay.h"
+#include "analysis/omni_calibration.h"
+#include "analysis/omni_calibration_report.h"
 #include "analysis/omni_replay.h"
 #include "app/commands/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "identification/wls_identification.h"
 #include "io/output_files.h"
+#include "io/printf_number.h"
 #include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "learning/omni_predictor.h"
@@ -71,6 +75,49 @@ int ReplayArm(const ReplayOptions& options) {
   return kExitOk;
 }
 
+// How well the samples' distribution holds the log's measured poses (issue 64): the
+// calibration compare prints, at the replay's one horizon. Nothing without measured rows.
+std::string SampleCoverage(const OmniLog& log, const OmniReplayResult& result, int horizon) {
+  const std::vector<PredictiveError> rows = PredictiveErrors(log, result);
+  if (rows.empty()) return "";
+  OmniCalibration c = Calibrate(rows, ConstantSpread(rows));
+  c.frames = horizon;
+  c.seconds = horizon * log.frame_period;
+  return "calibration of the samples' distribution on the log's measured poses (a calibrated model holds 50 % and "
+         "90 %; energy score against the best constant spread on these rows):\n" +
+         FormatCalibrationTable({c});
+}
+
+// Samples drawn on an engine the model was not fitted on (issue 64): the share of
+// predicted rows whose position lies outside the 90 % region of the fitted engine's
+// prediction (with the camera's noise, as a measured pose is scored), said as a warning above kEngineShare (a note below it): there the fan is
+// drawn around another mean than the response the model was fitted to.
+constexpr double kEngineShare = 0.1;
+std::string EngineAgainstItsFit(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& asked,
+                                const OmniReplayResult& result, bool* warn) {
+  OmniReplayOptions o = asked;
+  o.backend = model.fitted_on;
+  const OmniReplayResult fitted = ReplayOmniLog(model, log, o);
+  const double chi2_90 = -2 * std::log(0.1);  // two dimensions
+  int rows = 0, outside = 0;
+  for (std::size_t i = 0; i < result.pose.size() && i < fitted.pose.size(); ++i) {
+    if (!result.predicted[i] || !fitted.predicted[i] || i >= fitted.covariance.size()) continue;
+    const Eigen::Vector2d d(result.pose[i].x - fitted.pose[i].x, result.pose[i].y - fitted.pose[i].y);
+    // The region a measured pose is scored against: the prediction's and the camera's.
+    const Eigen::LDLT<Eigen::Matrix2d> c(fitted.covariance[i].topLeftCorner<2, 2>() +
+                                         fitted.measurement_covariance.topLeftCorner<2, 2>());
+    if (c.info() != Eigen::Success || !c.isPositive()) continue;
+    ++rows;
+    if (d.dot(c.solve(d)) > chi2_90) ++outside;
+  }
+  *warn = rows > 0 && outside > kEngineShare * rows;
+  if (rows == 0) return "";
+  return "on " + asked.backend + " the predicted positions lie outside the " + model.fitted_on +
+         " engine's 90 % region (the engine " + model.name + " was fitted on) on " + std::to_string(outside) + " of " +
+         std::to_string(rows) + " predicted rows (" + PrintfNumber("%.1f", 100.0 * outside / rows) + " %)" +
+         (*warn ? ": the samples are drawn around another mean than the fitted response" : "");
+}
+
 int Replay(const ReplayOptions& options) {
   // Check everything before writing anything.
   const std::string kind = ModelFileRobotKind(options.model);
@@ -113,6 +160,16 @@ int Replay(const ReplayOptions& options) {
                  "its training data (by more than %.0f %% of their range): its predictions there are extrapolation\n",
                  result.unseen_input_steps, 100 * kInputMargin);
   }
+  if (options.samples > 0 && !engine_note.empty()) {
+    bool warn = false;
+    const std::string against = EngineAgainstItsFit(model, log, replay, result, &warn);
+    // A warning is said even with --quiet: the fan a user tunes against is off its fit.
+    if (warn) {
+      std::fprintf(stderr, "warning: %s\n", against.c_str());
+    } else if (!against.empty() && !options.quiet) {
+      std::printf("%s\n", against.c_str());
+    }
+  }
   OutputFiles files;
   if (options.samples > 0) {
     WritePoseSamplesCsv(options.out, result.t, result.samples);
@@ -128,6 +185,7 @@ int Replay(const ReplayOptions& options) {
         log.rows.size(), options.log.c_str(), model.name.c_str(), replay.backend.c_str(), options.horizon,
         result.delay_frames, result.state == "none" ? "first two rows" : result.state.c_str(), result.num_predicted(),
         PositionRmse(log, result));
+    if (options.samples > 0) std::printf("%s", SampleCoverage(log, result, options.horizon).c_str());
     files.PrintWrote();
   }
   return kExitOk;
