@@ -2,6 +2,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -88,11 +89,14 @@ std::string SampleCoverage(const OmniLog& log, const OmniReplayResult& result, i
          FormatCalibrationTable({c});
 }
 
+// Above this share of rows off the fitted engine's regions, a warning (below, a note).
+constexpr double kEngineShare = 0.1;
+
 // Samples drawn on an engine the model was not fitted on (issue 64): the share of
 // predicted rows whose position lies outside the 90 % region of the fitted engine's
-// prediction (with the camera's noise, as a measured pose is scored), said as a warning above kEngineShare (a note below it): there the fan is
-// drawn around another mean than the response the model was fitted to.
-constexpr double kEngineShare = 0.1;
+// prediction (with the camera's noise, as a measured pose is scored). Above
+// kEngineShare the fan is drawn around another mean than the response the model was
+// fitted to.
 std::string EngineAgainstItsFit(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& asked,
                                 const OmniReplayResult& result, bool* warn) {
   OmniReplayOptions o = asked;
