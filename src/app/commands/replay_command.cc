@@ -101,6 +101,8 @@ std::string EngineAgainstItsFit(const OmniModel& model, const OmniLog& log, cons
                                 const OmniReplayResult& result, bool* warn) {
   OmniReplayOptions o = asked;
   o.backend = model.fitted_on;
+  o.covariance = true;
+  if (o.state == "observer") o.samples = 0;  // the filter's covariance needs no draws (the tracker's does)
   const OmniReplayResult fitted = ReplayOmniLog(model, log, o);
   const double chi2_90 = -2 * std::log(0.1);  // two dimensions
   int rows = 0, outside = 0;

@@ -117,10 +117,11 @@ class AnalyticOmniEngine final : public OmniEngine {
     OmniBodyState s;
     s.pose = Pose2{r.x[0], r.x[1], r.x[2]};
     s.velocity = Twist2{r.x[3], r.x[4], r.x[5]};
-    s.wheel_speeds = r.kin.WheelSpeeds(s.velocity);
+    GetWheelSpeeds(robot, &s.wheel_speeds);
     return s;
   }
 
+  // The wheels rolling with the body, J v, without allocating once `out` has the size.
   void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const override {
     const AnalyticRobot& r = robots_.at(static_cast<std::size_t>(Check(robot)));
     out->resize(r.model.num_wheels());
