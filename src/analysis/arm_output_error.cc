@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <memory>
 
+#include "analysis/arm_fit_coordinates.h"
 #include "analysis/arm_replay.h"
+#include "analysis/arm_shooting.h"
 #include "analysis/arm_simulation_score.h"
 #include "analysis/fixed_step_cost.h"
 #include "backends/arm_backend_factory.h"
@@ -18,10 +20,15 @@
 namespace twinsim {
 
 bool ArmOutputErrorOptions::IsValid(std::string* why) const {
-  if (!std::isfinite(horizon) || horizon <= 0) {
+  if (!whole_run && (!std::isfinite(horizon) || horizon <= 0)) {
     *why = "the output-error horizon must be a positive number of seconds";
     return false;
   }
+  if (whole_run && (!std::isfinite(segment) || segment <= 0)) {
+    *why = "the shooting segments must be a positive number of seconds";
+    return false;
+  }
+
   if (max_iterations < 1) {
     *why = "the output-error fit needs at least one iteration";
     return false;
@@ -52,35 +59,17 @@ constexpr double kStep = 1e-3;
 // place (measured on a plant without it: 3 % from fitting the engines' differences).
 constexpr double kLowSpeedGain = 0.1;
 
-// What a coordinate is, in the order they come (n of each; offsets and the two Stribeck
-// kinds only when asked for).
-enum class Coordinate { kScale, kViscous, kCoulomb, kOffset, kBreakaway, kStribeckVelocity };
-
-const char* CoordinateName(Coordinate c) {
-  switch (c) {
-    case Coordinate::kScale: return "scale";
-    case Coordinate::kViscous: return "viscous";
-    case Coordinate::kCoulomb: return "Coulomb";
-    case Coordinate::kOffset: return "offset";
-    case Coordinate::kBreakaway: return "break-away";
-    case Coordinate::kStribeckVelocity: return "Stribeck speed";
-  }
-  return "";
-}
-
-// The fit's data and coordinates. Coordinates per joint j of n: x[j] = ln k (the link's
-// inertial scale), x[n + j], x[2n + j] the logarithms of viscous and Coulomb friction
-// over their units (the start's values, or a thousandth of the joint's torque scale
-// where the start has none); with offsets x[3n + j] the offset's change in tenths of the
-// joint's torque RMS; with stribeck, next, the logarithms of the break-away s - c and the
-// Stribeck speed vs over their units (the start's, or the Coulomb unit and a tenth of the
-// joint's RMS speed).
+// The fit's data; its coordinates are ArmFitCoordinates'.
 class OutputErrorProblem {
  public:
   OutputErrorProblem(const ArmModel& start, const std::vector<ArmLog>& logs, const ArmOutputErrorOptions& options)
-      : start_(start), logs_(logs), options_(options), n_(start.dof()) {
-    Eigen::ArrayXd tau2 = Eigen::ArrayXd::Zero(n_), qd2 = tau2, velocity2 = tau2, torque_error2 = tau2;
-    double samples = 0, rows = 0;
+      : start_(start),
+        logs_(logs),
+        options_(options),
+        n_(start.dof()),
+        coordinates_(start, logs, options.offsets, options.stribeck) {
+    Eigen::ArrayXd velocity2 = Eigen::ArrayXd::Zero(n_), torque_error2 = velocity2;
+    double rows = 0;
     int window = 0;
     for (const ArmLog& log : logs_) {
       CheckArmLogMatchesModel(log, start_);
@@ -101,9 +90,6 @@ class OutputErrorProblem {
           velocity2 += (ConstantVelocityQ(log, s, r + 1) - log.q.row(s + 1 + r)).array().square().transpose();
         rows += length;
       }
-      tau2 += log.tau.array().square().colwise().sum().transpose();
-      qd2 += log.qd.array().square().colwise().sum().transpose();
-      samples += log.rows();
       torque_rows_ += static_cast<std::size_t>(log.rows() - 2 * log.edge_samples);
     }
     const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs_, options_.rest_share);
@@ -125,42 +111,10 @@ class OutputErrorProblem {
     const double torque_rows = static_cast<double>(std::max<std::size_t>(torque_rows_, 1));
     const Eigen::ArrayXd torque_rmse = (torque_error2 / torque_rows).sqrt().max(1e-12);
     torque_weight_ = (std::sqrt(options_.torque_weight) / (torque_rmse * std::sqrt(torque_rows))).matrix();
-    const Eigen::ArrayXd tau_rms = (tau2 / samples).sqrt(), qd_rms = (qd2 / samples).sqrt().max(1e-6);
-    viscous_unit_.resize(n_);
-    coulomb_unit_.resize(n_);
-    breakaway_unit_.resize(n_);
-    stribeck_velocity_unit_.resize(n_);
-    offset_unit_ = 0.1 * tau_rms.max(1e-9).matrix();
-    for (int j = 0; j < n_; ++j) {
-      viscous_unit_[j] = std::max(start_.joints[j].viscous, 1e-3 * tau_rms[j] / qd_rms[j]);
-      coulomb_unit_[j] = std::max(start_.joints[j].coulomb, 1e-3 * tau_rms[j]);
-      const JointEffects& e = start_.effects.joint(j);
-      breakaway_unit_[j] = e.stribeck() ? e.stribeck_static - e.stribeck_coulomb : coulomb_unit_[j];
-      stribeck_velocity_unit_[j] = e.stribeck() ? e.stribeck_velocity : 0.1 * qd_rms[j];
-    }
   }
 
-  int parameters() const { return n_ * (3 + (options_.offsets ? 1 : 0) + (options_.stribeck ? 2 : 0)); }
-  Coordinate Kind(int k) const {
-    const int block = k / n_;
-    if (block < 3) return static_cast<Coordinate>(block);
-    if (options_.offsets && block == 3) return Coordinate::kOffset;
-    return block == (options_.offsets ? 4 : 3) ? Coordinate::kBreakaway : Coordinate::kStribeckVelocity;
-  }
-  // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its unit
-  // to a thousand times it, an offset within twice the joint's torque RMS, a break-away
-  // from a thousandth of the Coulomb unit to a hundred times it, a Stribeck speed from a
-  // thousandth to ten times the joint's RMS speed.
-  void Bounds(int k, double* lower, double* upper) const {
-    switch (Kind(k)) {
-      case Coordinate::kScale: *upper = std::log(100.0), *lower = -*upper; break;
-      case Coordinate::kViscous:
-      case Coordinate::kCoulomb: *lower = std::log(1e-6), *upper = std::log(1000.0); break;
-      case Coordinate::kOffset: *lower = -20, *upper = 20; break;
-      case Coordinate::kBreakaway: *lower = std::log(1e-3), *upper = std::log(100.0); break;
-      case Coordinate::kStribeckVelocity: *lower = std::log(1e-2), *upper = std::log(100.0); break;
-    }
-  }
+  const ArmFitCoordinates& coordinates() const { return coordinates_; }
+  int parameters() const { return coordinates_.parameters(); }
   // The fit's residuals: the simulated rows' position errors, then the torque rows'.
   std::size_t residuals() const { return (simulated_rows_ + torque_rows_) * static_cast<std::size_t>(n_); }
   int fit_windows() const { return fit_windows_; }
@@ -168,28 +122,7 @@ class OutputErrorProblem {
   const Eigen::VectorXd& constant_velocity() const { return constant_velocity_; }
 
   // The model for coordinates x (0: the start, frictions raised to their floors).
-  ArmModel Apply(const double* x) const {
-    ArmModel m = start_;
-    if (options_.offsets && m.effects.joints.size() != static_cast<std::size_t>(n_)) m.effects.joints.resize(n_);
-    for (int j = 0; j < n_; ++j) {
-      ArmJoint& joint = m.joints[j];
-      const double k = std::exp(x[j]);
-      joint.child.mass *= k;
-      joint.child.inertia *= k;
-      joint.viscous = viscous_unit_[j] * std::exp(x[n_ + j]);
-      joint.coulomb = coulomb_unit_[j] * std::exp(x[2 * n_ + j]);
-      if (options_.offsets)
-        m.effects.joints[j].torque_offset = start_.effects.joint(j).torque_offset + offset_unit_[j] * x[3 * n_ + j];
-      if (options_.stribeck) {
-        const int base = n_ * (options_.offsets ? 4 : 3);
-        if (m.effects.joints.size() != static_cast<std::size_t>(n_)) m.effects.joints.resize(n_);
-        JointEffects& e = m.effects.joints[j];
-        e.stribeck_static = e.stribeck_coulomb + breakaway_unit_[j] * std::exp(x[base + j]);
-        e.stribeck_velocity = stribeck_velocity_unit_[j] * std::exp(x[base + n_ + j]);
-      }
-    }
-    return m;
-  }
+  ArmModel Apply(const double* x) const { return coordinates_.Apply(x); }
 
   // The fit's weighted residuals: the position errors of every fit window of every log,
   // row by row, joint by joint; then the torque errors of every log's rows.
@@ -256,9 +189,9 @@ class OutputErrorProblem {
   std::vector<int> lengths_;                   // per log, the windows' rows
   int fit_windows_ = 0, check_windows_ = 0;
   std::size_t simulated_rows_ = 0, torque_rows_ = 0;
-  Eigen::VectorXd constant_velocity_, weight_, torque_weight_, viscous_unit_, coulomb_unit_, offset_unit_;
+  ArmFitCoordinates coordinates_;
+  Eigen::VectorXd constant_velocity_, weight_, torque_weight_;
   std::vector<Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>> rest_;  // per log: rows at rest, not scored
-  Eigen::VectorXd breakaway_unit_, stribeck_velocity_unit_;
 };
 
 // Levenberg-Marquardt from `x` within the problem's bounds; the coordinates found into
@@ -278,7 +211,7 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
                                  nullptr, x->data());
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
   for (int k = 0; k < p; ++k) {
-    problem.Bounds(k, &lower[k], &upper[k]);
+    problem.coordinates().Bounds(k, &lower[k], &upper[k]);
     (*x)[k] = std::clamp((*x)[k], lower[k], upper[k]);
     ceres_problem.SetParameterLowerBound(x->data(), k, lower[k]);
     ceres_problem.SetParameterUpperBound(x->data(), k, upper[k]);
@@ -305,10 +238,8 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
 // with its frictions raised to their floors, `with` the low-speed fit (read only when
 // `stribeck_tried`). The check windows, iterations and decisions are the caller's.
 ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErrorProblem& used, const ArmModel& start,
-                                const ArmModel& floor, const ArmModel& fitted, const ArmModel& with,
-                                const std::vector<double>& x, const std::vector<int>& at_bound,
-                                const ArmOutputErrorOptions& options, bool stribeck_tried) {
-  const int n = start.dof();
+                                const ArmModel& floor, const ArmModel& fitted, const std::vector<double>& x,
+                                const std::vector<int>& at_bound, const ArmOutputErrorOptions& options) {
   ArmOutputErrorSummary s;
   s.horizon = options.horizon;
   s.fit_windows = plain.fit_windows();
@@ -316,40 +247,53 @@ ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErr
   s.rmse_before = plain.SimulationRmse(floor, false);
   s.rmse_after = plain.SimulationRmse(fitted, false);
   s.constant_velocity = plain.constant_velocity();
-  s.scale.resize(n);
-  s.viscous_before.resize(n), s.viscous_after.resize(n), s.coulomb_before.resize(n), s.coulomb_after.resize(n);
-  s.offset_before.resize(n), s.offset_after.resize(n);
-  for (int j = 0; j < n; ++j) {
-    s.scale[j] = std::exp(x[static_cast<std::size_t>(j)]);
-    s.viscous_before[j] = start.joints[j].viscous;
-    s.coulomb_before[j] = start.joints[j].coulomb;
-    s.viscous_after[j] = fitted.joints[j].viscous;
-    s.coulomb_after[j] = fitted.joints[j].coulomb;
-    s.offset_before[j] = start.effects.joint(j).torque_offset;
-    s.offset_after[j] = fitted.effects.joint(j).torque_offset;
-  }
-  for (int k : at_bound)
-    s.at_bound.push_back(std::string(CoordinateName(used.Kind(k))) + " of joint " + std::to_string(k % n + 1));
-  s.stribeck_tried = stribeck_tried;
-  if (stribeck_tried) {
-    s.breakaway.resize(n);
-    s.stribeck_velocity.resize(n);
-    for (int j = 0; j < n; ++j) {
-      const JointEffects& e = with.effects.joint(j);
-      s.breakaway[j] = e.stribeck_static - e.stribeck_coulomb;
-      s.stribeck_velocity[j] = e.stribeck_velocity;
-    }
-  }
+  SummariseArmFit(used.coordinates(), start, fitted, x, at_bound, &s);
   return s;
 }
 
 }  // namespace
+
+void SummariseArmFit(const ArmFitCoordinates& coordinates, const ArmModel& start, const ArmModel& fitted,
+                     const std::vector<double>& x, const std::vector<int>& at_bound, ArmOutputErrorSummary* s) {
+  const int n = start.dof();
+  s->scale.resize(n);
+  s->viscous_before.resize(n), s->viscous_after.resize(n), s->coulomb_before.resize(n), s->coulomb_after.resize(n);
+  s->offset_before.resize(n), s->offset_after.resize(n);
+  for (int j = 0; j < n; ++j) {
+    s->scale[j] = std::exp(x[static_cast<std::size_t>(j)]);
+    s->viscous_before[j] = start.joints[j].viscous;
+    s->coulomb_before[j] = start.joints[j].coulomb;
+    s->viscous_after[j] = fitted.joints[j].viscous;
+    s->coulomb_after[j] = fitted.joints[j].coulomb;
+    s->offset_before[j] = start.effects.joint(j).torque_offset;
+    s->offset_after[j] = fitted.effects.joint(j).torque_offset;
+  }
+  s->at_bound.clear();
+  for (int k : at_bound) s->at_bound.push_back(coordinates.Name(k));
+}
+
+void SummariseLowSpeedFriction(const ArmModel& with, bool tried, bool kept, const Eigen::VectorXd& check_plain,
+                               ArmOutputErrorSummary* s) {
+  s->stribeck_tried = tried;
+  s->stribeck_kept = kept;
+  s->check_plain = tried ? check_plain : Eigen::VectorXd();
+  if (!tried) return;
+  const int n = with.dof();
+  s->breakaway.resize(n);
+  s->stribeck_velocity.resize(n);
+  for (int j = 0; j < n; ++j) {
+    const JointEffects& e = with.effects.joint(j);
+    s->breakaway[j] = e.stribeck_static - e.stribeck_coulomb;
+    s->stribeck_velocity[j] = e.stribeck_velocity;
+  }
+}
 
 ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
                                 const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   if (logs.empty()) throw InputError("output error: no log to fit");
+  if (options.whole_run) return RefineArmByShooting(start, logs, options, summary);
   ArmOutputErrorOptions plain_options = options;
   plain_options.stribeck = false;
   const OutputErrorProblem plain(start, logs, plain_options);
@@ -392,13 +336,12 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   }
 
   if (summary) {
-    *summary = Summarise(plain, *final_problem, start, floor, fitted, with, x, at_bound, options, stribeck_tried);
+    *summary = Summarise(plain, *final_problem, start, floor, fitted, x, at_bound, options);
     summary->iterations = iterations;
     summary->kept = kept;
-    summary->stribeck_kept = stribeck_kept;
+    SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain, summary);
     summary->check_before = check_before;
     summary->check_after = check_after;
-    summary->check_plain = stribeck_tried ? check_plain : Eigen::VectorXd();
   }
   if (!kept) return start;
   return fitted;
@@ -407,23 +350,46 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
 std::string ArmOutputErrorSummary::FullReport() const {
   std::string text;
   char line[320];
-  std::snprintf(line, sizeof line,
-                "output error: windows of %g s simulated from the logged torques, %d fitted and %d held out; %d "
-                "iterations\n",
-                horizon, fit_windows, check_windows, iterations);
-  text += line;
-  std::snprintf(line, sizeof line, "%-6s %27s %27s %11s %8s %23s %23s %23s\n", "joint", "fit windows' RMSE",
-                "held-out windows' RMSE", "const. vel.", "scale k", "viscous", "Coulomb", "offset tau0");
-  text += line;
   const int n = static_cast<int>(scale.size());
-  for (int j = 0; j < n; ++j) {
+  if (whole_run) {
     std::snprintf(line, sizeof line,
-                  "%-6d %11.4g -> %11.4g  %11.4g -> %11.4g  %11.4g %8.4g %10.4g -> %10.4g %10.4g -> %10.4g %10.4g -> "
-                  "%10.4g\n",
-                  j + 1, rmse_before[j], rmse_after[j], check_before[j], check_after[j], constant_velocity[j],
-                  scale[j], viscous_before[j], viscous_after[j], coulomb_before[j], coulomb_after[j],
-                  offset_before[j], offset_after[j]);
+                  "output error over whole runs: each log's first three quarters fitted by multiple shooting (%d "
+                  "segments of %g s; largest defect left %.3g of the spread of q), its last quarter held out and "
+                  "simulated free; %d iterations\n",
+                  segments, segment, largest_defect, iterations);
     text += line;
+    std::snprintf(line, sizeof line, "%-6s %35s %35s %8s %23s %23s %23s\n", "joint", "fitted part's free run (fit %)",
+                  "held-out quarter's free run (fit %)", "scale k", "viscous", "Coulomb", "offset tau0");
+    text += line;
+    const auto fit = [](double rmse, double spread) { return spread > 0 ? 100 * (1 - rmse / spread) : 0.0; };
+    for (int j = 0; j < n; ++j) {
+      std::snprintf(line, sizeof line,
+                    "%-6d %9.4g (%5.1f) -> %9.4g (%5.1f)  %9.4g (%5.1f) -> %9.4g (%5.1f) %8.4g %10.4g -> %10.4g "
+                    "%10.4g -> %10.4g %10.4g -> %10.4g\n",
+                    j + 1, rmse_before[j], fit(rmse_before[j], spread_fit[j]), rmse_after[j],
+                    fit(rmse_after[j], spread_fit[j]), check_before[j], fit(check_before[j], spread_check[j]),
+                    check_after[j], fit(check_after[j], spread_check[j]), scale[j], viscous_before[j],
+                    viscous_after[j], coulomb_before[j], coulomb_after[j], offset_before[j], offset_after[j]);
+      text += line;
+    }
+  } else {
+    std::snprintf(line, sizeof line,
+                  "output error: windows of %g s simulated from the logged torques, %d fitted and %d held out; %d "
+                  "iterations\n",
+                  horizon, fit_windows, check_windows, iterations);
+    text += line;
+    std::snprintf(line, sizeof line, "%-6s %27s %27s %11s %8s %23s %23s %23s\n", "joint", "fit windows' RMSE",
+                  "held-out windows' RMSE", "const. vel.", "scale k", "viscous", "Coulomb", "offset tau0");
+    text += line;
+    for (int j = 0; j < n; ++j) {
+      std::snprintf(line, sizeof line,
+                    "%-6d %11.4g -> %11.4g  %11.4g -> %11.4g  %11.4g %8.4g %10.4g -> %10.4g %10.4g -> %10.4g %10.4g "
+                    "-> %10.4g\n",
+                    j + 1, rmse_before[j], rmse_after[j], check_before[j], check_after[j], constant_velocity[j],
+                    scale[j], viscous_before[j], viscous_after[j], coulomb_before[j], coulomb_after[j],
+                    offset_before[j], offset_after[j]);
+      text += line;
+    }
   }
   if (stribeck_tried) {
     text += "low-speed friction (stribeck_friction: break-away s - c, speed vs), fitted after the plain refinement:\n";
@@ -440,8 +406,9 @@ std::string ArmOutputErrorSummary::FullReport() const {
     for (std::size_t k = 0; k < at_bound.size(); ++k) text += (k ? ", " : " ") + at_bound[k];
     text += "\n";
   }
-  text += kept ? "kept: the held-out windows are simulated better\n"
-               : "not kept: the held-out windows are simulated no better; the estimate is written as it was\n";
+  const char* what = whole_run ? "held-out quarters" : "held-out windows";
+  text += std::string(kept ? "kept: the " : "not kept: the ") + what +
+          (kept ? " are simulated better\n" : " are simulated no better; the estimate is written as it was\n");
   return text;
 }
 

@@ -21,8 +21,18 @@
 //     plain refinement on the held-out windows,
 // by Levenberg-Marquardt (Ceres) with central differences at a fixed step in
 // coordinates (ln k, the frictions' logarithms, the offset in tenths of the joint's
-// torque RMS), the Jacobian's columns simulated on `threads` threads (deterministic:
-// each column on its own simulation).
+// torque RMS; ArmFitCoordinates), the Jacobian's columns simulated on `threads` threads
+// (deterministic: each column on its own simulation).
+//
+// With `whole_run` the windows are the logs themselves (issue 65): the simulation error
+// of each log's free run from its first state, as the system-identification benchmarks
+// score a simulator, fitted by multiple shooting. Each log's first three quarters are cut
+// into segments of `segment` seconds, each simulated from a state of its own (a fitted
+// coordinate, starting at the logged one), the end of one tied to the start of the next
+// by a continuity residual weighted kContinuity times a row's; the parameters are then
+// those of one continuous run, found without integrating a drift over the whole log
+// from the first iteration. No torque rows: the last quarter of every log, simulated
+// free from its first logged state, is the check the refinement must pass.
 //
 //   ArmOutputErrorSummary summary;
 //   ArmModel refined = RefineArmByOutputError(identified, logs, {}, &summary);
@@ -40,7 +50,9 @@
 namespace twinsim {
 
 struct ArmOutputErrorOptions {
-  double horizon = 0.1;       // s: the simulated windows' length (> 0)
+  double horizon = 0.1;       // s: the simulated windows' length (> 0; not used with whole_run)
+  bool whole_run = false;     // fit each log's free run by multiple shooting instead of windows
+  double segment = 2.0;       // s: whole_run's shooting segments (> 0)
   int max_iterations = 30;    // Levenberg-Marquardt iterations
   bool offsets = false;       // also refine each joint's torque_offset tau0
   // Also try friction that holds at low speed: per joint a break-away above the Coulomb
@@ -61,6 +73,15 @@ struct ArmOutputErrorOptions {
 
 struct ArmOutputErrorSummary {
   double horizon = 0;
+  // With whole_run: the segments' length and count, the windows then being the logs'
+  // fitted three quarters and held-out quarters simulated free; each joint's spread of
+  // q about its mean there (fit = 100 (1 - RMSE / spread)); the largest continuity
+  // defect left between segments, in q over the joint's spread.
+  bool whole_run = false;
+  double segment = 0;
+  int segments = 0;
+  Eigen::VectorXd spread_fit, spread_check;
+  double largest_defect = 0;
   int iterations = 0;
   int fit_windows = 0, check_windows = 0;   // over all logs: fitted, and held out (every fourth)
   bool kept = false;                        // the held-out windows got better: the refined model returned

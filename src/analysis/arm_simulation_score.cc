@@ -77,11 +77,17 @@ ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horiz
 
 bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int steps, Eigen::MatrixXd* q,
                         bool hold_on_runaway) {
+  return SimulateArmFromState(sim, log, start, steps, log.q.row(start).transpose(), log.qd.row(start).transpose(), q,
+                              hold_on_runaway);
+}
+
+bool SimulateArmFromState(ArmSimulation* sim, const ArmLog& log, int start, int steps, const Eigen::VectorXd& q0,
+                          const Eigen::VectorXd& qd0, Eigen::MatrixXd* q, bool hold_on_runaway) {
   const int n = sim->model().dof(), d = sim->model().delay_samples;
   if (log.dof != n || start - d < 0 || steps < 0 || start + steps >= log.rows())
     throw std::invalid_argument("SimulateArmFromLog: the window does not fit the log");
   q->resize(steps, n);
-  sim->Reset(log.q.row(start).transpose(), log.qd.row(start).transpose(), log.tau.row(start - d).transpose());
+  sim->Reset(q0, qd0, log.tau.row(start - d).transpose());
   // The commands logged in the D rows before the start are in flight.
   ArmSimulationState state = sim->Save();
   for (int k = start - d + 1; k < start; ++k) state.commands_in_flight.Push(log.tau.row(k).transpose());
@@ -98,7 +104,7 @@ bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int st
         throw CheckFailed("the simulated q is not finite at row " + std::to_string(start + 1 + r) + " of " + log.path);
     } catch (const CheckFailed&) {
       if (!hold_on_runaway) throw;
-      const Eigen::RowVectorXd last = r > 0 ? Eigen::RowVectorXd(q->row(r - 1)) : Eigen::RowVectorXd(log.q.row(start));
+      const Eigen::RowVectorXd last = r > 0 ? Eigen::RowVectorXd(q->row(r - 1)) : q0.transpose();
       for (int rest = r; rest < steps; ++rest) q->row(rest) = last;
       return false;
     }

@@ -45,6 +45,10 @@ class ArmSimulation;
 // false. Throws std::invalid_argument when the window does not fit the log.
 bool SimulateArmFromLog(ArmSimulation* sim, const ArmLog& log, int start, int steps, Eigen::MatrixXd* q,
                         bool hold_on_runaway = false);
+// The same from the state (q0, qd0) at row `start` instead of the logged one (a shooting
+// segment's own initial state); the state it ends in is sim->backend()'s.
+bool SimulateArmFromState(ArmSimulation* sim, const ArmLog& log, int start, int steps, const Eigen::VectorXd& q0,
+                          const Eigen::VectorXd& qd0, Eigen::MatrixXd* q, bool hold_on_runaway = false);
 
 // `model` stepping once per row of a log sampled every `period` s: its sample_time
 // replaced by the period, its delay_samples rescaled to the nearest whole row.

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "analysis/arm_output_error.h"
 #include "analysis/arm_simulation_score.h"
 #include "analysis/derivative_cutoff.h"
 #include "analysis/emps_like_plant.h"
@@ -26,12 +27,6 @@ namespace twinsim {
 namespace {
 
 ArmModel Nominal() { return LoadArmModelFromYamlString(testing::EmpsLikeNominalYaml(), "emps_like.yaml"); }
-
-double FreeRunFit(const ArmModel& model, const ArmLog& log) {
-  ArmSimulationScoreOptions options;
-  options.horizons = {0};
-  return ScoreArmSimulation(model, log, options).horizons.front().fit[0];
-}
 
 struct Found {
   ArmModel model;
@@ -74,7 +69,7 @@ TEST(EmpsLikeDrive, IdentifyFindsTheFrictionAndSimulatesTheHeldOutRunWithPulses)
       const ArmJoint& axis = f.model.joints[0];
       // The benchmark's score: the held-out run simulated open loop from its force over
       // its whole 24.8 s (the true parameters reach 99.6 %).
-      const double fit = FreeRunFit(f.model, test);
+      const double fit = testing::FreeRunFit(f.model, test);
       std::printf("seed %d, cut-off %g Hz%s: mass %.2f kg, Fv %.1f N s/m, Fc %.2f N, offset %.2f N; %d of %d rows at "
                   "rest; held-out free run %.1f %%\n",
                   static_cast<int>(seed), chosen, cutoff > 0 ? "" : " (chosen)", axis.child.mass, axis.viscous,
@@ -97,11 +92,58 @@ TEST(EmpsLikeDrive, IdentifyFindsTheFrictionAndSimulatesTheHeldOutRunWithPulses)
     // its value or less, and the simulated cart drifts off (measured: Fc 3.6 / 5.1 N, Fv
     // 285 / 291 N s/m, fit -77 / 46 %).
     const Found biased = Identify(estimation, 50, 0);
-    const double biased_fit = FreeRunFit(biased.model, test);
+    const double biased_fit = testing::FreeRunFit(biased.model, test);
     std::printf("seed %d, every row: Fv %.1f N s/m, Fc %.2f N; held-out free run %.1f %%\n", static_cast<int>(seed),
                 biased.model.joints[0].viscous, biased.model.joints[0].coulomb, biased_fit);
     EXPECT_LT(biased.model.joints[0].coulomb, 0.5 * truth.coulomb);
     EXPECT_LT(biased_fit, 50);
+  }
+}
+
+// Issue 65: the output-error fit over whole runs (multiple shooting) from the estimate at
+// the fixed 10 Hz cut-off, whose mass is 2 to 4 % high and whose free run misses the
+// held-out pulses run by 5 to 10 %: fitted on the estimation run's simulation itself
+// (its last quarter held out), the estimate moves to the truth.
+TEST(EmpsLikeDrive, WholeRunOutputErrorMovesTheTenHertzEstimateToTheTruth) {
+  if (!testing::MujocoAvailable()) GTEST_SKIP() << "built without MuJoCo";
+  const testing::EmpsLikeTruth truth;
+  testing::EmpsLikeRecording with_pulses;
+  with_pulses.pulses = true;
+  for (std::uint64_t seed : {1, 3}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::string csv = testing::RecordEmpsLike(seed);
+    ArmLogOptions at_10_hz;
+    at_10_hz.cutoff_hz = 10;
+    const ArmLog estimation = ParseArmLog(csv, "estimation.csv", at_10_hz);
+    const ArmLog test = ParseArmLog(testing::RecordEmpsLike(seed + 1, with_pulses), "test.csv");
+    const Found start = Identify(csv, 10, WlsIdentificationOptions{}.rest_share);
+    ArmOutputErrorOptions options;
+    options.whole_run = true;
+    options.offsets = true;
+    ArmOutputErrorSummary summary;
+    const ArmModel refined = RefineArmByOutputError(start.model, {estimation}, options, &summary);
+    const ArmJoint& before = start.model.joints[0];
+    const ArmJoint& after = refined.joints[0];
+    const double fit_before = testing::FreeRunFit(start.model, test), fit_after = testing::FreeRunFit(refined, test);
+    std::printf("seed %d: mass %.2f -> %.2f kg, Fv %.1f -> %.1f N s/m, Fc %.2f -> %.2f N, offset %.3f -> %.3f N; "
+                "held-out quarter %.3g -> %.3g mm; pulses run's free run %.1f -> %.1f %% (%d iterations)\n",
+                static_cast<int>(seed), before.child.mass, after.child.mass, before.viscous, after.viscous,
+                before.coulomb, after.coulomb, -start.model.effects.joint(0).torque_offset,
+                -refined.effects.joint(0).torque_offset, 1e3 * summary.check_before[0], 1e3 * summary.check_after[0],
+                fit_before, fit_after, summary.iterations);
+    // Measured (seeds 1 / 3): mass 97.07 / 99.29 -> 95.04 / 94.92 kg, Fv 197.2 -> 202.8 /
+    // 203.6, Fc 21.40 / 20.86 -> 20.47 / 20.37 N, offset 3.46 / 3.41 -> 3.172 / 3.174 N; the
+    // pulses run 94.8 / 90.4 -> 99.8 / 99.4 % (the true parameters 99.6 %).
+    ASSERT_TRUE(summary.kept);
+    EXPECT_TRUE(summary.whole_run);
+    EXPECT_LT(summary.largest_defect, 1e-3);
+    EXPECT_LT(summary.check_after[0], 0.5 * summary.check_before[0]);
+    EXPECT_NEAR(after.child.mass, truth.mass, 0.005 * truth.mass);
+    EXPECT_NEAR(after.viscous, truth.viscous, 0.01 * truth.viscous);
+    EXPECT_NEAR(after.coulomb, truth.coulomb, 0.02 * truth.coulomb);
+    EXPECT_NEAR(-refined.effects.joint(0).torque_offset, -truth.offset, 0.02 * std::abs(truth.offset));
+    EXPECT_GT(fit_after, 98);
+    EXPECT_GT(fit_after, fit_before);
   }
 }
 

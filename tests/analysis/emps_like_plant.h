@@ -19,6 +19,10 @@
 #include <string>
 
 namespace twinsim {
+
+struct ArmLog;
+struct ArmModel;
+
 namespace testing {
 
 struct EmpsLikeTruth {
@@ -43,6 +47,10 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how = {}
 // The a-priori model a user would write for it: a 90 kg cart on a prismatic joint along
 // x, no friction (YAML text).
 std::string EmpsLikeNominalYaml();
+
+// The benchmark's score of a one-joint model on a log: its free run from the log's first
+// state, driven by the logged force, as a fit in % (100 (1 - ||q - q_sim|| / ||q - mean q||)).
+double FreeRunFit(const ArmModel& model, const ArmLog& log);
 
 }  // namespace testing
 }  // namespace twinsim

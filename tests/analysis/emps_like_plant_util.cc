@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "analysis/arm_simulation_score.h"
 #include "core/rng.h"
 #include "diagnosis/mujoco_model.h"
 
@@ -25,6 +26,12 @@ std::string EmpsLikeNominalYaml() {
          "    lower: -0.1\n"
          "    upper: 0.35\n"
          "    link: {name: cart, mass: 90, com: [0, 0, 0], inertia: [1, 1, 1, 0, 0, 0]}\n";
+}
+
+double FreeRunFit(const ArmModel& model, const ArmLog& log) {
+  ArmSimulationScoreOptions options;
+  options.horizons = {0};
+  return ScoreArmSimulation(model, log, options).horizons.front().fit[0];
 }
 
 #ifndef TWINSIM_HAVE_MUJOCO

@@ -30,13 +30,13 @@ ArmModel HeavierRrr() {
   return m;
 }
 
-std::string WriteLog(const std::string& dir, const std::string& name, int still_joint = -1) {
+std::string WriteLog(const std::string& dir, const std::string& name, int still_joint = -1, double seconds = 8) {
   const ArmModel truth = HeavierRrr();
   testing::SensorNoise noise;
   noise.counts_per_rev = 1 << 18;
   noise.torque_fraction = 0.01;
   const ArmLog log =
-      testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 21), 8.0, 500.0, noise, still_joint);
+      testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 21), seconds, 500.0, noise, still_joint);
   WriteArmLog(dir + "/" + name, log, false);
   return dir + "/" + name;
 }
@@ -167,6 +167,38 @@ TEST(IdentifyCli, OutputErrorRefinesTheEstimateAndSimulatesAllThreeModels) {
             std::string::npos)
       << negative.err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/n.yaml"));
+}
+
+// --output-error run: the whole runs' simulation error by multiple shooting, the last
+// quarter of the log held out; the words that are no horizon refused before anything runs.
+TEST(IdentifyCli, OutputErrorOverWholeRunsAndItsRefusals) {
+  const std::string dir = testing::TempDir("identify_output_error_run");
+  const std::string log = WriteLog(dir, "run.csv", -1, 4);
+  const std::string base = "identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir;
+  auto r = RunTwinsim(base + "/m.yaml --output-error run --segment 1 --threads 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("output error over whole runs: each log's first three quarters fitted by multiple shooting (2 "
+                       "segments of 1 s"),
+            std::string::npos)
+      << r.out;
+  const bool kept = r.out.find("\nkept: the held-out quarters are simulated better") != std::string::npos;
+  const std::string yaml = testing::ReadText(dir + "/m.yaml");
+  EXPECT_NE(yaml.find(kept ? "refined by output error over whole runs: multiple shooting, segments of 1 s"
+                           : "output error over whole runs (segments of 1 s) tried and not kept"),
+            std::string::npos)
+      << yaml;
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {"--output-error runs", "--output-error runs: give the windows' length in seconds, or run for whole runs"},
+           {"--output-error 0.1s", "--output-error 0.1s: give the windows' length in seconds"},
+           {"--segment 2", "--segment cuts --output-error run's whole runs: give --output-error run as well"},
+           {"--output-error run --segment 0", "the shooting segments must be a positive number of seconds"},
+           {"--output-error run --segment 1.5", "too short for the whole-run output-error fit"}}) {
+    SCOPED_TRACE(args);
+    auto bad = RunTwinsim(base + "/bad.yaml " + args);
+    EXPECT_EQ(bad.exit_code, 2);
+    EXPECT_NE(bad.err.find(message), std::string::npos) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/bad.yaml"));
+  }
 }
 
 TEST(IdentifyCli, ReplayOfTheUrdfWritesTheModelsTorques) {

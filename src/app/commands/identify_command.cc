@@ -35,7 +35,8 @@ struct IdentifyCliOptions {
   WlsIdentificationOptions identification;
   bool unweighted = false;
   bool offsets = false;
-  double output_error = 0;  // s: the output-error refinement's horizon; 0 = none
+  std::string output_error = "0";  // the output-error refinement's windows in s, "run" for whole runs; "0" = none
+  double segment = ArmOutputErrorOptions{}.segment;  // s: with --output-error run, the shooting segments
   bool stribeck = false;    // with output_error: also try friction that holds at low speed
   bool quiet = false;
   // Omni robots.
@@ -74,7 +75,8 @@ bool EndsWithYaml(const std::string& path) {
 // Omni: `--out DIR` writes DIR/model.yaml, report.json and report.html; `--out M.yaml`
 // the model there and the reports into --report DIR when given.
 int IdentifyOmniCli(const IdentifyCliOptions& options) {
-  for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition", "--output-error", "--stribeck"}) {
+  for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition",
+                               "--output-error", "--stribeck", "--segment"}) {
     if (std::find(options.given.begin(), options.given.end(), arm_only) != options.given.end())
       throw InputError(std::string(arm_only) + " is for arms; " + options.model + " is an omni robot");
   }
@@ -123,6 +125,20 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
   return kExitOk;
 }
 
+// --output-error's seconds ("0": none); InputError for what is no number.
+double ParseOutputErrorHorizon(const std::string& text) {
+  std::size_t used = 0;
+  double seconds = 0;
+  try {
+    seconds = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size())
+    throw InputError("--output-error " + text + ": give the windows' length in seconds, or run for whole runs");
+  return seconds;
+}
+
 // Refuses omni-only options, a non-YAML --out and bad settings; returns the weighted least squares' options.
 WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& options,
                                                  ArmOutputErrorOptions* output_error) {
@@ -141,13 +157,18 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   identification.torque_offsets = options.offsets;
   std::string why;
   if (!identification.IsValid(&why)) throw InputError(why);
-  output_error->horizon = options.output_error;
+  output_error->whole_run = options.output_error == "run";
+  output_error->horizon = output_error->whole_run ? 0 : ParseOutputErrorHorizon(options.output_error);
+  output_error->segment = options.segment;
   output_error->offsets = options.offsets;
   output_error->stribeck = options.stribeck;
   output_error->threads = options.omni.threads;
   output_error->rest_share = identification.rest_share;
-  if (options.output_error != 0 && !output_error->IsValid(&why)) throw InputError("--output-error: " + why);
-  if (options.stribeck && options.output_error <= 0)
+  const bool refine = output_error->whole_run || output_error->horizon != 0;
+  if (refine && !output_error->IsValid(&why)) throw InputError("--output-error: " + why);
+  if (!output_error->whole_run && std::find(options.given.begin(), options.given.end(), "--segment") != options.given.end())
+    throw InputError("--segment cuts --output-error run's whole runs: give --output-error run as well");
+  if (options.stribeck && !refine)
     throw InputError("--stribeck refines by output error: give --output-error S as well");
   if (options.omni.threads < 0) throw InputError("--threads must be 0 (one per core) or more");
   return identification;
@@ -156,7 +177,7 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
 // The identified model file's comment: the logs, the starting model and how the estimate was refined.
 std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t logs,
                                  const WlsIdentificationSummary& summary, const ArmOutputErrorSummary& refinement,
-                                 double cutoff_hz) {  // Hz, 0: nothing derived
+                                 bool refined_by_output_error, double cutoff_hz) {  // Hz, 0: nothing derived
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
   char cutoff[96] = "";
@@ -165,13 +186,21 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
                   options.cutoff == "auto" ? " (auto)" : "");
   }
   comment += "\nstarting from " + options.model + cutoff + "; " + summary.BriefReport();
-  if (options.output_error > 0) {
-    char refined[160];
-    std::snprintf(refined, sizeof refined,
-                  refinement.kept ? "\nrefined by output error: windows of %g s simulated from the logs' torques"
-                                  : "\noutput error on windows of %g s tried and not kept: the held-out windows were "
-                                    "simulated no better",
-                  options.output_error);
+  if (refined_by_output_error) {
+    char refined[200];
+    if (refinement.whole_run) {
+      std::snprintf(refined, sizeof refined,
+                    refinement.kept ? "\nrefined by output error over whole runs: multiple shooting, segments of %g s"
+                                    : "\noutput error over whole runs (segments of %g s) tried and not kept: the "
+                                      "held-out quarters were simulated no better",
+                    refinement.segment);
+    } else {
+      std::snprintf(refined, sizeof refined,
+                    refinement.kept ? "\nrefined by output error: windows of %g s simulated from the logs' torques"
+                                    : "\noutput error on windows of %g s tried and not kept: the held-out windows "
+                                      "were simulated no better",
+                    refinement.horizon);
+    }
     comment += refined;
     if (refinement.stribeck_tried) {
       comment += refinement.stribeck_kept
@@ -226,7 +255,8 @@ int Identify(const IdentifyCliOptions& options) {
   const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
   // --output-error: the inverse-dynamics estimate refined on the logs' simulation error.
   ArmOutputErrorSummary refinement;
-  const ArmModel identified = options.output_error > 0
+  const bool refine = output_error.whole_run || output_error.horizon > 0;
+  const ArmModel identified = refine
                                   ? RefineArmByOutputError(inverse_dynamics, logs, output_error, &refinement)
                                   : inverse_dynamics;
 
@@ -234,11 +264,11 @@ int Identify(const IdentifyCliOptions& options) {
   // unconstrained model, and the motion they simulate (with --output-error the
   // inverse-dynamics estimate's too).
   IdentificationValidation validation = ValidateIdentification(model, identified, summary, identification, held_out);
-  if (options.output_error > 0) AddSimulatedModel(&validation, "inverse dynamics", inverse_dynamics, held_out);
+  if (refine) AddSimulatedModel(&validation, "inverse dynamics", inverse_dynamics, held_out);
 
   OutputFiles files;
   files.Write(options.out,
-              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement,
+              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement, refine,
                                                                   logs.front().derive_cutoff_hz)));
   if (!options.report.empty()) {
     WriteArmIdentifyReport(options.report, model, identified, logs[0], summary, validation, !held_out.empty(), &files);
@@ -253,7 +283,7 @@ int Identify(const IdentifyCliOptions& options) {
       for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
       std::printf(" N·m or N\n");
     }
-    if (options.output_error > 0) std::printf("\n%s", refinement.FullReport().c_str());
+    if (refine) std::printf("\n%s", refinement.FullReport().c_str());
     std::printf("%s\n", validation.FullReport().c_str());
     files.PrintWrote();
   }
@@ -302,7 +332,10 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                   "they simulate from the logs' torques");
   cmd->add_option("--output-error", options->output_error,
                   "s: refine the estimate by output error, on windows of this length simulated from the logs' "
-                  "torques (link inertial scales, friction, offsets); 0 = off")
+                  "torques (link inertial scales, friction, offsets); run: on each log's free run, by multiple "
+                  "shooting, its last quarter held out; 0 = off")
+      ->capture_default_str();
+  cmd->add_option("--segment", options->segment, "s: with --output-error run, the shooting segments' length")
       ->capture_default_str();
   cmd->add_flag("--stribeck", options->stribeck,
                 "With --output-error: also fit a break-away above the Coulomb level per joint (stribeck_friction), "

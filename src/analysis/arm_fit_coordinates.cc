@@ -1,0 +1,87 @@
+#include "analysis/arm_fit_coordinates.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace twinsim {
+
+ArmFitCoordinates::ArmFitCoordinates(const ArmModel& start, const std::vector<ArmLog>& logs, bool offsets,
+                                     bool stribeck)
+    : start_(start), n_(start.dof()), offsets_(offsets), stribeck_(stribeck) {
+  Eigen::ArrayXd tau2 = Eigen::ArrayXd::Zero(n_), qd2 = tau2;
+  double samples = 0;
+  for (const ArmLog& log : logs) {
+    tau2 += log.tau.array().square().colwise().sum().transpose();
+    qd2 += log.qd.array().square().colwise().sum().transpose();
+    samples += log.rows();
+  }
+  samples = std::max(samples, 1.0);
+  const Eigen::ArrayXd tau_rms = (tau2 / samples).sqrt(), qd_rms = (qd2 / samples).sqrt().max(1e-6);
+  viscous_unit_.resize(n_);
+  coulomb_unit_.resize(n_);
+  breakaway_unit_.resize(n_);
+  stribeck_velocity_unit_.resize(n_);
+  offset_unit_ = 0.1 * tau_rms.max(1e-9).matrix();
+  for (int j = 0; j < n_; ++j) {
+    viscous_unit_[j] = std::max(start_.joints[j].viscous, 1e-3 * tau_rms[j] / qd_rms[j]);
+    coulomb_unit_[j] = std::max(start_.joints[j].coulomb, 1e-3 * tau_rms[j]);
+    const JointEffects& e = start_.effects.joint(j);
+    breakaway_unit_[j] = e.stribeck() ? e.stribeck_static - e.stribeck_coulomb : coulomb_unit_[j];
+    stribeck_velocity_unit_[j] = e.stribeck() ? e.stribeck_velocity : 0.1 * qd_rms[j];
+  }
+}
+
+ArmFitCoordinates::Kind ArmFitCoordinates::KindOf(int k) const {
+  const int block = k / n_;
+  if (block < 3) return static_cast<Kind>(block);
+  if (offsets_ && block == 3) return Kind::kOffset;
+  return block == (offsets_ ? 4 : 3) ? Kind::kBreakaway : Kind::kStribeckVelocity;
+}
+
+std::string ArmFitCoordinates::Name(int k) const {
+  const char* kind = "";
+  switch (KindOf(k)) {
+    case Kind::kScale: kind = "scale"; break;
+    case Kind::kViscous: kind = "viscous"; break;
+    case Kind::kCoulomb: kind = "Coulomb"; break;
+    case Kind::kOffset: kind = "offset"; break;
+    case Kind::kBreakaway: kind = "break-away"; break;
+    case Kind::kStribeckVelocity: kind = "Stribeck speed"; break;
+  }
+  return std::string(kind) + " of joint " + std::to_string(k % n_ + 1);
+}
+
+void ArmFitCoordinates::Bounds(int k, double* lower, double* upper) const {
+  switch (KindOf(k)) {
+    case Kind::kScale: *upper = std::log(100.0), *lower = -*upper; break;
+    case Kind::kViscous:
+    case Kind::kCoulomb: *lower = std::log(1e-6), *upper = std::log(1000.0); break;
+    case Kind::kOffset: *lower = -20, *upper = 20; break;
+    case Kind::kBreakaway: *lower = std::log(1e-3), *upper = std::log(100.0); break;
+    case Kind::kStribeckVelocity: *lower = std::log(1e-2), *upper = std::log(100.0); break;
+  }
+}
+
+ArmModel ArmFitCoordinates::Apply(const double* x) const {
+  ArmModel m = start_;
+  if ((offsets_ || stribeck_) && m.effects.joints.size() != static_cast<std::size_t>(n_)) m.effects.joints.resize(n_);
+  for (int j = 0; j < n_; ++j) {
+    ArmJoint& joint = m.joints[j];
+    const double k = std::exp(x[j]);
+    joint.child.mass *= k;
+    joint.child.inertia *= k;
+    joint.viscous = viscous_unit_[j] * std::exp(x[n_ + j]);
+    joint.coulomb = coulomb_unit_[j] * std::exp(x[2 * n_ + j]);
+    if (offsets_)
+      m.effects.joints[j].torque_offset = start_.effects.joint(j).torque_offset + offset_unit_[j] * x[3 * n_ + j];
+    if (stribeck_) {
+      const int base = n_ * (offsets_ ? 4 : 3);
+      JointEffects& e = m.effects.joints[j];
+      e.stribeck_static = e.stribeck_coulomb + breakaway_unit_[j] * std::exp(x[base + j]);
+      e.stribeck_velocity = stribeck_velocity_unit_[j] * std::exp(x[base + n_ + j]);
+    }
+  }
+  return m;
+}
+
+}  // namespace twinsim

@@ -1,0 +1,54 @@
+// The coordinates in which the output-error fits move an arm model (arm_output_error.h):
+// per joint j of n, x[j] = ln k (the moving link's inertial scale: mass, first moment
+// and inertia times k, so a physically consistent link stays consistent), x[n + j] and
+// x[2n + j] the logarithms of viscous and Coulomb friction over their units (the start's
+// values, or a thousandth of the joint's torque scale where the start has none); with
+// offsets x[3n + j] the torque_offset's change in tenths of the joint's torque RMS; with
+// stribeck, next, the logarithms of the break-away s - c and the Stribeck speed vs over
+// their units (the start's, or the Coulomb unit and a tenth of the joint's RMS speed).
+// x = 0 is the start, its frictions raised to their floors.
+//
+//   ArmFitCoordinates c(start, logs, /*offsets=*/true, /*stribeck=*/false);
+//   std::vector<double> x(c.parameters(), 0.0);
+//   ArmModel m = c.Apply(x.data());
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "robots/arm/arm_log.h"
+#include "robots/arm/arm_model.h"
+
+namespace twinsim {
+
+class ArmFitCoordinates {
+ public:
+  // What a coordinate is, in the order they come (n of each; offsets and the two Stribeck
+  // kinds only when asked for).
+  enum class Kind { kScale, kViscous, kCoulomb, kOffset, kBreakaway, kStribeckVelocity };
+
+  // The units from `start` and the torques and speeds of `logs`.
+  ArmFitCoordinates(const ArmModel& start, const std::vector<ArmLog>& logs, bool offsets, bool stribeck);
+
+  int parameters() const { return n_ * (3 + (offsets_ ? 1 : 0) + (stribeck_ ? 2 : 0)); }
+  Kind KindOf(int k) const;
+  // "scale of joint 1", ...
+  std::string Name(int k) const;
+  // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its unit
+  // to a thousand times it, an offset within twice the joint's torque RMS, a break-away
+  // from a thousandth of the Coulomb unit to a hundred times it, a Stribeck speed from a
+  // thousandth to ten times the joint's RMS speed.
+  void Bounds(int k, double* lower, double* upper) const;
+  // The model at coordinates x.
+  ArmModel Apply(const double* x) const;
+
+ private:
+  ArmModel start_;
+  int n_;
+  bool offsets_, stribeck_;
+  Eigen::VectorXd viscous_unit_, coulomb_unit_, offset_unit_, breakaway_unit_, stribeck_velocity_unit_;
+};
+
+}  // namespace twinsim
