@@ -210,12 +210,7 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
                                                    options.threads),
                                  nullptr, x->data());
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
-  for (int k = 0; k < p; ++k) {
-    problem.coordinates().Bounds(k, &lower[k], &upper[k]);
-    (*x)[k] = std::clamp((*x)[k], lower[k], upper[k]);
-    ceres_problem.SetParameterLowerBound(x->data(), k, lower[k]);
-    ceres_problem.SetParameterUpperBound(x->data(), k, upper[k]);
-  }
+  for (int k = 0; k < p; ++k) problem.coordinates().Bounds(k, &lower[k], &upper[k]);
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_QR;
   solver.max_num_iterations = options.max_iterations;
@@ -223,14 +218,7 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
   solver.parameter_tolerance = 1e-8;
   solver.num_threads = 1;  // the cost simulates its columns in parallel itself
   solver.logging_type = ceres::SILENT;
-  ceres::Solver::Summary result;
-  ceres::Solve(solver, &ceres_problem, &result);
-  at_bound->clear();
-  for (int k = 0; k < p; ++k) {
-    const double margin = 1e-3 * (upper[k] - lower[k]);
-    if ((*x)[k] < lower[k] + margin || (*x)[k] > upper[k] - margin) at_bound->push_back(k);
-  }
-  return static_cast<int>(result.iterations.size()) - 1;
+  return SolveWithinBounds(&ceres_problem, x, lower, upper, solver, at_bound);
 }
 
 // The summary's fits, parameters and bounds: `plain` the plain refinement's problem,

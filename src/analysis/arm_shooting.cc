@@ -256,11 +256,7 @@ int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& o
   }
   const int p = problem.coordinates().parameters();
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
-  for (int k = 0; k < p; ++k) {
-    problem.coordinates().Bounds(k, &lower[k], &upper[k]);
-    ceres_problem.SetParameterLowerBound(x->data(), k, lower[k]);
-    ceres_problem.SetParameterUpperBound(x->data(), k, upper[k]);
-  }
+  for (int k = 0; k < p; ++k) problem.coordinates().Bounds(k, &lower[k], &upper[k]);
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
   solver.max_num_iterations = options.max_iterations;
@@ -269,14 +265,7 @@ int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& o
   // Each segment is simulated on its own: the same numbers for any thread count.
   solver.num_threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   solver.logging_type = ceres::SILENT;
-  ceres::Solver::Summary result;
-  ceres::Solve(solver, &ceres_problem, &result);
-  at_bound->clear();
-  for (int k = 0; k < p; ++k) {
-    const double margin = 1e-3 * (upper[k] - lower[k]);
-    if ((*x)[k] < lower[k] + margin || (*x)[k] > upper[k] - margin) at_bound->push_back(k);
-  }
-  return static_cast<int>(result.iterations.size()) - 1;
+  return SolveWithinBounds(&ceres_problem, x, lower, upper, solver, at_bound);
 }
 
 // The model coordinates fitted from x0 by multiple shooting.

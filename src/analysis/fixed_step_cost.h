@@ -12,6 +12,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <functional>
 #include <utility>
@@ -70,5 +71,27 @@ class FixedStepCost : public ceres::CostFunction {
   FitResidualFunction residual_;
   int threads_;
 };
+
+// Solves `problem` by `solver` with block x (its size lower.size()) kept within [lower,
+// upper] (x clamped into it first); the iterations taken returned, the coordinates that
+// ended within a thousandth of their range of a bound into *at_bound.
+inline int SolveWithinBounds(ceres::Problem* problem, std::vector<double>* x, const std::vector<double>& lower,
+                             const std::vector<double>& upper, const ceres::Solver::Options& solver,
+                             std::vector<int>* at_bound) {
+  const int p = static_cast<int>(lower.size());
+  for (int k = 0; k < p; ++k) {
+    (*x)[k] = std::clamp((*x)[k], lower[k], upper[k]);
+    problem->SetParameterLowerBound(x->data(), k, lower[k]);
+    problem->SetParameterUpperBound(x->data(), k, upper[k]);
+  }
+  ceres::Solver::Summary result;
+  ceres::Solve(solver, problem, &result);
+  at_bound->clear();
+  for (int k = 0; k < p; ++k) {
+    const double margin = 1e-3 * (upper[k] - lower[k]);
+    if ((*x)[k] < lower[k] + margin || (*x)[k] > upper[k] - margin) at_bound->push_back(k);
+  }
+  return static_cast<int>(result.iterations.size()) - 1;
+}
 
 }  // namespace twinsim

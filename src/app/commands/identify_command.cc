@@ -290,6 +290,34 @@ int Identify(const IdentifyCliOptions& options) {
   return kExitOk;
 }
 
+// The options only an arm's identification reads (the least squares, the validation and
+// the output-error refinement).
+void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
+  AddDerivativeCutoffOption(cmd, &options->cutoff);
+  cmd->add_option("--decimate", options->identification.decimate, "Use every k-th sample")->capture_default_str();
+  cmd->add_option("--max-condition", options->identification.max_condition_number,
+                  "Largest condition number of the scaled regressor before parameters count as not excited")
+      ->capture_default_str();
+  cmd->add_flag("--unweighted", options->unweighted, "Ordinary least squares only (no per-joint weights)");
+  cmd->add_flag("--offsets", options->offsets,
+                "Also estimate a constant torque offset per joint (a torque sensor's bias), written as torque_offset effects");
+  cmd->add_option("--validate", options->validate,
+                  "Held-out log(s): print the a-priori and identified models' torque errors on them and the motion "
+                  "they simulate from the logs' torques");
+  cmd->add_option("--output-error", options->output_error,
+                  "s: refine the estimate by output error, on windows of this length simulated from the logs' "
+                  "torques (link inertial scales, friction, offsets); run: on each log's free run, by multiple "
+                  "shooting, its last quarter held out; 0 = off")
+      ->capture_default_str();
+  cmd->add_option("--segment", options->segment, "s: with --output-error run, the shooting segments' length")
+      ->capture_default_str();
+  cmd->add_flag("--stribeck", options->stribeck,
+                "With --output-error: also fit a break-away above the Coulomb level per joint (stribeck_friction), "
+                "kept only where it simulates the held-out windows at least 10 % better");
+  cmd->add_option("--report", options->report,
+                  "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
+}
+
 }  // namespace
 
 void AddIdentifyCommand(CLI::App& app, int* exit_code) {
@@ -319,29 +347,7 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--log", options->logs, "Measured arm log(s) (repeat --log)")->required();
   cmd->add_option("--out", options->out, "Identified model to write (.yaml); omni: or a folder for model.yaml and reports")
       ->required();
-  AddDerivativeCutoffOption(cmd, &options->cutoff);
-  cmd->add_option("--decimate", options->identification.decimate, "Use every k-th sample")->capture_default_str();
-  cmd->add_option("--max-condition", options->identification.max_condition_number,
-                  "Largest condition number of the scaled regressor before parameters count as not excited")
-      ->capture_default_str();
-  cmd->add_flag("--unweighted", options->unweighted, "Ordinary least squares only (no per-joint weights)");
-  cmd->add_flag("--offsets", options->offsets,
-                "Also estimate a constant torque offset per joint (a torque sensor's bias), written as torque_offset effects");
-  cmd->add_option("--validate", options->validate,
-                  "Held-out log(s): print the a-priori and identified models' torque errors on them and the motion "
-                  "they simulate from the logs' torques");
-  cmd->add_option("--output-error", options->output_error,
-                  "s: refine the estimate by output error, on windows of this length simulated from the logs' "
-                  "torques (link inertial scales, friction, offsets); run: on each log's free run, by multiple "
-                  "shooting, its last quarter held out; 0 = off")
-      ->capture_default_str();
-  cmd->add_option("--segment", options->segment, "s: with --output-error run, the shooting segments' length")
-      ->capture_default_str();
-  cmd->add_flag("--stribeck", options->stribeck,
-                "With --output-error: also fit a break-away above the Coulomb level per joint (stribeck_friction), "
-                "kept only where it simulates the held-out windows at least 10 % better");
-  cmd->add_option("--report", options->report,
-                  "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
+  AddArmIdentifyOptions(cmd, options.get());
   AddLogSelectorOptions(cmd, &options->select);
   cmd->add_option("--held-out", options->omni.held_out, "Omni: share of each log's time blocks held out from the fit")
       ->capture_default_str();
