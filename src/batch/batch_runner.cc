@@ -13,6 +13,8 @@
 #include <sstream>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "batch/batch_mpi.h"
 #include "batch/batch_summary.h"
 #include "core/error.h"
@@ -92,8 +94,9 @@ std::vector<int> Prepare(const Sweep& sweep, const std::vector<SweepJob>& jobs, 
                          std::vector<JobResult>* results, int* resumed) {
   const std::string record = options.out + "/batch.json";
   const std::string fingerprint = Fingerprint(sweep, jobs);
-  const std::string expected = "{\"sweep\": \"" + sweep.name + "\", \"jobs\": " + std::to_string(jobs.size()) +
-                               ", \"fingerprint\": \"" + fingerprint + "\"}\n";
+  // The name as a JSON string (escaped: a sweep may be named anything YAML holds).
+  const std::string expected = "{\"sweep\": " + nlohmann::json(sweep.name).dump() + ", \"jobs\": " +
+                               std::to_string(jobs.size()) + ", \"fingerprint\": \"" + fingerprint + "\"}\n";
   std::error_code ec;
   const bool has_record = fs::exists(record, ec);
   if (!options.resume && (has_record || fs::exists(options.out + "/jobs", ec))) {

@@ -1,5 +1,7 @@
 #include "diagnosis/statistics.h"
 
+#include <unsupported/Eigen/SpecialFunctions>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,72 +11,6 @@
 
 namespace twinsim {
 namespace {
-
-constexpr int kMaxContinuedFractionTerms = 500;
-constexpr double kTiny = 1e-300;
-constexpr double kEpsilon = 1e-15;
-
-// The continued fraction of the regularised incomplete beta function (modified Lentz),
-// valid for x < (a + 1) / (a + b + 2).
-double BetaContinuedFraction(double a, double b, double x) {
-  double c = 1, d = 1 - (a + b) * x / (a + 1);
-  if (std::abs(d) < kTiny) d = kTiny;
-  d = 1 / d;
-  double h = d;
-  for (int m = 1; m <= kMaxContinuedFractionTerms; ++m) {
-    const double m2 = 2.0 * m;
-    double coefficient = m * (b - m) * x / ((a + m2 - 1) * (a + m2));
-    for (int half = 0; half < 2; ++half) {
-      d = 1 + coefficient * d;
-      if (std::abs(d) < kTiny) d = kTiny;
-      c = 1 + coefficient / c;
-      if (std::abs(c) < kTiny) c = kTiny;
-      d = 1 / d;
-      h *= d * c;
-      coefficient = -(a + m) * (a + b + m) * x / ((a + m2) * (a + m2 + 1));
-    }
-    if (std::abs(d * c - 1) < kEpsilon) break;
-  }
-  return h;
-}
-
-// I_x(a, b).
-double RegularizedBeta(double a, double b, double x) {
-  if (x <= 0) return 0;
-  if (x >= 1) return 1;
-  const double front =
-      std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x));
-  if (x < (a + 1) / (a + b + 2)) return front * BetaContinuedFraction(a, b, x) / a;
-  return 1 - front * BetaContinuedFraction(b, a, 1 - x) / b;
-}
-
-// Q(a, x), the regularised upper incomplete gamma function.
-double RegularizedGammaQ(double a, double x) {
-  if (x <= 0) return 1;
-  const double log_front = a * std::log(x) - x - std::lgamma(a);
-  if (x < a + 1) {
-    double term = 1 / a, sum = term;
-    for (int n = 1; n <= kMaxContinuedFractionTerms; ++n) {
-      term *= x / (a + n);
-      sum += term;
-      if (std::abs(term) < std::abs(sum) * kEpsilon) break;
-    }
-    return 1 - std::exp(log_front) * sum;
-  }
-  double b = x + 1 - a, c = 1 / kTiny, d = 1 / b, h = d;
-  for (int i = 1; i <= kMaxContinuedFractionTerms; ++i) {
-    const double an = -i * (i - a);
-    b += 2;
-    d = an * d + b;
-    if (std::abs(d) < kTiny) d = kTiny;
-    c = b + an / c;
-    if (std::abs(c) < kTiny) c = kTiny;
-    d = 1 / d;
-    h *= d * c;
-    if (std::abs(d * c - 1) < kEpsilon) break;
-  }
-  return std::exp(log_front) * h;
-}
 
 double MeanOf(const std::vector<double>& x) {
   return x.empty() ? 0.0 : std::accumulate(x.begin(), x.end(), 0.0) / static_cast<double>(x.size());
@@ -105,13 +41,7 @@ std::vector<double> EveryStep(const std::vector<double>& x, int step) {
 
 double TwoSidedNormalQuantile(double p) {
   if (!(p > 0 && p < 1)) return std::numeric_limits<double>::quiet_NaN();
-  // P(|Z| > z) = erfc(z / sqrt 2) falls monotonically: bisection to double precision.
-  double lo = 0, hi = 40;
-  for (int i = 0; i < 200 && hi - lo > 1e-15 * hi; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
+  return -Eigen::numext::ndtri(0.5 * p);  // P(|Z| > z) = p
 }
 
 double WorstChannelP(double t, double df, int channels) {
@@ -121,13 +51,14 @@ double WorstChannelP(double t, double df, int channels) {
 double StudentTUpperTail(double t, double df) {
   if (std::isnan(t) || !(df > 0)) return std::numeric_limits<double>::quiet_NaN();
   if (std::isinf(t)) return t > 0 ? 0.0 : 1.0;
-  const double tail = 0.5 * RegularizedBeta(df / 2, 0.5, df / (df + t * t));  // P(T >= |t|)
+  const double tail = 0.5 * Eigen::numext::betainc(df / 2, 0.5, df / (df + t * t));  // P(T >= |t|)
   return t >= 0 ? tail : 1 - tail;
 }
 
 double ChiSquareUpperTail(double x, double k) {
   if (std::isnan(x) || !(k > 0)) return std::numeric_limits<double>::quiet_NaN();
-  return std::clamp(RegularizedGammaQ(k / 2, x / 2), 0.0, 1.0);
+  if (x <= 0) return 1;
+  return std::clamp(Eigen::numext::igammac(k / 2, x / 2), 0.0, 1.0);
 }
 
 LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth) {

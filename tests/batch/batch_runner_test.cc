@@ -6,6 +6,8 @@
 #include <map>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "batch/sweep.h"
 #include "core/error.h"
 #include "test_util.h"
@@ -56,8 +58,8 @@ std::map<std::string, std::string> Files(const std::string& dir) {
 }
 
 // Six short drives: two backends, three random chassis masses, one mass out of range.
-std::string WriteSweep(const std::string& dir, const std::string& extra = "") {
-  return WriteText(dir + "/sweep.yaml", "name: t\nseed: 3\nfixed:\n  scene: " + SourcePath("scenes/drive45.yaml") +
+std::string WriteSweep(const std::string& dir, const std::string& extra = "", const std::string& name = "t") {
+  return WriteText(dir + "/sweep.yaml", "name: " + name + "\nseed: 3\nfixed:\n  scene: " + SourcePath("scenes/drive45.yaml") +
                                             "\n  scene.duration: 1\ngrid:\n  backend: [analytic, ode]\n"
                                             "  plant.chassis.mass: [2.0, 2.6, -1]\n" + extra);
 }
@@ -134,6 +136,19 @@ TEST(BatchRunner, AFolderHoldingASweepIsNotOverwritten) {
   }
   const std::string changed = WriteSweep(dir + "/changed", "  seed: [1, 2]\n");
   EXPECT_THROW(RunSweep(changed, dir + "/out", 2, true), InputError);
+}
+
+// batch.json holds the sweep's name as a JSON string: quotes and backslashes escaped, so
+// the record parses and --resume recognises its own sweep.
+TEST(BatchRunner, TheRecordOfASweepNamedWithQuotesIsJson) {
+  const std::string dir = TempDir("batch_quoted");
+  const std::string name = R"(say "hi" \ now)";
+  const std::string sweep = WriteSweep(dir, "", "'" + name + "'");
+  RunSweep(sweep, dir + "/out", 1);
+  const nlohmann::json record = nlohmann::json::parse(ReadText(dir + "/out/batch.json"));
+  EXPECT_EQ(record.at("sweep").get<std::string>(), name);
+  EXPECT_EQ(record.at("jobs").get<int>(), 6);
+  EXPECT_NO_THROW(RunSweep(sweep, dir + "/out", 1, true));
 }
 
 TEST(BatchRunner, ReplayJobsRecordTheirLogFirstForOmniAndArm) {
