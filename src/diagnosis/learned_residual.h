@@ -31,6 +31,20 @@ class RandomFeatureRidge {
   double ridge() const { return ridge_; }
 
  private:
+  // Fit's steps: the inputs' mean and scale; the random features' frequencies and
+  // phases; stage 1 (the additive model) on the rows, with what it leaves (*rest) and what
+  // its fit on the training rows alone leaves (*rest_of_train); stage 2 (kernel ridge on
+  // what stage 1 leaves, its penalty chosen on the check rows). Boost is stage 1's
+  // boosting of output o on `rows` (bins: each row's bin per input): per step the error
+  // left on `check` (none without check rows).
+  void Standardise(const Eigen::MatrixXd& x);
+  void DrawFeatures(Eigen::Index inputs, int features, std::uint64_t seed);
+  void FitAdditive(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const std::vector<Eigen::Index>& train,
+                   const std::vector<Eigen::Index>& check, Eigen::MatrixXd* rest, Eigen::MatrixXd* rest_of_train);
+  std::vector<double> Boost(const Eigen::MatrixXi& bin, const Eigen::MatrixXd& y, Eigen::Index o,
+                            const std::vector<Eigen::Index>& rows, const std::vector<Eigen::Index>& check, int steps);
+  void FitKernel(const Eigen::MatrixXd& x, const Eigen::MatrixXd& rest, const Eigen::MatrixXd& rest_of_train,
+                 const std::vector<Eigen::Index>& train, const std::vector<Eigen::Index>& check);
   Eigen::MatrixXd Features(const Eigen::MatrixXd& x) const;
 
   Eigen::MatrixXd Additive(const Eigen::MatrixXd& x) const;
