@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <thread>
 
 #include "analysis/arm_fit_coordinates.h"
 #include "analysis/arm_simulation_score.h"
@@ -195,11 +194,13 @@ class ShootingProblem {
 };
 
 // One segment's residual block: the model's coordinates, the segment's state and, linked,
-// the next segment's state. The first two by central differences at kShootingStep; the next
-// state enters the defect rows linearly.
+// the next segment's state. The first two by central differences at kShootingStep, their
+// columns simulated on `threads` threads (each on its own: the same numbers for any
+// count); the next state enters the defect rows linearly.
 class SegmentCost : public ceres::CostFunction {
  public:
-  SegmentCost(const ShootingProblem& problem, const Segment& segment) : problem_(problem), segment_(segment) {
+  SegmentCost(const ShootingProblem& problem, const Segment& segment, int threads)
+      : problem_(problem), segment_(segment), threads_(threads) {
     mutable_parameter_block_sizes()->push_back(problem.coordinates().parameters());
     mutable_parameter_block_sizes()->push_back(problem.state_size());
     if (segment.linked) mutable_parameter_block_sizes()->push_back(problem.state_size());
@@ -222,7 +223,7 @@ class SegmentCost : public ceres::CostFunction {
       const std::size_t columns = z.size();
       std::vector<double> jacobian(static_cast<std::size_t>(rows) * columns);
       if (!CentralDifferences(f, z.data(), std::vector<double>(columns, kShootingStep), static_cast<std::size_t>(rows),
-                              jacobian.data()))
+                              jacobian.data(), threads_))
         return false;
       for (int r = 0; r < rows; ++r) {
         const double* row = jacobian.data() + static_cast<std::size_t>(r) * columns;
@@ -240,6 +241,7 @@ class SegmentCost : public ceres::CostFunction {
  private:
   const ShootingProblem& problem_;
   Segment segment_;
+  int threads_;
 };
 
 // Levenberg-Marquardt over the model's coordinates *x and the segments' states *states
@@ -252,7 +254,7 @@ int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& o
   for (std::size_t i = 0; i < segments.size(); ++i) {
     std::vector<double*> blocks = {x->data(), (*states)[i].data()};
     if (segments[i].linked) blocks.push_back((*states)[i + 1].data());
-    ceres_problem.AddResidualBlock(new SegmentCost(problem, segments[i]), nullptr, blocks);
+    ceres_problem.AddResidualBlock(new SegmentCost(problem, segments[i], options.threads), nullptr, blocks);
   }
   const int p = problem.coordinates().parameters();
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
@@ -262,19 +264,19 @@ int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& o
   solver.max_num_iterations = options.max_iterations;
   solver.function_tolerance = 1e-6;
   solver.parameter_tolerance = 1e-8;
-  // Each segment is simulated on its own: the same numbers for any thread count.
-  solver.num_threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  // One thread for Ceres: its threads would sum the blocks' costs and gradients in the
+  // order they finish. The segments' columns are simulated in parallel instead.
+  solver.num_threads = 1;
   solver.logging_type = ceres::SILENT;
   return SolveWithinBounds(&ceres_problem, x, lower, upper, solver, at_bound);
 }
 
 // The model coordinates fitted from x0 by multiple shooting.
 //
-// Not followed by a single-shooting fit of the free run itself: on the real EMPS's first
-// half that took the fitted part from 96.2 to 98.0 % fit and the held-out quarter from
-// 97.2 down to 96.6 % (the free run's few stops decide it, and the frictions bend to
-// place them: viscous 194 -> 180, Coulomb 21.4 -> 23.1), where the segments' own states
-// keep it from chasing them (docs/identification.md).
+// Not followed by a single-shooting fit of the free run itself: a free run's few stops
+// decide its error, and there the frictions bent to place them and the held-out quarter
+// got worse on the real EMPS, where the segments' own states keep the fit from chasing
+// them (docs/identification.md, "Output error over whole runs").
 struct RunFit {
   std::vector<double> x;
   std::vector<int> at_bound;

@@ -40,8 +40,8 @@ struct LearnedNoiseOptions {
   int samples = 16;                      // rollouts per start
   int stride = 4;                        // frames between starts at least
   // The fit's starts over all logs at most: the stride grows on long logs (a fit's cost is
-  // starts x samples x the longest horizon per evaluation; on ten minutes at 30 fps with
-  // every 4th frame it took 3.5 minutes for a neural predictor).
+  // starts x samples x the longest horizon per evaluation, so a long log at every 4th
+  // frame took minutes for a neural predictor; docs/benchmarks.md).
   int max_starts = 150;
   std::uint64_t seed = 1;                // of the rollouts' draws
   int max_evaluations = 90;              // of the cost, besides the start's; the growths get half as many more

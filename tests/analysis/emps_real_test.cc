@@ -57,7 +57,7 @@ TEST(RealEmps, WholeRunOutputErrorOnTheEstimationRunsHalves) {
                 fit.path.c_str(), 1e3 * summary.check_before[0], 1e3 * summary.check_after[0],
                 summary.kept ? "kept" : "not kept", before, after);
     // Measured: first half 2.44 -> 2.34 mm, kept, the second half 92.1 -> 94.0 %; second
-    // half 2.49 -> 2.76 mm, not kept (the estimate returned), the first half 90.8 %. The
+    // half 2.49 -> 2.75 mm, not kept (the estimate returned), the first half 90.8 %. The
     // halves' torque offsets differ by 0.27 N (quarters: -3.12, -3.20, -3.41, -3.44 N), a
     // drift no model of one run carries into the other.
     EXPECT_EQ(summary.kept, !second);

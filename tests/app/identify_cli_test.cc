@@ -170,8 +170,8 @@ TEST(IdentifyCli, OutputErrorRefinesTheEstimateAndSimulatesAllThreeModels) {
 }
 
 // --output-error run: the whole runs' simulation error by multiple shooting, the last
-// quarter of the log held out; the words that are no horizon refused before anything runs.
-TEST(IdentifyCli, OutputErrorOverWholeRunsAndItsRefusals) {
+// quarter of the log held out, the same model on one thread and two (deep-only: 16 s).
+TEST(IdentifyCli, OutputErrorOverWholeRunsTheSameOnOneThreadAndTwo) {
   const std::string dir = testing::TempDir("identify_output_error_run");
   const std::string log = WriteLog(dir, "run.csv", -1, 4);
   const std::string base = "identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir;
@@ -187,6 +187,17 @@ TEST(IdentifyCli, OutputErrorOverWholeRunsAndItsRefusals) {
                            : "output error over whole runs (segments of 1 s) tried and not kept"),
             std::string::npos)
       << yaml;
+  // Each segment's columns are simulated on their own.
+  auto one = RunTwinsim(base + "/one.yaml --output-error run --segment 1 --threads 1");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  EXPECT_EQ(testing::ReadText(dir + "/one.yaml"), yaml);
+}
+
+// The words that are no horizon, refused before anything runs.
+TEST(IdentifyCli, OutputErrorOverWholeRunsRefusesWhatIsNoHorizon) {
+  const std::string dir = testing::TempDir("identify_output_error_refused");
+  const std::string log = WriteLog(dir, "run.csv", -1, 4);
+  const std::string base = "identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir;
   for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
            {"--output-error runs", "--output-error runs: give the windows' length in seconds, or run for whole runs"},
            {"--output-error 0.1s", "--output-error 0.1s: give the windows' length in seconds"},

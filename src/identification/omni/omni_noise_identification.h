@@ -13,9 +13,9 @@
 // omni_calibration.h, MeanLogScore): the observer's predictive distribution must hold
 // the measured poses at every horizon a behaviour looks ahead. The rows are the
 // held-out blocks', which the response was not fitted on: on the fit blocks the
-// response follows the blocks' own wander a little, and a minute's noise fitted there
-// came out low (its 90 % ellipses held 83-86 % at 16 and 63 frames on unseen minutes;
-// issue 42, docs/identification.md). A pattern search in the logarithms of the seven
+// response follows the blocks' own wander a little, and a noise fitted there came out
+// too narrow on unseen minutes (issue 42; the coverage measured is in
+// docs/identification.md). A pattern search in the logarithms of the seven
 // (doubling steps, halved in log until 5 %); then again with the spreads' growth with
 // the robot's speed and acceleration (driving_noise.per_speed, per_acceleration; in
 // log(1 + g)). The choices are made out of sample for the noise as well: the same two
@@ -62,9 +62,9 @@ bool ScoredInBlocks(const OmniBlockedStretch& s, std::size_t i, bool held_out, i
 struct OmniNoiseOptions {
   std::string backend = "analytic";
   std::vector<int> horizons{4, 16, 63};  // frames; the longest is predicted, the rest on the way
-  // The fit predicts from every stride-th frame of the held-out blocks. A minute's
-  // held-out blocks from every 8th left its 90 % ellipses at 86-89 % on unseen minutes,
-  // from every 4th at 86-91 % (issue 42, docs/identification.md).
+  // The fit predicts from every stride-th frame of the held-out blocks: every 8th left
+  // the 90 % ellipses narrower on unseen minutes than every 4th (issue 42; the coverage
+  // of each in docs/identification.md).
   int stride = 4;
   int score_stride = 2;      // the calibration from every score_stride-th
   double max_delay = 0.35;   // s: rows start after the longest warm-up a replay can have
