@@ -112,14 +112,17 @@ class ShootingProblem {
     const ArmModel at = ArmModelAtLogPeriod(coordinates_.Apply(x), log.sample_period);
     ArmSimulation sim(at, MakeArmBackend(options_.backend, at));
     Eigen::MatrixXd q;
-    SimulateArmFromState(&sim, log, s.start, s.length, StartQ(log, s.start, y), StartQd(log, s.start, y), &q, true);
+    const bool finished = SimulateArmFromState(&sim, log, s.start, s.length, StartQ(log, s.start, y),
+                                               StartQd(log, s.start, y), &q, true);
     int i = 0;
     for (int r = 0; r < s.length; ++r)
       for (int j = 0; j < n_; ++j) out[i++] = (q(r, j) - log.q(s.start + 1 + r, j)) * weight_[j];
     if (!s.linked) return true;
+    // A segment that ran away ends where it was held, at rest: its defects stay numbers.
     const int next = s.start + s.length;
-    for (int j = 0; j < n_; ++j) out[i++] = (sim.backend().q()[j] - log.q(next, j)) * LinkWeight(s, j);
-    for (int j = 0; j < n_; ++j) out[i++] = (sim.backend().qd()[j] - log.qd(next, j)) * LinkWeight(s, n_ + j);
+    for (int j = 0; j < n_; ++j) out[i++] = (q(s.length - 1, j) - log.q(next, j)) * LinkWeight(s, j);
+    for (int j = 0; j < n_; ++j)
+      out[i++] = ((finished ? sim.backend().qd()[j] : 0.0) - log.qd(next, j)) * LinkWeight(s, n_ + j);
     return true;
   }
 
