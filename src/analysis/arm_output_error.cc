@@ -379,23 +379,24 @@ std::string ArmOutputErrorSummary::FullReport() const {
       text += line;
     }
   }
+  // The held-out part the decisions are made on: windows, or with whole_run each log's last quarter.
+  const std::string held_out = whole_run ? "held-out quarters" : "held-out windows";
   if (stribeck_tried) {
     text += "low-speed friction (stribeck_friction: break-away s - c, speed vs), fitted after the plain refinement:\n";
     for (int j = 0; j < n; ++j) {
-      std::snprintf(line, sizeof line, "  joint %d: s - c %.4g, vs %.4g; held-out windows' RMSE %.4g without it\n", j + 1,
-                    breakaway[j], stribeck_velocity[j], check_plain[j]);
+      std::snprintf(line, sizeof line, "  joint %d: s - c %.4g, vs %.4g; %s' RMSE %.4g without it\n", j + 1,
+                    breakaway[j], stribeck_velocity[j], held_out.c_str(), check_plain[j]);
       text += line;
     }
-    text += stribeck_kept ? "  kept: the held-out windows are simulated better with it\n"
-                          : "  not kept: it removes under 10 % of the held-out windows' cost the plain refinement leaves\n";
+    text += stribeck_kept ? "  kept: the " + held_out + " are simulated better with it\n"
+                          : "  not kept: it removes under 10 % of the " + held_out + "' cost the plain refinement leaves\n";
   }
   if (!at_bound.empty()) {
     text += "at the edge of its range (not determined by the simulation):";
     for (std::size_t k = 0; k < at_bound.size(); ++k) text += (k ? ", " : " ") + at_bound[k];
     text += "\n";
   }
-  const char* what = whole_run ? "held-out quarters" : "held-out windows";
-  text += std::string(kept ? "kept: the " : "not kept: the ") + what +
+  text += (kept ? "kept: the " : "not kept: the ") + held_out +
           (kept ? " are simulated better\n" : " are simulated no better; the estimate is written as it was\n");
   return text;
 }

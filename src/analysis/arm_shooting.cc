@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "analysis/arm_fit_coordinates.h"
 #include "analysis/arm_simulation_score.h"
@@ -251,7 +252,7 @@ class SegmentCost : public ceres::CostFunction {
 // (both from 0: the start and the logged states); the iterations returned, the model
 // coordinates that ended at a bound into *at_bound.
 int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& options, std::vector<double>* x,
-          std::vector<std::vector<double>>* states, std::vector<int>* at_bound) {
+                  std::vector<std::vector<double>>* states, std::vector<int>* at_bound) {
   const std::vector<Segment>& segments = problem.segments();
   ceres::Problem ceres_problem;
   for (std::size_t i = 0; i < segments.size(); ++i) {
@@ -287,9 +288,7 @@ struct RunFit {
   double largest_defect = 0;
 };
 
-RunFit FitRuns(const ArmModel& start, const std::vector<ArmLog>& logs, const ArmOutputErrorOptions& options,
-               std::vector<double> x0) {
-  const ShootingProblem problem(start, logs, options);
+RunFit FitRuns(const ShootingProblem& problem, const ArmOutputErrorOptions& options, std::vector<double> x0) {
   RunFit fit;
   fit.x = std::move(x0);
   fit.x.resize(static_cast<std::size_t>(problem.coordinates().parameters()), 0.0);
@@ -308,7 +307,7 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
   ArmOutputErrorOptions plain_options = options;
   plain_options.stribeck = false;
   const ShootingProblem plain(start, logs, plain_options);
-  RunFit fit = FitRuns(start, logs, plain_options, {});
+  RunFit fit = FitRuns(plain, plain_options, {});
   ArmModel fitted = plain.coordinates().Apply(fit.x.data());
   const Eigen::VectorXd check_before = plain.FreeRunRmse(start, true);
   Eigen::VectorXd check_after = plain.FreeRunRmse(fitted, true);
@@ -319,12 +318,13 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
   const bool stribeck_tried = options.stribeck && kept;
   bool stribeck_kept = false;
   ArmModel with;
+  std::optional<ShootingProblem> low_speed;
   if (stribeck_tried) {
-    const ShootingProblem low_speed(start, logs, options);
-    RunFit y = FitRuns(start, logs, options, fit.x);
-    with = low_speed.coordinates().Apply(y.x.data());
-    const Eigen::VectorXd check_with = low_speed.FreeRunRmse(with, true);
-    stribeck_kept = low_speed.CheckCost(check_with) < (1 - kRunLowSpeedGain) * plain.CheckCost(check_plain);
+    low_speed.emplace(start, logs, options);
+    RunFit y = FitRuns(*low_speed, options, fit.x);
+    with = low_speed->coordinates().Apply(y.x.data());
+    const Eigen::VectorXd check_with = low_speed->FreeRunRmse(with, true);
+    stribeck_kept = low_speed->CheckCost(check_with) < (1 - kRunLowSpeedGain) * plain.CheckCost(check_plain);
     if (stribeck_kept) {
       y.iterations += fit.iterations;
       fit = std::move(y);
@@ -334,8 +334,7 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
   }
   if (summary) {
     *summary = ArmOutputErrorSummary();
-    const ArmFitCoordinates used(start, logs, options.offsets, stribeck_kept);
-    SummariseArmFit(used, start, fitted, fit.x, fit.at_bound, summary);
+    SummariseArmFit((stribeck_kept ? *low_speed : plain).coordinates(), start, fitted, fit.x, fit.at_bound, summary);
     SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain, summary);
     summary->whole_run = true;
     summary->segment = options.segment;

@@ -125,6 +125,10 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
   return kExitOk;
 }
 
+// Whether identify refines by output error: over whole runs, or on windows (--output-error
+// 0 sets none; a negative horizon reaches ArmOutputErrorOptions::IsValid's refusal).
+bool RefinesByOutputError(const ArmOutputErrorOptions& o) { return o.whole_run || o.horizon != 0; }
+
 // --output-error's seconds ("0": none); InputError for what is no number.
 double ParseOutputErrorHorizon(const std::string& text) {
   std::size_t used = 0;
@@ -164,7 +168,7 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   output_error->stribeck = options.stribeck;
   output_error->threads = options.omni.threads;
   output_error->rest_share = identification.rest_share;
-  const bool refine = output_error->whole_run || output_error->horizon != 0;
+  const bool refine = RefinesByOutputError(*output_error);
   if (refine && !output_error->IsValid(&why)) throw InputError("--output-error: " + why);
   if (!output_error->whole_run && std::find(options.given.begin(), options.given.end(), "--segment") != options.given.end())
     throw InputError("--segment cuts --output-error run's whole runs: give --output-error run as well");
@@ -255,7 +259,7 @@ int Identify(const IdentifyCliOptions& options) {
   const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
   // --output-error: the inverse-dynamics estimate refined on the logs' simulation error.
   ArmOutputErrorSummary refinement;
-  const bool refine = output_error.whole_run || output_error.horizon > 0;
+  const bool refine = RefinesByOutputError(output_error);
   const ArmModel identified = refine
                                   ? RefineArmByOutputError(inverse_dynamics, logs, output_error, &refinement)
                                   : inverse_dynamics;
