@@ -288,7 +288,12 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
     Pose2 pose = backend_->pose(0);
     pose.theta = last_theta = last_theta + WrapAngle(pose.theta - last_theta);
     out.pose.push_back(pose);
-    if (covariance) out.pose_covariance.push_back(p_.topLeftCorner<3, 3>());
+    if (covariance) {
+      // The model's safeguard on its intervals (identity without one).
+      const std::array<double, 2> scale = model_.observer.IntervalScaleAt(j + 1);
+      const Eigen::Vector3d d(scale[0], scale[0], scale[1]);
+      out.pose_covariance.push_back(d.asDiagonal() * p_.topLeftCorner<3, 3>() * d.asDiagonal());
+    }
   }
   backend_->Restore(saved);
   p_ = p;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "analysis/arm_replay.h"
 #include "identification/synthetic_arm_data.h"
@@ -307,6 +308,26 @@ TEST(IdentifyCli, BadOptionsAreExitTwo) {
   // An omni model is identified from an omni log: the arm log lacks its columns.
   EXPECT_NE(omni.err.find("run.csv:1: missing column 'x'"), std::string::npos) << omni.err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
+  auto arm_safeguard = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                                  "/m.yaml --safeguard logs");
+  EXPECT_EQ(arm_safeguard.exit_code, 2);
+  EXPECT_NE(arm_safeguard.err.find("--safeguard is for omni robots"), std::string::npos) << arm_safeguard.err;
+  // The intervals' safeguard on left-out logs needs a second log to leave one out.
+  const std::string omni_log = dir + "/omni.csv";
+  {
+    std::ofstream f(omni_log);
+    f << "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd\n";
+    for (int i = 0; i < 300; ++i) f << i / 30.0 << "," << 0.01 * i << ",0,0,0.3,0,0\n";
+  }
+  const std::string omni_base =
+      "identify --model " + SourcePath("models/omni4.yaml") + " --log " + omni_log + " --out " + dir + "/o";
+  auto one_log = RunTwinsim(omni_base + " --safeguard logs");
+  EXPECT_EQ(one_log.exit_code, 2);
+  EXPECT_NE(one_log.err.find("--safeguard logs needs at least two logs"), std::string::npos) << one_log.err;
+  auto bad_word = RunTwinsim(omni_base + " --safeguard always");
+  EXPECT_EQ(bad_word.exit_code, 2);
+  EXPECT_NE(bad_word.err.find("--safeguard"), std::string::npos) << bad_word.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/o"));
 }
 
 }  // namespace

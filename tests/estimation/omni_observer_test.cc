@@ -207,6 +207,35 @@ TEST(OmniObserver, PredictionSpreadGrowsWithTheHorizonAndLeavesTheFilterUnchange
   EXPECT_EQ(observer.PredictAhead(20).pose.back().y, ahead.pose.back().y);
 }
 
+// Issue 64: a model's safeguard scales the predicted covariance k frames ahead by its
+// scales at k (position rows and columns by one, the heading's by the other), and
+// leaves the mean and the filter alone.
+TEST(OmniObserver, TheIntervalsSafeguardScalesThePredictedCovarianceOnly) {
+  const testing::WanderingPlant plant;
+  const testing::PlantRecording rec = testing::RecordWanderingPlant(plant, 3, 2);
+  OmniModel scaled = ResemblingModel(plant);
+  scaled.observer.interval_scale = {{4, 2.0, 0.5}, {16, 1.5, 3.0}};
+  OmniObserver plain(ResemblingModel(plant), "analytic", plant.frame_rate);
+  OmniObserver safeguarded(scaled, "analytic", plant.frame_rate);
+  for (const OmniLogRow& row : rec.log.rows) {
+    const std::optional<Pose2> camera = row.measured ? std::optional<Pose2>(row.pose) : std::nullopt;
+    plain.AddFrame(camera, row.command);
+    safeguarded.AddFrame(camera, row.command);
+  }
+  const OmniPrediction a = plain.PredictAhead(20, {}, true);
+  const OmniPrediction b = safeguarded.PredictAhead(20, {}, true);
+  for (int k : {1, 4, 8, 16, 20}) {
+    const std::size_t j = static_cast<std::size_t>(k - 1);
+    const std::array<double, 2> s = scaled.observer.IntervalScaleAt(k);
+    EXPECT_EQ(b.pose[j].x, a.pose[j].x);
+    EXPECT_NEAR(b.pose_covariance[j](0, 0), s[0] * s[0] * a.pose_covariance[j](0, 0), 1e-15);
+    EXPECT_NEAR(b.pose_covariance[j](0, 1), s[0] * s[0] * a.pose_covariance[j](0, 1), 1e-15);
+    EXPECT_NEAR(b.pose_covariance[j](2, 2), s[1] * s[1] * a.pose_covariance[j](2, 2), 1e-15);
+    EXPECT_NEAR(b.pose_covariance[j](0, 2), s[0] * s[1] * a.pose_covariance[j](0, 2), 1e-15);
+  }
+  EXPECT_EQ(safeguarded.Estimate().covariance, plain.Estimate().covariance);
+}
+
 // ODE and Bullet run the same filter, F from the model's analytic twin: their
 // predictions of the wandering robot are as good as the analytic model's.
 TEST(OmniObserver, RunsOnOdeAndBulletAsOnTheAnalyticModel) {

@@ -148,7 +148,7 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
                                                  ArmOutputErrorOptions* output_error) {
   for (const char* omni_only :
        {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--robot", "--team", "--state",
-        "--no-noise"}) {
+        "--no-noise", "--safeguard"}) {
     if (std::find(options.given.begin(), options.given.end(), omni_only) != options.given.end())
       throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
   }
@@ -373,6 +373,12 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   cmd->add_flag("!--no-noise", options->omni.noise,
                 "Omni: keep the prediction-error fit's noise; without it the driving noise is identified anew for "
                 "predictions ahead and the simulation (likelihood at 4, 16 and 63 frames, some 20-40 s more)");
+  cmd->add_option("--safeguard", options->omni.safeguard,
+                  "Omni: the intervals' conformal scale per horizon, fitted on the two halves of the held-out blocks "
+                  "(blocks), on each log predicted by the model of the others (logs: identification once more per "
+                  "log), or not (off); kept only where it helps rows it was not fitted on")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"blocks", "logs", "off"}));
   cmd->add_option("--threads", options->omni.threads,
                   "Omni, and an arm's --output-error: worker threads (0: one per core); results do not depend on it")
       ->capture_default_str();

@@ -747,6 +747,8 @@ bool OmniIdentificationOptions::IsValid(std::string* why) const {
   if (!(max_delay > 0 && max_delay <= 2)) return fail("--max-delay must be above 0 and at most 2 s");
   if (threads < 0) return fail("--threads must be 0 (one per core) or more");
   if (backend == "learned") return fail("--backend: identification fits a physical model (analytic, ode or bullet)");
+  if (safeguard != "blocks" && safeguard != "logs" && safeguard != "off")
+    return fail("--safeguard must be blocks, logs or off, got '" + safeguard + "'");
   return IsReplayState(state, why);
 }
 
@@ -1000,6 +1002,7 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
                    const std::function<void(int, const std::string&)>& say, OmniModel* model,
                    OmniIdentificationReport* report) {
   if (options.state != "observer") return;
+  model->observer.interval_scale.clear();  // fitted anew below, on this noise
   std::vector<OmniBlockedStretch> views;
   for (const Segment& s : segments) views.push_back(View(s));
   OmniNoiseOptions noise_options;
@@ -1015,8 +1018,69 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     model->driving_noise.simulated = true;
   }
   // A noise fitted on the held-out blocks is calibrated there only across the halves.
-  report->calibration =
-      CalibrateOnBlocks(*model, views, noise_options, report->noise.kept ? &report->noise.crossed : nullptr);
+  const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
+  report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed);
+  if (options.safeguard != "blocks") return;
+  say(6, "intervals' safeguard");
+  report->safeguard = FitIntervalSafeguard(*model, views, noise_options, crossed);
+  model->observer.interval_scale = report->safeguard.Scales();
+}
+
+// The intervals' safeguard on left-out logs (options.safeguard "logs"): each log predicted,
+// at the safeguard's horizons, by the model identified on the others (its noise and its
+// camera with it), and the safeguard fitted with each log a fold. A log that drives
+// differently from the others (another direction, another floor) is then what the
+// scale is checked on: the model's own error out of its fit's reach, not only the
+// robot's wander.
+OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::vector<OmniLog>& logs,
+                                           const OmniIdentificationOptions& options,
+                                           const std::function<void(int, const std::string&)>& say) {
+  constexpr int kMinRows = 20;  // per log and horizon
+  const OmniNoiseOptions noise_options;
+  const std::vector<int> horizons = SafeguardHorizons(noise_options.horizons);
+  OmniIdentificationOptions fold = options;
+  fold.safeguard = "off";
+  std::vector<std::vector<std::vector<SafeguardRow>>> rows(horizons.size(),
+                                                           std::vector<std::vector<SafeguardRow>>(logs.size()));
+  for (std::size_t i = 0; i < logs.size(); ++i) {
+    say(6, "intervals' safeguard: " + std::to_string(i + 1) + " of " + std::to_string(logs.size()) + " logs left out");
+    std::vector<OmniLog> others;
+    for (std::size_t j = 0; j < logs.size(); ++j)
+      if (j != i) others.push_back(logs[j]);
+    OmniModel model;
+    IdentifyOmni(nominal, others, {}, fold, &model);
+    OmniReplayOptions o;
+    o.backend = options.backend;
+    o.horizon = horizons.back();
+    o.also.assign(horizons.begin(), horizons.end() - 1);
+    o.stride = noise_options.score_stride;
+    o.covariance = true;
+    const OmniReplayResult r = ReplayOmniLog(model, logs[i], o);
+    const Eigen::Matrix3d camera = MeasurementCovariance(model);
+    for (std::size_t q = 0; q < horizons.size(); ++q)
+      AppendSafeguardRows(PredictiveErrors(logs[i], q + 1 == horizons.size() ? r : r.also[q]), camera, &rows[q][i]);
+  }
+  OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, noise_options.score_stride, kMinRows);
+  out.on = "left-out logs";
+  return out;
+}
+
+// With options.safeguard "logs" (and the observer's state), the safeguard on left-out
+// logs into the report and the model.
+void SafeguardOnLeftOutLogs(const OmniModel& nominal, const std::vector<OmniLog>& logs,
+                            const OmniIdentificationOptions& options,
+                            const std::function<void(int, const std::string&)>& say, OmniModel* model,
+                            OmniIdentificationReport* report) {
+  if (options.safeguard != "logs" || options.state != "observer") return;
+  report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, say);
+  model->observer.interval_scale = report->safeguard.Scales();
+}
+
+// Refuses no logs, and one log to leave out.
+void CheckLogCount(const std::vector<OmniLog>& logs, const OmniIdentificationOptions& options) {
+  if (logs.empty()) throw InputError("identify needs at least one log");
+  if (options.safeguard == "logs" && logs.size() < 2)
+    throw InputError("--safeguard logs needs at least two logs to fit on (each is predicted by the model of the others)");
 }
 
 // The report's parameter table, the delay first, each with its standard error or why it
@@ -1208,7 +1272,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   const auto start = std::chrono::steady_clock::now();
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
-  if (logs.empty()) throw InputError("identify needs at least one log");
+  CheckLogCount(logs, options);
   auto say = [&](int step, const std::string& what) {
     if (progress) progress(step, 8, what);
   };
@@ -1255,6 +1319,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   StandardErrors(problem, options, &fit, &report);
   OmniModel model = problem.Build(fit.v, false);
   IdentifyNoise(segments, options, say, &model, &report);
+  SafeguardOnLeftOutLogs(nominal, logs, options, say, &model, &report);
   model.fitted_on = options.backend;  // the engines part near the wheels' grip: replay on this one
   if (identified) *identified = model;
   ReportParameters(fit, model, &report);

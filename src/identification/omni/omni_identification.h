@@ -56,6 +56,11 @@ struct OmniIdentificationOptions {
   // With the observer's state: the driving noise identified anew for predictions ahead
   // (omni_noise_identification.h), kept where the held-out blocks score it better.
   bool noise = true;
+  // With the observer's state, the intervals' safeguard (analysis/omni_interval_scale.h)
+  // fitted on: "blocks", the two halves of the held-out blocks; "logs", each fit log
+  // predicted by the model identified on the others (identification once more per log;
+  // at least two logs); "off".
+  std::string safeguard = "blocks";
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -143,6 +148,9 @@ struct OmniIdentificationReport {
   // The identified model's predictive distribution on the held-out blocks (or the
   // validation logs) at 4, 16 and 63 frames (analysis/omni_calibration.h).
   std::vector<OmniCalibration> calibration;
+  // The intervals' safeguard fitted after it (its scales in the model's observer where
+  // kept); the calibration above is the covariance's before it.
+  OmniIntervalSafeguard safeguard;
   std::vector<std::string> notes;
   std::vector<OmniIdentificationSeries> series;
   double seconds = 0;

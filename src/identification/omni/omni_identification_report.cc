@@ -8,6 +8,7 @@
 #include "analysis/omni_horizons.h"
 #include "identification/omni/omni_identification.h"
 #include "io/html_text.h"
+#include "io/printf_number.h"
 #include "render/plot.h"
 
 namespace twinsim {
@@ -90,6 +91,61 @@ ordered_json CalibrationJson(const std::vector<OmniCalibration>& calibration) {
                    {"pit_heading", c.heading_pit}});
   }
   return out;
+}
+
+ordered_json SafeguardJson(const OmniIntervalSafeguard& g, double period) {
+  ordered_json out;
+  out["on"] = g.on;
+  out["kept"] = g.AnyKept();
+  ordered_json hs = ordered_json::array();
+  auto check = [](const std::array<ScaledIntervals, 2>& c) {
+    return ordered_json{{"rows", c[0].rows},
+                        {"inside_50_before", c[0].inside_50}, {"inside_50_after", c[1].inside_50},
+                        {"inside_90_before", c[0].inside_90}, {"inside_90_after", c[1].inside_90},
+                        {"log_score_before", Finite(c[0].log_score)}, {"log_score_after", Finite(c[1].log_score)}};
+  };
+  for (const OmniSafeguardHorizon& h : g.horizons) {
+    hs.push_back({{"frames", h.frames},
+                  {"seconds", h.frames * period},
+                  {"rows", h.rows},
+                  {"position_scale", h.position},
+                  {"position_kept", h.position_kept},
+                  {"heading_scale", h.heading},
+                  {"heading_kept", h.heading_kept},
+                  {"position_check", check(h.position_check)},
+                  {"heading_check", check(h.heading_check)}});
+  }
+  out["horizons"] = hs;
+  if (!g.note.empty()) out["note"] = g.note;
+  return out;
+}
+
+// One part's cell: the scale (or "-" where not kept) and the other halves' shares in the
+// 90 % regions without and with their scale.
+std::string SafeguardCell(double scale, bool kept, const std::array<ScaledIntervals, 2>& check) {
+  if (check[0].rows == 0) return "(too few rows)";
+  char cell[96];
+  std::snprintf(cell, sizeof cell, "%-6s  %5.1f -> %5.1f %%", kept ? PrintfNumber("x%.3g", scale).c_str() : "-",
+                100 * check[0].inside_90, 100 * check[1].inside_90);
+  return cell;
+}
+
+std::string FormatSafeguard(const OmniIntervalSafeguard& g, double period) {
+  std::ostringstream s;
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-20s %6s   %-26s %-26s\n", "horizon", "rows", "position: scale, 90 %",
+                "heading: scale, 90 %");
+  s << line;
+  for (const OmniSafeguardHorizon& h : g.horizons) {
+    char label[64];
+    std::snprintf(label, sizeof label, "%d frames (%.2f s)", h.frames, h.frames * period);
+    std::snprintf(line, sizeof line, "  %-20s %6d   %-26s %-26s\n", label, h.rows,
+                  SafeguardCell(h.position, h.position_kept, h.position_check).c_str(),
+                  SafeguardCell(h.heading, h.heading_kept, h.heading_check).c_str());
+    s << line;
+  }
+  if (!g.note.empty()) s << "  " << g.note << "\n";
+  return s.str();
 }
 
 std::string Verdict(const OmniIdentificationReport& r) {
@@ -181,6 +237,7 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
     j["calibration_on"] = r.validation.empty() ? "held-out blocks" : "validation logs";
     j["calibration"] = CalibrationJson(r.calibration);
   }
+  if (!r.safeguard.on.empty()) j["intervals_safeguard"] = SafeguardJson(r.safeguard, r.frame_period);
   j["noise_floor"] = r.noise_floor;
   j["collinearity_index"] = Finite(r.collinearity);
   j["fit_rms_nominal"] = r.fit_cost_nominal;
@@ -262,6 +319,11 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
       << CalibratedOn(r)
       << "; energy score against a constant spread):\n"
       << FormatCalibrationTable(r.calibration);
+  }
+  if (!r.safeguard.on.empty()) {
+    s << "intervals' safeguard (a conformal scale of the predicted covariance, fitted on the " << r.safeguard.on
+      << "; each fold with the others' scale, its share in the 90 % regions without -> with it):\n"
+      << FormatSafeguard(r.safeguard, r.frame_period);
   }
   s << Verdict(r) << "\n";
   for (const auto& n : r.notes) s << "note: " << n << "\n";
@@ -345,6 +407,14 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
          "intervals), which a calibrated model holds at 50 % and 90 %; the energy score of the position beside the "
          "same mean with one round spread per horizon (fitted on the fit blocks), lower is better.</p>\n"
       << FormatCalibrationHtml(r.calibration, renderer);
+  }
+  if (!r.safeguard.on.empty()) {
+    h << "<h3>The intervals' safeguard</h3>\n<p>A conformal scale of the predicted covariance per horizon, fitted on "
+      << HtmlEscape(r.safeguard.on)
+      << " (docs/identification.md): the scale that makes the 90 % regions hold 90 % of those rows, kept where they "
+         "were off by more than two standard errors and each fold, with the scale of the others, comes nearer 90 % "
+         "without a worse log density. Each fold's share in the 90 % regions without and with it:</p>\n<pre>"
+      << HtmlEscape(FormatSafeguard(r.safeguard, r.frame_period)) << "</pre>\n";
   }
   if (!r.delay_profile_s.empty()) {
     SeriesPlot plot;

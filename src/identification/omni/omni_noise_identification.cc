@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/pattern_search.h"
+#include "estimation/omni_observer.h"
 #include "io/printf_number.h"
 
 namespace twinsim {
@@ -465,6 +466,33 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
     c.seconds = c.frames * period;
     out.push_back(c);
   }
+  return out;
+}
+
+OmniIntervalSafeguard FitIntervalSafeguard(const OmniModel& given, const std::vector<OmniBlockedStretch>& stretches,
+                                           const OmniNoiseOptions& options,
+                                           const std::array<OmniCrossedNoise, 2>* crossed) {
+  if (std::string why; !options.IsValid(&why)) throw InputError(why);
+  constexpr int kMinRows = 20;  // per half and horizon
+  auto unscaled = [](OmniModel m) {
+    m.observer.interval_scale.clear();
+    return m;
+  };
+  OmniNoiseOptions scoring = options;
+  scoring.stride = options.score_stride;
+  scoring.horizons = SafeguardHorizons(options.horizons);
+  const std::array<std::set<int>, 2> halves =
+      crossed ? std::array<std::set<int>, 2>{(*crossed)[0].blocks, (*crossed)[1].blocks} : HeldOutHalves(stretches);
+  // rows[horizon][half]
+  std::vector<std::vector<std::vector<SafeguardRow>>> rows(scoring.horizons.size(),
+                                                           std::vector<std::vector<SafeguardRow>>(2));
+  for (std::size_t k = 0; k < 2; ++k) {
+    const OmniModel predictor = unscaled(crossed ? (*crossed)[1 - k].model : given);
+    const std::vector<HorizonRows> half = Collect(predictor, stretches, scoring, {Rows::kHeldOutBlocks, &halves[k]});
+    for (std::size_t q = 0; q < half.size(); ++q) AppendSafeguardRows(half[q].rows, MeasurementCovariance(predictor), &rows[q][k]);
+  }
+  OmniIntervalSafeguard out = SafeguardFromFolds(scoring.horizons, rows, scoring.stride, kMinRows);
+  out.on = "held-out blocks";
   return out;
 }
 

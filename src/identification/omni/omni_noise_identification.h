@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "analysis/omni_calibration.h"
+#include "analysis/omni_interval_scale.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
@@ -119,5 +120,13 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed = nullptr);
+
+// Fits the safeguard of `model` (its own interval_scale ignored) on the held-out blocks'
+// rows in their two halves (the folds), with `crossed` each half predicted with the
+// noise fitted on the other; at options.horizons and between them
+// (SafeguardHorizons). Throws as CalibrateOnBlocks.
+OmniIntervalSafeguard FitIntervalSafeguard(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                           const OmniNoiseOptions& options,
+                                           const std::array<OmniCrossedNoise, 2>* crossed = nullptr);
 
 }  // namespace twinsim

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/math_constants.h"
 #include "io/atomic_file.h"
 #include "io/csv_table.h"
 
@@ -148,6 +149,43 @@ void FillUnmeasured(OmniLog* log, const std::vector<char>& empty) {
     if (empty[k]) rows[k].pose = rows[previous].pose;
 }
 
+// Puts each pose's theta on one continuous branch. From one frame to the next a robot
+// turns by less than half a turn, so the nearest branch is the right one. Across frames
+// without a pose (lost, or a hole in the clock) it may have turned further: the branch
+// is then the one nearest the turn extrapolated at the rate measured just before the gap
+// (over up to kRateFrames frames of consecutive measurements), so a robot spinning at
+// 6 rad/s keeps its count of turns across a stall of the logger.
+void UnwrapHeadings(OmniLog* log_out, const std::vector<char>& empty) {
+  constexpr std::size_t kRateFrames = 4;
+  constexpr double kGapFrames = 1.5;  // a gap longer than this many frame periods is extrapolated over
+  OmniLog& log = *log_out;
+  std::vector<const OmniLogRow*> run;  // the measured rows of the current gapless stretch, newest last
+  const OmniLogRow* prev = nullptr;    // the last row with a pose, measured or repeated
+  for (std::size_t i = 0; i < log.rows.size(); ++i) {
+    OmniLogRow& row = log.rows[i];
+    if (empty[i]) continue;
+    if (!prev) {
+      prev = &row;
+      if (row.measured) run.push_back(&row);
+      continue;
+    }
+    row.pose.theta = prev->pose.theta + WrapAngle(row.pose.theta - prev->pose.theta);  // the nearest branch
+    const OmniLogRow& last = *run.back();
+    const double gap = row.t - last.t;
+    // Across a gap, the branch nearest the turn extrapolated from the last measurement (a
+    // repeated pose is the last one sent again: it never turns).
+    if (row.measured && gap > kGapFrames * log.frame_period && run.size() >= 2) {
+      const double expected = last.pose.theta + (last.pose.theta - run.front()->pose.theta) / (last.t - run.front()->t) * gap;
+      row.pose.theta += 2 * kPi * std::round((expected - row.pose.theta) / (2 * kPi));
+    }
+    prev = &row;
+    if (!row.measured) continue;
+    if (gap > kGapFrames * log.frame_period) run.clear();
+    run.push_back(&row);
+    if (run.size() > kRateFrames + 1) run.erase(run.begin());
+  }
+}
+
 // Each row's frame counted from the one before (a real clock jitters: counted from the
 // first row, jitter that does not average out would put two rows on one frame), and the
 // holes in the clock. `dts` are the gaps between rows. Throws InputError for two rows
@@ -262,14 +300,7 @@ OmniLog OmniLogFromTable(const CsvTable& table, const OmniLogSelector& select) {
   CountFrames(dts, table.path, &log);
   refuse_beyond_max_frames(log.frame_of.back());
 
-  // Unwrap theta: successive measurements never turn by more than half a turn.
-  const OmniLogRow* prev = nullptr;
-  for (std::size_t i = 0; i < log.rows.size(); ++i) {
-    OmniLogRow& row = log.rows[i];
-    if (empty[i]) continue;
-    if (prev) row.pose.theta = prev->pose.theta + WrapAngle(row.pose.theta - prev->pose.theta);
-    prev = &row;
-  }
+  UnwrapHeadings(&log, empty);
   FillUnmeasured(&log, empty);
   return log;
 }

@@ -105,6 +105,15 @@ std::string OmniModel::Validate() const {
   if (com_height <= ground_clearance || com_height >= ground_clearance + chassis_height)
     out << "com_height must lie inside the chassis (between " << ground_clearance << " and "
         << ground_clearance + chassis_height << " m)\n";
+  const auto& scales = observer.interval_scale;
+  for (std::size_t i = 0; i < scales.size(); ++i) {
+    constexpr double kMost = OmniObserverModel::kMaxIntervalScale;
+    const auto in_range = [](double v) { return v >= 1 / kMost && v <= kMost; };
+    if (scales[i].frames < 1 || (i > 0 && scales[i].frames <= scales[i - 1].frames))
+      out << "observer interval_scale: the horizons must be at least 1 frame and increase\n";
+    if (!in_range(scales[i].position) || !in_range(scales[i].heading))
+      out << "observer interval_scale: the scales must lie in [" << 1 / kMost << ", " << kMost << "]\n";
+  }
   if (!motor_strength.empty() && static_cast<int>(motor_strength.size()) != n)
     out << "motor strength lists " << motor_strength.size() << " values for " << n << " wheels\n";
   if (n >= 3) {
@@ -135,6 +144,21 @@ std::string ReplayEngineFor(const OmniModel& model, const std::string& asked, co
             " does not follow the fitted response";
   }
   return asked;
+}
+
+std::array<double, 2> OmniObserverModel::IntervalScaleAt(int k) const {
+  if (interval_scale.empty()) return {1, 1};
+  const IntervalScale& first = interval_scale.front();
+  const IntervalScale& last = interval_scale.back();
+  if (k <= first.frames) return {first.position, first.heading};
+  if (k >= last.frames) return {last.position, last.heading};
+  std::size_t i = 1;
+  while (interval_scale[i].frames < k) ++i;
+  const IntervalScale& a = interval_scale[i - 1];
+  const IntervalScale& b = interval_scale[i];
+  const double u = std::log(static_cast<double>(k) / a.frames) / std::log(static_cast<double>(b.frames) / a.frames);
+  auto between = [u](double x, double y) { return std::exp((1 - u) * std::log(x) + u * std::log(y)); };
+  return {between(a.position, b.position), between(a.heading, b.heading)};
 }
 
 }  // namespace twinsim

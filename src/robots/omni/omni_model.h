@@ -89,6 +89,22 @@ struct OmniObserverModel {
 
   static constexpr double kMinMeasurementNoiseXy = 5e-4;     // m
   static constexpr double kMinMeasurementNoiseTheta = 5e-3;  // rad
+
+  // The intervals' safeguard (identify's conformal scale; docs/identification.md, "The
+  // intervals' safeguard"): k frames ahead, the predicted covariance of the position is
+  // multiplied by position^2 and that of the heading by heading^2 (their cross terms by
+  // the product), so the measured pose lands in the 90 % regions as often as on the
+  // held-out rows identify scaled them on. Horizons strictly increasing; between two the
+  // scales are interpolated in log(k), before the first and after the last held. Empty:
+  // the filter's covariance as it is.
+  struct IntervalScale {
+    int frames = 0;
+    double position = 1, heading = 1;
+  };
+  std::vector<IntervalScale> interval_scale;
+  // The scales (position, heading) k frames ahead.
+  std::array<double, 2> IntervalScaleAt(int k) const;
+  static constexpr double kMaxIntervalScale = 20;  // either way: 1/20 to 20
 };
 
 struct OmniModel {

@@ -23,6 +23,29 @@ void ReadPid(YamlMap& parent, const std::string& key, PidGains* g) {
   m.Finish();
 }
 
+// observer.interval_scale: a list of {frames, position, heading}, frames strictly increasing.
+void ReadIntervalScale(YamlMap& observer, std::vector<OmniObserverModel::IntervalScale>* out) {
+  const YAML::Node list = observer.Child("interval_scale");
+  if (!list.IsSequence() || list.size() == 0) {
+    observer.Error("interval_scale", "must be a list of {frames: K, position: s, heading: s}, horizons increasing");
+    return;
+  }
+  constexpr double kMost = OmniObserverModel::kMaxIntervalScale;
+  out->clear();
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    YamlMap m(list[i], observer.path(), "observer.interval_scale[" + std::to_string(i) + "]", observer.errors());
+    if (!m.valid()) continue;
+    OmniObserverModel::IntervalScale h;
+    m.Require("frames", &h.frames, InRange(1, 1e6));
+    m.Require("position", &h.position, InRange(1 / kMost, kMost));
+    m.Require("heading", &h.heading, InRange(1 / kMost, kMost));
+    if (!out->empty() && h.frames <= out->back().frames)
+      m.Error("frames", "the horizons must increase from one entry to the next");
+    m.Finish();
+    out->push_back(h);
+  }
+}
+
 OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, int depth);
 
 YAML::Node Resolve(const YAML::Node& root, const std::string& path, int depth) {
@@ -200,6 +223,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
       r.Get("theta", &model.observer.measurement_noise_theta, NonNegative(10));
       r.Finish();
     }
+    if (o.Has("interval_scale")) ReadIntervalScale(o, &model.observer.interval_scale);
     o.Finish();
   }
   top.Finish();

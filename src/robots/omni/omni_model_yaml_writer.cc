@@ -146,13 +146,20 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   }
   const OmniObserverModel& o = model.observer;
   if (o.process_noise != defaults.observer.process_noise || o.measurement_noise_xy > 0 ||
-      o.measurement_noise_theta > 0) {
+      o.measurement_noise_theta > 0 || !o.interval_scale.empty()) {
     s << "observer:\n";
     line("  process_noise", "{" + AxisValues(o.process_noise) + "}", "m/s and rad/s per sqrt(s): the model's own errors", 46);
     if (o.measurement_noise_xy > 0 || o.measurement_noise_theta > 0) {
       line("  measurement_noise",
            "{xy: " + YamlNumber(o.measurement_noise_xy) + ", theta: " + YamlNumber(o.measurement_noise_theta) + "}",
            "m, rad; 0 = the vision block's", 46);
+    }
+    if (!o.interval_scale.empty()) {
+      s << "  interval_scale:  # the predicted covariance's scale k frames ahead (identify's safeguard)\n";
+      for (const OmniObserverModel::IntervalScale& h : o.interval_scale) {
+        s << "    - {frames: " << h.frames << ", position: " << YamlNumber(h.position)
+          << ", heading: " << YamlNumber(h.heading) << "}\n";
+      }
     }
   }
 

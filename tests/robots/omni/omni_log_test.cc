@@ -2,8 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <string>
+#include <vector>
+
 #include "core/error.h"
 #include "core/math_constants.h"
+#include "core/pose.h"
 
 namespace twinsim {
 namespace {
@@ -237,6 +242,45 @@ TEST(OmniLogClockHoles, AJitteringClockCountsFramesGapByGap) {
   ASSERT_EQ(log.holes.size(), 1u);
   EXPECT_EQ(log.holes[0].frames, 1);
   for (std::size_t i = 1; i < log.rows.size(); ++i) EXPECT_GT(log.FrameIndex(i), log.FrameIndex(i - 1));
+}
+
+// A robot spinning at 6 rad/s turns 4.8 rad (more than half a turn) in a 0.8 s stall of
+// the logger, and 1.6 rad in 8 lost frames: the nearest branch would count one turn too
+// few across the stall; the heading stays on the turn extrapolated from before the gap,
+// either way round, while a pose repeated right after the gap is never taken as a turn.
+TEST(OmniLogClockHoles, AFastSpinKeepsItsTurnsAcrossHolesAndLostFrames) {
+  const double period = 1.0 / 30;
+  for (const double omega : {6.0, -6.0}) {
+    std::string csv = kHeader;
+    std::vector<double> truth;  // the unwrapped heading of each row written
+    auto row = [&](double t, bool lost) {
+      const double theta = omega * t;
+      if (!lost) truth.push_back(theta);
+      if (lost) truth.push_back(std::nan(""));
+      const std::string pose = lost ? ",,," : "0,0," + std::to_string(WrapAngle(theta)) + ",";
+      csv += std::to_string(t) + "," + pose + "0,0," + std::to_string(omega) + "\n";
+    };
+    int f = 0;
+    for (; f < 10; ++f) row(f * period, false);
+    f += 24;  // the stall: 0.8 s without a row
+    for (int k = 0; k < 10; ++k, ++f) row(f * period, false);
+    for (int k = 0; k < 8; ++k, ++f) row(f * period, true);  // lost: empty pose cells
+    for (int k = 0; k < 10; ++k, ++f) row(f * period, false);
+    const OmniLog log = ParseOmniLog(csv, "log.csv");
+    ASSERT_EQ(log.rows.size(), truth.size());
+    ASSERT_EQ(log.holes.size(), 1u);
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      if (std::isnan(truth[i])) continue;
+      EXPECT_NEAR(log.rows[i].pose.theta, truth[i], 1e-5) << "omega " << omega << ", row " << i;
+    }
+  }
+  // A camera that repeats its last pose after a gap: the repeat keeps the heading.
+  const std::string repeated = std::string(kHeader) + "0,0,0,0,0,0,6\n0.0333333,0,0,0.2,0,0,6\n"
+                               "0.0666667,0,0,0.4,0,0,6\n0.3,0,0,0.4,0,0,6\n0.3333333,0,0,2.0,0,0,6\n";
+  const OmniLog log = ParseOmniLog(repeated, "log.csv");
+  EXPECT_FALSE(log.rows[3].measured);
+  EXPECT_NEAR(log.rows[3].pose.theta, 0.4, 1e-12);
+  EXPECT_NEAR(log.rows[4].pose.theta, 2.0, 1e-12);  // 1.6 rad in 0.27 s: the nearest branch
 }
 
 TEST(OmniLogClockHoles, AHoleLongerThanTheObserverBridgesIsAnError) {

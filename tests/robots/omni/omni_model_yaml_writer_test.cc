@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <filesystem>
 
 #include "core/error.h"
@@ -155,6 +157,50 @@ TEST(OmniModelYamlWriter, DrivingNoiseAndObserverRoundTripAndAreLeftOutAtTheirDe
   }
   EXPECT_THROW(LoadOmniModelFromString(base + "observer: {process_noise: {sideways: 0}}\n", "bad.yaml"), InputError);
   EXPECT_THROW(LoadOmniModelFromString(base + "observer: {slip: 1}\n", "bad.yaml"), InputError);
+}
+
+// Issue 64: the intervals' safeguard, a scale of the predicted covariance per horizon,
+// round-trips, is interpolated in log(frames) between horizons and held beyond them, and
+// a list out of order or out of range is refused where it is written.
+TEST(OmniModelYamlWriter, TheIntervalsSafeguardRoundTripsInterpolatesAndIsChecked) {
+  OmniModel m = testing::Omni4();
+  EXPECT_EQ(m.observer.IntervalScaleAt(10), (std::array<double, 2>{1, 1}));
+  m.observer.interval_scale = {{4, 2.0, 0.8}, {16, 0.5, 1 / 3.0}, {63, 0.7, 1.25}};
+  const std::string text = FormatOmniModelYaml(m);
+  EXPECT_NE(text.find("interval_scale:"), std::string::npos) << text;
+  const OmniModel back = RoundTrip(m);
+  ASSERT_EQ(back.observer.interval_scale.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(back.observer.interval_scale[i].frames, m.observer.interval_scale[i].frames);
+    EXPECT_EQ(back.observer.interval_scale[i].position, m.observer.interval_scale[i].position);
+    EXPECT_EQ(back.observer.interval_scale[i].heading, m.observer.interval_scale[i].heading);
+  }
+  EXPECT_EQ(FormatOmniModelYaml(back), text);
+  // 8 frames lie halfway between 4 and 16 in log(frames): the geometric mean.
+  EXPECT_NEAR(back.observer.IntervalScaleAt(8)[0], 1.0, 1e-12);
+  EXPECT_NEAR(back.observer.IntervalScaleAt(8)[1], std::sqrt(0.8 / 3), 1e-12);
+  EXPECT_EQ(back.observer.IntervalScaleAt(1)[0], 2.0);
+  EXPECT_EQ(back.observer.IntervalScaleAt(200)[1], 1.25);
+
+  const std::string base = "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n";
+  auto refused = [&](const std::string& yaml) {
+    try {
+      LoadOmniModelFromString(base + yaml, "bad.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("loaded");
+  };
+  const std::string order = refused(
+      "observer:\n  interval_scale:\n    - {frames: 16, position: 1, heading: 1}\n    - {frames: 4, position: 1, "
+      "heading: 1}\n");
+  EXPECT_NE(order.find("bad.yaml:6:"), std::string::npos) << order;
+  EXPECT_NE(order.find("increase"), std::string::npos) << order;
+  const std::string range = refused("observer: {interval_scale: [{frames: 4, position: 0, heading: 1}]}\n");
+  EXPECT_NE(range.find("bad.yaml:3:"), std::string::npos) << range;
+  EXPECT_NE(range.find("position"), std::string::npos) << range;
+  EXPECT_NE(refused("observer: {interval_scale: 2}\n").find("a list of"), std::string::npos);
+  EXPECT_NE(refused("observer: {interval_scale: [{frames: 4, position: 1}]}\n").find("heading"), std::string::npos);
 }
 
 // Issue 63: a fitted model names the engine it was fitted on, and commands replay it

@@ -1,0 +1,90 @@
+// The intervals' safeguard (issue 64; docs/identification.md, "The intervals'
+// safeguard"): a split-conformal scale of an omni model's predictive covariance.
+//
+// A row's predictive distribution of the measured position is N(mean, s^2 P + R), P the
+// filter's predicted covariance of the position, R the camera's; the heading's the same
+// with its own s. The row's score is the smallest s whose 90 % region
+// (d^2 = e' (s^2 P + R)^-1 e <= chi2_2(0.9), or z^2 <= chi2_1(0.9) for the heading)
+// holds it. With n held-out rows, the ceil((n + 1) 0.9)-th smallest score makes the
+// 90 % regions hold at least 90 % of new rows exchangeable with those (split conformal
+// prediction: Vovk, Gammerman and Shafer 2005; Lei et al. 2018): by construction on rows
+// of the same logs driven the same way, and no promise beyond them.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "analysis/omni_calibration.h"
+#include "robots/omni/omni_model.h"
+
+namespace twinsim {
+
+// One held-out row: the measured pose minus the predicted, the prediction's covariance
+// and the camera's (of the model that predicted it).
+struct SafeguardRow {
+  Eigen::Vector3d e = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d camera = Eigen::Matrix3d::Zero();
+};
+
+// Observer rows (c is the prediction's covariance plus `camera`) as safeguard rows,
+// appended to *out.
+void AppendSafeguardRows(const std::vector<PredictiveError>& rows, const Eigen::Matrix3d& camera,
+                         std::vector<SafeguardRow>* out);
+
+// The shares of `part` (position or heading) inside the central 50 % and 90 % regions,
+// and its mean negative log density (nats per row), with the predicted covariance scaled.
+struct ScaledIntervals {
+  int rows = 0;
+  double inside_50 = 0, inside_90 = 0;
+  double log_score = 0;
+};
+
+// The conformal scale of `part` (PosePart::kPosition or kHeading) for the central
+// `level` regions on `rows`, within [1 / most, most]; 1 without rows.
+double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level = 0.9);
+
+// `rows` scored with the prediction's covariance of `part` scaled by `scale`.
+ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double scale);
+
+// Pools two scores of different rows by their row counts.
+ScaledIntervals Pooled(const ScaledIntervals& a, const ScaledIntervals& b);
+
+// The safeguard at one horizon: the scales of the position's and the heading's
+// predicted covariance, each kept only where the rows held a share in their 90 % regions
+// more than two standard errors from 90 % and each fold's rows, scored with the scale of
+// the other folds' rows, come nearer 90 % without a worse log density (the scale written
+// is then the one of all rows; 1 where not kept).
+struct OmniSafeguardHorizon {
+  int frames = 0;
+  int rows = 0;  // all folds'
+  double position = 1, heading = 1;
+  bool position_kept = false, heading_kept = false;
+  // Each fold with the other folds' scale, pooled: without (first) and with (second).
+  std::array<ScaledIntervals, 2> position_check, heading_check;
+};
+
+struct OmniIntervalSafeguard {
+  std::string on;  // the folds: "held-out blocks" (its two halves) or "left-out logs"; "" when not fitted
+  std::vector<OmniSafeguardHorizon> horizons;
+  std::string note;  // why none is kept, where none is
+  bool AnyKept() const;
+  // The model's observer.interval_scale: every horizon when any is kept, else empty.
+  std::vector<OmniObserverModel::IntervalScale> Scales() const;
+};
+
+// The horizons a safeguard is fitted at: `horizons`, and between two of them their
+// geometric mean, so that a scale read between horizons is interpolated over at most a
+// doubling.
+std::vector<int> SafeguardHorizons(std::vector<int> horizons);
+
+// The safeguard from rows[h][f], the rows of fold f at horizons[h], predicted from every
+// `stride`-th frame (their overlap sets the standard error). Folds with fewer than
+// `min_rows` rows at a horizon leave it unscaled.
+OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
+                                         const std::vector<std::vector<std::vector<SafeguardRow>>>& rows, int stride,
+                                         int min_rows);
+
+}  // namespace twinsim

@@ -1,0 +1,127 @@
+// The intervals' safeguard's conformal scale (analysis/omni_interval_scale.h): recovered
+// where the covariance is a known factor off, and holding its 90 % on new rows whatever
+// the errors' shape.
+#include "analysis/omni_interval_scale.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/rng.h"
+
+namespace twinsim {
+namespace {
+
+constexpr double kPredicted = 0.01;  // m and rad: the spread the covariance claims
+constexpr double kCamera = 0.002;    // m and rad
+
+Eigen::Matrix3d Camera() { return Eigen::Vector3d::Constant(kCamera * kCamera).asDiagonal(); }
+
+// n rows whose prediction error is `spread` (m, rad) times a standard draw of
+// `draw`, plus the camera's noise, under a covariance that claims kPredicted.
+template <typename Draw>
+std::vector<SafeguardRow> Rows(int n, double spread, Rng* rng, Draw draw) {
+  std::vector<PredictiveError> rows(static_cast<std::size_t>(n));
+  for (PredictiveError& r : rows) {
+    for (int a = 0; a < 3; ++a) r.e(a) = spread * draw(rng) + kCamera * rng->Gaussian();
+    r.c = Eigen::Vector3d::Constant(kPredicted * kPredicted).asDiagonal();
+    r.c += Camera();
+  }
+  std::vector<SafeguardRow> out;
+  AppendSafeguardRows(rows, Camera(), &out);
+  return out;
+}
+
+double Gaussian(Rng* rng) { return rng->Gaussian(); }
+// Student's t with 3 degrees of freedom, scaled to unit variance: heavy tails.
+double HeavyTailed(Rng* rng) {
+  double chi2 = 0;
+  for (int k = 0; k < 3; ++k) chi2 += std::pow(rng->Gaussian(), 2);
+  return rng->Gaussian() / std::sqrt(chi2 / 3) / std::sqrt(3.0);
+}
+
+// The errors are twice what the covariance claims: the scale is 2, within what 4000 rows
+// determine (the 90 % quantile's standard error is about 2 %), and with it new rows fall
+// in the 90 % and the 50 % regions as they should (a Gaussian's shape is right).
+TEST(OmniIntervalScale, RecoversAKnownFactorAndHoldsOnNewRows) {
+  Rng rng(7);
+  const std::vector<SafeguardRow> fit = Rows(4000, 2 * kPredicted, &rng, Gaussian);
+  const std::vector<SafeguardRow> fresh = Rows(4000, 2 * kPredicted, &rng, Gaussian);
+  for (PosePart part : {PosePart::kPosition, PosePart::kHeading}) {
+    const double s = ConformalIntervalScale(fit, part, 20);
+    EXPECT_NEAR(s, 2.0, 0.08) << static_cast<int>(part);
+    const ScaledIntervals before = ScoreIntervalScale(fresh, part, 1);
+    const ScaledIntervals after = ScoreIntervalScale(fresh, part, s);
+    EXPECT_LT(before.inside_90, 0.75);
+    EXPECT_NEAR(after.inside_90, 0.90, 0.015);
+    EXPECT_NEAR(after.inside_50, 0.50, 0.025);
+    EXPECT_LT(after.log_score, before.log_score);
+  }
+  // A covariance three times too wide shrinks.
+  const std::vector<SafeguardRow> narrow = Rows(4000, kPredicted / 3, &rng, Gaussian);
+  EXPECT_LT(ConformalIntervalScale(narrow, PosePart::kPosition, 20), 0.45);
+}
+
+// Heavy tails: one scale cannot hold both shares of a Gaussian, and the conformal one
+// holds the 90 % it is made for on rows it has not seen, leaving the 50 % regions
+// too wide (the share says so).
+TEST(OmniIntervalScale, HoldsNinetyPercentWhateverTheShape) {
+  Rng rng(11);
+  const std::vector<SafeguardRow> fit = Rows(4000, kPredicted, &rng, HeavyTailed);
+  const std::vector<SafeguardRow> fresh = Rows(4000, kPredicted, &rng, HeavyTailed);
+  for (PosePart part : {PosePart::kPosition, PosePart::kHeading}) {
+    const double s = ConformalIntervalScale(fit, part, 20);
+    const ScaledIntervals after = ScoreIntervalScale(fresh, part, s);
+    EXPECT_NEAR(after.inside_90, 0.90, 0.015) << static_cast<int>(part);
+    EXPECT_GT(after.inside_50, 0.56) << static_cast<int>(part);
+  }
+}
+
+// The finite-sample rank: of 19 rows the 18th smallest score, ceil((19 + 1) 0.9); the
+// bounds hold where no scale within them holds the rows; no rows, no scale.
+TEST(OmniIntervalScale, RankBoundsAndNoRows) {
+  std::vector<SafeguardRow> rows(19);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    rows[i].predicted = Eigen::Vector3d::Constant(kPredicted * kPredicted).asDiagonal();
+    // Heading errors of 1..19 predicted spreads, no camera: a row's score is the
+    // scale at which |e| = z_0.95 s kPredicted.
+    rows[i].e(2) = (static_cast<double>(i) + 1) * kPredicted;
+  }
+  const double z95 = 1.6448536269514722;
+  EXPECT_NEAR(ConformalIntervalScale(rows, PosePart::kHeading, 20), 18 / z95, 1e-9);
+  EXPECT_EQ(ConformalIntervalScale(rows, PosePart::kHeading, 5), 5.0);
+  for (SafeguardRow& r : rows) r.e(2) = 1e-6 * kPredicted;
+  EXPECT_EQ(ConformalIntervalScale(rows, PosePart::kHeading, 20), 1 / 20.0);
+  EXPECT_EQ(ConformalIntervalScale({}, PosePart::kPosition, 20), 1.0);
+}
+
+// Folds: a scale is kept where every fold is off by the same factor (each fold's rows,
+// scored with the others' scale, come to 90 %), and not where they are calibrated
+// already; the horizons between the noise's are their geometric means.
+TEST(OmniIntervalScale, FoldsKeepAScaleOnlyWhereItHelpsRowsItWasNotFittedOn) {
+  Rng rng(5);
+  std::vector<std::vector<std::vector<SafeguardRow>>> rows(2);
+  for (int f = 0; f < 3; ++f) {
+    rows[0].push_back(Rows(600, 3 * kPredicted, &rng, Gaussian));  // three times wider than claimed
+    rows[1].push_back(Rows(600, kPredicted, &rng, Gaussian));      // as claimed
+  }
+  const OmniIntervalSafeguard g = SafeguardFromFolds({4, 16}, rows, 2, 20);
+  ASSERT_EQ(g.horizons.size(), 2u);
+  EXPECT_TRUE(g.horizons[0].position_kept);
+  EXPECT_TRUE(g.horizons[0].heading_kept);
+  EXPECT_NEAR(g.horizons[0].position, 3.0, 0.25);
+  EXPECT_LT(g.horizons[0].position_check[0].inside_90, 0.5);
+  EXPECT_NEAR(g.horizons[0].position_check[1].inside_90, 0.9, 0.03);
+  EXPECT_FALSE(g.horizons[1].position_kept);
+  EXPECT_FALSE(g.horizons[1].heading_kept);
+  EXPECT_EQ(g.horizons[1].position, 1.0);
+  EXPECT_TRUE(g.AnyKept());
+  EXPECT_EQ(g.Scales().size(), 2u);
+  // Too few rows in a fold: nothing.
+  EXPECT_FALSE(SafeguardFromFolds({4, 16}, rows, 2, 601).AnyKept());
+  EXPECT_EQ(SafeguardHorizons({63, 4, 16}), (std::vector<int>{4, 8, 16, 32, 63}));
+}
+
+}  // namespace
+}  // namespace twinsim
