@@ -9,7 +9,7 @@
 
 #include "../tests/estimation/wandering_plant.h"
 #include "analysis/omni_replay.h"
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {

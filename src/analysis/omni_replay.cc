@@ -10,6 +10,7 @@
 #include "core/covariance_root.h"
 #include "core/error.h"
 #include "core/rng.h"
+#include "learning/omni_predictor.h"
 #include "robots/omni/omni_driving_noise.h"
 
 namespace twinsim {

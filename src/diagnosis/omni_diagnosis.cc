@@ -21,7 +21,7 @@
 #include "diagnosis/diagnosis_report.h"
 #include "diagnosis/forward_selection.h"
 #include "diagnosis/response_changes.h"
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 #include "learning/omni_predictor.h"
 
 namespace twinsim {

@@ -13,7 +13,7 @@
 #include "analysis/omni_replay.h"
 #include "diagnosis/response_changes.h"
 #include "engines/omni_engine.h"
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 #include "learning/omni_predictor.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"

@@ -18,7 +18,7 @@
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 #include "robots/arm/arm_model_yaml_writer.h"
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model_yaml_writer.h"
 

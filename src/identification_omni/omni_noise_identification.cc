@@ -1,4 +1,4 @@
-#include "identification/omni/omni_noise_identification.h"
+#include "identification_omni/omni_noise_identification.h"
 
 #include <Eigen/Dense>
 #include <algorithm>

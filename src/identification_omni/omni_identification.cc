@@ -1,4 +1,4 @@
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 
 #include <ceres/ceres.h>
 

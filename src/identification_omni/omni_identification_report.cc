@@ -6,7 +6,7 @@
 
 #include "analysis/omni_calibration_report.h"
 #include "analysis/omni_horizons.h"
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 #include "io/html_text.h"
 #include "io/printf_number.h"
 #include "render/plot.h"

@@ -4,7 +4,7 @@
 // frames and camera noise. Identification runs on the analytic engine from the user's
 // nominal model (models/omni4.yaml) and is never told the plant; the test alone knows
 // it, and uses it for the gap a perfect model reaches on the same held-out rows.
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 
 #include <gtest/gtest.h>
 

@@ -1,10 +1,10 @@
 // The driving noise identified from logs and its predictive distribution scored on a
-// validation log (identification/omni/omni_noise_identification.h, analysis/omni_calibration.h),
+// validation log (identification_omni/omni_noise_identification.h, analysis/omni_calibration.h),
 // on wandering plants (tests/estimation/wandering_plant.h): robots written apart from
 // twinsim's models (a first-order lag per axis, no PID, no wheels), whose driving noise
 // is a Gauss-Markov disturbance of a size and correlation time drawn off any grid.
 // Identification starts from models/omni4.yaml and is never told the noise.
-#include "identification/omni/omni_noise_identification.h"
+#include "identification_omni/omni_noise_identification.h"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "analysis/pooled_calibration.h"
-#include "identification/omni/omni_identification.h"
+#include "identification_omni/omni_identification.h"
 #include "estimation/wandering_plant.h"
 #include "io/printf_number.h"
 #include "test_util.h"

@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "identification/omni/omni_noise_identification.h"
+#include "identification_omni/omni_noise_identification.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
