@@ -47,7 +47,7 @@ constexpr double kPayloadReach = 2;      // m: a payload's position is searched 
 constexpr double kChunkSeconds = 0.25;
 
 // One log with what every evaluation reuses.
-struct LogData {
+struct ArmLogData {
   const ArmLog* log = nullptr;
   int first = 0, last = 0;                  // rows used, [first, last)
   Eigen::MatrixXd rigid;                    // rows x n, N·m: inverse dynamics of the bodies, no friction
@@ -63,7 +63,6 @@ struct ParameterMap {
   std::vector<double> upper;
 };
 
-const double kInf = std::numeric_limits<double>::infinity();
 
 // The guard between blocks (s): a zero-phase derivative filter spreads a sample over
 // about half a period of its cut-off each way (its impulse response's main lobe);
@@ -178,7 +177,7 @@ class ArmProblem : public DiagnosisProblem {
     payload_candidate_ = nominal.effects.payload_mass <= 0;
     int blocks = 0;  // of the logs before
     for (const ArmLog& log : logs) {
-      LogData d;
+      ArmLogData d;
       d.log = &log;
       d.first = log.edge_samples;
       d.last = log.rows() - log.edge_samples;
@@ -215,7 +214,7 @@ class ArmProblem : public DiagnosisProblem {
   }
 
   int dof() const { return n_; }
-  const std::vector<LogData>& data() const { return data_; }
+  const std::vector<ArmLogData>& data() const { return data_; }
   double Gap(double mean_squared) const override { return std::sqrt(mean_squared / n_); }
   int ChunkRows() const override { return chunk_rows_; }
 
@@ -227,7 +226,7 @@ class ArmProblem : public DiagnosisProblem {
   }
 
   // Torque of the trial model's payload effect on log d (rows x n), or empty.
-  Eigen::MatrixXd PayloadTorque(const ArmModel& trial, const LogData& d) const {
+  Eigen::MatrixXd PayloadTorque(const ArmModel& trial, const ArmLogData& d) const {
     if (!payload_candidate_ || trial.effects.payload_mass <= 0) return {};
     const auto pi = PointMassParameters(trial.effects.payload_mass, trial.effects.payload_position);
     Eigen::MatrixXd tau = Eigen::MatrixXd::Zero(d.log->rows(), n_);
@@ -238,7 +237,7 @@ class ArmProblem : public DiagnosisProblem {
   // What the links of joint j need: rigid bodies, payload and all friction (rows). A
   // joint at a standstill gets no friction here: it sticks, and its friction is then
   // whatever holds it (Residual() allows for that).
-  Eigen::VectorXd Needed(const ArmModel& trial, const LogData& d, int j, const Eigen::MatrixXd& payload) const {
+  Eigen::VectorXd Needed(const ArmModel& trial, const ArmLogData& d, int j, const Eigen::MatrixXd& payload) const {
     Eigen::VectorXd needed = d.rigid.col(j);
     if (payload.size()) needed += payload.col(j);
     const auto& qd = d.log->qd;
@@ -249,7 +248,7 @@ class ArmProblem : public DiagnosisProblem {
   }
 
   // The model's command for joint j (rows).
-  Eigen::VectorXd Command(const ArmModel& trial, const LogData& d, int j, const Eigen::MatrixXd& payload) const {
+  Eigen::VectorXd Command(const ArmModel& trial, const ArmLogData& d, int j, const Eigen::MatrixXd& payload) const {
     return JointCommandFromNeeded(trial, j, d.log->t, d.log->qdd.col(j), Needed(trial, d, j, payload));
   }
 
@@ -269,7 +268,7 @@ class ArmProblem : public DiagnosisProblem {
   // only what exceeds that level counts: on the rows whose command the joint receives
   // at a standstill, its delay later (a delay's fit judged at the unshifted rows is
   // pulled short: a 21 ms delay on a joint with Coulomb friction came out at 16 ms).
-  Eigen::VectorXd Residual(const ArmModel& trial, const LogData& d, int j, const Eigen::MatrixXd& payload) const {
+  Eigen::VectorXd Residual(const ArmModel& trial, const ArmLogData& d, int j, const Eigen::MatrixXd& payload) const {
     const Eigen::VectorXd cmd = Command(trial, d, j, payload);
     const JointEffects e = trial.effects.joint(j);
     const Eigen::VectorXd u = d.log->tau.col(j);
@@ -295,7 +294,7 @@ class ArmProblem : public DiagnosisProblem {
     SquaredResiduals out;
     out.selection_by_channel.resize(static_cast<std::size_t>(n_));
     out.fit_by_channel.resize(static_cast<std::size_t>(n_));
-    for (const LogData& d : data_) {
+    for (const ArmLogData& d : data_) {
       const Eigen::MatrixXd payload = PayloadTorque(trial, d);
       Eigen::MatrixXd squared(d.log->rows(), n_);
       for (int j = 0; j < n_; ++j) squared.col(j) = Residual(trial, d, j, payload).cwiseAbs2();
@@ -390,7 +389,7 @@ class ArmProblem : public DiagnosisProblem {
       // The spring carries the joint's torque: a spring that would deflect by more than
       // kMaxDeflection under it is a filter fitted to something else, not a joint.
       double peak = 0;
-      for (const LogData& d : data_) peak = std::max(peak, d.rigid.col(e.joint).segment(d.first, d.last - d.first).cwiseAbs().maxCoeff());
+      for (const ArmLogData& d : data_) peak = std::max(peak, d.rigid.col(e.joint).segment(d.first, d.last - d.first).cwiseAbs().maxCoeff());
       if (peak / e.parameters.at("k") > kMaxDeflection) {
         std::snprintf(msg, sizeof msg, "its spring would deflect %.3g rad under the joint's %.3g N·m: no joint is that soft",
                       peak / e.parameters.at("k"), peak);
@@ -415,7 +414,7 @@ class ArmProblem : public DiagnosisProblem {
     } else if (e.name == "torque_saturation") {
       long beyond = 0, total = 0;
       const double reach = SaturationReach(e.parameters.at("limit"), e.joint);
-      for (const LogData& d : data_) {
+      for (const ArmLogData& d : data_) {
         for (int r = d.first; r < d.last; ++r) {
           beyond += std::abs(d.log->tau(r, e.joint)) > reach;
           ++total;
@@ -435,7 +434,7 @@ class ArmProblem : public DiagnosisProblem {
   Eigen::VectorXd FitResidual(const std::vector<TrialEffect>& effects, const std::vector<int>& joints) const {
     const ArmModel trial = Build(effects);
     std::vector<double> out;
-    for (const LogData& d : data_) {
+    for (const ArmLogData& d : data_) {
       const Eigen::MatrixXd payload = PayloadTorque(trial, d);
       for (int j : joints) {
         const Eigen::VectorXd r = Residual(trial, d, j, payload);
@@ -449,7 +448,7 @@ class ArmProblem : public DiagnosisProblem {
 
   void SetStride() {
     int rows = 0;
-    for (const LogData& d : data_) rows += d.last - d.first;
+    for (const ArmLogData& d : data_) rows += d.last - d.first;
     stride_ = std::max(1, rows / kMaxFitRows);
   }
 
@@ -498,7 +497,7 @@ class ArmProblem : public DiagnosisProblem {
   double bandwidth_ = 0;       // Hz: the motion the logs resolve (derivative cut-off, or a quarter of the rate)
   double sample_period_ = 0;   // s, the logs' median
   bool payload_candidate_ = true;
-  std::vector<LogData> data_;
+  std::vector<ArmLogData> data_;
   // Per joint, the logs' torque noise (NoiseFloor): fixed, so an effect that fits the
   // noise cannot lower the floor it is judged against.
   std::vector<double> noise_;
@@ -562,7 +561,7 @@ void GuessPayload(const GuessRows& fit, std::map<std::string, double>* p) {
 GuessRows ArmProblem::GuessRowsFor(const ArmModel& base, const TrialEffect& e) const {
   const int j = e.joint;
   GuessRows fit;
-  for (const LogData& d : data_) {
+  for (const ArmLogData& d : data_) {
     const Eigen::MatrixXd payload = PayloadTorque(base, d);
     if (j >= 0) {
       const Eigen::VectorXd res = Residual(base, d, j, payload);
@@ -607,7 +606,7 @@ void ArmProblem::GuessOnGrid(const ArmModel& base, std::vector<TrialEffect>* eff
     // its limit needs the limit while its controller's command winds up beyond it
     // (to the effort limit, where every command may be the same number).
     std::vector<double> u, needed;
-    for (const LogData& d : data_) {
+    for (const ArmLogData& d : data_) {
       const Eigen::VectorXd cmd = Command(base, d, j, PayloadTorque(base, d));
       for (int row = d.first; row < d.last; ++row) {
         u.push_back(std::abs(d.log->tau(row, j)));
@@ -773,21 +772,8 @@ void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int
 double CommandLag(const Eigen::VectorXd& t, const Eigen::VectorXd& measured, const Eigen::VectorXd& model, int first, int last) {
   const double dt = (t[last - 1] - t[first]) / std::max(1, last - first - 1);
   const int max_shift = std::min(200, static_cast<int>(kMaxLag / dt));
-  double best = -kInf;
-  int best_shift = 0;
-  for (int s = -max_shift; s <= max_shift; ++s) {
-    std::vector<double> a, b;
-    for (int r = std::max(first, first - s); r < std::min(last, last - s); ++r) {
-      a.push_back(measured[r]);
-      b.push_back(model[r + s]);
-    }
-    const double c = Correlation(a, b);
-    if (c > best) {
-      best = c;
-      best_shift = s;
-    }
-  }
-  return best_shift * dt;
+  const std::vector<double> a(measured.data() + first, measured.data() + last), b(model.data() + first, model.data() + last);
+  return BestAlignment(a, b, -max_shift, max_shift).shift * dt;
 }
 
 std::string ArmProblem::Signature(const TrialEffect& e) const {
@@ -807,7 +793,7 @@ std::string ArmProblem::Signature(const TrialEffect& e) const {
                   FormatParameter(p.at("tau0")).c_str());
   } else if (e.name == "torque_saturation") {
     int beyond = 0, total = 0;
-    for (const LogData& d : data_) {
+    for (const ArmLogData& d : data_) {
       for (int r = d.first; r < d.last; ++r) {
         beyond += std::abs(d.log->tau(r, e.joint)) > p.at("limit");
         ++total;
@@ -826,7 +812,7 @@ std::string ArmProblem::Signature(const TrialEffect& e) const {
     // How much of the payload's torque a constant offset per joint could carry.
     const ArmModel trial = Build({e});
     double total = 0, constant = 0;
-    for (const LogData& d : data_) {
+    for (const ArmLogData& d : data_) {
       const Eigen::MatrixXd tau = PayloadTorque(trial, d).middleRows(d.first, d.last - d.first);
       for (int j = 0; j < n_; ++j) {
         const double mean = tau.col(j).mean();
@@ -862,7 +848,7 @@ double HighFrequencySigma(const Eigen::VectorXd& residual, double rate, double c
 // sign of qd. No past motion: with qdd 20 ms earlier the learner modelled the
 // derivative filter's own error (jerk) and flagged a correctly repaired joint as
 // unexplained (measured: joint 3 beside a payload named and closed 100 %).
-void LearnedInputs(const LogData& d, int r, std::vector<double>* x) {
+void LearnedInputs(const ArmLogData& d, int r, std::vector<double>* x) {
   const ArmLog& log = *d.log;
   x->clear();
   for (int j = 0; j < log.dof; ++j) {
@@ -877,7 +863,7 @@ double FilterCutoff(const ArmLog& log) {
 
 std::vector<double> ArmProblem::NoiseFloor() const {
   std::vector<double> variance(static_cast<std::size_t>(n_), 0.0);
-  for (const LogData& d : data_) {
+  for (const ArmLogData& d : data_) {
     for (int j = 0; j < n_; ++j) {
       const double sigma = HighFrequencySigma(d.log->tau.col(j).segment(d.first, d.last - d.first),
                                               1.0 / d.log->sample_period, 2 * FilterCutoff(*d.log));
@@ -904,7 +890,7 @@ TestResiduals ArmProblem::Test(const std::vector<TrialEffect>& effects, bool lea
   std::vector<std::vector<double>> fit_x, fit_y, test_x;
   std::vector<double> x;
   double cutoff = 0;
-  for (const LogData& d : data_) {
+  for (const ArmLogData& d : data_) {
     const ArmLog& log = *d.log;
     const Eigen::MatrixXd payload = PayloadTorque(trial, d);
     std::vector<Eigen::VectorXd> res(n);
@@ -993,14 +979,14 @@ constexpr double kSimulationHorizons[] = {0.1, 0.5};
 // `given` and `repaired` simulated from the logs' torques in windows wholly in test rows,
 // per horizon that at least one window fits, pooled over the logs (RMSE weighted by rows).
 std::vector<DiagnosisSimulation> SimulateTestRows(const ArmModel& given, const ArmModel& repaired,
-                                                  const std::vector<LogData>& data) {
+                                                  const std::vector<ArmLogData>& data) {
   std::vector<DiagnosisSimulation> out;
   for (double horizon : kSimulationHorizons) {
     DiagnosisSimulation sim;
     sim.seconds = horizon;
     const int n = given.dof();
     Eigen::ArrayXd nominal = Eigen::ArrayXd::Zero(n), fixed = nominal, velocity = nominal;
-    for (const LogData& d : data) {
+    for (const ArmLogData& d : data) {
       ArmSimulationScoreOptions options;
       options.horizons = {horizon};
       options.drop_long_horizons = true;
@@ -1078,7 +1064,7 @@ void FindJoint(const ArmProblem& problem, const ArmModel& model, const ArmModel&
   ChannelSamples x;
   double lag_sum = 0, noise_joint = 0;
   for (std::size_t k = 0; k < data.size(); ++k) {
-    const LogData& d = data[k];
+    const ArmLogData& d = data[k];
     const ArmLog& log = *d.log;
     const Eigen::VectorXd rb = problem.Residual(nominal_model, d, j, nominal_payload[k]);
     const Eigen::VectorXd ra = problem.Residual(repaired_model, d, j, repaired_payload[k]);
@@ -1170,7 +1156,7 @@ DiagnosisReport DiagnoseArm(const ArmModel& model, const std::vector<ArmLog>& lo
   const ArmModel nominal_model = problem.Build({});
   const ArmModel repaired_model = problem.Build(selection.effects);
   std::vector<Eigen::MatrixXd> nominal_payload, repaired_payload;  // per log
-  for (const LogData& d : problem.data()) {
+  for (const ArmLogData& d : problem.data()) {
     nominal_payload.push_back(problem.PayloadTorque(nominal_model, d));
     repaired_payload.push_back(problem.PayloadTorque(repaired_model, d));
   }

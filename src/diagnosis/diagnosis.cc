@@ -95,26 +95,6 @@ void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vecto
   for (int b = 0; b < bins; ++b) (*frequency)[static_cast<std::size_t>(b)] = b * rate / segment;
 }
 
-double Correlation(const std::vector<double>& a, const std::vector<double>& b) {
-  const std::size_t n = std::min(a.size(), b.size());
-  if (n < 2) return 0;
-  double ma = 0, mb = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    ma += a[i];
-    mb += b[i];
-  }
-  ma /= static_cast<double>(n);
-  mb /= static_cast<double>(n);
-  double sab = 0, saa = 0, sbb = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    sab += (a[i] - ma) * (b[i] - mb);
-    saa += (a[i] - ma) * (a[i] - ma);
-    sbb += (b[i] - mb) * (b[i] - mb);
-  }
-  if (saa <= 0 || sbb <= 0) return 0;
-  return sab / std::sqrt(saa * sbb);
-}
-
 double Rms(const std::vector<double>& v) {
   double sum = 0;
   for (double x : v) sum += x * x;

@@ -33,6 +33,9 @@
 
 namespace twinsim {
 
+// No bound: the diagnosis's searches start from it.
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
 struct DiagnosisOptions {
   double held_out = 0.4;      // share of each log's time blocks held out from every fit (half selection, half test)
   double block_seconds = 0;   // s, length of a time block; 0 = automatic (a 20th of the log, 0.5 to 10 s)
@@ -302,9 +305,6 @@ double Rms(const std::vector<double>& v);
 // samples, half overlapping); fills frequency (Hz) and psd (unit^2/Hz).
 void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vector<double>* frequency,
               std::vector<double>* psd);
-
-// Pearson correlation of a and b (0 when either is constant).
-double Correlation(const std::vector<double>& a, const std::vector<double>& b);
 
 // "0.12", "1.5e-05": a parameter as the report prints it.
 std::string FormatParameter(double value);

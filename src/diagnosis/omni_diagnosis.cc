@@ -47,13 +47,12 @@ constexpr const char* kReportState = "observer";
 
 constexpr int kFitStride = 4;     // fits predict from every fourth frame (consecutive predictions overlap)
 constexpr int kMaxCeresIterations = 8;
-constexpr double kReversalWindow = 0.1;  // s
+constexpr double kOmniReversalWindow = 0.1;  // s
 // An axis stands below 5 % of its largest speed: its velocity is differenced from camera
 // poses, noisier than an arm's filtered q̇ (2 %).
-constexpr double kStandFraction = 0.05;
+constexpr double kOmniStandFraction = 0.05;
 // Samples of the residual spectra's Welch segments at most: omni logs run at 30 to 60 Hz.
-constexpr int kWelchSegmentCap = 256;
-const double kInf = std::numeric_limits<double>::infinity();
+constexpr int kOmniWelchSegmentCap = 256;
 
 // One optimiser variable of an omni effect.
 struct Variable {
@@ -74,14 +73,14 @@ std::vector<Variable> VariablesOf(const std::string& name) {
   return {};
 }
 
-struct LogData {
+struct OmniLogData {
   const OmniLog* log = nullptr;
   std::vector<RowKind> kind;  // per row
   std::vector<int> block;     // per row: its block, numbered over every log
 };
 
 // Per row of the log: is it of `kind`?
-std::vector<char> RowsOfKind(const LogData& d, RowKind kind) {
+std::vector<char> RowsOfKind(const OmniLogData& d, RowKind kind) {
   std::vector<char> out(d.kind.size());
   for (std::size_t i = 0; i < out.size(); ++i) out[i] = d.kind[i] == kind;
   return out;
@@ -169,7 +168,7 @@ class OmniProblem : public DiagnosisProblem {
     guard_seconds_ = (options.horizon + 1) * logs.front().frame_period;
     int blocks = 0;  // of the logs before
     for (const OmniLog& log : logs) {
-      LogData d;
+      OmniLogData d;
       d.log = &log;
       d.kind.resize(log.rows.size());
       d.block.resize(log.rows.size());
@@ -201,7 +200,7 @@ class OmniProblem : public DiagnosisProblem {
 
   double Gap(double mean_squared) const override { return std::sqrt(mean_squared); }
   int ChunkRows() const override { return chunk_rows_; }
-  const std::vector<LogData>& data() const { return data_; }
+  const std::vector<OmniLogData>& data() const { return data_; }
 
   OmniModel Build(const std::vector<TrialEffect>& effects) const {
     OmniModel m = nominal_;
@@ -209,7 +208,7 @@ class OmniProblem : public DiagnosisProblem {
     return m;
   }
 
-  ReplayResidual Residual(const OmniModel& model, const LogData& d, int stride, int horizon,
+  ReplayResidual Residual(const OmniModel& model, const OmniLogData& d, int stride, int horizon,
                           const char* state = kDiagnosisState) const {
     OmniReplayOptions o;
     o.backend = options_.backend;
@@ -223,7 +222,7 @@ class OmniProblem : public DiagnosisProblem {
     const OmniModel model = Build(effects);
     SquaredResiduals out;
     out.selection_by_channel.resize(3);
-    for (const LogData& d : data_) {
+    for (const OmniLogData& d : data_) {
       const ReplayResidual r = Residual(model, d, 1, selection_horizon_);
       for (std::size_t k = 0; k < r.rows.size(); ++k) {
         const auto& e = r.e[k];
@@ -247,7 +246,7 @@ class OmniProblem : public DiagnosisProblem {
   std::vector<double> FitResidual(const std::vector<TrialEffect>& effects) const {
     const OmniModel model = Build(effects);
     std::vector<double> out;
-    for (const LogData& d : data_) {
+    for (const OmniLogData& d : data_) {
       const ReplayResidual r = Residual(model, d, kFitStride, selection_horizon_);
       for (std::size_t k = 0; k < r.rows.size(); ++k) {
         if (d.kind[r.rows[k]] != RowKind::kFit) continue;
@@ -319,7 +318,7 @@ class OmniProblem : public DiagnosisProblem {
   std::vector<double> channel_noise_;  // m, per axis: ObserverNoiseFloor's
   double noise_floor_ = 0;             // m, its total
   int selection_horizon_ = 4;          // frames: the residuals' horizon (SelectionHorizon)
-  std::vector<LogData> data_;
+  std::vector<OmniLogData> data_;
   double frame_period_ = 1.0 / 30;
   double physics_dt_ = 1.0 / 300;
   int chunk_rows_ = 30;
@@ -570,17 +569,7 @@ std::string OmniProblem::Signature(const TrialEffect& e) const {
 // The shift (s) that best aligns a command series with a velocity series (velocity
 // lagging positive), over [0, max_lag].
 double ResponseLag(const std::vector<double>& command, const std::vector<double>& velocity, double dt, int max_shift) {
-  double best = -kInf;
-  int best_shift = 0;
-  for (int s = 0; s <= max_shift; ++s) {
-    std::vector<double> a(command.begin(), command.end() - s), b(velocity.begin() + s, velocity.end());
-    const double c = Correlation(a, b);
-    if (c > best) {
-      best = c;
-      best_shift = s;
-    }
-  }
-  return best_shift * dt;
+  return BestAlignment(command, velocity, 0, max_shift).shift * dt;
 }
 
 // The seed's linear predictor as a residual on this model (twinsim train --residual
@@ -591,7 +580,7 @@ double ResponseLag(const std::vector<double>& command, const std::vector<double>
 // consecutive fit blocks as a log of its own, which a short or lossy real log left
 // without one long enough.
 std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel& model, const std::string& backend,
-                                                                const std::vector<LogData>& data,
+                                                                const std::vector<OmniLogData>& data,
                                                                 std::string* learner) {
   std::shared_ptr<const OmniPredictor> predictor;
   OmniTrainOptions train;
@@ -600,7 +589,7 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
   train.residual = true;
   train.nominal_engine = backend;
   std::vector<OmniLog> logs;
-  for (const LogData& d : data) {
+  for (const OmniLogData& d : data) {
     logs.push_back(*d.log);
     train.sample_rows.push_back(RowsOfKind(d, RowKind::kFit));
   }
@@ -618,7 +607,7 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
 
 // Each log's pose errors replayed by the learned predictor; a replay that fails drops the predictor, saying why in
 // `learner`, as does a note of the steps held to its training bounds.
-std::vector<ReplayResidual> ReplayLearnedResidual(const OmniModel& model, const std::vector<LogData>& data,
+std::vector<ReplayResidual> ReplayLearnedResidual(const OmniModel& model, const std::vector<OmniLogData>& data,
                                                   int horizon, double radius,
                                                   std::shared_ptr<const OmniPredictor>* predictor, std::string* learner) {
   std::vector<ReplayResidual> learned(data.size());
@@ -664,7 +653,7 @@ TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool le
   }
   if (predictor) out.learned.resize(3);
   for (std::size_t li = 0; li < data_.size(); ++li) {
-    const LogData& d = data_[li];
+    const OmniLogData& d = data_[li];
     const ReplayResidual r = Residual(model, d, 1, selection_horizon_);
     const ReplayResidual& l = learned[li];
     // The learned backend starts from its own tracker's state, the physics here from the
@@ -707,7 +696,7 @@ std::vector<HorizonStretch> StretchesOf(const OmniProblem& problem, RowKind kind
     min_start = std::max(min_start, m->command_delay_frames + m->vision_delay_frames + kWarmUpFrames);
   }
   std::vector<HorizonStretch> stretches;
-  for (const LogData& d : problem.data()) stretches.push_back({d.log, RowsOfKind(d, kind), 0, min_start});
+  for (const OmniLogData& d : problem.data()) stretches.push_back({d.log, RowsOfKind(d, kind), 0, min_start});
   return stretches;
 }
 
@@ -735,7 +724,7 @@ void ScoreHorizons(const OmniProblem& problem, const OmniModel& given, const Omn
   predictors.push_back({"integrated command", nullptr, HorizonPredictor::kIntegratedCommand});
   std::vector<OmniLog> logs;
   std::vector<std::vector<char>> fit_rows;
-  for (const LogData& d : problem.data()) {
+  for (const OmniLogData& d : problem.data()) {
     logs.push_back(*d.log);
     fit_rows.push_back(RowsOfKind(d, RowKind::kFit));
   }
@@ -1013,7 +1002,7 @@ void CollectResiduals(const OmniLog& log, const ReplayResidual& rb, const Replay
     ChannelSeries& plot = (*series)[cc];
     std::vector<double> times(n), speeds(n);
     for (std::size_t i = 0; i < n; ++i) times[i] = log.rows[i].t, speeds[i] = v[i][cc];
-    ReversalWindows reversals(times, speeds, kStandFraction, kReversalWindow);
+    ReversalWindows reversals(times, speeds, kOmniStandFraction, kOmniReversalWindow);
     std::vector<double> xb, xa;
     for (std::size_t k = 0; k < rb.rows.size(); ++k) {
       const std::size_t i = rb.rows[k];
@@ -1035,7 +1024,7 @@ void CollectResiduals(const OmniLog& log, const ReplayResidual& rb, const Replay
       xa.push_back(ra.e[k][cc]);
       if (first_log) plot.after.push_back(ra.e[k][cc]);
     }
-    if (first_log) ResidualSpectra(xb, xa, 1.0 / dt, kWelchSegmentCap, &plot);
+    if (first_log) ResidualSpectra(xb, xa, 1.0 / dt, kOmniWelchSegmentCap, &plot);
   }
 }
 
@@ -1050,7 +1039,7 @@ void FindChannels(const OmniProblem& problem, const OmniModel& model, const Omni
   std::vector<ChannelSamples> samples(3);
   std::vector<double> lag_sum(3, 0.0);
   for (std::size_t li = 0; li < problem.data().size(); ++li) {
-    const LogData& d = problem.data()[li];
+    const OmniLogData& d = problem.data()[li];
     const OmniLog& log = *d.log;
     std::vector<std::array<double, 3>> v, a;
     MeasuredMotion(log, &v, &a);
@@ -1082,7 +1071,7 @@ void FindChannels(const OmniProblem& problem, const OmniModel& model, const Omni
 // freely from its start by the nominal and the repaired model, beside the measured one.
 void FreeRunPaths(const OmniProblem& problem, const OmniModel& nominal_model, const OmniModel& repaired_model,
                   const DiagnosisOptions& options, int first_predicted, DiagnosisReport* report) {
-  const LogData& d = problem.data().front();
+  const OmniLogData& d = problem.data().front();
   const OmniLog& log = *d.log;
   std::size_t best_first = 0, best_len = 0;
   for (std::size_t i = static_cast<std::size_t>(first_predicted); i < log.rows.size();) {

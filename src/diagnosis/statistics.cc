@@ -158,15 +158,12 @@ CrossCorrelation PeakCrossCorrelation(const std::vector<double>& residual, const
   const std::size_t n = std::min(r.size(), u.size());
   if (n < 8) return out;
   const int reach = std::min<int>(max_lag, static_cast<int>(n / 4));
-  for (int lag = -reach; lag <= reach; ++lag) {
-    std::vector<double> a, b;
-    for (std::size_t i = static_cast<std::size_t>(std::max(lag, 0)); i < n && static_cast<long>(i) - lag < static_cast<long>(n); ++i) {
-      a.push_back(r[i]);
-      b.push_back(u[static_cast<std::size_t>(static_cast<long>(i) - lag)]);
-    }
-    const double c = Correlation(a, b);
-    if (std::abs(c) > std::abs(out.peak)) out.peak = c, out.lag = lag * std::max(step, 1);
-  }
+  // r[i] against u[i - lag], the lags in increasing order: shifts of u from +reach down.
+  const Alignment peak = BestAlignment(std::vector<double>(r.begin(), r.begin() + static_cast<long>(n)),
+                                       std::vector<double>(u.begin(), u.begin() + static_cast<long>(n)), reach, -reach,
+                                       true);
+  out.peak = peak.correlation;
+  out.lag = -peak.shift * std::max(step, 1);
   // Two autocorrelated series correlate by chance more than white ones: Bartlett's
   // variance of a cross-correlation, n_eff = n / (1 + 2 sum r_res(k) r_in(k)).
   const int lags = std::min<int>(50, static_cast<int>(n / 4));
