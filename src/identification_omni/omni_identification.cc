@@ -1001,8 +1001,8 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
 void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificationOptions& options,
                    const std::function<void(int, const std::string&)>& say, OmniModel* model,
                    OmniIdentificationReport* report) {
+  model->observer.interval_scale.clear();  // the given model's belongs to its own fit; fitted anew below
   if (options.state != "observer") return;
-  model->observer.interval_scale.clear();  // fitted anew below, on this noise
   std::vector<OmniBlockedStretch> views;
   for (const Segment& s : segments) views.push_back(View(s));
   OmniNoiseOptions noise_options;
