@@ -63,7 +63,6 @@ struct ParameterMap {
   std::vector<double> upper;
 };
 
-
 // The guard between blocks (s): a zero-phase derivative filter spreads a sample over
 // about half a period of its cut-off each way (its impulse response's main lobe);
 // logged velocities need only a few samples.
