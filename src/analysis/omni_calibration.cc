@@ -200,27 +200,32 @@ double MeanLogScore(const std::vector<PredictiveError>& rows) {
   return sum / static_cast<double>(rows.size());
 }
 
+std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniModel& model, const OmniLog& log,
+                                                                  const std::string& backend,
+                                                                  const std::vector<int>& horizons, int stride) {
+  std::vector<std::vector<PredictiveError>> out(horizons.size());
+  if (horizons.empty()) return out;
+  const int longest = horizons.back();
+  if (log.FrameIndex(log.rows.size() - 1) <= longest + kWarmUpFrames) return out;
+  OmniReplayOptions o;
+  o.backend = backend;
+  o.horizon = longest;
+  o.also.assign(horizons.begin(), horizons.end() - 1);
+  o.covariance = true;
+  o.stride = stride;
+  o.stride_origin = 0;
+  const OmniReplayResult r = ReplayOmniLog(model, log, o);
+  for (std::size_t q = 0; q < horizons.size(); ++q) out[q] = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q]);
+  return out;
+}
+
 std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
                                               std::vector<int> horizons, int stride) {
   std::sort(horizons.begin(), horizons.end());
   std::vector<OmniCalibration> out;
-  if (horizons.empty()) return out;
-  const int longest = horizons.back();
-  OmniReplayResult r;
-  if (log.FrameIndex(log.rows.size() - 1) > longest + kWarmUpFrames) {
-    OmniReplayOptions o;
-    o.backend = backend;
-    o.horizon = longest;
-    o.also.assign(horizons.begin(), horizons.end() - 1);
-    o.covariance = true;
-    o.stride = stride;
-    o.stride_origin = 0;
-    r = ReplayOmniLog(model, log, o);
-  }
+  const std::vector<std::vector<PredictiveError>> rows = OmniLogPredictiveErrors(model, log, backend, horizons, stride);
   for (std::size_t q = 0; q < horizons.size(); ++q) {
-    std::vector<PredictiveError> rows;
-    if (!r.predicted.empty()) rows = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q]);
-    OmniCalibration c = Calibrate(rows, ConstantSpread(rows));
+    OmniCalibration c = Calibrate(rows[q], ConstantSpread(rows[q]));
     c.frames = horizons[q];
     c.seconds = c.frames * log.frame_period;
     out.push_back(c);

@@ -101,6 +101,14 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
 std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
                                               std::vector<int> horizons = {4, 16, 63}, int stride = 2);
 
+// The rows of a whole log predicted by `model` on `backend` at each of `horizons` (sorted
+// increasing) from every `stride`-th frame counted from the log's first (the same rows
+// for every model), with their covariances: one list per horizon, all empty where the
+// log is too short for the longest. Throws as ReplayOmniLog.
+std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniModel& model, const OmniLog& log,
+                                                                  const std::string& backend,
+                                                                  const std::vector<int>& horizons, int stride);
+
 // The negative log density (nats) of one row's pose under its distribution (its Gaussian,
 // or the Student t of a covariance estimated from draws); infinity for a covariance that
 // is not positive definite.

@@ -1049,16 +1049,10 @@ OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::
       if (j != i) others.push_back(logs[j]);
     OmniModel model;
     IdentifyOmni(nominal, others, {}, fold, &model);
-    OmniReplayOptions o;
-    o.backend = options.backend;
-    o.horizon = horizons.back();
-    o.also.assign(horizons.begin(), horizons.end() - 1);
-    o.stride = noise_options.score_stride;
-    o.covariance = true;
-    const OmniReplayResult r = ReplayOmniLog(model, logs[i], o);
-    const Eigen::Matrix3d camera = MeasurementCovariance(model);
+    const std::vector<std::vector<PredictiveError>> left_out =
+        OmniLogPredictiveErrors(model, logs[i], options.backend, horizons, noise_options.score_stride);
     for (std::size_t q = 0; q < horizons.size(); ++q)
-      AppendSafeguardRows(PredictiveErrors(logs[i], q + 1 == horizons.size() ? r : r.also[q]), camera, &rows[q][i]);
+      AppendSafeguardRows(left_out[q], MeasurementCovariance(model), &rows[q][i]);
   }
   OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, noise_options.score_stride, kMinRows);
   out.on = "left-out logs";
