@@ -89,6 +89,7 @@ PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& re
   PredictiveError p;
   p.e << m.x - result.pose[i].x, m.y - result.pose[i].y, m.theta - result.pose[i].theta;
   p.c = result.covariance[i] + result.measurement_covariance;
+  if (i < result.input_distance.size()) p.input_distance = result.input_distance[i];
   if (result.covariance_draws > 0) {
     p.draws = result.covariance_draws;
     p.drawn = result.covariance[i];

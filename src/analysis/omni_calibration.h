@@ -52,6 +52,7 @@ struct PredictiveError {
   Eigen::Matrix3d c = Eigen::Matrix3d::Zero();  // its covariance: the prediction's plus the camera's
   int draws = 0;                                // 0: c is known; else the prediction's part was estimated from this many draws
   Eigen::Matrix3d drawn = Eigen::Matrix3d::Zero();  // that part (c minus the camera's)
+  double input_distance = 0;  // the prediction's mean distance from the model's seen inputs (0: none)
 };
 
 // The part of a pose a row's covariance is taken over.

@@ -39,47 +39,69 @@ double ChiSquareQuantile(int dims, double p) {
   return z * z;
 }
 
+// The smallest s in [0, most] whose region of squared standardised radius q holds the
+// row (d^2 falls as s grows); infinity where `most` does not.
+double SmallestHoldingScale(const SafeguardRow& row, PosePart part, double most, double q) {
+  auto outside = [&](double s) { return StandardisedError(row, part, s).d2 > q; };
+  if (!outside(0)) return 0;
+  if (outside(most)) return std::numeric_limits<double>::infinity();
+  double lo = 0, hi = most;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (outside(mid) ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 }  // namespace
 
 void AppendSafeguardRows(const std::vector<PredictiveError>& rows, const Eigen::Matrix3d& camera,
                          std::vector<SafeguardRow>* out) {
-  for (const PredictiveError& r : rows) out->push_back({r.e, r.c - camera, camera});
+  for (const PredictiveError& r : rows) out->push_back({r.e, r.c - camera, camera, r.input_distance});
 }
 
-double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level) {
+double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level,
+                              double growth) {
   if (rows.empty()) return 1;
   const int dims = part == PosePart::kHeading ? 1 : 2;
   const double q = ChiSquareQuantile(dims, level);
   // Each row's score: the smallest s in [0, most] that holds it (d^2 falls as s grows).
   std::vector<double> scores;
   scores.reserve(rows.size());
-  for (const SafeguardRow& row : rows) {
-    auto outside = [&](double s) { return StandardisedError(row, part, s).d2 > q; };
-    if (!outside(0)) {
-      scores.push_back(0);
-    } else if (outside(most)) {
-      scores.push_back(std::numeric_limits<double>::infinity());
-    } else {
-      double lo = 0, hi = most;
-      for (int i = 0; i < 60; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (outside(mid) ? lo : hi) = mid;
-      }
-      scores.push_back(hi);
-    }
-  }
+  // The scale s the row is scaled by is s0 (1 + g d): the score is s0's.
+  for (const SafeguardRow& row : rows)
+    scores.push_back(SmallestHoldingScale(row, part, most * (1 + growth * row.distance), q) / (1 + growth * row.distance));
   const std::size_t n = scores.size();
   const std::size_t k = std::min(n, static_cast<std::size_t>(std::ceil((static_cast<double>(n) + 1) * level)));
   std::nth_element(scores.begin(), scores.begin() + static_cast<long>(k - 1), scores.end());
   return std::clamp(scores[k - 1], 1 / most, most);
 }
 
-ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double scale) {
+double ConformalIntervalGrowth(const std::vector<SafeguardRow>& rows, PosePart part, double base, double level) {
+  constexpr double kMost = OmniObserverModel::kMaxIntervalGrowth;
+  if (rows.empty()) return 0;
+  // Each row's score: the smallest g whose base (1 + g d) holds it, from the smallest
+  // scale that holds it (at most base (1 + kMost d): beyond, infinite).
+  const double q = ChiSquareQuantile(part == PosePart::kHeading ? 1 : 2, level);
+  std::vector<double> scores;
+  scores.reserve(rows.size());
+  for (const SafeguardRow& row : rows) {
+    const double d = std::max(row.distance, kMinGrowthDistance);
+    const double needed = SmallestHoldingScale(row, part, base * (1 + kMost * d), q);
+    scores.push_back(std::isfinite(needed) ? std::max(0.0, (needed / base - 1) / d) : needed);
+  }
+  const std::size_t n = scores.size();
+  const std::size_t k = std::min(n, static_cast<std::size_t>(std::ceil((static_cast<double>(n) + 1) * level)));
+  std::nth_element(scores.begin(), scores.begin() + static_cast<long>(k - 1), scores.end());
+  return std::clamp(scores[k - 1], 0.0, kMost);
+}
+
+ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double scale, double growth) {
   ScaledIntervals out;
   const int dims = part == PosePart::kHeading ? 1 : 2;
   const double q50 = ChiSquareQuantile(dims, 0.5), q90 = ChiSquareQuantile(dims, 0.9);
   for (const SafeguardRow& row : rows) {
-    const Standardised z = StandardisedError(row, part, scale);
+    const Standardised z = StandardisedError(row, part, scale * (1 + growth * row.distance));
     out.inside_50 += z.d2 <= q50;
     out.inside_90 += z.d2 <= q90;
     out.log_score += 0.5 * (z.d2 + z.log_det + dims * std::log(2 * kPi));
@@ -111,8 +133,12 @@ bool OmniIntervalSafeguard::AnyKept() const {
 
 std::vector<OmniObserverModel::IntervalScale> OmniIntervalSafeguard::Scales() const {
   std::vector<OmniObserverModel::IntervalScale> out;
-  if (!AnyKept()) return out;
-  for (const OmniSafeguardHorizon& h : horizons) out.push_back({h.frames, h.position, h.heading});
+  const bool any = std::any_of(horizons.begin(), horizons.end(), [](const OmniSafeguardHorizon& h) {
+    return h.position != 1 || h.heading != 1 || h.position_growth > 0 || h.heading_growth > 0;
+  });
+  if (!any) return out;
+  for (const OmniSafeguardHorizon& h : horizons)
+    out.push_back({h.frames, h.position, h.heading, h.position_growth, h.heading_growth});
   return out;
 }
 
@@ -146,17 +172,24 @@ bool SafeguardHelps(const std::array<ScaledIntervals, 2>& check, int frames, int
          check[1].log_score <= check[0].log_score;
 }
 
-// Each fold's rows scored with their own covariance and with the scale of the other
-// folds' rows, pooled over the folds.
-std::array<ScaledIntervals, 2> CheckAcrossFolds(const std::vector<std::vector<SafeguardRow>>& folds, PosePart part) {
+// Each fold's rows scored without the safeguard and with what the other folds' rows
+// give, pooled over the folds: without `base`, their scale against none; with it (> 0),
+// their growth on top of the base scale against the base alone.
+std::array<ScaledIntervals, 2> CheckAcrossFolds(const std::vector<std::vector<SafeguardRow>>& folds, PosePart part,
+                                                double base) {
   constexpr double kMost = OmniObserverModel::kMaxIntervalScale;
   std::array<ScaledIntervals, 2> out;
   for (std::size_t f = 0; f < folds.size(); ++f) {
     std::vector<SafeguardRow> others;
     for (std::size_t g = 0; g < folds.size(); ++g)
       if (g != f) others.insert(others.end(), folds[g].begin(), folds[g].end());
-    out[0] = Pooled(out[0], ScoreIntervalScale(folds[f], part, 1));
-    out[1] = Pooled(out[1], ScoreIntervalScale(folds[f], part, ConformalIntervalScale(others, part, kMost)));
+    if (base > 0) {
+      out[0] = Pooled(out[0], ScoreIntervalScale(folds[f], part, base));
+      out[1] = Pooled(out[1], ScoreIntervalScale(folds[f], part, base, ConformalIntervalGrowth(others, part, base)));
+    } else {
+      out[0] = Pooled(out[0], ScoreIntervalScale(folds[f], part, 1));
+      out[1] = Pooled(out[1], ScoreIntervalScale(folds[f], part, ConformalIntervalScale(others, part, kMost)));
+    }
   }
   return out;
 }
@@ -165,7 +198,7 @@ std::array<ScaledIntervals, 2> CheckAcrossFolds(const std::vector<std::vector<Sa
 
 OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
                                          const std::vector<std::vector<std::vector<SafeguardRow>>>& rows, int stride,
-                                         int min_rows) {
+                                         int min_rows, const std::vector<std::array<double, 2>>* base) {
   constexpr double kMost = OmniObserverModel::kMaxIntervalScale;
   OmniIntervalSafeguard out;
   for (std::size_t q = 0; q < horizons.size(); ++q) {
@@ -180,16 +213,35 @@ OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
     }
     h.rows = static_cast<int>(all.size());
     if (folds.size() >= 2 && static_cast<int>(fewest) >= min_rows) {
-      h.position_check = CheckAcrossFolds(folds, PosePart::kPosition);
-      h.heading_check = CheckAcrossFolds(folds, PosePart::kHeading);
-      h.position_kept = SafeguardHelps(h.position_check, h.frames, stride);
-      h.heading_kept = SafeguardHelps(h.heading_check, h.frames, stride);
-      if (h.position_kept) h.position = ConformalIntervalScale(all, PosePart::kPosition, kMost);
-      if (h.heading_kept) h.heading = ConformalIntervalScale(all, PosePart::kHeading, kMost);
+      if (base) {
+        // The base scales as given; a growth on top of each where it helps.
+        h.position = (*base)[q][0];
+        h.heading = (*base)[q][1];
+        h.position_check = CheckAcrossFolds(folds, PosePart::kPosition, h.position);
+        h.heading_check = CheckAcrossFolds(folds, PosePart::kHeading, h.heading);
+        h.position_kept = SafeguardHelps(h.position_check, h.frames, stride);
+        h.heading_kept = SafeguardHelps(h.heading_check, h.frames, stride);
+        if (h.position_kept) h.position_growth = ConformalIntervalGrowth(all, PosePart::kPosition, h.position);
+        if (h.heading_kept) h.heading_growth = ConformalIntervalGrowth(all, PosePart::kHeading, h.heading);
+      } else {
+        h.position_check = CheckAcrossFolds(folds, PosePart::kPosition, 0);
+        h.heading_check = CheckAcrossFolds(folds, PosePart::kHeading, 0);
+        h.position_kept = SafeguardHelps(h.position_check, h.frames, stride);
+        h.heading_kept = SafeguardHelps(h.heading_check, h.frames, stride);
+        if (h.position_kept) h.position = ConformalIntervalScale(all, PosePart::kPosition, kMost);
+        if (h.heading_kept) h.heading = ConformalIntervalScale(all, PosePart::kHeading, kMost);
+      }
+    } else if (base) {
+      h.position = (*base)[q][0];
+      h.heading = (*base)[q][1];
     }
     out.horizons.push_back(h);
   }
-  if (!out.AnyKept()) {
+  if (base && !out.AnyKept()) {
+    out.note = "no growth kept: the rows held 90 % in their 90 % regions of the base scale within two standard "
+               "errors, or the other folds' growth did not bring each fold nearer without a worse log density (or "
+               "too few rows)";
+  } else if (!out.AnyKept()) {
     out.note = "no scale kept: the rows held 90 % in their 90 % regions within two standard errors, or the other "
                "folds' scale did not bring each fold nearer without a worse log density (or too few rows)";
   }

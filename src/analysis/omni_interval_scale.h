@@ -9,6 +9,17 @@
 // 90 % regions hold at least 90 % of new rows exchangeable with those (split conformal
 // prediction: Vovk, Gammerman and Shafer 2005; Lei et al. 2018): by construction on rows
 // of the same logs driven the same way, and no promise beyond them.
+//
+// Out of the fit's reach the model's own error grows (left-out logs): a prediction whose
+// inputs lie a mean distance d from those the fit saw (robots/omni/omni_seen_inputs.h)
+// is scaled by s_b (1 + g d), s_b the scale of rows within the fit's reach (the held-out
+// blocks'). A row's score is the smallest g that holds it, (s_i / s_b - 1) / d_i (d at
+// least kMinGrowthDistance), and the same rank of the scores gives g: the regions of
+// s_b (1 + g d) grow with g on every row, so the guarantee above holds for it (a
+// normalised nonconformity score: Papadopoulos, Gammerman and Vovk 2008, a
+// nearest-neighbour distance the difficulty). The shape, linear in d from s_b at the
+// seen inputs, is the model error's first order: an error that is zero where the fit
+// saw the inputs and grows with the step away from them.
 #pragma once
 
 #include <Eigen/Core>
@@ -27,6 +38,7 @@ struct SafeguardRow {
   Eigen::Vector3d e = Eigen::Vector3d::Zero();
   Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d camera = Eigen::Matrix3d::Zero();
+  double distance = 0;  // the prediction's mean distance from the seen inputs
 };
 
 // Observer rows (c is the prediction's covariance plus `camera`) as safeguard rows,
@@ -43,11 +55,23 @@ struct ScaledIntervals {
 };
 
 // The conformal scale of `part` (PosePart::kPosition or kHeading) for the central
-// `level` regions on `rows`, within [1 / most, most]; 1 without rows.
-double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level = 0.9);
+// `level` regions on `rows`, each row's grown by 1 + growth * distance, within
+// [1 / most, most]; 1 without rows.
+double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level = 0.9,
+                              double growth = 0);
 
-// `rows` scored with the prediction's covariance of `part` scaled by `scale`.
-ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double scale);
+// `rows` scored with the prediction's covariance of `part` scaled by `scale` (1 + growth
+// * distance).
+ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double scale,
+                                   double growth = 0);
+
+// The conformal growth of `part` on `rows` over the base scale `base`: the scale of a
+// row d from the seen inputs is base (1 + g d); within [0, kMaxIntervalGrowth]; 0
+// without rows.
+double ConformalIntervalGrowth(const std::vector<SafeguardRow>& rows, PosePart part, double base, double level = 0.9);
+// The least distance a growth's score divides by: a row at the seen inputs that the base
+// scale does not hold asks for a growth, not for an infinite one.
+inline constexpr double kMinGrowthDistance = 0.1;
 
 // Pools two scores of different rows by their row counts.
 ScaledIntervals Pooled(const ScaledIntervals& a, const ScaledIntervals& b);
@@ -61,6 +85,7 @@ struct OmniSafeguardHorizon {
   int frames = 0;
   int rows = 0;  // all folds'
   double position = 1, heading = 1;
+  double position_growth = 0, heading_growth = 0;  // per unit of distance from the seen inputs
   bool position_kept = false, heading_kept = false;
   // Each fold with the other folds' scale, pooled: without (first) and with (second).
   std::array<ScaledIntervals, 2> position_check, heading_check;
@@ -71,7 +96,8 @@ struct OmniIntervalSafeguard {
   std::vector<OmniSafeguardHorizon> horizons;
   std::string note;  // why none is kept, where none is
   bool AnyKept() const;
-  // The model's observer.interval_scale: every horizon when any is kept, else empty.
+  // The model's observer.interval_scale: every horizon when any scale differs from 1 or
+  // grows, else empty.
   std::vector<OmniObserverModel::IntervalScale> Scales() const;
 };
 
@@ -82,9 +108,12 @@ std::vector<int> SafeguardHorizons(std::vector<int> horizons);
 
 // The safeguard from rows[h][f], the rows of fold f at horizons[h], predicted from every
 // `stride`-th frame (their overlap sets the standard error). Folds with fewer than
-// `min_rows` rows at a horizon leave it unscaled.
+// `min_rows` rows at a horizon leave it unscaled. With `base` ((position, heading) per
+// horizon: the scales within the fit's reach), those scales are kept as they are and
+// each gets a growth with the distance from the seen inputs where the folds ask for one
+// (the same rule, the base in place of no scale).
 OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
                                          const std::vector<std::vector<std::vector<SafeguardRow>>>& rows, int stride,
-                                         int min_rows);
+                                         int min_rows, const std::vector<std::array<double, 2>>* base = nullptr);
 
 }  // namespace twinsim

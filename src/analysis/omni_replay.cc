@@ -108,6 +108,10 @@ void PutPrediction(const OmniPrediction& prediction, int j, std::size_t at, doub
   result->pose[at] = p;
   result->predicted[at] = true;
   if (!result->covariance.empty()) result->covariance[at] = prediction.pose_covariance[static_cast<std::size_t>(j - 1)];
+  if (!prediction.input_distance.empty()) {
+    result->input_distance.resize(result->pose.size(), 0.0);
+    result->input_distance[at] = prediction.input_distance[static_cast<std::size_t>(j - 1)];
+  }
 }
 
 // The observer's replay (OmniReplayOptions::state "observer"): the filter runs along the
@@ -142,6 +146,10 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     if (observer.started() && start_frame < 0) start_frame = f;
     if (here == row_of_frame.end()) continue;
     const std::size_t row = here->second;
+    if (options.features && observer.started()) {
+      out->input_feature.resize(log.rows.size());
+      out->input_feature[row] = observer.InputFeature();
+    }
     if (stretch && row == stretch_first) {
       if (!observer.started() || f - start_frame < kWarmUpFrames) {
         throw InputError(log.path + ":" + std::to_string(log.line_of[stretch_first]) +

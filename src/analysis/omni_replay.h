@@ -76,6 +76,10 @@ struct OmniReplayOptions {
   // Shorter horizons (each 1..K-1) predicted from the same start frames: one K-frame
   // prediction gives them all (OmniReplayResult::also, in this order).
   std::vector<int> also;
+  // The observer's state (K >= 1; `reach` 0 predicts nothing): each row's input
+  // (OmniObserver::InputFeature) after its frame, into OmniReplayResult::input_feature
+  // (the seen inputs of identify's fit).
+  bool features = false;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;
@@ -111,6 +115,12 @@ struct OmniReplayResult {
   // How many draws each row's covariance was estimated from (the samples' mean square
   // about the prediction); 0: it is the filter's own, known (the observer's).
   int covariance_draws = 0;
+  // With the covariance and a model with observer.seen_inputs: per row its prediction's
+  // mean distance from them (OmniPrediction::input_distance), 0 where not predicted;
+  // else empty.
+  std::vector<double> input_distance;
+  // With OmniReplayOptions::features: per row its frame's input; else empty.
+  std::vector<Eigen::VectorXd> input_feature;
   // With OmniReplayOptions::also: one result per shorter horizon, in its order (the same
   // fields; their own `also` empty).
   std::vector<OmniReplayResult> also;

@@ -8,6 +8,7 @@
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
 #include "core/math_constants.h"
+#include "robots/omni/omni_kinematics.h"
 
 namespace twinsim {
 
@@ -67,6 +68,7 @@ OmniObserver::OmniObserver(const OmniModel& model, std::unique_ptr<OmniBackend> 
   }
   const FrameTiming& timing = backend_->timing();
   dt_ = timing.frame_dt();
+  wheels_from_body_ = OmniKinematics(model_).wheels_from_body();
   if (backend_->name() != "analytic") twin_ = MakeFilterBackend(model, "analytic", timing);
   delay_ = model.command_delay_frames + model.vision_delay_frames;
   sent_.assign(static_cast<std::size_t>(delay_ + 1), Twist2{});
@@ -109,6 +111,7 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   OmniBackendState before;
   if (difference) before = backend_->Save();
   backend_->StepFrame({acting});
+  last_acting_ = acting;
   Pose2 base_pose = backend_->pose(0);  // the model's own step, for F
   Twist2 base_velocity = backend_->velocity(0);
   const double acceleration = std::hypot(base_velocity.vx - v0.vx, base_velocity.vy - v0.vy) / dt_;  // m/s^2
@@ -282,15 +285,25 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
   const Eigen::Matrix<double, 6, 3> columns = velocity_columns_;
   const double jacobian_theta = jacobian_theta_;
   const int frames_since_jacobian = frames_since_jacobian_;
+  const Twist2 acting = last_acting_;
   double last_theta = backend_->pose(0).theta;
+  // The mean distance from the seen inputs along the frames predicted so far.
+  const OmniSeenInputs& seen = model_.observer.seen_inputs;
+  double distance_sum = 0;
   for (int j = 0; j < k; ++j) {
     Step(Acting(j, planned), covariance);
     Pose2 pose = backend_->pose(0);
     pose.theta = last_theta = last_theta + WrapAngle(pose.theta - last_theta);
     out.pose.push_back(pose);
     if (covariance) {
+      double distance = 0;
+      if (!seen.empty()) {
+        distance_sum += seen.Distance(InputFeature());
+        distance = distance_sum / (j + 1);
+        out.input_distance.push_back(distance);
+      }
       // The model's safeguard on its intervals (identity without one).
-      const std::array<double, 2> scale = model_.observer.IntervalScaleAt(j + 1);
+      const std::array<double, 2> scale = model_.observer.IntervalScaleAt(j + 1, distance);
       const Eigen::Vector3d d(scale[0], scale[0], scale[1]);
       out.pose_covariance.push_back(d.asDiagonal() * p_.topLeftCorner<3, 3>() * d.asDiagonal());
     }
@@ -301,7 +314,13 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
   velocity_columns_ = columns;
   jacobian_theta_ = jacobian_theta;
   frames_since_jacobian_ = frames_since_jacobian;
+  last_acting_ = acting;
   return out;
+}
+
+Eigen::VectorXd OmniObserver::InputFeature() const {
+  const Twist2 v = backend_->velocity(0);
+  return SeenInputFeature(wheels_from_body_, last_acting_, Twist2{v.vx + slip_[0], v.vy + slip_[1], v.omega + slip_[2]});
 }
 
 }  // namespace twinsim

@@ -94,6 +94,9 @@ struct OmniEstimate {
 struct OmniPrediction {
   std::vector<Pose2> pose;                      // frames 1..k ahead
   std::vector<Eigen::Matrix3d> pose_covariance;  // of (x, y, theta) per frame; empty unless asked for
+  // With the covariance and the model's observer.seen_inputs: per frame the mean
+  // distance of the frames so far from them (what the intervals' growth reads); else empty.
+  std::vector<double> input_distance;
 };
 
 // Totals of the camera poses the filter has seen.
@@ -145,6 +148,9 @@ class OmniObserver {
   // filter's prediction, process noise included). Throws std::logic_error before start.
   OmniPrediction PredictAhead(int k, const std::vector<Twist2>& planned = {}, bool covariance = false);
 
+  // The newest frame's input (robots/omni/omni_seen_inputs.h): the wheel speeds of the
+  // command that acted in it and of the body's estimated velocity.
+  Eigen::VectorXd InputFeature() const;
   // The backend the filter steps (for tests; its state is the estimate).
   const OmniBackend& backend() const { return *backend_; }
 
@@ -170,6 +176,8 @@ class OmniObserver {
   double jacobian_theta_ = 0;       // rad, the heading they were differenced at
   int frames_since_jacobian_ = -1;  // -1: none yet
   Eigen::Vector3d slip_ = Eigen::Vector3d::Zero();  // d, robot frame
+  Eigen::MatrixXd wheels_from_body_;                // J, for InputFeature
+  Twist2 last_acting_;                              // the command of the newest frame's step
   double slip_decay_ = 0;                           // a
   Eigen::Matrix3d r_ = Eigen::Matrix3d::Zero();
   bool started_ = false;

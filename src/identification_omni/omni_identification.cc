@@ -1001,7 +1001,8 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
 void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificationOptions& options,
                    const std::function<void(int, const std::string&)>& say, OmniModel* model,
                    OmniIdentificationReport* report) {
-  model->observer.interval_scale.clear();  // the given model's belongs to its own fit; fitted anew below
+  model->observer.interval_scale.clear();  // the given model's belong to its own fit; fitted anew below
+  model->observer.seen_inputs = {};
   if (options.state != "observer") return;
   std::vector<OmniBlockedStretch> views;
   for (const Segment& s : segments) views.push_back(View(s));
@@ -1017,10 +1018,14 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
     model->driving_noise.simulated = true;
   }
+  // The inputs of the fit, which a growth over left-out logs measures distances from.
+  if (options.safeguard == "logs" || options.keep_seen_inputs)
+    model->observer.seen_inputs = SeenInputsOfFitBlocks(*model, views, noise_options);
   // A noise fitted on the held-out blocks is calibrated there only across the halves.
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed);
-  if (options.safeguard != "blocks") return;
+  // The scale within the fit's reach: the safeguard of "blocks", the base of "logs".
+  if (options.safeguard == "off") return;
   say(6, "intervals' safeguard");
   report->safeguard = FitIntervalSafeguard(*model, views, noise_options, crossed);
   model->observer.interval_scale = report->safeguard.Scales();
@@ -1033,13 +1038,14 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
 // scale is checked on: the model's own error out of its fit's reach, not only the
 // robot's wander.
 OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::vector<OmniLog>& logs,
-                                           const OmniIdentificationOptions& options,
+                                           const OmniIdentificationOptions& options, const OmniIntervalSafeguard& blocks,
                                            const std::function<void(int, const std::string&)>& say) {
   constexpr int kMinRows = 20;  // per log and horizon
   const OmniNoiseOptions noise_options;
   const std::vector<int> horizons = SafeguardHorizons(noise_options.horizons);
   OmniIdentificationOptions fold = options;
   fold.safeguard = "off";
+  fold.keep_seen_inputs = true;  // each left-out log's distances from the others' fit
   std::vector<std::vector<std::vector<SafeguardRow>>> rows(horizons.size(),
                                                            std::vector<std::vector<SafeguardRow>>(logs.size()));
   for (std::size_t i = 0; i < logs.size(); ++i) {
@@ -1054,8 +1060,14 @@ OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::
     for (std::size_t q = 0; q < horizons.size(); ++q)
       AppendSafeguardRows(left_out[q], MeasurementCovariance(model), &rows[q][i]);
   }
-  OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, noise_options.score_stride, kMinRows);
-  out.on = "left-out logs";
+  // The held-out blocks' scales (1 where they kept none) are the base the growth adds to.
+  std::vector<std::array<double, 2>> base(horizons.size(), {1.0, 1.0});
+  for (std::size_t q = 0; q < horizons.size(); ++q) {
+    for (const OmniSafeguardHorizon& h : blocks.horizons)
+      if (h.frames == horizons[q]) base[q] = {h.position, h.heading};
+  }
+  OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, noise_options.score_stride, kMinRows, &base);
+  out.on = "left-out logs, a growth over the held-out blocks' scale";
   return out;
 }
 
@@ -1066,7 +1078,7 @@ void SafeguardOnLeftOutLogs(const OmniModel& nominal, const std::vector<OmniLog>
                             const std::function<void(int, const std::string&)>& say, OmniModel* model,
                             OmniIdentificationReport* report) {
   if (options.safeguard != "logs" || options.state != "observer") return;
-  report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, say);
+  report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, report->safeguard, say);
   model->observer.interval_scale = report->safeguard.Scales();
 }
 
@@ -1314,6 +1326,12 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   OmniModel model = problem.Build(fit.v, false);
   IdentifyNoise(segments, options, say, &model, &report);
   SafeguardOnLeftOutLogs(nominal, logs, options, say, &model, &report);
+  const auto& scales = model.observer.interval_scale;
+  if (!options.keep_seen_inputs && std::none_of(scales.begin(), scales.end(), [](const auto& h) {
+        return h.position_growth > 0 || h.heading_growth > 0;
+      })) {
+    model.observer.seen_inputs = {};  // no scale grows: the model file need not carry them
+  }
   model.fitted_on = options.backend;  // the engines part near the wheels' grip: replay on this one
   if (identified) *identified = model;
   ReportParameters(fit, model, &report);

@@ -61,6 +61,9 @@ struct OmniIdentificationOptions {
   // predicted by the model identified on the others (identification once more per log;
   // at least two logs); "off".
   std::string safeguard = "blocks";
+  // Keep the fit's seen inputs (observer.seen_inputs) in the model even where no scale
+  // grows with them (the left-out-logs safeguard's folds measure distances from them).
+  bool keep_seen_inputs = false;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;

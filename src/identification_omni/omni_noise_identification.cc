@@ -469,13 +469,34 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
   return out;
 }
 
+OmniSeenInputs SeenInputsOfFitBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                     const OmniNoiseOptions& options) {
+  std::vector<std::vector<Eigen::VectorXd>> per(stretches.size());
+  ParallelFor(static_cast<int>(stretches.size()), options.threads, [&](int k) {
+    const OmniBlockedStretch& s = stretches[static_cast<std::size_t>(k)];
+    if (s.validation) return;
+    OmniReplayOptions o;
+    o.backend = options.backend;
+    o.horizon = 1;  // the observer along the log (0 would be the free run), predicting nothing
+    o.reach = [](int) { return 0; };
+    o.features = true;
+    const OmniReplayResult r = ReplayOmniLog(model, *s.log, o);
+    for (std::size_t row = s.score_from; row < r.input_feature.size(); ++row)
+      if (!(*s.held)[row] && r.input_feature[row].size() > 0) per[static_cast<std::size_t>(k)].push_back(r.input_feature[row]);
+  });
+  std::vector<Eigen::VectorXd> all;
+  for (auto& p : per) all.insert(all.end(), p.begin(), p.end());
+  return MakeSeenInputs(all);
+}
+
 OmniIntervalSafeguard FitIntervalSafeguard(const OmniModel& given, const std::vector<OmniBlockedStretch>& stretches,
                                            const OmniNoiseOptions& options,
                                            const std::array<OmniCrossedNoise, 2>* crossed) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   constexpr int kMinRows = 20;  // per half and horizon
-  auto unscaled = [](OmniModel m) {
+  auto unscaled = [&given](OmniModel m) {
     m.observer.interval_scale.clear();
+    m.observer.seen_inputs = given.observer.seen_inputs;  // the distances from the fit's inputs
     return m;
   };
   OmniNoiseOptions scoring = options;

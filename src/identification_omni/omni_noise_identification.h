@@ -121,7 +121,13 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed = nullptr);
 
-// Fits the safeguard of `model` (its own interval_scale ignored) on the held-out blocks'
+// The seen inputs (robots/omni/omni_seen_inputs.h) of `model` on the fit blocks of
+// `stretches` (validation logs left out): each fit row's frame as the observer saw it.
+OmniSeenInputs SeenInputsOfFitBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                                     const OmniNoiseOptions& options);
+
+// Fits the safeguard of `model` (its own interval_scale ignored; its seen_inputs, where
+// it has them, give each row its distance) on the held-out blocks'
 // rows in their two halves (the folds), with `crossed` each half predicted with the
 // noise fitted on the other; at options.horizons and between them
 // (SafeguardHorizons). Throws as CalibrateOnBlocks.

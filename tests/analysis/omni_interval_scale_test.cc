@@ -123,5 +123,70 @@ TEST(OmniIntervalScale, FoldsKeepAScaleOnlyWhereItHelpsRowsItWasNotFittedOn) {
   EXPECT_EQ(SafeguardHorizons({63, 4, 16}), (std::vector<int>{4, 8, 16, 32, 63}));
 }
 
+// Rows whose error grows with their distance from the seen inputs, spread kPredicted
+// (1 + 3 d), under a covariance that claims kPredicted: d drawn uniformly in [lo, hi].
+std::vector<SafeguardRow> GrowingRows(int n, double lo, double hi, double growth, Rng* rng) {
+  std::vector<SafeguardRow> out;
+  for (int i = 0; i < n; ++i) {
+    const double d = lo + (hi - lo) * rng->Uniform();
+    std::vector<SafeguardRow> one = Rows(1, kPredicted * (1 + growth * d), rng, Gaussian);
+    one[0].distance = d;
+    out.push_back(one[0]);
+  }
+  return out;
+}
+
+// Out of the fit's reach: folds at different distances (as left-out logs are) whose
+// errors grow with it. The folds choose a growth near the true one (3, between the grid's
+// 2 and 4), and rows farther out than any fold (d = 1.5) then fall in their 90 % regions
+// as they should, where the plain scale (growth 0) holds barely two thirds of them.
+// Errors that do not grow, over a base that holds them, keep no growth and the far rows
+// held.
+TEST(OmniIntervalScale, AGrowthWithTheDistanceFromTheSeenInputsHoldsRowsFartherOut) {
+  Rng rng(13);
+  std::vector<std::vector<std::vector<SafeguardRow>>> rows(1);
+  rows[0].push_back(GrowingRows(600, 0.0, 0.3, 3, &rng));
+  rows[0].push_back(GrowingRows(600, 0.2, 0.6, 3, &rng));
+  rows[0].push_back(GrowingRows(600, 0.5, 1.0, 3, &rng));
+  const std::vector<std::array<double, 2>> base{{1.0, 1.0}};
+  const OmniIntervalSafeguard g = SafeguardFromFolds({16}, rows, 2, 20, &base);
+  const OmniSafeguardHorizon& h = g.horizons[0];
+  ASSERT_TRUE(h.position_kept);
+  ASSERT_TRUE(h.heading_kept);
+  EXPECT_GE(h.position_growth, 2.0);
+  EXPECT_LE(h.position_growth, 4.0);
+  EXPECT_GE(h.heading_growth, 2.0);
+  EXPECT_LE(h.heading_growth, 4.0);
+  EXPECT_EQ(g.Scales()[0].position_growth, h.position_growth);
+  const std::vector<SafeguardRow> far = GrowingRows(4000, 1.5, 1.5, 3, &rng);
+  std::vector<SafeguardRow> all;
+  for (const auto& f : rows[0]) all.insert(all.end(), f.begin(), f.end());
+  for (PosePart part : {PosePart::kPosition, PosePart::kHeading}) {
+    const double growth = part == PosePart::kPosition ? h.position_growth : h.heading_growth;
+    const double scale = part == PosePart::kPosition ? h.position : h.heading;
+    EXPECT_NEAR(ScoreIntervalScale(far, part, scale, growth).inside_90, 0.9, 0.04) << static_cast<int>(part);
+    const double plain = ConformalIntervalScale(all, part, 20);
+    EXPECT_LT(ScoreIntervalScale(far, part, plain).inside_90, 0.75) << static_cast<int>(part);
+  }
+
+  std::vector<std::vector<std::vector<SafeguardRow>>> flat(1);
+  flat[0].push_back(GrowingRows(600, 0.0, 0.3, 0, &rng));
+  flat[0].push_back(GrowingRows(600, 0.2, 0.6, 0, &rng));
+  flat[0].push_back(GrowingRows(600, 0.5, 1.0, 0, &rng));
+  for (auto& f : flat[0])
+    for (SafeguardRow& r : f) r.e *= 2;  // twice what is claimed: a scale is kept
+  const std::vector<std::array<double, 2>> doubled_base{{2.0, 2.0}};
+  const OmniIntervalSafeguard flat_guard = SafeguardFromFolds({16}, flat, 2, 20, &doubled_base);
+  const OmniSafeguardHorizon& k = flat_guard.horizons[0];
+  EXPECT_FALSE(k.position_kept);  // the base holds the folds: no growth
+  EXPECT_EQ(k.position_growth, 0.0);
+  EXPECT_EQ(k.position, 2.0);
+  EXPECT_EQ(flat_guard.Scales().size(), 1u);  // the base, which is not 1, is the model's
+  const std::vector<SafeguardRow> far_flat = GrowingRows(4000, 1.5, 1.5, 0, &rng);
+  std::vector<SafeguardRow> doubled = far_flat;
+  for (SafeguardRow& r : doubled) r.e *= 2;
+  EXPECT_GT(ScoreIntervalScale(doubled, PosePart::kPosition, k.position, k.position_growth).inside_90, 0.86);
+}
+
 }  // namespace
 }  // namespace twinsim

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/omni_calibration.h"
 #include "analysis/omni_replay.h"
 #include "diagnosis/response_changes.h"
 #include "engines/omni_engine.h"
@@ -162,6 +163,51 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
                             << p * 1000 << " mm";
     }
   }
+}
+
+// Issue 64: identified with the left-out-logs safeguard, the scale grows with the
+// distance from the fit's inputs. The left-out logs (90 degrees from the nearest fit
+// direction) ask for a growth at 16 and 63 frames; the validation runs, 30 degrees from
+// the fit directions, lie nearer (0.58 on average in the measurement of
+// docs/identification.md, "Intervals out of the fit's reach") and their 63-frame
+// predictions' log density is far better with the growth than with the filter's own
+// covariance (measured -5.3 against -0.3 nats per row, pooled).
+TEST(Robotino, TheLeftOutLogsSafeguardGrowsWithTheDistanceFromTheFitsInputs) {
+  SKIP_WITHOUT_ROBOTINO();
+  const std::string gray = RobotinoDir() + "/gray_surface/";
+  std::vector<OmniLog> fit, held;
+  for (const char* d : {"d000", "d090", "d180", "d270"}) fit.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+  for (const char* d : {"d030", "d120", "d210", "d300"}) held.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+  OmniIdentificationOptions options;
+  options.safeguard = "logs";
+  OmniModel grown;
+  const OmniIdentificationReport report =
+      IdentifyOmni(LoadOmniModel(testing::SourcePath("models/robotino.yaml")), fit, {}, options, &grown);
+  EXPECT_NE(report.safeguard.on.find("left-out logs"), std::string::npos);
+  for (const OmniSafeguardHorizon& h : report.safeguard.horizons) {
+    if (h.frames < 16) continue;
+    EXPECT_TRUE(h.position_kept) << h.frames;
+    EXPECT_GT(h.position_growth, 1.0) << h.frames;
+  }
+  ASSERT_FALSE(grown.observer.seen_inputs.empty());
+  EXPECT_EQ(grown.Validate(), "");
+  OmniModel plain = grown;
+  plain.observer.interval_scale.clear();
+  double with = 0, without = 0, distance = 0;
+  int rows = 0;
+  for (const OmniLog& log : held) {
+    const auto g = OmniLogPredictiveErrors(grown, log, "analytic", {16, 63}, 2)[1];
+    const auto p = OmniLogPredictiveErrors(plain, log, "analytic", {16, 63}, 2)[1];
+    ASSERT_EQ(g.size(), p.size());
+    with += MeanLogScore(g) * static_cast<double>(g.size());
+    without += MeanLogScore(p) * static_cast<double>(p.size());
+    for (const PredictiveError& r : g) distance += r.input_distance;
+    rows += static_cast<int>(g.size());
+  }
+  ASSERT_GT(rows, 100);
+  EXPECT_GT(distance / rows, 0.3);
+  EXPECT_LT(distance / rows, 1.0);
+  EXPECT_LT(with / rows, without / rows - 2.0) << "with the growth " << with / rows << ", without " << without / rows;
 }
 
 }  // namespace

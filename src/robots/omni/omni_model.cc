@@ -113,7 +113,21 @@ std::string OmniModel::Validate() const {
       out << "observer interval_scale: the horizons must be at least 1 frame and increase\n";
     if (!in_range(scales[i].position) || !in_range(scales[i].heading))
       out << "observer interval_scale: the scales must lie in [" << 1 / kMost << ", " << kMost << "]\n";
+    const auto growth_in_range = [](double g) { return g >= 0 && g <= OmniObserverModel::kMaxIntervalGrowth; };
+    if (!growth_in_range(scales[i].position_growth) || !growth_in_range(scales[i].heading_growth))
+      out << "observer interval_scale: the growths must lie in [0, " << OmniObserverModel::kMaxIntervalGrowth << "]\n";
+    if ((scales[i].position_growth > 0 || scales[i].heading_growth > 0) && observer.seen_inputs.empty())
+      out << "observer interval_scale: a growth needs observer.seen_inputs to measure distances from\n";
   }
+  const OmniSeenInputs& seen = observer.seen_inputs;
+  for (const Eigen::VectorXd& p : seen.points) {
+    if (p.size() != 2 * n || !p.allFinite()) {
+      out << "observer seen_inputs: each point must hold " << 2 * n << " finite wheel speeds (command, then body)\n";
+      break;
+    }
+  }
+  if (!seen.empty() && !(seen.scale > 0 && std::isfinite(seen.scale)))
+    out << "observer seen_inputs: the scale must be positive\n";
   if (!motor_strength.empty() && static_cast<int>(motor_strength.size()) != n)
     out << "motor strength lists " << motor_strength.size() << " values for " << n << " wheels\n";
   if (n >= 3) {
@@ -146,19 +160,27 @@ std::string ReplayEngineFor(const OmniModel& model, const std::string& asked, co
   return asked;
 }
 
-std::array<double, 2> OmniObserverModel::IntervalScaleAt(int k) const {
+std::array<double, 2> OmniObserverModel::IntervalScaleAt(int k, double distance) const {
   if (interval_scale.empty()) return {1, 1};
+  auto at = [distance](const IntervalScale& h) -> std::array<double, 2> {
+    return {h.position * (1 + h.position_growth * distance), h.heading * (1 + h.heading_growth * distance)};
+  };
   const IntervalScale& first = interval_scale.front();
   const IntervalScale& last = interval_scale.back();
-  if (k <= first.frames) return {first.position, first.heading};
-  if (k >= last.frames) return {last.position, last.heading};
+  if (k <= first.frames) return at(first);
+  if (k >= last.frames) return at(last);
   std::size_t i = 1;
   while (interval_scale[i].frames < k) ++i;
   const IntervalScale& a = interval_scale[i - 1];
   const IntervalScale& b = interval_scale[i];
   const double u = std::log(static_cast<double>(k) / a.frames) / std::log(static_cast<double>(b.frames) / a.frames);
   auto between = [u](double x, double y) { return std::exp((1 - u) * std::log(x) + u * std::log(y)); };
-  return {between(a.position, b.position), between(a.heading, b.heading)};
+  IntervalScale h;
+  h.position = between(a.position, b.position);
+  h.heading = between(a.heading, b.heading);
+  h.position_growth = (1 - u) * a.position_growth + u * b.position_growth;
+  h.heading_growth = (1 - u) * a.heading_growth + u * b.heading_growth;
+  return at(h);
 }
 
 }  // namespace twinsim

@@ -22,6 +22,7 @@
 
 #include "io/yaml_overrides.h"
 #include "robots/omni/omni_effects.h"
+#include "robots/omni/omni_seen_inputs.h"
 
 namespace twinsim {
 
@@ -97,14 +98,23 @@ struct OmniObserverModel {
   // held-out rows identify scaled them on. Horizons strictly increasing; between two the
   // scales are interpolated in log(k), before the first and after the last held. Empty:
   // the filter's covariance as it is.
+  // Out of the fit's reach (docs/identification.md, "Intervals out of the fit's reach"):
+  // each scale grows by its `growth` times the prediction's mean distance from the seen
+  // inputs (below) along its k frames, s (1 + g d); the growths are interpolated
+  // linearly in log(k).
   struct IntervalScale {
     int frames = 0;
     double position = 1, heading = 1;
+    double position_growth = 0, heading_growth = 0;  // per unit of distance; 0: none
   };
   std::vector<IntervalScale> interval_scale;
-  // The scales (position, heading) k frames ahead.
-  std::array<double, 2> IntervalScaleAt(int k) const;
+  // The scales (position, heading) k frames ahead, `distance` from the seen inputs.
+  std::array<double, 2> IntervalScaleAt(int k, double distance = 0) const;
   static constexpr double kMaxIntervalScale = 20;  // either way: 1/20 to 20
+  static constexpr double kMaxIntervalGrowth = 1000;
+  // The inputs identify's fit saw, which a growth measures distances from; empty when
+  // no scale grows.
+  OmniSeenInputs seen_inputs;
 };
 
 struct OmniModel {

@@ -39,11 +39,45 @@ void ReadIntervalScale(YamlMap& observer, std::vector<OmniObserverModel::Interva
     m.Require("frames", &h.frames, InRange(1, 1e6));
     m.Require("position", &h.position, InRange(1 / kMost, kMost));
     m.Require("heading", &h.heading, InRange(1 / kMost, kMost));
+    m.Get("position_growth", &h.position_growth, NonNegative(OmniObserverModel::kMaxIntervalGrowth));
+    m.Get("heading_growth", &h.heading_growth, NonNegative(OmniObserverModel::kMaxIntervalGrowth));
     if (!out->empty() && h.frames <= out->back().frames)
       m.Error("frames", "the horizons must increase from one entry to the next");
     m.Finish();
     out->push_back(h);
   }
+}
+
+// observer.seen_inputs: {scale, covering, points: [[u1..u2n], ...]} (omni_seen_inputs.h);
+// the points' length is checked against the wheels by Validate.
+void ReadSeenInputs(YamlMap& observer, OmniSeenInputs* out) {
+  YamlMap m(observer.Child("seen_inputs"), observer.path(), "observer.seen_inputs", observer.errors());
+  if (!m.valid()) return;
+  m.Require("scale", &out->scale, Positive(1e6));
+  m.Get("covering", &out->covering, NonNegative(1e6));
+  const YAML::Node points = m.Child("points");
+  if (!points.IsSequence() || points.size() == 0 || points.size() > static_cast<std::size_t>(kMaxSeenInputs)) {
+    m.Error("points", "must be a list of 1 to " + std::to_string(kMaxSeenInputs) +
+                          " inputs, each a list of wheel speeds (rad/s: the command's, then the body's)");
+  } else {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const std::string label = "observer.seen_inputs.points[" + std::to_string(i) + "]";
+      if (!points[i].IsSequence()) {
+        m.Error("points", label + " must be a list of wheel speeds");
+        break;
+      }
+      Eigen::VectorXd u(static_cast<long>(points[i].size()));
+      bool ok = true;
+      for (std::size_t j = 0; j < points[i].size() && ok; ++j) {
+        const std::optional<double> v = ReadNumber(points[i][j], observer.path(), label, observer.errors());
+        ok = v.has_value();
+        if (ok) u[static_cast<long>(j)] = *v;
+      }
+      if (!ok) break;
+      out->points.push_back(u);
+    }
+  }
+  m.Finish();
 }
 
 OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, int depth);
@@ -224,6 +258,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
       r.Finish();
     }
     if (o.Has("interval_scale")) ReadIntervalScale(o, &model.observer.interval_scale);
+    if (o.Has("seen_inputs")) ReadSeenInputs(o, &model.observer.seen_inputs);
     o.Finish();
   }
   top.Finish();

@@ -146,7 +146,7 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   }
   const OmniObserverModel& o = model.observer;
   if (o.process_noise != defaults.observer.process_noise || o.measurement_noise_xy > 0 ||
-      o.measurement_noise_theta > 0 || !o.interval_scale.empty()) {
+      o.measurement_noise_theta > 0 || !o.interval_scale.empty() || !o.seen_inputs.empty()) {
     s << "observer:\n";
     line("  process_noise", "{" + AxisValues(o.process_noise) + "}", "m/s and rad/s per sqrt(s): the model's own errors", 46);
     if (o.measurement_noise_xy > 0 || o.measurement_noise_theta > 0) {
@@ -158,7 +158,21 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
       s << "  interval_scale:  # the predicted covariance's scale k frames ahead (identify's safeguard)\n";
       for (const OmniObserverModel::IntervalScale& h : o.interval_scale) {
         s << "    - {frames: " << h.frames << ", position: " << YamlNumber(h.position)
-          << ", heading: " << YamlNumber(h.heading) << "}\n";
+          << ", heading: " << YamlNumber(h.heading);
+        if (h.position_growth > 0) s << ", position_growth: " << YamlNumber(h.position_growth);
+        if (h.heading_growth > 0) s << ", heading_growth: " << YamlNumber(h.heading_growth);
+        s << "}\n";
+      }
+    }
+    if (!o.seen_inputs.empty()) {
+      s << "  seen_inputs:  # the fit's inputs, wheel speeds (rad/s) of the command, then the body's; distances over scale\n";
+      s << "    scale: " << YamlNumber(o.seen_inputs.scale) << "\n";
+      s << "    covering: " << YamlNumber(o.seen_inputs.covering) << "\n";
+      s << "    points:\n";
+      for (const Eigen::VectorXd& u : o.seen_inputs.points) {
+        s << "      - [";
+        for (long j = 0; j < u.size(); ++j) s << (j ? ", " : "") << YamlNumber(u[j]);
+        s << "]\n";
       }
     }
   }

@@ -203,6 +203,53 @@ TEST(OmniModelYamlWriter, TheIntervalsSafeguardRoundTripsInterpolatesAndIsChecke
   EXPECT_NE(refused("observer: {interval_scale: [{frames: 4, position: 1}]}\n").find("heading"), std::string::npos);
 }
 
+// Issue 64: a scale that grows with the distance from the fit's inputs round-trips with
+// those inputs, grows as s (1 + g d), interpolates its growth linearly in log(k), and a
+// growth without seen inputs, or inputs of the wrong length, are refused.
+TEST(OmniModelYamlWriter, AGrowthOutOfTheFitsReachRoundTripsWithItsSeenInputs) {
+  OmniModel m = testing::Omni4();
+  m.observer.interval_scale = {{4, 2.0, 0.8, 3.0, 0.0}, {16, 0.5, 1.0, 1.0, 2.0}};
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(8);
+  u << 1, 2, 3, 4, 0.5, 1.5, 2.5, 3.5;
+  m.observer.seen_inputs = MakeSeenInputs({u, 2 * u, -u});
+  const std::string text = FormatOmniModelYaml(m);
+  EXPECT_NE(text.find("position_growth: 3"), std::string::npos) << text;
+  EXPECT_NE(text.find("seen_inputs:"), std::string::npos) << text;
+  const OmniModel back = RoundTrip(m);
+  ASSERT_EQ(back.observer.interval_scale.size(), 2u);
+  EXPECT_EQ(back.observer.interval_scale[0].position_growth, 3.0);
+  EXPECT_EQ(back.observer.interval_scale[1].heading_growth, 2.0);
+  ASSERT_EQ(back.observer.seen_inputs.points.size(), 3u);
+  EXPECT_EQ(back.observer.seen_inputs.scale, m.observer.seen_inputs.scale);
+  EXPECT_EQ(back.observer.seen_inputs.points[1], m.observer.seen_inputs.points[1]);
+  EXPECT_EQ(FormatOmniModelYaml(back), text);
+  EXPECT_NEAR(back.observer.IntervalScaleAt(4, 0.5)[0], 2.0 * (1 + 3.0 * 0.5), 1e-12);
+  EXPECT_NEAR(back.observer.IntervalScaleAt(4, 0.5)[1], 0.8, 1e-12);
+  EXPECT_NEAR(back.observer.IntervalScaleAt(8, 1.0)[0], 1.0 * (1 + 2.0), 1e-12);  // halfway: growth 2
+  EXPECT_NEAR(back.observer.IntervalScaleAt(8, 0.0)[0], 1.0, 1e-12);
+
+  const std::string base = "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n";
+  auto refused = [&](const std::string& yaml) {
+    try {
+      LoadOmniModelFromString(base + yaml, "bad.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("loaded");
+  };
+  EXPECT_NE(refused("observer: {interval_scale: [{frames: 4, position: 1, heading: 1, position_growth: 2}]}\n")
+                .find("seen_inputs"),
+            std::string::npos);
+  EXPECT_NE(refused("observer: {seen_inputs: {scale: 1, points: [[1, 2, 3]]}}\n").find("8 finite wheel speeds"),
+            std::string::npos);
+  EXPECT_NE(refused("observer: {seen_inputs: {scale: 1, points: []}}\n").find("bad.yaml:3:"), std::string::npos);
+  EXPECT_NE(refused("observer: {seen_inputs: {scale: 1, points: [[1, x, 3]]}}\n").find("bad.yaml:3:"),
+            std::string::npos);
+  EXPECT_NE(refused("observer: {interval_scale: [{frames: 4, position: 1, heading: 1, heading_growth: -1}]}\n")
+                .find("heading_growth"),
+            std::string::npos);
+}
+
 // Issue 63: a fitted model names the engine it was fitted on, and commands replay it
 // there unless told otherwise, saying so when told.
 TEST(OmniModelYamlWriter, TheEngineAModelWasFittedOnRoundTripsAndChoosesTheReplaysEngine) {
