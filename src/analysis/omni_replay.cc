@@ -114,6 +114,19 @@ void PutPrediction(const OmniPrediction& prediction, int j, std::size_t at, doub
   }
 }
 
+// The shift that puts a prediction's headings on the log's unwrapped branch at `row`.
+double UnwrapShift(const OmniLog& log, std::size_t row, const OmniObserver& observer) {
+  const double d = log.rows[row].pose.theta - observer.Estimate().pose.theta;
+  return d - WrapAngle(d);
+}
+
+// Row `row`'s input as the observer saw it (OmniReplayOptions::features), once started.
+void RecordInput(const OmniObserver& observer, std::size_t row, OmniReplayResult* out) {
+  if (!observer.started()) return;
+  out->input_feature.resize(out->pose.size());
+  out->input_feature[row] = observer.InputFeature();
+}
+
 // The observer's replay (OmniReplayOptions::state "observer"): the filter runs along the
 // log; each prediction (or the stretch's free run) starts from its estimate.
 void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
@@ -131,11 +144,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     return std::vector<Twist2>(command_at.begin() + std::min(f + 1, last_frame + 1),
                                command_at.begin() + std::min(until, last_frame) + 1);
   };
-  // A prediction's headings on the log's unwrapped branch at the start row.
-  auto unwrap_shift = [&](std::size_t row) {
-    const double d = log.rows[row].pose.theta - observer.Estimate().pose.theta;
-    return d - WrapAngle(d);
-  };
+  auto unwrap_shift = [&](std::size_t row) { return UnwrapShift(log, row, observer); };
   int start_frame = -1;
   for (int f = 0; f <= last_frame; ++f) {
     if (progress && f % 64 == 0) progress(f, last_frame);
@@ -146,10 +155,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     if (observer.started() && start_frame < 0) start_frame = f;
     if (here == row_of_frame.end()) continue;
     const std::size_t row = here->second;
-    if (options.features && observer.started()) {
-      out->input_feature.resize(log.rows.size());
-      out->input_feature[row] = observer.InputFeature();
-    }
+    if (options.features) RecordInput(observer, row, out);
     if (stretch && row == stretch_first) {
       if (!observer.started() || f - start_frame < kWarmUpFrames) {
         throw InputError(log.path + ":" + std::to_string(log.line_of[stretch_first]) +

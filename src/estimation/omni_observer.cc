@@ -126,7 +126,6 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   }
   slip_ *= slip_decay_;
   if (!jacobian) return;
-
   // F's model-velocity columns by forward differences of the model over the frame.
   if (difference) {
     OmniBackend* fd = backend_.get();

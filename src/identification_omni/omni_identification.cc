@@ -1072,14 +1072,22 @@ OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::
 }
 
 // With options.safeguard "logs" (and the observer's state), the safeguard on left-out
-// logs into the report and the model.
+// logs into the report and the model. The fit's seen inputs stay in the model only where
+// a scale grows with them (or options.keep_seen_inputs asks).
 void SafeguardOnLeftOutLogs(const OmniModel& nominal, const std::vector<OmniLog>& logs,
                             const OmniIdentificationOptions& options,
                             const std::function<void(int, const std::string&)>& say, OmniModel* model,
                             OmniIdentificationReport* report) {
-  if (options.safeguard != "logs" || options.state != "observer") return;
-  report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, report->safeguard, say);
-  model->observer.interval_scale = report->safeguard.Scales();
+  if (options.safeguard == "logs" && options.state == "observer") {
+    report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, report->safeguard, say);
+    model->observer.interval_scale = report->safeguard.Scales();
+  }
+  const auto& scales = model->observer.interval_scale;
+  if (!options.keep_seen_inputs && std::none_of(scales.begin(), scales.end(), [](const auto& h) {
+        return h.position_growth > 0 || h.heading_growth > 0;
+      })) {
+    model->observer.seen_inputs = {};  // no scale grows: the model file need not carry them
+  }
 }
 
 // Refuses no logs, and one log to leave out.
@@ -1326,12 +1334,6 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   OmniModel model = problem.Build(fit.v, false);
   IdentifyNoise(segments, options, say, &model, &report);
   SafeguardOnLeftOutLogs(nominal, logs, options, say, &model, &report);
-  const auto& scales = model.observer.interval_scale;
-  if (!options.keep_seen_inputs && std::none_of(scales.begin(), scales.end(), [](const auto& h) {
-        return h.position_growth > 0 || h.heading_growth > 0;
-      })) {
-    model.observer.seen_inputs = {};  // no scale grows: the model file need not carry them
-  }
   model.fitted_on = options.backend;  // the engines part near the wheels' grip: replay on this one
   if (identified) *identified = model;
   ReportParameters(fit, model, &report);
