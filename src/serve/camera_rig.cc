@@ -1,5 +1,6 @@
 #include "serve/camera_rig.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -40,8 +41,10 @@ CameraRig::CameraRig(const Scene& scene, const Simulation& sim, int vision_delay
   if (!scene.cameras) return;
   views_ = CameraViews(*scene.cameras, scene.field, scene.frame_rate, scene.seed);
   for (const CameraView& v : views_) rng_.push_back(Rng::Derived(scene.seed, kCameraStream + v.id));
+  last_.assign(views_.size(), std::vector<std::optional<Pose2>>(static_cast<std::size_t>(sim.num_robots())));
   start_.present.resize(static_cast<std::size_t>(sim.num_robots()));
   for (int i = 0; i < sim.num_robots(); ++i) {
+    time_jitter_ = std::max(time_jitter_, sim.robot_model(i).vision_time_jitter);
     start_.robots.push_back(sim.backend().pose(i));
     start_.present[static_cast<std::size_t>(i)] = sim.present(i);
   }
@@ -82,11 +85,12 @@ std::vector<SSL_WrapperPacket> CameraRig::Packets(int k, const std::function<dou
     for (int i = 0; i < sim.num_robots(); ++i) {
       const auto ku = static_cast<std::size_t>(i);
       const Pose2 truth = a > 0 ? CapturedPose(now.robots[ku], before.robots[ku], a, frame_dt_) : now.robots[ku];
-      const VisionNoise& noise = sim.vision_noise(i);
-      const Pose2 p{truth.x + rng.Gaussian(noise.xy), truth.y + rng.Gaussian(noise.xy),
-                    WrapAngle(truth.theta + rng.Gaussian(noise.theta))};
-      const bool lost = rng.Uniform() < sim.robot_model(i).vision_drop_probability;
-      if (now.present[ku] && !lost && view.Sees(truth.x, truth.y)) seen.push_back(Sighting{roster.robot(i), p});
+      // The camera `run` records (sim/omni_simulation.h), this camera's own stream.
+      std::optional<Pose2>& last = last_[v][ku];
+      const RobotCapture shot = CaptureRobot(truth, sim.vision_noise(i), sim.robot_model(i), &rng, &last);
+      if (!now.present[ku]) last.reset();  // off the field: nothing to repeat
+      if (now.present[ku] && !shot.lost && view.Sees(truth.x, truth.y))
+        seen.push_back(Sighting{roster.robot(i), shot.pose});
     }
     std::optional<Eigen::Vector3d> ball;
     if (sim.has_ball()) {
@@ -97,6 +101,9 @@ std::vector<SSL_WrapperPacket> CameraRig::Packets(int k, const std::function<dou
       const bool lost = rng.Uniform() < b.drop_probability;
       if (!lost && view.Sees(truth.x(), truth.y())) ball = p;
     }
+    // The camera's frame stamped off its clock as `run`'s are (the robots' largest
+    // vision.time_jitter; a draw only where there is one).
+    t_capture += StampJitter(time_jitter_, &rng);
     packets.push_back(
         DetectionPacket(seen, view.first_frame + static_cast<std::uint32_t>(k), t_capture, t_sent, ball, &view));
   }

@@ -3,6 +3,8 @@
 // ago in its area, with its own noise and lost detections from its own random stream,
 // captured at its own instant (a staggered camera: up to a frame period earlier, the
 // state interpolated between the two frames around it) and numbered by its own clock.
+// Each draws its poses as `run`'s camera does (CaptureRobot: noise, lost detections,
+// repeated poses) and stamps its frames with the models' time jitter.
 // The cameras' draws never touch the simulation's streams, so the observer's logs are
 // the same with cameras or without.
 //
@@ -12,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "core/rng.h"
@@ -59,6 +62,8 @@ class CameraRig {
 
   std::vector<CameraView> views_;
   std::vector<Rng> rng_;           // per camera
+  std::vector<std::vector<std::optional<Pose2>>> last_;  // per camera and robot: what it repeats
+  double time_jitter_ = 0;         // s, the robots' largest vision_time_jitter
   std::vector<Capture> captures_;  // frame j's at j % (vision_delay + 2)
   Capture start_;                  // before frame 0: the robots at their starts
   int vision_delay_ = 0;

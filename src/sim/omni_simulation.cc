@@ -10,6 +10,26 @@
 #include "robots/omni/omni_driving_noise.h"
 
 namespace twinsim {
+
+RobotCapture CaptureRobot(const Pose2& truth, const VisionNoise& noise, const OmniModel& model, Rng* rng,
+                          std::optional<Pose2>* last) {
+  RobotCapture out;
+  out.pose = truth;
+  out.pose.x += rng->Gaussian(noise.xy);
+  out.pose.y += rng->Gaussian(noise.xy);
+  out.pose.theta = WrapAngle(out.pose.theta + rng->Gaussian(noise.theta));
+  out.lost = rng->Uniform() < model.vision_drop_probability;
+  // A real camera now and then sends its last pose again.
+  if (model.vision_repeat_probability > 0) {
+    if (rng->Uniform() < model.vision_repeat_probability && *last) out.pose = **last;
+    *last = out.pose;
+  }
+  return out;
+}
+
+double StampJitter(double vision_time_jitter, Rng* rng) {
+  return vision_time_jitter > 0 ? vision_time_jitter * (2 * rng->Uniform() - 1) : 0.0;
+}
 namespace {
 
 // A robot faster than this, or this far outside any field, has diverged.
@@ -184,25 +204,13 @@ std::vector<FrameRecord> Simulation::BeginFrame() {
 
     // The camera: noise always drawn, so that dropping frames does not shift the stream.
     const OmniModel& m = robots_[k].model;
-    Pose2 captured = rec.truth;
-    const VisionNoise& noise = state_.vision_noise[k];
-    captured.x += state_.rng.Gaussian(noise.xy);
-    captured.y += state_.rng.Gaussian(noise.xy);
-    captured.theta = WrapAngle(captured.theta + state_.rng.Gaussian(noise.theta));
-    const bool lost = state_.rng.Uniform() < m.vision_drop_probability;
-    // A real camera now and then sends its last pose again; and stamps frames a little
-    // off the frame clock. Drawn only where the model asks for them (streams unchanged).
-    if (m.vision_repeat_probability > 0) {
-      std::optional<Pose2>& last = state_.last_captured[k];
-      if (state_.rng.Uniform() < m.vision_repeat_probability && last) captured = *last;
-      last = captured;
-    }
-    rec.stamp = t + (m.vision_time_jitter > 0 ? m.vision_time_jitter * (2 * state_.rng.Uniform() - 1) : 0.0);
+    const RobotCapture shot = CaptureRobot(rec.truth, state_.vision_noise[k], m, &state_.rng, &state_.last_captured[k]);
+    rec.stamp = t + StampJitter(m.vision_time_jitter, &state_.rng);
     // A robot off the field is not captured (the draws above are made all the same, so
     // that the other robots' noise does not depend on it), and has nothing to repeat.
     if (!rec.present) state_.last_captured[k].reset();
     std::optional<Pose2> arrived =
-        state_.captures_in_flight[k].Push(lost || !rec.present ? std::nullopt : std::optional(captured));
+        state_.captures_in_flight[k].Push(shot.lost || !rec.present ? std::nullopt : std::optional(shot.pose));
 
     auto& delivered = state_.delivered[k];
     if (arrived) {

@@ -98,6 +98,22 @@ struct VisionNoise {
   double theta = 0;  // rad
 };
 
+// One camera's capture of one robot, drawn from `rng` in this order (run's camera and
+// each of serve's cameras draw it alike, so a team's software sees from `serve` the
+// camera `run` records): Gaussian noise on x, y and theta; a lost detection with the
+// model's vision_drop_probability; where the model asks for it (a draw only then), its
+// last captured pose sent again with vision_repeat_probability (*last holds the pose
+// captured, repeated or not).
+struct RobotCapture {
+  Pose2 pose;
+  bool lost = false;
+};
+RobotCapture CaptureRobot(const Pose2& truth, const VisionNoise& noise, const OmniModel& model, Rng* rng,
+                          std::optional<Pose2>* last);
+// How far a frame's time stamp is off the frame clock: uniform within the model's
+// vision_time_jitter (a draw only where it has one), else 0.
+double StampJitter(double vision_time_jitter, Rng* rng);
+
 struct SimulationState {
   int frame = 0;
   std::vector<bool> present;                   // per robot: on the field

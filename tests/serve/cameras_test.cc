@@ -7,6 +7,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -294,6 +295,54 @@ TEST(Cameras, EachCameraSendsWhatItsAreaHoldsWithItsOwnNoise) {
     ++overlaps;
   }
   EXPECT_GT(differ / overlaps, 0.2) << "mm: two cameras' noise should be independent";
+}
+
+// Issue 66: the served cameras draw as `run`'s camera does. A model whose camera
+// repeats its last pose (repeat_probability 0.3) and stamps frames off the clock
+// (time_jitter 2 ms): each camera repeats blue 0's pose on about 30 % of the frames
+// (its own repeats: the cameras' streams are apart), and stamps its frames within 2 ms of
+// the frame clock, each camera its own offset.
+TEST(Cameras, EachCameraRepeatsPosesAndJittersItsStampsAsTheRecordedCameraDoes) {
+  const std::string dir = testing::TempDir("camera_repeats");
+  const std::string model = dir + "/repeating.yaml";
+  {
+    std::ofstream f(model);
+    f << "extends: " << SourcePath("models/omni4.yaml")
+      << "\nname: repeating\nvision: {noise_xy: 0.001, noise_theta: 0.005, repeat_probability: 0.3, time_jitter: 0.002}\n";
+  }
+  std::string text = CameraScene(true);
+  const std::string omni4 = SourcePath("models/omni4.yaml");
+  for (std::size_t at = text.find(omni4); at != std::string::npos; at = text.find(omni4)) text.replace(at, omni4.size(), model);
+  const Served served = Serve(LoadSceneFromString(text, "cams.yaml", "."), 60);
+  std::map<std::uint32_t, std::vector<SSL_DetectionFrame>> frames;
+  for (const SSL_WrapperPacket& p : served.packets) frames[p.detection().frame_number()].push_back(p.detection());
+  std::array<std::optional<std::pair<float, float>>, 4> last;
+  std::array<int, 4> repeats{}, seen{};
+  int stamps_apart = 0, stamped = 0;
+  for (std::uint32_t k = 4; k < 60; ++k) {
+    const std::vector<SSL_DetectionFrame>& f = frames[k];
+    ASSERT_EQ(f.size(), 4u) << "frame " << k;
+    const double clock = f[0].t_capture();
+    for (std::size_t c = 0; c < 4; ++c) {
+      // Every camera's stamp within 2 ms of camera 0's clock, one 2 ms either way.
+      EXPECT_LE(std::abs(f[c].t_capture() - clock), 0.004 + 1e-9) << "frame " << k << " camera " << c;
+      stamps_apart += f[c].t_capture() != clock;
+      ++stamped;
+      for (const SSL_DetectionRobot& r : f[c].robots_blue()) {
+        if (r.robot_id() != 0) continue;
+        const std::pair<float, float> xy{r.x(), r.y()};
+        if (last[c]) repeats[c] += *last[c] == xy;
+        ++seen[c];
+        last[c] = xy;
+      }
+    }
+  }
+  EXPECT_GT(stamps_apart, stamped / 2);
+  for (std::size_t c = 0; c < 4; ++c) {
+    const double share = static_cast<double>(repeats[c]) / seen[c];
+    EXPECT_GT(share, 0.12) << "camera " << c;  // 0.3 over 55 frames: 2.6 standard deviations below
+    EXPECT_LT(share, 0.5) << "camera " << c;
+  }
 }
 
 TEST(Cameras, TheObserversLogsAreAsWithOneCameraAndTheCamerasAreDeterministic) {
