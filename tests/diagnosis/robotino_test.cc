@@ -36,6 +36,14 @@ std::vector<std::string> Runs(const std::string& folder, const std::string& pref
   return out;
 }
 
+// Gray floor at 0.2 m/s: the four runs along the robot's axes (fit) and the four 30
+// degrees from them (held).
+void GrayRuns(std::vector<OmniLog>* fit, std::vector<OmniLog>* held) {
+  const std::string gray = RobotinoDir() + "/gray_surface/";
+  for (const char* d : {"d000", "d090", "d180", "d270"}) fit->push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+  for (const char* d : {"d030", "d120", "d210", "d300"}) held->push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+}
+
 #define SKIP_WITHOUT_ROBOTINO()                                             \
   if (!std::filesystem::exists(RobotinoDir() + "/README.md")) GTEST_SKIP() \
       << "no real data at " << RobotinoDir()
@@ -104,10 +112,8 @@ TEST(Robotino, TheChangeFinderListsFloorChangesAndNotSingleFloors) {
 // against 34.4 and 72.3 mm at 1 s; 20 s on two cores.
 TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
   SKIP_WITHOUT_ROBOTINO();
-  const std::string gray = RobotinoDir() + "/gray_surface/";
   std::vector<OmniLog> fit, held;
-  for (const char* d : {"d000", "d090", "d180", "d270"}) fit.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
-  for (const char* d : {"d030", "d120", "d210", "d300"}) held.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+  GrayRuns(&fit, &held);
   OmniModel identified;
   const OmniIdentificationReport report =
       IdentifyOmni(LoadOmniModel(testing::SourcePath("models/robotino.yaml")), fit, held, {}, &identified);
@@ -174,10 +180,8 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
 // covariance (measured -5.3 against -0.3 nats per row, pooled).
 TEST(Robotino, TheLeftOutLogsSafeguardGrowsWithTheDistanceFromTheFitsInputs) {
   SKIP_WITHOUT_ROBOTINO();
-  const std::string gray = RobotinoDir() + "/gray_surface/";
   std::vector<OmniLog> fit, held;
-  for (const char* d : {"d000", "d090", "d180", "d270"}) fit.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
-  for (const char* d : {"d030", "d120", "d210", "d300"}) held.push_back(ReadOmniLog(gray + "v0.2_" + d + ".csv"));
+  GrayRuns(&fit, &held);
   OmniIdentificationOptions options;
   options.safeguard = "logs";
   OmniModel grown;

@@ -71,6 +71,17 @@ void ExpectSameModel(const OmniModel& a, const OmniModel& b) {
 
 OmniModel RoundTrip(const OmniModel& m) { return LoadOmniModelFromString(FormatOmniModelYaml(m), "again.yaml"); }
 
+// The message a model of omni4 with `yaml` added (as bad.yaml, from its line 3) is
+// refused with; "loaded" where it loads.
+std::string Refused(const std::string& yaml) {
+  try {
+    LoadOmniModelFromString("extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n" + yaml, "bad.yaml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "loaded";
+}
+
 TEST(OmniModelYamlWriter, ShippedModelsRoundTripBitForBit) {
   for (const char* rel : {"models/omni4.yaml", "models/omni3.yaml", "models/omni4_plant.yaml"}) {
     SCOPED_TRACE(rel);
@@ -182,25 +193,16 @@ TEST(OmniModelYamlWriter, TheIntervalsSafeguardRoundTripsInterpolatesAndIsChecke
   EXPECT_EQ(back.observer.IntervalScaleAt(1)[0], 2.0);
   EXPECT_EQ(back.observer.IntervalScaleAt(200)[1], 1.25);
 
-  const std::string base = "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n";
-  auto refused = [&](const std::string& yaml) {
-    try {
-      LoadOmniModelFromString(base + yaml, "bad.yaml");
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("loaded");
-  };
-  const std::string order = refused(
+  const std::string order = Refused(
       "observer:\n  interval_scale:\n    - {frames: 16, position: 1, heading: 1}\n    - {frames: 4, position: 1, "
       "heading: 1}\n");
   EXPECT_NE(order.find("bad.yaml:6:"), std::string::npos) << order;
   EXPECT_NE(order.find("increase"), std::string::npos) << order;
-  const std::string range = refused("observer: {interval_scale: [{frames: 4, position: 0, heading: 1}]}\n");
+  const std::string range = Refused("observer: {interval_scale: [{frames: 4, position: 0, heading: 1}]}\n");
   EXPECT_NE(range.find("bad.yaml:3:"), std::string::npos) << range;
   EXPECT_NE(range.find("position"), std::string::npos) << range;
-  EXPECT_NE(refused("observer: {interval_scale: 2}\n").find("a list of"), std::string::npos);
-  EXPECT_NE(refused("observer: {interval_scale: [{frames: 4, position: 1}]}\n").find("heading"), std::string::npos);
+  EXPECT_NE(Refused("observer: {interval_scale: 2}\n").find("a list of"), std::string::npos);
+  EXPECT_NE(Refused("observer: {interval_scale: [{frames: 4, position: 1}]}\n").find("heading"), std::string::npos);
 }
 
 // Issue 64: a scale that grows with the distance from the fit's inputs round-trips with
@@ -228,24 +230,15 @@ TEST(OmniModelYamlWriter, AGrowthOutOfTheFitsReachRoundTripsWithItsSeenInputs) {
   EXPECT_NEAR(back.observer.IntervalScaleAt(8, 1.0)[0], 1.0 * (1 + 2.0), 1e-12);  // halfway: growth 2
   EXPECT_NEAR(back.observer.IntervalScaleAt(8, 0.0)[0], 1.0, 1e-12);
 
-  const std::string base = "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n";
-  auto refused = [&](const std::string& yaml) {
-    try {
-      LoadOmniModelFromString(base + yaml, "bad.yaml");
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string("loaded");
-  };
-  EXPECT_NE(refused("observer: {interval_scale: [{frames: 4, position: 1, heading: 1, position_growth: 2}]}\n")
+  EXPECT_NE(Refused("observer: {interval_scale: [{frames: 4, position: 1, heading: 1, position_growth: 2}]}\n")
                 .find("seen_inputs"),
             std::string::npos);
-  EXPECT_NE(refused("observer: {seen_inputs: {scale: 1, points: [[1, 2, 3]]}}\n").find("8 finite wheel speeds"),
+  EXPECT_NE(Refused("observer: {seen_inputs: {scale: 1, points: [[1, 2, 3]]}}\n").find("8 finite wheel speeds"),
             std::string::npos);
-  EXPECT_NE(refused("observer: {seen_inputs: {scale: 1, points: []}}\n").find("bad.yaml:3:"), std::string::npos);
-  EXPECT_NE(refused("observer: {seen_inputs: {scale: 1, points: [[1, x, 3]]}}\n").find("bad.yaml:3:"),
+  EXPECT_NE(Refused("observer: {seen_inputs: {scale: 1, points: []}}\n").find("bad.yaml:3:"), std::string::npos);
+  EXPECT_NE(Refused("observer: {seen_inputs: {scale: 1, points: [[1, x, 3]]}}\n").find("bad.yaml:3:"),
             std::string::npos);
-  EXPECT_NE(refused("observer: {interval_scale: [{frames: 4, position: 1, heading: 1, heading_growth: -1}]}\n")
+  EXPECT_NE(Refused("observer: {interval_scale: [{frames: 4, position: 1, heading: 1, heading_growth: -1}]}\n")
                 .find("heading_growth"),
             std::string::npos);
 }
