@@ -375,8 +375,9 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                 "predictions ahead and the simulation (likelihood at 4, 16 and 63 frames, some 20-40 s more)");
   cmd->add_option("--safeguard", options->omni.safeguard,
                   "Omni: the intervals' conformal scale per horizon, fitted on the two halves of the held-out blocks "
-                  "(blocks), on each log predicted by the model of the others (logs: identification once more per "
-                  "log), or not (off); kept only where it helps rows it was not fitted on")
+                  "(blocks), and with logs a growth on top with the distance of a prediction's inputs from those the "
+                  "fit saw, fitted on each log predicted by the model of the others (identification once more per "
+                  "log), or none (off); kept only where it helps rows it was not fitted on")
       ->capture_default_str()
       ->check(CLI::IsMember({"blocks", "logs", "off"}));
   cmd->add_option("--threads", options->omni.threads,
