@@ -220,18 +220,26 @@ std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniMode
   return out;
 }
 
-std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
-                                              std::vector<int> horizons, int stride) {
-  std::sort(horizons.begin(), horizons.end());
+std::vector<OmniCalibration> CalibrateRows(const std::vector<std::vector<PredictiveError>>& rows,
+                                           const std::vector<int>& horizons, double frame_period, double from,
+                                           double to) {
   std::vector<OmniCalibration> out;
-  const std::vector<std::vector<PredictiveError>> rows = OmniLogPredictiveErrors(model, log, backend, horizons, stride);
   for (std::size_t q = 0; q < horizons.size(); ++q) {
-    OmniCalibration c = Calibrate(rows[q], ConstantSpread(rows[q]));
+    std::vector<PredictiveError> within;
+    for (const PredictiveError& r : rows[q])
+      if (r.input_distance >= from && r.input_distance < to) within.push_back(r);
+    OmniCalibration c = Calibrate(within, ConstantSpread(within));
     c.frames = horizons[q];
-    c.seconds = c.frames * log.frame_period;
+    c.seconds = c.frames * frame_period;
     out.push_back(c);
   }
   return out;
+}
+
+std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
+                                              std::vector<int> horizons, int stride) {
+  std::sort(horizons.begin(), horizons.end());
+  return CalibrateRows(OmniLogPredictiveErrors(model, log, backend, horizons, stride), horizons, log.frame_period);
 }
 
 }  // namespace twinsim

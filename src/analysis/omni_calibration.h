@@ -28,6 +28,7 @@
 #include <array>
 #include <cstddef>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "analysis/omni_replay.h"
@@ -101,6 +102,17 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
 // constant spread. A horizon the log is too short for has no rows. Throws as ReplayOmniLog.
 std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
                                               std::vector<int> horizons = {4, 16, 63}, int stride = 2);
+
+// Scores rows[h], predicted horizons[h] frames ahead (frames of `frame_period` s), whose
+// prediction's mean distance from the model's seen inputs (PredictiveError::
+// input_distance; 0 for a model without them) lies in [from, to), each horizon's
+// baseline fitted on those rows.
+std::vector<OmniCalibration> CalibrateRows(const std::vector<std::vector<PredictiveError>>& rows,
+                                           const std::vector<int>& horizons, double frame_period, double from = 0,
+                                           double to = std::numeric_limits<double>::infinity());
+// The distances `compare` splits a calibration at: within the fit's reach, near it, beyond
+// (robots/omni/omni_seen_inputs.h: 1 is a typical command's size).
+inline constexpr std::array<double, 4> kCalibrationDistances{0, 0.25, 1, std::numeric_limits<double>::infinity()};
 
 // The rows of a whole log predicted by `model` on `backend` at each of `horizons` (sorted
 // increasing) from every `stride`-th frame counted from the log's first (the same rows

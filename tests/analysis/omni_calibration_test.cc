@@ -65,6 +65,37 @@ TEST(Calibration, RowsDrawnFromTheirOwnGaussiansAreCalibratedAndBeatAConstantSpr
   EXPECT_NEAR(MeanLogScore(rows), c.log_score, 1e-12);
 }
 
+// Issue 64: rows split by how far their inputs lie from the fit's. Calibrated rows near
+// the seen inputs and rows three times wider than stated beyond them: scored apart, the
+// near ones hold their 90 % and the far ones fall short; every row in one bin, none
+// counted twice, and the whole is what it was without the split.
+TEST(Calibration, RowsSplitByTheirDistanceFromTheSeenInputs) {
+  std::vector<PredictiveError> near = DrawnRows(4000, 1.0, 5), far = DrawnRows(2000, 3.0, 6);
+  for (std::size_t i = 0; i < near.size(); ++i) near[i].input_distance = 0.3 * static_cast<double>(i % 3) / 2;  // 0 to 0.3
+  for (PredictiveError& r : far) r.input_distance = 1.5;
+  std::vector<std::vector<PredictiveError>> rows(1, near);
+  rows[0].insert(rows[0].end(), far.begin(), far.end());
+  const std::vector<int> horizons{16};
+  std::vector<OmniCalibration> bins;
+  int total = 0;
+  for (std::size_t b = 0; b + 1 < kCalibrationDistances.size(); ++b) {
+    bins.push_back(CalibrateRows(rows, horizons, 1 / 30.0, kCalibrationDistances[b], kCalibrationDistances[b + 1])[0]);
+    total += bins.back().rows;
+    EXPECT_EQ(bins.back().frames, 16);
+  }
+  EXPECT_EQ(total, 6000);
+  EXPECT_EQ(bins[0].rows + bins[1].rows, 4000);  // 0 and 0.15 below 0.25, 0.3 above
+  EXPECT_EQ(bins[2].rows, 2000);
+  EXPECT_NEAR(bins[0].position_90, 0.9, 0.02);
+  EXPECT_LT(bins[2].position_90, 0.5);
+  const OmniCalibration whole = CalibrateRows(rows, horizons, 1 / 30.0)[0];
+  const OmniCalibration direct = Calibrate(rows[0], ConstantSpread(rows[0]));
+  EXPECT_EQ(whole.rows, 6000);
+  EXPECT_EQ(whole.position_90, direct.position_90);
+  EXPECT_EQ(whole.log_score, direct.log_score);
+  EXPECT_NEAR(whole.seconds, 16 / 30.0, 1e-12);
+}
+
 TEST(Calibration, RowsTwiceAsWideAsStatedShowAsAU) {
   const OmniCalibration c = Calibrate(DrawnRows(5000, 2.0, 5), 0.005);
   EXPECT_LT(c.position_50, 0.2);  // P(d^2 <= 1.386 / 4) = 1 - exp(-0.173) = 0.16

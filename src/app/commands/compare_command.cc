@@ -19,6 +19,7 @@
 #include "engines/omni_engine.h"
 #include "io/csv_table.h"
 #include "io/output_files.h"
+#include "io/printf_number.h"
 #include "io/yaml_reader.h"
 #include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
@@ -282,6 +283,34 @@ std::string FormatCalibrationCsv(
   return s.str();
 }
 
+// A calibration of one source's rows within [from, to) of the model's seen inputs.
+struct DistanceCalibration {
+  const CompareSource* source = nullptr;
+  double from = 0, to = 0;
+  std::vector<OmniCalibration> calibration;
+};
+
+std::string DistanceRange(double from, double to) {
+  return std::isfinite(to) ? PrintfNumber("%g", from) + " to " + PrintfNumber("%g", to) : "beyond " + PrintfNumber("%g", from);
+}
+
+std::string FormatDistanceCalibrationCsv(const std::vector<DistanceCalibration>& by_distance) {
+  std::ostringstream s;
+  s << "source,backend,distance_from,distance_to,horizon_frames,seconds,rows,position_50,position_90,heading_50,"
+       "heading_90,energy_score,log_score\n";
+  for (const DistanceCalibration& d : by_distance) {
+    for (const OmniCalibration& c : d.calibration) {
+      s << d.source->label << "," << d.source->backend << "," << FormatCsvNumber(d.from) << ","
+        << (std::isfinite(d.to) ? FormatCsvNumber(d.to) : std::string("inf")) << "," << c.frames << ","
+        << FormatCsvNumber(c.seconds) << "," << c.rows;
+      for (double v : {c.position_50, c.position_90, c.heading_50, c.heading_90, c.energy_score, c.log_score})
+        s << "," << (c.rows > 0 ? FormatCsvNumber(v) : std::string());
+      s << "\n";
+    }
+  }
+  return s.str();
+}
+
 int Compare(const CompareCliOptions& options) {
   // Check everything before running or writing anything.
   const std::string kind = ModelFileRobotKind(options.models.front());
@@ -313,6 +342,7 @@ int Compare(const CompareCliOptions& options) {
   // learned one whose predictor has a driving noise (its sampled rollouts), 4, 16 and 63
   // frames ahead (analysis/omni_calibration.h, analysis/learned_noise.h).
   std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>> calibration;
+  std::vector<DistanceCalibration> by_distance;
   for (const CompareSource& s : compare.sources) {
     if (s.backend == "learned") {
       const auto& predictor = s.backend_options.predictor;
@@ -325,7 +355,14 @@ int Compare(const CompareCliOptions& options) {
     }
     if (s.backend != "analytic" && s.backend != "ode" && s.backend != "bullet") continue;
     progress.Update(0, 1, s.label + ", calibration");
-    calibration.emplace_back(&s, CalibrateOmniLog(model, log, s.backend, {4, 16, 63}, kCalibrationStride));
+    const std::vector<int> horizons{4, 16, 63};
+    const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride);
+    calibration.emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
+    // Where the model knows the inputs its fit saw: the same split by how far from them.
+    for (std::size_t b = 0; !model.observer.seen_inputs.empty() && b + 1 < kCalibrationDistances.size(); ++b) {
+      const double from = kCalibrationDistances[b], to = kCalibrationDistances[b + 1];
+      by_distance.push_back({&s, from, to, CalibrateRows(rows, horizons, log.frame_period, from, to)});
+    }
   }
   progress.Finish();
 
@@ -333,6 +370,7 @@ int Compare(const CompareCliOptions& options) {
   files.Write("errors.csv", FormatCompareErrorsCsv(result));
   files.Write("paths.csv", FormatComparePathsCsv(log, result));
   if (!calibration.empty()) files.Write("calibration.csv", FormatCalibrationCsv(calibration));
+  if (!by_distance.empty()) files.Write("calibration_by_distance.csv", FormatDistanceCalibrationCsv(by_distance));
   if (RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
     files.WritePng("paths.png", RenderPathPlot(FreeRunPlot(log, result, model.name, options.plot_seconds), *renderer));
@@ -355,6 +393,14 @@ int Compare(const CompareCliOptions& options) {
                   "these rows):\n%s\n",
                   source->label.c_str(), source->backend == "learned" ? "its sampled rollouts" : "the observer's",
                   FormatCalibrationTable(c).c_str());
+    }
+    for (const DistanceCalibration& d : by_distance) {
+      if (std::none_of(d.calibration.begin(), d.calibration.end(), [](const OmniCalibration& c) { return c.rows > 0; }))
+        continue;
+      std::printf("the same, %s, predictions whose inputs lie %s from those %s's fit saw (observer.seen_inputs; 1 "
+                  "is a typical command's size):\n%s\n",
+                  d.source->label.c_str(), DistanceRange(d.from, d.to).c_str(), model.name.c_str(),
+                  FormatCalibrationTable(d.calibration).c_str());
     }
     files.PrintWrote();
   }
