@@ -311,6 +311,36 @@ std::string FormatDistanceCalibrationCsv(const std::vector<DistanceCalibration>&
   return s.str();
 }
 
+// The predictive distribution of every physics source (the observer's), and of every
+// learned one whose predictor has a driving noise (its sampled rollouts), 4, 16 and 63
+// frames ahead (analysis/omni_calibration.h, analysis/learned_noise.h); where the model
+// knows the inputs its fit saw, the physics sources' split by how far from them.
+void CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& compare, Progress* progress,
+                      std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>>* calibration,
+                      std::vector<DistanceCalibration>* by_distance) {
+  for (const CompareSource& s : compare.sources) {
+    if (s.backend == "learned") {
+      const auto& predictor = s.backend_options.predictor;
+      if (!predictor || !predictor->info().has_driving_noise) continue;
+      progress->Update(0, 1, s.label + ", calibration");
+      LearnedNoiseOptions sampled;
+      sampled.stride = kCalibrationStride;
+      calibration->emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled));
+      continue;
+    }
+    if (s.backend != "analytic" && s.backend != "ode" && s.backend != "bullet") continue;
+    progress->Update(0, 1, s.label + ", calibration");
+    const std::vector<int> horizons{4, 16, 63};
+    const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride);
+    calibration->emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
+    // Where the model knows the inputs its fit saw: the same split by how far from them.
+    for (std::size_t b = 0; !model.observer.seen_inputs.empty() && b + 1 < kCalibrationDistances.size(); ++b) {
+      const double from = kCalibrationDistances[b], to = kCalibrationDistances[b + 1];
+      by_distance->push_back({&s, from, to, CalibrateRows(rows, horizons, log.frame_period, from, to)});
+    }
+  }
+}
+
 int Compare(const CompareCliOptions& options) {
   // Check everything before running or writing anything.
   const std::string kind = ModelFileRobotKind(options.models.front());
@@ -338,32 +368,9 @@ int Compare(const CompareCliOptions& options) {
   const OmniCompareResult result = CompareOmniLog(
       model, log, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
 
-  // The predictive distribution of every physics source (the observer's), and of every
-  // learned one whose predictor has a driving noise (its sampled rollouts), 4, 16 and 63
-  // frames ahead (analysis/omni_calibration.h, analysis/learned_noise.h).
   std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>> calibration;
   std::vector<DistanceCalibration> by_distance;
-  for (const CompareSource& s : compare.sources) {
-    if (s.backend == "learned") {
-      const auto& predictor = s.backend_options.predictor;
-      if (!predictor || !predictor->info().has_driving_noise) continue;
-      progress.Update(0, 1, s.label + ", calibration");
-      LearnedNoiseOptions sampled;
-      sampled.stride = kCalibrationStride;
-      calibration.emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled));
-      continue;
-    }
-    if (s.backend != "analytic" && s.backend != "ode" && s.backend != "bullet") continue;
-    progress.Update(0, 1, s.label + ", calibration");
-    const std::vector<int> horizons{4, 16, 63};
-    const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride);
-    calibration.emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
-    // Where the model knows the inputs its fit saw: the same split by how far from them.
-    for (std::size_t b = 0; !model.observer.seen_inputs.empty() && b + 1 < kCalibrationDistances.size(); ++b) {
-      const double from = kCalibrationDistances[b], to = kCalibrationDistances[b + 1];
-      by_distance.push_back({&s, from, to, CalibrateRows(rows, horizons, log.frame_period, from, to)});
-    }
-  }
+  CalibrateSources(model, log, compare, &progress, &calibration, &by_distance);
   progress.Finish();
 
   OutputFiles files(options.out);
