@@ -301,11 +301,6 @@ void ResidualSpectra(const std::vector<double>& before, const std::vector<double
 // Root mean square of v (0 when empty).
 double Rms(const std::vector<double>& v);
 
-// Welch's power spectral density of x sampled at `rate` Hz (Hann windows of `segment`
-// samples, half overlapping); fills frequency (Hz) and psd (unit^2/Hz).
-void WelchPsd(const std::vector<double>& x, double rate, int segment, std::vector<double>* frequency,
-              std::vector<double>* psd);
-
 // "0.12", "1.5e-05": a parameter as the report prints it.
 std::string FormatParameter(double value);
 // "viscous_friction (joint 2)" or "traction_limit".

@@ -9,6 +9,7 @@
 
 #include "core/parallel.h"
 #include "diagnosis/statistics.h"
+#include "signal/spectrum.h"
 
 namespace twinsim {
 namespace {
