@@ -60,17 +60,14 @@ void AppendSafeguardRows(const std::vector<PredictiveError>& rows, const Eigen::
   for (const PredictiveError& r : rows) out->push_back({r.e, r.c - camera, camera, r.input_distance});
 }
 
-double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level,
-                              double growth) {
+double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level) {
   if (rows.empty()) return 1;
   const int dims = part == PosePart::kHeading ? 1 : 2;
   const double q = ChiSquareQuantile(dims, level);
   // Each row's score: the smallest s in [0, most] that holds it (d^2 falls as s grows).
   std::vector<double> scores;
   scores.reserve(rows.size());
-  // The scale s the row is scaled by is s0 (1 + g d): the score is s0's.
-  for (const SafeguardRow& row : rows)
-    scores.push_back(SmallestHoldingScale(row, part, most * (1 + growth * row.distance), q) / (1 + growth * row.distance));
+  for (const SafeguardRow& row : rows) scores.push_back(SmallestHoldingScale(row, part, most, q));
   const std::size_t n = scores.size();
   const std::size_t k = std::min(n, static_cast<std::size_t>(std::ceil((static_cast<double>(n) + 1) * level)));
   std::nth_element(scores.begin(), scores.begin() + static_cast<long>(k - 1), scores.end());

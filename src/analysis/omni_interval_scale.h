@@ -55,10 +55,8 @@ struct ScaledIntervals {
 };
 
 // The conformal scale of `part` (PosePart::kPosition or kHeading) for the central
-// `level` regions on `rows`, each row's grown by 1 + growth * distance, within
-// [1 / most, most]; 1 without rows.
-double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level = 0.9,
-                              double growth = 0);
+// `level` regions on `rows`, within [1 / most, most]; 1 without rows.
+double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level = 0.9);
 
 // `rows` scored with the prediction's covariance of `part` scaled by `scale` (1 + growth
 // * distance).
@@ -70,7 +68,8 @@ ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePa
 // without rows.
 double ConformalIntervalGrowth(const std::vector<SafeguardRow>& rows, PosePart part, double base, double level = 0.9);
 // The least distance a growth's score divides by: a row at the seen inputs that the base
-// scale does not hold asks for a growth, not for an infinite one.
+// scale does not hold asks for a growth, not for an infinite one. (So the guarantee is
+// for rows at least this far from the seen inputs; nearer, the base scale answers.)
 inline constexpr double kMinGrowthDistance = 0.1;
 
 // Pools two scores of different rows by their row counts.
@@ -80,19 +79,21 @@ ScaledIntervals Pooled(const ScaledIntervals& a, const ScaledIntervals& b);
 // predicted covariance, each kept only where the rows held a share in their 90 % regions
 // more than two standard errors from 90 % and each fold's rows, scored with the scale of
 // the other folds' rows, come nearer 90 % without a worse log density (the scale written
-// is then the one of all rows; 1 where not kept).
+// is then the one of all rows; 1 where not kept). Over a base (SafeguardFromFolds'
+// `base`): the scales are the base's, and what is kept, and checked, is each one's growth.
 struct OmniSafeguardHorizon {
   int frames = 0;
   int rows = 0;  // all folds'
   double position = 1, heading = 1;
   double position_growth = 0, heading_growth = 0;  // per unit of distance from the seen inputs
   bool position_kept = false, heading_kept = false;
-  // Each fold with the other folds' scale, pooled: without (first) and with (second).
+  // Each fold with the other folds' scale (or growth), pooled: without (first) and with
+  // (second).
   std::array<ScaledIntervals, 2> position_check, heading_check;
 };
 
 struct OmniIntervalSafeguard {
-  std::string on;  // the folds: "held-out blocks" (its two halves) or "left-out logs"; "" when not fitted
+  std::string on;  // the folds: "held-out blocks" (its two halves) or "left-out logs, ..."; "" when not fitted
   std::vector<OmniSafeguardHorizon> horizons;
   std::string note;  // why none is kept, where none is
   bool AnyKept() const;
