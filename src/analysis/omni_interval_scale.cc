@@ -53,6 +53,15 @@ double SmallestHoldingScale(const SafeguardRow& row, PosePart part, double most,
   return hi;
 }
 
+// The ceil((n + 1) level)-th smallest of the n scores (at most the largest): the split
+// conformal quantile.
+double ConformalRank(std::vector<double> scores, double level) {
+  const std::size_t n = scores.size();
+  const std::size_t k = std::min(n, static_cast<std::size_t>(std::ceil((static_cast<double>(n) + 1) * level)));
+  std::nth_element(scores.begin(), scores.begin() + static_cast<long>(k - 1), scores.end());
+  return scores[k - 1];
+}
+
 }  // namespace
 
 void AppendSafeguardRows(const std::vector<PredictiveError>& rows, const Eigen::Matrix3d& camera,
@@ -68,10 +77,7 @@ double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart pa
   std::vector<double> scores;
   scores.reserve(rows.size());
   for (const SafeguardRow& row : rows) scores.push_back(SmallestHoldingScale(row, part, most, q));
-  const std::size_t n = scores.size();
-  const std::size_t k = std::min(n, static_cast<std::size_t>(std::ceil((static_cast<double>(n) + 1) * level)));
-  std::nth_element(scores.begin(), scores.begin() + static_cast<long>(k - 1), scores.end());
-  return std::clamp(scores[k - 1], 1 / most, most);
+  return std::clamp(ConformalRank(std::move(scores), level), 1 / most, most);
 }
 
 double ConformalIntervalGrowth(const std::vector<SafeguardRow>& rows, PosePart part, double base, double level) {
@@ -87,10 +93,7 @@ double ConformalIntervalGrowth(const std::vector<SafeguardRow>& rows, PosePart p
     const double needed = SmallestHoldingScale(row, part, base * (1 + kMost * d), q);
     scores.push_back(std::isfinite(needed) ? std::max(0.0, (needed / base - 1) / d) : needed);
   }
-  const std::size_t n = scores.size();
-  const std::size_t k = std::min(n, static_cast<std::size_t>(std::ceil((static_cast<double>(n) + 1) * level)));
-  std::nth_element(scores.begin(), scores.begin() + static_cast<long>(k - 1), scores.end());
-  return std::clamp(scores[k - 1], 0.0, kMost);
+  return std::clamp(ConformalRank(std::move(scores), level), 0.0, kMost);
 }
 
 ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double scale, double growth) {
@@ -191,12 +194,26 @@ std::array<ScaledIntervals, 2> CheckAcrossFolds(const std::vector<std::vector<Sa
   return out;
 }
 
+// One part's safeguard at a horizon: checked across the folds and, where it helps, fitted
+// on all rows: a growth over *scale (over_base), else the scale itself.
+void FitPart(const std::vector<std::vector<SafeguardRow>>& folds, const std::vector<SafeguardRow>& all, PosePart part,
+             bool over_base, int frames, int stride, double* scale, double* growth, bool* kept,
+             std::array<ScaledIntervals, 2>* check) {
+  *check = CheckAcrossFolds(folds, part, over_base ? *scale : 0);
+  *kept = SafeguardHelps(*check, frames, stride);
+  if (!*kept) return;
+  if (over_base) {
+    *growth = ConformalIntervalGrowth(all, part, *scale);
+  } else {
+    *scale = ConformalIntervalScale(all, part, OmniObserverModel::kMaxIntervalScale);
+  }
+}
+
 }  // namespace
 
 OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
                                          const std::vector<std::vector<std::vector<SafeguardRow>>>& rows, int stride,
                                          int min_rows, const std::vector<std::array<double, 2>>* base) {
-  constexpr double kMost = OmniObserverModel::kMaxIntervalScale;
   OmniIntervalSafeguard out;
   for (std::size_t q = 0; q < horizons.size(); ++q) {
     OmniSafeguardHorizon h;
@@ -209,28 +226,15 @@ OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
       fewest = std::min(fewest, f.size());
     }
     h.rows = static_cast<int>(all.size());
-    if (folds.size() >= 2 && static_cast<int>(fewest) >= min_rows) {
-      if (base) {
-        // The base scales as given; a growth on top of each where it helps.
-        h.position = (*base)[q][0];
-        h.heading = (*base)[q][1];
-        h.position_check = CheckAcrossFolds(folds, PosePart::kPosition, h.position);
-        h.heading_check = CheckAcrossFolds(folds, PosePart::kHeading, h.heading);
-        h.position_kept = SafeguardHelps(h.position_check, h.frames, stride);
-        h.heading_kept = SafeguardHelps(h.heading_check, h.frames, stride);
-        if (h.position_kept) h.position_growth = ConformalIntervalGrowth(all, PosePart::kPosition, h.position);
-        if (h.heading_kept) h.heading_growth = ConformalIntervalGrowth(all, PosePart::kHeading, h.heading);
-      } else {
-        h.position_check = CheckAcrossFolds(folds, PosePart::kPosition, 0);
-        h.heading_check = CheckAcrossFolds(folds, PosePart::kHeading, 0);
-        h.position_kept = SafeguardHelps(h.position_check, h.frames, stride);
-        h.heading_kept = SafeguardHelps(h.heading_check, h.frames, stride);
-        if (h.position_kept) h.position = ConformalIntervalScale(all, PosePart::kPosition, kMost);
-        if (h.heading_kept) h.heading = ConformalIntervalScale(all, PosePart::kHeading, kMost);
-      }
-    } else if (base) {
+    if (base) {  // the base scales as given; a growth on top of each where it helps
       h.position = (*base)[q][0];
       h.heading = (*base)[q][1];
+    }
+    if (folds.size() >= 2 && static_cast<int>(fewest) >= min_rows) {
+      FitPart(folds, all, PosePart::kPosition, base != nullptr, h.frames, stride, &h.position, &h.position_growth,
+              &h.position_kept, &h.position_check);
+      FitPart(folds, all, PosePart::kHeading, base != nullptr, h.frames, stride, &h.heading, &h.heading_growth,
+              &h.heading_kept, &h.heading_check);
     }
     out.horizons.push_back(h);
   }

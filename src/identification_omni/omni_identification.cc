@@ -1018,17 +1018,19 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
     model->driving_noise.simulated = true;
   }
-  // The inputs of the fit, which a growth over left-out logs measures distances from.
-  if (options.safeguard == "logs" || options.keep_seen_inputs)
-    model->observer.seen_inputs = SeenInputsOfFitBlocks(*model, views, noise_options);
   // A noise fitted on the held-out blocks is calibrated there only across the halves.
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed);
   // The scale within the fit's reach: the safeguard of "blocks", the base of "logs".
-  if (options.safeguard == "off") return;
-  say(6, "intervals' safeguard");
-  report->safeguard = FitIntervalSafeguard(*model, views, noise_options, crossed);
-  model->observer.interval_scale = report->safeguard.Scales();
+  if (options.safeguard != "off") {
+    say(6, "intervals' safeguard");
+    report->safeguard = FitIntervalSafeguard(*model, views, noise_options, crossed);
+    model->observer.interval_scale = report->safeguard.Scales();
+  }
+  // The inputs of the fit, which a growth over left-out logs measures distances from
+  // (taken last: the held-out blocks above lie within the fit's reach and read none).
+  if (options.safeguard == "logs" || options.keep_seen_inputs)
+    model->observer.seen_inputs = SeenInputsOfFitBlocks(*model, views, noise_options);
 }
 
 // The intervals' safeguard on left-out logs (options.safeguard "logs"): each log predicted,

@@ -494,9 +494,8 @@ OmniIntervalSafeguard FitIntervalSafeguard(const OmniModel& given, const std::ve
                                            const std::array<OmniCrossedNoise, 2>* crossed) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   constexpr int kMinRows = 20;  // per half and horizon
-  auto unscaled = [&given](OmniModel m) {
+  auto unscaled = [](OmniModel m) {
     m.observer.interval_scale.clear();
-    m.observer.seen_inputs = given.observer.seen_inputs;  // the distances from the fit's inputs
     return m;
   };
   OmniNoiseOptions scoring = options;

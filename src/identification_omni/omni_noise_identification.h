@@ -126,8 +126,7 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
 OmniSeenInputs SeenInputsOfFitBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                      const OmniNoiseOptions& options);
 
-// Fits the safeguard of `model` (its own interval_scale ignored; its seen_inputs, where
-// it has them, give each row its distance) on the held-out blocks'
+// Fits the safeguard of `model` (its own interval_scale ignored) on the held-out blocks'
 // rows in their two halves (the folds), with `crossed` each half predicted with the
 // noise fitted on the other; at options.horizons and between them
 // (SafeguardHorizons). Throws as CalibrateOnBlocks.

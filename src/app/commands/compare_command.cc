@@ -264,20 +264,27 @@ int CompareArm(const CompareCliOptions& options) {
 // The calibration predicts 63 frames ahead from every this many frames.
 constexpr int kCalibrationStride = 4;
 
+// A calibration's columns from horizon_frames on, and its CSV cells (empty scores without rows).
+constexpr const char* kCalibrationColumns =
+    "horizon_frames,seconds,rows,position_50,position_90,heading_50,heading_90,energy_score,"
+    "constant_spread_energy_score,constant_spread,energy_gain,log_score\n";
+void WriteCalibrationCells(const OmniCalibration& c, std::ostringstream* s) {
+  *s << c.frames << "," << FormatCsvNumber(c.seconds) << "," << c.rows;
+  for (double v : {c.position_50, c.position_90, c.heading_50, c.heading_90, c.energy_score, c.baseline_energy_score,
+                   c.baseline_spread, c.EnergyGain(), c.log_score})
+    *s << "," << (c.rows > 0 ? FormatCsvNumber(v) : std::string());
+  *s << "\n";
+}
+
 // calibration.csv: one row per physics source and horizon.
 std::string FormatCalibrationCsv(
     const std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>>& calibration) {
   std::ostringstream s;
-  s << "source,backend,horizon_frames,seconds,rows,position_50,position_90,heading_50,heading_90,energy_score,"
-       "constant_spread_energy_score,constant_spread,energy_gain,log_score\n";
+  s << "source,backend," << kCalibrationColumns;
   for (const auto& [source, rows] : calibration) {
     for (const OmniCalibration& c : rows) {
-      s << source->label << "," << source->backend << "," << c.frames << "," << FormatCsvNumber(c.seconds) << ","
-        << c.rows;
-      for (double v : {c.position_50, c.position_90, c.heading_50, c.heading_90, c.energy_score,
-                       c.baseline_energy_score, c.baseline_spread, c.EnergyGain(), c.log_score})
-        s << "," << (c.rows > 0 ? FormatCsvNumber(v) : std::string());
-      s << "\n";
+      s << source->label << "," << source->backend << ",";
+      WriteCalibrationCells(c, &s);
     }
   }
   return s.str();
@@ -296,16 +303,12 @@ std::string DistanceRange(double from, double to) {
 
 std::string FormatDistanceCalibrationCsv(const std::vector<DistanceCalibration>& by_distance) {
   std::ostringstream s;
-  s << "source,backend,distance_from,distance_to,horizon_frames,seconds,rows,position_50,position_90,heading_50,"
-       "heading_90,energy_score,log_score\n";
+  s << "source,backend,distance_from,distance_to," << kCalibrationColumns;
   for (const DistanceCalibration& d : by_distance) {
     for (const OmniCalibration& c : d.calibration) {
       s << d.source->label << "," << d.source->backend << "," << FormatCsvNumber(d.from) << ","
-        << (std::isfinite(d.to) ? FormatCsvNumber(d.to) : std::string("inf")) << "," << c.frames << ","
-        << FormatCsvNumber(c.seconds) << "," << c.rows;
-      for (double v : {c.position_50, c.position_90, c.heading_50, c.heading_90, c.energy_score, c.log_score})
-        s << "," << (c.rows > 0 ? FormatCsvNumber(v) : std::string());
-      s << "\n";
+        << (std::isfinite(d.to) ? FormatCsvNumber(d.to) : std::string("inf")) << ",";
+      WriteCalibrationCells(c, &s);
     }
   }
   return s.str();
