@@ -31,6 +31,9 @@ struct ArmBackendState {
   Eigen::VectorXd held_before;
   // joint_flexibility: the motor side of each joint (rad, rad/s); rigid joints unused.
   Eigen::VectorXd motor_q, motor_qd;
+  // LuGre friction (stribeck_friction with sigma0): each joint's bristle deflection z
+  // (rad or m); other joints unused.
+  Eigen::VectorXd bristle;
   ArmEngineState engine;  // the engine's bodies, or the learned backend's window
 };
 

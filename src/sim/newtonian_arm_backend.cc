@@ -19,6 +19,10 @@ constexpr double kMaxSpringDampingPerStep = 0.5;  // h d / J_eff
 // The trapezoidal rule is stable for any step; its resonance comes out at
 // 2 atan(h w / 2) / h, low by (h w)^2 / 12: within 1 % at h w = 0.34.
 constexpr double kMaxSpringPhasePerStepTrapezoidal = 0.34;  // rad
+// LuGre bristles: their spring against the link resolved this finely, within this many
+// physics steps per sample.
+constexpr double kMaxBristlePhasePerStep = 0.5;  // rad: h sqrt(sigma0 / J_l)
+constexpr int kMaxBristleSubsteps = 64;
 // The velocity-level friction solve: projected Gauss-Seidel sweeps over the joints.
 constexpr int kFrictionSweeps = 50;
 constexpr double kFrictionTolerance = 1e-13;  // relative change of a sweep that ends it
@@ -121,6 +125,15 @@ NewtonianArmBackend::NewtonianArmBackend(const ArmModel& model, std::unique_ptr<
     effects_.push_back(e);
     const ArmJoint& nominal = model_.joints[static_cast<std::size_t>(j)];
     if (e.friction() || nominal.viscous > 0 || nominal.coulomb > 0) friction_joints_.push_back(j);
+    if (e.presliding()) {
+      presliding_joints_.push_back(j);
+      // The bristles' spring against the link: resolved at h sqrt(sigma0 / J_l) <= 0.5
+      // up to kMaxBristleSubsteps; stiffer bristles are stable (the step is implicit in
+      // them) and act as sticking.
+      const double omega = std::sqrt(e.bristle_stiffness * mobility(j, j));
+      substeps = std::max(substeps, std::min(kMaxBristleSubsteps,
+                                             static_cast<int>(std::ceil(ts * omega / kMaxBristlePhasePerStep))));
+    }
     if (e.flexible()) {
       flexible_ = true;
       const double link = 1 / mobility(j, j);
@@ -147,6 +160,9 @@ NewtonianArmBackend::NewtonianArmBackend(const ArmModel& model, std::unique_ptr<
     delay_steps_.push_back(steps);
     max_delay_steps_ = std::max(max_delay_steps_, steps);
   }
+  scratch_.bristle_steps.assign(static_cast<std::size_t>(n), ArmBristleStep{});
+  scratch_.bristle_torque = Eigen::VectorXd::Zero(n);
+  scratch_.bristle_gain = Eigen::VectorXd::Zero(n);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
   Reset(zero, zero, zero);
 }
@@ -162,6 +178,7 @@ void NewtonianArmBackend::Reset(const Eigen::VectorXd& q, const Eigen::VectorXd&
   state_.held_before = tau_before;
   state_.motor_q = q;
   state_.motor_qd = qd;
+  state_.bristle = Eigen::VectorXd::Zero(model_.dof());
 }
 
 void NewtonianArmBackend::DriveTorques(std::int64_t step, Eigen::VectorXd* drive) const {
@@ -194,6 +211,21 @@ void NewtonianArmBackend::DriveTorques(std::int64_t step, Eigen::VectorXd* drive
   }
 }
 
+void NewtonianArmBackend::PrepareBristles(int j, double qd, double h) {
+  // The bristles end the step at z = base + slope v_end; their torque is sigma0 z plus
+  // sigma1 times the step's mean z', and viscous friction is trapezoidal as elsewhere:
+  // f = A + B v_end, linear in the joint's end velocity like the other unknowns.
+  const auto k = static_cast<std::size_t>(j);
+  const JointEffects& e = effects_[k];
+  const double z0 = state_.bristle[j];
+  const ArmBristleStep step = ArmBristleStepFrom(model_, j, z0, qd, h);
+  scratch_.bristle_steps[k] = step;
+  const double viscous = model_.joints[k].viscous + e.viscous;
+  scratch_.bristle_torque[j] =
+      e.bristle_stiffness * step.base + e.bristle_damping * (step.base - z0) / h + 0.5 * viscous * qd;
+  scratch_.bristle_gain[j] = (e.bristle_stiffness + e.bristle_damping / h) * step.slope + 0.5 * viscous;
+}
+
 bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                             const Eigen::VectorXd& tau, const Eigen::VectorXd& drive, double h,
                                             Eigen::VectorXd* friction, Eigen::VectorXd* spring) {
@@ -224,6 +256,7 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
     const double viscous = model_.joints[k].viscous + effects_[k].viscous;
     w_inverse[j] = 1 / response(j, j);
     damping_inverse[j] = 1 / (1 + 0.5 * response(j, j) * viscous);
+    if (effects_[k].presliding()) PrepareBristles(j, qd[j], h);
   }
   // Projected Gauss-Seidel: each joint's friction, and each trapezoidal spring's torque,
   // given the others', until they settle.
@@ -250,8 +283,11 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
       const double w = response(j, j);
       double v = free_end[j] - response.row(j).dot(*friction) + w * (*friction)[j];
       if (springs) v += response.row(j).dot(*spring);
-      const double f = JointFriction(model_.joints[static_cast<std::size_t>(j)], effects_[static_cast<std::size_t>(j)],
-                                     v, w, w_inverse[j], damping_inverse[j], qd[j]);
+      const auto k = static_cast<std::size_t>(j);
+      const double f = effects_[k].presliding()
+                           ? (scratch_.bristle_torque[j] + scratch_.bristle_gain[j] * v) /
+                                 (1 + w * scratch_.bristle_gain[j])
+                           : JointFriction(model_.joints[k], effects_[k], v, w, w_inverse[j], damping_inverse[j], qd[j]);
       change = std::max(change, std::abs(f - (*friction)[j]));
       size = std::max(size, std::abs(f));
       (*friction)[j] = f;
@@ -326,6 +362,7 @@ void NewtonianArmBackend::Step(const Eigen::VectorXd& command, Eigen::VectorXd* 
     } else {
       engine_->Step(link, h);
     }
+    for (int j : presliding_joints_) state_.bristle[j] = scratch_.bristle_steps[static_cast<std::size_t>(j)].At(engine_->qd()[j]);
   }
   ++state_.sample;
 }
@@ -338,7 +375,8 @@ ArmBackendState NewtonianArmBackend::Save() const {
 
 void NewtonianArmBackend::Restore(const ArmBackendState& state) {
   const int n = model_.dof();
-  if (state.held_before.size() != n || state.motor_q.size() != n || state.motor_qd.size() != n) {
+  if (state.held_before.size() != n || state.motor_q.size() != n || state.motor_qd.size() != n ||
+      state.bristle.size() != n) {
     throw std::invalid_argument("arm backend: state of another arm");
   }
   engine_->Restore(state.engine);

@@ -9,7 +9,8 @@
 // the trapezoidal rule solved with the friction: ArmModel::flexibility_integrator);
 // friction (the joint's nominal viscous and Coulomb friction plus the friction effects)
 // is solved at velocity level, so a joint sticks exactly and viscous friction is
-// trapezoidal; the engine steps h, its first stage from the solve's M where there was
+// trapezoidal (a LuGre joint's bristles, stribeck_friction with sigma0, solved with it
+// and integrated exactly over the step: it deflects elastically instead of sticking); the engine steps h, its first stage from the solve's M where there was
 // one (ArmEngine::StepFromAcceleration). The payload is in the bodies the engine is
 // built with (ArmPlantModel).
 //
@@ -33,8 +34,8 @@ class NewtonianArmBackend final : public ArmBackend {
   // Takes an engine built for ArmPlantModel(model). `physics_substeps`: physics steps per
   // sample, 0 = automatic: 1, or as many as a stiff joint_flexibility needs
   // (explicit: h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5; trapezoidal:
-  // h sqrt(k / J_eff) <= 0.34; the link's inertia taken at q = 0 with the other joints
-  // free). Throws std::invalid_argument for an engine of another
+  // h sqrt(k / J_eff) <= 0.34; LuGre bristles: h sqrt(sigma0 / J_l) <= 0.5, at most 64
+  // steps; the link's inertia taken at q = 0 with the other joints free). Throws std::invalid_argument for an engine of another
   // arm, InputError for a model that does not Validate() or substeps out of [0, 100000].
   NewtonianArmBackend(const ArmModel& model, std::unique_ptr<ArmEngine> engine, int physics_substeps = 0);
 
@@ -59,6 +60,8 @@ class NewtonianArmBackend final : public ArmBackend {
   // has friction or a trapezoidal spring), with the joint accelerations at the step's
   // start under tau + spring - friction in scratch_.start_accel, from the same M: the
   // engine's first stage (ArmEngine::StepFromAcceleration).
+  // A LuGre joint j's bristles over a physics step of h from velocity qd, into scratch_.
+  void PrepareBristles(int j, double qd, double h);
   bool SolveJointTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau,
                          const Eigen::VectorXd& drive, double h, Eigen::VectorXd* friction, Eigen::VectorXd* spring);
 
@@ -76,6 +79,8 @@ class NewtonianArmBackend final : public ArmBackend {
     Eigen::VectorXd spring;                 // dof: trapezoidal flexible joints' mean spring torque
     Eigen::VectorXd w_inverse;              // dof: 1 / (h M^-1)_jj of the friction joints
     Eigen::VectorXd damping_inverse;        // dof: 1 / (1 + (h M^-1)_jj b_j / 2)
+    std::vector<ArmBristleStep> bristle_steps;  // dof: LuGre joints' bristles over the step
+    Eigen::VectorXd bristle_torque, bristle_gain;  // dof: their friction A + B v_end
   };
 
   ArmModel model_;  // the plant: payload lumped into the last link
@@ -83,6 +88,7 @@ class NewtonianArmBackend final : public ArmBackend {
   int substeps_ = 1;
   std::vector<JointEffects> effects_;  // dof
   std::vector<int> friction_joints_;   // joints with any friction
+  std::vector<int> presliding_joints_;  // joints with LuGre friction (bristles)
   std::vector<int> trapezoidal_joints_;  // flexible joints stepped by the trapezoidal rule
   std::vector<double> delay_steps_;    // per joint, time_delay in physics steps
   double max_delay_steps_ = 0;

@@ -39,7 +39,12 @@ const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
       {"viscous_friction", {{"b", true, NonNegative(1e6)}}},
       {"coulomb_friction",
        {{"c", false, NonNegative(1e7)}, {"c_pos", false, NonNegative(1e7)}, {"c_neg", false, NonNegative(1e7)}}},
-      {"stribeck_friction", {{"c", true, NonNegative(1e7)}, {"s", true, Positive(1e7)}, {"vs", true, Positive(1e4)}}},
+      {"stribeck_friction",
+       {{"c", true, NonNegative(1e7)},
+        {"s", true, Positive(1e7)},
+        {"vs", true, Positive(1e4)},
+        {"sigma0", false, Positive(1e12)},
+        {"sigma1", false, NonNegative(1e9)}}},
       {"torque_offset", {{"tau0", true, InRange(-1e7, 1e7)}}},
       {"torque_saturation", {{"limit", true, Positive(1e7)}}},
       {"time_delay", {{"delay", true, InRange(0, kMaxTimeDelay)}}},
@@ -116,6 +121,11 @@ void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<st
     j.stribeck_coulomb = get("c");
     j.stribeck_static = get("s");
     j.stribeck_velocity = get("vs");
+    if (has("sigma1") && !has("sigma0")) {
+      problems->push_back(label + ": 'sigma1' damps the bristles of 'sigma0' (LuGre): give sigma0 too");
+    }
+    j.bristle_stiffness = get("sigma0");
+    j.bristle_damping = get("sigma1");
   } else if (effect.name == "torque_offset") {
     if (j.torque_offset != 0) problems->push_back(twice);
     j.torque_offset = get("tau0");
@@ -207,8 +217,13 @@ std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects) {
       }
     }
     if (j.stribeck()) {
-      out.push_back({"stribeck_friction", i,
-                     {{"c", j.stribeck_coulomb}, {"s", j.stribeck_static}, {"vs", j.stribeck_velocity}}});
+      ArmEffect stribeck{"stribeck_friction", i,
+                         {{"c", j.stribeck_coulomb}, {"s", j.stribeck_static}, {"vs", j.stribeck_velocity}}};
+      if (j.presliding()) {
+        stribeck.parameters["sigma0"] = j.bristle_stiffness;
+        stribeck.parameters["sigma1"] = j.bristle_damping;
+      }
+      out.push_back(stribeck);
     }
     if (j.torque_offset != 0) out.push_back({"torque_offset", i, {{"tau0", j.torque_offset}}});
     if (j.saturation > 0) out.push_back({"torque_saturation", i, {{"limit", j.saturation}}});
@@ -297,16 +312,36 @@ void ReadArmEffects(const YAML::Node& list, const std::string& path, ArmModel* m
   }
 }
 
-double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
-  if (qd == 0) return 0;
+double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
   const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
   const JointEffects e = model.effects.joint(joint);
-  double level = nominal.coulomb + (qd > 0 ? e.coulomb_positive : e.coulomb_negative);
+  double level = nominal.coulomb + (qd >= 0 ? e.coulomb_positive : e.coulomb_negative);
   if (e.stribeck()) {
     const double r = qd / e.stribeck_velocity;
     level += e.stribeck_coulomb + (e.stribeck_static - e.stribeck_coulomb) * std::exp(-r * r);
   }
+  return level;
+}
+
+double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
+  if (qd == 0) return 0;
+  const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
+  const JointEffects e = model.effects.joint(joint);
+  const double level = ArmDryFrictionLevel(model, joint, qd);
   return (nominal.viscous + e.viscous) * qd + (qd > 0 ? level : -level);
+}
+
+ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h) {
+  const JointEffects e = model.effects.joint(joint);
+  const double g = ArmDryFrictionLevel(model, joint, qd0);
+  // With v(t) = qd0 + (qd1 - qd0) t / h: z(h) = z0 E + qd0 P + (qd1 - qd0) Q, where
+  // E = exp(-a h), P = (1 - E) / a and Q = (h - P) / (a h) (h and h / 2 as a -> 0).
+  const double a = g > 0 ? e.bristle_stiffness * std::abs(qd0) / g : 0;
+  const double ah = a * h;
+  if (ah < 1e-8) return {z0 + 0.5 * h * qd0, 0.5 * h};
+  const double p = -std::expm1(-ah) / a;
+  const double q = (h - p) / ah;
+  return {z0 * std::exp(-ah) + qd0 * (p - q), q};
 }
 
 ArmModel ArmPlantModel(const ArmModel& model) {

@@ -13,7 +13,15 @@
 //                       tau_s = k (thm - q) + d (thm' - qd) drives the link
 //   viscous_friction    tau_f = b qd
 //   coulomb_friction    tau_f = c_pos (qd > 0), -c_neg (qd < 0), sticking in between
-//   stribeck_friction   tau_f = (c + (s - c) exp(-(qd/vs)^2)) sign(qd), breaking away at s
+//   stribeck_friction   tau_f = (c + (s - c) exp(-(qd/vs)^2)) sign(qd), breaking away at s;
+//                       with sigma0 > 0 the LuGre model whose steady state that is
+//                       (Canudas de Wit et al. 1995): the joint's whole dry friction
+//                       g(qd) (nominal and effect Coulomb levels plus this one) acts
+//                       through bristles of deflection z,
+//                         z' = qd - sigma0 |qd| z / g(qd),
+//                         tau_f = sigma0 z + sigma1 z' + (viscous) qd,
+//                       so below break-away the joint moves elastically by about
+//                       tau / sigma0 (pre-sliding) instead of standing rigidly still
 // and for the arm (joint: null):
 //   payload             a point mass m at (x, y, z) in the last link's frame (default its
 //                       origin; the struct's frame, see arm_model.h: on the last joint's
@@ -48,6 +56,8 @@ struct JointEffects {
   double stribeck_coulomb = 0;   // N·m: stribeck_friction c, the sliding level
   double stribeck_static = 0;    // N·m: stribeck_friction s > c, the break-away level
   double stribeck_velocity = 0;  // rad/s: stribeck_friction vs; 0 = off
+  double bristle_stiffness = 0;  // N·m/rad: stribeck_friction sigma0 (LuGre); 0 = no pre-sliding
+  double bristle_damping = 0;    // N·m·s/rad: stribeck_friction sigma1 (LuGre)
   double torque_offset = 0;      // N·m: torque_offset tau0
   double saturation = 0;         // N·m: torque_saturation limit; 0 = off
   double time_delay = 0;         // s: time_delay delay
@@ -56,6 +66,8 @@ struct JointEffects {
   double motor_inertia = 0;      // kg m^2: joint_flexibility motor_inertia, on the joint side
 
   bool stribeck() const { return stribeck_velocity > 0; }
+  // LuGre: the dry friction acts through bristles (only with stribeck()).
+  bool presliding() const { return bristle_stiffness > 0; }
   bool flexible() const { return stiffness > 0; }
   // True when the joint has some friction effect.
   bool friction() const {
@@ -101,8 +113,27 @@ void ReadArmEffects(const YAML::Node& list, const std::string& path, ArmModel* m
 
 // The friction torque (N·m or N, opposing positive qd when positive) of joint j moving
 // at qd: the joint's nominal viscous and Coulomb friction plus its friction effects.
-// At qd = 0 it is 0 (sticking is the simulation loop's business).
+// At qd = 0 it is 0 (sticking is the simulation loop's business). For a LuGre joint
+// (JointEffects::presliding) it is the steady sliding torque, what the bristles settle
+// to at a constant qd; ArmBristleDeflection follows them along a motion.
 double ArmFrictionTorque(const ArmModel& model, int joint, double qd);
+
+// The dry friction level g(qd) >= 0 of joint j (N·m or N; no viscous part) moving at
+// speed |qd| in qd's direction (positive when qd == 0): nominal and effect Coulomb
+// levels plus the Stribeck level, the magnitude ArmFrictionTorque's dry part has.
+double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd);
+
+// One step of a LuGre joint's bristle deflection z over h seconds, the velocity going
+// linearly from qd0 to qd1 and the rate a = sigma0 |qd0| / g(qd0) held over the step:
+// z' = qd - a z integrated exactly, z(h) = base + slope qd1 (trapezoidal as a -> 0).
+// Linear in qd1, so a simulation can solve the step's end velocity and friction together;
+// stable for any h.
+struct ArmBristleStep {
+  double base = 0;   // rad: z(h) at qd1 = 0
+  double slope = 0;  // s: dz(h) / dqd1
+  double At(double qd1) const { return base + slope * qd1; }
+};
+ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h);
 
 // The rigid bodies the physics engines simulate: `model` with its payload lumped into
 // the last link. The result has no payload effect left.
