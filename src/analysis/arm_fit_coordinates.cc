@@ -2,12 +2,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+
+#include "robots/arm/arm_dynamics.h"
 
 namespace twinsim {
 
 ArmFitCoordinates::ArmFitCoordinates(const ArmModel& start, const std::vector<ArmLog>& logs, bool offsets,
-                                     bool stribeck)
-    : start_(start), n_(start.dof()), offsets_(offsets), stribeck_(stribeck) {
+                                     bool stribeck, ArmPresliding presliding)
+    : start_(start), n_(start.dof()), offsets_(offsets), stribeck_(stribeck), presliding_(presliding) {
+  if (presliding != ArmPresliding::kNone && !stribeck)
+    throw std::invalid_argument("arm fit coordinates: the bristles need the Stribeck coordinates");
   Eigen::ArrayXd tau2 = Eigen::ArrayXd::Zero(n_), qd2 = tau2;
   double samples = 0;
   for (const ArmLog& log : logs) {
@@ -29,13 +34,23 @@ ArmFitCoordinates::ArmFitCoordinates(const ArmModel& start, const std::vector<Ar
     breakaway_unit_[j] = e.stribeck() ? e.stribeck_static - e.stribeck_coulomb : coulomb_unit_[j];
     stribeck_velocity_unit_[j] = e.stribeck() ? e.stribeck_velocity : 0.1 * qd_rms[j];
   }
+  if (presliding_ == ArmPresliding::kNone) return;
+  bristle_unit_.resize(n_);
+  const Eigen::VectorXd q0 = logs.empty() || logs.front().rows() == 0 ? Eigen::VectorXd::Zero(n_)
+                                                                     : Eigen::VectorXd(logs.front().q.row(0).transpose());
+  joint_inertia_ = MassMatrix(start_, q0).diagonal();
+  for (int j = 0; j < n_; ++j) {
+    const JointEffects& e = start_.effects.joint(j);
+    bristle_unit_[j] = e.presliding() ? e.bristle_stiffness : coulomb_unit_[j] / (1e-3 * qd_rms[j]);
+  }
 }
 
 ArmFitCoordinates::Kind ArmFitCoordinates::KindOf(int k) const {
   const int block = k / n_;
   if (block < 3) return static_cast<Kind>(block);
   if (offsets_ && block == 3) return Kind::kOffset;
-  return block == (offsets_ ? 4 : 3) ? Kind::kBreakaway : Kind::kStribeckVelocity;
+  const int stribeck = block - (offsets_ ? 4 : 3);
+  return stribeck == 0 ? Kind::kBreakaway : stribeck == 1 ? Kind::kStribeckVelocity : Kind::kBristleStiffness;
 }
 
 std::string ArmFitCoordinates::Name(int k) const {
@@ -47,6 +62,7 @@ std::string ArmFitCoordinates::Name(int k) const {
     case Kind::kOffset: kind = "offset"; break;
     case Kind::kBreakaway: kind = "break-away"; break;
     case Kind::kStribeckVelocity: kind = "Stribeck speed"; break;
+    case Kind::kBristleStiffness: kind = "bristle stiffness"; break;
   }
   return std::string(kind) + " of joint " + std::to_string(k % n_ + 1);
 }
@@ -59,6 +75,7 @@ void ArmFitCoordinates::Bounds(int k, double* lower, double* upper) const {
     case Kind::kOffset: *lower = -20, *upper = 20; break;
     case Kind::kBreakaway: *lower = std::log(1e-3), *upper = std::log(100.0); break;
     case Kind::kStribeckVelocity: *lower = std::log(1e-2), *upper = std::log(100.0); break;
+    case Kind::kBristleStiffness: *lower = std::log(1e-3), *upper = std::log(1e4); break;
   }
 }
 
@@ -79,6 +96,11 @@ ArmModel ArmFitCoordinates::Apply(const double* x) const {
       JointEffects& e = m.effects.joints[j];
       e.stribeck_static = e.stribeck_coulomb + breakaway_unit_[j] * std::exp(x[base + j]);
       e.stribeck_velocity = stribeck_velocity_unit_[j] * std::exp(x[base + n_ + j]);
+      if (presliding_ != ArmPresliding::kNone) {
+        e.bristle_slip = presliding_ == ArmPresliding::kMaxwellSlip;
+        e.bristle_stiffness = bristle_unit_[j] * std::exp(x[base + 2 * n_ + j]);
+        e.bristle_damping = 2 * std::sqrt(e.bristle_stiffness * joint_inertia_[j]);
+      }
     }
   }
   return m;

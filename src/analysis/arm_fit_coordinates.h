@@ -5,7 +5,11 @@
 // values, or a thousandth of the joint's torque scale where the start has none); with
 // offsets x[3n + j] the torque_offset's change in tenths of the joint's torque RMS; with
 // stribeck, next, the logarithms of the break-away s - c and the Stribeck speed vs over
-// their units (the start's, or the Coulomb unit and a tenth of the joint's RMS speed).
+// their units (the start's, or the Coulomb unit and a tenth of the joint's RMS speed);
+// with presliding (LuGre or a Maxwell-slip element; it needs stribeck), last, the
+// logarithm of the bristles' stiffness sigma0 over its unit (the start's, or the Coulomb unit over the distance the joint
+// travels in a millisecond at its RMS speed), sigma1 set for critical damping against
+// the start's inertia of the joint at the first log's first posture, 2 sqrt(sigma0 M_jj).
 // x = 0 is the start, its frictions raised to their floors.
 //
 //   ArmFitCoordinates c(start, logs, /*offsets=*/true, /*stribeck=*/false);
@@ -27,19 +31,21 @@ class ArmFitCoordinates {
  public:
   // What a coordinate is, in the order they come (n of each; offsets and the two Stribeck
   // kinds only when asked for).
-  enum class Kind { kScale, kViscous, kCoulomb, kOffset, kBreakaway, kStribeckVelocity };
+  enum class Kind { kScale, kViscous, kCoulomb, kOffset, kBreakaway, kStribeckVelocity, kBristleStiffness };
 
   // The units from `start` and the torques and speeds of `logs`.
-  ArmFitCoordinates(const ArmModel& start, const std::vector<ArmLog>& logs, bool offsets, bool stribeck);
+  ArmFitCoordinates(const ArmModel& start, const std::vector<ArmLog>& logs, bool offsets, bool stribeck,
+                    ArmPresliding presliding = ArmPresliding::kNone);
 
-  int parameters() const { return n_ * (3 + (offsets_ ? 1 : 0) + (stribeck_ ? 2 : 0)); }
+  int parameters() const { return n_ * (3 + (offsets_ ? 1 : 0) + (stribeck_ ? 2 : 0) + (presliding_ != ArmPresliding::kNone ? 1 : 0)); }
   Kind KindOf(int k) const;
   // "scale of joint 1", ...
   std::string Name(int k) const;
   // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its unit
   // to a thousand times it, an offset within twice the joint's torque RMS, a break-away
   // from a thousandth of the Coulomb unit to a hundred times it, a Stribeck speed from a
-  // thousandth to ten times the joint's RMS speed.
+  // thousandth to ten times the joint's RMS speed, a bristle stiffness from a thousandth
+  // to ten thousand times its unit.
   void Bounds(int k, double* lower, double* upper) const;
   // The model at coordinates x.
   ArmModel Apply(const double* x) const;
@@ -48,7 +54,9 @@ class ArmFitCoordinates {
   ArmModel start_;
   int n_;
   bool offsets_, stribeck_;
+  ArmPresliding presliding_;
   Eigen::VectorXd viscous_unit_, coulomb_unit_, offset_unit_, breakaway_unit_, stribeck_velocity_unit_;
+  Eigen::VectorXd bristle_unit_, joint_inertia_;  // presliding: sigma0's unit; M_jj at the first posture
 };
 
 }  // namespace twinsim

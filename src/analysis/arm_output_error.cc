@@ -20,6 +20,10 @@
 namespace twinsim {
 
 bool ArmOutputErrorOptions::IsValid(std::string* why) const {
+  if (presliding != ArmPresliding::kNone && !stribeck) {
+    *why = "pre-sliding fits the Stribeck curve's bristles: it needs the Stribeck fit too";
+    return false;
+  }
   if (!whole_run && (!std::isfinite(horizon) || horizon <= 0)) {
     *why = "the output-error horizon must be a positive number of seconds";
     return false;
@@ -67,7 +71,7 @@ class OutputErrorProblem {
         logs_(logs),
         options_(options),
         n_(start.dof()),
-        coordinates_(start, logs, options.offsets, options.stribeck) {
+        coordinates_(start, logs, options.offsets, options.stribeck, options.presliding) {
     Eigen::ArrayXd velocity2 = Eigen::ArrayXd::Zero(n_), torque_error2 = velocity2;
     double rows = 0;
     int window = 0;
@@ -269,10 +273,12 @@ void SummariseLowSpeedFriction(const ArmModel& with, bool tried, bool kept, cons
   const int n = with.dof();
   s->breakaway.resize(n);
   s->stribeck_velocity.resize(n);
+  s->bristle_stiffness.resize(with.effects.joint(0).presliding() ? n : 0);
   for (int j = 0; j < n; ++j) {
     const JointEffects& e = with.effects.joint(j);
     s->breakaway[j] = e.stribeck_static - e.stribeck_coulomb;
     s->stribeck_velocity[j] = e.stribeck_velocity;
+    if (s->bristle_stiffness.size() > 0) s->bristle_stiffness[j] = e.bristle_stiffness;
   }
 }
 
@@ -284,6 +290,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   if (options.whole_run) return RefineArmByShooting(start, logs, options, summary);
   ArmOutputErrorOptions plain_options = options;
   plain_options.stribeck = false;
+  plain_options.presliding = ArmPresliding::kNone;
   const OutputErrorProblem plain(start, logs, plain_options);
   std::vector<double> x(static_cast<std::size_t>(plain.parameters()), 0.0);
   const ArmModel floor = plain.Apply(x.data());
@@ -382,10 +389,19 @@ std::string ArmOutputErrorSummary::FullReport() const {
   // The held-out part the decisions are made on: windows, or with whole_run each log's last quarter.
   const std::string held_out = whole_run ? "held-out quarters" : "held-out windows";
   if (stribeck_tried) {
-    text += "low-speed friction (stribeck_friction: break-away s - c, speed vs), fitted after the plain refinement:\n";
+    const bool bristles = bristle_stiffness.size() == n;
+    text += bristles ? "low-speed friction (stribeck_friction's break-away s - c, speed vs and bristle stiffness "
+                       "sigma0), fitted after the plain refinement:\n"
+                  : "low-speed friction (stribeck_friction: break-away s - c, speed vs), fitted after the plain "
+                    "refinement:\n";
     for (int j = 0; j < n; ++j) {
-      std::snprintf(line, sizeof line, "  joint %d: s - c %.4g, vs %.4g; %s' RMSE %.4g without it\n", j + 1,
-                    breakaway[j], stribeck_velocity[j], held_out.c_str(), check_plain[j]);
+      std::snprintf(line, sizeof line, "  joint %d: s - c %.4g, vs %.4g", j + 1, breakaway[j], stribeck_velocity[j]);
+      text += line;
+      if (bristles) {
+        std::snprintf(line, sizeof line, ", sigma0 %.4g", bristle_stiffness[j]);
+        text += line;
+      }
+      std::snprintf(line, sizeof line, "; %s' RMSE %.4g without it\n", held_out.c_str(), check_plain[j]);
       text += line;
     }
     text += stribeck_kept ? "  kept: the " + held_out + " are simulated better with it\n"

@@ -18,7 +18,8 @@
 //   - with `offsets`, the torque_offset effect's tau0,
 //   - with `stribeck`, a second fit: the stribeck_friction effect's break-away s - c and
 //     speed vs (a Coulomb level that holds near zero speed), kept only where it beats the
-//     plain refinement on the held-out windows,
+//     plain refinement on the held-out windows; with `presliding` the same with
+//     bristles (stribeck_friction's sigma0, sigma1, maxwell) fitted beside them,
 // by Levenberg-Marquardt (Ceres) with central differences at a fixed step in
 // coordinates (ln k, the frictions' logarithms, the offset in tenths of the joint's
 // torque RMS; ArmFitCoordinates), the Jacobian's columns simulated on `threads` threads
@@ -61,6 +62,10 @@ struct ArmOutputErrorOptions {
   // and kept only where it removes at least 10 % of the held-out windows' cost left by
   // the plain refinement.
   bool stribeck = false;
+  // With stribeck: the low-speed fit's Stribeck friction acts through bristles (LuGre's,
+  // or a Maxwell-slip element) whose stiffness sigma0 is fitted per joint too (sigma1
+  // critically damping them against the joint's inertia; ArmFitCoordinates).
+  ArmPresliding presliding = ArmPresliding::kNone;
   double torque_weight = 1;   // the torque rows' weight beside the simulated rows' (0: none)
   // The torque rows at rest are left out as the identification leaves them out
   // (WlsIdentificationOptions::rest_share, ArmRestRows): this share of a joint's RMS speed.
@@ -97,6 +102,7 @@ struct ArmOutputErrorSummary {
   // N) and speed vs (rad/s or m/s) per joint as fitted.
   bool stribeck_tried = false, stribeck_kept = false;
   Eigen::VectorXd check_plain, breakaway, stribeck_velocity;
+  Eigen::VectorXd bristle_stiffness;  // with presliding: sigma0 per joint as fitted, else empty
   std::vector<std::string> at_bound;  // coordinates that ended at the edge of their range ("scale of joint 1", ...)
   // A table: per joint the simulation errors before and after (and the baseline's), the
   // scale, frictions and offsets found; what ended at a bound; whether it was kept.

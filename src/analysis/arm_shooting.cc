@@ -50,7 +50,7 @@ struct LogSplit {
 class ShootingProblem {
  public:
   ShootingProblem(const ArmModel& start, const std::vector<ArmLog>& logs, const ArmOutputErrorOptions& options)
-      : logs_(logs), options_(options), n_(start.dof()), coordinates_(start, logs, options.offsets, options.stribeck) {
+      : logs_(logs), options_(options), n_(start.dof()), coordinates_(start, logs, options.offsets, options.stribeck, options.presliding) {
     for (const ArmLog& log : logs_) {
       CheckArmLogMatchesModel(log, start);
       LogSplit split;
@@ -306,6 +306,7 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
                              const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary) {
   ArmOutputErrorOptions plain_options = options;
   plain_options.stribeck = false;
+  plain_options.presliding = ArmPresliding::kNone;
   const ShootingProblem plain(start, logs, plain_options);
   RunFit fit = FitRuns(plain, plain_options, {});
   ArmModel fitted = plain.coordinates().Apply(fit.x.data());

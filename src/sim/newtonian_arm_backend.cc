@@ -23,6 +23,7 @@ constexpr double kMaxSpringPhasePerStepTrapezoidal = 0.34;  // rad
 // physics steps per sample.
 constexpr double kMaxBristlePhasePerStep = 0.5;  // rad: h sqrt(sigma0 / J_l)
 constexpr int kMaxBristleSubsteps = 64;
+constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
 // The velocity-level friction solve: projected Gauss-Seidel sweeps over the joints.
 constexpr int kFrictionSweeps = 50;
 constexpr double kFrictionTolerance = 1e-13;  // relative change of a sweep that ends it
@@ -163,6 +164,8 @@ NewtonianArmBackend::NewtonianArmBackend(const ArmModel& model, std::unique_ptr<
   scratch_.bristle_steps.assign(static_cast<std::size_t>(n), ArmBristleStep{});
   scratch_.bristle_torque = Eigen::VectorXd::Zero(n);
   scratch_.bristle_gain = Eigen::VectorXd::Zero(n);
+  scratch_.slip_level_positive = scratch_.slip_level_negative = scratch_.slid_deflection = Eigen::VectorXd::Zero(n);
+  scratch_.slid.assign(static_cast<std::size_t>(n), false);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
   Reset(zero, zero, zero);
 }
@@ -179,6 +182,21 @@ void NewtonianArmBackend::Reset(const Eigen::VectorXd& q, const Eigen::VectorXd&
   state_.motor_q = q;
   state_.motor_qd = qd;
   state_.bristle = Eigen::VectorXd::Zero(model_.dof());
+  if (presliding_joints_.empty()) return;
+  // The bristles start carrying the dry friction the joint's torque balance asks for,
+  // within the friction level: tau - bias - viscous qd, clipped to +-g(qd). A sliding
+  // joint's (at a constant speed) is its steady deflection g sign(qd) / sigma0; a held
+  // one's what holds it. Starting them unloaded would let every restart slip by up to
+  // g / sigma0 before they carry it.
+  MassMatrixAndBias(model_, q, qd, &scratch_.mass, &scratch_.bias);
+  for (int j : presliding_joints_) {
+    const auto k = static_cast<std::size_t>(j);
+    const JointEffects& e = effects_[k];
+    const double g = ArmDryFrictionLevel(model_, j, qd[j]);
+    const double carried = tau_before[j] + e.torque_offset - scratch_.bias[j] -
+                           (model_.joints[k].viscous + e.viscous) * qd[j];
+    state_.bristle[j] = std::clamp(carried, -g, g) / e.bristle_stiffness;
+  }
 }
 
 void NewtonianArmBackend::DriveTorques(std::int64_t step, Eigen::VectorXd* drive) const {
@@ -224,6 +242,31 @@ void NewtonianArmBackend::PrepareBristles(int j, double qd, double h) {
   scratch_.bristle_torque[j] =
       e.bristle_stiffness * step.base + e.bristle_damping * (step.base - z0) / h + 0.5 * viscous * qd;
   scratch_.bristle_gain[j] = (e.bristle_stiffness + e.bristle_damping / h) * step.slope + 0.5 * viscous;
+  if (e.bristle_slip) {
+    // The dry levels the element slips at, either way (the start's speed).
+    const double speed = std::abs(qd);
+    scratch_.slip_level_positive[j] = ArmDryFrictionLevel(model_, j, speed);
+    scratch_.slip_level_negative[j] = ArmDryFrictionLevel(model_, j, -std::max(speed, kTinySpeed));
+  }
+}
+
+double NewtonianArmBackend::BristleFriction(int j, double v, double w, double qd, double h) {
+  const auto k = static_cast<std::size_t>(j);
+  const JointEffects& e = effects_[k];
+  Scratch& s = scratch_;
+  const double f = (s.bristle_torque[j] + s.bristle_gain[j] * v) / (1 + w * s.bristle_gain[j]);
+  s.slid[k] = false;
+  if (!e.bristle_slip) return f;
+  // A Maxwell-slip element: elastic while its force (damping included) stays within the
+  // dry level; beyond it, it slips carrying exactly that level, and its deflection is
+  // what makes sigma0 z + sigma1 (z - z0) / h equal it.
+  const double viscous = model_.joints[k].viscous + e.viscous;
+  const double dry = f - 0.5 * viscous * (qd + v - w * f);
+  const double level = dry > 0 ? s.slip_level_positive[j] : -s.slip_level_negative[j];
+  if (std::abs(dry) <= std::abs(level)) return f;
+  s.slid[k] = true;
+  s.slid_deflection[j] = (level + e.bristle_damping * state_.bristle[j] / h) / (e.bristle_stiffness + e.bristle_damping / h);
+  return (level + 0.5 * viscous * (qd + v)) / (1 + 0.5 * w * viscous);
 }
 
 bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
@@ -285,8 +328,7 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
       if (springs) v += response.row(j).dot(*spring);
       const auto k = static_cast<std::size_t>(j);
       const double f = effects_[k].presliding()
-                           ? (scratch_.bristle_torque[j] + scratch_.bristle_gain[j] * v) /
-                                 (1 + w * scratch_.bristle_gain[j])
+                           ? BristleFriction(j, v, w, qd[j], h)
                            : JointFriction(model_.joints[k], effects_[k], v, w, w_inverse[j], damping_inverse[j], qd[j]);
       change = std::max(change, std::abs(f - (*friction)[j]));
       size = std::max(size, std::abs(f));
@@ -362,7 +404,10 @@ void NewtonianArmBackend::Step(const Eigen::VectorXd& command, Eigen::VectorXd* 
     } else {
       engine_->Step(link, h);
     }
-    for (int j : presliding_joints_) state_.bristle[j] = scratch_.bristle_steps[static_cast<std::size_t>(j)].At(engine_->qd()[j]);
+    for (int j : presliding_joints_) {
+      const auto k = static_cast<std::size_t>(j);
+      state_.bristle[j] = scratch_.slid[k] ? scratch_.slid_deflection[j] : scratch_.bristle_steps[k].At(engine_->qd()[j]);
+    }
   }
   ++state_.sample;
 }

@@ -62,6 +62,11 @@ class NewtonianArmBackend final : public ArmBackend {
   // engine's first stage (ArmEngine::StepFromAcceleration).
   // A LuGre joint j's bristles over a physics step of h from velocity qd, into scratch_.
   void PrepareBristles(int j, double qd, double h);
+  // Its friction torque for a free end velocity v and response w (the joint's
+  // (h M^-1)_jj), from velocity qd: A + B v_end solved with v_end = v - w f, or for a
+  // Maxwell-slip element whose force would exceed its dry level, that level (then
+  // scratch_.slid).
+  double BristleFriction(int j, double v, double w, double qd, double h);
   bool SolveJointTorques(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& tau,
                          const Eigen::VectorXd& drive, double h, Eigen::VectorXd* friction, Eigen::VectorXd* spring);
 
@@ -81,6 +86,9 @@ class NewtonianArmBackend final : public ArmBackend {
     Eigen::VectorXd damping_inverse;        // dof: 1 / (1 + (h M^-1)_jj b_j / 2)
     std::vector<ArmBristleStep> bristle_steps;  // dof: LuGre joints' bristles over the step
     Eigen::VectorXd bristle_torque, bristle_gain;  // dof: their friction A + B v_end
+    Eigen::VectorXd slip_level_positive, slip_level_negative;  // dof: Maxwell-slip elements' levels
+    std::vector<bool> slid;          // dof: the element slipped in the last solve
+    Eigen::VectorXd slid_deflection;  // dof: its deflection then
   };
 
   ArmModel model_;  // the plant: payload lumped into the last link

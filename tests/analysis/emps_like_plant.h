@@ -30,6 +30,13 @@ struct EmpsLikeTruth {
   double viscous = 203.5034;  // N s/m
   double coulomb = 20.3935;   // N (MuJoCo's friction loss: it also holds the cart at rest)
   double offset = -3.1648;    // N, a constant force on the cart (the drive's offset)
+  // Pre-sliding, as a Maxwell-slip element: with a stiffness (N/m) the dry friction acts
+  // on a slider of `slider_mass` (kg, part of `mass`) joined to the cart by that spring,
+  // damped at `presliding_damping_ratio` of critical against the cart; MuJoCo steps it at
+  // 0.1 ms. 0 = the friction on the cart itself, as the benchmark's model has it.
+  double presliding_stiffness = 0;
+  double slider_mass = 5;
+  double presliding_damping_ratio = 0.5;
 };
 
 struct EmpsLikeRecording {

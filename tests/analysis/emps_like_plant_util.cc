@@ -50,6 +50,12 @@ constexpr double kVelocityGain = 243.45;  // V/(m/s), Janot's kv
 constexpr double kForcePerVolt = 35.15;   // N/V, Janot's gtau
 constexpr double kVoltLimit = 10;         // V, the converter's range
 constexpr double kVoltQuantum = 10.0 / 2048;  // V, a 12-bit converter over +-10 V
+constexpr int kMaxwellSubsteps = 10;          // MuJoCo steps per sample of the Maxwell-slip cart
+// s: the time constant of the slider's friction constraint. MuJoCo's dry friction is a
+// soft constraint that pulls the speed to zero at 2 / time constant per second times the
+// body's mass: its default (0.02 s) would let a 5 kg slider creep at 500 N s/m below
+// the friction level instead of sticking.
+constexpr double kSliderFrictionTime = 5 * kDt / kMaxwellSubsteps;
 
 // The reference: moves between drawn positions with a trapezoidal speed profile (drawn
 // top speed and acceleration), dwells between them.
@@ -112,7 +118,27 @@ std::vector<double> DrawPulses(std::uint64_t seed, int rows) {
   return f;
 }
 
+// The Maxwell-slip cart (EmpsLikeTruth::presliding_stiffness): a slider with the dry
+// friction on a slide joint to the world, the cart on a spring joint to the slider.
+// qpos[0] + qpos[1] is the cart's position; the viscous friction and the force are the
+// caller's (world-relative: on both joints alike).
+std::unique_ptr<MujocoModel> LoadMaxwellSlipCart(const EmpsLikeTruth& truth) {
+  const double cart = truth.mass - truth.slider_mass;
+  const double damping = 2 * truth.presliding_damping_ratio * std::sqrt(truth.presliding_stiffness * cart);
+  std::ostringstream xml;
+  xml.precision(17);
+  xml << "<mujoco><option timestep=\"" << kDt / kMaxwellSubsteps
+      << "\" integrator=\"RK4\"><flag contact=\"disable\"/></option>"
+      << "<worldbody><body name=\"slider\"><joint name=\"slip\" type=\"slide\" axis=\"1 0 0\" frictionloss=\""
+      << truth.coulomb << "\" solreffriction=\"" << kSliderFrictionTime << " 1\"/><inertial pos=\"0 0 0\" mass=\"" << truth.slider_mass
+      << "\" diaginertia=\"1 1 1\"/><body name=\"cart\"><joint name=\"axis\" type=\"slide\" axis=\"1 0 0\" stiffness=\""
+      << truth.presliding_stiffness << "\" damping=\"" << damping << "\"/><inertial pos=\"0 0 0\" mass=\"" << cart
+      << "\" diaginertia=\"1 1 1\"/></body></body></worldbody></mujoco>\n";
+  return LoadMujocoText(xml.str(), ".xml", "the Maxwell-slip cart");
+}
+
 std::unique_ptr<MujocoModel> LoadCart(const EmpsLikeTruth& truth) {
+  if (truth.presliding_stiffness > 0) return LoadMaxwellSlipCart(truth);
   std::ostringstream xml;
   xml.precision(17);
   xml << "<mujoco><option timestep=\"" << kDt << "\" integrator=\"RK4\"><flag contact=\"disable\"/></option>"
@@ -131,8 +157,10 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how) {
   const std::unique_ptr<MujocoModel> cart = LoadCart(how.truth);
   MujocoModel& mj = *cart;
   Rng rng(0x6e6f6973 + 31 * seed);
+  const bool maxwell = how.truth.presliding_stiffness > 0;
   mj.data->qpos[0] = reference[0];
   mj_forward(mj.model, mj.data);
+  const auto position = [&mj, maxwell] { return mj.data->qpos[0] + (maxwell ? mj.data->qpos[1] : 0.0); };
   std::ostringstream csv;
   csv.precision(10);
   csv << "t,q1,tau1\n";
@@ -141,7 +169,7 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how) {
   double previous = reference[0], speed = 0;
   const double smoothing = kDt / 0.003;
   for (int k = 0; k < rows; ++k) {
-    const double q = mj.data->qpos[0];
+    const double q = position();
     if (!std::isfinite(q)) throw std::runtime_error("MuJoCo's cart diverged");
     const double measured = how.quantum > 0 ? how.quantum * std::round(q / how.quantum) : q;
     speed += smoothing * ((measured - previous) / kDt - speed);
@@ -152,8 +180,17 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how) {
     volts = kVoltQuantum * std::round(volts / kVoltQuantum);
     const double force = kForcePerVolt * volts;
     csv << k * kDt << "," << measured << "," << force + rng.Gaussian(how.force_noise) << "\n";
-    mj.data->qfrc_applied[0] = force + how.truth.offset;
-    mj_step(mj.model, mj.data);
+    if (!maxwell) {
+      mj.data->qfrc_applied[0] = force + how.truth.offset;
+      mj_step(mj.model, mj.data);
+      continue;
+    }
+    for (int s = 0; s < kMaxwellSubsteps; ++s) {
+      // On the cart, whose position is the sum of both joints': the same force on each.
+      const double speed = mj.data->qvel[0] + mj.data->qvel[1];
+      mj.data->qfrc_applied[0] = mj.data->qfrc_applied[1] = force + how.truth.offset - how.truth.viscous * speed;
+      mj_step(mj.model, mj.data);
+    }
   }
   return csv.str();
 }

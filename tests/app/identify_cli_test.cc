@@ -312,6 +312,17 @@ TEST(IdentifyCli, BadOptionsAreExitTwo) {
                                   "/m.yaml --safeguard logs");
   EXPECT_EQ(arm_safeguard.exit_code, 2);
   EXPECT_NE(arm_safeguard.err.find("--safeguard is for omni robots"), std::string::npos) << arm_safeguard.err;
+  // Pre-sliding is fitted by output error, as one of two models.
+  auto presliding_alone = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                                     "/m.yaml --presliding maxwell");
+  EXPECT_EQ(presliding_alone.exit_code, 2);
+  EXPECT_NE(presliding_alone.err.find("--presliding refines by output error"), std::string::npos)
+      << presliding_alone.err;
+  auto presliding_word = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                                    "/m.yaml --output-error 0.1 --presliding dahl");
+  EXPECT_EQ(presliding_word.exit_code, 2);
+  EXPECT_NE(presliding_word.err.find("--presliding"), std::string::npos) << presliding_word.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/m.yaml"));
   // The intervals' safeguard on left-out logs needs a second log to leave one out.
   const std::string omni_log = dir + "/omni.csv";
   {

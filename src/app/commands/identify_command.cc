@@ -38,6 +38,7 @@ struct IdentifyCliOptions {
   std::string output_error = "0";  // the output-error refinement's windows in s, "run" for whole runs; "0" = none
   double segment = ArmOutputErrorOptions{}.segment;  // s: with --output-error run, the shooting segments
   bool stribeck = false;    // with output_error: also try friction that holds at low speed
+  std::string presliding;   // with output_error: lugre or maxwell, the Stribeck friction through bristles
   bool quiet = false;
   // Omni robots.
   OmniLogSelector select;
@@ -76,7 +77,7 @@ bool EndsWithYaml(const std::string& path) {
 // the model there and the reports into --report DIR when given.
 int IdentifyOmniCli(const IdentifyCliOptions& options) {
   for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition",
-                               "--output-error", "--stribeck", "--segment"}) {
+                               "--output-error", "--stribeck", "--presliding", "--segment"}) {
     if (std::find(options.given.begin(), options.given.end(), arm_only) != options.given.end())
       throw InputError(std::string(arm_only) + " is for arms; " + options.model + " is an omni robot");
   }
@@ -165,7 +166,10 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   output_error->horizon = output_error->whole_run ? 0 : ParseOutputErrorHorizon(options.output_error);
   output_error->segment = options.segment;
   output_error->offsets = options.offsets;
-  output_error->stribeck = options.stribeck;
+  output_error->stribeck = options.stribeck || !options.presliding.empty();
+  output_error->presliding = options.presliding == "lugre"     ? ArmPresliding::kLugre
+                             : options.presliding == "maxwell" ? ArmPresliding::kMaxwellSlip
+                                                               : ArmPresliding::kNone;
   output_error->threads = options.omni.threads;
   output_error->rest_share = identification.rest_share;
   const bool refine = RefinesByOutputError(*output_error);
@@ -174,6 +178,8 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
     throw InputError("--segment cuts --output-error run's whole runs: give --output-error run as well");
   if (options.stribeck && !refine)
     throw InputError("--stribeck refines by output error: give --output-error S as well");
+  if (!options.presliding.empty() && !refine)
+    throw InputError("--presliding refines by output error: give --output-error S as well");
   if (options.omni.threads < 0) throw InputError("--threads must be 0 (one per core) or more");
   return identification;
 }
@@ -207,10 +213,14 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
     }
     comment += refined;
     if (refinement.stribeck_tried) {
+      const std::string kind =
+          options.presliding.empty()
+              ? "friction that holds at low speed (stribeck_friction)"
+              : "friction that deflects before it slides (stribeck_friction with " +
+                    std::string(options.presliding == "lugre" ? "LuGre bristles" : "a Maxwell-slip element") + ")";
       comment += refinement.stribeck_kept
-                     ? "\nwith friction that holds at low speed (stribeck_friction), chosen on the held-out windows"
-                     : "\nfriction that holds at low speed (stribeck_friction) tried and not kept: under 10 % better on "
-                       "the held-out windows";
+                     ? "\nwith " + kind + ", chosen on the held-out windows"
+                     : "\n" + kind + " tried and not kept: under 10 % better on the held-out windows";
     }
   }
   return comment;
@@ -318,6 +328,12 @@ void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
   cmd->add_flag("--stribeck", options->stribeck,
                 "With --output-error: also fit a break-away above the Coulomb level per joint (stribeck_friction), "
                 "kept only where it simulates the held-out windows at least 10 % better");
+  cmd->add_option("--presliding", options->presliding,
+                  "With --output-error: --stribeck with the friction acting through bristles that deflect before "
+                  "they slide, their stiffness fitted per joint too (stribeck_friction's sigma0; sigma1 damping them "
+                  "critically): lugre (bristles that creep under load) or maxwell (a Maxwell-slip element: a damped "
+                  "spring that slips at the friction level); kept under the same 10 % rule")
+      ->check(CLI::IsMember({"lugre", "maxwell"}));
   cmd->add_option("--report", options->report,
                   "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
 }

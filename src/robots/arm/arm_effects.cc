@@ -44,7 +44,8 @@ const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
         {"s", true, Positive(1e7)},
         {"vs", true, Positive(1e4)},
         {"sigma0", false, Positive(1e12)},
-        {"sigma1", false, NonNegative(1e9)}}},
+        {"sigma1", false, NonNegative(1e9)},
+        {"maxwell", false, InRange(0, 1)}}},
       {"torque_offset", {{"tau0", true, InRange(-1e7, 1e7)}}},
       {"torque_saturation", {{"limit", true, Positive(1e7)}}},
       {"time_delay", {{"delay", true, InRange(0, kMaxTimeDelay)}}},
@@ -124,8 +125,16 @@ void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<st
     if (has("sigma1") && !has("sigma0")) {
       problems->push_back(label + ": 'sigma1' damps the bristles of 'sigma0' (LuGre): give sigma0 too");
     }
+    if (has("maxwell") && !has("sigma0")) {
+      problems->push_back(label + ": 'maxwell' makes the bristles of 'sigma0' a Maxwell-slip element: give sigma0 too");
+    }
+    if (has("maxwell") && get("maxwell") != 0 && get("maxwell") != 1) {
+      problems->push_back(label + ": 'maxwell' is 1 (a Maxwell-slip element) or 0 (LuGre), not " +
+                          Number(get("maxwell")));
+    }
     j.bristle_stiffness = get("sigma0");
     j.bristle_damping = get("sigma1");
+    j.bristle_slip = get("maxwell") == 1;
   } else if (effect.name == "torque_offset") {
     if (j.torque_offset != 0) problems->push_back(twice);
     j.torque_offset = get("tau0");
@@ -222,6 +231,7 @@ std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects) {
       if (j.presliding()) {
         stribeck.parameters["sigma0"] = j.bristle_stiffness;
         stribeck.parameters["sigma1"] = j.bristle_damping;
+        if (j.bristle_slip) stribeck.parameters["maxwell"] = 1;
       }
       out.push_back(stribeck);
     }
@@ -336,7 +346,7 @@ ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, d
   const double g = ArmDryFrictionLevel(model, joint, qd0);
   // With v(t) = qd0 + (qd1 - qd0) t / h: z(h) = z0 E + qd0 P + (qd1 - qd0) Q, where
   // E = exp(-a h), P = (1 - E) / a and Q = (h - P) / (a h) (h and h / 2 as a -> 0).
-  const double a = g > 0 ? e.bristle_stiffness * std::abs(qd0) / g : 0;
+  const double a = g > 0 && !e.bristle_slip ? e.bristle_stiffness * std::abs(qd0) / g : 0;
   const double ah = a * h;
   if (ah < 1e-8) return {z0 + 0.5 * h * qd0, 0.5 * h};
   const double p = -std::expm1(-ah) / a;

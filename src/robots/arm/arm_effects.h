@@ -18,10 +18,15 @@
 //                       (Canudas de Wit et al. 1995): the joint's whole dry friction
 //                       g(qd) (nominal and effect Coulomb levels plus this one) acts
 //                       through bristles of deflection z,
-//                         z' = qd - sigma0 |qd| z / g(qd),
+//                         z' = qd - alpha sigma0 |qd| z / g(qd),
 //                         tau_f = sigma0 z + sigma1 z' + (viscous) qd,
-//                       so below break-away the joint moves elastically by about
-//                       tau / sigma0 (pre-sliding) instead of standing rigidly still
+//                       so below break-away the joint moves by about tau / sigma0
+//                       (pre-sliding) instead of standing rigidly still. LuGre has
+//                       alpha = 1: its bristles creep under any load, and sigma1 z'
+//                       adds to g. With `maxwell: 1` they are a Maxwell-slip element
+//                       instead (Lampaert et al. 2002, one element): alpha = 0, a
+//                       damped spring that slips where its force sigma0 z + sigma1 z'
+//                       would exceed g, so the dry friction never exceeds g
 // and for the arm (joint: null):
 //   payload             a point mass m at (x, y, z) in the last link's frame (default its
 //                       origin; the struct's frame, see arm_model.h: on the last joint's
@@ -58,6 +63,7 @@ struct JointEffects {
   double stribeck_velocity = 0;  // rad/s: stribeck_friction vs; 0 = off
   double bristle_stiffness = 0;  // N·m/rad: stribeck_friction sigma0 (LuGre); 0 = no pre-sliding
   double bristle_damping = 0;    // N·m·s/rad: stribeck_friction sigma1 (LuGre)
+  bool bristle_slip = false;      // stribeck_friction maxwell: 1: a Maxwell-slip element, not LuGre
   double torque_offset = 0;      // N·m: torque_offset tau0
   double saturation = 0;         // N·m: torque_saturation limit; 0 = off
   double time_delay = 0;         // s: time_delay delay
@@ -84,6 +90,10 @@ struct ArmEffects {
   JointEffects joint(int j) const;
   bool any() const;
 };
+
+// How a joint's dry friction deflects before it slides (stribeck_friction's sigma0 and
+// maxwell): not at all, LuGre's creeping bristles, or a Maxwell-slip element.
+enum class ArmPresliding { kNone, kLugre, kMaxwellSlip };
 
 // One effect as a model file and report.json name it.
 struct ArmEffect {
@@ -126,6 +136,7 @@ double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd);
 // One step of a LuGre joint's bristle deflection z over h seconds, the velocity going
 // linearly from qd0 to qd1 and the rate a = sigma0 |qd0| / g(qd0) held over the step:
 // z' = qd - a z integrated exactly, z(h) = base + slope qd1 (trapezoidal as a -> 0).
+// A Maxwell-slip element has a = 0 (its slip is the simulation's clamp of the force).
 // Linear in qd1, so a simulation can solve the step's end velocity and friction together;
 // stable for any h.
 struct ArmBristleStep {
