@@ -1,8 +1,9 @@
-// LuGre friction (stribeck_friction with sigma0 and sigma1) in the Newtonian arm backend,
-// on a 90 kg cart on a prismatic joint: the closed forms it must meet (an elastic
-// deflection F / sigma0 below break-away that springs back, the same steady sliding speed
-// as the static friction curve whose steady state it is), on every engine, and the model
-// file's refusals.
+// Pre-sliding friction (stribeck_friction with sigma0 and sigma1: LuGre's bristles, or
+// with maxwell: 1 a Maxwell-slip element) in the Newtonian arm backend, on a 90 kg cart
+// on a prismatic joint: LuGre against a fine RK4 of its equations below break-away, the
+// Maxwell-slip element's exact elastic deflection F / sigma0 that springs back whole,
+// both sliding at the speed of the static friction curve whose steady state they are, on
+// every engine, and the model file's refusals.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -27,7 +28,7 @@ constexpr double kStribeckSpeed = 0.01;  // m/s: vs
 constexpr double kViscous = 200;        // N s/m
 constexpr double kSigma0 = 1e6;         // N/m: 20 um of deflection at the sliding level
 
-ArmModel Cart(bool presliding) {
+ArmModel Cart(bool presliding, bool maxwell = false) {
   ArmModel m = LoadArmModelFromYamlString(
       "robot: arm\nname: cart\ngravity: [0, 0, -9.81]\nsample_time: 0.001\njoints:\n"
       "  - name: axis\n    type: prismatic\n    axis: [1, 0, 0]\n    viscous: 200\n"
@@ -37,6 +38,7 @@ ArmModel Cart(bool presliding) {
   if (presliding) {
     stribeck.parameters["sigma0"] = kSigma0;
     stribeck.parameters["sigma1"] = 2 * std::sqrt(kSigma0 * kCartMass);  // the bristles critically damped
+    if (maxwell) stribeck.parameters["maxwell"] = 1;
   }
   AddArmEffect(stribeck, m.dof(), &m.effects);
   return m;
@@ -89,7 +91,7 @@ Eigen::VectorXd LugreReference(double seconds, const std::function<double(double
   return x;
 }
 
-TEST(LugreFriction, BelowBreakAwayTheCartDeflectsAsTheFineReferenceWhereStaticFrictionHoldsIt) {
+TEST(PreslidingFriction, BelowBreakAwayTheCartDeflectsAsTheFineReferenceWhereStaticFrictionHoldsIt) {
   // 10 N for 0.5 s, then none for 0.5 s. The bristles' spring against the cart rings at
   // sqrt(sigma0 / m) = 105 rad/s, critically damped; the backend steps 1 ms with the
   // bristles integrated exactly over a step, against RK4 at 1 us. LuGre's pre-sliding is
@@ -113,7 +115,21 @@ TEST(LugreFriction, BelowBreakAwayTheCartDeflectsAsTheFineReferenceWhereStaticFr
   }
 }
 
-TEST(LugreFriction, SlidesAtTheSpeedOfTheStaticCurveItIsTheSteadyStateOf) {
+TEST(PreslidingFriction, AMaxwellSlipElementDeflectsByForceOverStiffnessAndSpringsBackWhole) {
+  // The same 10 N for 0.5 s: a Maxwell-slip element is a spring until its force reaches
+  // the friction level, so the cart settles at F / sigma0 = 10 um and returns to 0.
+  const auto force = [](double t) { return t < 0.5 ? 10.0 : 0.0; };
+  const double expected = 10 / kSigma0;
+  for (const std::string engine : {"analytic", "ode", "bullet"}) {
+    const CartRun run = Push(engine, Cart(true, true), 1.0, force);
+    std::cout << "[measured] " << engine << ": Maxwell-slip deflection under 10 N " << run.q[499] * 1e6
+              << " um, left after release " << run.q[999] * 1e6 << " um\n";
+    EXPECT_NEAR(run.q[499], expected, 0.01 * expected) << engine;
+    EXPECT_NEAR(run.q[999], 0, 0.01 * expected) << engine;
+  }
+}
+
+TEST(PreslidingFriction, SlidesAtTheSpeedOfTheStaticCurveItIsTheSteadyStateOf) {
   // 60 N: g(v) + b v = 60 at v = (60 - 20) / 200 = 0.2 m/s (the Stribeck excess is
   // exp(-400) there); m / b = 0.45 s, so after 7 s the speed is within 2e-7 of it.
   const auto force = [](double) { return 60.0; };
@@ -121,6 +137,8 @@ TEST(LugreFriction, SlidesAtTheSpeedOfTheStaticCurveItIsTheSteadyStateOf) {
   for (const std::string engine : {"analytic", "ode", "bullet"}) {
     const CartRun lugre = Push(engine, Cart(true), 7.0, force);
     const CartRun rigid = Push(engine, Cart(false), 7.0, force);
+    const CartRun maxwell = Push(engine, Cart(true, true), 7.0, force);
+    EXPECT_NEAR(maxwell.qd[maxwell.qd.size() - 1], expected, 1e-4 * expected) << engine;
     const double v_lugre = lugre.qd[lugre.qd.size() - 1], v_rigid = rigid.qd[rigid.qd.size() - 1];
     std::cout << "[measured] " << engine << ": sliding at " << v_lugre << " m/s (static curve " << v_rigid
               << ", closed form " << expected << "); positions after 7 s " << lugre.q[lugre.q.size() - 1] << " and "
@@ -133,7 +151,7 @@ TEST(LugreFriction, SlidesAtTheSpeedOfTheStaticCurveItIsTheSteadyStateOf) {
   }
 }
 
-TEST(LugreFriction, BreaksAwayWithTheStaticModelUnderASlowRamp) {
+TEST(PreslidingFriction, BreaksAwayWithTheStaticModelUnderASlowRamp) {
   // A force rising at 10 N/s: the static model slides from s = 25 N on and reaches 1 mm/s
   // a little later (the force keeps rising while the cart gathers speed). LuGre's
   // bristles let the cart creep below s and then slip: 1 mm/s within 1 N of the static
@@ -154,7 +172,7 @@ TEST(LugreFriction, BreaksAwayWithTheStaticModelUnderASlowRamp) {
   EXPECT_NEAR(at[1], at[0], 1.0);
 }
 
-TEST(LugreFriction, TheModelFileReadsWritesAndRefusesItsBristles) {
+TEST(PreslidingFriction, TheModelFileReadsWritesAndRefusesItsBristles) {
   ArmModel m = Cart(true);
   const std::vector<ArmEffect> listed = ListArmEffects(m.effects);
   ASSERT_EQ(listed.size(), 1u);
@@ -167,6 +185,15 @@ TEST(LugreFriction, TheModelFileReadsWritesAndRefusesItsBristles) {
                InputError);
   EXPECT_THROW(AddArmEffect({"stribeck_friction", 0, {{"c", 1}, {"s", 2}, {"vs", 0.1}, {"sigma0", -5}}}, 1, &effects),
                InputError);
+  EXPECT_THROW(AddArmEffect({"stribeck_friction", 0, {{"c", 1}, {"s", 2}, {"vs", 0.1}, {"maxwell", 1}}}, 1, &effects),
+               InputError);
+  EXPECT_THROW(
+      AddArmEffect({"stribeck_friction", 0, {{"c", 1}, {"s", 2}, {"vs", 0.1}, {"sigma0", 5}, {"maxwell", 0.5}}}, 1,
+                   &effects),
+      InputError);
+  const ArmModel maxwell = Cart(true, true);
+  EXPECT_EQ(ListArmEffects(maxwell.effects)[0].parameters.at("maxwell"), 1.0);
+  EXPECT_EQ(ListArmEffects(m.effects)[0].parameters.count("maxwell"), 0u);
 }
 
 }  // namespace
