@@ -36,8 +36,8 @@ ArmFitCoordinates::ArmFitCoordinates(const ArmModel& start, const std::vector<Ar
   }
   if (presliding_ == ArmPresliding::kNone) return;
   bristle_unit_.resize(n_);
-  const Eigen::VectorXd q0 = logs.empty() || logs.front().rows() == 0 ? Eigen::VectorXd::Zero(n_)
-                                                                     : Eigen::VectorXd(logs.front().q.row(0).transpose());
+  Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n_);
+  if (!logs.empty() && logs.front().rows() > 0) q0 = logs.front().q.row(0).transpose();
   joint_inertia_ = MassMatrix(start_, q0).diagonal();
   for (int j = 0; j < n_; ++j) {
     const JointEffects& e = start_.effects.joint(j);

@@ -7,9 +7,10 @@
 // stribeck, next, the logarithms of the break-away s - c and the Stribeck speed vs over
 // their units (the start's, or the Coulomb unit and a tenth of the joint's RMS speed);
 // with presliding (LuGre or a Maxwell-slip element; it needs stribeck), last, the
-// logarithm of the bristles' stiffness sigma0 over its unit (the start's, or the Coulomb unit over the distance the joint
-// travels in a millisecond at its RMS speed), sigma1 set for critical damping against
-// the start's inertia of the joint at the first log's first posture, 2 sqrt(sigma0 M_jj).
+// logarithm of the bristles' stiffness sigma0 over its unit (the start's, or the
+// Coulomb unit over the distance the joint travels in a millisecond at its RMS speed),
+// sigma1 set for critical damping against the start's inertia of the joint at the first
+// log's first posture, 2 sqrt(sigma0 M_jj).
 // x = 0 is the start, its frictions raised to their floors.
 //
 //   ArmFitCoordinates c(start, logs, /*offsets=*/true, /*stribeck=*/false);
@@ -37,7 +38,9 @@ class ArmFitCoordinates {
   ArmFitCoordinates(const ArmModel& start, const std::vector<ArmLog>& logs, bool offsets, bool stribeck,
                     ArmPresliding presliding = ArmPresliding::kNone);
 
-  int parameters() const { return n_ * (3 + (offsets_ ? 1 : 0) + (stribeck_ ? 2 : 0) + (presliding_ != ArmPresliding::kNone ? 1 : 0)); }
+  int parameters() const {
+    return n_ * (3 + (offsets_ ? 1 : 0) + (stribeck_ ? 2 : 0) + (presliding_ != ArmPresliding::kNone ? 1 : 0));
+  }
   Kind KindOf(int k) const;
   // "scale of joint 1", ...
   std::string Name(int k) const;

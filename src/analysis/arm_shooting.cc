@@ -50,7 +50,10 @@ struct LogSplit {
 class ShootingProblem {
  public:
   ShootingProblem(const ArmModel& start, const std::vector<ArmLog>& logs, const ArmOutputErrorOptions& options)
-      : logs_(logs), options_(options), n_(start.dof()), coordinates_(start, logs, options.offsets, options.stribeck, options.presliding) {
+      : logs_(logs),
+        options_(options),
+        n_(start.dof()),
+        coordinates_(start, logs, options.offsets, options.stribeck, options.presliding) {
     for (const ArmLog& log : logs_) {
       CheckArmLogMatchesModel(log, start);
       LogSplit split;

@@ -19,7 +19,7 @@ constexpr double kMaxSpringDampingPerStep = 0.5;  // h d / J_eff
 // The trapezoidal rule is stable for any step; its resonance comes out at
 // 2 atan(h w / 2) / h, low by (h w)^2 / 12: within 1 % at h w = 0.34.
 constexpr double kMaxSpringPhasePerStepTrapezoidal = 0.34;  // rad
-// LuGre bristles: their spring against the link resolved this finely, within this many
+// Pre-sliding bristles: their spring against the link resolved this finely, within this many
 // physics steps per sample.
 constexpr double kMaxBristlePhasePerStep = 0.5;  // rad: h sqrt(sigma0 / J_l)
 constexpr int kMaxBristleSubsteps = 64;
@@ -265,7 +265,8 @@ double NewtonianArmBackend::BristleFriction(int j, double v, double w, double qd
   const double level = dry > 0 ? s.slip_level_positive[j] : -s.slip_level_negative[j];
   if (std::abs(dry) <= std::abs(level)) return f;
   s.slid[k] = true;
-  s.slid_deflection[j] = (level + e.bristle_damping * state_.bristle[j] / h) / (e.bristle_stiffness + e.bristle_damping / h);
+  s.slid_deflection[j] =
+      (level + e.bristle_damping * state_.bristle[j] / h) / (e.bristle_stiffness + e.bristle_damping / h);
   return (level + 0.5 * viscous * (qd + v)) / (1 + 0.5 * w * viscous);
 }
 
@@ -327,9 +328,10 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
       double v = free_end[j] - response.row(j).dot(*friction) + w * (*friction)[j];
       if (springs) v += response.row(j).dot(*spring);
       const auto k = static_cast<std::size_t>(j);
-      const double f = effects_[k].presliding()
-                           ? BristleFriction(j, v, w, qd[j], h)
-                           : JointFriction(model_.joints[k], effects_[k], v, w, w_inverse[j], damping_inverse[j], qd[j]);
+      const double f =
+          effects_[k].presliding()
+              ? BristleFriction(j, v, w, qd[j], h)
+              : JointFriction(model_.joints[k], effects_[k], v, w, w_inverse[j], damping_inverse[j], qd[j]);
       change = std::max(change, std::abs(f - (*friction)[j]));
       size = std::max(size, std::abs(f));
       (*friction)[j] = f;
@@ -406,7 +408,8 @@ void NewtonianArmBackend::Step(const Eigen::VectorXd& command, Eigen::VectorXd* 
     }
     for (int j : presliding_joints_) {
       const auto k = static_cast<std::size_t>(j);
-      state_.bristle[j] = scratch_.slid[k] ? scratch_.slid_deflection[j] : scratch_.bristle_steps[k].At(engine_->qd()[j]);
+      state_.bristle[j] =
+          scratch_.slid[k] ? scratch_.slid_deflection[j] : scratch_.bristle_steps[k].At(engine_->qd()[j]);
     }
   }
   ++state_.sample;

@@ -9,8 +9,9 @@
 // the trapezoidal rule solved with the friction: ArmModel::flexibility_integrator);
 // friction (the joint's nominal viscous and Coulomb friction plus the friction effects)
 // is solved at velocity level, so a joint sticks exactly and viscous friction is
-// trapezoidal (a LuGre joint's bristles, stribeck_friction with sigma0, solved with it
-// and integrated exactly over the step: it deflects elastically instead of sticking); the engine steps h, its first stage from the solve's M where there was
+// trapezoidal (a pre-sliding joint's bristles, stribeck_friction with sigma0, are solved
+// with it and integrated exactly over the step: it deflects before it slides instead of
+// sticking); the engine steps h, its first stage from the solve's M where there was
 // one (ArmEngine::StepFromAcceleration). The payload is in the bodies the engine is
 // built with (ArmPlantModel).
 //
@@ -34,9 +35,10 @@ class NewtonianArmBackend final : public ArmBackend {
   // Takes an engine built for ArmPlantModel(model). `physics_substeps`: physics steps per
   // sample, 0 = automatic: 1, or as many as a stiff joint_flexibility needs
   // (explicit: h sqrt(k / J_eff) <= 0.1 and h d / J_eff <= 0.5; trapezoidal:
-  // h sqrt(k / J_eff) <= 0.34; LuGre bristles: h sqrt(sigma0 / J_l) <= 0.5, at most 64
-  // steps; the link's inertia taken at q = 0 with the other joints free). Throws std::invalid_argument for an engine of another
-  // arm, InputError for a model that does not Validate() or substeps out of [0, 100000].
+  // h sqrt(k / J_eff) <= 0.34; pre-sliding bristles: h sqrt(sigma0 / J_l) <= 0.5, at
+  // most 64 steps; the link's inertia taken at q = 0 with the other joints free). Throws
+  // std::invalid_argument for an engine of another arm, InputError for a model that does
+  // not Validate() or substeps out of [0, 100000].
   NewtonianArmBackend(const ArmModel& model, std::unique_ptr<ArmEngine> engine, int physics_substeps = 0);
 
   std::string name() const override { return engine_->name(); }

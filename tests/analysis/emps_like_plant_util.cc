@@ -130,7 +130,8 @@ std::unique_ptr<MujocoModel> LoadMaxwellSlipCart(const EmpsLikeTruth& truth) {
   xml << "<mujoco><option timestep=\"" << kDt / kMaxwellSubsteps
       << "\" integrator=\"RK4\"><flag contact=\"disable\"/></option>"
       << "<worldbody><body name=\"slider\"><joint name=\"slip\" type=\"slide\" axis=\"1 0 0\" frictionloss=\""
-      << truth.coulomb << "\" solreffriction=\"" << kSliderFrictionTime << " 1\"/><inertial pos=\"0 0 0\" mass=\"" << truth.slider_mass
+      << truth.coulomb << "\" solreffriction=\"" << kSliderFrictionTime
+      << " 1\"/><inertial pos=\"0 0 0\" mass=\"" << truth.slider_mass
       << "\" diaginertia=\"1 1 1\"/><body name=\"cart\"><joint name=\"axis\" type=\"slide\" axis=\"1 0 0\" stiffness=\""
       << truth.presliding_stiffness << "\" damping=\"" << damping << "\"/><inertial pos=\"0 0 0\" mass=\"" << cart
       << "\" diaginertia=\"1 1 1\"/></body></body></worldbody></mujoco>\n";

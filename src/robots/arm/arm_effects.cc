@@ -67,6 +67,37 @@ std::string KnownNames() {
 
 std::string JointLabel(int joint) { return "joint " + std::to_string(joint + 1); }
 
+// stribeck_friction's parameters (checked one by one) into `j`; the combination's
+// problems (s <= c, bristle parameters without sigma0) into `problems`.
+void ApplyStribeck(const std::map<std::string, double>& p, const std::string& label, JointEffects* j,
+                   std::vector<std::string>* problems) {
+  auto has = [&p](const char* key) { return p.count(key) > 0; };
+  auto get = [&p](const char* key) {
+    const auto it = p.find(key);
+    return it == p.end() ? 0.0 : it->second;
+  };
+  if (!(get("s") > get("c"))) {
+    problems->push_back(label + ": the static level s = " + Number(get("s")) +
+                        " must exceed the sliding level c = " + Number(get("c")));
+  }
+  if (has("sigma1") && !has("sigma0")) {
+    problems->push_back(label + ": 'sigma1' damps the bristles of 'sigma0' (LuGre): give sigma0 too");
+  }
+  if (has("maxwell") && !has("sigma0")) {
+    problems->push_back(label + ": 'maxwell' makes the bristles of 'sigma0' a Maxwell-slip element: give sigma0 too");
+  }
+  if (has("maxwell") && get("maxwell") != 0 && get("maxwell") != 1) {
+    problems->push_back(label + ": 'maxwell' is 1 (a Maxwell-slip element) or 0 (LuGre), not " +
+                        Number(get("maxwell")));
+  }
+  j->stribeck_coulomb = get("c");
+  j->stribeck_static = get("s");
+  j->stribeck_velocity = get("vs");
+  j->bristle_stiffness = get("sigma0");
+  j->bristle_damping = get("sigma1");
+  j->bristle_slip = get("maxwell") == 1;
+}
+
 // Sets `effect` (whose keys and ranges were checked) into `effects`; every problem of
 // the combination (missing alternatives, s <= c, a duplicate) goes to `problems`.
 void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<std::string>* problems) {
@@ -115,26 +146,7 @@ void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<st
     }
   } else if (effect.name == "stribeck_friction") {
     if (j.stribeck()) problems->push_back(twice);
-    if (!(get("s") > get("c"))) {
-      problems->push_back(label + ": the static level s = " + Number(get("s")) +
-                          " must exceed the sliding level c = " + Number(get("c")));
-    }
-    j.stribeck_coulomb = get("c");
-    j.stribeck_static = get("s");
-    j.stribeck_velocity = get("vs");
-    if (has("sigma1") && !has("sigma0")) {
-      problems->push_back(label + ": 'sigma1' damps the bristles of 'sigma0' (LuGre): give sigma0 too");
-    }
-    if (has("maxwell") && !has("sigma0")) {
-      problems->push_back(label + ": 'maxwell' makes the bristles of 'sigma0' a Maxwell-slip element: give sigma0 too");
-    }
-    if (has("maxwell") && get("maxwell") != 0 && get("maxwell") != 1) {
-      problems->push_back(label + ": 'maxwell' is 1 (a Maxwell-slip element) or 0 (LuGre), not " +
-                          Number(get("maxwell")));
-    }
-    j.bristle_stiffness = get("sigma0");
-    j.bristle_damping = get("sigma1");
-    j.bristle_slip = get("maxwell") == 1;
+    ApplyStribeck(p, label, &j, problems);
   } else if (effect.name == "torque_offset") {
     if (j.torque_offset != 0) problems->push_back(twice);
     j.torque_offset = get("tau0");

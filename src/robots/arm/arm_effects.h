@@ -24,7 +24,7 @@
 //                       (pre-sliding) instead of standing rigidly still. LuGre has
 //                       alpha = 1: its bristles creep under any load, and sigma1 z'
 //                       adds to g. With `maxwell: 1` they are a Maxwell-slip element
-//                       instead (Lampaert et al. 2002, one element): alpha = 0, a
+//                       instead (Lampaert et al. 2003, one element): alpha = 0, a
 //                       damped spring that slips where its force sigma0 z + sigma1 z'
 //                       would exceed g, so the dry friction never exceeds g
 // and for the arm (joint: null):
