@@ -25,6 +25,7 @@ ArmFitCoordinates::ArmFitCoordinates(const ArmModel& start, const std::vector<Ar
   viscous_unit_.resize(n_);
   coulomb_unit_.resize(n_);
   breakaway_unit_.resize(n_);
+  breakaway_limit_.resize(n_);
   stribeck_velocity_unit_.resize(n_);
   offset_unit_ = 0.1 * tau_rms.max(1e-9).matrix();
   for (int j = 0; j < n_; ++j) {
@@ -32,6 +33,7 @@ ArmFitCoordinates::ArmFitCoordinates(const ArmModel& start, const std::vector<Ar
     coulomb_unit_[j] = std::max(start_.joints[j].coulomb, 1e-3 * tau_rms[j]);
     const JointEffects& e = start_.effects.joint(j);
     breakaway_unit_[j] = e.stribeck() ? e.stribeck_static - e.stribeck_coulomb : coulomb_unit_[j];
+    breakaway_limit_[j] = std::max(kMaxBreakawayExcess * coulomb_unit_[j], 0.1 * tau_rms[j]);
     stribeck_velocity_unit_[j] = e.stribeck() ? e.stribeck_velocity : 0.1 * qd_rms[j];
   }
   if (presliding_ == ArmPresliding::kNone) return;
@@ -73,7 +75,13 @@ void ArmFitCoordinates::Bounds(int k, double* lower, double* upper) const {
     case Kind::kViscous:
     case Kind::kCoulomb: *lower = std::log(1e-6), *upper = std::log(1000.0); break;
     case Kind::kOffset: *lower = -20, *upper = 20; break;
-    case Kind::kBreakaway: *lower = std::log(1e-3), *upper = std::log(100.0); break;
+    case Kind::kBreakaway: {
+      // A start beyond the limits keeps its own excess.
+      const int j = k % n_;
+      *lower = std::min(std::log(1e-3 * coulomb_unit_[j] / breakaway_unit_[j]), 0.0);
+      *upper = std::max(std::log(breakaway_limit_[j] / breakaway_unit_[j]), 0.0);
+      break;
+    }
     case Kind::kStribeckVelocity: *lower = std::log(1e-2), *upper = std::log(100.0); break;
     case Kind::kBristleStiffness: *lower = std::log(1e-3), *upper = std::log(1e4); break;
   }

@@ -311,6 +311,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   const bool stribeck_tried = options.stribeck && kept;
   bool stribeck_kept = false;
   ArmModel with;  // the low-speed fit, kept or not
+  std::vector<std::string> low_speed_at_bound;
   if (stribeck_tried) {
     low_speed = std::make_unique<OutputErrorProblem>(start, logs, options);
     std::vector<double> y = x;
@@ -320,6 +321,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     with = low_speed->Apply(y.data());
     const Eigen::VectorXd check_with = low_speed->SimulationRmse(with, true);
     stribeck_kept = low_speed->CheckCost(check_with) < (1 - kLowSpeedGain) * plain.CheckCost(check_plain);
+    for (int k : y_bound) low_speed_at_bound.push_back(low_speed->coordinates().Name(k));
     if (stribeck_kept) {
       x = std::move(y);
       at_bound = std::move(y_bound);
@@ -335,6 +337,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     summary->iterations = iterations;
     summary->kept = kept;
     SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain, summary);
+    summary->low_speed_at_bound = std::move(low_speed_at_bound);
     summary->check_before = check_before;
     summary->check_after = check_after;
   }
@@ -403,6 +406,11 @@ std::string ArmOutputErrorSummary::FullReport() const {
       }
       std::snprintf(line, sizeof line, "; %s' RMSE %.4g without it\n", held_out.c_str(), check_plain[j]);
       text += line;
+    }
+    if (!stribeck_kept && !low_speed_at_bound.empty()) {
+      text += "  at the edge of its range:";
+      for (std::size_t k = 0; k < low_speed_at_bound.size(); ++k) text += (k ? ", " : " ") + low_speed_at_bound[k];
+      text += "\n";
     }
     text += stribeck_kept ? "  kept: the " + held_out + " are simulated better with it\n"
                           : "  not kept: it removes under 10 % of the " + held_out + "' cost the plain refinement leaves\n";

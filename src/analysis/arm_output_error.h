@@ -104,6 +104,7 @@ struct ArmOutputErrorSummary {
   Eigen::VectorXd check_plain, breakaway, stribeck_velocity;
   Eigen::VectorXd bristle_stiffness;  // with presliding: sigma0 per joint as fitted, else empty
   std::vector<std::string> at_bound;  // coordinates that ended at the edge of their range ("scale of joint 1", ...)
+  std::vector<std::string> low_speed_at_bound;  // the low-speed fit's, kept or not ("break-away of joint 1", ...)
   // A table: per joint the simulation errors before and after (and the baseline's), the
   // scale, frictions and offsets found; what ended at a bound; whether it was kept.
   std::string FullReport() const;

@@ -323,12 +323,14 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
   bool stribeck_kept = false;
   ArmModel with;
   std::optional<ShootingProblem> low_speed;
+  std::vector<std::string> low_speed_at_bound;
   if (stribeck_tried) {
     low_speed.emplace(start, logs, options);
     RunFit y = FitRuns(*low_speed, options, fit.x);
     with = low_speed->coordinates().Apply(y.x.data());
     const Eigen::VectorXd check_with = low_speed->FreeRunRmse(with, true);
     stribeck_kept = low_speed->CheckCost(check_with) < (1 - kRunLowSpeedGain) * plain.CheckCost(check_plain);
+    for (int k : y.at_bound) low_speed_at_bound.push_back(low_speed->coordinates().Name(k));
     if (stribeck_kept) {
       y.iterations += fit.iterations;
       fit = std::move(y);
@@ -340,6 +342,7 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
     *summary = ArmOutputErrorSummary();
     SummariseArmFit((stribeck_kept ? *low_speed : plain).coordinates(), start, fitted, fit.x, fit.at_bound, summary);
     SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain, summary);
+    summary->low_speed_at_bound = std::move(low_speed_at_bound);
     summary->whole_run = true;
     summary->segment = options.segment;
     summary->segments = fit.segments;
