@@ -161,6 +161,25 @@ TEST(IdentifyCli, OutputErrorRefinesTheEstimateAndSimulatesAllThreeModels) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 3 * 3 * 3) << csv;
   EXPECT_NE(csv.find("," + std::string("inverse dynamics") + ",0.1,1,"), std::string::npos) << csv;
 
+  // A continuation: windows of 0.1 s, then of 0.2 s from where they ended, each stage
+  // reported and named in the model file.
+  auto two = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir +
+                        "/two.yaml --output-error 0.1,0.2 --threads 2");
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_NE(two.out.find("stage 1 of 2 of the continuation\noutput error: windows of 0.1 s"), std::string::npos)
+      << two.out;
+  EXPECT_NE(two.out.find("stage 2 of 2 of the continuation\noutput error: windows of 0.2 s"), std::string::npos)
+      << two.out;
+  const std::string two_yaml = testing::ReadText(dir + "/two.yaml");
+  EXPECT_NE(two_yaml.find("output error as a continuation, each stage from where the last ended:"), std::string::npos)
+      << two_yaml;
+  EXPECT_NE(two_yaml.find("windows of 0.2 s"), std::string::npos) << two_yaml;
+  // Its first stage is the single refinement above.
+  EXPECT_NE(two_yaml.find(kept ? "refined by output error: windows of 0.1 s"
+                               : "output error on windows of 0.1 s tried and not kept"),
+            std::string::npos)
+      << two_yaml;
+
   auto negative = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir +
                              "/n.yaml --output-error -1");
   EXPECT_EQ(negative.exit_code, 2);
@@ -202,6 +221,9 @@ TEST(IdentifyCli, OutputErrorOverWholeRunsRefusesWhatIsNoHorizon) {
   for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
            {"--output-error runs", "--output-error runs: give the windows' length in seconds, or run for whole runs"},
            {"--output-error 0.1s", "--output-error 0.1s: give the windows' length in seconds"},
+           {"--output-error 0.1,,1", "--output-error : give the windows' length in seconds"},
+           {"--output-error 0.1,0", "--output-error 0.1,0: 0 (none) cannot be a stage of a continuation"},
+           {"--output-error 0.1,-1", "the output-error horizon must be a positive number of seconds"},
            {"--segment 2", "--segment cuts --output-error run's whole runs: give --output-error run as well"},
            {"--output-error run --segment 0", "the shooting segments must be a positive number of seconds"},
            {"--output-error run --segment 1.5", "too short for the whole-run output-error fit"}}) {

@@ -35,7 +35,9 @@ struct IdentifyCliOptions {
   WlsIdentificationOptions identification;
   bool unweighted = false;
   bool offsets = false;
-  std::string output_error = "0";  // the output-error refinement's windows in s, "run" for whole runs; "0" = none
+  // The output-error refinement's windows in s, "run" for whole runs, "0" = none; a
+  // comma-separated list is a continuation (each stage from where the last ended).
+  std::string output_error = "0";
   double segment = ArmOutputErrorOptions{}.segment;  // s: with --output-error run, the shooting segments
   bool stribeck = false;    // with output_error: also try friction that holds at low speed
   std::string presliding;   // with output_error: lugre or maxwell, the Stribeck friction through bristles
@@ -130,7 +132,7 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
 // 0 sets none; a negative horizon reaches ArmOutputErrorOptions::IsValid's refusal).
 bool RefinesByOutputError(const ArmOutputErrorOptions& o) { return o.whole_run || o.horizon != 0; }
 
-// --output-error's seconds ("0": none); InputError for what is no number.
+// One stage's seconds ("0": none); InputError for what is no number.
 double ParseOutputErrorHorizon(const std::string& text) {
   std::size_t used = 0;
   double seconds = 0;
@@ -144,9 +146,32 @@ double ParseOutputErrorHorizon(const std::string& text) {
   return seconds;
 }
 
+// --output-error's stages: "0" none, else each comma-separated item a window length in
+// seconds or "run", each stage's options `base` with its horizon. InputError for an
+// empty item, a 0 within a list, or one that is checked invalid.
+std::vector<ArmOutputErrorOptions> ParseOutputErrorStages(const std::string& text, const ArmOutputErrorOptions& base) {
+  std::vector<ArmOutputErrorOptions> stages;
+  if (text == "0") return stages;
+  std::size_t from = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', from);
+    const std::string item = text.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+    ArmOutputErrorOptions stage = base;
+    stage.whole_run = item == "run";
+    stage.horizon = stage.whole_run ? 0 : ParseOutputErrorHorizon(item);
+    std::string why;
+    if (!RefinesByOutputError(stage))
+      throw InputError("--output-error " + text + ": 0 (none) cannot be a stage of a continuation");
+    if (!stage.IsValid(&why)) throw InputError("--output-error: " + why);
+    stages.push_back(stage);
+    if (comma == std::string::npos) return stages;
+    from = comma + 1;
+  }
+}
+
 // Refuses omni-only options, a non-YAML --out and bad settings; returns the weighted least squares' options.
 WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& options,
-                                                 ArmOutputErrorOptions* output_error) {
+                                                 std::vector<ArmOutputErrorOptions>* stages) {
   for (const char* omni_only :
        {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--robot", "--team", "--state",
         "--no-noise", "--safeguard"}) {
@@ -162,19 +187,19 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   identification.torque_offsets = options.offsets;
   std::string why;
   if (!identification.IsValid(&why)) throw InputError(why);
-  output_error->whole_run = options.output_error == "run";
-  output_error->horizon = output_error->whole_run ? 0 : ParseOutputErrorHorizon(options.output_error);
-  output_error->segment = options.segment;
-  output_error->offsets = options.offsets;
-  output_error->stribeck = options.stribeck || !options.presliding.empty();
-  output_error->presliding = options.presliding == "lugre"     ? ArmPresliding::kLugre
-                             : options.presliding == "maxwell" ? ArmPresliding::kMaxwellSlip
-                                                               : ArmPresliding::kNone;
-  output_error->threads = options.omni.threads;
-  output_error->rest_share = identification.rest_share;
-  const bool refine = RefinesByOutputError(*output_error);
-  if (refine && !output_error->IsValid(&why)) throw InputError("--output-error: " + why);
-  if (!output_error->whole_run && std::find(options.given.begin(), options.given.end(), "--segment") != options.given.end())
+  ArmOutputErrorOptions base;
+  base.segment = options.segment;
+  base.offsets = options.offsets;
+  base.stribeck = options.stribeck || !options.presliding.empty();
+  base.presliding = options.presliding == "lugre"     ? ArmPresliding::kLugre
+                    : options.presliding == "maxwell" ? ArmPresliding::kMaxwellSlip
+                                                      : ArmPresliding::kNone;
+  base.threads = options.omni.threads;
+  base.rest_share = identification.rest_share;
+  *stages = ParseOutputErrorStages(options.output_error, base);
+  const bool refine = !stages->empty();
+  const bool whole_run = std::any_of(stages->begin(), stages->end(), [](const auto& s) { return s.whole_run; });
+  if (!whole_run && std::find(options.given.begin(), options.given.end(), "--segment") != options.given.end())
     throw InputError("--segment cuts --output-error run's whole runs: give --output-error run as well");
   if (options.stribeck && !refine)
     throw InputError("--stribeck refines by output error: give --output-error S as well");
@@ -184,10 +209,41 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   return identification;
 }
 
-// The identified model file's comment: the logs, the starting model and how the estimate was refined.
+// One output-error stage's lines of the model file's comment; `presliding` the option's text.
+std::string RefinementComment(const ArmOutputErrorSummary& refinement, const std::string& presliding) {
+  char refined[200];
+  if (refinement.whole_run) {
+    std::snprintf(refined, sizeof refined,
+                  refinement.kept ? "\nrefined by output error over whole runs: multiple shooting, segments of %g s"
+                                  : "\noutput error over whole runs (segments of %g s) tried and not kept: the "
+                                    "held-out quarters were simulated no better",
+                  refinement.segment);
+  } else {
+    std::snprintf(refined, sizeof refined,
+                  refinement.kept ? "\nrefined by output error: windows of %g s simulated from the logs' torques"
+                                  : "\noutput error on windows of %g s tried and not kept: the held-out windows "
+                                    "were simulated no better",
+                  refinement.horizon);
+  }
+  std::string comment = refined;
+  if (refinement.stribeck_tried) {
+    const std::string kind =
+        presliding.empty()
+            ? "friction that holds at low speed (stribeck_friction)"
+            : "friction that deflects before it slides (stribeck_friction with " +
+                  std::string(presliding == "lugre" ? "LuGre bristles" : "a Maxwell-slip element") + ")";
+    comment += refinement.stribeck_kept ? "\nwith " + kind + ", chosen on the held-out windows"
+                                        : "\n" + kind + " tried and not kept: under 10 % better on the held-out windows";
+  }
+  return comment;
+}
+
+// The identified model file's comment: the logs, the starting model and how the estimate
+// was refined (each output-error stage in turn).
 std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t logs,
-                                 const WlsIdentificationSummary& summary, const ArmOutputErrorSummary& refinement,
-                                 bool refined_by_output_error, double cutoff_hz) {  // Hz, 0: nothing derived
+                                 const WlsIdentificationSummary& summary,
+                                 const std::vector<ArmOutputErrorSummary>& refinements,
+                                 double cutoff_hz) {  // Hz, 0: nothing derived
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
   char cutoff[96] = "";
@@ -196,33 +252,8 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
                   options.cutoff == "auto" ? " (auto)" : "");
   }
   comment += "\nstarting from " + options.model + cutoff + "; " + summary.BriefReport();
-  if (refined_by_output_error) {
-    char refined[200];
-    if (refinement.whole_run) {
-      std::snprintf(refined, sizeof refined,
-                    refinement.kept ? "\nrefined by output error over whole runs: multiple shooting, segments of %g s"
-                                    : "\noutput error over whole runs (segments of %g s) tried and not kept: the "
-                                      "held-out quarters were simulated no better",
-                    refinement.segment);
-    } else {
-      std::snprintf(refined, sizeof refined,
-                    refinement.kept ? "\nrefined by output error: windows of %g s simulated from the logs' torques"
-                                    : "\noutput error on windows of %g s tried and not kept: the held-out windows "
-                                      "were simulated no better",
-                    refinement.horizon);
-    }
-    comment += refined;
-    if (refinement.stribeck_tried) {
-      const std::string kind =
-          options.presliding.empty()
-              ? "friction that holds at low speed (stribeck_friction)"
-              : "friction that deflects before it slides (stribeck_friction with " +
-                    std::string(options.presliding == "lugre" ? "LuGre bristles" : "a Maxwell-slip element") + ")";
-      comment += refinement.stribeck_kept
-                     ? "\nwith " + kind + ", chosen on the held-out windows"
-                     : "\n" + kind + " tried and not kept: under 10 % better on the held-out windows";
-    }
-  }
+  if (refinements.size() > 1) comment += "\noutput error as a continuation, each stage from where the last ended:";
+  for (const ArmOutputErrorSummary& refinement : refinements) comment += RefinementComment(refinement, options.presliding);
   return comment;
 }
 
@@ -253,8 +284,8 @@ void WriteArmIdentifyReport(const std::string& report_dir, const ArmModel& model
 int Identify(const IdentifyCliOptions& options) {
   if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
   // Check everything before identifying or writing.
-  ArmOutputErrorOptions output_error;
-  const WlsIdentificationOptions identification = CheckArmIdentifyOptions(options, &output_error);
+  std::vector<ArmOutputErrorOptions> stages;
+  const WlsIdentificationOptions identification = CheckArmIdentifyOptions(options, &stages);
   const ArmModel model = LoadArmModel(options.model);
   double cutoff_hz = 0;
   std::string cutoff_brief;
@@ -267,12 +298,13 @@ int Identify(const IdentifyCliOptions& options) {
 
   WlsIdentificationSummary summary;
   const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
-  // --output-error: the inverse-dynamics estimate refined on the logs' simulation error.
-  ArmOutputErrorSummary refinement;
-  const bool refine = RefinesByOutputError(output_error);
-  const ArmModel identified = refine
-                                  ? RefineArmByOutputError(inverse_dynamics, logs, output_error, &refinement)
-                                  : inverse_dynamics;
+  // --output-error: the inverse-dynamics estimate refined on the logs' simulation error,
+  // stage after stage.
+  std::vector<ArmOutputErrorSummary> refinements(stages.size());
+  const bool refine = !stages.empty();
+  ArmModel identified = inverse_dynamics;
+  for (std::size_t k = 0; k < stages.size(); ++k)
+    identified = RefineArmByOutputError(identified, logs, stages[k], &refinements[k]);
 
   // Held-out logs: the torque errors of the a-priori, the identified and the
   // unconstrained model, and the motion they simulate (with --output-error the
@@ -282,7 +314,7 @@ int Identify(const IdentifyCliOptions& options) {
 
   OutputFiles files;
   files.Write(options.out,
-              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinement, refine,
+              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinements,
                                                                   logs.front().derive_cutoff_hz)));
   if (!options.report.empty()) {
     WriteArmIdentifyReport(options.report, model, identified, logs[0], summary, validation, !held_out.empty(), &files);
@@ -297,7 +329,10 @@ int Identify(const IdentifyCliOptions& options) {
       for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
       std::printf(" N·m or N\n");
     }
-    if (refine) std::printf("\n%s", refinement.FullReport().c_str());
+    for (std::size_t k = 0; k < refinements.size(); ++k) {
+      if (refinements.size() > 1) std::printf("\nstage %zu of %zu of the continuation", k + 1, refinements.size());
+      std::printf("\n%s", refinements[k].FullReport().c_str());
+    }
     std::printf("%s\n", validation.FullReport().c_str());
     files.PrintWrote();
   }
@@ -321,7 +356,8 @@ void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
   cmd->add_option("--output-error", options->output_error,
                   "s: refine the estimate by output error, on windows of this length simulated from the logs' "
                   "torques (link inertial scales, friction, offsets); run: on each log's free run, by multiple "
-                  "shooting, its last quarter held out; 0 = off")
+                  "shooting, its last quarter held out; a list (0.1,0.5,1) refines stage after stage, each from "
+                  "where the last ended and kept by its own held-out windows; 0 = off")
       ->capture_default_str();
   cmd->add_option("--segment", options->segment, "s: with --output-error run, the shooting segments' length")
       ->capture_default_str();
