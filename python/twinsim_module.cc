@@ -388,7 +388,7 @@ PYBIND11_MODULE(_twinsim, m) {
                            const py::handle& predictor, const std::string& state) {
     return ReplayOmni(model.model, log, backend, horizon, predictor, state);
   });
-  m.def("_model_robot", [](const std::string& path) { return ModelFileRobot(path); });
+  m.def("_model_robot", [](const std::string& path) { return std::string(RobotKindName(ModelFileRobot(path))); });
   m.def("_replay_arm", [](const PyArmModel& model, const py::handle& log) { return ReplayArm(model.model, log); });
   m.def("_training_data", [](const PyOmniModel& model, const py::handle& logs, int horizon) {
     return OmniTrainingData(model.model, logs, horizon);

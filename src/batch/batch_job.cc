@@ -14,6 +14,7 @@
 #include "core/math_constants.h"
 #include "engines/omni_engine.h"
 #include "io/output_files.h"
+#include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "learning/omni_predictor.h"
 #include "robots/arm/arm_log.h"
@@ -89,9 +90,9 @@ Metrics RunArm(const Sweep& sweep, const JobInputs& in, OutputFiles* files) {
 
 // The log the job works on: given, or recorded by running its scene (on the scene's
 // own backend: `scene.backend` sets it) into trajectory.csv.
-std::string JobLog(const JobInputs& in, const std::string& kind, OutputFiles* files) {
+std::string JobLog(const JobInputs& in, RobotKind kind, OutputFiles* files) {
   if (!in.log.empty()) return in.log;
-  if (kind == "arm") {
+  if (kind == RobotKind::kArm) {
     ArmScene scene = LoadArmScene(in.scene, in.scene_overrides);
     scene.seed = in.seed;
     WriteArmRunFiles(scene, RunArmScene(scene, scene.backend, ""), scene.backend, false, files);
@@ -103,16 +104,9 @@ std::string JobLog(const JobInputs& in, const std::string& kind, OutputFiles* fi
   return files->Path("trajectory.csv");
 }
 
-std::string ModelKind(const std::string& path) {
-  const std::string ext = path.size() >= 5 ? path.substr(path.size() - 5) : "";
-  if (ext == ".urdf" || ext == ".URDF") return "arm";
-  const YAML::Node root = LoadYamlFile(path);
-  return root.IsMap() && root["robot"] && root["robot"].IsScalar() ? root["robot"].Scalar() : "omni";
-}
-
 Metrics Replay(const JobInputs& in, OutputFiles* files) {
-  const std::string kind = ModelKind(in.model);
-  if (kind == "arm") {
+  const RobotKind kind = ModelFileRobot(in.model);
+  if (kind == RobotKind::kArm) {
     const ArmModel model = LoadArmModel(in.model, in.model_overrides);
     const ArmLog log = ReadArmLog(JobLog(in, kind, files));
     CheckArmLogMatchesModel(log, model);
@@ -127,7 +121,6 @@ Metrics Replay(const JobInputs& in, OutputFiles* files) {
     }
     return m;
   }
-  if (kind != "omni") throw InputError(SourceLocation{in.model}, "unknown robot kind '" + kind + "'");
   const OmniModel model = LoadOmniModel(in.model, in.model_overrides);
   const OmniLog log = ReadOmniLog(JobLog(in, kind, files));
   OmniReplayOptions replay;
@@ -158,8 +151,8 @@ std::string HorizonTag(int frames, double frame_rate) {
 }
 
 Metrics Compare(const JobInputs& in, OutputFiles* files) {
-  const std::string kind = ModelKind(in.model);
-  if (kind != "omni") throw InputError(SourceLocation{in.model}, "compare takes omni models (this one is " + kind + ")");
+  const RobotKind kind = ModelFileRobot(in.model);
+  if (kind != RobotKind::kOmni) throw InputError(SourceLocation{in.model}, "compare takes omni models (this one is an arm's)");
   const OmniModel model = LoadOmniModel(in.model, in.model_overrides);
   const OmniLog log = ReadOmniLog(JobLog(in, kind, files));
   const double frame_rate = 1.0 / log.frame_period;
@@ -186,14 +179,14 @@ void CheckSweepJobLoads(const Sweep& sweep, const SweepJob& job) {
   try {
     const JobInputs in = ReadInputs(job);
     if (!in.scene.empty()) {
-      if (SceneRobotKind(in.scene) == "arm") {
+      if (SceneRobotKind(in.scene) == RobotKind::kArm) {
         LoadArmScene(in.scene, in.scene_overrides);
       } else {
         LoadScene(in.scene, in.scene_overrides);
       }
     }
     if (!in.model.empty()) {
-      if (ModelKind(in.model) == "arm") {
+      if (ModelFileRobot(in.model) == RobotKind::kArm) {
         LoadArmModel(in.model, in.model_overrides);
       } else {
         LoadOmniModel(in.model, in.model_overrides);
@@ -225,7 +218,7 @@ JobResult RunSweepJob(const Sweep& sweep, const SweepJob& job, const std::string
     const JobInputs in = ReadInputs(job);
     OutputFiles files(folder);
     if (sweep.command == "run") {
-      r.metrics = SceneRobotKind(in.scene) == "arm" ? RunArm(sweep, in, &files) : RunOmni(sweep, in, &files);
+      r.metrics = SceneRobotKind(in.scene) == RobotKind::kArm ? RunArm(sweep, in, &files) : RunOmni(sweep, in, &files);
     } else if (sweep.command == "replay") {
       r.metrics = Replay(in, &files);
     } else {

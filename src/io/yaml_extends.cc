@@ -23,12 +23,28 @@ void Overlay(YAML::Node base, const YAML::Node& over) {
 
 }  // namespace
 
-std::string ModelFileRobot(const std::string& path) {
+RobotKind ParseRobotKind(const YAML::Node& robot, const SourceLocation& where, const std::string& what) {
+  if (robot.IsScalar() && robot.Scalar() == "arm") return RobotKind::kArm;
+  if (robot.IsScalar() && robot.Scalar() == "omni") return RobotKind::kOmni;
+  throw InputError(where, "'robot': expected arm (" + what + " of an arm) or omni (the default), got '" +
+                              (robot.IsScalar() ? robot.Scalar() : std::string("a non-scalar")) + "'");
+}
+
+RobotKind ModelFileRobot(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext == ".urdf") return "arm";
-  const YAML::Node root = ResolveExtends(LoadYamlFile(path), path, 0, [](const YAML::Node&, const std::string&, int) {});
-  return root.IsMap() && root["robot"] && root["robot"].IsScalar() ? root["robot"].Scalar() : "omni";
+  if (ext == ".urdf") return RobotKind::kArm;
+  // Each file's own `robot` checked where it is written, the file's or a base's.
+  const auto check = [](const YAML::Node& root, const std::string& file, int) {
+    if (!root.IsMap() || !root["robot"]) return;
+    const YAML::Node robot = root["robot"];
+    ParseRobotKind(robot, {file, robot.Mark().line + 1, robot.Mark().column + 1}, "a model");
+  };
+  const YAML::Node own = LoadYamlFile(path);
+  check(own, path, 0);
+  const YAML::Node root = ResolveExtends(own, path, 0, check);
+  if (!root.IsMap() || !root["robot"]) return RobotKind::kOmni;
+  return ParseRobotKind(root["robot"], {path}, "a model");
 }
 
 YAML::Node ResolveExtends(const YAML::Node& root, const std::string& path, int depth, const CheckBaseFile& check_base) {

@@ -8,6 +8,9 @@
 #include <functional>
 #include <string>
 
+#include "core/error.h"
+#include "core/robot_kind.h"
+
 namespace twinsim {
 
 // Reads a model file's YAML (with its own `extends` resolved) at nesting `depth`; used
@@ -19,9 +22,14 @@ using CheckBaseFile = std::function<void(const YAML::Node& root, const std::stri
 // `check_base` throws for a base file.
 YAML::Node ResolveExtends(const YAML::Node& root, const std::string& path, int depth, const CheckBaseFile& check_base);
 
-// The kind of robot a model file describes: "arm" for URDF (.urdf), else the `robot`
-// value of the YAML with its `extends` chain resolved ("omni" when absent), so that a
-// file extending an arm's is an arm's. Throws InputError when the YAML cannot be read.
-std::string ModelFileRobot(const std::string& path);
+// The kind of robot a model file describes: an arm for URDF (.urdf), else the `robot`
+// value of the YAML with its `extends` chain resolved (omni when absent), so that a file
+// extending an arm's is an arm's. Throws InputError when the YAML cannot be read or
+// `robot` is neither arm nor omni.
+RobotKind ModelFileRobot(const std::string& path);
+
+// A `robot:` value: arm or omni; InputError at `where` (the key's place) for anything else,
+// `what` saying what the file is ("a model", "a scene").
+RobotKind ParseRobotKind(const YAML::Node& robot, const SourceLocation& where, const std::string& what);
 
 }  // namespace twinsim

@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "io/input_file.h"
+#include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "render/plot_spec.h"
 
@@ -467,14 +468,11 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
 
 }  // namespace
 
-std::string SceneRobotKind(const std::string& path) {
+RobotKind SceneRobotKind(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path);
-  if (!root.IsMap() || !root["robot"]) return "omni";
+  if (!root.IsMap() || !root["robot"]) return RobotKind::kOmni;
   const YAML::Node robot = root["robot"];
-  if (robot.IsScalar() && (robot.Scalar() == "arm" || robot.Scalar() == "omni")) return robot.Scalar();
-  throw InputError(SourceLocation{path, robot.Mark().line + 1, robot.Mark().column + 1},
-                   "'robot': expected arm (an arm scene) or omni (the default), got '" +
-                       (robot.IsScalar() ? robot.Scalar() : std::string("a non-scalar")) + "'");
+  return ParseRobotKind(robot, {path, robot.Mark().line + 1, robot.Mark().column + 1}, "a scene");
 }
 
 ArmScene LoadArmScene(const std::string& path) { return LoadArmScene(path, SceneOverrides{}); }

@@ -26,6 +26,7 @@
 #include "control/computed_torque.h"
 #include "control/iterative_learning.h"
 #include "control/writing_task.h"
+#include "core/robot_kind.h"
 #include "robots/arm/arm_model.h"
 #include "scene/arm_sensors.h"
 #include "scene/scene_overrides.h"
@@ -98,9 +99,9 @@ struct ArmScene {
   ArmSensorSpec sensors;             // what trajectory.csv records (default: exact q, qd, command)
 };
 
-// "arm" when the scene file's top level has `robot: arm`, else "omni". Throws InputError
+// An arm when the scene file's top level has `robot: arm`, else omni. Throws InputError
 // when the file cannot be read or `robot` names another kind.
-std::string SceneRobotKind(const std::string& path);
+RobotKind SceneRobotKind(const std::string& path);
 
 // Loads and validates an arm scene and the models it names; throws InputError listing
 // every problem as "path:line:column: ...".

@@ -28,7 +28,7 @@ std::string ArmSceneErrorOf(const std::string& yaml) {
 
 TEST(ArmScene, ShippedScenesLoadAndAreArmScenes) {
   const ArmScene bare = LoadArmScene(SourcePath("scenes/rrr_writing.yaml"));
-  EXPECT_EQ(SceneRobotKind(SourcePath("scenes/rrr_writing.yaml")), "arm");
+  EXPECT_EQ(SceneRobotKind(SourcePath("scenes/rrr_writing.yaml")), RobotKind::kArm);
   EXPECT_EQ(bare.name, "rrr_writing");
   EXPECT_EQ(bare.plant.name, "rrr");
   EXPECT_EQ(bare.hat.name, "rrr");
@@ -39,7 +39,7 @@ TEST(ArmScene, ShippedScenesLoadAndAreArmScenes) {
   EXPECT_EQ(tip.plant.name, "rrr_rod_tip");
   EXPECT_EQ(tip.hat.name, "rrr");
   EXPECT_EQ(tip.tracking.controller, TrackingController::kComputedTorque);
-  EXPECT_EQ(SceneRobotKind(SourcePath("scenes/drive45.yaml")), "omni");
+  EXPECT_EQ(SceneRobotKind(SourcePath("scenes/drive45.yaml")), RobotKind::kOmni);
 }
 
 TEST(ArmScene, TaskReferencesInClosedForm) {

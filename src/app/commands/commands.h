@@ -59,9 +59,4 @@ void AddDiagnoseCommand(CLI::App& app, int* exit_code);
 void AddBatchCommand(CLI::App& app, int* exit_code);
 void AddServeCommand(CLI::App& app, int* exit_code);
 
-// The kind of robot a model file describes: "arm" for URDF (.urdf) and for YAML with
-// `robot: arm` (its own or from the file it extends), else the YAML's `robot` value
-// ("omni" when absent). Throws InputError when a YAML file cannot be read.
-std::string ModelFileRobotKind(const std::string& path);
-
 }  // namespace twinsim

@@ -20,6 +20,7 @@
 #include "io/csv_table.h"
 #include "io/output_files.h"
 #include "io/printf_number.h"
+#include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
 #include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
@@ -346,15 +347,13 @@ void CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniComp
 
 int Compare(const CompareCliOptions& options) {
   // Check everything before running or writing anything.
-  const std::string kind = ModelFileRobotKind(options.models.front());
+  const RobotKind kind = ModelFileRobot(options.models.front());
   for (const std::string& path : options.models) {
-    if (ModelFileRobotKind(path) != kind)
-      throw InputError(SourceLocation{path}, "compare: every --model must be of one robot (the first is '" + kind + "')");
+    if (ModelFileRobot(path) != kind)
+      throw InputError(SourceLocation{path}, "compare: every --model must be of one robot (the first is '" +
+                                                 std::string(RobotKindName(kind)) + "')");
   }
-  if (kind == "arm") return CompareArm(options);
-  if (kind != "omni")
-    throw InputError(SourceLocation{options.models.front()},
-                     "compare of '" + kind + "' models is not available in this build (known: omni, arm)");
+  if (kind == RobotKind::kArm) return CompareArm(options);
   if (options.models.size() > 1)
     throw InputError("compare: an omni robot is compared on one --model (its backends side by side); got " +
                      std::to_string(options.models.size()));

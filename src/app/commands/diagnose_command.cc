@@ -12,6 +12,7 @@
 #include "diagnosis/omni_diagnosis.h"
 #include "identification/wls_identification.h"
 #include "io/atomic_file.h"
+#include "io/yaml_extends.h"
 #include "render/renderer.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model_yaml_writer.h"
@@ -37,7 +38,7 @@ int Diagnose(const DiagnoseCliOptions& options) {
   if (std::filesystem::exists(options.out) && !std::filesystem::is_directory(options.out)) {
     throw InputError("--out " + options.out + ": exists and is not a folder");
   }
-  const std::string kind = ModelFileRobotKind(options.model);
+  const RobotKind kind = ModelFileRobot(options.model);
   Progress progress("diagnose", !options.quiet);
   // The steps (identification, rounds of effects, the tables) are not known ahead: the
   // line shows the step and the time, not a bar.
@@ -50,7 +51,7 @@ int Diagnose(const DiagnoseCliOptions& options) {
   std::string model_yaml;
   std::string comment = "Repaired by twinsim diagnose from " + options.model + " and";
   for (const auto& log : options.logs) comment += "\n  " + log;
-  if (kind == "arm") {
+  if (kind == RobotKind::kArm) {
     const ArmModel model = LoadArmModel(options.model);
     std::string cutoff_brief;
     const std::vector<ArmLog> logs =
@@ -61,15 +62,13 @@ int Diagnose(const DiagnoseCliOptions& options) {
     if (!cutoff_brief.empty()) report.notes.insert(report.notes.begin(), "The logs' " + cutoff_brief + ".");
     if (!cutoff_brief.empty()) comment += "\n" + cutoff_brief;
     model_yaml = FormatArmModelYaml(repaired, comment + "\n" + DiagnosisVerdict(report));
-  } else if (kind == "omni") {
+  } else {
     const OmniModel model = LoadOmniModel(options.model);
     std::vector<OmniLog> logs;
     for (const auto& path : options.logs) logs.push_back(ReadOmniLogSayingHoles(path, options.select));
     OmniModel repaired;
     report = DiagnoseOmni(model, logs, options.diagnosis, &repaired, report_progress);
     model_yaml = FormatOmniModelYaml(repaired, comment + "\n" + DiagnosisVerdict(report));
-  } else {
-    throw InputError(SourceLocation{options.model, 1}, "robot: " + kind + " is not a robot diagnose knows (arm, omni)");
   }
   progress.Finish();
 

@@ -13,6 +13,7 @@
 #include "identification/identification_csv.h"
 #include "identification/wls_identification.h"
 #include "io/output_files.h"
+#include "io/yaml_extends.h"
 #include "render/plot.h"
 #include "render/renderer.h"
 #include "robots/arm/arm_log.h"
@@ -180,8 +181,6 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   }
   if (!EndsWithYaml(options.out))
     throw InputError("--out " + options.out + ": the identified model is written as YAML; give a .yaml or .yml path");
-  if (ModelFileRobotKind(options.model) != "arm")
-    throw InputError(SourceLocation{options.model}, "identify estimates an arm's parameters; this is not an arm model");
   WlsIdentificationOptions identification = options.identification;
   identification.weighted = !options.unweighted;
   identification.torque_offsets = options.offsets;
@@ -282,7 +281,7 @@ void WriteArmIdentifyReport(const std::string& report_dir, const ArmModel& model
 }
 
 int Identify(const IdentifyCliOptions& options) {
-  if (ModelFileRobotKind(options.model) == "omni") return IdentifyOmniCli(options);
+  if (ModelFileRobot(options.model) == RobotKind::kOmni) return IdentifyOmniCli(options);
   // Check everything before identifying or writing.
   std::vector<ArmOutputErrorOptions> stages;
   const WlsIdentificationOptions identification = CheckArmIdentifyOptions(options, &stages);

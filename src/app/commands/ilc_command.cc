@@ -153,7 +153,7 @@ void AddIlcCommand(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(0, 1000));
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] {
-    if (SceneRobotKind(options->scene) != "arm") {
+    if (SceneRobotKind(options->scene) != RobotKind::kArm) {
       throw InputError(SourceLocation{options->scene}, "twinsim ilc needs an arm scene (robot: arm)");
     }
     *exit_code = RunIlcCommand(*options);

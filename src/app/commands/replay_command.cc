@@ -126,11 +126,7 @@ std::string EngineAgainstItsFit(const OmniModel& model, const OmniLog& log, cons
 
 int Replay(const ReplayOptions& options) {
   // Check everything before writing anything.
-  const std::string kind = ModelFileRobotKind(options.model);
-  if (kind == "arm") return ReplayArm(options);
-  if (kind != "omni")
-    throw InputError(SourceLocation{options.model},
-                     "replay of '" + kind + "' models is not available in this build (known: omni, arm)");
+  if (ModelFileRobot(options.model) == RobotKind::kArm) return ReplayArm(options);
   const OmniModel model = LoadOmniModel(options.model);
   const OmniLog log = ReadOmniLogSayingHoles(options.log, options.select);
   OmniReplayOptions replay;
@@ -198,8 +194,6 @@ int Replay(const ReplayOptions& options) {
 }
 
 }  // namespace
-
-std::string ModelFileRobotKind(const std::string& path) { return ModelFileRobot(path); }
 
 void AddReplayCommand(CLI::App& app, int* exit_code) {
   auto options = std::make_shared<ReplayOptions>();

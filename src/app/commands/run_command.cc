@@ -107,7 +107,7 @@ int RunEnsemble(const Scene& scene, const std::string& backend, const RunOptions
 }
 
 int Run(const RunOptions& options) {
-  if (SceneRobotKind(options.scene) == "arm") {
+  if (SceneRobotKind(options.scene) == RobotKind::kArm) {
     if (options.driving_noise != "model") throw InputError("--driving-noise is for omni robots; " + options.scene + " is an arm scene");
     if (options.samples > 0) throw InputError("--samples draws omni robots' driving noise; " + options.scene + " is an arm scene");
     return RunArm(options);

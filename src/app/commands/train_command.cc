@@ -12,6 +12,7 @@
 #include "core/progress.h"
 #include "engines/omni_engine.h"
 #include "io/output_files.h"
+#include "io/yaml_extends.h"
 #include "learning/arm_predictor.h"
 #include "learning/omni_predictor.h"
 #include "robots/arm/arm_log.h"
@@ -85,7 +86,7 @@ int TrainArm(const TrainCliOptions& options) {
 }
 
 int Train(const TrainCliOptions& options) {
-  if (ModelFileRobotKind(options.model) == "arm") return TrainArm(options);
+  if (ModelFileRobot(options.model) == RobotKind::kArm) return TrainArm(options);
   if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
   if ((options.nominal_errors || options.nominal_engine || options.nominal_substeps) && !options.residual)
     throw InputError("--nominal-engine, --nominal-substeps and --nominal-errors are for residual predictors only "
