@@ -179,7 +179,7 @@ void ArmPredictor::Save(const std::string& path) const {
 
 ArmPredictor ArmPredictor::Load(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path);
-  CheckPredictorRobot(root, path, "arm");
+  CheckPredictorRobot(root, path, RobotKind::kArm);
   ErrorList errors;
   YamlMap top(root, path, "", &errors);
   const int version = ReadPredictorVersion(top, "arm predictor", 1, kArmPredictorFormatVersion);

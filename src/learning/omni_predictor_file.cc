@@ -69,7 +69,7 @@ void OmniPredictor::Save(const std::string& path) const {
 
 OmniPredictor OmniPredictor::Load(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path);
-  CheckPredictorRobot(root, path, "omni");
+  CheckPredictorRobot(root, path, RobotKind::kOmni);
   ErrorList errors;
   YamlMap top(root, path, "", &errors);
   const int version = ReadPredictorVersion(top, "predictor", kPredictorFormatVersion, kResidualPredictorFormatVersion);

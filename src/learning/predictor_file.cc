@@ -18,18 +18,19 @@ std::string PredictorFileRobot(const YAML::Node& root) {
   return "omni";
 }
 
-void CheckPredictorRobot(const YAML::Node& root, const std::string& path, const std::string& expected) {
+void CheckPredictorRobot(const YAML::Node& root, const std::string& path, RobotKind expected) {
   const std::string robot = PredictorFileRobot(root);
-  if (robot == expected) return;
+  if (robot == RobotKindName(expected)) return;
   SourceLocation where{path};
   if (root.IsMap() && root["robot"]) where.line = root["robot"].Mark().line + 1;
   else if (root.IsMap() && root["twinsim_predictor"]) where.line = root["twinsim_predictor"].Mark().line + 1;
-  const std::string hint = expected == "arm"
+  const bool arm = expected == RobotKind::kArm;
+  const std::string hint = arm
                                ? "train one for the arm with 'twinsim train --model ARM_MODEL --log ARM_LOG ...'"
                                : "train one for the omni robot with 'twinsim train --model OMNI_MODEL --log OMNI_LOG ...'";
   const std::string what = robot == "arm" ? "an arm" : robot == "omni" ? "an omni robot" : "a robot of kind '" + robot + "'";
   throw InputError(where, "this is a predictor for " + what +
-                              ", not for " + (expected == "arm" ? "an arm" : "an omni robot") + "; " + hint);
+                              ", not for " + (arm ? "an arm" : "an omni robot") + "; " + hint);
 }
 
 int ReadPredictorVersion(YamlMap& top, const std::string& what, int oldest, int newest) {

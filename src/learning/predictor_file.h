@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/robot_kind.h"
 #include "io/yaml_reader.h"
 #include "learning/mlp.h"
 
@@ -34,9 +35,9 @@ namespace twinsim {
 // absent (the omni format predates the key).
 std::string PredictorFileRobot(const YAML::Node& root);
 
-// Throws InputError "path:line: this is an omni predictor ... (use)" when the file's
-// robot is not `expected` ("arm" or "omni"); `use` says who wanted it.
-void CheckPredictorRobot(const YAML::Node& root, const std::string& path, const std::string& expected);
+// Throws InputError "path:line: this is a predictor for an omni robot, not for an arm;
+// train one ..." when the file's robot is not `expected`.
+void CheckPredictorRobot(const YAML::Node& root, const std::string& path, RobotKind expected);
 
 // Reads the root's `twinsim_predictor` version (and marks `robot`, which
 // CheckPredictorRobot() checked, as known). Throws InputError "WHAT format version V is
