@@ -27,24 +27,24 @@ void BM_ReplayMinute(benchmark::State& state) {
   const OmniModel model = Model();
   OmniReplayOptions o;
   o.backend = state.range(0) == 0 ? "analytic" : "ode";
-  o.state = state.range(1) == 0 ? "tracker" : "observer";
+  o.state = state.range(1) == 0 ? OmniReplayState::kTracker : OmniReplayState::kObserver;
   double rmse = 0;
   for (auto _ : state) rmse = PositionRmse(Minute().log, ReplayOmniLog(model, Minute().log, o));
   state.counters["rmse_mm"] = 1000 * rmse;
   state.counters["frames"] = static_cast<double>(Minute().log.rows.size());
-  state.SetLabel(o.backend + ", " + o.state);
+  state.SetLabel(o.backend + ", " + OmniReplayStateName(o.state));
 }
 BENCHMARK(BM_ReplayMinute)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 void BM_IdentifyMinute(benchmark::State& state) {
   const OmniModel model = Model();
   OmniIdentificationOptions options;
-  options.state = state.range(0) == 0 ? "tracker" : "observer";
+  options.state = state.range(0) == 0 ? OmniReplayState::kTracker : OmniReplayState::kObserver;
   OmniIdentificationReport report;
   for (auto _ : state) report = IdentifyOmni(model, {Minute().log}, {}, options, nullptr);
   state.counters["evaluations"] = report.evaluations;
   state.counters["held_out_mm"] = 1000 * report.Gap(report.held_out, "identified model")->rmse;
-  state.SetLabel(options.state);
+  state.SetLabel(OmniReplayStateName(options.state));
 }
 BENCHMARK(BM_IdentifyMinute)->DenseRange(0, 1)->Unit(benchmark::kSecond)->Iterations(1);
 

@@ -68,10 +68,9 @@ Array ReplayOmni(const OmniModel& model, const py::handle& log, const std::strin
   OmniReplayOptions options;
   options.backend = backend;
   options.horizon = horizon;
-  options.state = state;
   options.backend_options.predictor = OmniPredictorArg(predictor);
   std::string why;
-  if (!options.IsValid(&why)) throw InputError(why);
+  if (!ParseOmniReplayState(state, &options.state, &why, "state") || !options.IsValid(&why)) throw InputError(why);
   const OmniReplayResult r = ReplayOmniLog(model, l, options);
   Array out = NewArray(static_cast<py::ssize_t>(r.t.size()), 4);
   double* p = out.mutable_data();

@@ -38,7 +38,7 @@ struct HorizonStretch {
 
 struct HorizonOptions {
   std::string backend = "analytic";
-  std::string state = "observer";
+  OmniReplayState state = OmniReplayState::kObserver;
   double delay = 0;  // s, the integrated command's
   double radius = 0.09;  // m, weighs the heading error (a point on the rim)
   int threads = 0;

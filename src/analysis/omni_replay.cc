@@ -15,9 +15,17 @@
 
 namespace twinsim {
 
-bool IsReplayState(const std::string& state, std::string* why, const std::string& what) {
-  if (state == "observer" || state == "tracker") return true;
-  if (why) *why = what + " must be observer or tracker, got '" + state + "'";
+const char* OmniReplayStateName(OmniReplayState state) {
+  return state == OmniReplayState::kTracker ? "tracker" : "observer";
+}
+
+bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why, const std::string& what) {
+  for (OmniReplayState s : {OmniReplayState::kObserver, OmniReplayState::kTracker}) {
+    if (word != OmniReplayStateName(s)) continue;
+    *state = s;
+    return true;
+  }
+  if (why) *why = what + " must be observer or tracker, got '" + word + "'";
   return false;
 }
 
@@ -34,7 +42,7 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
     return fail("a prediction's covariance and shorter horizons come from predictions K >= 1 frames ahead");
   for (int h : also)
     if (h < 1 || h >= horizon) return fail("a shorter horizon must lie in 1.." + std::to_string(horizon - 1) + ", got " + std::to_string(h));
-  return IsReplayState(state, why) && observer.IsValid(why);
+  return observer.IsValid(why);
 }
 
 bool OmniReplayOptions::OnStride(int frame, int since_warm_up) const {
@@ -127,7 +135,7 @@ void RecordInput(const OmniObserver& observer, std::size_t row, OmniReplayResult
   out->input_feature[row] = observer.InputFeature();
 }
 
-// The observer's replay (OmniReplayOptions::state "observer"): the filter runs along the
+// The observer's replay (OmniReplayOptions::state kObserver): the filter runs along the
 // log; each prediction (or the stretch's free run) starts from its estimate.
 void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                     const std::function<void(int, int)>& progress, std::size_t stretch_first, std::size_t stretch_last,
@@ -445,8 +453,8 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     return out;
   }
 
-  if (options.state == "observer" && backend->has_velocity_state()) {
-    SizeResult(log, options, "observer", options.covariance || options.samples > 0, &out);
+  if (options.state == OmniReplayState::kObserver && backend->has_velocity_state()) {
+    SizeResult(log, options, OmniReplayStateName(OmniReplayState::kObserver), options.covariance || options.samples > 0, &out);
     ObserverReplay(model, log, options, progress, stretch_first, stretch_last, tl.row_of_frame, tl.command_at, check,
                    std::move(backend), &out);
     HoldUnpredictedSamples(options.samples, &out);
@@ -460,7 +468,7 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
     samples.emplace(LearnedDrivingNoise(model, options.backend_options.predictor.get()), options, 1.0 / timing.frame_rate);
     out.measurement_covariance = MeasurementCovariance(model);
   }
-  SizeResult(log, options, "tracker", options.samples > 0, &out);
+  SizeResult(log, options, OmniReplayStateName(OmniReplayState::kTracker), options.samples > 0, &out);
   TrackerReplay(*backend, log, options, tl, check, progress, stretch_first, stretch_last, samples ? &*samples : nullptr, &out);
   HoldUnpredictedSamples(options.samples, &out);
   out.bounded_steps = backend->bounded_steps();

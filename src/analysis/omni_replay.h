@@ -37,9 +37,16 @@ namespace twinsim {
 
 inline constexpr int kWarmUpFrames = 15;
 
-// The names OmniReplayOptions::state takes ("observer", "tracker"); `what` ("--state")
-// names the option in the message. True when `state` is one, else says why in *why.
-bool IsReplayState(const std::string& state, std::string* why, const std::string& what = "--state");
+// How a prediction's start state is estimated (above).
+enum class OmniReplayState { kObserver, kTracker };
+
+// Its word on the command line and in results: "observer", "tracker".
+const char* OmniReplayStateName(OmniReplayState state);
+
+// The state a word names into *state; false for another word, saying why in *why, `what`
+// ("--state") naming the option.
+bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why,
+                          const std::string& what = "--state");
 
 struct OmniReplayOptions {
   std::string backend = "ode";
@@ -55,9 +62,9 @@ struct OmniReplayOptions {
   // it (K and `also`) where less than K. Fits that score some blocks only predict nothing
   // they throw away. The tracker predicts all K wherever it is not 0.
   std::function<int(int)> reach;
-  // How the start state is estimated: "observer" or "tracker" (see above). The learned
-  // backend always uses the tracker.
-  std::string state = "observer";
+  // How the start state is estimated (see above). The learned backend always uses the
+  // tracker.
+  OmniReplayState state = OmniReplayState::kObserver;
   OmniObserverOptions observer;
   // With samples N > 0 (K >= 1), N draws of each predicted pose, from a stream seeded by
   // `seed`. The observer's state: from the filter's prediction K frames ahead, its mean
@@ -92,7 +99,9 @@ struct OmniReplayResult {
   std::vector<Pose2> pose;           // predicted (or held measured) pose per row
   std::vector<bool> predicted;       // false where the measured pose was held
   int delay_frames = 0;              // D used
-  std::string state;                 // the state estimate used: "observer" or "tracker"
+  // The state estimate used: "observer" or "tracker" (OmniReplayStateName); "none" for a
+  // free run, a baseline's name for a baseline (analysis/omni_baselines.h).
+  std::string state;
   // Learned backend: steps on which the predictor was held to the bounds of its training
   // data (it left what it learned); the user is told.
   long bounded_steps = 0;

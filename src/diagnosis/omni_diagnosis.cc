@@ -35,15 +35,15 @@ namespace {
 // ahead the pattern shows again (all 15 cases named, at 30 fps; at 0.25 s 14 of 15: a
 // speed limit of 1 m/s went unnamed). Before issue 63 the diagnosis read the open-loop
 // tracker's 4-frame residual, which users never replay.
-constexpr const char* kDiagnosisState = "observer";
+constexpr OmniReplayState kDiagnosisState = OmniReplayState::kObserver;
 constexpr double kSelectionSeconds = 0.5;
 // The free runs beside the residuals (the response's lag, the report's paths) start
 // from the tracker: a free run never sees a measurement after its start.
-constexpr const char* kTrackerState = "tracker";
-constexpr const char* kFreeRunState = kTrackerState;
+constexpr OmniReplayState kTrackerState = OmniReplayState::kTracker;
+constexpr OmniReplayState kFreeRunState = kTrackerState;
 // The report's every-horizon table, though, is what a user's replay gives: predictions
 // from the observer's estimate, as the contract's replay makes them.
-constexpr const char* kReportState = "observer";
+constexpr OmniReplayState kReportState = OmniReplayState::kObserver;
 
 constexpr int kFitStride = 4;     // fits predict from every fourth frame (consecutive predictions overlap)
 constexpr int kMaxCeresIterations = 8;
@@ -209,7 +209,7 @@ class OmniProblem : public DiagnosisProblem {
   }
 
   ReplayResidual Residual(const OmniModel& model, const OmniLogData& d, int stride, int horizon,
-                          const char* state = kDiagnosisState) const {
+                          OmniReplayState state = kDiagnosisState) const {
     OmniReplayOptions o;
     o.backend = options_.backend;
     o.horizon = horizon;

@@ -749,7 +749,7 @@ bool OmniIdentificationOptions::IsValid(std::string* why) const {
   if (backend == "learned") return fail("--backend: identification fits a physical model (analytic, ode or bullet)");
   if (safeguard != "blocks" && safeguard != "logs" && safeguard != "off")
     return fail("--safeguard must be blocks, logs or off, got '" + safeguard + "'");
-  return IsReplayState(state, why);
+  return true;
 }
 
 const OmniGap* OmniIdentificationReport::Gap(const std::vector<OmniGap>& gaps, const std::string& name) const {
@@ -838,7 +838,7 @@ std::array<bool, 3> ChooseFreeParameters(const std::vector<OmniLog>& logs, const
     if (a == 1) tied.insert(tied.end(), {kTurnY, kCrossXY});
     for (int p : tied) fit->pruned[p] = std::string("not excited: the fit blocks never command ") + kOmniAxisNames[a];
   }
-  if (options.state != "observer") {
+  if (options.state != OmniReplayState::kObserver) {
     for (int p : {kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale})
       fit->pruned[p] = "the open-loop tracker (--state tracker) has no observer";
   }
@@ -1003,7 +1003,7 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
                    OmniIdentificationReport* report) {
   model->observer.interval_scale.clear();  // the given model's belong to its own fit; fitted anew below
   model->observer.seen_inputs = {};
-  if (options.state != "observer") return;
+  if (options.state != OmniReplayState::kObserver) return;
   std::vector<OmniBlockedStretch> views;
   for (const Segment& s : segments) views.push_back(View(s));
   OmniNoiseOptions noise_options;
@@ -1080,7 +1080,7 @@ void SafeguardOnLeftOutLogs(const OmniModel& nominal, const std::vector<OmniLog>
                             const OmniIdentificationOptions& options,
                             const std::function<void(int, const std::string&)>& say, OmniModel* model,
                             OmniIdentificationReport* report) {
-  if (options.safeguard == "logs" && options.state == "observer") {
+  if (options.safeguard == "logs" && options.state == OmniReplayState::kObserver) {
     report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, report->safeguard, say);
     model->observer.interval_scale = report->safeguard.Scales();
   }
@@ -1188,9 +1188,9 @@ std::vector<OmniGap> HeldOutGaps(const std::vector<Segment>& segments, const Omn
   out.push_back(ToGap(n, "nominal model"));
   out.push_back(ToGap(i, "identified model"));
   out.push_back(ToGap(c, "constant velocity"));
-  if (options.state == "observer") {
+  if (options.state == OmniReplayState::kObserver) {
     OmniIdentificationOptions tracker = options;
-    tracker.state = "tracker";
+    tracker.state = OmniReplayState::kTracker;
     out.push_back(ToGap(ScoreHeldOut(segments, &model, validation_only, tracker, r), "identified model, open-loop tracker"));
   }
   if (!validation_only) report->held_out_rows = static_cast<int>(i.rows);

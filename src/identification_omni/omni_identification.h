@@ -43,10 +43,10 @@ namespace twinsim {
 struct OmniIdentificationOptions {
   std::string backend = "analytic";  // the physics that replays the model
   int horizon = 4;                   // frames predicted ahead (the contract's replay K)
-  // How each prediction's start state is estimated (analysis/omni_replay.h): "observer",
-  // the model's Kalman filter, whose driving noise (driving_noise:) is fitted with the rest (the
-  // prediction-error method); or "tracker", the open-loop response with corrected poses.
-  std::string state = "observer";
+  // How each prediction's start state is estimated (analysis/omni_replay.h): the model's
+  // Kalman filter (kObserver), whose driving noise (driving_noise:) is fitted with the rest
+  // (the prediction-error method); or the open-loop response with corrected poses (kTracker).
+  OmniReplayState state = OmniReplayState::kObserver;
   double held_out = 0.3;             // share of each log's time blocks held out from the fit
   double block_seconds = 0;          // s; 0 = automatic (a 20th of the longest log, 0.5 to 10 s)
   int stride = 4;                    // the fit predicts from every stride-th frame

@@ -48,7 +48,7 @@ TEST(TrackerSamples, ARobotAtRestSpreadsAsItsSlipIntegrates) {
   const OmniLog log = StandingLog(3, 60);
   OmniReplayOptions o;
   o.backend = "analytic";
-  o.state = "tracker";
+  o.state = OmniReplayState::kTracker;
   o.horizon = 30;
   o.also = {6};
   o.samples = 400;

@@ -254,7 +254,7 @@ TEST(Calibration, ShorterHorizonsOnTheWayAreTheSamePredictions) {
   bad.also = {16};
   EXPECT_THROW(ReplayOmniLog(model, rec.log, bad), InputError);
   bad.also = {4};
-  bad.state = "tracker";
+  bad.state = OmniReplayState::kTracker;
   EXPECT_THROW(ReplayOmniLog(model, rec.log, bad), InputError);
 }
 

@@ -22,7 +22,7 @@ class OmniReplayTest : public ::testing::Test {
   OmniReplayTest() {
     model.vision_noise_xy = model.vision_noise_theta = 0;
     options.backend = "analytic";
-    options.state = "tracker";
+    options.state = OmniReplayState::kTracker;
   }
   OmniModel model = testing::Omni4();
   OmniReplayOptions options;
@@ -49,7 +49,7 @@ TEST_F(OmniReplayTest, SameModelPredictsItsOwnLogFourFramesAhead) {
 // predicts the log to a fraction of a millimetre.
 TEST_F(OmniReplayTest, TheObserverPredictsTheSameModelsLogFromItsFirstRow) {
   const OmniLog log = RecordReplayLog(model, 20);
-  options.state = "observer";
+  options.state = OmniReplayState::kObserver;
   const OmniReplayResult r = ReplayOmniLog(model, log, options);
   EXPECT_EQ(r.state, "observer");
   const int first = kWarmUpFrames + 4;

@@ -18,7 +18,7 @@ OmniModel ResemblingModel(const testing::WanderingPlant& plant) {
   return testing::ResemblingModel(testing::Omni4(), plant);
 }
 
-OmniReplayOptions Options(const std::string& state, int horizon = 4) {
+OmniReplayOptions Options(OmniReplayState state, int horizon = 4) {
   OmniReplayOptions o;
   o.backend = "analytic";
   o.horizon = horizon;
@@ -33,8 +33,8 @@ TEST(OmniObserver, PredictsAWanderingRobotBetterThanNoModelAndTheTracker) {
   const testing::WanderingPlant plant;
   const testing::PlantRecording rec = testing::RecordWanderingPlant(plant, 60, 5);
   const OmniModel model = ResemblingModel(plant);
-  const OmniReplayResult observed = ReplayOmniLog(model, rec.log, Options("observer"));
-  const OmniReplayResult tracked = ReplayOmniLog(model, rec.log, Options("tracker"));
+  const OmniReplayResult observed = ReplayOmniLog(model, rec.log, Options(OmniReplayState::kObserver));
+  const OmniReplayResult tracked = ReplayOmniLog(model, rec.log, Options(OmniReplayState::kTracker));
   EXPECT_EQ(observed.state, "observer");
   EXPECT_EQ(tracked.state, "tracker");
   const double obs = PositionRmse(rec.log, observed);
@@ -242,10 +242,10 @@ TEST(OmniObserver, RunsOnOdeAndBulletAsOnTheAnalyticModel) {
   const testing::WanderingPlant plant;
   const testing::PlantRecording rec = testing::RecordWanderingPlant(plant, 15, 3);
   const OmniModel model = ResemblingModel(plant);
-  const double analytic = PositionRmse(rec.log, ReplayOmniLog(model, rec.log, Options("observer")));
+  const double analytic = PositionRmse(rec.log, ReplayOmniLog(model, rec.log, Options(OmniReplayState::kObserver)));
   for (const std::string& engine : AvailableOmniBackends()) {
     if (engine == "analytic" || engine == "learned") continue;
-    OmniReplayOptions o = Options("observer");
+    OmniReplayOptions o = Options(OmniReplayState::kObserver);
     o.backend = engine;
     const OmniReplayResult r = ReplayOmniLog(model, rec.log, o);
     EXPECT_EQ(r.state, "observer");
@@ -263,10 +263,13 @@ TEST(OmniObserver, RefusesBadInput) {
   OmniObserver observer(model, "analytic", 60);
   EXPECT_THROW(observer.PredictAhead(4), std::logic_error);
   EXPECT_THROW(observer.AddFrame(Pose2{std::nan(""), 0, 0}, Twist2{}), InputError);
-  OmniReplayOptions o = Options("kalman");
+  OmniReplayState state = OmniReplayState::kTracker;
   std::string why;
-  EXPECT_FALSE(o.IsValid(&why));
-  EXPECT_NE(why.find("observer or tracker"), std::string::npos) << why;
+  EXPECT_FALSE(ParseOmniReplayState("kalman", &state, &why));
+  EXPECT_NE(why.find("--state must be observer or tracker, got 'kalman'"), std::string::npos) << why;
+  EXPECT_EQ(state, OmniReplayState::kTracker);  // untouched
+  ASSERT_TRUE(ParseOmniReplayState("observer", &state, &why));
+  EXPECT_EQ(state, OmniReplayState::kObserver);
 }
 
 }  // namespace

@@ -158,7 +158,7 @@ TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
   // steps: the plant lost traction wherever it was placed), 2.09 and 2.63 (1.26x).
   OmniIdentificationOptions own = options;
   own.backend = c.backend;
-  own.state = "tracker";
+  own.state = OmniReplayState::kTracker;
   const OmniGap floor = OmniHeldOutGap(plant, logs, own, "plant", plant.chassis_radius);
   const OmniGap* ident = report.Gap(report.held_out, "identified model");
   const OmniGap* cv = report.Gap(report.held_out, "constant velocity");
@@ -350,8 +350,8 @@ TEST(OmniIdentification, RefusesALogWhereNothingMoves) {
     rows.push_back(r);
   }
   const OmniLog still = ParseOmniLog(FormatOmniLog(rows), "still.csv");
-  for (const char* state : {"observer", "tracker"}) {
-    SCOPED_TRACE(state);
+  for (OmniReplayState state : {OmniReplayState::kObserver, OmniReplayState::kTracker}) {
+    SCOPED_TRACE(OmniReplayStateName(state));
     OmniIdentificationOptions options;
     options.state = state;
     try {

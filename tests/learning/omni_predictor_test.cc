@@ -320,7 +320,7 @@ TEST(OmniLearnedVsNewtonian, LearnedWinsOnAPlantWithUnmodelledEffects) {
   options.kind = "mlp";
   auto learned = std::make_shared<OmniPredictor>(TrainOmniPredictor(newtonian, {train}, options));
 
-  auto rmse = [&](const std::string& backend, int horizon, const std::string& state = "observer") {
+  auto rmse = [&](const std::string& backend, int horizon, OmniReplayState state = OmniReplayState::kObserver) {
     OmniReplayOptions o;
     o.backend = backend;
     o.horizon = horizon;
@@ -329,7 +329,7 @@ TEST(OmniLearnedVsNewtonian, LearnedWinsOnAPlantWithUnmodelledEffects) {
     return PositionRmse(test, ReplayOmniLog(newtonian, test, o));
   };
   // The seed's comparison: the Newtonian model's open-loop response with corrected poses.
-  const double tracked4 = rmse("ode", 4, "tracker"), learned4 = rmse("learned", 4);
+  const double tracked4 = rmse("ode", 4, OmniReplayState::kTracker), learned4 = rmse("learned", 4);
   EXPECT_LE(learned4, 0.5 * tracked4) << "4 frames: learned " << learned4 << " m, Newtonian tracked " << tracked4 << " m";
   // The Newtonian model with its observer (velocity from the camera) closes much of
   // that gap, but not all: the plant's lag, drift and limits are not in it.

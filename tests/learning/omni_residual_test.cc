@@ -141,7 +141,7 @@ TEST_F(ResidualPredictor, IsTheNewtonianModelWhereItsCorrectionIsZero) {
   OmniReplayOptions o;
   o.horizon = 4;
   o.backend = "analytic";
-  o.state = "tracker";  // the residual's nominal track is the open-loop tracker's
+  o.state = OmniReplayState::kTracker;  // the residual's nominal track is the open-loop tracker's
   const OmniReplayResult nominal = ReplayOmniLog(model, *test_, o);
   o.backend = "learned";
   o.backend_options.predictor = zero;

@@ -13,6 +13,8 @@ namespace twinsim {
 // A number option's value must be a number greater than zero / not below zero.
 CLI::Validator PositiveNumber();
 CLI::Validator NonNegativeNumber();
+// --state's words (observer, tracker) onto the replay's state, any other refused.
+CLI::Validator OmniReplayStateWords();
 // Every number option is finite, and an unsigned one (a seed) is not negative; applied to
 // all options of `app` and its subcommands by main().
 void CheckNumberOptions(CLI::App* app);

@@ -418,8 +418,9 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--state", options->omni.state,
                   "Omni: each prediction starts from the model's Kalman filter (observer; its driving noise is fitted "
                   "too) or from the open-loop tracker (tracker)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"observer", "tracker"}));
+      ->type_name("TEXT")
+      ->transform(OmniReplayStateWords())
+      ->default_str(OmniReplayStateName(options->omni.state));
   cmd->add_option("--max-delay", options->omni.max_delay, "Omni: s, the longest total delay searched")->capture_default_str();
   cmd->add_flag("!--no-noise", options->omni.noise,
                 "Omni: keep the prediction-error fit's noise; without it the driving noise is identified anew for "

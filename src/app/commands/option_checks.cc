@@ -7,6 +7,7 @@
 
 #include "app/commands/commands.h"
 #include "analysis/derivative_cutoff.h"
+#include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "robots/arm/arm_log.h"
 #include "robots/omni/omni_log.h"
@@ -31,6 +32,18 @@ CLI::Validator PositiveNumber() {
         return v > 0 && std::isfinite(v) ? std::string() : "must be a positive number, got " + text;
       },
       "POSITIVE", "positive");
+}
+
+CLI::Validator OmniReplayStateWords() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        OmniReplayState state = OmniReplayState::kObserver;
+        std::string why;
+        if (!ParseOmniReplayState(text, &state, &why)) return "must be observer or tracker, got '" + text + "'";
+        text = std::to_string(static_cast<int>(state));  // what CLI11 reads into the enum
+        return std::string();
+      },
+      "{observer,tracker}", "state");
 }
 
 CLI::Validator NonNegativeNumber() {

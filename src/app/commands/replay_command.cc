@@ -34,7 +34,7 @@ struct ReplayOptions {
   std::string out;
   std::string backend;  // "": the engine the model was fitted on, else ode
   int horizon = 4;
-  std::string state = "observer";
+  OmniReplayState state = OmniReplayState::kObserver;
   std::string predictor;
   std::string cutoff = "10";  // arms: Hz, or auto (AddDerivativeCutoffOption)
   int samples = 0;             // omni: draws per row (0: the mean only)
@@ -102,7 +102,7 @@ std::string EngineAgainstItsFit(const OmniModel& model, const OmniLog& log, cons
   OmniReplayOptions o = asked;
   o.backend = model.fitted_on;
   o.covariance = true;
-  if (o.state == "observer") o.samples = 0;  // the filter's covariance needs no draws (the tracker's does)
+  if (o.state == OmniReplayState::kObserver) o.samples = 0;  // the filter's covariance needs no draws (the tracker's does)
   const OmniReplayResult fitted = ReplayOmniLog(model, log, o);
   const double chi2_90 = -2 * std::log(0.1);  // two dimensions
   int rows = 0, outside = 0;
@@ -225,8 +225,9 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
       ->capture_default_str()
       ->check(NonNegativeNumber());
   cmd->add_option("--state", options->state, "Omni: how the measured state is estimated: observer or tracker")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"observer", "tracker"}));
+      ->type_name("TEXT")
+      ->transform(OmniReplayStateWords())
+      ->default_str(OmniReplayStateName(options->state));
   AddDerivativeCutoffOption(cmd, &options->cutoff);
   cmd->add_option("--samples", options->samples,
                   "Omni: N draws per row, written as t,sample,x,y,theta. The observer's state: from its prediction "
