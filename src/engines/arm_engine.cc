@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/engine_names.h"
 #include "core/error.h"
 #include "engines/analytic/analytic_arm_engine.h"
 #include "robots/arm/arm_effects.h"
@@ -66,7 +67,7 @@ std::unique_ptr<ArmEngine> MakeArmEngine(const std::string& name, const ArmModel
                                            const ArmEngineOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw InputError("arm backend options: " + why);
-  if (name != "analytic" && name != "ode" && name != "bullet") {
+  if (!IsKnownEngine(name)) {
     throw InputError("unknown arm backend '" + name + "' (known: analytic, ode, bullet)");
   }
   if (const std::string problems = model.Validate(); !problems.empty()) {

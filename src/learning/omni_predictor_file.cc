@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/engine_names.h"
 #include "io/yaml_reader.h"
 #include "learning/omni_predictor.h"
 #include "learning/predictor_file.h"
@@ -98,7 +99,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   if (info.layout.residual) {
     if (top.Has("nominal")) {
       YamlMap n(top.Child("nominal"), path, "nominal", &errors);
-      n.Require("engine", &info.nominal_engine, std::vector<std::string>{"analytic", "ode", "bullet"});
+      n.Require("engine", &info.nominal_engine, KnownEngines());
       n.Require("substeps", &info.nominal_substeps, InRange(1, 1000));
       n.Require("model_fingerprint", &info.nominal_fingerprint);
       n.Finish();

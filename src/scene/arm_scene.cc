@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/engine_names.h"
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "io/input_file.h"
@@ -407,7 +408,7 @@ ArmScene ReadArmScene(const YAML::Node& root, const std::string& path, const fs:
   top.Require("name", &scene.name);
   std::string robot;
   top.Require("robot", &robot, std::vector<std::string>{"arm"});
-  top.Get("backend", &scene.backend, {"analytic", "ode", "bullet", "learned"});
+  top.Get("backend", &scene.backend, KnownBackends());
   double seed = 1;
   if (top.Get("seed", &seed, InRange(0, 9007199254740992.0))) scene.seed = static_cast<std::uint64_t>(seed);
 

@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/engine_names.h"
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "io/input_file.h"
@@ -134,7 +135,7 @@ void ReadRobotBackend(YamlMap& r, const fs::path& base_dir,
   RobotBackendAt where{r.Where(), r.Where()};
   if (r.Has("backend")) {
     where.backend = r.Where(r.Child("backend"));
-    if (r.Get("backend", &robot->backend, {"analytic", "ode", "bullet", "learned"})) {
+    if (r.Get("backend", &robot->backend, KnownBackends())) {
       const std::vector<std::string> built = AvailableOmniBackends();
       if (std::find(built.begin(), built.end(), robot->backend) == built.end()) {
         std::string upper = robot->backend;
@@ -269,7 +270,7 @@ Scene ReadScene(const YAML::Node& root, const std::string& path, const fs::path&
   scene.path = path;
   YamlMap top(root, path, "", &errors);
   top.Require("name", &scene.name);
-  top.Get("backend", &scene.backend, {"analytic", "ode", "bullet", "learned"});
+  top.Get("backend", &scene.backend, KnownBackends());
   top.Get("frame_rate", &scene.frame_rate, InRange(1, 1000));
   top.Get("physics_substeps", &scene.physics_substeps, InRange(0, 1000));
   top.Require("duration", &scene.duration, InRange(1e-3, 24 * 3600));

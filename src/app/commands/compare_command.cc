@@ -14,6 +14,7 @@
 #include "analysis/learned_noise.h"
 #include "app/commands/commands.h"
 #include "backends/omni_backend_factory.h"
+#include "core/engine_names.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "engines/omni_engine.h"
@@ -332,7 +333,7 @@ void CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniComp
       calibration->emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled));
       continue;
     }
-    if (s.backend != "analytic" && s.backend != "ode" && s.backend != "bullet") continue;
+    if (!IsKnownEngine(s.backend)) continue;
     progress->Update(0, 1, s.label + ", calibration");
     const std::vector<int> horizons{4, 16, 63};
     const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride);

@@ -8,6 +8,7 @@
 #include "analysis/learned_noise.h"
 #include "analysis/omni_replay.h"
 #include "app/commands/commands.h"
+#include "core/engine_names.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "engines/omni_engine.h"
@@ -200,7 +201,7 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
   cmd->add_option_function<std::string>(
          "--nominal-engine", [options](const std::string& v) { options->nominal_engine = v; },
          "Omni, with --residual: the engine of the model it corrects (analytic, ode, bullet; default analytic)")
-      ->check(CLI::IsMember({"analytic", "ode", "bullet"}));
+      ->check(CLI::IsMember(KnownEngines()));
   cmd->add_option_function<int>(
       "--nominal-substeps", [options](const int& v) { options->nominal_substeps = v; },
       "Omni, with --residual: physics steps per frame of the model it corrects (default: a fifth of the "

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/engine_names.h"
 #include "core/math_constants.h"
 #include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
@@ -98,7 +99,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
   top.Get("robot", &kind, {"omni"});
   top.Has("extends");  // resolved above
   top.Require("name", &model.name);
-  top.Get("fitted_on", &model.fitted_on, {"analytic", "ode", "bullet"});
+  top.Get("fitted_on", &model.fitted_on, KnownEngines());
 
   if (top.Has("chassis")) {
     YamlMap c(top.Child("chassis"), path, "chassis", &errors);
