@@ -747,8 +747,6 @@ bool OmniIdentificationOptions::IsValid(std::string* why) const {
   if (!(max_delay > 0 && max_delay <= 2)) return fail("--max-delay must be above 0 and at most 2 s");
   if (threads < 0) return fail("--threads must be 0 (one per core) or more");
   if (backend == "learned") return fail("--backend: identification fits a physical model (analytic, ode or bullet)");
-  if (safeguard != "blocks" && safeguard != "logs" && safeguard != "off")
-    return fail("--safeguard must be blocks, logs or off, got '" + safeguard + "'");
   return true;
 }
 
@@ -1022,18 +1020,18 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed);
   // The scale within the fit's reach: the safeguard of "blocks", the base of "logs".
-  if (options.safeguard != "off") {
+  if (options.safeguard != OmniSafeguard::kOff) {
     say(6, "intervals' safeguard");
     report->safeguard = FitIntervalSafeguard(*model, views, noise_options, crossed);
     model->observer.interval_scale = report->safeguard.Scales();
   }
   // The inputs of the fit, which a growth over left-out logs measures distances from
   // (taken last: the held-out blocks above lie within the fit's reach and read none).
-  if (options.safeguard == "logs" || options.keep_seen_inputs)
+  if (options.safeguard == OmniSafeguard::kLogs || options.keep_seen_inputs)
     model->observer.seen_inputs = SeenInputsOfFitBlocks(*model, views, noise_options);
 }
 
-// The intervals' safeguard on left-out logs (options.safeguard "logs"): each log predicted,
+// The intervals' safeguard on left-out logs (options.safeguard kLogs): each log predicted,
 // at the safeguard's horizons, by the model identified on the others (its noise and its
 // camera with it), and the safeguard fitted with each log a fold. A log that drives
 // differently from the others (another direction, another floor) is then what the
@@ -1046,7 +1044,7 @@ OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::
   const OmniNoiseOptions noise_options;
   const std::vector<int> horizons = SafeguardHorizons(noise_options.horizons);
   OmniIdentificationOptions fold = options;
-  fold.safeguard = "off";
+  fold.safeguard = OmniSafeguard::kOff;
   fold.keep_seen_inputs = true;  // each left-out log's distances from the others' fit
   std::vector<std::vector<std::vector<SafeguardRow>>> rows(horizons.size(),
                                                            std::vector<std::vector<SafeguardRow>>(logs.size()));
@@ -1073,14 +1071,14 @@ OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::
   return out;
 }
 
-// With options.safeguard "logs" (and the observer's state), the safeguard on left-out
+// With options.safeguard kLogs (and the observer's state), the safeguard on left-out
 // logs into the report and the model. The fit's seen inputs stay in the model only where
 // a scale grows with them (or options.keep_seen_inputs asks).
 void SafeguardOnLeftOutLogs(const OmniModel& nominal, const std::vector<OmniLog>& logs,
                             const OmniIdentificationOptions& options,
                             const std::function<void(int, const std::string&)>& say, OmniModel* model,
                             OmniIdentificationReport* report) {
-  if (options.safeguard == "logs" && options.state == OmniReplayState::kObserver) {
+  if (options.safeguard == OmniSafeguard::kLogs && options.state == OmniReplayState::kObserver) {
     report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, report->safeguard, say);
     model->observer.interval_scale = report->safeguard.Scales();
   }
@@ -1095,7 +1093,7 @@ void SafeguardOnLeftOutLogs(const OmniModel& nominal, const std::vector<OmniLog>
 // Refuses no logs, and one log to leave out.
 void CheckLogCount(const std::vector<OmniLog>& logs, const OmniIdentificationOptions& options) {
   if (logs.empty()) throw InputError("identify needs at least one log");
-  if (options.safeguard == "logs" && logs.size() < 2)
+  if (options.safeguard == OmniSafeguard::kLogs && logs.size() < 2)
     throw InputError("--safeguard logs needs at least two logs to fit on (each is predicted by the model of the others)");
 }
 

@@ -40,6 +40,11 @@
 
 namespace twinsim {
 
+// Where identify fits the intervals' safeguard (OmniIdentificationOptions::safeguard); the
+// words --safeguard takes, in this order: blocks, logs, off.
+enum class OmniSafeguard { kBlocks, kLogs, kOff };
+inline constexpr const char* kOmniSafeguardWords[] = {"blocks", "logs", "off"};
+
 struct OmniIdentificationOptions {
   std::string backend = "analytic";  // the physics that replays the model
   int horizon = 4;                   // frames predicted ahead (the contract's replay K)
@@ -57,10 +62,10 @@ struct OmniIdentificationOptions {
   // (omni_noise_identification.h), kept where the held-out blocks score it better.
   bool noise = true;
   // With the observer's state, the intervals' safeguard (analysis/omni_interval_scale.h)
-  // fitted on: "blocks", the two halves of the held-out blocks; "logs", each fit log
+  // fitted on: kBlocks, the two halves of the held-out blocks; kLogs, each fit log
   // predicted by the model identified on the others (identification once more per log;
-  // at least two logs); "off".
-  std::string safeguard = "blocks";
+  // at least two logs); kOff, none.
+  OmniSafeguard safeguard = OmniSafeguard::kBlocks;
   // Keep the fit's seen inputs (observer.seen_inputs) in the model even where no scale
   // grows with them (the left-out-logs safeguard's folds measure distances from them).
   bool keep_seen_inputs = false;

@@ -183,7 +183,7 @@ TEST(Robotino, TheLeftOutLogsSafeguardGrowsWithTheDistanceFromTheFitsInputs) {
   std::vector<OmniLog> fit, held;
   GrayRuns(&fit, &held);
   OmniIdentificationOptions options;
-  options.safeguard = "logs";
+  options.safeguard = OmniSafeguard::kLogs;
   OmniModel grown;
   const OmniIdentificationReport report =
       IdentifyOmni(LoadOmniModel(testing::SourcePath("models/robotino.yaml")), fit, {}, options, &grown);

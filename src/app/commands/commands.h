@@ -13,7 +13,10 @@ namespace twinsim {
 // A number option's value must be a number greater than zero / not below zero.
 CLI::Validator PositiveNumber();
 CLI::Validator NonNegativeNumber();
-// --state's words (observer, tracker) onto the replay's state, any other refused.
+// An enum option's words, word k onto the enumerator of value k; any other word refused
+// ("must be a, b or c, got 'd'").
+CLI::Validator EnumWords(const std::vector<std::string>& words);
+// --state's words (observer, tracker) onto the replay's state.
 CLI::Validator OmniReplayStateWords();
 // Every number option is finite, and an unsigned one (a seed) is not negative; applied to
 // all options of `app` and its subcommands by main().

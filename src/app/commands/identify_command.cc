@@ -430,8 +430,9 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                   "(blocks), and with logs a growth on top with the distance of a prediction's inputs from those the "
                   "fit saw, fitted on each log predicted by the model of the others (identification once more per "
                   "log), or none (off); kept only where it helps rows it was not fitted on")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"blocks", "logs", "off"}));
+      ->type_name("TEXT")
+      ->transform(EnumWords({std::begin(kOmniSafeguardWords), std::end(kOmniSafeguardWords)}))
+      ->default_str(kOmniSafeguardWords[static_cast<int>(options->omni.safeguard)]);
   cmd->add_option("--threads", options->omni.threads,
                   "Omni, and an arm's --output-error: worker threads (0: one per core); results do not depend on it")
       ->capture_default_str();

@@ -1,5 +1,6 @@
 // The checks every command's options share, and the reading of arm logs at the cut-off
 // --cutoff names (commands.h).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -34,16 +35,24 @@ CLI::Validator PositiveNumber() {
       "POSITIVE", "positive");
 }
 
-CLI::Validator OmniReplayStateWords() {
+CLI::Validator EnumWords(const std::vector<std::string>& words) {
+  std::string list, braces;
+  for (std::size_t k = 0; k < words.size(); ++k) {
+    list += (k == 0 ? "" : k + 1 == words.size() ? " or " : ", ") + words[k];
+    braces += (k == 0 ? "{" : ",") + words[k];
+  }
   return CLI::Validator(
-      [](std::string& text) -> std::string {
-        OmniReplayState state = OmniReplayState::kObserver;
-        std::string why;
-        if (!ParseOmniReplayState(text, &state, &why)) return "must be observer or tracker, got '" + text + "'";
-        text = std::to_string(static_cast<int>(state));  // what CLI11 reads into the enum
+      [words, list](std::string& text) -> std::string {
+        const auto at = std::find(words.begin(), words.end(), text);
+        if (at == words.end()) return "must be " + list + ", got '" + text + "'";
+        text = std::to_string(at - words.begin());  // what CLI11 reads into the enum
         return std::string();
       },
-      "{observer,tracker}", "state");
+      braces + "}", "words");
+}
+
+CLI::Validator OmniReplayStateWords() {
+  return EnumWords({OmniReplayStateName(OmniReplayState::kObserver), OmniReplayStateName(OmniReplayState::kTracker)});
 }
 
 CLI::Validator NonNegativeNumber() {
