@@ -90,6 +90,21 @@ TEST(Cli, ReplayWritesOneRowPerInputRow) {
   EXPECT_EQ(out.rfind("t,x,y,theta\n", 0), 0u);
   const OmniLog in = ReadOmniLog(dir + "/trajectory.csv");
   EXPECT_EQ(static_cast<std::size_t>(std::count(out.begin(), out.end(), '\n')), in.rows.size() + 1);
+  EXPECT_NE(r.out.find("state from the observer"), std::string::npos) << r.out;
+  // --state's words reach the replay; others (the enum's numbers too) are refused.
+  auto tracked = RunTwinsim("replay --model " + SourcePath("models/omni4.yaml") + " --log " + dir +
+                            "/trajectory.csv --backend analytic --state tracker --out " + dir + "/tracked.csv");
+  ASSERT_EQ(tracked.exit_code, 0) << tracked.err;
+  EXPECT_NE(tracked.out.find("state from the tracker"), std::string::npos) << tracked.out;
+  EXPECT_NE(ReadText(dir + "/tracked.csv"), out);
+  for (const char* word : {"kalman", "1"}) {
+    auto bad = RunTwinsim("replay --model " + SourcePath("models/omni4.yaml") + " --log " + dir +
+                          "/trajectory.csv --state " + word + " --out " + dir + "/bad.csv");
+    EXPECT_EQ(bad.exit_code, 2) << word;
+    EXPECT_NE(bad.err.find(std::string("--state: must be observer or tracker, got '") + word + "'"), std::string::npos)
+        << bad.err;
+    EXPECT_FALSE(fs::exists(dir + "/bad.csv"));
+  }
 }
 
 // Issue 63: a model fitted on one engine is replayed there unless told otherwise, and the
