@@ -69,6 +69,12 @@ std::string ArmFitCoordinates::Name(int k) const {
   return std::string(kind) + " of joint " + std::to_string(k % n_ + 1);
 }
 
+std::vector<std::string> ArmFitCoordinates::Names(const std::vector<int>& ks) const {
+  std::vector<std::string> names;
+  for (int k : ks) names.push_back(Name(k));
+  return names;
+}
+
 void ArmFitCoordinates::Bounds(int k, double* lower, double* upper) const {
   switch (KindOf(k)) {
     case Kind::kScale: *upper = std::log(100.0), *lower = -*upper; break;

@@ -49,6 +49,8 @@ class ArmFitCoordinates {
   Kind KindOf(int k) const;
   // "scale of joint 1", ...
   std::string Name(int k) const;
+  // The names of coordinates `ks`, in their order.
+  std::vector<std::string> Names(const std::vector<int>& ks) const;
   // Within reason: a link scaled by 1/100 to 100, a friction from a millionth of its unit
   // to a thousand times it, an offset within twice the joint's torque RMS, a break-away
   // excess s - c from a thousandth of the Coulomb unit to kMaxBreakawayExcess times it or

@@ -260,8 +260,7 @@ void SummariseArmFit(const ArmFitCoordinates& coordinates, const ArmModel& start
     s->offset_before[j] = start.effects.joint(j).torque_offset;
     s->offset_after[j] = fitted.effects.joint(j).torque_offset;
   }
-  s->at_bound.clear();
-  for (int k : at_bound) s->at_bound.push_back(coordinates.Name(k));
+  s->at_bound = coordinates.Names(at_bound);
 }
 
 void SummariseLowSpeedFriction(const ArmModel& with, bool tried, bool kept, const Eigen::VectorXd& check_plain,
@@ -321,7 +320,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     with = low_speed->Apply(y.data());
     const Eigen::VectorXd check_with = low_speed->SimulationRmse(with, true);
     stribeck_kept = low_speed->CheckCost(check_with) < (1 - kLowSpeedGain) * plain.CheckCost(check_plain);
-    for (int k : y_bound) low_speed_at_bound.push_back(low_speed->coordinates().Name(k));
+    low_speed_at_bound = low_speed->coordinates().Names(y_bound);
     if (stribeck_kept) {
       x = std::move(y);
       at_bound = std::move(y_bound);

@@ -330,7 +330,7 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
     with = low_speed->coordinates().Apply(y.x.data());
     const Eigen::VectorXd check_with = low_speed->FreeRunRmse(with, true);
     stribeck_kept = low_speed->CheckCost(check_with) < (1 - kRunLowSpeedGain) * plain.CheckCost(check_plain);
-    for (int k : y.at_bound) low_speed_at_bound.push_back(low_speed->coordinates().Name(k));
+    low_speed_at_bound = low_speed->coordinates().Names(y.at_bound);
     if (stribeck_kept) {
       y.iterations += fit.iterations;
       fit = std::move(y);

@@ -15,14 +15,10 @@
 
 namespace twinsim {
 
-const char* OmniReplayStateName(OmniReplayState state) {
-  return state == OmniReplayState::kTracker ? "tracker" : "observer";
-}
-
 bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why, const std::string& what) {
-  for (OmniReplayState s : {OmniReplayState::kObserver, OmniReplayState::kTracker}) {
-    if (word != OmniReplayStateName(s)) continue;
-    *state = s;
+  for (int k = 0; k < static_cast<int>(std::size(kOmniReplayStateWords)); ++k) {
+    if (word != kOmniReplayStateWords[k]) continue;
+    *state = static_cast<OmniReplayState>(k);
     return true;
   }
   if (why) *why = what + " must be observer or tracker, got '" + word + "'";

@@ -10,7 +10,11 @@ const std::vector<std::string>& KnownEngines() {
 }
 
 const std::vector<std::string>& KnownBackends() {
-  static const std::vector<std::string> names = {"analytic", "ode", "bullet", "learned"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> backends = KnownEngines();
+    backends.push_back("learned");
+    return backends;
+  }();
   return names;
 }
 

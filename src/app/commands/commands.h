@@ -16,8 +16,6 @@ CLI::Validator NonNegativeNumber();
 // An enum option's words, word k onto the enumerator of value k; any other word refused
 // ("must be a, b or c, got 'd'").
 CLI::Validator EnumWords(const std::vector<std::string>& words);
-// --state's words (observer, tracker) onto the replay's state.
-CLI::Validator OmniReplayStateWords();
 // Every number option is finite, and an unsigned one (a seed) is not negative; applied to
 // all options of `app` and its subcommands by main().
 void CheckNumberOptions(CLI::App* app);

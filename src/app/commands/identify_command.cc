@@ -419,7 +419,7 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                   "Omni: each prediction starts from the model's Kalman filter (observer; its driving noise is fitted "
                   "too) or from the open-loop tracker (tracker)")
       ->type_name("TEXT")
-      ->transform(OmniReplayStateWords())
+      ->transform(EnumWords({std::begin(kOmniReplayStateWords), std::end(kOmniReplayStateWords)}))
       ->default_str(OmniReplayStateName(options->omni.state));
   cmd->add_option("--max-delay", options->omni.max_delay, "Omni: s, the longest total delay searched")->capture_default_str();
   cmd->add_flag("!--no-noise", options->omni.noise,

@@ -8,7 +8,6 @@
 
 #include "app/commands/commands.h"
 #include "analysis/derivative_cutoff.h"
-#include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "robots/arm/arm_log.h"
 #include "robots/omni/omni_log.h"
@@ -49,10 +48,6 @@ CLI::Validator EnumWords(const std::vector<std::string>& words) {
         return std::string();
       },
       braces + "}", "words");
-}
-
-CLI::Validator OmniReplayStateWords() {
-  return EnumWords({OmniReplayStateName(OmniReplayState::kObserver), OmniReplayStateName(OmniReplayState::kTracker)});
 }
 
 CLI::Validator NonNegativeNumber() {

@@ -226,7 +226,7 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
       ->check(NonNegativeNumber());
   cmd->add_option("--state", options->state, "Omni: how the measured state is estimated: observer or tracker")
       ->type_name("TEXT")
-      ->transform(OmniReplayStateWords())
+      ->transform(EnumWords({std::begin(kOmniReplayStateWords), std::end(kOmniReplayStateWords)}))
       ->default_str(OmniReplayStateName(options->state));
   AddDerivativeCutoffOption(cmd, &options->cutoff);
   cmd->add_option("--samples", options->samples,
