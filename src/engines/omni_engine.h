@@ -96,6 +96,11 @@ class OmniEngine {
   // Robot i's wheel speeds (rad/s about a_i, relative to the chassis) into *out (n):
   // what GetState() returns, without the rest, for the per-step encoder read.
   virtual void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const { *out = GetState(robot).wheel_speeds; }
+  // Robot i's pose and velocity: what GetState() returns without its wheel speeds, for
+  // the reads of every frame and step (an engine whose state is planar overrides it and
+  // allocates nothing).
+  virtual Pose2 GetPose(int robot) const { return GetState(robot).pose; }
+  virtual Twist2 GetVelocity(int robot) const { return GetState(robot).velocity; }
 
   // Moves robot i rigidly in the plane so that its pose becomes `pose`: every body keeps
   // its height, tilt, spin and contact state, velocities turn with it. (The default

@@ -24,6 +24,12 @@ NewtonianOmniBackend::NewtonianOmniBackend(std::unique_ptr<OmniEngine> engine,
     const double ratio = physics_rate / m.controller.rate_hz;
     r.ticks_per_control = std::max(1, static_cast<int>(std::lround(ratio)));
     r.index = static_cast<int>(robots_.size());
+    for (int a = 0; a < 3; ++a) {
+      const double tau = m.effects.LagOf(a);
+      auto share = [&](double t) { return t > 0 ? 1 - std::exp(-timing_.physics_dt() / t) : 0.0; };
+      r.lag_share[static_cast<std::size_t>(a)] = share(tau);
+      r.lag_share_braking[static_cast<std::size_t>(a)] = share(tau * m.effects.lag_braking);
+    }
     robots_.push_back(std::move(r));
   }
   for (int i = 0; i < num_robots(); ++i) Reset(i, Pose2{}, Twist2{});
@@ -135,15 +141,15 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
     if (fx.lag_field_frame) {
       // The lagged translation keeps its direction in the field: in the robot's frame it
       // turns against the robot's own turn over the step.
-      const double turn = -engine_->GetState(r.index).velocity.omega * dt;
+      const double turn = -engine_->GetVelocity(r.index).omega * dt;
       const double cs = std::cos(turn), sn = std::sin(turn);
       s.lagged = Twist2{cs * s.lagged.vx - sn * s.lagged.vy, sn * s.lagged.vx + cs * s.lagged.vy, s.lagged.omega};
     }
     auto follow = [&](int axis, double lagged, double target) {
-      double tau = fx.LagOf(axis);
       // Slowing down (the set-point moves towards zero) at braking times the time constant.
-      if ((target - lagged) * lagged < 0) tau *= fx.lag_braking;
-      return tau > 0 ? lagged + (1 - std::exp(-dt / tau)) * (target - lagged) : target;
+      const bool braking = (target - lagged) * lagged < 0;
+      const double share = (braking ? r.lag_share_braking : r.lag_share)[static_cast<std::size_t>(axis)];
+      return share > 0 ? lagged + share * (target - lagged) : target;
     };
     s.lagged = Twist2{follow(0, s.lagged.vx, c.vx), follow(1, s.lagged.vy, c.vy), follow(2, s.lagged.omega, c.omega)};
     c = s.lagged;
@@ -180,8 +186,8 @@ void NewtonianOmniBackend::NetTorques(Robot& r) {
   for (int w = 0; w < r.speeds.size(); ++w) r.net[w] = WheelMotorTorque(r.model, w, (*command)[w], r.speeds[w]);
 }
 
-Pose2 NewtonianOmniBackend::pose(int robot) const { return engine_->GetState(robot).pose; }
-Twist2 NewtonianOmniBackend::velocity(int robot) const { return engine_->GetState(robot).velocity; }
+Pose2 NewtonianOmniBackend::pose(int robot) const { return engine_->GetPose(robot); }
+Twist2 NewtonianOmniBackend::velocity(int robot) const { return engine_->GetVelocity(robot); }
 
 OmniBackendState NewtonianOmniBackend::Save() const {
   OmniBackendState s;

@@ -7,6 +7,7 @@
 // torques, so all engines are driven identically.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -50,6 +51,9 @@ class NewtonianOmniBackend final : public OmniBackend {
     Eigen::VectorXd seen;       // n, scratch: wheel speeds as the firmware believes them
     Eigen::VectorXd net;        // n, scratch: net wheel torques
     int index = 0;              // in the engine
+    // motor_lag's share of the way to its target per physics step, 1 - exp(-dt / tau),
+    // per axis, accelerating and braking; 0 where the time constant is 0 (no lag).
+    std::array<double, 3> lag_share{}, lag_share_braking{};
   };
 
   // The command the firmware acts on at this physics step, after time_delay,

@@ -121,11 +121,21 @@ class AnalyticOmniEngine final : public OmniEngine {
     return s;
   }
 
+  Pose2 GetPose(int robot) const override {
+    const AnalyticRobot& r = robots_.at(static_cast<std::size_t>(Check(robot)));
+    return Pose2{r.x[0], r.x[1], r.x[2]};
+  }
+
+  Twist2 GetVelocity(int robot) const override {
+    const AnalyticRobot& r = robots_.at(static_cast<std::size_t>(Check(robot)));
+    return Twist2{r.x[3], r.x[4], r.x[5]};
+  }
+
   // The wheels rolling with the body, J v, without allocating once `out` has the size.
   void GetWheelSpeeds(int robot, Eigen::VectorXd* out) const override {
     const AnalyticRobot& r = robots_.at(static_cast<std::size_t>(Check(robot)));
     out->resize(r.model.num_wheels());
-    out->noalias() = r.kin.wheels_from_body() * r.x.tail<3>();
+    out->noalias() = r.kin.wheels_from_body().lazyProduct(r.x.tail<3>());
   }
 
   void SetWheelTorques(int robot, const Eigen::VectorXd& torques) override {

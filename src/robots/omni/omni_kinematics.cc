@@ -17,7 +17,9 @@ Eigen::VectorXd OmniKinematics::WheelSpeeds(const Twist2& v) const {
 }
 
 Twist2 OmniKinematics::BodyVelocity(const Eigen::VectorXd& wheel_speeds) const {
-  const Eigen::Vector3d v = body_from_wheels_ * wheel_speeds;
+  // Coefficient by coefficient (lazyProduct): at 3 x n the general product's dispatch
+  // costs more than its sums, and these run every physics step.
+  const Eigen::Vector3d v = body_from_wheels_.lazyProduct(wheel_speeds);
   return Twist2{v[0], v[1], v[2]};
 }
 
@@ -27,11 +29,11 @@ Eigen::VectorXd OmniKinematics::WheelTorques(const Eigen::Vector3d& wrench) cons
 
 void OmniKinematics::WheelTorques(const Eigen::Vector3d& wrench, Eigen::VectorXd* out) const {
   out->resize(torques_from_wrench_.rows());
-  out->noalias() = torques_from_wrench_ * wrench;
+  out->noalias() = torques_from_wrench_.lazyProduct(wrench);
 }
 
 Eigen::Vector3d OmniKinematics::Wrench(const Eigen::VectorXd& torques) const {
-  return wheels_from_body_.transpose() * torques;
+  return wheels_from_body_.transpose().lazyProduct(torques);
 }
 
 }  // namespace twinsim
