@@ -61,7 +61,7 @@ double JointCommandLead(const ArmModel& model, int joint) {
 
 Eigen::VectorXd JointCommandFromNeeded(const ArmModel& model, int joint, const Eigen::VectorXd& t,
                                        const Eigen::VectorXd& qdd, Eigen::VectorXd drive, int* beyond_saturation) {
-  const JointEffects& e = model.effects.joint(joint);
+  const JointEffects e = model.effects.joint(joint);
   const Eigen::Index rows = drive.size();
   // 2. A flexible joint: the spring carries `needed`; the motor must also accelerate.
   if (e.flexible() && rows > 0) {

@@ -269,7 +269,7 @@ class ArmProblem : public DiagnosisProblem {
   // pulled short: a 21 ms delay on a joint with Coulomb friction came out at 16 ms).
   Eigen::VectorXd Residual(const ArmModel& trial, const ArmLogData& d, int j, const Eigen::MatrixXd& payload) const {
     const Eigen::VectorXd cmd = Command(trial, d, j, payload);
-    const JointEffects& e = trial.effects.joint(j);
+    const JointEffects e = trial.effects.joint(j);
     const Eigen::VectorXd u = d.log->tau.col(j);
     Eigen::VectorXd r = u - cmd;
     if (e.saturation > 0) {

@@ -122,7 +122,7 @@ NewtonianArmBackend::NewtonianArmBackend(const ArmModel& model, std::unique_ptr<
   int substeps = 1;
   const Eigen::MatrixXd mobility = MassMatrix(model_, Eigen::VectorXd::Zero(n)).inverse();
   for (int j = 0; j < n; ++j) {
-    const JointEffects& e = model_.effects.joint(j);
+    const JointEffects e = model_.effects.joint(j);
     effects_.push_back(e);
     const ArmJoint& nominal = model_.joints[static_cast<std::size_t>(j)];
     if (e.friction() || nominal.viscous > 0 || nominal.coulomb > 0) friction_joints_.push_back(j);

@@ -331,7 +331,7 @@ void ReadArmEffects(const YAML::Node& list, const std::string& path, ArmModel* m
 
 double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
   const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
-  const JointEffects& e = model.effects.joint(joint);
+  const JointEffects e = model.effects.joint(joint);
   double level = nominal.coulomb + (qd >= 0 ? e.coulomb_positive : e.coulomb_negative);
   if (e.stribeck()) {
     const double r = qd / e.stribeck_velocity;
@@ -343,13 +343,13 @@ double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
 double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
   if (qd == 0) return 0;
   const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
-  const JointEffects& e = model.effects.joint(joint);
+  const JointEffects e = model.effects.joint(joint);
   const double level = ArmDryFrictionLevel(model, joint, qd);
   return (nominal.viscous + e.viscous) * qd + (qd > 0 ? level : -level);
 }
 
 ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h) {
-  const JointEffects& e = model.effects.joint(joint);
+  const JointEffects e = model.effects.joint(joint);
   const double g = ArmDryFrictionLevel(model, joint, qd0);
   // With v(t) = qd0 + (qd1 - qd0) t / h: z(h) = z0 E + qd0 P + (qd1 - qd0) Q, where
   // E = exp(-a h), P = (1 - E) / a and Q = (h - P) / (a h) (h and h / 2 as a -> 0).

@@ -86,11 +86,11 @@ struct ArmEffects {
   double payload_mass = 0;           // kg; 0 = off
   Eigen::Vector3d payload_position = Eigen::Vector3d::Zero();  // m, in the last link's frame
 
-  // The effects of joint j (0-based); all off when none were set. A reference: it is
-  // read for every joint of every sample of a fit.
-  const JointEffects& joint(int j) const {
-    static const JointEffects kNone;
-    return j >= 0 && j < static_cast<int>(joints.size()) ? joints[static_cast<std::size_t>(j)] : kNone;
+  // The effects of joint j (0-based); all off when none were set. A copy, so that it
+  // outlives a temporary model; inline, since it is read for every joint of every sample
+  // of a fit and the compiler then copies only what the caller reads.
+  JointEffects joint(int j) const {
+    return j >= 0 && j < static_cast<int>(joints.size()) ? joints[static_cast<std::size_t>(j)] : JointEffects{};
   }
   bool any() const;
 };

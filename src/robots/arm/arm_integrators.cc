@@ -58,7 +58,7 @@ FlexibleArmState FlexibleDerivative(const ArmModel& plant, const Eigen::VectorXd
   dx.motor_qd = Eigen::VectorXd::Zero(n);
   Eigen::VectorXd tau = drive;
   for (int j = 0; j < n; ++j) {
-    const JointEffects& e = plant.effects.joint(j);
+    const JointEffects e = plant.effects.joint(j);
     if (!e.flexible()) continue;
     const double spring = e.stiffness * (x.motor_q[j] - x.q[j]) + e.flex_damping * (x.motor_qd[j] - x.qd[j]);
     tau[j] = spring;
