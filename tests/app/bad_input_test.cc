@@ -297,6 +297,12 @@ std::string BuildArmRows(int n, int nj, double dt, const std::string& cols) {
 // per process for each set of arguments: the table asks for the same logs dozens of
 // times (ArmLogFile in 37 cases), and formatting them again was most of a case's own
 // time.
+std::string Exact(double v) {  // a key's number: every digit, so that no two values share a key
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
 std::string Memoised(const std::string& key, const std::function<std::string()>& build) {
   static std::map<std::string, std::string> built;
   auto it = built.find(key);
@@ -307,13 +313,13 @@ std::string Memoised(const std::string& key, const std::function<std::string()>&
 std::string OmniRows(int n, double dt, double t_scale,
                      const std::string& cols = "t,x,y,theta,vx_cmd,vy_cmd,omega_cmd") {
   if (g_names_only) return {};
-  return Memoised("omni " + std::to_string(n) + " " + G9(dt) + " " + G9(t_scale) + " " + cols,
+  return Memoised("omni " + std::to_string(n) + " " + Exact(dt) + " " + Exact(t_scale) + " " + cols,
                   [&] { return BuildOmniRows(n, dt, t_scale, cols); });
 }
 
 std::string ArmRows(int n, int nj, double dt, const std::string& cols = "") {
   if (g_names_only) return {};
-  return Memoised("arm " + std::to_string(n) + " " + std::to_string(nj) + " " + G9(dt) + " " + cols,
+  return Memoised("arm " + std::to_string(n) + " " + std::to_string(nj) + " " + Exact(dt) + " " + cols,
                   [&] { return BuildArmRows(n, nj, dt, cols); });
 }
 
