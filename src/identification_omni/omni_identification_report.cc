@@ -295,10 +295,11 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s\n", "parameter", "nominal", "identified", "std. error", "unit");
   s << line;
   for (const IdentifiedParameter& p : r.parameters) {
-    std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s%s\n", p.name.c_str(), Number(p.nominal).c_str(),
+    // The note after the columns, whole (a note is longer than any fixed buffer).
+    std::snprintf(line, sizeof line, "%-38s %12s %12s %12s  %s", p.name.c_str(), Number(p.nominal).c_str(),
                   p.estimated ? Number(p.value).c_str() : "-", p.estimated ? Number(p.standard_error, "%.2g").c_str() : "",
-                  p.unit.c_str(), (p.estimated && !p.held) || p.note.empty() ? "" : ("  (" + p.note + ")").c_str());
-    s << line;
+                  p.unit.c_str());
+    s << line << ((p.estimated && !p.held) || p.note.empty() ? "" : "  (" + p.note + ")") << "\n";
   }
   auto table = [&](const char* title, const std::vector<OmniGap>& gaps) {
     if (gaps.empty()) return;
