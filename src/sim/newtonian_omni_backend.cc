@@ -8,6 +8,11 @@
 #include "robots/omni/wheel_motor.h"
 
 namespace twinsim {
+namespace {
+// x^2 + y^2 at most this share of a limit's square puts hypot(x, y) surely below the
+// limit (rounding moves either by some 1e-16 of it).
+constexpr double kSquaresBelow = 1 - 1e-6;
+}  // namespace
 
 int DefaultPhysicsSubsteps(double frame_rate) {
   return std::max(1, static_cast<int>(std::ceil(300.0 / frame_rate - 1e-9)));
@@ -129,7 +134,9 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
                fx.axis_scale[1] * a.vy + fx.sideways_per_forward * a.vx,
                fx.axis_scale[2] * a.omega + fx.turn_per_forward * a.vx + fx.turn_per_sideways * a.vy};
   }
-  if (fx.v_max > 0) {
+  // hypot only near or over the limit (the squares' test is safe by far more than
+  // their rounding): the same bytes as hypot every step, at a fraction of its cost.
+  if (fx.v_max > 0 && c.vx * c.vx + c.vy * c.vy > kSquaresBelow * fx.v_max * fx.v_max) {
     const double speed = std::hypot(c.vx, c.vy);
     if (speed > fx.v_max) {
       c.vx *= fx.v_max / speed;
@@ -165,7 +172,8 @@ void NewtonianOmniBackend::SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) co
   // travelled, so it drives the robot that much off.
   const Twist2 v = r.kin.BodyVelocity(*speeds);
   const double s = fx.velocity_scale;
-  *speeds = r.kin.WheelSpeeds(Twist2{v.vx / s, v.vy / s, (v.omega - fx.rotation_drift * std::hypot(v.vx, v.vy)) / s});
+  const double drift = fx.rotation_drift != 0 ? fx.rotation_drift * std::hypot(v.vx, v.vy) : 0.0;
+  *speeds = r.kin.WheelSpeeds(Twist2{v.vx / s, v.vy / s, (v.omega - drift) / s});
 }
 
 void NewtonianOmniBackend::NetTorques(Robot& r) {
@@ -176,7 +184,9 @@ void NewtonianOmniBackend::NetTorques(Robot& r) {
     // traction_limit: the floor takes at most m * a_max of horizontal force.
     Eigen::Vector3d wrench = r.kin.Wrench(c.torque_command);
     const double limit = r.model.total_mass * r.model.effects.a_max;
-    const double force = std::hypot(wrench[0], wrench[1]);
+    const double force = wrench[0] * wrench[0] + wrench[1] * wrench[1] > kSquaresBelow * limit * limit
+                             ? std::hypot(wrench[0], wrench[1])
+                             : 0.0;  // below the limit: not needed
     if (force > limit) {
       wrench.head<2>() *= limit / force;
       limited = r.kin.WheelTorques(wrench);

@@ -30,10 +30,19 @@ void AccumulateEncoders(const Eigen::VectorXd& wheel_speeds, double dt, OnboardC
   s->wheel_angle += wheel_speeds * dt;
 }
 
+namespace {
+// An encoder's angle per count (rad); 0 for an ideal encoder.
+double AnglePerCount(const OmniModel& model) {
+  return model.encoder_counts_per_rev > 0 ? 2 * kPi / model.encoder_counts_per_rev : 0.0;
+}
+
+double Quantised(double wheel_angle, double per_count) {
+  return per_count > 0 ? std::floor(wheel_angle / per_count) * per_count : wheel_angle;
+}
+}  // namespace
+
 double EncoderReading(const OmniModel& model, double wheel_angle) {
-  if (model.encoder_counts_per_rev <= 0) return wheel_angle;
-  const double per_count = 2 * kPi / model.encoder_counts_per_rev;
-  return std::floor(wheel_angle / per_count) * per_count;
+  return Quantised(wheel_angle, AnglePerCount(model));
 }
 
 const Eigen::VectorXd& ControllerTick(const OmniModel& model, const OmniKinematics& kin,
@@ -42,8 +51,9 @@ const Eigen::VectorXd& ControllerTick(const OmniModel& model, const OmniKinemati
   const int n = model.num_wheels();
   thread_local Eigen::VectorXd speeds;  // scratch: a tick runs a thousand times a simulated second
   speeds.resize(n);
+  const double per_count = AnglePerCount(model);  // once a tick, not per wheel
   for (int i = 0; i < n; ++i) {
-    const double reading = EncoderReading(model, s->wheel_angle[i]);
+    const double reading = Quantised(s->wheel_angle[i], per_count);
     speeds[i] = (reading - s->last_reading[i]) / dt;
     s->last_reading[i] = reading;
   }
