@@ -236,6 +236,16 @@ std::vector<OmniCalibration> CalibrateRows(const std::vector<std::vector<Predict
   return out;
 }
 
+std::vector<OmniDistanceCalibration> CalibrateRowsByDistance(const std::vector<std::vector<PredictiveError>>& rows,
+                                                             const std::vector<int>& horizons, double frame_period) {
+  std::vector<OmniDistanceCalibration> out;
+  for (std::size_t b = 0; b + 1 < kCalibrationDistances.size(); ++b) {
+    const double from = kCalibrationDistances[b], to = kCalibrationDistances[b + 1];
+    out.push_back({from, to, CalibrateRows(rows, horizons, frame_period, from, to)});
+  }
+  return out;
+}
+
 std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const OmniLog& log, const std::string& backend,
                                               std::vector<int> horizons, int stride) {
   std::sort(horizons.begin(), horizons.end());

@@ -110,9 +110,19 @@ std::vector<OmniCalibration> CalibrateOmniLog(const OmniModel& model, const Omni
 std::vector<OmniCalibration> CalibrateRows(const std::vector<std::vector<PredictiveError>>& rows,
                                            const std::vector<int>& horizons, double frame_period, double from = 0,
                                            double to = std::numeric_limits<double>::infinity());
-// The distances `compare` splits a calibration at: within the fit's reach, near it, beyond
-// (robots/omni/omni_seen_inputs.h: 1 is a typical command's size).
+// The distances `compare` and `identify` split a calibration at: within the fit's reach,
+// near it, beyond (robots/omni/omni_seen_inputs.h: 1 is a typical command's size).
 inline constexpr std::array<double, 4> kCalibrationDistances{0, 0.25, 1, std::numeric_limits<double>::infinity()};
+
+// A calibration of the rows whose inputs lie in [from, to) of the fit's.
+struct OmniDistanceCalibration {
+  double from = 0, to = 0;
+  std::vector<OmniCalibration> calibration;  // per horizon
+};
+
+// CalibrateRows over each range of kCalibrationDistances.
+std::vector<OmniDistanceCalibration> CalibrateRowsByDistance(const std::vector<std::vector<PredictiveError>>& rows,
+                                                             const std::vector<int>& horizons, double frame_period);
 
 // The rows of a whole log predicted by `model` on `backend` at each of `horizons` (sorted
 // increasing) from every `stride`-th frame counted from the log's first (the same rows

@@ -1,6 +1,7 @@
 #include "analysis/omni_calibration_report.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -21,6 +22,20 @@ std::string HorizonLabel(const OmniCalibration& c) {
 }
 
 }  // namespace
+
+std::string CalibrationDistanceRange(double from, double to) {
+  return std::isfinite(to) ? PrintfNumber("%g", from) + " to " + PrintfNumber("%g", to) : "beyond " + PrintfNumber("%g", from);
+}
+
+std::string FormatDistanceCalibrationTables(const std::vector<OmniDistanceCalibration>& by_distance) {
+  std::ostringstream s;
+  for (const OmniDistanceCalibration& d : by_distance) {
+    if (std::none_of(d.calibration.begin(), d.calibration.end(), [](const OmniCalibration& c) { return c.rows > 0; }))
+      continue;
+    s << " inputs " << CalibrationDistanceRange(d.from, d.to) << " from the fit's:\n" << FormatCalibrationTable(d.calibration);
+  }
+  return s.str();
+}
 
 std::string FormatCalibrationTable(const std::vector<OmniCalibration>& calibration) {
   std::ostringstream s;

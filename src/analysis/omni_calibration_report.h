@@ -19,6 +19,13 @@ std::string FormatCalibrationTable(const std::vector<OmniCalibration>& calibrati
 // (one line per horizon over the uniform a calibrated model gives).
 std::string FormatCalibrationHtml(const std::vector<OmniCalibration>& calibration, Renderer& renderer);
 
+// "0 to 0.25", "beyond 1": a range of distances from the fit's inputs.
+std::string CalibrationDistanceRange(double from, double to);
+
+// One table per range that has rows (FormatCalibrationTable), each under a line that
+// says how far the predictions' inputs lie from those the fit saw.
+std::string FormatDistanceCalibrationTables(const std::vector<OmniDistanceCalibration>& by_distance);
+
 // The PIT histograms as a plot: density per tenth of [0, 1], one step line per horizon.
 SeriesPlot PitPlot(const std::vector<OmniCalibration>& calibration, bool heading);
 

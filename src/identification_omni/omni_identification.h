@@ -156,6 +156,9 @@ struct OmniIdentificationReport {
   // The identified model's predictive distribution on the held-out blocks (or the
   // validation logs) at 4, 16 and 63 frames (analysis/omni_calibration.h).
   std::vector<OmniCalibration> calibration;
+  // With validation logs, the same split by how far the predictions' inputs lie from the
+  // fit blocks' (analysis/omni_calibration.h, kCalibrationDistances).
+  std::vector<OmniDistanceCalibration> calibration_by_distance;
   // The intervals' safeguard fitted after it (its scales in the model's observer where
   // kept); the calibration above is the covariance's before it.
   OmniIntervalSafeguard safeguard;

@@ -248,6 +248,17 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
     j["calibration_on"] = r.validation.empty() ? "held-out blocks" : "validation logs";
     j["calibration"] = CalibrationJson(r.calibration);
   }
+  if (!r.calibration_by_distance.empty()) {
+    ordered_json by = ordered_json::array();
+    for (const OmniDistanceCalibration& d : r.calibration_by_distance) {
+      ordered_json x;
+      x["distance_from"] = d.from;
+      x["distance_to"] = std::isfinite(d.to) ? ordered_json(d.to) : ordered_json(nullptr);  // null: no upper end
+      x["calibration"] = CalibrationJson(d.calibration);
+      by.push_back(x);
+    }
+    j["calibration_by_distance"] = by;
+  }
   if (!r.safeguard.on.empty()) j["intervals_safeguard"] = SafeguardJson(r.safeguard, r.frame_period);
   j["noise_floor"] = r.noise_floor;
   j["collinearity_index"] = Finite(r.collinearity);
@@ -331,6 +342,11 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
       << CalibratedOn(r)
       << "; energy score against a constant spread):\n"
       << FormatCalibrationTable(r.calibration);
+  }
+  if (!r.calibration_by_distance.empty()) {
+    s << "the same by how far the predictions' inputs lie from the fit blocks' (observer.seen_inputs; 1 is a "
+         "typical command's size; each range's constant spread fitted on its rows):\n"
+      << FormatDistanceCalibrationTables(r.calibration_by_distance);
   }
   if (!r.safeguard.on.empty()) {
     s << "intervals' safeguard (a conformal scale of the predicted covariance, fitted on the " << r.safeguard.on
@@ -419,6 +435,11 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
          "intervals), which a calibrated model holds at 50 % and 90 %; the energy score of the position beside the "
          "same mean with one round spread per horizon (fitted on the fit blocks), lower is better.</p>\n"
       << FormatCalibrationHtml(r.calibration, renderer);
+  }
+  if (!r.calibration_by_distance.empty()) {
+    h << "<p>The same by how far the predictions' inputs lie from those of the fit blocks (1 is a typical command's "
+         "size): where the intervals can be relied on.</p>\n<pre>"
+      << HtmlEscape(FormatDistanceCalibrationTables(r.calibration_by_distance)) << "</pre>\n";
   }
   if (!r.safeguard.on.empty()) {
     h << "<h3>The intervals' safeguard</h3>\n<p>A conformal scale of the predicted covariance per horizon, fitted on "

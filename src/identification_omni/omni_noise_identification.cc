@@ -469,6 +469,19 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
   return out;
 }
 
+std::vector<OmniDistanceCalibration> CalibrateValidationByDistance(const OmniModel& model,
+                                                                   const std::vector<OmniBlockedStretch>& stretches,
+                                                                   const OmniNoiseOptions& options) {
+  if (std::none_of(stretches.begin(), stretches.end(), [](const OmniBlockedStretch& s) { return s.validation; })) return {};
+  OmniNoiseOptions scoring = options;
+  scoring.stride = options.score_stride;
+  OmniModel measured = model;  // the same predictions, each with its inputs' distance
+  measured.observer.seen_inputs = SeenInputsOfFitBlocks(model, stretches, options);
+  std::vector<std::vector<PredictiveError>> rows;
+  for (HorizonRows& h : Collect(measured, stretches, scoring, {Rows::kReport})) rows.push_back(std::move(h.rows));
+  return CalibrateRowsByDistance(rows, options.horizons, stretches.front().log->frame_period);
+}
+
 OmniSeenInputs SeenInputsOfFitBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                      const OmniNoiseOptions& options) {
   std::vector<std::vector<Eigen::VectorXd>> per(stretches.size());

@@ -121,6 +121,14 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed = nullptr);
 
+// The calibration of `model` on the validation logs, as CalibrateOnBlocks scores them,
+// split by how far each prediction's inputs lie from the fit blocks' (SeenInputsOfFitBlocks;
+// kCalibrationDistances; each range's baseline fitted on its rows): where the intervals
+// can be relied on. Empty without validation logs.
+std::vector<OmniDistanceCalibration> CalibrateValidationByDistance(const OmniModel& model,
+                                                                   const std::vector<OmniBlockedStretch>& stretches,
+                                                                   const OmniNoiseOptions& options);
+
 // The seen inputs (robots/omni/omni_seen_inputs.h) of `model` on the fit blocks of
 // `stretches` (validation logs left out): each fit row's frame as the observer saw it.
 OmniSeenInputs SeenInputsOfFitBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,

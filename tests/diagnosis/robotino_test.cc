@@ -119,6 +119,14 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
       IdentifyOmni(LoadOmniModel(testing::SourcePath("models/robotino.yaml")), fit, held, {}, &identified);
   SCOPED_TRACE(FormatOmniIdentificationTable(report));
   EXPECT_EQ(identified.fitted_on, "analytic");
+  // The validation runs' calibration split by distance from the fit's inputs (issue 64):
+  // every row in one range (measured: all 0.25 to 1, the runs 30 degrees from the fit's).
+  ASSERT_EQ(report.calibration_by_distance.size(), kCalibrationDistances.size() - 1);
+  for (std::size_t q = 0; q < report.calibration.size(); ++q) {
+    int rows = 0;
+    for (const OmniDistanceCalibration& d : report.calibration_by_distance) rows += d.calibration[q].rows;
+    EXPECT_EQ(rows, report.calibration[q].rows) << report.calibration[q].frames << " frames";
+  }
   ASSERT_GE(report.horizons.size(), 3u);
   for (const OmniHorizonGaps& h : report.horizons) {
     const OmniGap* ident = report.Gap(h.gaps, "identified model");

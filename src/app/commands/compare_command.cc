@@ -299,10 +299,6 @@ struct DistanceCalibration {
   std::vector<OmniCalibration> calibration;
 };
 
-std::string DistanceRange(double from, double to) {
-  return std::isfinite(to) ? PrintfNumber("%g", from) + " to " + PrintfNumber("%g", to) : "beyond " + PrintfNumber("%g", from);
-}
-
 std::string FormatDistanceCalibrationCsv(const std::vector<DistanceCalibration>& by_distance) {
   std::ostringstream s;
   s << "source,backend,distance_from,distance_to," << kCalibrationColumns;
@@ -409,7 +405,7 @@ int Compare(const CompareCliOptions& options) {
         continue;
       std::printf("the same, %s, predictions whose inputs lie %s from those %s's fit saw (observer.seen_inputs; 1 "
                   "is a typical command's size):\n%s\n",
-                  d.source->label.c_str(), DistanceRange(d.from, d.to).c_str(), model.name.c_str(),
+                  d.source->label.c_str(), CalibrationDistanceRange(d.from, d.to).c_str(), model.name.c_str(),
                   FormatCalibrationTable(d.calibration).c_str());
     }
     files.PrintWrote();
