@@ -1088,8 +1088,7 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
   }
   // A noise fitted on the held-out blocks is calibrated there only across the halves.
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
-  report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed);
-  report->calibration_by_distance = CalibrateValidationByDistance(*model, views, noise_options);
+  report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance);
   // The scale within the fit's reach: the safeguard of "blocks", the base of "logs".
   if (options.safeguard != OmniSafeguard::kOff) {
     say(6, "intervals' safeguard");

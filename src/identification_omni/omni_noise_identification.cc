@@ -438,7 +438,8 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
 
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                                const OmniNoiseOptions& options,
-                                               const std::array<OmniCrossedNoise, 2>* crossed) {
+                                               const std::array<OmniCrossedNoise, 2>* crossed,
+                                               std::vector<OmniDistanceCalibration>* by_distance) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   OmniNoiseOptions scoring = options;
   scoring.stride = options.score_stride;
@@ -455,10 +456,19 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
       for (std::size_t q = 0; q < held.size(); ++q)
         held[q].rows.insert(held[q].rows.end(), half[q].rows.begin(), half[q].rows.end());
     }
+  } else if (by_distance && any_validation) {
+    OmniModel measured = model;  // the same predictions, each with its inputs' distance
+    measured.observer.seen_inputs = SeenInputsOfFitBlocks(model, stretches, options);
+    held = Collect(measured, stretches, scoring, {Rows::kReport});
   } else {
     held = Collect(model, stretches, scoring, {Rows::kReport});
   }
   const double period = stretches.empty() ? 0 : stretches.front().log->frame_period;
+  if (by_distance && any_validation) {
+    std::vector<std::vector<PredictiveError>> rows;
+    for (const HorizonRows& h : held) rows.push_back(h.rows);
+    *by_distance = CalibrateRowsByDistance(rows, options.horizons, period);
+  }
   std::vector<OmniCalibration> out;
   for (std::size_t q = 0; q < options.horizons.size(); ++q) {
     OmniCalibration c = Calibrate(held[q].rows, ConstantSpread(fit[q].rows));
@@ -467,19 +477,6 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
     out.push_back(c);
   }
   return out;
-}
-
-std::vector<OmniDistanceCalibration> CalibrateValidationByDistance(const OmniModel& model,
-                                                                   const std::vector<OmniBlockedStretch>& stretches,
-                                                                   const OmniNoiseOptions& options) {
-  if (std::none_of(stretches.begin(), stretches.end(), [](const OmniBlockedStretch& s) { return s.validation; })) return {};
-  OmniNoiseOptions scoring = options;
-  scoring.stride = options.score_stride;
-  OmniModel measured = model;  // the same predictions, each with its inputs' distance
-  measured.observer.seen_inputs = SeenInputsOfFitBlocks(model, stretches, options);
-  std::vector<std::vector<PredictiveError>> rows;
-  for (HorizonRows& h : Collect(measured, stretches, scoring, {Rows::kReport})) rows.push_back(std::move(h.rows));
-  return CalibrateRowsByDistance(rows, options.horizons, stretches.front().log->frame_period);
 }
 
 OmniSeenInputs SeenInputsOfFitBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,

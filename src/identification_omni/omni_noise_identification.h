@@ -116,18 +116,15 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
 // The calibration of `model` at each of options.horizons on the validation logs where
 // there are any, else on the held-out blocks, its constant-spread baseline fitted on the
 // fit rows. With `crossed` (a noise fitted on the held-out blocks), the held-out blocks of
-// each half are scored with the other half's noise, never with one fitted on them.
+// each half are scored with the other half's noise, never with one fitted on them. With
+// `by_distance` and validation logs, the same rows split by how far each prediction's
+// inputs lie from the fit blocks' (SeenInputsOfFitBlocks; kCalibrationDistances; each
+// range's baseline fitted on its rows): where the intervals can be relied on; `model`'s
+// interval_scale must then grow with no distance (its seen inputs are replaced).
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                                const OmniNoiseOptions& options,
-                                               const std::array<OmniCrossedNoise, 2>* crossed = nullptr);
-
-// The calibration of `model` on the validation logs, as CalibrateOnBlocks scores them,
-// split by how far each prediction's inputs lie from the fit blocks' (SeenInputsOfFitBlocks;
-// kCalibrationDistances; each range's baseline fitted on its rows): where the intervals
-// can be relied on. Empty without validation logs.
-std::vector<OmniDistanceCalibration> CalibrateValidationByDistance(const OmniModel& model,
-                                                                   const std::vector<OmniBlockedStretch>& stretches,
-                                                                   const OmniNoiseOptions& options);
+                                               const std::array<OmniCrossedNoise, 2>* crossed = nullptr,
+                                               std::vector<OmniDistanceCalibration>* by_distance = nullptr);
 
 // The seen inputs (robots/omni/omni_seen_inputs.h) of `model` on the fit blocks of
 // `stretches` (validation logs left out): each fit row's frame as the observer saw it.

@@ -209,7 +209,9 @@ TEST(CalibrationByDistance, SplitsTheValidationRowsByHowFarTheyDriveFromTheFit) 
     const std::vector<OmniBlockedStretch> stretches = {{&fit, 0, &fit_held, &fit_block, false},
                                                        {&scored, 0, &held, &block, true}};
     const std::vector<OmniCalibration> whole = CalibrateOnBlocks(model, stretches, options);
-    const std::vector<OmniDistanceCalibration> by = CalibrateValidationByDistance(model, stretches, options);
+    std::vector<OmniDistanceCalibration> by;
+    const std::vector<OmniCalibration> split = CalibrateOnBlocks(model, stretches, options, nullptr, &by);
+    for (std::size_t q = 0; q < whole.size(); ++q) EXPECT_EQ(split[q].rows, whole[q].rows);
     EXPECT_EQ(by.size(), kCalibrationDistances.size() - 1);
     int far = 0, all = 0;
     for (std::size_t q = 0; q < whole.size(); ++q) {

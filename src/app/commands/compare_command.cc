@@ -335,10 +335,9 @@ void CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniComp
     const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride);
     calibration->emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
     // Where the model knows the inputs its fit saw: the same split by how far from them.
-    for (std::size_t b = 0; !model.observer.seen_inputs.empty() && b + 1 < kCalibrationDistances.size(); ++b) {
-      const double from = kCalibrationDistances[b], to = kCalibrationDistances[b + 1];
-      by_distance->push_back({&s, from, to, CalibrateRows(rows, horizons, log.frame_period, from, to)});
-    }
+    if (model.observer.seen_inputs.empty()) continue;
+    for (OmniDistanceCalibration& d : CalibrateRowsByDistance(rows, horizons, log.frame_period))
+      by_distance->push_back({&s, d.from, d.to, std::move(d.calibration)});
   }
 }
 
