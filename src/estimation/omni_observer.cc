@@ -104,23 +104,6 @@ ObserverMatrix OmniObserver::ProcessNoise(double theta, double speed, double acc
   return q;
 }
 
-ObserverMatrix Propagated(const ObserverMatrix& f, const ObserverMatrix& p) {
-  // F in 3 x 3 blocks over (pose, model velocity, slip) is [[A, B, C], [0, V, 0], [0, 0, D]]
-  // (OmniObserver::Step): F P F^T by blocks takes half the products of the full one.
-  using Block = Eigen::Matrix3d;
-  const Block a = f.block<3, 3>(0, 0), b = f.block<3, 3>(0, 3), c = f.block<3, 3>(0, 6);
-  const Block v = f.block<3, 3>(3, 3), d = f.block<3, 3>(6, 6);
-  Eigen::Matrix<double, kObserverStates, kObserverStates> fp;  // F P
-  fp.topRows<3>() = a * p.topRows<3>() + b * p.middleRows<3>(3) + c * p.bottomRows<3>();
-  fp.middleRows<3>(3) = v * p.middleRows<3>(3);
-  fp.bottomRows<3>() = d * p.bottomRows<3>();
-  ObserverMatrix out;  // (F P) F^T
-  out.leftCols<3>() = fp.leftCols<3>() * a.transpose() + fp.middleCols<3>(3) * b.transpose() + fp.rightCols<3>() * c.transpose();
-  out.middleCols<3>(3) = fp.middleCols<3>(3) * v.transpose();
-  out.rightCols<3>() = fp.rightCols<3>() * d.transpose();
-  return out;
-}
-
 void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   const Pose2 p0 = backend_->pose(0);
   const Twist2 v0 = backend_->velocity(0);
@@ -198,7 +181,7 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   f(1, 7) = dt_ * c;
   f(2, 8) = dt_;
   for (int a = 0; a < 3; ++a) f(6 + a, 6 + a) = slip_decay_;
-  p_ = Propagated(f, p_) + ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration);
+  p_ = f * p_ * f.transpose() + ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration);
   p_ = 0.5 * (p_ + p_.transpose()).eval();
 }
 
@@ -266,9 +249,7 @@ bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& co
   const Eigen::Matrix<double, kObserverStates, 1> delta = gain * nu;
   ObserverMatrix ikh = ObserverMatrix::Identity();
   ikh.leftCols<3>() -= gain;
-  // Joseph's form with H = [I 0 0]: (I - K H) P = P - K P_top, and the same from the right.
-  const ObserverMatrix kp = p_ - gain * p_.topRows<3>();
-  p_ = kp - kp.leftCols<3>() * gain.transpose() + gain * r_ * gain.transpose();
+  p_ = ikh * p_ * ikh.transpose() + gain * r_ * gain.transpose();
   p_ = 0.5 * (p_ + p_.transpose()).eval();
   backend_->MoveBody(0, Pose2{pose.x + delta[0], pose.y + delta[1], pose.theta + delta[2]});
   backend_->SetVelocity(0, Twist2{velocity.vx + delta[3], velocity.vy + delta[4], velocity.omega + delta[5]});

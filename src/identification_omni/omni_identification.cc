@@ -420,71 +420,6 @@ class FitCost : public ceres::CostFunction {
   double max_delay_;
 };
 
-// The parameters that mimic others (a controller's loop gain and its set-point ramp
-// shape the response as a lag does, and a slower ramp as a longer delay): drawn weakly
-// toward the model's values, so that where the logs do not determine them they stay
-// there instead of wherever the solver's path ends (a change in the last bit of the
-// replay's arithmetic sent the Robotino's forward loop gain from 20x to 2x;
-// docs/identification.md, "A weak prior").
-bool HasPrior(int p) { return p == kDelay || (p >= kLoopX && p <= kLoopW) || (p >= kSlewX && p <= kSlewW); }
-
-// How weak: moving such a parameter by one unit of the solver's coordinate (a factor of e
-// for a loop gain or a ramp) costs what raising the fit's RMSE at the solve's start by
-// this share would. A direction the logs determine hardly moves; a flat one takes the
-// model's value.
-constexpr double kPriorShare = 1e-3;
-
-// The prior's residuals: w (x - centre) for each free parameter with one (HasPrior),
-// w^2 = 2 kPriorShare C0 with C0 the fit's sum of squares at the solve's start.
-class PriorCost : public ceres::CostFunction {
- public:
-  PriorCost(std::vector<int> columns, std::vector<double> centre, double weight)
-      : columns_(std::move(columns)), centre_(std::move(centre)), weight_(weight) {}
-
-  static PriorCost* Make(const std::vector<int>& free, const std::array<double, kNumParams>& centre,
-                         const std::vector<double>& residual, double max_delay) {
-    std::vector<int> columns;
-    std::vector<double> at;
-    for (std::size_t k = 0; k < free.size(); ++k) {
-      if (!HasPrior(free[k])) continue;
-      columns.push_back(static_cast<int>(k));
-      at.push_back(ToCoordinate(free[k], centre[static_cast<std::size_t>(free[k])], max_delay));
-    }
-    double ss = 0;
-    for (double r : residual) ss += r * r;
-    if (columns.empty() || !(ss > 0)) return nullptr;
-    auto* cost = new PriorCost(std::move(columns), std::move(at), std::sqrt(2 * kPriorShare * ss));
-    cost->mutable_parameter_block_sizes()->push_back(static_cast<int>(free.size()));
-    cost->set_num_residuals(static_cast<int>(cost->columns_.size()));
-    return cost;
-  }
-
-  // The prior's own share of a cost (the sum of squares) at x.
-  double SquaredNorm(const double* x) const {
-    double ss = 0;
-    for (std::size_t k = 0; k < columns_.size(); ++k) ss += std::pow(weight_ * (x[columns_[k]] - centre_[k]), 2);
-    return ss;
-  }
-
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    const int n = parameter_block_sizes()[0];
-    for (std::size_t k = 0; k < columns_.size(); ++k) {
-      residuals[k] = weight_ * (parameters[0][columns_[k]] - centre_[k]);
-      if (jacobians && jacobians[0]) {
-        double* row = jacobians[0] + k * static_cast<std::size_t>(n);
-        std::fill(row, row + n, 0.0);
-        row[columns_[k]] = weight_;
-      }
-    }
-    return true;
-  }
-
- private:
-  std::vector<int> columns_;
-  std::vector<double> centre_;
-  double weight_;
-};
-
 // A parameter the fit's sensitivities cannot tell from others: held at its value.
 struct HeldBack {
   int param = 0;
@@ -506,12 +441,10 @@ struct SolveResult {
 // `covariance`, the standard errors too. max_iterations 0: no solve, the standard errors
 // at `start`.
 SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<double, kNumParams>& start,
-                  const std::array<double, kNumParams>& prior, const std::vector<int>& free, double max_delay,
-                  int max_iterations, bool covariance) {
+                  const std::vector<int>& free, double max_delay, int max_iterations, bool covariance) {
   SolveResult out;
   out.values = start;
-  const std::vector<double> start_residual = problem.FitResidual(start);
-  const std::size_t rows = start_residual.size();
+  const std::size_t rows = problem.FitResidual(start).size();
   if (rows == 0) throw InputError("the logs leave no rows to fit: every prediction starts or ends in a held-out block");
   out.rows = rows;
   std::vector<double> x;
@@ -519,8 +452,6 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   auto* cost = new FitCost(&problem, start, free, rows, max_delay);
   ceres::Problem ceres_problem;
   ceres_problem.AddResidualBlock(cost, nullptr, x.data());
-  PriorCost* prior_cost = max_iterations > 0 ? PriorCost::Make(free, prior, start_residual, max_delay) : nullptr;
-  if (prior_cost) ceres_problem.AddResidualBlock(prior_cost, nullptr, x.data());
   // No bounds in Ceres (a bounded problem adds line searches that cost Jacobians); the
   // coordinates keep each parameter in its range instead (ToCoordinate).
   ceres::Solver::Options options;
@@ -535,7 +466,7 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
     ceres::Solve(options, &ceres_problem, &summary);
     out.values = cost->Apply(x.data());
     out.iterations = static_cast<int>(summary.iterations.size());
-    out.cost = 2 * summary.final_cost - (prior_cost ? prior_cost->SquaredNorm(x.data()) : 0.0);  // the fit's own
+    out.cost = 2 * summary.final_cost;
   } else {
     out.cost = problem.Cost(start);  // the standard errors at `start`
   }
@@ -833,7 +764,6 @@ using InFit = std::function<bool(const OmniLog&, std::size_t)>;
 struct FitState {
   std::array<double, kNumParams> v{};        // the parameters now
   std::array<double, kNumParams> nominal{};  // the given model's
-  std::array<double, kNumParams> prior{};    // where HasPrior's parameters are drawn: the start's
   std::vector<int> free;                     // estimated, in order
   std::map<int, std::string> pruned;         // left at a value, with why
   std::set<int> chosen;                      // lag structures the held-out blocks chose
@@ -935,7 +865,7 @@ void FitDelayAndResponse(const OmniIdentificationProblem& problem, const std::ve
                            &report->delay_profile_rms);
   LinearStart(logs, v[kDelay], in_fit, fit->free, &v);
   say(1, "delay, response and couplings");
-  const SolveResult solved = Solve(problem, v, fit->prior, fit->free, options.max_delay, options.max_iterations, false);
+  const SolveResult solved = Solve(problem, v, fit->free, options.max_delay, options.max_iterations, false);
   v = solved.values;
   report->solver_iterations += solved.iterations;
   say(2, "neighbouring delays");
@@ -946,7 +876,7 @@ void FitDelayAndResponse(const OmniIdentificationProblem& problem, const std::ve
     trial[kDelay] = centre[kDelay] + shift;
     if (trial[kDelay] < 0 || trial[kDelay] > options.max_delay) continue;
     try {
-      const SolveResult other = Solve(problem, trial, fit->prior, fit->free, options.max_delay, options.max_iterations / 2, false);
+      const SolveResult other = Solve(problem, trial, fit->free, options.max_delay, options.max_iterations / 2, false);
       report->solver_iterations += other.iterations;
       if (other.cost < best) {
         best = other.cost;
@@ -1003,7 +933,7 @@ void FitSpeedLimits(const OmniIdentificationProblem& lookahead, const std::vecto
 void FitTogether(const OmniIdentificationProblem& problem, const std::vector<Segment>& segments,
                  const OmniIdentificationOptions& options, FitState* fit, OmniIdentificationReport* report) {
   const double before = HeldOutRmse(problem, segments, options, fit->v);
-  const SolveResult solved = Solve(problem, fit->v, fit->prior, fit->free, options.max_delay, options.max_iterations, false);
+  const SolveResult solved = Solve(problem, fit->v, fit->free, options.max_delay, options.max_iterations, false);
   report->solver_iterations += solved.iterations;
   const double after = HeldOutRmse(problem, segments, options, solved.values);
   if (after <= (1 + kStructureTolerance) * before) {
@@ -1045,7 +975,7 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
     }
     fit->free.erase(std::find(fit->free.begin(), fit->free.end(), p));
   }
-  fit->solved = Solve(problem, fit->v, fit->prior, fit->free, options.max_delay, 0, true);
+  fit->solved = Solve(problem, fit->v, fit->free, options.max_delay, 0, true);
   report->collinearity = fit->solved.collinearity;
   for (const HeldBack& h : fit->solved.held) {
     fit->held.insert(h.param);
@@ -1383,7 +1313,6 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   FitState fit;
   fit.nominal = ValuesOf(nominal, period);
   fit.v = StartValues(nominal, period);
-  fit.prior = fit.v;
   const double nominal_cost = problem.Cost(fit.nominal);
   if (!std::isfinite(nominal_cost)) throw CheckFailed("the model as given diverges on the logs");
   // Nothing of the held-out blocks reaches the fit, its start or its limits.

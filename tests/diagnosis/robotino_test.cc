@@ -119,16 +119,6 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
       IdentifyOmni(LoadOmniModel(testing::SourcePath("models/robotino.yaml")), fit, held, {}, &identified);
   SCOPED_TRACE(FormatOmniIdentificationTable(report));
   EXPECT_EQ(identified.fitted_on, "analytic");
-  // Four runs at one speed hardly tell the loop gains from the lags and ramps: the weak
-  // prior keeps them near the model's (measured 1.38x and 2.8x; 1.34x and 2.2x under
-  // other last bits). Without it the forward one ended at the range's edge, 20x, and
-  // Bullet followed that model 3.6 times worse than the analytic engine.
-  for (const IdentifiedParameter& p : report.parameters) {
-    if (p.name != "forward.loop_gain" && p.name != "sideways.loop_gain") continue;
-    EXPECT_TRUE(p.estimated) << p.name << ": " << p.note;
-    EXPECT_GT(p.value, 0.25) << p.name;
-    EXPECT_LT(p.value, 4.0) << p.name;
-  }
   // The validation runs' calibration split by distance from the fit's inputs (issue 64):
   // every row in one range (measured: all 0.25 to 1, the runs 30 degrees from the fit's).
   ASSERT_EQ(report.calibration_by_distance.size(), kCalibrationDistances.size() - 1);

@@ -11,27 +11,9 @@
 namespace twinsim {
 namespace {
 
-// (cos, sin) of heading + turn from heading's (cos, sin). A step's turn is small (a
-// robot at 50 rad/s turns 0.05 rad in a millisecond), where the series to the ninth
-// power is exact to a double's precision (the next terms are below 3e-20); a larger
-// turn takes the library's functions.
-inline Eigen::Vector2d Turned(const Eigen::Vector2d& heading, double turn) {
-  double c, s;
-  if (std::abs(turn) <= 0.05) {
-    const double t2 = turn * turn;
-    c = 1 - t2 * (1.0 / 2) * (1 - t2 * (1.0 / 12) * (1 - t2 * (1.0 / 30) * (1 - t2 * (1.0 / 56))));
-    s = turn * (1 - t2 * (1.0 / 6) * (1 - t2 * (1.0 / 20) * (1 - t2 * (1.0 / 42) * (1 - t2 * (1.0 / 72)))));
-  } else {
-    c = std::cos(turn);
-    s = std::sin(turn);
-  }
-  return {heading.x() * c - heading.y() * s, heading.y() * c + heading.x() * s};
-}
-
 // Width of the regularised sign in the roller friction: below this sliding speed the
-// friction force grows linearly (m/s); its inverse, for the per-stage products.
+// friction force grows linearly (m/s).
 constexpr double kRollerSlipScale = 1e-3;
-constexpr double kPerRollerSlipScale = 1 / kRollerSlipScale;
 
 struct AnalyticRobot {
   OmniModel model;
@@ -68,13 +50,12 @@ struct AnalyticRobot {
     wrench = kin.Wrench(torques);
   }
 
-  // The state's derivative; `heading` is (cos theta, sin theta) of s's heading.
-  Eigen::Matrix<double, 6, 1> Derivative(const Eigen::Matrix<double, 6, 1>& s, const Eigen::Vector2d& heading) const {
-    const double vx = s[3], vy = s[4], w = s[5];
+  Eigen::Matrix<double, 6, 1> Derivative(const Eigen::Matrix<double, 6, 1>& s) const {
+    const double th = s[2], vx = s[3], vy = s[4], w = s[5];
     const Eigen::Vector3d p = rigid_mass * Eigen::Vector3d(vx, vy, w);
     Eigen::Vector3d force(w * p[1], -w * p[0], vy * p[0] - vx * p[1]);
     force += wrench;
-    const double c = heading.x(), sn = heading.y();
+    const double c = std::cos(th), sn = std::sin(th);
     // A sloping floor: the weight's share along it, at the centre of mass.
     if (!downhill.isZero()) {
       const Eigen::Vector2d f(c * downhill.x() + sn * downhill.y(), -sn * downhill.x() + c * downhill.y());
@@ -86,7 +67,7 @@ struct AnalyticRobot {
     // along the axle, through the centre, so it makes no torque.
     for (const Wheel& wheel : wheels) {
       const double slip = wheel.c * vx + wheel.s * vy;
-      const double f = -wheel.roller_limit * std::clamp(slip * kPerRollerSlipScale, -1.0, 1.0);
+      const double f = -wheel.roller_limit * std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
       force[0] += f * wheel.c;
       force[1] += f * wheel.s;
     }
@@ -109,7 +90,7 @@ struct AnalyticRobot {
       const double spin = j(i, 0) * ds[3] + j(i, 1) * ds[4] + j(i, 2) * ds[5];
       const double rolling = (torques[i] - model.wheel_spin_inertia * spin) / model.wheel_radius;
       const double slip = wheel.c * s[3] + wheel.s * s[4];
-      const double across = wheel.roller_limit * std::clamp(slip * kPerRollerSlipScale, -1.0, 1.0);
+      const double across = wheel.roller_limit * std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
       worst = std::max(worst, std::sqrt(rolling * rolling + across * across) / wheel.grip);
     }
     return worst;
@@ -169,17 +150,14 @@ class AnalyticOmniEngine final : public OmniEngine {
   void Step(double dt) override {
     for (auto& r : robots_) {
       const auto& x = r.x;
-      // One cosine and sine per step: the stages' headings differ from the step's by
-      // a turn of a fraction of dt, whose rotation Turned takes without trigonometry.
-      const Eigen::Vector2d heading(std::cos(x[2]), std::sin(x[2]));
-      const auto k1 = r.Derivative(x, heading);
+      const auto k1 = r.Derivative(x);
       const double needed = r.GripNeeded(x, k1);
       ++grip_.steps;
       if (needed > 1) ++grip_.beyond;
       grip_.worst = std::max(grip_.worst, needed);
-      const auto k2 = r.Derivative(x + 0.5 * dt * k1, Turned(heading, 0.5 * dt * k1[2]));
-      const auto k3 = r.Derivative(x + 0.5 * dt * k2, Turned(heading, 0.5 * dt * k2[2]));
-      const auto k4 = r.Derivative(x + dt * k3, Turned(heading, dt * k3[2]));
+      const auto k2 = r.Derivative(x + 0.5 * dt * k1);
+      const auto k3 = r.Derivative(x + 0.5 * dt * k2);
+      const auto k4 = r.Derivative(x + dt * k3);
       r.x += dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4);
     }
   }
