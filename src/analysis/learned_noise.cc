@@ -10,66 +10,52 @@
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/pattern_search.h"
+#include "robots/omni/omni_driving_noise.h"
 
 namespace twinsim {
 namespace {
 
 // The search's coordinates: ln of the forward, sideways and turn spreads and of the
-// correlation time, then ln(g + kGrowthOffset) of the growths with speed and with
-// acceleration (their lower bound is a growth of 0).
-using NoiseCoordinates = std::array<double, 6>;
+// correlation time, then ln(g + kGrowthOffset) of the growths with speed, with
+// acceleration and with turn rate (their lower bound is a growth of 0).
+using NoiseCoordinates = std::array<double, 7>;
 constexpr int kFlat = 4;  // the coordinates of a spread the same at every speed
-constexpr int kPerSpeed = 4, kPerAcceleration = 5;
+constexpr int kPerSpeed = 4, kPerAcceleration = 5, kPerTurnRate = 6;
 constexpr double kGrowthOffset = 0.05;
-// The bounds of the coordinates' values: the spreads at the typical speed (m/s, m/s,
-// rad/s), the correlation time (s), the growths (1/(m/s), 1/(m/s^2)).
-constexpr std::array<double, 6> kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0};
-constexpr std::array<double, 6> kUpper{3, 3, 20, 5, 20, 20};
+// The bounds of the coordinates' values: the spreads at the typical motion (m/s, m/s,
+// rad/s), the correlation time (s), the growths (1/(m/s), 1/(m/s^2), 1/(rad/s)).
+constexpr NoiseCoordinates kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0, 0};
+constexpr NoiseCoordinates kUpper{3, 3, 20, 5, 20, 20, 20};
 
 double ToCoordinate(std::size_t i, double value) {
   value = std::clamp(value, kLower[i], kUpper[i]);
   return std::log(i < kFlat ? value : value + kGrowthOffset);
 }
 
-// The spreads' coordinates are those at `typical_speed` (m/s, the logs'), not standing
-// still: a growth with speed then tilts the spreads about that speed instead of raising
-// them at every speed, so the search meets no ridge of a spread against its growth (with
-// the spreads standing still as coordinates it stopped at no growth where the rollouts
-// were a third too wide at low speed).
-NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, double typical_speed) {
+// The spreads' coordinates are those at the logs' typical motion (OmniTypicalMotion; with
+// the spreads standing still as coordinates the search stopped at no growth where the
+// rollouts were a third too wide at low speed).
+NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, const OmniTypicalMotion& typical) {
   NoiseCoordinates v;
-  for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a] * (1 + n.per_speed * typical_speed));
+  for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a] * typical.Factor(n));
   v[3] = ToCoordinate(3, n.correlation_time);
   v[kPerSpeed] = ToCoordinate(kPerSpeed, n.per_speed);
   v[kPerAcceleration] = ToCoordinate(kPerAcceleration, n.per_acceleration);
+  v[kPerTurnRate] = ToCoordinate(kPerTurnRate, n.per_turn_rate);
   return v;
 }
 
-OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, double typical_speed) {
+OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, const OmniTypicalMotion& typical) {
   OmniDrivingNoise n;
   n.correlation_time = std::exp(v[3]);
   // At the lower bound a growth is 0, not the rounding left of exp(ln 0.05) - 0.05.
   auto growth = [](double c) { return c <= std::log(kGrowthOffset) + 1e-12 ? 0.0 : std::exp(c) - kGrowthOffset; };
   n.per_speed = growth(v[kPerSpeed]);
   n.per_acceleration = growth(v[kPerAcceleration]);
-  for (std::size_t a = 0; a < 3; ++a) n.sd[a] = std::exp(v[a]) / (1 + n.per_speed * typical_speed);
+  n.per_turn_rate = growth(v[kPerTurnRate]);
+  for (std::size_t a = 0; a < 3; ++a) n.sd[a] = std::exp(v[a]) / typical.Factor(n);
   n.simulated = true;
   return n;
-}
-
-// The mean translational speed (m/s) between consecutive measured rows of `logs`.
-double TypicalSpeed(const std::vector<OmniLog>& logs) {
-  double sum = 0;
-  long count = 0;
-  for (const OmniLog& log : logs) {
-    for (std::size_t i = 1; i < log.rows.size(); ++i) {
-      const OmniLogRow &a = log.rows[i - 1], &b = log.rows[i];
-      if (!a.measured || !b.measured || b.t <= a.t) continue;
-      sum += std::hypot(b.pose.x - a.pose.x, b.pose.y - a.pose.y) / (b.t - a.t);
-      ++count;
-    }
-  }
-  return count > 0 ? std::min(sum / static_cast<double>(count), 3.0) : 0;
 }
 
 NoiseCoordinates Clamp(NoiseCoordinates v) {
@@ -153,7 +139,9 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
   LearnedNoiseFit out;
   out.start = LearnedDrivingNoise(model, &predictor);
   const int budget = 1 + options.max_evaluations + options.max_evaluations / 2;
-  const double typical = TypicalSpeed(logs);
+  std::vector<const OmniLog*> log_pointers;
+  for (const OmniLog& log : logs) log_pointers.push_back(&log);
+  const OmniTypicalMotion typical = TypicalMotion(log_pointers);
   auto rows_at = [&](const NoiseCoordinates& v) {
     return SampledRows(model, predictor, FromCoordinates(v, typical), logs, options, horizons);
   };
@@ -174,7 +162,7 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
   // First the same spread at every speed, then the growths about the typical motion.
   NoiseCoordinates v =
       PatternSearch<NoiseCoordinates>(cost, Clamp, start, kFlat, 1 + options.max_evaluations, &best, &out.evaluations);
-  v = PatternSearch<NoiseCoordinates>(cost, Clamp, v, kFlat, kPerAcceleration + 1, budget, &best, &out.evaluations);
+  v = PatternSearch<NoiseCoordinates>(cost, Clamp, v, kFlat, kPerTurnRate + 1, budget, &best, &out.evaluations);
   out.cost_after = best;
   out.noise = FromCoordinates(v, typical);
   out.calibration = CalibrationOf(rows_at(v), horizons, logs.front().frame_period);
@@ -195,10 +183,10 @@ std::string FormatLearnedNoiseFit(const LearnedNoiseFit& fit) {
   std::ostringstream s;
   char line[256];
   std::snprintf(line, sizeof line,
-                "driving noise: forward %.3g m/s, sideways %.3g m/s, turn %.3g rad/s standing, growing by %.3g per m/s "
-                "and %.3g per m/s^2, correlation time %.3g s (%d evaluations; %.3f -> %.3f nats per row)\n",
+                "driving noise: forward %.3g m/s, sideways %.3g m/s, turn %.3g rad/s standing, growing by %.3g per m/s, "
+                "%.3g per m/s^2 and %.3g per rad/s, correlation time %.3g s (%d evaluations; %.3f -> %.3f nats per row)\n",
                 fit.noise.sd[0], fit.noise.sd[1], fit.noise.sd[2], fit.noise.per_speed, fit.noise.per_acceleration,
-                fit.noise.correlation_time, fit.evaluations, fit.cost_before, fit.cost_after);
+                fit.noise.per_turn_rate, fit.noise.correlation_time, fit.evaluations, fit.cost_before, fit.cost_after);
   s << line;
   for (const OmniCalibration& c : fit.calibration) {
     std::snprintf(line, sizeof line,

@@ -87,7 +87,7 @@ ObserverMatrix OmniObserver::InitialCovariance() const {
   return p;
 }
 
-ObserverMatrix OmniObserver::ProcessNoise(double theta, double speed, double acceleration) const {
+ObserverMatrix OmniObserver::ProcessNoise(double theta, double speed, double acceleration, double turn_rate) const {
   const double c = std::cos(theta), s = std::sin(theta);
   const Eigen::Vector3d along[3] = {{c, s, 0}, {-s, c, 0}, {0, 0, 1}};
   ObserverMatrix q = ObserverMatrix::Zero();
@@ -99,7 +99,7 @@ ObserverMatrix OmniObserver::ProcessNoise(double theta, double speed, double acc
     q.block<3, 1>(0, 3 + a) += qa * dt2 * g;
     q.block<1, 3>(3 + a, 0) += qa * dt2 * g.transpose();
     q(3 + a, 3 + a) += qa * dt;
-    q(6 + a, 6 + a) = std::pow(model_.driving_noise.Spread(a, speed, acceleration), 2) * (1 - slip_decay_ * slip_decay_);
+    q(6 + a, 6 + a) = std::pow(model_.driving_noise.Spread(a, speed, acceleration, turn_rate), 2) * (1 - slip_decay_ * slip_decay_);
   }
   return q;
 }
@@ -181,7 +181,7 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   f(1, 7) = dt_ * c;
   f(2, 8) = dt_;
   for (int a = 0; a < 3; ++a) f(6 + a, 6 + a) = slip_decay_;
-  p_ = f * p_ * f.transpose() + ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration);
+  p_ = f * p_ * f.transpose() + ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration, v0.omega);
   p_ = 0.5 * (p_ + p_.transpose()).eval();
 }
 

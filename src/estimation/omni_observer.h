@@ -157,9 +157,9 @@ class OmniObserver {
  private:
   // One frame under the command acting now; with `jacobian`, P is propagated too.
   void Step(const Twist2& acting, bool jacobian);
-  // Q of one frame at heading theta (rad), the model's translational speed (m/s) and
-  // acceleration over the frame (m/s^2).
-  ObserverMatrix ProcessNoise(double theta, double speed, double acceleration) const;
+  // Q of one frame at heading theta (rad), the model's translational speed (m/s),
+  // acceleration over the frame (m/s^2) and turn rate (rad/s).
+  ObserverMatrix ProcessNoise(double theta, double speed, double acceleration, double turn_rate) const;
   ObserverMatrix InitialCovariance() const;
   void Restart(const Pose2& pose, const Twist2& velocity);
   Twist2 Acting(int ahead, const std::vector<Twist2>& planned) const;

@@ -61,12 +61,34 @@ void OmniPredictor::Save(const std::string& path) const {
     out << YAML::Key << "correlation_time" << YAML::Value << n.correlation_time;
     if (n.per_speed != 0) out << YAML::Key << "per_speed" << YAML::Value << n.per_speed;
     if (n.per_acceleration != 0) out << YAML::Key << "per_acceleration" << YAML::Value << n.per_acceleration;
+    if (n.per_turn_rate != 0) out << YAML::Key << "per_turn_rate" << YAML::Value << n.per_turn_rate;
     out << YAML::Key << "simulated" << YAML::Value << n.simulated;
     out << YAML::EndMap;
   }
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
   WritePredictorFile(out, path);
 }
+
+namespace {
+
+// The predictor's own driving noise, where the file has one (files from before issue 42
+// and predictors of more than a frame ahead have none).
+void ReadDrivingNoise(YamlMap* top, const std::string& path, ErrorList* errors, OmniPredictorInfo* info) {
+  if (!top->Has("driving_noise")) return;
+  YamlMap d(top->Child("driving_noise"), path, "driving_noise", errors);
+  OmniDrivingNoise& n = info->driving_noise;
+  for (int a = 0; a < 3; ++a) d.Require(kOmniAxisNames[a], &n.sd[static_cast<std::size_t>(a)], NonNegative(100));
+  d.Require("correlation_time", &n.correlation_time, InRange(1e-3, 100));
+  d.Get("per_speed", &n.per_speed, NonNegative(100));
+  d.Get("per_acceleration", &n.per_acceleration, NonNegative(100));
+  d.Get("per_turn_rate", &n.per_turn_rate, NonNegative(100));
+  d.Require("simulated", &n.simulated);
+  d.Finish();
+  info->has_driving_noise = true;
+  if (info->layout.horizon != 1) top->Error("driving_noise", "only a predictor of one frame ahead (layout.horizon 1) drives the learned backend");
+}
+
+}  // namespace
 
 OmniPredictor OmniPredictor::Load(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path);
@@ -123,18 +145,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
     }
     b.Finish();
   }
-  if (top.Has("driving_noise")) {  // optional: files from before issue 42 and H > 1 have none
-    YamlMap d(top.Child("driving_noise"), path, "driving_noise", &errors);
-    OmniDrivingNoise& n = info.driving_noise;
-    for (int a = 0; a < 3; ++a) d.Require(kOmniAxisNames[a], &n.sd[static_cast<std::size_t>(a)], NonNegative(100));
-    d.Require("correlation_time", &n.correlation_time, InRange(1e-3, 100));
-    d.Get("per_speed", &n.per_speed, NonNegative(100));
-    d.Get("per_acceleration", &n.per_acceleration, NonNegative(100));
-    d.Require("simulated", &n.simulated);
-    d.Finish();
-    info.has_driving_noise = true;
-    if (info.layout.horizon != 1) top.Error("driving_noise", "only a predictor of one frame ahead (layout.horizon 1) drives the learned backend");
-  }
+  ReadDrivingNoise(&top, path, &errors, &info);
   errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();

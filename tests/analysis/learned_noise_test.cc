@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <string>
 
 #include "analysis/omni_calibration_report.h"
 #include "analysis/pooled_calibration.h"
@@ -96,14 +98,27 @@ testing::WanderingPlant LearningPlant() {
   return plant;
 }
 
-Trained TrainOnWanderingPlant(double seconds) {
-  const testing::WanderingPlant plant = LearningPlant();
+Trained TrainOnWanderingPlant(double seconds, const testing::WanderingPlant& plant = LearningPlant()) {
   Trained t{testing::RecordWanderingPlant(plant, seconds, 57).log, testing::RecordWanderingPlant(plant, seconds, 58).log, {}};
   OmniTrainOptions train;
   train.kind = "linear";
   train.horizon = 1;
   t.predictor = TrainOmniPredictor(testing::Omni4(), {t.fit}, train, nullptr);
   return t;
+}
+
+// The learned backend with `noisy` calibrated on `unseen` and seven more minutes of
+// `plant` (seeds 100-106), pooled; recorded under `name` for
+// scripts/noise-calibration-table (the table of docs/learning.md).
+std::vector<testing::PooledCalibration> OnEightUnseenMinutes(const OmniPredictor& noisy, const OmniLog& unseen,
+                                                             const testing::WanderingPlant& plant, const std::string& name) {
+  std::vector<std::vector<OmniCalibration>> minutes{CalibrateLearnedOmniLog(testing::Omni4(), noisy, unseen)};
+  for (int seed = 100; seed < 107; ++seed)
+    minutes.push_back(CalibrateLearnedOmniLog(testing::Omni4(), noisy, testing::RecordWanderingPlant(plant, 60, seed).log));
+  const std::vector<testing::PooledCalibration> c = testing::PoolCalibrations(minutes);
+  ::testing::Test::RecordProperty(name, testing::NoiseTableRow(noisy.info().driving_noise, {}, static_cast<int>(minutes.size()), c));
+  std::printf("%s", FormatCalibrationTable(minutes.front()).c_str());
+  return c;
 }
 
 TEST(LearnedDrivingNoise, ThePredictorFileCarriesItAndTheSimulationDrawsIt) {
@@ -172,14 +187,8 @@ TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnUnseenMinutes) {
   EXPECT_TRUE(fit.noise.simulated);
   OmniPredictor noisy = t.predictor;
   noisy.SetDrivingNoise(fit.noise);
-  std::vector<std::vector<OmniCalibration>> minutes{CalibrateLearnedOmniLog(testing::Omni4(), noisy, t.unseen)};
-  for (int seed = 100; seed < 107; ++seed)
-    minutes.push_back(CalibrateLearnedOmniLog(testing::Omni4(), noisy, testing::RecordWanderingPlant(LearningPlant(), 60, seed).log));
-  const std::vector<testing::PooledCalibration> c = testing::PoolCalibrations(minutes);
+  const std::vector<testing::PooledCalibration> c = OnEightUnseenMinutes(noisy, t.unseen, LearningPlant(), "table_row");
   ASSERT_EQ(c.size(), 3u);
-  SCOPED_TRACE(FormatCalibrationTable(minutes.front()));
-  // The table of docs/learning.md (scripts/noise-calibration-table prints it).
-  RecordProperty("table_row", testing::NoiseTableRow(fit.noise, {}, static_cast<int>(minutes.size()), c));
   for (const testing::PooledCalibration& p : c) {
     const OmniCalibration& h = p.pooled;
     EXPECT_GT(h.rows, 4000) << h.frames;
@@ -193,6 +202,39 @@ TEST(LearnedDrivingNoise, FittedOnHeldOutRowsCalibratedOnUnseenMinutes) {
   for (double& s : tiny.sd) s /= 100;
   noisy.SetDrivingNoise(tiny);
   EXPECT_LT(CalibrateLearnedOmniLog(testing::Omni4(), noisy, t.unseen).back().position_90, 0.5);
+}
+
+// A robot that wanders more the faster it turns (a quarter of the spread while not
+// turning, all of it from 1.5 rad/s on; issue 64): the fit's growth with turn rate,
+// searched about the logs' typical motion as the growth with speed is, takes it up, and
+// the fan's shape then beats a constant spread at every horizon over eight unseen
+// minutes (its energy score lower). Measured (2026-12-03): 1.3 per rad/s (and 0.9 per
+// m/s); energy scores 0.9, 3.8 and 5.1 % under the constant spread's at 4, 16 and 63
+// frames on the first unseen minute, where the fit without the turn rate's growth (1.55
+// per m/s) scored -1.3, 0.0 and 2.4 % and held 62 and 67 % in its pooled 50 % ellipses
+// at 4 and 16 frames. With it the 90 % ellipses hold the test above's band, the 50 %
+// ones 61, 63 and 50 %: errors that mix turning and standing are heavier-tailed than
+// the rollouts' Student t at one spread, so the 50 % band is 44-65 % here.
+TEST(LearnedDrivingNoise, ASpreadGrowingWithTurnRateIsFitted) {
+  testing::WanderingPlant plant = LearningPlant();
+  plant.noise_not_turning = 0.25;
+  plant.noise_full_turn = 1.5;
+  const Trained t = TrainOnWanderingPlant(60, plant);
+  const LearnedNoiseFit fit = FitLearnedDrivingNoise(testing::Omni4(), t.predictor, OmniValidationParts({t.fit}, 0.2));
+  SCOPED_TRACE(FormatLearnedNoiseFit(fit));
+  EXPECT_GT(fit.noise.per_turn_rate, 0.3);
+  OmniPredictor noisy = t.predictor;
+  noisy.SetDrivingNoise(fit.noise);
+  const std::vector<testing::PooledCalibration> c = OnEightUnseenMinutes(noisy, t.unseen, plant, "turning_table_row");
+  ASSERT_EQ(c.size(), 3u);
+  for (const testing::PooledCalibration& p : c) {
+    const OmniCalibration& h = p.pooled;
+    EXPECT_LT(h.energy_score, h.baseline_energy_score) << h.frames;
+    EXPECT_GT(h.position_50, 0.44) << h.frames;
+    EXPECT_LT(h.position_50, 0.65) << h.frames;
+    EXPECT_GT(h.position_90, 0.86) << h.frames;
+    EXPECT_LT(h.position_90, 0.95) << h.frames;
+  }
 }
 
 }  // namespace

@@ -86,7 +86,7 @@ inline std::string NoiseTableRow(const OmniDrivingNoise& noise, const std::vecto
     return out + "]";
   };
   std::string row = "{\"noise\": " + list({noise.sd[0], noise.sd[1], noise.sd[2], noise.correlation_time, noise.per_speed,
-                                            noise.per_acceleration});
+                                            noise.per_acceleration, noise.per_turn_rate});
   if (!truth.empty()) row += ", \"truth\": " + list(truth);
   return row + ", \"minutes\": " + std::to_string(minutes) + ", \"horizons\": " + PooledCalibrationJson(pooled) + "}";
 }

@@ -29,6 +29,10 @@ struct WanderingPlant {
   // lagged velocity's translational speed: f of it standing still, all of it from V on.
   double noise_still = 1;
   double noise_full_speed = 1;                   // m/s
+  // And with turn rate, the same way (times the speed's factor): noise_not_turning of it
+  // while the lagged turn rate is 0, all of it from noise_full_turn (rad/s) on.
+  double noise_not_turning = 1;
+  double noise_full_turn = 2;                    // rad/s
   double camera_xy = 0.001;                      // m
   double camera_theta = 0.01;                    // rad
   double drop = 0.1;                             // share of frames the camera loses

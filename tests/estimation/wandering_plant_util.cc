@@ -83,8 +83,9 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
       targets[2] += plant.turn_per_sideways * acting[1];
       if (plant.turn_limit > 0) targets[2] = std::clamp(targets[2], -plant.turn_limit, plant.turn_limit);
       const double speed = std::min(1.0, std::hypot(v[0], v[1]) / plant.noise_full_speed);
-      const double f2 = plant.noise_still * plant.noise_still;
-      const double grow = std::sqrt(f2 + (1 - f2) * speed * speed);
+      const double turn = std::min(1.0, std::abs(v[2]) / plant.noise_full_turn);
+      const double f2 = plant.noise_still * plant.noise_still, g2 = plant.noise_not_turning * plant.noise_not_turning;
+      const double grow = std::sqrt(f2 + (1 - f2) * speed * speed) * std::sqrt(g2 + (1 - g2) * turn * turn);
       for (int a = 0; a < 3; ++a) {
         const double target = targets[static_cast<std::size_t>(a)];
         double& va = v[static_cast<std::size_t>(a)];

@@ -148,7 +148,7 @@ TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
   EXPECT_GT(run.model.driving_noise.per_speed, 0.3);
   EXPECT_TRUE(run.report.noise.growth_note.empty()) << run.report.noise.growth_note;
   for (int a = 0; a < 2; ++a) {
-    const double at_speed = run.model.driving_noise.Spread(a, 1.0, 0);
+    const double at_speed = run.model.driving_noise.Spread(a, 1.0, 0, 0);
     const double truth = plant.noise_sd[static_cast<std::size_t>(a)];
     EXPECT_NEAR(at_speed, truth, 0.3 * truth) << a;
     EXPECT_LT(run.model.driving_noise.sd[static_cast<std::size_t>(a)], 0.6 * truth) << a;

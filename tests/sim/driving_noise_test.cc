@@ -77,38 +77,69 @@ TEST(DrivingNoise, AStandingRobotSlipsWithTheModelsSpreadAndCorrelationOnEveryBa
   }
 }
 
-// A spread that grows with speed (driving_noise.per_speed): a robot circling at about
-// 0.8 m/s slips by sd (1 + per_speed v) on each axis, the velocity its wheels keep being
-// steady, so the body velocity's spread about its mean is the slip's.
-TEST(DrivingNoise, ASpreadGrowingWithSpeedIsWiderWhileDriving) {
-  OmniModel model = Slipping(0.1);
-  model.driving_noise.per_speed = 1.5;
+// The body velocity's spread about its mean (forward, sideways, turn) while the robot
+// drives `command` for 150 s, and that mean: the wheels' velocity is steady, so the
+// spread is the slip's.
+struct SteadySlip {
+  std::array<double, 3> mean{}, spread{};
+};
+SteadySlip SlipWhileDriving(const OmniModel& model, const Twist2& command) {
   FrameTiming timing;
   timing.frame_rate = 30;
   timing.physics_substeps = DefaultPhysicsSubsteps(30);
   const double seconds = 150;
-  CommandSpec circle;
-  circle.type = "sequence";
-  circle.segments = {{seconds, Twist2{0.8, 0, 1.0}, false}};
+  CommandSpec steady;
+  steady.type = "sequence";
+  steady.segments = {{seconds, command, false}};
   std::vector<SimRobot> robots;
-  robots.push_back(SimRobot{"r", model, Pose2{0, 0, 0}, MakeCommandSource(circle, 3, 0, seconds, Pose2{})});
+  robots.push_back(SimRobot{"r", model, Pose2{0, 0, 0}, MakeCommandSource(steady, 3, 0, seconds, Pose2{})});
   FieldModel open;
   open.walls = false;
   Simulation sim(std::move(robots), MakeOmniBackend("analytic", {model}, open, timing), 3);
   std::vector<std::array<double, 3>> v = BodyVelocities(sim.Run(static_cast<int>(seconds * 30)));
   v.erase(v.begin(), v.begin() + 60);  // the start's transient
-  std::array<double, 3> mean{};
+  SteadySlip out;
   for (const auto& x : v)
-    for (std::size_t c = 0; c < 3; ++c) mean[c] += x[c] / static_cast<double>(v.size());
-  const double speed = std::hypot(mean[0], mean[1]);
-  EXPECT_GT(speed, 0.5);
+    for (std::size_t c = 0; c < 3; ++c) out.mean[c] += x[c] / static_cast<double>(v.size());
   for (std::size_t c = 0; c < 3; ++c) {
     double sum2 = 0;
-    for (const auto& x : v) sum2 += (x[c] - mean[c]) * (x[c] - mean[c]);
-    const double expected = model.driving_noise.Spread(static_cast<int>(c), speed, 0);
+    for (const auto& x : v) sum2 += (x[c] - out.mean[c]) * (x[c] - out.mean[c]);
+    out.spread[c] = std::sqrt(sum2 / static_cast<double>(v.size()));
+  }
+  return out;
+}
+
+// A spread that grows with speed (driving_noise.per_speed): a robot circling at about
+// 0.8 m/s slips by sd (1 + per_speed v) on each axis.
+TEST(DrivingNoise, ASpreadGrowingWithSpeedIsWiderWhileDriving) {
+  OmniModel model = Slipping(0.1);
+  model.driving_noise.per_speed = 1.5;
+  const SteadySlip slip = SlipWhileDriving(model, Twist2{0.8, 0, 1.0});
+  const double speed = std::hypot(slip.mean[0], slip.mean[1]);
+  EXPECT_GT(speed, 0.5);
+  for (std::size_t c = 0; c < 3; ++c) {
+    const double expected = model.driving_noise.Spread(static_cast<int>(c), speed, 0, slip.mean[2]);
     // About 4400 frames, 700 independent stretches of 2 tau: within 10 %, and far from
     // the spread standing still (a factor 1 + 1.5 v, about 2).
-    EXPECT_NEAR(std::sqrt(sum2 / v.size()), expected, 0.1 * expected) << "axis " << c;
+    EXPECT_NEAR(slip.spread[c], expected, 0.1 * expected) << "axis " << c;
+  }
+}
+
+// And with the turn rate (driving_noise.per_turn_rate): a robot spinning on the spot at
+// about 3 rad/s slips by sd (1 + per_turn_rate |omega|), 2.5 times its spread standing,
+// the same turning either way.
+TEST(DrivingNoise, ASpreadGrowingWithTurnRateIsWiderWhileSpinning) {
+  OmniModel model = Slipping(0.1);
+  model.driving_noise.per_turn_rate = 0.5;
+  for (double sign : {1.0, -1.0}) {
+    const SteadySlip slip = SlipWhileDriving(model, Twist2{0, 0, 3 * sign});
+    EXPECT_GT(sign * slip.mean[2], 2.0);
+    EXPECT_LT(std::hypot(slip.mean[0], slip.mean[1]), 0.05);
+    for (std::size_t c = 0; c < 3; ++c) {
+      const double expected = model.driving_noise.Spread(static_cast<int>(c), 0, 0, slip.mean[2]);
+      EXPECT_GT(expected, 2 * model.driving_noise.sd[c]);
+      EXPECT_NEAR(slip.spread[c], expected, 0.1 * expected) << "axis " << c << " turning " << sign;
+    }
   }
 }
 
@@ -177,6 +208,12 @@ TEST(DrivingNoise, TheModelFileSaysWhetherItIsSimulated) {
   const OmniModel grown = LoadOmniModelFromString(FormatOmniModelYaml(m), "grown.yaml");
   EXPECT_EQ(grown.driving_noise.per_speed, 0.75);
   EXPECT_EQ(grown.driving_noise.per_acceleration, 0.125);
+  EXPECT_EQ(grown.driving_noise.per_turn_rate, 0.0);
+  m.driving_noise.per_turn_rate = 0.375;
+  const std::string turning = FormatOmniModelYaml(m);
+  EXPECT_NE(turning.find("per_turn_rate: 0.375"), std::string::npos) << turning;
+  EXPECT_EQ(LoadOmniModelFromString(turning, "turning.yaml").driving_noise.per_turn_rate, 0.375);
+  EXPECT_THROW(LoadOmniModelFromString("driving_noise: {per_turn_rate: -0.5}\n", "bad.yaml"), InputError);
   EXPECT_THROW(LoadOmniModelFromString("driving_noise: {simulated: perhaps}\n", "bad.yaml"), InputError);
   EXPECT_THROW(LoadOmniModelFromString("driving_noise: {per_speed: -1}\n", "bad.yaml"), InputError);
 }

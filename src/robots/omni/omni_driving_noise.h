@@ -1,9 +1,9 @@
 // One frame of an omni robot's driving noise (OmniDrivingNoise, docs/models.md): the
 // slip the wheels do not see, a first-order Gauss-Markov process per robot axis sampled
 // exactly over the frame,
-//   s <- a s + sqrt(1 - a^2) sd(v, dv/dt) w,   a = exp(-dt / correlation_time),
-// its spread stationary at sd (at the speed and acceleration of the robot's own, wheel,
-// velocity), and the body moved on by s dt in its own frame. The simulation loop
+//   s <- a s + sqrt(1 - a^2) sd(v, dv/dt, omega) w,   a = exp(-dt / correlation_time),
+// its spread stationary at sd (at the speed, acceleration and turn rate of the robot's
+// own, wheel, velocity), and the body moved on by s dt in its own frame. The simulation loop
 // (Simulation) and the learned backend's sampled predictions (analysis/omni_replay.h)
 // draw it the same way.
 //
@@ -12,9 +12,11 @@
 #pragma once
 
 #include <array>
+#include <vector>
 
 #include "core/pose.h"
 #include "core/rng.h"
+#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
@@ -24,5 +26,18 @@ namespace twinsim {
 // robot's own (wheel) velocity now and a frame ago, robot frame.
 Pose2 SlipPose(const OmniDrivingNoise& noise, double dt, const Twist2& velocity, const Twist2& velocity_before,
                const Pose2& pose, std::array<double, 3>* slip, Rng* rng);
+
+// Logs' typical motion: the mean translational speed (m/s, at most 3) and turn rate
+// (rad/s either way, at most 20) between consecutive measured rows. The noise fits
+// search the spreads there rather than standing still, so that a growth with speed or
+// turn rate tilts the spreads about the logs' motion instead of raising them at every
+// speed: with the spreads standing still as coordinates, a spread and its growth form a
+// ridge a search moving one coordinate at a time stops on.
+struct OmniTypicalMotion {
+  double speed = 0, turn_rate = 0;
+  // The spreads' factor there from the growths with speed and turn rate.
+  double Factor(const OmniDrivingNoise& n) const { return 1 + n.per_speed * speed + n.per_turn_rate * turn_rate; }
+};
+OmniTypicalMotion TypicalMotion(const std::vector<const OmniLog*>& logs);
 
 }  // namespace twinsim

@@ -67,12 +67,16 @@ struct OmniDrivingNoise {
   // 1/(m/s^2): and by this share per m/s^2 of the model's translational acceleration (a
   // robot whose wheels slip when it speeds up or brakes hard).
   double per_acceleration = 0;
+  // 1/(rad/s): and by this share per rad/s of the model's turn rate (wheels that slip
+  // across their rollers in fast turns).
+  double per_turn_rate = 0;
   bool simulated = false;                   // the simulation draws it (off: the observer's model only)
 
-  // The spread (m/s or rad/s) of axis a (forward, sideways, turn) at `speed` (m/s) and
-  // `acceleration` (m/s^2).
-  double Spread(int a, double speed, double acceleration) const {
-    return sd[static_cast<std::size_t>(a)] * (1 + per_speed * speed + per_acceleration * acceleration);
+  // The spread (m/s or rad/s) of axis a (forward, sideways, turn) at `speed` (m/s),
+  // `acceleration` (m/s^2) and `turn_rate` (rad/s, either sign).
+  double Spread(int a, double speed, double acceleration, double turn_rate) const {
+    return sd[static_cast<std::size_t>(a)] *
+           (1 + per_speed * speed + per_acceleration * acceleration + per_turn_rate * std::abs(turn_rate));
   }
 };
 

@@ -241,6 +241,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     d.Get("correlation_time", &model.driving_noise.correlation_time, InRange(1e-3, 100));
     d.Get("per_speed", &model.driving_noise.per_speed, NonNegative(100));
     d.Get("per_acceleration", &model.driving_noise.per_acceleration, NonNegative(100));
+    d.Get("per_turn_rate", &model.driving_noise.per_turn_rate, NonNegative(100));
     d.Get("simulated", &model.driving_noise.simulated);
     d.Finish();
   }
