@@ -28,8 +28,9 @@ Pose2 SlipPose(const OmniDrivingNoise& noise, double dt, const Twist2& velocity,
                const Pose2& pose, std::array<double, 3>* slip, Rng* rng);
 
 // Logs' typical motion: the mean translational speed (m/s, at most 3) and turn rate
-// (rad/s either way, at most 20) between consecutive measured rows. The noise fits
-// search the spreads there rather than standing still, so that a growth with speed or
+// (rad/s either way, at most 20) between consecutive measured rows. The learned
+// backend's noise fit (analysis/learned_noise.h) searches the spreads there rather than
+// standing still, so that a growth with speed or
 // turn rate tilts the spreads about the logs' motion instead of raising them at every
 // speed: with the spreads standing still as coordinates, a spread and its growth form a
 // ridge a search moving one coordinate at a time stops on.
