@@ -10,7 +10,7 @@
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/pattern_search.h"
-#include "robots/omni/omni_driving_noise.h"
+#include "core/pose.h"
 
 namespace twinsim {
 namespace {
@@ -27,15 +27,43 @@ constexpr double kGrowthOffset = 0.05;
 constexpr NoiseCoordinates kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0, 0};
 constexpr NoiseCoordinates kUpper{3, 3, 20, 5, 20, 20, 20};
 
+// The logs' typical motion: the mean translational speed (m/s, at most 3) and turn rate
+// (rad/s either way, at most 20) between consecutive measured rows. The spreads are
+// searched there rather than standing still, so that a growth with speed or turn rate
+// tilts them about the logs' motion instead of raising them at every speed: with the
+// spreads standing still as coordinates, a spread and its growth form a ridge a search
+// moving one coordinate at a time stops on.
+struct TypicalMotion {
+  double speed = 0, turn_rate = 0;
+  // The spreads' factor there from the growths with speed and turn rate.
+  double Factor(const OmniDrivingNoise& n) const { return 1 + n.per_speed * speed + n.per_turn_rate * turn_rate; }
+};
+
+TypicalMotion TypicalMotionOf(const std::vector<OmniLog>& logs) {
+  double speed = 0, turn = 0;
+  long count = 0;
+  for (const OmniLog& log : logs) {
+    for (std::size_t i = 1; i < log.rows.size(); ++i) {
+      const OmniLogRow &a = log.rows[i - 1], &b = log.rows[i];
+      if (!a.measured || !b.measured || b.t <= a.t) continue;
+      speed += std::hypot(b.pose.x - a.pose.x, b.pose.y - a.pose.y) / (b.t - a.t);
+      turn += std::abs(WrapAngle(b.pose.theta - a.pose.theta)) / (b.t - a.t);
+      ++count;
+    }
+  }
+  if (count == 0) return {};
+  return {std::min(speed / static_cast<double>(count), 3.0), std::min(turn / static_cast<double>(count), 20.0)};
+}
+
 double ToCoordinate(std::size_t i, double value) {
   value = std::clamp(value, kLower[i], kUpper[i]);
   return std::log(i < kFlat ? value : value + kGrowthOffset);
 }
 
-// The spreads' coordinates are those at the logs' typical motion (OmniTypicalMotion; with
-// the spreads standing still as coordinates the search stopped at no growth where the
+// The spreads' coordinates are those at the logs' typical motion (TypicalMotion; with the
+// spreads standing still as coordinates the search stopped at no growth where the
 // rollouts were a third too wide at low speed).
-NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, const OmniTypicalMotion& typical) {
+NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, const TypicalMotion& typical) {
   NoiseCoordinates v;
   for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a] * typical.Factor(n));
   v[3] = ToCoordinate(3, n.correlation_time);
@@ -45,7 +73,7 @@ NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, const OmniTypicalMotio
   return v;
 }
 
-OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, const OmniTypicalMotion& typical) {
+OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, const TypicalMotion& typical) {
   OmniDrivingNoise n;
   n.correlation_time = std::exp(v[3]);
   // At the lower bound a growth is 0, not the rounding left of exp(ln 0.05) - 0.05.
@@ -139,9 +167,7 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
   LearnedNoiseFit out;
   out.start = LearnedDrivingNoise(model, &predictor);
   const int budget = 1 + options.max_evaluations + options.max_evaluations / 2;
-  std::vector<const OmniLog*> log_pointers;
-  for (const OmniLog& log : logs) log_pointers.push_back(&log);
-  const OmniTypicalMotion typical = TypicalMotion(log_pointers);
+  const TypicalMotion typical = TypicalMotionOf(logs);
   auto rows_at = [&](const NoiseCoordinates& v) {
     return SampledRows(model, predictor, FromCoordinates(v, typical), logs, options, horizons);
   };

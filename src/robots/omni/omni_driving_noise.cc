@@ -1,6 +1,5 @@
 #include "robots/omni/omni_driving_noise.h"
 
-#include <algorithm>
 #include <cmath>
 
 namespace twinsim {
@@ -17,22 +16,6 @@ Pose2 SlipPose(const OmniDrivingNoise& noise, double dt, const Twist2& velocity,
   const double cos_t = std::cos(pose.theta), sin_t = std::sin(pose.theta);
   return Pose2{pose.x + (cos_t * s[0] - sin_t * s[1]) * dt, pose.y + (sin_t * s[0] + cos_t * s[1]) * dt,
                pose.theta + s[2] * dt};
-}
-
-OmniTypicalMotion TypicalMotion(const std::vector<const OmniLog*>& logs) {
-  double speed = 0, turn = 0;
-  long count = 0;
-  for (const OmniLog* log : logs) {
-    for (std::size_t i = 1; i < log->rows.size(); ++i) {
-      const OmniLogRow &a = log->rows[i - 1], &b = log->rows[i];
-      if (!a.measured || !b.measured || b.t <= a.t) continue;
-      speed += std::hypot(b.pose.x - a.pose.x, b.pose.y - a.pose.y) / (b.t - a.t);
-      turn += std::abs(WrapAngle(b.pose.theta - a.pose.theta)) / (b.t - a.t);
-      ++count;
-    }
-  }
-  if (count == 0) return {};
-  return {std::min(speed / static_cast<double>(count), 3.0), std::min(turn / static_cast<double>(count), 20.0)};
 }
 
 }  // namespace twinsim

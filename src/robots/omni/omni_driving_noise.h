@@ -12,11 +12,9 @@
 #pragma once
 
 #include <array>
-#include <vector>
 
 #include "core/pose.h"
 #include "core/rng.h"
-#include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
@@ -26,19 +24,5 @@ namespace twinsim {
 // robot's own (wheel) velocity now and a frame ago, robot frame.
 Pose2 SlipPose(const OmniDrivingNoise& noise, double dt, const Twist2& velocity, const Twist2& velocity_before,
                const Pose2& pose, std::array<double, 3>* slip, Rng* rng);
-
-// Logs' typical motion: the mean translational speed (m/s, at most 3) and turn rate
-// (rad/s either way, at most 20) between consecutive measured rows. The learned
-// backend's noise fit (analysis/learned_noise.h) searches the spreads there rather than
-// standing still, so that a growth with speed or
-// turn rate tilts the spreads about the logs' motion instead of raising them at every
-// speed: with the spreads standing still as coordinates, a spread and its growth form a
-// ridge a search moving one coordinate at a time stops on.
-struct OmniTypicalMotion {
-  double speed = 0, turn_rate = 0;
-  // The spreads' factor there from the growths with speed and turn rate.
-  double Factor(const OmniDrivingNoise& n) const { return 1 + n.per_speed * speed + n.per_turn_rate * turn_rate; }
-};
-OmniTypicalMotion TypicalMotion(const std::vector<const OmniLog*>& logs);
 
 }  // namespace twinsim
