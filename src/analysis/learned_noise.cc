@@ -10,7 +10,6 @@
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/pattern_search.h"
-#include "core/pose.h"
 
 namespace twinsim {
 namespace {
@@ -27,45 +26,17 @@ constexpr double kGrowthOffset = 0.05;
 constexpr NoiseCoordinates kLower{1e-3, 1e-3, 1e-3, 0.01, 0, 0, 0};
 constexpr NoiseCoordinates kUpper{3, 3, 20, 5, 20, 20, 20};
 
-// The logs' typical motion: the mean translational speed (m/s, at most 3) and turn rate
-// (rad/s either way, at most 20) between consecutive measured rows. The spreads are
-// searched there rather than standing still, so that a growth with speed or turn rate
-// tilts them about the logs' motion instead of raising them at every speed: with the
-// spreads standing still as coordinates, a spread and its growth form a ridge a search
-// moving one coordinate at a time stops on.
-struct TypicalMotion {
-  double speed = 0, turn_rate = 0;
-  // The spreads' factor there from the growths with speed and turn rate.
-  double Factor(const OmniDrivingNoise& n) const { return 1 + n.per_speed * speed + n.per_turn_rate * turn_rate; }
-};
-
-TypicalMotion TypicalMotionOf(const std::vector<OmniLog>& logs) {
-  double speed = 0, turn = 0;
-  long count = 0;
-  for (const OmniLog& log : logs) {
-    for (std::size_t i = 1; i < log.rows.size(); ++i) {
-      const OmniLogRow &a = log.rows[i - 1], &b = log.rows[i];
-      if (!a.measured || !b.measured || b.t <= a.t) continue;
-      speed += std::hypot(b.pose.x - a.pose.x, b.pose.y - a.pose.y) / (b.t - a.t);
-      turn += std::abs(WrapAngle(b.pose.theta - a.pose.theta)) / (b.t - a.t);
-      ++count;
-    }
-  }
-  if (count == 0) return {};
-  return {std::min(speed / static_cast<double>(count), 3.0), std::min(turn / static_cast<double>(count), 20.0)};
-}
-
 double ToCoordinate(std::size_t i, double value) {
   value = std::clamp(value, kLower[i], kUpper[i]);
   return std::log(i < kFlat ? value : value + kGrowthOffset);
 }
 
-// The spreads' coordinates are those at the logs' typical motion (TypicalMotion; with the
+// The spreads' coordinates are those at the logs' typical motion (OmniTypicalMotion; with the
 // spreads standing still as coordinates the search stopped at no growth where the
 // rollouts were a third too wide at low speed).
-NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, const TypicalMotion& typical) {
+NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, const OmniTypicalMotion& typical) {
   NoiseCoordinates v;
-  for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a] * typical.Factor(n));
+  for (std::size_t a = 0; a < 3; ++a) v[a] = ToCoordinate(a, n.sd[a] * n.Growth(typical.speed, 0, typical.turn_rate));
   v[3] = ToCoordinate(3, n.correlation_time);
   v[kPerSpeed] = ToCoordinate(kPerSpeed, n.per_speed);
   v[kPerAcceleration] = ToCoordinate(kPerAcceleration, n.per_acceleration);
@@ -73,7 +44,7 @@ NoiseCoordinates ToCoordinates(const OmniDrivingNoise& n, const TypicalMotion& t
   return v;
 }
 
-OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, const TypicalMotion& typical) {
+OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, const OmniTypicalMotion& typical) {
   OmniDrivingNoise n;
   n.correlation_time = std::exp(v[3]);
   // At the lower bound a growth is 0, not the rounding left of exp(ln 0.05) - 0.05.
@@ -81,7 +52,7 @@ OmniDrivingNoise FromCoordinates(const NoiseCoordinates& v, const TypicalMotion&
   n.per_speed = growth(v[kPerSpeed]);
   n.per_acceleration = growth(v[kPerAcceleration]);
   n.per_turn_rate = growth(v[kPerTurnRate]);
-  for (std::size_t a = 0; a < 3; ++a) n.sd[a] = std::exp(v[a]) / typical.Factor(n);
+  for (std::size_t a = 0; a < 3; ++a) n.sd[a] = std::exp(v[a]) / n.Growth(typical.speed, 0, typical.turn_rate);
   n.simulated = true;
   return n;
 }
@@ -167,7 +138,9 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
   LearnedNoiseFit out;
   out.start = LearnedDrivingNoise(model, &predictor);
   const int budget = 1 + options.max_evaluations + options.max_evaluations / 2;
-  const TypicalMotion typical = TypicalMotionOf(logs);
+  std::vector<const OmniLog*> pointers;
+  for (const OmniLog& log : logs) pointers.push_back(&log);
+  const OmniTypicalMotion typical = TypicalMotionOf(pointers);
   auto rows_at = [&](const NoiseCoordinates& v) {
     return SampledRows(model, predictor, FromCoordinates(v, typical), logs, options, horizons);
   };

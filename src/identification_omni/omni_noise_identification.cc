@@ -19,19 +19,21 @@ namespace twinsim {
 
 namespace {
 
-// The driving noise's forward, sideways and turn spreads and correlation time, the
-// scale of the model's process noise, the camera's position and heading noise, and the
-// spreads' growth with speed and acceleration. The search runs in the logarithms of all
+// The driving noise's forward, sideways and turn spreads at the logs' typical motion
+// (OmniTypicalMotion, which says why there) and correlation time, the scale of the
+// model's process noise, the camera's position and heading noise, and the spreads'
+// growth with speed, acceleration and turn rate. The search runs in the logarithms of all
 // but the growths, which run in log(1 + g), so that they may start at none.
-constexpr int kNoiseParams = 9;
-constexpr int kPerSpeed = 7, kPerAcceleration = 8;  // the growths, last
+constexpr int kNoiseParams = 10;
+constexpr int kPerSpeed = 7, kPerAcceleration = 8, kPerTurnRate = 9;  // the growths, last
 constexpr double kLower[kNoiseParams] = {1e-3, 1e-3, 1e-2, 5e-3, 1e-3, OmniObserverModel::kMinMeasurementNoiseXy,
-                                         OmniObserverModel::kMinMeasurementNoiseTheta, 0, 0};
-constexpr double kUpper[kNoiseParams] = {5, 5, 50, 5, 100, 0.1, 0.5, 20, 20};
+                                         OmniObserverModel::kMinMeasurementNoiseTheta, 0, 0, 0};
+constexpr double kUpper[kNoiseParams] = {5, 5, 50, 5, 100, 0.1, 0.5, 20, 20, 20};
 constexpr const char* kNames[kNoiseParams] = {"forward",   "sideways",     "turn",      "correlation_time",
                                               "process_noise_scale", "camera_xy", "camera_theta", "per_speed",
-                                              "per_acceleration"};
-constexpr const char* kUnits[kNoiseParams] = {"m/s", "m/s", "rad/s", "s", "x", "m", "rad", "1/(m/s)", "1/(m/s^2)"};
+                                              "per_acceleration", "per_turn_rate"};
+constexpr const char* kUnits[kNoiseParams] = {"m/s", "m/s", "rad/s", "s", "x", "m", "rad", "1/(m/s)", "1/(m/s^2)",
+                                              "1/(rad/s)"};
 using NoiseValues = std::array<double, kNoiseParams>;  // the search's coordinates
 
 bool IsGrowth(int i) { return i >= kPerSpeed; }
@@ -39,24 +41,35 @@ double ToCoordinate(int i, double value) { return IsGrowth(i) ? std::log1p(value
 double FromCoordinate(int i, double x) { return IsGrowth(i) ? std::expm1(x) : std::exp(x); }
 double Slope(int, double x) { return std::exp(x); }  // d value / d x, for both maps
 
-NoiseValues Coordinates(const OmniModel& m) {
-  const double values[kNoiseParams] = {m.driving_noise.sd[0], m.driving_noise.sd[1], m.driving_noise.sd[2],
-                                       m.driving_noise.correlation_time, 1.0, m.ObserverNoiseXy(),
-                                       m.ObserverNoiseTheta(), m.driving_noise.per_speed,
-                                       m.driving_noise.per_acceleration};
+// The spreads' factor at the typical motion for the growths in `v`.
+double GrowthAt(const NoiseValues& v, const OmniTypicalMotion& typical) {
+  OmniDrivingNoise n;
+  n.per_speed = FromCoordinate(kPerSpeed, v[kPerSpeed]);
+  n.per_turn_rate = FromCoordinate(kPerTurnRate, v[kPerTurnRate]);
+  return n.Growth(typical.speed, 0, typical.turn_rate);
+}
+
+NoiseValues Coordinates(const OmniModel& m, const OmniTypicalMotion& typical) {
+  const OmniDrivingNoise& n = m.driving_noise;
+  const double growth = n.Growth(typical.speed, 0, typical.turn_rate);
+  const double values[kNoiseParams] = {n.sd[0] * growth, n.sd[1] * growth, n.sd[2] * growth, n.correlation_time, 1.0,
+                                       m.ObserverNoiseXy(), m.ObserverNoiseTheta(), n.per_speed, n.per_acceleration,
+                                       n.per_turn_rate};
   NoiseValues v;
   for (int i = 0; i < kNoiseParams; ++i) v[i] = ToCoordinate(i, values[i]);
   return v;
 }
 
-OmniModel WithNoise(OmniModel m, const NoiseValues& v) {
-  for (std::size_t a = 0; a < 3; ++a) m.driving_noise.sd[a] = FromCoordinate(static_cast<int>(a), v[a]);
+OmniModel WithNoise(OmniModel m, const NoiseValues& v, const OmniTypicalMotion& typical) {
+  const double growth = GrowthAt(v, typical);
+  for (std::size_t a = 0; a < 3; ++a) m.driving_noise.sd[a] = FromCoordinate(static_cast<int>(a), v[a]) / growth;
   m.driving_noise.correlation_time = FromCoordinate(3, v[3]);
   for (double& q : m.observer.process_noise) q *= FromCoordinate(4, v[4]);
   m.observer.measurement_noise_xy = FromCoordinate(5, v[5]);
   m.observer.measurement_noise_theta = FromCoordinate(6, v[6]);
   m.driving_noise.per_speed = FromCoordinate(kPerSpeed, v[kPerSpeed]);
   m.driving_noise.per_acceleration = FromCoordinate(kPerAcceleration, v[kPerAcceleration]);
+  m.driving_noise.per_turn_rate = FromCoordinate(kPerTurnRate, v[kPerTurnRate]);
   return m;
 }
 
@@ -241,35 +254,41 @@ NoiseValues StandardErrors(const std::function<std::vector<HorizonRows>(const No
   return se;
 }
 
-// The report's parameters: start and identified values, errors from the coordinates'.
-std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const NoiseValues& v, const NoiseValues& se) {
+// The report's parameters: start and identified values (the spreads standing still, as
+// the model file has them), errors from the coordinates' (a spread's relative error is
+// its error at the typical motion, where it is searched).
+std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const NoiseValues& v, const NoiseValues& se,
+                                           const OmniTypicalMotion& typical) {
   std::vector<OmniNoiseParameter> out;
   for (int i = 0; i < kNoiseParams; ++i) {
+    const bool spread = i < 3;
     OmniNoiseParameter p;
     p.name = kNames[i];
     p.unit = kUnits[i];
-    p.start = FromCoordinate(i, start[i]);
-    p.value = FromCoordinate(i, v[i]);
-    p.standard_error = Slope(i, v[i]) * se[i];  // first order
+    p.start = FromCoordinate(i, start[i]) / (spread ? GrowthAt(start, typical) : 1);
+    p.value = FromCoordinate(i, v[i]) / (spread ? GrowthAt(v, typical) : 1);
+    p.standard_error = (spread ? p.value : Slope(i, v[i])) * se[i];  // first order
     out.push_back(p);
   }
   return out;
 }
 
+bool Grows(const NoiseValues& v) { return v[kPerSpeed] > 0 || v[kPerAcceleration] > 0 || v[kPerTurnRate] > 0; }
+
 // The noise fitted on some held-out blocks: the same spread at every speed, then with the
-// two growths as well, from there (each search within options.max_evaluations).
+// three growths as well, from there (each search within options.max_evaluations).
 struct NoiseFit {
   NoiseValues flat{}, grow{};
   double start_cost = 0, flat_cost = 0, grow_cost = 0;  // the cost at the start, after each search
-  bool grows() const { return grow[kPerSpeed] > 0 || grow[kPerAcceleration] > 0; }
+  bool grows() const { return Grows(grow); }
 };
 
 // The held-out blocks' rows (those of `blocks` only, where given) with the noise `v`.
-std::vector<HorizonRows> CollectHeldOut(const OmniModel& model, const NoiseValues& v,
+std::vector<HorizonRows> CollectHeldOut(const OmniModel& model, const NoiseValues& v, const OmniTypicalMotion& typical,
                                         const std::vector<OmniBlockedStretch>& stretches, const OmniNoiseOptions& options,
                                         const std::set<int>* blocks) {
   try {
-    return Collect(WithNoise(model, v), stretches, options, {Rows::kHeldOutBlocks, blocks});
+    return Collect(WithNoise(model, v, typical), stretches, options, {Rows::kHeldOutBlocks, blocks});
   } catch (const CheckFailed&) {
     return {};  // diverged: no rows, an infinite cost
   }
@@ -312,7 +331,8 @@ std::array<std::set<int>, 2> HeldOutHalves(const std::vector<OmniBlockedStretch>
 
 // The noise fitted on every held-out block (first) and on each half, side by side (each
 // replays its logs in turn).
-std::array<NoiseFit, 3> FitAllAndHalves(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+std::array<NoiseFit, 3> FitAllAndHalves(const OmniModel& model, const OmniTypicalMotion& typical,
+                                        const std::vector<OmniBlockedStretch>& stretches,
                                         const OmniNoiseOptions& options, const NoiseValues& start,
                                         const std::array<std::set<int>, 2>& halves, int* evaluations) {
   std::array<NoiseFit, 3> fits;
@@ -322,12 +342,41 @@ std::array<NoiseFit, 3> FitAllAndHalves(const OmniModel& model, const std::vecto
     OmniNoiseOptions one = options;
     one.threads = 1;
     const CollectNoise collect = [&](const NoiseValues& v, const std::set<int>* b) {
-      return CollectHeldOut(model, v, stretches, one, b);
+      return CollectHeldOut(model, v, typical, stretches, one, b);
     };
     fits[static_cast<std::size_t>(k)] = FitNoise(collect, start, blocks, one, &used[static_cast<std::size_t>(k)]);
   });
   for (int u : used) *evaluations += u;
   return fits;
+}
+
+// Each half's noise again with the growths held at `whole`'s (the fit on every held-out
+// block), its spreads, correlation time, process noise and camera refitted from its own
+// fit (within half of options.max_evaluations): the noise each half's rows are predicted
+// with for the calibration and the intervals' safeguard. A half's own growths, fitted on
+// half the rows, decide whether the growths are kept, but they stray far from the whole
+// fit's (to the bounds on a minute's log) and judge its intervals by others than its own.
+std::array<NoiseValues, 2> HalvesWithTheWholeGrowth(const OmniModel& model, const OmniTypicalMotion& typical,
+                                                     const std::vector<OmniBlockedStretch>& stretches,
+                                                     const OmniNoiseOptions& options, const std::array<NoiseFit, 3>& fits,
+                                                     const std::array<std::set<int>, 2>& halves, int* evaluations) {
+  std::array<NoiseValues, 2> out;
+  std::array<int, 2> used{};
+  ParallelFor(2, options.threads, [&](int k) {
+    const std::size_t h = static_cast<std::size_t>(k);
+    OmniNoiseOptions one = options;
+    one.threads = 1;
+    const std::function<double(const NoiseValues&)> cost = [&](const NoiseValues& x) {
+      return Cost(CollectHeldOut(model, x, typical, stretches, one, &halves[h]));
+    };
+    NoiseValues start = fits[1 + h].grow;
+    for (int i = kPerSpeed; i < kNoiseParams; ++i) start[static_cast<std::size_t>(i)] = fits[0].grow[static_cast<std::size_t>(i)];
+    double best = cost(start);
+    used[h] = 1;
+    out[h] = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, 1 + options.max_evaluations / 2, &best, &used[h]);
+  });
+  *evaluations += used[0] + used[1];
+  return out;
 }
 
 // Each half's fits scored on the other half, averaged over the halves: rows that neither
@@ -381,11 +430,15 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   OmniNoiseIdentification out;
   out.model = model;
-  const NoiseValues start = Coordinates(model);
+  std::vector<const OmniLog*> logs;
+  for (const OmniBlockedStretch& s : stretches)
+    if (!s.validation && std::find(logs.begin(), logs.end(), s.log) == logs.end()) logs.push_back(s.log);
+  const OmniTypicalMotion typical = TypicalMotionOf(logs);
+  const NoiseValues start = Coordinates(model, typical);
   // The noise is fitted on the held-out blocks, rows the response never saw; validation
   // logs only report.
   const CollectNoise collect = [&](const NoiseValues& v, const std::set<int>* blocks) {
-    return CollectHeldOut(model, v, stretches, options, blocks);
+    return CollectHeldOut(model, v, typical, stretches, options, blocks);
   };
   const std::vector<HorizonRows> first = collect(start, nullptr);
   out.fit_rows = CountRows(first);
@@ -393,20 +446,22 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
     out.note = "no held-out rows to fit the noise on: the prediction-error fit's noise is kept";
     NoiseValues none;
     none.fill(std::numeric_limits<double>::quiet_NaN());
-    out.parameters = Parameters(start, start, none);
+    out.parameters = Parameters(start, start, none, typical);
     return out;
   }
   out.fit_before = Cost(first);
   int evaluations = 1;
   const std::array<std::set<int>, 2> halves = HeldOutHalves(stretches);
-  const std::array<NoiseFit, 3> fits = FitAllAndHalves(model, stretches, options, start, halves, &evaluations);
+  const std::array<NoiseFit, 3> fits = FitAllAndHalves(model, typical, stretches, options, start, halves, &evaluations);
   const CrossedScores crossed = ScoreCrossed(collect, fits, halves, &evaluations);
   const bool growth = fits[0].grows() && crossed.grow < crossed.flat;
   if (fits[0].grows() && !growth) {
     out.growth_note = "a spread growing with speed (" +
-                      PrintfNumber("%.4g", FromCoordinate(kPerSpeed, fits[0].grow[kPerSpeed])) + " per m/s) and acceleration (" +
+                      PrintfNumber("%.4g", FromCoordinate(kPerSpeed, fits[0].grow[kPerSpeed])) + " per m/s), acceleration (" +
                       PrintfNumber("%.4g", FromCoordinate(kPerAcceleration, fits[0].grow[kPerAcceleration])) +
-                      " per m/s^2) fitted the held-out blocks better, but fitted on each half of them it did not "
+                      " per m/s^2) and turn rate (" +
+                      PrintfNumber("%.4g", FromCoordinate(kPerTurnRate, fits[0].grow[kPerTurnRate])) +
+                      " per rad/s) fitted the held-out blocks better, but fitted on each half of them it did not "
                       "score the other half better: none kept";
   }
   const NoiseValues v = growth ? fits[0].grow : fits[0].flat;
@@ -421,12 +476,15 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   out.held_out_before = crossed.before;
   out.held_out_after = growth ? crossed.grow : crossed.flat;
   out.kept = out.held_out_after < out.held_out_before;
-  out.model = WithNoise(model, v);
-  out.parameters = Parameters(start, v, se);
-  for (int k = 0; k < 2; ++k) {
-    const NoiseFit& f = fits[static_cast<std::size_t>(1 + k)];
-    out.crossed[static_cast<std::size_t>(k)].model = WithNoise(model, growth ? f.grow : f.flat);
-    out.crossed[static_cast<std::size_t>(k)].blocks = halves[static_cast<std::size_t>(k)];
+  out.model = WithNoise(model, v, typical);
+  out.parameters = Parameters(start, v, se, typical);
+  const std::array<NoiseValues, 2> crossed_values =
+      growth ? HalvesWithTheWholeGrowth(model, typical, stretches, options, fits, halves, &evaluations)
+             : std::array<NoiseValues, 2>{fits[1].flat, fits[2].flat};
+  out.evaluations = evaluations;
+  for (std::size_t k = 0; k < 2; ++k) {
+    out.crossed[k].model = WithNoise(model, crossed_values[k], typical);
+    out.crossed[k].blocks = halves[k];
   }
   if (!out.kept) {
     out.model = model;

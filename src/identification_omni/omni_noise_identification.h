@@ -16,15 +16,18 @@
 // response follows the blocks' own wander a little, and a noise fitted there came out
 // too narrow on unseen minutes (issue 42; the coverage measured is in
 // docs/identification.md). A pattern search in the logarithms of the seven
-// (doubling steps, halved in log until 5 %); then again with the spreads' growth with
-// the robot's speed and acceleration (driving_noise.per_speed, per_acceleration; in
-// log(1 + g)). The choices are made out of sample for the noise as well: the same two
-// searches on each half of the held-out blocks (every other block), each half's noise
-// scored on the other half. The growth is kept only where it scores the other halves
-// better than none, the noise only where it scores them better than the
+// (doubling steps, halved in log until 5 %), the spreads taken at the logs' typical
+// motion (OmniTypicalMotion); then again with the spreads' growth with the robot's
+// speed, acceleration and turn rate (driving_noise.per_speed, per_acceleration,
+// per_turn_rate; in log(1 + g)). The choices are made out of sample for the noise as
+// well: the same two searches on each half of the held-out blocks (every other block),
+// each half's noise scored on the other half. The growth is kept only where it scores
+// the other halves better than none, the noise only where it scores them better than the
 // prediction-error fit's (validation logs never choose: they only report the
-// calibration). Standard errors: the sandwich of the cost's Hessian and the held-out
-// blocks' gradients (blocks are nearly independent, rows within one are not).
+// calibration). The calibration and the intervals' safeguard then predict each half with
+// the other's noise refitted under the whole fit's growths (OmniCrossedNoise). Standard
+// errors: the sandwich of the cost's Hessian and the held-out blocks' gradients (blocks
+// are nearly independent, rows within one are not).
 //
 //   std::vector<OmniBlockedStretch> stretches = ...;  // identification's blocks
 //   OmniNoiseIdentification n = IdentifyDrivingNoise(model, stretches, options);
@@ -75,18 +78,20 @@ struct OmniNoiseOptions {
   bool IsValid(std::string* why) const;
 };
 
-// One of the nine, as identify's report lists it.
+// One of the ten, as identify's report lists it.
 struct OmniNoiseParameter {
   // "forward", "sideways", "turn", "correlation_time", "process_noise_scale", "camera_xy",
-  // "camera_theta", "per_speed", "per_acceleration"
+  // "camera_theta", "per_speed", "per_acceleration", "per_turn_rate"
   std::string name;
-  std::string unit;         // "m/s", "rad/s", "s", "x", "m", "rad", "1/(m/s)", "1/(m/s^2)"
-  double start = 0;         // the prediction-error fit's value
+  std::string unit;         // "m/s", "rad/s", "s", "x", "m", "rad", "1/(m/s)", "1/(m/s^2)", "1/(rad/s)"
+  double start = 0;         // the prediction-error fit's value (spreads: standing still)
   double value = 0;         // identified
   double standard_error = 0;  // NaN where the blocks do not determine it
 };
 
-// The noise fitted on one half of the held-out blocks, for the other half's calibration.
+// The noise fitted on one half of the held-out blocks, for the other half's calibration:
+// where a growth was kept, with the growths held at the whole fit's (a half's own, on
+// half the rows, stray far from them: to the bounds on a minute's log).
 struct OmniCrossedNoise {
   OmniModel model;       // the given model with the half's noise
   std::set<int> blocks;  // the half's blocks

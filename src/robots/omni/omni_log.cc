@@ -385,6 +385,22 @@ void WritePoseSamplesCsv(const std::string& path, const std::vector<double>& t,
   WriteFileAtomically(path, FormatPoseSamplesCsv(t, samples));
 }
 
+OmniTypicalMotion TypicalMotionOf(const std::vector<const OmniLog*>& logs) {
+  double speed = 0, turn = 0;
+  long count = 0;
+  for (const OmniLog* log : logs) {
+    for (std::size_t i = 1; i < log->rows.size(); ++i) {
+      const OmniLogRow &a = log->rows[i - 1], &b = log->rows[i];
+      if (!a.measured || !b.measured || b.t <= a.t) continue;
+      speed += std::hypot(b.pose.x - a.pose.x, b.pose.y - a.pose.y) / (b.t - a.t);
+      turn += std::abs(WrapAngle(b.pose.theta - a.pose.theta)) / (b.t - a.t);
+      ++count;
+    }
+  }
+  if (count == 0) return {};
+  return {std::min(speed / static_cast<double>(count), 3.0), std::min(turn / static_cast<double>(count), 20.0)};
+}
+
 OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last) {
   OmniLog out;
   out.path = log.path;

@@ -85,6 +85,18 @@ inline constexpr double kSameCameraRate = 0.05;
 // how many frames in all, the longest and where. Commands say it once per log.
 std::string DescribeClockHoles(const OmniLog& log);
 
+// The logs' typical motion: the mean translational speed (m/s, at most 3) and turn rate
+// (rad/s either way, at most 20) between consecutive measured rows. The driving noise's
+// fits (identify's, the learned backend's) search its spreads there rather than
+// standing still, so that a growth with speed or turn rate tilts them about the logs'
+// motion instead of raising them at every speed: with the spreads standing still as
+// coordinates, a spread and its growth form a ridge a search moving one coordinate at a
+// time stops on.
+struct OmniTypicalMotion {
+  double speed = 0, turn_rate = 0;
+};
+OmniTypicalMotion TypicalMotionOf(const std::vector<const OmniLog*>& logs);
+
 // Rows [first, last) of `log` as a log of their own (path, robot and frame period kept).
 OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last);
 

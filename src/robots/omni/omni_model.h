@@ -75,8 +75,11 @@ struct OmniDrivingNoise {
   // The spread (m/s or rad/s) of axis a (forward, sideways, turn) at `speed` (m/s),
   // `acceleration` (m/s^2) and `turn_rate` (rad/s, either sign).
   double Spread(int a, double speed, double acceleration, double turn_rate) const {
-    return sd[static_cast<std::size_t>(a)] *
-           (1 + per_speed * speed + per_acceleration * acceleration + per_turn_rate * std::abs(turn_rate));
+    return sd[static_cast<std::size_t>(a)] * Growth(speed, acceleration, turn_rate);
+  }
+  // The spreads' factor over standing still there.
+  double Growth(double speed, double acceleration, double turn_rate) const {
+    return 1 + per_speed * speed + per_acceleration * acceleration + per_turn_rate * std::abs(turn_rate);
   }
 };
 
