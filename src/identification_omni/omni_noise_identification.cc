@@ -194,42 +194,55 @@ std::map<int, double> BlockTerms(const std::vector<HorizonRows>& rows) {
 
 // Standard errors of the coordinates `free` at `v` (NaN for the others): the sandwich
 // H^-1 B H^-1 of the cost, H its Hessian (second differences), B the outer products of
-// the blocks' gradients.
-NoiseValues StandardErrors(const std::function<std::vector<HorizonRows>(const NoiseValues&)>& collect,
-                           const NoiseValues& v, double cost_at_v, const std::vector<int>& free, int* evaluations) {
+// the blocks' gradients. The trial points are evaluated side by side on options.threads,
+// each collecting on one.
+NoiseValues StandardErrors(const std::function<std::vector<HorizonRows>(const NoiseValues&, int threads)>& collect,
+                           const NoiseValues& v, double cost_at_v, const std::vector<int>& free, int threads,
+                           int* evaluations) {
   constexpr double kStep = 0.1;
   NoiseValues se;
   se.fill(std::numeric_limits<double>::quiet_NaN());
   const int n = static_cast<int>(free.size());
   if (n == 0) return se;
-  std::vector<std::map<int, double>> up(static_cast<std::size_t>(n)), down(static_cast<std::size_t>(n));
-  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
-  std::vector<double> cost_up(static_cast<std::size_t>(n));
+  // The trials: each free coordinate up, then down (2i, 2i + 1), then each pair up.
+  std::vector<NoiseValues> trials;
   for (int i = 0; i < n; ++i) {
-    NoiseValues a = v, b = v;
-    a[free[i]] += kStep;
-    b[free[i]] -= kStep;
-    const std::vector<HorizonRows> ra = collect(a), rb = collect(b);
-    *evaluations += 2;
-    up[i] = BlockTerms(ra);
-    down[i] = BlockTerms(rb);
-    cost_up[i] = Cost(ra);
-    h(i, i) = (cost_up[i] - 2 * cost_at_v + Cost(rb)) / (kStep * kStep);
+    for (double sign : {1.0, -1.0}) {
+      trials.push_back(v);
+      trials.back()[free[i]] += sign * kStep;
+    }
   }
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
-      NoiseValues a = v;
-      a[free[i]] += kStep;
-      a[free[j]] += kStep;
-      const double c = Cost(collect(a));
-      ++*evaluations;
-      h(i, j) = h(j, i) = (c - cost_up[i] - cost_up[j] + cost_at_v) / (kStep * kStep);
+      trials.push_back(v);
+      trials.back()[free[i]] += kStep;
+      trials.back()[free[j]] += kStep;
+    }
+  }
+  std::vector<double> cost(trials.size());
+  std::vector<std::map<int, double>> terms(2 * static_cast<std::size_t>(n));
+  ParallelFor(static_cast<int>(trials.size()), threads, [&](int t) {
+    const std::vector<HorizonRows> rows = collect(trials[static_cast<std::size_t>(t)], 1);
+    cost[static_cast<std::size_t>(t)] = Cost(rows);
+    if (t < 2 * n) terms[static_cast<std::size_t>(t)] = BlockTerms(rows);
+  });
+  *evaluations += static_cast<int>(trials.size());
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i)
+    h(i, i) = (cost[2 * static_cast<std::size_t>(i)] - 2 * cost_at_v + cost[2 * static_cast<std::size_t>(i) + 1]) /
+              (kStep * kStep);
+  for (int i = 0, t = 2 * n; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j, ++t) {
+      h(i, j) = h(j, i) = (cost[static_cast<std::size_t>(t)] - cost[2 * static_cast<std::size_t>(i)] -
+                           cost[2 * static_cast<std::size_t>(j)] + cost_at_v) /
+                          (kStep * kStep);
     }
   }
   Eigen::MatrixXd b = Eigen::MatrixXd::Zero(n, n);
-  for (const auto& [block, unused] : up[0]) {
+  for (const auto& [block, unused] : terms[0]) {
     Eigen::VectorXd g(n);
-    for (int i = 0; i < n; ++i) g[i] = (up[i][block] - down[i][block]) / (2 * kStep);
+    for (int i = 0; i < n; ++i)
+      g[i] = (terms[2 * static_cast<std::size_t>(i)][block] - terms[2 * static_cast<std::size_t>(i) + 1][block]) / (2 * kStep);
     b += g * g.transpose();
   }
   // Where the cost is flat or curved down along some combination (a ridge the search
@@ -469,8 +482,12 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   std::vector<int> free;
   for (int i = 0; i < kNoiseParams; ++i)
     if (!IsGrowth(i) || v[i] > 0) free.push_back(i);  // no growth: not estimated, no error
-  const NoiseValues se =
-      StandardErrors([&](const NoiseValues& x) { return collect(x, nullptr); }, v, out.fit_after, free, &evaluations);
+  const auto collect_on = [&](const NoiseValues& x, int threads) {
+    OmniNoiseOptions o = options;
+    o.threads = threads;
+    return CollectHeldOut(model, x, typical, stretches, o, nullptr);
+  };
+  const NoiseValues se = StandardErrors(collect_on, v, out.fit_after, free, options.threads, &evaluations);
   out.evaluations = evaluations;
   out.held_out_rows = out.fit_rows;
   out.held_out_before = crossed.before;
