@@ -87,7 +87,7 @@ std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, co
     o.stride = stride;
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
     for (std::size_t q = 0; q < horizons.size(); ++q) {
-      std::vector<PredictiveError> e = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q]);
+      std::vector<PredictiveError> e = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q], {}, horizons[q]);
       rows[q].insert(rows[q].end(), e.begin(), e.end());
     }
   }
@@ -170,12 +170,15 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
 }
 
 std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
-                                                     const OmniLog& log, const LearnedNoiseOptions& options) {
+                                                     const OmniLog& log, const LearnedNoiseOptions& options,
+                                                     std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate) {
   const std::vector<int> horizons = Sorted(options.horizons);
   const OmniDrivingNoise& noise = LearnedDrivingNoise(model, &predictor);
   LearnedNoiseOptions every = options;  // a calibration scores every stride-th frame
   every.max_starts = std::numeric_limits<int>::max();
-  return CalibrationOf(SampledRows(model, predictor, noise, {log}, every, horizons), horizons, log.frame_period);
+  const std::vector<std::vector<PredictiveError>> rows = SampledRows(model, predictor, noise, {log}, every, horizons);
+  if (by_turn_rate) *by_turn_rate = CalibrateRowsByTurnRate(rows, horizons, log.frame_period);
+  return CalibrationOf(rows, horizons, log.frame_period);
 }
 
 std::string FormatLearnedNoiseFit(const LearnedNoiseFit& fit) {

@@ -22,6 +22,7 @@
 //   p.Save(path);
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -70,9 +71,11 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
 // The calibration of the learned backend with `predictor` (and its driving noise) on
 // `log` at each horizon, from `samples` rollouts per start at every `stride`-th frame
 // (max_starts does not apply; `compare`); the constant spread is fitted on the same rows
-// (a baseline with hindsight).
+// (a baseline with hindsight). With `by_turn_rate`, the same rows by quarter of their
+// measured turn rate (CalibrateRowsByTurnRate).
 std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
-                                                     const OmniLog& log, const LearnedNoiseOptions& options = {});
+                                                     const OmniLog& log, const LearnedNoiseOptions& options = {},
+                                                     std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate = nullptr);
 
 // One line per horizon: coverage of the 50 % and 90 % ellipses, energy score against
 // the constant spread.

@@ -9,6 +9,7 @@
 
 #include "core/covariance_root.h"
 #include "core/math_constants.h"
+#include "core/pose.h"
 
 namespace twinsim {
 
@@ -74,12 +75,13 @@ double StudentCdf(double t, double nu) {
 }  // namespace
 
 std::vector<PredictiveError> PredictiveErrors(const OmniLog& log, const OmniReplayResult& result,
-                                              const std::function<bool(std::size_t)>& keep) {
+                                              const std::function<bool(std::size_t)>& keep, int frames) {
   std::vector<PredictiveError> out;
   if (result.covariance.size() != log.rows.size()) return out;
   for (std::size_t i = 0; i < log.rows.size(); ++i) {
     if (!PredictedAndMeasured(log, result, i) || (keep && !keep(i))) continue;
     out.push_back(PredictiveErrorAt(log, result, i));
+    if (frames > 0) out.back().turn_rate = MeasuredTurnRate(log, i, frames);
   }
   return out;
 }
@@ -201,6 +203,37 @@ double MeanLogScore(const std::vector<PredictiveError>& rows) {
   return sum / static_cast<double>(rows.size());
 }
 
+double MeasuredTurnRate(const OmniLog& log, std::size_t i, int frames) {
+  const int last = log.FrameIndex(i);
+  double turned = 0;
+  std::size_t j = i;
+  for (; j > 0 && log.FrameIndex(j - 1) >= last - frames; --j)
+    turned += std::abs(WrapAngle(log.rows[j].pose.theta - log.rows[j - 1].pose.theta));
+  const double seconds = log.rows[i].t - log.rows[j].t;
+  return seconds > 0 ? turned / seconds : 0;
+}
+
+std::vector<std::array<OmniTurnQuarter, 4>> CalibrateRowsByTurnRate(const std::vector<std::vector<PredictiveError>>& rows,
+                                                                    const std::vector<int>& horizons, double frame_period) {
+  std::vector<std::array<OmniTurnQuarter, 4>> out(horizons.size());
+  for (std::size_t q = 0; q < horizons.size(); ++q) {
+    std::vector<PredictiveError> sorted = rows[q];
+    std::stable_sort(sorted.begin(), sorted.end(),
+                     [](const PredictiveError& a, const PredictiveError& b) { return a.turn_rate < b.turn_rate; });
+    const std::size_t n = sorted.size();
+    for (std::size_t k = 0; k < 4; ++k) {
+      const std::vector<PredictiveError> quarter(sorted.begin() + static_cast<std::ptrdiff_t>(k * n / 4),
+                                                 sorted.begin() + static_cast<std::ptrdiff_t>((k + 1) * n / 4));
+      OmniTurnQuarter& t = out[q][k];
+      if (!quarter.empty()) t.from = quarter.front().turn_rate, t.to = quarter.back().turn_rate;
+      t.calibration = Calibrate(quarter, ConstantSpread(quarter));
+      t.calibration.frames = horizons[q];
+      t.calibration.seconds = horizons[q] * frame_period;
+    }
+  }
+  return out;
+}
+
 std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniModel& model, const OmniLog& log,
                                                                   const std::string& backend,
                                                                   const std::vector<int>& horizons, int stride) {
@@ -216,7 +249,8 @@ std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniMode
   o.stride = stride;
   o.stride_origin = 0;
   const OmniReplayResult r = ReplayOmniLog(model, log, o);
-  for (std::size_t q = 0; q < horizons.size(); ++q) out[q] = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q]);
+  for (std::size_t q = 0; q < horizons.size(); ++q)
+    out[q] = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q], {}, horizons[q]);
   return out;
 }
 

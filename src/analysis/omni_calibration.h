@@ -54,7 +54,14 @@ struct PredictiveError {
   int draws = 0;                                // 0: c is known; else the prediction's part was estimated from this many draws
   Eigen::Matrix3d drawn = Eigen::Matrix3d::Zero();  // that part (c minus the camera's)
   double input_distance = 0;  // the prediction's mean distance from the model's seen inputs (0: none)
+  double turn_rate = 0;       // rad/s: the log's mean turn rate over the prediction's frames (MeasuredTurnRate)
 };
+
+// The mean of |turn rate| (rad/s) the log's poses show over the `frames` frames before
+// row i: the sum of each row's |heading change| from the row before (a row without a
+// measurement has its interpolated pose), over the time they span; 0 at the log's start.
+// A robot that turns back and forth reads its speed of turning, not its net turn.
+double MeasuredTurnRate(const OmniLog& log, std::size_t i, int frames);
 
 // The part of a pose a row's covariance is taken over.
 enum class PosePart { kPosition, kHeading, kPose };
@@ -65,9 +72,10 @@ double EffectiveDraws(const PredictiveError& row, PosePart part);
 // Row i of a replay run with `covariance` (predicted, with a measurement).
 PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& result, std::size_t i);
 // The rows of a replay run with `covariance` that were predicted, hold a measurement and
-// that `keep` accepts (all when empty).
+// that `keep` accepts (all when empty); with `frames` (the horizon predicted), each with
+// its MeasuredTurnRate over them.
 std::vector<PredictiveError> PredictiveErrors(const OmniLog& log, const OmniReplayResult& result,
-                                              const std::function<bool(std::size_t)>& keep = {});
+                                              const std::function<bool(std::size_t)>& keep = {}, int frames = 0);
 
 inline constexpr int kPitBins = 10;
 
@@ -123,6 +131,21 @@ struct OmniDistanceCalibration {
 // CalibrateRows over each range of kCalibrationDistances.
 std::vector<OmniDistanceCalibration> CalibrateRowsByDistance(const std::vector<std::vector<PredictiveError>>& rows,
                                                              const std::vector<int>& horizons, double frame_period);
+
+// A calibration of the rows whose measured turn rate (PredictiveError::turn_rate) lies in
+// [from, to] rad/s (its slowest and fastest row): a quarter of one horizon's rows.
+struct OmniTurnQuarter {
+  double from = 0, to = 0;
+  OmniCalibration calibration;
+};
+
+// Each horizon's rows in four quarters of their measured turn rate, slowest first (by
+// rank among that horizon's rows, so the quarters hold as many rows each, give or take
+// one), each quarter's baseline
+// fitted on its rows: whether the intervals hold in the fastest turns as they do on
+// average (issue 64). One array per horizon; a horizon without rows has empty quarters.
+std::vector<std::array<OmniTurnQuarter, 4>> CalibrateRowsByTurnRate(const std::vector<std::vector<PredictiveError>>& rows,
+                                                                    const std::vector<int>& horizons, double frame_period);
 
 // The rows of a whole log predicted by `model` on `backend` at each of `horizons` (sorted
 // increasing) from every `stride`-th frame counted from the log's first (the same rows

@@ -57,6 +57,28 @@ std::string FormatCalibrationTable(const std::vector<OmniCalibration>& calibrati
   return s.str();
 }
 
+std::string FormatTurnRateCalibrationTable(const std::vector<std::array<OmniTurnQuarter, 4>>& by_turn_rate) {
+  std::ostringstream s;
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-20s %-26s %-26s %-26s %-26s\n", "horizon", "slowest quarter", "second",
+                "third", "fastest quarter");
+  s << line;
+  for (const std::array<OmniTurnQuarter, 4>& quarters : by_turn_rate) {
+    std::snprintf(line, sizeof line, "  %-20s", HorizonLabel(quarters[0].calibration).c_str());
+    s << line;
+    for (const OmniTurnQuarter& q : quarters) {
+      const OmniCalibration& c = q.calibration;
+      const std::string cell = c.rows == 0 ? "(no rows)"
+                                           : PrintfNumber("%.2f", q.from) + "-" + PrintfNumber("%.2f", q.to) + ": " +
+                                                 Percent(c.position_50) + " / " + Percent(c.position_90) + " %";
+      std::snprintf(line, sizeof line, " %-26s", cell.c_str());
+      s << line;
+    }
+    s << "\n";
+  }
+  return s.str();
+}
+
 SeriesPlot PitPlot(const std::vector<OmniCalibration>& calibration, bool heading) {
   SeriesPlot plot;
   plot.title = heading ? "PIT of the heading (flat at 1: calibrated; U: too narrow; hump: too wide)"

@@ -3,6 +3,7 @@
 // PIT histograms (identify's and compare's reports; docs/identification.md, "Calibration").
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,10 @@ std::string CalibrationDistanceRange(double from, double to);
 // One table per range that has rows (FormatCalibrationTable), each under a line that
 // says how far the predictions' inputs lie from those the fit saw.
 std::string FormatDistanceCalibrationTables(const std::vector<OmniDistanceCalibration>& by_distance);
+
+// One line per horizon, one cell per quarter of the measured turn rate (slowest first):
+// the quarter's range in rad/s and the shares its 50 % and 90 % position ellipses hold.
+std::string FormatTurnRateCalibrationTable(const std::vector<std::array<OmniTurnQuarter, 4>>& by_turn_rate);
 
 // The PIT histograms as a plot: density per tenth of [0, 1], one step line per horizon.
 SeriesPlot PitPlot(const std::vector<OmniCalibration>& calibration, bool heading);

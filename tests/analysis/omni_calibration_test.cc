@@ -96,6 +96,55 @@ TEST(Calibration, RowsSplitByTheirDistanceFromTheSeenInputs) {
   EXPECT_NEAR(whole.seconds, 16 / 30.0, 1e-12);
 }
 
+// Issue 64: the rows by quarter of their measured turn rate. Calibrated rows while the
+// robot turns slowly and rows three times wider than stated in the fastest half: the
+// quarters hold a quarter of the rows each, slowest first, with their ranges; the slow
+// ones hold their 90 % and the fast ones fall short.
+TEST(Calibration, RowsSplitByQuarterOfTheirTurnRate) {
+  std::vector<PredictiveError> slow = DrawnRows(2000, 1.0, 7), fast = DrawnRows(2000, 3.0, 8);
+  for (std::size_t i = 0; i < slow.size(); ++i) slow[i].turn_rate = 0.001 * static_cast<double>(i);  // 0 to 2 rad/s
+  for (std::size_t i = 0; i < fast.size(); ++i) fast[i].turn_rate = 3 + 0.001 * static_cast<double>(i);
+  std::vector<std::vector<PredictiveError>> rows(2, fast);  // out of order: sorted by the split
+  rows[0].insert(rows[0].end(), slow.begin(), slow.end());
+  rows[1].resize(3);  // a horizon with too few rows for every quarter
+  const auto quarters = CalibrateRowsByTurnRate(rows, {16, 63}, 1 / 30.0);
+  ASSERT_EQ(quarters.size(), 2u);
+  const std::array<double, 4> from{0, 1, 3, 4}, to{0.999, 1.999, 3.999, 4.999};
+  for (std::size_t k = 0; k < 4; ++k) {
+    const OmniTurnQuarter& q = quarters[0][k];
+    EXPECT_EQ(q.calibration.rows, 1000) << k;
+    EXPECT_EQ(q.calibration.frames, 16);
+    EXPECT_NEAR(q.from, from[k], 1e-9) << k;
+    EXPECT_NEAR(q.to, to[k], 1e-9) << k;
+    if (k < 2) EXPECT_NEAR(q.calibration.position_90, 0.9, 0.03) << k;
+    else EXPECT_LT(q.calibration.position_90, 0.5) << k;
+  }
+  int short_rows = 0;
+  for (const OmniTurnQuarter& q : quarters[1]) short_rows += q.calibration.rows;
+  EXPECT_EQ(short_rows, 3);
+  EXPECT_EQ(quarters[1][0].calibration.rows, 0);
+}
+
+// The turn rate a row is split by: the mean of |turn rate| over the prediction's frames,
+// the robot's speed of turning even where it turns back and forth (a net turn of none).
+TEST(Calibration, TheMeasuredTurnRateIsTheSpeedOfTurning) {
+  OmniLog log;
+  log.frame_period = 1 / 30.0;
+  for (int k = 0; k <= 120; ++k) {
+    OmniLogRow row;
+    row.t = k / 30.0;
+    // 2 rad/s one way for 10 frames, then back for 10.
+    const int phase = k % 20;
+    row.pose.theta = 2.0 / 30 * (phase < 10 ? phase : 20 - phase);
+    log.rows.push_back(row);
+  }
+  for (std::size_t i : {20u, 47u, 120u}) EXPECT_NEAR(MeasuredTurnRate(log, i, 16), 2.0, 1e-9) << i;
+  EXPECT_NEAR(MeasuredTurnRate(log, 5, 16), 2.0, 1e-9);  // the frames there are before the log's start
+  EXPECT_EQ(MeasuredTurnRate(log, 0, 16), 0);
+  log.rows[30].measured = false;  // its pose interpolated, as the reader gives it: the same
+  EXPECT_NEAR(MeasuredTurnRate(log, 40, 16), 2.0, 1e-9);
+}
+
 TEST(Calibration, RowsTwiceAsWideAsStatedShowAsAU) {
   const OmniCalibration c = Calibrate(DrawnRows(5000, 2.0, 5), 0.005);
   EXPECT_LT(c.position_50, 0.2);  // P(d^2 <= 1.386 / 4) = 1 - exp(-0.173) = 0.16

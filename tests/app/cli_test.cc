@@ -230,6 +230,19 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
     EXPECT_LE(row[6], 1.0);
   }
   EXPECT_EQ(calibration_csv.find("\nresidual,"), std::string::npos);
+  // The same rows by quarter of the log's turn rate: four quarters of each source and
+  // horizon, a quarter of each horizon's rows each (give or take one), slowest first.
+  const CsvTable by_turn = ParseCsvTable(testing::ReadText(dir + "/compare/calibration_by_turn_rate.csv"), "by turn");
+  ASSERT_EQ(by_turn.header.size(), 17u);
+  EXPECT_EQ(by_turn.header[3], "turn_rate_from");
+  ASSERT_EQ(by_turn.rows.size(), 24u);  // analytic, then learned, each 4 quarters x 3 horizons
+  for (std::size_t i = 0; i < 12; ++i) {
+    const std::size_t h = i % 3, quarter = i / 3;
+    EXPECT_EQ(by_turn.rows[i][2], static_cast<double>(quarter + 1));
+    EXPECT_NEAR(by_turn.rows[i][7], calibration.rows[h][4] / 4, 1) << i;  // rows
+    EXPECT_LE(by_turn.rows[i][3], by_turn.rows[i][4]) << i;
+    if (quarter > 0) EXPECT_GE(by_turn.rows[i][3], by_turn.rows[i - 3][4]) << i;
+  }
 
   // Its rollouts sampled: replay writes t,sample,x,y,theta, three rows per input row.
   auto sampled = testing::RunTwinsim("replay --model " + omni4 + " --log " + log + " --backend learned --predictor " + dir +

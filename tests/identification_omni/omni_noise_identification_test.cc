@@ -8,12 +8,14 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "analysis/omni_calibration_report.h"
 #include "analysis/pooled_calibration.h"
 #include "identification_omni/omni_identification.h"
 #include "estimation/wandering_plant.h"
@@ -70,11 +72,22 @@ std::string StandardErrorsJson(const OmniIdentificationReport& r) {
 // The identified model's calibration pooled over eight unseen minutes (the validation
 // log and seven more; tests/analysis/pooled_calibration.h says why one is not enough), recorded
 // for scripts/noise-calibration-table under `name`.
-std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(const testing::WanderingPlant& plant, const NoiseRun& run,
-                                                                 const std::string& name) {
+// With `by_turn_rate`, their rows pooled and split by quarter of the turn rate.
+std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(
+    const testing::WanderingPlant& plant, const NoiseRun& run, const std::string& name,
+    std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate = nullptr) {
+  const std::vector<int> horizons{4, 16, 63};
   std::vector<std::vector<OmniCalibration>> minutes;
-  for (int seed : {58, 100, 101, 102, 103, 104, 105, 106})
-    minutes.push_back(CalibrateOmniLog(run.model, testing::RecordWanderingPlant(plant, 60, seed).log, "analytic"));
+  std::vector<std::vector<PredictiveError>> pooled_rows(horizons.size());
+  double period = 0;
+  for (int seed : {58, 100, 101, 102, 103, 104, 105, 106}) {
+    const OmniLog log = testing::RecordWanderingPlant(plant, 60, seed).log;
+    const auto rows = OmniLogPredictiveErrors(run.model, log, "analytic", horizons, 2);  // CalibrateOmniLog's
+    minutes.push_back(CalibrateRows(rows, horizons, log.frame_period));
+    for (std::size_t q = 0; q < horizons.size(); ++q) pooled_rows[q].insert(pooled_rows[q].end(), rows[q].begin(), rows[q].end());
+    period = log.frame_period;
+  }
+  if (by_turn_rate) *by_turn_rate = CalibrateRowsByTurnRate(pooled_rows, horizons, period);
   const std::vector<testing::PooledCalibration> pooled = testing::PoolCalibrations(minutes);
   const std::vector<double> truth{plant.noise_sd[0], plant.noise_sd[1], plant.noise_sd[2], plant.noise_correlation};
   ::testing::Test::RecordProperty(name, testing::NoiseTableRow(run.model.driving_noise, truth,
@@ -180,10 +193,19 @@ TEST(DrivingNoiseIdentification, ASpreadGrowingWithTurnRateIsSelected) {
   EXPECT_GT(run.model.driving_noise.per_turn_rate, 0.3);
   EXPECT_TRUE(run.report.noise.growth_note.empty()) << run.report.noise.growth_note;
   for (const OmniSafeguardHorizon& h : run.report.safeguard.horizons) EXPECT_NEAR(h.position, 1.0, 0.15) << h.frames;
-  for (const testing::PooledCalibration& p : CalibrateOnUnseenMinutes(plant, run, "turning_spread")) {
+  std::vector<std::array<OmniTurnQuarter, 4>> by_turn_rate;
+  for (const testing::PooledCalibration& p : CalibrateOnUnseenMinutes(plant, run, "turning_spread", &by_turn_rate)) {
     EXPECT_LT(p.pooled.energy_score, p.pooled.baseline_energy_score) << p.pooled.frames;
     EXPECT_NEAR(p.pooled.position_50, 0.5, 0.08) << p.pooled.frames;
     EXPECT_NEAR(p.pooled.position_90, 0.9, 0.04) << p.pooled.frames;
+  }
+  // In every quarter of the turn rate the 90 % ellipses hold at least 80 % (the issue's
+  // bar for the real robot), the fastest quarter included. Measured: 91-94 % at 4
+  // frames, 87-90 % at 16, 85-88 % at 63 (fastest 91, 87 and 88 %).
+  SCOPED_TRACE(FormatTurnRateCalibrationTable(by_turn_rate));
+  for (const std::array<OmniTurnQuarter, 4>& horizon : by_turn_rate) {
+    for (const OmniTurnQuarter& q : horizon)
+      EXPECT_GT(q.calibration.position_90, 0.8) << q.calibration.frames << " frames, " << q.from << "-" << q.to << " rad/s";
   }
 }
 

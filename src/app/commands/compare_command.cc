@@ -312,13 +312,43 @@ std::string FormatDistanceCalibrationCsv(const std::vector<DistanceCalibration>&
   return s.str();
 }
 
+// A calibration of one source's rows by quarter of the log's turn rate, per horizon.
+struct TurnRateCalibration {
+  const CompareSource* source = nullptr;
+  std::vector<std::array<OmniTurnQuarter, 4>> quarters;
+};
+
+std::string FormatTurnRateCalibrationCsv(const std::vector<TurnRateCalibration>& by_turn_rate) {
+  std::ostringstream s;
+  s << "source,backend,quarter,turn_rate_from,turn_rate_to," << kCalibrationColumns;
+  for (const TurnRateCalibration& t : by_turn_rate) {
+    for (std::size_t k = 0; k < 4; ++k) {
+      for (const std::array<OmniTurnQuarter, 4>& horizon : t.quarters) {
+        const OmniTurnQuarter& q = horizon[k];
+        s << t.source->label << "," << t.source->backend << "," << k + 1 << ","
+          << (q.calibration.rows > 0 ? FormatCsvNumber(q.from) + "," + FormatCsvNumber(q.to) : std::string(",")) << ",";
+        WriteCalibrationCells(q.calibration, &s);
+      }
+    }
+  }
+  return s.str();
+}
+
+// Where each source's calibration goes.
+struct SourceCalibrations {
+  std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>> whole;
+  std::vector<DistanceCalibration> by_distance;
+  std::vector<TurnRateCalibration> by_turn_rate;
+};
+
 // The predictive distribution of every physics source (the observer's), and of every
 // learned one whose predictor has a driving noise (its sampled rollouts), 4, 16 and 63
 // frames ahead (analysis/omni_calibration.h, analysis/learned_noise.h); where the model
-// knows the inputs its fit saw, the physics sources' split by how far from them.
-void CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& compare, Progress* progress,
-                      std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>>* calibration,
-                      std::vector<DistanceCalibration>* by_distance) {
+// knows the inputs its fit saw, the physics sources' split by how far from them; and
+// every source's by quarter of the log's turn rate.
+SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& compare,
+                                    Progress* progress) {
+  SourceCalibrations out;
   for (const CompareSource& s : compare.sources) {
     if (s.backend == "learned") {
       const auto& predictor = s.backend_options.predictor;
@@ -326,19 +356,22 @@ void CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniComp
       progress->Update(0, 1, s.label + ", calibration");
       LearnedNoiseOptions sampled;
       sampled.stride = kCalibrationStride;
-      calibration->emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled));
+      out.by_turn_rate.push_back({&s, {}});
+      out.whole.emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled, &out.by_turn_rate.back().quarters));
       continue;
     }
     if (!IsKnownEngine(s.backend)) continue;
     progress->Update(0, 1, s.label + ", calibration");
     const std::vector<int> horizons{4, 16, 63};
     const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride);
-    calibration->emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
+    out.whole.emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
+    out.by_turn_rate.push_back({&s, CalibrateRowsByTurnRate(rows, horizons, log.frame_period)});
     // Where the model knows the inputs its fit saw: the same split by how far from them.
     if (model.observer.seen_inputs.empty()) continue;
     for (OmniDistanceCalibration& d : CalibrateRowsByDistance(rows, horizons, log.frame_period))
-      by_distance->push_back({&s, d.from, d.to, std::move(d.calibration)});
+      out.by_distance.push_back({&s, d.from, d.to, std::move(d.calibration)});
   }
+  return out;
 }
 
 int Compare(const CompareCliOptions& options) {
@@ -366,9 +399,9 @@ int Compare(const CompareCliOptions& options) {
   const OmniCompareResult result = CompareOmniLog(
       model, log, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
 
-  std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>> calibration;
-  std::vector<DistanceCalibration> by_distance;
-  CalibrateSources(model, log, compare, &progress, &calibration, &by_distance);
+  const SourceCalibrations calibrations = CalibrateSources(model, log, compare, &progress);
+  const auto& calibration = calibrations.whole;
+  const auto& by_distance = calibrations.by_distance;
   progress.Finish();
 
   OutputFiles files(options.out);
@@ -376,6 +409,8 @@ int Compare(const CompareCliOptions& options) {
   files.Write("paths.csv", FormatComparePathsCsv(log, result));
   if (!calibration.empty()) files.Write("calibration.csv", FormatCalibrationCsv(calibration));
   if (!by_distance.empty()) files.Write("calibration_by_distance.csv", FormatDistanceCalibrationCsv(by_distance));
+  if (!calibrations.by_turn_rate.empty())
+    files.Write("calibration_by_turn_rate.csv", FormatTurnRateCalibrationCsv(calibrations.by_turn_rate));
   if (RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
     files.WritePng("paths.png", RenderPathPlot(FreeRunPlot(log, result, model.name, options.plot_seconds), *renderer));
@@ -398,6 +433,11 @@ int Compare(const CompareCliOptions& options) {
                   "these rows):\n%s\n",
                   source->label.c_str(), source->backend == "learned" ? "its sampled rollouts" : "the observer's",
                   FormatCalibrationTable(c).c_str());
+    }
+    for (const TurnRateCalibration& t : calibrations.by_turn_rate) {
+      std::printf("the same, %s, by quarter of the log's turn rate over each prediction (rad/s: position 50 / 90 %% "
+                  "ellipses hold):\n%s\n",
+                  t.source->label.c_str(), FormatTurnRateCalibrationTable(t.quarters).c_str());
     }
     for (const DistanceCalibration& d : by_distance) {
       if (std::none_of(d.calibration.begin(), d.calibration.end(), [](const OmniCalibration& c) { return c.rows > 0; }))
