@@ -301,6 +301,7 @@ TEST(Cli, ReplaySamplesSayTheirCoverageAndAnEngineOffItsFit) {
   ASSERT_EQ(analytic.exit_code, 0) << analytic.err;
   EXPECT_NE(analytic.out.find("calibration of the samples' distribution"), std::string::npos) << analytic.out;
   EXPECT_NE(analytic.out.find("  8 frames (0.27 s)"), std::string::npos) << analytic.out;
+  EXPECT_NE(analytic.out.find("by quarter of the log's turn rate"), std::string::npos) << analytic.out;
   EXPECT_EQ(analytic.err.find("warning: on"), std::string::npos) << analytic.err;
   const auto ode = replay("ode");
   ASSERT_EQ(ode.exit_code, 0) << ode.err;

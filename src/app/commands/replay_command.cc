@@ -77,16 +77,19 @@ int ReplayArm(const ReplayOptions& options) {
 }
 
 // How well the samples' distribution holds the log's measured poses (issue 64): the
-// calibration compare prints, at the replay's one horizon. Nothing without measured rows.
+// calibration compare prints, at the replay's one horizon, as a whole and by quarter of
+// the log's turn rate. Nothing without measured rows.
 std::string SampleCoverage(const OmniLog& log, const OmniReplayResult& result, int horizon) {
-  const std::vector<PredictiveError> rows = PredictiveErrors(log, result);
+  const std::vector<PredictiveError> rows = PredictiveErrors(log, result, {}, horizon);
   if (rows.empty()) return "";
   OmniCalibration c = Calibrate(rows, ConstantSpread(rows));
   c.frames = horizon;
   c.seconds = horizon * log.frame_period;
   return "calibration of the samples' distribution on the log's measured poses (a calibrated model holds 50 % and "
          "90 %; energy score against the best constant spread on these rows):\n" +
-         FormatCalibrationTable({c});
+         FormatCalibrationTable({c}) +
+         "by quarter of the log's turn rate over each prediction (rad/s: position 50 / 90 % ellipses hold):\n" +
+         FormatTurnRateCalibrationTable(CalibrateRowsByTurnRate({rows}, {horizon}, log.frame_period));
 }
 
 // Above this share of rows off the fitted engine's regions, a warning (below, a note).
