@@ -1018,7 +1018,8 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
   }
   // A noise fitted on the held-out blocks is calibrated there only across the halves.
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
-  report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance);
+  report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance,
+                                          &report->calibration_by_turn_rate);
   // The scale within the fit's reach: the safeguard of "blocks", the base of "logs".
   if (options.safeguard != OmniSafeguard::kOff) {
     say(6, "intervals' safeguard");

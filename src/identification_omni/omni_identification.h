@@ -159,6 +159,9 @@ struct OmniIdentificationReport {
   // With validation logs, the same split by how far the predictions' inputs lie from the
   // fit blocks' (analysis/omni_calibration.h, kCalibrationDistances).
   std::vector<OmniDistanceCalibration> calibration_by_distance;
+  // The same by quarter of the log's turn rate over each prediction, per horizon
+  // (analysis/omni_calibration.h, CalibrateRowsByTurnRate).
+  std::vector<std::array<OmniTurnQuarter, 4>> calibration_by_turn_rate;
   // The intervals' safeguard fitted after it (its scales in the model's observer where
   // kept); the calibration above is the covariance's before it.
   OmniIntervalSafeguard safeguard;

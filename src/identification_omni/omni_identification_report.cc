@@ -259,6 +259,21 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
     }
     j["calibration_by_distance"] = by;
   }
+  if (!r.calibration_by_turn_rate.empty()) {
+    ordered_json by = ordered_json::array();
+    for (std::size_t k = 0; k < 4; ++k) {
+      ordered_json from = ordered_json::array(), to = ordered_json::array();
+      std::vector<OmniCalibration> calibration;
+      for (const std::array<OmniTurnQuarter, 4>& horizon : r.calibration_by_turn_rate) {
+        from.push_back(horizon[k].from);
+        to.push_back(horizon[k].to);
+        calibration.push_back(horizon[k].calibration);
+      }
+      by.push_back({{"quarter", k + 1}, {"turn_rate_from", from}, {"turn_rate_to", to},
+                    {"calibration", CalibrationJson(calibration)}});
+    }
+    j["calibration_by_turn_rate"] = by;
+  }
   if (!r.safeguard.on.empty()) j["intervals_safeguard"] = SafeguardJson(r.safeguard, r.frame_period);
   j["noise_floor"] = r.noise_floor;
   j["collinearity_index"] = Finite(r.collinearity);
@@ -347,6 +362,10 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
     s << "the same by how far the predictions' inputs lie from the fit blocks' (observer.seen_inputs; 1 is a "
          "typical command's size; each range's constant spread fitted on its rows):\n"
       << FormatDistanceCalibrationTables(r.calibration_by_distance);
+  }
+  if (!r.calibration_by_turn_rate.empty()) {
+    s << "the same by quarter of the turn rate over each prediction (rad/s: position 50 / 90 % ellipses hold):\n"
+      << FormatTurnRateCalibrationTable(r.calibration_by_turn_rate);
   }
   if (!r.safeguard.on.empty()) {
     s << "intervals' safeguard (a conformal scale of the predicted covariance, fitted on the " << r.safeguard.on
@@ -440,6 +459,11 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     h << "<p>The same by how far the predictions' inputs lie from those of the fit blocks (1 is a typical command's "
          "size): where the intervals can be relied on.</p>\n<pre>"
       << HtmlEscape(FormatDistanceCalibrationTables(r.calibration_by_distance)) << "</pre>\n";
+  }
+  if (!r.calibration_by_turn_rate.empty()) {
+    h << "<p>The same by quarter of the turn rate over each prediction (rad/s; slowest first): whether the "
+         "intervals hold in the fastest turns as on average.</p>\n<pre>"
+      << HtmlEscape(FormatTurnRateCalibrationTable(r.calibration_by_turn_rate)) << "</pre>\n";
   }
   if (!r.safeguard.on.empty()) {
     h << "<h3>The intervals' safeguard</h3>\n<p>A conformal scale of the predicted covariance per horizon, fitted on "

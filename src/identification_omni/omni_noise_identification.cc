@@ -147,6 +147,7 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
         // With blocks, the prediction ends and starts in them too.
         if (selection.blocks && (!in_selection(row) || !is_selected(s.log->FrameIndex(row) - h))) continue;
         out.rows.push_back(PredictiveErrorAt(*s.log, at, row));
+        out.rows.back().turn_rate = MeasuredTurnRate(*s.log, row, h);
         out.block.push_back((*s.block)[row]);
       }
     }
@@ -514,7 +515,8 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed,
-                                               std::vector<OmniDistanceCalibration>* by_distance) {
+                                               std::vector<OmniDistanceCalibration>* by_distance,
+                                               std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   OmniNoiseOptions scoring = options;
   scoring.stride = options.score_stride;
@@ -539,11 +541,10 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
     held = Collect(model, stretches, scoring, {Rows::kReport});
   }
   const double period = stretches.empty() ? 0 : stretches.front().log->frame_period;
-  if (by_distance && any_validation) {
-    std::vector<std::vector<PredictiveError>> rows;
-    for (const HorizonRows& h : held) rows.push_back(h.rows);
-    *by_distance = CalibrateRowsByDistance(rows, options.horizons, period);
-  }
+  std::vector<std::vector<PredictiveError>> rows;
+  for (const HorizonRows& h : held) rows.push_back(h.rows);
+  if (by_distance && any_validation) *by_distance = CalibrateRowsByDistance(rows, options.horizons, period);
+  if (by_turn_rate) *by_turn_rate = CalibrateRowsByTurnRate(rows, options.horizons, period);
   std::vector<OmniCalibration> out;
   for (std::size_t q = 0; q < options.horizons.size(); ++q) {
     OmniCalibration c = Calibrate(held[q].rows, ConstantSpread(fit[q].rows));

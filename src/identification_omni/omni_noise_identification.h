@@ -125,11 +125,14 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
 // `by_distance` and validation logs, the same rows split by how far each prediction's
 // inputs lie from the fit blocks' (SeenInputsOfFitBlocks; kCalibrationDistances; each
 // range's baseline fitted on its rows): where the intervals can be relied on; `model`'s
-// interval_scale must then grow with no distance (its seen inputs are replaced).
+// interval_scale must then grow with no distance (its seen inputs are replaced). With
+// `by_turn_rate`, the same rows by quarter of their measured turn rate
+// (CalibrateRowsByTurnRate).
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed = nullptr,
-                                               std::vector<OmniDistanceCalibration>* by_distance = nullptr);
+                                               std::vector<OmniDistanceCalibration>* by_distance = nullptr,
+                                               std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate = nullptr);
 
 // The seen inputs (robots/omni/omni_seen_inputs.h) of `model` on the fit blocks of
 // `stretches` (validation logs left out): each fit row's frame as the observer saw it.
