@@ -93,6 +93,37 @@ ordered_json CalibrationJson(const std::vector<OmniCalibration>& calibration) {
   return out;
 }
 
+// report.json's calibration_by_distance: per range of distances, the calibration per horizon.
+ordered_json DistanceCalibrationJson(const std::vector<OmniDistanceCalibration>& by_distance) {
+  ordered_json by = ordered_json::array();
+  for (const OmniDistanceCalibration& d : by_distance) {
+    ordered_json x;
+    x["distance_from"] = d.from;
+    x["distance_to"] = std::isfinite(d.to) ? ordered_json(d.to) : ordered_json(nullptr);  // null: no upper end
+    x["calibration"] = CalibrationJson(d.calibration);
+    by.push_back(x);
+  }
+  return by;
+}
+
+// report.json's calibration_by_turn_rate: per quarter (slowest first) its range and
+// calibration per horizon.
+ordered_json TurnRateCalibrationJson(const std::vector<std::array<OmniTurnQuarter, 4>>& by_turn_rate) {
+  ordered_json by = ordered_json::array();
+  for (std::size_t k = 0; k < 4; ++k) {
+    ordered_json from = ordered_json::array(), to = ordered_json::array();
+    std::vector<OmniCalibration> calibration;
+    for (const std::array<OmniTurnQuarter, 4>& horizon : by_turn_rate) {
+      from.push_back(horizon[k].from);
+      to.push_back(horizon[k].to);
+      calibration.push_back(horizon[k].calibration);
+    }
+    by.push_back({{"quarter", k + 1}, {"turn_rate_from", from}, {"turn_rate_to", to},
+                  {"calibration", CalibrationJson(calibration)}});
+  }
+  return by;
+}
+
 ordered_json SafeguardJson(const OmniIntervalSafeguard& g, double period) {
   ordered_json out;
   out["on"] = g.on;
@@ -248,32 +279,8 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
     j["calibration_on"] = r.validation.empty() ? "held-out blocks" : "validation logs";
     j["calibration"] = CalibrationJson(r.calibration);
   }
-  if (!r.calibration_by_distance.empty()) {
-    ordered_json by = ordered_json::array();
-    for (const OmniDistanceCalibration& d : r.calibration_by_distance) {
-      ordered_json x;
-      x["distance_from"] = d.from;
-      x["distance_to"] = std::isfinite(d.to) ? ordered_json(d.to) : ordered_json(nullptr);  // null: no upper end
-      x["calibration"] = CalibrationJson(d.calibration);
-      by.push_back(x);
-    }
-    j["calibration_by_distance"] = by;
-  }
-  if (!r.calibration_by_turn_rate.empty()) {
-    ordered_json by = ordered_json::array();
-    for (std::size_t k = 0; k < 4; ++k) {
-      ordered_json from = ordered_json::array(), to = ordered_json::array();
-      std::vector<OmniCalibration> calibration;
-      for (const std::array<OmniTurnQuarter, 4>& horizon : r.calibration_by_turn_rate) {
-        from.push_back(horizon[k].from);
-        to.push_back(horizon[k].to);
-        calibration.push_back(horizon[k].calibration);
-      }
-      by.push_back({{"quarter", k + 1}, {"turn_rate_from", from}, {"turn_rate_to", to},
-                    {"calibration", CalibrationJson(calibration)}});
-    }
-    j["calibration_by_turn_rate"] = by;
-  }
+  if (!r.calibration_by_distance.empty()) j["calibration_by_distance"] = DistanceCalibrationJson(r.calibration_by_distance);
+  if (!r.calibration_by_turn_rate.empty()) j["calibration_by_turn_rate"] = TurnRateCalibrationJson(r.calibration_by_turn_rate);
   if (!r.safeguard.on.empty()) j["intervals_safeguard"] = SafeguardJson(r.safeguard, r.frame_period);
   j["noise_floor"] = r.noise_floor;
   j["collinearity_index"] = Finite(r.collinearity);
