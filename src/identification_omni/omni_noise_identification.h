@@ -72,7 +72,9 @@ struct OmniNoiseOptions {
   int stride = 4;
   int score_stride = 2;      // the calibration from every score_stride-th
   double max_delay = 0.35;   // s: rows start after the longest warm-up a replay can have
-  int max_evaluations = 150;  // of the likelihood, per search (without and with growth, on all and on each half)
+  // Of the likelihood, per search (without and with growth, on all and on each half; half
+  // of it for each half's refit under the whole fit's growths).
+  int max_evaluations = 150;
   int threads = 0;           // 0 = one per core; results do not depend on it
 
   bool IsValid(std::string* why) const;
