@@ -364,8 +364,8 @@ std::array<NoiseFit, 3> FitAllAndHalves(const OmniModel& model, const OmniTypica
   return fits;
 }
 
-// Each half's noise again with the growths held at `whole`'s (the fit on every held-out
-// block), its spreads, correlation time, process noise and camera refitted from its own
+// Each half's noise again with the growths held at the whole fit's (fits[0], on every
+// held-out block), its spreads, correlation time, process noise and camera refitted from its own
 // fit (within half of options.max_evaluations): the noise each half's rows are predicted
 // with for the calibration and the intervals' safeguard. A half's own growths, fitted on
 // half the rows, decide whether the growths are kept, but they stray far from the whole
