@@ -147,7 +147,8 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
         // With blocks, the prediction ends and starts in them too.
         if (selection.blocks && (!in_selection(row) || !is_selected(s.log->FrameIndex(row) - h))) continue;
         out.rows.push_back(PredictiveErrorAt(*s.log, at, row));
-        out.rows.back().turn_rate = MeasuredTurnRate(*s.log, row, h);
+        // Only the calibration splits rows by turn rate: the searches' rows go without.
+        if (selection.rows == Rows::kReport) out.rows.back().turn_rate = MeasuredTurnRate(*s.log, row, h);
         out.block.push_back((*s.block)[row]);
       }
     }
