@@ -69,6 +69,19 @@ std::string ArmFitCoordinates::Name(int k) const {
   return std::string(kind) + " of joint " + std::to_string(k % n_ + 1);
 }
 
+std::string ArmFitCoordinates::BlockHeading(int block) const {
+  switch (KindOf(block * n_)) {
+    case Kind::kScale: return "scale k";
+    case Kind::kViscous: return "viscous";
+    case Kind::kCoulomb: return "Coulomb";
+    case Kind::kOffset: return "offset tau0";
+    case Kind::kBreakaway: return "s - c";
+    case Kind::kStribeckVelocity: return "vs";
+    case Kind::kBristleStiffness: return "sigma0";
+  }
+  return "";
+}
+
 std::vector<std::string> ArmFitCoordinates::Names(const std::vector<int>& ks) const {
   std::vector<std::string> names;
   for (int k : ks) names.push_back(Name(k));

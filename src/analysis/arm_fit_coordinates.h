@@ -61,6 +61,14 @@ class ArmFitCoordinates {
   void Bounds(int k, double* lower, double* upper) const;
   // The model at coordinates x.
   ArmModel Apply(const double* x) const;
+  // The standard error of coordinate k's value from the coordinate's own, `se`: for the
+  // logarithmic ones a share of the value (the delta method: d ln v = dx), for an offset
+  // N·m or N.
+  double ValueError(int k, double se) const {
+    return KindOf(k) == Kind::kOffset ? offset_unit_[k % n_] * se : se;
+  }
+  // A block of n coordinates in a table's heading: "scale k", "viscous", ... (`block` k / n).
+  std::string BlockHeading(int block) const;
 
  private:
   ArmModel start_;

@@ -11,6 +11,7 @@
 #include "analysis/arm_replay.h"
 #include "analysis/arm_shooting.h"
 #include "analysis/arm_simulation_score.h"
+#include "analysis/fit_covariance.h"
 #include "analysis/fixed_step_cost.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
@@ -151,6 +152,25 @@ class OutputErrorProblem {
       for (int j = 0; j < n_; ++j) visit(j, rest_[k](r, j) ? 0.0 : tau(r, j) - log.tau(r, j));
   }
 
+  // Each residual's cluster for the standard errors: a stretch of its log as long as a
+  // window (numbered from 0 over the logs), holding the simulated rows of the fit window
+  // that starts in it and the torque rows in it. In Residual's order.
+  std::vector<int> Clusters() const {
+    std::vector<int> out, first;
+    out.reserve(residuals());
+    int stretches = 0;
+    for (std::size_t l = 0; l < logs_.size(); ++l) {
+      first.push_back(stretches);
+      stretches += logs_[l].rows() / lengths_[l] + 1;
+    }
+    for (std::size_t l = 0; l < logs_.size(); ++l)
+      for (int s : fit_[l]) out.insert(out.end(), static_cast<std::size_t>(lengths_[l] * n_), first[l] + s / lengths_[l]);
+    for (std::size_t l = 0; l < logs_.size(); ++l)
+      for (int r = logs_[l].edge_samples; r < logs_[l].rows() - logs_[l].edge_samples; ++r)
+        out.insert(out.end(), static_cast<std::size_t>(n_), first[l] + r / lengths_[l]);
+    return out;
+  }
+
   // Per joint, the position RMSE of the fit windows (`check` false) or the held-out ones.
   Eigen::VectorXd SimulationRmse(const ArmModel& model, bool check) const {
     Eigen::ArrayXd squares = Eigen::ArrayXd::Zero(n_);
@@ -199,14 +219,15 @@ class OutputErrorProblem {
 };
 
 // Levenberg-Marquardt from `x` within the problem's bounds; the coordinates found into
-// *x, the iterations taken returned, those that ended at a bound into *at_bound.
+// *x, the iterations taken returned, those that ended at a bound into *at_bound, their
+// standard errors into *se (one Jacobian more).
 int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& options, std::vector<double>* x,
-          std::vector<int>* at_bound) {
+          std::vector<int>* at_bound, std::vector<double>* se) {
   const int p = problem.parameters();
   ceres::Problem ceres_problem;
   // Central differences at kStep in every coordinate, the columns simulated on
   // options.threads threads.
-  ceres_problem.AddResidualBlock(new FixedStepCost(problem.residuals(), std::vector<double>(x->size(), kStep),
+  const ceres::ResidualBlockId block = ceres_problem.AddResidualBlock(new FixedStepCost(problem.residuals(), std::vector<double>(x->size(), kStep),
                                                    [&problem](const double* at, double* out) {
                                                      problem.Residual(problem.Apply(at), out);
                                                      return true;
@@ -222,7 +243,9 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
   solver.parameter_tolerance = 1e-8;
   solver.num_threads = 1;  // the cost simulates its columns in parallel itself
   solver.logging_type = ceres::SILENT;
-  return SolveWithinBounds(&ceres_problem, x, lower, upper, solver, at_bound);
+  const int iterations = SolveWithinBounds(&ceres_problem, x, lower, upper, solver, at_bound);
+  *se = ClusteredStandardErrors(&ceres_problem, {x->data()}, {block}, p, *at_bound, problem.Clusters());
+  return iterations;
 }
 
 // The summary's fits, parameters and bounds: `plain` the plain refinement's problem,
@@ -231,7 +254,8 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
 // `stribeck_tried`). The check windows, iterations and decisions are the caller's.
 ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErrorProblem& used, const ArmModel& start,
                                 const ArmModel& floor, const ArmModel& fitted, const std::vector<double>& x,
-                                const std::vector<int>& at_bound, const ArmOutputErrorOptions& options) {
+                                const std::vector<int>& at_bound, const std::vector<double>& se,
+                                const ArmOutputErrorOptions& options) {
   ArmOutputErrorSummary s;
   s.horizon = options.horizon;
   s.fit_windows = plain.fit_windows();
@@ -239,14 +263,15 @@ ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErr
   s.rmse_before = plain.SimulationRmse(floor, false);
   s.rmse_after = plain.SimulationRmse(fitted, false);
   s.constant_velocity = plain.constant_velocity();
-  SummariseArmFit(used.coordinates(), start, fitted, x, at_bound, &s);
+  SummariseArmFit(used.coordinates(), start, fitted, x, at_bound, se, &s);
   return s;
 }
 
 }  // namespace
 
 void SummariseArmFit(const ArmFitCoordinates& coordinates, const ArmModel& start, const ArmModel& fitted,
-                     const std::vector<double>& x, const std::vector<int>& at_bound, ArmOutputErrorSummary* s) {
+                     const std::vector<double>& x, const std::vector<int>& at_bound, const std::vector<double>& se,
+                     ArmOutputErrorSummary* s) {
   const int n = start.dof();
   s->scale.resize(n);
   s->viscous_before.resize(n), s->viscous_after.resize(n), s->coulomb_before.resize(n), s->coulomb_after.resize(n);
@@ -261,6 +286,16 @@ void SummariseArmFit(const ArmFitCoordinates& coordinates, const ArmModel& start
     s->offset_after[j] = fitted.effects.joint(j).torque_offset;
   }
   s->at_bound = coordinates.Names(at_bound);
+  const int blocks = coordinates.parameters() / n;
+  s->standard_error.resize(se.empty() ? 0 : n, se.empty() ? 0 : blocks);
+  s->standard_error_headings.clear();
+  for (int b = 0; b < blocks && !se.empty(); ++b) {
+    s->standard_error_headings.push_back(coordinates.BlockHeading(b));
+    for (int j = 0; j < n; ++j) {
+      const int k = b * n + j;
+      s->standard_error(j, b) = coordinates.ValueError(k, se[static_cast<std::size_t>(k)]);
+    }
+  }
 }
 
 void SummariseLowSpeedFriction(const ArmModel& with, bool tried, bool kept, const Eigen::VectorXd& check_plain,
@@ -294,7 +329,8 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   std::vector<double> x(static_cast<std::size_t>(plain.parameters()), 0.0);
   const ArmModel floor = plain.Apply(x.data());
   std::vector<int> at_bound;
-  int iterations = Solve(plain, plain_options, &x, &at_bound);
+  std::vector<double> se;
+  int iterations = Solve(plain, plain_options, &x, &at_bound, &se);
   ArmModel fitted = plain.Apply(x.data());
   // Kept only where the held-out windows get better.
   const Eigen::VectorXd check_before = plain.SimulationRmse(floor, true);
@@ -316,7 +352,8 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     std::vector<double> y = x;
     y.resize(static_cast<std::size_t>(low_speed->parameters()), 0.0);
     std::vector<int> y_bound;
-    const int y_iterations = Solve(*low_speed, options, &y, &y_bound);
+    std::vector<double> y_se;
+    const int y_iterations = Solve(*low_speed, options, &y, &y_bound, &y_se);
     with = low_speed->Apply(y.data());
     const Eigen::VectorXd check_with = low_speed->SimulationRmse(with, true);
     stribeck_kept = low_speed->CheckCost(check_with) < (1 - kLowSpeedGain) * plain.CheckCost(check_plain);
@@ -324,6 +361,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     if (stribeck_kept) {
       x = std::move(y);
       at_bound = std::move(y_bound);
+      se = std::move(y_se);
       iterations += y_iterations;
       fitted = with;
       check_after = check_with;
@@ -332,7 +370,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   }
 
   if (summary) {
-    *summary = Summarise(plain, *final_problem, start, floor, fitted, x, at_bound, options);
+    *summary = Summarise(plain, *final_problem, start, floor, fitted, x, at_bound, se, options);
     summary->iterations = iterations;
     summary->kept = kept;
     SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain, summary);
@@ -343,6 +381,48 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   if (!kept) return start;
   return fitted;
 }
+
+namespace {
+
+// The summary's standard errors: a row per joint, a column per coordinate block.
+std::string StandardErrorTable(const ArmOutputErrorSummary& s) {
+  std::string text = s.whole_run ? "standard errors (each shooting segment an independent cluster; % of the value, "
+                                   "offsets in N·m or N):\n"
+                                 : "standard errors (each window-long stretch of the logs an independent cluster; % "
+                                   "of the value, offsets in N·m or N):\n";
+  char cell[64];
+  std::snprintf(cell, sizeof cell, "%-6s", "joint");
+  text += cell;
+  for (const std::string& heading : s.standard_error_headings) {
+    std::snprintf(cell, sizeof cell, " %13s", heading.c_str());
+    text += cell;
+  }
+  text += "\n";
+  for (Eigen::Index j = 0; j < s.standard_error.rows(); ++j) {
+    std::snprintf(cell, sizeof cell, "%-6d", static_cast<int>(j + 1));
+    text += cell;
+    for (Eigen::Index b = 0; b < s.standard_error.cols(); ++b) {
+      const double e = s.standard_error(j, b);
+      const bool offset = s.standard_error_headings[static_cast<std::size_t>(b)] == "offset tau0";
+      if (std::isnan(e)) {
+        std::snprintf(cell, sizeof cell, " %13s", "at bound");
+      } else if (std::isinf(e)) {
+        std::snprintf(cell, sizeof cell, " %13s", "undetermined");
+      } else if (offset) {
+        std::snprintf(cell, sizeof cell, " %13.3g", e);
+      } else if (e > 10) {  // ten times the value: the delta method says no more than that
+        std::snprintf(cell, sizeof cell, " %13s", "> 1000 %");
+      } else {
+        std::snprintf(cell, sizeof cell, " %11.3g %%", 100 * e);
+      }
+      text += cell;
+    }
+    text += "\n";
+  }
+  return text;
+}
+
+}  // namespace
 
 std::string ArmOutputErrorSummary::FullReport() const {
   std::string text;
@@ -388,6 +468,7 @@ std::string ArmOutputErrorSummary::FullReport() const {
       text += line;
     }
   }
+  if (standard_error.size() > 0) text += StandardErrorTable(*this);
   // The held-out part the decisions are made on: windows, or with whole_run each log's last quarter.
   const std::string held_out = whole_run ? "held-out quarters" : "held-out windows";
   if (stribeck_tried) {

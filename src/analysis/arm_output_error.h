@@ -35,6 +35,10 @@
 // from the first iteration. No torque rows: the last quarter of every log, simulated
 // free from its first logged state, is the check the refinement must pass.
 //
+// Either way the summary carries the fit's standard errors, with the windows' stretches
+// of the logs (or the segments) as independent clusters (analysis/fit_covariance.h): a
+// simulated error runs smooth from row to row, so rows are not independent measurements.
+//
 //   ArmOutputErrorSummary summary;
 //   ArmModel refined = RefineArmByOutputError(identified, logs, {}, &summary);
 //   std::printf("%s", summary.FullReport().c_str());
@@ -105,8 +109,17 @@ struct ArmOutputErrorSummary {
   Eigen::VectorXd bristle_stiffness;  // with presliding: sigma0 per joint as fitted, else empty
   std::vector<std::string> at_bound;  // coordinates that ended at the edge of their range ("scale of joint 1", ...)
   std::vector<std::string> low_speed_at_bound;  // the low-speed fit's, kept or not ("break-away of joint 1", ...)
+  // The returned fit's standard errors (analysis/fit_covariance.h: each stretch of a log
+  // as long as a window, or each shooting segment, an independent cluster), joints by
+  // coordinate blocks in ArmFitCoordinates' order, each block headed by its
+  // standard_error_headings entry: a share of the value for scales and frictions, N·m or
+  // N for an offset; NaN at a bound, infinite where the logs do not determine it. Empty
+  // when nothing was fitted.
+  Eigen::MatrixXd standard_error;
+  std::vector<std::string> standard_error_headings;
   // A table: per joint the simulation errors before and after (and the baseline's), the
-  // scale, frictions and offsets found; what ended at a bound; whether it was kept.
+  // scale, frictions and offsets found, their standard errors; what ended at a bound;
+  // whether it was kept.
   std::string FullReport() const;
 };
 

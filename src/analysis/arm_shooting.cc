@@ -9,6 +9,7 @@
 
 #include "analysis/arm_fit_coordinates.h"
 #include "analysis/arm_simulation_score.h"
+#include "analysis/fit_covariance.h"
 #include "analysis/fixed_step_cost.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
@@ -253,15 +254,22 @@ class SegmentCost : public ceres::CostFunction {
 
 // Levenberg-Marquardt over the model's coordinates *x and the segments' states *states
 // (both from 0: the start and the logged states); the iterations returned, the model
-// coordinates that ended at a bound into *at_bound.
+// coordinates that ended at a bound into *at_bound, their standard errors into *se (each
+// segment, its defect rows with it, an independent cluster; the states' uncertainty
+// carried into them).
 int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& options, std::vector<double>* x,
-                  std::vector<std::vector<double>>* states, std::vector<int>* at_bound) {
+                  std::vector<std::vector<double>>* states, std::vector<int>* at_bound, std::vector<double>* se) {
   const std::vector<Segment>& segments = problem.segments();
   ceres::Problem ceres_problem;
+  std::vector<ceres::ResidualBlockId> ids;
+  std::vector<int> clusters;
+  std::vector<double*> parameters = {x->data()};
   for (std::size_t i = 0; i < segments.size(); ++i) {
     std::vector<double*> blocks = {x->data(), (*states)[i].data()};
     if (segments[i].linked) blocks.push_back((*states)[i + 1].data());
-    ceres_problem.AddResidualBlock(new SegmentCost(problem, segments[i], options.threads), nullptr, blocks);
+    ids.push_back(ceres_problem.AddResidualBlock(new SegmentCost(problem, segments[i], options.threads), nullptr, blocks));
+    clusters.insert(clusters.end(), static_cast<std::size_t>(problem.rows(segments[i])), static_cast<int>(i));
+    parameters.push_back((*states)[i].data());
   }
   const int p = problem.coordinates().parameters();
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
@@ -275,7 +283,9 @@ int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& o
   // order they finish. The segments' columns are simulated in parallel instead.
   solver.num_threads = 1;
   solver.logging_type = ceres::SILENT;
-  return SolveWithinBounds(&ceres_problem, x, lower, upper, solver, at_bound);
+  const int iterations = SolveWithinBounds(&ceres_problem, x, lower, upper, solver, at_bound);
+  *se = ClusteredStandardErrors(&ceres_problem, parameters, ids, p, *at_bound, clusters);
+  return iterations;
 }
 
 // The model coordinates fitted from x0 by multiple shooting.
@@ -287,6 +297,7 @@ int SolveShooting(const ShootingProblem& problem, const ArmOutputErrorOptions& o
 struct RunFit {
   std::vector<double> x;
   std::vector<int> at_bound;
+  std::vector<double> se;  // ClusteredStandardErrors of x
   int iterations = 0, segments = 0;
   double largest_defect = 0;
 };
@@ -297,7 +308,7 @@ RunFit FitRuns(const ShootingProblem& problem, const ArmOutputErrorOptions& opti
   fit.x.resize(static_cast<std::size_t>(problem.coordinates().parameters()), 0.0);
   std::vector<std::vector<double>> states(problem.segments().size(),
                                           std::vector<double>(static_cast<std::size_t>(problem.state_size()), 0.0));
-  fit.iterations = SolveShooting(problem, options, &fit.x, &states, &fit.at_bound);
+  fit.iterations = SolveShooting(problem, options, &fit.x, &states, &fit.at_bound, &fit.se);
   fit.segments = static_cast<int>(problem.segments().size());
   fit.largest_defect = problem.LargestDefect(fit.x.data(), states);
   return fit;
@@ -340,7 +351,8 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
   }
   if (summary) {
     *summary = ArmOutputErrorSummary();
-    SummariseArmFit((stribeck_kept ? *low_speed : plain).coordinates(), start, fitted, fit.x, fit.at_bound, summary);
+    SummariseArmFit((stribeck_kept ? *low_speed : plain).coordinates(), start, fitted, fit.x, fit.at_bound, fit.se,
+                    summary);
     SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain, summary);
     summary->low_speed_at_bound = std::move(low_speed_at_bound);
     summary->whole_run = true;

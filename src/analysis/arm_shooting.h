@@ -19,9 +19,12 @@ ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& l
                              const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary);
 
 // Both fits' parameters into *summary: per joint the scale at coordinates x, the
-// frictions and offsets of `start` and `fitted`, and the coordinates at a bound by name.
+// frictions and offsets of `start` and `fitted`, the coordinates at a bound by name, and
+// the standard errors of the coordinates `se` (ClusteredStandardErrors) in the values'
+// terms (ArmFitCoordinates::ValueError).
 void SummariseArmFit(const ArmFitCoordinates& coordinates, const ArmModel& start, const ArmModel& fitted,
-                     const std::vector<double>& x, const std::vector<int>& at_bound, ArmOutputErrorSummary* summary);
+                     const std::vector<double>& x, const std::vector<int>& at_bound, const std::vector<double>& se,
+                     ArmOutputErrorSummary* summary);
 
 // The low-speed friction's part of *summary: `with` the model it fitted (read when
 // tried), whether it was tried and kept, and the plain fit's held-out RMSE.

@@ -9,6 +9,7 @@
 // (analysis/derivative_cutoff.h) puts both the identification and the diagnosis right.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -109,6 +110,8 @@ TEST(EmpsLikeDrive, WholeRunOutputErrorMovesTheTenHertzEstimateToTheTruth) {
   const testing::EmpsLikeTruth truth;
   testing::EmpsLikeRecording with_pulses;
   with_pulses.pulses = true;
+  // Per seed: mass, viscous, Coulomb and offset found, and their standard errors.
+  std::vector<std::array<double, 4>> found, errors;
   for (std::uint64_t seed : {1, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const std::string csv = testing::RecordEmpsLike(seed);
@@ -144,7 +147,35 @@ TEST(EmpsLikeDrive, WholeRunOutputErrorMovesTheTenHertzEstimateToTheTruth) {
     EXPECT_NEAR(-refined.effects.joint(0).torque_offset, -truth.offset, 0.02 * std::abs(truth.offset));
     EXPECT_GT(fit_after, 98);
     EXPECT_GT(fit_after, fit_before);
+    // The standard errors (each shooting segment a cluster): finite, and small beside the
+    // values (a share of them; the offset in N).
+    std::printf("%s", summary.FullReport().c_str());
+    ASSERT_EQ(summary.standard_error.rows(), 1);
+    ASSERT_EQ(summary.standard_error.cols(), 4);  // scale, viscous, Coulomb, offset
+    const Eigen::VectorXd se = summary.standard_error.row(0).transpose();
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_TRUE(std::isfinite(se[k]) && se[k] > 0) << k;
+    }
+    found.push_back({after.child.mass, after.viscous, after.coulomb, refined.effects.joint(0).torque_offset});
+    errors.push_back({se[0] * after.child.mass, se[1] * after.viscous, se[2] * after.coulomb, se[3]});
+    // The truth within 4 of them (measured: within 2.2; the plant is MuJoCo's cart, the
+    // model twinsim's analytic one).
+    const std::array<double, 4> truths = {truth.mass, truth.viscous, truth.coulomb, truth.offset};
+    for (int k = 0; k < 4; ++k) EXPECT_LT(std::abs(found.back()[k] - truths[k]), 4 * errors.back()[k]) << k;
   }
+  // Two recordings with their own noise: the estimates differ by what their standard
+  // errors say, neither far more (errors too small) nor far less (too large) in all.
+  ASSERT_EQ(found.size(), 2u);
+  double z2 = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double z = (found[0][k] - found[1][k]) / std::hypot(errors[0][k], errors[1][k]);
+    std::printf("parameter %d: %.5g and %.5g, standard errors %.3g and %.3g: z = %.2f\n", k, found[0][k], found[1][k],
+                errors[0][k], errors[1][k], z);
+    EXPECT_LT(std::abs(z), 3.5) << k;
+    z2 += z * z;
+  }
+  // All four together: chi-square with 4 degrees of freedom, its 0.1 % point 0.091.
+  EXPECT_GT(z2, 0.091);
 }
 
 // Plain `twinsim diagnose` (its defaults, the cut-off chosen from the log) on the

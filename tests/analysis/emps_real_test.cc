@@ -4,6 +4,7 @@
 // runs"). The benchmark's validation run is kept back; these halves stand in for it.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -46,6 +47,7 @@ TEST(RealEmps, WholeRunOutputErrorOnTheEstimationRunsHalves) {
   ArmOutputErrorOptions options;
   options.whole_run = true;
   options.offsets = true;
+  double offset[2], offset_se[2];  // each half's fitted offset tau0 and its standard error (N)
   for (bool second : {false, true}) {
     const ArmLog fit = Half(second), test = Half(!second);
     SCOPED_TRACE(fit.path);
@@ -68,7 +70,17 @@ TEST(RealEmps, WholeRunOutputErrorOnTheEstimationRunsHalves) {
     } else {
       EXPECT_EQ(after, before);  // the start, returned as it was
     }
+    std::printf("%s", summary.FullReport().c_str());
+    ASSERT_EQ(summary.standard_error.cols(), 4);
+    offset[second] = summary.offset_after[0];
+    offset_se[second] = summary.standard_error(0, 3);
   }
+  // The drift, beyond what either fit's standard errors (each 2 s segment a cluster) allow
+  // for: the halves' offsets differ by many of them.
+  const double z = (offset[1] - offset[0]) / std::hypot(offset_se[0], offset_se[1]);
+  std::printf("offsets %.4f and %.4f N, standard errors %.3g and %.3g: z = %.1f\n", offset[0], offset[1], offset_se[0],
+              offset_se[1], z);
+  EXPECT_GT(std::abs(z), 4);
 }
 
 }  // namespace

@@ -241,7 +241,9 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
     EXPECT_EQ(by_turn.rows[i][2], static_cast<double>(quarter + 1));
     EXPECT_NEAR(by_turn.rows[i][7], calibration.rows[h][4] / 4, 1) << i;  // rows
     EXPECT_LE(by_turn.rows[i][3], by_turn.rows[i][4]) << i;
-    if (quarter > 0) EXPECT_GE(by_turn.rows[i][3], by_turn.rows[i - 3][4]) << i;
+    if (quarter > 0) {
+      EXPECT_GE(by_turn.rows[i][3], by_turn.rows[i - 3][4]) << i;
+    }
   }
 
   // Its rollouts sampled: replay writes t,sample,x,y,theta, three rows per input row.

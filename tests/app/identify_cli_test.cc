@@ -142,6 +142,11 @@ TEST(IdentifyCli, OutputErrorRefinesTheEstimateAndSimulatesAllThreeModels) {
   EXPECT_NE(r.out.find("output error: windows of 0.1 s simulated from the logged torques, 54 fitted and 18 held out"),
             std::string::npos)
       << r.out;
+  // The fit's standard errors, a row per joint under the coordinates' headings.
+  EXPECT_NE(r.out.find("standard errors (each window-long stretch of the logs an independent cluster; % of the value, "
+                       "offsets in N·m or N):\njoint        scale k       viscous       Coulomb\n1 "),
+            std::string::npos)
+      << r.out;
   EXPECT_NE(r.out.find("simulated from its torques: " + log), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("inverse dynamics beats holding on"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("identified beats holding on"), std::string::npos) << r.out;
@@ -211,6 +216,14 @@ TEST(IdentifyCli, OutputErrorOverWholeRunsTheSameOnOneThreadAndTwo) {
   auto one = RunTwinsim(base + "/one.yaml --output-error run --segment 1 --threads 1");
   ASSERT_EQ(one.exit_code, 0) << one.err;
   EXPECT_EQ(testing::ReadText(dir + "/one.yaml"), yaml);
+  // The fit's printout with its standard errors, the same too.
+  const auto fit_table = [](const std::string& out) {
+    const std::size_t from = out.find("output error over whole runs"), to = out.find("kept: the held-out", from);
+    return from == std::string::npos || to == std::string::npos ? std::string() : out.substr(from, to - from);
+  };
+  EXPECT_NE(fit_table(r.out).find("standard errors (each shooting segment an independent cluster"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(fit_table(one.out), fit_table(r.out));
 }
 
 // The words that are no horizon, refused before anything runs.
