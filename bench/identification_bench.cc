@@ -45,7 +45,7 @@ void BM_IdentifyArm(benchmark::State& state) {
   const ArmModel arm = BenchArm();
   const ArmLog& log = BenchLog(arm);
   WlsIdentificationSummary summary;
-  for (auto _ : state) benchmark::DoNotOptimize(IdentifyArm(arm, {log}, {}, &summary));
+  for (auto _ : state) benchmark::DoNotOptimize(IdentifyArmByLeastSquares(arm, {log}, {}, &summary));
   state.counters["joints"] = arm.dof();
   state.counters["samples"] = summary.samples;
   state.counters["base_params"] = static_cast<double>(summary.names.size());
@@ -67,7 +67,7 @@ void BM_IdentifyKukaRun1(benchmark::State& state) {
   WlsIdentificationOptions options;
   options.torque_offsets = true;
   WlsIdentificationSummary summary;
-  for (auto _ : state) benchmark::DoNotOptimize(IdentifyArm(arm, {log}, options, &summary));
+  for (auto _ : state) benchmark::DoNotOptimize(IdentifyArmByLeastSquares(arm, {log}, options, &summary));
   state.counters["samples"] = summary.samples;
   state.counters["fit_steps"] = summary.consistency_iterations;
 }

@@ -402,7 +402,7 @@ PYBIND11_MODULE(_twinsim, m) {
     return TrainArm(model.model, logs, kind, residual, seed, epochs, std::move(hidden));
   });
   m.def("_identify", [](const PyArmModel& model, const py::handle& logs) {
-    return PyArmModel{IdentifyArm(model.model, ToArmLogs(logs), WlsIdentificationOptions{})};
+    return PyArmModel{IdentifyArmByLeastSquares(model.model, ToArmLogs(logs), WlsIdentificationOptions{})};
   });
   m.def("_diagnose", &Diagnose);
   m.def("_compare", [](const PyOmniModel& model, const py::handle& log, std::vector<std::string> backends,

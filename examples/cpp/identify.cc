@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
     // The derivatives' cut-off chosen from the logs, as --cutoff auto does.
     std::printf("%s\n", twinsim::DeriveAtChosenCutoff(a_priori, &logs, {}).Brief().c_str());
     twinsim::WlsIdentificationSummary summary;
-    const twinsim::ArmModel identified = twinsim::IdentifyArm(a_priori, logs, {}, &summary);
+    const twinsim::ArmModel identified = twinsim::IdentifyArmByLeastSquares(a_priori, logs, {}, &summary);
     for (int k = 0; k < summary.base_parameters; ++k) {
       std::printf("%-28s a priori %10.4f  identified %10.4f  (%.1f %%)\n", summary.names[k].c_str(),
                   summary.a_priori[k], summary.consistent[k], summary.relative_std[k]);

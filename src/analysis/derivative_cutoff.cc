@@ -101,7 +101,7 @@ DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::
     double error = std::numeric_limits<double>::quiet_NaN();
     try {
       const std::vector<ArmLog> fit = ArmFitBlockLogs(derived_logs, block, options.held_out);
-      const ArmModel identified = IdentifyArm(model, fit, identification);
+      const ArmModel identified = IdentifyArmByLeastSquares(model, fit, identification);
       error = HeldOutError(identified, derived_logs, edge, block, options.held_out);
     } catch (const InputError& e) {
       char at[48];

@@ -6,7 +6,7 @@
 //
 // Each candidate, from `lowest_hz` up in octaves to a quarter of the sample rate, is
 // judged as an identification engineer judges a filter: the logs are derived at it, the
-// model is identified (IdentifyArm) on the fit blocks, and its torques are compared with
+// model is identified (IdentifyArmByLeastSquares) on the fit blocks, and its torques are compared with
 // the measured ones on the held-out blocks (analysis/held_out_blocks.h), on the same rows
 // for every candidate. The measured torque does not depend on the cut-off; only how well
 // the derived motion explains it does. The lowest cut-off within `tolerance` of the best

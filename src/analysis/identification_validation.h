@@ -45,7 +45,7 @@ struct IdentificationValidation {
 };
 
 // The errors on every log of `held_out` of `a_priori`, of `identified` and of the
-// unconstrained estimate in `summary`, all from IdentifyArm() with `options`. Throws
+// unconstrained estimate in `summary`, all from IdentifyArmByLeastSquares() with `options`. Throws
 // InputError when a log's joint count differs from the models'.
 IdentificationValidation ValidateIdentification(const ArmModel& a_priori, const ArmModel& identified,
                                                 const WlsIdentificationSummary& summary,

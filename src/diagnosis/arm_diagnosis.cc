@@ -963,7 +963,7 @@ ArmModel RefitOnFitBlocks(const ArmModel& model, const std::vector<ArmLog>& logs
   WlsIdentificationOptions wls;
   wls.skip_filter_edges = false;  // ArmFitBlockLogs left the edges out
   try {
-    ArmModel refitted = IdentifyArm(model, ArmFitBlockLogs(logs, block, held_out), wls);
+    ArmModel refitted = IdentifyArmByLeastSquares(model, ArmFitBlockLogs(logs, block, held_out), wls);
     refitted.name = model.name, refitted.source_path = model.source_path;
     return refitted;
   } catch (const InputError& e) {

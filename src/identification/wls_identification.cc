@@ -542,7 +542,7 @@ ArmEffects IdentifiedEffects(const ArmModel& a_priori, const Eigen::VectorXd& of
 
 }  // namespace
 
-ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
+ArmModel IdentifyArmByLeastSquares(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
                      const WlsIdentificationOptions& options, WlsIdentificationSummary* summary_out) {
   const auto start = std::chrono::steady_clock::now();
   std::string why;

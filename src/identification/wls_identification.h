@@ -23,7 +23,7 @@
 // The result passes ArmModel::Validate().
 //
 //   WlsIdentificationSummary summary;
-//   ArmModel identified = IdentifyArm(a_priori, {ReadArmLog("run1.csv")}, {}, &summary);
+//   ArmModel identified = IdentifyArmByLeastSquares(a_priori, {ReadArmLog("run1.csv")}, {}, &summary);
 //   std::puts(summary.FullReport().c_str());
 #pragma once
 
@@ -99,7 +99,7 @@ struct WlsIdentificationSummary {
 // whose joint count differs from the model's, too few samples, data that does not
 // excite some parameter (named in words), data whose physically consistent fit still is
 // no valid arm, or an a-priori model that is not physical.
-ArmModel IdentifyArm(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
+ArmModel IdentifyArmByLeastSquares(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
                      const WlsIdentificationOptions& options, WlsIdentificationSummary* summary = nullptr);
 
 // Per joint, the speed below which a row of `logs` counts as at rest: `share` of the

@@ -86,7 +86,7 @@ TEST(DerivativeCutoff, RaisesItForMotionAboveIt) {
   EXPECT_EQ(logs[0].derive_cutoff_hz, c.cutoff_hz);  // the log was derived again at it
   EXPECT_GT(c.held_out_error[0], 10 * c.held_out_error[2]);
   // The cart's mass is then found within 1 % (at 10 Hz the fast force is left to the noise).
-  const ArmModel identified = IdentifyArm(Cart(), logs, {});
+  const ArmModel identified = IdentifyArmByLeastSquares(Cart(), logs, {});
   EXPECT_NEAR(identified.joints[0].child.mass, kMass, 0.01 * kMass);
   EXPECT_NEAR(identified.joints[0].viscous, kViscous, 0.02 * kViscous);
   EXPECT_NEAR(identified.joints[0].coulomb, kCoulomb, 0.05 * kCoulomb);

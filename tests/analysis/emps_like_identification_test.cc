@@ -49,7 +49,7 @@ Found Identify(const std::string& csv, double cutoff_hz, double rest_share, doub
     if (chosen_hz) *chosen_hz = chosen;
   }
   Found f;
-  f.model = IdentifyArm(Nominal(), logs, options, &f.summary);
+  f.model = IdentifyArmByLeastSquares(Nominal(), logs, options, &f.summary);
   return f;
 }
 

@@ -51,7 +51,7 @@ TEST(RealEmps, WholeRunOutputErrorOnTheEstimationRunsHalves) {
   for (bool second : {false, true}) {
     const ArmLog fit = Half(second), test = Half(!second);
     SCOPED_TRACE(fit.path);
-    const ArmModel start = IdentifyArm(nominal, {fit}, identification);
+    const ArmModel start = IdentifyArmByLeastSquares(nominal, {fit}, identification);
     ArmOutputErrorSummary summary;
     const ArmModel refined = RefineArmByOutputError(start, {fit}, options, &summary);
     const double before = testing::FreeRunFit(start, test), after = testing::FreeRunFit(refined, test);

@@ -26,7 +26,7 @@ TEST(IdentificationValidation, TheIdentifiedModelBeatsTheAPrioriOneOnAHeldOutLog
       Read(testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 4), 4.0, 500.0, noise), "held_out.csv");
   const WlsIdentificationOptions options;
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(a_priori, {fit}, options, &summary);
+  const ArmModel identified = IdentifyArmByLeastSquares(a_priori, {fit}, options, &summary);
 
   const IdentificationValidation v = ValidateIdentification(a_priori, identified, summary, options, {held_out});
   ASSERT_EQ(v.logs.size(), 1u);

@@ -220,7 +220,7 @@ TEST(ArmCommands, IdentifyWritesTheOffsetsAsTorqueOffsetEffectsWithTheContractsS
   AddArmEffect({"torque_offset", 0, {{"tau0", 9}}}, 3, &a_priori.effects);
   AddArmEffect({"viscous_friction", 0, {{"b", 0.2}}}, 3, &a_priori.effects);
   AddArmEffect({"time_delay", 0, {{"delay", 0.0005}}}, 3, &a_priori.effects);
-  const ArmModel identified = IdentifyArm(a_priori, {sim.log}, options, &summary);
+  const ArmModel identified = IdentifyArmByLeastSquares(a_priori, {sim.log}, options, &summary);
   std::printf("[measured] identified tau0 = %.4f / %.4f / %.4f N m (true 0 / 1.5 / -0.4)\n",
               identified.effects.joint(0).torque_offset, identified.effects.joint(1).torque_offset,
               identified.effects.joint(2).torque_offset);

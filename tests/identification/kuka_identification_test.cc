@@ -22,7 +22,7 @@ TEST(KukaIdentification, HeldOutTorquesAreFarCloserThanTheUrdfs) {
   WlsIdentificationOptions options;
   options.torque_offsets = true;  // the torque sensors' biases, up to 0.86 N·m on joint 1
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(urdf, {run1}, options, &summary);
+  const ArmModel identified = IdentifyArmByLeastSquares(urdf, {run1}, options, &summary);
   EXPECT_EQ(identified.Validate(), "");
   EXPECT_EQ(summary.base_parameters, 57);
   EXPECT_LT(summary.condition_number, 200);
@@ -57,7 +57,7 @@ TEST(KukaIdentification, HeldOutTorquesAreFarCloserThanTheUrdfs) {
 TEST(KukaIdentification, WithoutOffsetsStillBeatsTheUrdfOnHeldOutData) {
   if (!std::filesystem::exists(KukaDir() + "/run1.csv")) GTEST_SKIP() << "no real data at " << KukaDir();
   const ArmModel urdf = LoadArmModel(KukaDir() + "/kuka_lwr4.urdf");
-  const ArmModel identified = IdentifyArm(urdf, {ReadArmLog(KukaDir() + "/run1.csv")}, {});
+  const ArmModel identified = IdentifyArmByLeastSquares(urdf, {ReadArmLog(KukaDir() + "/run1.csv")}, {});
   const ArmLog run2 = ReadArmLog(KukaDir() + "/run2.csv");
   const TorqueErrors before = CompareArmTorques(urdf, run2);
   const TorqueErrors after = CompareArmTorques(identified, run2);

@@ -72,7 +72,7 @@ TEST(WlsIdentification, RecoversEveryBaseParameterWithin1PercentWithoutNoise) {
   ASSERT_FALSE(log.qd_logged);
   WlsIdentificationOptions options;
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(a_priori, {log}, options, &summary);
+  const ArmModel identified = IdentifyArmByLeastSquares(a_priori, {log}, options, &summary);
 
   // The test, not the code under test, knows the truth.
   const BaseParameters base = IdentificationBase(a_priori, options);
@@ -104,7 +104,7 @@ TEST(WlsIdentification, RecoversEveryBaseParameterWithin5PercentFromQuantisedPos
   noise.seed = 3;
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 20.0, 1000.0, noise));
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(a_priori, {log}, {}, &summary);
+  const ArmModel identified = IdentifyArmByLeastSquares(a_priori, {log}, {}, &summary);
   const BaseParameters base = IdentificationBase(a_priori, {});
   const Eigen::VectorXd beta_true = base.from_standard * StandardParameters(truth);
   const double worst = WorstRelativeError(summary.identified, beta_true, base.names, 0.05);
@@ -128,8 +128,8 @@ TEST(WlsIdentification, IsDeterministic) {
   noise.torque_fraction = 0.02;
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 5), 6.0, 500.0, noise));
   WlsIdentificationSummary a, b;
-  IdentifyArm(WlsRrr(), {log}, {}, &a);
-  IdentifyArm(WlsRrr(), {log}, {}, &b);
+  IdentifyArmByLeastSquares(WlsRrr(), {log}, {}, &a);
+  IdentifyArmByLeastSquares(WlsRrr(), {log}, {}, &b);
   EXPECT_EQ(a.identified, b.identified);
   EXPECT_EQ(a.consistent, b.consistent);
 }
@@ -138,7 +138,7 @@ TEST(WlsIdentification, AJointThatNeverMovesIsNamed) {
   const ArmModel truth = TrueRrr();
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 10.0, 500.0, SensorNoise{}, 2));
   try {
-    IdentifyArm(WlsRrr(), {log}, {});
+    IdentifyArmByLeastSquares(WlsRrr(), {log}, {});
     FAIL() << "expected an InputError";
   } catch (const InputError& e) {
     const std::string what = e.what();
@@ -156,7 +156,7 @@ TEST(WlsIdentification, NegativeFrictionInTheDataIsClippedAndTheShiftReported) {
   odd.joints[1].viscous = -0.2;
   const ArmLog log = ThroughCsv(MakeSyntheticLog(odd, MakeMultiSine(odd, 11), 10.0, 500.0, SensorNoise{}));
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(WlsRrr(), {log}, {}, &summary);
+  const ArmModel identified = IdentifyArmByLeastSquares(WlsRrr(), {log}, {}, &summary);
   const auto fv2 = std::find(summary.names.begin(), summary.names.end(), "fv2") - summary.names.begin();
   ASSERT_LT(fv2, static_cast<long>(summary.names.size()));
   EXPECT_NEAR(summary.identified[fv2], -0.2, 0.005);
@@ -182,7 +182,7 @@ TEST(WlsIdentification, AnUnphysicalInertiaIsFixedInTheDirectionsTheTorquesDoNot
   const ArmModel truth = TrueRrr();
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 10.0, 500.0, SensorNoise{}));
   WlsIdentificationSummary summary;
-  const ArmModel identified = IdentifyArm(a_priori, {log}, {}, &summary);
+  const ArmModel identified = IdentifyArmByLeastSquares(a_priori, {log}, {}, &summary);
   EXPECT_TRUE(summary.consistency_fixed);
   ASSERT_FALSE(summary.consistency_notes.empty());
   EXPECT_NE(summary.consistency_notes[0].find("triangle inequality"), std::string::npos) << summary.consistency_notes[0];
@@ -201,16 +201,16 @@ TEST(WlsIdentification, DecimationAndOptionsAreChecked) {
   options.decimate = 1;
   options.max_condition_number = 0.5;
   EXPECT_FALSE(options.IsValid(&why));
-  EXPECT_THROW(IdentifyArm(WlsRrr(), {}, {}), InputError);
+  EXPECT_THROW(IdentifyArmByLeastSquares(WlsRrr(), {}, {}), InputError);
 
   // Every 4th sample of a 1 kHz log gives nearly the same answer.
   const ArmModel truth = TrueRrr();
   const ArmLog log = ThroughCsv(MakeSyntheticLog(truth, MakeMultiSine(truth, 11), 10.0, 1000.0, SensorNoise{}));
   WlsIdentificationSummary all, quarter;
-  IdentifyArm(WlsRrr(), {log}, {}, &all);
+  IdentifyArmByLeastSquares(WlsRrr(), {log}, {}, &all);
   WlsIdentificationOptions decimated;
   decimated.decimate = 4;
-  IdentifyArm(WlsRrr(), {log}, decimated, &quarter);
+  IdentifyArmByLeastSquares(WlsRrr(), {log}, decimated, &quarter);
   EXPECT_NEAR(quarter.samples, all.samples / 4.0, 1.0);
   EXPECT_LT((quarter.identified - all.identified).cwiseQuotient(all.identified).cwiseAbs().maxCoeff(), 0.01);
 }
@@ -292,7 +292,7 @@ joints:
 )",
                                                    "cart.yaml");
   try {
-    IdentifyArm(cart, {ParseArmLog(csv, "steps.csv")}, {});
+    IdentifyArmByLeastSquares(cart, {ParseArmLog(csv, "steps.csv")}, {});
     FAIL() << "identified a joint that never left rest";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("joint 1 is at rest or near it on every one of the"), std::string::npos)

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "analysis/arm_identification.h"
 #include "analysis/arm_output_error.h"
 #include "analysis/arm_replay.h"
 #include "analysis/identification_validation.h"
@@ -258,14 +259,14 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
 
 // Writes --report's tables and, where rendering is compiled, the first log's torque plot per joint.
 void WriteArmIdentifyReport(const std::string& report_dir, const ArmModel& model, const ArmModel& identified,
-                            const ArmLog& first_log, const WlsIdentificationSummary& summary,
-                            const IdentificationValidation& validation, bool held_out, OutputFiles* files) {
+                            const ArmLog& first_log, const ArmIdentificationReport& found, bool held_out,
+                            OutputFiles* files) {
   const std::string report = report_dir + "/";
-  files->Write(report + "parameters.csv", FormatIdentifiedParametersCsv(summary));
-  files->Write(report + "joints.csv", FormatIdentifiedJointsCsv(summary));
+  files->Write(report + "parameters.csv", FormatIdentifiedParametersCsv(found.least_squares));
+  files->Write(report + "joints.csv", FormatIdentifiedJointsCsv(found.least_squares));
   if (held_out) {
-    files->Write(report + "validation.csv", FormatIdentificationValidationCsv(validation));
-    files->Write(report + "simulation.csv", FormatArmSimulationScoresCsv(validation.simulated));
+    files->Write(report + "validation.csv", FormatIdentificationValidationCsv(found.validation));
+    files->Write(report + "simulation.csv", FormatArmSimulationScoresCsv(found.validation.simulated));
   }
   if (RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
@@ -295,44 +296,23 @@ int Identify(const IdentifyCliOptions& options) {
   std::snprintf(chosen, sizeof chosen, "%.17g", cutoff_hz);
   std::vector<ArmLog> held_out = ReadArmLogsAtCutoff(options.validate, chosen, model, identification);
 
-  WlsIdentificationSummary summary;
-  const ArmModel inverse_dynamics = IdentifyArm(model, logs, identification, &summary);
-  // --output-error: the inverse-dynamics estimate refined on the logs' simulation error,
-  // stage after stage.
-  std::vector<ArmOutputErrorSummary> refinements(stages.size());
-  const bool refine = !stages.empty();
-  ArmModel identified = inverse_dynamics;
-  for (std::size_t k = 0; k < stages.size(); ++k)
-    identified = RefineArmByOutputError(identified, logs, stages[k], &refinements[k]);
-
-  // Held-out logs: the torque errors of the a-priori, the identified and the
-  // unconstrained model, and the motion they simulate (with --output-error the
-  // inverse-dynamics estimate's too).
-  IdentificationValidation validation = ValidateIdentification(model, identified, summary, identification, held_out);
-  if (refine) AddSimulatedModel(&validation, "inverse dynamics", inverse_dynamics, held_out);
+  ArmIdentificationOptions arm;
+  arm.least_squares = identification;
+  arm.output_error = stages;
+  ArmModel identified;
+  const ArmIdentificationReport report = IdentifyArm(model, logs, held_out, arm, &identified);
 
   OutputFiles files;
   files.Write(options.out,
-              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), summary, refinements,
-                                                                  logs.front().derive_cutoff_hz)));
-  if (!options.report.empty()) {
-    WriteArmIdentifyReport(options.report, model, identified, logs[0], summary, validation, !held_out.empty(), &files);
-  }
+              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), report.least_squares,
+                                                                  report.output_error, logs.front().derive_cutoff_hz)));
+  if (!options.report.empty())
+    WriteArmIdentifyReport(options.report, model, identified, logs[0], report, !held_out.empty(), &files);
 
   if (!options.quiet) {
     std::printf("identified %s (%d joints) from %zu log(s)\n", model.name.c_str(), model.dof(), logs.size());
     if (!cutoff_brief.empty()) std::printf("%s\n", cutoff_brief.c_str());
-    std::printf("\n%s", summary.FullReport().c_str());
-    if (summary.offsets.size() > 0) {
-      std::printf("torque offsets (measured - model), written as torque_offset effects with tau0 = -offset:");
-      for (Eigen::Index j = 0; j < summary.offsets.size(); ++j) std::printf(" %.4g", summary.offsets[j]);
-      std::printf(" N·m or N\n");
-    }
-    for (std::size_t k = 0; k < refinements.size(); ++k) {
-      if (refinements.size() > 1) std::printf("\nstage %zu of %zu of the continuation", k + 1, refinements.size());
-      std::printf("\n%s", refinements[k].FullReport().c_str());
-    }
-    std::printf("%s\n", validation.FullReport().c_str());
+    std::printf("\n%s", report.FullReport().c_str());
     files.PrintWrote();
   }
   return kExitOk;

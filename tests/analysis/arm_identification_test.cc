@@ -1,0 +1,69 @@
+// The arm's identification as `twinsim identify` runs it (analysis/arm_identification.h):
+// the least squares, the output-error stages and the held-out logs in one call.
+#include "analysis/arm_identification.h"
+
+#include <gtest/gtest.h>
+
+#include "identification/synthetic_arm_data.h"
+#include "robots/arm/arm_model_yaml_writer.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+// A synthetic log as a reader gives it, qd and qdd derived from q.
+ArmLog Read(const ArmLog& log, const std::string& path) { return ParseArmLog(FormatArmLog(log, false), path); }
+
+TEST(ArmIdentification, TheStepsInOneCallAsTheirPartsGiveThem) {
+  const ArmModel a_priori = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
+  ArmModel truth = a_priori;  // heavier links, more viscous friction
+  for (auto& j : truth.joints) j.child.mass *= 1.15, j.viscous *= 1.3;
+  testing::SensorNoise noise;
+  noise.torque_fraction = 0.01;
+  const ArmLog fit = Read(testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 3), 6.0, 500.0, noise), "fit.csv");
+  const ArmLog held_out =
+      Read(testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 4), 3.0, 500.0, noise), "held_out.csv");
+
+  // The least squares alone: its model, and the held-out logs judged.
+  ArmIdentificationOptions options;
+  ArmModel identified;
+  const ArmIdentificationReport plain = IdentifyArm(a_priori, {fit}, {held_out}, options, &identified);
+  WlsIdentificationSummary summary;
+  const ArmModel least_squares = IdentifyArmByLeastSquares(a_priori, {fit}, options.least_squares, &summary);
+  EXPECT_EQ(FormatArmModelYaml(identified, ""), FormatArmModelYaml(least_squares, ""));
+  EXPECT_EQ(FormatArmModelYaml(plain.inverse_dynamics, ""), FormatArmModelYaml(least_squares, ""));
+  EXPECT_TRUE(plain.output_error.empty());
+  ASSERT_EQ(plain.validation.logs.size(), 1u);
+  for (int j = 0; j < 3; ++j)
+    EXPECT_LT(plain.validation.logs[0].identified.error_rms[j], 0.5 * plain.validation.logs[0].a_priori.error_rms[j]);
+  const std::string text = plain.FullReport();
+  EXPECT_EQ(text.rfind(summary.FullReport().substr(0, summary.FullReport().find('(')), 0), 0u) << text;
+  EXPECT_NE(text.find("\nheld out: held_out.csv ("), std::string::npos) << text;
+
+  // Two output-error stages: each reported, the second from where the first ended, and the
+  // least squares' model simulated beside the others on the held-out log.
+  ArmOutputErrorOptions stage;
+  stage.horizon = 0.1;
+  stage.max_iterations = 3;
+  options.output_error = {stage, stage};
+  options.output_error[1].horizon = 0.2;
+  ArmModel refined;
+  const ArmIdentificationReport two = IdentifyArm(a_priori, {fit}, {held_out}, options, &refined);
+  ASSERT_EQ(two.output_error.size(), 2u);
+  EXPECT_DOUBLE_EQ(two.output_error[1].horizon, 0.2);
+  const ArmModel first = RefineArmByOutputError(least_squares, {fit}, options.output_error[0]);
+  EXPECT_EQ(FormatArmModelYaml(refined, ""),
+            FormatArmModelYaml(RefineArmByOutputError(first, {fit}, options.output_error[1]), ""));
+  const std::string staged = two.FullReport();
+  EXPECT_NE(staged.find("\nstage 1 of 2 of the continuation\noutput error: windows of 0.1 s"), std::string::npos)
+      << staged;
+  EXPECT_NE(staged.find("\nstage 2 of 2 of the continuation\noutput error: windows of 0.2 s"), std::string::npos)
+      << staged;
+  bool inverse_dynamics = false;
+  for (const auto& [name, score] : two.validation.simulated) inverse_dynamics |= name == "inverse dynamics";
+  EXPECT_TRUE(inverse_dynamics);
+  EXPECT_THROW(IdentifyArm(a_priori, {fit}, {}, options, nullptr), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace twinsim
