@@ -78,13 +78,14 @@ double ArmGuardSeconds(const std::vector<ArmLog>& logs) {
 constexpr int kMaxLearnedRows = 8000;
 constexpr int kLearnedFeatures = 300;
 
-double Get(const TrialEffect& e, const char* key, double fallback = 0) {
+// The effect's parameter `key`, or `fallback` where it has none.
+double ParameterOr(const TrialEffect& e, const char* key, double fallback = 0) {
   auto it = e.parameters.find(key);
   return it == e.parameters.end() ? fallback : it->second;
 }
 
-// Encodes an effect's parameters as variables (log scale where a parameter spans decades).
-ParameterMap Encode(const TrialEffect& e) {
+// An effect's parameters as variables (log scale where a parameter spans decades).
+ParameterMap FitVariablesOf(const TrialEffect& e) {
   ParameterMap m;
   auto add = [&](double x, double lo, double hi) {
     m.x.push_back(std::clamp(x, lo, hi));
@@ -92,38 +93,38 @@ ParameterMap Encode(const TrialEffect& e) {
     m.upper.push_back(hi);
   };
   if (e.name == "viscous_friction") {
-    add(Get(e, "b"), 0, kInf);
+    add(ParameterOr(e, "b"), 0, kInf);
   } else if (e.name == "coulomb_friction") {
-    add(Get(e, "c_pos"), 0, kInf);
-    add(Get(e, "c_neg"), 0, kInf);
+    add(ParameterOr(e, "c_pos"), 0, kInf);
+    add(ParameterOr(e, "c_neg"), 0, kInf);
   } else if (e.name == "stribeck_friction") {
-    add(Get(e, "c"), 0, kInf);
-    add(std::max(Get(e, "s") - Get(e, "c"), 1e-6), 1e-6, kInf);
-    add(std::log(std::max(Get(e, "vs"), 1e-4)), std::log(1e-4), std::log(100.0));
+    add(ParameterOr(e, "c"), 0, kInf);
+    add(std::max(ParameterOr(e, "s") - ParameterOr(e, "c"), 1e-6), 1e-6, kInf);
+    add(std::log(std::max(ParameterOr(e, "vs"), 1e-4)), std::log(1e-4), std::log(100.0));
   } else if (e.name == "torque_offset") {
-    add(Get(e, "tau0"), -kInf, kInf);
+    add(ParameterOr(e, "tau0"), -kInf, kInf);
   } else if (e.name == "torque_saturation") {
-    add(Get(e, "limit"), 1e-6, kInf);
+    add(ParameterOr(e, "limit"), 1e-6, kInf);
   } else if (e.name == "time_delay") {
-    add(Get(e, "delay"), 0, 1.0);
+    add(ParameterOr(e, "delay"), 0, 1.0);
   } else if (e.name == "joint_flexibility") {
-    add(std::log(std::max(Get(e, "k"), kMinStiffness)), std::log(kMinStiffness), std::log(1e9));
-    add(Get(e, "damping"), 0, kInf);
-    add(std::log(std::max(Get(e, "motor_inertia"), kMinMotorInertia)), std::log(kMinMotorInertia), std::log(1e3));
+    add(std::log(std::max(ParameterOr(e, "k"), kMinStiffness)), std::log(kMinStiffness), std::log(1e9));
+    add(ParameterOr(e, "damping"), 0, kInf);
+    add(std::log(std::max(ParameterOr(e, "motor_inertia"), kMinMotorInertia)), std::log(kMinMotorInertia), std::log(1e3));
   } else if (e.name == "payload") {
-    add(std::max(Get(e, "mass"), 1e-6), 1e-6, kInf);
-    add(Get(e, "x"), -kPayloadReach, kPayloadReach);
-    add(Get(e, "y"), -kPayloadReach, kPayloadReach);
-    add(Get(e, "z"), -kPayloadReach, kPayloadReach);
+    add(std::max(ParameterOr(e, "mass"), 1e-6), 1e-6, kInf);
+    add(ParameterOr(e, "x"), -kPayloadReach, kPayloadReach);
+    add(ParameterOr(e, "y"), -kPayloadReach, kPayloadReach);
+    add(ParameterOr(e, "z"), -kPayloadReach, kPayloadReach);
   }
   return m;
 }
 
-// Decodes variables into parameters, projected onto each parameter's valid range: Ceres
-// keeps its iterates within the bounds, but its numeric derivatives step across them
+// The fit variables x into the effect's parameters, each projected onto its valid range:
+// Ceres keeps its iterates within the bounds, but its numeric derivatives step across them
 // (a friction level starting at 0 is tried at -1e-4), and an evaluation the effect's
 // checks refuse would end the fit at its start.
-void Decode(const double* x, TrialEffect* e) {
+void SetFromFitVariables(const double* x, TrialEffect* e) {
   auto& p = e->parameters;
   auto positive = [](double v, double least) { return std::max(v, least); };
   p.clear();
@@ -348,7 +349,7 @@ class ArmProblem : public DiagnosisProblem {
     const Eigen::VectorXd r = FitResidual(effects, joints);
     return {r.data(), r.data() + r.size()};
   }
-  TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const override;
+  TestResiduals TestRowResiduals(const std::vector<TrialEffect>& effects, bool learn) const override;
   // The arm's floor (the residual above twice the derivative filter's cut-off, scaled
   // to the band) is a lower bound: plants with nothing missing reach up to 3.4 times it
   // (flexible joints with logged velocities; 2 for delays under a 4 Hz controller;
@@ -710,7 +711,7 @@ class FitFunctor {
 
   bool operator()(double const* const* x, double* residual) const {
     std::vector<TrialEffect> trial = effects_;
-    for (std::size_t k = 0; k < free_.size(); ++k) Decode(x[k], &trial[static_cast<std::size_t>(free_[k])]);
+    for (std::size_t k = 0; k < free_.size(); ++k) SetFromFitVariables(x[k], &trial[static_cast<std::size_t>(free_[k])]);
     Eigen::VectorXd r;
     try {
       r = problem_->FitResidual(trial, joints_);
@@ -735,7 +736,7 @@ void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int
   std::vector<ParameterMap> maps;
   std::vector<int> sizes;
   for (int i : free) {
-    maps.push_back(Encode((*effects)[static_cast<std::size_t>(i)]));
+    maps.push_back(FitVariablesOf((*effects)[static_cast<std::size_t>(i)]));
     sizes.push_back(static_cast<int>(maps.back().x.size()));
   }
   ceres::NumericDiffOptions diff;
@@ -762,7 +763,7 @@ void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  for (std::size_t k = 0; k < free.size(); ++k) Decode(maps[k].x.data(), &(*effects)[static_cast<std::size_t>(free[k])]);
+  for (std::size_t k = 0; k < free.size(); ++k) SetFromFitVariables(maps[k].x.data(), &(*effects)[static_cast<std::size_t>(free[k])]);
   Build(*effects);  // throws InputError when Ceres left the valid range
 }
 
@@ -873,7 +874,7 @@ std::vector<double> ArmProblem::NoiseFloor() const {
   return variance;
 }
 
-TestResiduals ArmProblem::Test(const std::vector<TrialEffect>& effects, bool learn) const {
+TestResiduals ArmProblem::TestRowResiduals(const std::vector<TrialEffect>& effects, bool learn) const {
   const ArmModel trial = Build(effects);
   TestResiduals out;
   const auto n = static_cast<std::size_t>(n_);

@@ -694,8 +694,8 @@ void ReportSelection(const DiagnosisReportHeader& header, const DiagnosisProblem
     return;
   }
   // With nothing added the repaired model is the nominal one: one check serves both.
-  const TestResiduals nominal = problem.Test({}, true);
-  const TestResiduals repaired = selection.effects.empty() ? nominal : problem.Test(selection.effects, true);
+  const TestResiduals nominal = problem.TestRowResiduals({}, true);
+  const TestResiduals repaired = selection.effects.empty() ? nominal : problem.TestRowResiduals(selection.effects, true);
   std::vector<double> p;
   for (std::size_t c = 0; c < repaired.channels.size(); ++c) {
     report->adequacy.push_back(CheckChannel(repaired, c, problem.ChunkRows()));

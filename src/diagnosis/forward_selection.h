@@ -93,7 +93,7 @@ class DiagnosisProblem {
   virtual double LearnedFloor() const { return 0; }
   // The test rows of the model with `effects`; with `learn`, also corrected by a
   // learned residual predictor trained on the fit rows.
-  virtual TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const = 0;
+  virtual TestResiduals TestRowResiduals(const std::vector<TrialEffect>& effects, bool learn) const = 0;
   // A clause of evidence particular to this effect (its signature in the data), or "".
   virtual std::string Signature(const TrialEffect& effect) const { return ""; }
   // True when `effect`, already added, keeps its fit while the next candidates are

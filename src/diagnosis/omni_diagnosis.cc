@@ -292,7 +292,7 @@ class OmniProblem : public DiagnosisProblem {
   std::vector<double> FitResiduals(const std::vector<TrialEffect>& effects) const override { return FitResidual(effects); }
   int ResidualComponents() const override { return 3; }
   double RelativeStep() const override { return 2e-2; }  // the replay's cost is jagged at fine scales (Refine)
-  TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const override;
+  TestResiduals TestRowResiduals(const std::vector<TrialEffect>& effects, bool learn) const override;
   // The camera's noise from third differences predicts a perfect model's gap closely
   // (clean logs: at most 1.15 times it over 20 seeds, measured, docs/diagnose-study).
   double FloorRatio() const override { return 1.6; }
@@ -634,7 +634,7 @@ std::vector<ReplayResidual> ReplayLearnedResidual(const OmniModel& model, const 
 
 }  // namespace
 
-TestResiduals OmniProblem::Test(const std::vector<TrialEffect>& effects, bool learn) const {
+TestResiduals OmniProblem::TestRowResiduals(const std::vector<TrialEffect>& effects, bool learn) const {
   const OmniModel model = Build(effects);
   TestResiduals out;
   out.channels = {"forward", "sideways", "rotation (at the rim)"};

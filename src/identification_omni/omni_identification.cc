@@ -172,7 +172,7 @@ struct Segment {
   bool validation = false;     // a wholly held-out log
 };
 
-OmniBlockedStretch View(const Segment& s) { return {&s.log, s.score_from, &s.held, &s.block, s.validation}; }
+OmniBlockedStretch BlockedStretchOf(const Segment& s) { return {&s.log, s.score_from, &s.held, &s.block, s.validation}; }
 
 // The report's gap of summed errors.
 OmniGap ToGap(const HorizonSum& sum, const std::string& name) {
@@ -239,7 +239,7 @@ std::vector<Segment> MakeSegments(const std::vector<OmniLog>& logs, const std::v
 // given kind, after the piece's lead-in: a fit row's prediction never starts from a
 // tracker corrected to a held-out measurement, and a held-out row's never from a fit one.
 bool ScoredRow(const Segment& s, std::size_t i, bool held_out, int horizon) {
-  return ScoredInBlocks(View(s), i, held_out, horizon);
+  return ScoredInBlocks(BlockedStretchOf(s), i, held_out, horizon);
 }
 
 // Sums the errors of the held-out rows of `segments` (validation logs or the others)
@@ -1003,7 +1003,7 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
   model->observer.seen_inputs = {};
   if (options.state != OmniReplayState::kObserver) return;
   std::vector<OmniBlockedStretch> views;
-  for (const Segment& s : segments) views.push_back(View(s));
+  for (const Segment& s : segments) views.push_back(BlockedStretchOf(s));
   OmniNoiseOptions noise_options;
   noise_options.backend = options.backend;
   noise_options.max_delay = options.max_delay;

@@ -113,7 +113,7 @@ class LinearProblem : public DiagnosisProblem {
     return out;
   }
 
-  TestResiduals Test(const std::vector<TrialEffect>& effects, bool) const override {
+  TestResiduals TestRowResiduals(const std::vector<TrialEffect>& effects, bool) const override {
     TestResiduals t;
     t.channels = {"joint 1"};
     t.noise = {1};
@@ -376,11 +376,11 @@ class TwoJointProblem : public DiagnosisProblem {
     return out;
   }
 
-  TestResiduals Test(const std::vector<TrialEffect>& effects, bool learn) const override {
-    TestResiduals t = joints_[0].Test(On(effects, 0), learn);
+  TestResiduals TestRowResiduals(const std::vector<TrialEffect>& effects, bool learn) const override {
+    TestResiduals t = joints_[0].TestRowResiduals(On(effects, 0), learn);
     t.channels = {"joint 1", "joint 2"};
     t.noise = {1, 1};
-    t.residual.push_back(joints_[1].Test(On(effects, 1), learn).residual[0]);
+    t.residual.push_back(joints_[1].TestRowResiduals(On(effects, 1), learn).residual[0]);
     return t;
   }
 
