@@ -69,8 +69,8 @@ std::string ArmFitCoordinates::Name(int k) const {
   return std::string(kind) + " of joint " + std::to_string(k % n_ + 1);
 }
 
-std::string ArmFitCoordinates::BlockHeading(int block) const {
-  switch (KindOf(block * n_)) {
+std::string ArmFitCoordinates::Heading(Kind kind) {
+  switch (kind) {
     case Kind::kScale: return "scale k";
     case Kind::kViscous: return "viscous";
     case Kind::kCoulomb: return "Coulomb";
@@ -78,6 +78,19 @@ std::string ArmFitCoordinates::BlockHeading(int block) const {
     case Kind::kBreakaway: return "s - c";
     case Kind::kStribeckVelocity: return "vs";
     case Kind::kBristleStiffness: return "sigma0";
+  }
+  return "";
+}
+
+std::string ArmFitCoordinates::Key(Kind kind) {
+  switch (kind) {
+    case Kind::kScale: return "scale";
+    case Kind::kViscous: return "viscous";
+    case Kind::kCoulomb: return "coulomb";
+    case Kind::kOffset: return "offset";
+    case Kind::kBreakaway: return "breakaway";
+    case Kind::kStribeckVelocity: return "stribeck_velocity";
+    case Kind::kBristleStiffness: return "bristle_stiffness";
   }
   return "";
 }

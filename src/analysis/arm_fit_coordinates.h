@@ -67,8 +67,10 @@ class ArmFitCoordinates {
   double ValueError(int k, double se) const {
     return KindOf(k) == Kind::kOffset ? offset_unit_[k % n_] * se : se;
   }
-  // A block of n coordinates in a table's heading: "scale k", "viscous", ... (`block` k / n).
-  std::string BlockHeading(int block) const;
+  // A kind in a table's heading ("scale k", "viscous", ...) and as a CSV key ("scale",
+  // "viscous", ...).
+  static std::string Heading(Kind kind);
+  static std::string Key(Kind kind);
 
  private:
   ArmModel start_;

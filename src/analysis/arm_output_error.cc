@@ -15,6 +15,7 @@
 #include "analysis/fixed_step_cost.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
+#include "io/csv_table.h"
 #include "identification/wls_identification.h"
 #include "sim/arm_simulation.h"
 
@@ -288,9 +289,9 @@ void SummariseArmFit(const ArmFitCoordinates& coordinates, const ArmModel& start
   s->at_bound = coordinates.Names(at_bound);
   const int blocks = coordinates.parameters() / n;
   s->standard_error.resize(se.empty() ? 0 : n, se.empty() ? 0 : blocks);
-  s->standard_error_headings.clear();
+  s->standard_error_kinds.clear();
   for (int b = 0; b < blocks && !se.empty(); ++b) {
-    s->standard_error_headings.push_back(coordinates.BlockHeading(b));
+    s->standard_error_kinds.push_back(coordinates.KindOf(b * n));
     for (int j = 0; j < n; ++j) {
       const int k = b * n + j;
       s->standard_error(j, b) = coordinates.ValueError(k, se[static_cast<std::size_t>(k)]);
@@ -393,8 +394,8 @@ std::string StandardErrorTable(const ArmOutputErrorSummary& s) {
   char cell[64];
   std::snprintf(cell, sizeof cell, "%-6s", "joint");
   text += cell;
-  for (const std::string& heading : s.standard_error_headings) {
-    std::snprintf(cell, sizeof cell, " %13s", heading.c_str());
+  for (ArmFitCoordinates::Kind kind : s.standard_error_kinds) {
+    std::snprintf(cell, sizeof cell, " %13s", ArmFitCoordinates::Heading(kind).c_str());
     text += cell;
   }
   text += "\n";
@@ -403,7 +404,7 @@ std::string StandardErrorTable(const ArmOutputErrorSummary& s) {
     text += cell;
     for (Eigen::Index b = 0; b < s.standard_error.cols(); ++b) {
       const double e = s.standard_error(j, b);
-      const bool offset = s.standard_error_headings[static_cast<std::size_t>(b)] == "offset tau0";
+      const bool offset = s.standard_error_kinds[static_cast<std::size_t>(b)] == ArmFitCoordinates::Kind::kOffset;
       if (std::isnan(e)) {
         std::snprintf(cell, sizeof cell, " %13s", "at bound");
       } else if (std::isinf(e)) {
@@ -423,6 +424,33 @@ std::string StandardErrorTable(const ArmOutputErrorSummary& s) {
 }
 
 }  // namespace
+
+std::string FormatArmOutputErrorCsv(const std::vector<ArmOutputErrorSummary>& stages) {
+  using Kind = ArmFitCoordinates::Kind;
+  std::string csv = "stage,joint,coordinate,value,standard_error\n";
+  for (std::size_t k = 0; k < stages.size(); ++k) {
+    const ArmOutputErrorSummary& s = stages[k];
+    for (Eigen::Index j = 0; j < s.standard_error.rows(); ++j) {
+      for (std::size_t b = 0; b < s.standard_error_kinds.size(); ++b) {
+        const Kind kind = s.standard_error_kinds[b];
+        const double value = kind == Kind::kScale              ? s.scale[j]
+                             : kind == Kind::kViscous          ? s.viscous_after[j]
+                             : kind == Kind::kCoulomb          ? s.coulomb_after[j]
+                             : kind == Kind::kOffset           ? s.offset_after[j]
+                             : kind == Kind::kBreakaway        ? s.breakaway[j]
+                             : kind == Kind::kStribeckVelocity ? s.stribeck_velocity[j]
+                                                               : s.bristle_stiffness[j];
+        const double e = s.standard_error(j, static_cast<Eigen::Index>(b));
+        const double error = kind == Kind::kOffset ? e : e * std::abs(value);
+        csv += std::to_string(k + 1) + "," + std::to_string(j + 1) + "," + ArmFitCoordinates::Key(kind) + "," +
+               FormatCsvNumber(value) + "," +
+               (std::isnan(error) ? std::string() : std::isinf(error) ? std::string("inf") : FormatCsvNumber(error)) +
+               "\n";
+      }
+    }
+  }
+  return csv;
+}
 
 std::string ArmOutputErrorSummary::FullReport() const {
   std::string text;

@@ -49,6 +49,7 @@
 
 #include <Eigen/Core>
 
+#include "analysis/arm_fit_coordinates.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
@@ -111,17 +112,24 @@ struct ArmOutputErrorSummary {
   std::vector<std::string> low_speed_at_bound;  // the low-speed fit's, kept or not ("break-away of joint 1", ...)
   // The returned fit's standard errors (analysis/fit_covariance.h: each stretch of a log
   // as long as a window, or each shooting segment, an independent cluster), joints by
-  // coordinate blocks in ArmFitCoordinates' order, each block headed by its
-  // standard_error_headings entry: a share of the value for scales and frictions, N·m or
-  // N for an offset; NaN at a bound, infinite where the logs do not determine it. Empty
-  // when nothing was fitted.
+  // coordinate blocks in ArmFitCoordinates' order, each block of the kind in
+  // standard_error_kinds: a share of the value for scales and frictions, N·m or N for an
+  // offset; NaN at a bound, infinite where the logs do not determine it. Empty when
+  // nothing was fitted.
   Eigen::MatrixXd standard_error;
-  std::vector<std::string> standard_error_headings;
+  std::vector<ArmFitCoordinates::Kind> standard_error_kinds;
   // A table: per joint the simulation errors before and after (and the baseline's), the
   // scale, frictions and offsets found, their standard errors; what ended at a bound;
   // whether it was kept.
   std::string FullReport() const;
 };
+
+// output_error.csv: stage,joint,coordinate,value,standard_error, a row per stage (1, 2, ...
+// of a continuation), joint and fitted coordinate (ArmFitCoordinates::Key: scale,
+// viscous, coulomb, offset, breakaway, stribeck_velocity, bristle_stiffness); the value
+// as fitted (kept or not) and its standard error in the same unit, empty at a bound,
+// inf where the logs do not determine it.
+std::string FormatArmOutputErrorCsv(const std::vector<ArmOutputErrorSummary>& stages);
 
 // Refines `start` on `logs` (joint counts checked): the refined model, or `start` when
 // the held-out windows do not get better. Throws InputError for invalid options or logs

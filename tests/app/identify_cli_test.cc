@@ -165,6 +165,11 @@ TEST(IdentifyCli, OutputErrorRefinesTheEstimateAndSimulatesAllThreeModels) {
   const std::string csv = testing::ReadText(dir + "/report/simulation.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 3 * 3 * 3) << csv;
   EXPECT_NE(csv.find("," + std::string("inverse dynamics") + ",0.1,1,"), std::string::npos) << csv;
+  // The fit's coordinates with their standard errors: scale, viscous and Coulomb per joint.
+  const std::string fitted = testing::ReadText(dir + "/report/output_error.csv");
+  EXPECT_EQ(fitted.substr(0, fitted.find('\n')), "stage,joint,coordinate,value,standard_error");
+  EXPECT_EQ(std::count(fitted.begin(), fitted.end(), '\n'), 1 + 3 * 3) << fitted;
+  EXPECT_NE(fitted.find("\n1,3,coulomb,"), std::string::npos) << fitted;
 
   // A continuation: windows of 0.1 s, then of 0.2 s from where they ended, each stage
   // reported and named in the model file.

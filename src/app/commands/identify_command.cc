@@ -257,7 +257,8 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
   return comment;
 }
 
-// Writes --report's tables and, where rendering is compiled, the first log's torque plot per joint.
+// Writes --report's tables (with output error its fit's values and standard errors) and,
+// where rendering is compiled, the first log's torque plot per joint.
 void WriteArmIdentifyReport(const std::string& report_dir, const ArmModel& model, const ArmModel& identified,
                             const ArmLog& first_log, const ArmIdentificationReport& found, bool held_out,
                             OutputFiles* files) {
@@ -268,6 +269,7 @@ void WriteArmIdentifyReport(const std::string& report_dir, const ArmModel& model
     files->Write(report + "validation.csv", FormatIdentificationValidationCsv(found.validation));
     files->Write(report + "simulation.csv", FormatArmSimulationScoresCsv(found.validation.simulated));
   }
+  if (!found.output_error.empty()) files->Write(report + "output_error.csv", FormatArmOutputErrorCsv(found.output_error));
   if (RenderingCompiled()) {
     std::unique_ptr<Renderer> renderer = MakeDefaultRenderer();
     const Eigen::MatrixXd before = PredictArmCommands(model, first_log);
@@ -350,7 +352,8 @@ void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
                   "spring that slips at the friction level); kept under the same 10 % rule")
       ->check(CLI::IsMember({"lugre", "maxwell"}));
   cmd->add_option("--report", options->report,
-                  "Folder for parameters.csv, joints.csv and torque_joint<j>.png (measured vs models, first log)");
+                  "Folder for parameters.csv, joints.csv, output_error.csv (with --output-error) and "
+                  "torque_joint<j>.png (measured vs models, first log)");
 }
 
 }  // namespace
