@@ -11,25 +11,14 @@
 namespace twinsim {
 namespace {
 
-// A synthetic log as a reader gives it, qd and qdd derived from q.
-ArmLog Read(const ArmLog& log, const std::string& path) { return ParseArmLog(FormatArmLog(log, false), path); }
-
 TEST(ArmIdentification, TheStepsInOneCallAsTheirPartsGiveThem) {
-  const ArmModel a_priori = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
-  ArmModel truth = a_priori;  // heavier links, more viscous friction
-  for (auto& j : truth.joints) j.child.mass *= 1.15, j.viscous *= 1.3;
-  testing::SensorNoise noise;
-  noise.torque_fraction = 0.01;
-  const ArmLog fit = Read(testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 3), 6.0, 500.0, noise), "fit.csv");
-  const ArmLog held_out =
-      Read(testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 4), 3.0, 500.0, noise), "held_out.csv");
-
+  const testing::HeavierRrr c = testing::MakeHeavierRrr(LoadArmModel(testing::SourcePath("models/rrr.yaml")), 6.0);
   // The least squares alone: its model, and the held-out logs judged.
   ArmIdentificationOptions options;
   ArmModel identified;
-  const ArmIdentificationReport plain = IdentifyArm(a_priori, {fit}, {held_out}, options, &identified);
+  const ArmIdentificationReport plain = IdentifyArm(c.a_priori, {c.fit}, {c.held_out}, options, &identified);
   WlsIdentificationSummary summary;
-  const ArmModel least_squares = IdentifyArmByLeastSquares(a_priori, {fit}, options.least_squares, &summary);
+  const ArmModel least_squares = IdentifyArmByLeastSquares(c.a_priori, {c.fit}, options.least_squares, &summary);
   EXPECT_EQ(FormatArmModelYaml(identified, ""), FormatArmModelYaml(least_squares, ""));
   EXPECT_EQ(FormatArmModelYaml(plain.inverse_dynamics, ""), FormatArmModelYaml(least_squares, ""));
   EXPECT_TRUE(plain.output_error.empty());
@@ -48,12 +37,12 @@ TEST(ArmIdentification, TheStepsInOneCallAsTheirPartsGiveThem) {
   options.output_error = {stage, stage};
   options.output_error[1].horizon = 0.2;
   ArmModel refined;
-  const ArmIdentificationReport two = IdentifyArm(a_priori, {fit}, {held_out}, options, &refined);
+  const ArmIdentificationReport two = IdentifyArm(c.a_priori, {c.fit}, {c.held_out}, options, &refined);
   ASSERT_EQ(two.output_error.size(), 2u);
   EXPECT_DOUBLE_EQ(two.output_error[1].horizon, 0.2);
-  const ArmModel first = RefineArmByOutputError(least_squares, {fit}, options.output_error[0]);
+  const ArmModel first = RefineArmByOutputError(least_squares, {c.fit}, options.output_error[0]);
   EXPECT_EQ(FormatArmModelYaml(refined, ""),
-            FormatArmModelYaml(RefineArmByOutputError(first, {fit}, options.output_error[1]), ""));
+            FormatArmModelYaml(RefineArmByOutputError(first, {c.fit}, options.output_error[1]), ""));
   const std::string staged = two.FullReport();
   EXPECT_NE(staged.find("\nstage 1 of 2 of the continuation\noutput error: windows of 0.1 s"), std::string::npos)
       << staged;
@@ -62,7 +51,7 @@ TEST(ArmIdentification, TheStepsInOneCallAsTheirPartsGiveThem) {
   bool inverse_dynamics = false;
   for (const auto& [name, score] : two.validation.simulated) inverse_dynamics |= name == "inverse dynamics";
   EXPECT_TRUE(inverse_dynamics);
-  EXPECT_THROW(IdentifyArm(a_priori, {fit}, {}, options, nullptr), std::invalid_argument);
+  EXPECT_THROW(IdentifyArm(c.a_priori, {c.fit}, {}, options, nullptr), std::invalid_argument);
 }
 
 }  // namespace

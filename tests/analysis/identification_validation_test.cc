@@ -12,18 +12,11 @@
 namespace twinsim {
 namespace {
 
-// A synthetic log as a reader gives it, qd and qdd derived from q.
-ArmLog Read(const ArmLog& log, const std::string& path) { return ParseArmLog(FormatArmLog(log, false), path); }
-
 TEST(IdentificationValidation, TheIdentifiedModelBeatsTheAPrioriOneOnAHeldOutLog) {
-  const ArmModel a_priori = LoadArmModel(testing::SourcePath("models/rrr.yaml"));
-  ArmModel truth = a_priori;  // heavier links, more viscous friction
-  for (auto& j : truth.joints) j.child.mass *= 1.15, j.viscous *= 1.3;
-  testing::SensorNoise noise;
-  noise.torque_fraction = 0.01;
-  const ArmLog fit = Read(testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 3), 8.0, 500.0, noise), "fit.csv");
-  const ArmLog held_out =
-      Read(testing::MakeSyntheticLog(truth, testing::MakeMultiSine(truth, 4), 4.0, 500.0, noise), "held_out.csv");
+  const testing::HeavierRrr c = testing::MakeHeavierRrr(LoadArmModel(testing::SourcePath("models/rrr.yaml")), 8.0);
+  const ArmModel& a_priori = c.a_priori;
+  const ArmLog& fit = c.fit;
+  const ArmLog& held_out = c.held_out;
   const WlsIdentificationOptions options;
   WlsIdentificationSummary summary;
   const ArmModel identified = IdentifyArmByLeastSquares(a_priori, {fit}, options, &summary);
