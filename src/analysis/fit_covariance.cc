@@ -18,7 +18,7 @@ std::vector<double> ClusteredStandardErrors(ceres::Problem* problem, const std::
   std::vector<bool> used(static_cast<std::size_t>(labels), false);
   for (int c : cluster_of) used[static_cast<std::size_t>(c)] = true;
   const auto clusters = static_cast<int>(std::count(used.begin(), used.end(), true));  // G: the clusters with rows
-  if (clusters < 2) return se;
+  if (clusters < 2) return {};
   ceres::Problem::EvaluateOptions options;
   options.parameter_blocks = blocks;
   options.residual_blocks = residual_blocks;
@@ -26,7 +26,7 @@ std::vector<double> ClusteredStandardErrors(ceres::Problem* problem, const std::
   std::vector<double> r;
   ceres::CRSMatrix jacobian;
   double cost = 0;
-  if (!problem->Evaluate(options, &cost, &r, nullptr, &jacobian) || r.size() != cluster_of.size()) return se;
+  if (!problem->Evaluate(options, &cost, &r, nullptr, &jacobian) || r.size() != cluster_of.size()) return {};
 
   // The free columns (held ones out) and their place in A.
   std::vector<int> place(static_cast<std::size_t>(jacobian.num_cols), -1);

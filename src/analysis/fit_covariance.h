@@ -31,8 +31,8 @@ namespace twinsim {
 // uncertainty is propagated), at the blocks' current values. `held`: indices (< p) of
 // coordinates at a bound, NaN and left out. `cluster_of`: each residual's cluster (0 to
 // G - 1), the residuals in the order of `residual_blocks`. Evaluates the problem's residuals and Jacobian once on one thread (the cost
-// functions' own threads as they have them). NaN for every coordinate when fewer than two
-// clusters or the evaluation fails.
+// functions' own threads as they have them). Empty when fewer than two clusters hold rows
+// or the evaluation fails.
 std::vector<double> ClusteredStandardErrors(ceres::Problem* problem, const std::vector<double*>& blocks,
                                             const std::vector<ceres::ResidualBlockId>& residual_blocks, int p,
                                             const std::vector<int>& held,
