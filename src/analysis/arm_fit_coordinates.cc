@@ -55,44 +55,31 @@ ArmFitCoordinates::Kind ArmFitCoordinates::KindOf(int k) const {
   return stribeck == 0 ? Kind::kBreakaway : stribeck == 1 ? Kind::kStribeckVelocity : Kind::kBristleStiffness;
 }
 
+namespace {
+
+// Each kind's words, heading and key, in the order of ArmFitCoordinates::Kind.
+struct KindText {
+  const char *words, *heading, *key;
+};
+constexpr KindText kKindTexts[] = {
+    {"scale", "scale k", "scale"},
+    {"viscous", "viscous", "viscous"},
+    {"Coulomb", "Coulomb", "coulomb"},
+    {"offset", "offset tau0", "offset"},
+    {"break-away", "s - c", "breakaway"},
+    {"Stribeck speed", "vs", "stribeck_velocity"},
+    {"bristle stiffness", "sigma0", "bristle_stiffness"},
+};
+
+const KindText& TextOf(ArmFitCoordinates::Kind kind) { return kKindTexts[static_cast<int>(kind)]; }
+
+}  // namespace
+
+std::string ArmFitCoordinates::Heading(Kind kind) { return TextOf(kind).heading; }
+std::string ArmFitCoordinates::Key(Kind kind) { return TextOf(kind).key; }
+
 std::string ArmFitCoordinates::Name(int k) const {
-  const char* kind = "";
-  switch (KindOf(k)) {
-    case Kind::kScale: kind = "scale"; break;
-    case Kind::kViscous: kind = "viscous"; break;
-    case Kind::kCoulomb: kind = "Coulomb"; break;
-    case Kind::kOffset: kind = "offset"; break;
-    case Kind::kBreakaway: kind = "break-away"; break;
-    case Kind::kStribeckVelocity: kind = "Stribeck speed"; break;
-    case Kind::kBristleStiffness: kind = "bristle stiffness"; break;
-  }
-  return std::string(kind) + " of joint " + std::to_string(k % n_ + 1);
-}
-
-std::string ArmFitCoordinates::Heading(Kind kind) {
-  switch (kind) {
-    case Kind::kScale: return "scale k";
-    case Kind::kViscous: return "viscous";
-    case Kind::kCoulomb: return "Coulomb";
-    case Kind::kOffset: return "offset tau0";
-    case Kind::kBreakaway: return "s - c";
-    case Kind::kStribeckVelocity: return "vs";
-    case Kind::kBristleStiffness: return "sigma0";
-  }
-  return "";
-}
-
-std::string ArmFitCoordinates::Key(Kind kind) {
-  switch (kind) {
-    case Kind::kScale: return "scale";
-    case Kind::kViscous: return "viscous";
-    case Kind::kCoulomb: return "coulomb";
-    case Kind::kOffset: return "offset";
-    case Kind::kBreakaway: return "breakaway";
-    case Kind::kStribeckVelocity: return "stribeck_velocity";
-    case Kind::kBristleStiffness: return "bristle_stiffness";
-  }
-  return "";
+  return std::string(TextOf(KindOf(k)).words) + " of joint " + std::to_string(k % n_ + 1);
 }
 
 std::vector<std::string> ArmFitCoordinates::Names(const std::vector<int>& ks) const {

@@ -65,10 +65,13 @@ class ArmFitCoordinates {
   // logarithmic ones a share of the value (the delta method: d ln v = dx), for an offset
   // N·m or N.
   double ValueError(int k, double se) const {
-    return KindOf(k) == Kind::kOffset ? offset_unit_[k % n_] * se : se;
+    return Relative(KindOf(k)) ? se : offset_unit_[k % n_] * se;
   }
-  // A kind in a table's heading ("scale k", "viscous", ...) and as a CSV key ("scale",
-  // "viscous", ...).
+  // Whether ValueError gives a kind's error as a share of the value (every kind but the
+  // offset, whose coordinate is linear).
+  static bool Relative(Kind kind) { return kind != Kind::kOffset; }
+  // A kind in a table's heading ("s - c") and as a CSV key ("breakaway"); Name has it
+  // in words ("break-away").
   static std::string Heading(Kind kind);
   static std::string Key(Kind kind);
 

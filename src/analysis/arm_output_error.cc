@@ -228,13 +228,13 @@ int Solve(const OutputErrorProblem& problem, const ArmOutputErrorOptions& option
   ceres::Problem ceres_problem;
   // Central differences at kStep in every coordinate, the columns simulated on
   // options.threads threads.
-  const ceres::ResidualBlockId block = ceres_problem.AddResidualBlock(new FixedStepCost(problem.residuals(), std::vector<double>(x->size(), kStep),
-                                                   [&problem](const double* at, double* out) {
-                                                     problem.Residual(problem.Apply(at), out);
-                                                     return true;
-                                                   },
-                                                   options.threads),
-                                 nullptr, x->data());
+  auto* cost = new FixedStepCost(problem.residuals(), std::vector<double>(x->size(), kStep),
+                                 [&problem](const double* at, double* out) {
+                                   problem.Residual(problem.Apply(at), out);
+                                   return true;
+                                 },
+                                 options.threads);
+  const ceres::ResidualBlockId block = ceres_problem.AddResidualBlock(cost, nullptr, x->data());
   std::vector<double> lower(static_cast<std::size_t>(p)), upper(static_cast<std::size_t>(p));
   for (int k = 0; k < p; ++k) problem.coordinates().Bounds(k, &lower[k], &upper[k]);
   ceres::Solver::Options solver;
@@ -404,12 +404,12 @@ std::string StandardErrorTable(const ArmOutputErrorSummary& s) {
     text += cell;
     for (Eigen::Index b = 0; b < s.standard_error.cols(); ++b) {
       const double e = s.standard_error(j, b);
-      const bool offset = s.standard_error_kinds[static_cast<std::size_t>(b)] == ArmFitCoordinates::Kind::kOffset;
+      const bool relative = ArmFitCoordinates::Relative(s.standard_error_kinds[static_cast<std::size_t>(b)]);
       if (std::isnan(e)) {
         std::snprintf(cell, sizeof cell, " %13s", "at bound");
       } else if (std::isinf(e)) {
         std::snprintf(cell, sizeof cell, " %13s", "undetermined");
-      } else if (offset) {
+      } else if (!relative) {
         std::snprintf(cell, sizeof cell, " %13.3g", e);
       } else if (e > 10) {  // ten times the value: the delta method says no more than that
         std::snprintf(cell, sizeof cell, " %13s", "> 1000 %");
@@ -441,7 +441,7 @@ std::string FormatArmOutputErrorCsv(const std::vector<ArmOutputErrorSummary>& st
                              : kind == Kind::kStribeckVelocity ? s.stribeck_velocity[j]
                                                                : s.bristle_stiffness[j];
         const double e = s.standard_error(j, static_cast<Eigen::Index>(b));
-        const double error = kind == Kind::kOffset ? e : e * std::abs(value);
+        const double error = ArmFitCoordinates::Relative(kind) ? e * std::abs(value) : e;
         csv += std::to_string(k + 1) + "," + std::to_string(j + 1) + "," + ArmFitCoordinates::Key(kind) + "," +
                FormatCsvNumber(value) + "," +
                (std::isnan(error) ? std::string() : std::isinf(error) ? std::string("inf") : FormatCsvNumber(error)) +

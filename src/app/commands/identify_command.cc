@@ -260,12 +260,11 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
 // Writes --report's tables (with output error its fit's values and standard errors) and,
 // where rendering is compiled, the first log's torque plot per joint.
 void WriteArmIdentifyReport(const std::string& report_dir, const ArmModel& model, const ArmModel& identified,
-                            const ArmLog& first_log, const ArmIdentificationReport& found, bool held_out,
-                            OutputFiles* files) {
+                            const ArmLog& first_log, const ArmIdentificationReport& found, OutputFiles* files) {
   const std::string report = report_dir + "/";
   files->Write(report + "parameters.csv", FormatIdentifiedParametersCsv(found.least_squares));
   files->Write(report + "joints.csv", FormatIdentifiedJointsCsv(found.least_squares));
-  if (held_out) {
+  if (!found.validation.logs.empty()) {  // held-out logs were given
     files->Write(report + "validation.csv", FormatIdentificationValidationCsv(found.validation));
     files->Write(report + "simulation.csv", FormatArmSimulationScoresCsv(found.validation.simulated));
   }
@@ -309,7 +308,7 @@ int Identify(const IdentifyCliOptions& options) {
               FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), report.least_squares,
                                                                   report.output_error, logs.front().derive_cutoff_hz)));
   if (!options.report.empty())
-    WriteArmIdentifyReport(options.report, model, identified, logs[0], report, !held_out.empty(), &files);
+    WriteArmIdentifyReport(options.report, model, identified, logs[0], report, &files);
 
   if (!options.quiet) {
     std::printf("identified %s (%d joints) from %zu log(s)\n", model.name.c_str(), model.dof(), logs.size());
