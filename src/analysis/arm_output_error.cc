@@ -317,6 +317,20 @@ void SummariseLowSpeedFriction(const ArmModel& with, bool tried, bool kept, cons
   }
 }
 
+double ArmOutputErrorStartCost(const ArmModel& model, const std::vector<ArmLog>& logs,
+                               const ArmOutputErrorOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  if (logs.empty()) throw InputError("output error: no log to fit");
+  if (options.whole_run) return ArmShootingStartCost(model, logs, options);
+  ArmOutputErrorOptions windows = options;
+  windows.stribeck = false;
+  windows.presliding = ArmPresliding::kNone;
+  const OutputErrorProblem problem(model, logs, windows);
+  const std::vector<double> x(static_cast<std::size_t>(problem.parameters()), 0.0);
+  return problem.CheckCost(problem.SimulationRmse(problem.Apply(x.data()), false));
+}
+
 ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
                                 const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary) {
   std::string why;
@@ -529,7 +543,7 @@ std::string ArmOutputErrorSummary::FullReport() const {
     text += "\n";
   }
   text += (kept ? "kept: the " : "not kept: the ") + held_out +
-          (kept ? " are simulated better\n" : " are simulated no better; the estimate is written as it was\n");
+          (kept ? " are simulated better\n" : " are simulated no better; the model it started from is written as it was\n");
   return text;
 }
 

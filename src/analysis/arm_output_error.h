@@ -131,6 +131,15 @@ struct ArmOutputErrorSummary {
 // inf where the logs do not determine it.
 std::string FormatArmOutputErrorCsv(const std::vector<ArmOutputErrorSummary>& stages);
 
+// What the fit sees at `model` before its first step: each joint's position error over
+// the fit windows simulated from the logged states, over the constant-velocity
+// baseline's, squared and summed over the joints; with whole_run, over the shooting
+// segments simulated from their logged states, each joint's over its spread of q. The
+// frictions are raised to their floors as the fit starts them. Lower is a better start; comparable
+// between models on the same logs and options. Throws as RefineArmByOutputError.
+double ArmOutputErrorStartCost(const ArmModel& model, const std::vector<ArmLog>& logs,
+                               const ArmOutputErrorOptions& options);
+
 // Refines `start` on `logs` (joint counts checked): the refined model, or `start` when
 // the held-out windows do not get better. Throws InputError for invalid options or logs
 // too short for four windows.

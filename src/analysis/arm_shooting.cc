@@ -154,6 +154,22 @@ class ShootingProblem {
     return (rmse.array() / spread_check_.array().max(1e-12)).square().sum();
   }
 
+  // The fit's position rows at its start (the model at coordinates 0, every segment from
+  // its logged state), each joint's over its spread, squared and summed: the cost without
+  // the defects.
+  double StartCost() const {
+    const std::vector<double> x(static_cast<std::size_t>(coordinates_.parameters()), 0.0);
+    const std::vector<double> y(static_cast<std::size_t>(state_size()), 0.0);
+    double cost = 0;
+    std::vector<double> out;
+    for (const Segment& s : segments_) {
+      out.resize(static_cast<std::size_t>(rows(s)));
+      Residual(x.data(), y.data(), s, out.data());
+      for (int r = 0; r < s.length * n_; ++r) cost += out[static_cast<std::size_t>(r)] * out[static_cast<std::size_t>(r)];
+    }
+    return cost;
+  }
+
   // The largest defect between segments' q, over the joint's spread of q.
   double LargestDefect(const double* x, const std::vector<std::vector<double>>& states) const {
     double largest = 0;
@@ -315,6 +331,14 @@ RunFit FitRuns(const ShootingProblem& problem, const ArmOutputErrorOptions& opti
 }
 
 }  // namespace
+
+double ArmShootingStartCost(const ArmModel& model, const std::vector<ArmLog>& logs,
+                            const ArmOutputErrorOptions& options) {
+  ArmOutputErrorOptions plain = options;
+  plain.stribeck = false;
+  plain.presliding = ArmPresliding::kNone;
+  return ShootingProblem(model, logs, plain).StartCost();
+}
 
 ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& logs,
                              const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary) {

@@ -18,6 +18,11 @@ class ArmFitCoordinates;
 ArmModel RefineArmByShooting(const ArmModel& start, const std::vector<ArmLog>& logs,
                              const ArmOutputErrorOptions& options, ArmOutputErrorSummary* summary);
 
+// ArmOutputErrorStartCost of a whole-run fit: every segment simulated from its logged
+// state, each joint's squared error over its spread of q, summed (no defects).
+double ArmShootingStartCost(const ArmModel& model, const std::vector<ArmLog>& logs,
+                            const ArmOutputErrorOptions& options);
+
 // Both fits' parameters into *summary: per joint the scale at coordinates x, the
 // frictions and offsets of `start` and `fitted`, the coordinates at a bound by name, and
 // the standard errors of the coordinates `se` (ClusteredStandardErrors) in the values'

@@ -241,9 +241,9 @@ std::string RefinementComment(const ArmOutputErrorSummary& refinement, const std
 // The identified model file's comment: the logs, the starting model and how the estimate
 // was refined (each output-error stage in turn).
 std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t logs,
-                                 const WlsIdentificationSummary& summary,
-                                 const std::vector<ArmOutputErrorSummary>& refinements,
+                                 const ArmIdentificationReport& found,
                                  double cutoff_hz) {  // Hz, 0: nothing derived
+  const std::vector<ArmOutputErrorSummary>& refinements = found.output_error;
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
   char cutoff[96] = "";
@@ -251,7 +251,10 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
     std::snprintf(cutoff, sizeof cutoff, "; derivatives at %g Hz%s", cutoff_hz,
                   options.cutoff == "auto" ? " (auto)" : "");
   }
-  comment += "\nstarting from " + options.model + cutoff + "; " + summary.BriefReport();
+  comment += "\nstarting from " + options.model + cutoff + "; " + found.least_squares.BriefReport();
+  if (found.started_from_a_priori)
+    comment += "\noutput error from the a-priori model's inertia and friction (it simulated the fit's windows better "
+               "than the least squares' estimate)";
   if (refinements.size() > 1) comment += "\noutput error as a continuation, each stage from where the last ended:";
   for (const ArmOutputErrorSummary& refinement : refinements) comment += RefinementComment(refinement, options.presliding);
   return comment;
@@ -305,8 +308,8 @@ int Identify(const IdentifyCliOptions& options) {
 
   OutputFiles files;
   files.Write(options.out,
-              FormatArmModelYaml(identified, IdentifiedArmComment(options, logs.size(), report.least_squares,
-                                                                  report.output_error, logs.front().derive_cutoff_hz)));
+              FormatArmModelYaml(identified,
+                                 IdentifiedArmComment(options, logs.size(), report, logs.front().derive_cutoff_hz)));
   if (!options.report.empty())
     WriteArmIdentifyReport(options.report, model, identified, logs[0], report, &files);
 
@@ -337,7 +340,9 @@ void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
                   "s: refine the estimate by output error, on windows of this length simulated from the logs' "
                   "torques (link inertial scales, friction, offsets); run: on each log's free run, by multiple "
                   "shooting, its last quarter held out; a list (0.1,0.5,1) refines stage after stage, each from "
-                  "where the last ended and kept by its own held-out windows; 0 = off")
+                  "where the last ended and kept by its own held-out windows; the first from the least squares' "
+                  "estimate, or from the a-priori model (with the estimated offsets) where that simulates its fit "
+                  "windows better; 0 = off")
       ->capture_default_str();
   cmd->add_option("--segment", options->segment, "s: with --output-error run, the shooting segments' length")
       ->capture_default_str();
