@@ -38,7 +38,7 @@ enum Param {
   kVMax, kWMax,
   kDelay,
   kLoopX, kLoopY, kLoopW,
-  kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale,
+  kNoiseX, kNoiseY, kNoiseW, kNoiseTime, kProcessScale,
   kBraking, kFieldFrame,
   kNumParams
 };
@@ -73,10 +73,10 @@ const ParamSpec kSpecs[kNumParams] = {
     {"forward.loop_gain", "controller.forward.kp, ki, kd", "x", "the forward controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"sideways.loop_gain", "controller.sideways.kp, ki, kd", "x", "the sideways controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
     {"turn.loop_gain", "controller.rotation.kp, ki, kd", "x", "the rotation controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
-    {"forward.slip", "driving_noise.forward", "m/s", "spread of the forward driving noise the wheels do not see (the observer's)", 0.002, 5, true},
-    {"sideways.slip", "driving_noise.sideways", "m/s", "spread of the sideways driving noise the wheels do not see (the observer's)", 0.002, 5, true},
-    {"turn.slip", "driving_noise.turn", "rad/s", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true},
-    {"slip.correlation_time", "driving_noise.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
+    {"driving_noise.forward", "driving_noise.forward", "m/s", "spread of the forward driving noise the wheels do not see (the observer's)", 0.002, 5, true},
+    {"driving_noise.sideways", "driving_noise.sideways", "m/s", "spread of the sideways driving noise the wheels do not see (the observer's)", 0.002, 5, true},
+    {"driving_noise.turn", "driving_noise.turn", "rad/s", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true},
+    {"driving_noise.correlation_time", "driving_noise.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
     {"process_noise.scale", "observer.process_noise", "x", "the observer's process noise on the model's velocity relative to the model's: how far the model's own velocity is trusted", 0.001, 100, true},
     {"lag.braking", "effects.motor_lag.braking", "x", "the lags' time constants while slowing down, relative to speeding up", 0.1, 10, true},
     // A choice, never fitted: 0 the lag acts in the robot's frame, 1 in the field's.
@@ -144,8 +144,8 @@ OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, doubl
   fx.forward_per_sideways = v[kCrossXY];
   fx.v_max = v[kVMax];
   fx.w_max = v[kWMax];
-  for (int a = 0; a < 3; ++a) m.driving_noise.sd[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kSlipX + a)];
-  m.driving_noise.correlation_time = v[kSlipTime];
+  for (int a = 0; a < 3; ++a) m.driving_noise.sd[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kNoiseX + a)];
+  m.driving_noise.correlation_time = v[kNoiseTime];
   for (double& q : m.observer.process_noise) q *= v[kProcessScale];
   PidGains* gains[3] = {&m.controller.forward, &m.controller.sideways, &m.controller.rotation};
   for (int a = 0; a < 3; ++a) {
@@ -837,7 +837,7 @@ std::array<bool, 3> ChooseFreeParameters(const std::vector<OmniLog>& logs, const
     for (int p : tied) fit->pruned[p] = std::string("not excited: the fit blocks never command ") + kOmniAxisNames[a];
   }
   if (options.state != OmniReplayState::kObserver) {
-    for (int p : {kSlipX, kSlipY, kSlipW, kSlipTime, kProcessScale})
+    for (int p : {kNoiseX, kNoiseY, kNoiseW, kNoiseTime, kProcessScale})
       fit->pruned[p] = "the open-loop tracker (--state tracker) has no observer";
   }
   for (int p = 0; p < kNumParams; ++p)
@@ -966,7 +966,7 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
     } else if (p >= kSlewX && p <= kSlewW && at_upper) {
       value = 0;
       why = "no ramp limit";
-    } else if (p >= kSlipX && p <= kSlipW && at_lower) {
+    } else if (p >= kNoiseX && p <= kNoiseW && at_lower) {
       why = "no driving noise found on this axis: the model's response explains its motion (the floor of the range is kept)";
     } else if (p == kProcessScale && at_lower) {
       why = "the observer trusts the model's velocity (the floor of the range is kept)";
@@ -1103,8 +1103,8 @@ void CheckLogCount(const std::vector<OmniLog>& logs, const OmniIdentificationOpt
 // tuning).
 void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentificationReport* report) {
   for (int p : {kDelay, kGainX, kGainY, kGainW, kLagX, kLagY, kLagW, kBraking, kFieldFrame, kLoopX, kLoopY, kLoopW,
-                kSlewX, kSlewY, kSlewW, kTurnX, kTurnY, kCrossYX, kCrossXY, kVMax, kWMax, kSlipX, kSlipY, kSlipW,
-                kSlipTime, kProcessScale}) {
+                kSlewX, kSlewY, kSlewW, kTurnX, kTurnY, kCrossYX, kCrossXY, kVMax, kWMax, kNoiseX, kNoiseY, kNoiseW,
+                kNoiseTime, kProcessScale}) {
     IdentifiedParameter q;
     const ParamSpec& s = kSpecs[p];
     q.name = s.name;
@@ -1133,10 +1133,10 @@ void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentific
     report->parameters.push_back(q);
   }
   if (!report->noise.kept) return;
-  const std::map<std::string, std::string> replaced = {{"forward.slip", "forward"},
-                                                       {"sideways.slip", "sideways"},
-                                                       {"turn.slip", "turn"},
-                                                       {"slip.correlation_time", "correlation_time"},
+  const std::map<std::string, std::string> replaced = {{"driving_noise.forward", "forward"},
+                                                       {"driving_noise.sideways", "sideways"},
+                                                       {"driving_noise.turn", "turn"},
+                                                       {"driving_noise.correlation_time", "correlation_time"},
                                                        {"process_noise.scale", "process_noise_scale"}};
   for (IdentifiedParameter& q : report->parameters) {
     auto it = replaced.find(q.name);

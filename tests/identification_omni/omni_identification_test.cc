@@ -383,7 +383,7 @@ TEST(OmniIdentification, RefusesLogsTooShortToHoldOut) {
 TEST(OmniIdentification, TheTablePrintsLongNotesWholeOnTheirOwnLines) {
   OmniIdentificationReport report;
   IdentifiedParameter held;
-  held.name = "slip.correlation_time";
+  held.name = "driving_noise.correlation_time";
   held.unit = "s";
   held.nominal = 0.15;
   held.value = 0.018;
