@@ -135,8 +135,9 @@ std::string FormatArmOutputErrorCsv(const std::vector<ArmOutputErrorSummary>& st
 // the fit windows simulated from the logged states, over the constant-velocity
 // baseline's, squared and summed over the joints; with whole_run, over the shooting
 // segments simulated from their logged states, each joint's over its spread of q. The
-// frictions are raised to their floors as the fit starts them. Lower is a better start; comparable
-// between models on the same logs and options. Throws as RefineArmByOutputError.
+// frictions are raised to their floors as the fit starts them. Lower is a better start;
+// comparable between models on the same logs and options. Throws as
+// RefineArmByOutputError.
 double ArmOutputErrorStartCost(const ArmModel& model, const std::vector<ArmLog>& logs,
                                const ArmOutputErrorOptions& options);
 

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "diagnosis/diagnosis_plants.h"
+#include "test_util.h"
 
 namespace twinsim {
 namespace {

@@ -68,17 +68,18 @@ TEST(KukaIdentification, WithoutOffsetsStillBeatsTheUrdfOnHeldOutData) {
 
 // Issue 65's KUKA goal: fitted on run1, the model simulates run2 and run3 from their
 // torques at least as well as the CAD model at 0.1 s and 1 s on every joint. The output
-// error on 0.1 s windows, started from the URDF (it simulates run1's windows better than
-// the torque fit's estimate), reaches it on 25 of the 28 joint-horizon cells (run2 at 1 s:
-// joints 2 and 3 24 and 28 % worse; run3 at 0.1 s: joint 4 8 % worse); started from the
-// estimate, 15. Four minutes on 2 cores: a deep test (tests/deep_only.txt).
+// error on 0.3 s windows (between the two horizons scored), started from the URDF (it
+// simulates run1's windows better than the torque fit's estimate), reaches it on 27 of
+// the 28 joint-horizon cells (run3 at 0.1 s: joint 2 58 % worse); on 0.1 s windows 25;
+// started from the estimate, 15 (docs/identification.md, "A continuation"). Eight
+// minutes on 2 cores: a deep test (tests/deep_only.txt).
 TEST(KukaIdentification, OutputErrorFromTheUrdfSimulatesTheHeldOutRunsAsWellAsTheUrdf) {
   if (!std::filesystem::exists(KukaDir() + "/run1.csv")) GTEST_SKIP() << "no real data at " << KukaDir();
   const ArmModel urdf = LoadArmModel(KukaDir() + "/kuka_lwr4.urdf");
   ArmIdentificationOptions options;
   options.least_squares.torque_offsets = true;
   ArmOutputErrorOptions stage;
-  stage.horizon = 0.1;
+  stage.horizon = 0.3;
   options.output_error = {stage};
   ArmModel identified;
   const ArmIdentificationReport report =
@@ -104,8 +105,8 @@ TEST(KukaIdentification, OutputErrorFromTheUrdfSimulatesTheHeldOutRunsAsWellAsTh
       }
   }
   EXPECT_EQ(cells, 28);
-  EXPECT_GE(as_good, 24);  // measured 25
-  EXPECT_LT(worst, 1.4);   // measured 1.28 (run2, 1 s, joint 3)
+  EXPECT_GE(as_good, 26);  // measured 27
+  EXPECT_LT(worst, 1.8);   // measured 1.58 (run3, 0.1 s, joint 2)
 }
 
 }  // namespace

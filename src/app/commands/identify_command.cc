@@ -253,8 +253,8 @@ std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t 
   }
   comment += "\nstarting from " + options.model + cutoff + "; " + found.least_squares.BriefReport();
   if (found.started_from_a_priori)
-    comment += "\noutput error from the a-priori model's inertia and friction (it simulated the fit's windows better "
-               "than the least squares' estimate)";
+    comment += "\noutput error from the a-priori model's inertia and friction (it simulated the first stage's rows "
+               "better than the least squares' estimate)";
   if (refinements.size() > 1) comment += "\noutput error as a continuation, each stage from where the last ended:";
   for (const ArmOutputErrorSummary& refinement : refinements) comment += RefinementComment(refinement, options.presliding);
   return comment;
