@@ -35,6 +35,41 @@ bool ArmSimulationScoreOptions::IsValid(std::string* why) const {
 
 namespace {
 
+// Where each joint of `model` may go in a simulation of `log`: its limits, widened to
+// what the log itself reached (a sensor's offset or a limit written a little tight is
+// not the model's fault).
+void JointRange(const ArmModel& model, const ArmLog& log, Eigen::VectorXd* lower, Eigen::VectorXd* upper) {
+  const int n = model.dof();
+  lower->resize(n);
+  upper->resize(n);
+  for (int j = 0; j < n; ++j) {
+    const ArmJoint& joint = model.joints[static_cast<std::size_t>(j)];
+    (*lower)[j] = std::min(joint.lower, log.q.col(j).minCoeff());
+    (*upper)[j] = std::max(joint.upper, log.q.col(j).maxCoeff());
+  }
+}
+
+// Whether a window's simulated q (its rows start + 1 ..) leaves [lower, upper] anywhere;
+// the first such window is recorded in *score.
+bool LeavesRange(const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, const Eigen::VectorXd& t, int start,
+                 const Eigen::MatrixXd& q, ArmHorizonScore* score) {
+  for (Eigen::Index r = 0; r < q.rows(); ++r) {
+    for (Eigen::Index j = 0; j < q.cols(); ++j) {
+      const double v = q(r, j);
+      if (v >= lower[j] && v <= upper[j]) continue;
+      if (score->left_range_joint < 0) {
+        score->left_range_joint = static_cast<int>(j);
+        score->left_range_row = start + 1 + static_cast<int>(r);
+        score->left_range_t = t[score->left_range_row];
+        score->left_range_q = v;
+        score->left_range_limit = v < lower[j] ? lower[j] : upper[j];
+      }
+      return true;
+    }
+  }
+  return false;
+}
+
 // `free_run` (if given) receives the simulated q of the last window: the free run's
 // whole path when horizon is 0.
 ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horizon,
@@ -44,10 +79,13 @@ ArmHorizonScore ScoreHorizon(ArmSimulation* sim, const ArmLog& log, double horiz
   const std::vector<int> starts = ArmSimulationWindows(sim->model(), log, horizon, &length, scored_rows);
   ArmHorizonScore score;
   score.horizon = horizon;
+  Eigen::VectorXd lower, upper;
+  JointRange(sim->model(), log, &lower, &upper);
   Eigen::ArrayXd model = Eigen::ArrayXd::Zero(n), hold = model, velocity = model, sum = model, squares = model;
   Eigen::MatrixXd q(length, n);
   for (int start : starts) {
     if (!SimulateArmFromLog(sim, log, start, length, &q, true)) ++score.diverged;
+    if (LeavesRange(lower, upper, log.t, start, q, &score)) ++score.left_range;
     ++score.windows;
     for (int r = 0; r < length; ++r) {
       const int row = start + 1 + r;
@@ -246,6 +284,14 @@ std::string FormatArmSimulationScores(const std::vector<std::pair<std::string, A
           std::snprintf(cell, sizeof cell, "; ran away in %d of %d windows", s.diverged, s.windows);
           text += cell;
         }
+        if (s.left_range > 0) {
+          std::snprintf(cell, sizeof cell,
+                        "; left a joint's range in %d of %d windows, which a real arm cannot (first: joint %d at "
+                        "t = %.3f s, at %.4g past its bound %.4g)",
+                        s.left_range, s.windows, s.left_range_joint + 1, s.left_range_t, s.left_range_q,
+                        s.left_range_limit);
+          text += cell;
+        }
         text += "\n";
       }
     }
@@ -254,14 +300,15 @@ std::string FormatArmSimulationScores(const std::vector<std::pair<std::string, A
 }
 
 std::string FormatArmSimulationScoresCsv(const std::vector<std::pair<std::string, ArmSimulationScore>>& scores) {
-  std::string csv = "log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,rmse_constant_velocity\n";
+  std::string csv =
+      "log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,rmse_constant_velocity,left_range\n";
   for (const auto& [name, score] : scores) {
     for (const ArmHorizonScore& s : score.horizons) {
       for (Eigen::Index j = 0; j < s.rmse.size(); ++j) {
         csv += score.path + "," + name + "," + FormatCsvNumber(s.horizon) + "," + std::to_string(j + 1) + "," +
                std::to_string(s.windows) + "," + std::to_string(s.rows) + "," + std::to_string(s.diverged) + "," +
                FormatCsvNumber(s.rmse[j]) + "," + (std::isfinite(s.fit[j]) ? FormatCsvNumber(s.fit[j]) : "") + "," + FormatCsvNumber(s.hold[j]) +
-               "," + FormatCsvNumber(s.constant_velocity[j]) + "\n";
+               "," + FormatCsvNumber(s.constant_velocity[j]) + "," + std::to_string(s.left_range) + "\n";
       }
     }
   }

@@ -87,6 +87,17 @@ struct ArmHorizonScore {
   int windows = 0;         // windows simulated
   int rows = 0;            // rows scored (every window's rows after its first)
   int diverged = 0;        // windows the model ran away in (their rows held at the last good state)
+  // Windows in which a simulated joint left its range (its limits, widened to what the
+  // log itself reached), which a real arm's end stops do not let it: the model is wrong
+  // there, whatever its RMSE says. Their rows are scored as simulated (holding them
+  // would score a model that leaves early as well as holding still); a window that also
+  // ran away counts in both.
+  int left_range = 0;
+  int left_range_joint = -1;  // 0-based: the joint of the first window that left (-1: none)
+  int left_range_row = -1;    // the log's row where it was first seen outside
+  double left_range_t = 0;    // s: that row's time
+  double left_range_q = 0;    // rad or m: its simulated position there
+  double left_range_limit = 0;  // rad or m: the bound it passed
   Eigen::VectorXd rmse;    // the model's position error
   Eigen::VectorXd fit;     // percent: 100 (1 - ||error|| / ||q - mean q||) over the scored rows;
                            // NaN for a joint that never moves (an empty cell in the CSV)
@@ -115,8 +126,9 @@ ArmSimulationScore ScoreArmSimulation(const ArmModel& model, const ArmLog& log,
 std::string FormatArmSimulationScores(const std::vector<std::pair<std::string, ArmSimulationScore>>& scores);
 
 // simulation.csv: log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,
-// rmse_constant_velocity (rad or m; fit in percent, empty for a joint that never moves;
-// horizon 0: the free run).
+// rmse_constant_velocity,left_range (rad or m; fit in percent, empty for a joint that
+// never moves; horizon 0: the free run; left_range: the windows that left a joint's
+// range, ArmHorizonScore::left_range).
 std::string FormatArmSimulationScoresCsv(const std::vector<std::pair<std::string, ArmSimulationScore>>& scores);
 
 }  // namespace twinsim

@@ -95,7 +95,7 @@ TEST(ArmSimulationScore, TablesCsvAndRefusals) {
   EXPECT_NE(text.find("truth beats holding on 3 of 3 joints, constant velocity on 3 of 3\n"), std::string::npos) << text;
   const std::string csv = FormatArmSimulationScoresCsv({{"truth", s}});
   EXPECT_EQ(csv.substr(0, csv.find('\n')),
-            "log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,rmse_constant_velocity");
+            "log,model,horizon,joint,windows,rows,diverged,rmse,fit,rmse_hold,rmse_constant_velocity,left_range");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 3);
   EXPECT_NE(csv.find("\nplant.csv,truth,0.25,1,5,1250,0,"), std::string::npos) << csv;
 
@@ -143,6 +143,52 @@ TEST(ArmSimulationScore, AModelThatRunsAwayIsCountedAndHeld) {
   EXPECT_EQ(s.horizons.at(0).diverged, 1);
   EXPECT_TRUE(s.horizons.at(0).rmse.allFinite());
   EXPECT_NE(FormatArmSimulationScores({{"light", s}}).find("; ran away in 1 of 1 windows"), std::string::npos);
+}
+
+// Forward simulation kept physical (issue 65): a simulated joint that passes its limits
+// (widened to what the log reached) goes where a real arm's end stops do not let it.
+// The window is counted and the first exit said, with its joint, time and position.
+TEST(ArmSimulationScore, AJointThatLeavesItsRangeIsCountedAndSaid) {
+  const ArmModel truth = Rrr();
+  const ArmLog log = testing::OdePdArmLog(truth, 1.5, 1);
+  ArmModel light = truth;  // the links 20 times lighter: the logged torques fling them
+  for (ArmJoint& j : light.joints) j.child.mass *= 0.05, j.child.inertia *= 0.05;
+  ArmSimulationScoreOptions options;
+  options.horizons = {0.25, 0};
+  const ArmSimulationScore right = ScoreArmSimulation(truth, log, options);
+  const ArmSimulationScore wrong = ScoreArmSimulation(light, log, options);
+  for (const ArmHorizonScore& h : right.horizons) {
+    EXPECT_EQ(h.left_range, 0) << "horizon " << h.horizon;
+    EXPECT_EQ(h.left_range_joint, -1);
+  }
+  const ArmHorizonScore& free = At(wrong, 0);
+  ASSERT_EQ(free.left_range, 1);
+  ASSERT_GE(free.left_range_joint, 0);
+  const ArmJoint& joint = light.joints[static_cast<std::size_t>(free.left_range_joint)];
+  const double reached_low = log.q.col(free.left_range_joint).minCoeff();
+  const double reached_high = log.q.col(free.left_range_joint).maxCoeff();
+  // Past the bound it names, which is the joint's limit or the log's own reach beyond it.
+  if (free.left_range_q > 0) {
+    EXPECT_EQ(free.left_range_limit, std::max(joint.upper, reached_high));
+    EXPECT_GT(free.left_range_q, free.left_range_limit);
+  } else {
+    EXPECT_EQ(free.left_range_limit, std::min(joint.lower, reached_low));
+    EXPECT_LT(free.left_range_q, free.left_range_limit);
+  }
+  EXPECT_EQ(free.left_range_t, log.t[free.left_range_row]);
+  EXPECT_GT(At(wrong, 0.25).left_range, 0);
+  EXPECT_LE(At(wrong, 0.25).left_range, At(wrong, 0.25).windows);
+  std::cout << "[measured] the light model left joint " << free.left_range_joint + 1 << "'s range at t = "
+            << free.left_range_t << " s (" << free.left_range_q << " past " << free.left_range_limit << "); "
+            << At(wrong, 0.25).left_range << " of " << At(wrong, 0.25).windows << " 0.25 s windows\n";
+  const std::string text = FormatArmSimulationScores({{"light", wrong}});
+  EXPECT_NE(text.find("; left a joint's range in 1 of 1 windows, which a real arm cannot (first: joint " +
+                      std::to_string(free.left_range_joint + 1) + " at t = "),
+            std::string::npos)
+      << text;
+  const std::string csv = FormatArmSimulationScoresCsv({{"light", wrong}});
+  EXPECT_NE(csv.find("\nplant.csv,light,0,1,1,"), std::string::npos) << csv;
+  EXPECT_EQ(csv.substr(csv.size() - 3), ",1\n") << csv;  // the free run's last joint: left_range 1
 }
 
 // Output error: a model whose links are 30 % too heavy and whose viscous friction is
