@@ -15,16 +15,6 @@
 
 namespace twinsim {
 
-bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why, const std::string& what) {
-  for (int k = 0; k < static_cast<int>(std::size(kOmniReplayStateWords)); ++k) {
-    if (word != kOmniReplayStateWords[k]) continue;
-    *state = static_cast<OmniReplayState>(k);
-    return true;
-  }
-  if (why) *why = what + " must be observer or tracker, got '" + word + "'";
-  return false;
-}
-
 bool OmniReplayOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& s) {
     if (why) *why = s;

@@ -37,19 +37,6 @@ namespace twinsim {
 
 inline constexpr int kWarmUpFrames = 15;
 
-// How a prediction's start state is estimated (above), and its words on the command line
-// and in results, in the enumerators' order.
-enum class OmniReplayState { kObserver, kTracker };
-inline constexpr const char* kOmniReplayStateWords[] = {"observer", "tracker"};
-
-// Its word: "observer", "tracker".
-inline const char* OmniReplayStateName(OmniReplayState state) { return kOmniReplayStateWords[static_cast<int>(state)]; }
-
-// The state a word names into *state; false for another word, saying why in *why, `what`
-// ("--state") naming the option.
-bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why,
-                          const std::string& what = "--state");
-
 struct OmniReplayOptions {
   std::string backend = "ode";
   OmniBackendOptions backend_options;  // the predictor, for the learned backend

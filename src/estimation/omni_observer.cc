@@ -5,10 +5,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "backends/omni_backend_factory.h"
+#include "core/engine_names.h"
 #include "core/error.h"
 #include "core/math_constants.h"
 #include "robots/omni/omni_kinematics.h"
+#include "sim/newtonian_omni_backend.h"
 
 namespace twinsim {
 
@@ -27,10 +28,17 @@ bool OmniObserverOptions::IsValid(std::string* why) const {
 
 namespace {
 
+// A Newtonian backend (analytic, ode, bullet) for the filter: the observer lies below the
+// backends' factory (learning/'s residual track runs it), so it builds its own.
 std::unique_ptr<OmniBackend> MakeFilterBackend(const OmniModel& model, const std::string& name, const FrameTiming& timing) {
+  if (!IsKnownEngine(name)) {
+    throw InputError("the observer needs a backend that holds the robot's velocity (analytic, ode, bullet); " + name +
+                     (name == "learned" ? " predicts from its own window of measured poses" : " is none of them"));
+  }
   FieldModel field;
   field.walls = false;  // a logged robot may be anywhere
-  return MakeOmniBackend(name, {model}, field, timing);
+  return std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(name, {model}, field), std::vector<OmniModel>{model},
+                                                timing);
 }
 
 }  // namespace
@@ -218,9 +226,16 @@ bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& co
     return true;
   }
   // From the previous frame to this one, under the command sent D frames before it.
-  Step(sent_.front(), true);
+  const Twist2 acting = sent_.front();
   sent_.pop_front();
   sent_.push_back(command);
+  Advance(acting, true);
+  if (!camera) return false;
+  return CorrectFrame(*camera);
+}
+
+void OmniObserver::Advance(const Twist2& acting, bool covariance) {
+  Step(acting, covariance);
   const Pose2 pose = backend_->pose(0);
   const Twist2 velocity = backend_->velocity(0);
   if (!IsFinite(pose) || !IsFinite(velocity) || !p_.allFinite() || !slip_.allFinite()) {
@@ -228,9 +243,32 @@ bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& co
     msg << "observer: model " << model_.name << " on " << backend_->name() << " diverged at frame " << frame_;
     throw CheckFailed(msg.str());
   }
-  if (!camera) return false;
+}
 
-  const Eigen::Vector3d nu(camera->x - pose.x, camera->y - pose.y, WrapAngle(camera->theta - pose.theta));
+void OmniObserver::Start(const Pose2& pose, const Twist2& velocity) {
+  if (!IsFinite(pose) || !IsFinite(velocity)) throw InputError("observer: a start pose or velocity is not finite");
+  ++frame_;
+  backend_->Reset(0, pose, velocity);
+  slip_.setZero();
+  frames_since_jacobian_ = -1;
+  p_ = InitialCovariance();
+  refused_in_a_row_ = 0;
+  started_ = true;
+}
+
+void OmniObserver::PredictFrame(const Twist2& acting, bool covariance) {
+  if (!started_) throw std::logic_error("OmniObserver::PredictFrame before Start");
+  if (!IsFinite(acting)) throw InputError("observer: a command is not finite");
+  ++frame_;
+  Advance(acting, covariance);
+}
+
+bool OmniObserver::CorrectFrame(const Pose2& camera) {
+  if (!started_) throw std::logic_error("OmniObserver::CorrectFrame before Start");
+  if (!IsFinite(camera)) throw InputError("observer: a camera pose is not finite");
+  const Pose2 pose = backend_->pose(0);
+  const Twist2 velocity = backend_->velocity(0);
+  const Eigen::Vector3d nu(camera.x - pose.x, camera.y - pose.y, WrapAngle(camera.theta - pose.theta));
   const Eigen::Matrix3d s = p_.topLeftCorner<3, 3>() + r_;
   const Eigen::LLT<Eigen::Matrix3d> llt(s);
   const double nis = nu.dot(llt.solve(nu));
@@ -239,7 +277,7 @@ bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& co
     ++stats_.refused;
     if (++refused_in_a_row_ >= options_.reacquire_after) {
       ++stats_.restarts;
-      Restart(*camera, velocity);
+      Restart(camera, velocity);
     }
     return false;
   }
@@ -260,6 +298,53 @@ bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& co
   stats_.nis_sum += nis;
   stats_.log_likelihood += -0.5 * (nis + log_det + 3 * std::log(2 * kPi));
   return true;
+}
+
+void OmniObserver::MovePose(const Pose2& pose) {
+  if (!started_) throw std::logic_error("OmniObserver::MovePose before Start");
+  backend_->MoveBody(0, pose);
+}
+
+OmniObserverState OmniObserver::Save() const {
+  OmniObserverState s;
+  s.backend = backend_->Save();
+  s.covariance = p_;
+  s.slip = slip_;
+  s.velocity_columns = velocity_columns_;
+  s.jacobian_theta = jacobian_theta_;
+  s.frames_since_jacobian = frames_since_jacobian_;
+  s.last_acting = last_acting_;
+  s.sent = sent_;
+  s.started = started_;
+  s.frame = frame_;
+  s.refused_in_a_row = refused_in_a_row_;
+  s.stats = stats_;
+  return s;
+}
+
+void OmniObserver::Restore(const OmniObserverState& s) {
+  backend_->Restore(s.backend);
+  p_ = s.covariance;
+  slip_ = s.slip;
+  velocity_columns_ = s.velocity_columns;
+  jacobian_theta_ = s.jacobian_theta;
+  frames_since_jacobian_ = s.frames_since_jacobian;
+  last_acting_ = s.last_acting;
+  sent_ = s.sent;
+  started_ = s.started;
+  frame_ = s.frame;
+  refused_in_a_row_ = s.refused_in_a_row;
+  stats_ = s.stats;
+}
+
+bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why, const std::string& what) {
+  for (int k = 0; k < static_cast<int>(std::size(kOmniReplayStateWords)); ++k) {
+    if (word != kOmniReplayStateWords[k]) continue;
+    *state = static_cast<OmniReplayState>(k);
+    return true;
+  }
+  if (why) *why = what + " must be observer or tracker, got '" + word + "'";
+  return false;
 }
 
 OmniEstimate OmniObserver::Estimate() const {

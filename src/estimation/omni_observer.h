@@ -76,6 +76,21 @@ struct OmniObserverOptions {
   bool IsValid(std::string* why) const;
 };
 
+// How a prediction's start state is estimated, and its words on the command line, in
+// model and predictor files and in results, in the enumerators' order: the observer
+// (this filter: pose, velocity and slip from every camera pose so far), or the open-loop
+// tracker (the model moved to each measured pose, its velocity its own).
+enum class OmniReplayState { kObserver, kTracker };
+inline constexpr const char* kOmniReplayStateWords[] = {"observer", "tracker"};
+
+// Its word: "observer", "tracker".
+inline const char* OmniReplayStateName(OmniReplayState state) { return kOmniReplayStateWords[static_cast<int>(state)]; }
+
+// The state a word names into *state; false for another word, saying why in *why, `what`
+// ("--state") naming the option.
+bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why,
+                          const std::string& what = "--state");
+
 inline constexpr int kObserverStates = 9;
 using ObserverMatrix = Eigen::Matrix<double, kObserverStates, kObserverStates>;
 
@@ -109,6 +124,22 @@ struct OmniInnovationStats {
   double last_nis = 0;
 };
 
+// Everything that changes inside an observer (OmniObserver::Save).
+struct OmniObserverState {
+  OmniBackendState backend;
+  ObserverMatrix covariance = ObserverMatrix::Zero();
+  Eigen::Vector3d slip = Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, 6, 3> velocity_columns = Eigen::Matrix<double, 6, 3>::Zero();
+  double jacobian_theta = 0;
+  int frames_since_jacobian = -1;
+  Twist2 last_acting;
+  std::deque<Twist2> sent;
+  bool started = false;
+  int frame = -1;
+  int refused_in_a_row = 0;
+  OmniInnovationStats stats;
+};
+
 // The covariance of a camera pose (x, y, theta) as `model`'s observer takes it: its
 // observer noise (OmniModel::ObserverNoiseXy, ObserverNoiseTheta) squared, uncorrelated.
 Eigen::Matrix3d MeasurementCovariance(const OmniModel& model);
@@ -133,6 +164,24 @@ class OmniObserver {
   // there, at rest with a wide velocity. Returns true when the pose was taken.
   // Throws CheckFailed when the estimate stops being finite.
   bool AddFrame(const std::optional<Pose2>& camera, const Twist2& command);
+
+  // The same one step at a time, for a caller that knows the command acting in each
+  // frame (the residual predictors' track, learning/omni_residual.h, which passes the
+  // commands after the model's delay itself): Start the filter at a pose moving at
+  // `velocity` (robot frame; the model's velocity, no slip, the covariance of a start),
+  // then per frame PredictFrame under the command acting over it (with `covariance`, P
+  // propagated too) and, with a camera pose, CorrectFrame (true when the gate took it).
+  // Throws as AddFrame does; std::logic_error before Start.
+  void Start(const Pose2& pose, const Twist2& velocity);
+  void PredictFrame(const Twist2& acting, bool covariance = true);
+  bool CorrectFrame(const Pose2& camera);
+  // Puts the estimate's pose at `pose` without a measurement (a predictor's own step):
+  // its velocity, slip and covariance stay.
+  void MovePose(const Pose2& pose);
+
+  // The filter's whole state, to come back to (the backend's included).
+  OmniObserverState Save() const;
+  void Restore(const OmniObserverState& state);
 
   bool started() const { return started_; }
   int delay_frames() const { return delay_; }
@@ -162,6 +211,8 @@ class OmniObserver {
   ObserverMatrix ProcessNoise(double theta, double speed, double acceleration, double turn_rate) const;
   ObserverMatrix InitialCovariance() const;
   void Restart(const Pose2& pose, const Twist2& velocity);
+  // One frame under `acting` (Step), then the divergence check.
+  void Advance(const Twist2& acting, bool covariance);
   Twist2 Acting(int ahead, const std::vector<Twist2>& planned) const;
 
   OmniModel model_;

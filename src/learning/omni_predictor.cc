@@ -147,7 +147,7 @@ Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, bool* u
 NominalOmniTrack OmniPredictor::MakeNominalTrack(const OmniModel& model) const {
   if (!residual()) throw std::logic_error("OmniPredictor::MakeNominalTrack: not a residual predictor");
   return NominalOmniTrack(model, info_.nominal_engine, info_.frame_rate, info_.nominal_substeps,
-                          info_.layout.nominal_errors);
+                          info_.layout.nominal_errors, info_.nominal_state);
 }
 
 Pose2 OmniPredictor::Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity,
@@ -187,7 +187,7 @@ Pose2 OmniPredictor::Step(const Pose2* poses, const Twist2* commands, NominalOmn
         << " rad (its nominal model predicted x = " << end.x << " m, y = " << end.y << " m)";
     throw CheckFailed(msg.str());
   }
-  track->Correct(next);
+  track->Follow(next);
   return next;
 }
 
@@ -277,6 +277,11 @@ std::string OmniTrainSummary::BriefReport() const {
         s << ridge[j];
     }
   }
+  if (rollout_rmse_observer > 0 || rollout_rmse_tracker > 0) {
+    s << "; the model carried by its " << (rollout_rmse_observer > 0 && rollout_rmse_observer < rollout_rmse_tracker ? "observer" : "tracker")
+      << " (held-out 1 s rollouts " << rollout_rmse_observer * 1000 << " mm from the observer's state, "
+      << rollout_rmse_tracker * 1000 << " mm from the tracker's)";
+  }
   if (!mlp_report.empty()) s << "; " << mlp_report;
   return s.str();
 }
@@ -356,7 +361,9 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
     const bool for_validation = usable && f >= cut;
     bool stepped = false;
     if (for_training || for_validation) {
-      if (for_validation && validation_windows++ % stride == 0 && seq.Complete(start, std::min(f + rollout_frames, frames - 1)) &&
+      // A rollout needs its start window measured; along it, only measured frames score
+      // (ResidualRollouts), so that logs with lost or repeated frames have rollouts too.
+      if (for_validation && validation_windows++ % stride == 0 && seq.Complete(start, f) &&
           f + rollout_frames < frames && seq.Sampled(start, f + rollout_frames))
         starts->push_back({f, track->Save()});
       const Pose2& now = seq.pose[uf];
@@ -394,7 +401,7 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
 
 // The residual 1-frame predictor on its own for `frames` frames from each start (its
 // track restored there) under the logged acting commands: the summed squared position
-// error over all steps and their count.
+// error over the steps that end on a measured frame, and their count.
 std::pair<double, long> ResidualRollouts(const OmniPredictor& model, const FrameSequence& seq,
                                          const std::vector<ResidualStart>& starts, int frames, NominalOmniTrack* track) {
   const int h = model.info().layout.history;
@@ -410,6 +417,7 @@ std::pair<double, long> ResidualRollouts(const OmniPredictor& model, const Frame
       const Pose2& truth = seq.pose[static_cast<std::size_t>(i + 1)];
       window.erase(window.begin());
       window.push_back(next);
+      if (!seq.observed[static_cast<std::size_t>(i + 1)]) continue;
       sum += std::pow(next.x - truth.x, 2) + std::pow(next.y - truth.y, 2);
       ++count;
     }
@@ -435,13 +443,14 @@ OmniPredictorInfo StartInfo(const OmniModel& model, const std::vector<OmniLog>& 
     info.layout.residual = true;
     info.layout.nominal_errors = options.nominal_errors;
     info.nominal_engine = options.nominal_engine;
+    info.nominal_state = options.nominal_state;
     info.nominal_fingerprint = NominalModelFingerprint(model);
     info.nominal_substeps = options.nominal_substeps > 0 ? options.nominal_substeps
-                            : info.nominal_engine == "analytic"
+                            : info.nominal_engine == "analytic" && options.nominal_state == OmniReplayState::kTracker
                                 ? std::max(1, DefaultPhysicsSubsteps(info.frame_rate) / 5)
                                 : DefaultPhysicsSubsteps(info.frame_rate);
     *track = std::make_unique<NominalOmniTrack>(model, info.nominal_engine, info.frame_rate, info.nominal_substeps,
-                                                info.layout.nominal_errors);
+                                                info.layout.nominal_errors, info.nominal_state);
   }
   return info;
 }
@@ -647,6 +656,25 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
                                  const std::function<void(int, int, double)>& progress) {
   if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
   if (logs.empty()) throw InputError("no logs to train on");
+  if (options.residual && options.choose_nominal_state) {
+    // Both tracks, each trained as if asked for; the one whose held-out rollouts come
+    // nearer is kept (the tracker where they tie, or where neither could roll out).
+    OmniTrainOptions one = options;
+    one.choose_nominal_state = false;
+    one.nominal_state = OmniReplayState::kTracker;
+    OmniTrainSummary tracker_summary, observer_summary;
+    OmniPredictor tracker = TrainOmniPredictor(model, logs, one, &tracker_summary, progress);
+    one.nominal_state = OmniReplayState::kObserver;
+    OmniPredictor observer = TrainOmniPredictor(model, logs, one, &observer_summary, progress);
+    const double t = tracker_summary.validation_rollout_rmse, o = observer_summary.validation_rollout_rmse;
+    const bool keep_observer = o > 0 && t > 0 && o < t;
+    OmniTrainSummary& kept = keep_observer ? observer_summary : tracker_summary;
+    kept.rollout_rmse_tracker = t;
+    kept.rollout_rmse_observer = o;
+    kept.seconds = tracker_summary.seconds + observer_summary.seconds;
+    if (summary) *summary = kept;
+    return keep_observer ? observer : tracker;
+  }
   std::unique_ptr<NominalOmniTrack> track;
   OmniPredictorInfo info = StartInfo(model, logs, options, &track);
   const int rollout_frames = static_cast<int>(std::lround(info.frame_rate));  // 1 s

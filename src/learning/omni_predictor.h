@@ -69,6 +69,9 @@ struct OmniPredictorInfo {
   // Residual predictors (layout.residual) only:
   std::string nominal_engine;       // the engine of the model it corrects: analytic, ode, bullet
   int nominal_substeps = 0;         // that model's physics steps per frame
+  // How that model is carried along the poses (NominalOmniTrack): the open-loop tracker
+  // (files from before have no word for it) or its observer.
+  OmniReplayState nominal_state = OmniReplayState::kTracker;
   std::string nominal_fingerprint;  // NominalModelFingerprint() of that model
 };
 
@@ -165,9 +168,17 @@ struct OmniTrainOptions {
   int horizon = 1;               // H, frames
   bool residual = false;         // learn the correction to the Newtonian model's prediction
   std::string nominal_engine = "analytic";  // residual: the engine that model runs on
-  // Residual: that model's physics steps per frame; 0 chooses: 2 on analytic (at 30 fps it
-  // predicts as well as the loop's 10 at a fifth of the cost), the loop's on ode and bullet
-  // (whose contacts need it; measured, docs/learning.md).
+  // Residual: how that model is carried along the poses: by its observer (the estimate a
+  // physics-only replay starts from) or the open-loop tracker (NominalOmniTrack). With
+  // `choose_nominal_state`, both are trained and the one whose held-out rollouts (1 s from
+  // the validation rows) come nearer is kept, the tracker where they tie: neither wins
+  // everywhere (docs/learning.md, "The observer's track").
+  OmniReplayState nominal_state = OmniReplayState::kTracker;
+  bool choose_nominal_state = false;
+  // Residual: that model's physics steps per frame; 0 chooses: for the tracker 2 on
+  // analytic (at 30 fps it predicts as well as the loop's 10 at a fifth of the cost), the
+  // loop's on ode and bullet (whose contacts need it); for the observer the loop's on every
+  // engine (a fifth of them made its 1 s predictions ten times worse; docs/learning.md).
   int nominal_substeps = 0;
   // Residual: the model's last one-frame errors among the inputs. 0 by default: on logs
   // with camera noise they made every predictor measured worse (docs/learning.md).
@@ -202,6 +213,9 @@ struct OmniTrainSummary {
   // left-out fold clearly better than the physics alone). Zero otherwise.
   Eigen::Vector3d ridge = Eigen::Vector3d::Zero();
   std::string ridge_folds;
+  // A residual predictor whose nominal state was chosen (OmniTrainOptions::
+  // choose_nominal_state): each state's held-out 1 s rollout RMSE (m; 0 where not tried).
+  double rollout_rmse_observer = 0, rollout_rmse_tracker = 0;
   double seconds = 0;          // wall time of the fit
   std::string mlp_report;
   std::string BriefReport() const;

@@ -38,6 +38,8 @@ void OmniPredictor::Save(const std::string& path) const {
     out << YAML::Key << "engine" << YAML::Value << info_.nominal_engine;
     out << YAML::Key << "substeps" << YAML::Value << info_.nominal_substeps;
     out << YAML::Key << "model_fingerprint" << YAML::Value << info_.nominal_fingerprint;
+    if (info_.nominal_state != OmniReplayState::kTracker)
+      out << YAML::Key << "state" << YAML::Value << OmniReplayStateName(info_.nominal_state);
     out << YAML::EndMap;
   }
   EmitTrainedOn(out, info_.logs, info_.samples,
@@ -124,6 +126,9 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
       n.Require("engine", &info.nominal_engine, KnownEngines());
       n.Require("substeps", &info.nominal_substeps, InRange(1, 1000));
       n.Require("model_fingerprint", &info.nominal_fingerprint);
+      std::string state = OmniReplayStateName(OmniReplayState::kTracker);
+      if (n.Get("state", &state, {kOmniReplayStateWords[0], kOmniReplayStateWords[1]}))
+        ParseOmniReplayState(state, &info.nominal_state, nullptr);
       n.Finish();
     } else {
       top.Missing("nominal");

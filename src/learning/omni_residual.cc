@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cinttypes>
 #include <cstdio>
+#include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.h"
 #include "robots/omni/omni_model_yaml_writer.h"
@@ -12,24 +14,32 @@
 namespace twinsim {
 
 NominalOmniTrack::NominalOmniTrack(const OmniModel& model, const std::string& engine, double frame_rate, int substeps,
-                                   int errors)
+                                   int errors, OmniReplayState state)
     : model_(model),
       engine_(engine),
       frame_rate_(frame_rate),
       substeps_(substeps),
+      state_(state),
       errors_(static_cast<std::size_t>(std::max(errors, 0)), Eigen::Vector3d::Zero()) {
   FrameTiming timing;
   timing.frame_rate = frame_rate;
   timing.physics_substeps = substeps > 0 ? substeps : DefaultPhysicsSubsteps(frame_rate);
   FieldModel field;
   field.walls = false;  // the robot's own motion only: the field is not part of the correction
-  backend_ = std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(engine, {model}, field), std::vector<OmniModel>{model},
-                                                    timing);
+  auto backend = std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(engine, {model}, field),
+                                                        std::vector<OmniModel>{model}, timing);
+  if (state == OmniReplayState::kObserver) {
+    // The track is handed the commands that act (after the model's delay), one frame at a
+    // time: the filter's own delay line is not used (OmniObserver::PredictFrame).
+    observer_ = std::make_unique<OmniObserver>(model, std::move(backend));
+  } else {
+    backend_ = std::move(backend);
+  }
 }
 
 NominalOmniTrack::NominalOmniTrack(const NominalOmniTrack& other)
     : NominalOmniTrack(other.model_, other.engine_, other.frame_rate_, other.substeps_,
-                       static_cast<int>(other.errors_.size())) {
+                       static_cast<int>(other.errors_.size()), other.state_) {
   Restore(other.Save());
 }
 
@@ -38,17 +48,38 @@ NominalOmniTrack& NominalOmniTrack::operator=(const NominalOmniTrack& other) {
   return *this;
 }
 
+Pose2 NominalOmniTrack::pose() const { return observer_ ? observer_->backend().pose(0) : backend_->pose(0); }
+
+Twist2 NominalOmniTrack::velocity() const {
+  return observer_ ? observer_->Estimate().velocity : backend_->velocity(0);
+}
+
 void NominalOmniTrack::Reset(const Pose2& pose, const Twist2& velocity) {
-  backend_->Reset(0, pose, velocity);
+  before_follow_.reset();
+  if (observer_) {
+    observer_->Start(pose, velocity);
+  } else {
+    backend_->Reset(0, pose, velocity);
+  }
   predicted_ = pose;
   for (Eigen::Vector3d& e : errors_) e.setZero();
 }
 
 Pose2 NominalOmniTrack::Step(const Twist2& acting) {
-  const Pose2 from = backend_->pose(0);
-  backend_->StepFrame({acting});
-  predicted_ = backend_->pose(0);
-  if (!IsFinite(predicted_)) {
+  const Pose2 from = pose();
+  before_follow_.reset();  // a new frame: the last one's Follow stands
+  bool diverged = false;
+  try {
+    if (observer_) {
+      observer_->PredictFrame(acting);
+    } else {
+      backend_->StepFrame({acting});
+    }
+  } catch (const CheckFailed&) {
+    diverged = true;  // the observer's own check: said below as the tracker's is
+  }
+  predicted_ = pose();
+  if (diverged || !IsFinite(predicted_)) {
     std::ostringstream msg;
     msg << "the residual predictor's nominal model (" << engine_ << ") diverged in one frame from x = " << from.x
         << " m, y = " << from.y << " m, theta = " << from.theta << " rad under the command (" << acting.vx << ", "
@@ -65,22 +96,75 @@ Pose2 NominalOmniTrack::Step(const Twist2& acting) {
 void NominalOmniTrack::Correct(const Pose2& pose) {
   if (!errors_.empty())
     errors_.back() = Eigen::Vector3d(pose.x - predicted_.x, pose.y - predicted_.y, WrapAngle(pose.theta - predicted_.theta));
-  backend_->MoveBody(0, pose);
-  predicted_ = pose;
+  if (observer_) {
+    if (before_follow_) {
+      observer_->Restore(*before_follow_);
+      before_follow_.reset();
+    }
+    observer_->CorrectFrame(pose);
+    predicted_ = this->pose();
+  } else {
+    backend_->MoveBody(0, pose);
+    predicted_ = pose;
+  }
+}
+
+void NominalOmniTrack::Follow(const Pose2& pose) {
+  if (!observer_) {
+    Correct(pose);
+    return;
+  }
+  if (!before_follow_) before_follow_ = observer_->Save();
+  observer_->MovePose(pose);
 }
 
 Pose2 NominalOmniTrack::Lookahead(const Twist2* acting, int frames) {
   const NominalTrackState saved = Save();
-  Pose2 p = backend_->pose(0);
+  Pose2 p = pose();
+  if (observer_) {
+    // The filter's prediction ahead, its covariance not needed: the slip carried on,
+    // decaying, as PredictAhead does.
+    for (int j = 0; j < frames; ++j) {
+      observer_->PredictFrame(acting[j], false);
+      p = pose();
+      if (!IsFinite(p)) break;
+    }
+    Restore(saved);
+    if (!IsFinite(p)) {
+      std::ostringstream msg;
+      msg << "the residual predictor's nominal model (" << engine_ << ") diverged within " << frames
+          << " frames of its observer's estimate at x = " << saved.predicted.x << " m, y = " << saved.predicted.y << " m";
+      throw CheckFailed(msg.str());
+    }
+    return p;
+  }
   for (int j = 0; j < frames; ++j) p = Step(acting[j]);
   Restore(saved);
   return p;
 }
 
-NominalTrackState NominalOmniTrack::Save() const { return NominalTrackState{backend_->Save().robots, predicted_, errors_}; }
+NominalTrackState NominalOmniTrack::Save() const {
+  NominalTrackState s;
+  if (observer_) {
+    s.observer = observer_->Save();
+  } else {
+    s.backend = backend_->Save().robots;
+  }
+  s.before_follow = before_follow_;
+  s.predicted = predicted_;
+  s.errors = errors_;
+  return s;
+}
 
 void NominalOmniTrack::Restore(const NominalTrackState& state) {
-  backend_->Restore(OmniBackendState{state.backend});
+  if (observer_) {
+    if (!state.observer) throw std::invalid_argument("NominalOmniTrack::Restore: a tracker's state for an observer track");
+    observer_->Restore(*state.observer);
+  } else {
+    if (state.observer) throw std::invalid_argument("NominalOmniTrack::Restore: an observer's state for a tracker");
+    backend_->Restore(OmniBackendState{state.backend});
+  }
+  before_follow_ = state.before_follow;
   predicted_ = state.predicted;
   errors_ = state.errors;
 }

@@ -61,16 +61,6 @@ struct OmniRobotState {
   std::shared_ptr<const NominalTrackState> nominal;
 };
 
-// What changes inside the Newtonian model that a residual predictor corrects
-// (NominalOmniTrack, learning/omni_residual.h): the model's own backend state, the pose
-// it predicted for the newest frame, and its recent errors (field frame: dx, dy m,
-// dtheta rad; the newest last).
-struct NominalTrackState {
-  std::vector<OmniRobotState> backend;
-  Pose2 predicted;
-  std::vector<Eigen::Vector3d> errors;
-};
-
 // A copy of everything that changes inside a backend (see OmniBackend::Save).
 struct OmniBackendState {
   std::vector<OmniRobotState> robots;

@@ -1,5 +1,6 @@
 // `twinsim train --model MODEL --log LOG.csv [--log ...] --kind linear|mlp --horizon H --out P`
-// [--residual [--nominal-engine E] [--nominal-errors on|off]] (arms also: --history N)
+// [--residual [--nominal-engine E] [--nominal-state observer|tracker|auto] [--nominal-errors on|off]]
+// (arms also: --history N)
 #include <algorithm>
 #include <cstdio>
 #include <memory>
@@ -34,6 +35,7 @@ struct TrainCliOptions {
   std::optional<bool> nominal_errors;   // residual only: its recent errors as inputs
   std::optional<std::string> nominal_engine;  // omni residual only
   std::optional<int> nominal_substeps;         // omni residual only
+  std::optional<int> nominal_state;  // omni residual only: an OmniReplayState, or 2 for auto
   bool quiet = false;
   bool no_noise = false;   // omni, one frame ahead: skip the driving noise's fit
   OmniLogSelector select;  // omni logs holding several robots
@@ -56,9 +58,9 @@ int TrainArm(const TrainCliOptions& options) {
   if (options.nominal_errors && !options.residual)
     throw InputError("--nominal-errors is for residual predictors only (add --residual)");
   train.nominal_errors = options.nominal_errors;
-  if (options.nominal_engine || options.nominal_substeps)
-    throw InputError("--nominal-engine and --nominal-substeps are for omni robots (an arm's nominal step runs on the "
-                     "analytic model)");
+  if (options.nominal_engine || options.nominal_substeps || options.nominal_state)
+    throw InputError("--nominal-engine, --nominal-substeps and --nominal-state are for omni robots (an arm's nominal "
+                     "step runs on the analytic model)");
   if (std::string problem; !train.IsValid(&problem)) throw InputError(problem);
 
   const std::string what = (train.residual ? "residual " : "") + train.kind;
@@ -89,9 +91,10 @@ int TrainArm(const TrainCliOptions& options) {
 int Train(const TrainCliOptions& options) {
   if (ModelFileRobot(options.model) == RobotKind::kArm) return TrainArm(options);
   if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
-  if ((options.nominal_errors || options.nominal_engine || options.nominal_substeps) && !options.residual)
-    throw InputError("--nominal-engine, --nominal-substeps and --nominal-errors are for residual predictors only "
-                     "(add --residual)");
+  if ((options.nominal_errors || options.nominal_engine || options.nominal_substeps || options.nominal_state) &&
+      !options.residual)
+    throw InputError("--nominal-engine, --nominal-substeps, --nominal-state and --nominal-errors are for residual "
+                     "predictors only (add --residual)");
   // Read and check everything before training or writing.
   const OmniModel model = LoadOmniModel(options.model);
   std::vector<OmniLog> logs;
@@ -100,6 +103,9 @@ int Train(const TrainCliOptions& options) {
   train.residual = options.residual;
   if (options.nominal_engine) train.nominal_engine = *options.nominal_engine;
   if (options.nominal_substeps) train.nominal_substeps = *options.nominal_substeps;
+  // Unless told, both states are trained and the held-out rollouts choose (auto).
+  train.choose_nominal_state = !options.nominal_state || *options.nominal_state == 2;
+  if (!train.choose_nominal_state) train.nominal_state = static_cast<OmniReplayState>(*options.nominal_state);
   if (options.nominal_errors) train.nominal_errors = *options.nominal_errors ? 5 : 0;
   if (std::string problem; !train.IsValid(&problem)) throw InputError(problem);
   if (train.residual) {
@@ -175,7 +181,9 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       "samples of joint positions (sin, cos for revolute joints), velocities and the torques acting\n"
       "then (the logged command, delay_samples later); output: the joint state H samples ahead.\n"
       "--residual: learn only the correction to the model file's own prediction (omni: the Newtonian\n"
-      "robot on --nominal-engine, carried along the log; arms: the one-sample step, rigid-body\n"
+      "robot on --nominal-engine, carried along the log by its observer or the open-loop tracker,\n"
+      "--nominal-state, by default whichever rolls out nearer on the held-out rows; arms: the\n"
+      "one-sample step, rigid-body\n"
       "dynamics with its friction); --nominal-errors on|off adds that model's recent errors to the\n"
       "inputs (omni: its last 5 one-frame errors, default off; arms: over the history, default on for\n"
       "linear, off for mlp). A residual predictor works only with the model file it was trained over.\n"
@@ -206,6 +214,17 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       "--nominal-substeps", [options](const int& v) { options->nominal_substeps = v; },
       "Omni, with --residual: physics steps per frame of the model it corrects (default: a fifth of the "
       "loop's on analytic, 2 at 30 fps; the loop's on ode and bullet)");
+  cmd->add_option_function<std::string>(
+         "--nominal-state",
+         [options](const std::string& v) {  // the word's index, from EnumWords
+           options->nominal_state = std::stoi(v);
+         },
+         "Omni, with --residual: how the model it corrects is carried along the poses: observer (its Kalman "
+         "filter: the estimate replay predicts from), tracker (moved to each pose, its velocity its own), or "
+         "auto (both trained, the one whose held-out 1 s rollouts come nearer kept)")
+      ->type_name("TEXT")
+      ->transform(EnumWords({kOmniReplayStateWords[0], kOmniReplayStateWords[1], "auto"}))
+      ->default_str("auto");
   cmd->add_option("--seed", options->train.mlp.seed, "Seed of the neural net's initialisation and batches")
       ->capture_default_str();
   cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training")->capture_default_str();

@@ -66,7 +66,7 @@ class LearnedOmniBackend final : public OmniBackend {
       const Pose2 next = BoundStep(predictor_->info(), s.pose_history.back(), predicted, &bounded);
       if (bounded) {
         ++bounded_steps_;
-        if (!tracks_.empty()) tracks_[static_cast<std::size_t>(i)].Correct(next);
+        if (!tracks_.empty()) tracks_[static_cast<std::size_t>(i)].Follow(next);
       }
       s.pose_history.erase(s.pose_history.begin());
       s.pose_history.push_back(next);
