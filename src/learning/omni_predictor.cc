@@ -334,7 +334,7 @@ std::pair<double, long> Rollouts(const OmniPredictor& model, const FrameSequence
 // measured poses (NominalOmniTrack) from the first frame with a known command and a
 // frame before it, and a window ending at frame i is a sample once the track has run
 // kNominalWarmUpFrames: into *train when i + H < cut, into *validation when i >= cut.
-// Every `stride`-th validation window with `rollout_frames` observed frames after it is
+// Every `stride`-th validation window that is measured, with `rollout_frames` frames after it, is
 // a rollout start. Returns the number of samples.
 int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout, double frame_rate, int cut,
                           NominalOmniTrack* track, OmniDataset* train, OmniDataset* validation, int rollout_frames,
