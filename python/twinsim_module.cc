@@ -97,12 +97,18 @@ py::tuple OmniTrainingData(const OmniModel& model, const py::handle& logs, int h
 
 std::shared_ptr<OmniPredictor> TrainOmni(const OmniModel& model, const py::handle& logs, const std::string& kind,
                                          int horizon, bool residual, const std::string& nominal_engine,
-                                         std::uint64_t seed, int epochs, std::vector<int> hidden) {
+                                         const std::string& nominal_state, std::uint64_t seed, int epochs,
+                                         std::vector<int> hidden) {
   OmniTrainOptions options;
   options.kind = kind;
   options.horizon = horizon;
   options.residual = residual;
   options.nominal_engine = nominal_engine;
+  // "auto" (train's default): both tracks trained, the held-out rollouts choose.
+  options.choose_nominal_state = nominal_state == "auto";
+  std::string why;
+  if (!options.choose_nominal_state && !ParseOmniReplayState(nominal_state, &options.nominal_state, &why, "nominal_state"))
+    throw InputError(why + " (or auto)");
   options.mlp.seed = seed;
   options.mlp.max_epochs = epochs;
   options.mlp.hidden = std::move(hidden);
@@ -364,6 +370,9 @@ PYBIND11_MODULE(_twinsim, m) {
       .def_property_readonly("kind", [](const OmniPredictor& p) { return p.info().kind; })
       .def_property_readonly("residual", &OmniPredictor::residual)
       .def_property_readonly("nominal_engine", [](const OmniPredictor& p) { return p.info().nominal_engine; })
+      .def_property_readonly("nominal_state", [](const OmniPredictor& p) {
+        return std::string(OmniReplayStateName(p.info().nominal_state));
+      })
       .def_property_readonly("horizon", [](const OmniPredictor& p) { return p.info().layout.horizon; })
       .def_property_readonly("num_inputs", [](const OmniPredictor& p) { return p.info().layout.num_inputs(); })
       .def_property_readonly("model_name", [](const OmniPredictor& p) { return p.info().model_name; })
@@ -393,9 +402,10 @@ PYBIND11_MODULE(_twinsim, m) {
     return OmniTrainingData(model.model, logs, horizon);
   });
   m.def("_train_omni", [](const PyOmniModel& model, const py::handle& logs, const std::string& kind, int horizon,
-                          bool residual, const std::string& nominal_engine, std::uint64_t seed, int epochs,
-                          std::vector<int> hidden) {
-    return TrainOmni(model.model, logs, kind, horizon, residual, nominal_engine, seed, epochs, std::move(hidden));
+                          bool residual, const std::string& nominal_engine, const std::string& nominal_state,
+                          std::uint64_t seed, int epochs, std::vector<int> hidden) {
+    return TrainOmni(model.model, logs, kind, horizon, residual, nominal_engine, nominal_state, seed, epochs,
+                     std::move(hidden));
   });
   m.def("_train_arm", [](const PyArmModel& model, const py::handle& logs, const std::string& kind, bool residual,
                          std::uint64_t seed, int epochs, std::vector<int> hidden) {

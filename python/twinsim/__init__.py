@@ -71,14 +71,16 @@ def training_data(model, logs, horizon=1):
 
 
 def train(model, logs, kind="linear", horizon=1, residual=False, seed=1, epochs=400, hidden=(32, 32),
-          nominal_engine="analytic"):
+          nominal_engine="analytic", nominal_state="auto"):
     """`twinsim train` without files: an OmniPredictor or ArmPredictor (save() writes it).
     residual=True learns the correction to the model's own prediction (omni: the Newtonian
-    robot on nominal_engine, carried along the log; docs/learning.md)."""
+    robot on nominal_engine, carried along the log by its observer or the open-loop
+    tracker, nominal_state "observer", "tracker" or "auto": both trained, the one whose
+    held-out rollouts come nearer kept; docs/learning.md)."""
     if isinstance(model, ArmModel):
         return _twinsim._train_arm(model, logs, kind, bool(residual), int(seed), int(epochs), list(hidden))
-    return _twinsim._train_omni(model, logs, kind, int(horizon), bool(residual), nominal_engine, int(seed),
-                                int(epochs), list(hidden))
+    return _twinsim._train_omni(model, logs, kind, int(horizon), bool(residual), nominal_engine, nominal_state,
+                                int(seed), int(epochs), list(hidden))
 
 
 def identify(model, logs):

@@ -286,6 +286,7 @@ def test_train_and_diagnose_return_objects_and_dicts():
     assert not predictor.residual
     residual = twinsim.train(nominal, [log, record(plant, 3600, 6)], kind="linear", residual=True)
     assert residual.residual and residual.nominal_engine == "analytic"
+    assert residual.nominal_state in ("observer", "tracker")  # auto: the held-out rollouts chose
     held_out = record(plant, 600, 5)
 
     def error(p):
