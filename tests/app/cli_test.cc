@@ -275,6 +275,16 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
                                    " --residual --nominal-substeps -3 --out " + dir + "/x.pred");
   EXPECT_EQ(steps.exit_code, 2);
   EXPECT_NE(steps.err.find("--nominal-substeps must be 1 to 1000"), std::string::npos) << steps.err;
+  auto state = testing::RunTwinsim("train --model " + omni4 + " --log " + log +
+                                   " --residual --nominal-state kalman --out " + dir + "/x.pred");
+  EXPECT_EQ(state.exit_code, 2);
+  EXPECT_NE(state.err.find("must be observer, tracker or auto, got 'kalman'"), std::string::npos) << state.err;
+  auto lone_state = testing::RunTwinsim("train --model " + omni4 + " --log " + log + " --nominal-state observer --out " +
+                                        dir + "/x.pred");
+  EXPECT_EQ(lone_state.exit_code, 2);
+  EXPECT_NE(lone_state.err.find("--nominal-state and --nominal-errors are for residual predictors only"),
+            std::string::npos)
+      << lone_state.err;
   EXPECT_FALSE(std::filesystem::exists(dir + "/x.pred"));
 }
 
