@@ -82,6 +82,57 @@ TEST(NominalOmniTrack, FollowsALogOfItsOwnModelWithZeroErrors) {
   EXPECT_EQ(before.backend[0].body.pose.x, after.backend[0].body.pose.x);
 }
 
+TEST(NominalOmniTrack, UnderTheObserverAFollowIsTakenBackWhenTheFrameIsMeasured) {
+  // Two tracks carried by the observer along the same log: one also follows a
+  // predictor's own pose in every frame before the measurement arrives, the other does
+  // not. The measured frames correct both alike, so they end in the same state, bit for
+  // bit; frames without a measurement keep the followed pose.
+  OmniModel m = testing::Omni4();
+  m.driving_noise.sd = {0.05, 0.05, 0.3};
+  const OmniLog log = RecordResidualLog(m, 5, 4, "follow.csv");
+  const FrameSequence seq = ToFrameSequence(log, PredictorLayout(m, 1));
+  NominalOmniTrack plain(m, "analytic", 30, 0, 3, OmniReplayState::kObserver);
+  NominalOmniTrack follows(m, "analytic", 30, 0, 3, OmniReplayState::kObserver);
+  EXPECT_EQ(plain.state(), OmniReplayState::kObserver);
+  plain.Reset(seq.pose[0], Twist2{});
+  follows.Reset(seq.pose[0], Twist2{});
+  int measured = 0;
+  for (int f = 0; f + 1 < seq.frames(); ++f) {
+    const auto next = static_cast<std::size_t>(f + 1);
+    const Pose2 a = plain.Step(seq.acting[static_cast<std::size_t>(f)]);
+    const Pose2 b = follows.Step(seq.acting[static_cast<std::size_t>(f)]);
+    ASSERT_EQ(a.x, b.x) << "frame " << f;
+    const Pose2 own{b.x + 0.01, b.y - 0.02, b.theta + 0.05};  // a predictor's correction
+    follows.Follow(own);
+    if (seq.observed[next]) {
+      plain.Correct(seq.pose[next]);
+      follows.Correct(seq.pose[next]);
+      ++measured;
+    } else {
+      EXPECT_EQ(follows.pose().x, own.x);
+      plain.Follow(own);  // the two follow alike where nothing is measured
+    }
+    ASSERT_EQ(plain.pose().x, follows.pose().x) << "frame " << f;
+    ASSERT_EQ(plain.pose().theta, follows.pose().theta) << "frame " << f;
+    ASSERT_EQ(plain.velocity().vx, follows.velocity().vx) << "frame " << f;
+  }
+  EXPECT_GT(measured, seq.frames() / 2);
+  // The innovations are the errors; the observer's update takes the pose near the camera.
+  EXPECT_GT(plain.errors().back().head<2>().norm(), 0.0);
+  EXPECT_LT(std::hypot(plain.pose().x - seq.pose.back().x, plain.pose().y - seq.pose.back().y), 0.01);
+  // Lookahead and a copy leave the filter as it was; a tracker's state is refused.
+  const NominalTrackState before = plain.Save();
+  ASSERT_TRUE(before.observer.has_value());
+  const Twist2 go[3] = {{1, 0, 0}, {1, 0, 0}, {1, 0, 0}};
+  const Pose2 ahead = plain.Lookahead(go, 3);
+  NominalOmniTrack copy(plain);
+  EXPECT_EQ(copy.Lookahead(go, 3).x, ahead.x);
+  EXPECT_EQ(plain.Save().predicted.x, before.predicted.x);
+  EXPECT_EQ(plain.pose().x, copy.pose().x);
+  NominalOmniTrack tracker(m, "analytic", 30, 0, 3);
+  EXPECT_THROW(tracker.Restore(before), std::invalid_argument);
+}
+
 class ResidualPredictor : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
