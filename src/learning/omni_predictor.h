@@ -178,7 +178,8 @@ struct OmniTrainOptions {
   // Residual: that model's physics steps per frame; 0 chooses: for the tracker 2 on
   // analytic (at 30 fps it predicts as well as the loop's 10 at a fifth of the cost), the
   // loop's on ode and bullet (whose contacts need it); for the observer the loop's on every
-  // engine (a fifth of them made its 1 s predictions ten times worse; docs/learning.md).
+  // engine (its predictions ahead run uncorrected from its estimate, where a coarser step
+  // is another model; measured in docs/learning.md).
   int nominal_substeps = 0;
   // Residual: the model's last one-frame errors among the inputs. 0 by default: on logs
   // with camera noise they made every predictor measured worse (docs/learning.md).

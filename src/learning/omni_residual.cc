@@ -69,14 +69,14 @@ Pose2 NominalOmniTrack::Step(const Twist2& acting) {
   const Pose2 from = pose();
   before_follow_.reset();  // a new frame: the last one's Follow stands
   bool diverged = false;
-  try {
-    if (observer_) {
+  if (observer_) {
+    try {
       observer_->PredictFrame(acting);
-    } else {
-      backend_->StepFrame({acting});
+    } catch (const CheckFailed&) {
+      diverged = true;  // the filter's own check: said below as the tracker's is
     }
-  } catch (const CheckFailed&) {
-    diverged = true;  // the observer's own check: said below as the tracker's is
+  } else {
+    backend_->StepFrame({acting});
   }
   predicted_ = pose();
   if (diverged || !IsFinite(predicted_)) {
@@ -124,10 +124,13 @@ Pose2 NominalOmniTrack::Lookahead(const Twist2* acting, int frames) {
   if (observer_) {
     // The filter's prediction ahead, its covariance not needed: the slip carried on,
     // decaying, as PredictAhead does.
-    for (int j = 0; j < frames; ++j) {
-      observer_->PredictFrame(acting[j], false);
-      p = pose();
-      if (!IsFinite(p)) break;
+    try {
+      for (int j = 0; j < frames && IsFinite(p); ++j) {
+        observer_->PredictFrame(acting[j], false);
+        p = pose();
+      }
+    } catch (const CheckFailed&) {
+      p = Pose2{NAN, NAN, NAN};  // the filter's own check: said below
     }
     Restore(saved);
     if (!IsFinite(p)) {

@@ -291,6 +291,13 @@ TEST(OmniPredictorFile, CorruptFilesAreInputErrors) {
                 .find("'input_mean' in 'linear': expected 42 numbers, got 2"),
             std::string::npos);
   EXPECT_NE(error_of(header + "linear: {").find("YAML syntax error"), std::string::npos);
+  // A residual's nominal state is one of the words.
+  const std::string residual =
+      testing::ReadText(testing::SourcePath("tests/fuzz/corpus/predictor/omni4_residual_observer.pred"));
+  std::string kalman = residual;
+  kalman.replace(kalman.find("state: observer"), 15, "state: kalman");
+  EXPECT_NE(error_of(kalman).find("'state' in 'nominal'"), std::string::npos) << error_of(kalman);
+  EXPECT_EQ(error_of(residual), "");
 }
 
 TEST(OmniTraining, ALogTooShortForOneWindowIsRefused) {
