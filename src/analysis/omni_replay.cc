@@ -304,7 +304,7 @@ class TrackerSamples {
       for (int j = f; j < f + k; ++j) {
         const Twist2 before = backend.velocity(0);
         backend.StepFrame({tl.Delayed(j)});
-        backend.MoveBody(0, SlipPose(noise_, dt_, backend.velocity(0), before, backend.pose(0), &slip, &rng_));
+        backend.PushBody(0, SlipPose(noise_, dt_, backend.velocity(0), before, backend.pose(0), &slip, &rng_));
         for (std::size_t h = 0; h < horizons.size(); ++h) {
           if (j + 1 != f + horizons[h]) continue;
           auto at = tl.row_of_frame.find(j + 1);

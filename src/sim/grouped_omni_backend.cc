@@ -59,6 +59,11 @@ void GroupedOmniBackend::MoveBody(int robot, const Pose2& pose) {
   groups_[static_cast<std::size_t>(p.group)].backend->MoveBody(p.index, pose);
 }
 
+void GroupedOmniBackend::PushBody(int robot, const Pose2& pose) {
+  const Place& p = At(robot);
+  groups_[static_cast<std::size_t>(p.group)].backend->PushBody(p.index, pose);
+}
+
 bool GroupedOmniBackend::has_velocity_state() const {
   for (const OmniBackendGroup& g : groups_)
     if (!g.backend->has_velocity_state()) return false;

@@ -50,6 +50,7 @@ class GroupedOmniBackend final : public OmniBackend {
 
   void Reset(int robot, const Pose2& pose, const Twist2& velocity) override;
   void MoveBody(int robot, const Pose2& pose) override;
+  void PushBody(int robot, const Pose2& pose) override;
   bool has_velocity_state() const override;
   void SetVelocity(int robot, const Twist2& velocity) override;
   void StepFrame(const std::vector<Twist2>& commands) override;

@@ -85,6 +85,11 @@ class OmniBackend {
   // and everything internal (the controller's state; a learned backend keeps its older
   // poses, so a window corrected every frame holds measured poses).
   virtual void MoveBody(int robot, const Pose2& pose) = 0;
+  // Moves robot i's body to `pose` by what no measurement saw (a slip drawn from the
+  // driving noise), keeping the rest as MoveBody does. Only a backend that tells the two
+  // apart overrides it: a residual predictor carried by its observer follows a push but
+  // takes a measurement through its filter (learning/omni_residual.h).
+  virtual void PushBody(int robot, const Pose2& pose) { MoveBody(robot, pose); }
   // True when SetVelocity works: the backend's state holds each body's velocity (the
   // Newtonian backends). A learned backend's velocity is its window of poses.
   virtual bool has_velocity_state() const { return false; }

@@ -300,7 +300,7 @@ void Simulation::Slip(const std::vector<Twist2>& velocity_before) {
     if (!noise.simulated || !present(i) || state_.pulls[k]) continue;
     // The slip (robot frame) at the speed and acceleration of the robot's own (wheel)
     // velocity; the body moves on by it, the wheels unaware.
-    backend_->MoveBody(i, SlipPose(noise, dt, backend_->velocity(i), velocity_before[k], backend_->pose(i), &state_.slip[k],
+    backend_->PushBody(i, SlipPose(noise, dt, backend_->velocity(i), velocity_before[k], backend_->pose(i), &state_.slip[k],
                                    &state_.drive_rng));
   }
 }

@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "analysis/omni_replay.h"
+#include "backends/learned/learned_omni_backend.h"
 #include "core/error.h"
 #include "learning/omni_predictor.h"
 #include "robots/omni/omni_effects.h"
@@ -317,6 +318,30 @@ TEST(ResidualPredictorState, TheObserversTrackIsKeptWhereThePhysicsIsRightAndThe
   EXPECT_EQ(ReplayRmse(model, test, "learned", 30, loaded), kept30);
   tracker->Save(path);
   EXPECT_EQ(testing::ReadText(path).find("state:"), std::string::npos) << "a tracker's file as before";
+
+  // On the learned backend a slip drawn from the driving noise is a push (PushBody), not
+  // a measurement: a frame measured after a push ends where it ends without one.
+  FrameTiming timing;
+  timing.frame_rate = 30;
+  auto pushed = MakeLearnedOmniBackend({model}, timing, kept);
+  auto plain = MakeLearnedOmniBackend({model}, timing, kept);
+  const Pose2 start{0.2, -0.1, 0.3};
+  const Twist2 drive{0.8, 0.2, 1.0};
+  pushed->Reset(0, start, drive);
+  plain->Reset(0, start, drive);
+  for (int f = 0; f < 20; ++f) {
+    pushed->StepFrame({drive});
+    plain->StepFrame({drive});
+    const Pose2 p = pushed->pose(0);
+    pushed->PushBody(0, Pose2{p.x + 0.01, p.y, p.theta + 0.02});
+    const Pose2 measured{p.x + 0.002, p.y - 0.001, p.theta};
+    pushed->MoveBody(0, measured);
+    plain->MoveBody(0, measured);
+  }
+  pushed->StepFrame({drive});
+  plain->StepFrame({drive});
+  EXPECT_EQ(pushed->pose(0).x, plain->pose(0).x);
+  EXPECT_EQ(pushed->pose(0).theta, plain->pose(0).theta);
 }
 
 TEST(ResidualTraining, OptionsAreChecked) {

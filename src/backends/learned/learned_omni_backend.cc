@@ -46,6 +46,13 @@ class LearnedOmniBackend final : public OmniBackend {
     if (!tracks_.empty()) tracks_[static_cast<std::size_t>(robot)].Correct(pose);
   }
 
+  // A slip, not a measurement: the residual's model follows it (the tracker's: as a
+  // measurement; the observer's: its pose moved, its filter untouched).
+  void PushBody(int robot, const Pose2& pose) override {
+    At(robot).pose_history.back() = pose;
+    if (!tracks_.empty()) tracks_[static_cast<std::size_t>(robot)].Follow(pose);
+  }
+
   void StepFrame(const std::vector<Twist2>& commands) override {
     if (static_cast<int>(commands.size()) != num_robots())
       throw std::invalid_argument("StepFrame: one command per robot expected");
