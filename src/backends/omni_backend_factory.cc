@@ -19,7 +19,7 @@ std::unique_ptr<OmniBackend> MakeOmniBackend(const std::string& name, const std:
                                              const FieldModel& field, const FrameTiming& timing,
                                              const OmniBackendOptions& options) {
   if (name == "learned") return MakeLearnedOmniBackend(robots, timing, options.predictor);
-  return std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(name, robots, field), robots, timing);
+  return MakeNewtonianOmniBackend(name, robots, field, timing);
 }
 
 std::unique_ptr<OmniBackend> MakeOmniBackend(const std::vector<RobotBackendChoice>& per_robot,

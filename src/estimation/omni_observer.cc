@@ -37,8 +37,7 @@ std::unique_ptr<OmniBackend> MakeFilterBackend(const OmniModel& model, const std
   }
   FieldModel field;
   field.walls = false;  // a logged robot may be anywhere
-  return std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(name, {model}, field), std::vector<OmniModel>{model},
-                                                timing);
+  return MakeNewtonianOmniBackend(name, {model}, field, timing);
 }
 
 }  // namespace
@@ -218,11 +217,7 @@ bool OmniObserver::AddFrame(const std::optional<Pose2>& camera, const Twist2& co
     sent_.pop_front();
     sent_.push_back(command);
     if (!camera) return false;
-    backend_->Reset(0, *camera, Twist2{});
-    slip_.setZero();
-    frames_since_jacobian_ = -1;
-    p_ = InitialCovariance();
-    started_ = true;
+    Begin(*camera, Twist2{});
     return true;
   }
   // From the previous frame to this one, under the command sent D frames before it.
@@ -245,15 +240,19 @@ void OmniObserver::Advance(const Twist2& acting, bool covariance) {
   }
 }
 
-void OmniObserver::Start(const Pose2& pose, const Twist2& velocity) {
-  if (!IsFinite(pose) || !IsFinite(velocity)) throw InputError("observer: a start pose or velocity is not finite");
-  ++frame_;
+void OmniObserver::Begin(const Pose2& pose, const Twist2& velocity) {
   backend_->Reset(0, pose, velocity);
   slip_.setZero();
   frames_since_jacobian_ = -1;
   p_ = InitialCovariance();
   refused_in_a_row_ = 0;
   started_ = true;
+}
+
+void OmniObserver::Start(const Pose2& pose, const Twist2& velocity) {
+  if (!IsFinite(pose) || !IsFinite(velocity)) throw InputError("observer: a start pose or velocity is not finite");
+  ++frame_;
+  Begin(pose, velocity);
 }
 
 void OmniObserver::PredictFrame(const Twist2& acting, bool covariance) {
@@ -363,13 +362,7 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
   if (!started_) throw std::logic_error("OmniObserver::PredictAhead before the first camera pose");
   OmniPrediction out;
   if (k <= 0) return out;
-  const OmniBackendState saved = backend_->Save();
-  const ObserverMatrix p = p_;
-  const Eigen::Vector3d slip = slip_;
-  const Eigen::Matrix<double, 6, 3> columns = velocity_columns_;
-  const double jacobian_theta = jacobian_theta_;
-  const int frames_since_jacobian = frames_since_jacobian_;
-  const Twist2 acting = last_acting_;
+  const OmniObserverState saved = Save();
   double last_theta = backend_->pose(0).theta;
   // The mean distance from the seen inputs along the frames predicted so far.
   const OmniSeenInputs& seen = model_.observer.seen_inputs;
@@ -392,13 +385,7 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
       out.pose_covariance.push_back(d.asDiagonal() * p_.topLeftCorner<3, 3>() * d.asDiagonal());
     }
   }
-  backend_->Restore(saved);
-  p_ = p;
-  slip_ = slip;
-  velocity_columns_ = columns;
-  jacobian_theta_ = jacobian_theta;
-  frames_since_jacobian_ = frames_since_jacobian;
-  last_acting_ = acting;
+  Restore(saved);
   return out;
 }
 

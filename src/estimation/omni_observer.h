@@ -211,6 +211,8 @@ class OmniObserver {
   ObserverMatrix ProcessNoise(double theta, double speed, double acceleration, double turn_rate) const;
   ObserverMatrix InitialCovariance() const;
   void Restart(const Pose2& pose, const Twist2& velocity);
+  // The filter started at `pose` moving at `velocity`: the covariance of a start, no slip.
+  void Begin(const Pose2& pose, const Twist2& velocity);
   // One frame under `acting` (Step), then the divergence check.
   void Advance(const Twist2& acting, bool covariance);
   Twist2 Acting(int ahead, const std::vector<Twist2>& planned) const;

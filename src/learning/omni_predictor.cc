@@ -278,7 +278,7 @@ std::string OmniTrainSummary::BriefReport() const {
     }
   }
   if (rollout_rmse_observer > 0 || rollout_rmse_tracker > 0) {
-    s << "; the model carried by its " << (rollout_rmse_observer > 0 && rollout_rmse_observer < rollout_rmse_tracker ? "observer" : "tracker")
+    s << "; the model carried by its " << (KeepsObserver() ? "observer" : "tracker")
       << " (held-out 1 s rollouts " << rollout_rmse_observer * 1000 << " mm from the observer's state, "
       << rollout_rmse_tracker * 1000 << " mm from the tracker's)";
   }
@@ -666,11 +666,13 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     OmniPredictor tracker = TrainOmniPredictor(model, logs, one, &tracker_summary, progress);
     one.nominal_state = OmniReplayState::kObserver;
     OmniPredictor observer = TrainOmniPredictor(model, logs, one, &observer_summary, progress);
-    const double t = tracker_summary.validation_rollout_rmse, o = observer_summary.validation_rollout_rmse;
-    const bool keep_observer = o > 0 && t > 0 && o < t;
+    OmniTrainSummary choice;
+    choice.rollout_rmse_tracker = tracker_summary.validation_rollout_rmse;
+    choice.rollout_rmse_observer = observer_summary.validation_rollout_rmse;
+    const bool keep_observer = choice.KeepsObserver();
     OmniTrainSummary& kept = keep_observer ? observer_summary : tracker_summary;
-    kept.rollout_rmse_tracker = t;
-    kept.rollout_rmse_observer = o;
+    kept.rollout_rmse_tracker = choice.rollout_rmse_tracker;
+    kept.rollout_rmse_observer = choice.rollout_rmse_observer;
     kept.seconds = tracker_summary.seconds + observer_summary.seconds;
     if (summary) *summary = kept;
     return keep_observer ? observer : tracker;

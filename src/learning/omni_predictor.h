@@ -217,6 +217,11 @@ struct OmniTrainSummary {
   // A residual predictor whose nominal state was chosen (OmniTrainOptions::
   // choose_nominal_state): each state's held-out 1 s rollout RMSE (m; 0 where not tried).
   double rollout_rmse_observer = 0, rollout_rmse_tracker = 0;
+  // Whether those keep the observer: both rolled out, the observer nearer (a tie, or a
+  // state without rollouts, keeps the tracker).
+  bool KeepsObserver() const {
+    return rollout_rmse_observer > 0 && rollout_rmse_tracker > 0 && rollout_rmse_observer < rollout_rmse_tracker;
+  }
   double seconds = 0;          // wall time of the fit
   std::string mlp_report;
   std::string BriefReport() const;

@@ -26,8 +26,7 @@ NominalOmniTrack::NominalOmniTrack(const OmniModel& model, const std::string& en
   timing.physics_substeps = substeps > 0 ? substeps : DefaultPhysicsSubsteps(frame_rate);
   FieldModel field;
   field.walls = false;  // the robot's own motion only: the field is not part of the correction
-  auto backend = std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(engine, {model}, field),
-                                                        std::vector<OmniModel>{model}, timing);
+  auto backend = MakeNewtonianOmniBackend(engine, {model}, field, timing);
   if (state == OmniReplayState::kObserver) {
     // The track is handed the commands that act (after the model's delay), one frame at a
     // time: the filter's own delay line is not used (OmniObserver::PredictFrame).

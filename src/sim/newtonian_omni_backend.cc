@@ -14,6 +14,12 @@ namespace {
 constexpr double kSquaresBelow = 1 - 1e-6;
 }  // namespace
 
+std::unique_ptr<NewtonianOmniBackend> MakeNewtonianOmniBackend(const std::string& engine,
+                                                               const std::vector<OmniModel>& robots,
+                                                               const FieldModel& field, const FrameTiming& timing) {
+  return std::make_unique<NewtonianOmniBackend>(MakeOmniEngine(engine, robots, field), robots, timing);
+}
+
 int DefaultPhysicsSubsteps(double frame_rate) {
   return std::max(1, static_cast<int>(std::ceil(300.0 / frame_rate - 1e-9)));
 }

@@ -69,4 +69,10 @@ class NewtonianOmniBackend final : public OmniBackend {
   FrameTiming timing_;
 };
 
+// The Newtonian backend of `robots` on engine `engine` (analytic, ode, bullet:
+// MakeOmniEngine, which throws InputError for another or one not built in), in `field`.
+std::unique_ptr<NewtonianOmniBackend> MakeNewtonianOmniBackend(const std::string& engine,
+                                                               const std::vector<OmniModel>& robots,
+                                                               const FieldModel& field, const FrameTiming& timing);
+
 }  // namespace twinsim
