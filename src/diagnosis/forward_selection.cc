@@ -26,6 +26,11 @@ constexpr double kStrongReduction = 0.25;
 constexpr double kBlockChanged = 1e-6;
 constexpr int kWhitenessLags = 20;
 constexpr int kCrossCorrelationsShown = 3;
+// A learned yardstick is taken as trained while it predicts the test rows at most this
+// share worse than the nominal model alone: a correction that learned nothing (its
+// ridge kept the physics, or fitted the fit rows' noise) is a yardstick that found
+// nothing predictable; one far worse is broken (below).
+constexpr double kYardstickTolerance = 0.1;
 
 // Row by row, how much `after` is below `before` (the rows of both in the same order).
 std::vector<double> Gains(const std::vector<double>& before, const std::vector<double>& after) {
@@ -716,9 +721,9 @@ void ReportSelection(const DiagnosisReportHeader& header, const DiagnosisProblem
   y.available = !repaired.learned.empty();
   y.nominal = ChannelGap(problem, nominal.learned);
   y.repaired = ChannelGap(problem, repaired.learned);
-  // A learned correction that predicts the test rows worse than the nominal model alone
-  // learned nothing it can stand for (on EMPS: 345.8 against 46.96): not trained.
-  if (y.available && std::isfinite(y.nominal) && y.nominal > report->gap_before) {
+  // A learned correction that predicts the test rows clearly worse than the nominal model
+  // alone learned nothing it can stand for (on EMPS: 345.8 against 46.96): not trained.
+  if (y.available && std::isfinite(y.nominal) && y.nominal > (1 + kYardstickTolerance) * report->gap_before) {
     y.available = false;
     y.learner += ", which predicts the test rows worse than the nominal model alone (" + FormatParameter(y.nominal) +
                  " against " + FormatParameter(report->gap_before) + "): counted as not trained";

@@ -588,6 +588,7 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
   train.horizon = 1;
   train.residual = true;
   train.nominal_engine = backend;
+  train.choose_nominal_state = true;  // as train --residual chooses: the hybrid users get
   std::vector<OmniLog> logs;
   for (const OmniLogData& d : data) {
     logs.push_back(*d.log);
@@ -598,7 +599,7 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
     predictor = std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, logs, train, &summary));
     *learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
                "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
-               " windows of fit rows";
+               " windows of fit rows; " + summary.StateChoice();
   } catch (const std::runtime_error& e) {  // InputError (too few windows) or CheckFailed (its track diverged)
     *learner = std::string("no learned residual: ") + e.what();
   }
@@ -656,13 +657,15 @@ TestResiduals OmniProblem::TestRowResiduals(const std::vector<TrialEffect>& effe
     const OmniLogData& d = data_[li];
     const ReplayResidual r = Residual(model, d, 1, selection_horizon_);
     const ReplayResidual& l = learned[li];
-    // The learned backend starts from its own tracker's state, the physics here from the
-    // observer's; the yardstick is the learned correction (the learned prediction minus
-    // the physics' from the same tracker state) added to the observer's prediction:
-    // e = e_observer + e_learned - e_tracker. Compared as they come, a noise-free plant's
-    // tracker, whose velocity is the model's own, beat the observer's noisy estimate and
-    // passed for physics the model lacks.
-    const ReplayResidual t = predictor ? Residual(model, d, 1, selection_horizon_, kTrackerState) : ReplayResidual{};
+    // The learned backend starts from its own track's state (the tracker's or the
+    // observer's, as training chose), the physics here from the observer's; the yardstick
+    // is the learned correction (the learned prediction minus the physics' from the same
+    // track's state) added to the observer's prediction: e = e_observer + e_learned -
+    // e_track (on the observer's track, e_learned itself). Compared as they come, a
+    // noise-free plant's tracker, whose velocity is the model's own, beat the observer's
+    // noisy estimate and passed for physics the model lacks.
+    const OmniReplayState track = predictor ? predictor->info().nominal_state : kDiagnosisState;
+    const ReplayResidual t = track == kDiagnosisState ? r : Residual(model, d, 1, selection_horizon_, track);
     std::size_t m = 0, n = 0;  // walk l.rows and t.rows alongside
     for (std::size_t k = 0; k < r.rows.size(); ++k) {
       const std::size_t i = r.rows[k];

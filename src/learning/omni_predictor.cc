@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -277,12 +279,23 @@ std::string OmniTrainSummary::BriefReport() const {
         s << ridge[j];
     }
   }
-  if (rollout_rmse_observer > 0 || rollout_rmse_tracker > 0) {
-    s << "; the model carried by its " << (KeepsObserver() ? "observer" : "tracker")
-      << " (held-out 1 s rollouts " << rollout_rmse_observer * 1000 << " mm from the observer's state, "
+  if (chosen_state) s << "; " << StateChoice();
+  if (!mlp_report.empty()) s << "; " << mlp_report;
+  return s.str();
+}
+
+std::string OmniTrainSummary::StateChoice() const {
+  if (!chosen_state) return "";
+  std::ostringstream s;
+  s << "the model carried by its " << OmniReplayStateName(kept_state);
+  if (!untrained_state.empty()) {
+    s << " (" << untrained_state << ")";
+  } else if (rollout_rmse_observer == 0 && rollout_rmse_tracker == 0) {
+    s << " (no held-out 1 s rollout to choose by)";
+  } else {
+    s << " (held-out 1 s rollouts " << rollout_rmse_observer * 1000 << " mm from the observer's state, "
       << rollout_rmse_tracker * 1000 << " mm from the tracker's)";
   }
-  if (!mlp_report.empty()) s << "; " << mlp_report;
   return s.str();
 }
 
@@ -651,31 +664,60 @@ double RolloutRmse(const OmniPredictor& predictor, const std::vector<SplitLog>& 
 
 }  // namespace
 
+namespace {
+
+// A residual predictor on both tracks, each trained as if asked for; the one whose
+// held-out rollouts come nearer is kept (the tracker where they tie, or where neither
+// could roll out). Where one track cannot be trained (its filter diverged, or too few
+// windows), the other is kept and the summary says why; where neither can, the tracker's
+// error is thrown.
+OmniPredictor TrainChoosingNominalState(const OmniModel& model, const std::vector<OmniLog>& logs,
+                                        const OmniTrainOptions& options, OmniTrainSummary* summary,
+                                        const std::function<void(int, int, double)>& progress) {
+  OmniTrainOptions one = options;
+  one.choose_nominal_state = false;
+  std::optional<OmniPredictor> trained[2];
+  OmniTrainSummary summaries[2];
+  std::exception_ptr failure[2];
+  std::string why[2];
+  const OmniReplayState states[2] = {OmniReplayState::kTracker, OmniReplayState::kObserver};
+  for (int k = 0; k < 2; ++k) {
+    one.nominal_state = states[k];
+    try {
+      trained[k].emplace(TrainOmniPredictor(model, logs, one, &summaries[k], progress));
+    } catch (const std::runtime_error& e) {  // InputError (too few windows) or CheckFailed (its track diverged)
+      failure[k] = std::current_exception();
+      why[k] = e.what();
+    }
+  }
+  if (!trained[0] && !trained[1]) std::rethrow_exception(failure[0]);
+  OmniTrainSummary choice;
+  choice.rollout_rmse_tracker = summaries[0].validation_rollout_rmse;
+  choice.rollout_rmse_observer = summaries[1].validation_rollout_rmse;
+  const int keep = !trained[0] ? 1 : !trained[1] ? 0 : choice.KeepsObserver() ? 1 : 0;
+  OmniTrainSummary& kept = summaries[keep];
+  kept.rollout_rmse_tracker = choice.rollout_rmse_tracker;
+  kept.rollout_rmse_observer = choice.rollout_rmse_observer;
+  kept.chosen_state = true;
+  kept.kept_state = states[keep];
+  if (!trained[1 - keep]) {
+    kept.untrained_state = std::string("the ") + OmniReplayStateName(states[1 - keep]) + "'s track could not be trained: " +
+                           why[1 - keep];
+  }
+  kept.seconds = summaries[0].seconds + summaries[1].seconds;
+  if (summary) *summary = kept;
+  return std::move(*trained[keep]);
+}
+
+}  // namespace
+
 OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniLog>& logs,
                                  const OmniTrainOptions& options, OmniTrainSummary* summary,
                                  const std::function<void(int, int, double)>& progress) {
   if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
   if (logs.empty()) throw InputError("no logs to train on");
   if (options.residual && options.choose_nominal_state) {
-    // Both tracks, each trained as if asked for; the one whose held-out rollouts come
-    // nearer is kept (the tracker where they tie, or where neither could roll out).
-    OmniTrainOptions one = options;
-    one.choose_nominal_state = false;
-    one.nominal_state = OmniReplayState::kTracker;
-    OmniTrainSummary tracker_summary, observer_summary;
-    OmniPredictor tracker = TrainOmniPredictor(model, logs, one, &tracker_summary, progress);
-    one.nominal_state = OmniReplayState::kObserver;
-    OmniPredictor observer = TrainOmniPredictor(model, logs, one, &observer_summary, progress);
-    OmniTrainSummary choice;
-    choice.rollout_rmse_tracker = tracker_summary.validation_rollout_rmse;
-    choice.rollout_rmse_observer = observer_summary.validation_rollout_rmse;
-    const bool keep_observer = choice.KeepsObserver();
-    OmniTrainSummary& kept = keep_observer ? observer_summary : tracker_summary;
-    kept.rollout_rmse_tracker = choice.rollout_rmse_tracker;
-    kept.rollout_rmse_observer = choice.rollout_rmse_observer;
-    kept.seconds = tracker_summary.seconds + observer_summary.seconds;
-    if (summary) *summary = kept;
-    return keep_observer ? observer : tracker;
+    return TrainChoosingNominalState(model, logs, options, summary, progress);
   }
   std::unique_ptr<NominalOmniTrack> track;
   OmniPredictorInfo info = StartInfo(model, logs, options, &track);

@@ -215,13 +215,20 @@ struct OmniTrainSummary {
   Eigen::Vector3d ridge = Eigen::Vector3d::Zero();
   std::string ridge_folds;
   // A residual predictor whose nominal state was chosen (OmniTrainOptions::
-  // choose_nominal_state): each state's held-out 1 s rollout RMSE (m; 0 where not tried).
+  // choose_nominal_state): each state's held-out 1 s rollout RMSE (m; 0 where not tried),
+  // the state kept, and why a state could not be trained (empty: both were).
   double rollout_rmse_observer = 0, rollout_rmse_tracker = 0;
-  // Whether those keep the observer: both rolled out, the observer nearer (a tie, or a
-  // state without rollouts, keeps the tracker).
+  bool chosen_state = false;
+  OmniReplayState kept_state = OmniReplayState::kTracker;
+  std::string untrained_state;
+  // Whether those rollouts keep the observer: both rolled out, the observer nearer (a
+  // tie, or a state without rollouts, keeps the tracker).
   bool KeepsObserver() const {
     return rollout_rmse_observer > 0 && rollout_rmse_tracker > 0 && rollout_rmse_observer < rollout_rmse_tracker;
   }
+  // The choice in words ("the model carried by its observer (held-out 1 s rollouts ...)");
+  // empty where none was made.
+  std::string StateChoice() const;
   double seconds = 0;          // wall time of the fit
   std::string mlp_report;
   std::string BriefReport() const;
