@@ -76,6 +76,38 @@ struct OmniEffects {
 // The per-axis keys of velocity_scale and motor_lag, axis 0 (forward), 1 (sideways), 2 (turn).
 inline constexpr const char* kOmniAxisNames[3] = {"forward", "sideways", "turn"};
 
+// One number of an omni effect: its key (in a model file's effect block, report.json and
+// SetOmniEffect), its valid range and the value that leaves it off. The model file's
+// reader, SetOmniEffect, ListOmniEffects, OmniEffects::Active and the model writer all
+// read these, so that a key, a range or a unit is written once (issue 66).
+struct OmniEffectField {
+  const char* key;
+  double lower, upper;  // valid: lower <= v <= upper; 0 < v <= upper where `positive`
+  bool positive;        // a limit: 0 is no limit, so the file gives a positive one
+  double off;           // the value that leaves it off, taken where the key is not given
+  bool modifier;        // shapes the effect without switching it on (motor_lag's braking)
+  bool binary;          // a choice, 0 or 1 (read from a file as an integer)
+  double (*get)(const OmniEffects&);
+  void (*set)(OmniEffects*, double);
+};
+
+// An effect of the vocabulary and its numbers.
+struct OmniEffectSpec {
+  const char* name;
+  const char* unit;   // of its numbers, in the model file's comment
+  const char* needs;  // where it has several switching keys and none is given: which it needs
+  const char* missing_key;  // the key a model file that gives none of them is told of
+  std::vector<OmniEffectField> fields;
+
+  // True when one of its switching numbers is not off in `effects`.
+  bool On(const OmniEffects& effects) const;
+};
+
+// The vocabulary (CONTRACT.md), in its order.
+const std::vector<OmniEffectSpec>& OmniEffectSpecs();
+// The effect called `name`; null for none.
+const OmniEffectSpec* FindOmniEffectSpec(const std::string& name);
+
 // The omni effect vocabulary (CONTRACT.md), in its order.
 const std::vector<std::string>& OmniEffectNames();
 

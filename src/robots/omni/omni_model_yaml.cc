@@ -7,6 +7,7 @@
 #include "core/math_constants.h"
 #include "io/yaml_extends.h"
 #include "io/yaml_reader.h"
+#include "robots/omni/omni_effects.h"
 #include "robots/omni/omni_model.h"
 
 namespace twinsim {
@@ -182,46 +183,33 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
   }
 
   if (top.Has("effects")) {
+    // Every effect's keys and ranges from the vocabulary's table (omni_effects.h); a key
+    // the file leaves out keeps its value (from `extends:`, or off).
     YamlMap e(top.Child("effects"), path, "effects", &errors);
-    OmniEffects& fx = model.effects;
-    auto effect = [&](const char* name, auto&& read) {
-      if (!e.Has(name)) return;
-      YamlMap m(e.Child(name), path, std::string("effects.") + name, &errors);
-      read(m);
+    for (const OmniEffectSpec& spec : OmniEffectSpecs()) {
+      if (!e.Has(spec.name)) continue;
+      YamlMap m(e.Child(spec.name), path, std::string("effects.") + spec.name, &errors);
+      auto read = [&](const OmniEffectField& f) {
+        if (f.binary) {
+          int v = static_cast<int>(f.get(model.effects));
+          if (m.Get(f.key, &v, InRange(0, 1))) f.set(&model.effects, v);
+        } else {
+          double v = f.get(model.effects);
+          if (m.Get(f.key, &v, f.positive ? Positive(f.upper) : InRange(f.lower, f.upper))) f.set(&model.effects, v);
+        }
+      };
+      bool given = false;  // one of the keys that switch it on
+      for (const OmniEffectField& f : spec.fields) {
+        if (f.modifier) continue;
+        given = given || m.Has(f.key);
+        read(f);
+      }
+      if (!given) m.Missing(spec.missing_key);
+      for (const OmniEffectField& f : spec.fields) {
+        if (f.modifier) read(f);
+      }
       m.Finish();
-    };
-    effect("time_delay", [&](YamlMap& m) { m.Require("delay", &fx.time_delay, InRange(0, 1)); });
-    effect("velocity_saturation", [&](YamlMap& m) {
-      m.Get("v_max", &fx.v_max, Positive(100));
-      m.Get("w_max", &fx.w_max, Positive(1000));
-      if (!m.Has("v_max") && !m.Has("w_max")) m.Missing("v_max");
-    });
-    effect("motor_lag", [&](YamlMap& m) {
-      m.Get("time_constant", &fx.motor_lag, InRange(0, 10));
-      for (int a = 0; a < 3; ++a) m.Get(kOmniAxisNames[a], &fx.axis_lag[static_cast<std::size_t>(a)], InRange(0, 10));
-      if (!m.Has("time_constant") && !m.Has("forward") && !m.Has("sideways") && !m.Has("turn")) m.Missing("time_constant");
-      m.Get("braking", &fx.lag_braking, InRange(0.05, 20));
-      int field_frame = 0;
-      m.Get("field_frame", &field_frame, InRange(0, 1));
-      fx.lag_field_frame = field_frame == 1;
-    });
-    effect("traction_limit", [&](YamlMap& m) { m.Require("a_max", &fx.a_max, Positive(1e4)); });
-    effect("velocity_scale", [&](YamlMap& m) {
-      m.Get("scale", &fx.velocity_scale, InRange(0.2, 5));
-      for (int a = 0; a < 3; ++a) m.Get(kOmniAxisNames[a], &fx.axis_scale[static_cast<std::size_t>(a)], InRange(0.02, 5));
-      if (!m.Has("scale") && !m.Has("forward") && !m.Has("sideways") && !m.Has("turn")) m.Missing("scale");
-    });
-    effect("rotation_drift", [&](YamlMap& m) { m.Require("rate", &fx.rotation_drift, InRange(-10, 10)); });
-    effect("turn_coupling", [&](YamlMap& m) {
-      m.Get("forward", &fx.turn_per_forward, InRange(-20, 20));
-      m.Get("sideways", &fx.turn_per_sideways, InRange(-20, 20));
-      if (!m.Has("forward") && !m.Has("sideways")) m.Missing("sideways");
-    });
-    effect("cross_coupling", [&](YamlMap& m) {
-      m.Get("sideways_per_forward", &fx.sideways_per_forward, InRange(-2, 2));
-      m.Get("forward_per_sideways", &fx.forward_per_sideways, InRange(-2, 2));
-      if (!m.Has("sideways_per_forward") && !m.Has("forward_per_sideways")) m.Missing("sideways_per_forward");
-    });
+    }
     e.Finish();
   }
 

@@ -12,6 +12,7 @@
 #include "core/math_constants.h"
 #include "io/atomic_file.h"
 #include "io/yaml_number.h"
+#include "robots/omni/omni_effects.h"
 
 namespace twinsim {
 namespace {
@@ -178,17 +179,14 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
     }
   }
 
-  // Only what is on, with the parameters ListOmniEffects gives (the reader's keys).
-  static const std::map<std::string, const char*> kUnits = {
-      {"time_delay", "s"},          {"velocity_saturation", "m/s, rad/s"}, {"traction_limit", "m/s^2"},
-      {"motor_lag", "s"},           {"velocity_scale", "times as fast"},   {"rotation_drift", "rad per metre"},
-      {"turn_coupling", "rad/s per m/s"}, {"cross_coupling", "m/s per m/s"}};
+  // Only what is on, with the parameters ListOmniEffects gives (the reader's keys) and
+  // the vocabulary's units.
   const auto effects = ListOmniEffects(model.effects);
   if (!effects.empty()) s << "effects:\n";
   for (const auto& [name, parameters] : effects) {
     std::string values;
     for (const auto& [key, value] : parameters) values += (values.empty() ? "" : ", ") + key + ": " + YamlNumber(value);
-    line("  " + name, "{" + values + "}", kUnits.at(name), 46);
+    line("  " + name, "{" + values + "}", FindOmniEffectSpec(name)->unit, 46);
   }
   return s.str();
 }

@@ -6,6 +6,8 @@
 
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
+#include "io/yaml_number.h"
+#include "robots/omni/omni_model_yaml_writer.h"
 #include "scene/command_source.h"
 #include "sim/omni_simulation.h"
 #include "test_util.h"
@@ -175,6 +177,50 @@ TEST(OmniEffects, MotorLagStructureIsChecked) {
   EXPECT_EQ(e.lag_braking, 0.4);
   EXPECT_TRUE(e.lag_field_frame);
   EXPECT_EQ(ListOmniEffects(e).front().second, (std::map<std::string, double>{{"braking", 0.4}, {"field_frame", 1}, {"forward", 0.1}}));
+}
+
+// The vocabulary's one table (OmniEffectSpecs) is what the model file's reader,
+// SetOmniEffect, ListOmniEffects and the writer all go by: every number of every effect,
+// inside its range, reads from a file as SetOmniEffect sets it, lists back as given and
+// survives the writer; just beyond its range both refuse it.
+TEST(OmniEffects, EveryNumberOfTheTableReadsSetsListsAndWritesAlike) {
+  for (const OmniEffectSpec& spec : OmniEffectSpecs()) {
+    const OmniEffectField* first = nullptr;  // a number that switches the effect on
+    for (const OmniEffectField& f : spec.fields) {
+      if (!f.modifier && !first) first = &f;
+    }
+    ASSERT_NE(first, nullptr) << spec.name;
+    for (const OmniEffectField& f : spec.fields) {
+      SCOPED_TRACE(std::string(spec.name) + "." + f.key);
+      const double inside = f.binary ? 1 : f.positive ? 0.5 * f.upper : f.lower + 0.3 * (f.upper - f.lower);
+      ASSERT_NE(inside, f.off);
+      std::map<std::string, double> given = {{f.key, inside}};
+      if (f.modifier) given[first->key] = first->positive ? 0.5 * first->upper : first->lower + 0.3 * (first->upper - first->lower);
+      OmniEffects set;
+      SetOmniEffect(spec.name, given, &set);
+      ASSERT_EQ(ListOmniEffects(set).size(), 1u);
+      EXPECT_EQ(ListOmniEffects(set).front().first, spec.name);
+      EXPECT_EQ(ListOmniEffects(set).front().second, given);
+      std::string block;
+      for (const auto& [key, value] : given) block += (block.empty() ? "" : ", ") + key + ": " + YamlNumber(value);
+      const OmniModel read = With(std::string(spec.name) + ": {" + block + "}");
+      EXPECT_EQ(ListOmniEffects(read.effects), ListOmniEffects(set));
+      const OmniModel written = LoadOmniModelFromString(FormatOmniModelYaml(read), "written.yaml");
+      EXPECT_EQ(ListOmniEffects(written.effects), ListOmniEffects(set));
+      // Beyond the range: above it, and at or below its lower end.
+      const double beyond = f.binary ? 2 : f.upper + 1;
+      const double below = f.positive ? 0 : f.lower - 1;
+      for (double bad : {beyond, below}) {
+        std::map<std::string, double> wrong = given;
+        wrong[f.key] = bad;
+        OmniEffects e;
+        EXPECT_THROW(SetOmniEffect(spec.name, wrong, &e), InputError) << bad;
+        std::string text;
+        for (const auto& [key, value] : wrong) text += (text.empty() ? "" : ", ") + key + ": " + YamlNumber(value);
+        EXPECT_THROW(With(std::string(spec.name) + ": {" + text + "}"), InputError) << bad;
+      }
+    }
+  }
 }
 
 TEST(OmniEffects, UnknownEffectOrParameterIsReported) {
