@@ -995,6 +995,30 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
   }
 }
 
+// A note where the calibration (on the validation logs where `validated`, else the
+// held-out blocks) had too few rows at a horizon to check the intervals:
+// short runs (the Robotino's 10 s) leave no held-out block long enough for a prediction
+// 2 s ahead, and a user would otherwise read the intervals there as checked (on the
+// Robotino's validation runs the heading's 90 % intervals held 20 % at 63 frames).
+void NoteUncheckedIntervals(bool validated, OmniIdentificationReport* report) {
+  constexpr int kMinRows = 20;  // the safeguard's least per horizon
+  std::string horizons;
+  for (const OmniCalibration& c : report->calibration) {
+    if (c.rows >= kMinRows) continue;
+    char label[64];
+    std::snprintf(label, sizeof label, "%d frames (%.2g s)", c.frames, c.seconds);
+    horizons += (horizons.empty() ? "" : ", ") + std::string(label);
+  }
+  if (horizons.empty()) return;
+  char where[160];
+  std::snprintf(where, sizeof where, validated ? "the validation logs hold fewer than %d predictions that long"
+                                               : "fewer than %d predictions that long lie within a held-out block (%.3g s)",
+                kMinRows, report->block_seconds);
+  report->notes.push_back("the predictive intervals " + horizons + " ahead are not checked: " + where +
+                          "; check them on a log not fitted (--validate LOG, or compare) or scale them on left-out logs "
+                          "(--safeguard logs)");
+}
+
 // The driving noise for predictions ahead and the simulation, then its calibration.
 void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificationOptions& options,
                    const std::function<void(int, const std::string&)>& say, OmniModel* model,
@@ -1020,6 +1044,11 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance,
                                           &report->calibration_by_turn_rate);
+  // (Under --safeguard logs the left-out logs check them.)
+  if (options.safeguard != OmniSafeguard::kLogs) {
+    NoteUncheckedIntervals(std::any_of(segments.begin(), segments.end(), [](const Segment& s) { return s.validation; }),
+                           report);
+  }
   // The scale within the fit's reach: the safeguard of "blocks", the base of "logs".
   if (options.safeguard != OmniSafeguard::kOff) {
     say(6, "intervals' safeguard");
