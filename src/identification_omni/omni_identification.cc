@@ -1000,7 +1000,7 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
 // short runs (the Robotino's 10 s) leave no held-out block long enough for a prediction
 // 2 s ahead, and a user would otherwise read the intervals there as checked (on the
 // Robotino's validation runs the heading's 90 % intervals held 20 % at 63 frames).
-void NoteUncheckedIntervals(bool validated, OmniIdentificationReport* report) {
+void NoteUncheckedIntervals(bool validated, int fit_logs, OmniIdentificationReport* report) {
   constexpr int kMinRows = 20;  // the safeguard's least per horizon
   std::string horizons;
   for (const OmniCalibration& c : report->calibration) {
@@ -1014,9 +1014,10 @@ void NoteUncheckedIntervals(bool validated, OmniIdentificationReport* report) {
   std::snprintf(where, sizeof where, validated ? "the validation logs hold fewer than %d predictions that long"
                                                : "fewer than %d predictions that long lie within a held-out block (%.3g s)",
                 kMinRows, report->block_seconds);
-  report->notes.push_back("the predictive intervals " + horizons + " ahead are not checked: " + where +
-                          "; check them on a log not fitted (--validate LOG, or compare) or scale them on left-out logs "
-                          "(--safeguard logs)");
+  const std::string check = validated ? "check them on longer logs not fitted (--validate LOG, or compare)"
+                                       : "check them on a log not fitted (--validate LOG, or compare)";
+  report->notes.push_back("the predictive intervals " + horizons + " ahead are not checked: " + where + "; " + check +
+                          (fit_logs > 1 ? " or scale them on left-out logs (--safeguard logs)" : ""));
 }
 
 // The driving noise for predictions ahead and the simulation, then its calibration.
@@ -1046,8 +1047,13 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
                                           &report->calibration_by_turn_rate);
   // (Under --safeguard logs the left-out logs check them.)
   if (options.safeguard != OmniSafeguard::kLogs) {
-    NoteUncheckedIntervals(std::any_of(segments.begin(), segments.end(), [](const Segment& s) { return s.validation; }),
-                           report);
+    std::set<int> fit_logs;  // a segment is a piece of one log: its blocks' numbers say which
+    bool validated = false;
+    for (const Segment& s : segments) {
+      validated = validated || s.validation;
+      if (!s.validation && !s.block.empty()) fit_logs.insert(s.block.front() / kBlocksPerLog);
+    }
+    NoteUncheckedIntervals(validated, static_cast<int>(fit_logs.size()), report);
   }
   // The scale within the fit's reach: the safeguard of "blocks", the base of "logs".
   if (options.safeguard != OmniSafeguard::kOff) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 
@@ -137,9 +138,19 @@ TEST(OmniDiagnosis, TheYardstickIsTheHybridTrainKeepsAndFindsNothingOnAWellModel
   SCOPED_TRACE(FormatDiagnosisTable(report));
   EXPECT_TRUE(report.effects.empty());
   ASSERT_TRUE(report.yardstick.available) << report.yardstick.learner;
-  EXPECT_NE(report.yardstick.learner.find("mm from the observer's state"), std::string::npos);
-  EXPECT_NE(report.yardstick.learner.find("mm from the tracker's"), std::string::npos);
-  EXPECT_LE(report.yardstick.nominal, 1.1 * report.gap_before);
+  // The kept track is the one whose held-out rollouts came nearer (the tracker on a tie).
+  const std::string& learner = report.yardstick.learner;
+  const std::size_t at = learner.find("held-out 1 s rollouts ");
+  ASSERT_NE(at, std::string::npos) << learner;
+  double observer = 0, tracker = 0;
+  ASSERT_EQ(std::sscanf(learner.c_str() + at, "held-out 1 s rollouts %lf mm from the observer's state, %lf", &observer,
+                        &tracker),
+            2)
+      << learner;
+  EXPECT_NE(learner.find(observer < tracker ? "carried by its observer" : "carried by its tracker"), std::string::npos)
+      << learner;
+  // It learned nothing: within 5 % of the physics (measured 2.3 % worse).
+  EXPECT_LE(report.yardstick.nominal, 1.05 * report.gap_before);
   for (const ChannelAdequacy& a : report.adequacy) EXPECT_FALSE(a.learned_significant) << a.channel;
   const std::string verdict = DiagnosisVerdict(report);
   EXPECT_NE(verdict.find("a learned residual finds nothing predictable"), std::string::npos) << verdict;

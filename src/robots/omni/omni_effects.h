@@ -76,10 +76,10 @@ struct OmniEffects {
 // The per-axis keys of velocity_scale and motor_lag, axis 0 (forward), 1 (sideways), 2 (turn).
 inline constexpr const char* kOmniAxisNames[3] = {"forward", "sideways", "turn"};
 
-// One number of an omni effect: its key (in a model file's effect block, report.json and
-// SetOmniEffect), its valid range and the value that leaves it off. The model file's
-// reader, SetOmniEffect, ListOmniEffects, OmniEffects::Active and the model writer all
-// read these, so that a key, a range or a unit is written once (issue 66).
+// One number of an omni effect: its key (in a model file's effect block and in
+// SetOmniEffect's parameters), its valid range and the value that leaves it off. The model
+// file's reader, SetOmniEffect, ListOmniEffects, OmniEffects::Active and the model writer
+// all read these, so that a key, a range or a unit is written once (issue 66).
 struct OmniEffectField {
   const char* key;
   double lower, upper;  // valid: lower <= v <= upper; 0 < v <= upper where `positive`

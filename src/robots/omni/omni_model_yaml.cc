@@ -184,7 +184,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("effects")) {
     // Every effect's keys and ranges from the vocabulary's table (omni_effects.h); a key
-    // the file leaves out keeps its value (from `extends:`, or off).
+    // the file leaves out stays off (`extends:` is merged into the YAML before this).
     YamlMap e(top.Child("effects"), path, "effects", &errors);
     for (const OmniEffectSpec& spec : OmniEffectSpecs()) {
       if (!e.Has(spec.name)) continue;

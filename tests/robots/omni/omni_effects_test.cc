@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iterator>
+#include <map>
 
 #include "backends/omni_backend_factory.h"
 #include "core/error.h"
@@ -219,6 +221,77 @@ TEST(OmniEffects, EveryNumberOfTheTableReadsSetsListsAndWritesAlike) {
         for (const auto& [key, value] : wrong) text += (text.empty() ? "" : ", ") + key + ": " + YamlNumber(value);
         EXPECT_THROW(With(std::string(spec.name) + ": {" + text + "}"), InputError) << bad;
       }
+    }
+  }
+}
+
+// The table itself, against the keys, ranges, off values and units each place held by
+// hand before it (issue 66), and the contract's names in its order: an edit to the table
+// that moves any of them fails here, where the test above, built from the table, would
+// follow it.
+TEST(OmniEffects, TheTableHoldsTheVocabularysKeysRangesAndUnits) {
+  struct Row {
+    const char* effect;
+    const char* key;
+    double lower, upper;
+    bool positive;
+    double off;
+  };
+  const Row rows[] = {
+      {"time_delay", "delay", 0, 1, false, 0},
+      {"velocity_saturation", "v_max", 0, 100, true, 0},
+      {"velocity_saturation", "w_max", 0, 1000, true, 0},
+      {"traction_limit", "a_max", 0, 1e4, true, 0},
+      {"motor_lag", "time_constant", 0, 10, false, 0},
+      {"motor_lag", "forward", 0, 10, false, 0},
+      {"motor_lag", "sideways", 0, 10, false, 0},
+      {"motor_lag", "turn", 0, 10, false, 0},
+      {"motor_lag", "braking", 0.05, 20, false, 1},
+      {"motor_lag", "field_frame", 0, 1, false, 0},
+      {"velocity_scale", "scale", 0.2, 5, false, 1},
+      {"velocity_scale", "forward", 0.02, 5, false, 1},
+      {"velocity_scale", "sideways", 0.02, 5, false, 1},
+      {"velocity_scale", "turn", 0.02, 5, false, 1},
+      {"rotation_drift", "rate", -10, 10, false, 0},
+      {"turn_coupling", "forward", -20, 20, false, 0},
+      {"turn_coupling", "sideways", -20, 20, false, 0},
+      {"cross_coupling", "sideways_per_forward", -2, 2, false, 0},
+      {"cross_coupling", "forward_per_sideways", -2, 2, false, 0},
+  };
+  std::size_t k = 0;
+  for (const OmniEffectSpec& spec : OmniEffectSpecs()) {
+    for (const OmniEffectField& f : spec.fields) {
+      ASSERT_LT(k, std::size(rows));
+      const Row& r = rows[k++];
+      SCOPED_TRACE(std::string(r.effect) + "." + r.key);
+      EXPECT_STREQ(spec.name, r.effect);
+      EXPECT_STREQ(f.key, r.key);
+      EXPECT_EQ(f.lower, r.lower);
+      EXPECT_EQ(f.upper, r.upper);
+      EXPECT_EQ(f.positive, r.positive);
+      EXPECT_EQ(f.off, r.off);
+    }
+  }
+  EXPECT_EQ(k, std::size(rows));
+  EXPECT_EQ(OmniEffectNames(), (std::vector<std::string>{"time_delay", "velocity_saturation", "traction_limit", "motor_lag",
+                                                         "velocity_scale", "rotation_drift", "turn_coupling",
+                                                         "cross_coupling"}));
+  const std::map<std::string, std::string> units = {
+      {"time_delay", "s"},         {"velocity_saturation", "m/s, rad/s"}, {"traction_limit", "m/s^2"},
+      {"motor_lag", "s"},          {"velocity_scale", "times as fast"},   {"rotation_drift", "rad per metre"},
+      {"turn_coupling", "rad/s per m/s"}, {"cross_coupling", "m/s per m/s"}};
+  for (const OmniEffectSpec& spec : OmniEffectSpecs()) EXPECT_EQ(spec.unit, units.at(spec.name)) << spec.name;
+  // What a block that switches nothing on is told, as each effect said it before.
+  for (const auto& [block, message] : std::vector<std::pair<std::string, std::string>>{
+           {"motor_lag: {braking: 2}", "missing required key 'time_constant' in 'effects.motor_lag'"},
+           {"turn_coupling: {}", "missing required key 'sideways' in 'effects.turn_coupling'"},
+           {"velocity_saturation: {}", "missing required key 'v_max' in 'effects.velocity_saturation'"},
+           {"cross_coupling: {}", "missing required key 'sideways_per_forward' in 'effects.cross_coupling'"}}) {
+    try {
+      With(block);
+      ADD_FAILURE() << block;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
     }
   }
 }
