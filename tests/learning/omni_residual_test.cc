@@ -276,6 +276,28 @@ TEST_F(ResidualPredictor, RunsOnItsOwnDeterministicallyAndStaysAtRest) {
 // replay starts. train's choice (both trained, the held-out 1 s rollouts decide) keeps
 // the observer, and on a log it never saw the kept hybrid predicts 1 s ahead as the
 // physics does and better than the tracker's.
+// `auto` keeps the track that can be trained where the other cannot, and says why: an
+// observer whose filter overflows (a process noise no file would give, set here to make
+// it diverge) leaves the tracker's hybrid, not no predictor at all.
+TEST(ResidualPredictorState, WhereOneTrackCannotBeTrainedTheOtherIsKeptAndTheReasonSaid) {
+  const OmniModel plant = testing::Omni4();
+  const OmniLog train = RecordResidualLog(plant, 20, 23, "diverging_train.csv");
+  OmniModel model = plant;
+  model.observer.process_noise = {1e300, 1e300, 1e300};
+  OmniTrainOptions options;
+  options.residual = true;
+  options.nominal_state = OmniReplayState::kObserver;
+  EXPECT_THROW(TrainOmniPredictor(model, {train}, options), std::runtime_error);  // the observer's alone
+  options.choose_nominal_state = true;
+  OmniTrainSummary summary;
+  const OmniPredictor kept = TrainOmniPredictor(model, {train}, options, &summary);
+  EXPECT_EQ(kept.info().nominal_state, OmniReplayState::kTracker);
+  EXPECT_EQ(summary.kept_state, OmniReplayState::kTracker);
+  EXPECT_NE(summary.BriefReport().find("the model carried by its tracker (the observer's track could not be trained: "),
+            std::string::npos)
+      << summary.BriefReport();
+}
+
 TEST(ResidualPredictorState, TheObserversTrackIsKeptWhereThePhysicsIsRightAndTheRobotSlips) {
   OmniModel plant = testing::Omni4();
   plant.driving_noise.sd = {0.05, 0.05, 0.3};
