@@ -1001,10 +1001,9 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
 // 2 s ahead, and a user would otherwise read the intervals there as checked (on the
 // Robotino's validation runs the heading's 90 % intervals held 20 % at 63 frames).
 void NoteUncheckedIntervals(bool validated, int fit_logs, OmniIdentificationReport* report) {
-  constexpr int kMinRows = 20;  // the safeguard's least per horizon
   std::string horizons;
   for (const OmniCalibration& c : report->calibration) {
-    if (c.rows >= kMinRows) continue;
+    if (c.rows >= kSafeguardLeastRows) continue;
     char label[64];
     std::snprintf(label, sizeof label, "%d frames (%.2g s)", c.frames, c.seconds);
     horizons += (horizons.empty() ? "" : ", ") + std::string(label);
@@ -1013,7 +1012,7 @@ void NoteUncheckedIntervals(bool validated, int fit_logs, OmniIdentificationRepo
   char where[160];
   std::snprintf(where, sizeof where, validated ? "the validation logs hold fewer than %d predictions that long"
                                                : "fewer than %d predictions that long lie within a held-out block (%.3g s)",
-                kMinRows, report->block_seconds);
+                kSafeguardLeastRows, report->block_seconds);
   const std::string check = validated ? "check them on longer logs not fitted (--validate LOG, or compare)"
                                        : "check them on a log not fitted (--validate LOG, or compare)";
   report->notes.push_back("the predictive intervals " + horizons + " ahead are not checked: " + where + "; " + check +
@@ -1076,7 +1075,6 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
 OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::vector<OmniLog>& logs,
                                            const OmniIdentificationOptions& options, const OmniIntervalSafeguard& blocks,
                                            const std::function<void(int, const std::string&)>& say) {
-  constexpr int kMinRows = 20;  // per log and horizon
   const OmniNoiseOptions noise_options;
   const std::vector<int> horizons = SafeguardHorizons(noise_options.horizons);
   OmniIdentificationOptions fold = options;
@@ -1102,7 +1100,7 @@ OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::
     for (const OmniSafeguardHorizon& h : blocks.horizons)
       if (h.frames == horizons[q]) base[q] = {h.position, h.heading};
   }
-  OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, noise_options.score_stride, kMinRows, &base);
+  OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, noise_options.score_stride, kSafeguardLeastRows, &base);
   out.on = "left-out logs, a growth over the held-out blocks' scale";
   return out;
 }

@@ -580,7 +580,6 @@ OmniIntervalSafeguard FitIntervalSafeguard(const OmniModel& given, const std::ve
                                            const OmniNoiseOptions& options,
                                            const std::array<OmniCrossedNoise, 2>* crossed) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
-  constexpr int kMinRows = 20;  // per half and horizon
   auto unscaled = [](OmniModel m) {
     m.observer.interval_scale.clear();
     return m;
@@ -598,7 +597,7 @@ OmniIntervalSafeguard FitIntervalSafeguard(const OmniModel& given, const std::ve
     const std::vector<HorizonRows> half = Collect(predictor, stretches, scoring, {Rows::kHeldOutBlocks, &halves[k]});
     for (std::size_t q = 0; q < half.size(); ++q) AppendSafeguardRows(half[q].rows, MeasurementCovariance(predictor), &rows[q][k]);
   }
-  OmniIntervalSafeguard out = SafeguardFromFolds(scoring.horizons, rows, scoring.stride, kMinRows);
+  OmniIntervalSafeguard out = SafeguardFromFolds(scoring.horizons, rows, scoring.stride, kSafeguardLeastRows);
   out.on = "held-out blocks";
   return out;
 }
