@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "analysis/omni_replay.h"
+#include "estimation/omni_observer.h"
 #include "core/error.h"
 #include "core/pattern_search.h"
 
@@ -62,10 +63,16 @@ NoiseCoordinates Clamp(NoiseCoordinates v) {
   return v;
 }
 
-// The predicted rows of `logs` at each horizon (sorted), `predictor` drawing `noise`.
-std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, const OmniPredictor& predictor,
-                                                      const OmniDrivingNoise& noise, const std::vector<OmniLog>& logs,
-                                                      const LearnedNoiseOptions& options, std::vector<int> horizons) {
+// The predicted rows of each of `logs` at each horizon (sorted; rows[log][horizon], in
+// time order), `predictor` drawing `noise` (with its safeguard's scales, if it has any);
+// *stride_used (if given) is the frames between starts.
+std::vector<std::vector<std::vector<PredictiveError>>> SampledRowsByLog(const OmniModel& model,
+                                                                        const OmniPredictor& predictor,
+                                                                        const OmniDrivingNoise& noise,
+                                                                        const std::vector<OmniLog>& logs,
+                                                                        const LearnedNoiseOptions& options,
+                                                                        std::vector<int> horizons,
+                                                                        int* stride_used = nullptr) {
   auto with_noise = std::make_shared<OmniPredictor>(predictor);
   with_noise->SetDrivingNoise(noise);
   // Every stride-th frame after the warm-up, the stride grown to keep to max_starts.
@@ -73,7 +80,9 @@ std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, co
   for (const OmniLog& log : logs)
     if (log.rows.size() >= 2) frames += std::max(0, log.FrameIndex(log.rows.size() - 1) - horizons.back() - kWarmUpFrames);
   const int stride = std::max<long>(options.stride, (frames + options.max_starts - 1) / std::max(1, options.max_starts));
-  std::vector<std::vector<PredictiveError>> rows(horizons.size());
+  if (stride_used) *stride_used = stride;
+  std::vector<std::vector<std::vector<PredictiveError>>> by_log(
+      logs.size(), std::vector<std::vector<PredictiveError>>(horizons.size()));
   for (std::size_t l = 0; l < logs.size(); ++l) {
     const OmniLog& log = logs[l];
     if (log.rows.size() < 2 || log.FrameIndex(log.rows.size() - 1) <= horizons.back() + kWarmUpFrames) continue;
@@ -86,12 +95,26 @@ std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, co
     o.seed = options.seed + 0x9e3779b97f4a7c15ULL * l;  // each log draws its own
     o.stride = stride;
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
-    for (std::size_t q = 0; q < horizons.size(); ++q) {
-      std::vector<PredictiveError> e = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q], {}, horizons[q]);
-      rows[q].insert(rows[q].end(), e.begin(), e.end());
-    }
+    for (std::size_t q = 0; q < horizons.size(); ++q)
+      by_log[l][q] = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q], {}, horizons[q]);
   }
+  return by_log;
+}
+
+// The same, every log's rows pooled per horizon.
+std::vector<std::vector<PredictiveError>> SampledRows(const OmniModel& model, const OmniPredictor& predictor,
+                                                      const OmniDrivingNoise& noise, const std::vector<OmniLog>& logs,
+                                                      const LearnedNoiseOptions& options, const std::vector<int>& horizons) {
+  std::vector<std::vector<PredictiveError>> rows(horizons.size());
+  for (auto& log : SampledRowsByLog(model, predictor, noise, logs, options, horizons))
+    for (std::size_t q = 0; q < horizons.size(); ++q) rows[q].insert(rows[q].end(), log[q].begin(), log[q].end());
   return rows;
+}
+
+// `predictor` without a safeguard: the rollouts as drawn, for the fits.
+OmniPredictor Unscaled(OmniPredictor predictor) {
+  predictor.SetIntervalScale({});
+  return predictor;
 }
 
 double MeanCost(const std::vector<std::vector<PredictiveError>>& rows) {
@@ -135,14 +158,15 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
     throw InputError("a driving noise is fitted for a predictor of one frame ahead, not " +
                      std::to_string(predictor.info().layout.horizon));
   const std::vector<int> horizons = Sorted(options.horizons);
+  const OmniPredictor unscaled = Unscaled(predictor);
   LearnedNoiseFit out;
-  out.start = LearnedDrivingNoise(model, &predictor);
+  out.start = LearnedDrivingNoise(model, &unscaled);
   const int budget = 1 + options.max_evaluations + options.max_evaluations / 2;
   std::vector<const OmniLog*> pointers;
   for (const OmniLog& log : logs) pointers.push_back(&log);
   const OmniTypicalMotion typical = TypicalMotionOf(pointers);
   auto rows_at = [&](const NoiseCoordinates& v) {
-    return SampledRows(model, predictor, FromCoordinates(v, typical), logs, options, horizons);
+    return SampledRows(model, unscaled, FromCoordinates(v, typical), logs, options, horizons);
   };
   std::function<double(const NoiseCoordinates&)> cost = [&](const NoiseCoordinates& v) {
     if (progress) progress(out.evaluations, budget);
@@ -166,6 +190,36 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
   out.noise = FromCoordinates(v, typical);
   out.calibration = CalibrationOf(rows_at(v), horizons, logs.front().frame_period);
   if (progress) progress(budget, budget);
+  return out;
+}
+
+OmniIntervalSafeguard FitLearnedIntervalSafeguard(const OmniModel& model, const OmniPredictor& predictor,
+                                                  const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options) {
+  const OmniPredictor unscaled = Unscaled(predictor);
+  const std::vector<int> horizons = SafeguardHorizons(Sorted(options.horizons));
+  int stride = options.stride;
+  const auto by_log = SampledRowsByLog(model, unscaled, LearnedDrivingNoise(model, &unscaled), logs, options,
+                                       horizons, &stride);
+  std::vector<std::size_t> with_rows;
+  for (std::size_t l = 0; l < by_log.size(); ++l)
+    if (!by_log[l].back().empty()) with_rows.push_back(l);
+  const Eigen::Matrix3d camera = MeasurementCovariance(model);
+  // rows[horizon][fold]: alternate logs, or one log's earlier and later starts.
+  std::vector<std::vector<std::vector<SafeguardRow>>> rows(horizons.size(), std::vector<std::vector<SafeguardRow>>(2));
+  for (std::size_t k = 0; k < with_rows.size(); ++k) {
+    for (std::size_t q = 0; q < horizons.size(); ++q) {
+      const std::vector<PredictiveError>& log_rows = by_log[with_rows[k]][q];
+      if (with_rows.size() >= 2) {
+        AppendSafeguardRows(log_rows, camera, &rows[q][k % 2]);
+        continue;
+      }
+      const auto middle = log_rows.begin() + static_cast<std::ptrdiff_t>(log_rows.size() / 2);
+      AppendSafeguardRows({log_rows.begin(), middle}, camera, &rows[q][0]);
+      AppendSafeguardRows({middle, log_rows.end()}, camera, &rows[q][1]);
+    }
+  }
+  OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, stride, kSafeguardLeastRows);
+  out.on = with_rows.size() >= 2 ? "held-out rows, alternate logs as folds" : "held-out rows, their two halves as folds";
   return out;
 }
 

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "analysis/omni_calibration.h"
+#include "analysis/omni_interval_scale.h"
 #include "learning/omni_predictor.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
@@ -67,6 +68,16 @@ bool LongEnoughForLearnedNoise(const std::vector<OmniLog>& logs, const LearnedNo
 LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredictor& predictor,
                                        const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options = {},
                                        const std::function<void(int, int)>& progress = {});
+
+// The safeguard of the learned backend's intervals (docs/learning.md, "The intervals'
+// safeguard"): `predictor` (its driving noise fitted, its own scales ignored) predicts
+// `logs` (the same held-out rows) at SafeguardHorizons(options.horizons), and
+// SafeguardFromFolds keeps a conformal scale of the rollouts' spread per horizon and part
+// where each fold, scaled as the other says, comes nearer 90 % in its 90 % regions
+// without a worse log density. The folds: alternate logs, or one log's earlier and later
+// half of its starts; each needs kSafeguardLeastRows rows at a horizon.
+OmniIntervalSafeguard FitLearnedIntervalSafeguard(const OmniModel& model, const OmniPredictor& predictor,
+                                                  const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options = {});
 
 // The calibration of the learned backend with `predictor` (and its driving noise) on
 // `log` at each horizon, from `samples` rollouts per start at every `stride`-th frame

@@ -116,6 +116,16 @@ double EffectiveDraws(const PredictiveError& row, PosePart part) {
   return row.draws * std::pow(whole / drawn, 2.0 / p);
 }
 
+Pits PitsOf(const PredictiveError& r) {
+  const Eigen::Matrix2d cxy = r.c.topLeftCorner<2, 2>();
+  const Eigen::Vector2d exy = r.e.head<2>();
+  const double d2 = exy.dot(cxy.ldlt().solve(exy));
+  const double z = r.e[2] / std::sqrt(std::max(r.c(2, 2), 1e-300));
+  // Chi-square and normal for a known covariance, F and Student's t for one estimated
+  // from draws (PredictiveError).
+  return {PositionPit(d2, EffectiveDraws(r, PosePart::kPosition)), StudentCdf(z, EffectiveDraws(r, PosePart::kHeading))};
+}
+
 double OmniCalibration::EnergyGain() const {
   return baseline_energy_score > 0 ? 1 - energy_score / baseline_energy_score : 0;
 }
@@ -156,19 +166,13 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
   for (const PredictiveError& r : rows) {
     const Eigen::Matrix2d cxy = r.c.topLeftCorner<2, 2>();
     const Eigen::Vector2d exy = r.e.head<2>();
-    const double d2 = exy.dot(cxy.ldlt().solve(exy));
-    const double z = r.e[2] / std::sqrt(std::max(r.c(2, 2), 1e-300));
-    // The PITs: chi-square and normal for a known covariance, F and Student's t for one
-    // estimated from draws (PredictiveError); inside a central interval where the PIT
-    // (the heading's folded about its middle) is within its share.
-    const double u = PositionPit(d2, EffectiveDraws(r, PosePart::kPosition));
-    const double v = StudentCdf(z, EffectiveDraws(r, PosePart::kHeading));
-    in50 += u <= 0.5;
-    in90 += u <= 0.9;
-    h50 += std::abs(2 * v - 1) <= 0.5;
-    h90 += std::abs(2 * v - 1) <= 0.9;
-    ++out.position_pit[static_cast<std::size_t>(PitBin(u))];
-    ++out.heading_pit[static_cast<std::size_t>(PitBin(v))];
+    const Pits pits = PitsOf(r);
+    in50 += pits.position <= 0.5;
+    in90 += pits.position <= 0.9;
+    h50 += std::abs(2 * pits.heading - 1) <= 0.5;
+    h90 += std::abs(2 * pits.heading - 1) <= 0.9;
+    ++out.position_pit[static_cast<std::size_t>(PitBin(pits.position))];
+    ++out.heading_pit[static_cast<std::size_t>(PitBin(pits.heading))];
     es += EnergyScore(CovarianceRoot(cxy), exy);
     base += EnergyScore(round, exy);
   }
@@ -181,19 +185,43 @@ OmniCalibration Calibrate(const std::vector<PredictiveError>& rows, double const
   return out;
 }
 
+namespace {
+
+// The negative log density of a p-dimensional error whose squared Mahalanobis distance
+// under its covariance C is d2 (log |C| = log_det), C known (n infinite) or estimated from
+// n draws: then Student's t with nu = n - p + 1 degrees of freedom and scale n C / nu,
+// so that e' scale^-1 e / nu = e' C^-1 e / n.
+double NegativeLogDensity(double d2, double log_det, int p, double n) {
+  if (std::isinf(n) || n <= p) return 0.5 * (d2 + log_det + p * std::log(2 * kPi));
+  const double nu = n - p + 1;
+  return std::lgamma(0.5 * nu) - std::lgamma(0.5 * (nu + p)) + 0.5 * p * std::log(nu * kPi) +
+         0.5 * (log_det + p * std::log(n / nu)) + 0.5 * (nu + p) * std::log1p(d2 / n);
+}
+
+}  // namespace
+
 double LogScore(const PredictiveError& r) {
   const Eigen::LLT<Eigen::Matrix3d> llt(0.5 * (r.c + r.c.transpose()));
   if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
   const Eigen::Vector3d w = llt.matrixL().solve(r.e);
   double log_det = 0;
   for (int i = 0; i < 3; ++i) log_det += 2 * std::log(llt.matrixL()(i, i));
-  const double n = EffectiveDraws(r, PosePart::kPose);
-  if (std::isinf(n) || n <= 3) return 0.5 * (w.squaredNorm() + log_det + 3 * std::log(2 * kPi));
-  // Student's t in 3 dimensions: nu = n - 2 degrees of freedom, scale n C / nu, so that
-  // e' scale^-1 e / nu = e' C^-1 e / n.
-  const double nu = n - 2;
-  return std::lgamma(0.5 * nu) - std::lgamma(0.5 * (nu + 3)) + 1.5 * std::log(nu * kPi) +
-         0.5 * (log_det + 3 * std::log(n / nu)) + 0.5 * (nu + 3) * std::log1p(w.squaredNorm() / n);
+  return NegativeLogDensity(w.squaredNorm(), log_det, 3, EffectiveDraws(r, PosePart::kPose));
+}
+
+double PartLogScore(const PredictiveError& r, PosePart part) {
+  if (part == PosePart::kPose) return LogScore(r);
+  if (part == PosePart::kHeading) {
+    const double v = r.c(2, 2);
+    if (!(v > 0)) return std::numeric_limits<double>::infinity();
+    return NegativeLogDensity(r.e(2) * r.e(2) / v, std::log(v), 1, EffectiveDraws(r, part));
+  }
+  const Eigen::Matrix2d c = r.c.topLeftCorner<2, 2>();
+  const Eigen::LLT<Eigen::Matrix2d> llt(c);
+  if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d w = llt.matrixL().solve(r.e.head<2>());
+  const double log_det = 2 * (std::log(llt.matrixL()(0, 0)) + std::log(llt.matrixL()(1, 1)));
+  return NegativeLogDensity(w.squaredNorm(), log_det, 2, EffectiveDraws(r, part));
 }
 
 double MeanLogScore(const std::vector<PredictiveError>& rows) {

@@ -69,6 +69,17 @@ enum class PosePart { kPosition, kHeading, kPose };
 // the camera's known part dominates; infinity for a known covariance.
 double EffectiveDraws(const PredictiveError& row, PosePart part);
 
+// A row's probability integral transforms: the position's (the share of its
+// distribution nearer the mean, in Mahalanobis distance, than the measured position) and
+// the heading's (its distribution function at the measured heading); chi-square and
+// normal for a known covariance, F and Student's t for one estimated from draws. The
+// row lies inside the central p region of the position where `position` <= p, of the
+// heading where |2 heading - 1| <= p.
+struct Pits {
+  double position = 0, heading = 0;
+};
+Pits PitsOf(const PredictiveError& row);
+
 // Row i of a replay run with `covariance` (predicted, with a measurement).
 PredictiveError PredictiveErrorAt(const OmniLog& log, const OmniReplayResult& result, std::size_t i);
 // The rows of a replay run with `covariance` that were predicted, hold a measurement and
@@ -159,6 +170,9 @@ std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniMode
 // or the Student t of a covariance estimated from draws); infinity for a covariance that
 // is not positive definite.
 double LogScore(const PredictiveError& row);
+// The same of one part of the pose (the position's two coordinates, the heading, or the
+// pose: LogScore), its own degrees of freedom (EffectiveDraws).
+double PartLogScore(const PredictiveError& row, PosePart part);
 // Its mean over `rows` (0 without rows): the cost the driving noise is identified by.
 double MeanLogScore(const std::vector<PredictiveError>& rows);
 

@@ -4,9 +4,12 @@
 #include <unsupported/Eigen/SpecialFunctions>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <sstream>
 
 #include "core/math_constants.h"
+#include "io/printf_number.h"
 
 namespace twinsim {
 namespace {
@@ -39,10 +42,29 @@ double ChiSquareQuantile(int dims, double p) {
   return z * z;
 }
 
-// The smallest s in [0, most] whose region of squared standardised radius q holds the
-// row (d^2 falls as s grows); infinity where `most` does not.
-double SmallestHoldingScale(const SafeguardRow& row, PosePart part, double most, double q) {
-  auto outside = [&](double s) { return StandardisedError(row, part, s).d2 > q; };
+// The row with its prediction's covariance scaled by s, as calibration scores it.
+PredictiveError ScaledRow(const SafeguardRow& row, double s) {
+  PredictiveError p;
+  p.e = row.e;
+  p.drawn = s * s * row.predicted;
+  p.c = p.drawn + row.camera;
+  p.draws = row.draws;
+  return p;
+}
+
+// Whether the central `level` region of `part` holds the row with its prediction's
+// covariance scaled by s: d^2 <= q (the chi-square quantile of `level`) for a known
+// covariance; the Student t's region (its PIT within `level`) for one from draws.
+bool Holds(const SafeguardRow& row, PosePart part, double s, double level, double q) {
+  if (row.draws <= 0) return StandardisedError(row, part, s).d2 <= q;
+  const Pits pits = PitsOf(ScaledRow(row, s));
+  return part == PosePart::kHeading ? std::abs(2 * pits.heading - 1) <= level : pits.position <= level;
+}
+
+// The smallest s in [0, most] whose central `level` region (q its chi-square quantile)
+// holds the row (the region grows with s); infinity where `most` does not.
+double SmallestHoldingScale(const SafeguardRow& row, PosePart part, double most, double level, double q) {
+  auto outside = [&](double s) { return !Holds(row, part, s, level, q); };
   if (!outside(0)) return 0;
   if (outside(most)) return std::numeric_limits<double>::infinity();
   double lo = 0, hi = most;
@@ -66,7 +88,7 @@ double ConformalRank(std::vector<double> scores, double level) {
 
 void AppendSafeguardRows(const std::vector<PredictiveError>& rows, const Eigen::Matrix3d& camera,
                          std::vector<SafeguardRow>* out) {
-  for (const PredictiveError& r : rows) out->push_back({r.e, r.c - camera, camera, r.input_distance});
+  for (const PredictiveError& r : rows) out->push_back({r.e, r.c - camera, camera, r.input_distance, r.draws});
 }
 
 double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart part, double most, double level) {
@@ -76,7 +98,7 @@ double ConformalIntervalScale(const std::vector<SafeguardRow>& rows, PosePart pa
   // Each row's score: the smallest s in [0, most] that holds it (d^2 falls as s grows).
   std::vector<double> scores;
   scores.reserve(rows.size());
-  for (const SafeguardRow& row : rows) scores.push_back(SmallestHoldingScale(row, part, most, q));
+  for (const SafeguardRow& row : rows) scores.push_back(SmallestHoldingScale(row, part, most, level, q));
   return std::clamp(ConformalRank(std::move(scores), level), 1 / most, most);
 }
 
@@ -90,7 +112,7 @@ double ConformalIntervalGrowth(const std::vector<SafeguardRow>& rows, PosePart p
   scores.reserve(rows.size());
   for (const SafeguardRow& row : rows) {
     const double d = std::max(row.distance, kMinGrowthDistance);
-    const double needed = SmallestHoldingScale(row, part, base * (1 + kMost * d), q);
+    const double needed = SmallestHoldingScale(row, part, base * (1 + kMost * d), level, q);
     scores.push_back(std::isfinite(needed) ? std::max(0.0, (needed / base - 1) / d) : needed);
   }
   return std::clamp(ConformalRank(std::move(scores), level), 0.0, kMost);
@@ -101,10 +123,17 @@ ScaledIntervals ScoreIntervalScale(const std::vector<SafeguardRow>& rows, PosePa
   const int dims = part == PosePart::kHeading ? 1 : 2;
   const double q50 = ChiSquareQuantile(dims, 0.5), q90 = ChiSquareQuantile(dims, 0.9);
   for (const SafeguardRow& row : rows) {
-    const Standardised z = StandardisedError(row, part, scale * (1 + growth * row.distance));
-    out.inside_50 += z.d2 <= q50;
-    out.inside_90 += z.d2 <= q90;
-    out.log_score += 0.5 * (z.d2 + z.log_det + dims * std::log(2 * kPi));
+    const double s = scale * (1 + growth * row.distance);
+    if (row.draws > 0) {
+      out.inside_50 += Holds(row, part, s, 0.5, q50);
+      out.inside_90 += Holds(row, part, s, 0.9, q90);
+      out.log_score += PartLogScore(ScaledRow(row, s), part);
+    } else {
+      const Standardised z = StandardisedError(row, part, s);
+      out.inside_50 += z.d2 <= q50;
+      out.inside_90 += z.d2 <= q90;
+      out.log_score += 0.5 * (z.d2 + z.log_det + dims * std::log(2 * kPi));
+    }
     ++out.rows;
   }
   if (out.rows > 0) {
@@ -247,6 +276,47 @@ OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
                "folds' scale did not bring each fold nearer without a worse log density (or too few rows)";
   }
   return out;
+}
+
+namespace {
+
+// One part's cell: the scale (or "-" where not kept), with its growth per unit of
+// distance from the seen inputs where it has one, and the other folds' shares in the
+// 90 % regions without and with their scale.
+std::string SafeguardCell(double scale, double growth, bool kept, const std::array<ScaledIntervals, 2>& check) {
+  if (check[0].rows == 0) return "(too few rows)";
+  std::string factor = scale != 1 || (kept && growth > 0) ? PrintfNumber("x%.3g", scale) : "-";
+  if (kept && growth > 0) factor += PrintfNumber("(1+%.3gd)", growth);
+  char cell[128];
+  std::snprintf(cell, sizeof cell, "%-14s %5.1f -> %5.1f %%", factor.c_str(), 100 * check[0].inside_90,
+                100 * check[1].inside_90);
+  return cell;
+}
+
+}  // namespace
+
+std::string FormatSafeguard(const OmniIntervalSafeguard& g, double period) {
+  std::ostringstream s;
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-20s %6s   %-33s %-33s\n", "horizon", "rows", "position: scale, 90 %",
+                "heading: scale, 90 %");
+  s << line;
+  bool grows = false;
+  for (const OmniSafeguardHorizon& h : g.horizons) {
+    char label[64];
+    std::snprintf(label, sizeof label, "%d frames (%.2f s)", h.frames, h.frames * period);
+    std::snprintf(line, sizeof line, "  %-20s %6d   %-33s %-33s\n", label, h.rows,
+                  SafeguardCell(h.position, h.position_growth, h.position_kept, h.position_check).c_str(),
+                  SafeguardCell(h.heading, h.heading_growth, h.heading_kept, h.heading_check).c_str());
+    s << line;
+    grows = grows || (h.position_kept && h.position_growth > 0) || (h.heading_kept && h.heading_growth > 0);
+  }
+  if (grows) {
+    s << "  (1+g d): the scale grows with d, a prediction's mean distance from the inputs the fit saw (wheel speeds "
+         "asked and reached, over the seen commands' size)\n";
+  }
+  if (!g.note.empty()) s << "  " << g.note << "\n";
+  return s.str();
 }
 
 }  // namespace twinsim

@@ -39,6 +39,11 @@ struct SafeguardRow {
   Eigen::Matrix3d predicted = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d camera = Eigen::Matrix3d::Zero();
   double distance = 0;  // the prediction's mean distance from the seen inputs
+  // 0: `predicted` is known (the observer's); else it was estimated from this many
+  // sampled rollouts (the learned backend's), and the row's regions and density are
+  // those of the Student t it implies (analysis/omni_calibration.h, PredictiveError), so
+  // that a scale fitted here holds where `compare` scores it.
+  int draws = 0;
 };
 
 // Observer rows (c is the prediction's covariance plus `camera`) as safeguard rows,
@@ -107,6 +112,12 @@ struct OmniIntervalSafeguard {
 // doubling.
 std::vector<int> SafeguardHorizons(std::vector<int> horizons);
 
+// The fewest predictions at a horizon that check or scale the intervals there: per fold
+// of a safeguard (a half of identify's held-out blocks, a left-out log, a fold of
+// train's held-out rows), below which nothing is scaled, and in identify's calibration
+// as a whole, below which identify says the horizon is not checked.
+inline constexpr int kSafeguardLeastRows = 20;
+
 // The safeguard from rows[h][f], the rows of fold f at horizons[h], predicted from every
 // `stride`-th frame (their overlap sets the standard error). Folds with fewer than
 // `min_rows` rows at a horizon leave it unscaled. With `base` ((position, heading) per
@@ -116,5 +127,10 @@ std::vector<int> SafeguardHorizons(std::vector<int> horizons);
 OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
                                          const std::vector<std::vector<std::vector<SafeguardRow>>>& rows, int stride,
                                          int min_rows, const std::vector<std::array<double, 2>>* base = nullptr);
+
+// The safeguard as a table: per horizon (`period` s a frame) its rows and, for the
+// position and the heading, the scale kept ("-" where none) and each fold's share in its
+// 90 % regions without and with the other folds' scale; then the note where none is kept.
+std::string FormatSafeguard(const OmniIntervalSafeguard& g, double period);
 
 }  // namespace twinsim

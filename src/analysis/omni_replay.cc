@@ -285,11 +285,16 @@ Pose2 PredictedPose(const OmniBackend& backend, std::size_t row, double from, co
 // rollouts of the backend K frames ahead, each moved on by a driving noise drawn from the
 // samples' own stream (SlipPose, the slip starting at rest: the measured window already
 // holds the motion so far). Each predicted row gets its N poses, and it and each shorter
-// horizon's row the draws' covariance about the prediction without the noise.
+// horizon's row the draws' covariance about the prediction without the noise. With a
+// safeguard's `scales` (a learned predictor's interval_scale), each horizon's draws are
+// spread about the prediction by its scales (position, heading), and so is their
+// covariance.
 class TrackerSamples {
  public:
-  TrackerSamples(const OmniDrivingNoise& noise, const OmniReplayOptions& options, double dt)
-      : noise_(noise), options_(options), dt_(dt), rng_(Rng::Derived(options.seed, 0x73616d70)) {}
+  TrackerSamples(const OmniDrivingNoise& noise, std::vector<OmniObserverModel::IntervalScale> scales,
+                 const OmniReplayOptions& options, double dt)
+      : noise_(noise), scales_(std::move(scales)), options_(options), dt_(dt),
+        rng_(Rng::Derived(options.seed, 0x73616d70)) {}
 
   void Draw(OmniBackend& backend, const OmniBackendState& saved, const Timeline& tl, int f, double from,
             const PoseCheck& check, OmniReplayResult* out) {
@@ -317,9 +322,15 @@ class TrackerSamples {
       if (draws[h].empty()) continue;
       OmniReplayResult& r = h + 1 == horizons.size() ? *out : out->also[h];
       const std::size_t row = tl.row_of_frame.at(f + horizons[h]);
+      const Pose2& mean = r.pose[row];
       Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
-      for (const Pose2& p : draws[h]) {
-        const Eigen::Vector3d d(p.x - r.pose[row].x, p.y - r.pose[row].y, WrapAngle(p.theta - r.pose[row].theta));
+      const std::array<double, 2> scale = IntervalScaleAt(scales_, horizons[h]);
+      for (Pose2& p : draws[h]) {
+        Eigen::Vector3d d(p.x - mean.x, p.y - mean.y, WrapAngle(p.theta - mean.theta));
+        if (!scales_.empty()) {
+          d = Eigen::Vector3d(scale[0], scale[0], scale[1]).asDiagonal() * d;
+          p = Pose2{mean.x + d.x(), mean.y + d.y(), mean.theta + d.z()};
+        }
         c += d * d.transpose();
       }
       r.covariance[row] = c / static_cast<double>(draws[h].size());
@@ -330,6 +341,7 @@ class TrackerSamples {
 
  private:
   OmniDrivingNoise noise_;
+  std::vector<OmniObserverModel::IntervalScale> scales_;
   const OmniReplayOptions& options_;
   double dt_;
   Rng rng_;
@@ -451,7 +463,12 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
                      options.backend);
   std::optional<TrackerSamples> samples;
   if (options.samples > 0) {
-    samples.emplace(LearnedDrivingNoise(model, options.backend_options.predictor.get()), options, 1.0 / timing.frame_rate);
+    // The predictor's own noise where it has one (LearnedDrivingNoise), with its safeguard.
+    const OmniPredictor* predictor = options.backend_options.predictor.get();
+    samples.emplace(LearnedDrivingNoise(model, predictor),
+                    predictor && predictor->info().has_driving_noise ? predictor->info().interval_scale
+                                                                      : std::vector<OmniObserverModel::IntervalScale>{},
+                    options, 1.0 / timing.frame_rate);
     out.measurement_covariance = MeasurementCovariance(model);
   }
   SizeResult(log, options, OmniReplayStateName(OmniReplayState::kTracker), options.samples > 0, &out);

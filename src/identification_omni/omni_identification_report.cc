@@ -153,43 +153,6 @@ ordered_json SafeguardJson(const OmniIntervalSafeguard& g, double period) {
   return out;
 }
 
-// One part's cell: the scale (or "-" where not kept), with its growth per unit of
-// distance from the seen inputs where it has one, and the other folds' shares in the
-// 90 % regions without and with their scale.
-std::string SafeguardCell(double scale, double growth, bool kept, const std::array<ScaledIntervals, 2>& check) {
-  if (check[0].rows == 0) return "(too few rows)";
-  std::string factor = scale != 1 || (kept && growth > 0) ? PrintfNumber("x%.3g", scale) : "-";
-  if (kept && growth > 0) factor += PrintfNumber("(1+%.3gd)", growth);
-  char cell[128];
-  std::snprintf(cell, sizeof cell, "%-14s %5.1f -> %5.1f %%", factor.c_str(), 100 * check[0].inside_90,
-                100 * check[1].inside_90);
-  return cell;
-}
-
-std::string FormatSafeguard(const OmniIntervalSafeguard& g, double period) {
-  std::ostringstream s;
-  char line[256];
-  std::snprintf(line, sizeof line, "  %-20s %6s   %-33s %-33s\n", "horizon", "rows", "position: scale, 90 %",
-                "heading: scale, 90 %");
-  s << line;
-  bool grows = false;
-  for (const OmniSafeguardHorizon& h : g.horizons) {
-    char label[64];
-    std::snprintf(label, sizeof label, "%d frames (%.2f s)", h.frames, h.frames * period);
-    std::snprintf(line, sizeof line, "  %-20s %6d   %-33s %-33s\n", label, h.rows,
-                  SafeguardCell(h.position, h.position_growth, h.position_kept, h.position_check).c_str(),
-                  SafeguardCell(h.heading, h.heading_growth, h.heading_kept, h.heading_check).c_str());
-    s << line;
-    grows = grows || (h.position_kept && h.position_growth > 0) || (h.heading_kept && h.heading_growth > 0);
-  }
-  if (grows) {
-    s << "  (1+g d): the scale grows with d, a prediction's mean distance from the inputs the fit saw (wheel speeds "
-         "asked and reached, over the seen commands' size)\n";
-  }
-  if (!g.note.empty()) s << "  " << g.note << "\n";
-  return s.str();
-}
-
 std::string Verdict(const OmniIdentificationReport& r) {
   const std::vector<OmniGap>& gaps = r.validation.empty() ? r.held_out : r.validation;
   const OmniGap* n = r.Gap(gaps, "nominal model");

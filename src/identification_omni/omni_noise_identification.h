@@ -141,12 +141,6 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
 OmniSeenInputs SeenInputsOfFitBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                      const OmniNoiseOptions& options);
 
-// The fewest predictions at a horizon that check or scale the intervals there: per fold
-// of the safeguard (a half of the held-out blocks, or a left-out log), below which
-// nothing is scaled, and in identify's calibration as a whole, below which identify says
-// the horizon is not checked.
-inline constexpr int kSafeguardLeastRows = 20;
-
 // Fits the safeguard of `model` (its own interval_scale ignored) on the held-out blocks'
 // rows in their two halves (the folds), with `crossed` each half predicted with the
 // noise fitted on the other; at options.horizons and between them

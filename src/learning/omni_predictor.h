@@ -66,6 +66,11 @@ struct OmniPredictorInfo {
   // false) in files from before issue 42 and for H > 1.
   bool has_driving_noise = false;
   OmniDrivingNoise driving_noise;
+  // With the driving noise, its intervals' safeguard (`train`'s conformal scale, fitted on
+  // the same held-out rows; docs/learning.md, "The intervals' safeguard"): k frames ahead
+  // the sampled rollouts' spread about the prediction is multiplied by `position` and
+  // `heading` (IntervalScaleAt; no growths). Empty: the rollouts as drawn.
+  std::vector<OmniObserverModel::IntervalScale> interval_scale;
   // Residual predictors (layout.residual) only:
   std::string nominal_engine;       // the engine of the model it corrects: analytic, ode, bullet
   int nominal_substeps = 0;         // that model's physics steps per frame
@@ -124,6 +129,10 @@ class OmniPredictor {
   void SetDrivingNoise(const OmniDrivingNoise& noise) {
     info_.has_driving_noise = true;
     info_.driving_noise = noise;
+  }
+  // Sets the safeguard's scales (OmniPredictorInfo::interval_scale; empty: none).
+  void SetIntervalScale(std::vector<OmniObserverModel::IntervalScale> scales) {
+    info_.interval_scale = std::move(scales);
   }
 
   // Writes the file atomically.

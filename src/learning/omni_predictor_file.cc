@@ -67,6 +67,15 @@ void OmniPredictor::Save(const std::string& path) const {
     out << YAML::Key << "simulated" << YAML::Value << n.simulated;
     out << YAML::EndMap;
   }
+  if (!info_.interval_scale.empty()) {
+    out << YAML::Key << "interval_scale" << YAML::Value << YAML::BeginSeq;
+    for (const OmniObserverModel::IntervalScale& h : info_.interval_scale) {
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "frames" << YAML::Value << h.frames;
+      out << YAML::Key << "position" << YAML::Value << h.position;
+      out << YAML::Key << "heading" << YAML::Value << h.heading << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
   WritePredictorFile(out, path);
 }
@@ -88,6 +97,14 @@ void ReadDrivingNoise(YamlMap* top, const std::string& path, ErrorList* errors, 
   d.Finish();
   info->has_driving_noise = true;
   if (info->layout.horizon != 1) top->Error("driving_noise", "only a predictor of one frame ahead (layout.horizon 1) drives the learned backend");
+}
+
+// The safeguard on the driving noise's intervals, where the file has one (train's; files
+// from before have none).
+void ReadIntervalScale(YamlMap* top, OmniPredictorInfo* info) {
+  if (!top->Has("interval_scale")) return;
+  ReadIntervalScales(*top, "interval_scale", false, &info->interval_scale);
+  if (!info->has_driving_noise) top->Error("interval_scale", "scales the driving noise's intervals: give driving_noise too");
 }
 
 }  // namespace
@@ -151,6 +168,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
     b.Finish();
   }
   ReadDrivingNoise(&top, path, &errors, &info);
+  ReadIntervalScale(&top, &info);
   errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();

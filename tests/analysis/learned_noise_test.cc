@@ -170,6 +170,120 @@ TEST(LearnedDrivingNoise, ThePredictorFileCarriesItAndTheSimulationDrawsIt) {
   EXPECT_THROW(OmniPredictor::Load(testing::WriteText(dir + "/far.pred", text)), InputError);
 }
 
+// What loading the predictor file at `path` throws ("" when it loads).
+std::string LoadError(const std::string& path) {
+  try {
+    OmniPredictor::Load(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The intervals' safeguard in the predictor file (issue 64): the file carries the scales
+// per horizon, refuses them without a driving noise to scale or with a growth, and the
+// learned backend's sampled rollouts spread about the prediction by exactly them, the
+// same draws otherwise.
+TEST(LearnedIntervalSafeguard, TheFileCarriesItAndTheRolloutsSpreadByIt) {
+  Trained t = TrainOnWanderingPlant(20);
+  OmniDrivingNoise n;
+  n.sd = {0.11, 0.07, 0.6};
+  n.correlation_time = 0.3;
+  n.simulated = true;
+  t.predictor.SetDrivingNoise(n);
+  OmniPredictor scaled = t.predictor;
+  scaled.SetIntervalScale({{4, 1.5, 0.5}, {16, 2.0, 3.0}});
+  const std::string dir = testing::TempDir("learned_safeguard");
+  scaled.Save(dir + "/scaled.pred");
+  const OmniPredictor back = OmniPredictor::Load(dir + "/scaled.pred");
+  ASSERT_EQ(back.info().interval_scale.size(), 2u);
+  EXPECT_EQ(back.info().interval_scale[1].frames, 16);
+  EXPECT_EQ(back.info().interval_scale[1].position, 2.0);
+  EXPECT_EQ(back.info().interval_scale[1].heading, 3.0);
+
+  OmniReplayOptions o;
+  o.backend = "learned";
+  o.horizon = 16;
+  o.also = {4};
+  o.samples = 8;
+  o.stride = 25;
+  o.backend_options.predictor = std::make_shared<OmniPredictor>(t.predictor);
+  const OmniReplayResult plain = ReplayOmniLog(testing::Omni4(), t.unseen, o);
+  o.backend_options.predictor = std::make_shared<OmniPredictor>(back);
+  const OmniReplayResult wide = ReplayOmniLog(testing::Omni4(), t.unseen, o);
+  int rows = 0;
+  for (std::size_t i = 0; i < t.unseen.rows.size(); ++i) {
+    if (!plain.predicted[i]) continue;
+    ++rows;
+    ASSERT_EQ(wide.pose[i].x, plain.pose[i].x) << "the mean prediction is the plain one";
+    const Pose2& p = plain.samples[i][3];
+    const Pose2& w = wide.samples[i][3];
+    EXPECT_NEAR(w.x - wide.pose[i].x, 2 * (p.x - plain.pose[i].x), 1e-12);
+    EXPECT_NEAR(w.theta - wide.pose[i].theta, 3 * (p.theta - plain.pose[i].theta), 1e-12);
+    const Eigen::Vector3d d(2, 2, 3);
+    EXPECT_TRUE(wide.covariance[i].isApprox(d.asDiagonal() * plain.covariance[i] * d.asDiagonal(), 1e-12)) << i;
+    if (!plain.also[0].predicted[i]) continue;
+    const Eigen::Vector3d d4(1.5, 1.5, 0.5);
+    EXPECT_TRUE(wide.also[0].covariance[i].isApprox(d4.asDiagonal() * plain.also[0].covariance[i] * d4.asDiagonal(), 1e-12));
+  }
+  EXPECT_GT(rows, 20);
+
+  // Bad files: a scale without a noise to scale, a growth (a physics model's only).
+  std::string text = testing::ReadText(dir + "/scaled.pred");
+  std::string no_noise = text;
+  no_noise.erase(no_noise.find("driving_noise:"), no_noise.find('\n', no_noise.find("driving_noise:")) + 1 -
+                                                      no_noise.find("driving_noise:"));
+  EXPECT_NE(LoadError(testing::WriteText(dir + "/no_noise.pred", no_noise)).find("scales the driving noise's intervals"),
+            std::string::npos);
+  std::string growth = text;
+  growth.replace(growth.find("heading: 3}"), 11, "heading: 3, position_growth: 1}");
+  EXPECT_NE(LoadError(testing::WriteText(dir + "/growth.pred", growth)).find("position_growth"), std::string::npos);
+}
+
+// A learned backend whose driving noise is a third of what the robot wanders (the
+// wandering plant's spreads over 3): its 90 % ellipses hold far too little. The
+// safeguard `train` fits on the same held-out rows (the last 12 s of the minute, its two
+// halves as folds) widens the rollouts, and on a minute the predictor never saw the 90 %
+// ellipses then hold about their share. The fit is never told the plant's spreads or
+// the factor. Measured (2026-12-04): scales 4.1, 2.8, 1.9 and 1.5 at 4, 8, 16 and 32
+// frames; the unseen minute's 90 % ellipses 25.6 -> 93.8 % at 4 frames and 57.6 -> 89.6 %
+// at 16. At 63 frames the held-out rows held 78 % (the narrow slip integrates to a
+// nearer spread there), and 113 predictions over 63 frames are some 7 independent
+// stretches, whose share is uncertain by 11 %: the safeguard leaves that horizon as it is
+// (the unseen minute holds 83.5 % there), as its rule says.
+TEST(LearnedIntervalSafeguard, WidensANoiseTooNarrowToHoldItsShareOnAnUnseenMinute) {
+  Trained t = TrainOnWanderingPlant(60);
+  const testing::WanderingPlant plant = LearningPlant();
+  OmniDrivingNoise narrow;
+  for (std::size_t a = 0; a < 3; ++a) narrow.sd[a] = plant.noise_sd[a] / 3;
+  narrow.correlation_time = plant.noise_correlation;
+  narrow.simulated = true;
+  t.predictor.SetDrivingNoise(narrow);
+  const OmniIntervalSafeguard g = FitLearnedIntervalSafeguard(testing::Omni4(), t.predictor, OmniValidationParts({t.fit}, 0.2));
+  SCOPED_TRACE(FormatSafeguard(g, 1.0 / 60));
+  EXPECT_EQ(g.on, "held-out rows, their two halves as folds");
+  ASSERT_EQ(g.horizons.size(), 5u);  // 4, 8, 16, 32, 63 frames
+  for (const OmniSafeguardHorizon& h : g.horizons) {
+    if (h.frames > 16) continue;
+    EXPECT_TRUE(h.position_kept) << h.frames;
+    EXPECT_GT(h.position, 1.5) << h.frames;
+  }
+  EXPECT_FALSE(g.horizons.back().position_kept);
+  OmniPredictor safeguarded = t.predictor;
+  safeguarded.SetIntervalScale(g.Scales());
+  const std::vector<OmniCalibration> before = CalibrateLearnedOmniLog(testing::Omni4(), t.predictor, t.unseen);
+  const std::vector<OmniCalibration> after = CalibrateLearnedOmniLog(testing::Omni4(), safeguarded, t.unseen);
+  std::printf("without the safeguard:\n%swith it:\n%s", FormatCalibrationTable(before).c_str(),
+              FormatCalibrationTable(after).c_str());
+  ASSERT_EQ(after.size(), 3u);
+  for (std::size_t q = 0; q < 2; ++q) {  // 4 and 16 frames
+    EXPECT_LT(before[q].position_90, 0.75) << after[q].frames;
+    EXPECT_GT(after[q].position_90, 0.84) << after[q].frames;
+    EXPECT_LT(after[q].position_90, 0.96) << after[q].frames;
+    EXPECT_LT(after[q].log_score, before[q].log_score) << after[q].frames;
+  }
+}
+
 // Fitted on the held-out 20 % of one minute, judged on eight minutes it never saw: the
 // 50 % and 90 % ellipses of the learned backend's sampled rollouts hold about their
 // share at 4, 16 and 63 frames. Measured: the 50 % ellipses hold 52/56/51 %, the 90 %

@@ -193,6 +193,12 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
   auto seed = testing::RunTwinsim("train --model " + omni4 + " --log " + log + " --kind linear --out " + dir + "/seed.pred");
   ASSERT_EQ(seed.exit_code, 0) << seed.err;
   EXPECT_NE(seed.out.find("on the held-out rows, driving noise: forward"), std::string::npos) << seed.out;
+  // And its intervals' safeguard on the same rows, said as a table (issue 64).
+  EXPECT_NE(seed.out.find("intervals' safeguard (a conformal scale of the rollouts' spread, fitted on the held-out rows, "
+                          "their two halves as folds"),
+            std::string::npos)
+      << seed.out;
+  EXPECT_NE(seed.out.find("  63 frames ("), std::string::npos) << seed.out;
   EXPECT_NE(testing::ReadText(dir + "/seed.pred").find("\ndriving_noise: {forward: "), std::string::npos);
   EXPECT_EQ(testing::ReadText(dir + "/seed.pred").rfind("twinsim_predictor: 2\n", 0), 0u)
       << "the seed's predictors keep the format older builds read";

@@ -38,6 +38,7 @@ struct TrainCliOptions {
   std::optional<int> nominal_state;  // omni residual only: an OmniReplayState, or 2 for auto
   bool quiet = false;
   bool no_noise = false;   // omni, one frame ahead: skip the driving noise's fit
+  bool no_safeguard = false;  // omni, with the noise: skip its intervals' safeguard
   OmniLogSelector select;  // omni logs holding several robots
 };
 
@@ -135,6 +136,7 @@ int Train(const TrainCliOptions& options) {
   // it was validated on (analysis/learned_noise.h).
   OmniPredictor written = predictor;
   std::optional<LearnedNoiseFit> noise;
+  OmniIntervalSafeguard safeguard;
   if (train.horizon == 1 && !options.no_noise) {
     const std::vector<OmniLog> held_out = OmniValidationParts(logs, train.validation_fraction);
     if (!LongEnoughForLearnedNoise(held_out)) {
@@ -150,6 +152,12 @@ int Train(const TrainCliOptions& options) {
                                      [&](int done, int total) { noise_progress.Update(done, total); });
       noise_progress.Finish();
       written.SetDrivingNoise(noise->noise);
+      // The safeguard of the noise's intervals, on the same held-out rows
+      // (docs/learning.md, "The intervals' safeguard").
+      if (!options.no_safeguard) {
+        safeguard = FitLearnedIntervalSafeguard(model, written, held_out);
+        written.SetIntervalScale(safeguard.Scales());
+      }
     }
   }
   OutputFiles files;
@@ -162,6 +170,11 @@ int Train(const TrainCliOptions& options) {
     std::printf("%s predictor of %s%s, %d frame(s) ahead at %g fps: %s\n", what.c_str(), model.name.c_str(),
                 over.c_str(), train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
     if (noise) std::printf("on the held-out rows, %s", FormatLearnedNoiseFit(*noise).c_str());
+    if (!safeguard.on.empty()) {
+      std::printf("intervals' safeguard (a conformal scale of the rollouts' spread, fitted on the %s; each fold with "
+                  "the others' scale, its share in the 90 %% regions without -> with it):\n%s",
+                  safeguard.on.c_str(), FormatSafeguard(safeguard, logs.front().frame_period).c_str());
+    }
     files.PrintWrote();
   }
   return kExitOk;
@@ -236,6 +249,9 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
   cmd->add_flag("--no-noise", options->no_noise,
                 "Omni, one frame ahead: do not fit the learned backend's driving noise on the held-out rows "
                 "(docs/learning.md); the predictor then draws the model's");
+  cmd->add_flag("--no-safeguard", options->no_safeguard,
+                "Omni, with the driving noise: do not fit its intervals' safeguard (a conformal scale of the rollouts' "
+                "spread per horizon, on the held-out rows; docs/learning.md)");
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Train(*options); });

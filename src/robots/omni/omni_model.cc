@@ -160,19 +160,21 @@ std::string ReplayEngineFor(const OmniModel& model, const std::string& asked, co
   return asked;
 }
 
-std::array<double, 2> OmniObserverModel::IntervalScaleAt(int k, double distance) const {
-  if (interval_scale.empty()) return {1, 1};
+std::array<double, 2> IntervalScaleAt(const std::vector<OmniObserverModel::IntervalScale>& scales, int k,
+                                      double distance) {
+  using IntervalScale = OmniObserverModel::IntervalScale;
+  if (scales.empty()) return {1, 1};
   auto at = [distance](const IntervalScale& h) -> std::array<double, 2> {
     return {h.position * (1 + h.position_growth * distance), h.heading * (1 + h.heading_growth * distance)};
   };
-  const IntervalScale& first = interval_scale.front();
-  const IntervalScale& last = interval_scale.back();
+  const IntervalScale& first = scales.front();
+  const IntervalScale& last = scales.back();
   if (k <= first.frames) return at(first);
   if (k >= last.frames) return at(last);
   std::size_t i = 1;
-  while (interval_scale[i].frames < k) ++i;
-  const IntervalScale& a = interval_scale[i - 1];
-  const IntervalScale& b = interval_scale[i];
+  while (scales[i].frames < k) ++i;
+  const IntervalScale& a = scales[i - 1];
+  const IntervalScale& b = scales[i];
   const double u = std::log(static_cast<double>(k) / a.frames) / std::log(static_cast<double>(b.frames) / a.frames);
   auto between = [u](double x, double y) { return std::exp((1 - u) * std::log(x) + u * std::log(y)); };
   IntervalScale h;
@@ -181,6 +183,10 @@ std::array<double, 2> OmniObserverModel::IntervalScaleAt(int k, double distance)
   h.position_growth = (1 - u) * a.position_growth + u * b.position_growth;
   h.heading_growth = (1 - u) * a.heading_growth + u * b.heading_growth;
   return at(h);
+}
+
+std::array<double, 2> OmniObserverModel::IntervalScaleAt(int k, double distance) const {
+  return twinsim::IntervalScaleAt(interval_scale, k, distance);
 }
 
 }  // namespace twinsim

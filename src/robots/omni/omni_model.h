@@ -245,6 +245,20 @@ OmniModel LoadOmniModel(const std::string& path, const YamlOverrides& overrides)
 // As LoadOmniModel, from YAML text; `name` stands for the file in messages.
 OmniModel LoadOmniModelFromString(const std::string& yaml, const std::string& name);
 
+// The scales (position, heading) of a safeguard's list k frames ahead, `distance` from
+// the seen inputs: OmniObserverModel::IntervalScaleAt's rule, for any holder of such a
+// list (a model's observer, a learned predictor); {1, 1} for an empty list.
+std::array<double, 2> IntervalScaleAt(const std::vector<OmniObserverModel::IntervalScale>& scales, int k,
+                                      double distance = 0);
+
+class YamlMap;
+// Reads the list under `key` of `parent` (a model file's observer.interval_scale, a
+// predictor file's interval_scale): {frames, position, heading}, with position_growth
+// and heading_growth where `growth` allows them, the horizons increasing; each problem
+// into the parent's errors.
+void ReadIntervalScales(YamlMap& parent, const std::string& key, bool growth,
+                        std::vector<OmniObserverModel::IntervalScale>* out);
+
 // The engine a command replays `model` on: `asked` (its --backend) where given, else the
 // engine the model was fitted on, else `fallback` (the command's own default). Where
 // `asked` is a physics engine other than the one the model was fitted on, *note (if

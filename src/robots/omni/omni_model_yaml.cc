@@ -25,31 +25,6 @@ void ReadPid(YamlMap& parent, const std::string& key, PidGains* g) {
   m.Finish();
 }
 
-// observer.interval_scale: a list of {frames, position, heading}, frames strictly increasing.
-void ReadIntervalScale(YamlMap& observer, std::vector<OmniObserverModel::IntervalScale>* out) {
-  const YAML::Node list = observer.Child("interval_scale");
-  if (!list.IsSequence() || list.size() == 0) {
-    observer.Error("interval_scale", "must be a list of {frames: K, position: s, heading: s}, horizons increasing");
-    return;
-  }
-  constexpr double kMost = OmniObserverModel::kMaxIntervalScale;
-  out->clear();
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    YamlMap m(list[i], observer.path(), "observer.interval_scale[" + std::to_string(i) + "]", observer.errors());
-    if (!m.valid()) continue;
-    OmniObserverModel::IntervalScale h;
-    m.Require("frames", &h.frames, InRange(1, 1e6));
-    m.Require("position", &h.position, InRange(1 / kMost, kMost));
-    m.Require("heading", &h.heading, InRange(1 / kMost, kMost));
-    m.Get("position_growth", &h.position_growth, NonNegative(OmniObserverModel::kMaxIntervalGrowth));
-    m.Get("heading_growth", &h.heading_growth, NonNegative(OmniObserverModel::kMaxIntervalGrowth));
-    if (!out->empty() && h.frames <= out->back().frames)
-      m.Error("frames", "the horizons must increase from one entry to the next");
-    m.Finish();
-    out->push_back(h);
-  }
-}
-
 // observer.seen_inputs: {scale, covering, points: [[u1..u2n], ...]} (omni_seen_inputs.h);
 // the points' length is checked against the wheels by Validate.
 void ReadSeenInputs(YamlMap& observer, OmniSeenInputs* out) {
@@ -247,7 +222,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
       r.Get("theta", &model.observer.measurement_noise_theta, NonNegative(10));
       r.Finish();
     }
-    if (o.Has("interval_scale")) ReadIntervalScale(o, &model.observer.interval_scale);
+    if (o.Has("interval_scale")) ReadIntervalScales(o, "interval_scale", true, &model.observer.interval_scale);
     if (o.Has("seen_inputs")) ReadSeenInputs(o, &model.observer.seen_inputs);
     o.Finish();
   }
@@ -271,6 +246,34 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 }
 
 }  // namespace
+
+void ReadIntervalScales(YamlMap& parent, const std::string& key, bool growth,
+                        std::vector<OmniObserverModel::IntervalScale>* out) {
+  const YAML::Node list = parent.Child(key);
+  if (!list.IsSequence() || list.size() == 0) {
+    parent.Error(key, "must be a list of {frames: K, position: s, heading: s}, horizons increasing");
+    return;
+  }
+  constexpr double kMost = OmniObserverModel::kMaxIntervalScale;
+  const std::string label = parent.context().empty() ? key : parent.context() + "." + key;
+  out->clear();
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    YamlMap m(list[i], parent.path(), label + "[" + std::to_string(i) + "]", parent.errors());
+    if (!m.valid()) continue;
+    OmniObserverModel::IntervalScale h;
+    m.Require("frames", &h.frames, InRange(1, 1e6));
+    m.Require("position", &h.position, InRange(1 / kMost, kMost));
+    m.Require("heading", &h.heading, InRange(1 / kMost, kMost));
+    if (growth) {
+      m.Get("position_growth", &h.position_growth, NonNegative(OmniObserverModel::kMaxIntervalGrowth));
+      m.Get("heading_growth", &h.heading_growth, NonNegative(OmniObserverModel::kMaxIntervalGrowth));
+    }
+    if (!out->empty() && h.frames <= out->back().frames)
+      m.Error("frames", "the horizons must increase from one entry to the next");
+    m.Finish();
+    out->push_back(h);
+  }
+}
 
 OmniModel LoadOmniModel(const std::string& path) { return ReadOmniModel(LoadYamlFile(path), path, 0); }
 
