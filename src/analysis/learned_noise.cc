@@ -197,29 +197,45 @@ OmniIntervalSafeguard FitLearnedIntervalSafeguard(const OmniModel& model, const 
                                                   const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options) {
   const OmniPredictor unscaled = Unscaled(predictor);
   const std::vector<int> horizons = SafeguardHorizons(Sorted(options.horizons));
+  // Fresh draws: the noise's search chose its spreads under its own draws (common random
+  // numbers), which would flatter it here.
+  LearnedNoiseOptions fresh = options;
+  fresh.seed = options.seed + 0x5afe;
   int stride = options.stride;
-  const auto by_log = SampledRowsByLog(model, unscaled, LearnedDrivingNoise(model, &unscaled), logs, options,
+  const auto by_log = SampledRowsByLog(model, unscaled, LearnedDrivingNoise(model, &unscaled), logs, fresh,
                                        horizons, &stride);
-  std::vector<std::size_t> with_rows;
-  for (std::size_t l = 0; l < by_log.size(); ++l)
-    if (!by_log[l].back().empty()) with_rows.push_back(l);
+  // rows[horizon][fold]: alternate logs where each fold so gets enough rows at every
+  // horizon (the folds further apart in time), else each log's earlier and later starts.
+  const bool by_logs = [&] {
+    std::vector<std::array<std::size_t, 2>> count(horizons.size(), std::array<std::size_t, 2>{});
+    std::size_t fold = 0;
+    for (const auto& log : by_log) {
+      if (log.back().empty()) continue;
+      for (std::size_t q = 0; q < horizons.size(); ++q) count[q][fold % 2] += log[q].size();
+      ++fold;
+    }
+    return std::all_of(count.begin(), count.end(), [](const std::array<std::size_t, 2>& c) {
+      return std::min(c[0], c[1]) >= static_cast<std::size_t>(kSafeguardLeastRows);
+    });
+  }();
   const Eigen::Matrix3d camera = MeasurementCovariance(model);
-  // rows[horizon][fold]: alternate logs, or one log's earlier and later starts.
   std::vector<std::vector<std::vector<SafeguardRow>>> rows(horizons.size(), std::vector<std::vector<SafeguardRow>>(2));
-  for (std::size_t k = 0; k < with_rows.size(); ++k) {
+  std::size_t fold = 0;
+  for (const auto& log : by_log) {
+    if (log.back().empty()) continue;
     for (std::size_t q = 0; q < horizons.size(); ++q) {
-      const std::vector<PredictiveError>& log_rows = by_log[with_rows[k]][q];
-      if (with_rows.size() >= 2) {
-        AppendSafeguardRows(log_rows, camera, &rows[q][k % 2]);
+      if (by_logs) {
+        AppendSafeguardRows(log[q], camera, &rows[q][fold % 2]);
         continue;
       }
-      const auto middle = log_rows.begin() + static_cast<std::ptrdiff_t>(log_rows.size() / 2);
-      AppendSafeguardRows({log_rows.begin(), middle}, camera, &rows[q][0]);
-      AppendSafeguardRows({middle, log_rows.end()}, camera, &rows[q][1]);
+      const auto middle = log[q].begin() + static_cast<std::ptrdiff_t>(log[q].size() / 2);
+      AppendSafeguardRows({log[q].begin(), middle}, camera, &rows[q][0]);
+      AppendSafeguardRows({middle, log[q].end()}, camera, &rows[q][1]);
     }
+    ++fold;
   }
   OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, stride, kSafeguardLeastRows);
-  out.on = with_rows.size() >= 2 ? "held-out rows, alternate logs as folds" : "held-out rows, their two halves as folds";
+  out.on = by_logs ? "held-out rows, alternate logs as folds" : "held-out rows, each log's halves as folds";
   return out;
 }
 

@@ -74,8 +74,11 @@ LearnedNoiseFit FitLearnedDrivingNoise(const OmniModel& model, const OmniPredict
 // `logs` (the same held-out rows) at SafeguardHorizons(options.horizons), and
 // SafeguardFromFolds keeps a conformal scale of the rollouts' spread per horizon and part
 // where each fold, scaled as the other says, comes nearer 90 % in its 90 % regions
-// without a worse log density. The folds: alternate logs, or one log's earlier and later
-// half of its starts; each needs kSafeguardLeastRows rows at a horizon.
+// without a worse log density. The folds: alternate logs where each fold so gets
+// kSafeguardLeastRows rows at every horizon, else each log's earlier and later half of
+// its starts. The rollouts draw afresh (another seed than the noise's search), but the
+// rows are those the noise was fitted on: the check across folds is not independent of
+// the noise's fit, as identify's crossed noise is (a finding, docs/learning.md).
 OmniIntervalSafeguard FitLearnedIntervalSafeguard(const OmniModel& model, const OmniPredictor& predictor,
                                                   const std::vector<OmniLog>& logs, const LearnedNoiseOptions& options = {});
 

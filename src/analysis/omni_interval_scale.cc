@@ -56,7 +56,7 @@ PredictiveError ScaledRow(const SafeguardRow& row, double s) {
 // covariance scaled by s: d^2 <= q (the chi-square quantile of `level`) for a known
 // covariance; the Student t's region (its PIT within `level`) for one from draws.
 bool Holds(const SafeguardRow& row, PosePart part, double s, double level, double q) {
-  if (row.draws <= 0) return StandardisedError(row, part, s).d2 <= q;
+  if (row.draws <= 0) return !(StandardisedError(row, part, s).d2 > q);
   const Pits pits = PitsOf(ScaledRow(row, s));
   return part == PosePart::kHeading ? std::abs(2 * pits.heading - 1) <= level : pits.position <= level;
 }

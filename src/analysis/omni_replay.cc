@@ -325,9 +325,10 @@ class TrackerSamples {
       const Pose2& mean = r.pose[row];
       Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
       const std::array<double, 2> scale = IntervalScaleAt(scales_, horizons[h]);
+      const bool scaled = scale[0] != 1 || scale[1] != 1;
       for (Pose2& p : draws[h]) {
         Eigen::Vector3d d(p.x - mean.x, p.y - mean.y, WrapAngle(p.theta - mean.theta));
-        if (!scales_.empty()) {
+        if (scaled) {
           d = Eigen::Vector3d(scale[0], scale[0], scale[1]).asDiagonal() * d;
           p = Pose2{mean.x + d.x(), mean.y + d.y(), mean.theta + d.z()};
         }

@@ -130,7 +130,9 @@ class OmniPredictor {
     info_.has_driving_noise = true;
     info_.driving_noise = noise;
   }
-  // Sets the safeguard's scales (OmniPredictorInfo::interval_scale; empty: none).
+  // Sets the safeguard's scales (OmniPredictorInfo::interval_scale; empty: none). They
+  // scale the predictor's own driving noise: a predictor without one neither uses nor
+  // saves them.
   void SetIntervalScale(std::vector<OmniObserverModel::IntervalScale> scales) {
     info_.interval_scale = std::move(scales);
   }

@@ -67,7 +67,7 @@ void OmniPredictor::Save(const std::string& path) const {
     out << YAML::Key << "simulated" << YAML::Value << n.simulated;
     out << YAML::EndMap;
   }
-  if (!info_.interval_scale.empty()) {
+  if (info_.has_driving_noise && !info_.interval_scale.empty()) {  // it scales the noise's intervals
     out << YAML::Key << "interval_scale" << YAML::Value << YAML::BeginSeq;
     for (const OmniObserverModel::IntervalScale& h : info_.interval_scale) {
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "frames" << YAML::Value << h.frames;

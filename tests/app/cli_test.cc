@@ -195,7 +195,7 @@ TEST(CliLearning, ResidualPredictorTrainsRunsAndComparesFromTheCommandLine) {
   EXPECT_NE(seed.out.find("on the held-out rows, driving noise: forward"), std::string::npos) << seed.out;
   // And its intervals' safeguard on the same rows, said as a table (issue 64).
   EXPECT_NE(seed.out.find("intervals' safeguard (a conformal scale of the rollouts' spread, fitted on the held-out rows, "
-                          "their two halves as folds"),
+                          "each log's halves as folds"),
             std::string::npos)
       << seed.out;
   EXPECT_NE(seed.out.find("  63 frames ("), std::string::npos) << seed.out;
