@@ -95,10 +95,9 @@ Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, Arm
   Eigen::MatrixXd needed(log.rows(), n);
   for (int r = 0; r < log.rows(); ++r) {
     const Eigen::VectorXd qd = log.qd.row(r).transpose();
-    Eigen::VectorXd tau = InverseDynamics(bodies, log.q.row(r).transpose(), qd, log.qdd.row(r).transpose(), false);
-    for (int j = 0; j < n; ++j) tau[j] += ArmFrictionTorque(model, j, qd[j]);
-    needed.row(r) = tau.transpose();
+    needed.row(r) = InverseDynamics(bodies, log.q.row(r).transpose(), qd, log.qdd.row(r).transpose(), false).transpose();
   }
+  for (int j = 0; j < n; ++j) needed.col(j) += ArmFrictionAlong(model, j, log.t, log.qd.col(j));
   ArmCommandSummary s;
   s.shift.resize(n);
   s.beyond_saturation = Eigen::VectorXi::Zero(n);

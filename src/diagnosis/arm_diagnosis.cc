@@ -234,15 +234,18 @@ class ArmProblem : public DiagnosisProblem {
     return tau;
   }
 
-  // What the links of joint j need: rigid bodies, payload and all friction (rows). A
-  // joint at a standstill gets no friction here: it sticks, and its friction is then
-  // whatever holds it (Residual() allows for that).
+  // What the links of joint j need: rigid bodies, payload and all friction (rows; a
+  // pre-sliding joint's bristles followed along the log, ArmFrictionAlong). A joint at a
+  // standstill gets no friction here: it sticks, and its friction is then whatever holds
+  // it (Residual() allows for that).
   Eigen::VectorXd Needed(const ArmModel& trial, const ArmLogData& d, int j, const Eigen::MatrixXd& payload) const {
     Eigen::VectorXd needed = d.rigid.col(j);
     if (payload.size()) needed += payload.col(j);
     const auto& qd = d.log->qd;
+    const bool along = trial.effects.joint(j).presliding();
+    const Eigen::VectorXd friction = along ? ArmFrictionAlong(trial, j, d.log->t, qd.col(j)) : Eigen::VectorXd();
     for (int r = 0; r < d.log->rows(); ++r) {
-      if (std::abs(qd(r, j)) >= standstill_) needed[r] += ArmFrictionTorque(trial, j, qd(r, j));
+      if (std::abs(qd(r, j)) >= standstill_) needed[r] += along ? friction[r] : ArmFrictionTorque(trial, j, qd(r, j));
     }
     return needed;
   }

@@ -361,6 +361,41 @@ ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, d
   return {z0 * std::exp(-ah) + qd0 * (p - q), q};
 }
 
+Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& qd) {
+  const long n = qd.size();
+  Eigen::VectorXd out(n);
+  const JointEffects e = model.effects.joint(joint);
+  if (!e.presliding() || !e.stribeck()) {
+    for (long r = 0; r < n; ++r) out[r] = ArmFrictionTorque(model, joint, qd[r]);
+    return out;
+  }
+  constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
+  const double viscous = model.joints.at(static_cast<std::size_t>(joint)).viscous + e.viscous;
+  const double s0 = e.bristle_stiffness, s1 = e.bristle_damping;
+  // At the first row: the steady deflection of its velocity, whose force is the level.
+  double z = n > 0 && qd[0] != 0 ? std::copysign(ArmDryFrictionLevel(model, joint, qd[0]), qd[0]) / s0 : 0;
+  if (n > 0) out[0] = s0 * z + viscous * qd[0];
+  for (long r = 1; r < n; ++r) {
+    const double h = t[r] - t[r - 1];
+    const double z0 = z;
+    z = ArmBristleStepFrom(model, joint, z0, qd[r - 1], h).At(qd[r]);
+    double dry = s0 * z + s1 * (z - z0) / h;
+    if (e.bristle_slip) {
+      // Beyond the dry level (the step's start speed, either way) the element slips
+      // carrying exactly that level: its deflection makes sigma0 z + sigma1 z' equal it.
+      const double speed = std::abs(qd[r - 1]);
+      const double level = dry > 0 ? ArmDryFrictionLevel(model, joint, speed)
+                                   : -ArmDryFrictionLevel(model, joint, -std::max(speed, kTinySpeed));
+      if (std::abs(dry) > std::abs(level)) {
+        z = (level + s1 * z0 / h) / (s0 + s1 / h);
+        dry = level;
+      }
+    }
+    out[r] = dry + viscous * qd[r];
+  }
+  return out;
+}
+
 ArmModel ArmPlantModel(const ArmModel& model) {
   ArmModel plant = model;
   if (model.effects.payload_mass > 0 && model.dof() > 0) {

@@ -150,6 +150,17 @@ struct ArmBristleStep {
 };
 ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h);
 
+// The friction torque of joint j along a logged motion (times t, velocities qd, one per
+// row): ArmFrictionTorque at each row, except on a pre-sliding joint
+// (JointEffects::presliding), whose bristles are followed along the rows as the
+// simulation steps them (ArmBristleStepFrom from row to row; a Maxwell-slip element
+// slips where its force would pass the dry level), the friction at a row their
+// sigma0 z + sigma1 z' (z' over the step that ends there) plus the viscous part. They
+// start at their steady deflection for the first row's velocity (none at rest). So the
+// replay of a log is the inverse of the simulation that follows the bristles, where the
+// steady formula would flip the dry friction's sign at every reversal at once.
+Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& qd);
+
 // The rigid bodies the physics engines simulate: `model` with its payload lumped into
 // the last link. The result has no payload effect left.
 ArmModel ArmPlantModel(const ArmModel& model);
