@@ -6,7 +6,8 @@
 // the whole model, effects included (arm_effects.h), into the commands a controller must
 // have sent for the logged motion -- what the log's tau columns hold:
 //   1. the joint needs N(t) = ID(q, qd, qdd) of the bodies with the payload lumped in,
-//      plus the friction of every friction effect (ArmFrictionTorque; 0 at qd = 0);
+//      plus the friction of every friction effect (ArmFrictionTorque; 0 at qd = 0; a
+//      joint's pre-sliding bristles followed along the rows, ArmFrictionAlong);
 //   2. joint_flexibility: N is the spring's torque on the link; the spring's deflection
 //      e = thm - q solves d e' + k e = N (e = N / k without damping; implicit Euler from
 //      the static deflection at the first row), and the drive must be

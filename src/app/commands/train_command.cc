@@ -89,6 +89,44 @@ int TrainArm(const TrainCliOptions& options) {
   return kExitOk;
 }
 
+// What a one-frame predictor's rollouts are uncertain by: its driving noise and the
+// safeguard of its intervals, each where fitted.
+struct LearnedUncertainty {
+  std::optional<LearnedNoiseFit> noise;
+  OmniIntervalSafeguard safeguard;
+};
+
+// A one-frame predictor drives the learned backend: its driving noise, from the rows it
+// was validated on (analysis/learned_noise.h), then the safeguard of the noise's
+// intervals on the same rows (docs/learning.md, "The intervals' safeguard"), both set on
+// *predictor, unless the options skip them.
+LearnedUncertainty FitLearnedUncertainty(const OmniModel& model, const std::vector<OmniLog>& logs,
+                                         const OmniTrainOptions& train, const TrainCliOptions& options,
+                                         OmniPredictor* predictor) {
+  LearnedUncertainty out;
+  if (train.horizon != 1 || options.no_noise) return out;
+  const std::vector<OmniLog> held_out = OmniValidationParts(logs, train.validation_fraction);
+  if (!LongEnoughForLearnedNoise(held_out)) {
+    // Said even with --quiet: the predictor then draws the model's noise, not its own.
+    std::fprintf(stderr,
+                 "train: warning: the driving noise is not fitted: the held-out rows (the last %g %% of each log) "
+                 "are too short for a prediction %d frames ahead after the tracker's %d-frame warm-up; the learned "
+                 "backend will draw the model's driving noise\n",
+                 100 * train.validation_fraction, LearnedNoiseOptions{}.horizons.back(), kWarmUpFrames);
+    return out;
+  }
+  Progress noise_progress("driving noise", !options.quiet);
+  out.noise = FitLearnedDrivingNoise(model, *predictor, held_out, {},
+                                     [&](int done, int total) { noise_progress.Update(done, total); });
+  noise_progress.Finish();
+  predictor->SetDrivingNoise(out.noise->noise);
+  if (!options.no_safeguard) {
+    out.safeguard = FitLearnedIntervalSafeguard(model, *predictor, held_out);
+    predictor->SetIntervalScale(out.safeguard.Scales());
+  }
+  return out;
+}
+
 int Train(const TrainCliOptions& options) {
   if (ModelFileRobot(options.model) == RobotKind::kArm) return TrainArm(options);
   if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
@@ -132,34 +170,8 @@ int Train(const TrainCliOptions& options) {
     if (std::find(used.begin(), used.end(), log.path) == used.end())
       std::fprintf(stderr, "train: note: %s gave no complete window and was left out\n", log.path.c_str());
   }
-  // A one-frame predictor drives the learned backend: its driving noise, from the rows
-  // it was validated on (analysis/learned_noise.h).
   OmniPredictor written = predictor;
-  std::optional<LearnedNoiseFit> noise;
-  OmniIntervalSafeguard safeguard;
-  if (train.horizon == 1 && !options.no_noise) {
-    const std::vector<OmniLog> held_out = OmniValidationParts(logs, train.validation_fraction);
-    if (!LongEnoughForLearnedNoise(held_out)) {
-      // Said even with --quiet: the predictor then draws the model's noise, not its own.
-      std::fprintf(stderr,
-                   "train: warning: the driving noise is not fitted: the held-out rows (the last %g %% of each log) "
-                   "are too short for a prediction %d frames ahead after the tracker's %d-frame warm-up; the learned "
-                   "backend will draw the model's driving noise\n",
-                   100 * train.validation_fraction, LearnedNoiseOptions{}.horizons.back(), kWarmUpFrames);
-    } else {
-      Progress noise_progress("driving noise", !options.quiet);
-      noise = FitLearnedDrivingNoise(model, predictor, held_out, {},
-                                     [&](int done, int total) { noise_progress.Update(done, total); });
-      noise_progress.Finish();
-      written.SetDrivingNoise(noise->noise);
-      // The safeguard of the noise's intervals, on the same held-out rows
-      // (docs/learning.md, "The intervals' safeguard").
-      if (!options.no_safeguard) {
-        safeguard = FitLearnedIntervalSafeguard(model, written, held_out);
-        written.SetIntervalScale(safeguard.Scales());
-      }
-    }
-  }
+  const LearnedUncertainty uncertainty = FitLearnedUncertainty(model, logs, train, options, &written);
   OutputFiles files;
   written.Save(options.out);
   files.Add(options.out);
@@ -169,8 +181,8 @@ int Train(const TrainCliOptions& options) {
                                             : "";
     std::printf("%s predictor of %s%s, %d frame(s) ahead at %g fps: %s\n", what.c_str(), model.name.c_str(),
                 over.c_str(), train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
-    if (noise) std::printf("on the held-out rows, %s", FormatLearnedNoiseFit(*noise).c_str());
-    if (!safeguard.on.empty()) {
+    if (const auto& noise = uncertainty.noise) std::printf("on the held-out rows, %s", FormatLearnedNoiseFit(*noise).c_str());
+    if (const OmniIntervalSafeguard& safeguard = uncertainty.safeguard; !safeguard.on.empty()) {
       std::printf("intervals' safeguard (a conformal scale of the rollouts' spread, fitted on the %s; each fold with "
                   "the others' scale, its share in the 90 %% regions without -> with it):\n%s",
                   safeguard.on.c_str(), FormatSafeguard(safeguard, logs.front().frame_period).c_str());
