@@ -8,9 +8,9 @@
 #include <sstream>
 
 #include "analysis/omni_replay.h"
-#include "estimation/omni_observer.h"
 #include "core/error.h"
 #include "core/pattern_search.h"
+#include "estimation/omni_observer.h"
 
 namespace twinsim {
 namespace {
