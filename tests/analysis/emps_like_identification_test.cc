@@ -274,9 +274,9 @@ TEST(EmpsLikeDrive, AMaxwellSlipElementIsFoundOnADriveThatDeflectsBeforeItSlides
 // explains the logged force far better than the steady friction, most near the true
 // stiffness: a pre-sliding drive leaves a torque signature that the steady formula
 // cannot, which a diagnosis could read. Measured (2026-12-04, the log derived at the
-// 40 Hz the identification chooses): RMS over every row 14.8 N without bristles, 8.0 N
-// at the true 2e5 N/m, 5.2 N at 4e5, 7.6 N at 1e6; over the rows moving at 1 mm/s or more
-// 6.28, 4.95, 4.92 and 5.70 N.
+// 40 Hz the identification chooses): RMS over every row 14.8 N without bristles, 11.4 N
+// at 1e5 N/m, 8.0 N at the true 2e5, 7.7 N at 1e6; over the rows moving at 1 mm/s or
+// more 6.28, 5.63, 4.96 and 5.85 N.
 TEST(EmpsLikeDrive, TheReplayFollowingAMaxwellSlipElementExplainsAPreslidingDrivesForce) {
   if (!testing::MujocoAvailable()) GTEST_SKIP() << "built without MuJoCo";
   testing::EmpsLikeRecording how;

@@ -365,25 +365,29 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
   const long n = qd.size();
   Eigen::VectorXd out(n);
   const JointEffects e = model.effects.joint(joint);
-  if (!e.presliding() || !e.stribeck()) {
+  if (!e.presliding() || !e.stribeck() || n < 2 || t.size() != n) {
     for (long r = 0; r < n; ++r) out[r] = ArmFrictionTorque(model, joint, qd[r]);
     return out;
   }
   constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
   const double viscous = model.joints.at(static_cast<std::size_t>(joint)).viscous + e.viscous;
   const double s0 = e.bristle_stiffness, s1 = e.bristle_damping;
-  // At the first row: the steady deflection of its velocity, whose force is the level.
-  double z = n > 0 && qd[0] != 0 ? std::copysign(ArmDryFrictionLevel(model, joint, qd[0]), qd[0]) / s0 : 0;
-  if (n > 0) out[0] = s0 * z + viscous * qd[0];
-  for (long r = 1; r < n; ++r) {
-    const double h = t[r] - t[r - 1];
+  // At the first row: the steady deflection of its velocity, whose force is the level
+  // (unloaded at rest: the log does not say what holds it).
+  double z = qd[0] != 0 ? std::copysign(ArmDryFrictionLevel(model, joint, qd[0]), qd[0]) / s0 : 0;
+  for (long r = 0; r < n; ++r) {
+    // Row r's friction is the step's from row r to r + 1, as the simulation logs a row
+    // (its state before the step, the command acting over it); the last row's, the step
+    // before it again at a held velocity.
+    const double h = r + 1 < n ? t[r + 1] - t[r] : t[r] - t[r - 1];
+    const double next = r + 1 < n ? qd[r + 1] : qd[r];
     const double z0 = z;
-    z = ArmBristleStepFrom(model, joint, z0, qd[r - 1], h).At(qd[r]);
+    z = ArmBristleStepFrom(model, joint, z0, qd[r], h).At(next);
     double dry = s0 * z + s1 * (z - z0) / h;
     if (e.bristle_slip) {
       // Beyond the dry level (the step's start speed, either way) the element slips
       // carrying exactly that level: its deflection makes sigma0 z + sigma1 z' equal it.
-      const double speed = std::abs(qd[r - 1]);
+      const double speed = std::abs(qd[r]);
       const double level = dry > 0 ? ArmDryFrictionLevel(model, joint, speed)
                                    : -ArmDryFrictionLevel(model, joint, -std::max(speed, kTinySpeed));
       if (std::abs(dry) > std::abs(level)) {
@@ -391,7 +395,7 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
         dry = level;
       }
     }
-    out[r] = dry + viscous * qd[r];
+    out[r] = dry + 0.5 * viscous * (qd[r] + next);  // viscous over the step, trapezoidal as the simulation's
   }
   return out;
 }

@@ -152,13 +152,17 @@ ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, d
 
 // The friction torque of joint j along a logged motion (times t, velocities qd, one per
 // row): ArmFrictionTorque at each row, except on a pre-sliding joint
-// (JointEffects::presliding), whose bristles are followed along the rows as the
-// simulation steps them (ArmBristleStepFrom from row to row; a Maxwell-slip element
-// slips where its force would pass the dry level), the friction at a row their
-// sigma0 z + sigma1 z' (z' over the step that ends there) plus the viscous part. They
-// start at their steady deflection for the first row's velocity (none at rest). So the
-// replay of a log is the inverse of the simulation that follows the bristles, where the
-// steady formula would flip the dry friction's sign at every reversal at once.
+// (JointEffects::presliding, with its Stribeck effect as a model file gives them), whose
+// bristles are followed along the rows as the simulation steps them. A row is read as
+// the simulation logs one, its state before a step and the command acting over that
+// step: its friction is the step's to the next row (ArmBristleStepFrom; a Maxwell-slip
+// element slips where its force would pass the dry level), sigma0 z + sigma1 z' at the
+// step's end plus the viscous part over the step; the last row repeats the step before
+// at a held velocity. The bristles start at the steady deflection of the first row's
+// velocity, unloaded at rest. So the replay of a simulated log is the simulation's
+// inverse on such a joint (one physics step per row), where the steady formula would
+// flip the dry friction's sign at every reversal at once. Fewer than 2 rows, or times
+// not matching the velocities: the steady formula.
 Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& qd);
 
 // The rigid bodies the physics engines simulate: `model` with its payload lumped into
