@@ -242,10 +242,9 @@ class ArmProblem : public DiagnosisProblem {
     Eigen::VectorXd needed = d.rigid.col(j);
     if (payload.size()) needed += payload.col(j);
     const auto& qd = d.log->qd;
-    const bool along = trial.effects.joint(j).presliding();
-    const Eigen::VectorXd friction = along ? ArmFrictionAlong(trial, j, d.log->t, qd.col(j)) : Eigen::VectorXd();
+    const Eigen::VectorXd friction = ArmFrictionAlong(trial, j, d.log->t, qd.col(j));
     for (int r = 0; r < d.log->rows(); ++r) {
-      if (std::abs(qd(r, j)) >= standstill_) needed[r] += along ? friction[r] : ArmFrictionTorque(trial, j, qd(r, j));
+      if (std::abs(qd(r, j)) >= standstill_) needed[r] += friction[r];
     }
     return needed;
   }

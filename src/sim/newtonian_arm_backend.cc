@@ -23,7 +23,6 @@ constexpr double kMaxSpringPhasePerStepTrapezoidal = 0.34;  // rad
 // physics steps per sample.
 constexpr double kMaxBristlePhasePerStep = 0.5;  // rad: h sqrt(sigma0 / J_l)
 constexpr int kMaxBristleSubsteps = 64;
-constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
 // The velocity-level friction solve: projected Gauss-Seidel sweeps over the joints.
 constexpr int kFrictionSweeps = 50;
 constexpr double kFrictionTolerance = 1e-13;  // relative change of a sweep that ends it
@@ -244,9 +243,9 @@ void NewtonianArmBackend::PrepareBristles(int j, double qd, double h) {
   scratch_.bristle_gain[j] = (e.bristle_stiffness + e.bristle_damping / h) * step.slope + 0.5 * viscous;
   if (e.bristle_slip) {
     // The dry levels the element slips at, either way (the start's speed).
-    const double speed = std::abs(qd);
-    scratch_.slip_level_positive[j] = ArmDryFrictionLevel(model_, j, speed);
-    scratch_.slip_level_negative[j] = ArmDryFrictionLevel(model_, j, -std::max(speed, kTinySpeed));
+    const ArmSlipLevels levels = ArmMaxwellSlipLevels(model_, j, qd);
+    scratch_.slip_level_positive[j] = levels.positive;
+    scratch_.slip_level_negative[j] = levels.negative;
   }
 }
 
@@ -265,8 +264,7 @@ double NewtonianArmBackend::BristleFriction(int j, double v, double w, double qd
   const double level = dry > 0 ? s.slip_level_positive[j] : -s.slip_level_negative[j];
   if (std::abs(dry) <= std::abs(level)) return f;
   s.slid[k] = true;
-  s.slid_deflection[j] =
-      (level + e.bristle_damping * state_.bristle[j] / h) / (e.bristle_stiffness + e.bristle_damping / h);
+  s.slid_deflection[j] = ArmMaxwellSlipDeflection(e, level, state_.bristle[j], h);
   return (level + 0.5 * viscous * (qd + v)) / (1 + 0.5 * w * viscous);
 }
 

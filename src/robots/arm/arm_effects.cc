@@ -361,6 +361,16 @@ ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, d
   return {z0 * std::exp(-ah) + qd0 * (p - q), q};
 }
 
+ArmSlipLevels ArmMaxwellSlipLevels(const ArmModel& model, int joint, double qd0) {
+  constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
+  const double speed = std::abs(qd0);
+  return {ArmDryFrictionLevel(model, joint, speed), ArmDryFrictionLevel(model, joint, -std::max(speed, kTinySpeed))};
+}
+
+double ArmMaxwellSlipDeflection(const JointEffects& effects, double level, double z0, double h) {
+  return (level + effects.bristle_damping * z0 / h) / (effects.bristle_stiffness + effects.bristle_damping / h);
+}
+
 Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& qd) {
   const long n = qd.size();
   Eigen::VectorXd out(n);
@@ -369,7 +379,6 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
     for (long r = 0; r < n; ++r) out[r] = ArmFrictionTorque(model, joint, qd[r]);
     return out;
   }
-  constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
   const double viscous = model.joints.at(static_cast<std::size_t>(joint)).viscous + e.viscous;
   const double s0 = e.bristle_stiffness, s1 = e.bristle_damping;
   // At the first row: the steady deflection of its velocity, whose force is the level
@@ -386,12 +395,10 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
     double dry = s0 * z + s1 * (z - z0) / h;
     if (e.bristle_slip) {
       // Beyond the dry level (the step's start speed, either way) the element slips
-      // carrying exactly that level: its deflection makes sigma0 z + sigma1 z' equal it.
-      const double speed = std::abs(qd[r]);
-      const double level = dry > 0 ? ArmDryFrictionLevel(model, joint, speed)
-                                   : -ArmDryFrictionLevel(model, joint, -std::max(speed, kTinySpeed));
+      // carrying exactly that level.
+      const double level = ArmMaxwellSlipLevels(model, joint, qd[r]).For(dry);
       if (std::abs(dry) > std::abs(level)) {
-        z = (level + s1 * z0 / h) / (s0 + s1 / h);
+        z = ArmMaxwellSlipDeflection(e, level, z0, h);
         dry = level;
       }
     }

@@ -150,6 +150,18 @@ struct ArmBristleStep {
 };
 ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h);
 
+// A Maxwell-slip element (JointEffects::bristle_slip) over a step that starts at speed
+// qd0: the dry levels it slips at either way (both >= 0; `negative` the level's size
+// going negative), and, once it slips at the signed `level`, its deflection from z0 over
+// h seconds, what makes sigma0 z + sigma1 (z - z0) / h equal the level. The simulation
+// and the replay (ArmFrictionAlong) slip by these alike.
+struct ArmSlipLevels {
+  double positive = 0, negative = 0;
+  double For(double force) const { return force > 0 ? positive : -negative; }  // signed, on force's side
+};
+ArmSlipLevels ArmMaxwellSlipLevels(const ArmModel& model, int joint, double qd0);
+double ArmMaxwellSlipDeflection(const JointEffects& effects, double level, double z0, double h);
+
 // The friction torque of joint j along a logged motion (times t, velocities qd, one per
 // row): ArmFrictionTorque at each row, except on a pre-sliding joint
 // (JointEffects::presliding, with its Stribeck effect as a model file gives them), whose
