@@ -526,6 +526,7 @@ std::vector<std::map<std::string, double>> StandardErrors(const DiagnosisProblem
   std::vector<Slot> slots;
   for (std::size_t i = 0; i < effects.size(); ++i) {
     for (const auto& [key, value] : effects[i].parameters) {
+      if (problem.Derived(effects[i], key)) continue;
       slots.push_back({i, key});
       out[i][key] = nan;
     }

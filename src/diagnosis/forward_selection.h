@@ -111,6 +111,9 @@ class DiagnosisProblem {
   // stands for something else (a torque limit under most commands fits a model that
   // needs too little torque on its joint; issue 41, the KUKA's joint 5).
   virtual std::vector<std::string> MustBeDetermined(const TrialEffect& effect) const { return {}; }
+  // True for a parameter of `effect` that follows from the others (a flag, or a damping
+  // set from a stiffness): it gets no standard error and is not varied for them.
+  virtual bool Derived(const TrialEffect& effect, const std::string& key) const { return false; }
 };
 
 struct SelectionResult {

@@ -329,9 +329,11 @@ void ReadArmEffects(const YAML::Node& list, const std::string& path, ArmModel* m
   }
 }
 
-double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
-  const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
-  const JointEffects e = model.effects.joint(joint);
+namespace {
+
+// ArmDryFrictionLevel and ArmFrictionTorque of a joint `nominal` with effects `e` (the
+// replay calls them for every row of a log).
+double DryFrictionLevel(const ArmJoint& nominal, const JointEffects& e, double qd) {
   double level = nominal.coulomb + (qd >= 0 ? e.coulomb_positive : e.coulomb_negative);
   if (e.stribeck()) {
     const double r = qd / e.stribeck_velocity;
@@ -340,12 +342,20 @@ double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
   return level;
 }
 
-double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
+double FrictionTorque(const ArmJoint& nominal, const JointEffects& e, double qd) {
   if (qd == 0) return 0;
-  const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
-  const JointEffects e = model.effects.joint(joint);
-  const double level = ArmDryFrictionLevel(model, joint, qd);
+  const double level = DryFrictionLevel(nominal, e, qd);
   return (nominal.viscous + e.viscous) * qd + (qd > 0 ? level : -level);
+}
+
+}  // namespace
+
+double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
+  return DryFrictionLevel(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), qd);
+}
+
+double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
+  return FrictionTorque(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), qd);
 }
 
 ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h) {
@@ -376,7 +386,8 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
   Eigen::VectorXd out(n);
   const JointEffects e = model.effects.joint(joint);
   if (!e.presliding() || !e.stribeck() || n < 2 || t.size() != n) {
-    for (long r = 0; r < n; ++r) out[r] = ArmFrictionTorque(model, joint, qd[r]);
+    const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
+    for (long r = 0; r < n; ++r) out[r] = FrictionTorque(nominal, e, qd[r]);
     return out;
   }
   const double viscous = model.joints.at(static_cast<std::size_t>(joint)).viscous + e.viscous;
