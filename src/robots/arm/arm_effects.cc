@@ -348,6 +348,25 @@ double FrictionTorque(const ArmJoint& nominal, const JointEffects& e, double qd)
   return (nominal.viscous + e.viscous) * qd + (qd > 0 ? level : -level);
 }
 
+// ArmBristleStepFrom and ArmMaxwellSlipLevels of a joint `nominal` with effects `e`.
+ArmBristleStep BristleStepFrom(const ArmJoint& nominal, const JointEffects& e, double z0, double qd0, double h) {
+  const double g = DryFrictionLevel(nominal, e, qd0);
+  // With v(t) = qd0 + (qd1 - qd0) t / h: z(h) = z0 E + qd0 P + (qd1 - qd0) Q, where
+  // E = exp(-a h), P = (1 - E) / a and Q = (h - P) / (a h) (h and h / 2 as a -> 0).
+  const double a = g > 0 && !e.bristle_slip ? e.bristle_stiffness * std::abs(qd0) / g : 0;
+  const double ah = a * h;
+  if (ah < 1e-8) return {z0 + 0.5 * h * qd0, 0.5 * h};
+  const double p = -std::expm1(-ah) / a;
+  const double q = (h - p) / ah;
+  return {z0 * std::exp(-ah) + qd0 * (p - q), q};
+}
+
+ArmSlipLevels MaxwellSlipLevels(const ArmJoint& nominal, const JointEffects& e, double qd0) {
+  constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
+  const double speed = std::abs(qd0);
+  return {DryFrictionLevel(nominal, e, speed), DryFrictionLevel(nominal, e, -std::max(speed, kTinySpeed))};
+}
+
 }  // namespace
 
 double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
@@ -359,22 +378,11 @@ double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
 }
 
 ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h) {
-  const JointEffects e = model.effects.joint(joint);
-  const double g = ArmDryFrictionLevel(model, joint, qd0);
-  // With v(t) = qd0 + (qd1 - qd0) t / h: z(h) = z0 E + qd0 P + (qd1 - qd0) Q, where
-  // E = exp(-a h), P = (1 - E) / a and Q = (h - P) / (a h) (h and h / 2 as a -> 0).
-  const double a = g > 0 && !e.bristle_slip ? e.bristle_stiffness * std::abs(qd0) / g : 0;
-  const double ah = a * h;
-  if (ah < 1e-8) return {z0 + 0.5 * h * qd0, 0.5 * h};
-  const double p = -std::expm1(-ah) / a;
-  const double q = (h - p) / ah;
-  return {z0 * std::exp(-ah) + qd0 * (p - q), q};
+  return BristleStepFrom(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), z0, qd0, h);
 }
 
 ArmSlipLevels ArmMaxwellSlipLevels(const ArmModel& model, int joint, double qd0) {
-  constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
-  const double speed = std::abs(qd0);
-  return {ArmDryFrictionLevel(model, joint, speed), ArmDryFrictionLevel(model, joint, -std::max(speed, kTinySpeed))};
+  return MaxwellSlipLevels(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), qd0);
 }
 
 double ArmMaxwellSlipDeflection(const JointEffects& effects, double level, double z0, double h) {
@@ -385,16 +393,16 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
   const long n = qd.size();
   Eigen::VectorXd out(n);
   const JointEffects e = model.effects.joint(joint);
+  const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
   if (!e.presliding() || !e.stribeck() || n < 2 || t.size() != n) {
-    const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
     for (long r = 0; r < n; ++r) out[r] = FrictionTorque(nominal, e, qd[r]);
     return out;
   }
-  const double viscous = model.joints.at(static_cast<std::size_t>(joint)).viscous + e.viscous;
+  const double viscous = nominal.viscous + e.viscous;
   const double s0 = e.bristle_stiffness, s1 = e.bristle_damping;
   // At the first row: the steady deflection of its velocity, whose force is the level
   // (unloaded at rest: the log does not say what holds it).
-  double z = qd[0] != 0 ? std::copysign(ArmDryFrictionLevel(model, joint, qd[0]), qd[0]) / s0 : 0;
+  double z = qd[0] != 0 ? std::copysign(DryFrictionLevel(nominal, e, qd[0]), qd[0]) / s0 : 0;
   for (long r = 0; r < n; ++r) {
     // Row r's friction is the step's from row r to r + 1, as the simulation logs a row
     // (its state before the step, the command acting over it); the last row's, the step
@@ -402,12 +410,12 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
     const double h = r + 1 < n ? t[r + 1] - t[r] : t[r] - t[r - 1];
     const double next = r + 1 < n ? qd[r + 1] : qd[r];
     const double z0 = z;
-    z = ArmBristleStepFrom(model, joint, z0, qd[r], h).At(next);
+    z = BristleStepFrom(nominal, e, z0, qd[r], h).At(next);
     double dry = s0 * z + s1 * (z - z0) / h;
     if (e.bristle_slip) {
       // Beyond the dry level (the step's start speed, either way) the element slips
       // carrying exactly that level.
-      const double level = ArmMaxwellSlipLevels(model, joint, qd[r]).For(dry);
+      const double level = MaxwellSlipLevels(nominal, e, qd[r]).For(dry);
       if (std::abs(dry) > std::abs(level)) {
         z = ArmMaxwellSlipDeflection(e, level, z0, h);
         dry = level;
