@@ -835,8 +835,7 @@ void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int
 }
 
 void ArmProblem::TryBristles(std::vector<TrialEffect>* effects, const std::vector<int>& free, int i) const {
-  const TrialEffect plain = (*effects)[static_cast<std::size_t>(i)];
-  const int j = plain.joint;
+  const int j = (*effects)[static_cast<std::size_t>(i)].joint;
   const double plain_cost = Cost(*effects, {j});
   // Start from the best of a grid of deflections at the break-away level, a micro-radian
   // (or micrometre) to the most there is.
@@ -854,12 +853,12 @@ void ArmProblem::TryBristles(std::vector<TrialEffect>* effects, const std::vecto
   if (!(best_cost < (1 - kBristleMargin / 2) * plain_cost)) return;
   try {
     Refine(&best, free);
+    CheckResolved(best[static_cast<std::size_t>(i)]);  // too soft, or Coulomb friction by another name: the plain curve stays
   } catch (const InputError&) {
     return;
+  } catch (const CheckFailed&) {
+    return;
   }
-  const TrialEffect& p_effect = best[static_cast<std::size_t>(i)];
-  const auto& p = p_effect.parameters;
-  if (BristleDeflection(p_effect) > kMaxBristleDeflection || p.at("vs") < standstill_) return;  // CheckResolved's
   if (Cost(best, {j}) > (1 - kBristleMargin) * plain_cost) return;
   // And on the joint's selection rows, unseen by either fit: no worse than the plain curve.
   const auto selection = [&](const std::vector<TrialEffect>& e) {
@@ -895,8 +894,7 @@ std::string ArmProblem::Signature(const TrialEffect& e) const {
       std::snprintf(buf, sizeof buf,
                     "%s; before it slides the joint deflects on bristles of %s N·m/rad (%s mrad at the break-away), "
                     "so the friction turns round over a stretch of motion at each reversal, not at once",
-                    plain.c_str(), FormatParameter(p.at("sigma0")).c_str(),
-                    FormatParameter(1e3 * p.at("s") / p.at("sigma0")).c_str());
+                    plain.c_str(), FormatParameter(p.at("sigma0")).c_str(), FormatParameter(1e3 * BristleDeflection(e)).c_str());
     }
   } else if (e.name == "torque_offset") {
     std::snprintf(buf, sizeof buf, "a constant %s N·m at every posture, speed and acceleration, where a payload's torque would follow gravity",

@@ -163,7 +163,8 @@ NewtonianArmBackend::NewtonianArmBackend(const ArmModel& model, std::unique_ptr<
   scratch_.bristle_steps.assign(static_cast<std::size_t>(n), ArmBristleStep{});
   scratch_.bristle_torque = Eigen::VectorXd::Zero(n);
   scratch_.bristle_gain = Eigen::VectorXd::Zero(n);
-  scratch_.slip_level_positive = scratch_.slip_level_negative = scratch_.slid_deflection = Eigen::VectorXd::Zero(n);
+  scratch_.slip_levels.assign(static_cast<std::size_t>(n), ArmSlipLevels{});
+  scratch_.slid_deflection = Eigen::VectorXd::Zero(n);
   scratch_.slid.assign(static_cast<std::size_t>(n), false);
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
   Reset(zero, zero, zero);
@@ -243,9 +244,7 @@ void NewtonianArmBackend::PrepareBristles(int j, double qd, double h) {
   scratch_.bristle_gain[j] = (e.bristle_stiffness + e.bristle_damping / h) * step.slope + 0.5 * viscous;
   if (e.bristle_slip) {
     // The dry levels the element slips at, either way (the start's speed).
-    const ArmSlipLevels levels = ArmMaxwellSlipLevels(model_, j, qd);
-    scratch_.slip_level_positive[j] = levels.positive;
-    scratch_.slip_level_negative[j] = levels.negative;
+    scratch_.slip_levels[k] = ArmMaxwellSlipLevels(model_, j, qd);
   }
 }
 
@@ -261,7 +260,7 @@ double NewtonianArmBackend::BristleFriction(int j, double v, double w, double qd
   // what makes sigma0 z + sigma1 (z - z0) / h equal it.
   const double viscous = model_.joints[k].viscous + e.viscous;
   const double dry = f - 0.5 * viscous * (qd + v - w * f);
-  const double level = dry > 0 ? s.slip_level_positive[j] : -s.slip_level_negative[j];
+  const double level = s.slip_levels[k].For(dry);
   if (std::abs(dry) <= std::abs(level)) return f;
   s.slid[k] = true;
   s.slid_deflection[j] = ArmMaxwellSlipDeflection(e, level, state_.bristle[j], h);

@@ -88,7 +88,7 @@ class NewtonianArmBackend final : public ArmBackend {
     Eigen::VectorXd damping_inverse;        // dof: 1 / (1 + (h M^-1)_jj b_j / 2)
     std::vector<ArmBristleStep> bristle_steps;  // dof: LuGre joints' bristles over the step
     Eigen::VectorXd bristle_torque, bristle_gain;  // dof: their friction A + B v_end
-    Eigen::VectorXd slip_level_positive, slip_level_negative;  // dof: Maxwell-slip elements' levels
+    std::vector<ArmSlipLevels> slip_levels;  // dof: Maxwell-slip elements' levels over the step
     std::vector<bool> slid;          // dof: the element slipped in the last solve
     Eigen::VectorXd slid_deflection;  // dof: its deflection then
   };
