@@ -59,10 +59,12 @@ void BindOmniObserver(py::module_& m, const std::function<OmniModel(const py::ha
             d["velocity"] = TwistArray(e.velocity);
             d["model_velocity"] = TwistArray(e.model_velocity);
             d["slip"] = TwistArray(e.slip);
-            d["covariance"] = Eigen::MatrixXd(e.covariance);
+            d["drift"] = TwistArray(e.drift);
+            const int n = o.has_drift() ? kObserverStates : kObserverStatesWithoutDrift;
+            d["covariance"] = Eigen::MatrixXd(e.covariance.topLeftCorner(n, n));
             return d;
           },
-          "dict: frame, pose (x, y, theta), velocity, model_velocity and slip (robot frame), covariance (9 x 9)")
+          "dict: frame, pose, velocity (model_velocity + slip + drift), model_velocity, slip, drift, covariance (9 x 9; 12 x 12 with a drift)")
       .def(
           "predict",
           [](OmniObserver& o, int k, const std::vector<std::vector<double>>& planned, bool covariance) {

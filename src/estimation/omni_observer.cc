@@ -44,6 +44,31 @@ std::unique_ptr<OmniBackend> MakeFilterBackend(const OmniModel& model, const std
 
 namespace {
 
+using WithoutDrift = Eigen::Matrix<double, kObserverStatesWithoutDrift, kObserverStatesWithoutDrift>;
+
+// P <- F P F^T + Q, kept symmetric, on a filter of N states.
+template <int N>
+void PropagateCovariance(const Eigen::Matrix<double, N, N>& f, const Eigen::Matrix<double, N, N>& q,
+                         Eigen::Matrix<double, N, N>* p) {
+  *p = f * *p * f.transpose() + q;
+  *p = 0.5 * (*p + p->transpose()).eval();
+}
+
+// The correction of a filter of N states by a pose innovation nu (S's factor `llt`, R
+// the pose's covariance), in Joseph's form: P <- (I - K H) P (I - K H)^T + K R K^T, H the
+// first three states. Returns K nu.
+template <int N>
+Eigen::Matrix<double, N, 1> CorrectCovariance(const Eigen::LLT<Eigen::Matrix3d>& llt, const Eigen::Vector3d& nu,
+                                              const Eigen::Matrix3d& r, Eigen::Matrix<double, N, N>* p) {
+  const Eigen::Matrix<double, N, 3> gain = llt.solve(p->template topLeftCorner<N, 3>().transpose()).transpose();
+  const Eigen::Matrix<double, N, 1> delta = gain * nu;
+  Eigen::Matrix<double, N, N> ikh = Eigen::Matrix<double, N, N>::Identity();
+  ikh.template leftCols<3>() -= gain;
+  *p = ikh * *p * ikh.transpose() + gain * r * gain.transpose();
+  *p = 0.5 * (*p + p->transpose()).eval();
+  return delta;
+}
+
 FrameTiming TimingAt(double frame_rate) {
   if (!(frame_rate > 0)) throw InputError("observer: the frame rate must be positive");
   FrameTiming timing;
@@ -81,6 +106,8 @@ OmniObserver::OmniObserver(const OmniModel& model, std::unique_ptr<OmniBackend> 
   sent_.assign(static_cast<std::size_t>(delay_ + 1), Twist2{});
   r_ = MeasurementCovariance(model);
   slip_decay_ = std::exp(-dt_ / model.driving_noise.correlation_time);
+  has_drift_ = model.driving_noise.drift.any();
+  drift_decay_ = std::exp(-dt_ / model.driving_noise.drift.correlation_time);
 }
 
 OmniObserver::~OmniObserver() = default;
@@ -90,7 +117,10 @@ ObserverMatrix OmniObserver::InitialCovariance() const {
   p.topLeftCorner<3, 3>() = r_;
   p(3, 3) = p(4, 4) = options_.initial_speed_sd * options_.initial_speed_sd;
   p(5, 5) = options_.initial_turn_sd * options_.initial_turn_sd;
-  for (int a = 0; a < 3; ++a) p(6 + a, 6 + a) = std::pow(model_.driving_noise.sd[static_cast<std::size_t>(a)], 2);
+  for (int a = 0; a < 3; ++a) {
+    p(6 + a, 6 + a) = std::pow(model_.driving_noise.sd[static_cast<std::size_t>(a)], 2);
+    p(9 + a, 9 + a) = std::pow(model_.driving_noise.drift.sd[static_cast<std::size_t>(a)], 2);
+  }
   return p;
 }
 
@@ -107,6 +137,7 @@ ObserverMatrix OmniObserver::ProcessNoise(double theta, double speed, double acc
     q.block<1, 3>(3 + a, 0) += qa * dt2 * g.transpose();
     q(3 + a, 3 + a) += qa * dt;
     q(6 + a, 6 + a) = std::pow(model_.driving_noise.Spread(a, speed, acceleration, turn_rate), 2) * (1 - slip_decay_ * slip_decay_);
+    q(9 + a, 9 + a) = std::pow(model_.driving_noise.drift.sd[static_cast<std::size_t>(a)], 2) * (1 - drift_decay_ * drift_decay_);
   }
   return q;
 }
@@ -122,16 +153,18 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   Pose2 base_pose = backend_->pose(0);  // the model's own step, for F
   Twist2 base_velocity = backend_->velocity(0);
   const double acceleration = std::hypot(base_velocity.vx - v0.vx, base_velocity.vy - v0.vy) / dt_;  // m/s^2
-  // The slip moves the body on, unseen by the wheels; then it decays.
+  // The slip and the drift move the body on, unseen by the wheels; then they decay.
   const double c = std::cos(p0.theta), sn = std::sin(p0.theta);
   Pose2 moved = base_pose;
-  if (!slip_.isZero()) {
-    moved.x += dt_ * (c * slip_[0] - sn * slip_[1]);
-    moved.y += dt_ * (sn * slip_[0] + c * slip_[1]);
-    moved.theta += dt_ * slip_[2];
+  const Eigen::Vector3d unseen = has_drift_ ? Eigen::Vector3d(slip_ + drift_) : slip_;
+  if (!unseen.isZero()) {
+    moved.x += dt_ * (c * unseen[0] - sn * unseen[1]);
+    moved.y += dt_ * (sn * unseen[0] + c * unseen[1]);
+    moved.theta += dt_ * unseen[2];
     backend_->MoveBody(0, moved);
   }
   slip_ *= slip_decay_;
+  drift_ *= drift_decay_;
   if (!jacobian) return;
   // F's model-velocity columns by forward differences of the model over the frame.
   if (difference) {
@@ -166,6 +199,11 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   } else {
     ++frames_since_jacobian_;
   }
+  Propagate(p0, moved, difference, v0, acceleration);
+}
+
+void OmniObserver::Propagate(const Pose2& p0, const Pose2& moved, bool difference, const Twist2& v0, double acceleration) {
+  const double c = std::cos(p0.theta), sn = std::sin(p0.theta);
   ObserverMatrix f = ObserverMatrix::Identity();
   f(0, 2) = -(moved.y - p0.y);
   f(1, 2) = moved.x - p0.x;
@@ -181,15 +219,26 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
       f(1, 3 + j) = st * x + ct * y;
     }
   }
-  // The slip's columns: it moves the pose along the robot's axes, and decays.
-  f(0, 6) = dt_ * c;
-  f(0, 7) = -dt_ * sn;
-  f(1, 6) = dt_ * sn;
-  f(1, 7) = dt_ * c;
-  f(2, 8) = dt_;
-  for (int a = 0; a < 3; ++a) f(6 + a, 6 + a) = slip_decay_;
-  p_ = f * p_ * f.transpose() + ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration, v0.omega);
-  p_ = 0.5 * (p_ + p_.transpose()).eval();
+  // The slip's and the drift's columns: they move the pose along the robot's axes, and
+  // decay.
+  for (int first : {6, 9}) {
+    f(0, first) = dt_ * c;
+    f(0, first + 1) = -dt_ * sn;
+    f(1, first) = dt_ * sn;
+    f(1, first + 1) = dt_ * c;
+    f(2, first + 2) = dt_;
+    for (int a = 0; a < 3; ++a) f(first + a, first + a) = first == 6 ? slip_decay_ : drift_decay_;
+  }
+  const ObserverMatrix q = ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration, v0.omega);
+  if (has_drift_) {
+    PropagateCovariance<kObserverStates>(f, q, &p_);
+  } else {
+    // Without a drift, on the first nine states alone (its rows and columns stay zero).
+    WithoutDrift p = p_.topLeftCorner<kObserverStatesWithoutDrift, kObserverStatesWithoutDrift>();
+    PropagateCovariance<kObserverStatesWithoutDrift>(f.topLeftCorner<kObserverStatesWithoutDrift, kObserverStatesWithoutDrift>(),
+                                                     q.topLeftCorner<kObserverStatesWithoutDrift, kObserverStatesWithoutDrift>(), &p);
+    p_.topLeftCorner<kObserverStatesWithoutDrift, kObserverStatesWithoutDrift>() = p;
+  }
 }
 
 Twist2 OmniObserver::Acting(int ahead, const std::vector<Twist2>& planned) const {
@@ -205,6 +254,7 @@ void OmniObserver::Restart(const Pose2& pose, const Twist2& velocity) {
   backend_->MoveBody(0, pose);
   backend_->SetVelocity(0, velocity);
   slip_.setZero();
+  drift_.setZero();
   p_ = InitialCovariance();
   refused_in_a_row_ = 0;
 }
@@ -233,7 +283,7 @@ void OmniObserver::Advance(const Twist2& acting, bool covariance) {
   Step(acting, covariance);
   const Pose2 pose = backend_->pose(0);
   const Twist2 velocity = backend_->velocity(0);
-  if (!IsFinite(pose) || !IsFinite(velocity) || !p_.allFinite() || !slip_.allFinite()) {
+  if (!IsFinite(pose) || !IsFinite(velocity) || !p_.allFinite() || !slip_.allFinite() || !drift_.allFinite()) {
     std::ostringstream msg;
     msg << "observer: model " << model_.name << " on " << backend_->name() << " diverged at frame " << frame_;
     throw CheckFailed(msg.str());
@@ -243,6 +293,7 @@ void OmniObserver::Advance(const Twist2& acting, bool covariance) {
 void OmniObserver::Begin(const Pose2& pose, const Twist2& velocity) {
   backend_->Reset(0, pose, velocity);
   slip_.setZero();
+  drift_.setZero();
   frames_since_jacobian_ = -1;
   p_ = InitialCovariance();
   refused_in_a_row_ = 0;
@@ -281,16 +332,18 @@ bool OmniObserver::CorrectFrame(const Pose2& camera) {
     return false;
   }
   refused_in_a_row_ = 0;
-  const Eigen::Matrix<double, kObserverStates, 3> gain =
-      llt.solve(p_.topLeftCorner<kObserverStates, 3>().transpose()).transpose();
-  const Eigen::Matrix<double, kObserverStates, 1> delta = gain * nu;
-  ObserverMatrix ikh = ObserverMatrix::Identity();
-  ikh.leftCols<3>() -= gain;
-  p_ = ikh * p_ * ikh.transpose() + gain * r_ * gain.transpose();
-  p_ = 0.5 * (p_ + p_.transpose()).eval();
+  Eigen::Matrix<double, kObserverStates, 1> delta = Eigen::Matrix<double, kObserverStates, 1>::Zero();
+  if (has_drift_) {
+    delta = CorrectCovariance<kObserverStates>(llt, nu, r_, &p_);
+  } else {
+    WithoutDrift p = p_.topLeftCorner<kObserverStatesWithoutDrift, kObserverStatesWithoutDrift>();
+    delta.head<kObserverStatesWithoutDrift>() = CorrectCovariance<kObserverStatesWithoutDrift>(llt, nu, r_, &p);
+    p_.topLeftCorner<kObserverStatesWithoutDrift, kObserverStatesWithoutDrift>() = p;
+  }
   backend_->MoveBody(0, Pose2{pose.x + delta[0], pose.y + delta[1], pose.theta + delta[2]});
   backend_->SetVelocity(0, Twist2{velocity.vx + delta[3], velocity.vy + delta[4], velocity.omega + delta[5]});
-  slip_ += delta.tail<3>();
+  slip_ += delta.segment<3>(6);
+  drift_ += delta.tail<3>();
 
   const double log_det = 2 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
   ++stats_.updates;
@@ -309,6 +362,7 @@ OmniObserverState OmniObserver::Save() const {
   s.backend = backend_->Save();
   s.covariance = p_;
   s.slip = slip_;
+  s.drift = drift_;
   s.velocity_columns = velocity_columns_;
   s.jacobian_theta = jacobian_theta_;
   s.frames_since_jacobian = frames_since_jacobian_;
@@ -325,6 +379,7 @@ void OmniObserver::Restore(const OmniObserverState& s) {
   backend_->Restore(s.backend);
   p_ = s.covariance;
   slip_ = s.slip;
+  drift_ = s.drift;
   velocity_columns_ = s.velocity_columns;
   jacobian_theta_ = s.jacobian_theta;
   frames_since_jacobian_ = s.frames_since_jacobian;
@@ -353,7 +408,9 @@ OmniEstimate OmniObserver::Estimate() const {
   e.pose = backend_->pose(0);
   e.model_velocity = backend_->velocity(0);
   e.slip = Twist2{slip_[0], slip_[1], slip_[2]};
-  e.velocity = Twist2{e.model_velocity.vx + slip_[0], e.model_velocity.vy + slip_[1], e.model_velocity.omega + slip_[2]};
+  e.drift = Twist2{drift_[0], drift_[1], drift_[2]};
+  const Eigen::Vector3d unseen = has_drift_ ? Eigen::Vector3d(slip_ + drift_) : slip_;
+  e.velocity = Twist2{e.model_velocity.vx + unseen[0], e.model_velocity.vy + unseen[1], e.model_velocity.omega + unseen[2]};
   e.covariance = p_;
   return e;
 }
@@ -391,7 +448,8 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
 
 Eigen::VectorXd OmniObserver::InputFeature() const {
   const Twist2 v = backend_->velocity(0);
-  return SeenInputFeature(wheels_from_body_, last_acting_, Twist2{v.vx + slip_[0], v.vy + slip_[1], v.omega + slip_[2]});
+  const Eigen::Vector3d unseen = has_drift_ ? Eigen::Vector3d(slip_ + drift_) : slip_;
+  return SeenInputFeature(wheels_from_body_, last_acting_, Twist2{v.vx + unseen[0], v.vy + unseen[1], v.omega + unseen[2]});
 }
 
 }  // namespace twinsim

@@ -9,19 +9,23 @@
 // Bullet), which the filter steps one camera frame at a time. Beside it the body slips:
 // it moves at the model's velocity plus a slip d that the wheels, and so the on-board
 // controller, do not see (the driving noise), a first-order Gauss-Markov process per
-// robot axis of spread sigma_a and correlation time T (model.driving_noise). The
-// filter's state is
-//   s = (x, y, theta, vx, vy, omega, dx, dy, domega): the pose in the field frame, the
-//   model's velocity and the slip in the robot's,
-// with its covariance P. Per frame f (period dt, a = exp(-dt / T)):
+// robot axis of spread sigma_a and correlation time T (model.driving_noise), and, where
+// the model has one, a slow slip b beside it, the same kind of process of spread
+// sigma_b,a and correlation time T_b (driving_noise.drift: a run's own drift, which the
+// filter learns over seconds of frames and carries far ahead). The filter's state is
+//   s = (x, y, theta, vx, vy, omega, dx, dy, domega, bx, by, bomega): the pose in the
+//   field frame, the model's velocity, the slip and the drift in the robot's,
+// with its covariance P (the drift's rows and columns zero, and never computed, for a
+// model without one). Per frame f (period dt, a = exp(-dt / T), a_b = exp(-dt / T_b)):
 //   predict  the backend steps from f-1 to f under the command sent at f-1-D (D = the
 //            model's command + vision delay, in frames: the filter runs at the camera's
-//            capture time); the pose moves on by R(theta) d dt; d <- a d. P <- F P F^T + Q
+//            capture time); the pose moves on by R(theta) (d + b) dt; d <- a d,
+//            b <- a_b b. P <- F P F^T + Q
 //            with F the frame's Jacobian: the pose block exactly (a turn of the start pose
 //            swings the frame's displacement with it), the model velocity's columns by
 //            finite differences of the model itself (on its analytic twin when the
-//            backend is ODE or Bullet), the slip's as written. Q holds the slip's
-//            innovations sigma_a^2 (1 - a^2) and white acceleration of spectral density
+//            backend is ODE or Bullet), the slip's and drift's as written. Q holds their
+//            innovations sigma_a^2 (1 - a^2), sigma_b,a^2 (1 - a_b^2), and white acceleration of spectral density
 //            q_a (model.observer.process_noise squared) on the model's velocity along
 //            each robot axis a, integrated over the frame:
 //              Q_a = q_a [dt^3/3 g g^T, dt^2/2 g e_a^T; dt^2/2 e_a g^T, dt e_a e_a^T],
@@ -35,7 +39,7 @@
 //            robot was carried away).
 // A frame without a camera pose only predicts: P grows, and after a gap of seconds the
 // next pose is taken with the weight the grown P gives it (the filter re-acquires).
-// Predictions ahead carry the slip on, decaying as a^k.
+// Predictions ahead carry the slip on, decaying as a^k, and the drift as a_b^k.
 //
 //   OmniObserver observer(model, "analytic", 1.0 / log.frame_period);
 //   per frame:  observer.AddFrame(camera_pose_or_nullopt, command_sent_now);
@@ -91,17 +95,20 @@ inline const char* OmniReplayStateName(OmniReplayState state) { return kOmniRepl
 bool ParseOmniReplayState(const std::string& word, OmniReplayState* state, std::string* why,
                           const std::string& what = "--state");
 
-inline constexpr int kObserverStates = 9;
+inline constexpr int kObserverStates = 12;
+// The states of a filter whose model has no drift (the first nine).
+inline constexpr int kObserverStatesWithoutDrift = 9;
 using ObserverMatrix = Eigen::Matrix<double, kObserverStates, kObserverStates>;
 
 // The filter's estimate at its newest frame.
 struct OmniEstimate {
   int frame = -1;         // frames since the first AddFrame (-1: not started)
   Pose2 pose;             // field frame
-  Twist2 velocity;        // robot frame: the body's, the model's velocity plus the slip
+  Twist2 velocity;        // robot frame: the body's, the model's velocity plus the slip and drift
   Twist2 model_velocity;  // robot frame: the model's (what its wheels and controller see)
   Twist2 slip;            // robot frame: the slip
-  // Of (x, y, theta, model vx, vy, omega, slip vx, vy, omega).
+  Twist2 drift;           // robot frame: the slow slip (zero for a model without drift)
+  // Of (x, y, theta, model vx, vy, omega, slip vx, vy, omega, drift vx, vy, omega).
   ObserverMatrix covariance = ObserverMatrix::Zero();
 };
 
@@ -129,6 +136,7 @@ struct OmniObserverState {
   OmniBackendState backend;
   ObserverMatrix covariance = ObserverMatrix::Zero();
   Eigen::Vector3d slip = Eigen::Vector3d::Zero();
+  Eigen::Vector3d drift = Eigen::Vector3d::Zero();
   Eigen::Matrix<double, 6, 3> velocity_columns = Eigen::Matrix<double, 6, 3>::Zero();
   double jacobian_theta = 0;
   int frames_since_jacobian = -1;
@@ -184,6 +192,8 @@ class OmniObserver {
   void Restore(const OmniObserverState& state);
 
   bool started() const { return started_; }
+  // True when the model has a drift (the filter's state is then all kObserverStates).
+  bool has_drift() const { return has_drift_; }
   int delay_frames() const { return delay_; }
   const OmniModel& model() const { return model_; }
   OmniEstimate Estimate() const;
@@ -206,6 +216,9 @@ class OmniObserver {
  private:
   // One frame under the command acting now; with `jacobian`, P is propagated too.
   void Step(const Twist2& acting, bool jacobian);
+  // P over the frame from pose p0 (velocity v0, acceleration in m/s^2) to `moved`, F's
+  // velocity columns those last differenced (`difference`: in this frame).
+  void Propagate(const Pose2& p0, const Pose2& moved, bool difference, const Twist2& v0, double acceleration);
   // Q of one frame at heading theta (rad), the model's translational speed (m/s),
   // acceleration over the frame (m/s^2) and turn rate (rad/s).
   ObserverMatrix ProcessNoise(double theta, double speed, double acceleration, double turn_rate) const;
@@ -229,9 +242,12 @@ class OmniObserver {
   double jacobian_theta_ = 0;       // rad, the heading they were differenced at
   int frames_since_jacobian_ = -1;  // -1: none yet
   Eigen::Vector3d slip_ = Eigen::Vector3d::Zero();  // d, robot frame
+  Eigen::Vector3d drift_ = Eigen::Vector3d::Zero();  // b, robot frame
   Eigen::MatrixXd wheels_from_body_;                // J, for InputFeature
   Twist2 last_acting_;                              // the command of the newest frame's step
   double slip_decay_ = 0;                           // a
+  double drift_decay_ = 0;                          // a_b
+  bool has_drift_ = false;
   Eigen::Matrix3d r_ = Eigen::Matrix3d::Zero();
   bool started_ = false;
   int frame_ = -1;

@@ -1040,6 +1040,16 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
     model->driving_noise.simulated = true;
   }
+  model->driving_noise.drift = {};  // the given model's, if any, is fitted anew
+  if (options.noise && options.drift) {
+    say(6, "the noise's drift");
+    report->drift = IdentifyDrift(*model, views, noise_options);
+    report->drift_identified = true;
+    if (report->drift.kept) {
+      model->driving_noise.drift = report->drift.drift;
+      for (OmniCrossedNoise& c : report->noise.crossed) c.model.driving_noise.drift = report->drift.drift;
+    }
+  }
   // A noise fitted on the held-out blocks is calibrated there only across the halves.
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance,
@@ -1072,27 +1082,42 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
 // differently from the others (another direction, another floor) is then what the
 // scale is checked on: the model's own error out of its fit's reach, not only the
 // robot's wander.
+// With options.drift, the noise's drift is fitted first on the left-out logs'
+// innovations (the model's own error on a run it did not see, as that run's drift) into
+// *drift, and each left-out log is predicted with it where kept.
 OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::vector<OmniLog>& logs,
                                            const OmniIdentificationOptions& options, const OmniIntervalSafeguard& blocks,
-                                           const std::function<void(int, const std::string&)>& say) {
-  const OmniNoiseOptions noise_options;
+                                           const std::function<void(int, const std::string&)>& say,
+                                           OmniDriftIdentification* drift) {
+  OmniNoiseOptions noise_options;
+  noise_options.backend = options.backend;
+  noise_options.threads = options.threads;
   const std::vector<int> horizons = SafeguardHorizons(noise_options.horizons);
   OmniIdentificationOptions fold = options;
   fold.safeguard = OmniSafeguard::kOff;
   fold.keep_seen_inputs = true;  // each left-out log's distances from the others' fit
-  std::vector<std::vector<std::vector<SafeguardRow>>> rows(horizons.size(),
-                                                           std::vector<std::vector<SafeguardRow>>(logs.size()));
+  std::vector<OmniModel> models(logs.size());
+  std::vector<const OmniLog*> left_out_logs;
   for (std::size_t i = 0; i < logs.size(); ++i) {
     say(6, "intervals' safeguard: " + std::to_string(i + 1) + " of " + std::to_string(logs.size()) + " logs left out");
     std::vector<OmniLog> others;
     for (std::size_t j = 0; j < logs.size(); ++j)
       if (j != i) others.push_back(logs[j]);
-    OmniModel model;
-    IdentifyOmni(nominal, others, {}, fold, &model);
+    IdentifyOmni(nominal, others, {}, fold, &models[i]);
+    left_out_logs.push_back(&logs[i]);
+  }
+  if (options.noise && options.drift) {
+    say(6, "the noise's drift on the left-out logs");
+    *drift = IdentifyDriftOnLeftOutLogs(models, left_out_logs, noise_options);
+    for (OmniModel& m : models) m.driving_noise.drift = drift->kept ? drift->drift : OmniDrivingNoise::Drift{};
+  }
+  std::vector<std::vector<std::vector<SafeguardRow>>> rows(horizons.size(),
+                                                           std::vector<std::vector<SafeguardRow>>(logs.size()));
+  for (std::size_t i = 0; i < logs.size(); ++i) {
     const std::vector<std::vector<PredictiveError>> left_out =
-        OmniLogPredictiveErrors(model, logs[i], options.backend, horizons, noise_options.score_stride);
+        OmniLogPredictiveErrors(models[i], logs[i], options.backend, horizons, noise_options.score_stride);
     for (std::size_t q = 0; q < horizons.size(); ++q)
-      AppendSafeguardRows(left_out[q], MeasurementCovariance(model), &rows[q][i]);
+      AppendSafeguardRows(left_out[q], MeasurementCovariance(models[i]), &rows[q][i]);
   }
   // The held-out blocks' scales (1 where they kept none) are the base the growth adds to.
   std::vector<std::array<double, 2>> base(horizons.size(), {1.0, 1.0});
@@ -1113,8 +1138,15 @@ void SafeguardOnLeftOutLogs(const OmniModel& nominal, const std::vector<OmniLog>
                             const std::function<void(int, const std::string&)>& say, OmniModel* model,
                             OmniIdentificationReport* report) {
   if (options.safeguard == OmniSafeguard::kLogs && options.state == OmniReplayState::kObserver) {
-    report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, report->safeguard, say);
+    OmniDriftIdentification drift;
+    report->safeguard = LeftOutLogsSafeguard(nominal, logs, options, report->safeguard, say, &drift);
     model->observer.interval_scale = report->safeguard.Scales();
+    // A run unlike the fit's drifts as the left-out logs did: that drift where kept.
+    if (drift.kept || (!report->drift.kept && !drift.on.empty())) {
+      report->drift = drift;
+      report->drift_identified = true;
+      model->driving_noise.drift = drift.kept ? drift.drift : OmniDrivingNoise::Drift{};
+    }
   }
   const auto& scales = model->observer.interval_scale;
   if (!options.keep_seen_inputs && std::none_of(scales.begin(), scales.end(), [](const auto& h) {

@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "identification_omni/omni_drift_identification.h"
 #include "identification_omni/omni_noise_identification.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
@@ -61,6 +62,10 @@ struct OmniIdentificationOptions {
   // With the observer's state: the driving noise identified anew for predictions ahead
   // (omni_noise_identification.h), kept where the held-out blocks score it better.
   bool noise = true;
+  // With the noise: its drift (a slow slip, driving_noise.drift) fitted on the filter's
+  // innovations (omni_drift_identification.h), kept where significant and no worse on
+  // the held-out blocks.
+  bool drift = true;
   // With the observer's state, the intervals' safeguard (analysis/omni_interval_scale.h)
   // fitted on: kBlocks, the two halves of the held-out blocks; kLogs, each fit log
   // predicted by the model identified on the others (identification once more per log;
@@ -153,6 +158,9 @@ struct OmniIdentificationReport {
   // The driving noise for predictions ahead (with the observer's state and options.noise).
   bool noise_identified = false;
   OmniNoiseIdentification noise;
+  // The noise's drift (with options.drift).
+  bool drift_identified = false;
+  OmniDriftIdentification drift;
   // The identified model's predictive distribution on the held-out blocks (or the
   // validation logs) at 4, 16 and 63 frames (analysis/omni_calibration.h).
   std::vector<OmniCalibration> calibration;

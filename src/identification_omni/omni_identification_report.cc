@@ -69,7 +69,42 @@ ordered_json NoiseJson(const OmniIdentificationReport& r) {
   j["parameters"] = params;
   if (!n.note.empty()) j["note"] = n.note;
   if (!n.growth_note.empty()) j["growth_note"] = n.growth_note;
+  if (r.drift_identified) {
+    const OmniDriftIdentification& d = r.drift;
+    ordered_json drift;
+    drift["kept"] = d.kept;
+    drift["fitted_on"] = d.on;
+    drift["forward"] = d.drift.sd[0];
+    drift["sideways"] = d.drift.sd[1];
+    drift["turn"] = d.drift.sd[2];
+    drift["correlation_time"] = d.drift.correlation_time;
+    drift["rmse_half_second_before"] = Finite(d.rmse_before[0]);
+    drift["rmse_half_second_after"] = Finite(d.rmse_after[0]);
+    drift["rmse_second_before"] = Finite(d.rmse_before[1]);
+    drift["rmse_second_after"] = Finite(d.rmse_after[1]);
+    drift["rows"] = d.rows;
+    drift["held_out_log_score_before"] = Finite(d.held_out_before);
+    drift["held_out_log_score_after"] = Finite(d.held_out_after);
+    drift["evaluations"] = d.evaluations;
+    if (!d.note.empty()) drift["note"] = d.note;
+    j["drift"] = drift;
+  }
   return j;
+}
+
+// One sentence on the noise's drift: what was fitted, and kept or why not.
+std::string DriftSentence(const OmniDriftIdentification& d) {
+  const OmniDrivingNoise::Drift& v = d.drift;
+  std::string out = std::string(d.kept ? "kept" : "not kept") + ": forward " + Number(v.sd[0], "%.3g") + " m/s, sideways " +
+                    Number(v.sd[1], "%.3g") + " m/s, turn " + Number(v.sd[2], "%.3g") + " rad/s, lasting " +
+                    Number(v.correlation_time, "%.3g") + " s; predictions 0.5 and 1 s ahead " +
+                    Number(1000 * d.rmse_before[0], "%.3g") + " -> " + Number(1000 * d.rmse_after[0], "%.3g") + " and " +
+                    Number(1000 * d.rmse_before[1], "%.3g") + " -> " + Number(1000 * d.rmse_after[1], "%.3g") +
+                    " mm over " + std::to_string(d.rows) + " rows";
+  if (d.held_out_rows > 0)
+    out += "; held-out blocks " + Number(d.held_out_before, "%.4g") + " -> " + Number(d.held_out_after, "%.4g") + " nats per row";
+  if (!d.note.empty()) out += " (" + d.note + ")";
+  return out;
 }
 
 ordered_json CalibrationJson(const std::vector<OmniCalibration>& calibration) {
@@ -322,6 +357,9 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
       s << line;
     }
   }
+  if (r.drift_identified)
+    s << "the noise's drift (a slow slip the observer learns and carries ahead; fitted on " << r.drift.on
+      << "): " << DriftSentence(r.drift) << "\n";
   if (!r.calibration.empty()) {
     s << "calibration of the predictions ("
       << CalibratedOn(r)
@@ -416,6 +454,11 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     }
     h << "</table>\n";
     if (!r.noise.growth_note.empty()) h << "<p class=\"small\">" << HtmlEscape(r.noise.growth_note) << "</p>\n";
+    if (r.drift_identified)
+      h << "<p>The noise's drift, a slow slip beside it that the observer learns over the frames and carries into "
+           "every prediction (a run's own drift; fitted on "
+        << HtmlEscape(r.drift.on) << ", kept where significant and no worse on the rows it was not fitted on): "
+        << HtmlEscape(DriftSentence(r.drift)) << ".</p>\n";
   }
   if (!r.calibration.empty()) {
     h << "<h2>Calibration</h2>\n<p>The identified model's predictive distribution on the "

@@ -513,6 +513,18 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
   return out;
 }
 
+double HeldOutLogScore(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                       const OmniNoiseOptions& options, int* rows) {
+  std::vector<HorizonRows> held;
+  try {
+    held = Collect(model, stretches, options, {Rows::kHeldOutBlocks, nullptr});
+  } catch (const CheckFailed&) {
+    // diverged: no rows, an infinite cost
+  }
+  if (rows) *rows = CountRows(held);
+  return Cost(held);
+}
+
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed,

@@ -120,6 +120,13 @@ struct OmniNoiseIdentification {
 OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                              const OmniNoiseOptions& options);
 
+// The mean negative log density (nats per row, averaged over options.horizons that have
+// rows) of `model`'s predictions on the held-out blocks of `stretches`, the noise
+// search's cost; *rows (where given) the rows it is over. Infinite where none, or where
+// the filter diverged.
+double HeldOutLogScore(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
+                       const OmniNoiseOptions& options, int* rows = nullptr);
+
 // The calibration of `model` at each of options.horizons on the validation logs where
 // there are any, else on the held-out blocks, its constant-spread baseline fitted on the
 // fit rows. With `crossed` (a noise fitted on the held-out blocks), the held-out blocks of

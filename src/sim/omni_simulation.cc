@@ -58,6 +58,8 @@ Simulation::Simulation(std::vector<SimRobot> robots, std::unique_ptr<OmniBackend
     backend_->Reset(i, start, Twist2{});
     state_.present.push_back(r.present);
     state_.slip.push_back({0, 0, 0});
+    state_.drift.push_back({0, 0, 0});
+    state_.drift_started.push_back(0);
     state_.pulls.emplace_back();
     state_.commands_in_flight.emplace_back(r.model.command_delay_frames, Twist2{});
     state_.captures_in_flight.emplace_back(r.model.vision_delay_frames,
@@ -300,8 +302,12 @@ void Simulation::Slip(const std::vector<Twist2>& velocity_before) {
     if (!noise.simulated || !present(i) || state_.pulls[k]) continue;
     // The slip (robot frame) at the speed and acceleration of the robot's own (wheel)
     // velocity; the body moves on by it, the wheels unaware.
+    if (!state_.drift_started[k]) {
+      state_.drift[k] = StartDrift(noise, &state_.drive_rng);
+      state_.drift_started[k] = 1;
+    }
     backend_->PushBody(i, SlipPose(noise, dt, backend_->velocity(i), velocity_before[k], backend_->pose(i), &state_.slip[k],
-                                   &state_.drive_rng));
+                                   &state_.drive_rng, &state_.drift[k]));
   }
 }
 

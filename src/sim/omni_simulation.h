@@ -141,6 +141,9 @@ struct SimulationState {
   // sideways m/s, turn rad/s, robot frame), drawn from a stream of its own so that the
   // camera's draws stay as they were.
   std::vector<std::array<double, 3>> slip;
+  // And its drift (OmniDrivingNoise::drift), drawn at the robot's first slip.
+  std::vector<std::array<double, 3>> drift;
+  std::vector<char> drift_started;
   Rng drive_rng;
   BallRecord ball_record;  // the open (or last) frame's
   // Per robot, a copy of its behaviour as it was (null: none); filled by Save() only.

@@ -46,6 +46,10 @@ struct WanderingPlant {
   double turn_limit = 0;           // rad/s, the turn rate the robot reaches at most (0: none)
   double turn_per_sideways = 0;    // rad/s of turn per m/s of sideways command
   double camera_smoothing = 0;     // s, the camera's poses through a first-order smoother (a vision filter)
+  // A run's own drift: a velocity (forward, sideways m/s, turn rad/s, robot frame) the
+  // body adds the whole recording through, constant, the same whatever it is commanded
+  // (a floor, a battery, a worn wheel of the day); a test gives each recording its own.
+  std::array<double, 3> run_drift{0, 0, 0};
 };
 
 struct PlantRecording {

@@ -94,7 +94,8 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
         d[static_cast<std::size_t>(a)] = decay * d[static_cast<std::size_t>(a)] +
                                          grow * plant.noise_sd[static_cast<std::size_t>(a)] * std::sqrt(1 - decay * decay) * normal();
       }
-      const double bx = v[0] + d[0], by = v[1] + d[1], w = v[2] + d[2];
+      const double bx = v[0] + d[0] + plant.run_drift[0], by = v[1] + d[1] + plant.run_drift[1],
+                   w = v[2] + d[2] + plant.run_drift[2];
       x += dt * (std::cos(th) * bx - std::sin(th) * by);
       y += dt * (std::sin(th) * bx + std::cos(th) * by);
       th += dt * w;

@@ -230,7 +230,8 @@ def test_the_observer_fed_live_predicts_what_replay_predicts():
     assert checked > 200
     estimate = observer.estimate
     assert estimate["covariance"].shape == (9, 9)
-    np.testing.assert_allclose(estimate["velocity"], estimate["model_velocity"] + estimate["slip"])
+    np.testing.assert_allclose(estimate["velocity"], estimate["model_velocity"] + estimate["slip"] + estimate["drift"])
+    np.testing.assert_array_equal(estimate["drift"], [0, 0, 0])  # this model has none
     assert observer.innovations["updates"] > 200
     with pytest.raises(twinsim.InputError, match="expected 3 numbers"):
         observer.add_frame([0, 0], [0, 0, 0])

@@ -77,6 +77,35 @@ TEST(DrivingNoise, AStandingRobotSlipsWithTheModelsSpreadAndCorrelationOnEveryBa
   }
 }
 
+// A drift beside the slip (driving_noise.drift): a standing robot's body velocity,
+// averaged over a second (where the fast slip, 10 ms long, averages out), follows the
+// drift's slow process: its spread the drift's and its correlation a second apart
+// exp(-1 / T_b), over many runs each drawn from its stationary spread at the start.
+TEST(DrivingNoise, ADriftIsASlowSlipDrawnFromItsSpreadAtTheStart) {
+  OmniModel model = Slipping(0.01);
+  model.driving_noise.sd = {0.01, 0.01, 0.05};
+  model.driving_noise.drift.sd = {0.04, 0.02, 0.2};
+  model.driving_noise.drift.correlation_time = 4;
+  std::array<double, 3> sum2{}, lag1{};
+  int n = 0;
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    const std::vector<std::array<double, 3>> v = BodyVelocities(StandStill("analytic", model, 6, seed));
+    std::array<double, 3> first{}, second{};  // the means over the first two seconds
+    for (std::size_t k = 0; k < 60; ++k) {
+      for (std::size_t c = 0; c < 3; ++c) (k < 30 ? first : second)[c] += v[k][c] / 30;
+    }
+    for (std::size_t c = 0; c < 3; ++c) sum2[c] += first[c] * first[c], lag1[c] += first[c] * second[c];
+    ++n;
+  }
+  for (std::size_t c = 0; c < 3; ++c) {
+    // 40 runs: a spread within 25 % (its relative error about 1 / sqrt(2 * 40) = 11 %),
+    // corrected for the second's average of a process of 4 s (about 0.98 of its spread)
+    const double sd = std::sqrt(sum2[c] / n);
+    EXPECT_NEAR(sd, model.driving_noise.drift.sd[c], 0.25 * model.driving_noise.drift.sd[c]) << "axis " << c;
+    EXPECT_NEAR(lag1[c] / sum2[c], std::exp(-1.0 / 4), 0.15) << "axis " << c;
+  }
+}
+
 // The body velocity's spread about its mean (forward, sideways, turn) while the robot
 // drives `command` for 150 s, and that mean: the wheels' velocity is steady, so the
 // spread is the slip's.

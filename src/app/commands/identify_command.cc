@@ -176,7 +176,7 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
                                                  std::vector<ArmOutputErrorOptions>* stages) {
   for (const char* omni_only :
        {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--robot", "--team", "--state",
-        "--no-noise", "--safeguard"}) {
+        "--no-noise", "--no-drift", "--safeguard"}) {
     if (std::find(options.given.begin(), options.given.end(), omni_only) != options.given.end())
       throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
   }
@@ -412,6 +412,10 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
   cmd->add_flag("!--no-noise", options->omni.noise,
                 "Omni: keep the prediction-error fit's noise; without it the driving noise is identified anew for "
                 "predictions ahead and the simulation (likelihood at 4, 16 and 63 frames, some 20-40 s more)");
+  cmd->add_flag("!--no-drift", options->omni.drift,
+                "Omni: no drift; without it a slow slip beside the driving noise (a run's own drift, which the observer "
+                "learns and carries ahead) is fitted on the filter's innovations and kept where significant and no "
+                "worse on the held-out blocks");
   cmd->add_option("--safeguard", options->omni.safeguard,
                   "Omni: the intervals' conformal scale per horizon, fitted on the two halves of the held-out blocks "
                   "(blocks), and with logs a growth on top with the distance of a prediction's inputs from those the "

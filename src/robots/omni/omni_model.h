@@ -71,6 +71,17 @@ struct OmniDrivingNoise {
   // across their rollers in fast turns).
   double per_turn_rate = 0;
   bool simulated = false;                   // the simulation draws it (off: the observer's model only)
+  // A slow slip beside it (docs/models.md `driving_noise.drift`): the same kind of
+  // process, its own spreads (at every speed alike) and a correlation time of seconds,
+  // what a run's floor, battery or worn wheel adds for a while and the response to the
+  // command does not hold (a run's own drift). The observer learns it over the frames and
+  // carries it into its predictions; identify fits it on the filter's innovations.
+  struct Drift {
+    std::array<double, 3> sd{0, 0, 0};  // forward, sideways m/s; turn rad/s; all 0: none
+    double correlation_time = 5;       // s
+    bool any() const { return sd[0] > 0 || sd[1] > 0 || sd[2] > 0; }
+  };
+  Drift drift;
 
   // The spread (m/s or rad/s) of axis a (forward, sideways, turn) at `speed` (m/s),
   // `acceleration` (m/s^2) and `turn_rate` (rad/s, either sign).

@@ -206,6 +206,13 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     d.Get("per_acceleration", &model.driving_noise.per_acceleration, NonNegative(100));
     d.Get("per_turn_rate", &model.driving_noise.per_turn_rate, NonNegative(100));
     d.Get("simulated", &model.driving_noise.simulated);
+    if (d.Has("drift")) {
+      YamlMap b(d.Child("drift"), path, "driving_noise.drift", &errors);
+      for (int a = 0; a < 3; ++a)
+        b.Get(kOmniAxisNames[a], &model.driving_noise.drift.sd[static_cast<std::size_t>(a)], NonNegative(100));
+      b.Get("correlation_time", &model.driving_noise.drift.correlation_time, InRange(0.1, 1000));
+      b.Finish();
+    }
     d.Finish();
   }
   if (top.Has("observer")) {

@@ -136,13 +136,17 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   if (model.vision_time_jitter > 0) line("  time_jitter", YamlNumber(model.vision_time_jitter), "s");
   const OmniDrivingNoise& dn = model.driving_noise;
   if (dn.sd != defaults.driving_noise.sd || dn.correlation_time != defaults.driving_noise.correlation_time ||
-      dn.per_speed != 0 || dn.per_acceleration != 0 || dn.per_turn_rate != 0 || dn.simulated) {
+      dn.per_speed != 0 || dn.per_acceleration != 0 || dn.per_turn_rate != 0 || dn.simulated || dn.drift.any()) {
     line("driving_noise",
          "{" + AxisValues(dn.sd) + ", correlation_time: " + YamlNumber(dn.correlation_time) +
              (dn.per_speed != 0 ? ", per_speed: " + YamlNumber(dn.per_speed) : "") +
              (dn.per_acceleration != 0 ? ", per_acceleration: " + YamlNumber(dn.per_acceleration) : "") +
              (dn.per_turn_rate != 0 ? ", per_turn_rate: " + YamlNumber(dn.per_turn_rate) : "") +
-             (dn.simulated ? ", simulated: true" : "") + "}",
+             (dn.simulated ? ", simulated: true" : "") +
+             (dn.drift.any() ? ", drift: {" + AxisValues(dn.drift.sd) +
+                                   ", correlation_time: " + YamlNumber(dn.drift.correlation_time) + "}"
+                             : "") +
+             "}",
          "m/s, rad/s, s: slip the wheels do not see", 46);
   }
   const OmniObserverModel& o = model.observer;

@@ -170,6 +170,33 @@ TEST(OmniModelYamlWriter, DrivingNoiseAndObserverRoundTripAndAreLeftOutAtTheirDe
   EXPECT_THROW(LoadOmniModelFromString(base + "observer: {slip: 1}\n", "bad.yaml"), InputError);
 }
 
+// The noise's drift, a slow slip beside it: written only where it has a spread, round
+// trips bit for bit, and a drift with a time of none or a negative spread is refused
+// where it is written.
+TEST(OmniModelYamlWriter, TheNoisesDriftRoundTripsAndIsChecked) {
+  OmniModel m = testing::Omni4();
+  m.driving_noise.drift.correlation_time = 7;  // no spread: no drift, not written
+  EXPECT_EQ(FormatOmniModelYaml(m).find("drift"), std::string::npos);
+  m.driving_noise.drift.sd = {0.0123, 0, 0.1 / 3};
+  const std::string text = FormatOmniModelYaml(m);
+  EXPECT_NE(text.find("drift: {"), std::string::npos) << text;
+  const OmniModel back = RoundTrip(m);
+  EXPECT_EQ(back.driving_noise.drift.sd, m.driving_noise.drift.sd);
+  EXPECT_EQ(back.driving_noise.drift.correlation_time, 7);
+  EXPECT_EQ(FormatOmniModelYaml(back), text);
+  const std::string base = "extends: " + testing::SourcePath("models/omni4.yaml") + "\nname: n\n";
+  try {
+    LoadOmniModelFromString(base + "driving_noise:\n  drift: {turn: -0.1, correlation_time: 0}\n", "bad.yaml");
+    ADD_FAILURE() << "a drift with a negative spread loads";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("bad.yaml:4:"), std::string::npos) << what;
+    EXPECT_NE(what.find("turn"), std::string::npos) << what;
+    EXPECT_NE(what.find("correlation_time"), std::string::npos) << what;
+  }
+  EXPECT_THROW(LoadOmniModelFromString(base + "driving_noise: {drift: {wander: 1}}\n", "bad.yaml"), InputError);
+}
+
 // Issue 64: the intervals' safeguard, a scale of the predicted covariance per horizon,
 // round-trips, is interpolated in log(frames) between horizons and held beyond them, and
 // a list out of order or out of range is refused where it is written.
