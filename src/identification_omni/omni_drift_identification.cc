@@ -28,7 +28,7 @@ constexpr double kLowerTime = 3, kUpperTime = 100;  // s
 // The drift starts at this share of the fast slip's spreads, lasting this long (s).
 constexpr double kStartShare = 0.25;
 constexpr double kStartTime = 20;
-// The predictions' mean squared error must fall by this share of none's.
+// The cost (the predictions' mean squared errors as shares of none's) must fall by this much.
 constexpr double kLeastGain = 0.05;
 constexpr int kBudget = 40;  // evaluations of the predictions' score
 
@@ -49,11 +49,14 @@ DriftValues ClampedDrift(DriftValues v, double fast_time) {
 
 // The filter's predictions half a second and a second ahead over logs (each replayed on
 // its own, in parallel, by its own model with `drift`), from every quarter second after
-// the warm-up: the squared position errors summed per horizon, and the rows.
+// the warm-up: the squared position and heading errors summed per horizon, and the rows.
 struct AheadErrors {
-  std::array<double, 2> sum{0, 0};
+  std::array<double, 2> sum{0, 0}, heading_sum{0, 0};  // m^2, rad^2
   std::array<int, 2> rows{0, 0};
   double Mse(std::size_t h) const { return rows[h] ? sum[h] / rows[h] : std::numeric_limits<double>::infinity(); }
+  double HeadingMse(std::size_t h) const {
+    return rows[h] ? heading_sum[h] / rows[h] : std::numeric_limits<double>::infinity();
+  }
 };
 
 AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<const OmniLog*>& logs,
@@ -78,13 +81,18 @@ AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<
         const Pose2& p = at.pose[row];
         const Pose2& m = log.rows[row].pose;
         out.sum[h] += (p.x - m.x) * (p.x - m.x) + (p.y - m.y) * (p.y - m.y);
+        out.heading_sum[h] += std::pow(WrapAngle(p.theta - m.theta), 2);
         ++out.rows[h];
       }
     }
   });
   AheadErrors out;
   for (const AheadErrors& a : per) {
-    for (std::size_t h = 0; h < 2; ++h) out.sum[h] += a.sum[h], out.rows[h] += a.rows[h];
+    for (std::size_t h = 0; h < 2; ++h) {
+      out.sum[h] += a.sum[h];
+      out.heading_sum[h] += a.heading_sum[h];
+      out.rows[h] += a.rows[h];
+    }
   }
   return out;
 }
@@ -104,9 +112,20 @@ OmniDriftIdentification FitAhead(const std::vector<OmniModel>& models, const std
   out.start = DriftOf(start);
   const AheadErrors none = ErrorsAhead(models, logs, {}, options);
   out.rows = none.rows[0] + none.rows[1];
+  bool scorable = true;
+  for (std::size_t h = 0; h < 2; ++h) scorable = scorable && none.rows[h] > 0 && none.Mse(h) > 0 && none.HeadingMse(h) > 0;
+  if (!scorable) {
+    out.note = "the logs hold no prediction a second ahead to fit it on";
+    return out;
+  }
   out.rmse_before = {std::sqrt(none.Mse(0)), std::sqrt(none.Mse(1))};
-  // Each horizon's mean squared error as a share of none's, averaged.
-  const auto share = [&](const AheadErrors& a) { return 0.5 * (a.Mse(0) / none.Mse(0) + a.Mse(1) / none.Mse(1)); };
+  // Each horizon's mean squared error of the position and of the heading as a share of
+  // none's, the four averaged.
+  const auto share = [&](const AheadErrors& a) {
+    double sum = 0;
+    for (std::size_t h = 0; h < 2; ++h) sum += a.Mse(h) / none.Mse(h) + a.HeadingMse(h) / none.HeadingMse(h);
+    return sum / 4;
+  };
   AheadErrors best_errors = none;
   const std::function<double(const DriftValues&)> cost = [&](const DriftValues& v) {
     try {
@@ -125,7 +144,7 @@ OmniDriftIdentification FitAhead(const std::vector<OmniModel>& models, const std
   out.drift = DriftOf(fitted);
   out.rmse_after = {std::sqrt(best_errors.Mse(0)), std::sqrt(best_errors.Mse(1))};
   if (!(best <= 1 - kLeastGain)) {
-    out.note = "the predictions half a second and a second ahead do not ask for one (their mean squared error " +
+    out.note = "the predictions half a second and a second ahead do not ask for one (their mean squared errors " +
                PrintfNumber("%.3g", best) + " of none's; kept from " + PrintfNumber("%.3g", 1 - kLeastGain) + ")";
   }
   return out;
@@ -141,6 +160,7 @@ OmniDriftIdentification IdentifyDrift(const OmniModel& given, const std::vector<
   std::vector<const OmniLog*> logs;
   for (const OmniBlockedStretch& s : stretches)
     if (!s.validation && std::find(logs.begin(), logs.end(), s.log) == logs.end()) logs.push_back(s.log);
+  if (logs.empty()) throw InputError("the drift needs a fit log");
   OmniDriftIdentification out = FitAhead(std::vector<OmniModel>(logs.size(), model), logs, options);
   out.on = "the fit logs' predictions 0.5 and 1 s ahead";
   if (!out.note.empty()) return out;

@@ -5,16 +5,17 @@
 // into every prediction, so it moves the mean a second ahead as well as the intervals.
 //
 // Its spreads (forward, sideways, turn) and correlation time (3 to 100 s: longer than
-// the predictions a behaviour makes) are fitted, the rest of the model held, by the mean
-// squared position error of the observer's predictions half a second and a second ahead
-// over the whole fit logs (from every quarter second; each horizon's as a share of
-// none's, averaged; a pattern search in their logarithms): the drift is what moves the
-// mean far ahead. Not by the one-frame innovations, which reward any freedom to follow
-// the velocity (on a plant whose response the model only resembles they asked for a
-// 0.7 m/s forward "drift" that predicted a second ahead worse than none), nor by the
-// predictions' log density, which took the drift for a way to widen intervals that were
-// too narrow (0.49 m/s there). It is kept only where
-//   - it takes at least 5 % off that mean squared error, and
+// the predictions a behaviour makes) are fitted, the rest of the model held, by the
+// observer's predictions half a second and a second ahead over the whole fit logs (from
+// every quarter second): each horizon's mean squared position and heading error as a
+// share of no drift's, the four averaged (a pattern search in their logarithms). The
+// drift is what moves the mean far ahead. Not by the one-frame innovations, which reward
+// any freedom to follow the velocity (on a plant whose response the model only resembles
+// they asked for a 0.7 m/s forward "drift" that predicted a second ahead worse than
+// none), nor by the predictions' log density, which took the drift for a way to widen
+// intervals that were too narrow (0.49 m/s there), nor by the position alone, which a
+// turn's drift hardly moves within a second. It is kept only where
+//   - it takes at least 5 % off that cost, and
 //   - the held-out blocks' predictions (the noise's horizons, the noise search's log
 //     score) are no worse with it.
 //
@@ -36,7 +37,7 @@ struct OmniDriftIdentification {
   OmniDrivingNoise::Drift start;  // where the search started
   OmniDrivingNoise::Drift drift;  // fitted (kept or not); spreads 0 where none was fitted
   // The position RMSE (m) of the predictions 0.5 and 1 s ahead it was fitted on, without
-  // and with it, and their rows.
+  // and with it (the fit weighs their heading too), and their rows.
   std::array<double, 2> rmse_before{0, 0}, rmse_after{0, 0};
   int rows = 0;
   // The held-out blocks' mean negative log density without and with it (nats per row).

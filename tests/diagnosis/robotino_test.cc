@@ -182,14 +182,18 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
   }
 }
 
-// Issue 64: identified with the left-out-logs safeguard, the scale grows with the
-// distance from the fit's inputs. The left-out logs (90 degrees from the nearest fit
-// direction) ask for a growth at 16 and 63 frames; the validation runs, 30 degrees from
-// the fit directions, lie nearer (0.58 on average in the measurement of
-// docs/identification.md, "Intervals out of the fit's reach") and their 63-frame
-// predictions' log density is far better with the growth than with the filter's own
-// covariance (measured -5.3 against -0.3 nats per row, pooled).
-TEST(Robotino, TheLeftOutLogsSafeguardGrowsWithTheDistanceFromTheFitsInputs) {
+// Issue 64: identified with the left-out logs (--safeguard logs), each predicted by the
+// model of the other three (90 degrees from the nearest fit direction). Before the noise
+// had a drift they asked for a scale growing with the distance from the fit's inputs at
+// 16 and 63 frames, and with it the validation runs (30 degrees from the fit directions)
+// had a 63-frame log density of -5.3 nats per row, pooled (-0.3 with the filter's own
+// covariance). Now the drift fitted on the left-out logs carries each run's own
+// deviation: it is kept, no position scale is needed from 16 frames on, and the
+// validation runs' 63-frame log density is -8.1 nats per row as identify writes the model
+// (-10.1 with the filter's covariance alone: the heading scale kept at 4 and 8 frames,
+// held beyond them, widens the long horizons' headings too; docs/identification.md, "A
+// run's own drift").
+TEST(Robotino, TheLeftOutLogsDriftCarriesTheRunsBetweenThem) {
   SKIP_WITHOUT_ROBOTINO();
   std::vector<OmniLog> fit, held;
   GrayRuns(&fit, &held);
@@ -199,30 +203,23 @@ TEST(Robotino, TheLeftOutLogsSafeguardGrowsWithTheDistanceFromTheFitsInputs) {
   const OmniIdentificationReport report =
       IdentifyOmni(LoadOmniModel(testing::SourcePath("models/robotino.yaml")), fit, {}, options, &grown);
   EXPECT_NE(report.safeguard.on.find("left-out logs"), std::string::npos);
-  for (const OmniSafeguardHorizon& h : report.safeguard.horizons) {
-    if (h.frames < 16) continue;
-    EXPECT_TRUE(h.position_kept) << h.frames;
-    EXPECT_GT(h.position_growth, 1.0) << h.frames;
-  }
-  ASSERT_FALSE(grown.observer.seen_inputs.empty());
+  ASSERT_TRUE(report.drift_identified);
+  EXPECT_TRUE(report.drift.kept) << report.drift.note;
+  EXPECT_NE(report.drift.on.find("left-out logs"), std::string::npos) << report.drift.on;
+  EXPECT_EQ(grown.driving_noise.drift.sd, report.drift.drift.sd);
+  EXPECT_LT(report.drift.rmse_after[1], 0.6 * report.drift.rmse_before[1]) << "the left-out logs a second ahead";
   EXPECT_EQ(grown.Validate(), "");
-  OmniModel plain = grown;
-  plain.observer.interval_scale.clear();
-  double with = 0, without = 0, distance = 0;
+  double score = 0, distance = 0;
   int rows = 0;
   for (const OmniLog& log : held) {
     const auto g = OmniLogPredictiveErrors(grown, log, "analytic", {16, 63}, 2)[1];
-    const auto p = OmniLogPredictiveErrors(plain, log, "analytic", {16, 63}, 2)[1];
-    ASSERT_EQ(g.size(), p.size());
-    with += MeanLogScore(g) * static_cast<double>(g.size());
-    without += MeanLogScore(p) * static_cast<double>(p.size());
+    score += MeanLogScore(g) * static_cast<double>(g.size());
     for (const PredictiveError& r : g) distance += r.input_distance;
     rows += static_cast<int>(g.size());
   }
   ASSERT_GT(rows, 100);
-  EXPECT_GT(distance / rows, 0.3);
-  EXPECT_LT(distance / rows, 1.0);
-  EXPECT_LT(with / rows, without / rows - 2.0) << "with the growth " << with / rows << ", without " << without / rows;
+  if (!grown.observer.seen_inputs.empty()) EXPECT_LT(distance / rows, 1.0);
+  EXPECT_LT(score / rows, -6.5) << "the validation runs 63 frames ahead (before the drift: -5.3 with the growth)";
 }
 
 }  // namespace

@@ -113,5 +113,15 @@ TEST(OmniDrift, ARunWithoutDriftGetsNone) {
   EXPECT_FALSE(d.note.empty());
 }
 
+// A log too short for a prediction a second ahead gets no drift, and says why.
+TEST(OmniDrift, ALogTooShortForASecondAheadGetsNone) {
+  const testing::WanderingPlant plant = Plant({0.08, 0.0, 0.35});
+  const Blocked fit = InBlocks(testing::RecordWanderingPlant(plant, 1.2, 61).log);
+  const OmniDriftIdentification d =
+      IdentifyDrift(testing::ResemblingModel(testing::Omni4(), plant), {fit.Stretch()}, Options());
+  EXPECT_FALSE(d.kept);
+  EXPECT_NE(d.note.find("a second ahead"), std::string::npos) << d.note;
+}
+
 }  // namespace
 }  // namespace twinsim
