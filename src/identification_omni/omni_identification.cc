@@ -1083,8 +1083,9 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
 // scale is checked on: the model's own error out of its fit's reach, not only the
 // robot's wander.
 // With options.drift, the noise's drift is fitted first on the left-out logs'
-// innovations (the model's own error on a run it did not see, as that run's drift) into
-// *drift, and each left-out log is predicted with it where kept.
+// predictions (the model's own error on a run it did not see, as that run's drift) into
+// *drift, and each left-out log is predicted with it where kept. (The held-out blocks'
+// scales, the growth's base, were fitted with the fit logs' drift.)
 OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::vector<OmniLog>& logs,
                                            const OmniIdentificationOptions& options, const OmniIntervalSafeguard& blocks,
                                            const std::function<void(int, const std::string&)>& say,

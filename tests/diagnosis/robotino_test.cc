@@ -190,9 +190,9 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
 // covariance). Now the drift fitted on the left-out logs carries each run's own
 // deviation: it is kept, no position scale is needed from 16 frames on, and the
 // validation runs' 63-frame log density is -8.1 nats per row as identify writes the model
-// (-10.1 with the filter's covariance alone: the heading scale kept at 4 and 8 frames,
-// held beyond them, widens the long horizons' headings too; docs/identification.md, "A
-// run's own drift").
+// (lower is better; -10.1 with the filter's covariance alone: the heading scale kept at 4
+// and 8 frames, held beyond them, widens the long horizons' headings too, which costs
+// more there than it buys; docs/identification.md, "A run's own drift").
 TEST(Robotino, TheLeftOutLogsDriftCarriesTheRunsBetweenThem) {
   SKIP_WITHOUT_ROBOTINO();
   std::vector<OmniLog> fit, held;
