@@ -11,10 +11,10 @@
 // share of no drift's, the four averaged (a pattern search in their logarithms). The
 // drift is what moves the mean far ahead. Not by the one-frame innovations, which reward
 // any freedom to follow the velocity (on a plant whose response the model only resembles
-// they asked for a 0.7 m/s forward "drift" that predicted a second ahead worse than
-// none), nor by the predictions' log density, which took the drift for a way to widen
-// intervals that were too narrow (0.49 m/s there), nor by the position alone, which a
-// turn's drift hardly moves within a second. It is kept only where
+// they asked for a large forward "drift" that predicted a second ahead worse than none),
+// nor by the predictions' log density, which took the drift for a way to widen intervals
+// that were too narrow, nor by the position alone, which a turn's drift hardly moves
+// within a second (docs/identification.md has the numbers). It is kept only where
 //   - it takes at least 5 % off that cost, and
 //   - the held-out blocks' predictions (the noise's horizons, the noise search's log
 //     score) are no worse with it.
