@@ -62,9 +62,9 @@ struct OmniIdentificationOptions {
   // With the observer's state: the driving noise identified anew for predictions ahead
   // (omni_noise_identification.h), kept where the held-out blocks score it better.
   bool noise = true;
-  // With the noise: its drift (a slow slip, driving_noise.drift) fitted on the filter's
-  // innovations (omni_drift_identification.h), kept where significant and no worse on
-  // the held-out blocks.
+  // With the noise: its drift (a slow slip, driving_noise.drift) fitted on the
+  // predictions 0.5 and 1 s ahead (omni_drift_identification.h), kept where it takes 5 %
+  // off them and the held-out blocks are no worse.
   bool drift = true;
   // With the observer's state, the intervals' safeguard (analysis/omni_interval_scale.h)
   // fitted on: kBlocks, the two halves of the held-out blocks; kLogs, each fit log

@@ -457,7 +457,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     if (r.drift_identified)
       h << "<p>The noise's drift, a slow slip beside it that the observer learns over the frames and carries into "
            "every prediction (a run's own drift; fitted on "
-        << HtmlEscape(r.drift.on) << ", kept where significant and no worse on the rows it was not fitted on): "
+        << HtmlEscape(r.drift.on) << ", kept where it takes 5 % off them and the rows it was not fitted on are no worse): "
         << HtmlEscape(DriftSentence(r.drift)) << ".</p>\n";
   }
   if (!r.calibration.empty()) {

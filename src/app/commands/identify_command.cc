@@ -414,8 +414,8 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                 "predictions ahead and the simulation (likelihood at 4, 16 and 63 frames, some 20-40 s more)");
   cmd->add_flag("!--no-drift", options->omni.drift,
                 "Omni: no drift; without it a slow slip beside the driving noise (a run's own drift, which the observer "
-                "learns and carries ahead) is fitted on the filter's innovations and kept where significant and no "
-                "worse on the held-out blocks");
+                "learns and carries ahead) is fitted on the predictions 0.5 and 1 s ahead and kept where it takes 5 % "
+                "off them and the held-out blocks are no worse");
   cmd->add_option("--safeguard", options->omni.safeguard,
                   "Omni: the intervals' conformal scale per horizon, fitted on the two halves of the held-out blocks "
                   "(blocks), and with logs a growth on top with the distance of a prediction's inputs from those the "
