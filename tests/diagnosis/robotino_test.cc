@@ -218,7 +218,9 @@ TEST(Robotino, TheLeftOutLogsDriftCarriesTheRunsBetweenThem) {
     rows += static_cast<int>(g.size());
   }
   ASSERT_GT(rows, 100);
-  if (!grown.observer.seen_inputs.empty()) EXPECT_LT(distance / rows, 1.0);
+  if (!grown.observer.seen_inputs.empty()) {
+    EXPECT_LT(distance / rows, 1.0);
+  }
   EXPECT_LT(score / rows, -6.5) << "the validation runs 63 frames ahead (before the drift: -5.3 with the growth)";
 }
 
