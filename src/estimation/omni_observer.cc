@@ -156,7 +156,7 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   // The slip and the drift move the body on, unseen by the wheels; then they decay.
   const double c = std::cos(p0.theta), sn = std::sin(p0.theta);
   Pose2 moved = base_pose;
-  const Eigen::Vector3d unseen = has_drift_ ? Eigen::Vector3d(slip_ + drift_) : slip_;
+  const Eigen::Vector3d unseen = Unseen();
   if (!unseen.isZero()) {
     moved.x += dt_ * (c * unseen[0] - sn * unseen[1]);
     moved.y += dt_ * (sn * unseen[0] + c * unseen[1]);
@@ -199,11 +199,11 @@ void OmniObserver::Step(const Twist2& acting, bool jacobian) {
   } else {
     ++frames_since_jacobian_;
   }
-  Propagate(p0, moved, difference, v0, acceleration);
+  Propagate(p0, c, sn, moved, difference, v0, acceleration);
 }
 
-void OmniObserver::Propagate(const Pose2& p0, const Pose2& moved, bool difference, const Twist2& v0, double acceleration) {
-  const double c = std::cos(p0.theta), sn = std::sin(p0.theta);
+void OmniObserver::Propagate(const Pose2& p0, double c, double sn, const Pose2& moved, bool difference, const Twist2& v0,
+                             double acceleration) {
   ObserverMatrix f = ObserverMatrix::Identity();
   f(0, 2) = -(moved.y - p0.y);
   f(1, 2) = moved.x - p0.x;
@@ -409,7 +409,7 @@ OmniEstimate OmniObserver::Estimate() const {
   e.model_velocity = backend_->velocity(0);
   e.slip = Twist2{slip_[0], slip_[1], slip_[2]};
   e.drift = Twist2{drift_[0], drift_[1], drift_[2]};
-  const Eigen::Vector3d unseen = has_drift_ ? Eigen::Vector3d(slip_ + drift_) : slip_;
+  const Eigen::Vector3d unseen = Unseen();
   e.velocity = Twist2{e.model_velocity.vx + unseen[0], e.model_velocity.vy + unseen[1], e.model_velocity.omega + unseen[2]};
   e.covariance = p_;
   return e;
@@ -448,7 +448,7 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
 
 Eigen::VectorXd OmniObserver::InputFeature() const {
   const Twist2 v = backend_->velocity(0);
-  const Eigen::Vector3d unseen = has_drift_ ? Eigen::Vector3d(slip_ + drift_) : slip_;
+  const Eigen::Vector3d unseen = Unseen();
   return SeenInputFeature(wheels_from_body_, last_acting_, Twist2{v.vx + unseen[0], v.vy + unseen[1], v.omega + unseen[2]});
 }
 

@@ -218,7 +218,11 @@ class OmniObserver {
   void Step(const Twist2& acting, bool jacobian);
   // P over the frame from pose p0 (velocity v0, acceleration in m/s^2) to `moved`, F's
   // velocity columns those last differenced (`difference`: in this frame).
-  void Propagate(const Pose2& p0, const Pose2& moved, bool difference, const Twist2& v0, double acceleration);
+  // c, sn: cos and sin of p0.theta.
+  void Propagate(const Pose2& p0, double c, double sn, const Pose2& moved, bool difference, const Twist2& v0,
+                 double acceleration);
+  // What moves the body unseen by the wheels: the slip, and the drift where the model has one.
+  Eigen::Vector3d Unseen() const { return has_drift_ ? Eigen::Vector3d(slip_ + drift_) : slip_; }
   // Q of one frame at heading theta (rad), the model's translational speed (m/s),
   // acceleration over the frame (m/s^2) and turn rate (rad/s).
   ObserverMatrix ProcessNoise(double theta, double speed, double acceleration, double turn_rate) const;

@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "analysis/omni_compare.h"
 #include "analysis/omni_replay.h"
 #include "core/error.h"
 #include "core/parallel.h"
@@ -75,15 +76,10 @@ AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
     AheadErrors& out = per[static_cast<std::size_t>(k)];
     for (std::size_t h = 0; h < 2; ++h) {
-      const OmniReplayResult& at = h == 0 ? r.also[0] : r;
-      for (std::size_t row = 0; row < log.rows.size(); ++row) {
-        if (!PredictedAndMeasured(log, at, row)) continue;
-        const Pose2& p = at.pose[row];
-        const Pose2& m = log.rows[row].pose;
-        out.sum[h] += (p.x - m.x) * (p.x - m.x) + (p.y - m.y) * (p.y - m.y);
-        out.heading_sum[h] += std::pow(WrapAngle(p.theta - m.theta), 2);
-        ++out.rows[h];
-      }
+      const CompareErrorRow e = MeasurePredictionErrors(log, h == 0 ? r.also[0] : r);
+      out.sum[h] = e.position_rmse * e.position_rmse * e.predicted;
+      out.heading_sum[h] = e.heading_rmse * e.heading_rmse * e.predicted;
+      out.rows[h] = e.predicted;
     }
   });
   AheadErrors out;
@@ -109,7 +105,6 @@ OmniDriftIdentification FitAhead(const std::vector<OmniModel>& models, const std
   for (std::size_t a = 0; a < 3; ++a) start[a] = std::log(std::max(kStartShare * noise.sd[a], kLowerSpread[a]));
   start[3] = std::log(kStartTime);
   start = ClampedDrift(start, fast_time);
-  out.start = DriftOf(start);
   const AheadErrors none = ErrorsAhead(models, logs, {}, options);
   out.rows = none.rows[0] + none.rows[1];
   bool scorable = true;

@@ -34,7 +34,6 @@ namespace twinsim {
 
 struct OmniDriftIdentification {
   bool kept = false;
-  OmniDrivingNoise::Drift start;  // where the search started
   OmniDrivingNoise::Drift drift;  // fitted (kept or not); spreads 0 where none was fitted
   // The position RMSE (m) of the predictions 0.5 and 1 s ahead it was fitted on, without
   // and with it (the fit weighs their heading too), and their rows.

@@ -1040,7 +1040,7 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     // The better of the two on the held-out blocks is the robot's own wander: run and serve draw it.
     model->driving_noise.simulated = true;
   }
-  model->driving_noise.drift = {};  // the given model's, if any, is fitted anew
+  model->driving_noise.drift = {};  // the given model's, if any: fitted anew below, or none
   if (options.noise && options.drift) {
     say(6, "the noise's drift");
     report->drift = IdentifyDrift(*model, views, noise_options);

@@ -75,7 +75,7 @@ struct OmniDrivingNoise {
   // process, its own spreads (at every speed alike) and a correlation time of seconds,
   // what a run's floor, battery or worn wheel adds for a while and the response to the
   // command does not hold (a run's own drift). The observer learns it over the frames and
-  // carries it into its predictions; identify fits it on the filter's innovations.
+  // carries it into its predictions; identify fits it on the predictions a second ahead.
   struct Drift {
     std::array<double, 3> sd{0, 0, 0};  // forward, sideways m/s; turn rad/s; all 0: none
     double correlation_time = 5;       // s
