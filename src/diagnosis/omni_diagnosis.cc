@@ -599,7 +599,7 @@ std::shared_ptr<const OmniPredictor> TrainTestResidualPredictor(const OmniModel&
     predictor = std::make_shared<const OmniPredictor>(TrainOmniPredictor(model, logs, train, &summary));
     *learner = "the seed's linear predictor as a residual on the physics (twinsim train --residual --kind linear, "
                "one frame, rolled out over the horizon), trained on " + std::to_string(summary.train_samples) +
-               " windows of fit rows; " + summary.StateChoice();
+               " windows of fit rows; " + summary.RidgeChoice() + "; " + summary.StateChoice();
   } catch (const std::runtime_error& e) {  // InputError (too few windows) or CheckFailed (its track diverged)
     *learner = std::string("no learned residual: ") + e.what();
   }

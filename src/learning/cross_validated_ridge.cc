@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "learning/predictor_file.h"
 
@@ -52,6 +53,67 @@ std::vector<double> ChooseRidgesByOneStandardError(const Eigen::MatrixXd& x, con
     chosen[static_cast<std::size_t>(j)] = ridges[keep];
   }
   return chosen;
+}
+
+namespace {
+
+// The mean cost of every subset of `chosen` for fold k (indexed by the subset's bits), or
+// nothing where the fold cannot be scored.
+std::optional<std::vector<double>> FoldCosts(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
+                                             const std::vector<int>& fold, const std::vector<double>& ridges,
+                                             int chosen, int k, const FoldCost& cost) {
+  std::vector<long> rows;
+  for (long i = 0; i < x.rows(); ++i)
+    if (fold[static_cast<std::size_t>(i)] != k) rows.push_back(i);
+  if (rows.size() < 10) return std::nullopt;
+  const Eigen::MatrixXd fx = x(rows, Eigen::all), fy = y(rows, Eigen::all);
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(y.cols(), x.cols());
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(x.cols());
+  for (long j = 0; j < y.cols(); ++j)
+    if (chosen >> j & 1) w.row(j) = FitRidge(fx, fy.col(j), ridges[static_cast<std::size_t>(j)], &scale).transpose();
+  std::vector<double> out(std::size_t{1} << y.cols(), 0.0);
+  for (int mask = 0; mask < static_cast<int>(out.size()); ++mask) {
+    if (mask & ~chosen) continue;
+    Eigen::MatrixXd wm = w;
+    for (long j = 0; j < y.cols(); ++j)
+      if (!(mask >> j & 1)) wm.row(j).setZero();
+    const std::optional<double> c = cost(k, scale, wm);
+    if (!c) return std::nullopt;
+    out[static_cast<std::size_t>(mask)] = *c;
+  }
+  return out;
+}
+
+}  // namespace
+
+OutputSubsetChoice ChooseOutputsByFoldCost(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
+                                           const std::vector<int>& fold, const std::vector<double>& ridges,
+                                           const FoldCost& cost) {
+  OutputSubsetChoice c;
+  for (long j = 0; j < y.cols(); ++j)
+    if (std::isfinite(ridges[static_cast<std::size_t>(j)])) c.chosen |= 1 << j;
+  c.kept = c.chosen;
+  if (c.chosen == 0 || fold.empty()) return c;
+  const int folds = *std::max_element(fold.begin(), fold.end()) + 1;
+  std::vector<double> mean(std::size_t{1} << y.cols(), 0.0);
+  for (int k = 0; k < folds; ++k) {
+    const std::optional<std::vector<double>> f = FoldCosts(x, y, fold, ridges, c.chosen, k, cost);
+    if (!f) continue;
+    ++c.folds;
+    for (std::size_t m = 0; m < mean.size(); ++m) mean[m] += (*f)[m];
+  }
+  if (c.folds < 2) return c;
+  for (double& m : mean) m /= c.folds;
+  auto bits = [](int mask) { return __builtin_popcount(static_cast<unsigned>(mask)); };
+  for (int mask = 0; mask < static_cast<int>(mean.size()); ++mask) {
+    if (mask & ~c.chosen) continue;
+    const double a = mean[static_cast<std::size_t>(mask)], b = mean[static_cast<std::size_t>(c.kept)];
+    if (a < b || (a == b && bits(mask) < bits(c.kept))) c.kept = mask;
+  }
+  c.cost_chosen = mean[static_cast<std::size_t>(c.chosen)];
+  c.cost_kept = mean[static_cast<std::size_t>(c.kept)];
+  c.cost_none = mean[0];
+  return c;
 }
 
 }  // namespace twinsim

@@ -9,6 +9,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
+#include <optional>
 #include <vector>
 
 namespace twinsim {
@@ -25,5 +27,24 @@ Eigen::MatrixXd CrossValidatedErrors(const Eigen::MatrixXd& x, const Eigen::Matr
 // predicted.
 std::vector<double> ChooseRidgesByOneStandardError(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
                                                    const std::vector<int>& fold, std::vector<double> ridges);
+
+// Which outputs keep their fit, judged by what the fits are used for rather than by their
+// own errors: for every subset S of the outputs with a finite ridge (bit j: output j of y),
+// the mean over folds of `cost(k, scale, weights)`, the weights (outputs x inputs, on
+// inputs divided by `scale`) fitted on the other folds' rows of (x, y), each at its ridge,
+// and zero outside S. `cost` returns nothing where fold k cannot be scored. Kept: the
+// subset of least mean cost (on a tie, the one with fewer outputs). Fewer than two folds
+// scored: every output kept, `folds` says how many were.
+struct OutputSubsetChoice {
+  int chosen = 0;  // the outputs with a finite ridge
+  int kept = 0;
+  int folds = 0;   // folds scored
+  double cost_chosen = 0, cost_kept = 0, cost_none = 0;  // the mean costs
+};
+using FoldCost =
+    std::function<std::optional<double>(int fold, const Eigen::VectorXd& scale, const Eigen::MatrixXd& weights)>;
+OutputSubsetChoice ChooseOutputsByFoldCost(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
+                                           const std::vector<int>& fold, const std::vector<double>& ridges,
+                                           const FoldCost& cost);
 
 }  // namespace twinsim

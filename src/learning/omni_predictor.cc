@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -239,72 +240,14 @@ std::vector<OmniLog> OmniValidationParts(const std::vector<OmniLog>& logs, doubl
   return parts;
 }
 
-bool OmniTrainOptions::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& s) {
-    if (why) *why = s;
-    return false;
-  };
-  if (kind != "linear" && kind != "mlp") return fail("--kind must be linear or mlp, got '" + kind + "'");
-  if (horizon < 1 || horizon > 30) return fail("--horizon must be 1 to 30 frames, got " + std::to_string(horizon));
-  if (!(ridge >= 0) || !std::isfinite(ridge)) return fail("ridge must be finite and not negative");
-  if (residual && kind == "linear" && residual_ridges.empty()) return fail("no residual ridge to try");
-  for (double r : residual_ridges)
-    if (!(r >= 0) || !std::isfinite(r)) return fail("residual ridges must be finite and not negative");
-  if (validation_fraction <= 0 || validation_fraction >= 0.9) return fail("validation fraction must be in (0, 0.9)");
-  if (residual) {
-    if (nominal_engine != "analytic" && nominal_engine != "ode" && nominal_engine != "bullet")
-      return fail("--nominal-engine must be analytic, ode or bullet, got '" + nominal_engine + "'");
-    if (nominal_substeps < 0 || nominal_substeps > 1000)
-      return fail("--nominal-substeps must be 1 to 1000 (or 0 to choose), got " + std::to_string(nominal_substeps));
-    if (nominal_errors < 0 || nominal_errors > 30)
-      return fail("nominal errors must be 0 to 30 frames, got " + std::to_string(nominal_errors));
-  }
-  if (kind == "mlp") return mlp.IsValid(why);
-  return true;
-}
-
-std::string OmniTrainSummary::BriefReport() const {
-  std::ostringstream s;
-  s << samples << " samples (" << train_samples << " for training), position RMSE " << train_rmse * 1000
-    << " mm on training, " << validation_rmse * 1000 << " mm held out, " << seconds << " s";
-  if (validation_rollout_rmse > 0)
-    s << "; on its own for 1 s: " << validation_rollout_rmse * 1000 << " mm held out";
-  if (ridge.maxCoeff() > 0) {
-    s << "; ridge chosen by cross-validation over " << ridge_folds << " (forward, sideways, turn): ";
-    for (int j = 0; j < 3; ++j) {
-      s << (j ? ", " : "");
-      if (std::isinf(ridge[j]))
-        s << "no correction";
-      else
-        s << ridge[j];
-    }
-  }
-  if (chosen_state) s << "; " << StateChoice();
-  if (!mlp_report.empty()) s << "; " << mlp_report;
-  return s.str();
-}
-
-std::string OmniTrainSummary::StateChoice() const {
-  if (!chosen_state) return "";
-  std::ostringstream s;
-  s << "the model carried by its " << OmniReplayStateName(kept_state);
-  if (!untrained_state.empty()) {
-    s << " (" << untrained_state << ")";
-  } else if (rollout_rmse_observer == 0 && rollout_rmse_tracker == 0) {
-    s << " (no held-out 1 s rollout to choose by)";
-  } else {
-    s << " (held-out 1 s rollouts " << rollout_rmse_observer * 1000 << " mm from the observer's state, "
-      << rollout_rmse_tracker * 1000 << " mm from the tracker's)";
-  }
-  return s.str();
-}
-
 namespace {
 
-// Where a held-out rollout of a residual predictor starts: the frame and its track's state.
+// Where a rollout of a residual predictor starts: the frame, its track's state, and the
+// index of the window ending there among its log's windows (time order).
 struct ResidualStart {
   int frame = 0;
   NominalTrackState track;
+  int window = 0;
 };
 
 // One log's frames, split in time: windows ending before `cut` train, the rest validate.
@@ -312,8 +255,13 @@ struct SplitLog {
   FrameSequence seq;
   int cut = 0;
   std::vector<ResidualStart> residual_starts;  // residual predictors: the held-out rollouts' starts
+  std::vector<ResidualStart> check_starts;     // and the rollout check's, over the whole log
   int train_windows = 0, validation_windows = 0;  // the windows it gave each dataset
 };
+
+// The rollout check's starts (a residual's corrections checked by cross-validated 1 s
+// rollouts): about this many over all logs, evenly spaced.
+constexpr int kRolloutCheckStarts = 400;
 
 // Runs the 1-frame model on its own from every window ending in [first, last - frames],
 // `frames` steps under the logged acting commands; returns the summed squared position
@@ -343,15 +291,17 @@ std::pair<double, long> Rollouts(const OmniPredictor& model, const FrameSequence
   return {sum, count};
 }
 
-// A residual predictor's samples from one log: the nominal model is carried along the
-// measured poses (NominalOmniTrack) from the first frame with a known command and a
-// frame before it, and a window ending at frame i is a sample once the track has run
-// kNominalWarmUpFrames: into *train when i + H < cut, into *validation when i >= cut.
-// Every `stride`-th validation window that is measured, with `rollout_frames` frames after it, is
-// a rollout start. Returns the number of samples.
-int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout, double frame_rate, int cut,
-                          NominalOmniTrack* track, OmniDataset* train, OmniDataset* validation, int rollout_frames,
-                          int stride, std::vector<ResidualStart>* starts) {
+// A residual predictor's samples from one log (part->seq): the nominal model is carried
+// along the measured poses (NominalOmniTrack) from the first frame with a known command
+// and a frame before it, and a window ending at frame i is a sample once the track has
+// run kNominalWarmUpFrames: into *train when i + H < part->cut, into *validation when
+// i >= cut. A window that is measured, with `rollout_frames` sampled frames after it, is a
+// rollout start: every `stride`-th validation window into part->residual_starts, every
+// `check_stride`-th window into part->check_starts. Returns the number of samples.
+int AppendResidualSamples(const FeatureLayout& layout, double frame_rate, NominalOmniTrack* track, int rollout_frames,
+                          int stride, int check_stride, SplitLog* part, OmniDataset* train, OmniDataset* validation) {
+  const FrameSequence& seq = part->seq;
+  const int cut = part->cut;
   const int h = layout.history, horizon = layout.horizon, frames = seq.frames();
   int f0 = std::max(seq.first_known_command, 1);
   while (f0 < frames && !(seq.observed[static_cast<std::size_t>(f0)] && seq.observed[static_cast<std::size_t>(f0 - 1)])) ++f0;
@@ -362,7 +312,7 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
   const int in = layout.num_inputs();
   std::vector<double> train_x, train_y, val_x, val_y;
   std::vector<double> row(static_cast<std::size_t>(in));
-  int validation_windows = 0;
+  int validation_windows = 0, windows = 0;
   for (int f = f0; f < frames; ++f) {
     const auto uf = static_cast<std::size_t>(f);
     if (seq.observed[uf]) track->Correct(seq.pose[uf]);
@@ -376,9 +326,11 @@ int AppendResidualSamples(const FrameSequence& seq, const FeatureLayout& layout,
     if (for_training || for_validation) {
       // A rollout needs its start window measured; along it, only measured frames score
       // (ResidualRollouts), so that logs with lost or repeated frames have rollouts too.
-      if (for_validation && validation_windows++ % stride == 0 && seq.Complete(start, f) &&
-          f + rollout_frames < frames && seq.Sampled(start, f + rollout_frames))
-        starts->push_back({f, track->Save()});
+      const bool can_roll = seq.Complete(start, f) && f + rollout_frames < frames && seq.Sampled(start, f + rollout_frames);
+      if (for_validation && validation_windows++ % stride == 0 && can_roll)
+        part->residual_starts.push_back({f, track->Save(), windows});
+      if (windows % check_stride == 0 && can_roll) part->check_starts.push_back({f, track->Save(), windows});
+      ++windows;
       const Pose2& now = seq.pose[uf];
       const Twist2 velocity = track->velocity();
       const std::vector<Eigen::Vector3d> errors = track->errors();
@@ -489,6 +441,9 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
   std::size_t total_rows = 0;
   if (!options.sample_rows.empty() && options.sample_rows.size() != logs.size())
     throw std::invalid_argument("OmniTrainOptions::sample_rows: one row mask per log");
+  std::size_t all_rows = 0;
+  for (const OmniLog& log : logs) all_rows += log.rows.size();
+  const int check_stride = std::max(1, static_cast<int>(all_rows / kRolloutCheckStarts));
   for (std::size_t k = 0; k < logs.size(); ++k) {
     const OmniLog& log = logs[k];
     if (std::abs(1.0 / log.frame_period - info->frame_rate) > kSameCameraRate * info->frame_rate) {
@@ -496,15 +451,15 @@ std::vector<SplitLog> SplitLogs(const std::vector<OmniLog>& logs, const OmniTrai
       msg << "frame rate " << 1.0 / log.frame_period << " fps differs from the first log's " << info->frame_rate << " fps";
       throw InputError(SourceLocation{log.path}, msg.str());
     }
-    SplitLog part{ToFrameSequence(log, info->layout), 0, {}, 0, 0};
+    SplitLog part{ToFrameSequence(log, info->layout), 0, {}, {}, 0, 0};
     if (!options.sample_rows.empty()) SetSampledFrames(log, options.sample_rows[k], &part.seq);
     part.cut = ValidationCut(part.seq.frames(), options.validation_fraction);
     int n_train = 0, n_val = 0;
     if (track) {
       const int before_train = train->rows(), before_val = validation->rows();
       const int stride = std::max(1, (part.seq.frames() - part.cut) / 2000);  // bounds the rollouts' cost
-      AppendResidualSamples(part.seq, info->layout, info->frame_rate, part.cut, track, train, validation,
-                            rollout_frames, stride, &part.residual_starts);
+      AppendResidualSamples(info->layout, info->frame_rate, track, rollout_frames, stride, check_stride, &part, train,
+                            validation);
       n_train = train->rows() - before_train;
       n_val = validation->rows() - before_val;
     } else {
@@ -598,6 +553,80 @@ OmniDataset JoinedWindows(const OmniDataset& train, const OmniDataset& validatio
   return all;
 }
 
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// What the rollout check of a residual's corrections runs on: the logs with their check
+// starts, the track that carries the model, and the rollouts' length (frames). No track:
+// no check.
+struct ResidualCheckInputs {
+  const std::vector<SplitLog>* split = nullptr;
+  NominalOmniTrack* track = nullptr;
+  int frames = 0;
+};
+
+// A residual linear predictor's choice: each output's ridge (infinite: no correction) and
+// the rollout check that may have dropped some.
+struct ResidualChoice {
+  Eigen::Vector3d ridge = Eigen::Vector3d::Zero();
+  OmniRolloutCheck check;
+};
+
+// The check starts of cross-validation fold `k` (RidgeFolds), per log: with several logs
+// the k-th log's, with one the windows of its k-th stretch of time.
+using FoldStartList = std::vector<std::pair<const SplitLog*, std::vector<ResidualStart>>>;
+FoldStartList FoldStarts(const std::vector<SplitLog>& split, int k) {
+  FoldStartList out;
+  if (split.size() >= 2) {
+    const auto uk = static_cast<std::size_t>(k);
+    if (uk < split.size()) out.emplace_back(&split[uk], split[uk].check_starts);
+    return out;
+  }
+  if (split.empty()) return out;
+  const SplitLog& part = split[0];
+  const long n = part.train_windows + part.validation_windows;
+  std::vector<ResidualStart> starts;
+  for (const ResidualStart& s : part.check_starts)
+    if (static_cast<int>(static_cast<long>(kRidgeStretches) * s.window / n) == k) starts.push_back(s);
+  out.emplace_back(&part, std::move(starts));
+  return out;
+}
+
+// Checks a residual's corrections by its rollouts, cross-validated over the ridge's folds
+// (ChooseOutputsByFoldCost): for every subset of the outputs the one-frame choice corrects
+// (`ridges` finite), the left-out fold's 1 s rollouts' mean squared position error with
+// the corrections fitted on the other folds; the subset with the least mean over the
+// folds is kept. The one-frame choice is already conservative (its one-standard-error
+// rule), so this check only drops what makes the rollouts worse: a correction that wins a
+// frame can lose a second, where its small errors compound (docs/learning.md, "The
+// rollout check"). Fewer than two folds with rollouts: no check, every correction kept.
+OmniRolloutCheck CheckCorrectionsByRollouts(const OmniPredictorInfo& info, const OmniDataset& all,
+                                            const std::vector<int>& folds, const std::vector<double>& ridges,
+                                            const ResidualCheckInputs& in) {
+  const FoldCost rollouts = [&](int k, const Eigen::VectorXd& scale,
+                                const Eigen::MatrixXd& weights) -> std::optional<double> {
+    const OmniPredictor p =
+        MakeLinearPredictor(info, Eigen::VectorXd::Zero(scale.size()), scale, weights, Eigen::Vector3d::Zero());
+    double sum = 0;
+    long count = 0;
+    for (const auto& [part, starts] : FoldStarts(*in.split, k)) {
+      const auto [s, c] = ResidualRollouts(p, part->seq, starts, in.frames, in.track);
+      sum += s;
+      count += c;
+    }
+    if (count == 0) return std::nullopt;
+    return sum / static_cast<double>(count);
+  };
+  const OutputSubsetChoice c = ChooseOutputsByFoldCost(all.x, all.y, folds, ridges, rollouts);
+  OmniRolloutCheck check;
+  check.chosen = c.chosen;
+  check.kept = c.kept;
+  check.folds = c.folds;
+  check.rmse_chosen = std::sqrt(c.cost_chosen);
+  check.rmse_kept = std::sqrt(c.cost_kept);
+  check.rmse_none = std::sqrt(c.cost_none);
+  return check;
+}
+
 // A residual predictor's ridge regression on scaled inputs, closed form, through the
 // origin, fitted on `data`, each output (forward, sideways, turn) with a ridge of
 // `ridges` or none chosen by cross-validation over `folds` of `all` by the
@@ -607,15 +636,24 @@ OmniDataset JoinedWindows(const OmniDataset& train, const OmniDataset& validatio
 // and a correction's error compounds over the steps that follow, so one that wins a
 // frame by less than the folds' scatter is not worth its weights (measured on the
 // Robotino: docs/learning.md).
+//
+// With a track (horizon 1), the corrections so chosen are then checked by what the
+// predictor is used for, its rollouts (CheckCorrectionsByRollouts): an output whose
+// correction does not make the left-out folds' 1 s rollouts clearly nearer keeps none.
 OmniPredictor FitResidualChoosingRidge(const OmniPredictorInfo& info, const OmniDataset& data, const OmniDataset& all,
                                        const std::vector<int>& folds, const std::vector<double>& ridges,
-                                       Eigen::Vector3d* chosen) {
-  const std::vector<double> r = ChooseRidgesByOneStandardError(all.x, all.y, folds, ridges);
+                                       const ResidualCheckInputs& rollouts, ResidualChoice* choice) {
+  std::vector<double> r = ChooseRidgesByOneStandardError(all.x, all.y, folds, ridges);
+  if (rollouts.track) {
+    choice->check = CheckCorrectionsByRollouts(info, all, folds, r, rollouts);
+    for (int j = 0; j < 3; ++j)
+      if (!(choice->check.kept >> j & 1)) r[static_cast<std::size_t>(j)] = kInfinity;
+  }
   const long n = data.x.cols();
   Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(3, n);
   Eigen::VectorXd scale = Eigen::VectorXd::Ones(n);
   for (int j = 0; j < 3; ++j) {
-    (*chosen)[j] = r[static_cast<std::size_t>(j)];
+    choice->ridge[j] = r[static_cast<std::size_t>(j)];
     if (std::isinf(r[static_cast<std::size_t>(j)])) continue;  // no correction
     weights.row(j) = FitRidge(data.x, data.y.col(j), r[static_cast<std::size_t>(j)], &scale).transpose();  // same scale
   }
@@ -630,10 +668,11 @@ OmniPredictor FitResidualChoosingRidge(const OmniPredictorInfo& info, const Omni
 // rest only under camera noise.
 OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& data, const OmniDataset& validation,
                            const OmniTrainOptions& options, const std::function<void(int, int, double)>& progress,
-                           const std::vector<SplitLog>& split, std::string* mlp_report, Eigen::Vector3d* chosen_ridge) {
+                           const ResidualCheckInputs& rollouts, std::string* mlp_report, ResidualChoice* choice) {
+  const std::vector<SplitLog>& split = *rollouts.split;
   if (options.kind == "linear" && info.layout.residual)
     return FitResidualChoosingRidge(info, data, JoinedWindows(data, validation), RidgeFolds(split),
-                                    options.residual_ridges, chosen_ridge);
+                                    options.residual_ridges, rollouts, choice);
   if (options.kind == "linear") {
     Eigen::VectorXd scale;
     const Eigen::MatrixXd w = FitRidge(data.x, data.y, options.ridge, &scale);  // in x 3
@@ -729,8 +768,9 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
 
   const auto start = std::chrono::steady_clock::now();
   std::string mlp_report;
-  Eigen::Vector3d ridge = Eigen::Vector3d::Zero();
-  OmniPredictor predictor = FitPredictor(info, train, validation, options, progress, split, &mlp_report, &ridge);
+  ResidualChoice choice;
+  const ResidualCheckInputs rollouts{&split, info.layout.horizon == 1 ? track.get() : nullptr, rollout_frames};
+  OmniPredictor predictor = FitPredictor(info, train, validation, options, progress, rollouts, &mlp_report, &choice);
   const double rollout = info.layout.horizon == 1 ? RolloutRmse(predictor, split, rollout_frames, track.get()) : 0.0;
   OmniPredictorInfo final_info = info;
   final_info.validation_rollout_rmse = rollout;
@@ -746,7 +786,8 @@ OmniPredictor TrainOmniPredictor(const OmniModel& model, const std::vector<OmniL
     summary->seconds = seconds;
     summary->mlp_report = mlp_report;
     summary->validation_rollout_rmse = rollout;
-    summary->ridge = ridge;
+    summary->ridge = choice.ridge;
+    summary->rollout_check = choice.check;
     summary->ridge_folds = split.size() >= 2 ? std::to_string(split.size()) + " logs"
                                              : std::to_string(kRidgeStretches) + " stretches of the log";
   }

@@ -142,19 +142,23 @@ class ResidualPredictor : public ::testing::Test {
     test_ = new OmniLog(RecordResidualLog(plant, 40, 12, "slip_test.csv"));
     OmniTrainOptions options;
     options.residual = true;
-    linear_ = std::make_shared<OmniPredictor>(TrainOmniPredictor(testing::Omni4(), {*train_}, options));
+    summary_ = new OmniTrainSummary;
+    linear_ = std::make_shared<OmniPredictor>(TrainOmniPredictor(testing::Omni4(), {*train_}, options, summary_));
   }
   static void TearDownTestSuite() {
     delete train_;
     delete test_;
+    delete summary_;
     linear_.reset();
   }
   static OmniLog* train_;
   static OmniLog* test_;
+  static OmniTrainSummary* summary_;
   static std::shared_ptr<const OmniPredictor> linear_;
 };
 OmniLog* ResidualPredictor::train_ = nullptr;
 OmniLog* ResidualPredictor::test_ = nullptr;
+OmniTrainSummary* ResidualPredictor::summary_ = nullptr;
 std::shared_ptr<const OmniPredictor> ResidualPredictor::linear_;
 
 // The claim on a plant with effects (traction limit and motor lag), here on the
@@ -171,6 +175,21 @@ TEST_F(ResidualPredictor, LearnsWhatTheNewtonianModelMisses) {
   const double residual30 = ReplayRmse(model, *test_, "learned", 30, linear_);
   EXPECT_LE(residual4, 0.25 * newton4) << "4 frames: residual " << residual4 << " m, Newtonian " << newton4 << " m";
   EXPECT_LE(residual30, 0.5 * newton30) << "1 s: residual " << residual30 << " m, Newtonian " << newton30 << " m";
+}
+
+// The rollout check (docs/learning.md) keeps what the rollouts need: on this plant the
+// corrections carry the traction limit and the lag, and the five stretches' left-out 1 s
+// rollouts with them are a fraction of the physics' alone.
+TEST_F(ResidualPredictor, TheRolloutCheckKeepsTheCorrectionsTheRolloutsNeed) {
+  const OmniRolloutCheck& c = summary_->rollout_check;
+  SCOPED_TRACE(summary_->BriefReport());
+  EXPECT_EQ(c.folds, 5);
+  EXPECT_NE(c.kept, 0);
+  EXPECT_EQ(c.kept & ~c.chosen, 0);
+  EXPECT_LE(c.rmse_kept, c.rmse_chosen);
+  EXPECT_LT(c.rmse_kept, 0.5 * c.rmse_none);
+  for (int j = 0; j < 3; ++j) EXPECT_EQ(std::isinf(summary_->ridge[j]), !(c.kept >> j & 1)) << j;
+  EXPECT_NE(summary_->BriefReport().find("1 s rollouts over the 5 folds"), std::string::npos);
 }
 
 TEST_F(ResidualPredictor, IsTheNewtonianModelWhereItsCorrectionIsZero) {
