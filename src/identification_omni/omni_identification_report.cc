@@ -25,6 +25,14 @@ std::string Number(double v, const char* format = "%.4g") {
 
 ordered_json Finite(double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); }
 
+// A noise parameter on its search's bound, said after its unit (issue 64: no bound the
+// data hits without saying so).
+std::string NoiseBoundNote(const OmniNoiseParameter& p) {
+  if (p.bound == "lower") return "  (at its lower bound: the logs ask for less)";
+  if (p.bound == "upper") return "  (at its upper bound: the logs ask for more)";
+  return "";
+}
+
 ordered_json GapsJson(const std::vector<OmniGap>& gaps) {
   ordered_json out = ordered_json::array();
   for (const OmniGap& g : gaps) {
@@ -65,6 +73,7 @@ ordered_json NoiseJson(const OmniIdentificationReport& r) {
   for (const OmniNoiseParameter& p : n.parameters) {
     params.push_back({{"name", p.name}, {"unit", p.unit}, {"start", p.start}, {"value", p.value},
                       {"standard_error", Finite(p.standard_error)}});
+    if (!p.bound.empty()) params.back()["at_bound"] = p.bound;
   }
   j["parameters"] = params;
   if (!n.note.empty()) j["note"] = n.note;
@@ -352,9 +361,9 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   if (r.noise_identified) {
     s << "driving noise for predictions ahead (" << (r.noise.kept ? "kept" : "not kept") << "; start -> identified):\n";
     for (const OmniNoiseParameter& p : r.noise.parameters) {
-      std::snprintf(line, sizeof line, "  %-22s %12s -> %12s +- %-10s %s\n", p.name.c_str(), Number(p.start).c_str(),
+      std::snprintf(line, sizeof line, "  %-22s %12s -> %12s +- %-10s %s", p.name.c_str(), Number(p.start).c_str(),
                     Number(p.value).c_str(), Number(p.standard_error, "%.2g").c_str(), p.unit.c_str());
-      s << line;
+      s << line << NoiseBoundNote(p) << "\n";
     }
   }
   if (r.drift_identified)
@@ -450,7 +459,7 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     for (const OmniNoiseParameter& p : r.noise.parameters) {
       h << "<tr><td>" << HtmlEscape(p.name) << "</td><td class=n>" << Number(p.start) << "</td><td class=n>"
         << Number(p.value) << "</td><td class=n>" << Number(p.standard_error, "%.2g") << "</td><td>"
-        << HtmlEscape(p.unit) << "</td></tr>\n";
+        << HtmlEscape(p.unit + NoiseBoundNote(p)) << "</td></tr>\n";
     }
     h << "</table>\n";
     if (!r.noise.growth_note.empty()) h << "<p class=\"small\">" << HtmlEscape(r.noise.growth_note) << "</p>\n";

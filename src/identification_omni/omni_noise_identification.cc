@@ -283,6 +283,11 @@ std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const Noise
     p.start = FromCoordinate(i, start[i]) / (spread ? GrowthAt(start, typical) : 1);
     p.value = FromCoordinate(i, v[i]) / (spread ? GrowthAt(v, typical) : 1);
     p.standard_error = (spread ? p.value : Slope(i, v[i])) * se[i];  // first order
+    if (v[i] != start[i]) {  // searched
+      const double lower = ToCoordinate(i, kLower[i]), upper = ToCoordinate(i, kUpper[i]);
+      if (!IsGrowth(i) && v[i] <= lower) p.bound = "lower";
+      if (v[i] >= upper) p.bound = "upper";
+    }
     out.push_back(p);
   }
   return out;

@@ -89,6 +89,10 @@ struct OmniNoiseParameter {
   double start = 0;         // the prediction-error fit's value (spreads: standing still)
   double value = 0;         // identified
   double standard_error = 0;  // NaN where the blocks do not determine it
+  // "lower" or "upper" where the identified value sits on the search's bound (the logs ask
+  // for less, or more, than it allows: the camera's noise has a floor, the observer's
+  // kMinMeasurementNoise*); empty inside. A growth at none is not on a bound.
+  std::string bound;
 };
 
 // The noise fitted on one half of the held-out blocks, for the other half's calibration:

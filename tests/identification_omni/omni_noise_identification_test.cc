@@ -138,7 +138,10 @@ TEST(DrivingNoiseIdentification, AWanderingRobotsNoiseWithinThirtyPercentAndItsI
   }
   // The model file carries it; the report names every parameter with an error or none.
   EXPECT_EQ(run.model.Validate(), "");
-  for (const OmniNoiseParameter& p : r.noise.parameters) EXPECT_TRUE(p.value > 0 || p.name.rfind("per_", 0) == 0) << p.name;
+  for (const OmniNoiseParameter& p : r.noise.parameters) {
+    EXPECT_TRUE(p.value > 0 || p.name.rfind("per_", 0) == 0) << p.name;
+    EXPECT_EQ(p.bound, "") << p.name << " on its search's bound";
+  }
 }
 
 // A robot that wanders more the faster it drives (a quarter of the spread standing,
