@@ -255,14 +255,16 @@ OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
       fewest = std::min(fewest, f.size());
     }
     h.rows = static_cast<int>(all.size());
-    if (base) {  // the base scales as given; a growth on top of each where it helps
-      h.position = (*base)[q][0];
-      h.heading = (*base)[q][1];
-    }
+    // The base scales as given, a growth on top of each where it helps; a part without
+    // one (NaN) gets its scale from the folds.
+    const bool over_position = base && std::isfinite((*base)[q][0]);
+    const bool over_heading = base && std::isfinite((*base)[q][1]);
+    if (over_position) h.position = (*base)[q][0];
+    if (over_heading) h.heading = (*base)[q][1];
     if (folds.size() >= 2 && static_cast<int>(fewest) >= min_rows) {
-      FitPart(folds, all, PosePart::kPosition, base != nullptr, h.frames, stride, &h.position, &h.position_growth,
+      FitPart(folds, all, PosePart::kPosition, over_position, h.frames, stride, &h.position, &h.position_growth,
               &h.position_kept, &h.position_check);
-      FitPart(folds, all, PosePart::kHeading, base != nullptr, h.frames, stride, &h.heading, &h.heading_growth,
+      FitPart(folds, all, PosePart::kHeading, over_heading, h.frames, stride, &h.heading, &h.heading_growth,
               &h.heading_kept, &h.heading_check);
     }
     out.horizons.push_back(h);

@@ -123,7 +123,8 @@ inline constexpr int kSafeguardLeastRows = 20;
 // `min_rows` rows at a horizon leave it unscaled. With `base` ((position, heading) per
 // horizon: the scales within the fit's reach), those scales are kept as they are and
 // each gets a growth with the distance from the seen inputs where the folds ask for one
-// (the same rule, the base in place of no scale).
+// (the same rule, the base in place of no scale); a NaN base (no scale within the fit's
+// reach was checked there) leaves the folds to fit that scale itself.
 OmniIntervalSafeguard SafeguardFromFolds(const std::vector<int>& horizons,
                                          const std::vector<std::vector<std::vector<SafeguardRow>>>& rows, int stride,
                                          int min_rows, const std::vector<std::array<double, 2>>* base = nullptr);

@@ -1120,14 +1120,21 @@ OmniIntervalSafeguard LeftOutLogsSafeguard(const OmniModel& nominal, const std::
     for (std::size_t q = 0; q < horizons.size(); ++q)
       AppendSafeguardRows(left_out[q], MeasurementCovariance(models[i]), &rows[q][i]);
   }
-  // The held-out blocks' scales (1 where they kept none) are the base the growth adds to.
-  std::vector<std::array<double, 2>> base(horizons.size(), {1.0, 1.0});
+  // The held-out blocks' scales (1 where they kept none) are the base the growth adds to;
+  // where too few of their predictions reach a horizon to check it (short runs: the
+  // Robotino's 10 s leave none 0.5 s long), the left-out logs fit the scale itself, which
+  // may narrow the intervals as well as widen them.
+  constexpr double kNoBase = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::array<double, 2>> base(horizons.size(), {kNoBase, kNoBase});
   for (std::size_t q = 0; q < horizons.size(); ++q) {
     for (const OmniSafeguardHorizon& h : blocks.horizons)
-      if (h.frames == horizons[q]) base[q] = {h.position, h.heading};
+      if (h.frames == horizons[q] && h.position_check[0].rows > 0) base[q] = {h.position, h.heading};
   }
   OmniIntervalSafeguard out = SafeguardFromFolds(horizons, rows, noise_options.score_stride, kSafeguardLeastRows, &base);
-  out.on = "left-out logs, a growth over the held-out blocks' scale";
+  const bool own = std::any_of(base.begin(), base.end(), [](const auto& b) { return !std::isfinite(b[0]); });
+  out.on = own ? "left-out logs, a growth over the held-out blocks' scale, or a scale of their own where too few "
+                 "held-out predictions reach"
+               : "left-out logs, a growth over the held-out blocks' scale";
   return out;
 }
 

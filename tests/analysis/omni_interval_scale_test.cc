@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "analysis/omni_calibration.h"
@@ -248,6 +249,29 @@ TEST(OmniIntervalScale, AGrowthWithTheDistanceFromTheSeenInputsHoldsRowsFartherO
   std::vector<SafeguardRow> doubled = far_flat;
   for (SafeguardRow& r : doubled) r.e *= 2;
   EXPECT_GT(ScoreIntervalScale(doubled, PosePart::kPosition, k.position, k.position_growth).inside_90, 0.86);
+}
+
+// Where nothing within the fit's reach checked a horizon (a NaN base: identify's held-out
+// blocks too short for it), the folds fit the scale itself, and a covariance twice too
+// wide is narrowed to hold 90 %; over a base of 1 only a growth could be added, and the
+// intervals stay too wide.
+TEST(OmniIntervalScale, WithoutABaseTheFoldsMayNarrowTheIntervals) {
+  Rng rng(17);
+  std::vector<std::vector<std::vector<SafeguardRow>>> rows(1);
+  for (int f = 0; f < 3; ++f) rows[0].push_back(Rows(600, 0.5 * kPredicted, &rng, Gaussian));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<std::array<double, 2>> none{{nan, nan}}, one{{1.0, 1.0}};
+  const OmniSafeguardHorizon own = SafeguardFromFolds({16}, rows, 2, 20, &none).horizons[0];
+  const OmniSafeguardHorizon over = SafeguardFromFolds({16}, rows, 2, 20, &one).horizons[0];
+  const std::vector<SafeguardRow> fresh = Rows(4000, 0.5 * kPredicted, &rng, Gaussian);
+  ASSERT_TRUE(own.position_kept);
+  ASSERT_TRUE(own.heading_kept);
+  EXPECT_NEAR(own.position, 0.5, 0.06);
+  EXPECT_NEAR(own.heading, 0.5, 0.08);  // the camera's share is larger in one dimension
+  EXPECT_NEAR(ScoreIntervalScale(fresh, PosePart::kPosition, own.position).inside_90, 0.9, 0.02);
+  EXPECT_EQ(over.position, 1.0);
+  EXPECT_EQ(over.position_growth, 0.0);
+  EXPECT_GT(ScoreIntervalScale(fresh, PosePart::kPosition, over.position).inside_90, 0.99);
 }
 
 }  // namespace
