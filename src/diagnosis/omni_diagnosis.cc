@@ -23,6 +23,7 @@
 #include "diagnosis/response_changes.h"
 #include "identification_omni/omni_identification.h"
 #include "learning/omni_predictor.h"
+#include "robots/omni/omni_effects.h"
 
 namespace twinsim {
 namespace {
@@ -54,7 +55,8 @@ constexpr double kOmniStandFraction = 0.05;
 // Samples of the residual spectra's Welch segments at most: omni logs run at 30 to 60 Hz.
 constexpr int kOmniWelchSegmentCap = 256;
 
-// One optimiser variable of an omni effect.
+// One optimiser variable of an omni effect: a field of the vocabulary's table
+// (robots/omni/omni_effects.h) with its search range.
 struct Variable {
   const char* key;
   double lower, upper;
@@ -62,15 +64,12 @@ struct Variable {
 };
 
 std::vector<Variable> VariablesOf(const std::string& name) {
-  if (name == "time_delay") return {{"delay", 0, 1, false}};
-  if (name == "velocity_saturation") return {{"v_max", 0.02, 20, true}, {"w_max", 0.05, 100, true}};
-  if (name == "traction_limit") return {{"a_max", 0.02, 100, true}};
-  if (name == "motor_lag") return {{"time_constant", 1e-3, 5, true}};
-  if (name == "velocity_scale") return {{"scale", 0.2, 5, false}};
-  if (name == "rotation_drift") return {{"rate", -10, 10, false}};
-  if (name == "turn_coupling") return {{"forward", -20, 20, false}, {"sideways", -20, 20, false}};
-  if (name == "cross_coupling") return {{"sideways_per_forward", -2, 2, false}, {"forward_per_sideways", -2, 2, false}};
-  return {};
+  std::vector<Variable> out;
+  if (const OmniEffectSpec* spec = FindOmniEffectSpec(name)) {
+    for (const OmniEffectField& f : spec->fields)
+      if (f.search_upper > f.search_lower) out.push_back({f.key, f.search_lower, f.search_upper, f.search_log});
+  }
+  return out;
 }
 
 struct OmniLogData {

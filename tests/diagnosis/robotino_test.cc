@@ -124,8 +124,11 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
   // floors at 0.1 mm and 1 mrad it went to 0.46 mm and 4.2 mrad and the validation runs'
   // calibration moved by a few points only (docs/identification.md).
   ASSERT_TRUE(report.noise_identified);
-  for (const OmniNoiseParameter& p : report.noise.parameters)
-    if (p.name == "camera_xy") EXPECT_EQ(p.bound, "lower");
+  for (const OmniNoiseParameter& p : report.noise.parameters) {
+    if (p.name == "camera_xy") {
+      EXPECT_EQ(p.bound, "lower");
+    }
+  }
   // The validation runs' calibration split by distance from the fit's inputs (issue 64):
   // every row in one range (measured: all 0.25 to 1, the runs 30 degrees from the fit's).
   ASSERT_EQ(report.calibration_by_distance.size(), kCalibrationDistances.size() - 1);

@@ -18,15 +18,18 @@ namespace {
   [](const OmniEffects& e) { return e.member[axis]; }, [](OmniEffects* e, double v) { e->member[axis] = v; }
 
 std::vector<OmniEffectSpec> MakeOmniEffectSpecs() {
-  //  key, lower, upper, positive, off, modifier, binary, get and set
+  //  key, lower, upper, positive, off, modifier, binary, get and set; where searched, the
+  //  diagnosis's search range (lower, upper, in logarithms)
   return {
-      {"time_delay", "s", "", "delay", {{"delay", 0, 1, false, 0, false, false, TWINSIM_OMNI_NUMBER(time_delay)}}},
+      {"time_delay", "s", "", "delay",
+       {{"delay", 0, 1, false, 0, false, false, TWINSIM_OMNI_NUMBER(time_delay), 0, 1, false}}},
       {"velocity_saturation", "m/s, rad/s", "v_max, w_max or both", "v_max",
-       {{"v_max", 0, 100, true, 0, false, false, TWINSIM_OMNI_NUMBER(v_max)},
-        {"w_max", 0, 1000, true, 0, false, false, TWINSIM_OMNI_NUMBER(w_max)}}},
-      {"traction_limit", "m/s^2", "", "a_max", {{"a_max", 0, 1e4, true, 0, false, false, TWINSIM_OMNI_NUMBER(a_max)}}},
+       {{"v_max", 0, 100, true, 0, false, false, TWINSIM_OMNI_NUMBER(v_max), 0.02, 20, true},
+        {"w_max", 0, 1000, true, 0, false, false, TWINSIM_OMNI_NUMBER(w_max), 0.05, 100, true}}},
+      {"traction_limit", "m/s^2", "", "a_max",
+       {{"a_max", 0, 1e4, true, 0, false, false, TWINSIM_OMNI_NUMBER(a_max), 0.02, 100, true}}},
       {"motor_lag", "s", "time_constant or per-axis time constants", "time_constant",
-       {{"time_constant", 0, 10, false, 0, false, false, TWINSIM_OMNI_NUMBER(motor_lag)},
+       {{"time_constant", 0, 10, false, 0, false, false, TWINSIM_OMNI_NUMBER(motor_lag), 1e-3, 5, true},
         {"forward", 0, 10, false, 0, false, false, TWINSIM_OMNI_AXIS(axis_lag, 0)},
         {"sideways", 0, 10, false, 0, false, false, TWINSIM_OMNI_AXIS(axis_lag, 1)},
         {"turn", 0, 10, false, 0, false, false, TWINSIM_OMNI_AXIS(axis_lag, 2)},
@@ -34,18 +37,20 @@ std::vector<OmniEffectSpec> MakeOmniEffectSpecs() {
         {"field_frame", 0, 1, false, 0, true, true, [](const OmniEffects& e) { return e.lag_field_frame ? 1.0 : 0.0; },
          [](OmniEffects* e, double v) { e->lag_field_frame = v == 1; }}}},
       {"velocity_scale", "times as fast", "scale or per-axis scales", "scale",
-       {{"scale", 0.2, 5, false, 1, false, false, TWINSIM_OMNI_NUMBER(velocity_scale)},
+       {{"scale", 0.2, 5, false, 1, false, false, TWINSIM_OMNI_NUMBER(velocity_scale), 0.2, 5, false},
         {"forward", 0.02, 5, false, 1, false, false, TWINSIM_OMNI_AXIS(axis_scale, 0)},
         {"sideways", 0.02, 5, false, 1, false, false, TWINSIM_OMNI_AXIS(axis_scale, 1)},
         {"turn", 0.02, 5, false, 1, false, false, TWINSIM_OMNI_AXIS(axis_scale, 2)}}},
       {"rotation_drift", "rad per metre", "", "rate",
-       {{"rate", -10, 10, false, 0, false, false, TWINSIM_OMNI_NUMBER(rotation_drift)}}},
+       {{"rate", -10, 10, false, 0, false, false, TWINSIM_OMNI_NUMBER(rotation_drift), -10, 10, false}}},
       {"turn_coupling", "rad/s per m/s", "forward, sideways or both", "sideways",
-       {{"forward", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_forward)},
-        {"sideways", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_sideways)}}},
+       {{"forward", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_forward), -20, 20, false},
+        {"sideways", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_sideways), -20, 20, false}}},
       {"cross_coupling", "m/s per m/s", "sideways_per_forward, forward_per_sideways or both", "sideways_per_forward",
-       {{"sideways_per_forward", -2, 2, false, 0, false, false, TWINSIM_OMNI_NUMBER(sideways_per_forward)},
-        {"forward_per_sideways", -2, 2, false, 0, false, false, TWINSIM_OMNI_NUMBER(forward_per_sideways)}}},
+       {{"sideways_per_forward", -2, 2, false, 0, false, false, TWINSIM_OMNI_NUMBER(sideways_per_forward), -2, 2,
+         false},
+        {"forward_per_sideways", -2, 2, false, 0, false, false, TWINSIM_OMNI_NUMBER(forward_per_sideways), -2, 2,
+         false}}},
   };
 }
 

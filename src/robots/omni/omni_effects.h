@@ -89,6 +89,11 @@ struct OmniEffectField {
   bool binary;          // a choice, 0 or 1 (read from a file as an integer)
   double (*get)(const OmniEffects&);
   void (*set)(OmniEffects*, double);
+  // Where the diagnosis searches it when it refines the effect (diagnosis/omni_diagnosis.cc):
+  // within [search_lower, search_upper], in logarithms where `search_log`. Not searched
+  // (a per-axis key, a modifier) where the two are equal.
+  double search_lower = 0, search_upper = 0;
+  bool search_log = false;
 };
 
 // An effect of the vocabulary and its numbers.
