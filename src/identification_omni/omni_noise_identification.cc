@@ -271,9 +271,10 @@ NoiseValues StandardErrors(const std::function<std::vector<HorizonRows>(const No
 
 // The report's parameters: start and identified values (the spreads standing still, as
 // the model file has them), errors from the coordinates' (a spread's relative error is
-// its error at the typical motion, where it is searched).
+// its error at the typical motion, where it is searched); where `searched`, which sit on
+// the search's bounds.
 std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const NoiseValues& v, const NoiseValues& se,
-                                           const OmniTypicalMotion& typical) {
+                                           const OmniTypicalMotion& typical, bool searched = true) {
   std::vector<OmniNoiseParameter> out;
   for (int i = 0; i < kNoiseParams; ++i) {
     const bool spread = i < 3;
@@ -283,7 +284,7 @@ std::vector<OmniNoiseParameter> Parameters(const NoiseValues& start, const Noise
     p.start = FromCoordinate(i, start[i]) / (spread ? GrowthAt(start, typical) : 1);
     p.value = FromCoordinate(i, v[i]) / (spread ? GrowthAt(v, typical) : 1);
     p.standard_error = (spread ? p.value : Slope(i, v[i])) * se[i];  // first order
-    if (v[i] != start[i]) {  // searched
+    if (searched) {
       const double lower = ToCoordinate(i, kLower[i]), upper = ToCoordinate(i, kUpper[i]);
       if (!IsGrowth(i) && v[i] <= lower) p.bound = "lower";
       if (v[i] >= upper) p.bound = "upper";
@@ -466,7 +467,7 @@ OmniNoiseIdentification IdentifyDrivingNoise(const OmniModel& model, const std::
     out.note = "no held-out rows to fit the noise on: the prediction-error fit's noise is kept";
     NoiseValues none;
     none.fill(std::numeric_limits<double>::quiet_NaN());
-    out.parameters = Parameters(start, start, none, typical);
+    out.parameters = Parameters(start, start, none, typical, false);
     return out;
   }
   out.fit_before = Cost(first);
