@@ -8,15 +8,22 @@
 #include "learning/predictor_file.h"
 
 namespace twinsim {
+namespace {
+
+// The rows of fold f (*test) and of the others (*fit).
+void SplitByFold(const std::vector<int>& fold, int f, std::vector<long>* fit, std::vector<long>* test) {
+  for (std::size_t i = 0; i < fold.size(); ++i) (fold[i] == f ? test : fit)->push_back(static_cast<long>(i));
+}
+
+}  // namespace
 
 Eigen::MatrixXd CrossValidatedErrors(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, const std::vector<int>& fold,
                                      double ridge) {
   const int folds = fold.empty() ? 0 : *std::max_element(fold.begin(), fold.end()) + 1;
   std::vector<Eigen::VectorXd> rows;
   for (int f = 0; f < folds; ++f) {
-    std::vector<int> fit_rows, test_rows;
-    for (int i = 0; i < static_cast<int>(x.rows()); ++i)
-      (fold[static_cast<std::size_t>(i)] == f ? test_rows : fit_rows).push_back(i);
+    std::vector<long> fit_rows, test_rows;
+    SplitByFold(fold, f, &fit_rows, &test_rows);
     if (test_rows.empty() || fit_rows.size() < 10) continue;
     Eigen::MatrixXd predicted = Eigen::MatrixXd::Zero(static_cast<long>(test_rows.size()), y.cols());
     if (std::isfinite(ridge)) {
@@ -62,9 +69,8 @@ namespace {
 std::optional<std::vector<double>> FoldCosts(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
                                              const std::vector<int>& fold, const std::vector<double>& ridges,
                                              int chosen, int k, const FoldCost& cost) {
-  std::vector<long> rows;
-  for (long i = 0; i < x.rows(); ++i)
-    if (fold[static_cast<std::size_t>(i)] != k) rows.push_back(i);
+  std::vector<long> rows, left_out;
+  SplitByFold(fold, k, &rows, &left_out);
   if (rows.size() < 10) return std::nullopt;
   const Eigen::MatrixXd fx = x(rows, Eigen::all), fy = y(rows, Eigen::all);
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(y.cols(), x.cols());

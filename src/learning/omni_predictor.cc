@@ -327,9 +327,13 @@ int AppendResidualSamples(const FeatureLayout& layout, double frame_rate, Nomina
       // A rollout needs its start window measured; along it, only measured frames score
       // (ResidualRollouts), so that logs with lost or repeated frames have rollouts too.
       const bool can_roll = seq.Complete(start, f) && f + rollout_frames < frames && seq.Sampled(start, f + rollout_frames);
-      if (for_validation && validation_windows++ % stride == 0 && can_roll)
-        part->residual_starts.push_back({f, track->Save(), windows});
-      if (windows % check_stride == 0 && can_roll) part->check_starts.push_back({f, track->Save(), windows});
+      const bool held_start = for_validation && validation_windows++ % stride == 0 && can_roll;
+      const bool check_start = windows % check_stride == 0 && can_roll;
+      if (held_start || check_start) {
+        const ResidualStart here{f, track->Save(), windows};
+        if (held_start) part->residual_starts.push_back(here);
+        if (check_start) part->check_starts.push_back(here);
+      }
       ++windows;
       const Pose2& now = seq.pose[uf];
       const Twist2 velocity = track->velocity();
@@ -553,8 +557,6 @@ OmniDataset JoinedWindows(const OmniDataset& train, const OmniDataset& validatio
   return all;
 }
 
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
 // What the rollout check of a residual's corrections runs on: the logs with their check
 // starts, the track that carries the model, and the rollouts' length (frames). No track:
 // no check.
@@ -571,23 +573,26 @@ struct ResidualChoice {
   OmniRolloutCheck check;
 };
 
-// The check starts of cross-validation fold `k` (RidgeFolds), per log: with several logs
-// the k-th log's, with one the windows of its k-th stretch of time.
-using FoldStartList = std::vector<std::pair<const SplitLog*, std::vector<ResidualStart>>>;
-FoldStartList FoldStarts(const std::vector<SplitLog>& split, int k) {
-  FoldStartList out;
-  if (split.size() >= 2) {
-    const auto uk = static_cast<std::size_t>(k);
-    if (uk < split.size()) out.emplace_back(&split[uk], split[uk].check_starts);
-    return out;
-  }
-  if (split.empty()) return out;
-  const SplitLog& part = split[0];
-  const long n = part.train_windows + part.validation_windows;
+// The check starts of each of `folds` cross-validation folds (RidgeFolds) and the log
+// they lie in: with several logs the k-th log's, with one the windows of its k-th
+// stretch of time.
+struct FoldStarts {
+  const SplitLog* part = nullptr;
   std::vector<ResidualStart> starts;
-  for (const ResidualStart& s : part.check_starts)
-    if (static_cast<int>(static_cast<long>(kRidgeStretches) * s.window / n) == k) starts.push_back(s);
-  out.emplace_back(&part, std::move(starts));
+};
+std::vector<FoldStarts> StartsByFold(const std::vector<SplitLog>& split, int folds) {
+  std::vector<FoldStarts> out(static_cast<std::size_t>(folds));
+  for (std::size_t k = 0; k < out.size() && !split.empty(); ++k) {
+    const SplitLog& part = split[split.size() >= 2 ? k : 0];
+    out[k].part = &part;
+    if (split.size() >= 2) {
+      out[k].starts = part.check_starts;
+      continue;
+    }
+    const long n = part.train_windows + part.validation_windows;
+    for (const ResidualStart& s : part.check_starts)
+      if (static_cast<std::size_t>(static_cast<long>(kRidgeStretches) * s.window / n) == k) out[k].starts.push_back(s);
+  }
   return out;
 }
 
@@ -602,17 +607,14 @@ FoldStartList FoldStarts(const std::vector<SplitLog>& split, int k) {
 OmniRolloutCheck CheckCorrectionsByRollouts(const OmniPredictorInfo& info, const OmniDataset& all,
                                             const std::vector<int>& folds, const std::vector<double>& ridges,
                                             const ResidualCheckInputs& in) {
+  const int num_folds = folds.empty() ? 0 : *std::max_element(folds.begin(), folds.end()) + 1;
+  const std::vector<FoldStarts> fold_starts = StartsByFold(*in.split, num_folds);  // once for all subsets
   const FoldCost rollouts = [&](int k, const Eigen::VectorXd& scale,
                                 const Eigen::MatrixXd& weights) -> std::optional<double> {
     const OmniPredictor p =
         MakeLinearPredictor(info, Eigen::VectorXd::Zero(scale.size()), scale, weights, Eigen::Vector3d::Zero());
-    double sum = 0;
-    long count = 0;
-    for (const auto& [part, starts] : FoldStarts(*in.split, k)) {
-      const auto [s, c] = ResidualRollouts(p, part->seq, starts, in.frames, in.track);
-      sum += s;
-      count += c;
-    }
+    const FoldStarts& f = fold_starts[static_cast<std::size_t>(k)];
+    const auto [sum, count] = ResidualRollouts(p, f.part->seq, f.starts, in.frames, in.track);
     if (count == 0) return std::nullopt;
     return sum / static_cast<double>(count);
   };
@@ -647,7 +649,7 @@ OmniPredictor FitResidualChoosingRidge(const OmniPredictorInfo& info, const Omni
   if (rollouts.track) {
     choice->check = CheckCorrectionsByRollouts(info, all, folds, r, rollouts);
     for (int j = 0; j < 3; ++j)
-      if (!(choice->check.kept >> j & 1)) r[static_cast<std::size_t>(j)] = kInfinity;
+      if (!(choice->check.kept >> j & 1)) r[static_cast<std::size_t>(j)] = std::numeric_limits<double>::infinity();
   }
   const long n = data.x.cols();
   Eigen::MatrixXd weights = Eigen::MatrixXd::Zero(3, n);
