@@ -1,6 +1,7 @@
 // The omni observer's cost (issue 40): replaying a minute at 60 Hz through the model's
-// Kalman filter against the open-loop tracker, on the analytic engine and on ODE; and
-// identify of that minute (the goal: a 60 s log within 60 s on two cores). The log is the
+// Kalman filter against the open-loop tracker, on the analytic engine and on ODE; the
+// same minute predicted far ahead with the covariance, as the driving noise's search
+// replays it; and identify of that minute (the goal: a 60 s log within 60 s on two cores). The log is the
 // wandering plant of the tests (tests/estimation/wandering_plant.h: a robot with driving
 // noise, written apart from the models).
 //
@@ -35,6 +36,30 @@ void BM_ReplayMinute(benchmark::State& state) {
   state.SetLabel(o.backend + ", " + OmniReplayStateName(o.state));
 }
 BENCHMARK(BM_ReplayMinute)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
+
+// The driving noise's search replays so: the observer's predictions 63 frames ahead
+// (16 and 4 on the way) from every 4th frame, each with its covariance (the Kalman
+// filter's propagation at every frame ahead), on the analytic engine.
+void BM_ReplayMinuteWithCovariance(benchmark::State& state) {
+  OmniModel model = Model();
+  model.driving_noise.sd = {0.02, 0.02, 0.1};
+  model.driving_noise.drift.sd = {state.range(0) ? 0.01 : 0.0, 0, 0};
+  OmniReplayOptions o;
+  o.state = OmniReplayState::kObserver;
+  o.horizon = 63;
+  o.also = {4, 16};
+  o.stride = 4;
+  o.covariance = true;
+  double trace = 0;
+  for (auto _ : state) {
+    const OmniReplayResult r = ReplayOmniLog(model, Minute().log, o);
+    trace = 0;
+    for (const Eigen::Matrix3d& c : r.covariance) trace += c.trace();
+  }
+  state.counters["trace_sum"] = trace;
+  state.SetLabel(state.range(0) ? "12 states (a drift)" : "9 states");
+}
+BENCHMARK(BM_ReplayMinuteWithCovariance)->DenseRange(0, 1)->Unit(benchmark::kMillisecond);
 
 void BM_IdentifyMinute(benchmark::State& state) {
   const OmniModel model = Model();

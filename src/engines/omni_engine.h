@@ -70,8 +70,14 @@ struct GripCheck {
   }
 };
 
-// Empty when nothing passed the grip; else one sentence for the user: on what share of
-// the steps the analytic model's wheels needed more grip than they have, and what to do.
+// A pass of the grip worth a word: some step needing this many times the grip, or this
+// share of the steps needing more than it.
+inline constexpr double kGripWorthSaying = 1.05;
+inline constexpr double kGripShareWorthSaying = 0.01;
+
+// Empty when nothing passed the grip by what is worth a word (above); else one sentence
+// for the user: on what share of the steps the analytic model's wheels needed more grip
+// than they have, and what to do.
 std::string DescribeGrip(const GripCheck& grip);
 
 // Everything that changes about one robot's bodies, enough to put it back exactly.

@@ -74,6 +74,23 @@ TEST(AnalyticGrip, BeyondItsGripTheAnalyticModelSaysSoAndOdeSlipsAway) {
   }
 }
 
+// A pass of the grip is said where it could move the robot: some step at 5 % over it, or
+// 1 % of the steps over it at all; not a handful of steps a hair over it.
+TEST(AnalyticGrip, AHairOverTheGripOnAFewStepsIsNotSaid) {
+  GripCheck grip;
+  grip.steps = 531300;  // a replay of a minute with predictions 16 frames ahead
+  grip.beyond = 5;
+  grip.worst = 1.0025;
+  EXPECT_TRUE(DescribeGrip(grip).empty());
+  grip.worst = 1.06;
+  EXPECT_NE(DescribeGrip(grip).find("up to 1.1 times it"), std::string::npos) << DescribeGrip(grip);
+  grip.worst = 1.01;
+  grip.beyond = grip.steps / 100;
+  EXPECT_NE(DescribeGrip(grip).find("on 1 % of the steps"), std::string::npos) << DescribeGrip(grip);
+  grip.beyond = grip.steps / 100 - 1;
+  EXPECT_TRUE(DescribeGrip(grip).empty());
+}
+
 // Replaying a log (replay, compare, diagnose and identify all do) carries the check out:
 // a fast turn recorded by ODE is flagged on the analytic model, a gentle one is not.
 TEST(AnalyticGrip, AReplayOfALogSaysWhereTheAnalyticModelLeftItsGrip) {
