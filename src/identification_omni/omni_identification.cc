@@ -7,9 +7,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "analysis/camera_noise.h"
 #include "analysis/fixed_step_cost.h"
@@ -21,6 +23,8 @@
 #include "core/parallel.h"
 #include "identification/identifiability.h"
 #include "io/printf_number.h"
+#include "robots/omni/omni_effects.h"
+#include "robots/omni/omni_model_fields.h"
 #include "signal/series_statistics.h"
 
 namespace twinsim {
@@ -45,43 +49,90 @@ enum Param {
 
 struct ParamSpec {
   const char* name;
-  const char* key;  // in the model file
+  std::string key;  // in the model file
   const char* unit;
   const char* meaning;
   double lower, upper;
   bool log_scale;
+  // Where a model holds it, for a parameter that is one number of the model file (the
+  // file's own tables: robots/omni/omni_model_fields.h, omni_effects.h); empty for the
+  // lags (read through a common motor_lag), the delay (frames and an effect), the loop
+  // gains and the process noise's scale (factors on the model's own), which ValuesOf and
+  // WithValues compute.
+  std::function<double(const OmniModel&)> get = {};
+  std::function<void(OmniModel*, double)> set = {};
 };
 
-const ParamSpec kSpecs[kNumParams] = {
-    {"forward.gain", "effects.velocity_scale.forward", "", "forward speed reached per unit of forward command", 0.05, 3, false},
-    {"sideways.gain", "effects.velocity_scale.sideways", "", "sideways speed reached per unit of sideways command", 0.05, 3, false},
-    {"turn.gain", "effects.velocity_scale.turn", "", "turn rate reached per unit of turn command", 0.05, 3, false},
-    {"forward.lag", "effects.motor_lag.forward", "s", "first-order time constant of the forward response, before the controller", 0.002, 1, true},
-    {"sideways.lag", "effects.motor_lag.sideways", "s", "first-order time constant of the sideways response, before the controller", 0.002, 1, true},
-    {"turn.lag", "effects.motor_lag.turn", "s", "first-order time constant of the turn response, before the controller", 0.002, 1, true},
-    {"forward.slew", "controller.forward.slew_rate", "m/s^2", "the controller's forward set-point ramps at most this fast", 0.05, 200, true},
-    {"sideways.slew", "controller.sideways.slew_rate", "m/s^2", "the controller's sideways set-point ramps at most this fast", 0.05, 200, true},
-    {"turn.slew", "controller.rotation.slew_rate", "rad/s^2", "the controller's turn set-point ramps at most this fast", 0.5, 2000, true},
-    {"turn_coupling.forward", "effects.turn_coupling.forward", "rad/s per m/s", "turn rate per m/s of forward command", -5, 5, false},
-    {"turn_coupling.sideways", "effects.turn_coupling.sideways", "rad/s per m/s", "turn rate per m/s of sideways command", -5, 5, false},
-    {"cross_coupling.sideways_per_forward", "effects.cross_coupling.sideways_per_forward", "", "sideways speed per unit of forward command", -1, 1, false},
-    {"cross_coupling.forward_per_sideways", "effects.cross_coupling.forward_per_sideways", "", "forward speed per unit of sideways command", -1, 1, false},
-    {"velocity_saturation.v_max", "effects.velocity_saturation.v_max", "m/s", "the highest translational speed the robot reaches", 0.05, 20, true},
-    {"velocity_saturation.w_max", "effects.velocity_saturation.w_max", "rad/s", "the highest turn rate the robot reaches", 0.1, 200, true},
-    {"delay", "delay.command_frames + delay.vision_frames + effects.time_delay.delay", "s",
-     "from sending a command to the camera's pose showing its effect (command and vision together)", 0, 2, false},
-    {"forward.loop_gain", "controller.forward.kp, ki, kd", "x", "the forward controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
-    {"sideways.loop_gain", "controller.sideways.kp, ki, kd", "x", "the sideways controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
-    {"turn.loop_gain", "controller.rotation.kp, ki, kd", "x", "the rotation controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
-    {"driving_noise.forward", "driving_noise.forward", "m/s", "spread of the forward driving noise the wheels do not see (the observer's)", 0.002, 5, true},
-    {"driving_noise.sideways", "driving_noise.sideways", "m/s", "spread of the sideways driving noise the wheels do not see (the observer's)", 0.002, 5, true},
-    {"driving_noise.turn", "driving_noise.turn", "rad/s", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true},
-    {"driving_noise.correlation_time", "driving_noise.correlation_time", "s", "how long the driving noise lasts (the observer's)", 0.01, 5, true},
-    {"process_noise.scale", "observer.process_noise", "x", "the observer's process noise on the model's velocity relative to the model's: how far the model's own velocity is trusted", 0.001, 100, true},
-    {"lag.braking", "effects.motor_lag.braking", "x", "the lags' time constants while slowing down, relative to speeding up", 0.1, 10, true},
-    // A choice, never fitted: 0 the lag acts in the robot's frame, 1 in the field's.
-    {"lag.field_frame", "effects.motor_lag.field_frame", "", "1: the lagged velocity keeps its direction in the field while the robot turns; 0: it turns with the robot", 0, 1, false},
-};
+// A parameter that is the model file's number at `path` (omni_model_fields.h).
+ParamSpec ModelNumber(const char* name, const std::string& path, const char* meaning, double lower, double upper,
+                      bool log_scale) {
+  const OmniModelField& f = OmniModelFieldAt(path);
+  return {name, f.path(), f.unit.c_str(), meaning, lower, upper, log_scale, f.get, f.set};
+}
+
+// The field `key` of the effect `effect` in the vocabulary's table (omni_effects.h).
+const OmniEffectField& EffectField(const std::string& effect, const std::string& key) {
+  if (const OmniEffectSpec* spec = FindOmniEffectSpec(effect)) {
+    for (const OmniEffectField& f : spec->fields)
+      if (key == f.key) return f;
+  }
+  throw std::logic_error("no omni effect field '" + effect + "." + key + "'");
+}
+
+std::string EffectKey(const std::string& effect, const std::string& key) {
+  return "effects." + effect + "." + EffectField(effect, key).key;
+}
+
+// A parameter that is the number `key` of the effect `effect`, in identify's unit.
+ParamSpec EffectNumber(const char* name, const std::string& effect, const std::string& key, const char* unit,
+                       const char* meaning, double lower, double upper, bool log_scale) {
+  const OmniEffectField& f = EffectField(effect, key);
+  return {name,      EffectKey(effect, key), unit, meaning, lower, upper, log_scale,
+          [get = f.get](const OmniModel& m) { return get(m.effects); },
+          [set = f.set](OmniModel* m, double v) { set(&m->effects, v); }};
+}
+
+std::vector<ParamSpec> MakeSpecs() {
+  const auto section = [](const std::string& path) { return OmniModelFieldAt(path).section; };
+  std::vector<ParamSpec> specs = {
+      EffectNumber("forward.gain", "velocity_scale", "forward", "", "forward speed reached per unit of forward command", 0.05, 3, false),
+      EffectNumber("sideways.gain", "velocity_scale", "sideways", "", "sideways speed reached per unit of sideways command", 0.05, 3, false),
+      EffectNumber("turn.gain", "velocity_scale", "turn", "", "turn rate reached per unit of turn command", 0.05, 3, false),
+      {"forward.lag", EffectKey("motor_lag", "forward"), "s", "first-order time constant of the forward response, before the controller", 0.002, 1, true},
+      {"sideways.lag", EffectKey("motor_lag", "sideways"), "s", "first-order time constant of the sideways response, before the controller", 0.002, 1, true},
+      {"turn.lag", EffectKey("motor_lag", "turn"), "s", "first-order time constant of the turn response, before the controller", 0.002, 1, true},
+      ModelNumber("forward.slew", "controller.forward.slew_rate", "the controller's forward set-point ramps at most this fast", 0.05, 200, true),
+      ModelNumber("sideways.slew", "controller.sideways.slew_rate", "the controller's sideways set-point ramps at most this fast", 0.05, 200, true),
+      ModelNumber("turn.slew", "controller.rotation.slew_rate", "the controller's turn set-point ramps at most this fast", 0.5, 2000, true),
+      EffectNumber("turn_coupling.forward", "turn_coupling", "forward", "rad/s per m/s", "turn rate per m/s of forward command", -5, 5, false),
+      EffectNumber("turn_coupling.sideways", "turn_coupling", "sideways", "rad/s per m/s", "turn rate per m/s of sideways command", -5, 5, false),
+      EffectNumber("cross_coupling.sideways_per_forward", "cross_coupling", "sideways_per_forward", "", "sideways speed per unit of forward command", -1, 1, false),
+      EffectNumber("cross_coupling.forward_per_sideways", "cross_coupling", "forward_per_sideways", "", "forward speed per unit of sideways command", -1, 1, false),
+      EffectNumber("velocity_saturation.v_max", "velocity_saturation", "v_max", "m/s", "the highest translational speed the robot reaches", 0.05, 20, true),
+      EffectNumber("velocity_saturation.w_max", "velocity_saturation", "w_max", "rad/s", "the highest turn rate the robot reaches", 0.1, 200, true),
+      {"delay", OmniModelFieldAt("delay.command_frames").path() + " + " + OmniModelFieldAt("delay.vision_frames").path() + " + " + EffectKey("time_delay", "delay"), "s",
+       "from sending a command to the camera's pose showing its effect (command and vision together)", 0, 2, false},
+      {"forward.loop_gain", section("controller.forward.kp") + ".kp, ki, kd", "x", "the forward controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
+      {"sideways.loop_gain", section("controller.sideways.kp") + ".kp, ki, kd", "x", "the sideways controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
+      {"turn.loop_gain", section("controller.rotation.kp") + ".kp, ki, kd", "x", "the rotation controller's gains relative to the model's: its bandwidth", 0.05, 20, true},
+      ModelNumber("driving_noise.forward", "driving_noise.forward", "spread of the forward driving noise the wheels do not see (the observer's)", 0.002, 5, true),
+      ModelNumber("driving_noise.sideways", "driving_noise.sideways", "spread of the sideways driving noise the wheels do not see (the observer's)", 0.002, 5, true),
+      ModelNumber("driving_noise.turn", "driving_noise.turn", "spread of the turning driving noise the wheels do not see (the observer's)", 0.01, 50, true),
+      ModelNumber("driving_noise.correlation_time", "driving_noise.correlation_time", "how long the driving noise lasts (the observer's)", 0.01, 5, true),
+      {"process_noise.scale", section("observer.process_noise.forward"), "x", "the observer's process noise on the model's velocity relative to the model's: how far the model's own velocity is trusted", 0.001, 100, true},
+      EffectNumber("lag.braking", "motor_lag", "braking", "x", "the lags' time constants while slowing down, relative to speeding up", 0.1, 10, true),
+      // A choice, never fitted: 0 the lag acts in the robot's frame, 1 in the field's.
+      EffectNumber("lag.field_frame", "motor_lag", "field_frame", "", "1: the lagged velocity keeps its direction in the field while the robot turns; 0: it turns with the robot", 0, 1, false),
+  };
+  if (specs.size() != kNumParams) throw std::logic_error("identify's parameter table is out of step with Param");
+  return specs;
+}
+
+const std::vector<ParamSpec>& Specs() {
+  static const std::vector<ParamSpec> specs = MakeSpecs();
+  return specs;
+}
+const std::vector<ParamSpec>& kSpecs = Specs();
 
 // Which of parameters that trade against each other is held at its value (larger:
 // sooner; identification/identifiability.h): the controller's loop gain and ramp before the
@@ -112,13 +163,16 @@ constexpr double kCoordinateStep = 2e-2;
 
 // The parameters of a model (physical units); 0 for a limit that is off.
 std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period) {
-  const OmniEffects& fx = m.effects;
-  return {fx.axis_scale[0], fx.axis_scale[1], fx.axis_scale[2], fx.LagOf(0), fx.LagOf(1), fx.LagOf(2),
-          m.controller.forward.slew_rate, m.controller.sideways.slew_rate, m.controller.rotation.slew_rate,
-          fx.turn_per_forward, fx.turn_per_sideways, fx.sideways_per_forward, fx.forward_per_sideways,
-          fx.v_max, fx.w_max, m.TotalDelaySeconds(frame_period),
-          1, 1, 1, m.driving_noise.sd[0], m.driving_noise.sd[1], m.driving_noise.sd[2], m.driving_noise.correlation_time, 1,
-          fx.lag_braking, fx.lag_field_frame ? 1.0 : 0.0};
+  std::array<double, kNumParams> v{};
+  for (int p = 0; p < kNumParams; ++p)
+    if (kSpecs[p].get) v[static_cast<std::size_t>(p)] = kSpecs[p].get(m);
+  for (int a = 0; a < 3; ++a) {
+    v[static_cast<std::size_t>(kLagX + a)] = m.effects.LagOf(a);
+    v[static_cast<std::size_t>(kLoopX + a)] = 1;
+  }
+  v[kDelay] = m.TotalDelaySeconds(frame_period);
+  v[kProcessScale] = 1;
+  return v;
 }
 
 // `base` with the parameters. The total delay (s) goes into whole frames in `delay:`
@@ -127,25 +181,11 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
 // predict the same rows whatever the delay), all into the effect. Both act alike.
 OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, double frame_period, bool all_in_effect) {
   const double delay = v[kDelay];
+  for (int p = 0; p < kNumParams; ++p)
+    if (kSpecs[p].set) kSpecs[p].set(&m, v[static_cast<std::size_t>(p)]);
   OmniEffects& fx = m.effects;
-  for (int a = 0; a < 3; ++a) {
-    fx.axis_scale[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kGainX + a)];
-    fx.axis_lag[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kLagX + a)];
-  }
+  for (int a = 0; a < 3; ++a) fx.axis_lag[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kLagX + a)];
   fx.motor_lag = 0;
-  fx.lag_braking = v[kBraking];
-  fx.lag_field_frame = v[kFieldFrame] > 0.5;
-  m.controller.forward.slew_rate = v[kSlewX];
-  m.controller.sideways.slew_rate = v[kSlewY];
-  m.controller.rotation.slew_rate = v[kSlewW];
-  fx.turn_per_forward = v[kTurnX];
-  fx.turn_per_sideways = v[kTurnY];
-  fx.sideways_per_forward = v[kCrossYX];
-  fx.forward_per_sideways = v[kCrossXY];
-  fx.v_max = v[kVMax];
-  fx.w_max = v[kWMax];
-  for (int a = 0; a < 3; ++a) m.driving_noise.sd[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kNoiseX + a)];
-  m.driving_noise.correlation_time = v[kNoiseTime];
   for (double& q : m.observer.process_noise) q *= v[kProcessScale];
   PidGains* gains[3] = {&m.controller.forward, &m.controller.sideways, &m.controller.rotation};
   for (int a = 0; a < 3; ++a) {

@@ -1,6 +1,7 @@
 // Reading OmniModel from YAML; the schema is documented in docs/models.md.
 #include <cmath>
 #include <filesystem>
+#include <functional>
 
 #include "core/error.h"
 #include "core/engine_names.h"
@@ -9,19 +10,34 @@
 #include "io/yaml_reader.h"
 #include "robots/omni/omni_effects.h"
 #include "robots/omni/omni_model.h"
+#include "robots/omni/omni_model_fields.h"
 
 namespace twinsim {
 namespace {
 
-void ReadPid(YamlMap& parent, const std::string& key, PidGains* g) {
+// Reads the numbers of `section` (omni_model_fields.h) from `m`, in the table's order; a
+// key that is not one number is read by `custom` at its place.
+void ReadFields(YamlMap& m, const std::string& section, OmniModel* model,
+                const std::function<void(const std::string& key)>& custom = {}) {
+  for (const OmniModelField* f : OmniModelFieldsOf(section)) {
+    if (f->custom) {
+      if (custom) custom(f->key);
+    } else if (f->integer) {
+      int v = static_cast<int>(f->get(*model));
+      if (m.Get(f->key, &v, f->check)) f->set(model, v);
+    } else {
+      double v = f->get(*model);
+      if (m.Get(f->key, &v, f->check)) f->set(model, v);
+    }
+  }
+}
+
+// A section of its own under `parent` (controller.forward, observer.process_noise):
+// its numbers, and no other key.
+void ReadSubsection(YamlMap& parent, const std::string& key, const std::string& section, OmniModel* model) {
   if (!parent.Has(key)) return;
-  YamlMap m(parent.Child(key), parent.path(), "controller." + key, parent.errors());
-  m.Get("kp", &g->kp, NonNegative(1e6));
-  m.Get("ki", &g->ki, NonNegative(1e6));
-  m.Get("kd", &g->kd, NonNegative(1e6));
-  m.Get("integral_limit", &g->integral_limit, NonNegative(1e6));
-  m.Get("output_limit", &g->output_limit, NonNegative(1e6));
-  m.Get("slew_rate", &g->slew_rate, NonNegative(1e6));
+  YamlMap m(parent.Child(key), parent.path(), section, parent.errors());
+  ReadFields(m, section, model);
   m.Finish();
 }
 
@@ -79,17 +95,13 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("chassis")) {
     YamlMap c(top.Child("chassis"), path, "chassis", &errors);
-    c.Get("mass", &model.chassis_mass, Positive(1000));
-    c.Get("radius", &model.chassis_radius, InRange(0.01, 10));
-    c.Get("height", &model.chassis_height, Positive(10));
-    c.Get("inertia_z", &model.chassis_inertia_z, NonNegative(1e4));
-    c.Get("com_height", &model.com_height, Positive(10));
-    std::vector<double> com;
-    if (c.Get("com", &com, 2, InRange(-10, 10))) model.chassis_com = Eigen::Vector2d(com[0], com[1]);
-    c.Get("ground_clearance", &model.ground_clearance, NonNegative(1));
-    if (c.Get("front_distance", &model.front_distance, NonNegative(10)) &&
-        ((model.front_distance > 0 && model.front_distance < 0.5 * model.chassis_radius) ||
-         model.front_distance >= model.chassis_radius)) {
+    ReadFields(c, "chassis", &model, [&](const std::string&) {  // com
+      std::vector<double> com;
+      if (c.Get("com", &com, 2, InRange(-10, 10))) model.chassis_com = Eigen::Vector2d(com[0], com[1]);
+    });
+    // front_distance, the section's last key: 0 where not given (or not valid).
+    if ((model.front_distance > 0 && model.front_distance < 0.5 * model.chassis_radius) ||
+        model.front_distance >= model.chassis_radius) {
       c.Error("front_distance", "must lie between half the radius and the radius (" +
                                     std::to_string(0.5 * model.chassis_radius) + " .. " +
                                     std::to_string(model.chassis_radius) + " m), or be 0 for the default");
@@ -101,20 +113,15 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("wheels")) {
     YamlMap w(top.Child("wheels"), path, "wheels", &errors);
-    std::vector<double> angles_deg;
-    if (w.Require("angles_deg", &angles_deg, -1, InRange(-360, 360))) {
-      model.wheel_angles.clear();
-      for (double a : angles_deg) model.wheel_angles.push_back(a * kPi / 180.0);
-      if (angles_deg.size() < 3 || angles_deg.size() > 8)
-        w.Error("angles_deg", "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
-    }
-    w.Get("distance", &model.wheel_distance, InRange(0.001, 10));
-    w.Get("radius", &model.wheel_radius, Positive(1));
-    w.Get("width", &model.wheel_width, Positive(1));
-    w.Get("mass", &model.wheel_mass, Positive(100));
-    w.Get("friction", &model.wheel_friction, Positive(100));
-    w.Get("roller_friction", &model.roller_friction, NonNegative(100));
-    w.Get("bearing_damping", &model.bearing_damping, NonNegative(1e3));
+    ReadFields(w, "wheels", &model, [&](const std::string&) {  // angles_deg
+      std::vector<double> angles_deg;
+      if (w.Require("angles_deg", &angles_deg, -1, InRange(-360, 360))) {
+        model.wheel_angles.clear();
+        for (double a : angles_deg) model.wheel_angles.push_back(a * kPi / 180.0);
+        if (angles_deg.size() < 3 || angles_deg.size() > 8)
+          w.Error("angles_deg", "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
+      }
+    });
     w.Finish();
   } else {
     top.Missing("wheels");
@@ -122,40 +129,20 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("motor")) {
     YamlMap m(top.Child("motor"), path, "motor", &errors);
-    m.Get("stall_torque", &model.motor_stall_torque, Positive(1e4));
-    m.Get("no_load_speed", &model.motor_no_load_speed, Positive(1e5));
-    m.Get("encoder_counts_per_rev", &model.encoder_counts_per_rev, NonNegative(1e9));
-    m.Get("strength", &model.motor_strength, -1, InRange(0.01, 2));
+    ReadFields(m, "motor", &model, [&](const std::string&) {  // strength
+      m.Get("strength", &model.motor_strength, -1, InRange(0.01, 2));
+    });
     m.Finish();
   }
 
   if (top.Has("controller")) {
     YamlMap c(top.Child("controller"), path, "controller", &errors);
-    c.Get("rate_hz", &model.controller.rate_hz, InRange(1, 100000));
-    ReadPid(c, "forward", &model.controller.forward);
-    ReadPid(c, "sideways", &model.controller.sideways);
-    ReadPid(c, "rotation", &model.controller.rotation);
+    ReadFields(c, "controller", &model);
+    for (const char* axis : {"forward", "sideways", "rotation"})
+      ReadSubsection(c, axis, std::string("controller.") + axis, &model);
     c.Finish();
   }
-
-  if (top.Has("kicker")) {
-    YamlMap k(top.Child("kicker"), path, "kicker", &errors);
-    k.Get("max_speed", &model.kicker_max_speed, InRange(0.1, 20));
-    k.Finish();
-  }
-  if (top.Has("dribbler")) {
-    YamlMap d(top.Child("dribbler"), path, "dribbler", &errors);
-    d.Get("max_force", &model.dribbler_max_force, InRange(0, 100));
-    d.Get("full_speed", &model.dribbler_full_speed, InRange(0, 1e5));
-    d.Finish();
-  }
-
-  if (top.Has("delay")) {
-    YamlMap d(top.Child("delay"), path, "delay", &errors);
-    d.Get("command_frames", &model.command_delay_frames, InRange(0, 100));
-    d.Get("vision_frames", &model.vision_delay_frames, InRange(0, 100));
-    d.Finish();
-  }
+  for (const char* section : {"kicker", "dribbler", "delay"}) ReadSubsection(top, section, section, &model);
 
   if (top.Has("effects")) {
     // Every effect's keys and ranges from the vocabulary's table (omni_effects.h); a key
@@ -188,47 +175,20 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     e.Finish();
   }
 
-  if (top.Has("vision")) {
-    YamlMap v(top.Child("vision"), path, "vision", &errors);
-    v.Get("noise_xy", &model.vision_noise_xy, NonNegative(10));
-    v.Get("noise_theta", &model.vision_noise_theta, NonNegative(10));
-    v.Get("drop_probability", &model.vision_drop_probability, InRange(0, 0.9));
-    v.Get("repeat_probability", &model.vision_repeat_probability, InRange(0, 0.9));
-    v.Get("time_jitter", &model.vision_time_jitter, InRange(0, 0.005));
-    v.Finish();
-  }
+  ReadSubsection(top, "vision", "vision", &model);
 
   if (top.Has("driving_noise")) {
     YamlMap d(top.Child("driving_noise"), path, "driving_noise", &errors);
-    for (int a = 0; a < 3; ++a) d.Get(kOmniAxisNames[a], &model.driving_noise.sd[static_cast<std::size_t>(a)], NonNegative(100));
-    d.Get("correlation_time", &model.driving_noise.correlation_time, InRange(1e-3, 100));
-    d.Get("per_speed", &model.driving_noise.per_speed, NonNegative(100));
-    d.Get("per_acceleration", &model.driving_noise.per_acceleration, NonNegative(100));
-    d.Get("per_turn_rate", &model.driving_noise.per_turn_rate, NonNegative(100));
-    d.Get("simulated", &model.driving_noise.simulated);
-    if (d.Has("drift")) {
-      YamlMap b(d.Child("drift"), path, "driving_noise.drift", &errors);
-      for (int a = 0; a < 3; ++a)
-        b.Get(kOmniAxisNames[a], &model.driving_noise.drift.sd[static_cast<std::size_t>(a)], NonNegative(100));
-      b.Get("correlation_time", &model.driving_noise.drift.correlation_time, InRange(0.1, 1000));
-      b.Finish();
-    }
+    ReadFields(d, "driving_noise", &model, [&](const std::string& key) {
+      if (key == "simulated") d.Get("simulated", &model.driving_noise.simulated);
+      if (key == "drift") ReadSubsection(d, "drift", "driving_noise.drift", &model);
+    });
     d.Finish();
   }
   if (top.Has("observer")) {
     YamlMap o(top.Child("observer"), path, "observer", &errors);
-    if (o.Has("process_noise")) {
-      YamlMap q(o.Child("process_noise"), path, "observer.process_noise", &errors);
-      for (int a = 0; a < 3; ++a)
-        q.Get(kOmniAxisNames[a], &model.observer.process_noise[static_cast<std::size_t>(a)], InRange(1e-6, 1e3));
-      q.Finish();
-    }
-    if (o.Has("measurement_noise")) {
-      YamlMap r(o.Child("measurement_noise"), path, "observer.measurement_noise", &errors);
-      r.Get("xy", &model.observer.measurement_noise_xy, NonNegative(10));
-      r.Get("theta", &model.observer.measurement_noise_theta, NonNegative(10));
-      r.Finish();
-    }
+    ReadSubsection(o, "process_noise", "observer.process_noise", &model);
+    ReadSubsection(o, "measurement_noise", "observer.measurement_noise", &model);
     if (o.Has("interval_scale")) ReadIntervalScales(o, "interval_scale", true, &model.observer.interval_scale);
     if (o.Has("seen_inputs")) ReadSeenInputs(o, &model.observer.seen_inputs);
     o.Finish();
