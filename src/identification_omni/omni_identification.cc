@@ -72,22 +72,21 @@ ParamSpec ModelNumber(const char* name, const std::string& path, const char* mea
 
 // The field `key` of the effect `effect` in the vocabulary's table (omni_effects.h).
 const OmniEffectField& EffectField(const std::string& effect, const std::string& key) {
-  if (const OmniEffectSpec* spec = FindOmniEffectSpec(effect)) {
-    for (const OmniEffectField& f : spec->fields)
-      if (key == f.key) return f;
-  }
+  const OmniEffectSpec* spec = FindOmniEffectSpec(effect);
+  if (const OmniEffectField* f = spec ? spec->Field(key) : nullptr) return *f;
   throw std::logic_error("no omni effect field '" + effect + "." + key + "'");
 }
 
+std::string EffectKey(const std::string& effect, const OmniEffectField& f) { return "effects." + effect + "." + f.key; }
 std::string EffectKey(const std::string& effect, const std::string& key) {
-  return "effects." + effect + "." + EffectField(effect, key).key;
+  return EffectKey(effect, EffectField(effect, key));
 }
 
 // A parameter that is the number `key` of the effect `effect`, in identify's unit.
 ParamSpec EffectNumber(const char* name, const std::string& effect, const std::string& key, const char* unit,
                        const char* meaning, double lower, double upper, bool log_scale) {
   const OmniEffectField& f = EffectField(effect, key);
-  return {name,      EffectKey(effect, key), unit, meaning, lower, upper, log_scale,
+  return {name,      EffectKey(effect, f), unit, meaning, lower, upper, log_scale,
           [get = f.get](const OmniModel& m) { return get(m.effects); },
           [set = f.set](OmniModel* m, double v) { set(&m->effects, v); }};
 }
@@ -128,11 +127,11 @@ std::vector<ParamSpec> MakeSpecs() {
   return specs;
 }
 
+// The table, built on first use (not at every command's start-up).
 const std::vector<ParamSpec>& Specs() {
   static const std::vector<ParamSpec> specs = MakeSpecs();
   return specs;
 }
-const std::vector<ParamSpec>& kSpecs = Specs();
 
 // Which of parameters that trade against each other is held at its value (larger:
 // sooner; identification/identifiability.h): the controller's loop gain and ramp before the
@@ -164,8 +163,9 @@ constexpr double kCoordinateStep = 2e-2;
 // The parameters of a model (physical units); 0 for a limit that is off.
 std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period) {
   std::array<double, kNumParams> v{};
+  const std::vector<ParamSpec>& specs = Specs();
   for (int p = 0; p < kNumParams; ++p)
-    if (kSpecs[p].get) v[static_cast<std::size_t>(p)] = kSpecs[p].get(m);
+    if (specs[p].get) v[static_cast<std::size_t>(p)] = specs[p].get(m);
   for (int a = 0; a < 3; ++a) {
     v[static_cast<std::size_t>(kLagX + a)] = m.effects.LagOf(a);
     v[static_cast<std::size_t>(kLoopX + a)] = 1;
@@ -181,8 +181,9 @@ std::array<double, kNumParams> ValuesOf(const OmniModel& m, double frame_period)
 // predict the same rows whatever the delay), all into the effect. Both act alike.
 OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, double frame_period, bool all_in_effect) {
   const double delay = v[kDelay];
+  const std::vector<ParamSpec>& specs = Specs();
   for (int p = 0; p < kNumParams; ++p)
-    if (kSpecs[p].set) kSpecs[p].set(&m, v[static_cast<std::size_t>(p)]);
+    if (specs[p].set) specs[p].set(&m, v[static_cast<std::size_t>(p)]);
   OmniEffects& fx = m.effects;
   for (int a = 0; a < 3; ++a) fx.axis_lag[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kLagX + a)];
   fx.motor_lag = 0;
@@ -386,10 +387,10 @@ class OmniIdentificationProblem {
 // range), else a logistic map onto the range, so that no bound is ever crossed and the
 // cost never goes flat outside it (Ceres' own bounds add line searches that cost
 // Jacobians).
-double ParamUpper(int p, double max_delay) { return p == kDelay ? max_delay : kSpecs[p].upper; }
+double ParamUpper(int p, double max_delay) { return p == kDelay ? max_delay : Specs()[p].upper; }
 
 double ToCoordinate(int p, double value, double max_delay) {
-  const ParamSpec& s = kSpecs[p];
+  const ParamSpec& s = Specs()[p];
   const double upper = ParamUpper(p, max_delay);
   if (s.log_scale) return std::log(std::clamp(value, s.lower, upper));
   const double u = std::clamp((value - s.lower) / (upper - s.lower), 1e-6, 1 - 1e-6);
@@ -397,7 +398,7 @@ double ToCoordinate(int p, double value, double max_delay) {
 }
 
 double FromCoordinate(int p, double x, double max_delay) {
-  const ParamSpec& s = kSpecs[p];
+  const ParamSpec& s = Specs()[p];
   const double upper = ParamUpper(p, max_delay);
   if (s.log_scale) return std::clamp(std::exp(x), s.lower, upper);
   return s.lower + (upper - s.lower) / (1 + std::exp(-x));
@@ -405,7 +406,7 @@ double FromCoordinate(int p, double x, double max_delay) {
 
 // d value / d coordinate, for the standard errors (the delta method).
 double CoordinateSlope(int p, double value, double max_delay) {
-  const ParamSpec& s = kSpecs[p];
+  const ParamSpec& s = Specs()[p];
   if (s.log_scale) return value;
   const double upper = ParamUpper(p, max_delay);
   const double u = (value - s.lower) / (upper - s.lower);
@@ -600,7 +601,7 @@ void LinearStart(const std::vector<OmniLog>& logs, double delay, const std::func
   };
   auto set = [&](int p, double value) {
     if (std::find(free.begin(), free.end(), p) == free.end()) return;  // held at the model's value
-    if (std::isfinite(value)) (*v)[static_cast<std::size_t>(p)] = std::clamp(value, kSpecs[p].lower, kSpecs[p].upper);
+    if (std::isfinite(value)) (*v)[static_cast<std::size_t>(p)] = std::clamp(value, Specs()[p].lower, Specs()[p].upper);
   };
   const Eigen::VectorXd fx = fit(0, {0, 1}), fy = fit(1, {1, 0}), fw = fit(2, {2, 0, 1});
   set(kGainX, fx[0]);
@@ -664,7 +665,7 @@ void ChooseLagStructures(const OmniIdentificationProblem& lookahead, const std::
   for (int a = 0; a < 3; ++a) {
     const int p = kLagX + a;
     any_lag = any_lag || (std::find(free.begin(), free.end(), p) != free.end() &&
-                          (*v)[static_cast<std::size_t>(p)] > 1.05 * kSpecs[p].lower);
+                          (*v)[static_cast<std::size_t>(p)] > 1.05 * Specs()[p].lower);
   }
   if (!any_lag) {
     (*notes)[kFieldFrame] = (*notes)[kBraking] = "not tried: the fit found no lag";
@@ -835,7 +836,7 @@ std::array<double, kNumParams> StartValues(const OmniModel& nominal, double peri
     if (lag <= 0) lag = kStartLag;
   }
   for (int p : {kSlewX, kSlewY, kSlewW}) {
-    if (v[static_cast<std::size_t>(p)] <= 0) v[static_cast<std::size_t>(p)] = kSpecs[p].upper;
+    if (v[static_cast<std::size_t>(p)] <= 0) v[static_cast<std::size_t>(p)] = Specs()[p].upper;
   }
   v[kBraking] = 1;
   v[kFieldFrame] = 0;
@@ -950,7 +951,7 @@ void FitSpeedLimits(const OmniIdentificationProblem& lookahead, const std::vecto
     double best_cost = base_cost, best_limit = 0;
     for (double q : {0.6, 0.75, 0.85, 0.92, 0.96, 0.98, 0.99, 0.995}) {
       const double limit = sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
-      if (limit < kSpecs[p].lower) continue;
+      if (limit < Specs()[p].lower) continue;
       std::array<double, kNumParams> trial = v;
       trial[static_cast<std::size_t>(p)] = limit;
       const double c = lookahead.Cost(trial);
@@ -993,7 +994,7 @@ void FitTogether(const OmniIdentificationProblem& problem, const std::vector<Seg
 void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentificationOptions& options, FitState* fit,
                     OmniIdentificationReport* report) {
   for (int p : std::vector<int>(fit->free)) {
-    const ParamSpec& s = kSpecs[p];
+    const ParamSpec& s = Specs()[p];
     double& value = fit->v[static_cast<std::size_t>(p)];
     const double upper = p == kDelay ? options.max_delay : s.upper;
     const bool at_lower = s.log_scale ? value <= 1.05 * s.lower : value <= s.lower + 1e-3 * (upper - s.lower);
@@ -1020,7 +1021,7 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
   for (const HeldBack& h : fit->solved.held) {
     fit->held.insert(h.param);
     std::string partners;
-    for (int q : h.partners) partners += (partners.empty() ? "" : ", ") + std::string(kSpecs[q].name);
+    for (int q : h.partners) partners += (partners.empty() ? "" : ", ") + std::string(Specs()[q].name);
     char index[32];
     std::snprintf(index, sizeof index, "%.3g", h.collinearity);
     fit->pruned[h.param] = h.partners.empty()
@@ -1219,7 +1220,7 @@ void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentific
                 kSlewX, kSlewY, kSlewW, kTurnX, kTurnY, kCrossYX, kCrossXY, kVMax, kWMax, kNoiseX, kNoiseY, kNoiseW,
                 kNoiseTime, kProcessScale}) {
     IdentifiedParameter q;
-    const ParamSpec& s = kSpecs[p];
+    const ParamSpec& s = Specs()[p];
     q.name = s.name;
     q.key = s.key;
     q.unit = s.unit;

@@ -81,6 +81,12 @@ bool OmniEffectSpec::On(const OmniEffects& effects) const {
   return false;
 }
 
+const OmniEffectField* OmniEffectSpec::Field(const std::string& key) const {
+  for (const OmniEffectField& f : fields)
+    if (key == f.key) return &f;
+  return nullptr;
+}
+
 const std::vector<OmniEffectSpec>& OmniEffectSpecs() {
   static const std::vector<OmniEffectSpec> specs = MakeOmniEffectSpecs();
   return specs;
@@ -128,7 +134,7 @@ void SetOmniEffect(const std::string& name, const std::map<std::string, double>&
   std::string known;
   for (const OmniEffectField& f : spec->fields) known += (known.empty() ? "" : ", ") + std::string(f.key);
   for (const auto& [key, value] : parameters) {
-    if (std::none_of(spec->fields.begin(), spec->fields.end(), [&, &key = key](const OmniEffectField& f) { return key == f.key; })) {
+    if (!spec->Field(key)) {
       throw InputError("effect '" + name + "': unknown parameter '" + key + "' (known: " + known + ")");
     }
     if (!std::isfinite(value)) throw InputError("effect '" + name + "': '" + key + "' is not a finite number");

@@ -106,6 +106,8 @@ struct OmniEffectSpec {
 
   // True when one of its switching numbers is not off in `effects`.
   bool On(const OmniEffects& effects) const;
+  // Its number called `key`; null for none.
+  const OmniEffectField* Field(const std::string& key) const;
 };
 
 // The vocabulary (CONTRACT.md), in its order.

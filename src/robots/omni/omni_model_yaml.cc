@@ -18,10 +18,10 @@ namespace {
 // Reads the numbers of `section` (omni_model_fields.h) from `m`, in the table's order; a
 // key that is not one number is read by `custom` at its place.
 void ReadFields(YamlMap& m, const std::string& section, OmniModel* model,
-                const std::function<void(const std::string& key)>& custom = {}) {
+                const std::function<void(const OmniModelField&)>& custom = {}) {
   for (const OmniModelField* f : OmniModelFieldsOf(section)) {
     if (f->custom) {
-      if (custom) custom(f->key);
+      if (custom) custom(*f);
     } else if (f->integer) {
       int v = static_cast<int>(f->get(*model));
       if (m.Get(f->key, &v, f->check)) f->set(model, v);
@@ -95,9 +95,9 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("chassis")) {
     YamlMap c(top.Child("chassis"), path, "chassis", &errors);
-    ReadFields(c, "chassis", &model, [&](const std::string&) {  // com
+    ReadFields(c, "chassis", &model, [&](const OmniModelField& f) {  // com
       std::vector<double> com;
-      if (c.Get("com", &com, 2, InRange(-10, 10))) model.chassis_com = Eigen::Vector2d(com[0], com[1]);
+      if (c.Get(f.key, &com, 2, InRange(-10, 10))) model.chassis_com = Eigen::Vector2d(com[0], com[1]);
     });
     // front_distance, the section's last key: 0 where not given (or not valid).
     if ((model.front_distance > 0 && model.front_distance < 0.5 * model.chassis_radius) ||
@@ -113,13 +113,13 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("wheels")) {
     YamlMap w(top.Child("wheels"), path, "wheels", &errors);
-    ReadFields(w, "wheels", &model, [&](const std::string&) {  // angles_deg
+    ReadFields(w, "wheels", &model, [&](const OmniModelField& f) {  // angles_deg
       std::vector<double> angles_deg;
-      if (w.Require("angles_deg", &angles_deg, -1, InRange(-360, 360))) {
+      if (w.Require(f.key, &angles_deg, -1, InRange(-360, 360))) {
         model.wheel_angles.clear();
         for (double a : angles_deg) model.wheel_angles.push_back(a * kPi / 180.0);
         if (angles_deg.size() < 3 || angles_deg.size() > 8)
-          w.Error("angles_deg", "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
+          w.Error(f.key, "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
       }
     });
     w.Finish();
@@ -129,8 +129,8 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("motor")) {
     YamlMap m(top.Child("motor"), path, "motor", &errors);
-    ReadFields(m, "motor", &model, [&](const std::string&) {  // strength
-      m.Get("strength", &model.motor_strength, -1, InRange(0.01, 2));
+    ReadFields(m, "motor", &model, [&](const OmniModelField& f) {  // strength
+      m.Get(f.key, &model.motor_strength, -1, InRange(0.01, 2));
     });
     m.Finish();
   }
@@ -179,9 +179,9 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
 
   if (top.Has("driving_noise")) {
     YamlMap d(top.Child("driving_noise"), path, "driving_noise", &errors);
-    ReadFields(d, "driving_noise", &model, [&](const std::string& key) {
-      if (key == "simulated") d.Get("simulated", &model.driving_noise.simulated);
-      if (key == "drift") ReadSubsection(d, "drift", "driving_noise.drift", &model);
+    ReadFields(d, "driving_noise", &model, [&](const OmniModelField& f) {
+      if (f.key == "simulated") d.Get(f.key, &model.driving_noise.simulated);
+      if (f.key == "drift") ReadSubsection(d, f.key, f.path(), &model);
     });
     d.Finish();
   }

@@ -2,7 +2,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -54,12 +53,12 @@ std::string Value(const OmniModelField& f, const OmniModel& model) {
 // the table's order; a key that is not one number gets the text `custom` gives it ("" for
 // none).
 std::string FlowMap(const std::string& section, const OmniModel& model,
-                    const std::function<std::string(const std::string& key)>& custom = {}) {
+                    const std::function<std::string(const OmniModelField&)>& custom = {}) {
   std::string out;
   for (const OmniModelField* f : OmniModelFieldsOf(section)) {
     std::string item;
     if (f->custom) {
-      if (custom) item = custom(f->key);
+      if (custom) item = custom(*f);
     } else if (!f->omitted_at_zero || f->get(model) != 0) {
       item = f->key + ": " + Value(*f, model);
     }
@@ -86,10 +85,10 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   }
   // "  key: value  # unit" for the numbers of `section`, in the table's order; a key that
   // is not one number is written by `custom` at its place.
-  auto lines = [&](const std::string& section, const std::function<void(const std::string& key)>& custom = {}) {
+  auto lines = [&](const std::string& section, const std::function<void(const OmniModelField&)>& custom = {}) {
     for (const OmniModelField* f : OmniModelFieldsOf(section)) {
       if (f->custom) {
-        if (custom) custom(f->key);
+        if (custom) custom(*f);
       } else if (!f->omitted_at_zero || f->get(model) != 0) {
         line("  " + f->key, Value(*f, model), f->unit);
       }
@@ -99,23 +98,22 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   line("name", Text(model.name));
   if (!model.fitted_on.empty()) line("fitted_on", model.fitted_on, "the engine the response was fitted on");
   s << "chassis:\n";
-  lines("chassis", [&](const std::string& key) {
+  lines("chassis", [&](const OmniModelField& f) {  // com
     if (model.chassis_com.isZero()) return;
-    line("  " + key, "[" + YamlNumber(model.chassis_com.x()) + ", " + YamlNumber(model.chassis_com.y()) + "]",
-         OmniModelFieldAt("chassis." + key).unit);
+    line("  " + f.key, "[" + YamlNumber(model.chassis_com.x()) + ", " + YamlNumber(model.chassis_com.y()) + "]", f.unit);
   });
   s << "wheels:\n";
-  lines("wheels", [&](const std::string& key) {
+  lines("wheels", [&](const OmniModelField& f) {  // angles_deg
     std::string angles;
     for (double a : model.wheel_angles) angles += (angles.empty() ? "" : ", ") + Degrees(a);
-    line("  " + key, "[" + angles + "]", OmniModelFieldAt("wheels." + key).unit);
+    line("  " + f.key, "[" + angles + "]", f.unit);
   });
   s << "motor:\n";
-  lines("motor", [&](const std::string& key) {
+  lines("motor", [&](const OmniModelField& f) {  // strength
     if (model.motor_strength.empty()) return;
     std::string strength;
     for (double v : model.motor_strength) strength += (strength.empty() ? "" : ", ") + YamlNumber(v);
-    line("  " + key, "[" + strength + "]", OmniModelFieldAt("motor." + key).unit);
+    line("  " + f.key, "[" + strength + "]", f.unit);
   });
   const OmniModel defaults;
   if (model.kicker_max_speed != defaults.kicker_max_speed) {
@@ -140,9 +138,9 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   const OmniDrivingNoise& dn = model.driving_noise;
   if (dn.sd != defaults.driving_noise.sd || dn.correlation_time != defaults.driving_noise.correlation_time ||
       dn.per_speed != 0 || dn.per_acceleration != 0 || dn.per_turn_rate != 0 || dn.simulated || dn.drift.any()) {
-    line("driving_noise", FlowMap("driving_noise", model, [&](const std::string& key) -> std::string {
-           if (key == "simulated") return dn.simulated ? "simulated: true" : "";
-           return dn.drift.any() ? "drift: " + FlowMap("driving_noise.drift", model) : "";  // drift
+    line("driving_noise", FlowMap("driving_noise", model, [&](const OmniModelField& f) -> std::string {
+           if (f.key == "simulated") return dn.simulated ? f.key + ": true" : "";
+           return dn.drift.any() ? f.key + ": " + FlowMap(f.path(), model) : "";  // drift
          }),
          "m/s, rad/s, s: slip the wheels do not see", 46);
   }
