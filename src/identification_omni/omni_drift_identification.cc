@@ -1,12 +1,17 @@
 #include "identification_omni/omni_drift_identification.h"
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
+#include "analysis/clustered_standard_errors.h"
 #include "analysis/omni_compare.h"
 #include "analysis/omni_replay.h"
 #include "core/error.h"
@@ -54,14 +59,35 @@ DriftValues ClampedDrift(DriftValues v, double fast_time) {
 struct AheadErrors {
   std::array<double, 2> sum{0, 0}, heading_sum{0, 0};  // m^2, rad^2
   std::array<int, 2> rows{0, 0};
+  // With ErrorsAhead's `with_rows`: each row's errors (x, y m; heading rad), its horizon
+  // (0: half a second, 1: a second) and its cluster (kClusterSeconds of a log), logs in
+  // order, each log's half-second rows first.
+  std::vector<std::array<double, 3>> error;
+  std::vector<int> horizon, cluster;
   double Mse(std::size_t h) const { return rows[h] ? sum[h] / rows[h] : std::numeric_limits<double>::infinity(); }
   double HeadingMse(std::size_t h) const {
     return rows[h] ? heading_sum[h] / rows[h] : std::numeric_limits<double>::infinity();
   }
 };
 
+// The standard errors' clusters: pieces of a log this long (each of the Robotino's 10 s
+// runs one), whose predictions 1 s ahead from every quarter second share their errors.
+constexpr double kClusterSeconds = 10;
+
+// Appends the rows of `log` predicted in `r` (one horizon) to *out.
+void AppendRows(const OmniLog& log, const OmniReplayResult& r, int horizon, int first_cluster, AheadErrors* out) {
+  for (std::size_t i = 0; i < r.t.size(); ++i) {
+    if (!PredictedAndMeasured(log, r, i)) continue;
+    const Pose2& p = r.pose[i];
+    const Pose2& m = log.rows[i].pose;
+    out->error.push_back({p.x - m.x, p.y - m.y, WrapAngle(p.theta - m.theta)});
+    out->horizon.push_back(horizon);
+    out->cluster.push_back(first_cluster + static_cast<int>((log.rows[i].t - log.rows.front().t) / kClusterSeconds));
+  }
+}
+
 AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<const OmniLog*>& logs,
-                        const OmniDrivingNoise::Drift& drift, const OmniNoiseOptions& options) {
+                        const OmniDrivingNoise::Drift& drift, const OmniNoiseOptions& options, bool with_rows = false) {
   std::vector<AheadErrors> per(logs.size());
   ParallelFor(static_cast<int>(logs.size()), options.threads, [&](int k) {
     const OmniLog& log = *logs[static_cast<std::size_t>(k)];
@@ -75,11 +101,14 @@ AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<
     o.stride = std::max(1, second / 4);
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
     AheadErrors& out = per[static_cast<std::size_t>(k)];
+    // Each log's clusters numbered after the previous logs' (a log is at most a day long).
+    const int first_cluster = k * static_cast<int>(86400 / kClusterSeconds);
     for (std::size_t h = 0; h < 2; ++h) {
       const CompareErrorRow e = MeasurePredictionErrors(log, h == 0 ? r.also[0] : r);
       out.sum[h] = e.position_rmse * e.position_rmse * e.predicted;
       out.heading_sum[h] = e.heading_rmse * e.heading_rmse * e.predicted;
       out.rows[h] = e.predicted;
+      if (with_rows) AppendRows(log, h == 0 ? r.also[0] : r, static_cast<int>(h), first_cluster, &out);
     }
   });
   AheadErrors out;
@@ -89,8 +118,84 @@ AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<
       out.heading_sum[h] += a.heading_sum[h];
       out.rows[h] += a.rows[h];
     }
+    out.error.insert(out.error.end(), a.error.begin(), a.error.end());
+    out.horizon.insert(out.horizon.end(), a.horizon.begin(), a.horizon.end());
+    out.cluster.insert(out.cluster.end(), a.cluster.begin(), a.cluster.end());
   }
   return out;
+}
+
+// The cost's residuals (FitAhead's share, C = the sum of their squares): each row's
+// position errors over sqrt(4 N_h MSE0_pos,h), its heading's over sqrt(4 N_h
+// MSE0_theta,h), `none` the predictions without a drift.
+Eigen::VectorXd Residuals(const AheadErrors& a, const AheadErrors& none) {
+  Eigen::VectorXd r(3 * static_cast<Eigen::Index>(a.error.size()));
+  for (std::size_t i = 0; i < a.error.size(); ++i) {
+    const auto h = static_cast<std::size_t>(a.horizon[i]);
+    const double position = std::sqrt(4.0 * none.rows[h] * none.Mse(h));
+    const double heading = std::sqrt(4.0 * none.rows[h] * none.HeadingMse(h));
+    const auto row = 3 * static_cast<Eigen::Index>(i);
+    r[row] = a.error[i][0] / position;
+    r[row + 1] = a.error[i][1] / position;
+    r[row + 2] = a.error[i][2] / heading;
+  }
+  return r;
+}
+
+// Each coordinate of `fitted` on the search's bound: "lower", "upper" or empty.
+std::array<std::string, 4> DriftBounds(const DriftValues& fitted, double fast_time) {
+  std::array<std::string, 4> bound;
+  for (std::size_t k = 0; k < 4; ++k) {
+    DriftValues low = fitted, high = fitted;
+    low[k] = -1e300;
+    high[k] = 1e300;
+    if (fitted[k] <= ClampedDrift(low, fast_time)[k]) bound[k] = "lower";
+    if (fitted[k] >= ClampedDrift(high, fast_time)[k]) bound[k] = "upper";
+  }
+  return bound;
+}
+
+// The standard errors (in the values' units) of the fitted drift (coordinates `fitted`):
+// the cluster-robust covariance of the cost's residuals (analysis/
+// clustered_standard_errors.h), their Jacobian by central differences of 0.1 in the
+// logarithms. A coordinate on its bound (`bound`) gets none (NaN); so does every one
+// where fewer than two clusters hold rows.
+std::array<double, 4> DriftStandardErrors(const std::vector<OmniModel>& models, const std::vector<const OmniLog*>& logs,
+                                          const DriftValues& fitted, const std::array<std::string, 4>& bound,
+                                          const AheadErrors& none, const OmniNoiseOptions& options, int* evaluations) {
+  constexpr double kStep = 0.1;
+  std::array<double, 4> se;
+  se.fill(std::numeric_limits<double>::quiet_NaN());
+  std::vector<int> held;
+  for (std::size_t k = 0; k < 4; ++k)
+    if (!bound[k].empty()) held.push_back(static_cast<int>(k));
+  const AheadErrors at = ErrorsAhead(models, logs, DriftOf(fitted), options, true);
+  ++*evaluations;
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(3 * static_cast<Eigen::Index>(at.error.size()), 4);
+  for (std::size_t k = 0; k < 4; ++k) {
+    if (!bound[k].empty()) continue;
+    DriftValues up = fitted, down = fitted;
+    up[k] += kStep;
+    down[k] -= kStep;
+    const AheadErrors u = ErrorsAhead(models, logs, DriftOf(up), options, true);
+    const AheadErrors d = ErrorsAhead(models, logs, DriftOf(down), options, true);
+    *evaluations += 2;
+    if (u.error.size() != at.error.size() || d.error.size() != at.error.size()) return se;
+    jacobian.col(static_cast<Eigen::Index>(k)) = (Residuals(u, none) - Residuals(d, none)) / (2 * kStep);
+  }
+  // Each row's three residuals in its cluster, the clusters numbered densely.
+  std::vector<int> labels = at.cluster;
+  std::sort(labels.begin(), labels.end());
+  labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
+  std::vector<int> cluster;
+  for (int c : at.cluster)
+    cluster.insert(cluster.end(), 3, static_cast<int>(std::lower_bound(labels.begin(), labels.end(), c) - labels.begin()));
+  const std::vector<double> log_se = ClusteredStandardErrors(jacobian, Residuals(at, none), held, cluster);
+  if (log_se.size() != 4) return se;
+  const OmniDrivingNoise::Drift value = DriftOf(fitted);
+  for (std::size_t k = 0; k < 4; ++k)
+    se[k] = (k < 3 ? value.sd[k] : value.correlation_time) * log_se[k];  // dv = v d(ln v)
+  return se;
 }
 
 // The search on the predictions of `logs` by `models` (the drift they carry ignored),
@@ -138,6 +243,9 @@ OmniDriftIdentification FitAhead(const std::vector<OmniModel>& models, const std
       cost, [&](DriftValues v) { return ClampedDrift(v, fast_time); }, start, 4, kBudget, &best, &out.evaluations);
   out.drift = DriftOf(fitted);
   out.rmse_after = {std::sqrt(best_errors.Mse(0)), std::sqrt(best_errors.Mse(1))};
+  out.bound = DriftBounds(fitted, fast_time);
+  if (best <= 1 - kLeastGain)  // asked for: how well the logs determine it
+    out.standard_error = DriftStandardErrors(models, logs, fitted, out.bound, none, options, &out.evaluations);
   if (!(best <= 1 - kLeastGain)) {
     out.note = "the predictions half a second and a second ahead do not ask for one (their mean squared errors " +
                PrintfNumber("%.3g", best) + " of none's; kept from " + PrintfNumber("%.3g", 1 - kLeastGain) + ")";

@@ -24,6 +24,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,7 @@
 namespace twinsim {
 
 struct OmniDriftIdentification {
+  static constexpr double kNotFitted = std::numeric_limits<double>::quiet_NaN();
   bool kept = false;
   OmniDrivingNoise::Drift drift;  // fitted (kept or not); spreads 0 where none was fitted
   // The position RMSE (m) of the predictions 0.5 and 1 s ahead it was fitted on, without
@@ -43,6 +45,13 @@ struct OmniDriftIdentification {
   double held_out_before = 0, held_out_after = 0;
   int held_out_rows = 0;
   int evaluations = 0;
+  // Where the predictions asked for it: the standard errors of forward, sideways, turn
+  // (m/s, m/s, rad/s) and correlation time (s), cluster-robust over pieces of 10 s of the
+  // logs (each of the Robotino's runs one): NaN on a bound or where fewer than two
+  // pieces hold predictions, infinite where the logs do not determine it. `bound`: the
+  // search's bound each sits on ("lower", "upper"; empty inside).
+  std::array<double, 4> standard_error{kNotFitted, kNotFitted, kNotFitted, kNotFitted};
+  std::array<std::string, 4> bound;
   std::string note;  // why it was not kept
   std::string on;    // the predictions it was fitted on, in words
 };

@@ -87,6 +87,14 @@ ordered_json NoiseJson(const OmniIdentificationReport& r) {
     drift["sideways"] = d.drift.sd[1];
     drift["turn"] = d.drift.sd[2];
     drift["correlation_time"] = d.drift.correlation_time;
+    constexpr const char* kNames[4] = {"forward", "sideways", "turn", "correlation_time"};
+    ordered_json se, bound;
+    for (std::size_t k = 0; k < 4; ++k) {
+      if (!std::isnan(d.standard_error[k])) se[kNames[k]] = Finite(d.standard_error[k]);
+      if (!d.bound[k].empty()) bound[kNames[k]] = d.bound[k];
+    }
+    if (!se.empty()) drift["standard_errors"] = se;
+    if (!bound.empty()) drift["at_bound"] = bound;
     drift["rmse_half_second_before"] = Finite(d.rmse_before[0]);
     drift["rmse_half_second_after"] = Finite(d.rmse_after[0]);
     drift["rmse_second_before"] = Finite(d.rmse_before[1]);
@@ -102,11 +110,22 @@ ordered_json NoiseJson(const OmniIdentificationReport& r) {
 }
 
 // One sentence on the noise's drift: what was fitted, and kept or why not.
+// One of the drift's numbers: its value, its standard error where it has one, its unit,
+// and its bound where it sits on one.
+std::string DriftNumber(const OmniDriftIdentification& d, std::size_t k, const char* unit) {
+  const double value = k < 3 ? d.drift.sd[k] : d.drift.correlation_time;
+  std::string out = Number(value, "%.3g");
+  if (!std::isnan(d.standard_error[k])) out += " +- " + Number(d.standard_error[k], "%.2g");
+  out += std::string(" ") + unit;
+  if (d.bound[k] == "lower") out += " (at its lower bound)";
+  if (d.bound[k] == "upper") out += " (at its upper bound)";
+  return out;
+}
+
 std::string DriftSentence(const OmniDriftIdentification& d) {
-  const OmniDrivingNoise::Drift& v = d.drift;
-  std::string out = std::string(d.kept ? "kept" : "not kept") + ": forward " + Number(v.sd[0], "%.3g") + " m/s, sideways " +
-                    Number(v.sd[1], "%.3g") + " m/s, turn " + Number(v.sd[2], "%.3g") + " rad/s, lasting " +
-                    Number(v.correlation_time, "%.3g") + " s; predictions 0.5 and 1 s ahead " +
+  std::string out = std::string(d.kept ? "kept" : "not kept") + ": forward " + DriftNumber(d, 0, "m/s") + ", sideways " +
+                    DriftNumber(d, 1, "m/s") + ", turn " + DriftNumber(d, 2, "rad/s") + ", lasting " +
+                    DriftNumber(d, 3, "s") + "; predictions 0.5 and 1 s ahead " +
                     Number(1000 * d.rmse_before[0], "%.3g") + " -> " + Number(1000 * d.rmse_after[0], "%.3g") + " and " +
                     Number(1000 * d.rmse_before[1], "%.3g") + " -> " + Number(1000 * d.rmse_after[1], "%.3g") +
                     " mm over " + std::to_string(d.rows) + " rows";

@@ -4,10 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+
 #include <cmath>
 #include <random>
 #include <vector>
 
+#include "analysis/clustered_standard_errors.h"
 #include "analysis/fixed_step_cost.h"
 
 namespace twinsim {
@@ -105,6 +108,32 @@ TEST(FitCovariance, AHeldCoordinateIsNaNAndAnUndeterminedOneInfinite) {
   // A single cluster says nothing of the spread between clusters.
   Fit(r, std::vector<int>(r.t.size(), 0), &x, &se);
   EXPECT_TRUE(se.empty());
+}
+
+// The same sandwich from a dense Jacobian (analysis/clustered_standard_errors.h, used where
+// the residuals come from a simulation, as the omni drift's do): at the line's fit, J's
+// rows (1, t_i) and the residuals give the Ceres problem's standard errors.
+TEST(FitCovariance, ADenseJacobianGivesTheCeresProblemsStandardErrors) {
+  std::mt19937_64 rng(11);
+  const Recording r = Record(&rng);
+  std::vector<double> x, se;
+  Fit(r, r.cluster, &x, &se);
+  Eigen::MatrixXd jacobian(static_cast<Eigen::Index>(r.t.size()), 2);
+  Eigen::VectorXd residuals(static_cast<Eigen::Index>(r.t.size()));
+  for (std::size_t i = 0; i < r.t.size(); ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    jacobian(row, 0) = 1;
+    jacobian(row, 1) = r.t[i];
+    residuals[row] = x[0] + x[1] * r.t[i] - r.y[i];
+  }
+  const std::vector<double> dense = ClusteredStandardErrors(jacobian, residuals, {}, r.cluster);
+  ASSERT_EQ(dense.size(), 2u);
+  for (std::size_t p = 0; p < 2; ++p) EXPECT_NEAR(dense[p], se[p], 1e-6 * se[p]) << p;
+  const std::vector<double> held = ClusteredStandardErrors(jacobian, residuals, {0}, r.cluster);
+  ASSERT_EQ(held.size(), 2u);
+  EXPECT_TRUE(std::isnan(held[0]));
+  EXPECT_TRUE(std::isfinite(held[1]));
+  EXPECT_TRUE(ClusteredStandardErrors(jacobian, residuals, {}, std::vector<int>(r.t.size(), 0)).empty());
 }
 
 }  // namespace
