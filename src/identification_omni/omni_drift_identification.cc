@@ -244,8 +244,13 @@ OmniDriftIdentification FitAhead(const std::vector<OmniModel>& models, const std
   out.drift = DriftOf(fitted);
   out.rmse_after = {std::sqrt(best_errors.Mse(0)), std::sqrt(best_errors.Mse(1))};
   out.bound = DriftBounds(fitted, fast_time);
-  if (best <= 1 - kLeastGain)  // asked for: how well the logs determine it
-    out.standard_error = DriftStandardErrors(models, logs, fitted, out.bound, none, options, &out.evaluations);
+  if (best <= 1 - kLeastGain) {  // asked for: how well the logs determine it
+    try {
+      out.standard_error = DriftStandardErrors(models, logs, fitted, out.bound, none, options, &out.evaluations);
+    } catch (const CheckFailed&) {
+      // a step beside the fit diverged: no errors (NaN), the fit stands
+    }
+  }
   if (!(best <= 1 - kLeastGain)) {
     out.note = "the predictions half a second and a second ahead do not ask for one (their mean squared errors " +
                PrintfNumber("%.3g", best) + " of none's; kept from " + PrintfNumber("%.3g", 1 - kLeastGain) + ")";

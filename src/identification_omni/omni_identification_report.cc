@@ -109,7 +109,6 @@ ordered_json NoiseJson(const OmniIdentificationReport& r) {
   return j;
 }
 
-// One sentence on the noise's drift: what was fitted, and kept or why not.
 // One of the drift's numbers: its value, its standard error where it has one, its unit,
 // and its bound where it sits on one.
 std::string DriftNumber(const OmniDriftIdentification& d, std::size_t k, const char* unit) {
@@ -122,6 +121,7 @@ std::string DriftNumber(const OmniDriftIdentification& d, std::size_t k, const c
   return out;
 }
 
+// One sentence on the noise's drift: what was fitted, and kept or why not.
 std::string DriftSentence(const OmniDriftIdentification& d) {
   std::string out = std::string(d.kept ? "kept" : "not kept") + ": forward " + DriftNumber(d, 0, "m/s") + ", sideways " +
                     DriftNumber(d, 1, "m/s") + ", turn " + DriftNumber(d, 2, "rad/s") + ", lasting " +
