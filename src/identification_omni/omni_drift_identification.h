@@ -18,6 +18,8 @@
 //   - it takes at least 5 % off that cost, and
 //   - the held-out blocks' predictions (the noise's horizons, the noise search's log
 //     score) are no worse with it.
+// Where the predictions ask for one, its standard errors: the cluster-robust sandwich of
+// that cost's residuals over 10 s pieces of the logs (analysis/clustered_standard_errors.h).
 //
 //   OmniDriftIdentification d = IdentifyDrift(model, stretches, noise_options);
 //   if (d.kept) model.driving_noise.drift = d.drift;
