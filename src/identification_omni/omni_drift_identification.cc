@@ -60,8 +60,8 @@ struct AheadErrors {
   std::array<double, 2> sum{0, 0}, heading_sum{0, 0};  // m^2, rad^2
   std::array<int, 2> rows{0, 0};
   // With ErrorsAhead's `with_rows`: each row's errors (x, y m; heading rad), its horizon
-  // (0: half a second, 1: a second) and its cluster (kClusterSeconds of a log), logs in
-  // order, each log's half-second rows first.
+  // (0: half a second, 1: a second) and its cluster (kClusterSeconds of a log, numbered
+  // from 0 across the logs), logs in order, each log's half-second rows first.
   std::vector<std::array<double, 3>> error;
   std::vector<int> horizon, cluster;
   double Mse(std::size_t h) const { return rows[h] ? sum[h] / rows[h] : std::numeric_limits<double>::infinity(); }
@@ -75,14 +75,14 @@ struct AheadErrors {
 constexpr double kClusterSeconds = 10;
 
 // Appends the rows of `log` predicted in `r` (one horizon) to *out.
-void AppendRows(const OmniLog& log, const OmniReplayResult& r, int horizon, int first_cluster, AheadErrors* out) {
+void AppendRows(const OmniLog& log, const OmniReplayResult& r, int horizon, AheadErrors* out) {
   for (std::size_t i = 0; i < r.t.size(); ++i) {
     if (!PredictedAndMeasured(log, r, i)) continue;
     const Pose2& p = r.pose[i];
     const Pose2& m = log.rows[i].pose;
     out->error.push_back({p.x - m.x, p.y - m.y, WrapAngle(p.theta - m.theta)});
     out->horizon.push_back(horizon);
-    out->cluster.push_back(first_cluster + static_cast<int>((log.rows[i].t - log.rows.front().t) / kClusterSeconds));
+    out->cluster.push_back(static_cast<int>((log.rows[i].t - log.rows.front().t) / kClusterSeconds));
   }
 }
 
@@ -101,17 +101,16 @@ AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<
     o.stride = std::max(1, second / 4);
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
     AheadErrors& out = per[static_cast<std::size_t>(k)];
-    // Each log's clusters numbered after the previous logs' (a log is at most a day long).
-    const int first_cluster = k * static_cast<int>(86400 / kClusterSeconds);
     for (std::size_t h = 0; h < 2; ++h) {
       const CompareErrorRow e = MeasurePredictionErrors(log, h == 0 ? r.also[0] : r);
       out.sum[h] = e.position_rmse * e.position_rmse * e.predicted;
       out.heading_sum[h] = e.heading_rmse * e.heading_rmse * e.predicted;
       out.rows[h] = e.predicted;
-      if (with_rows) AppendRows(log, h == 0 ? r.also[0] : r, static_cast<int>(h), first_cluster, &out);
+      if (with_rows) AppendRows(log, h == 0 ? r.also[0] : r, static_cast<int>(h), &out);
     }
   });
   AheadErrors out;
+  int first_cluster = 0;  // each log's pieces numbered after the previous logs'
   for (const AheadErrors& a : per) {
     for (std::size_t h = 0; h < 2; ++h) {
       out.sum[h] += a.sum[h];
@@ -120,7 +119,8 @@ AheadErrors ErrorsAhead(const std::vector<OmniModel>& models, const std::vector<
     }
     out.error.insert(out.error.end(), a.error.begin(), a.error.end());
     out.horizon.insert(out.horizon.end(), a.horizon.begin(), a.horizon.end());
-    out.cluster.insert(out.cluster.end(), a.cluster.begin(), a.cluster.end());
+    for (int c : a.cluster) out.cluster.push_back(first_cluster + c);
+    if (!a.cluster.empty()) first_cluster += *std::max_element(a.cluster.begin(), a.cluster.end()) + 1;
   }
   return out;
 }
@@ -183,13 +183,8 @@ std::array<double, 4> DriftStandardErrors(const std::vector<OmniModel>& models, 
     if (u.error.size() != at.error.size() || d.error.size() != at.error.size()) return se;
     jacobian.col(static_cast<Eigen::Index>(k)) = (Residuals(u, none) - Residuals(d, none)) / (2 * kStep);
   }
-  // Each row's three residuals in its cluster, the clusters numbered densely.
-  std::vector<int> labels = at.cluster;
-  std::sort(labels.begin(), labels.end());
-  labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
-  std::vector<int> cluster;
-  for (int c : at.cluster)
-    cluster.insert(cluster.end(), 3, static_cast<int>(std::lower_bound(labels.begin(), labels.end(), c) - labels.begin()));
+  std::vector<int> cluster;  // each row's three residuals in its cluster
+  for (int c : at.cluster) cluster.insert(cluster.end(), 3, c);
   const std::vector<double> log_se = ClusteredStandardErrors(jacobian, Residuals(at, none), held, cluster);
   if (log_se.size() != 4) return se;
   const OmniDrivingNoise::Drift value = DriftOf(fitted);
@@ -250,8 +245,7 @@ OmniDriftIdentification FitAhead(const std::vector<OmniModel>& models, const std
     } catch (const CheckFailed&) {
       // a step beside the fit diverged: no errors (NaN), the fit stands
     }
-  }
-  if (!(best <= 1 - kLeastGain)) {
+  } else {
     out.note = "the predictions half a second and a second ahead do not ask for one (their mean squared errors " +
                PrintfNumber("%.3g", best) + " of none's; kept from " + PrintfNumber("%.3g", 1 - kLeastGain) + ")";
   }
