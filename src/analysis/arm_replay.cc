@@ -97,7 +97,7 @@ Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, Arm
     const Eigen::VectorXd qd = log.qd.row(r).transpose();
     needed.row(r) = InverseDynamics(bodies, log.q.row(r).transpose(), qd, log.qdd.row(r).transpose(), false).transpose();
   }
-  for (int j = 0; j < n; ++j) needed.col(j) += ArmFrictionAlong(model, j, log.t, log.qd.col(j));
+  for (int j = 0; j < n; ++j) needed.col(j) += ArmFrictionAlong(model, j, log.t, log.q.col(j), log.qd.col(j));
   ArmCommandSummary s;
   s.shift.resize(n);
   s.beyond_saturation = Eigen::VectorXi::Zero(n);

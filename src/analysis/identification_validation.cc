@@ -31,7 +31,7 @@ IdentificationValidation ValidateIdentification(const ArmModel& a_priori, const 
     // a-priori model's delays and other kept effects included, as replay gives them.
     const Eigen::MatrixXd tau = PredictArmCommands(identified, log);
     Eigen::MatrixXd free = PredictBaseTorques(a_priori, base, summary.identified.head(summary.base_parameters), log);
-    if (summary.offsets.size() == log.dof) free.rowwise() += summary.identified.tail(log.dof).transpose();
+    free += ExtraTorques(summary, summary.identified, log);
     const int first = log.edge_samples, last = log.rows() - log.edge_samples;
     HeldOutTorqueErrors errors;
     errors.path = log.path;

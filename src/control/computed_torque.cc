@@ -88,7 +88,7 @@ Eigen::VectorXd ComputedTorque(const ArmModel& hat, const TrackingGains& gains, 
   CheckSize("qd_friction", qd_friction, hat.dof());
   Eigen::VectorXd bias = BiasForces(hat, q, qd);
   if (friction) {
-    for (int j = 0; j < hat.dof(); ++j) bias(j) += ArmFrictionTorque(hat, j, qd_friction(j));
+    for (int j = 0; j < hat.dof(); ++j) bias(j) += ArmFrictionTorque(hat, j, q(j), qd_friction(j));
   }
   const Eigen::VectorXd feedback = gains.kd.cwiseProduct(qd_r - qd) + gains.kp.cwiseProduct(q_r - q);
   if (model_part) *model_part = m * qdd_r + bias;
@@ -181,7 +181,7 @@ Eigen::MatrixXd NeededTorque(const ArmModel& body, const ArmTrajectory& run, dou
         const double band = std::abs(body.joints[j].coulomb);
         needed(j) += std::clamp(run.applied(i, j) - needed(j), -band, band);
       } else {
-        needed(j) += ArmFrictionTorque(body, j, qdm(j));
+        needed(j) += ArmFrictionTorque(body, j, qm(j), qdm(j));
       }
     }
     out.row(i) = needed.transpose();

@@ -270,7 +270,7 @@ class ArmProblem : public DiagnosisProblem {
     Eigen::VectorXd needed = d.rigid.col(j);
     if (payload.size()) needed += payload.col(j);
     const auto& qd = d.log->qd;
-    const Eigen::VectorXd friction = ArmFrictionAlong(trial, j, d.log->t, qd.col(j));
+    const Eigen::VectorXd friction = ArmFrictionAlong(trial, j, d.log->t, d.log->q.col(j), qd.col(j));
     for (int r = 0; r < d.log->rows(); ++r) {
       if (std::abs(qd(r, j)) >= standstill_) needed[r] += friction[r];
     }
@@ -313,7 +313,8 @@ class ArmProblem : public DiagnosisProblem {
     const Eigen::VectorXd received_qd = ShiftEarlier(d.log->t, d.log->qd.col(j), JointCommandLead(trial, j));
     for (int row = 0; row < d.log->rows(); ++row) {
       if (std::abs(received_qd[row]) >= standstill_) continue;
-      const double level = coulomb + (r[row] > 0 ? e.coulomb_positive : e.coulomb_negative);
+      const double level = coulomb + (r[row] > 0 ? e.coulomb_positive : e.coulomb_negative) +
+                           e.PositionFrictionLevel(d.log->q(row, j));
       r[row] = r[row] > 0 ? std::max(0.0, r[row] - level) : std::min(0.0, r[row] + level);
     }
     return r;
@@ -355,7 +356,10 @@ class ArmProblem : public DiagnosisProblem {
     std::vector<TrialEffect> out;
     for (int j = 0; j < n_; ++j) {
       for (const std::string& name : ArmEffectNames()) {
-        if (name == "payload" || taken.count({name, j})) continue;
+        // position_friction is identify's (--position-friction): its levels need the
+        // joint's travel split into knots, which the diagnosis's one-parameter-set search
+        // does not choose.
+        if (name == "payload" || name == "position_friction" || taken.count({name, j})) continue;
         out.push_back({name, j, {}});
       }
     }
@@ -379,9 +383,10 @@ class ArmProblem : public DiagnosisProblem {
 
   // How far the bristles of a stribeck_friction effect `e` deflect before its joint
   // slides: the joint's whole dry friction level at rest (the nominal's Coulomb friction
-  // acts through them too) over sigma0.
+  // acts through them too; at the first log's first posture) over sigma0.
   double BristleDeflection(const TrialEffect& e) const {
-    const ArmSlipLevels levels = ArmMaxwellSlipLevels(Build({e}), e.joint, 0);
+    const double q = data_.front().log->q(0, e.joint);
+    const ArmSlipLevels levels = ArmMaxwellSlipLevels(Build({e}), e.joint, q, 0);
     return std::max(levels.positive, levels.negative) / e.parameters.at("sigma0");
   }
 

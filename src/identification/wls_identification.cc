@@ -81,6 +81,9 @@ bool WlsIdentificationOptions::IsValid(std::string* why) const {
     s << "max_condition_number must be above 1, got " << max_condition_number;
   } else if (base_samples < 10) {
     s << "base_samples must be at least 10, got " << base_samples;
+  } else if (position_friction_knots != 0 &&
+             !(position_friction_knots >= 2 && position_friction_knots <= kMaxFrictionKnots)) {
+    s << "position friction needs 2 to " << kMaxFrictionKnots << " knots (or 0: none), got " << position_friction_knots;
   }
   if (why) *why = s.str();
   return s.str().empty();
@@ -146,27 +149,76 @@ std::string DescribeBaseParameter(const ArmModel& model, const BaseParameters& b
 
 namespace {
 
-// Names the unknowns in *summary (the r base parameters, then `offsets` torque offsets)
-// with the a-priori model's values.
-void DescribeUnknowns(const ArmModel& a_priori, const BaseParameters& base, int offsets,
+// How far each joint moves over all logs, and which never do.
+struct JointSpans {
+  std::vector<double> lo, hi;  // rad or m, min and max of q per joint
+  std::vector<double> span;    // hi - lo
+  std::vector<bool> still;     // span below the options' still_range
+};
+
+int Sign(double v) { return (v > 0) - (v < 0); }
+
+// The unknowns after the r base parameters, each in one joint's equations: a torque
+// offset per joint (with torque_offsets), then per moving joint the position friction's
+// d_2..d_K (with position_friction_knots K), in the summary's order.
+struct ExtraColumns {
+  int offsets = 0;
+  int knots = 0;
+  std::vector<int> joint;  // per extra column
+  std::vector<int> knot;   // per extra column: -1 an offset, else the knot (1..K-1, 0-based)
+  Eigen::VectorXd from, to;
+
+  ExtraColumns(int dof, bool with_offsets, int position_knots, const std::vector<int>& position_joints,
+               const Eigen::VectorXd& knots_from, const Eigen::VectorXd& knots_to)
+      : offsets(with_offsets ? dof : 0), knots(position_knots), from(knots_from), to(knots_to) {
+    for (int j = 0; j < offsets; ++j) joint.push_back(j), knot.push_back(-1);
+    for (int j : position_joints)
+      for (int k = 1; k < knots; ++k) joint.push_back(j), knot.push_back(k);
+  }
+  int size() const { return static_cast<int>(joint.size()); }
+  // Extra column c's entry in its joint's equation at position q and velocity qd.
+  double Value(int c, double q, double qd) const {
+    const int k = knot[static_cast<std::size_t>(c)];
+    if (k < 0) return 1;
+    const int j = joint[static_cast<std::size_t>(c)];
+    const double u = std::clamp((q - from[j]) / (to[j] - from[j]), 0.0, 1.0) * (knots - 1);
+    return Sign(qd) * std::max(0.0, 1 - std::abs(u - k));
+  }
+};
+
+// The joints with knots of their own: every joint that moves, with position friction.
+std::vector<int> PositionJoints(int knots, const JointSpans& spans) {
+  std::vector<int> joints;
+  for (std::size_t j = 0; knots > 0 && j < spans.still.size(); ++j)
+    if (!spans.still[j]) joints.push_back(static_cast<int>(j));
+  return joints;
+}
+
+// Names the unknowns in *summary (the r base parameters, then the extra columns) with
+// the a-priori model's values.
+void DescribeUnknowns(const ArmModel& a_priori, const BaseParameters& base, const ExtraColumns& extras,
                       WlsIdentificationSummary* summary) {
   const int r = base.rank();
   summary->base_parameters = r;
   summary->names = base.names;
   for (int k = 0; k < r; ++k) summary->descriptions.push_back(DescribeBaseParameter(a_priori, base, k));
-  for (int j = 0; j < offsets; ++j) {
-    summary->names.push_back("offset" + std::to_string(j + 1));
-    summary->descriptions.push_back("torque offset of joint " + std::to_string(j + 1));
+  for (int c = 0; c < extras.size(); ++c) {
+    const int j = extras.joint[static_cast<std::size_t>(c)], k = extras.knot[static_cast<std::size_t>(c)];
+    const std::string joint = std::to_string(j + 1);
+    if (k < 0) {
+      summary->names.push_back("offset" + joint);
+      summary->descriptions.push_back("torque offset of joint " + joint);
+    } else {
+      const double at = extras.from[j] + (extras.to[j] - extras.from[j]) * k / (extras.knots - 1);
+      summary->names.push_back("dfc" + joint + "_" + std::to_string(k + 1));
+      summary->descriptions.push_back("Coulomb friction of joint " + joint + " at knot " + std::to_string(k + 1) +
+                                      " of " + std::to_string(extras.knots) + " (q = " + Format(at) +
+                                      ") over its level at knot 1");
+    }
   }
-  summary->a_priori = Eigen::VectorXd::Zero(r + offsets);
+  summary->a_priori = Eigen::VectorXd::Zero(r + extras.size());
   summary->a_priori.head(r) = base.from_standard * StandardParameters(a_priori);
 }
-
-// How far each joint moves over all logs, and which never do.
-struct JointSpans {
-  std::vector<double> span;  // rad or m, max - min of q per joint
-  std::vector<bool> still;   // span below the options' still_range
-};
 
 // Finds the joints that never move (listed 1-based in summary->still_joints): their
 // velocity and acceleration are then taken as exactly zero, so that the parameters only
@@ -176,12 +228,16 @@ JointSpans FindStillJoints(const std::vector<ArmLog>& logs, int n, double still_
   JointSpans s;
   s.span.assign(static_cast<std::size_t>(n), 0.0);
   s.still.assign(static_cast<std::size_t>(n), false);
+  s.lo.assign(static_cast<std::size_t>(n), 0.0);
+  s.hi.assign(static_cast<std::size_t>(n), 0.0);
   for (int j = 0; j < n; ++j) {
     double lo = 1e300, hi = -1e300;
     for (const ArmLog& log : logs) {
       lo = std::min(lo, log.q.col(j).minCoeff());
       hi = std::max(hi, log.q.col(j).maxCoeff());
     }
+    s.lo[static_cast<std::size_t>(j)] = lo;
+    s.hi[static_cast<std::size_t>(j)] = hi;
     s.span[static_cast<std::size_t>(j)] = hi - lo;
     if (hi - lo < still_range) {
       s.still[static_cast<std::size_t>(j)] = true;
@@ -261,12 +317,12 @@ void CheckEnoughRows(const Eigen::VectorXi& joint_samples, int columns, double r
 // (a joint's rows at rest, below summary->rest_speed or near it, left out of its own
 // equations) and sets summary->samples, rest_rows and torque_rms; throws InputError for
 // too few samples.
-JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base, int offsets,
+JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base, const ExtraColumns& extras,
                             const std::vector<ArmLog>& logs, const WlsIdentificationOptions& options,
                             const JointSpans& spans, const std::string& where, WlsIdentificationSummary* summary) {
   const int n = a_priori.dof();
   const int r = base.rank();
-  const int cols_total = r + offsets;
+  const int cols_total = r + extras.size();
   // Joint j's torque depends only on links j..n and its own friction: its rows are folded
   // into a factor over those base columns alone.
   std::vector<std::vector<int>> columns(static_cast<std::size_t>(n));
@@ -278,7 +334,7 @@ JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base
       if (link || friction) columns[static_cast<std::size_t>(j)].push_back(k);
     }
   }
-  for (int j = 0; j < offsets; ++j) columns[static_cast<std::size_t>(j)].push_back(r + j);
+  for (int c = 0; c < extras.size(); ++c) columns[static_cast<std::size_t>(extras.joint[static_cast<std::size_t>(c)])].push_back(r + c);
   std::vector<TriangularAccumulator> factors;
   for (int j = 0; j < n; ++j) factors.emplace_back(static_cast<int>(columns[static_cast<std::size_t>(j)].size()) + 1, 1024);
 
@@ -304,7 +360,8 @@ JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base
         auto next = factors[static_cast<std::size_t>(j)].Next();
         for (std::size_t c = 0; c < cols.size(); ++c) {
           const int k = cols[c];
-          next[static_cast<Eigen::Index>(c)] = k < r ? y(j, base.independent[static_cast<std::size_t>(k)]) : 1.0;
+          next[static_cast<Eigen::Index>(c)] =
+              k < r ? y(j, base.independent[static_cast<std::size_t>(k)]) : extras.Value(k - r, q[j], qd[j]);
         }
         next[static_cast<Eigen::Index>(cols.size())] = log.tau(row, j);
         factors[static_cast<std::size_t>(j)].Commit();
@@ -452,22 +509,25 @@ WeightedSolution Solve(const JointSystems& systems, const Eigen::MatrixXd& a, co
 // parameters (the least change, K having full row rank) or, if that is no real arm, the
 // physically consistent ones that fit the torques best, and fills summary->consistent,
 // offsets and the consistency fields; throws InputError when even those are no valid arm.
-ArmModel ProjectConsistent(const ArmModel& a_priori, const Eigen::MatrixXd& k_matrix, int offsets,
+// The `extras` unknowns after the base parameters (offsets, position friction) are free.
+ArmModel ProjectConsistent(const ArmModel& a_priori, const Eigen::MatrixXd& k_matrix, const ExtraColumns& extra_columns,
                            const WeightedSolution& solution, const std::string& where,
                            WlsIdentificationSummary* summary) {
   const int r = static_cast<int>(k_matrix.rows());
-  const int cols_total = r + offsets;
+  const int extras = extra_columns.size();
+  const int cols_total = r + extras;
   const Eigen::MatrixXd& aw = solution.aw;
-  // The offsets are free: with them first in a QR of the weighted system, R = [[R_oo,
-  // R_ob], [0, R_bb]] and R_bb is the weighted metric of beta with the offsets refitted.
+  // The extra unknowns (offsets, position friction) are free: with them first in a QR of
+  // the weighted system, R = [[R_oo, R_ob], [0, R_bb]] and R_bb is the weighted metric of
+  // beta with them refitted.
   const Eigen::VectorXd beta = summary->identified.head(r);
   Eigen::MatrixXd r_beta = solution.rw.topLeftCorner(r, r), r_oo, r_ob;
-  if (offsets > 0) {
+  if (extras > 0) {
     Eigen::MatrixXd permuted(aw.rows(), cols_total);
-    permuted << aw.rightCols(offsets), aw.leftCols(r);
+    permuted << aw.rightCols(extras), aw.leftCols(r);
     const Eigen::MatrixXd rp = permuted.householderQr().matrixQR().topRows(cols_total).triangularView<Eigen::Upper>();
-    r_oo = rp.topLeftCorner(offsets, offsets);
-    r_ob = rp.topRightCorner(offsets, r);
+    r_oo = rp.topLeftCorner(extras, extras);
+    r_ob = rp.topRightCorner(extras, r);
     r_beta = rp.bottomRightCorner(r, r);
   }
   const Eigen::VectorXd pi_mn = NearestStandardParameters(a_priori, k_matrix, beta);
@@ -503,12 +563,12 @@ ArmModel ProjectConsistent(const ArmModel& a_priori, const Eigen::MatrixXd& k_ma
   }
   summary->consistent = summary->identified;
   summary->consistent.head(r) = k_matrix * pi_final;
-  if (offsets > 0) {
-    // The offsets that go best with the consistent base parameters.
-    summary->consistent.tail(offsets) -=
+  if (extras > 0) {
+    // The extra unknowns that go best with the consistent base parameters.
+    summary->consistent.tail(extras) -=
         r_oo.triangularView<Eigen::Upper>().solve(r_ob * (summary->consistent.head(r) - beta));
   }
-  summary->offsets = summary->consistent.tail(offsets);
+  summary->offsets = summary->consistent.segment(r, extra_columns.offsets);
   summary->consistency_shift_max_std = 0;
   for (int k = 0; k < cols_total; ++k) {
     if (solution.std_dev[k] > 0)
@@ -540,7 +600,54 @@ ArmEffects IdentifiedEffects(const ArmModel& a_priori, const Eigen::VectorXd& of
   return effects;
 }
 
+// With position friction: each knotted joint's dry level at its knots, the consistent
+// Coulomb level plus d_k, into summary->position_* and into `result` as the joint's
+// constant level (the lowest knot's; a level below zero is held at zero and noted) and a
+// position_friction effect with the rest.
+void SetPositionFriction(const ExtraColumns& extras, ArmModel* result, WlsIdentificationSummary* summary) {
+  const int n = result->dof(), knots = extras.knots, r = summary->base_parameters;
+  if (knots == 0) return;
+  summary->position_knots = knots;
+  summary->position_from = extras.from;
+  summary->position_to = extras.to;
+  summary->position_levels.resize(n, knots);
+  for (int j = 0; j < n; ++j) summary->position_levels.row(j).setConstant(result->joints[static_cast<std::size_t>(j)].coulomb);
+  for (int c = 0; c < extras.size(); ++c) {
+    const int k = extras.knot[static_cast<std::size_t>(c)];
+    if (k >= 0) summary->position_levels(extras.joint[static_cast<std::size_t>(c)], k) += summary->consistent[r + c];
+  }
+  for (const int j : summary->position_joints) {
+    auto levels = summary->position_levels.row(j);
+    for (int k = 0; k < knots; ++k) {
+      if (levels[k] >= 0) continue;
+      summary->position_notes.push_back("the Coulomb friction of joint " + std::to_string(j + 1) + " at knot " +
+                                           std::to_string(k + 1) + " came out negative (" + Format(levels[k]) +
+                                           "): held at 0");
+      levels[k] = 0;
+    }
+    const double lowest = levels.minCoeff();
+    result->joints[static_cast<std::size_t>(j)].coulomb = lowest;
+    ArmEffect effect{"position_friction", j, {{"from", extras.from[j]}, {"to", extras.to[j]}}};
+    for (int k = 0; k < knots; ++k) effect.parameters["c" + std::to_string(k + 1)] = levels[k] - lowest;
+    AddArmEffect(effect, n, &result->effects);
+  }
+}
+
 }  // namespace
+
+Eigen::MatrixXd ExtraTorques(const WlsIdentificationSummary& summary, const Eigen::VectorXd& x, const ArmLog& log) {
+  const int n = log.dof, r = summary.base_parameters;
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(n);
+  const ExtraColumns extras(n, summary.offsets.size() > 0, summary.position_knots, summary.position_joints,
+                            summary.position_knots > 0 ? summary.position_from : none,
+                            summary.position_knots > 0 ? summary.position_to : none);
+  Eigen::MatrixXd tau = Eigen::MatrixXd::Zero(log.rows(), n);
+  for (int c = 0; c < extras.size(); ++c) {
+    const int j = extras.joint[static_cast<std::size_t>(c)];
+    for (int row = 0; row < log.rows(); ++row) tau(row, j) += x[r + c] * extras.Value(c, log.q(row, j), log.qd(row, j));
+  }
+  return tau;
+}
 
 ArmModel IdentifyArmByLeastSquares(const ArmModel& a_priori, const std::vector<ArmLog>& logs,
                      const WlsIdentificationOptions& options, WlsIdentificationSummary* summary_out) {
@@ -556,22 +663,27 @@ ArmModel IdentifyArmByLeastSquares(const ArmModel& a_priori, const std::vector<A
   summary.dof = n;
   summary.logs = static_cast<int>(logs.size());
   const BaseParameters base = IdentificationBase(a_priori, options);
-  // Estimated: the r base parameters, then (optionally) one torque offset per joint.
-  const int offsets = options.torque_offsets ? n : 0;
-  DescribeUnknowns(a_priori, base, offsets, &summary);
   const JointSpans spans = FindStillJoints(logs, n, options.still_range, &summary);
+  // Estimated: the r base parameters, then (optionally) one torque offset per joint and
+  // the position friction's knots.
+  summary.position_joints = PositionJoints(options.position_friction_knots, spans);
+  const ExtraColumns extras(n, options.torque_offsets, options.position_friction_knots, summary.position_joints,
+                            Eigen::Map<const Eigen::VectorXd>(spans.lo.data(), n),
+                            Eigen::Map<const Eigen::VectorXd>(spans.hi.data(), n));
+  DescribeUnknowns(a_priori, base, extras, &summary);
   summary.rest_speed = RestSpeeds(logs, n, options, spans);
-  const JointSystems systems = AccumulateRows(a_priori, base, offsets, logs, options, spans, where, &summary);
+  const JointSystems systems = AccumulateRows(a_priori, base, extras, logs, options, spans, where, &summary);
   Eigen::MatrixXd a;
   Eigen::VectorXd b;
   systems.Stack(Eigen::VectorXd::Ones(n), &a, &b);
   CheckExcitation(a, base, spans, options, where, summary);
   const WeightedSolution solution = Solve(systems, a, b, options, &summary);
-  ArmModel result = ProjectConsistent(a_priori, base.from_standard, offsets, solution, where, &summary);
+  ArmModel result = ProjectConsistent(a_priori, base.from_standard, extras, solution, where, &summary);
   summary.error_rms_a_priori = systems.ErrorRms(summary.a_priori);
   summary.error_rms_identified = systems.ErrorRms(summary.identified);
   summary.error_rms_model = systems.ErrorRms(summary.consistent);
   result.effects = IdentifiedEffects(a_priori, summary.offsets);
+  SetPositionFriction(extras, &result, &summary);
   result.source_path.clear();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary_out) *summary_out = summary;
@@ -582,7 +694,11 @@ std::string WlsIdentificationSummary::BriefReport() const {
   std::ostringstream s;
   const double before = error_rms_a_priori.size() ? (error_rms_a_priori.cwiseQuotient(torque_rms)).mean() : 0;
   const double after = error_rms_model.size() ? (error_rms_model.cwiseQuotient(torque_rms)).mean() : 0;
-  s << base_parameters << " base parameters" << (names.size() > static_cast<std::size_t>(base_parameters) ? " and torque offsets" : "") << " from " << samples << " samples of " << logs << " log" << (logs == 1 ? "" : "s")
+  const char* extras = offsets.size() > 0 && position_knots > 0 ? " and torque offsets and position friction"
+                       : offsets.size() > 0                      ? " and torque offsets"
+                       : position_knots > 0                      ? " and position friction"
+                                                                 : "";
+  s << base_parameters << " base parameters" << extras << " from " << samples << " samples of " << logs << " log" << (logs == 1 ? "" : "s")
     << ", condition number " << Format(condition_number) << ", torque error " << Format(100 * before) << " % -> "
     << Format(100 * after) << " % of the torque RMS (mean over joints)"
     << (consistency_fixed ? ", made physically consistent" : "");
@@ -628,6 +744,17 @@ std::string WlsIdentificationSummary::FullReport() const {
                     100.0 * rest_rows[j] / std::max(samples, 1), rest_speed[j]);
       s << line << (j + 1 < dof ? ";" : "\n");
     }
+  }
+  if (position_knots > 0) {
+    s << "Coulomb friction along each joint's travel (the model's level at each knot, N·m or N):\n";
+    for (const int j : position_joints) {
+      std::snprintf(line, sizeof line, "  joint %d, %d knots from %.6g to %.6g:", j + 1, position_knots,
+                    position_from[j], position_to[j]);
+      s << line;
+      for (int k = 0; k < position_knots; ++k) s << " " << Format(position_levels(j, k));
+      s << "\n";
+    }
+    for (const auto& note : position_notes) s << "  " << note << "\n";
   }
   if (consistency_fixed) {
     s << "\nThe minimum-norm standard parameters were not physical:\n";

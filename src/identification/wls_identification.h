@@ -11,7 +11,13 @@
 // small triangular factor as they are computed, so 100 000 samples of a 7-joint arm
 // take a fraction of the memory of W. The relative standard deviation of each estimate
 // comes from (W_w^T W_w)^-1, scaled by the weighted residual's variance. Optionally a
-// constant torque offset per joint (a torque sensor's bias) is estimated alongside.
+// constant torque offset per joint (a torque sensor's bias) is estimated alongside, and a
+// Coulomb level that varies along each joint's travel (position_friction, arm_effects.h):
+// with K knots evenly spread over the positions the logs visit, the level is
+//   c(q) = f_c + sum_{k=2..K} d_k h_k(q),
+// h_k the hat function that is 1 at knot k and 0 at its neighbours (linear between), so
+// f_c is the level at the first knot and f_c + d_k at knot k; the columns sign(q̇) h_k(q)
+// join the joint's equations beside its constant Coulomb column.
 //
 // Data that does not excite some base parameter (a joint that never moves, or a motion
 // too poor to tell combinations apart) is refused with an InputError naming them. The
@@ -45,6 +51,9 @@ struct WlsIdentificationOptions {
   // Also estimate a constant offset per joint: measured torque = model torque + offset
   // (a torque sensor's bias; the contract's torque_offset effect is minus this).
   bool torque_offsets = false;
+  // Also estimate each moving joint's Coulomb level at this many knots along its travel
+  // (position_friction; 0: one level, 2..kMaxFrictionKnots).
+  int position_friction_knots = 0;
   double still_range = 1e-3;         // rad or m: a joint whose q spans less than this never moves
   // A moving joint's rows where |q̇| is below this share of its RMS speed (over all logs)
   // are left out of its own equations: at rest a joint holds anywhere within its friction
@@ -73,6 +82,15 @@ struct WlsIdentificationSummary {
   Eigen::VectorXd relative_std;        // %, 100 sigma(beta_k) / |beta_k|
   Eigen::VectorXd consistent;          // K pi of the returned model (and the offsets refitted to it)
   Eigen::VectorXd offsets;             // N·m or N per joint (empty without torque_offsets): measured - model at rest
+  // With position_friction_knots K: the unknowns after the offsets are, per moving joint
+  // (position_joints, 0-based), d_2..d_K; the returned model's dry level at each knot
+  // (dof x K, N·m or N; a joint without its own knots holds its constant level), the
+  // knots from position_from to position_to (per joint, rad or m).
+  int position_knots = 0;
+  std::vector<int> position_joints;
+  Eigen::MatrixXd position_levels;
+  Eigen::VectorXd position_from, position_to;
+  std::vector<std::string> position_notes;  // a knot's level below zero, held at zero
   Eigen::VectorXd joint_sigma;         // N·m or N per joint, the OLS residual std dev (the weights' inverse)
   Eigen::VectorXd torque_rms;          // N·m or N per joint, measured torque RMS over the samples used
   Eigen::VectorXd error_rms_a_priori;  // N·m or N per joint, torque error RMS of the a-priori model
@@ -93,7 +111,9 @@ struct WlsIdentificationSummary {
 
 // Identifies `a_priori`'s base parameters and friction from `logs` and returns the
 // model with them (kinematics, limits and names unchanged). Its effects: the estimated
-// torque offsets as torque_offset effects (tau0 = -offset); the a-priori model's
+// torque offsets as torque_offset effects (tau0 = -offset); with position friction a
+// position_friction effect per moving joint over its lowest knot's level (the joint's
+// Coulomb friction); the a-priori model's
 // time_delay, torque_saturation and joint_flexibility kept; its friction effects,
 // payload and torque offsets dropped (the identified parameters hold their torques). Throws InputError for invalid options, a log
 // whose joint count differs from the model's, too few samples, data that does not
@@ -112,6 +132,11 @@ Eigen::VectorXd ArmRestSpeeds(const std::vector<ArmLog>& logs, double share, int
 // derivatives' cut-off of such a row (the zero-phase filter smears a stop over that
 // reach, so the derived q̇ there still moves while the joint already sticks).
 Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ArmRestRows(const ArmLog& log, const Eigen::VectorXd& rest_speed);
+
+// The torques of the unknowns beyond the base parameters (offsets, position friction's
+// d_k) at the estimate `x` (an estimate vector of *summary: identified, consistent, ...)
+// for every row of `log` (rows x dof).
+Eigen::MatrixXd ExtraTorques(const WlsIdentificationSummary& summary, const Eigen::VectorXd& x, const ArmLog& log);
 
 // The identification's base parameters of `model` (FindBaseParameters with the options' samples and seed).
 BaseParameters IdentificationBase(const ArmModel& model, const WlsIdentificationOptions& options);

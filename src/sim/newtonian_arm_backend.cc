@@ -27,10 +27,11 @@ constexpr int kMaxBristleSubsteps = 64;
 constexpr int kFrictionSweeps = 50;
 constexpr double kFrictionTolerance = 1e-13;  // relative change of a sweep that ends it
 
-// The sliding friction level of a joint moving at `speed` >= 0 in direction `dir` (+1 or
-// -1), without viscous friction: nominal Coulomb plus the Coulomb and Stribeck effects.
-double SlidingLevel(const ArmJoint& nominal, const JointEffects& e, double speed, int dir) {
-  double level = nominal.coulomb + (dir > 0 ? e.coulomb_positive : e.coulomb_negative);
+// The sliding friction level of a joint at position q moving at `speed` >= 0 in
+// direction `dir` (+1 or -1), without viscous friction: nominal Coulomb plus the
+// Coulomb, position and Stribeck effects.
+double SlidingLevel(const ArmJoint& nominal, const JointEffects& e, double q, double speed, int dir) {
+  double level = nominal.coulomb + (dir > 0 ? e.coulomb_positive : e.coulomb_negative) + e.PositionFrictionLevel(q);
   if (e.stribeck()) {
     const double r = speed / e.stribeck_velocity;
     level += e.stribeck_coulomb + (e.stribeck_static - e.stribeck_coulomb) * std::exp(-r * r);
@@ -43,15 +44,16 @@ double SlidingLevel(const ArmJoint& nominal, const JointEffects& e, double speed
 // unit torque over the step changes it, `qd` its velocity at the start. The joint
 // sticks when its break-away level can stop it within the step; else it slides with
 // the Coulomb/Stribeck level of its present speed and viscous friction on the mean of
-// its start and end velocities (trapezoidal: second order, and stable for any b).
+// its start and end velocities (trapezoidal: second order, and stable for any b); `q`
+// its position at the start (position_friction's level).
 // `inv_w` = 1 / w and `inv_damping` = 1 / (1 + w b / 2), b the joint's viscous
 // coefficient: fixed over a step's sweeps, so divided once.
 double JointFriction(const ArmJoint& nominal, const JointEffects& e, double v, double w, double inv_w,
-                     double inv_damping, double qd) {
+                     double inv_damping, double q, double qd) {
   const double viscous = nominal.viscous + e.viscous;
   for (const int dir : {+1, -1}) {
-    if (dir * v <= w * SlidingLevel(nominal, e, 0, dir)) continue;
-    const double level = dir * SlidingLevel(nominal, e, std::max(dir * qd, 0.0), dir);
+    if (dir * v <= w * SlidingLevel(nominal, e, q, 0, dir)) continue;
+    const double level = dir * SlidingLevel(nominal, e, q, std::max(dir * qd, 0.0), dir);
     // Sliding: f = level + b (qd + v_end) / 2 with v_end = v - w f.
     const double f = (level + 0.5 * viscous * (v + qd)) * inv_damping;
     // A damping so strong that the trapezoid would overshoot zero stops the joint.
@@ -192,7 +194,7 @@ void NewtonianArmBackend::Reset(const Eigen::VectorXd& q, const Eigen::VectorXd&
   for (int j : presliding_joints_) {
     const auto k = static_cast<std::size_t>(j);
     const JointEffects& e = effects_[k];
-    const double g = ArmDryFrictionLevel(model_, j, qd[j]);
+    const double g = ArmDryFrictionLevel(model_, j, q[j], qd[j]);
     const double carried = tau_before[j] + e.torque_offset - scratch_.bias[j] -
                            (model_.joints[k].viscous + e.viscous) * qd[j];
     state_.bristle[j] = std::clamp(carried, -g, g) / e.bristle_stiffness;
@@ -229,14 +231,14 @@ void NewtonianArmBackend::DriveTorques(std::int64_t step, Eigen::VectorXd* drive
   }
 }
 
-void NewtonianArmBackend::PrepareBristles(int j, double qd, double h) {
+void NewtonianArmBackend::PrepareBristles(int j, double q, double qd, double h) {
   // The bristles end the step at z = base + slope v_end; their torque is sigma0 z plus
   // sigma1 times the step's mean z', and viscous friction is trapezoidal as elsewhere:
   // f = A + B v_end, linear in the joint's end velocity like the other unknowns.
   const auto k = static_cast<std::size_t>(j);
   const JointEffects& e = effects_[k];
   const double z0 = state_.bristle[j];
-  const ArmBristleStep step = ArmBristleStepFrom(model_, j, z0, qd, h);
+  const ArmBristleStep step = ArmBristleStepFrom(model_, j, q, z0, qd, h);
   scratch_.bristle_steps[k] = step;
   const double viscous = model_.joints[k].viscous + e.viscous;
   scratch_.bristle_torque[j] =
@@ -244,7 +246,7 @@ void NewtonianArmBackend::PrepareBristles(int j, double qd, double h) {
   scratch_.bristle_gain[j] = (e.bristle_stiffness + e.bristle_damping / h) * step.slope + 0.5 * viscous;
   if (e.bristle_slip) {
     // The dry levels the element slips at, either way (the start's speed).
-    scratch_.slip_levels[k] = ArmMaxwellSlipLevels(model_, j, qd);
+    scratch_.slip_levels[k] = ArmMaxwellSlipLevels(model_, j, q, qd);
   }
 }
 
@@ -297,7 +299,7 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
     const double viscous = model_.joints[k].viscous + effects_[k].viscous;
     w_inverse[j] = 1 / response(j, j);
     damping_inverse[j] = 1 / (1 + 0.5 * response(j, j) * viscous);
-    if (effects_[k].presliding()) PrepareBristles(j, qd[j], h);
+    if (effects_[k].presliding()) PrepareBristles(j, q[j], qd[j], h);
   }
   // Projected Gauss-Seidel: each joint's friction, and each trapezoidal spring's torque,
   // given the others', until they settle.
@@ -328,7 +330,7 @@ bool NewtonianArmBackend::SolveJointTorques(const Eigen::VectorXd& q, const Eige
       const double f =
           effects_[k].presliding()
               ? BristleFriction(j, v, w, qd[j], h)
-              : JointFriction(model_.joints[k], effects_[k], v, w, w_inverse[j], damping_inverse[j], qd[j]);
+              : JointFriction(model_.joints[k], effects_[k], v, w, w_inverse[j], damping_inverse[j], q[j], qd[j]);
       change = std::max(change, std::abs(f - (*friction)[j]));
       size = std::max(size, std::abs(f));
       (*friction)[j] = f;

@@ -62,8 +62,9 @@ class NewtonianArmBackend final : public ArmBackend {
   // has friction or a trapezoidal spring), with the joint accelerations at the step's
   // start under tau + spring - friction in scratch_.start_accel, from the same M: the
   // engine's first stage (ArmEngine::StepFromAcceleration).
-  // A LuGre joint j's bristles over a physics step of h from velocity qd, into scratch_.
-  void PrepareBristles(int j, double qd, double h);
+  // A LuGre joint j's bristles over a physics step of h from position q and velocity qd,
+  // into scratch_.
+  void PrepareBristles(int j, double q, double qd, double h);
   // Its friction torque for a free end velocity v and response w (the joint's
   // (h M^-1)_jj), from velocity qd: A + B v_end solved with v_end = v - w f, or for a
   // Maxwell-slip element whose force would exceed its dry level, that level (then

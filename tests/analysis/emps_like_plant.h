@@ -30,6 +30,11 @@ struct EmpsLikeTruth {
   double viscous = 203.5034;  // N s/m
   double coulomb = 20.3935;   // N (MuJoCo's friction loss: it also holds the cart at rest)
   double offset = -3.1648;    // N, a constant force on the cart (the drive's offset)
+  // A friction loss that varies along the travel (a screw tighter at one end): MuJoCo's
+  // friction loss set before each step to coulomb (1 + coulomb_wave cos(pi (q - 0.02 m)
+  // / 0.2 m)), so coulomb (1 + wave) at the travel's start, coulomb (1 - wave) at its
+  // end. 0 = the same everywhere. Not with presliding_stiffness.
+  double coulomb_wave = 0;
   // Pre-sliding, as a Maxwell-slip element: with a stiffness (N/m) the dry friction acts
   // on a slider of `slider_mass` (kg, part of `mass`) joined to the cart by that spring,
   // damped at `presliding_damping_ratio` of critical against the cart; MuJoCo steps it at
@@ -53,6 +58,9 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how = {}
 
 // The a-priori model a user would write for it: a 90 kg cart on a prismatic joint along
 // x, no friction (YAML text).
+
+// The friction loss of `truth` at cart position q (N): its coulomb_wave along the travel.
+double EmpsLikeFrictionLoss(const EmpsLikeTruth& truth, double q);
 std::string EmpsLikeNominalYaml();
 
 // The benchmark's score of a one-joint model on a log: its free run from the log's first

@@ -28,6 +28,11 @@ std::string EmpsLikeNominalYaml() {
          "    link: {name: cart, mass: 90, com: [0, 0, 0], inertia: [1, 1, 1, 0, 0, 0]}\n";
 }
 
+double EmpsLikeFrictionLoss(const EmpsLikeTruth& truth, double q) {
+  constexpr double kPi = 3.14159265358979323846;
+  return truth.coulomb * (1 + truth.coulomb_wave * std::cos(kPi * (q - 0.02) / 0.2));
+}
+
 double FreeRunFit(const ArmModel& model, const ArmLog& log) {
   ArmSimulationScoreOptions options;
   options.horizons = {0};
@@ -183,6 +188,7 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how) {
     csv << k * kDt << "," << measured << "," << force + rng.Gaussian(how.force_noise) << "\n";
     if (!maxwell) {
       mj.data->qfrc_applied[0] = force + how.truth.offset;
+      if (how.truth.coulomb_wave != 0) mj.model->dof_frictionloss[0] = EmpsLikeFrictionLoss(how.truth, q);
       mj_step(mj.model, mj.data);
       continue;
     }

@@ -81,7 +81,7 @@ bool EndsWithYaml(const std::string& path) {
 // the model there and the reports into --report DIR when given.
 int IdentifyOmniCli(const IdentifyCliOptions& options) {
   for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition",
-                               "--output-error", "--stribeck", "--presliding", "--segment"}) {
+                               "--output-error", "--stribeck", "--presliding", "--segment", "--position-friction"}) {
     if (std::find(options.given.begin(), options.given.end(), arm_only) != options.given.end())
       throw InputError(std::string(arm_only) + " is for arms; " + options.model + " is an omni robot");
   }
@@ -333,6 +333,10 @@ void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
   cmd->add_flag("--unweighted", options->unweighted, "Ordinary least squares only (no per-joint weights)");
   cmd->add_flag("--offsets", options->offsets,
                 "Also estimate a constant torque offset per joint (a torque sensor's bias), written as torque_offset effects");
+  cmd->add_option("--position-friction", options->identification.position_friction_knots,
+                  "Also estimate each moving joint's Coulomb friction at this many evenly spaced positions along "
+                  "its travel (2 to 12; linear between them), written as position_friction effects; 0 = one level")
+      ->capture_default_str();
   cmd->add_option("--validate", options->validate,
                   "Held-out log(s): print the a-priori and identified models' torque errors on them and the motion "
                   "they simulate from the logs' torques");

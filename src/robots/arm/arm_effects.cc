@@ -6,6 +6,7 @@
 #include <functional>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/error.h"
 #include "io/yaml_reader.h"
@@ -31,6 +32,19 @@ std::string Number(double v) {
 }
 
 
+// position_friction's keys: the knots' span, then the levels c1..cK (the first two required).
+std::vector<ParameterSpec> PositionFrictionSpecs() {
+  static const std::vector<std::string> level_keys = [] {
+    std::vector<std::string> keys;
+    for (int k = 1; k <= kMaxFrictionKnots; ++k) keys.push_back("c" + std::to_string(k));
+    return keys;
+  }();
+  std::vector<ParameterSpec> specs = {{"from", true, InRange(-1e6, 1e6)}, {"to", true, InRange(-1e6, 1e6)}};
+  for (int k = 0; k < kMaxFrictionKnots; ++k)
+    specs.push_back({level_keys[static_cast<std::size_t>(k)].c_str(), k < 2, NonNegative(1e7)});
+  return specs;
+}
+
 // The parameter table of the vocabulary; the order is the documentation's.
 const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
   static const std::map<std::string, std::vector<ParameterSpec>> specs = {
@@ -39,6 +53,7 @@ const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
       {"viscous_friction", {{"b", true, NonNegative(1e6)}}},
       {"coulomb_friction",
        {{"c", false, NonNegative(1e7)}, {"c_pos", false, NonNegative(1e7)}, {"c_neg", false, NonNegative(1e7)}}},
+      {"position_friction", PositionFrictionSpecs()},
       {"stribeck_friction",
        {{"c", true, NonNegative(1e7)},
         {"s", true, Positive(1e7)},
@@ -98,6 +113,30 @@ void ApplyStribeck(const std::map<std::string, double>& p, const std::string& la
   j->bristle_slip = get("maxwell") == 1;
 }
 
+// position_friction's parameters (checked one by one) into `j`; the combination's
+// problems (to <= from, a level missing between two given) into `problems`.
+void ApplyPositionFriction(const std::map<std::string, double>& p, const std::string& label, JointEffects* j,
+                           std::vector<std::string>* problems) {
+  const double from = p.at("from"), to = p.at("to");
+  if (!(to > from)) {
+    problems->push_back(label + ": the last knot 'to' = " + Number(to) + " must lie beyond the first, 'from' = " +
+                        Number(from));
+  }
+  int knots = 0;
+  while (knots < kMaxFrictionKnots && p.count("c" + std::to_string(knots + 1)) > 0) ++knots;
+  for (int k = knots + 1; k < kMaxFrictionKnots; ++k) {
+    if (p.count("c" + std::to_string(k + 1)) > 0) {
+      problems->push_back(label + ": 'c" + std::to_string(k + 1) + "' given without 'c" + std::to_string(knots + 1) +
+                          "': the levels are c1, c2, ... in order");
+      break;
+    }
+  }
+  j->friction_knots = knots;
+  j->friction_from = from;
+  j->friction_to = to;
+  for (int k = 0; k < knots; ++k) j->friction_levels[static_cast<std::size_t>(k)] = p.at("c" + std::to_string(k + 1));
+}
+
 // Sets `effect` (whose keys and ranges were checked) into `effects`; every problem of
 // the combination (missing alternatives, s <= c, a duplicate) goes to `problems`.
 void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<std::string>* problems) {
@@ -144,6 +183,9 @@ void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<st
     } else {
       problems->push_back(label + ": needs 'c' (both directions) or both 'c_pos' and 'c_neg'");
     }
+  } else if (effect.name == "position_friction") {
+    if (j.position_friction()) problems->push_back(twice);
+    ApplyPositionFriction(p, label, &j, problems);
   } else if (effect.name == "stribeck_friction") {
     if (j.stribeck()) problems->push_back(twice);
     ApplyStribeck(p, label, &j, problems);
@@ -177,7 +219,7 @@ bool ArmEffects::any() const { return payload_mass > 0 || !ListArmEffects(*this)
 const std::vector<std::string>& ArmEffectNames() {
   static const std::vector<std::string> names = {"viscous_friction",  "coulomb_friction", "stribeck_friction",
                                                  "torque_offset",     "torque_saturation", "time_delay",
-                                                 "joint_flexibility", "payload"};
+                                                 "joint_flexibility", "payload",          "position_friction"};
   return names;
 }
 
@@ -231,6 +273,12 @@ std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects) {
       } else {
         out.push_back({"coulomb_friction", i, {{"c_pos", j.coulomb_positive}, {"c_neg", j.coulomb_negative}}});
       }
+    }
+    if (j.position_friction()) {
+      ArmEffect levels{"position_friction", i, {{"from", j.friction_from}, {"to", j.friction_to}}};
+      for (int k = 0; k < j.friction_knots; ++k)
+        levels.parameters["c" + std::to_string(k + 1)] = j.friction_levels[static_cast<std::size_t>(k)];
+      out.push_back(levels);
     }
     if (j.stribeck()) {
       ArmEffect stribeck{"stribeck_friction", i,
@@ -333,8 +381,8 @@ namespace {
 
 // ArmDryFrictionLevel and ArmFrictionTorque of a joint `nominal` with effects `e` (the
 // replay calls them for every row of a log).
-double DryFrictionLevel(const ArmJoint& nominal, const JointEffects& e, double qd) {
-  double level = nominal.coulomb + (qd >= 0 ? e.coulomb_positive : e.coulomb_negative);
+double DryFrictionLevel(const ArmJoint& nominal, const JointEffects& e, double q, double qd) {
+  double level = nominal.coulomb + (qd >= 0 ? e.coulomb_positive : e.coulomb_negative) + e.PositionFrictionLevel(q);
   if (e.stribeck()) {
     const double r = qd / e.stribeck_velocity;
     level += e.stribeck_coulomb + (e.stribeck_static - e.stribeck_coulomb) * std::exp(-r * r);
@@ -342,67 +390,71 @@ double DryFrictionLevel(const ArmJoint& nominal, const JointEffects& e, double q
   return level;
 }
 
-double FrictionTorque(const ArmJoint& nominal, const JointEffects& e, double qd) {
+double FrictionTorque(const ArmJoint& nominal, const JointEffects& e, double q, double qd) {
   if (qd == 0) return 0;
-  const double level = DryFrictionLevel(nominal, e, qd);
+  const double level = DryFrictionLevel(nominal, e, q, qd);
   return (nominal.viscous + e.viscous) * qd + (qd > 0 ? level : -level);
 }
 
 // ArmBristleStepFrom and ArmMaxwellSlipLevels of a joint `nominal` with effects `e`.
-ArmBristleStep BristleStepFrom(const ArmJoint& nominal, const JointEffects& e, double z0, double qd0, double h) {
-  const double g = DryFrictionLevel(nominal, e, qd0);
+ArmBristleStep BristleStepFrom(const ArmJoint& nominal, const JointEffects& e, double q, double z0, double qd0,
+                               double h) {
+  const double g = DryFrictionLevel(nominal, e, q, qd0);
   // With v(t) = qd0 + (qd1 - qd0) t / h: z(h) = z0 E + qd0 P + (qd1 - qd0) Q, where
   // E = exp(-a h), P = (1 - E) / a and Q = (h - P) / (a h) (h and h / 2 as a -> 0).
   const double a = g > 0 && !e.bristle_slip ? e.bristle_stiffness * std::abs(qd0) / g : 0;
   const double ah = a * h;
   if (ah < 1e-8) return {z0 + 0.5 * h * qd0, 0.5 * h};
   const double p = -std::expm1(-ah) / a;
-  const double q = (h - p) / ah;
-  return {z0 * std::exp(-ah) + qd0 * (p - q), q};
+  const double r = (h - p) / ah;  // the comment's Q
+  return {z0 * std::exp(-ah) + qd0 * (p - r), r};
 }
 
-ArmSlipLevels MaxwellSlipLevels(const ArmJoint& nominal, const JointEffects& e, double qd0) {
+ArmSlipLevels MaxwellSlipLevels(const ArmJoint& nominal, const JointEffects& e, double q, double qd0) {
   constexpr double kTinySpeed = 1e-300;  // a speed that only gives a direction
   const double speed = std::abs(qd0);
-  return {DryFrictionLevel(nominal, e, speed), DryFrictionLevel(nominal, e, -std::max(speed, kTinySpeed))};
+  return {DryFrictionLevel(nominal, e, q, speed), DryFrictionLevel(nominal, e, q, -std::max(speed, kTinySpeed))};
 }
 
 }  // namespace
 
-double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd) {
-  return DryFrictionLevel(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), qd);
+double ArmDryFrictionLevel(const ArmModel& model, int joint, double q, double qd) {
+  return DryFrictionLevel(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), q, qd);
 }
 
-double ArmFrictionTorque(const ArmModel& model, int joint, double qd) {
-  return FrictionTorque(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), qd);
+double ArmFrictionTorque(const ArmModel& model, int joint, double q, double qd) {
+  return FrictionTorque(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), q, qd);
 }
 
-ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h) {
-  return BristleStepFrom(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), z0, qd0, h);
+ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double q, double z0, double qd0, double h) {
+  return BristleStepFrom(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), q, z0, qd0,
+                         h);
 }
 
-ArmSlipLevels ArmMaxwellSlipLevels(const ArmModel& model, int joint, double qd0) {
-  return MaxwellSlipLevels(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), qd0);
+ArmSlipLevels ArmMaxwellSlipLevels(const ArmModel& model, int joint, double q, double qd0) {
+  return MaxwellSlipLevels(model.joints.at(static_cast<std::size_t>(joint)), model.effects.joint(joint), q, qd0);
 }
 
 double ArmMaxwellSlipDeflection(const JointEffects& effects, double level, double z0, double h) {
   return (level + effects.bristle_damping * z0 / h) / (effects.bristle_stiffness + effects.bristle_damping / h);
 }
 
-Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& qd) {
+Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& q,
+                                 const Eigen::VectorXd& qd) {
   const long n = qd.size();
+  if (q.size() != n) throw std::invalid_argument("ArmFrictionAlong: q and qd differ in length");
   Eigen::VectorXd out(n);
   const JointEffects e = model.effects.joint(joint);
   const ArmJoint& nominal = model.joints.at(static_cast<std::size_t>(joint));
   if (!e.presliding() || !e.stribeck() || n < 2 || t.size() != n) {
-    for (long r = 0; r < n; ++r) out[r] = FrictionTorque(nominal, e, qd[r]);
+    for (long r = 0; r < n; ++r) out[r] = FrictionTorque(nominal, e, q[r], qd[r]);
     return out;
   }
   const double viscous = nominal.viscous + e.viscous;
   const double s0 = e.bristle_stiffness, s1 = e.bristle_damping;
   // At the first row: the steady deflection of its velocity, whose force is the level
   // (unloaded at rest: the log does not say what holds it).
-  double z = qd[0] != 0 ? std::copysign(DryFrictionLevel(nominal, e, qd[0]), qd[0]) / s0 : 0;
+  double z = qd[0] != 0 ? std::copysign(DryFrictionLevel(nominal, e, q[0], qd[0]), qd[0]) / s0 : 0;
   for (long r = 0; r < n; ++r) {
     // Row r's friction is the step's from row r to r + 1, as the simulation logs a row
     // (its state before the step, the command acting over it); the last row's, the step
@@ -410,12 +462,12 @@ Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::
     const double h = r + 1 < n ? t[r + 1] - t[r] : t[r] - t[r - 1];
     const double next = r + 1 < n ? qd[r + 1] : qd[r];
     const double z0 = z;
-    z = BristleStepFrom(nominal, e, z0, qd[r], h).At(next);
+    z = BristleStepFrom(nominal, e, q[r], z0, qd[r], h).At(next);
     double dry = s0 * z + s1 * (z - z0) / h;
     if (e.bristle_slip) {
       // Beyond the dry level (the step's start speed, either way) the element slips
       // carrying exactly that level.
-      const double level = MaxwellSlipLevels(nominal, e, qd[r]).For(dry);
+      const double level = MaxwellSlipLevels(nominal, e, q[r], qd[r]).For(dry);
       if (std::abs(dry) > std::abs(level)) {
         z = ArmMaxwellSlipDeflection(e, level, z0, h);
         dry = level;

@@ -13,6 +13,12 @@
 //                       tau_s = k (thm - q) + d (thm' - qd) drives the link
 //   viscous_friction    tau_f = b qd
 //   coulomb_friction    tau_f = c_pos (qd > 0), -c_neg (qd < 0), sticking in between
+//   position_friction   tau_f = c(q) sign(qd): a dry friction level that varies along the
+//                       joint's travel (a ball screw or a gear tighter in some places),
+//                       c(q) through the levels c1..cK at K evenly spaced positions from
+//                       `from` to `to`, linear between them, c1 before `from` and cK
+//                       beyond `to`; it adds to the Coulomb levels and, like them, holds
+//                       a joint at rest and sets where bristles slip
 //   stribeck_friction   tau_f = (c + (s - c) exp(-(qd/vs)^2)) sign(qd), breaking away at s;
 //                       with sigma0 > 0 the LuGre model whose steady state that is
 //                       (Canudas de Wit et al. 1995): the joint's whole dry friction
@@ -39,6 +45,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <array>
 #include <map>
 #include <string>
 #include <vector>
@@ -54,6 +62,10 @@ class ErrorList;
 
 // The effects of one joint; all off by default. Units: N·m for revolute joints, N for
 // prismatic ones (and rad or m for positions accordingly).
+// position_friction's most levels (a fixed array, so that JointEffects copies without
+// allocating: it is read for every joint of every sample of a fit).
+inline constexpr int kMaxFrictionKnots = 12;
+
 struct JointEffects {
   double viscous = 0;            // N·m·s/rad: viscous_friction b
   double coulomb_positive = 0;   // N·m: coulomb_friction while qd > 0 (c_pos)
@@ -64,6 +76,10 @@ struct JointEffects {
   double bristle_stiffness = 0;  // N·m/rad: stribeck_friction sigma0 (LuGre); 0 = no pre-sliding
   double bristle_damping = 0;    // N·m·s/rad: stribeck_friction sigma1 (LuGre)
   bool bristle_slip = false;      // stribeck_friction maxwell: 1: a Maxwell-slip element, not LuGre
+  int friction_knots = 0;        // position_friction: K levels c1..cK; 0 = off
+  double friction_from = 0;      // rad or m: position_friction's first knot
+  double friction_to = 0;        // rad or m: its last knot (> from)
+  std::array<double, kMaxFrictionKnots> friction_levels{};  // N·m: c1..cK, each >= 0
   double torque_offset = 0;      // N·m: torque_offset tau0
   double saturation = 0;         // N·m: torque_saturation limit; 0 = off
   double time_delay = 0;         // s: time_delay delay
@@ -75,9 +91,19 @@ struct JointEffects {
   // LuGre: the dry friction acts through bristles (only with stribeck()).
   bool presliding() const { return bristle_stiffness > 0; }
   bool flexible() const { return stiffness > 0; }
+  bool position_friction() const { return friction_knots > 0; }
+  // position_friction's level c(q) at position q (0 when off).
+  double PositionFrictionLevel(double q) const {
+    if (friction_knots == 0) return 0;
+    const double u = std::clamp((q - friction_from) / (friction_to - friction_from), 0.0, 1.0) * (friction_knots - 1);
+    const int k = std::min(static_cast<int>(u), friction_knots - 2);
+    const double a = u - k;
+    const auto i = static_cast<std::size_t>(k);
+    return (1 - a) * friction_levels[i] + a * friction_levels[i + 1];
+  }
   // True when the joint has some friction effect.
   bool friction() const {
-    return viscous > 0 || coulomb_positive > 0 || coulomb_negative > 0 || stribeck();
+    return viscous > 0 || coulomb_positive > 0 || coulomb_negative > 0 || stribeck() || position_friction();
   }
 };
 
@@ -125,20 +151,22 @@ std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects);
 // problem goes into `errors` as "path:line:col: ...".
 void ReadArmEffects(const YAML::Node& list, const std::string& path, ArmModel* model, ErrorList* errors);
 
-// The friction torque (N·m or N, opposing positive qd when positive) of joint j moving
-// at qd: the joint's nominal viscous and Coulomb friction plus its friction effects.
+// The friction torque (N·m or N, opposing positive qd when positive) of joint j at
+// position q moving at qd: the joint's nominal viscous and Coulomb friction plus its
+// friction effects (q matters only to position_friction).
 // At qd = 0 it is 0 (sticking is the simulation loop's business). For a LuGre joint
 // (JointEffects::presliding) it is the steady sliding torque, what the bristles settle
 // to at a constant qd; ArmBristleDeflection follows them along a motion.
-double ArmFrictionTorque(const ArmModel& model, int joint, double qd);
+double ArmFrictionTorque(const ArmModel& model, int joint, double q, double qd);
 
-// The dry friction level g(qd) >= 0 of joint j (N·m or N; no viscous part) moving at
-// speed |qd| in qd's direction (positive when qd == 0): nominal and effect Coulomb
-// levels plus the Stribeck level, the magnitude ArmFrictionTorque's dry part has.
-double ArmDryFrictionLevel(const ArmModel& model, int joint, double qd);
+// The dry friction level g(q, qd) >= 0 of joint j (N·m or N; no viscous part) at
+// position q moving at speed |qd| in qd's direction (positive when qd == 0): nominal and
+// effect Coulomb levels plus the position and Stribeck levels, the magnitude
+// ArmFrictionTorque's dry part has.
+double ArmDryFrictionLevel(const ArmModel& model, int joint, double q, double qd);
 
 // One step of a LuGre joint's bristle deflection z over h seconds, the velocity going
-// linearly from qd0 to qd1 and the rate a = sigma0 |qd0| / g(qd0) held over the step:
+// linearly from qd0 to qd1 and the rate a = sigma0 |qd0| / g(q, qd0) held over the step:
 // z' = qd - a z integrated exactly, z(h) = base + slope qd1 (trapezoidal as a -> 0).
 // A Maxwell-slip element has a = 0 (its slip is the simulation's clamp of the force).
 // Linear in qd1, so a simulation can solve the step's end velocity and friction together;
@@ -148,10 +176,10 @@ struct ArmBristleStep {
   double slope = 0;  // s: dz(h) / dqd1
   double At(double qd1) const { return base + slope * qd1; }
 };
-ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double z0, double qd0, double h);
+ArmBristleStep ArmBristleStepFrom(const ArmModel& model, int joint, double q, double z0, double qd0, double h);
 
-// A Maxwell-slip element (JointEffects::bristle_slip) over a step that starts at speed
-// qd0: the dry levels it slips at either way (both >= 0; `negative` the level's size
+// A Maxwell-slip element (JointEffects::bristle_slip) over a step that starts at
+// position q and speed qd0: the dry levels it slips at either way (both >= 0; `negative` the level's size
 // going negative), and, once it slips at the signed `level`, its deflection from z0 over
 // h seconds, what makes sigma0 z + sigma1 (z - z0) / h equal the level. The simulation
 // and the replay (ArmFrictionAlong) slip by these alike.
@@ -159,11 +187,11 @@ struct ArmSlipLevels {
   double positive = 0, negative = 0;
   double For(double force) const { return force > 0 ? positive : -negative; }  // signed, on force's side
 };
-ArmSlipLevels ArmMaxwellSlipLevels(const ArmModel& model, int joint, double qd0);
+ArmSlipLevels ArmMaxwellSlipLevels(const ArmModel& model, int joint, double q, double qd0);
 double ArmMaxwellSlipDeflection(const JointEffects& effects, double level, double z0, double h);
 
-// The friction torque of joint j along a logged motion (times t, velocities qd, one per
-// row): ArmFrictionTorque at each row, except on a pre-sliding joint
+// The friction torque of joint j along a logged motion (times t, positions q and
+// velocities qd, one per row): ArmFrictionTorque at each row, except on a pre-sliding joint
 // (JointEffects::presliding, with its Stribeck effect as a model file gives them), whose
 // bristles are followed along the rows as the simulation steps them. A row is read as
 // the simulation logs one, its state before a step and the command acting over that
@@ -175,7 +203,8 @@ double ArmMaxwellSlipDeflection(const JointEffects& effects, double level, doubl
 // inverse on such a joint (one physics step per row), where the steady formula would
 // flip the dry friction's sign at every reversal at once. Fewer than 2 rows, or times
 // not matching the velocities: the steady formula.
-Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& qd);
+Eigen::VectorXd ArmFrictionAlong(const ArmModel& model, int joint, const Eigen::VectorXd& t, const Eigen::VectorXd& q,
+                                 const Eigen::VectorXd& qd);
 
 // The rigid bodies the physics engines simulate: `model` with its payload lumped into
 // the last link. The result has no payload effect left.

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 
@@ -285,6 +286,7 @@ TEST(ArmEffects, ModelFileEffectsRoundTripThroughTheList) {
   const ArmModel m = Turntable(
       "  - {name: viscous_friction, joint: 1, b: 0.1}\n"
       "  - {name: coulomb_friction, joint: hinge, c: 0.3}\n"
+      "  - {name: position_friction, joint: 1, from: -1, to: 1, c1: 0.2, c2: 0, c3: 0.1}\n"
       "  - {name: stribeck_friction, joint: 1, c: 0.1, s: 0.2, vs: 0.01}\n"
       "  - {name: torque_offset, joint: 1, tau0: -0.05}\n"
       "  - {name: torque_saturation, joint: 1, limit: 4}\n"
@@ -299,20 +301,79 @@ TEST(ArmEffects, ModelFileEffectsRoundTripThroughTheList) {
   EXPECT_EQ(e.time_delay, 0.002);
   EXPECT_EQ(e.flex_damping, 0.2);
   EXPECT_EQ(m.effects.payload_mass, 0.3);
+  EXPECT_EQ(e.friction_knots, 3);
+  EXPECT_EQ(e.friction_levels[2], 0.1);
   const std::vector<ArmEffect> list = ListArmEffects(m.effects);
-  ASSERT_EQ(list.size(), 8u);
+  ASSERT_EQ(list.size(), 9u);
   std::vector<std::string> names;
   for (const ArmEffect& fx : list) names.push_back(fx.name);
-  EXPECT_EQ(names, ArmEffectNames());
+  // Each joint's effects in the vocabulary's order, position_friction beside the other
+  // dry friction; the payload last.
+  EXPECT_EQ(names, (std::vector<std::string>{"viscous_friction", "coulomb_friction", "position_friction",
+                                             "stribeck_friction", "torque_offset", "torque_saturation", "time_delay",
+                                             "joint_flexibility", "payload"}));
+  std::vector<std::string> vocabulary = ArmEffectNames();
+  std::sort(vocabulary.begin(), vocabulary.end());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, vocabulary);
   ArmEffects rebuilt;
   for (const ArmEffect& fx : list) AddArmEffect(fx, 1, &rebuilt);
-  EXPECT_EQ(ListArmEffects(rebuilt).size(), 8u);
+  EXPECT_EQ(ListArmEffects(rebuilt).size(), 9u);
+  EXPECT_EQ(rebuilt.joint(0).friction_levels[0], 0.2);
   EXPECT_EQ(rebuilt.joint(0).stiffness, 500);
   EXPECT_EQ(rebuilt.payload_mass, 0.3);
   // The friction torque of the model: nominal (none here) plus all three laws.
-  EXPECT_NEAR(ArmFrictionTorque(m, 0, 2.0), 0.1 * 2 + 0.3 + 0.1 + 0.1 * std::exp(-40000.0), 1e-12);
-  EXPECT_NEAR(ArmFrictionTorque(m, 0, -0.01), -0.001 - 0.3 - (0.1 + 0.1 * std::exp(-1.0)), 1e-12);
-  EXPECT_EQ(ArmFrictionTorque(m, 0, 0), 0);
+  EXPECT_NEAR(ArmFrictionTorque(m, 0, 0.0, 2.0), 0.1 * 2 + 0.3 + 0.1 + 0.1 * std::exp(-40000.0), 1e-12);
+  EXPECT_NEAR(ArmFrictionTorque(m, 0, 0.0, -0.01), -0.001 - 0.3 - (0.1 + 0.1 * std::exp(-1.0)), 1e-12);
+  EXPECT_EQ(ArmFrictionTorque(m, 0, 0.0, 0.0), 0);
+}
+
+TEST(ArmEffects, PositionFrictionInterpolatesItsKnotsAndHoldsTheEndsBeyondThem) {
+  const ArmModel m = Turntable(
+      "  - {name: coulomb_friction, joint: 1, c: 0.1}\n"
+      "  - {name: position_friction, joint: 1, from: -1, to: 1, c1: 0.4, c2: 0, c3: 0.2}\n");
+  const JointEffects e = m.effects.joint(0);
+  ASSERT_EQ(e.friction_knots, 3);
+  // Knots at -1, 0 and 1; linear between; the end levels beyond them.
+  EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(-1), 0.4);
+  EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(-0.25), 0.1);
+  EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(0), 0);
+  EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(0.5), 0.1);
+  EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(1), 0.2);
+  EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(-7), 0.4);
+  EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(7), 0.2);
+  // It adds to the joint's other dry friction and opposes the motion either way.
+  const double nominal = m.joints[0].coulomb, viscous = m.joints[0].viscous;
+  EXPECT_NEAR(ArmFrictionTorque(m, 0, -0.25, 2.0), viscous * 2 + nominal + 0.1 + 0.1, 1e-12);
+  EXPECT_NEAR(ArmFrictionTorque(m, 0, 0.5, -2.0), -viscous * 2 - nominal - 0.1 - 0.1, 1e-12);
+  EXPECT_NEAR(ArmDryFrictionLevel(m, 0, -1, 0), nominal + 0.1 + 0.4, 1e-12);
+}
+
+TEST(ArmEffects, PositionFrictionHoldsAJointWhereItsLevelExceedsThePushOnEveryEngine) {
+  // The turntable (no gravity on it, no other friction) pushed by a constant torque
+  // u = 0.1 N·m against a level c(q) = 0.2 q: where the level exceeds the push the joint
+  // stays put. Started at rest at q0 = 0.1, where it is below, it swings about q = 0.5
+  // (I q'' = u - c(q), a harmonic oscillator) and comes to rest at the far end of the
+  // swing, q = 0.9, where the work u (q - q0) equals the friction's 0.1 (q^2 - q0^2) and
+  // the level (0.18) holds it: on every engine alike.
+  const ArmModel m = Turntable("  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0, c2: 0.2}\n");
+  ASSERT_EQ(m.joints[0].coulomb, 0);
+  ASSERT_EQ(m.joints[0].viscous, 0);
+  const double push = 0.1;
+  for (const std::string& backend : AvailableArmEngines()) {
+    ArmSimulation held(m, MakeArmBackend(backend, m));
+    held.Reset(Eigen::VectorXd::Constant(1, 0.8), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Constant(1, push));
+    const ArmTrajectory still = held.Run(
+        501, [&](double, const Eigen::VectorXd&, const Eigen::VectorXd&) { return Eigen::VectorXd::Constant(1, push); });
+    EXPECT_LT(std::abs(still.q(still.q.rows() - 1, 0) - 0.8), 1e-9) << backend << ": it crept where the level holds it";
+
+    ArmSimulation sliding(m, MakeArmBackend(backend, m));
+    sliding.Reset(Eigen::VectorXd::Constant(1, 0.1), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Constant(1, push));
+    const ArmTrajectory run = sliding.Run(
+        4001, [&](double, const Eigen::VectorXd&, const Eigen::VectorXd&) { return Eigen::VectorXd::Constant(1, push); });
+    EXPECT_NEAR(run.q(run.q.rows() - 1, 0), 0.9, 2e-3) << backend << ": not where the work balances";
+    EXPECT_LT(std::abs(run.qd(run.qd.rows() - 1, 0)), 1e-9) << backend << ": it has not come to rest";
+  }
 }
 
 TEST(ArmEffects, BadEffectsAreRefusedWithFileLineAndTheKnownNames) {
@@ -330,7 +391,8 @@ TEST(ArmEffects, BadEffectsAreRefusedWithFileLineAndTheKnownNames) {
   // The effects list starts on line 17 of OneLink's text.
   EXPECT_EQ(error_of("  - {name: viscosity, joint: 1, b: 0.1}\n"),
             path + ":17:12: 'name' in 'effect 1': unknown value 'viscosity' (known: viscous_friction, coulomb_friction, "
-                   "stribeck_friction, torque_offset, torque_saturation, time_delay, joint_flexibility, payload)");
+                   "stribeck_friction, torque_offset, torque_saturation, time_delay, joint_flexibility, payload, "
+                   "position_friction)");
   EXPECT_EQ(error_of("  - {name: viscous_friction, joint: 1, b: 0.1}\n  - {name: viscous_friction, joint: 1, bb: 1}\n"),
             path + ":18:5: missing required key 'b' in 'effect 2'\n" + path +
                 ":18:40: unknown key 'bb' in 'effect 2' (known: b, joint, name)");
@@ -351,6 +413,16 @@ TEST(ArmEffects, BadEffectsAreRefusedWithFileLineAndTheKnownNames) {
                    "'c_neg'");
   EXPECT_EQ(error_of("  - {name: time_delay, joint: 1, delay: 0.01}\n  - {name: time_delay, joint: hinge, delay: 0.02}\n"),
             path + ":18:5: effect 2: effect 'time_delay' given twice for joint 1");
+  EXPECT_EQ(error_of("  - {name: position_friction, joint: 1, from: 0.5, to: 0.5, c1: 0.1, c2: 0.2}\n"),
+            path + ":17:5: effect 1: effect 'position_friction': the last knot 'to' = 0.5 must lie beyond the first, "
+                   "'from' = 0.5");
+  EXPECT_EQ(error_of("  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0.1, c2: 0.2, c4: 0.3}\n"),
+            path + ":17:5: effect 1: effect 'position_friction': 'c4' given without 'c3': the levels are c1, c2, ... "
+                   "in order");
+  EXPECT_EQ(error_of("  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0.1}\n"),
+            path + ":17:5: missing required key 'c2' in 'effect 1'");
+  EXPECT_EQ(error_of("  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0.1, c2: -0.2}\n"),
+            path + ":17:70: 'c2' in 'effect 1': must not be negative, got -0.2");
   EXPECT_EQ(error_of("  name: viscous_friction\n"), path + ":17:3: 'effects': expected a list of effects, each with a 'name'");
   // Programmatic additions say the same without a place.
   ArmEffects fx;
