@@ -44,29 +44,28 @@ std::string DerivativeCutoffChoice::Brief() const {
   return s.str();
 }
 
-namespace {
-
-// The held-out error of `model` on `logs`: per joint, the sum of squared errors and of
-// squared measured torques over the held-out rows in [edge[i], rows - edge[i]).
-double HeldOutError(const ArmModel& model, const std::vector<ArmLog>& logs, const std::vector<int>& edge, double block,
-                    double held_out) {
+double ArmHeldOutTorqueError(const ArmModel& model, const std::vector<ArmLog>& logs, const std::vector<int>& edge,
+                             double block, double held_out, const Eigen::VectorXd& rest_speed) {
   const int n = model.dof();
   Eigen::VectorXd error = Eigen::VectorXd::Zero(n), torque = Eigen::VectorXd::Zero(n);
   for (std::size_t i = 0; i < logs.size(); ++i) {
     const ArmLog& log = logs[i];
     const Eigen::MatrixXd predicted = PredictArmCommands(model, log);
+    Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> rest;
+    if (rest_speed.size() > 0) rest = ArmRestRows(log, rest_speed);
     for (int r = edge[i]; r < log.rows() - edge[i]; ++r) {
       if (!InHeldOutBlock(log.t[r] - log.t[0], block, held_out)) continue;
-      error += (log.tau.row(r) - predicted.row(r)).transpose().cwiseAbs2();
-      torque += log.tau.row(r).transpose().cwiseAbs2();
+      for (int j = 0; j < n; ++j) {
+        if (rest.size() > 0 && rest(r, j)) continue;
+        error[j] += (log.tau(r, j) - predicted(r, j)) * (log.tau(r, j) - predicted(r, j));
+        torque[j] += log.tau(r, j) * log.tau(r, j);
+      }
     }
   }
   double sum = 0;
   for (int j = 0; j < n; ++j) sum += torque[j] > 0 ? error[j] / torque[j] : 0;
   return sum / n;
 }
-
-}  // namespace
 
 DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::vector<ArmLog>& logs,
                                               const DerivativeCutoffOptions& options) {
@@ -102,7 +101,7 @@ DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::
     try {
       const std::vector<ArmLog> fit = ArmFitBlockLogs(derived_logs, block, options.held_out);
       const ArmModel identified = IdentifyArmByLeastSquares(model, fit, identification);
-      error = HeldOutError(identified, derived_logs, edge, block, options.held_out);
+      error = ArmHeldOutTorqueError(identified, derived_logs, edge, block, options.held_out);
     } catch (const InputError& e) {
       char at[48];
       std::snprintf(at, sizeof at, "at %g Hz: ", hz);

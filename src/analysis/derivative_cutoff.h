@@ -47,6 +47,16 @@ struct DerivativeCutoffChoice {
   std::string Brief() const;
 };
 
+// The held-out torque error of `model` on `logs` (PredictArmCommands): per joint the
+// error's mean square over the measured torque's on the rows in held-out blocks of
+// `block` s (InHeldOutBlock with share `held_out`) between log i's first and last
+// edge[i] rows, averaged over joints; with `rest_speed` (per joint) a joint's rows at
+// rest (ArmRestRows) left out, as the least squares leaves them out: there its friction
+// holds it anywhere within the band. What the cut-off (every row) and the position
+// friction's knots (moving rows) are chosen by.
+double ArmHeldOutTorqueError(const ArmModel& model, const std::vector<ArmLog>& logs, const std::vector<int>& edge,
+                             double block, double held_out, const Eigen::VectorXd& rest_speed = {});
+
 // Chooses the cut-off for `logs` (read at any cut-off; each is derived again per
 // candidate, their copies only) and the a-priori `model`. A candidate whose
 // identification fails is skipped (its error NaN); where every one fails, lowest_hz is

@@ -114,6 +114,45 @@ TEST(IdentifyCli, TheCutoffIsChosenFromTheLogsByDefaultAndSaidWhere) {
   EXPECT_NE(testing::ReadText(dir + "/fixed.yaml").find("; derivatives at 15 Hz; "), std::string::npos);
 }
 
+TEST(IdentifyCli, PositionFrictionIsWrittenAsEffectsAndChosenFromTheLogsWithAuto) {
+  // The synthetic RRR arm's friction is the same along the travel: three knots come out
+  // near its constant levels, written as each joint's Coulomb friction (the lowest knot's)
+  // and a position_friction effect with the rest; auto keeps one level.
+  const std::string dir = testing::TempDir("identify_position_friction");
+  const std::string log = WriteLog(dir, "run.csv");
+  const std::string model = SourcePath("models/rrr.yaml");
+  auto three = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                          "/three.yaml --position-friction 3 --validate " + log);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  EXPECT_NE(three.out.find("Coulomb friction along each joint's travel"), std::string::npos) << three.out;
+  const ArmModel truth = HeavierRrr(), written = LoadArmModel(dir + "/three.yaml");
+  for (int j = 0; j < 3; ++j) {
+    const JointEffects e = written.effects.joint(j);
+    ASSERT_EQ(e.friction_knots, 3) << "joint " << j + 1;
+    EXPECT_EQ(*std::min_element(e.friction_levels.begin(), e.friction_levels.begin() + 3), 0) << "joint " << j + 1;
+    for (int k = 0; k < 3; ++k) {
+      const double level = written.joints[static_cast<std::size_t>(j)].coulomb + e.friction_levels[static_cast<std::size_t>(k)];
+      // 1 % torque noise on torques of several N·m: within 0.1 N·m of the true level.
+      EXPECT_NEAR(level, truth.joints[static_cast<std::size_t>(j)].coulomb, 0.1) << "joint " << j + 1 << ", knot " << k + 1;
+    }
+  }
+  auto automatic = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                              "/auto.yaml --position-friction auto");
+  ASSERT_EQ(automatic.exit_code, 0) << automatic.err;
+  EXPECT_NE(automatic.out.find("position friction: one level (held-out torque error per candidate: 0 "),
+            std::string::npos)
+      << automatic.out;
+  EXPECT_NE(testing::ReadText(dir + "/auto.yaml").find("\n# position friction: one level"), std::string::npos);
+  EXPECT_FALSE(LoadArmModel(dir + "/auto.yaml").effects.joint(0).position_friction());
+  for (const char* bad : {"1", "13", "five", "-2"}) {
+    auto r = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/bad.yaml --position-friction " +
+                        bad);
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_NE(r.err.find("knots"), std::string::npos) << bad << ": " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.yaml"));
+}
+
 TEST(IdentifyCli, OffsetsAndHeldOutValidation) {
   const std::string dir = testing::TempDir("identify_validate");
   const std::string log = WriteLog(dir, "run.csv");

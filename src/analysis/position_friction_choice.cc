@@ -1,0 +1,96 @@
+#include "analysis/position_friction_choice.h"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include "analysis/derivative_cutoff.h"
+#include "analysis/held_out_blocks.h"
+#include "core/error.h"
+#include "robots/arm/arm_effects.h"
+
+namespace twinsim {
+
+bool PositionFrictionChoiceOptions::IsValid(std::string* why) const {
+  std::ostringstream s;
+  std::string inner;
+  if (candidates.empty()) {
+    s << "no knots to choose from";
+  } else if (!(tolerance >= 0 && tolerance < 1)) {
+    s << "the tolerance must lie in [0, 1), got " << tolerance;
+  } else if (!(held_out > 0 && held_out < 1)) {
+    s << "the held-out share must lie in (0, 1), got " << held_out;
+  } else if (!(block_seconds >= 0 && std::isfinite(block_seconds))) {
+    s << "the block length must be a non-negative number of seconds, got " << block_seconds;
+  } else if (!identification.IsValid(&inner)) {
+    s << inner;
+  }
+  for (const int k : candidates) {
+    if (s.str().empty() && k != 0 && !(k >= 2 && k <= kMaxFrictionKnots))
+      s << "position friction needs 2 to " << kMaxFrictionKnots << " knots (or 0: none), got " << k;
+  }
+  if (why) *why = s.str();
+  return s.str().empty();
+}
+
+std::string PositionFrictionChoice::Brief() const {
+  std::ostringstream s;
+  s << "position friction: " << (knots > 0 ? std::to_string(knots) + " knots" : std::string("one level"))
+    << " (held-out torque error per candidate:";
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%s %d %.4g", k ? "," : "", candidates[k], held_out_error[k]);
+    s << buf;
+  }
+  s << ")";
+  if (!note.empty()) s << "; " << note;
+  return s.str();
+}
+
+PositionFrictionChoice ChoosePositionFrictionKnots(const ArmModel& model, const std::vector<ArmLog>& logs,
+                                                   const PositionFrictionChoiceOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw InputError(why);
+  PositionFrictionChoice choice;
+  choice.candidates = options.candidates;
+  std::vector<double> durations;
+  std::vector<int> edge;
+  for (const ArmLog& log : logs) {
+    CheckArmLogMatchesModel(log, model);
+    durations.push_back(log.t[log.rows() - 1] - log.t[0]);
+    edge.push_back(log.edge_samples);
+  }
+  const double block = HeldOutBlockSeconds(options.block_seconds, durations);
+  const std::vector<ArmLog> fit = ArmFitBlockLogs(logs, block, options.held_out);
+  WlsIdentificationOptions identification = options.identification;
+  identification.skip_filter_edges = false;  // ArmFitBlockLogs leaves the edges out
+  // Scored where the fit reads friction: on the rows where the joint moves.
+  const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs, identification.rest_share, identification.decimate);
+  double best = std::numeric_limits<double>::infinity();
+  for (const int knots : options.candidates) {
+    identification.position_friction_knots = knots;
+    double error = std::numeric_limits<double>::quiet_NaN();
+    try {
+      error = ArmHeldOutTorqueError(IdentifyArmByLeastSquares(model, fit, identification), logs, edge, block,
+                                    options.held_out, rest_speed);
+    } catch (const InputError& e) {
+      if (choice.note.empty()) choice.note = "with " + std::to_string(knots) + " knots: " + e.what();
+    }
+    choice.held_out_error.push_back(error);
+    if (std::isfinite(error)) best = std::min(best, error);
+  }
+  if (!std::isfinite(best)) {
+    choice.note = "no candidate could be identified, so one level is kept (" + choice.note + ")";
+    return choice;
+  }
+  for (std::size_t k = 0; k < choice.candidates.size(); ++k) {
+    if (choice.held_out_error[k] <= (1 + options.tolerance) * best) {
+      choice.knots = choice.candidates[k];
+      break;
+    }
+  }
+  return choice;
+}
+
+}  // namespace twinsim

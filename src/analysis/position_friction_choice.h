@@ -1,0 +1,51 @@
+// How many knots a joint's Coulomb friction gets along its travel (position_friction,
+// robots/arm/arm_effects.h), chosen from the data as the derivative cut-off is
+// (analysis/derivative_cutoff.h): each candidate's model is identified by least squares
+// on the fit blocks and its torques compared with the measured ones on the held-out
+// blocks where the joints move (at rest a joint's friction holds it anywhere within its
+// band, and the fit leaves those rows out too), on the same rows for every candidate.
+// The fewest knots within `tolerance` of
+// the best held-out error win, one level (no knots) first: a finer map of the friction
+// must predict rows it was not fitted on better, by more than the tolerance, to be kept.
+//
+//   PositionFrictionChoice c = ChoosePositionFrictionKnots(model, logs, {});
+//   options.position_friction_knots = c.knots;
+//   std::printf("%s\n", c.Brief().c_str());
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "identification/wls_identification.h"
+#include "robots/arm/arm_log.h"
+#include "robots/arm/arm_model.h"
+
+namespace twinsim {
+
+struct PositionFrictionChoiceOptions {
+  std::vector<int> candidates = {0, 3, 5, 9};  // knots tried, in order of preference (0: one level)
+  double tolerance = 0.02;   // a candidate within this share of the best held-out error counts as as good
+  double held_out = 0.4;     // share of the blocks held out (InHeldOutBlock)
+  double block_seconds = 0;  // s; 0: HeldOutBlockSeconds' choice
+  WlsIdentificationOptions identification;  // how each candidate's model is identified (its knots replaced)
+  // True when usable; otherwise *why says what is wrong.
+  bool IsValid(std::string* why) const;
+};
+
+struct PositionFrictionChoice {
+  int knots = 0;                       // the choice (0: one level)
+  std::vector<int> candidates;         // in the order tried
+  std::vector<double> held_out_error;  // per candidate (ArmHeldOutTorqueError; NaN where it failed)
+  std::string note;                    // the first candidate whose identification failed, and why
+  // One line: the choice and each candidate's error.
+  std::string Brief() const;
+};
+
+// Chooses the knots for `logs` (derived at their cut-off) and the a-priori `model`. A
+// candidate whose identification fails is skipped (its error NaN); where every one
+// fails, 0 is kept and the note says why. Throws InputError for invalid options or logs
+// whose joint count differs from the model's.
+PositionFrictionChoice ChoosePositionFrictionKnots(const ArmModel& model, const std::vector<ArmLog>& logs,
+                                                   const PositionFrictionChoiceOptions& options);
+
+}  // namespace twinsim
