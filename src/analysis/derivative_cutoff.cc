@@ -13,11 +13,19 @@
 namespace twinsim {
 
 bool DerivativeCutoffOptions::IsValid(std::string* why) const {
+  if (!(lowest_hz > 0 && std::isfinite(lowest_hz))) {
+    std::ostringstream s;
+    s << "the lowest cut-off must be a positive number of Hz, got " << lowest_hz;
+    if (why) *why = s.str();
+    return false;
+  }
+  return HeldOutChoiceOptions::IsValid(why);
+}
+
+bool HeldOutChoiceOptions::IsValid(std::string* why) const {
   std::ostringstream s;
   std::string inner;
-  if (!(lowest_hz > 0 && std::isfinite(lowest_hz))) {
-    s << "the lowest cut-off must be a positive number of Hz, got " << lowest_hz;
-  } else if (!(tolerance >= 0 && tolerance < 1)) {
+  if (!(tolerance >= 0 && tolerance < 1)) {
     s << "the tolerance must lie in [0, 1), got " << tolerance;
   } else if (!(held_out > 0 && held_out < 1)) {
     s << "the held-out share must lie in (0, 1), got " << held_out;
@@ -67,6 +75,16 @@ double ArmHeldOutTorqueError(const ArmModel& model, const std::vector<ArmLog>& l
   return sum / n;
 }
 
+int FirstCandidateNearBest(const std::vector<double>& errors, double tolerance) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const double e : errors)
+    if (std::isfinite(e)) best = std::min(best, e);
+  for (std::size_t k = 0; k < errors.size() && std::isfinite(best); ++k) {
+    if (errors[k] <= (1 + tolerance) * best) return static_cast<int>(k);
+  }
+  return -1;
+}
+
 DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::vector<ArmLog>& logs,
                                               const DerivativeCutoffOptions& options) {
   std::string why;
@@ -90,7 +108,6 @@ DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::
   identification.skip_filter_edges = false;  // ArmFitBlockLogs leaves the edges out
   std::vector<ArmLog> derived_logs = logs;
   std::vector<int> edge;  // per log: the first (lowest) candidate's edges, the widest
-  double best = std::numeric_limits<double>::infinity();
   for (double hz : choice.candidates_hz) {
     for (ArmLog& log : derived_logs) DeriveArmLog({hz}, &log);
     // Every candidate is scored on the rows the lowest cut-off leaves.
@@ -108,19 +125,10 @@ DerivativeCutoffChoice ChooseDerivativeCutoff(const ArmModel& model, const std::
       if (choice.note.empty()) choice.note = at + std::string(e.what());
     }
     choice.held_out_error.push_back(error);
-    if (std::isfinite(error)) best = std::min(best, error);
   }
-  choice.cutoff_hz = options.lowest_hz;
-  if (!std::isfinite(best)) {
-    choice.note = "no candidate could be identified, so the lowest is kept (" + choice.note + ")";
-    return choice;
-  }
-  for (std::size_t k = 0; k < choice.candidates_hz.size(); ++k) {
-    if (choice.held_out_error[k] <= (1 + options.tolerance) * best) {
-      choice.cutoff_hz = choice.candidates_hz[k];
-      break;
-    }
-  }
+  const int chosen = FirstCandidateNearBest(choice.held_out_error, options.tolerance);
+  choice.cutoff_hz = chosen >= 0 ? choice.candidates_hz[static_cast<std::size_t>(chosen)] : options.lowest_hz;
+  if (chosen < 0) choice.note = "no candidate could be identified, so the lowest is kept (" + choice.note + ")";
   return choice;
 }
 

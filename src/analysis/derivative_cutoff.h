@@ -26,12 +26,19 @@
 
 namespace twinsim {
 
-struct DerivativeCutoffOptions {
-  double lowest_hz = ArmLogOptions{}.cutoff_hz;  // Hz, the first candidate (the default cut-off)
+// How a choice among candidates is made on held-out blocks (the cut-off here, the
+// position friction's knots in analysis/position_friction_choice.h).
+struct HeldOutChoiceOptions {
   double tolerance = 0.05;   // a candidate within this share of the best held-out error counts as as good
   double held_out = 0.4;     // share of the blocks held out (InHeldOutBlock)
   double block_seconds = 0;  // s; 0: HeldOutBlockSeconds' choice
   WlsIdentificationOptions identification;  // how each candidate's model is identified
+  // True when usable; otherwise *why says what is wrong.
+  bool IsValid(std::string* why) const;
+};
+
+struct DerivativeCutoffOptions : HeldOutChoiceOptions {
+  double lowest_hz = ArmLogOptions{}.cutoff_hz;  // Hz, the first candidate (the default cut-off)
   // True when usable; otherwise *why says what is wrong.
   bool IsValid(std::string* why) const;
 };
@@ -56,6 +63,11 @@ struct DerivativeCutoffChoice {
 // friction's knots (moving rows) are chosen by.
 double ArmHeldOutTorqueError(const ArmModel& model, const std::vector<ArmLog>& logs, const std::vector<int>& edge,
                              double block, double held_out, const Eigen::VectorXd& rest_speed = {});
+
+// The first of candidates' held-out `errors` (in their order of preference) within
+// (1 + tolerance) times the least finite one; -1 when none is finite (NaN: a candidate
+// that could not be identified).
+int FirstCandidateNearBest(const std::vector<double>& errors, double tolerance);
 
 // Chooses the cut-off for `logs` (read at any cut-off; each is derived again per
 // candidate, their copies only) and the a-priori `model`. A candidate whose

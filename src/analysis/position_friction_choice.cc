@@ -5,7 +5,6 @@
 #include <limits>
 #include <sstream>
 
-#include "analysis/derivative_cutoff.h"
 #include "analysis/held_out_blocks.h"
 #include "core/error.h"
 #include "robots/arm/arm_effects.h"
@@ -14,24 +13,16 @@ namespace twinsim {
 
 bool PositionFrictionChoiceOptions::IsValid(std::string* why) const {
   std::ostringstream s;
-  std::string inner;
-  if (candidates.empty()) {
-    s << "no knots to choose from";
-  } else if (!(tolerance >= 0 && tolerance < 1)) {
-    s << "the tolerance must lie in [0, 1), got " << tolerance;
-  } else if (!(held_out > 0 && held_out < 1)) {
-    s << "the held-out share must lie in (0, 1), got " << held_out;
-  } else if (!(block_seconds >= 0 && std::isfinite(block_seconds))) {
-    s << "the block length must be a non-negative number of seconds, got " << block_seconds;
-  } else if (!identification.IsValid(&inner)) {
-    s << inner;
-  }
+  if (candidates.empty()) s << "no knots to choose from";
   for (const int k : candidates) {
     if (s.str().empty() && k != 0 && !(k >= 2 && k <= kMaxFrictionKnots))
       s << "position friction needs 2 to " << kMaxFrictionKnots << " knots (or 0: none), got " << k;
   }
-  if (why) *why = s.str();
-  return s.str().empty();
+  if (!s.str().empty()) {
+    if (why) *why = s.str();
+    return false;
+  }
+  return HeldOutChoiceOptions::IsValid(why);
 }
 
 std::string PositionFrictionChoice::Brief() const {
@@ -67,7 +58,6 @@ PositionFrictionChoice ChoosePositionFrictionKnots(const ArmModel& model, const 
   identification.skip_filter_edges = false;  // ArmFitBlockLogs leaves the edges out
   // Scored where the fit reads friction: on the rows where the joint moves.
   const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs, identification.rest_share, identification.decimate);
-  double best = std::numeric_limits<double>::infinity();
   for (const int knots : options.candidates) {
     identification.position_friction_knots = knots;
     double error = std::numeric_limits<double>::quiet_NaN();
@@ -78,17 +68,12 @@ PositionFrictionChoice ChoosePositionFrictionKnots(const ArmModel& model, const 
       if (choice.note.empty()) choice.note = "with " + std::to_string(knots) + " knots: " + e.what();
     }
     choice.held_out_error.push_back(error);
-    if (std::isfinite(error)) best = std::min(best, error);
   }
-  if (!std::isfinite(best)) {
+  const int chosen = FirstCandidateNearBest(choice.held_out_error, options.tolerance);
+  if (chosen >= 0) {
+    choice.knots = choice.candidates[static_cast<std::size_t>(chosen)];
+  } else {
     choice.note = "no candidate could be identified, so one level is kept (" + choice.note + ")";
-    return choice;
-  }
-  for (std::size_t k = 0; k < choice.candidates.size(); ++k) {
-    if (choice.held_out_error[k] <= (1 + options.tolerance) * best) {
-      choice.knots = choice.candidates[k];
-      break;
-    }
   }
   return choice;
 }

@@ -16,18 +16,18 @@
 #include <string>
 #include <vector>
 
+#include "analysis/derivative_cutoff.h"
 #include "identification/wls_identification.h"
 #include "robots/arm/arm_log.h"
 #include "robots/arm/arm_model.h"
 
 namespace twinsim {
 
-struct PositionFrictionChoiceOptions {
+// The held-out blocks and the identification as the cut-off's (its knots replaced by each
+// candidate's), a tolerance of 2 %.
+struct PositionFrictionChoiceOptions : HeldOutChoiceOptions {
+  PositionFrictionChoiceOptions() { tolerance = 0.02; }
   std::vector<int> candidates = {0, 3, 5, 9};  // knots tried, in order of preference (0: one level)
-  double tolerance = 0.02;   // a candidate within this share of the best held-out error counts as as good
-  double held_out = 0.4;     // share of the blocks held out (InHeldOutBlock)
-  double block_seconds = 0;  // s; 0: HeldOutBlockSeconds' choice
-  WlsIdentificationOptions identification;  // how each candidate's model is identified (its knots replaced)
   // True when usable; otherwise *why says what is wrong.
   bool IsValid(std::string* why) const;
 };
