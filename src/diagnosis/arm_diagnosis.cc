@@ -54,6 +54,14 @@ constexpr double kBristleMargin = 0.1;
 // deflect micrometres to a milliradian or so before they slide; softer "bristles" stand
 // for something else (a flexible joint's spring, on the plants that have one).
 constexpr double kMaxBristleDeflection = 0.01;
+// position_friction: the knots a candidate gets, evenly over the positions the logs
+// visit, and the share of its joint's fit-row squared residual it must remove beyond the
+// best constant level (the levels one level, a Coulomb friction) to be kept: it nests
+// that level, so a criterion's parameter count is no margin on thousands of rows.
+constexpr int kPositionFrictionKnots = 5;
+constexpr double kPositionFrictionMargin = 0.1;
+// rad or m: a joint that moves less than this gets no position_friction candidate.
+constexpr double kPositionFrictionSpan = 1e-3;
 // The shortest bandwidth of the long-run variance (statistics.h): a quarter second holds
 // a motion's stop or reversal (the events where friction and delays show).
 constexpr double kChunkSeconds = 0.25;
@@ -97,7 +105,9 @@ double ParameterOr(const TrialEffect& e, const char* key, double fallback = 0) {
 }
 
 // An effect's parameters as variables (log scale where a parameter spans decades).
-ParameterMap FitVariablesOf(const TrialEffect& e) {
+// `floor`: the least a position_friction level may be (minus the joint's nominal Coulomb
+// friction, which it may take away from).
+ParameterMap FitVariablesOf(const TrialEffect& e, double floor) {
   ParameterMap m;
   auto add = [&](double x, double lo, double hi) {
     m.x.push_back(std::clamp(x, lo, hi));
@@ -116,6 +126,9 @@ ParameterMap FitVariablesOf(const TrialEffect& e) {
     if (e.parameters.count("sigma0")) {
       add(std::log(ParameterOr(e, "sigma0")), std::log(kMinBristleStiffness), std::log(kMaxBristleStiffness));
     }
+  } else if (e.name == "position_friction") {
+    for (int k = 1; e.parameters.count("c" + std::to_string(k)); ++k)
+      add(ParameterOr(e, ("c" + std::to_string(k)).c_str()), floor, kInf);
   } else if (e.name == "torque_offset") {
     add(ParameterOr(e, "tau0"), -kInf, kInf);
   } else if (e.name == "torque_saturation") {
@@ -148,11 +161,16 @@ void SetBristles(double sigma0, double inertia, std::map<std::string, double>* p
 // Ceres keeps its iterates within the bounds, but its numeric derivatives step across them
 // (a friction level starting at 0 is tried at -1e-4), and an evaluation the effect's
 // checks refuse would end the fit at its start. `inertia`: the effect's joint's, for
-// bristles.
-void SetFromFitVariables(const double* x, double inertia, TrialEffect* e) {
+// bristles; `floor`: FitVariablesOf's, for position_friction's levels.
+void SetFromFitVariables(const double* x, double inertia, double floor, TrialEffect* e) {
   auto& p = e->parameters;
   auto positive = [](double v, double least) { return std::max(v, least); };
   const bool bristles = p.count("sigma0") > 0;
+  if (e->name == "position_friction") {
+    // The knots stay where the guess put them; only their levels are variables.
+    for (int k = 1; p.count("c" + std::to_string(k)); ++k) p["c" + std::to_string(k)] = positive(x[k - 1], floor);
+    return;
+  }
   p.clear();
   if (e->name == "viscous_friction") {
     p["b"] = positive(x[0], 0);
@@ -189,7 +207,7 @@ Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& a, const Eigen::VectorX
 
 // The fit rows of the residual the other effects leave, with the per-row features the starting guesses need.
 struct GuessRows {
-  std::vector<double> r, qd, qdd, needed_dd;
+  std::vector<double> r, q, qd, qdd, needed_dd;
   std::vector<std::array<double, 4>> payload_rows;  // per joint row: m, mcx, mcy, mcz columns
   std::vector<double> payload_r;
 };
@@ -233,6 +251,12 @@ class ArmProblem : public DiagnosisProblem {
     }
     noise_ = NoiseFloor();
     joint_inertia_ = MassMatrix(bodies, logs.front().q.row(0).transpose()).diagonal();
+    q_lo_ = Eigen::VectorXd::Constant(n_, kInf);
+    q_hi_ = Eigen::VectorXd::Constant(n_, -kInf);
+    for (const ArmLog& log : logs) {
+      q_lo_ = q_lo_.cwiseMin(log.q.colwise().minCoeff().transpose());
+      q_hi_ = q_hi_.cwiseMax(log.q.colwise().maxCoeff().transpose());
+    }
     chunk_rows_ = std::max(1, static_cast<int>(std::lround(kChunkSeconds / logs.front().sample_period)));
     sample_period_ = logs.front().sample_period;
     bandwidth_ = kInf;
@@ -356,10 +380,9 @@ class ArmProblem : public DiagnosisProblem {
     std::vector<TrialEffect> out;
     for (int j = 0; j < n_; ++j) {
       for (const std::string& name : ArmEffectNames()) {
-        // position_friction is identify's (--position-friction): its levels need the
-        // joint's travel split into knots, which the diagnosis's one-parameter-set search
-        // does not choose.
-        if (name == "payload" || name == "position_friction" || taken.count({name, j})) continue;
+        if (name == "payload" || taken.count({name, j})) continue;
+        // Friction along the travel needs a travel to map.
+        if (name == "position_friction" && !(q_hi_[j] - q_lo_[j] >= kPositionFrictionSpan)) continue;
         out.push_back({name, j, {}});
       }
     }
@@ -368,15 +391,17 @@ class ArmProblem : public DiagnosisProblem {
   }
 
   std::vector<TrialEffect> Fit(std::vector<TrialEffect> effects, const std::vector<int>& free) const override {
-    std::vector<int> fresh_stribeck;
+    std::vector<int> fresh_stribeck, fresh_position;
     for (int i : free) {
       TrialEffect& e = effects[static_cast<std::size_t>(i)];
       if (!e.parameters.empty()) continue;
       if (e.name == "stribeck_friction") fresh_stribeck.push_back(i);
+      if (e.name == "position_friction") fresh_position.push_back(i);
       InitialGuess(&effects, i);
     }
     Refine(&effects, free);
     for (int i : fresh_stribeck) TryBristles(&effects, free, i);
+    for (int i : fresh_position) CheckLevelsVary(effects, i);
     for (int i : free) CheckResolved(effects[static_cast<std::size_t>(i)]);  // a joint refit too
     return effects;
   }
@@ -393,6 +418,9 @@ class ArmProblem : public DiagnosisProblem {
   // The joint's inertia on itself (M_jj at the first log's first posture; 0 for j < 0):
   // what the bristles' damping is critical against.
   double JointInertia(int j) const { return j >= 0 ? joint_inertia_[j] : 0.0; }
+  // The least a position_friction level of joint j may be: minus the nominal's Coulomb
+  // friction there, so that the joint's dry friction never turns negative (0 for j < 0).
+  double LevelFloor(int j) const { return j >= 0 ? -nominal_.joints[static_cast<std::size_t>(j)].coulomb : 0.0; }
 
   std::string Signature(const TrialEffect& e) const override;
   std::vector<double> FitResiduals(const std::vector<TrialEffect>& effects) const override {
@@ -428,7 +456,8 @@ class ArmProblem : public DiagnosisProblem {
   }
   // The bristles' damping follows their stiffness (SetBristles); `maxwell` names the element.
   bool Derived(const TrialEffect& e, const std::string& key) const override {
-    return e.name == "stribeck_friction" && (key == "sigma1" || key == "maxwell");
+    return (e.name == "stribeck_friction" && (key == "sigma1" || key == "maxwell")) ||
+           (e.name == "position_friction" && (key == "from" || key == "to"));  // the knots: the logs' travel
   }
   // A joint's effect changes that joint's command alone (Residual): scored on it.
   int ChannelOf(const TrialEffect& e) const override { return e.joint; }
@@ -555,6 +584,10 @@ class ArmProblem : public DiagnosisProblem {
   // they remove kBristleMargin of its joint's fit-row squared residual beyond it and do
   // no worse on its selection rows.
   void TryBristles(std::vector<TrialEffect>* effects, const std::vector<int>& free, int i) const;
+  // Throws CheckFailed unless the position_friction effects[i], just fitted, removes
+  // kPositionFrictionMargin of its joint's fit-row squared residual beyond its best
+  // single level (every knot at the constant the other effects' residual asks for).
+  void CheckLevelsVary(const std::vector<TrialEffect>& effects, int i) const;
 
   ArmModel nominal_;
   int n_;
@@ -564,6 +597,7 @@ class ArmProblem : public DiagnosisProblem {
   bool payload_candidate_ = true;
   std::vector<ArmLogData> data_;
   Eigen::VectorXd joint_inertia_;  // per joint, M_jj at the first log's first row (JointInertia)
+  Eigen::VectorXd q_lo_, q_hi_;    // per joint, the least and greatest position over the logs
   // Per joint, the logs' torque noise (NoiseFloor): fixed, so an effect that fits the
   // noise cannot lower the floor it is judged against.
   std::vector<double> noise_;
@@ -584,6 +618,23 @@ void GuessCoulombFriction(const std::vector<double>& qd, const Eigen::Map<const 
   const Eigen::VectorXd c = SolveLeastSquares(a, rv);
   (*p)["c_pos"] = std::max(0.0, c[0]);
   (*p)["c_neg"] = std::max(0.0, c[1]);
+}
+
+// Friction along the travel: kPositionFrictionKnots knots from `from` to `to`, their
+// levels by least squares on sign(qd) times each knot's weight (at least `floor`).
+void GuessPositionFriction(const GuessRows& fit, double from, double to, double floor,
+                           const Eigen::Map<const Eigen::VectorXd>& rv, std::map<std::string, double>* p) {
+  const auto rows = static_cast<Eigen::Index>(fit.qd.size());
+  Eigen::MatrixXd a(rows, kPositionFrictionKnots);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const double v = fit.qd[static_cast<std::size_t>(r)], sign = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+    for (int k = 0; k < kPositionFrictionKnots; ++k)
+      a(r, k) = sign * FrictionKnotWeight(from, to, kPositionFrictionKnots, k, fit.q[static_cast<std::size_t>(r)]);
+  }
+  const Eigen::VectorXd c = SolveLeastSquares(a, rv);
+  (*p)["from"] = from;
+  (*p)["to"] = to;
+  for (int k = 0; k < kPositionFrictionKnots; ++k) (*p)["c" + std::to_string(k + 1)] = std::max(floor, c[k]);
 }
 
 // Stribeck friction's c, s and vs: least squares for each of a grid of Stribeck speeds, the best kept.
@@ -639,6 +690,7 @@ GuessRows ArmProblem::GuessRowsFor(const ArmModel& base, const TrialEffect& e) c
       for (int row = d.first; row < d.last; row += stride_) {
         if (d.kind[static_cast<std::size_t>(row)] != RowKind::kFit) continue;
         fit.r.push_back(res[row]);
+        fit.q.push_back(d.log->q(row, j));
         fit.qd.push_back(d.log->qd(row, j));
         fit.qdd.push_back(d.log->qdd(row, j));
         if (ndd.size()) fit.needed_dd.push_back(ndd[row]);
@@ -756,6 +808,8 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
     GuessCoulombFriction(fit.qd, rv, &p);
   } else if (e.name == "stribeck_friction") {
     GuessStribeckFriction(fit.qd, rv, &p);
+  } else if (e.name == "position_friction") {
+    GuessPositionFriction(fit, q_lo_[e.joint], q_hi_[e.joint], LevelFloor(e.joint), rv, &p);
   } else if (e.name == "torque_offset") {
     // The joint receives the command plus tau0: the residual rises by it.
     p["tau0"] = rows ? -rv.mean() : 0.0;
@@ -779,7 +833,7 @@ class FitFunctor {
     std::vector<TrialEffect> trial = effects_;
     for (std::size_t k = 0; k < free_.size(); ++k) {
       TrialEffect& e = trial[static_cast<std::size_t>(free_[k])];
-      SetFromFitVariables(x[k], problem_->JointInertia(e.joint), &e);
+      SetFromFitVariables(x[k], problem_->JointInertia(e.joint), problem_->LevelFloor(e.joint), &e);
     }
     Eigen::VectorXd r;
     try {
@@ -805,7 +859,8 @@ void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int
   std::vector<ParameterMap> maps;
   std::vector<int> sizes;
   for (int i : free) {
-    maps.push_back(FitVariablesOf((*effects)[static_cast<std::size_t>(i)]));
+    const TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+    maps.push_back(FitVariablesOf(e, LevelFloor(e.joint)));
     sizes.push_back(static_cast<int>(maps.back().x.size()));
   }
   ceres::NumericDiffOptions diff;
@@ -834,9 +889,34 @@ void ArmProblem::Refine(std::vector<TrialEffect>* effects, const std::vector<int
   ceres::Solve(options, &problem, &summary);
   for (std::size_t k = 0; k < free.size(); ++k) {
     TrialEffect& e = (*effects)[static_cast<std::size_t>(free[k])];
-    SetFromFitVariables(maps[k].x.data(), JointInertia(e.joint), &e);
+    SetFromFitVariables(maps[k].x.data(), JointInertia(e.joint), LevelFloor(e.joint), &e);
   }
   Build(*effects);  // throws InputError when Ceres left the valid range
+}
+
+void ArmProblem::CheckLevelsVary(const std::vector<TrialEffect>& effects, int i) const {
+  const TrialEffect& e = effects[static_cast<std::size_t>(i)];
+  std::vector<TrialEffect> others = effects;
+  others.erase(others.begin() + i);
+  const GuessRows fit = GuessRowsFor(Build(others), e);
+  double along = 0, across = 0;
+  for (std::size_t r = 0; r < fit.r.size(); ++r) {
+    const double sign = fit.qd[r] > 0 ? 1.0 : (fit.qd[r] < 0 ? -1.0 : 0.0);
+    along += sign * fit.r[r];
+    across += sign * sign;
+  }
+  const double level = std::max(LevelFloor(e.joint), across > 0 ? along / across : 0.0);
+  std::vector<TrialEffect> one = effects;
+  for (int k = 1; one[static_cast<std::size_t>(i)].parameters.count("c" + std::to_string(k)); ++k)
+    one[static_cast<std::size_t>(i)].parameters["c" + std::to_string(k)] = level;
+  const double varied = Cost(effects, {e.joint}), flat = Cost(one, {e.joint});
+  if (varied <= (1 - kPositionFrictionMargin) * flat) return;
+  char msg[240];
+  std::snprintf(msg, sizeof msg,
+                "its levels remove %.3g %% of the joint's fit-row cost beyond one level of %.3g, under the %g %% a "
+                "map of the travel must: Coulomb friction by another name",
+                flat > 0 ? 100 * (1 - varied / flat) : 0.0, level, 100 * kPositionFrictionMargin);
+  throw CheckFailed(msg);
 }
 
 void ArmProblem::TryBristles(std::vector<TrialEffect>* effects, const std::vector<int>& free, int i) const {

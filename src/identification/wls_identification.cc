@@ -181,8 +181,7 @@ struct ExtraColumns {
     const int k = knot[static_cast<std::size_t>(c)];
     if (k < 0) return 1;
     const int j = joint[static_cast<std::size_t>(c)];
-    const double u = std::clamp((q - from[j]) / (to[j] - from[j]), 0.0, 1.0) * (knots - 1);
-    return Sign(qd) * std::max(0.0, 1 - std::abs(u - k));
+    return Sign(qd) * FrictionKnotWeight(from[j], to[j], knots, k, q);
   }
 };
 

@@ -23,6 +23,7 @@
 #include "analysis/emps_like_plant.h"
 #include "analysis/position_friction_choice.h"
 #include "diagnosis/arm_diagnosis.h"
+#include "diagnosis/diagnosis_report.h"
 #include "diagnosis/mujoco_arm_plant.h"
 #include "identification/wls_identification.h"
 #include "robots/arm/arm_log.h"
@@ -279,6 +280,56 @@ TEST(EmpsLikeDrive, DiagnoseNamesBothFrictionsAtTheChosenCutoff) {
     EXPECT_NEAR(coulomb, truth.coulomb, 0.15 * truth.coulomb);
     EXPECT_NEAR(asymmetry, -truth.offset, 0.25 * std::abs(truth.offset));
     EXPECT_LT(report.gap_after, 0.1 * report.gap_before);
+    EXPECT_EQ(named.find("position_friction"), std::string::npos) << "a map of a friction that is one level";
+  }
+}
+
+// Issue 65: the diagnosis names friction that varies along the travel. The MuJoCo cart
+// with a screw tighter at one end (30.6 N at the travel's start, 10.2 N at its end),
+// identified as a user would first (least squares, one Coulomb level, offsets) and that
+// model diagnosed: position_friction on the axis, the identified level plus its levels
+// near the plant's. (From the 90 kg model without friction the map is drawn into the
+// mass error: the cart accelerates at the ends of its travel, so a map of sign(q̇) there
+// carries m q̈, and neither it nor a payload is significant after the Coulomb level.)
+TEST(EmpsLikeDrive, DiagnoseNamesFrictionThatVariesAlongTheTravel) {
+  if (!testing::MujocoAvailable()) GTEST_SKIP() << "built without MuJoCo";
+  testing::EmpsLikeRecording recording;
+  recording.truth.coulomb_wave = 0.5;
+  for (std::uint64_t seed : {1, 3}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::string csv = testing::RecordEmpsLike(seed, recording);
+    const ArmModel identified = Identify(csv, 0, WlsIdentificationOptions{}.rest_share).model;
+    std::vector<ArmLog> logs = {ParseArmLog(csv, "estimation.csv")};
+    DeriveAtChosenCutoff(identified, &logs, {});
+    const DiagnosisReport report = DiagnoseArm(identified, logs, DiagnosisOptions{});
+    std::string named;
+    const DiagnosedEffect* map = nullptr;
+    for (const DiagnosedEffect& e : report.effects) {
+      named += " " + e.name;
+      if (e.name == "position_friction") map = &e;
+    }
+    std::printf("seed %d: named%s; test-row gap %.2f -> %.2f\n", static_cast<int>(seed), named.c_str(),
+                report.gap_before, report.gap_after);
+    for (const DiagnosisCandidate& c : report.candidates) {
+      if (c.name != "position_friction" && c.name != "coulomb_friction") continue;
+      std::printf("  round %d %s %.1f %%:", c.round, c.name.c_str(), 100 * c.reduction);
+      for (const auto& [k, v] : c.parameters) std::printf(" %s %.3g", k.c_str(), v);
+      std::printf("\n");
+    }
+    ASSERT_NE(map, nullptr) << named << "\n" << FormatDiagnosisTable(report);
+    const double from = map->parameters.at("from"), to = map->parameters.at("to");
+    double worst = 0;
+    for (int k = 0; k < 5; ++k) {
+      const double at = from + (to - from) * k / 4;
+      const double level = identified.joints[0].coulomb + map->parameters.at("c" + std::to_string(k + 1));
+      const double truth = testing::EmpsLikeFrictionLoss(recording.truth, at);
+      std::printf("  knot %d at %.3f m: %.2f N (true %.2f)\n", k + 1, at, level, truth);
+      worst = std::max(worst, std::abs(level - truth));
+    }
+    // Measured (seeds 1 / 3): every knot within 1.3 N; the test-row gap 2.58 -> 1.92 /
+    // 3.53 -> 1.27 N (noise floor about 1.1 N; a time delay named beside it).
+    EXPECT_LT(worst, 2.5);  // N, of levels from 10 to 31 N
+    EXPECT_LT(report.gap_after, 0.8 * report.gap_before);
   }
 }
 

@@ -41,7 +41,7 @@ std::vector<ParameterSpec> PositionFrictionSpecs() {
   }();
   std::vector<ParameterSpec> specs = {{"from", true, InRange(-1e6, 1e6)}, {"to", true, InRange(-1e6, 1e6)}};
   for (int k = 0; k < kMaxFrictionKnots; ++k)
-    specs.push_back({level_keys[static_cast<std::size_t>(k)].c_str(), k < 2, NonNegative(1e7)});
+    specs.push_back({level_keys[static_cast<std::size_t>(k)].c_str(), k < 2, InRange(-1e7, 1e7)});
   return specs;
 }
 

@@ -18,7 +18,9 @@
 //                       c(q) through the levels c1..cK at K evenly spaced positions from
 //                       `from` to `to`, linear between them, c1 before `from` and cK
 //                       beyond `to`; it adds to the Coulomb levels and, like them, holds
-//                       a joint at rest and sets where bristles slip
+//                       a joint at rest and sets where bristles slip. A level may be
+//                       negative where the joint's Coulomb friction covers it: the total
+//                       must not be (ArmModel::Validate)
 //   stribeck_friction   tau_f = (c + (s - c) exp(-(qd/vs)^2)) sign(qd), breaking away at s;
 //                       with sigma0 > 0 the LuGre model whose steady state that is
 //                       (Canudas de Wit et al. 1995): the joint's whole dry friction
@@ -47,6 +49,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -66,6 +69,15 @@ class ErrorList;
 // allocating: it is read for every joint of every sample of a fit).
 inline constexpr int kMaxFrictionKnots = 12;
 
+// The weight of knot k (0-based) of `knots` evenly spaced from `from` to `to` at
+// position q: the hat that is 1 at the knot and 0 at its neighbours, linear between,
+// with q held within [from, to] (the end knots' weights 1 beyond them). The weights sum
+// to 1 at every q: position_friction's c(q) = sum_k c_k FrictionKnotWeight(...).
+inline double FrictionKnotWeight(double from, double to, int knots, int k, double q) {
+  const double u = std::clamp((q - from) / (to - from), 0.0, 1.0) * (knots - 1);
+  return std::max(0.0, 1 - std::abs(u - k));
+}
+
 struct JointEffects {
   double viscous = 0;            // N·m·s/rad: viscous_friction b
   double coulomb_positive = 0;   // N·m: coulomb_friction while qd > 0 (c_pos)
@@ -79,7 +91,7 @@ struct JointEffects {
   int friction_knots = 0;        // position_friction: K levels c1..cK; 0 = off
   double friction_from = 0;      // rad or m: position_friction's first knot
   double friction_to = 0;        // rad or m: its last knot (> from)
-  std::array<double, kMaxFrictionKnots> friction_levels{};  // N·m: c1..cK, each >= 0
+  std::array<double, kMaxFrictionKnots> friction_levels{};  // N·m: c1..cK (the joint's total level >= 0)
   double torque_offset = 0;      // N·m: torque_offset tau0
   double saturation = 0;         // N·m: torque_saturation limit; 0 = off
   double time_delay = 0;         // s: time_delay delay

@@ -87,6 +87,20 @@ std::string ArmModel::Validate() const {
     non_negative(j.effort_limit, "effort limit");
     non_negative(j.viscous, "viscous friction");
     non_negative(j.coulomb, "Coulomb friction");
+    // position_friction's levels may dip below zero where the joint's other Coulomb
+    // friction covers them: its dry level must not go negative anywhere along the travel
+    // (linear between the knots, so at a knot if anywhere).
+    const JointEffects e = effects.joint(static_cast<int>(k));
+    for (int knot = 0; knot < e.friction_knots; ++knot) {
+      const double level =
+          j.coulomb + std::min(e.coulomb_positive, e.coulomb_negative) + e.friction_levels[static_cast<std::size_t>(knot)];
+      if (level >= 0) continue;
+      s.str("");
+      s << label << ": its dry friction would be " << level << " at position_friction's knot " << knot + 1
+        << " (the joint's Coulomb friction plus c" << knot + 1 << "): it must not be negative";
+      problems.push_back(s.str());
+      break;
+    }
     CheckLink(j.child, label + ", link '" + j.child.name + "'", &problems);
   }
   std::string all;

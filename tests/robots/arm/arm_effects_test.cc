@@ -421,8 +421,13 @@ TEST(ArmEffects, BadEffectsAreRefusedWithFileLineAndTheKnownNames) {
                    "in order");
   EXPECT_EQ(error_of("  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0.1}\n"),
             path + ":17:5: missing required key 'c2' in 'effect 1'");
+  // A level may take away from the joint's Coulomb friction, not more.
   EXPECT_EQ(error_of("  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0.1, c2: -0.2}\n"),
-            path + ":17:70: 'c2' in 'effect 1': must not be negative, got -0.2");
+            path + ": joint 1 'hinge': its dry friction would be -0.2 at position_friction's knot 2 (the joint's "
+                   "Coulomb friction plus c2): it must not be negative");
+  EXPECT_EQ(error_of("  - {name: coulomb_friction, joint: 1, c: 0.3}\n"
+                     "  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0.1, c2: -0.2}\n"),
+            "no error");
   EXPECT_EQ(error_of("  name: viscous_friction\n"), path + ":17:3: 'effects': expected a list of effects, each with a 'name'");
   // Programmatic additions say the same without a place.
   ArmEffects fx;
