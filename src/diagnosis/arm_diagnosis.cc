@@ -485,6 +485,19 @@ class ArmProblem : public DiagnosisProblem {
         std::snprintf(msg, sizeof msg, "its resonance (%.3g Hz) lies above the %.3g Hz the logs' motion resolves", f, bandwidth_);
         throw CheckFailed(msg);
       }
+    } else if (e.name == "position_friction") {
+      // A level on its floor takes the joint's whole Coulomb friction away there: the
+      // map stands in for something that holds the joint less (a flexible joint's
+      // spring, on the plant that has one), not for friction the logs measure.
+      const double floor = LevelFloor(e.joint);
+      for (int k = 1; e.parameters.count("c" + std::to_string(k)); ++k) {
+        if (e.parameters.at("c" + std::to_string(k)) > floor + 1e-9 * std::max(1.0, std::abs(floor))) continue;
+        std::snprintf(msg, sizeof msg,
+                      "its level at knot %d ends at %.3g, leaving the joint no dry friction there: friction taken away "
+                      "is no map of it",
+                      k, floor);
+        throw CheckFailed(msg);
+      }
     } else if (e.name == "time_delay") {
       if (e.parameters.at("delay") < 0.5 * sample_period_) {
         std::snprintf(msg, sizeof msg, "%.3g ms is below half a sample", 1000 * e.parameters.at("delay"));
