@@ -333,7 +333,8 @@ JointSystems AccumulateRows(const ArmModel& a_priori, const BaseParameters& base
       if (link || friction) columns[static_cast<std::size_t>(j)].push_back(k);
     }
   }
-  for (int c = 0; c < extras.size(); ++c) columns[static_cast<std::size_t>(extras.joint[static_cast<std::size_t>(c)])].push_back(r + c);
+  for (int c = 0; c < extras.size(); ++c)
+    columns[static_cast<std::size_t>(extras.joint[static_cast<std::size_t>(c)])].push_back(r + c);
   std::vector<TriangularAccumulator> factors;
   for (int j = 0; j < n; ++j) factors.emplace_back(static_cast<int>(columns[static_cast<std::size_t>(j)].size()) + 1, 1024);
 
@@ -610,7 +611,8 @@ void SetPositionFriction(const ExtraColumns& extras, ArmModel* result, WlsIdenti
   summary->position_from = extras.from;
   summary->position_to = extras.to;
   summary->position_levels.resize(n, knots);
-  for (int j = 0; j < n; ++j) summary->position_levels.row(j).setConstant(result->joints[static_cast<std::size_t>(j)].coulomb);
+  for (int j = 0; j < n; ++j)
+    summary->position_levels.row(j).setConstant(result->joints[static_cast<std::size_t>(j)].coulomb);
   for (int c = 0; c < extras.size(); ++c) {
     const int k = extras.knot[static_cast<std::size_t>(c)];
     if (k >= 0) summary->position_levels(extras.joint[static_cast<std::size_t>(c)], k) += summary->consistent[r + c];
