@@ -144,7 +144,8 @@ struct ArmEffect {
   std::map<std::string, double> parameters;  // keys as in the model file, SI units
 };
 
-// The arm effect vocabulary, in the contract's order.
+// The arm effect vocabulary: the contract's names in its order, then twinsim's own
+// (position_friction).
 const std::vector<std::string>& ArmEffectNames();
 
 // The parameter keys an effect takes (empty for an unknown name).
