@@ -127,8 +127,7 @@ ParameterMap FitVariablesOf(const TrialEffect& e, double floor) {
       add(std::log(ParameterOr(e, "sigma0")), std::log(kMinBristleStiffness), std::log(kMaxBristleStiffness));
     }
   } else if (e.name == "position_friction") {
-    for (int k = 1; e.parameters.count("c" + std::to_string(k)); ++k)
-      add(ParameterOr(e, ("c" + std::to_string(k)).c_str()), floor, kInf);
+    for (int k = 0; k < FrictionLevelCount(e.parameters); ++k) add(e.parameters.at(FrictionLevelKey(k)), floor, kInf);
   } else if (e.name == "torque_offset") {
     add(ParameterOr(e, "tau0"), -kInf, kInf);
   } else if (e.name == "torque_saturation") {
@@ -168,7 +167,7 @@ void SetFromFitVariables(const double* x, double inertia, double floor, TrialEff
   const bool bristles = p.count("sigma0") > 0;
   if (e->name == "position_friction") {
     // The knots stay where the guess put them; only their levels are variables.
-    for (int k = 1; p.count("c" + std::to_string(k)); ++k) p["c" + std::to_string(k)] = positive(x[k - 1], floor);
+    for (int k = 0; k < FrictionLevelCount(p); ++k) p[FrictionLevelKey(k)] = positive(x[k], floor);
     return;
   }
   p.clear();
@@ -201,6 +200,8 @@ void SetFromFitVariables(const double* x, double inertia, double floor, TrialEff
 }
 
 // Least squares x = argmin |A x - b| with columns of A given as vectors (small systems).
+double SignOf(double v) { return v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0); }
+
 Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
   return a.colPivHouseholderQr().solve(b);
 }
@@ -490,12 +491,12 @@ class ArmProblem : public DiagnosisProblem {
       // map stands in for something that holds the joint less (a flexible joint's
       // spring, on the plant that has one), not for friction the logs measure.
       const double floor = LevelFloor(e.joint);
-      for (int k = 1; e.parameters.count("c" + std::to_string(k)); ++k) {
-        if (e.parameters.at("c" + std::to_string(k)) > floor + 1e-9 * std::max(1.0, std::abs(floor))) continue;
+      for (int k = 0; k < FrictionLevelCount(e.parameters); ++k) {
+        if (e.parameters.at(FrictionLevelKey(k)) > floor + 1e-9 * std::max(1.0, std::abs(floor))) continue;
         std::snprintf(msg, sizeof msg,
                       "its level at knot %d ends at %.3g, leaving the joint no dry friction there: friction taken away "
                       "is no map of it",
-                      k, floor);
+                      k + 1, floor);
         throw CheckFailed(msg);
       }
     } else if (e.name == "time_delay") {
@@ -640,14 +641,14 @@ void GuessPositionFriction(const GuessRows& fit, double from, double to, double 
   const auto rows = static_cast<Eigen::Index>(fit.qd.size());
   Eigen::MatrixXd a(rows, kPositionFrictionKnots);
   for (Eigen::Index r = 0; r < rows; ++r) {
-    const double v = fit.qd[static_cast<std::size_t>(r)], sign = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+    const double sign = SignOf(fit.qd[static_cast<std::size_t>(r)]);
     for (int k = 0; k < kPositionFrictionKnots; ++k)
       a(r, k) = sign * FrictionKnotWeight(from, to, kPositionFrictionKnots, k, fit.q[static_cast<std::size_t>(r)]);
   }
   const Eigen::VectorXd c = SolveLeastSquares(a, rv);
   (*p)["from"] = from;
   (*p)["to"] = to;
-  for (int k = 0; k < kPositionFrictionKnots; ++k) (*p)["c" + std::to_string(k + 1)] = std::max(floor, c[k]);
+  for (int k = 0; k < kPositionFrictionKnots; ++k) (*p)[FrictionLevelKey(k)] = std::max(floor, c[k]);
 }
 
 // Stribeck friction's c, s and vs: least squares for each of a grid of Stribeck speeds, the best kept.
@@ -658,7 +659,7 @@ void GuessStribeckFriction(const std::vector<double>& qd, const Eigen::Map<const
   for (double vs : {0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0}) {
     Eigen::MatrixXd a(rows, 2);
     for (Eigen::Index k = 0; k < rows; ++k) {
-      const double v = qd[static_cast<std::size_t>(k)], s = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+      const double v = qd[static_cast<std::size_t>(k)], s = SignOf(v);
       a(k, 0) = s;
       a(k, 1) = s * std::exp(-(v / vs) * (v / vs));
     }
@@ -914,14 +915,14 @@ void ArmProblem::CheckLevelsVary(const std::vector<TrialEffect>& effects, int i)
   const GuessRows fit = GuessRowsFor(Build(others), e);
   double along = 0, across = 0;
   for (std::size_t r = 0; r < fit.r.size(); ++r) {
-    const double sign = fit.qd[r] > 0 ? 1.0 : (fit.qd[r] < 0 ? -1.0 : 0.0);
+    const double sign = SignOf(fit.qd[r]);
     along += sign * fit.r[r];
     across += sign * sign;
   }
   const double level = std::max(LevelFloor(e.joint), across > 0 ? along / across : 0.0);
   std::vector<TrialEffect> one = effects;
-  for (int k = 1; one[static_cast<std::size_t>(i)].parameters.count("c" + std::to_string(k)); ++k)
-    one[static_cast<std::size_t>(i)].parameters["c" + std::to_string(k)] = level;
+  auto& levels = one[static_cast<std::size_t>(i)].parameters;
+  for (int k = 0; k < FrictionLevelCount(levels); ++k) levels[FrictionLevelKey(k)] = level;
   const double varied = Cost(effects, {e.joint}), flat = Cost(one, {e.joint});
   if (varied <= (1 - kPositionFrictionMargin) * flat) return;
   char msg[240];

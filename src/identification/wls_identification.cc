@@ -629,7 +629,7 @@ void SetPositionFriction(const ExtraColumns& extras, ArmModel* result, WlsIdenti
     const double lowest = levels.minCoeff();
     result->joints[static_cast<std::size_t>(j)].coulomb = lowest;
     ArmEffect effect{"position_friction", j, {{"from", extras.from[j]}, {"to", extras.to[j]}}};
-    for (int k = 0; k < knots; ++k) effect.parameters["c" + std::to_string(k + 1)] = levels[k] - lowest;
+    for (int k = 0; k < knots; ++k) effect.parameters[FrictionLevelKey(k)] = levels[k] - lowest;
     AddArmEffect(effect, n, &result->effects);
   }
 }

@@ -36,7 +36,7 @@ std::string Number(double v) {
 std::vector<ParameterSpec> PositionFrictionSpecs() {
   static const std::vector<std::string> level_keys = [] {
     std::vector<std::string> keys;
-    for (int k = 1; k <= kMaxFrictionKnots; ++k) keys.push_back("c" + std::to_string(k));
+    for (int k = 0; k < kMaxFrictionKnots; ++k) keys.push_back(FrictionLevelKey(k));
     return keys;
   }();
   std::vector<ParameterSpec> specs = {{"from", true, InRange(-1e6, 1e6)}, {"to", true, InRange(-1e6, 1e6)}};
@@ -122,11 +122,10 @@ void ApplyPositionFriction(const std::map<std::string, double>& p, const std::st
     problems->push_back(label + ": the last knot 'to' = " + Number(to) + " must lie beyond the first, 'from' = " +
                         Number(from));
   }
-  int knots = 0;
-  while (knots < kMaxFrictionKnots && p.count("c" + std::to_string(knots + 1)) > 0) ++knots;
+  const int knots = std::min(FrictionLevelCount(p), kMaxFrictionKnots);
   for (int k = knots + 1; k < kMaxFrictionKnots; ++k) {
-    if (p.count("c" + std::to_string(k + 1)) > 0) {
-      problems->push_back(label + ": 'c" + std::to_string(k + 1) + "' given without 'c" + std::to_string(knots + 1) +
+    if (p.count(FrictionLevelKey(k)) > 0) {
+      problems->push_back(label + ": '" + FrictionLevelKey(k) + "' given without '" + FrictionLevelKey(knots) +
                           "': the levels are c1, c2, ... in order");
       break;
     }
@@ -134,7 +133,7 @@ void ApplyPositionFriction(const std::map<std::string, double>& p, const std::st
   j->friction_knots = knots;
   j->friction_from = from;
   j->friction_to = to;
-  for (int k = 0; k < knots; ++k) j->friction_levels[static_cast<std::size_t>(k)] = p.at("c" + std::to_string(k + 1));
+  for (int k = 0; k < knots; ++k) j->friction_levels[static_cast<std::size_t>(k)] = p.at(FrictionLevelKey(k));
 }
 
 // Sets `effect` (whose keys and ranges were checked) into `effects`; every problem of
@@ -214,6 +213,14 @@ void ThrowProblems(const std::vector<std::string>& problems) {
 
 }  // namespace
 
+std::string FrictionLevelKey(int k) { return "c" + std::to_string(k + 1); }
+
+int FrictionLevelCount(const std::map<std::string, double>& parameters) {
+  int levels = 0;
+  while (parameters.count(FrictionLevelKey(levels)) > 0) ++levels;
+  return levels;
+}
+
 bool ArmEffects::any() const { return payload_mass > 0 || !ListArmEffects(*this).empty(); }
 
 const std::vector<std::string>& ArmEffectNames() {
@@ -277,7 +284,7 @@ std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects) {
     if (j.position_friction()) {
       ArmEffect levels{"position_friction", i, {{"from", j.friction_from}, {"to", j.friction_to}}};
       for (int k = 0; k < j.friction_knots; ++k)
-        levels.parameters["c" + std::to_string(k + 1)] = j.friction_levels[static_cast<std::size_t>(k)];
+        levels.parameters[FrictionLevelKey(k)] = j.friction_levels[static_cast<std::size_t>(k)];
       out.push_back(levels);
     }
     if (j.stribeck()) {

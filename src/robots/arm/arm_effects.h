@@ -69,14 +69,25 @@ class ErrorList;
 // allocating: it is read for every joint of every sample of a fit).
 inline constexpr int kMaxFrictionKnots = 12;
 
+// Where q lies among `knots` knots evenly spaced from `from` to `to`: 0 at the first,
+// knots - 1 at the last, held within them.
+inline double FrictionKnotCoordinate(double from, double to, int knots, double q) {
+  return std::clamp((q - from) / (to - from), 0.0, 1.0) * (knots - 1);
+}
+
 // The weight of knot k (0-based) of `knots` evenly spaced from `from` to `to` at
 // position q: the hat that is 1 at the knot and 0 at its neighbours, linear between,
 // with q held within [from, to] (the end knots' weights 1 beyond them). The weights sum
 // to 1 at every q: position_friction's c(q) = sum_k c_k FrictionKnotWeight(...).
 inline double FrictionKnotWeight(double from, double to, int knots, int k, double q) {
-  const double u = std::clamp((q - from) / (to - from), 0.0, 1.0) * (knots - 1);
-  return std::max(0.0, 1 - std::abs(u - k));
+  return std::max(0.0, 1 - std::abs(FrictionKnotCoordinate(from, to, knots, q) - k));
 }
+
+// position_friction's key of level k (0-based): "c1", "c2", ...
+std::string FrictionLevelKey(int k);
+// How many of position_friction's levels `parameters` holds: c1, c2, ... up to the first
+// missing one.
+int FrictionLevelCount(const std::map<std::string, double>& parameters);
 
 struct JointEffects {
   double viscous = 0;            // N·m·s/rad: viscous_friction b
@@ -107,7 +118,7 @@ struct JointEffects {
   // position_friction's level c(q) at position q (0 when off).
   double PositionFrictionLevel(double q) const {
     if (friction_knots == 0) return 0;
-    const double u = std::clamp((q - friction_from) / (friction_to - friction_from), 0.0, 1.0) * (friction_knots - 1);
+    const double u = FrictionKnotCoordinate(friction_from, friction_to, friction_knots, q);
     const int k = std::min(static_cast<int>(u), friction_knots - 2);
     const double a = u - k;
     const auto i = static_cast<std::size_t>(k);
