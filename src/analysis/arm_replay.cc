@@ -97,7 +97,12 @@ Eigen::MatrixXd PredictArmCommands(const ArmModel& model, const ArmLog& log, Arm
     const Eigen::VectorXd qd = log.qd.row(r).transpose();
     needed.row(r) = InverseDynamics(bodies, log.q.row(r).transpose(), qd, log.qdd.row(r).transpose(), false).transpose();
   }
-  for (int j = 0; j < n; ++j) needed.col(j) += ArmFrictionAlong(model, j, log.t, log.q.col(j), log.qd.col(j));
+  for (int j = 0; j < n; ++j) {
+    needed.col(j) += ArmFrictionAlong(model, j, log.t, log.q.col(j), log.qd.col(j));
+    // position_torque acts on the link: the drive needs that much less.
+    const JointEffects e = model.effects.joint(j);
+    if (e.torque_profile.on()) needed.col(j) -= log.q.col(j).unaryExpr([&e](double q) { return e.PositionTorque(q); });
+  }
   ArmCommandSummary s;
   s.shift.resize(n);
   s.beyond_saturation = Eigen::VectorXi::Zero(n);

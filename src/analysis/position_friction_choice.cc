@@ -15,8 +15,9 @@ bool PositionFrictionChoiceOptions::IsValid(std::string* why) const {
   std::ostringstream s;
   if (candidates.empty()) s << "no knots to choose from";
   for (const int k : candidates) {
-    if (s.str().empty() && k != 0 && !(k >= 2 && k <= kMaxFrictionKnots))
-      s << "position friction needs 2 to " << kMaxFrictionKnots << " knots (or 0: none), got " << k;
+    if (s.str().empty() && k != 0 && !(k >= 2 && k <= kMaxProfileKnots))
+      s << (torque ? "a position torque" : "position friction") << " needs 2 to " << kMaxProfileKnots
+        << " knots (or 0: none), got " << k;
   }
   if (!s.str().empty()) {
     if (why) *why = s.str();
@@ -27,7 +28,9 @@ bool PositionFrictionChoiceOptions::IsValid(std::string* why) const {
 
 std::string PositionFrictionChoice::Brief() const {
   std::ostringstream s;
-  s << "position friction: " << (knots > 0 ? std::to_string(knots) + " knots" : std::string("one level"))
+  const char* none = torque ? "none" : "one level";
+  s << (torque ? "position torque: " : "position friction: ")
+    << (knots > 0 ? std::to_string(knots) + " knots" : std::string(none))
     << " (held-out torque error per candidate:";
   for (std::size_t k = 0; k < candidates.size(); ++k) {
     char buf[64];
@@ -44,6 +47,7 @@ PositionFrictionChoice ChoosePositionFrictionKnots(const ArmModel& model, const 
   std::string why;
   if (!options.IsValid(&why)) throw InputError(why);
   PositionFrictionChoice choice;
+  choice.torque = options.torque;
   choice.candidates = options.candidates;
   std::vector<double> durations;
   std::vector<int> edge;
@@ -59,7 +63,7 @@ PositionFrictionChoice ChoosePositionFrictionKnots(const ArmModel& model, const 
   // Scored where the fit reads friction: on the rows where the joint moves.
   const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs, identification.rest_share, identification.decimate);
   for (const int knots : options.candidates) {
-    identification.position_friction_knots = knots;
+    (options.torque ? identification.position_torque_knots : identification.position_friction_knots) = knots;
     double error = std::numeric_limits<double>::quiet_NaN();
     try {
       error = ArmHeldOutTorqueError(IdentifyArmByLeastSquares(model, fit, identification), logs, edge, block,
@@ -73,7 +77,8 @@ PositionFrictionChoice ChoosePositionFrictionKnots(const ArmModel& model, const 
   if (chosen >= 0) {
     choice.knots = choice.candidates[static_cast<std::size_t>(chosen)];
   } else {
-    choice.note = "no candidate could be identified, so one level is kept (" + choice.note + ")";
+    choice.note = std::string("no candidate could be identified, so ") +
+                  (options.torque ? "no position torque is fitted (" : "one level is kept (") + choice.note + ")";
   }
   return choice;
 }

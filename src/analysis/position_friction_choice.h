@@ -1,5 +1,5 @@
 // How many knots a joint's Coulomb friction gets along its travel (position_friction,
-// robots/arm/arm_effects.h), chosen from the data as the derivative cut-off is
+// robots/arm/arm_effects.h), or its torque along the travel (position_torque), chosen from the data as the derivative cut-off is
 // (analysis/derivative_cutoff.h): each candidate's model is identified by least squares
 // on the fit blocks and its torques compared with the measured ones on the held-out
 // blocks where the joints move (at rest a joint's friction holds it anywhere within its
@@ -28,12 +28,16 @@ namespace twinsim {
 struct PositionFrictionChoiceOptions : HeldOutChoiceOptions {
   PositionFrictionChoiceOptions() { tolerance = 0.02; }
   std::vector<int> candidates = {0, 3, 5, 9};  // knots tried, in order of preference (0: one level)
+  // Choose position_torque's knots (0: none) instead of position_friction's; the other
+  // profile's knots as `identification` gives them.
+  bool torque = false;
   // True when usable; otherwise *why says what is wrong.
   bool IsValid(std::string* why) const;
 };
 
 struct PositionFrictionChoice {
-  int knots = 0;                       // the choice (0: one level)
+  int knots = 0;                       // the choice (0: one level, or no position torque)
+  bool torque = false;                 // position_torque's knots (else position_friction's)
   std::vector<int> candidates;         // in the order tried
   std::vector<double> held_out_error;  // per candidate (ArmHeldOutTorqueError; NaN where it failed)
   std::string note;                    // the first candidate whose identification failed, and why

@@ -127,7 +127,7 @@ ParameterMap FitVariablesOf(const TrialEffect& e, double floor) {
       add(std::log(ParameterOr(e, "sigma0")), std::log(kMinBristleStiffness), std::log(kMaxBristleStiffness));
     }
   } else if (e.name == "position_friction") {
-    for (int k = 0; k < FrictionLevelCount(e.parameters); ++k) add(e.parameters.at(FrictionLevelKey(k)), floor, kInf);
+    for (int k = 0; k < ProfileLevelCount('c', e.parameters); ++k) add(e.parameters.at(ProfileLevelKey('c', k)), floor, kInf);
   } else if (e.name == "torque_offset") {
     add(ParameterOr(e, "tau0"), -kInf, kInf);
   } else if (e.name == "torque_saturation") {
@@ -167,7 +167,7 @@ void SetFromFitVariables(const double* x, double inertia, double floor, TrialEff
   const bool bristles = p.count("sigma0") > 0;
   if (e->name == "position_friction") {
     // The knots stay where the guess put them; only their levels are variables.
-    for (int k = 0; k < FrictionLevelCount(p); ++k) p[FrictionLevelKey(k)] = positive(x[k], floor);
+    for (int k = 0; k < ProfileLevelCount('c', p); ++k) p[ProfileLevelKey('c', k)] = positive(x[k], floor);
     return;
   }
   p.clear();
@@ -381,7 +381,8 @@ class ArmProblem : public DiagnosisProblem {
     std::vector<TrialEffect> out;
     for (int j = 0; j < n_; ++j) {
       for (const std::string& name : ArmEffectNames()) {
-        if (name == "payload" || taken.count({name, j})) continue;
+        // position_torque is identify's (--position-torque), not yet the diagnosis's.
+        if (name == "payload" || name == "position_torque" || taken.count({name, j})) continue;
         // Friction along the travel needs a travel to map.
         if (name == "position_friction" && !(q_hi_[j] - q_lo_[j] >= kPositionFrictionSpan)) continue;
         out.push_back({name, j, {}});
@@ -491,8 +492,8 @@ class ArmProblem : public DiagnosisProblem {
       // map stands in for something that holds the joint less (a flexible joint's
       // spring, on the plant that has one), not for friction the logs measure.
       const double floor = LevelFloor(e.joint);
-      for (int k = 0; k < FrictionLevelCount(e.parameters); ++k) {
-        if (e.parameters.at(FrictionLevelKey(k)) > floor + 1e-9 * std::max(1.0, std::abs(floor))) continue;
+      for (int k = 0; k < ProfileLevelCount('c', e.parameters); ++k) {
+        if (e.parameters.at(ProfileLevelKey('c', k)) > floor + 1e-9 * std::max(1.0, std::abs(floor))) continue;
         std::snprintf(msg, sizeof msg,
                       "its level at knot %d ends at %.3g, leaving the joint no dry friction there: friction taken away "
                       "is no map of it",
@@ -643,12 +644,12 @@ void GuessPositionFriction(const GuessRows& fit, double from, double to, double 
   for (Eigen::Index r = 0; r < rows; ++r) {
     const double sign = SignOf(fit.qd[static_cast<std::size_t>(r)]);
     for (int k = 0; k < kPositionFrictionKnots; ++k)
-      a(r, k) = sign * FrictionKnotWeight(from, to, kPositionFrictionKnots, k, fit.q[static_cast<std::size_t>(r)]);
+      a(r, k) = sign * KnotWeight(from, to, kPositionFrictionKnots, k, fit.q[static_cast<std::size_t>(r)]);
   }
   const Eigen::VectorXd c = SolveLeastSquares(a, rv);
   (*p)["from"] = from;
   (*p)["to"] = to;
-  for (int k = 0; k < kPositionFrictionKnots; ++k) (*p)[FrictionLevelKey(k)] = std::max(floor, c[k]);
+  for (int k = 0; k < kPositionFrictionKnots; ++k) (*p)[ProfileLevelKey('c', k)] = std::max(floor, c[k]);
 }
 
 // Stribeck friction's c, s and vs: least squares for each of a grid of Stribeck speeds, the best kept.
@@ -922,7 +923,7 @@ void ArmProblem::CheckLevelsVary(const std::vector<TrialEffect>& effects, int i)
   const double level = std::max(LevelFloor(e.joint), across > 0 ? along / across : 0.0);
   std::vector<TrialEffect> one = effects;
   auto& levels = one[static_cast<std::size_t>(i)].parameters;
-  for (int k = 0; k < FrictionLevelCount(levels); ++k) levels[FrictionLevelKey(k)] = level;
+  for (int k = 0; k < ProfileLevelCount('c', levels); ++k) levels[ProfileLevelKey('c', k)] = level;
   const double varied = Cost(effects, {e.joint}), flat = Cost(one, {e.joint});
   if (varied <= (1 - kPositionFrictionMargin) * flat) return;
   char msg[240];

@@ -82,8 +82,11 @@ bool WlsIdentificationOptions::IsValid(std::string* why) const {
   } else if (base_samples < 10) {
     s << "base_samples must be at least 10, got " << base_samples;
   } else if (position_friction_knots != 0 &&
-             !(position_friction_knots >= 2 && position_friction_knots <= kMaxFrictionKnots)) {
-    s << "position friction needs 2 to " << kMaxFrictionKnots << " knots (or 0: none), got " << position_friction_knots;
+             !(position_friction_knots >= 2 && position_friction_knots <= kMaxProfileKnots)) {
+    s << "position friction needs 2 to " << kMaxProfileKnots << " knots (or 0: none), got " << position_friction_knots;
+  } else if (position_torque_knots != 0 &&
+             !(position_torque_knots >= 2 && position_torque_knots <= kMaxProfileKnots)) {
+    s << "a position torque needs 2 to " << kMaxProfileKnots << " knots (or 0: none), got " << position_torque_knots;
   }
   if (why) *why = s.str();
   return s.str().empty();
@@ -160,35 +163,59 @@ int Sign(double v) { return (v > 0) - (v < 0); }
 
 // The unknowns after the r base parameters, each in one joint's equations: a torque
 // offset per joint (with torque_offsets), then per moving joint the position friction's
-// d_2..d_K (with position_friction_knots K), in the summary's order.
+// d_2..d_K (with position_friction_knots K), then per moving joint the position torque's
+// levels (with position_torque_knots K: e_2..e_K beside an offset, else e_1..e_K), in the
+// summary's order.
 struct ExtraColumns {
+  enum class Kind { kOffset, kFriction, kTorque };
   int offsets = 0;
-  int knots = 0;
+  int knots = 0;         // position friction's
+  int torque_knots = 0;  // position torque's
   std::vector<int> joint;  // per extra column
-  std::vector<int> knot;   // per extra column: -1 an offset, else the knot (1..K-1, 0-based)
+  std::vector<int> knot;   // per extra column: its knot (0-based; -1 for an offset)
+  std::vector<Kind> kind;  // per extra column
   Eigen::VectorXd from, to;
 
-  ExtraColumns(int dof, bool with_offsets, int position_knots, const std::vector<int>& position_joints,
-               const Eigen::VectorXd& knots_from, const Eigen::VectorXd& knots_to)
-      : offsets(with_offsets ? dof : 0), knots(position_knots), from(knots_from), to(knots_to) {
-    for (int j = 0; j < offsets; ++j) joint.push_back(j), knot.push_back(-1);
+  ExtraColumns(int dof, bool with_offsets, int position_knots, int position_torque_knots,
+               const std::vector<int>& position_joints, const Eigen::VectorXd& knots_from,
+               const Eigen::VectorXd& knots_to)
+      : offsets(with_offsets ? dof : 0),
+        knots(position_knots),
+        torque_knots(position_torque_knots),
+        from(knots_from),
+        to(knots_to) {
+    for (int j = 0; j < offsets; ++j) Add(j, -1, Kind::kOffset);
     for (int j : position_joints)
-      for (int k = 1; k < knots; ++k) joint.push_back(j), knot.push_back(k);
+      for (int k = 1; k < knots; ++k) Add(j, k, Kind::kFriction);
+    for (int j : position_joints)
+      for (int k = offsets > 0 ? 1 : 0; k < torque_knots; ++k) Add(j, k, Kind::kTorque);
   }
   int size() const { return static_cast<int>(joint.size()); }
   // Extra column c's entry in its joint's equation at position q and velocity qd.
   double Value(int c, double q, double qd) const {
-    const int k = knot[static_cast<std::size_t>(c)];
-    if (k < 0) return 1;
-    const int j = joint[static_cast<std::size_t>(c)];
-    return Sign(qd) * FrictionKnotWeight(from[j], to[j], knots, k, q);
+    const auto i = static_cast<std::size_t>(c);
+    const int j = joint[i];
+    switch (kind[i]) {
+      case Kind::kOffset: return 1;
+      case Kind::kFriction: return Sign(qd) * KnotWeight(from[j], to[j], knots, knot[i], q);
+      case Kind::kTorque: return KnotWeight(from[j], to[j], torque_knots, knot[i], q);
+    }
+    return 0;
+  }
+
+ private:
+  void Add(int j, int k, Kind what) {
+    joint.push_back(j);
+    knot.push_back(k);
+    kind.push_back(what);
   }
 };
 
-// The joints with knots of their own: every joint that moves, with position friction.
-std::vector<int> PositionJoints(int knots, const JointSpans& spans) {
+// The joints with knots of their own: every joint that moves, with position friction or
+// a position torque.
+std::vector<int> PositionJoints(bool profiles, const JointSpans& spans) {
   std::vector<int> joints;
-  for (std::size_t j = 0; knots > 0 && j < spans.still.size(); ++j)
+  for (std::size_t j = 0; profiles && j < spans.still.size(); ++j)
     if (!spans.still[j]) joints.push_back(static_cast<int>(j));
   return joints;
 }
@@ -204,16 +231,20 @@ void DescribeUnknowns(const ArmModel& a_priori, const BaseParameters& base, cons
   for (int c = 0; c < extras.size(); ++c) {
     const int j = extras.joint[static_cast<std::size_t>(c)], k = extras.knot[static_cast<std::size_t>(c)];
     const std::string joint = std::to_string(j + 1);
-    if (k < 0) {
+    const auto kind = extras.kind[static_cast<std::size_t>(c)];
+    if (kind == ExtraColumns::Kind::kOffset) {
       summary->names.push_back("offset" + joint);
       summary->descriptions.push_back("torque offset of joint " + joint);
-    } else {
-      const double at = extras.from[j] + (extras.to[j] - extras.from[j]) * k / (extras.knots - 1);
-      summary->names.push_back("dfc" + joint + "_" + std::to_string(k + 1));
-      summary->descriptions.push_back("Coulomb friction of joint " + joint + " at knot " + std::to_string(k + 1) +
-                                      " of " + std::to_string(extras.knots) + " (q = " + Format(at) +
-                                      ") over its level at knot 1");
+      continue;
     }
+    const bool friction = kind == ExtraColumns::Kind::kFriction;
+    const int knots = friction ? extras.knots : extras.torque_knots;
+    const std::string at = " at knot " + std::to_string(k + 1) + " of " + std::to_string(knots) + " (q = " +
+                           Format(extras.from[j] + (extras.to[j] - extras.from[j]) * k / (knots - 1)) + ")";
+    summary->names.push_back((friction ? "dfc" : "tq") + joint + "_" + std::to_string(k + 1));
+    summary->descriptions.push_back(friction ? "Coulomb friction of joint " + joint + at + " over its level at knot 1"
+                                             : "torque along the travel of joint " + joint + at +
+                                                   " (measured - model, as an offset)");
   }
   summary->a_priori = Eigen::VectorXd::Zero(r + extras.size());
   summary->a_priori.head(r) = base.from_standard * StandardParameters(a_priori);
@@ -608,14 +639,13 @@ void SetPositionFriction(const ExtraColumns& extras, ArmModel* result, WlsIdenti
   const int n = result->dof(), knots = extras.knots, r = summary->base_parameters;
   if (knots == 0) return;
   summary->position_knots = knots;
-  summary->position_from = extras.from;
-  summary->position_to = extras.to;
   summary->position_levels.resize(n, knots);
   for (int j = 0; j < n; ++j)
     summary->position_levels.row(j).setConstant(result->joints[static_cast<std::size_t>(j)].coulomb);
   for (int c = 0; c < extras.size(); ++c) {
-    const int k = extras.knot[static_cast<std::size_t>(c)];
-    if (k >= 0) summary->position_levels(extras.joint[static_cast<std::size_t>(c)], k) += summary->consistent[r + c];
+    if (extras.kind[static_cast<std::size_t>(c)] != ExtraColumns::Kind::kFriction) continue;
+    summary->position_levels(extras.joint[static_cast<std::size_t>(c)], extras.knot[static_cast<std::size_t>(c)]) +=
+        summary->consistent[r + c];
   }
   for (const int j : summary->position_joints) {
     auto levels = summary->position_levels.row(j);
@@ -629,7 +659,27 @@ void SetPositionFriction(const ExtraColumns& extras, ArmModel* result, WlsIdenti
     const double lowest = levels.minCoeff();
     result->joints[static_cast<std::size_t>(j)].coulomb = lowest;
     ArmEffect effect{"position_friction", j, {{"from", extras.from[j]}, {"to", extras.to[j]}}};
-    for (int k = 0; k < knots; ++k) effect.parameters[FrictionLevelKey(k)] = levels[k] - lowest;
+    for (int k = 0; k < knots; ++k) effect.parameters[ProfileLevelKey('c', k)] = levels[k] - lowest;
+    AddArmEffect(effect, n, &result->effects);
+  }
+}
+
+// With a position torque: each knotted joint's levels p_k, minus its columns' estimates
+// (measured - model, as the offsets; 0 at the first knot beside an offset), into
+// summary->torque_levels and into `result` as a position_torque effect.
+void SetPositionTorque(const ExtraColumns& extras, ArmModel* result, WlsIdentificationSummary* summary) {
+  const int n = result->dof(), knots = extras.torque_knots, r = summary->base_parameters;
+  if (knots == 0) return;
+  summary->torque_knots = knots;
+  summary->torque_levels = Eigen::MatrixXd::Zero(n, knots);
+  for (int c = 0; c < extras.size(); ++c) {
+    if (extras.kind[static_cast<std::size_t>(c)] != ExtraColumns::Kind::kTorque) continue;
+    summary->torque_levels(extras.joint[static_cast<std::size_t>(c)], extras.knot[static_cast<std::size_t>(c)]) =
+        -summary->consistent[r + c];
+  }
+  for (const int j : summary->position_joints) {
+    ArmEffect effect{"position_torque", j, {{"from", extras.from[j]}, {"to", extras.to[j]}}};
+    for (int k = 0; k < knots; ++k) effect.parameters[ProfileLevelKey('p', k)] = summary->torque_levels(j, k);
     AddArmEffect(effect, n, &result->effects);
   }
 }
@@ -639,9 +689,10 @@ void SetPositionFriction(const ExtraColumns& extras, ArmModel* result, WlsIdenti
 Eigen::MatrixXd ExtraTorques(const WlsIdentificationSummary& summary, const Eigen::VectorXd& x, const ArmLog& log) {
   const int n = log.dof, r = summary.base_parameters;
   const Eigen::VectorXd none = Eigen::VectorXd::Zero(n);
-  const ExtraColumns extras(n, summary.offsets.size() > 0, summary.position_knots, summary.position_joints,
-                            summary.position_knots > 0 ? summary.position_from : none,
-                            summary.position_knots > 0 ? summary.position_to : none);
+  const bool profiles = !summary.position_joints.empty();
+  const ExtraColumns extras(n, summary.offsets.size() > 0, summary.position_knots, summary.torque_knots,
+                            summary.position_joints, profiles ? summary.position_from : none,
+                            profiles ? summary.position_to : none);
   Eigen::MatrixXd tau = Eigen::MatrixXd::Zero(log.rows(), n);
   for (int c = 0; c < extras.size(); ++c) {
     const int j = extras.joint[static_cast<std::size_t>(c)];
@@ -667,10 +718,15 @@ ArmModel IdentifyArmByLeastSquares(const ArmModel& a_priori, const std::vector<A
   const JointSpans spans = FindStillJoints(logs, n, options.still_range, &summary);
   // Estimated: the r base parameters, then (optionally) one torque offset per joint and
   // the position friction's knots.
-  summary.position_joints = PositionJoints(options.position_friction_knots, spans);
-  const ExtraColumns extras(n, options.torque_offsets, options.position_friction_knots, summary.position_joints,
-                            Eigen::Map<const Eigen::VectorXd>(spans.lo.data(), n),
+  summary.position_joints =
+      PositionJoints(options.position_friction_knots > 0 || options.position_torque_knots > 0, spans);
+  const ExtraColumns extras(n, options.torque_offsets, options.position_friction_knots, options.position_torque_knots,
+                            summary.position_joints, Eigen::Map<const Eigen::VectorXd>(spans.lo.data(), n),
                             Eigen::Map<const Eigen::VectorXd>(spans.hi.data(), n));
+  if (!summary.position_joints.empty()) {
+    summary.position_from = extras.from;
+    summary.position_to = extras.to;
+  }
   DescribeUnknowns(a_priori, base, extras, &summary);
   summary.rest_speed = RestSpeeds(logs, n, options, spans);
   const JointSystems systems = AccumulateRows(a_priori, base, extras, logs, options, spans, where, &summary);
@@ -685,6 +741,7 @@ ArmModel IdentifyArmByLeastSquares(const ArmModel& a_priori, const std::vector<A
   summary.error_rms_model = systems.ErrorRms(summary.consistent);
   result.effects = IdentifiedEffects(a_priori, summary.offsets);
   SetPositionFriction(extras, &result, &summary);
+  SetPositionTorque(extras, &result, &summary);
   result.source_path.clear();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary_out) *summary_out = summary;
@@ -695,10 +752,12 @@ std::string WlsIdentificationSummary::BriefReport() const {
   std::ostringstream s;
   const double before = error_rms_a_priori.size() ? (error_rms_a_priori.cwiseQuotient(torque_rms)).mean() : 0;
   const double after = error_rms_model.size() ? (error_rms_model.cwiseQuotient(torque_rms)).mean() : 0;
-  const char* extras = offsets.size() > 0 && position_knots > 0 ? " and torque offsets and position friction"
-                       : offsets.size() > 0                      ? " and torque offsets"
-                       : position_knots > 0                      ? " and position friction"
-                                                                 : "";
+  std::vector<std::string> parts;
+  if (offsets.size() > 0) parts.push_back("torque offsets");
+  if (position_knots > 0) parts.push_back("position friction");
+  if (torque_knots > 0) parts.push_back("position torque");
+  std::string extras;
+  for (const std::string& part : parts) extras += " and " + part;
   s << base_parameters << " base parameters" << extras << " from " << samples << " samples of " << logs << " log" << (logs == 1 ? "" : "s")
     << ", condition number " << Format(condition_number) << ", torque error " << Format(100 * before) << " % -> "
     << Format(100 * after) << " % of the torque RMS (mean over joints)"
@@ -756,6 +815,17 @@ std::string WlsIdentificationSummary::FullReport() const {
       s << "\n";
     }
     for (const auto& note : position_notes) s << "  " << note << "\n";
+  }
+  if (torque_knots > 0) {
+    s << "Torque along each joint's travel (position_torque: what the joint receives beside the command at each "
+         "knot, N·m or N):\n";
+    for (const int j : position_joints) {
+      std::snprintf(line, sizeof line, "  joint %d, %d knots from %.6g to %.6g:", j + 1, torque_knots,
+                    position_from[j], position_to[j]);
+      s << line;
+      for (int k = 0; k < torque_knots; ++k) s << " " << Format(torque_levels(j, k));
+      s << "\n";
+    }
   }
   if (consistency_fixed) {
     s << "\nThe minimum-norm standard parameters were not physical:\n";

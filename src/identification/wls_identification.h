@@ -52,8 +52,12 @@ struct WlsIdentificationOptions {
   // (a torque sensor's bias; the contract's torque_offset effect is minus this).
   bool torque_offsets = false;
   // Also estimate each moving joint's Coulomb level at this many knots along its travel
-  // (position_friction; 0: one level, 2..kMaxFrictionKnots).
+  // (position_friction; 0: one level, 2..kMaxProfileKnots).
   int position_friction_knots = 0;
+  // Also estimate a torque that varies along each moving joint's travel, at this many
+  // knots (position_torque: a cable, a spring, a tilt; 0: none, 2..kMaxProfileKnots).
+  // Beside torque offsets its first knot's level is the offset's (0 in the effect).
+  int position_torque_knots = 0;
   double still_range = 1e-3;         // rad or m: a joint whose q spans less than this never moves
   // A moving joint's rows where |q̇| is below this share of its RMS speed (over all logs)
   // are left out of its own equations: at rest a joint holds anywhere within its friction
@@ -85,12 +89,17 @@ struct WlsIdentificationSummary {
   // With position_friction_knots K: the unknowns after the offsets are, per moving joint
   // (position_joints, 0-based), d_2..d_K; the returned model's dry level at each knot
   // (dof x K, N·m or N; a joint without its own knots holds its constant level), the
-  // knots from position_from to position_to (per joint, rad or m).
+  // knots from position_from to position_to (per joint, rad or m; set with either profile).
   int position_knots = 0;
   std::vector<int> position_joints;
   Eigen::MatrixXd position_levels;
   Eigen::VectorXd position_from, position_to;
   std::vector<std::string> position_notes;  // a knot's level below zero, held at zero
+  // With position_torque_knots K: then per moving joint the position torque's e_k (k from
+  // 2 beside offsets, else from 1), measured - model as the offsets; the returned model's
+  // position_torque levels p_k = -e_k (dof x K; 0 for a joint without knots).
+  int torque_knots = 0;
+  Eigen::MatrixXd torque_levels;
   Eigen::VectorXd joint_sigma;         // N·m or N per joint, the OLS residual std dev (the weights' inverse)
   Eigen::VectorXd torque_rms;          // N·m or N per joint, measured torque RMS over the samples used
   Eigen::VectorXd error_rms_a_priori;  // N·m or N per joint, torque error RMS of the a-priori model
@@ -113,7 +122,8 @@ struct WlsIdentificationSummary {
 // model with them (kinematics, limits and names unchanged). Its effects: the estimated
 // torque offsets as torque_offset effects (tau0 = -offset); with position friction a
 // position_friction effect per moving joint over its lowest knot's level (the joint's
-// Coulomb friction); the a-priori model's
+// Coulomb friction); with a position torque a position_torque effect per moving joint;
+// the a-priori model's
 // time_delay, torque_saturation and joint_flexibility kept; its friction effects,
 // payload and torque offsets dropped (the identified parameters hold their torques). Throws InputError for invalid options, a log
 // whose joint count differs from the model's, too few samples, data that does not
@@ -134,7 +144,7 @@ Eigen::VectorXd ArmRestSpeeds(const std::vector<ArmLog>& logs, double share, int
 Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ArmRestRows(const ArmLog& log, const Eigen::VectorXd& rest_speed);
 
 // The torques of the unknowns beyond the base parameters (offsets, position friction's
-// d_k) at the estimate `x` (an estimate vector of *summary: identified, consistent, ...)
+// d_k, position torque's e_k) at the estimate `x` (an estimate vector of *summary: identified, consistent, ...)
 // for every row of `log` (rows x dof).
 Eigen::MatrixXd ExtraTorques(const WlsIdentificationSummary& summary, const Eigen::VectorXd& x, const ArmLog& log);
 

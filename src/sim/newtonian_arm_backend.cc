@@ -127,6 +127,7 @@ NewtonianArmBackend::NewtonianArmBackend(const ArmModel& model, std::unique_ptr<
     effects_.push_back(e);
     const ArmJoint& nominal = model_.joints[static_cast<std::size_t>(j)];
     if (e.friction() || nominal.viscous > 0 || nominal.coulomb > 0) friction_joints_.push_back(j);
+    if (e.torque_profile.on()) position_torque_joints_.push_back(j);
     if (e.presliding()) {
       presliding_joints_.push_back(j);
       // The bristles' spring against the link: resolved at h sqrt(sigma0 / J_l) <= 0.5
@@ -195,7 +196,7 @@ void NewtonianArmBackend::Reset(const Eigen::VectorXd& q, const Eigen::VectorXd&
     const auto k = static_cast<std::size_t>(j);
     const JointEffects& e = effects_[k];
     const double g = ArmDryFrictionLevel(model_, j, q[j], qd[j]);
-    const double carried = tau_before[j] + e.torque_offset - scratch_.bias[j] -
+    const double carried = tau_before[j] + e.torque_offset + e.PositionTorque(q[j]) - scratch_.bias[j] -
                            (model_.joints[k].viscous + e.viscous) * qd[j];
     state_.bristle[j] = std::clamp(carried, -g, g) / e.bristle_stiffness;
   }
@@ -390,6 +391,8 @@ void NewtonianArmBackend::Step(const Eigen::VectorXd& command, Eigen::VectorXd* 
         state_.motor_q[j] += h * state_.motor_qd[j];
       }
     }
+    // position_torque acts on the link at its position at the step's start.
+    for (int j : position_torque_joints_) link[j] += effects_[static_cast<std::size_t>(j)].PositionTorque(q[j]);
     const bool solved = SolveJointTorques(q, qd, link, drive, h, &friction, &spring);
     link -= friction;
     for (int j : trapezoidal_joints_) {

@@ -101,6 +101,7 @@ class NewtonianArmBackend final : public ArmBackend {
   std::vector<int> friction_joints_;   // joints with any friction
   std::vector<int> presliding_joints_;  // joints with LuGre friction (bristles)
   std::vector<int> trapezoidal_joints_;  // flexible joints stepped by the trapezoidal rule
+  std::vector<int> position_torque_joints_;  // joints with a position_torque
   std::vector<double> delay_steps_;    // per joint, time_delay in physics steps
   double max_delay_steps_ = 0;
   bool flexible_ = false;

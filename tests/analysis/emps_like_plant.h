@@ -35,6 +35,10 @@ struct EmpsLikeTruth {
   // / 0.2 m)), so coulomb (1 + wave) at the travel's start, coulomb (1 - wave) at its
   // end. 0 = the same everywhere. Not with presliding_stiffness.
   double coulomb_wave = 0;
+  // A force along the travel that does not depend on the motion (a cable chain pulling
+  // the cart; position_torque's kind): cable cos(2 pi (q - 0.02 m) / 0.2 m) N on the
+  // cart, +cable at both ends of the travel and -cable in its middle. 0 = none.
+  double cable = 0;
   // Pre-sliding, as a Maxwell-slip element: with a stiffness (N/m) the dry friction acts
   // on a slider of `slider_mass` (kg, part of `mass`) joined to the cart by that spring,
   // damped at `presliding_damping_ratio` of critical against the cart; MuJoCo steps it at
@@ -61,6 +65,8 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how = {}
 
 // The friction loss of `truth` at cart position q (N): its coulomb_wave along the travel.
 double EmpsLikeFrictionLoss(const EmpsLikeTruth& truth, double q);
+// The cable's force of `truth` on the cart at position q (N).
+double EmpsLikeCableForce(const EmpsLikeTruth& truth, double q);
 std::string EmpsLikeNominalYaml();
 
 // The benchmark's score of a one-joint model on a log: its free run from the log's first

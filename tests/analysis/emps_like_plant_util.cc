@@ -33,6 +33,11 @@ double EmpsLikeFrictionLoss(const EmpsLikeTruth& truth, double q) {
   return truth.coulomb * (1 + truth.coulomb_wave * std::cos(kPi * (q - 0.02) / 0.2));
 }
 
+double EmpsLikeCableForce(const EmpsLikeTruth& truth, double q) {
+  constexpr double kPi = 3.14159265358979323846;
+  return truth.cable * std::cos(2 * kPi * (q - 0.02) / 0.2);
+}
+
 double FreeRunFit(const ArmModel& model, const ArmLog& log) {
   ArmSimulationScoreOptions options;
   options.horizons = {0};
@@ -187,7 +192,7 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how) {
     const double force = kForcePerVolt * volts;
     csv << k * kDt << "," << measured << "," << force + rng.Gaussian(how.force_noise) << "\n";
     if (!maxwell) {
-      mj.data->qfrc_applied[0] = force + how.truth.offset;
+      mj.data->qfrc_applied[0] = force + how.truth.offset + EmpsLikeCableForce(how.truth, q);
       if (how.truth.coulomb_wave != 0) mj.model->dof_frictionloss[0] = EmpsLikeFrictionLoss(how.truth, q);
       mj_step(mj.model, mj.data);
       continue;
@@ -195,7 +200,8 @@ std::string RecordEmpsLike(std::uint64_t seed, const EmpsLikeRecording& how) {
     for (int s = 0; s < kMaxwellSubsteps; ++s) {
       // On the cart, whose position is the sum of both joints': the same force on each.
       const double speed = mj.data->qvel[0] + mj.data->qvel[1];
-      mj.data->qfrc_applied[0] = mj.data->qfrc_applied[1] = force + how.truth.offset - how.truth.viscous * speed;
+      mj.data->qfrc_applied[0] = mj.data->qfrc_applied[1] =
+          force + how.truth.offset + EmpsLikeCableForce(how.truth, position()) - how.truth.viscous * speed;
       mj_step(mj.model, mj.data);
     }
   }

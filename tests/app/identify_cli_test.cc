@@ -128,10 +128,10 @@ TEST(IdentifyCli, PositionFrictionIsWrittenAsEffectsAndChosenFromTheLogsWithAuto
   const ArmModel truth = HeavierRrr(), written = LoadArmModel(dir + "/three.yaml");
   for (int j = 0; j < 3; ++j) {
     const JointEffects e = written.effects.joint(j);
-    ASSERT_EQ(e.friction_knots, 3) << "joint " << j + 1;
-    EXPECT_EQ(*std::min_element(e.friction_levels.begin(), e.friction_levels.begin() + 3), 0) << "joint " << j + 1;
+    ASSERT_EQ(e.friction_profile.knots, 3) << "joint " << j + 1;
+    EXPECT_EQ(*std::min_element(e.friction_profile.levels.begin(), e.friction_profile.levels.begin() + 3), 0) << "joint " << j + 1;
     for (int k = 0; k < 3; ++k) {
-      const double level = written.joints[static_cast<std::size_t>(j)].coulomb + e.friction_levels[static_cast<std::size_t>(k)];
+      const double level = written.joints[static_cast<std::size_t>(j)].coulomb + e.friction_profile.levels[static_cast<std::size_t>(k)];
       // 1 % torque noise on torques of several N·m: within 0.1 N·m of the true level.
       EXPECT_NEAR(level, truth.joints[static_cast<std::size_t>(j)].coulomb, 0.1) << "joint " << j + 1 << ", knot " << k + 1;
     }
@@ -146,6 +146,41 @@ TEST(IdentifyCli, PositionFrictionIsWrittenAsEffectsAndChosenFromTheLogsWithAuto
   EXPECT_FALSE(LoadArmModel(dir + "/auto.yaml").effects.joint(0).position_friction());
   for (const char* bad : {"1", "13", "five", "-2"}) {
     auto r = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/bad.yaml --position-friction " +
+                        bad);
+    EXPECT_EQ(r.exit_code, 2) << bad;
+    EXPECT_NE(r.err.find("knots"), std::string::npos) << bad << ": " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.yaml"));
+}
+
+TEST(IdentifyCli, PositionTorqueIsWrittenAsEffectsAndAutoKeepsNoneWhereTheArmHasNone) {
+  // The synthetic RRR arm has no torque along its joints' travel beyond its gravity: three
+  // knots beside the offsets come out near zero (the offset holds the first: p1 = 0), and
+  // auto keeps none.
+  const std::string dir = testing::TempDir("identify_position_torque");
+  const std::string log = WriteLog(dir, "run.csv");
+  const std::string model = SourcePath("models/rrr.yaml");
+  auto three = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                          "/three.yaml --offsets --position-torque 3 --validate " + log);
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  EXPECT_NE(three.out.find("Torque along each joint's travel"), std::string::npos) << three.out;
+  const ArmModel written = LoadArmModel(dir + "/three.yaml");
+  for (int j = 0; j < 3; ++j) {
+    const KnotProfile p = written.effects.joint(j).torque_profile;
+    ASSERT_EQ(p.knots, 3) << "joint " << j + 1;
+    EXPECT_EQ(p.levels[0], 0) << "joint " << j + 1 << ": the offset holds the first knot's level";
+    // 1 % torque noise on torques of several N·m: measured, every level within 1.2 of its
+    // standard errors (joint 2's, beside its gravity, about 0.11 N·m; the others' 0.004).
+    for (int k = 1; k < 3; ++k) EXPECT_LT(std::abs(p.levels[static_cast<std::size_t>(k)]), 0.3) << "joint " << j + 1;
+  }
+  auto automatic = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                              "/auto.yaml --offsets --position-torque auto");
+  ASSERT_EQ(automatic.exit_code, 0) << automatic.err;
+  EXPECT_NE(automatic.out.find("position torque: none (held-out torque error per candidate: 0 "), std::string::npos)
+      << automatic.out;
+  EXPECT_FALSE(LoadArmModel(dir + "/auto.yaml").effects.joint(0).torque_profile.on());
+  for (const char* bad : {"1", "13", "3.5"}) {
+    auto r = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir + "/bad.yaml --position-torque " +
                         bad);
     EXPECT_EQ(r.exit_code, 2) << bad;
     EXPECT_NE(r.err.find("knots"), std::string::npos) << bad << ": " << r.err;

@@ -46,6 +46,7 @@ struct IdentifyCliOptions {
   bool stribeck = false;    // with output_error: also try friction that holds at low speed
   std::string presliding;   // with output_error: lugre or maxwell, the Stribeck friction through bristles
   std::string position_friction = "0";  // knots along each joint's travel, or auto (0: one Coulomb level)
+  std::string position_torque = "0";    // knots of a torque along each joint's travel, or auto (0: none)
   bool quiet = false;
   // Omni robots.
   OmniLogSelector select;
@@ -175,6 +176,17 @@ std::vector<ArmOutputErrorOptions> ParseOutputErrorStages(const std::string& tex
 }
 
 // Refuses omni-only options, a non-YAML --out and bad settings; returns the weighted least squares' options.
+// A --position-friction or --position-torque value: a whole number of knots, or 0 for
+// auto (chosen later from the logs).
+int KnotsOption(const char* flag, const std::string& text) {
+  if (text == "auto") return 0;
+  char* end = nullptr;
+  const long knots = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || knots < 0 || knots > 1000)
+    throw InputError(std::string(flag) + ": expected auto or a whole number of knots, got '" + text + "'");
+  return static_cast<int>(knots);
+}
+
 WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& options,
                                                  std::vector<ArmOutputErrorOptions>* stages) {
   for (const char* omni_only :
@@ -188,14 +200,8 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
   WlsIdentificationOptions identification = options.identification;
   identification.weighted = !options.unweighted;
   identification.torque_offsets = options.offsets;
-  if (options.position_friction != "auto") {
-    const std::string& text = options.position_friction;
-    char* end = nullptr;
-    const long knots = std::strtol(text.c_str(), &end, 10);
-    if (text.empty() || *end != '\0' || knots < 0 || knots > 1000)
-      throw InputError("--position-friction: expected auto or a whole number of knots, got '" + text + "'");
-    identification.position_friction_knots = static_cast<int>(knots);
-  }
+  identification.position_friction_knots = KnotsOption("--position-friction", options.position_friction);
+  identification.position_torque_knots = KnotsOption("--position-torque", options.position_torque);
   std::string why;
   if (!identification.IsValid(&why)) throw InputError(why);
   ArmOutputErrorOptions base;
@@ -254,7 +260,7 @@ std::string RefinementComment(const ArmOutputErrorSummary& refinement, const std
 std::string IdentifiedArmComment(const IdentifyCliOptions& options, std::size_t logs,
                                  const ArmIdentificationReport& found,
                                  double cutoff_hz,  // Hz, 0: nothing derived
-                                 const std::string& knots_brief) {  // --position-friction auto's choice, or empty
+                                 const std::string& knots_brief) {  // the auto knots' choices, or empty
   const std::vector<ArmOutputErrorSummary>& refinements = found.output_error;
   std::string comment = "Identified by twinsim identify from " + std::to_string(logs) + " log(s):";
   for (const auto& path : options.logs) comment += "\n  " + path;
@@ -314,12 +320,15 @@ int Identify(const IdentifyCliOptions& options) {
   std::vector<ArmLog> held_out = ReadArmLogsAtCutoff(options.validate, chosen, model, identification);
   std::string knots_brief;
   WlsIdentificationOptions least_squares = identification;
-  if (options.position_friction == "auto") {
+  // auto: the friction's knots first (without a position torque), then the torque's.
+  for (const bool torque : {false, true}) {
+    if ((torque ? options.position_torque : options.position_friction) != "auto") continue;
     PositionFrictionChoiceOptions choose;
-    choose.identification = identification;
+    choose.identification = least_squares;
+    choose.torque = torque;
     const PositionFrictionChoice choice = ChoosePositionFrictionKnots(model, logs, choose);
-    least_squares.position_friction_knots = choice.knots;
-    knots_brief = choice.Brief();
+    (torque ? least_squares.position_torque_knots : least_squares.position_friction_knots) = choice.knots;
+    knots_brief += (knots_brief.empty() ? "" : "\n") + choice.Brief();
   }
 
   ArmIdentificationOptions arm;
@@ -360,6 +369,11 @@ void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
                   "Also estimate each moving joint's Coulomb friction at this many evenly spaced positions along "
                   "its travel (2 to 12; linear between them), written as position_friction effects; auto: 0, 3, 5 "
                   "or 9, whichever predicts held-out blocks' torques best (fewer within 2 %); 0 = one level")
+      ->capture_default_str();
+  cmd->add_option("--position-torque", options->position_torque,
+                  "Also estimate a torque that varies along each moving joint's travel (a cable, a spring, a tilt), "
+                  "at this many evenly spaced positions (2 to 12; linear between them), written as position_torque "
+                  "effects; auto: 0, 3, 5 or 9 as for --position-friction; 0 = none")
       ->capture_default_str();
   cmd->add_option("--validate", options->validate,
                   "Held-out log(s): print the a-priori and identified models' torque errors on them and the motion "
@@ -403,7 +417,8 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
       "written model (YAML, URDF-style joint table) is physically consistent and loads anywhere a\n"
       "model does. With --offsets the offsets are written as torque_offset effects (tau0 = -offset);\n"
       "with --position-friction each moving joint's Coulomb friction at its knots as the joint's\n"
-      "lowest level and a position_friction effect with the rest.\n"
+      "lowest level and a position_friction effect with the rest; with --position-torque a\n"
+      "position_torque effect (beside --offsets its first level is 0: the offset holds it).\n"
       "The input model's friction effects, payload and torque offsets are dropped (the identified\n"
       "parameters hold their torques); its time_delay, torque_saturation and joint_flexibility are\n"
       "kept. Data that does not excite a parameter is refused (exit 2) naming it.\n"

@@ -32,16 +32,18 @@ std::string Number(double v) {
 }
 
 
-// position_friction's keys: the knots' span, then the levels c1..cK (the first two required).
-std::vector<ParameterSpec> PositionFrictionSpecs() {
-  static const std::vector<std::string> level_keys = [] {
-    std::vector<std::string> keys;
-    for (int k = 0; k < kMaxFrictionKnots; ++k) keys.push_back(FrictionLevelKey(k));
-    return keys;
-  }();
+// A profile's keys (position_friction, `letter` c; position_torque, p): the knots' span,
+// then the levels letter1..letterK (the first two required).
+std::vector<ParameterSpec> ProfileSpecs(char letter) {
+  // The specs keep the keys' pointers: one table per letter, alive for the program.
+  static std::map<char, std::vector<std::string>> level_keys;
+  std::vector<std::string>& keys = level_keys[letter];
+  if (keys.empty()) {
+    for (int k = 0; k < kMaxProfileKnots; ++k) keys.push_back(ProfileLevelKey(letter, k));
+  }
   std::vector<ParameterSpec> specs = {{"from", true, InRange(-1e6, 1e6)}, {"to", true, InRange(-1e6, 1e6)}};
-  for (int k = 0; k < kMaxFrictionKnots; ++k)
-    specs.push_back({level_keys[static_cast<std::size_t>(k)].c_str(), k < 2, InRange(-1e7, 1e7)});
+  for (int k = 0; k < kMaxProfileKnots; ++k)
+    specs.push_back({keys[static_cast<std::size_t>(k)].c_str(), k < 2, InRange(-1e7, 1e7)});
   return specs;
 }
 
@@ -53,7 +55,7 @@ const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
       {"viscous_friction", {{"b", true, NonNegative(1e6)}}},
       {"coulomb_friction",
        {{"c", false, NonNegative(1e7)}, {"c_pos", false, NonNegative(1e7)}, {"c_neg", false, NonNegative(1e7)}}},
-      {"position_friction", PositionFrictionSpecs()},
+      {"position_friction", ProfileSpecs('c')},
       {"stribeck_friction",
        {{"c", true, NonNegative(1e7)},
         {"s", true, Positive(1e7)},
@@ -62,6 +64,7 @@ const std::vector<ParameterSpec>* SpecsOf(const std::string& name) {
         {"sigma1", false, NonNegative(1e9)},
         {"maxwell", false, InRange(0, 1)}}},
       {"torque_offset", {{"tau0", true, InRange(-1e7, 1e7)}}},
+      {"position_torque", ProfileSpecs('p')},
       {"torque_saturation", {{"limit", true, Positive(1e7)}}},
       {"time_delay", {{"delay", true, InRange(0, kMaxTimeDelay)}}},
       {"joint_flexibility",
@@ -113,27 +116,29 @@ void ApplyStribeck(const std::map<std::string, double>& p, const std::string& la
   j->bristle_slip = get("maxwell") == 1;
 }
 
-// position_friction's parameters (checked one by one) into `j`; the combination's
-// problems (to <= from, a level missing between two given) into `problems`.
-void ApplyPositionFriction(const std::map<std::string, double>& p, const std::string& label, JointEffects* j,
-                           std::vector<std::string>* problems) {
+// A profile's parameters (checked one by one, levels named `letter`1, ...) into
+// `profile`; the combination's problems (to <= from, a level missing between two given)
+// into `problems`.
+void ApplyProfile(const std::map<std::string, double>& p, char letter, const std::string& label,
+                  KnotProfile* profile, std::vector<std::string>* problems) {
   const double from = p.at("from"), to = p.at("to");
   if (!(to > from)) {
     problems->push_back(label + ": the last knot 'to' = " + Number(to) + " must lie beyond the first, 'from' = " +
                         Number(from));
   }
-  const int knots = std::min(FrictionLevelCount(p), kMaxFrictionKnots);
-  for (int k = knots + 1; k < kMaxFrictionKnots; ++k) {
-    if (p.count(FrictionLevelKey(k)) > 0) {
-      problems->push_back(label + ": '" + FrictionLevelKey(k) + "' given without '" + FrictionLevelKey(knots) +
-                          "': the levels are c1, c2, ... in order");
+  const int knots = std::min(ProfileLevelCount(letter, p), kMaxProfileKnots);
+  for (int k = knots + 1; k < kMaxProfileKnots; ++k) {
+    if (p.count(ProfileLevelKey(letter, k)) > 0) {
+      problems->push_back(label + ": '" + ProfileLevelKey(letter, k) + "' given without '" +
+                          ProfileLevelKey(letter, knots) + "': the levels are " + ProfileLevelKey(letter, 0) + ", " +
+                          ProfileLevelKey(letter, 1) + ", ... in order");
       break;
     }
   }
-  j->friction_knots = knots;
-  j->friction_from = from;
-  j->friction_to = to;
-  for (int k = 0; k < knots; ++k) j->friction_levels[static_cast<std::size_t>(k)] = p.at(FrictionLevelKey(k));
+  profile->knots = knots;
+  profile->from = from;
+  profile->to = to;
+  for (int k = 0; k < knots; ++k) profile->levels[static_cast<std::size_t>(k)] = p.at(ProfileLevelKey(letter, k));
 }
 
 // Sets `effect` (whose keys and ranges were checked) into `effects`; every problem of
@@ -184,13 +189,16 @@ void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<st
     }
   } else if (effect.name == "position_friction") {
     if (j.position_friction()) problems->push_back(twice);
-    ApplyPositionFriction(p, label, &j, problems);
+    ApplyProfile(p, 'c', label, &j.friction_profile, problems);
   } else if (effect.name == "stribeck_friction") {
     if (j.stribeck()) problems->push_back(twice);
     ApplyStribeck(p, label, &j, problems);
   } else if (effect.name == "torque_offset") {
     if (j.torque_offset != 0) problems->push_back(twice);
     j.torque_offset = get("tau0");
+  } else if (effect.name == "position_torque") {
+    if (j.torque_profile.on()) problems->push_back(twice);
+    ApplyProfile(p, 'p', label, &j.torque_profile, problems);
   } else if (effect.name == "torque_saturation") {
     if (j.saturation > 0) problems->push_back(twice);
     j.saturation = get("limit");
@@ -205,6 +213,14 @@ void Apply(const ArmEffect& effect, int dof, ArmEffects* effects, std::vector<st
   }
 }
 
+// A profile as the effect `name` with levels `letter`1.. lists it.
+ArmEffect ProfileEffect(const char* name, char letter, int joint, const KnotProfile& profile) {
+  ArmEffect effect{name, joint, {{"from", profile.from}, {"to", profile.to}}};
+  for (int k = 0; k < profile.knots; ++k)
+    effect.parameters[ProfileLevelKey(letter, k)] = profile.levels[static_cast<std::size_t>(k)];
+  return effect;
+}
+
 void ThrowProblems(const std::vector<std::string>& problems) {
   ErrorList errors;
   for (const std::string& p : problems) errors.Add(p);
@@ -213,11 +229,11 @@ void ThrowProblems(const std::vector<std::string>& problems) {
 
 }  // namespace
 
-std::string FrictionLevelKey(int k) { return "c" + std::to_string(k + 1); }
+std::string ProfileLevelKey(char letter, int k) { return letter + std::to_string(k + 1); }
 
-int FrictionLevelCount(const std::map<std::string, double>& parameters) {
+int ProfileLevelCount(char letter, const std::map<std::string, double>& parameters) {
   int levels = 0;
-  while (parameters.count(FrictionLevelKey(levels)) > 0) ++levels;
+  while (parameters.count(ProfileLevelKey(letter, levels)) > 0) ++levels;
   return levels;
 }
 
@@ -226,7 +242,8 @@ bool ArmEffects::any() const { return payload_mass > 0 || !ListArmEffects(*this)
 const std::vector<std::string>& ArmEffectNames() {
   static const std::vector<std::string> names = {"viscous_friction",  "coulomb_friction", "stribeck_friction",
                                                  "torque_offset",     "torque_saturation", "time_delay",
-                                                 "joint_flexibility", "payload",          "position_friction"};
+                                                 "joint_flexibility", "payload",          "position_friction",
+                                                 "position_torque"};
   return names;
 }
 
@@ -281,12 +298,7 @@ std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects) {
         out.push_back({"coulomb_friction", i, {{"c_pos", j.coulomb_positive}, {"c_neg", j.coulomb_negative}}});
       }
     }
-    if (j.position_friction()) {
-      ArmEffect levels{"position_friction", i, {{"from", j.friction_from}, {"to", j.friction_to}}};
-      for (int k = 0; k < j.friction_knots; ++k)
-        levels.parameters[FrictionLevelKey(k)] = j.friction_levels[static_cast<std::size_t>(k)];
-      out.push_back(levels);
-    }
+    if (j.position_friction()) out.push_back(ProfileEffect("position_friction", 'c', i, j.friction_profile));
     if (j.stribeck()) {
       ArmEffect stribeck{"stribeck_friction", i,
                          {{"c", j.stribeck_coulomb}, {"s", j.stribeck_static}, {"vs", j.stribeck_velocity}}};
@@ -298,6 +310,7 @@ std::vector<ArmEffect> ListArmEffects(const ArmEffects& effects) {
       out.push_back(stribeck);
     }
     if (j.torque_offset != 0) out.push_back({"torque_offset", i, {{"tau0", j.torque_offset}}});
+    if (j.torque_profile.on()) out.push_back(ProfileEffect("position_torque", 'p', i, j.torque_profile));
     if (j.saturation > 0) out.push_back({"torque_saturation", i, {{"limit", j.saturation}}});
     if (j.time_delay > 0) out.push_back({"time_delay", i, {{"delay", j.time_delay}}});
     if (j.flexible()) {

@@ -8,6 +8,11 @@
 //   time_delay          the joint receives u(t - delay)
 //   torque_saturation   it receives clip(u, -limit, +limit)
 //   torque_offset       plus a constant tau0
+//   position_torque     plus p(q), a torque that varies along the joint's travel (a
+//                       cable or hose pulling, a spring, a tilted axis, a motor's
+//                       cogging at a coarse pitch): through the levels p1..pK at K
+//                       evenly spaced positions from `from` to `to` as position_friction's
+//                       c(q), but acting whether or not the joint moves
 //   joint_flexibility   that torque drives a motor inertia J_m joined to the link by a
 //                       spring k with damping d: J_m thm'' = u - tau_s,
 //                       tau_s = k (thm - q) + d (thm' - qd) drives the link
@@ -63,32 +68,54 @@ namespace twinsim {
 struct ArmModel;
 class ErrorList;
 
-// The effects of one joint; all off by default. Units: N·m for revolute joints, N for
-// prismatic ones (and rad or m for positions accordingly).
-// position_friction's most levels (a fixed array, so that JointEffects copies without
-// allocating: it is read for every joint of every sample of a fit).
-inline constexpr int kMaxFrictionKnots = 12;
+// The most knots of a profile along a joint's travel (position_friction's levels,
+// position_torque's): a fixed array, so that JointEffects copies without allocating (it
+// is read for every joint of every sample of a fit).
+inline constexpr int kMaxProfileKnots = 12;
 
 // Where q lies among `knots` knots evenly spaced from `from` to `to`: 0 at the first,
 // knots - 1 at the last, held within them.
-inline double FrictionKnotCoordinate(double from, double to, int knots, double q) {
+inline double KnotCoordinate(double from, double to, int knots, double q) {
   return std::clamp((q - from) / (to - from), 0.0, 1.0) * (knots - 1);
 }
 
 // The weight of knot k (0-based) of `knots` evenly spaced from `from` to `to` at
 // position q: the hat that is 1 at the knot and 0 at its neighbours, linear between,
 // with q held within [from, to] (the end knots' weights 1 beyond them). The weights sum
-// to 1 at every q: position_friction's c(q) = sum_k c_k FrictionKnotWeight(...).
-inline double FrictionKnotWeight(double from, double to, int knots, int k, double q) {
-  return std::max(0.0, 1 - std::abs(FrictionKnotCoordinate(from, to, knots, q) - k));
+// to 1 at every q: a profile's value is sum_k level_k KnotWeight(...).
+inline double KnotWeight(double from, double to, int knots, int k, double q) {
+  return std::max(0.0, 1 - std::abs(KnotCoordinate(from, to, knots, q) - k));
 }
 
-// position_friction's key of level k (0-based): "c1", "c2", ...
-std::string FrictionLevelKey(int k);
-// How many of position_friction's levels `parameters` holds: c1, c2, ... up to the first
-// missing one.
-int FrictionLevelCount(const std::map<std::string, double>& parameters);
+// A quantity that varies along a joint's travel: levels at `knots` positions evenly
+// spaced from `from` to `to`, linear between them, the first level before `from` and
+// the last beyond `to` (position_friction's c(q), position_torque's p(q)).
+struct KnotProfile {
+  int knots = 0;  // 0 = off, else 2..kMaxProfileKnots
+  double from = 0;  // rad or m: the first knot
+  double to = 0;    // rad or m: the last (> from)
+  std::array<double, kMaxProfileKnots> levels{};
 
+  bool on() const { return knots > 0; }
+  // The profile's value at position q (0 when off).
+  double At(double q) const {
+    if (knots == 0) return 0;
+    const double u = KnotCoordinate(from, to, knots, q);
+    const int k = std::min(static_cast<int>(u), knots - 2);
+    const double a = u - k;
+    const auto i = static_cast<std::size_t>(k);
+    return (1 - a) * levels[i] + a * levels[i + 1];
+  }
+};
+
+// A profile's key of level k (0-based): `letter` then k + 1 (position_friction's "c1",
+// "c2", ..., position_torque's "p1", ...).
+std::string ProfileLevelKey(char letter, int k);
+// How many levels `parameters` holds: letter1, letter2, ... up to the first missing one.
+int ProfileLevelCount(char letter, const std::map<std::string, double>& parameters);
+
+// The effects of one joint; all off by default. Units: N·m for revolute joints, N for
+// prismatic ones (and rad or m for positions accordingly).
 struct JointEffects {
   double viscous = 0;            // N·m·s/rad: viscous_friction b
   double coulomb_positive = 0;   // N·m: coulomb_friction while qd > 0 (c_pos)
@@ -99,11 +126,9 @@ struct JointEffects {
   double bristle_stiffness = 0;  // N·m/rad: stribeck_friction sigma0 (LuGre); 0 = no pre-sliding
   double bristle_damping = 0;    // N·m·s/rad: stribeck_friction sigma1 (LuGre)
   bool bristle_slip = false;      // stribeck_friction maxwell: 1: a Maxwell-slip element, not LuGre
-  int friction_knots = 0;        // position_friction: K levels c1..cK; 0 = off
-  double friction_from = 0;      // rad or m: position_friction's first knot
-  double friction_to = 0;        // rad or m: its last knot (> from)
-  std::array<double, kMaxFrictionKnots> friction_levels{};  // N·m: c1..cK (the joint's total level >= 0)
+  KnotProfile friction_profile;   // position_friction: c1..cK, N·m (the joint's total level >= 0)
   double torque_offset = 0;      // N·m: torque_offset tau0
+  KnotProfile torque_profile;     // position_torque: p1..pK, N·m
   double saturation = 0;         // N·m: torque_saturation limit; 0 = off
   double time_delay = 0;         // s: time_delay delay
   double stiffness = 0;          // N·m/rad: joint_flexibility k; 0 = rigid
@@ -114,16 +139,11 @@ struct JointEffects {
   // LuGre: the dry friction acts through bristles (only with stribeck()).
   bool presliding() const { return bristle_stiffness > 0; }
   bool flexible() const { return stiffness > 0; }
-  bool position_friction() const { return friction_knots > 0; }
+  bool position_friction() const { return friction_profile.on(); }
   // position_friction's level c(q) at position q (0 when off).
-  double PositionFrictionLevel(double q) const {
-    if (friction_knots == 0) return 0;
-    const double u = FrictionKnotCoordinate(friction_from, friction_to, friction_knots, q);
-    const int k = std::min(static_cast<int>(u), friction_knots - 2);
-    const double a = u - k;
-    const auto i = static_cast<std::size_t>(k);
-    return (1 - a) * friction_levels[i] + a * friction_levels[i + 1];
-  }
+  double PositionFrictionLevel(double q) const { return friction_profile.At(q); }
+  // position_torque's p(q) at position q (0 when off): added to what the joint receives.
+  double PositionTorque(double q) const { return torque_profile.At(q); }
   // True when the joint has some friction effect.
   bool friction() const {
     return viscous > 0 || coulomb_positive > 0 || coulomb_negative > 0 || stribeck() || position_friction();
@@ -156,7 +176,7 @@ struct ArmEffect {
 };
 
 // The arm effect vocabulary: the contract's names in its order, then twinsim's own
-// (position_friction).
+// (position_friction, position_torque).
 const std::vector<std::string>& ArmEffectNames();
 
 // The parameter keys an effect takes (empty for an unknown name).

@@ -91,9 +91,9 @@ std::string ArmModel::Validate() const {
     // friction covers them: its dry level must not go negative anywhere along the travel
     // (linear between the knots, so at a knot if anywhere).
     const JointEffects e = effects.joint(static_cast<int>(k));
-    for (int knot = 0; knot < e.friction_knots; ++knot) {
+    for (int knot = 0; knot < e.friction_profile.knots; ++knot) {
       const double level = j.coulomb + std::min(e.coulomb_positive, e.coulomb_negative) +
-                           e.friction_levels[static_cast<std::size_t>(knot)];
+                           e.friction_profile.levels[static_cast<std::size_t>(knot)];
       if (level >= 0) continue;
       s.str("");
       s << label << ": its dry friction would be " << level << " at position_friction's knot " << knot + 1

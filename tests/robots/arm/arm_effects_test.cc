@@ -10,6 +10,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "analysis/arm_replay.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
 #include "core/math_constants.h"
@@ -289,6 +290,7 @@ TEST(ArmEffects, ModelFileEffectsRoundTripThroughTheList) {
       "  - {name: position_friction, joint: 1, from: -1, to: 1, c1: 0.2, c2: 0, c3: 0.1}\n"
       "  - {name: stribeck_friction, joint: 1, c: 0.1, s: 0.2, vs: 0.01}\n"
       "  - {name: torque_offset, joint: 1, tau0: -0.05}\n"
+      "  - {name: position_torque, joint: 1, from: 0, to: 2, p1: 0.3, p2: -0.1}\n"
       "  - {name: torque_saturation, joint: 1, limit: 4}\n"
       "  - {name: time_delay, joint: 1, delay: 0.002}\n"
       "  - {name: joint_flexibility, joint: 1, k: 500, damping: 0.2, motor_inertia: 0.01}\n"
@@ -301,25 +303,26 @@ TEST(ArmEffects, ModelFileEffectsRoundTripThroughTheList) {
   EXPECT_EQ(e.time_delay, 0.002);
   EXPECT_EQ(e.flex_damping, 0.2);
   EXPECT_EQ(m.effects.payload_mass, 0.3);
-  EXPECT_EQ(e.friction_knots, 3);
-  EXPECT_EQ(e.friction_levels[2], 0.1);
+  EXPECT_EQ(e.friction_profile.knots, 3);
+  EXPECT_EQ(e.friction_profile.levels[2], 0.1);
   const std::vector<ArmEffect> list = ListArmEffects(m.effects);
-  ASSERT_EQ(list.size(), 9u);
+  ASSERT_EQ(list.size(), 10u);
   std::vector<std::string> names;
   for (const ArmEffect& fx : list) names.push_back(fx.name);
   // Each joint's effects in the vocabulary's order, position_friction beside the other
-  // dry friction; the payload last.
+  // dry friction, position_torque beside the offset; the payload last.
   EXPECT_EQ(names, (std::vector<std::string>{"viscous_friction", "coulomb_friction", "position_friction",
-                                             "stribeck_friction", "torque_offset", "torque_saturation", "time_delay",
-                                             "joint_flexibility", "payload"}));
+                                             "stribeck_friction", "torque_offset", "position_torque",
+                                             "torque_saturation", "time_delay", "joint_flexibility", "payload"}));
   std::vector<std::string> vocabulary = ArmEffectNames();
   std::sort(vocabulary.begin(), vocabulary.end());
   std::sort(names.begin(), names.end());
   EXPECT_EQ(names, vocabulary);
   ArmEffects rebuilt;
   for (const ArmEffect& fx : list) AddArmEffect(fx, 1, &rebuilt);
-  EXPECT_EQ(ListArmEffects(rebuilt).size(), 9u);
-  EXPECT_EQ(rebuilt.joint(0).friction_levels[0], 0.2);
+  EXPECT_EQ(ListArmEffects(rebuilt).size(), 10u);
+  EXPECT_EQ(rebuilt.joint(0).torque_profile.levels[1], -0.1);
+  EXPECT_EQ(rebuilt.joint(0).friction_profile.levels[0], 0.2);
   EXPECT_EQ(rebuilt.joint(0).stiffness, 500);
   EXPECT_EQ(rebuilt.payload_mass, 0.3);
   // The friction torque of the model: nominal (none here) plus all three laws.
@@ -333,7 +336,7 @@ TEST(ArmEffects, PositionFrictionInterpolatesItsKnotsAndHoldsTheEndsBeyondThem) 
       "  - {name: coulomb_friction, joint: 1, c: 0.1}\n"
       "  - {name: position_friction, joint: 1, from: -1, to: 1, c1: 0.4, c2: 0, c3: 0.2}\n");
   const JointEffects e = m.effects.joint(0);
-  ASSERT_EQ(e.friction_knots, 3);
+  ASSERT_EQ(e.friction_profile.knots, 3);
   // Knots at -1, 0 and 1; linear between; the end levels beyond them.
   EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(-1), 0.4);
   EXPECT_DOUBLE_EQ(e.PositionFrictionLevel(-0.25), 0.1);
@@ -376,6 +379,40 @@ TEST(ArmEffects, PositionFrictionHoldsAJointWhereItsLevelExceedsThePushOnEveryEn
   }
 }
 
+TEST(ArmEffects, PositionTorqueIsASpringWhenItFallsAlongTheTravelOnEveryEngineAndInTheReplay) {
+  // p(q) through p1 = 0.2 at q = -1 and p2 = -0.2 at q = 1 is the spring p = -k q with
+  // k = 0.2 N·m/rad: the frictionless turntable released at q0 = 0.5 swings as
+  // q0 cos(w t), w = sqrt(k / J), its amplitude kept (no friction to take its energy).
+  const ArmModel m = Turntable("  - {name: position_torque, joint: 1, from: -1, to: 1, p1: 0.2, p2: -0.2}\n");
+  const JointEffects e = m.effects.joint(0);
+  ASSERT_TRUE(e.torque_profile.on());
+  EXPECT_DOUBLE_EQ(e.PositionTorque(0.5), -0.1);
+  EXPECT_DOUBLE_EQ(e.PositionTorque(-3), 0.2) << "the end level beyond the last knot";
+  const double k = 0.2, w = std::sqrt(k / kJ), q0 = 0.5;
+  for (const std::string& backend : AvailableArmEngines()) {
+    const ArmTrajectory r = Drive(backend, m, q0, 0, 13, nullptr);
+    EXPECT_NEAR(Period(r.t, r.q.col(0)), 2 * kPi / w, 2e-3 * 2 * kPi / w) << backend;
+    const int last_period = Row(13 - 2 * kPi / w, m.sample_time);
+    const Eigen::VectorXd tail = r.q.col(0).tail(r.q.rows() - last_period);
+    EXPECT_NEAR(tail.maxCoeff(), q0, 5e-3) << backend << ": the swing lost or gained energy";
+    EXPECT_NEAR(tail.minCoeff(), -q0, 5e-3) << backend;
+  }
+  // The replay: the closed-form swing needs no command with the spring in the model, and
+  // J q'' = -k q without it.
+  ArmLog log;
+  log.dof = 1;
+  const int rows = 2001;
+  log.t = Eigen::VectorXd::LinSpaced(rows, 0, 2);
+  log.q = (q0 * (w * log.t.array()).cos()).matrix();
+  log.qd = (-q0 * w * (w * log.t.array()).sin()).matrix();
+  log.qdd = (-q0 * w * w * (w * log.t.array()).cos()).matrix();
+  log.tau = Eigen::MatrixXd::Zero(rows, 1);
+  log.sample_period = 1e-3;
+  EXPECT_LT(PredictArmCommands(m, log).cwiseAbs().maxCoeff(), 1e-12);
+  const Eigen::MatrixXd without = PredictArmCommands(Turntable(), log);
+  EXPECT_LT((without + k * log.q).cwiseAbs().maxCoeff(), 1e-12);
+}
+
 TEST(ArmEffects, BadEffectsAreRefusedWithFileLineAndTheKnownNames) {
   const std::string dir = TempDir("arm_effects");
   auto error_of = [&](const std::string& effects) -> std::string {
@@ -392,7 +429,7 @@ TEST(ArmEffects, BadEffectsAreRefusedWithFileLineAndTheKnownNames) {
   EXPECT_EQ(error_of("  - {name: viscosity, joint: 1, b: 0.1}\n"),
             path + ":17:12: 'name' in 'effect 1': unknown value 'viscosity' (known: viscous_friction, coulomb_friction, "
                    "stribeck_friction, torque_offset, torque_saturation, time_delay, joint_flexibility, payload, "
-                   "position_friction)");
+                   "position_friction, position_torque)");
   EXPECT_EQ(error_of("  - {name: viscous_friction, joint: 1, b: 0.1}\n  - {name: viscous_friction, joint: 1, bb: 1}\n"),
             path + ":18:5: missing required key 'b' in 'effect 2'\n" + path +
                 ":18:40: unknown key 'bb' in 'effect 2' (known: b, joint, name)");
@@ -428,6 +465,15 @@ TEST(ArmEffects, BadEffectsAreRefusedWithFileLineAndTheKnownNames) {
   EXPECT_EQ(error_of("  - {name: coulomb_friction, joint: 1, c: 0.3}\n"
                      "  - {name: position_friction, joint: 1, from: 0, to: 1, c1: 0.1, c2: -0.2}\n"),
             "no error");
+  EXPECT_EQ(error_of("  - {name: position_torque, joint: 1, from: 1, to: 0, p1: 0.1, p2: 0.2}\n"),
+            path + ":17:5: effect 1: effect 'position_torque': the last knot 'to' = 0 must lie beyond the first, "
+                   "'from' = 1");
+  EXPECT_EQ(error_of("  - {name: position_torque, joint: 1, from: 0, to: 1, p1: 0.1, p2: 0.2, p5: 0.3}\n"),
+            path + ":17:5: effect 1: effect 'position_torque': 'p5' given without 'p3': the levels are p1, p2, ... "
+                   "in order");
+  EXPECT_EQ(error_of("  - {name: position_torque, joint: 1, from: 0, to: 1, p1: 0.1, p2: 0.2, c3: 0.3}\n"),
+            path + ":17:73: unknown key 'c3' in 'effect 1' (known: from, joint, name, p1, p10, p11, p12, p2, p3, p4, "
+                   "p5, p6, p7, p8, p9, to)");
   EXPECT_EQ(error_of("  name: viscous_friction\n"), path + ":17:3: 'effects': expected a list of effects, each with a 'name'");
   // Programmatic additions say the same without a place.
   ArmEffects fx;
