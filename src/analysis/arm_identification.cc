@@ -8,13 +8,17 @@ namespace twinsim {
 namespace {
 
 // The a-priori model as an output-error start: its inertia, friction and effects, with
-// the least squares' torque offsets where those were estimated.
+// the least squares' torque offsets where those were estimated and its position torques
+// (which stand beside the offsets: their first level is the offset's).
 ArmModel APrioriStart(const ArmModel& a_priori, const ArmModel& least_squares, bool offsets) {
   ArmModel start = a_priori;
-  if (!offsets) return start;
   start.effects.joints.resize(static_cast<std::size_t>(start.dof()));
-  for (int j = 0; j < start.dof(); ++j)
-    start.effects.joints[static_cast<std::size_t>(j)].torque_offset = least_squares.effects.joint(j).torque_offset;
+  for (int j = 0; j < start.dof(); ++j) {
+    JointEffects& e = start.effects.joints[static_cast<std::size_t>(j)];
+    const JointEffects fitted = least_squares.effects.joint(j);
+    if (offsets) e.torque_offset = fitted.torque_offset;
+    if (fitted.torque_profile.on()) e.torque_profile = fitted.torque_profile;
+  }
   return start;
 }
 
@@ -26,7 +30,10 @@ std::string StartLine(const ArmIdentificationReport& r) {
   std::snprintf(line, sizeof line,
                 "output error starts from the %s model%s: its %s simulated at %.4g against %.4g for the %s model (%s)",
                 r.started_from_a_priori ? "a-priori" : "least squares'",
-                r.started_from_a_priori && r.least_squares.offsets.size() > 0 ? ", with the least squares' torque offsets"
+                !r.started_from_a_priori                                      ? ""
+                : r.least_squares.torque_knots > 0                            ? ", with the least squares' offsets and "
+                                                                                "torques along the travel"
+                : r.least_squares.offsets.size() > 0                          ? ", with the least squares' torque offsets"
                                                                                : "",
                 run ? "shooting segments" : "fit windows",
                 r.started_from_a_priori ? r.start_cost_a_priori : r.start_cost_least_squares,

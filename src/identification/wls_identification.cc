@@ -11,6 +11,7 @@
 
 #include "core/error.h"
 #include "identification/physical_consistency.h"
+#include "identification/wls_extra_columns.h"
 
 namespace twinsim {
 namespace {
@@ -158,67 +159,6 @@ struct JointSpans {
   std::vector<double> span;    // hi - lo
   std::vector<bool> still;     // span below the options' still_range
 };
-
-int Sign(double v) { return (v > 0) - (v < 0); }
-
-// The unknowns after the r base parameters, each in one joint's equations: a torque
-// offset per joint (with torque_offsets), then per moving joint the position friction's
-// d_2..d_K (with position_friction_knots K), then per moving joint the position torque's
-// levels (with position_torque_knots K: e_2..e_K beside an offset, else e_1..e_K), in the
-// summary's order.
-struct ExtraColumns {
-  enum class Kind { kOffset, kFriction, kTorque };
-  int offsets = 0;
-  int knots = 0;         // position friction's
-  int torque_knots = 0;  // position torque's
-  std::vector<int> joint;  // per extra column
-  std::vector<int> knot;   // per extra column: its knot (0-based; -1 for an offset)
-  std::vector<Kind> kind;  // per extra column
-  Eigen::VectorXd from, to;
-
-  ExtraColumns(int dof, bool with_offsets, int position_knots, int position_torque_knots,
-               const std::vector<int>& position_joints, const Eigen::VectorXd& knots_from,
-               const Eigen::VectorXd& knots_to)
-      : offsets(with_offsets ? dof : 0),
-        knots(position_knots),
-        torque_knots(position_torque_knots),
-        from(knots_from),
-        to(knots_to) {
-    for (int j = 0; j < offsets; ++j) Add(j, -1, Kind::kOffset);
-    for (int j : position_joints)
-      for (int k = 1; k < knots; ++k) Add(j, k, Kind::kFriction);
-    for (int j : position_joints)
-      for (int k = offsets > 0 ? 1 : 0; k < torque_knots; ++k) Add(j, k, Kind::kTorque);
-  }
-  int size() const { return static_cast<int>(joint.size()); }
-  // Extra column c's entry in its joint's equation at position q and velocity qd.
-  double Value(int c, double q, double qd) const {
-    const auto i = static_cast<std::size_t>(c);
-    const int j = joint[i];
-    switch (kind[i]) {
-      case Kind::kOffset: return 1;
-      case Kind::kFriction: return Sign(qd) * KnotWeight(from[j], to[j], knots, knot[i], q);
-      case Kind::kTorque: return KnotWeight(from[j], to[j], torque_knots, knot[i], q);
-    }
-    return 0;
-  }
-
- private:
-  void Add(int j, int k, Kind what) {
-    joint.push_back(j);
-    knot.push_back(k);
-    kind.push_back(what);
-  }
-};
-
-// The joints with knots of their own: every joint that moves, with position friction or
-// a position torque.
-std::vector<int> PositionJoints(bool profiles, const JointSpans& spans) {
-  std::vector<int> joints;
-  for (std::size_t j = 0; profiles && j < spans.still.size(); ++j)
-    if (!spans.still[j]) joints.push_back(static_cast<int>(j));
-  return joints;
-}
 
 // Names the unknowns in *summary (the r base parameters, then the extra columns) with
 // the a-priori model's values.
@@ -631,59 +571,6 @@ ArmEffects IdentifiedEffects(const ArmModel& a_priori, const Eigen::VectorXd& of
   return effects;
 }
 
-// With position friction: each knotted joint's dry level at its knots, the consistent
-// Coulomb level plus d_k, into summary->position_* and into `result` as the joint's
-// constant level (the lowest knot's; a level below zero is held at zero and noted) and a
-// position_friction effect with the rest.
-void SetPositionFriction(const ExtraColumns& extras, ArmModel* result, WlsIdentificationSummary* summary) {
-  const int n = result->dof(), knots = extras.knots, r = summary->base_parameters;
-  if (knots == 0) return;
-  summary->position_knots = knots;
-  summary->position_levels.resize(n, knots);
-  for (int j = 0; j < n; ++j)
-    summary->position_levels.row(j).setConstant(result->joints[static_cast<std::size_t>(j)].coulomb);
-  for (int c = 0; c < extras.size(); ++c) {
-    if (extras.kind[static_cast<std::size_t>(c)] != ExtraColumns::Kind::kFriction) continue;
-    summary->position_levels(extras.joint[static_cast<std::size_t>(c)], extras.knot[static_cast<std::size_t>(c)]) +=
-        summary->consistent[r + c];
-  }
-  for (const int j : summary->position_joints) {
-    auto levels = summary->position_levels.row(j);
-    for (int k = 0; k < knots; ++k) {
-      if (levels[k] >= 0) continue;
-      summary->position_notes.push_back("the Coulomb friction of joint " + std::to_string(j + 1) + " at knot " +
-                                           std::to_string(k + 1) + " came out negative (" + Format(levels[k]) +
-                                           "): held at 0");
-      levels[k] = 0;
-    }
-    const double lowest = levels.minCoeff();
-    result->joints[static_cast<std::size_t>(j)].coulomb = lowest;
-    ArmEffect effect{"position_friction", j, {{"from", extras.from[j]}, {"to", extras.to[j]}}};
-    for (int k = 0; k < knots; ++k) effect.parameters[ProfileLevelKey('c', k)] = levels[k] - lowest;
-    AddArmEffect(effect, n, &result->effects);
-  }
-}
-
-// With a position torque: each knotted joint's levels p_k, minus its columns' estimates
-// (measured - model, as the offsets; 0 at the first knot beside an offset), into
-// summary->torque_levels and into `result` as a position_torque effect.
-void SetPositionTorque(const ExtraColumns& extras, ArmModel* result, WlsIdentificationSummary* summary) {
-  const int n = result->dof(), knots = extras.torque_knots, r = summary->base_parameters;
-  if (knots == 0) return;
-  summary->torque_knots = knots;
-  summary->torque_levels = Eigen::MatrixXd::Zero(n, knots);
-  for (int c = 0; c < extras.size(); ++c) {
-    if (extras.kind[static_cast<std::size_t>(c)] != ExtraColumns::Kind::kTorque) continue;
-    summary->torque_levels(extras.joint[static_cast<std::size_t>(c)], extras.knot[static_cast<std::size_t>(c)]) =
-        -summary->consistent[r + c];
-  }
-  for (const int j : summary->position_joints) {
-    ArmEffect effect{"position_torque", j, {{"from", extras.from[j]}, {"to", extras.to[j]}}};
-    for (int k = 0; k < knots; ++k) effect.parameters[ProfileLevelKey('p', k)] = summary->torque_levels(j, k);
-    AddArmEffect(effect, n, &result->effects);
-  }
-}
-
 }  // namespace
 
 Eigen::MatrixXd ExtraTorques(const WlsIdentificationSummary& summary, const Eigen::VectorXd& x, const ArmLog& log) {
@@ -719,7 +606,7 @@ ArmModel IdentifyArmByLeastSquares(const ArmModel& a_priori, const std::vector<A
   // Estimated: the r base parameters, then (optionally) one torque offset per joint and
   // the position friction's knots.
   summary.position_joints =
-      PositionJoints(options.position_friction_knots > 0 || options.position_torque_knots > 0, spans);
+      PositionJoints(options.position_friction_knots > 0 || options.position_torque_knots > 0, spans.still);
   const ExtraColumns extras(n, options.torque_offsets, options.position_friction_knots, options.position_torque_knots,
                             summary.position_joints, Eigen::Map<const Eigen::VectorXd>(spans.lo.data(), n),
                             Eigen::Map<const Eigen::VectorXd>(spans.hi.data(), n));
@@ -805,27 +692,26 @@ std::string WlsIdentificationSummary::FullReport() const {
       s << line << (j + 1 < dof ? ";" : "\n");
     }
   }
-  if (position_knots > 0) {
-    s << "Coulomb friction along each joint's travel (the model's level at each knot, N·m or N):\n";
+  // A profile's levels at its knots, one line per knotted joint.
+  const auto knot_levels = [&](const char* title, int knots, const Eigen::MatrixXd& levels) {
+    s << title << ":\n";
     for (const int j : position_joints) {
-      std::snprintf(line, sizeof line, "  joint %d, %d knots from %.6g to %.6g:", j + 1, position_knots,
-                    position_from[j], position_to[j]);
+      std::snprintf(line, sizeof line, "  joint %d, %d knots from %.6g to %.6g:", j + 1, knots, position_from[j],
+                    position_to[j]);
       s << line;
-      for (int k = 0; k < position_knots; ++k) s << " " << Format(position_levels(j, k));
+      for (int k = 0; k < knots; ++k) s << " " << Format(levels(j, k));
       s << "\n";
     }
+  };
+  if (position_knots > 0) {
+    knot_levels("Coulomb friction along each joint's travel (the model's level at each knot, N·m or N)", position_knots,
+                position_levels);
     for (const auto& note : position_notes) s << "  " << note << "\n";
   }
   if (torque_knots > 0) {
-    s << "Torque along each joint's travel (position_torque: what the joint receives beside the command at each "
-         "knot, N·m or N):\n";
-    for (const int j : position_joints) {
-      std::snprintf(line, sizeof line, "  joint %d, %d knots from %.6g to %.6g:", j + 1, torque_knots,
-                    position_from[j], position_to[j]);
-      s << line;
-      for (int k = 0; k < torque_knots; ++k) s << " " << Format(torque_levels(j, k));
-      s << "\n";
-    }
+    knot_levels("Torque along each joint's travel (position_torque: what the joint receives beside the command at "
+                "each knot, N·m or N)",
+                torque_knots, torque_levels);
   }
   if (consistency_fixed) {
     s << "\nThe minimum-norm standard parameters were not physical:\n";

@@ -62,6 +62,30 @@ Found Identify(const std::string& csv, double cutoff_hz, double rest_share, doub
   return f;
 }
 
+// A plant's estimation run (CSV text) and its held-out run with force pulses (seed + 1).
+struct PlantRuns {
+  std::string estimation;
+  ArmLog test;
+};
+PlantRuns RecordRuns(const testing::EmpsLikeRecording& recording, std::uint64_t seed) {
+  testing::EmpsLikeRecording with_pulses = recording;
+  with_pulses.pulses = true;
+  return {testing::RecordEmpsLike(seed, recording), ParseArmLog(testing::RecordEmpsLike(seed + 1, with_pulses), "test.csv")};
+}
+
+// The knots held-out blocks choose on an estimation run (offsets on, the cut-off chosen
+// from the log): position_friction's, or with `torque` position_torque's.
+PositionFrictionChoice ChooseKnots(const std::string& estimation, bool torque) {
+  std::vector<ArmLog> logs = {ParseArmLog(estimation, "estimation.csv")};
+  DerivativeCutoffOptions cutoff;
+  cutoff.identification.torque_offsets = true;
+  DeriveAtChosenCutoff(Nominal(), &logs, cutoff);
+  PositionFrictionChoiceOptions choose;
+  choose.identification.torque_offsets = true;
+  choose.torque = torque;
+  return ChoosePositionFrictionKnots(Nominal(), logs, choose);
+}
+
 TEST(EmpsLikeDrive, IdentifyFindsTheFrictionAndSimulatesTheHeldOutRunWithPulses) {
   if (!testing::MujocoAvailable()) GTEST_SKIP() << "built without MuJoCo";
   const testing::EmpsLikeTruth truth;
@@ -121,12 +145,9 @@ TEST(EmpsLikeDrive, PositionFrictionFindsAScrewTighterAtOneEnd) {
   for (const double wave : {0.5, 0.0}) {
     testing::EmpsLikeRecording recording;
     recording.truth.coulomb_wave = wave;
-    testing::EmpsLikeRecording with_pulses = recording;
-    with_pulses.pulses = true;
     for (std::uint64_t seed : {1, 3}) {
       SCOPED_TRACE("wave " + std::to_string(wave) + ", seed " + std::to_string(seed));
-      const std::string estimation = testing::RecordEmpsLike(seed, recording);
-      const ArmLog test = ParseArmLog(testing::RecordEmpsLike(seed + 1, with_pulses), "test.csv");
+      const auto [estimation, test] = RecordRuns(recording, seed);
       const double rest_share = WlsIdentificationOptions{}.rest_share;
       const Found one = Identify(estimation, 0, rest_share);
       const Found knotted = Identify(estimation, 0, rest_share, nullptr, 5);
@@ -146,13 +167,7 @@ TEST(EmpsLikeDrive, PositionFrictionFindsAScrewTighterAtOneEnd) {
       }
       std::printf("; free run %.1f %%\n", knotted_fit);
       {
-        std::vector<ArmLog> logs = {ParseArmLog(estimation, "estimation.csv")};
-        DerivativeCutoffOptions cutoff;
-        cutoff.identification.torque_offsets = true;
-        DeriveAtChosenCutoff(Nominal(), &logs, cutoff);
-        PositionFrictionChoiceOptions choose;
-        choose.identification.torque_offsets = true;
-        const PositionFrictionChoice choice = ChoosePositionFrictionKnots(Nominal(), logs, choose);
+        const PositionFrictionChoice choice = ChooseKnots(estimation, false);
         std::printf("  %s\n", choice.Brief().c_str());
         // Measured: the wave 5 knots on both seeds (held-out error 0.0033 / 0.0016 with
         // one level, 0.00063 / 0.00045 with five), the plain cart one level (3 to 9 knots
@@ -184,12 +199,9 @@ TEST(EmpsLikeDrive, PositionTorqueFindsACablePullingAlongTheTravel) {
   for (const double cable : {4.0, 0.0}) {
     testing::EmpsLikeRecording recording;
     recording.truth.cable = cable;
-    testing::EmpsLikeRecording with_pulses = recording;
-    with_pulses.pulses = true;
     for (std::uint64_t seed : {1, 3}) {
       SCOPED_TRACE("cable " + std::to_string(cable) + ", seed " + std::to_string(seed));
-      const std::string estimation = testing::RecordEmpsLike(seed, recording);
-      const ArmLog test = ParseArmLog(testing::RecordEmpsLike(seed + 1, with_pulses), "test.csv");
+      const auto [estimation, test] = RecordRuns(recording, seed);
       const double rest_share = WlsIdentificationOptions{}.rest_share;
       const Found plain = Identify(estimation, 0, rest_share);
       const Found knotted = Identify(estimation, 0, rest_share, nullptr, 0, 5);
@@ -209,14 +221,7 @@ TEST(EmpsLikeDrive, PositionTorqueFindsACablePullingAlongTheTravel) {
         worst = std::max(worst, std::abs(tau0 + k.torque_levels(0, knot) - truth));
       }
       std::printf("; free run %.1f %%\n", knotted_fit);
-      std::vector<ArmLog> logs = {ParseArmLog(estimation, "estimation.csv")};
-      DerivativeCutoffOptions cutoff;
-      cutoff.identification.torque_offsets = true;
-      DeriveAtChosenCutoff(Nominal(), &logs, cutoff);
-      PositionFrictionChoiceOptions choose;
-      choose.identification.torque_offsets = true;
-      choose.torque = true;
-      const PositionFrictionChoice choice = ChoosePositionFrictionKnots(Nominal(), logs, choose);
+      const PositionFrictionChoice choice = ChooseKnots(estimation, true);
       std::printf("  %s\n", choice.Brief().c_str());
       EXPECT_LT(worst, 1.5);  // N
       if (cable > 0) {
