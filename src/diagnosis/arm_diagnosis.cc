@@ -54,13 +54,14 @@ constexpr double kBristleMargin = 0.1;
 // deflect micrometres to a milliradian or so before they slide; softer "bristles" stand
 // for something else (a flexible joint's spring, on the plants that have one).
 constexpr double kMaxBristleDeflection = 0.01;
-// position_friction: the knots a candidate gets, evenly over the positions the logs
-// visit, and the share of its joint's fit-row squared residual it must remove beyond the
-// best constant level (the levels one level, a Coulomb friction) to be kept: it nests
-// that level, so a criterion's parameter count is no margin on thousands of rows.
+// position_friction and position_torque: the knots a candidate gets, evenly over the
+// positions the logs visit, and the share of its joint's fit-row squared residual it must
+// remove beyond the best constant level (for friction one Coulomb level, for a torque a
+// torque offset) to be kept: it nests that level, so a criterion's parameter count is no
+// margin on thousands of rows.
 constexpr int kPositionFrictionKnots = 5;
 constexpr double kPositionFrictionMargin = 0.1;
-// rad or m: a joint that moves less than this gets no position_friction candidate.
+// rad or m: a joint that moves less than this gets no candidate along its travel.
 constexpr double kPositionFrictionSpan = 1e-3;
 // The shortest bandwidth of the long-run variance (statistics.h): a quarter second holds
 // a motion's stop or reversal (the events where friction and delays show).
@@ -128,6 +129,8 @@ ParameterMap FitVariablesOf(const TrialEffect& e, double floor) {
     }
   } else if (e.name == "position_friction") {
     for (int k = 0; k < ProfileLevelCount('c', e.parameters); ++k) add(e.parameters.at(ProfileLevelKey('c', k)), floor, kInf);
+  } else if (e.name == "position_torque") {
+    for (int k = 0; k < ProfileLevelCount('p', e.parameters); ++k) add(e.parameters.at(ProfileLevelKey('p', k)), -kInf, kInf);
   } else if (e.name == "torque_offset") {
     add(ParameterOr(e, "tau0"), -kInf, kInf);
   } else if (e.name == "torque_saturation") {
@@ -168,6 +171,10 @@ void SetFromFitVariables(const double* x, double inertia, double floor, TrialEff
   if (e->name == "position_friction") {
     // The knots stay where the guess put them; only their levels are variables.
     for (int k = 0; k < ProfileLevelCount('c', p); ++k) p[ProfileLevelKey('c', k)] = positive(x[k], floor);
+    return;
+  }
+  if (e->name == "position_torque") {
+    for (int k = 0; k < ProfileLevelCount('p', p); ++k) p[ProfileLevelKey('p', k)] = x[k];
     return;
   }
   p.clear();
@@ -296,8 +303,11 @@ class ArmProblem : public DiagnosisProblem {
     if (payload.size()) needed += payload.col(j);
     const auto& qd = d.log->qd;
     const Eigen::VectorXd friction = ArmFrictionAlong(trial, j, d.log->t, d.log->q.col(j), qd.col(j));
+    const JointEffects e = trial.effects.joint(j);
     for (int r = 0; r < d.log->rows(); ++r) {
       if (std::abs(qd(r, j)) >= standstill_) needed[r] += friction[r];
+      // position_torque acts on the link: the drive needs that much less.
+      if (e.torque_profile.on()) needed[r] -= e.PositionTorque(d.log->q(r, j));
     }
     return needed;
   }
@@ -381,10 +391,10 @@ class ArmProblem : public DiagnosisProblem {
     std::vector<TrialEffect> out;
     for (int j = 0; j < n_; ++j) {
       for (const std::string& name : ArmEffectNames()) {
-        // position_torque is identify's (--position-torque), not yet the diagnosis's.
-        if (name == "payload" || name == "position_torque" || taken.count({name, j})) continue;
-        // Friction along the travel needs a travel to map.
-        if (name == "position_friction" && !(q_hi_[j] - q_lo_[j] >= kPositionFrictionSpan)) continue;
+        if (name == "payload" || taken.count({name, j})) continue;
+        // Friction or a torque along the travel needs a travel to map.
+        const bool along = name == "position_friction" || name == "position_torque";
+        if (along && !(q_hi_[j] - q_lo_[j] >= kPositionFrictionSpan)) continue;
         out.push_back({name, j, {}});
       }
     }
@@ -398,7 +408,7 @@ class ArmProblem : public DiagnosisProblem {
       TrialEffect& e = effects[static_cast<std::size_t>(i)];
       if (!e.parameters.empty()) continue;
       if (e.name == "stribeck_friction") fresh_stribeck.push_back(i);
-      if (e.name == "position_friction") fresh_position.push_back(i);
+      if (e.name == "position_friction" || e.name == "position_torque") fresh_position.push_back(i);
       InitialGuess(&effects, i);
     }
     Refine(&effects, free);
@@ -459,7 +469,8 @@ class ArmProblem : public DiagnosisProblem {
   // The bristles' damping follows their stiffness (SetBristles); `maxwell` names the element.
   bool Derived(const TrialEffect& e, const std::string& key) const override {
     return (e.name == "stribeck_friction" && (key == "sigma1" || key == "maxwell")) ||
-           (e.name == "position_friction" && (key == "from" || key == "to"));  // the knots: the logs' travel
+           ((e.name == "position_friction" || e.name == "position_torque") &&
+            (key == "from" || key == "to"));  // the knots: the logs' travel
   }
   // A joint's effect changes that joint's command alone (Residual): scored on it.
   int ChannelOf(const TrialEffect& e) const override { return e.joint; }
@@ -599,9 +610,10 @@ class ArmProblem : public DiagnosisProblem {
   // they remove kBristleMargin of its joint's fit-row squared residual beyond it and do
   // no worse on its selection rows.
   void TryBristles(std::vector<TrialEffect>* effects, const std::vector<int>& free, int i) const;
-  // Throws CheckFailed unless the position_friction effects[i], just fitted, removes
-  // kPositionFrictionMargin of its joint's fit-row squared residual beyond its best
-  // single level (every knot at the constant the other effects' residual asks for).
+  // Throws CheckFailed unless the position_friction or position_torque effects[i], just
+  // fitted, removes kPositionFrictionMargin of its joint's fit-row squared residual beyond
+  // its best single level (every knot at the constant the other effects' residual asks
+  // for: one Coulomb level, or a torque offset).
   void CheckLevelsVary(const std::vector<TrialEffect>& effects, int i) const;
 
   ArmModel nominal_;
@@ -635,21 +647,32 @@ void GuessCoulombFriction(const std::vector<double>& qd, const Eigen::Map<const 
   (*p)["c_neg"] = std::max(0.0, c[1]);
 }
 
-// Friction along the travel: kPositionFrictionKnots knots from `from` to `to`, their
-// levels by least squares on sign(qd) times each knot's weight (at least `floor`).
-void GuessPositionFriction(const GuessRows& fit, double from, double to, double floor,
-                           const Eigen::Map<const Eigen::VectorXd>& rv, std::map<std::string, double>* p) {
+// How a profile along the travel moves joint j's command on a fit row: friction's levels
+// by sign(qd) (the command rises by c(q) sign(qd)); a torque's by -1 (the joint receives
+// p(q), the command falls by it) on the rows where the joint moves, 0 at a standstill,
+// whose residual the friction band has already clipped.
+double ProfileFactor(bool torque, double qd, double standstill) {
+  if (!torque) return SignOf(qd);
+  return std::abs(qd) >= standstill ? -1.0 : 0.0;
+}
+
+// Friction (or with `torque` a torque) along the travel: kPositionFrictionKnots knots
+// from `from` to `to`, their levels by least squares on ProfileFactor times each knot's
+// weight (friction's at least `floor`).
+void GuessPositionProfile(const GuessRows& fit, double from, double to, double floor, bool torque, double standstill,
+                          const Eigen::Map<const Eigen::VectorXd>& rv, std::map<std::string, double>* p) {
   const auto rows = static_cast<Eigen::Index>(fit.qd.size());
   Eigen::MatrixXd a(rows, kPositionFrictionKnots);
   for (Eigen::Index r = 0; r < rows; ++r) {
-    const double sign = SignOf(fit.qd[static_cast<std::size_t>(r)]);
+    const double factor = ProfileFactor(torque, fit.qd[static_cast<std::size_t>(r)], standstill);
     for (int k = 0; k < kPositionFrictionKnots; ++k)
-      a(r, k) = sign * KnotWeight(from, to, kPositionFrictionKnots, k, fit.q[static_cast<std::size_t>(r)]);
+      a(r, k) = factor * KnotWeight(from, to, kPositionFrictionKnots, k, fit.q[static_cast<std::size_t>(r)]);
   }
   const Eigen::VectorXd c = SolveLeastSquares(a, rv);
   (*p)["from"] = from;
   (*p)["to"] = to;
-  for (int k = 0; k < kPositionFrictionKnots; ++k) (*p)[ProfileLevelKey('c', k)] = std::max(floor, c[k]);
+  for (int k = 0; k < kPositionFrictionKnots; ++k)
+    (*p)[ProfileLevelKey(torque ? 'p' : 'c', k)] = torque ? c[k] : std::max(floor, c[k]);
 }
 
 // Stribeck friction's c, s and vs: least squares for each of a grid of Stribeck speeds, the best kept.
@@ -823,8 +846,9 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
     GuessCoulombFriction(fit.qd, rv, &p);
   } else if (e.name == "stribeck_friction") {
     GuessStribeckFriction(fit.qd, rv, &p);
-  } else if (e.name == "position_friction") {
-    GuessPositionFriction(fit, q_lo_[e.joint], q_hi_[e.joint], LevelFloor(e.joint), rv, &p);
+  } else if (e.name == "position_friction" || e.name == "position_torque") {
+    GuessPositionProfile(fit, q_lo_[e.joint], q_hi_[e.joint], LevelFloor(e.joint), e.name == "position_torque",
+                         standstill_, rv, &p);
   } else if (e.name == "torque_offset") {
     // The joint receives the command plus tau0: the residual rises by it.
     p["tau0"] = rows ? -rv.mean() : 0.0;
@@ -914,23 +938,27 @@ void ArmProblem::CheckLevelsVary(const std::vector<TrialEffect>& effects, int i)
   std::vector<TrialEffect> others = effects;
   others.erase(others.begin() + i);
   const GuessRows fit = GuessRowsFor(Build(others), e);
+  const bool torque = e.name == "position_torque";
   double along = 0, across = 0;
   for (std::size_t r = 0; r < fit.r.size(); ++r) {
-    const double sign = SignOf(fit.qd[r]);
-    along += sign * fit.r[r];
-    across += sign * sign;
+    const double factor = ProfileFactor(torque, fit.qd[r], standstill_);
+    along += factor * fit.r[r];
+    across += factor * factor;
   }
-  const double level = std::max(LevelFloor(e.joint), across > 0 ? along / across : 0.0);
+  const double best = across > 0 ? along / across : 0.0;
+  const double level = torque ? best : std::max(LevelFloor(e.joint), best);
   std::vector<TrialEffect> one = effects;
   auto& levels = one[static_cast<std::size_t>(i)].parameters;
-  for (int k = 0; k < ProfileLevelCount('c', levels); ++k) levels[ProfileLevelKey('c', k)] = level;
+  const char letter = torque ? 'p' : 'c';
+  for (int k = 0; k < ProfileLevelCount(letter, levels); ++k) levels[ProfileLevelKey(letter, k)] = level;
   const double varied = Cost(effects, {e.joint}), flat = Cost(one, {e.joint});
   if (varied <= (1 - kPositionFrictionMargin) * flat) return;
   char msg[240];
   std::snprintf(msg, sizeof msg,
                 "its levels remove %.3g %% of the joint's fit-row cost beyond one level of %.3g, under the %g %% a "
-                "map of the travel must: Coulomb friction by another name",
-                flat > 0 ? 100 * (1 - varied / flat) : 0.0, level, 100 * kPositionFrictionMargin);
+                "map of the travel must: %s by another name",
+                flat > 0 ? 100 * (1 - varied / flat) : 0.0, level, 100 * kPositionFrictionMargin,
+                torque ? "a torque offset" : "Coulomb friction");
   throw CheckFailed(msg);
 }
 
@@ -996,6 +1024,20 @@ std::string ArmProblem::Signature(const TrialEffect& e) const {
                     "so the friction turns round over a stretch of motion at each reversal, not at once",
                     plain.c_str(), FormatParameter(p.at("sigma0")).c_str(), FormatParameter(1e3 * BristleDeflection(e)).c_str());
     }
+  } else if (e.name == "position_friction" || e.name == "position_torque") {
+    const bool torque = e.name == "position_torque";
+    const char letter = torque ? 'p' : 'c';
+    double lo = kInf, hi = -kInf;
+    for (int k = 0; k < ProfileLevelCount(letter, p); ++k) {
+      lo = std::min(lo, p.at(ProfileLevelKey(letter, k)));
+      hi = std::max(hi, p.at(ProfileLevelKey(letter, k)));
+    }
+    std::snprintf(buf, sizeof buf,
+                  torque ? "a torque that follows the joint's position whether or not it moves, %s to %s N·m over "
+                           "%s to %s"
+                         : "the friction level changes along the joint's travel, by %s to %s N·m over %s to %s",
+                  FormatParameter(lo).c_str(), FormatParameter(hi).c_str(), FormatParameter(p.at("from")).c_str(),
+                  FormatParameter(p.at("to")).c_str());
   } else if (e.name == "torque_offset") {
     std::snprintf(buf, sizeof buf, "a constant %s N·m at every posture, speed and acceleration, where a payload's torque would follow gravity",
                   FormatParameter(p.at("tau0")).c_str());

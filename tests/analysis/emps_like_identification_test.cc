@@ -396,6 +396,50 @@ TEST(EmpsLikeDrive, DiagnoseNamesFrictionThatVariesAlongTheTravel) {
   }
 }
 
+// Issue 65: the diagnosis names a force along the travel. The MuJoCo cart with a cable
+// (6 N at both ends of its travel, -6 N in its middle), identified as a user would first
+// (least squares, one offset) and that model diagnosed: position_torque on the axis,
+// what the cart receives at each knot (the identified offset plus its levels) near the
+// plant's. (With 4 N seed 3 names nothing: position_torque removes 15 % of the selection
+// rows' error at t 3, short of Holm's correction over the round's candidates.)
+TEST(EmpsLikeDrive, DiagnoseNamesAForceAlongTheTravel) {
+  if (!testing::MujocoAvailable()) GTEST_SKIP() << "built without MuJoCo";
+  testing::EmpsLikeRecording recording;
+  recording.truth.cable = 6;
+  for (std::uint64_t seed : {1, 3}) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::string csv = testing::RecordEmpsLike(seed, recording);
+    const ArmModel identified = Identify(csv, 0, WlsIdentificationOptions{}.rest_share).model;
+    std::vector<ArmLog> logs = {ParseArmLog(csv, "estimation.csv")};
+    DeriveAtChosenCutoff(identified, &logs, {});
+    const DiagnosisReport report = DiagnoseArm(identified, logs, DiagnosisOptions{});
+    std::string named;
+    const DiagnosedEffect* map = nullptr;
+    for (const DiagnosedEffect& e : report.effects) {
+      named += " " + e.name;
+      if (e.name == "position_torque") map = &e;
+    }
+    std::printf("seed %d: named%s; test-row gap %.2f -> %.2f\n", static_cast<int>(seed), named.c_str(),
+                report.gap_before, report.gap_after);
+    ASSERT_NE(map, nullptr) << named << "\n" << FormatDiagnosisTable(report);
+    const double from = map->parameters.at("from"), to = map->parameters.at("to");
+    const double tau0 = identified.effects.joint(0).torque_offset;
+    double worst = 0;
+    for (int k = 0; k < 5; ++k) {
+      const double at = from + (to - from) * k / 4;
+      const double level = tau0 + map->parameters.at("p" + std::to_string(k + 1));
+      const double truth = recording.truth.offset + testing::EmpsLikeCableForce(recording.truth, at);
+      std::printf("  knot %d at %.3f m: %.2f N (true %.2f)\n", k + 1, at, level, truth);
+      worst = std::max(worst, std::abs(level - truth));
+    }
+    // Measured (seeds 1 / 3): within 1.4 / 1.9 N, five straight pieces fitted to a
+    // cosine deepening its trough; the test-row gap 2.79 -> 1.79 / 2.80 -> 1.94 N (noise
+    // floor about 1.1 N; a time delay named beside it, as on the screw).
+    EXPECT_LT(worst, 2.5);  // N, of a force from -9 to 3 N
+    EXPECT_LT(report.gap_after, 0.8 * report.gap_before);
+  }
+}
+
 // A drive whose dry friction acts through a spring (a Maxwell-slip element made in
 // MuJoCo: a 5 kg slider with the friction, the cart on a 2e5 N/m spring to it, damped at
 // half of critical; emps_like_plant.h): it deflects about 0.1 mm before it slides. The
