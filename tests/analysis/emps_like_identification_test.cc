@@ -347,6 +347,31 @@ TEST(EmpsLikeDrive, DiagnoseNamesBothFrictionsAtTheChosenCutoff) {
   }
 }
 
+// A cart's log diagnosed as a user would after identify (least squares, one level and
+// offsets, the cut-off chosen from the log): the identified model, the report, and the
+// effect `name` among those it names (nullptr: not named). Prints what it named.
+struct DiagnosedCart {
+  ArmModel identified;
+  DiagnosisReport report;
+  const DiagnosedEffect* Named(const std::string& name) const {
+    for (const DiagnosedEffect& e : report.effects)
+      if (e.name == name) return &e;
+    return nullptr;
+  }
+};
+DiagnosedCart DiagnoseIdentifiedCart(const std::string& csv, std::uint64_t seed) {
+  DiagnosedCart d;
+  d.identified = Identify(csv, 0, WlsIdentificationOptions{}.rest_share).model;
+  std::vector<ArmLog> logs = {ParseArmLog(csv, "estimation.csv")};
+  DeriveAtChosenCutoff(d.identified, &logs, {});
+  d.report = DiagnoseArm(d.identified, logs, DiagnosisOptions{});
+  std::string named;
+  for (const DiagnosedEffect& e : d.report.effects) named += " " + e.name;
+  std::printf("seed %d: named%s; test-row gap %.2f -> %.2f\n", static_cast<int>(seed), named.c_str(),
+              d.report.gap_before, d.report.gap_after);
+  return d;
+}
+
 // Issue 65: the diagnosis names friction that varies along the travel. The MuJoCo cart
 // with a screw tighter at one end (30.6 N at the travel's start, 10.2 N at its end),
 // identified as a user would first (least squares, one Coulomb level, offsets) and that
@@ -360,26 +385,17 @@ TEST(EmpsLikeDrive, DiagnoseNamesFrictionThatVariesAlongTheTravel) {
   recording.truth.coulomb_wave = 0.5;
   for (std::uint64_t seed : {1, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const std::string csv = testing::RecordEmpsLike(seed, recording);
-    const ArmModel identified = Identify(csv, 0, WlsIdentificationOptions{}.rest_share).model;
-    std::vector<ArmLog> logs = {ParseArmLog(csv, "estimation.csv")};
-    DeriveAtChosenCutoff(identified, &logs, {});
-    const DiagnosisReport report = DiagnoseArm(identified, logs, DiagnosisOptions{});
-    std::string named;
-    const DiagnosedEffect* map = nullptr;
-    for (const DiagnosedEffect& e : report.effects) {
-      named += " " + e.name;
-      if (e.name == "position_friction") map = &e;
-    }
-    std::printf("seed %d: named%s; test-row gap %.2f -> %.2f\n", static_cast<int>(seed), named.c_str(),
-                report.gap_before, report.gap_after);
+    const DiagnosedCart d = DiagnoseIdentifiedCart(testing::RecordEmpsLike(seed, recording), seed);
+    const ArmModel& identified = d.identified;
+    const DiagnosisReport& report = d.report;
+    const DiagnosedEffect* map = d.Named("position_friction");
     for (const DiagnosisCandidate& c : report.candidates) {
       if (c.name != "position_friction" && c.name != "coulomb_friction") continue;
       std::printf("  round %d %s %.1f %%:", c.round, c.name.c_str(), 100 * c.reduction);
       for (const auto& [k, v] : c.parameters) std::printf(" %s %.3g", k.c_str(), v);
       std::printf("\n");
     }
-    ASSERT_NE(map, nullptr) << named << "\n" << FormatDiagnosisTable(report);
+    ASSERT_NE(map, nullptr) << FormatDiagnosisTable(report);
     const double from = map->parameters.at("from"), to = map->parameters.at("to");
     double worst = 0;
     for (int k = 0; k < 5; ++k) {
@@ -408,20 +424,11 @@ TEST(EmpsLikeDrive, DiagnoseNamesAForceAlongTheTravel) {
   recording.truth.cable = 6;
   for (std::uint64_t seed : {1, 3}) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const std::string csv = testing::RecordEmpsLike(seed, recording);
-    const ArmModel identified = Identify(csv, 0, WlsIdentificationOptions{}.rest_share).model;
-    std::vector<ArmLog> logs = {ParseArmLog(csv, "estimation.csv")};
-    DeriveAtChosenCutoff(identified, &logs, {});
-    const DiagnosisReport report = DiagnoseArm(identified, logs, DiagnosisOptions{});
-    std::string named;
-    const DiagnosedEffect* map = nullptr;
-    for (const DiagnosedEffect& e : report.effects) {
-      named += " " + e.name;
-      if (e.name == "position_torque") map = &e;
-    }
-    std::printf("seed %d: named%s; test-row gap %.2f -> %.2f\n", static_cast<int>(seed), named.c_str(),
-                report.gap_before, report.gap_after);
-    ASSERT_NE(map, nullptr) << named << "\n" << FormatDiagnosisTable(report);
+    const DiagnosedCart d = DiagnoseIdentifiedCart(testing::RecordEmpsLike(seed, recording), seed);
+    const ArmModel& identified = d.identified;
+    const DiagnosisReport& report = d.report;
+    const DiagnosedEffect* map = d.Named("position_torque");
+    ASSERT_NE(map, nullptr) << FormatDiagnosisTable(report);
     const double from = map->parameters.at("from"), to = map->parameters.at("to");
     const double tau0 = identified.effects.joint(0).torque_offset;
     double worst = 0;
