@@ -388,10 +388,17 @@ class ArmProblem : public DiagnosisProblem {
     std::set<std::pair<std::string, int>> taken;
     for (const ArmEffect& e : ListArmEffects(nominal_.effects)) taken.insert({e.name, e.joint});
     for (const TrialEffect& e : current) taken.insert({e.name, e.joint});
+    // A torque along the travel holds a torque offset (all its levels equal): both fitted
+    // on one joint would trade against each other and neither's standard error would be
+    // defined, so a joint whose trial effects hold one is not offered the other.
+    std::set<std::pair<std::string, int>> fitted;
+    for (const TrialEffect& e : current) fitted.insert({e.name, e.joint});
     std::vector<TrialEffect> out;
     for (int j = 0; j < n_; ++j) {
       for (const std::string& name : ArmEffectNames()) {
         if (name == "payload" || taken.count({name, j})) continue;
+        if (name == "position_torque" && fitted.count({"torque_offset", j})) continue;
+        if (name == "torque_offset" && fitted.count({"position_torque", j})) continue;
         // Friction or a torque along the travel needs a travel to map.
         const bool along = name == "position_friction" || name == "position_torque";
         if (along && !(q_hi_[j] - q_lo_[j] >= kPositionFrictionSpan)) continue;
