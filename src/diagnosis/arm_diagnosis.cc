@@ -385,14 +385,13 @@ class ArmProblem : public DiagnosisProblem {
   }
 
   std::vector<TrialEffect> Candidates(const std::vector<TrialEffect>& current) const override {
-    std::set<std::pair<std::string, int>> taken;
+    std::set<std::pair<std::string, int>> fitted;
+    for (const TrialEffect& e : current) fitted.insert({e.name, e.joint});
+    std::set<std::pair<std::string, int>> taken = fitted;
     for (const ArmEffect& e : ListArmEffects(nominal_.effects)) taken.insert({e.name, e.joint});
-    for (const TrialEffect& e : current) taken.insert({e.name, e.joint});
     // A torque along the travel holds a torque offset (all its levels equal): both fitted
     // on one joint would trade against each other and neither's standard error would be
     // defined, so a joint whose trial effects hold one is not offered the other.
-    std::set<std::pair<std::string, int>> fitted;
-    for (const TrialEffect& e : current) fitted.insert({e.name, e.joint});
     std::vector<TrialEffect> out;
     for (int j = 0; j < n_; ++j) {
       for (const std::string& name : ArmEffectNames()) {
