@@ -175,7 +175,6 @@ std::vector<ArmOutputErrorOptions> ParseOutputErrorStages(const std::string& tex
   }
 }
 
-// Refuses omni-only options, a non-YAML --out and bad settings; returns the weighted least squares' options.
 // A --position-friction or --position-torque value: a whole number of knots, or 0 for
 // auto (chosen later from the logs).
 int KnotsOption(const char* flag, const std::string& text) {
@@ -187,6 +186,7 @@ int KnotsOption(const char* flag, const std::string& text) {
   return static_cast<int>(knots);
 }
 
+// Refuses omni-only options, a non-YAML --out and bad settings; returns the weighted least squares' options.
 WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& options,
                                                  std::vector<ArmOutputErrorOptions>* stages) {
   for (const char* omni_only :
