@@ -105,6 +105,12 @@ double ParameterOr(const TrialEffect& e, const char* key, double fallback = 0) {
   return it == e.parameters.end() ? fallback : it->second;
 }
 
+// The letter of a profile along the travel's levels (position_friction's c1.., a
+// position_torque's p1..), or '\0' for any other effect.
+char ProfileLetter(const std::string& name) {
+  return name == "position_friction" ? 'c' : name == "position_torque" ? 'p' : '\0';
+}
+
 // An effect's parameters as variables (log scale where a parameter spans decades).
 // `floor`: the least a position_friction level may be (minus the joint's nominal Coulomb
 // friction, which it may take away from).
@@ -127,10 +133,11 @@ ParameterMap FitVariablesOf(const TrialEffect& e, double floor) {
     if (e.parameters.count("sigma0")) {
       add(std::log(ParameterOr(e, "sigma0")), std::log(kMinBristleStiffness), std::log(kMaxBristleStiffness));
     }
-  } else if (e.name == "position_friction") {
-    for (int k = 0; k < ProfileLevelCount('c', e.parameters); ++k) add(e.parameters.at(ProfileLevelKey('c', k)), floor, kInf);
-  } else if (e.name == "position_torque") {
-    for (int k = 0; k < ProfileLevelCount('p', e.parameters); ++k) add(e.parameters.at(ProfileLevelKey('p', k)), -kInf, kInf);
+  } else if (const char letter = ProfileLetter(e.name)) {
+    // A torque's levels are free; friction's no lower than `floor`.
+    const double lowest = letter == 'p' ? -kInf : floor;
+    for (int k = 0; k < ProfileLevelCount(letter, e.parameters); ++k)
+      add(e.parameters.at(ProfileLevelKey(letter, k)), lowest, kInf);
   } else if (e.name == "torque_offset") {
     add(ParameterOr(e, "tau0"), -kInf, kInf);
   } else if (e.name == "torque_saturation") {
@@ -168,13 +175,10 @@ void SetFromFitVariables(const double* x, double inertia, double floor, TrialEff
   auto& p = e->parameters;
   auto positive = [](double v, double least) { return std::max(v, least); };
   const bool bristles = p.count("sigma0") > 0;
-  if (e->name == "position_friction") {
+  if (const char letter = ProfileLetter(e->name)) {
     // The knots stay where the guess put them; only their levels are variables.
-    for (int k = 0; k < ProfileLevelCount('c', p); ++k) p[ProfileLevelKey('c', k)] = positive(x[k], floor);
-    return;
-  }
-  if (e->name == "position_torque") {
-    for (int k = 0; k < ProfileLevelCount('p', p); ++k) p[ProfileLevelKey('p', k)] = x[k];
+    for (int k = 0; k < ProfileLevelCount(letter, p); ++k)
+      p[ProfileLevelKey(letter, k)] = letter == 'p' ? x[k] : positive(x[k], floor);
     return;
   }
   p.clear();
@@ -206,9 +210,9 @@ void SetFromFitVariables(const double* x, double inertia, double floor, TrialEff
   }
 }
 
-// Least squares x = argmin |A x - b| with columns of A given as vectors (small systems).
 double SignOf(double v) { return v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0); }
 
+// Least squares x = argmin |A x - b| with columns of A given as vectors (small systems).
 Eigen::VectorXd SolveLeastSquares(const Eigen::MatrixXd& a, const Eigen::VectorXd& b) {
   return a.colPivHouseholderQr().solve(b);
 }
@@ -399,8 +403,7 @@ class ArmProblem : public DiagnosisProblem {
         if (name == "position_torque" && fitted.count({"torque_offset", j})) continue;
         if (name == "torque_offset" && fitted.count({"position_torque", j})) continue;
         // Friction or a torque along the travel needs a travel to map.
-        const bool along = name == "position_friction" || name == "position_torque";
-        if (along && !(q_hi_[j] - q_lo_[j] >= kPositionFrictionSpan)) continue;
+        if (ProfileLetter(name) && !(q_hi_[j] - q_lo_[j] >= kPositionFrictionSpan)) continue;
         out.push_back({name, j, {}});
       }
     }
@@ -414,7 +417,7 @@ class ArmProblem : public DiagnosisProblem {
       TrialEffect& e = effects[static_cast<std::size_t>(i)];
       if (!e.parameters.empty()) continue;
       if (e.name == "stribeck_friction") fresh_stribeck.push_back(i);
-      if (e.name == "position_friction" || e.name == "position_torque") fresh_position.push_back(i);
+      if (ProfileLetter(e.name)) fresh_position.push_back(i);
       InitialGuess(&effects, i);
     }
     Refine(&effects, free);
@@ -475,8 +478,7 @@ class ArmProblem : public DiagnosisProblem {
   // The bristles' damping follows their stiffness (SetBristles); `maxwell` names the element.
   bool Derived(const TrialEffect& e, const std::string& key) const override {
     return (e.name == "stribeck_friction" && (key == "sigma1" || key == "maxwell")) ||
-           ((e.name == "position_friction" || e.name == "position_torque") &&
-            (key == "from" || key == "to"));  // the knots: the logs' travel
+           (ProfileLetter(e.name) && (key == "from" || key == "to"));  // the knots: the logs' travel
   }
   // A joint's effect changes that joint's command alone (Residual): scored on it.
   int ChannelOf(const TrialEffect& e) const override { return e.joint; }
@@ -852,7 +854,7 @@ void ArmProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
     GuessCoulombFriction(fit.qd, rv, &p);
   } else if (e.name == "stribeck_friction") {
     GuessStribeckFriction(fit.qd, rv, &p);
-  } else if (e.name == "position_friction" || e.name == "position_torque") {
+  } else if (ProfileLetter(e.name)) {
     GuessPositionProfile(fit, q_lo_[e.joint], q_hi_[e.joint], LevelFloor(e.joint), e.name == "position_torque",
                          standstill_, rv, &p);
   } else if (e.name == "torque_offset") {
@@ -944,7 +946,8 @@ void ArmProblem::CheckLevelsVary(const std::vector<TrialEffect>& effects, int i)
   std::vector<TrialEffect> others = effects;
   others.erase(others.begin() + i);
   const GuessRows fit = GuessRowsFor(Build(others), e);
-  const bool torque = e.name == "position_torque";
+  const char letter = ProfileLetter(e.name);
+  const bool torque = letter == 'p';
   double along = 0, across = 0;
   for (std::size_t r = 0; r < fit.r.size(); ++r) {
     const double factor = ProfileFactor(torque, fit.qd[r], standstill_);
@@ -955,7 +958,6 @@ void ArmProblem::CheckLevelsVary(const std::vector<TrialEffect>& effects, int i)
   const double level = torque ? best : std::max(LevelFloor(e.joint), best);
   std::vector<TrialEffect> one = effects;
   auto& levels = one[static_cast<std::size_t>(i)].parameters;
-  const char letter = torque ? 'p' : 'c';
   for (int k = 0; k < ProfileLevelCount(letter, levels); ++k) levels[ProfileLevelKey(letter, k)] = level;
   const double varied = Cost(effects, {e.joint}), flat = Cost(one, {e.joint});
   if (varied <= (1 - kPositionFrictionMargin) * flat) return;
@@ -1030,9 +1032,8 @@ std::string ArmProblem::Signature(const TrialEffect& e) const {
                     "so the friction turns round over a stretch of motion at each reversal, not at once",
                     plain.c_str(), FormatParameter(p.at("sigma0")).c_str(), FormatParameter(1e3 * BristleDeflection(e)).c_str());
     }
-  } else if (e.name == "position_friction" || e.name == "position_torque") {
-    const bool torque = e.name == "position_torque";
-    const char letter = torque ? 'p' : 'c';
+  } else if (const char letter = ProfileLetter(e.name)) {
+    const bool torque = letter == 'p';
     double lo = kInf, hi = -kInf;
     for (int k = 0; k < ProfileLevelCount(letter, p); ++k) {
       lo = std::min(lo, p.at(ProfileLevelKey(letter, k)));
