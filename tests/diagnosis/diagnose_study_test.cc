@@ -241,6 +241,12 @@ Hidden DrawOmni(const std::string& kind, int seed) {
     h.yaml = "  velocity_scale: {scale: " + Fmt(rng.Uniform() < 0.5 ? 1 - s : 1 + s) + "}\n";
   } else if (kind == "rotation_drift") {
     h.yaml = "  rotation_drift: {rate: " + Fmt((rng.Uniform() < 0.5 ? -1 : 1) * rng.Uniform(0.2, 1.0)) + "}\n";
+  } else if (kind == "turn_coupling") {
+    const char* axis = rng.Uniform() < 0.5 ? "forward" : "sideways";
+    h.yaml = std::string("  turn_coupling: {") + axis + ": " + Fmt((rng.Uniform() < 0.5 ? -1 : 1) * rng.Uniform(0.2, 1.0)) + "}\n";
+  } else if (kind == "cross_coupling") {
+    const char* key = rng.Uniform() < 0.5 ? "sideways_per_forward" : "forward_per_sideways";
+    h.yaml = std::string("  cross_coupling: {") + key + ": " + Fmt((rng.Uniform() < 0.5 ? -1 : 1) * rng.Uniform(0.08, 0.25)) + "}\n";
   } else if (kind == "weak_wheel" || kind == "dead_wheel") {
     // dead_wheel: a motor at 0 to 5 % of its stall torque (a broken driver).
     h.name.clear();
@@ -322,7 +328,7 @@ std::vector<StudyRun> Runs() {
     for (int s = 1; s <= seeds; ++s) runs.push_back({"arm", k, s});
   }
   for (const char* k : {"time_delay", "motor_lag", "traction_limit", "velocity_saturation", "velocity_scale", "rotation_drift",
-                        "weak_wheel", "dead_wheel", "com_offset", "com_offset_far", "slope", "slope_steep"}) {
+                        "turn_coupling", "cross_coupling", "weak_wheel", "dead_wheel", "com_offset", "com_offset_far", "slope", "slope_steep"}) {
     for (int s = 1; s <= seeds; ++s) runs.push_back({"omni", k, s});
   }
   return runs;

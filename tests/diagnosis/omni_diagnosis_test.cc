@@ -43,6 +43,12 @@ std::vector<OmniCase> OmniCases() {
       {"scale_0_85", "  velocity_scale: {scale: 0.85}\n", {{"velocity_scale", {{"scale", 0.85}}}}},
       {"drift_0_3", "  rotation_drift: {rate: 0.3}\n", {{"rotation_drift", {{"rate", 0.3}}}}},
       {"drift_minus_0_8", "  rotation_drift: {rate: -0.8}\n", {{"rotation_drift", {{"rate", -0.8}}}}},
+      {"turn_coupling_0_4", "  turn_coupling: {forward: 0.4}\n", {{"turn_coupling", {{"forward", 0.4}}}}},
+      {"turn_coupling_sideways", "  turn_coupling: {sideways: -0.7}\n", {{"turn_coupling", {{"sideways", -0.7}}}}},
+      {"cross_coupling_0_15", "  cross_coupling: {sideways_per_forward: 0.15}\n",
+       {{"cross_coupling", {{"sideways_per_forward", 0.15}}}}},
+      {"cross_coupling_back", "  cross_coupling: {forward_per_sideways: -0.2}\n",
+       {{"cross_coupling", {{"forward_per_sideways", -0.2}}}}},
       {"saturation_0_7", "  velocity_saturation: {v_max: 0.7}\n", {{"velocity_saturation", {{"v_max", 0.7}}}}},
       // Look-alikes hidden together: a late command and a slow response. On 60 % of a
       // 30 s log they trade off: 46.7 ms and 61 ms (measured), the gap closed 85 % of
