@@ -267,20 +267,32 @@ class OmniProblem : public DiagnosisProblem {
     }
   }
 
+  // Every effect of the vocabulary not yet added. One the model already has (an
+  // identified model carries its delay, lags, scales and couplings) is a candidate as a
+  // change of its numbers, refitted from the model's (ChangeStart): a robot that answers
+  // later, lags longer or drives slower than when it was identified is named so, not
+  // left unexplained.
   std::vector<TrialEffect> Candidates(const std::vector<TrialEffect>& current) const override {
     std::set<std::string> taken;
-    for (const auto& [name, p] : ListOmniEffects(nominal_.effects)) taken.insert(name);
     for (const TrialEffect& e : current) taken.insert(e.name);
+    std::map<std::string, std::map<std::string, double>> present;
+    for (const auto& [name, p] : ListOmniEffects(nominal_.effects)) present[name] = p;
     std::vector<TrialEffect> out;
     for (const std::string& name : OmniEffectNames()) {
-      if (!taken.count(name)) out.push_back({name, -1, {}});
+      if (taken.count(name)) continue;
+      const auto it = present.find(name);
+      out.push_back({name, -1, it == present.end() ? std::map<std::string, double>{} : ChangeStart(name, it->second)});
     }
     return out;
   }
 
   std::vector<TrialEffect> Fit(std::vector<TrialEffect> effects, const std::vector<int>& free) const override {
     for (int i : free) {
-      if (effects[static_cast<std::size_t>(i)].parameters.empty()) InitialGuess(&effects, i);
+      if (effects[static_cast<std::size_t>(i)].parameters.empty()) {
+        InitialGuess(&effects, i);
+      } else if (AtChangeStart(effects[static_cast<std::size_t>(i)])) {
+        ChangeGuess(&effects, i);
+      }
     }
     Refine(&effects, free);
     for (int i : free) StepDelay(&effects, i);
@@ -306,6 +318,23 @@ class OmniProblem : public DiagnosisProblem {
     return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
   }
 
+  // The start of a change of effect `name`, which the model has with `present`: its
+  // numbers, and what the fit moves besides them: velocity_scale's `scale` on top of
+  // per-axis scales (a wheel radius that changed), both keys of a coupling.
+  static std::map<std::string, double> ChangeStart(const std::string& name, std::map<std::string, double> present);
+  // Whether `e` is a change candidate as Candidates made it, not yet fitted.
+  bool AtChangeStart(const TrialEffect& e) const {
+    for (const auto& [name, p] : ListOmniEffects(nominal_.effects))
+      if (name == e.name) return e.parameters == ChangeStart(name, p);
+    return false;
+  }
+  // A change's start: the best of a grid around the model's numbers (a delay walks
+  // instead, StepDelay), as InitialGuess's grid starts a new effect.
+  void ChangeGuess(std::vector<TrialEffect>* effects, int i) const;
+  // Effect i's parameters set to the grid's point of least cost, where that is below
+  // `best` (the cost they have); returns the cost they end with.
+  double TakeBestOf(const std::vector<std::map<std::string, double>>& grid, double best,
+                  std::vector<TrialEffect>* effects, int i) const;
   void InitialGuess(std::vector<TrialEffect>* effects, int i) const;
   void Refine(std::vector<TrialEffect>* effects, const std::vector<int>& free) const;
   // time_delay moves in physics steps: walk one step at a time while the cost falls.
@@ -323,6 +352,64 @@ class OmniProblem : public DiagnosisProblem {
   int chunk_rows_ = 30;
   std::vector<double> speeds_, turn_rates_;  // commanded, sorted
 };
+
+std::map<std::string, double> OmniProblem::ChangeStart(const std::string& name, std::map<std::string, double> present) {
+  const char* keys[2] = {nullptr, nullptr};
+  if (name == "velocity_scale") keys[0] = "scale";
+  if (name == "turn_coupling") keys[0] = "forward", keys[1] = "sideways";
+  if (name == "cross_coupling") keys[0] = "sideways_per_forward", keys[1] = "forward_per_sideways";
+  for (const char* key : keys) {
+    if (key) present.emplace(key, FindOmniEffectSpec(name)->Field(key)->off);
+  }
+  return present;
+}
+
+void OmniProblem::ChangeGuess(std::vector<TrialEffect>* effects, int i) const {
+  const TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
+  std::vector<std::map<std::string, double>> grid;
+  auto scaled = [&](const std::vector<std::string>& keys, double factor) {
+    std::map<std::string, double> p = e.parameters;
+    for (const std::string& k : keys) {
+      if (p.count(k)) p[k] *= factor;
+    }
+    grid.push_back(p);
+  };
+  auto shifted = [&](const std::string& key, double by) {
+    std::map<std::string, double> p = e.parameters;
+    p[key] += by;
+    grid.push_back(p);
+  };
+  if (e.name == "velocity_scale") {
+    for (double f : {0.5, 0.7, 0.85, 1.15, 1.4}) scaled({"scale"}, f);
+  } else if (e.name == "motor_lag") {
+    for (double f : {0.4, 0.63, 1.6, 2.5}) scaled({"time_constant", "forward", "sideways", "turn"}, f);
+  } else if (e.name == "velocity_saturation") {
+    for (double f : {0.6, 0.8, 1.25}) scaled({"v_max", "w_max"}, f);
+  } else if (e.name == "traction_limit") {
+    for (double f : {0.5, 0.7, 1.4}) scaled({"a_max"}, f);
+  } else if (e.name == "rotation_drift") {
+    for (double by : {-0.6, -0.2, 0.2, 0.6}) shifted("rate", by);
+  } else if (e.name == "turn_coupling") {
+    for (double by : {-1.0, -0.3, 0.3, 1.0}) shifted("forward", by), shifted("sideways", by);
+  } else if (e.name == "cross_coupling") {
+    for (double by : {-0.2, -0.07, 0.07, 0.2}) shifted("sideways_per_forward", by), shifted("forward_per_sideways", by);
+  }
+  if (!grid.empty()) TakeBestOf(grid, Cost(*effects), effects, i);
+}
+
+double OmniProblem::TakeBestOf(const std::vector<std::map<std::string, double>>& grid, double best,
+                               std::vector<TrialEffect>* effects, int i) const {
+  for (const auto& p : grid) {
+    std::vector<TrialEffect> trial = *effects;
+    trial[static_cast<std::size_t>(i)].parameters = p;
+    const double c = Cost(trial);
+    if (c < best) {
+      best = c;
+      (*effects)[static_cast<std::size_t>(i)].parameters = p;
+    }
+  }
+  return best;
+}
 
 void OmniProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
   TrialEffect& e = (*effects)[static_cast<std::size_t>(i)];
@@ -357,29 +444,15 @@ void OmniProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
       grid.push_back({{"forward_per_sideways", k}});
     }
   }
-  double best = kInf;
-  for (const auto& p : grid) {
-    std::vector<TrialEffect> trial = *effects;
-    trial[static_cast<std::size_t>(i)].parameters = p;
-    const double c = Cost(trial);
-    if (c < best) {
-      best = c;
-      e.parameters = p;
-    }
-  }
+  double best = TakeBestOf(grid, kInf, effects, i);
   if (e.name == "velocity_saturation" && e.parameters.count("v_max")) {
     // With the speed limit found, try a turn-rate limit beside it.
+    std::vector<std::map<std::string, double>> both;
     for (double q : {0.7, 0.9}) {
       const double w = Quantile(turn_rates_, q);
-      if (w <= 0.05) continue;
-      std::vector<TrialEffect> trial = *effects;
-      trial[static_cast<std::size_t>(i)].parameters = {{"v_max", e.parameters.at("v_max")}, {"w_max", w}};
-      const double c = Cost(trial);
-      if (c < best) {
-        best = c;
-        e.parameters = trial[static_cast<std::size_t>(i)].parameters;
-      }
+      if (w > 0.05) both.push_back({{"v_max", e.parameters.at("v_max")}, {"w_max", w}});
     }
+    best = TakeBestOf(both, best, effects, i);
   }
   if (!std::isfinite(best)) throw CheckFailed("the model diverged at every starting value");
 }
@@ -531,8 +604,13 @@ std::string OmniProblem::Signature(const TrialEffect& e) const {
     std::snprintf(buf, sizeof buf, "the robot answers every command %s ms later than the model's %d frames, with its response's shape unchanged",
                   ms(p.at("delay")).c_str(), nominal_.command_delay_frames + nominal_.vision_delay_frames);
   } else if (e.name == "motor_lag") {
-    std::snprintf(buf, sizeof buf, "steps in the command are followed with a time constant of %s ms, rounded rather than shifted",
-                  ms(p.at("time_constant")).c_str());
+    std::string lags;
+    if (p.count("time_constant")) lags = ms(p.at("time_constant")) + " ms";
+    for (const char* axis : kOmniAxisNames) {
+      if (p.count(axis)) lags += (lags.empty() ? "" : ", ") + ms(p.at(axis)) + " ms " + axis;
+    }
+    std::snprintf(buf, sizeof buf, "steps in the command are followed with a time constant of %s, rounded rather than shifted",
+                  lags.c_str());
   } else if (e.name == "traction_limit") {
     std::snprintf(buf, sizeof buf, "the robot accelerates at most %s m/s² where the controller's slew allows %s m/s²: the wheels slip",
                   FormatParameter(p.at("a_max")).c_str(), FormatParameter(nominal_.controller.forward.slew_rate).c_str());
@@ -562,7 +640,14 @@ std::string OmniProblem::Signature(const TrialEffect& e) const {
   } else {
     return "";
   }
-  return buf;
+  std::string out = buf;
+  for (const auto& [name, had] : ListOmniEffects(nominal_.effects)) {
+    if (name != e.name) continue;
+    std::string numbers;
+    for (const auto& [key, value] : had) numbers += (numbers.empty() ? "" : ", ") + key + " " + FormatParameter(value);
+    out += " (a change: the model had " + numbers + ")";
+  }
+  return out;
 }
 
 // The shift (s) that best aligns a command series with a velocity series (velocity
@@ -1164,7 +1249,9 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   report.notes.insert(report.notes.begin(), not_kept.begin(), not_kept.end());
   if (!engine_note.empty()) report.notes.insert(report.notes.begin(), engine_note);
   for (const auto& [name, p] : ListOmniEffects(model.effects)) {
-    report.notes.push_back("the model's own " + name + " was trusted, not refitted");
+    const bool changed = std::any_of(selection.effects.begin(), selection.effects.end(),
+                                     [&, &name = name](const TrialEffect& e) { return e.name == name; });
+    if (!changed) report.notes.push_back("the model's own " + name + " was kept: no change of its numbers passed the tests");
   }
   if (const std::string text = DescribeGrip(grip); !text.empty()) {
     report.notes.push_back("replaying the logs, " + text + "; an effect named from those rows may stand for the slip");

@@ -118,6 +118,47 @@ TEST_P(OmniDiagnosisCase, NamesWhatWasHiddenAndClosesTheGap) {
 INSTANTIATE_TEST_SUITE_P(HiddenEffects, OmniDiagnosisCase, ::testing::ValuesIn(OmniCases()),
                          [](const ::testing::TestParamInfo<OmniCase>& info) { return info.param.label; });
 
+// A model identify wrote carries effects of the vocabulary (a delay beyond its frames,
+// per-axis scales, a coupling). A robot that changed since is named by a change of those
+// numbers, refitted from the model's own (before, the model's effects were never
+// candidates and a longer delay or a worn wheel went unexplained); the same robot
+// unchanged names nothing. 30 s of the analytic robot at 30 fps each.
+TEST(OmniDiagnosis, NamesAChangeOfAnEffectTheModelAlreadyHas) {
+  const std::string identified = "extends: " + testing::SourcePath("models/omni4.yaml") +
+                                 "\nname: identified\neffects:\n"
+                                 "  turn_coupling: {sideways: 0.3}\n";
+  const std::string delay = "  time_delay: {delay: 0.03}\n";
+  const std::string scales = "  velocity_scale: {forward: 0.8, sideways: 0.7, turn: 0.9}\n";
+  const OmniModel given = LoadOmniModelFromString(identified + delay + scales, "given.yaml");
+  struct Case {
+    std::string plant_effects, name, key;
+    double value;
+  };
+  const std::vector<Case> cases = {
+      {delay + scales, "", "", 0},
+      {"  time_delay: {delay: 0.07}\n" + scales, "time_delay", "delay", 0.07},
+      {delay + "  velocity_scale: {scale: 0.8, forward: 0.8, sideways: 0.7, turn: 0.9}\n", "velocity_scale", "scale", 0.8},
+  };
+  for (const Case& c : cases) {
+    const OmniModel plant = LoadOmniModelFromString(identified + c.plant_effects, "plant.yaml");
+    const DiagnosisReport report = DiagnoseOmni(given, {testing::RecordOmniPlant(plant, 30, 5)}, DiagnosisOptions{});
+    SCOPED_TRACE(FormatDiagnosisTable(report));
+    if (c.name.empty()) {
+      EXPECT_TRUE(report.effects.empty());
+      for (const char* kept : {"time_delay", "velocity_scale", "turn_coupling"}) {
+        const std::string note = "the model's own " + std::string(kept) + " was kept: no change of its numbers passed the tests";
+        EXPECT_NE(std::find(report.notes.begin(), report.notes.end(), note), report.notes.end()) << note;
+      }
+      continue;
+    }
+    ASSERT_EQ(report.effects.size(), 1u);
+    EXPECT_EQ(report.effects[0].name, c.name);
+    EXPECT_NEAR(report.effects[0].parameters.at(c.key), c.value, 0.1 * c.value);
+    EXPECT_LT(report.gap_after, 0.5 * report.gap_before);
+    EXPECT_NE(report.effects[0].evidence.find("(a change: the model had"), std::string::npos) << report.effects[0].evidence;
+  }
+}
+
 TEST(OmniDiagnosis, SameLogsSameReportWhateverTheThreads) {
   OmniModel plant = testing::Omni4();
   plant.effects.motor_lag = 0.08;

@@ -50,6 +50,15 @@ struct WanderingPlant {
   // body adds the whole recording through, constant, the same whatever it is commanded
   // (a floor, a battery, a worn wheel of the day); a test gives each recording its own.
   std::array<double, 3> run_drift{0, 0, 0};
+  // Effects of the diagnosis's vocabulary, as this plant's own code makes them (all off
+  // by default), for the omni diagnosis's tests on a plant written apart from twinsim:
+  double motor_lag = 0;                // s, a first-order lag in series before the axes' own (all three)
+  double speed_scale = 1;              // every axis's gain times this (a wheel radius error)
+  double max_translation = 0;          // m/s, the translational target's length at most (0: none)
+  double max_acceleration = 0;         // m/s^2, the translational acceleration's length at most (0: none)
+  double turn_per_metre = 0;           // rad of extra turn per metre driven
+  double turn_per_forward = 0;         // rad/s of turn per m/s of forward command
+  double sideways_per_forward = 0;     // m/s sideways per m/s of forward command
 };
 
 struct PlantRecording {

@@ -45,7 +45,7 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
   PlantRecording out;
   std::vector<OmniLogRow> rows;
   double x = 0, y = 0, th = 0;
-  std::array<double, 3> v{0, 0, 0}, d{0, 0, 0};
+  std::array<double, 3> v{0, 0, 0}, d{0, 0, 0}, lagged{0, 0, 0};
   const double decay = std::exp(-dt / plant.noise_correlation);
   Pose2 smoothed;  // the camera's smoother, started on the first pose
   for (int f = 0; f < frames; ++f) {
@@ -79,9 +79,21 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
         v[1] = sn * vx + cs * v[1];
       }
       std::array<double, 3> targets;
-      for (int a = 0; a < 3; ++a) targets[static_cast<std::size_t>(a)] = plant.gain[static_cast<std::size_t>(a)] * acting[static_cast<std::size_t>(a)];
-      targets[2] += plant.turn_per_sideways * acting[1];
+      for (int a = 0; a < 3; ++a) {
+        // The hidden motor lag filters the command before the axes' own response.
+        double& u = lagged[static_cast<std::size_t>(a)];
+        u = plant.motor_lag > 0 ? u + (1 - std::exp(-dt / plant.motor_lag)) * (acting[static_cast<std::size_t>(a)] - u)
+                                : acting[static_cast<std::size_t>(a)];
+        targets[static_cast<std::size_t>(a)] = plant.gain[static_cast<std::size_t>(a)] * u * plant.speed_scale;
+      }
+      targets[2] += plant.turn_per_sideways * lagged[1] + plant.turn_per_forward * lagged[0];
+      targets[1] += plant.sideways_per_forward * lagged[0];
       if (plant.turn_limit > 0) targets[2] = std::clamp(targets[2], -plant.turn_limit, plant.turn_limit);
+      if (plant.max_translation > 0) {
+        const double length = std::hypot(targets[0], targets[1]);
+        if (length > plant.max_translation) targets[0] *= plant.max_translation / length, targets[1] *= plant.max_translation / length;
+      }
+      const std::array<double, 3> before = v;
       const double speed = std::min(1.0, std::hypot(v[0], v[1]) / plant.noise_full_speed);
       const double turn = std::min(1.0, std::abs(v[2]) / plant.noise_full_turn);
       const double f2 = plant.noise_still * plant.noise_still, g2 = plant.noise_not_turning * plant.noise_not_turning;
@@ -94,8 +106,16 @@ PlantRecording RecordWanderingPlant(const WanderingPlant& plant, double seconds,
         d[static_cast<std::size_t>(a)] = decay * d[static_cast<std::size_t>(a)] +
                                          grow * plant.noise_sd[static_cast<std::size_t>(a)] * std::sqrt(1 - decay * decay) * normal();
       }
+      if (plant.max_acceleration > 0) {
+        // The wheels grip up to max_acceleration: the translation's change is cut to it.
+        const double ax = (v[0] - before[0]) / dt, ay = (v[1] - before[1]) / dt, a = std::hypot(ax, ay);
+        if (a > plant.max_acceleration) {
+          v[0] = before[0] + ax * plant.max_acceleration / a * dt;
+          v[1] = before[1] + ay * plant.max_acceleration / a * dt;
+        }
+      }
       const double bx = v[0] + d[0] + plant.run_drift[0], by = v[1] + d[1] + plant.run_drift[1],
-                   w = v[2] + d[2] + plant.run_drift[2];
+                   w = v[2] + d[2] + plant.run_drift[2] + plant.turn_per_metre * std::hypot(bx, by);
       x += dt * (std::cos(th) * bx - std::sin(th) * by);
       y += dt * (std::sin(th) * bx + std::cos(th) * by);
       th += dt * w;

@@ -91,7 +91,8 @@ struct OmniEffectField {
   void (*set)(OmniEffects*, double);
   // Where the diagnosis searches it when it refines the effect (diagnosis/omni_diagnosis.cc):
   // within [search_lower, search_upper], in logarithms where `search_log`. Not searched
-  // (a per-axis key, a modifier) where the two are equal.
+  // (velocity_scale's per-axis keys, a modifier) where the two are equal; motor_lag's
+  // per-axis keys only where a model has them (a change of an identified lag).
   double search_lower = 0, search_upper = 0;
   bool search_log = false;
 };

@@ -1,0 +1,97 @@
+// The omni diagnosis on a robot written apart from twinsim (issue 63): the wandering
+// plant of tests/estimation/wandering_plant.h (a kinematic body whose velocity follows
+// its delayed command through a first-order lag per axis, no wheels, no PID, no engine)
+// with driving noise of 5 cm/s and 0.3 rad/s correlated over a fifth of a second, seen at
+// 60 fps by a camera that loses a tenth of its frames. The user's workflow: `identify` on
+// a recording of the robot as it was (40 s), then, the robot having changed, `diagnose`
+// of a new recording (30 s) against that identified model. The change is made by the
+// plant's own code in the vocabulary's terms; only the test knows it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <functional>
+#include <string>
+
+#include "diagnosis/diagnosis_report.h"
+#include "diagnosis/omni_diagnosis.h"
+#include "estimation/wandering_plant.h"
+#include "identification_omni/omni_identification.h"
+#include "test_util.h"
+
+namespace twinsim {
+namespace {
+
+struct Change {
+  std::string label;
+  std::string expected;  // the effect to be named; "" = nothing
+  std::function<void(testing::WanderingPlant*)> make;
+};
+
+// The robot as it was identified: moderate driving noise, the camera's 5 mrad.
+testing::WanderingPlant RobotAsIdentified() {
+  testing::WanderingPlant p;
+  p.noise_sd = {0.05, 0.05, 0.3};
+  p.camera_theta = 0.005;
+  return p;
+}
+
+// What changed, at sizes of a robot that changed between sessions (the real SSL robot's
+// second recording reached half the gain of its first).
+std::vector<Change> Changes() {
+  return {
+      {"nothing", "", [](testing::WanderingPlant*) {}},
+      {"67 ms more delay", "time_delay", [](testing::WanderingPlant* p) { p->delay_frames += 4; }},
+      {"a 150 ms motor lag in series", "motor_lag", [](testing::WanderingPlant* p) { p->motor_lag = 0.15; }},
+      {"0.6 times the speed", "velocity_scale", [](testing::WanderingPlant* p) { p->speed_scale = 0.6; }},
+      {"0.6 m/s at most", "velocity_saturation", [](testing::WanderingPlant* p) { p->max_translation = 0.6; }},
+      {"2 m/s^2 of grip", "traction_limit", [](testing::WanderingPlant* p) { p->max_acceleration = 2; }},
+      {"0.8 rad per metre", "rotation_drift", [](testing::WanderingPlant* p) { p->turn_per_metre = 0.8; }},
+      {"0.8 rad/s per m/s forward", "turn_coupling", [](testing::WanderingPlant* p) { p->turn_per_forward = 0.8; }},
+      {"0.25 sideways per forward", "cross_coupling", [](testing::WanderingPlant* p) { p->sideways_per_forward = 0.25; }},
+  };
+}
+
+// Measured (2026-12-05): the clean log names nothing; a longer delay, a lower speed
+// scale and both couplings are named as changes of the identified model's numbers and
+// close at least 80 % of the way to the clean log's gap; the grip limit is named and
+// closes 2 %; the motor lag is named a time_delay (its look-alike, docs/diagnose.md);
+// the speed limit removes 44 % of the selection rows' error at t 1 (not significant);
+// the drift per metre is carried by the observer's drift state and removes 5 %. Before
+// an identified model's effects were candidates as changes, three of these (delay,
+// scale, couplings) could not be named at all. About 7 minutes: one identification and
+// nine diagnoses of 60 fps logs.
+TEST(ForeignOmniDiagnosis, NamesWhatChangedOnARobotIdentifiedBeforeAndWrittenApart) {
+  const testing::WanderingPlant before = RobotAsIdentified();
+  OmniModel identified;
+  IdentifyOmni(testing::Omni4(), {testing::RecordWanderingPlant(before, 40, 4).log}, {}, OmniIdentificationOptions{},
+               &identified);
+  double clean_gap = 0;
+  int named = 0, closed = 0;
+  for (const Change& c : Changes()) {
+    testing::WanderingPlant after = before;
+    c.make(&after);
+    const DiagnosisReport report =
+        DiagnoseOmni(identified, {testing::RecordWanderingPlant(after, 30, 5).log}, DiagnosisOptions{});
+    SCOPED_TRACE(c.label + "\n" + FormatDiagnosisTable(report));
+    std::string names;
+    for (const DiagnosedEffect& e : report.effects) names += (names.empty() ? "" : ", ") + e.name;
+    std::printf("%-28s named: %-28s test-row gap %.1f -> %.1f mm\n", c.label.c_str(), names.empty() ? "nothing" : names.c_str(),
+                1000 * report.gap_before, 1000 * report.gap_after);
+    if (c.expected.empty()) {
+      EXPECT_TRUE(report.effects.empty());
+      EXPECT_EQ(report.gap_after, report.gap_before);
+      clean_gap = report.gap_before;
+      continue;
+    }
+    const bool right = std::any_of(report.effects.begin(), report.effects.end(),
+                                   [&](const DiagnosedEffect& e) { return e.name == c.expected; });
+    named += right;
+    closed += right && report.gap_before - report.gap_after >= 0.7 * (report.gap_before - clean_gap);
+  }
+  EXPECT_GE(named, 5);
+  EXPECT_GE(closed, 4);
+}
+
+}  // namespace
+}  // namespace twinsim
