@@ -161,7 +161,7 @@ class OmniProblem : public DiagnosisProblem {
  public:
   OmniProblem(const OmniModel& nominal, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
               double block_seconds)
-      : nominal_(nominal), options_(options) {
+      : nominal_(nominal), options_(options), changes_(!options.refit_model) {
     // A prediction spans `horizon` frames: rows closer than that (and one more) to
     // another block are guards.
     guard_seconds_ = (options.horizon + 1) * logs.front().frame_period;
@@ -271,7 +271,7 @@ class OmniProblem : public DiagnosisProblem {
   // identified model carries its delay, lags, scales and couplings) is a candidate as a
   // change of its numbers, refitted from the model's (ChangeStart): a robot that answers
   // later, lags longer or drives slower than when it was identified is named so, not
-  // left unexplained.
+  // left unexplained. Not after --refit-model (changes_).
   std::vector<TrialEffect> Candidates(const std::vector<TrialEffect>& current) const override {
     std::set<std::string> taken;
     for (const TrialEffect& e : current) taken.insert(e.name);
@@ -279,8 +279,8 @@ class OmniProblem : public DiagnosisProblem {
     for (const auto& [name, p] : ListOmniEffects(nominal_.effects)) present[name] = p;
     std::vector<TrialEffect> out;
     for (const std::string& name : OmniEffectNames()) {
-      if (taken.count(name)) continue;
       const auto it = present.find(name);
+      if (taken.count(name) || (it != present.end() && !changes_)) continue;
       out.push_back({name, -1, it == present.end() ? std::map<std::string, double>{} : ChangeStart(name, it->second)});
     }
     return out;
@@ -342,6 +342,9 @@ class OmniProblem : public DiagnosisProblem {
 
   OmniModel nominal_;
   DiagnosisOptions options_;
+  // Whether the model's own effects are candidates as changes: not after --refit-model,
+  // whose identification has just fitted them to these fit blocks.
+  bool changes_ = true;
   double guard_seconds_ = 0;
   std::vector<double> channel_noise_;  // m, per axis: ObserverNoiseFloor's
   double noise_floor_ = 0;             // m, its total
@@ -1251,7 +1254,11 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   for (const auto& [name, p] : ListOmniEffects(model.effects)) {
     const bool changed = std::any_of(selection.effects.begin(), selection.effects.end(),
                                      [&, &name = name](const TrialEffect& e) { return e.name == name; });
-    if (!changed) report.notes.push_back("the model's own " + name + " was kept: no change of its numbers passed the tests");
+    if (asked.refit_model) {
+      report.notes.push_back("the model's own " + name + " was not sought as a change (--refit-model identifies the model's response instead)");
+    } else if (!changed) {
+      report.notes.push_back("the model's own " + name + " was kept: no change of its numbers passed the tests");
+    }
   }
   if (const std::string text = DescribeGrip(grip); !text.empty()) {
     report.notes.push_back("replaying the logs, " + text + "; an effect named from those rows may stand for the slip");

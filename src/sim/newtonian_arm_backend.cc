@@ -27,18 +27,6 @@ constexpr int kMaxBristleSubsteps = 64;
 constexpr int kFrictionSweeps = 50;
 constexpr double kFrictionTolerance = 1e-13;  // relative change of a sweep that ends it
 
-// The sliding friction level of a joint at position q moving at `speed` >= 0 in
-// direction `dir` (+1 or -1), without viscous friction: nominal Coulomb plus the
-// Coulomb, position and Stribeck effects.
-double SlidingLevel(const ArmJoint& nominal, const JointEffects& e, double q, double speed, int dir) {
-  double level = nominal.coulomb + (dir > 0 ? e.coulomb_positive : e.coulomb_negative) + e.PositionFrictionLevel(q);
-  if (e.stribeck()) {
-    const double r = speed / e.stribeck_velocity;
-    level += e.stribeck_coulomb + (e.stribeck_static - e.stribeck_coulomb) * std::exp(-r * r);
-  }
-  return level;
-}
-
 // The friction torque of one joint for one step: `v` is the velocity the joint would
 // reach at the end of the step without its own friction, `w` (s/(kg m^2)) how much a
 // unit torque over the step changes it, `qd` its velocity at the start. The joint
@@ -52,8 +40,8 @@ double JointFriction(const ArmJoint& nominal, const JointEffects& e, double v, d
                      double inv_damping, double q, double qd) {
   const double viscous = nominal.viscous + e.viscous;
   for (const int dir : {+1, -1}) {
-    if (dir * v <= w * SlidingLevel(nominal, e, q, 0, dir)) continue;
-    const double level = dir * SlidingLevel(nominal, e, q, std::max(dir * qd, 0.0), dir);
+    if (dir * v <= w * e.SlidingLevel(nominal.coulomb, q, 0, dir)) continue;
+    const double level = dir * e.SlidingLevel(nominal.coulomb, q, std::max(dir * qd, 0.0), dir);
     // Sliding: f = level + b (qd + v_end) / 2 with v_end = v - w f.
     const double f = (level + 0.5 * viscous * (v + qd)) * inv_damping;
     // A damping so strong that the trapezoid would overshoot zero stops the joint.

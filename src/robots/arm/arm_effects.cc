@@ -402,12 +402,7 @@ namespace {
 // ArmDryFrictionLevel and ArmFrictionTorque of a joint `nominal` with effects `e` (the
 // replay calls them for every row of a log).
 double DryFrictionLevel(const ArmJoint& nominal, const JointEffects& e, double q, double qd) {
-  double level = nominal.coulomb + (qd >= 0 ? e.coulomb_positive : e.coulomb_negative) + e.PositionFrictionLevel(q);
-  if (e.stribeck()) {
-    const double r = qd / e.stribeck_velocity;
-    level += e.stribeck_coulomb + (e.stribeck_static - e.stribeck_coulomb) * std::exp(-r * r);
-  }
-  return level;
+  return e.SlidingLevel(nominal.coulomb, q, std::abs(qd), qd >= 0 ? 1 : -1);
 }
 
 double FrictionTorque(const ArmJoint& nominal, const JointEffects& e, double q, double qd) {

@@ -144,6 +144,18 @@ struct JointEffects {
   double PositionFrictionLevel(double q) const { return friction_profile.At(q); }
   // position_torque's p(q) at position q (0 when off): added to what the joint receives.
   double PositionTorque(double q) const { return torque_profile.At(q); }
+  // The dry friction level (>= 0, no viscous part) of a joint whose nominal Coulomb level
+  // is `coulomb`, at position q sliding at `speed` >= 0 in direction `dir` (+1 or -1; it
+  // picks the Coulomb side where speed is 0, as a simulation asks either way at rest):
+  // the Coulomb levels plus position_friction's and the Stribeck hump's.
+  double SlidingLevel(double coulomb, double q, double speed, int dir) const {
+    double level = coulomb + (dir > 0 ? coulomb_positive : coulomb_negative) + PositionFrictionLevel(q);
+    if (stribeck()) {
+      const double r = speed / stribeck_velocity;
+      level += stribeck_coulomb + (stribeck_static - stribeck_coulomb) * std::exp(-r * r);
+    }
+    return level;
+  }
   // True when the joint has some friction effect.
   bool friction() const {
     return viscous > 0 || coulomb_positive > 0 || coulomb_negative > 0 || stribeck() || position_friction();
