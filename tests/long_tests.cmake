@@ -6,3 +6,9 @@
 set_tests_properties(
   "KukaIdentification.OutputErrorFromTheUrdfSimulatesTheHeldOutRunsAsWellAsTheUrdf"
   PROPERTIES TIMEOUT 1500)
+# The omni diagnosis on a robot written apart, identified and then changed nine ways:
+# 3.2 to 3.6 minutes with both cores to itself; 15 allowed beside another test on a
+# machine half as fast.
+set_tests_properties(
+  "ForeignOmniDiagnosis.NamesWhatChangedOnARobotIdentifiedBeforeAndWrittenApart"
+  PROPERTIES TIMEOUT 900)
