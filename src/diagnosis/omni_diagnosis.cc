@@ -161,7 +161,8 @@ class OmniProblem : public DiagnosisProblem {
  public:
   OmniProblem(const OmniModel& nominal, const std::vector<OmniLog>& logs, const DiagnosisOptions& options,
               double block_seconds)
-      : nominal_(nominal), options_(options), changes_(!options.refit_model) {
+      : nominal_(nominal), options_(options) {
+    for (const auto& [name, p] : ListOmniEffects(nominal.effects)) own_[name] = p;
     // A prediction spans `horizon` frames: rows closer than that (and one more) to
     // another block are guards.
     guard_seconds_ = (options.horizon + 1) * logs.front().frame_period;
@@ -271,17 +272,16 @@ class OmniProblem : public DiagnosisProblem {
   // identified model carries its delay, lags, scales and couplings) is a candidate as a
   // change of its numbers, refitted from the model's (ChangeStart): a robot that answers
   // later, lags longer or drives slower than when it was identified is named so, not
-  // left unexplained. Not after --refit-model (changes_).
+  // left unexplained. Not after --refit-model, whose identification has just fitted
+  // those numbers to these fit blocks.
   std::vector<TrialEffect> Candidates(const std::vector<TrialEffect>& current) const override {
     std::set<std::string> taken;
     for (const TrialEffect& e : current) taken.insert(e.name);
-    std::map<std::string, std::map<std::string, double>> present;
-    for (const auto& [name, p] : ListOmniEffects(nominal_.effects)) present[name] = p;
     std::vector<TrialEffect> out;
     for (const std::string& name : OmniEffectNames()) {
-      const auto it = present.find(name);
-      if (taken.count(name) || (it != present.end() && !changes_)) continue;
-      out.push_back({name, -1, it == present.end() ? std::map<std::string, double>{} : ChangeStart(name, it->second)});
+      const auto it = own_.find(name);
+      if (taken.count(name) || (it != own_.end() && options_.refit_model)) continue;
+      out.push_back({name, -1, it == own_.end() ? std::map<std::string, double>{} : ChangeStart(name, it->second)});
     }
     return out;
   }
@@ -324,9 +324,8 @@ class OmniProblem : public DiagnosisProblem {
   static std::map<std::string, double> ChangeStart(const std::string& name, std::map<std::string, double> present);
   // Whether `e` is a change candidate as Candidates made it, not yet fitted.
   bool AtChangeStart(const TrialEffect& e) const {
-    for (const auto& [name, p] : ListOmniEffects(nominal_.effects))
-      if (name == e.name) return e.parameters == ChangeStart(name, p);
-    return false;
+    const auto it = own_.find(e.name);
+    return it != own_.end() && e.parameters == ChangeStart(e.name, it->second);
   }
   // A change's start: the best of a grid around the model's numbers (a delay walks
   // instead, StepDelay), as InitialGuess's grid starts a new effect.
@@ -342,9 +341,8 @@ class OmniProblem : public DiagnosisProblem {
 
   OmniModel nominal_;
   DiagnosisOptions options_;
-  // Whether the model's own effects are candidates as changes: not after --refit-model,
-  // whose identification has just fitted them to these fit blocks.
-  bool changes_ = true;
+  // The effects the model has, with their numbers (ListOmniEffects of nominal_).
+  std::map<std::string, std::map<std::string, double>> own_;
   double guard_seconds_ = 0;
   std::vector<double> channel_noise_;  // m, per axis: ObserverNoiseFloor's
   double noise_floor_ = 0;             // m, its total
@@ -644,10 +642,9 @@ std::string OmniProblem::Signature(const TrialEffect& e) const {
     return "";
   }
   std::string out = buf;
-  for (const auto& [name, had] : ListOmniEffects(nominal_.effects)) {
-    if (name != e.name) continue;
+  if (const auto it = own_.find(e.name); it != own_.end()) {
     std::string numbers;
-    for (const auto& [key, value] : had) numbers += (numbers.empty() ? "" : ", ") + key + " " + FormatParameter(value);
+    for (const auto& [key, value] : it->second) numbers += (numbers.empty() ? "" : ", ") + key + " " + FormatParameter(value);
     out += " (a change: the model had " + numbers + ")";
   }
   return out;
