@@ -520,7 +520,7 @@ std::string FormatDiagnosisHtml(const DiagnosisReport& r, Renderer& renderer) {
     h << "<tr><td>nominal model + learned residual</td><td>" << Num(r.yardstick.nominal) << "</td><td></td><td></td></tr>\n";
     h << "<tr><td>repaired model + learned residual</td><td>" << Num(r.yardstick.repaired) << "</td><td></td><td></td></tr>\n";
   }
-  h << "<tr><td>noise floor (estimated from the data)</td><td>" << Num(r.noise_floor) << "</td><td></td><td></td></tr></table>\n";
+  h << "<tr><td>noise floor (the data's noise; for a model whose robot wanders, its driving noise too)</td><td>" << Num(r.noise_floor) << "</td><td></td><td></td></tr></table>\n";
   if (!r.yardstick.learner.empty()) {
     h << "<p class=\"small\">Learned residual: " << HtmlEscape(r.yardstick.learner) << ".";
     if (std::isfinite(r.yardstick.physics_share)) {

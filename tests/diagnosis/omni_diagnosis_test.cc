@@ -203,6 +203,29 @@ TEST(OmniDiagnosis, TheYardstickIsTheHybridTrainKeepsAndFindsNothingOnAWellModel
   EXPECT_NE(verdict.find("a learned residual finds nothing predictable"), std::string::npos) << verdict;
 }
 
+// A robot that wanders (driving noise the wheels do not see, drawn by the simulation)
+// diagnosed with its own model: what is left half a second ahead is the wander, which
+// no model predicts. The floor draws it where the model says its robot wanders
+// (driving_noise.simulated, as identify writes it) and so predicts the robot's own gap;
+// the same model without that flag (its noise then only tunes the observer) gets the
+// camera's floor, far below the gap, and its channels read unexplained.
+TEST(OmniDiagnosis, TheNoiseFloorCountsTheWanderTheModelSaysItsRobotHas) {
+  OmniModel wandering = testing::Omni4();
+  wandering.driving_noise.sd = {0.05, 0.05, 0.3};
+  wandering.driving_noise.correlation_time = 0.2;
+  wandering.driving_noise.simulated = true;
+  const std::vector<OmniLog> logs = {testing::RecordOmniPlant(wandering, 30, 5)};
+  const DiagnosisReport report = DiagnoseOmni(wandering, logs, testing::GapsOnly());
+  // On the fit rows, half the log: the four test blocks alone gave 22 to 37 mm over seeds
+  // 5 to 10 where the fit rows gave 28 to 31 and the floor 30 to 33 (measured).
+  EXPECT_NEAR(report.noise_floor, report.fit_gap_before, 0.15 * report.fit_gap_before);
+  OmniModel observer_only = wandering;
+  observer_only.driving_noise.simulated = false;
+  const DiagnosisReport camera = DiagnoseOmni(observer_only, logs, testing::GapsOnly());
+  EXPECT_EQ(camera.fit_gap_before, report.fit_gap_before);  // the same observer: only the floor differs
+  EXPECT_LT(camera.noise_floor, 0.3 * report.noise_floor);   // measured 5.8 against 31.1 mm
+}
+
 TEST(OmniDiagnosis, RefusesBadInput) {
   const OmniModel nominal = testing::Omni4();
   const OmniLog log = testing::RecordOmniPlant(nominal, 1.5, 1);
