@@ -324,6 +324,44 @@ TEST(ForwardSelection, TheQuarterRuleAsksMostChangedBlocksToImprove) {
   EXPECT_EQ(local.candidates[0].blocks_improved, 6);
 }
 
+// A block counts as changed where the effect moved its squared error by 1 % or more
+// (issue 63): an omni effect leaves a trace in blocks where it never acts (the observer
+// carries its state over), and those traces, of either sign, were counted as blocks it
+// changed. Here the feature of the test above also holds a ten-thousandth of the level
+// where it does not act: it still changes 6 blocks, improves 6 and is added. And a
+// quarter removed in one block alone is not enough: the same effect acting in one group
+// of blocks only (one selection block) removes nearly all the selection rows' error,
+// not significantly, and is not added.
+TEST(ForwardSelection, TheQuarterRuleCountsBlocksItChangesByAPercentAndAsksTwo) {
+  Rng rng(11);
+  const std::size_t n = 4000;
+  std::vector<double> y(n), traced(n), y_once(n), once(n);
+  double level = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % 50 == 0) level = rng.Gaussian(1.0);
+    const bool acts = (i / 250) % 3 == 0;  // groups of five 50-row blocks
+    const double noise = rng.Gaussian(0.3);
+    traced[i] = acts ? level : 1e-4 * level;
+    y[i] = noise + (acts ? 10 * level : 0.0);
+    const bool first = i < 250;  // blocks 0-2 fit, 3 selection, 4 test
+    once[i] = first ? level : 0.0;
+    y_once[i] = noise + (first ? 10 * level : 0.0);
+  }
+  const SelectionResult spread = SelectEffects(LinearProblem(y, {{"torque_offset", 0, traced}}), Options());
+  ASSERT_EQ(spread.effects.size(), 1u);
+  EXPECT_NEAR(spread.effects[0].parameters.at("theta"), 10, 0.1);
+  EXPECT_EQ(spread.candidates[0].blocks_changed, 6);  // 16 counted at a millionth
+  EXPECT_EQ(spread.candidates[0].blocks_improved, 6);
+
+  const SelectionResult single = SelectEffects(LinearProblem(y_once, {{"torque_offset", 0, once}}), Options());
+  ASSERT_EQ(single.candidates.size(), 1u);
+  EXPECT_GE(single.candidates[0].reduction, 0.25);
+  EXPECT_FALSE(single.candidates[0].significant) << "t = " << single.candidates[0].t_statistic;
+  EXPECT_EQ(single.candidates[0].blocks_changed, 1);
+  EXPECT_EQ(single.candidates[0].blocks_improved, 1);
+  EXPECT_TRUE(single.effects.empty());
+}
+
 // Two joints, each a LinearProblem over its own rows (the same row kinds and blocks): an
 // arm whose joints' torques carry noise of very different sizes. An effect acts on its
 // joint's rows alone; with `own_channel` it is scored there (ChannelOf), else on the sum.

@@ -52,12 +52,15 @@ std::vector<Change> Changes() {
   };
 }
 
-// Measured (2026-12-05): the clean log names nothing; a longer delay, a lower speed
+// Measured (2026-12-06): the clean log names nothing; a longer delay, a lower speed
 // scale and both couplings are named as changes of the identified model's numbers and
-// close at least 80 % of the way to the clean log's gap; the grip limit is named and
+// close at least 80 % of the way to the clean log's gap; the speed limit is named
+// (v_max 0.57) and takes the gap below the clean log's; the grip limit is named and
 // closes 2 %; the motor lag is named a time_delay (its look-alike, docs/diagnose.md);
-// the speed limit removes 44 % of the selection rows' error at t 1 (not significant);
-// the drift per metre is carried by the observer's drift state and removes 5 %. The
+// the drift per metre is carried by the observer's drift state and removes 5 %. Until
+// a selection block counted as changed only where its error moved by 1 % (issue 63), the
+// speed limit's 44 % of the selection rows' error, in the two blocks it acted on, was
+// "2 of the 4 blocks it changed" and it went unnamed. The
 // grip limit's 2 % is this recording's test blocks: on seeds 6, 7 and 8 of the changed
 // robot's log it closes 77, 116 and 88 % (a_max 1.68-1.78). Before
 // an identified model's effects were candidates as changes, three of these (delay,
@@ -96,8 +99,8 @@ TEST(ForeignOmniDiagnosis, NamesWhatChangedOnARobotIdentifiedBeforeAndWrittenApa
     named += right;
     closed += right && report.gap_before - report.gap_after >= 0.7 * (report.gap_before - clean_gap);
   }
-  EXPECT_GE(named, 5);
-  EXPECT_GE(closed, 4);
+  EXPECT_GE(named, 6);
+  EXPECT_GE(closed, 5);
 }
 
 }  // namespace
