@@ -109,12 +109,16 @@ std::vector<Pose2> Wandered(const OmniModel& model, const OmniLog& log, const st
   for (std::size_t i = 0; i + 1 < motion.size(); ++i) {
     const double dt = log.rows[i + 1].t - log.rows[i].t;
     const Twist2 step = BodyVelocityBetween(motion[i], motion[i + 1], 1.0);  // in the frame of motion[i + 1]
-    const Twist2 v{step.vx / dt, step.vy / dt, step.omega / dt};
     const double theta = out[i].theta + step.omega;
     Pose2 next{0, 0, theta};
     Rotate(theta, step.vx, step.vy, &next.x, &next.y);
     next.x += out[i].x;
     next.y += out[i].y;
+    if (!(dt > 0)) {  // two rows at one time (a log's check refuses them): no time to slip in
+      out[i + 1] = next;
+      continue;
+    }
+    const Twist2 v{step.vx / dt, step.vy / dt, step.omega / dt};
     out[i + 1] = SlipPose(model.driving_noise, dt, v, before, next, &slip, rng, &drift);
     before = v;
   }
@@ -420,6 +424,20 @@ void OmniProblem::ChangeGuess(std::vector<TrialEffect>* effects, int i) const {
     for (double f : {0.5, 0.7, 0.85, 1.15, 1.4}) scaled({"scale"}, f);
   } else if (e.name == "motor_lag") {
     for (double f : {0.4, 0.63, 1.6, 2.5}) scaled({"time_constant", "forward", "sideways", "turn"}, f);
+    // A lag come in series with the model's adds its time constant to each axis's (one
+    // lag of the sum keeps the pair's mean delay), on an axis without a lag of its own
+    // too: the model's per-axis lags, scaled, cannot reach an axis that had none.
+    for (double by : {0.05, 0.15, 0.3}) {
+      std::map<std::string, double> p = e.parameters;
+      const bool per_axis = p.count("forward") || p.count("sideways") || p.count("turn");
+      const double common = p.count("time_constant") ? p["time_constant"] : 0.0;
+      if (!per_axis) {
+        p["time_constant"] = common + by;
+      } else {
+        for (const char* axis : kOmniAxisNames) p[axis] = (p.count(axis) ? p[axis] : common) + by;
+      }
+      grid.push_back(p);
+    }
   } else if (e.name == "velocity_saturation") {
     for (double f : {0.6, 0.8, 1.25}) scaled({"v_max", "w_max"}, f);
   } else if (e.name == "traction_limit") {
