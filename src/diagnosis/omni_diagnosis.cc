@@ -137,7 +137,8 @@ std::vector<Pose2> Wandered(const OmniModel& model, const OmniLog& log, const st
 // the start, carried over the horizon, is most of a perfect model's error half a second
 // ahead, and a robot that wanders adds what no model predicts (measured on the wandering
 // plant of tests/diagnosis/omni_foreign_diagnosis_test.cc: 8.9 mm for the camera alone,
-// 43 mm the identified model's own gap on the unchanged robot). A log on which the model's
+// 59 mm with identify's noise drawn, 43 mm the identified model's own gap on the
+// unchanged robot). A log on which the model's
 // free run runs away is left out; where every one is, the camera's part alone.
 std::vector<double> ObserverNoiseFloor(const OmniModel& model, const std::vector<OmniLog>& logs,
                                        const std::string& backend, int horizon) {
