@@ -110,10 +110,8 @@ std::vector<Pose2> Wandered(const OmniModel& model, const OmniLog& log, const st
     const double dt = log.rows[i + 1].t - log.rows[i].t;
     const Twist2 step = BodyVelocityBetween(motion[i], motion[i + 1], 1.0);  // in the frame of motion[i + 1]
     const double theta = out[i].theta + step.omega;
-    Pose2 next{0, 0, theta};
-    Rotate(theta, step.vx, step.vy, &next.x, &next.y);
-    next.x += out[i].x;
-    next.y += out[i].y;
+    const Twist2 moved = BodyToField(step, theta);
+    const Pose2 next{out[i].x + moved.vx, out[i].y + moved.vy, theta};
     if (!(dt > 0)) {  // two rows at one time (a log's check refuses them): no time to slip in
       out[i + 1] = next;
       continue;
@@ -138,8 +136,8 @@ std::vector<Pose2> Wandered(const OmniModel& model, const OmniLog& log, const st
 // ahead, and a robot that wanders adds what no model predicts (measured on the wandering
 // plant of tests/diagnosis/omni_foreign_diagnosis_test.cc: 8.9 mm for the camera alone,
 // 59 mm with identify's noise drawn, 43 mm the identified model's own gap on the
-// unchanged robot). A log on which the model's
-// free run runs away is left out; where every one is, the camera's part alone.
+// unchanged robot). A log on which the model's free run runs away is left out; where
+// every one is, the camera's part alone.
 std::vector<double> ObserverNoiseFloor(const OmniModel& model, const std::vector<OmniLog>& logs,
                                        const std::string& backend, int horizon) {
   double var_xy = 0, var_theta = 0;
