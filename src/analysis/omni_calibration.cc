@@ -264,8 +264,10 @@ std::vector<std::array<OmniTurnQuarter, 4>> CalibrateRowsByTurnRate(const std::v
 
 std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniModel& model, const OmniLog& log,
                                                                   const std::string& backend,
-                                                                  const std::vector<int>& horizons, int stride) {
+                                                                  const std::vector<int>& horizons, int stride,
+                                                                  std::vector<OmniSpreadBudget>* budgets) {
   std::vector<std::vector<PredictiveError>> out(horizons.size());
+  if (budgets) budgets->clear();
   if (horizons.empty()) return out;
   const int longest = horizons.back();
   if (log.FrameIndex(log.rows.size() - 1) <= longest + kWarmUpFrames) return out;
@@ -274,11 +276,17 @@ std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniMode
   o.horizon = longest;
   o.also.assign(horizons.begin(), horizons.end() - 1);
   o.covariance = true;
+  o.covariance_parts = budgets != nullptr;
   o.stride = stride;
   o.stride_origin = 0;
   const OmniReplayResult r = ReplayOmniLog(model, log, o);
-  for (std::size_t q = 0; q < horizons.size(); ++q)
-    out[q] = PredictiveErrors(log, q + 1 == horizons.size() ? r : r.also[q], {}, horizons[q]);
+  for (std::size_t q = 0; q < horizons.size(); ++q) {
+    const OmniReplayResult& at = q + 1 == horizons.size() ? r : r.also[q];
+    out[q] = PredictiveErrors(log, at, {}, horizons[q]);
+    if (!budgets) continue;
+    budgets->push_back(SpreadBudgetOf(log, at, horizons[q]));
+    budgets->back().scale = model.observer.IntervalScaleAt(horizons[q])[0];
+  }
   return out;
 }
 

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "analysis/omni_replay.h"
+#include "analysis/omni_spread_budget.h"
 #include "robots/omni/omni_log.h"
 
 namespace twinsim {
@@ -161,10 +162,12 @@ std::vector<std::array<OmniTurnQuarter, 4>> CalibrateRowsByTurnRate(const std::v
 // The rows of a whole log predicted by `model` on `backend` at each of `horizons` (sorted
 // increasing) from every `stride`-th frame counted from the log's first (the same rows
 // for every model), with their covariances: one list per horizon, all empty where the
-// log is too short for the longest. Throws as ReplayOmniLog.
+// log is too short for the longest. With `budgets`, each horizon's spread budget of the
+// same rows into it (analysis/omni_spread_budget.h). Throws as ReplayOmniLog.
 std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniModel& model, const OmniLog& log,
                                                                   const std::string& backend,
-                                                                  const std::vector<int>& horizons, int stride);
+                                                                  const std::vector<int>& horizons, int stride,
+                                                                  std::vector<OmniSpreadBudget>* budgets = nullptr);
 
 // The negative log density (nats) of one row's pose under its distribution (its Gaussian,
 // or the Student t of a covariance estimated from draws); infinity for a covariance that

@@ -24,6 +24,7 @@ bool OmniReplayOptions::IsValid(std::string* why) const {
   if (stride < 1) return fail("stride must be 1 or more, got " + std::to_string(stride));
   if (samples < 0) return fail("--samples must be 0 or more, got " + std::to_string(samples));
   if (samples > 0 && horizon < 1) return fail("--samples draws predictions K >= 1 frames ahead (--horizon 1 or more)");
+  if (covariance_parts && !covariance) return fail("a covariance's parts come with the covariance");
   if ((covariance || !also.empty()) && horizon < 1)
     return fail("a prediction's covariance and shorter horizons come from predictions K >= 1 frames ahead");
   for (int h : also)
@@ -102,6 +103,8 @@ void PutPrediction(const OmniPrediction& prediction, int j, std::size_t at, doub
   result->pose[at] = p;
   result->predicted[at] = true;
   if (!result->covariance.empty()) result->covariance[at] = prediction.pose_covariance[static_cast<std::size_t>(j - 1)];
+  if (!result->covariance_parts.empty())
+    result->covariance_parts[at] = prediction.pose_covariance_parts[static_cast<std::size_t>(j - 1)];
   if (!prediction.input_distance.empty()) {
     result->input_distance.resize(result->pose.size(), 0.0);
     result->input_distance[at] = prediction.input_distance[static_cast<std::size_t>(j - 1)];
@@ -182,7 +185,8 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     bool any = target != row_of_frame.end();
     for (int h : options.also) any = any || (h <= reach && row_of_frame.count(f + h) > 0);
     if (!any) continue;
-    const OmniPrediction prediction = observer.PredictAhead(reach, planned(f, f + reach), with_covariance);
+    const OmniPrediction prediction =
+        observer.PredictAhead(reach, planned(f, f + reach), with_covariance, options.covariance_parts);
     const double shift = unwrap_shift(row);
     for (std::size_t a = 0; a < options.also.size(); ++a) {
       if (options.also[a] > reach) continue;
@@ -209,13 +213,17 @@ void SizeResult(const OmniLog& log, const OmniReplayOptions& options, const std:
   const std::size_t n = log.rows.size();
   out->state = state;
   if (options.samples > 0) out->samples.resize(n);
+  OmniCovarianceParts none;
+  none.fill(Eigen::Matrix3d::Zero());
   if (covariance) out->covariance.assign(n, Eigen::Matrix3d::Zero());
+  if (options.covariance_parts) out->covariance_parts.assign(n, none);
   for (std::size_t a = 0; a < options.also.size(); ++a) {
     out->also.push_back(HeldMeasurements(log));
     out->also.back().delay_frames = out->delay_frames;
     out->also.back().state = state;
     out->also.back().measurement_covariance = out->measurement_covariance;
     if (covariance) out->also.back().covariance.assign(n, Eigen::Matrix3d::Zero());
+    if (options.covariance_parts) out->also.back().covariance_parts.assign(n, none);
   }
 }
 

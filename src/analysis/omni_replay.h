@@ -69,6 +69,9 @@ struct OmniReplayOptions {
   // covariance too (OmniReplayResult::covariance), the prediction's as the samples draw
   // from it.
   bool covariance = false;
+  // With covariance, on the observer's state: each predicted row's covariance split into
+  // its parts too (OmniReplayResult::covariance_parts).
+  bool covariance_parts = false;
   // Shorter horizons (each 1..K-1) predicted from the same start frames: one K-frame
   // prediction gives them all (OmniReplayResult::also, in this order).
   std::vector<int> also;
@@ -110,6 +113,10 @@ struct OmniReplayResult {
   // prediction's plus this).
   std::vector<Eigen::Matrix3d> covariance;
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
+  // With OmniReplayOptions::covariance_parts: per row the covariance's parts
+  // (estimation/omni_observer.h's OmniCovariancePart), zero where not predicted; their sum
+  // is the covariance before the model's intervals' safeguard scales it.
+  std::vector<OmniCovarianceParts> covariance_parts;
   // How many draws each row's covariance was estimated from (the samples' mean square
   // about the prediction); 0: it is the filter's own, known (the observer's).
   int covariance_draws = 0;

@@ -54,6 +54,22 @@ void PropagateCovariance(const Eigen::Matrix<double, N, N>& f, const Eigen::Matr
   *p = 0.5 * (*p + p->transpose()).eval();
 }
 
+// The covariance's parts over one frame (OmniCovariancePart): each carried by F, and Q
+// split by the states it drives (the pose and the model's velocity; the slip; the drift).
+// Without a drift (`drift` false) its part stays zero, as its states do in P.
+void PropagateParts(const ObserverMatrix& f, const ObserverMatrix& q, bool drift,
+                    std::array<ObserverMatrix, kCovarianceParts>* parts) {
+  constexpr int kVelocityEnd = 6, kSlipEnd = 9;
+  for (int i = 0; i < kCovarianceParts; ++i) {
+    ObserverMatrix& p = (*parts)[static_cast<std::size_t>(i)];
+    p = f * p * f.transpose();
+    if (i == kProcessNoise) p.topLeftCorner<kVelocityEnd, kVelocityEnd>() += q.topLeftCorner<kVelocityEnd, kVelocityEnd>();
+    if (i == kDrivingNoise) p.block<3, 3>(kVelocityEnd, kVelocityEnd) += q.block<3, 3>(kVelocityEnd, kVelocityEnd);
+    if (i == kDrift && drift) p.block<3, 3>(kSlipEnd, kSlipEnd) += q.block<3, 3>(kSlipEnd, kSlipEnd);
+    p = 0.5 * (p + p.transpose()).eval();
+  }
+}
+
 // The correction of a filter of N states by a pose innovation nu (S's factor `llt`, R
 // the pose's covariance), in Joseph's form: P <- (I - K H) P (I - K H)^T + K R K^T, H the
 // first three states. Returns K nu.
@@ -230,6 +246,7 @@ void OmniObserver::Propagate(const Pose2& p0, double c, double sn, const Pose2& 
     for (int a = 0; a < 3; ++a) f(first + a, first + a) = first == 6 ? slip_decay_ : drift_decay_;
   }
   const ObserverMatrix q = ProcessNoise(p0.theta, std::hypot(v0.vx, v0.vy), acceleration, v0.omega);
+  if (parts_) PropagateParts(f, q, has_drift_, parts_);
   if (has_drift_) {
     PropagateCovariance<kObserverStates>(f, q, &p_);
   } else {
@@ -415,11 +432,22 @@ OmniEstimate OmniObserver::Estimate() const {
   return e;
 }
 
-OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& planned, bool covariance) {
+OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& planned, bool covariance, bool parts) {
   if (!started_) throw std::logic_error("OmniObserver::PredictAhead before the first camera pose");
   OmniPrediction out;
   if (k <= 0) return out;
+  covariance = covariance || parts;
   const OmniObserverState saved = Save();
+  std::array<ObserverMatrix, kCovarianceParts> split;
+  if (parts) {
+    split.fill(ObserverMatrix::Zero());
+    split[kStartEstimate] = p_;
+    if (!has_drift_) {  // P's drift states are not propagated without a drift: nor are they here
+      split[kStartEstimate].bottomRows<kObserverStates - kObserverStatesWithoutDrift>().setZero();
+      split[kStartEstimate].rightCols<kObserverStates - kObserverStatesWithoutDrift>().setZero();
+    }
+    parts_ = &split;
+  }
   double last_theta = backend_->pose(0).theta;
   // The mean distance from the seen inputs along the frames predicted so far.
   const OmniSeenInputs& seen = model_.observer.seen_inputs;
@@ -440,8 +468,14 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
       const std::array<double, 2> scale = model_.observer.IntervalScaleAt(j + 1, distance);
       const Eigen::Vector3d d(scale[0], scale[0], scale[1]);
       out.pose_covariance.push_back(d.asDiagonal() * p_.topLeftCorner<3, 3>() * d.asDiagonal());
+      if (parts) {
+        OmniCovarianceParts pose_parts;
+        for (std::size_t i = 0; i < pose_parts.size(); ++i) pose_parts[i] = split[i].topLeftCorner<3, 3>();
+        out.pose_covariance_parts.push_back(pose_parts);
+      }
     }
   }
+  parts_ = nullptr;
   Restore(saved);
   return out;
 }

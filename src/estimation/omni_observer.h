@@ -48,6 +48,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -112,10 +113,26 @@ struct OmniEstimate {
   ObserverMatrix covariance = ObserverMatrix::Zero();
 };
 
+// The parts a predicted pose's covariance is the sum of (before the intervals'
+// safeguard scales it): P_k = Phi P_0 Phi' + sum_j Phi_j Q_j Phi_j', Q split by the
+// states it drives. kStartEstimate: the estimate's own uncertainty at the start, carried
+// on; kProcessNoise: the model's process noise on its velocity (observer.process_noise);
+// kDrivingNoise: the slip (driving_noise); kDrift: the slow slip (driving_noise.drift).
+enum OmniCovariancePart { kStartEstimate, kProcessNoise, kDrivingNoise, kDrift, kCovarianceParts };
+inline constexpr const char* kOmniCovariancePartNames[kCovarianceParts] = {"start estimate", "process noise",
+                                                                            "driving noise", "drift"};
+// The same as file keys (report.json, spread_budget.csv).
+inline constexpr const char* kOmniCovariancePartKeys[kCovarianceParts] = {"start_estimate", "process_noise",
+                                                                           "driving_noise", "drift"};
+using OmniCovarianceParts = std::array<Eigen::Matrix3d, kCovarianceParts>;
+
 // The poses of the frames ahead of the estimate, with their uncertainty.
 struct OmniPrediction {
   std::vector<Pose2> pose;                      // frames 1..k ahead
   std::vector<Eigen::Matrix3d> pose_covariance;  // of (x, y, theta) per frame; empty unless asked for
+  // With `parts`: per frame the covariance's parts (OmniCovariancePart), unscaled by
+  // the model's intervals' safeguard; else empty.
+  std::vector<OmniCovarianceParts> pose_covariance_parts;
   // With the covariance and the model's observer.seen_inputs: per frame the mean
   // distance of the frames so far from them (what the intervals' growth reads); else empty.
   std::vector<double> input_distance;
@@ -205,7 +222,9 @@ class OmniObserver {
   // already sent act first, then `planned` (the commands to be sent from the next frame
   // on), then the last of them held. With `covariance`, each pose's covariance too (the
   // filter's prediction, process noise included). Throws std::logic_error before start.
-  OmniPrediction PredictAhead(int k, const std::vector<Twist2>& planned = {}, bool covariance = false);
+  // With `parts` (implies `covariance`), the covariance's parts too.
+  OmniPrediction PredictAhead(int k, const std::vector<Twist2>& planned = {}, bool covariance = false,
+                              bool parts = false);
 
   // The newest frame's input (robots/omni/omni_seen_inputs.h): the wheel speeds of the
   // command that acted in it and of the body's estimated velocity.
@@ -257,6 +276,8 @@ class OmniObserver {
   int frame_ = -1;
   int refused_in_a_row_ = 0;
   OmniInnovationStats stats_;
+  // While PredictAhead splits the covariance: its parts, propagated beside p_.
+  std::array<ObserverMatrix, kCovarianceParts>* parts_ = nullptr;
 };
 
 }  // namespace twinsim

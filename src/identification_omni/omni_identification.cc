@@ -1392,6 +1392,23 @@ void SummariseFit(const OmniIdentificationProblem& problem, const std::vector<Se
   }
 }
 
+// Where the identified model's predicted spread comes from on the validation logs, at
+// the calibration's horizons, pooled (analysis/omni_spread_budget.h).
+std::vector<OmniSpreadBudget> SpreadBudgetOn(const OmniModel& model, const std::vector<OmniLog>& validation,
+                                             const OmniIdentificationReport& report,
+                                             const OmniIdentificationOptions& options) {
+  constexpr int kBudgetStride = 4;  // as compare's calibration
+  std::vector<int> horizons;
+  for (const OmniCalibration& c : report.calibration) horizons.push_back(c.frames);
+  std::vector<std::vector<OmniSpreadBudget>> per_log;
+  for (const OmniLog& log : validation) {
+    per_log.emplace_back();
+    OmniLogPredictiveErrors(model, log, options.backend, horizons, kBudgetStride, &per_log.back());
+    if (per_log.back().empty()) per_log.pop_back();  // too short for the longest horizon
+  }
+  return PoolSpreadBudgets(per_log);
+}
+
 }  // namespace
 
 OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vector<OmniLog>& logs,
@@ -1457,6 +1474,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   say(7, "held-out gaps");                                                                // step 7
   report.held_out = HeldOutGaps(segments, nominal, model, false, options, &report);
   if (!validation.empty()) report.validation = HeldOutGaps(segments, nominal, model, true, options, &report);
+  if (!validation.empty() && !report.calibration.empty()) report.spread_budget = SpreadBudgetOn(model, validation, report, options);
   std::vector<std::vector<char>> fit_rows;
   for (const OmniLog& log : logs) {
     fit_rows.emplace_back(log.rows.size());

@@ -170,6 +170,9 @@ struct OmniIdentificationReport {
   // The same by quarter of the log's turn rate over each prediction, per horizon
   // (analysis/omni_calibration.h, CalibrateRowsByTurnRate).
   std::vector<std::array<OmniTurnQuarter, 4>> calibration_by_turn_rate;
+  // With validation logs: where the predicted position spread comes from there, per
+  // horizon of the calibration, pooled over the logs (analysis/omni_spread_budget.h).
+  std::vector<OmniSpreadBudget> spread_budget;
   // The intervals' safeguard fitted after it (its scales in the model's observer where
   // kept); the calibration above is the covariance's before it.
   OmniIntervalSafeguard safeguard;

@@ -169,6 +169,25 @@ ordered_json DistanceCalibrationJson(const std::vector<OmniDistanceCalibration>&
   return by;
 }
 
+// report.json's spread_budget: per horizon the measured error and the predicted spread
+// with its parts (m).
+nlohmann::json SpreadBudgetJson(const std::vector<OmniSpreadBudget>& budgets) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const OmniSpreadBudget& b : budgets) {
+    nlohmann::json j;
+    j["frames"] = b.frames;
+    j["seconds"] = b.seconds;
+    j["rows"] = b.rows;
+    j["measured"] = b.measured;
+    j["predicted"] = b.predicted;
+    j["scale"] = b.scale;
+    for (int p = 0; p < kCovarianceParts; ++p) j[kOmniCovariancePartKeys[p]] = b.parts[static_cast<std::size_t>(p)];
+    j["camera"] = b.camera;
+    out.push_back(j);
+  }
+  return out;
+}
+
 // report.json's calibration_by_turn_rate: per quarter (slowest first) its range and
 // calibration per horizon.
 ordered_json TurnRateCalibrationJson(const std::vector<std::array<OmniTurnQuarter, 4>>& by_turn_rate) {
@@ -307,6 +326,7 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
   }
   if (!r.calibration_by_distance.empty()) j["calibration_by_distance"] = DistanceCalibrationJson(r.calibration_by_distance);
   if (!r.calibration_by_turn_rate.empty()) j["calibration_by_turn_rate"] = TurnRateCalibrationJson(r.calibration_by_turn_rate);
+  if (!r.spread_budget.empty()) j["spread_budget"] = SpreadBudgetJson(r.spread_budget);
   if (!r.safeguard.on.empty()) j["intervals_safeguard"] = SafeguardJson(r.safeguard, r.frame_period);
   j["noise_floor"] = r.noise_floor;
   j["collinearity_index"] = Finite(r.collinearity);
@@ -402,6 +422,11 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
   if (!r.calibration_by_turn_rate.empty()) {
     s << "the same by quarter of the turn rate over each prediction (rad/s: position 50 / 90 % ellipses hold):\n"
       << FormatTurnRateCalibrationTable(r.calibration_by_turn_rate);
+  }
+  if (!r.spread_budget.empty()) {
+    s << "where the predicted position spread comes from on the validation logs (RMS, mm; the parts add in squares "
+         "to the filter's spread; measured / predicted near 1 when calibrated):\n"
+      << FormatSpreadBudgets(r.spread_budget);
   }
   if (!r.safeguard.on.empty()) {
     s << "intervals' safeguard (a conformal scale of the predicted covariance, fitted on the " << r.safeguard.on
@@ -505,6 +530,12 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
     h << "<p>The same by quarter of the turn rate over each prediction (rad/s; slowest first): whether the "
          "intervals hold in the fastest turns as on average.</p>\n<pre>"
       << HtmlEscape(FormatTurnRateCalibrationTable(r.calibration_by_turn_rate)) << "</pre>\n";
+  }
+  if (!r.spread_budget.empty()) {
+    h << "<p>Where the predicted position spread comes from on the validation logs: the start estimate carried on, "
+         "the process noise, the driving noise, the drift and the camera (RMS, mm; they add in squares), beside the "
+         "measured error.</p>\n<pre>"
+      << HtmlEscape(FormatSpreadBudgets(r.spread_budget)) << "</pre>\n";
   }
   if (!r.safeguard.on.empty()) {
     h << "<h3>The intervals' safeguard</h3>\n<p>A conformal scale of the predicted covariance per horizon, fitted on "

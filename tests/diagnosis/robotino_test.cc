@@ -139,6 +139,17 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
     for (const OmniDistanceCalibration& d : report.calibration_by_distance) rows += d.calibration[q].rows;
     EXPECT_EQ(rows, report.calibration[q].rows) << report.calibration[q].frames << " frames";
   }
+  // Where the spread comes from on the validation runs (issue 64): at 16 frames the
+  // driving noise, fitted on the 4- and 8-frame predictions the 0.5 s blocks hold, is
+  // most of it and the intervals are too wide (measured 3.8 against 6.5 mm; the slip
+  // 5.8; docs/identification.md, "Where the spread comes from").
+  ASSERT_EQ(report.spread_budget.size(), report.calibration.size());
+  for (const OmniSpreadBudget& b : report.spread_budget) {
+    EXPECT_GT(b.rows, 200) << b.frames;
+    if (b.frames != 16) continue;
+    EXPECT_LT(b.measured, 0.7 * b.predicted);
+    for (int p = 0; p < kCovarianceParts; ++p) EXPECT_LE(b.parts[static_cast<std::size_t>(p)], b.parts[kDrivingNoise]);
+  }
   ASSERT_GE(report.horizons.size(), 3u);
   for (const OmniHorizonGaps& h : report.horizons) {
     const OmniGap* ident = report.Gap(h.gaps, "identified model");

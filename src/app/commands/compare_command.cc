@@ -292,6 +292,25 @@ std::string FormatCalibrationCsv(
   return s.str();
 }
 
+// spread_budget.csv: one row per physics source and horizon (analysis/omni_spread_budget.h).
+std::string FormatSpreadBudgetCsv(
+    const std::vector<std::pair<const CompareSource*, std::vector<OmniSpreadBudget>>>& budgets) {
+  std::ostringstream s;
+  s << "source,backend,horizon_frames,seconds,rows,measured,predicted,scale";
+  for (const char* key : kOmniCovariancePartKeys) s << "," << key;
+  s << ",camera\n";
+  for (const auto& [source, rows] : budgets) {
+    for (const OmniSpreadBudget& b : rows) {
+      s << source->label << "," << source->backend << "," << b.frames << "," << FormatCsvNumber(b.seconds) << ","
+        << b.rows << "," << FormatCsvNumber(b.measured) << "," << FormatCsvNumber(b.predicted) << ","
+        << FormatCsvNumber(b.scale);
+      for (double p : b.parts) s << "," << FormatCsvNumber(p);
+      s << "," << FormatCsvNumber(b.camera) << "\n";
+    }
+  }
+  return s.str();
+}
+
 // A calibration of one source's rows within [from, to) of the model's seen inputs.
 struct DistanceCalibration {
   const CompareSource* source = nullptr;
@@ -339,6 +358,8 @@ struct SourceCalibrations {
   std::vector<std::pair<const CompareSource*, std::vector<OmniCalibration>>> whole;
   std::vector<DistanceCalibration> by_distance;
   std::vector<TurnRateCalibration> by_turn_rate;
+  // Physics sources: where the spread of the position comes from (analysis/omni_spread_budget.h).
+  std::vector<std::pair<const CompareSource*, std::vector<OmniSpreadBudget>>> budgets;
 };
 
 // The predictive distribution of every physics source (the observer's), and of every
@@ -363,8 +384,10 @@ SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, 
     if (!IsKnownEngine(s.backend)) continue;
     progress->Update(0, 1, s.label + ", calibration");
     const std::vector<int> horizons{4, 16, 63};
-    const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride);
+    std::vector<OmniSpreadBudget> budgets;
+    const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride, &budgets);
     out.whole.emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
+    out.budgets.emplace_back(&s, std::move(budgets));
     out.by_turn_rate.push_back({&s, CalibrateRowsByTurnRate(rows, horizons, log.frame_period)});
     // Where the model knows the inputs its fit saw: the same split by how far from them.
     if (model.observer.seen_inputs.empty()) continue;
@@ -372,6 +395,34 @@ SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, 
       out.by_distance.push_back({&s, d.from, d.to, std::move(d.calibration)});
   }
   return out;
+}
+
+// The calibration tables compare prints (not with --quiet).
+void PrintCalibrations(const OmniModel& model, const SourceCalibrations& c) {
+  for (const auto& [source, whole] : c.whole) {
+    std::printf("calibration of %s's predictions (%s; energy score against the best constant spread on "
+                "these rows):\n%s\n",
+                source->label.c_str(), source->backend == "learned" ? "its sampled rollouts" : "the observer's",
+                FormatCalibrationTable(whole).c_str());
+  }
+  for (const auto& [source, b] : c.budgets) {
+    std::printf("where %s's predicted position spread comes from (RMS, mm; the parts add in squares to the "
+                "filter's spread, which the model's safeguard scales; measured / predicted near 1 when calibrated):\n%s\n",
+                source->label.c_str(), FormatSpreadBudgets(b).c_str());
+  }
+  for (const TurnRateCalibration& t : c.by_turn_rate) {
+    std::printf("the same, %s, by quarter of the log's turn rate over each prediction (rad/s: position 50 / 90 %% "
+                "ellipses hold):\n%s\n",
+                t.source->label.c_str(), FormatTurnRateCalibrationTable(t.quarters).c_str());
+  }
+  for (const DistanceCalibration& d : c.by_distance) {
+    if (std::none_of(d.calibration.begin(), d.calibration.end(), [](const OmniCalibration& k) { return k.rows > 0; }))
+      continue;
+    std::printf("the same, %s, predictions whose inputs lie %s from those %s's fit saw (observer.seen_inputs; 1 "
+                "is a typical command's size):\n%s\n",
+                d.source->label.c_str(), CalibrationDistanceRange(d.from, d.to).c_str(), model.name.c_str(),
+                FormatCalibrationTable(d.calibration).c_str());
+  }
 }
 
 int Compare(const CompareCliOptions& options) {
@@ -409,6 +460,7 @@ int Compare(const CompareCliOptions& options) {
   files.Write("paths.csv", FormatComparePathsCsv(log, result));
   if (!calibration.empty()) files.Write("calibration.csv", FormatCalibrationCsv(calibration));
   if (!by_distance.empty()) files.Write("calibration_by_distance.csv", FormatDistanceCalibrationCsv(by_distance));
+  if (!calibrations.budgets.empty()) files.Write("spread_budget.csv", FormatSpreadBudgetCsv(calibrations.budgets));
   if (!calibrations.by_turn_rate.empty())
     files.Write("calibration_by_turn_rate.csv", FormatTurnRateCalibrationCsv(calibrations.by_turn_rate));
   if (RenderingCompiled()) {
@@ -428,25 +480,7 @@ int Compare(const CompareCliOptions& options) {
     std::printf("compared %zu rows of %s (%g fps) through %s, delay %d frames\n\n%s\n", log.rows.size(),
                 options.log.c_str(), frame_rate, model.name.c_str(),
                 model.command_delay_frames + model.vision_delay_frames, result.FullReport().c_str());
-    for (const auto& [source, c] : calibration) {
-      std::printf("calibration of %s's predictions (%s; energy score against the best constant spread on "
-                  "these rows):\n%s\n",
-                  source->label.c_str(), source->backend == "learned" ? "its sampled rollouts" : "the observer's",
-                  FormatCalibrationTable(c).c_str());
-    }
-    for (const TurnRateCalibration& t : calibrations.by_turn_rate) {
-      std::printf("the same, %s, by quarter of the log's turn rate over each prediction (rad/s: position 50 / 90 %% "
-                  "ellipses hold):\n%s\n",
-                  t.source->label.c_str(), FormatTurnRateCalibrationTable(t.quarters).c_str());
-    }
-    for (const DistanceCalibration& d : by_distance) {
-      if (std::none_of(d.calibration.begin(), d.calibration.end(), [](const OmniCalibration& c) { return c.rows > 0; }))
-        continue;
-      std::printf("the same, %s, predictions whose inputs lie %s from those %s's fit saw (observer.seen_inputs; 1 "
-                  "is a typical command's size):\n%s\n",
-                  d.source->label.c_str(), CalibrationDistanceRange(d.from, d.to).c_str(), model.name.c_str(),
-                  FormatCalibrationTable(d.calibration).c_str());
-    }
+    PrintCalibrations(model, calibrations);
     files.PrintWrote();
   }
   return kExitOk;
