@@ -174,13 +174,8 @@ ordered_json DistanceCalibrationJson(const std::vector<OmniDistanceCalibration>&
 nlohmann::json SpreadBudgetJson(const std::vector<OmniSpreadBudget>& budgets) {
   nlohmann::json out = nlohmann::json::array();
   for (const OmniSpreadBudget& b : budgets) {
-    nlohmann::json j;
-    j["frames"] = b.frames;
-    j["seconds"] = b.seconds;
-    j["rows"] = b.rows;
-    j["measured"] = b.measured;
-    j["predicted"] = b.predicted;
-    j["scale"] = b.scale;
+    nlohmann::json j = {{"frames", b.frames}, {"seconds", b.seconds},     {"rows", b.rows},
+                        {"measured", b.measured}, {"predicted", b.predicted}, {"scale", b.scale}};
     for (int p = 0; p < kCovarianceParts; ++p) j[kOmniCovariancePartKeys[p]] = b.parts[static_cast<std::size_t>(p)];
     j["camera"] = b.camera;
     out.push_back(j);
