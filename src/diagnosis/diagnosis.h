@@ -221,6 +221,10 @@ struct DiagnosisReport {
   double gap_before = 0;                // metric of the nominal model on the test rows
   double gap_after = 0;                 // ... of the repaired model
   double noise_floor = 0;               // the metric a perfect model would reach, estimated from the data
+  // Omni: where the wander drawn from the model's driving noise gave a floor above the
+  // model's own error on the fit rows beyond their scatter (the floor is then held at
+  // that error, `noise_floor`), the floor drawn and that error (the metric's unit); else 0.
+  double drawn_floor = 0, own_fit_error = 0;
   double fit_gap_before = 0, fit_gap_after = 0;  // the same on the fit rows
   double selection_gap_before = 0, selection_gap_after = 0;  // ... on the selection rows
   // Residual rows of each kind: fit, selection (chose the effects), test (report the

@@ -93,13 +93,23 @@ std::string WorseThanGiven(const DiagnosisReport& report, double tolerance) {
   return out.empty() ? "" : "The written model predicts the test rows worse than the given one: " + out + ". ";
 }
 
+// Where the floor drawn from the model's driving noise was held at the model's own
+// error: the noise (and the model's intervals) are wider than the robot wanders here.
+std::string WiderNoiseSentence(const DiagnosisReport& r) {
+  if (!(r.drawn_floor > 0)) return "";
+  return " The model's driving noise draws more wander than this robot shows (" + Num(r.drawn_floor) +
+         " against the model's own " + Num(r.own_fit_error) +
+         " on the fit rows): its prediction intervals are wider than they should be here, and the floor is held at "
+         "the model's own error.";
+}
+
 std::string DiagnosisVerdict(const DiagnosisReport& r) {
   const bool refit = std::isfinite(r.refit_gap);
   std::string s = r.caution + ChangesSentence(r);
   if (refit) s += "Refitting the model's own parameters took the test-row gap from " + Num(r.gap_before) + " to " + Num(r.refit_gap) + ". ";
   if (r.effects.empty()) {
     s += "No effect of the vocabulary passes the tests: the test-row gap stays at " + Num(r.gap_after) +
-         " (noise floor about " + Num(r.noise_floor) + ").";
+         " (noise floor about " + Num(r.noise_floor) + ")." + WiderNoiseSentence(r);
   } else {
     std::string names;
     for (std::size_t k = 0; k < r.effects.size(); ++k) {
@@ -110,7 +120,7 @@ std::string DiagnosisVerdict(const DiagnosisReport& r) {
          Num(r.gap_before) + " to " + Num(r.gap_after) + " (noise floor about " + Num(r.noise_floor) + ")";
     const double closed = ShareClosed(r);
     if (std::isfinite(closed) && closed >= 0) s += ", " + Num(100 * closed, "%.0f") + " % of the way down to it";
-    s += ".";
+    s += "." + WiderNoiseSentence(r);
     if (r.gap_after > r.gap_before) {
       s += " Beware: the named effects chose themselves on the selection rows but make the test rows worse; they do "
            "not hold on data that chose nothing (too few blocks for an effect that depends on the posture or "
@@ -263,6 +273,10 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
   j["verdict"] = DiagnosisVerdict(r);
   j["method"] = DiagnosisMethod(r);
   j["noise_floor"] = r.noise_floor;
+  if (r.drawn_floor > 0) {
+    j["drawn_noise_floor"] = r.drawn_floor;
+    j["own_fit_error"] = r.own_fit_error;
+  }
   {
     ordered_json y;
     y["learner"] = r.yardstick.learner;

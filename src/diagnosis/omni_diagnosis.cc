@@ -355,6 +355,9 @@ class OmniProblem : public DiagnosisProblem {
   // Where the wander drawn from the model's driving noise left more than the model's
   // own error (HoldFloorAtOwnError), one sentence with both; else "".
   const std::string& floor_note() const { return floor_note_; }
+  // With a floor_note: the floor drawn and the model's own fit-row error (m); else 0.
+  double drawn_floor() const { return drawn_floor_; }
+  double own_fit_error() const { return own_fit_error_; }
 
  private:
   double Quantile(const std::vector<double>& sorted, double q) const {
@@ -396,6 +399,7 @@ class OmniProblem : public DiagnosisProblem {
   std::vector<double> channel_noise_;  // m, per axis: ObserverNoiseFloor's
   double noise_floor_ = 0;             // m, its total
   std::string floor_note_;
+  double drawn_floor_ = 0, own_fit_error_ = 0;
   int selection_horizon_ = 4;          // frames: the residuals' horizon (SelectionHorizon)
   std::vector<OmniLogData> data_;
   double frame_period_ = 1.0 / 30;
@@ -512,6 +516,8 @@ void OmniProblem::HoldFloorAtOwnError() {
                   "noise floor is held at the model's own error where the drawn wander exceeds it",
                   FormatParameter(1000 * drawn).c_str(), selection_horizon_, FormatParameter(1000 * own).c_str());
     floor_note_ = buf;
+    drawn_floor_ = drawn;
+    own_fit_error_ = own;
   }
 }
 
@@ -1346,7 +1352,11 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   const OmniModel nominal_model = problem->Build({});
   const OmniModel repaired_model = problem->Build(selection.effects);
   report.noise_floor = problem->noise_floor();  // of nominal_model, the model the problem starts from
-  if (!problem->floor_note().empty()) report.notes.push_back(problem->floor_note());
+  if (!problem->floor_note().empty()) {
+    report.notes.push_back(problem->floor_note());
+    report.drawn_floor = problem->drawn_floor();
+    report.own_fit_error = problem->own_fit_error();
+  }
   GripCheck grip;  // the nominal model's 1-frame replays: where the analytic model holds
   FindChannels(*problem, model, nominal_model, repaired_model, options, &report, &grip);
   FreeRunPaths(*problem, nominal_model, repaired_model, options, first_predicted, &report);

@@ -448,6 +448,11 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
     }
     parts_ = &split;
   }
+  // parts_ points into this frame: cleared however the prediction ends.
+  struct ClearParts {
+    std::array<ObserverMatrix, kCovarianceParts>** parts;
+    ~ClearParts() { *parts = nullptr; }
+  } clear_parts{&parts_};
   double last_theta = backend_->pose(0).theta;
   // The mean distance from the seen inputs along the frames predicted so far.
   const OmniSeenInputs& seen = model_.observer.seen_inputs;
@@ -475,7 +480,6 @@ OmniPrediction OmniObserver::PredictAhead(int k, const std::vector<Twist2>& plan
       }
     }
   }
-  parts_ = nullptr;
   Restore(saved);
   return out;
 }

@@ -263,6 +263,12 @@ TEST(OmniDiagnosis, AFloorAboveTheModelsOwnErrorIsHeldAtItAndSaid) {
       << *said;
   EXPECT_NEAR(own, 1000 * report.fit_gap_before, 0.01);
   EXPECT_GT(drawn, 2 * own);
+  // The verdict says it, and report.json carries both numbers.
+  EXPECT_NEAR(1000 * report.drawn_floor, drawn, 0.01);
+  EXPECT_NEAR(1000 * report.own_fit_error, own, 0.01);
+  const std::string verdict = DiagnosisVerdict(report);
+  EXPECT_NE(verdict.find("draws more wander than this robot shows"), std::string::npos) << verdict;
+  EXPECT_NE(FormatDiagnosisJson(report).find("\"drawn_noise_floor\""), std::string::npos);
 }
 
 TEST(OmniDiagnosis, RefusesBadInput) {
