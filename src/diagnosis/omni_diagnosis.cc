@@ -353,9 +353,8 @@ class OmniProblem : public DiagnosisProblem {
   int selection_horizon() const { return selection_horizon_; }
   double noise_floor() const { return noise_floor_; }  // m, ObserverNoiseFloor's total for Build({})
   // Where the wander drawn from the model's driving noise left more than the model's
-  // own error (HoldFloorAtOwnError), one sentence with both; else "".
-  const std::string& floor_note() const { return floor_note_; }
-  // With a floor_note: the floor drawn and the model's own fit-row error (m); else 0.
+  // own error beyond their scatter (HoldFloorAtOwnError): the floor drawn and that
+  // fit-row error (m); else 0.
   double drawn_floor() const { return drawn_floor_; }
   double own_fit_error() const { return own_fit_error_; }
 
@@ -398,7 +397,6 @@ class OmniProblem : public DiagnosisProblem {
   double guard_seconds_ = 0;
   std::vector<double> channel_noise_;  // m, per axis: ObserverNoiseFloor's
   double noise_floor_ = 0;             // m, its total
-  std::string floor_note_;
   double drawn_floor_ = 0, own_fit_error_ = 0;
   int selection_horizon_ = 4;          // frames: the residuals' horizon (SelectionHorizon)
   std::vector<OmniLogData> data_;
@@ -508,17 +506,21 @@ void OmniProblem::HoldFloorAtOwnError() {
   // own noise the wandering plant of tests/diagnosis gave 1.13 on 60 such predictions.)
   const double independent = static_cast<double>(rows) / std::max(1, selection_horizon_);
   if (std::log(drawn / own) > 2 / std::sqrt(independent)) {
-    char buf[512];
-    std::snprintf(buf, sizeof buf,
-                  "the model's driving noise draws its robot wandering by %s mm over the %d frames predicted, more than "
-                  "the model's own error on the fit rows (%s mm): this robot wanders less than the noise says, and the "
-                  "model's prediction intervals are wider than they should be here (compare shows their coverage); the "
-                  "noise floor is held at the model's own error where the drawn wander exceeds it",
-                  FormatParameter(1000 * drawn).c_str(), selection_horizon_, FormatParameter(1000 * own).c_str());
-    floor_note_ = buf;
     drawn_floor_ = drawn;
     own_fit_error_ = own;
   }
+}
+
+// The note of a floor held at the model's own error (OmniProblem::drawn_floor).
+std::string HeldFloorNote(double drawn, double own, int horizon) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "the model's driving noise draws its robot wandering by %s mm over the %d frames predicted, more than "
+                "the model's own error on the fit rows (%s mm): this robot wanders less than the noise says, and the "
+                "model's prediction intervals are wider than they should be here (compare shows their coverage); the "
+                "noise floor is held at the model's own error where the drawn wander exceeds it",
+                FormatParameter(1000 * drawn).c_str(), horizon, FormatParameter(1000 * own).c_str());
+  return buf;
 }
 
 void OmniProblem::InitialGuess(std::vector<TrialEffect>* effects, int i) const {
@@ -1352,10 +1354,10 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   const OmniModel nominal_model = problem->Build({});
   const OmniModel repaired_model = problem->Build(selection.effects);
   report.noise_floor = problem->noise_floor();  // of nominal_model, the model the problem starts from
-  if (!problem->floor_note().empty()) {
-    report.notes.push_back(problem->floor_note());
+  if (problem->drawn_floor() > 0) {
     report.drawn_floor = problem->drawn_floor();
     report.own_fit_error = problem->own_fit_error();
+    report.notes.push_back(HeldFloorNote(report.drawn_floor, report.own_fit_error, problem->selection_horizon()));
   }
   GripCheck grip;  // the nominal model's 1-frame replays: where the analytic model holds
   FindChannels(*problem, model, nominal_model, repaired_model, options, &report, &grip);
