@@ -61,6 +61,7 @@ void NewtonianOmniBackend::Reset(int robot, const Pose2& pose, const Twist2& vel
   r.state.received.clear();
   r.state.acting = velocity;
   r.state.lagged = velocity;
+  r.state.gripped = velocity;
   engine_->SetWheelTorques(robot, Eigen::VectorXd::Zero(r.model.num_wheels()));
 }
 
@@ -167,6 +168,21 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
     s.lagged = Twist2{follow(0, s.lagged.vx, c.vx), follow(1, s.lagged.vy, c.vy), follow(2, s.lagged.omega, c.omega)};
     c = s.lagged;
   }
+  if (fx.a_max > 0) {
+    // traction_limit: a slipping robot's wheels spin up to what the motors are driven
+    // to while the body follows at the grip's acceleration, so the loop, reading the
+    // wheels, sees its target approached at that pace. The translational set-point
+    // changes by at most a_max dt (its length) per step, divided by the encoders' scale
+    // (the body moves `scale` times the set-point); the loop follows it, and the
+    // floor's force stays capped (NetTorques).
+    const double dx = c.vx - s.gripped.vx, dy = c.vy - s.gripped.vy;
+    const double most = fx.a_max * dt / fx.velocity_scale;
+    if (dx * dx + dy * dy > kSquaresBelow * most * most) {
+      const double change = std::hypot(dx, dy);
+      if (change > most) c = Twist2{s.gripped.vx + dx * most / change, s.gripped.vy + dy * most / change, c.omega};
+    }
+  }
+  s.gripped = c;
   return c;
 }
 

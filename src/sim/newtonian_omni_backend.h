@@ -57,11 +57,12 @@ class NewtonianOmniBackend final : public OmniBackend {
   };
 
   // The command the firmware acts on at this physics step, after time_delay,
-  // velocity_saturation and motor_lag (its braking and field frame included).
+  // velocity_saturation, motor_lag (its braking and field frame included) and
+  // traction_limit.
   Twist2 EffectiveCommand(Robot& r, const Twist2& received, bool new_frame, double dt);
   // The encoder speeds the firmware believes (velocity_scale, rotation_drift).
   void SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const;
-  // Net wheel torques after traction_limit and the motors.
+  // Net wheel torques after the motors.
   void NetTorques(Robot& r);
 
   std::unique_ptr<OmniEngine> engine_;

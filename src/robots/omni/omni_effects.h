@@ -12,8 +12,11 @@
 //                       moves towards zero on an axis; with `field_frame: 1` the lagged
 //                       velocity keeps its direction in the field while the robot turns
 //                       under it (momentum), so a spinning robot's path bends against the spin
-//   traction_limit      the body's horizontal force is limited to m * a_max: acceleration
-//                       beyond a_max (m/s^2) is lost to slip
+//   traction_limit      the wheels slip beyond a_max (m/s^2) of translational acceleration:
+//                       the body follows at a_max while the wheels spin up, so the loop,
+//                       reading the wheels, sees its target approached at that pace;
+//                       simulated as the translational set-point changing at most a_max
+//                       fast, and the floor's horizontal force capped at m * a_max
 //   velocity_scale      the firmware's wheel radius is wrong: the robot moves `scale` times
 //                       as fast as commanded; or per axis (`forward`, `sideways`, `turn`):
 //                       each command component is scaled before the controller sees it
@@ -27,8 +30,8 @@
 // `time_delay`; mapped by the per-axis scales and the couplings,
 //   [vx', vy', w'] = [[sx, kxy, 0], [kyx, sy, 0], [kwx, kwy, sw]] [vx, vy, w];
 // clipped by velocity_saturation (so v_max and w_max are what the robot reaches);
-// through motor_lag per axis. velocity_scale's `scale` and rotation_drift act on the
-// encoder readings, traction_limit on the wheel torques.
+// through motor_lag per axis; its translation ramped by traction_limit. velocity_scale's
+// `scale` and rotation_drift act on the encoder readings.
 #pragma once
 
 #include <array>
