@@ -62,7 +62,7 @@ class NewtonianOmniBackend final : public OmniBackend {
   Twist2 EffectiveCommand(Robot& r, const Twist2& received, bool new_frame, double dt);
   // The encoder speeds the firmware believes (velocity_scale, rotation_drift).
   void SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const;
-  // Net wheel torques after the motors.
+  // Net wheel torques after traction_limit's force cap and the motors.
   void NetTorques(Robot& r);
 
   std::unique_ptr<OmniEngine> engine_;
