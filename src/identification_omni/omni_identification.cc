@@ -1138,7 +1138,8 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
   // A noise fitted on the held-out blocks is calibrated there only across the halves.
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance,
-                                          &report->calibration_by_turn_rate);
+                                          &report->calibration_by_turn_rate, &report->spread_budget);
+  if (!report->spread_budget.empty()) report->spread_budget_on = crossed ? "held-out blocks, each half with the noise fitted on the other" : "held-out blocks";
   // (Under --safeguard logs the left-out logs check them.)
   if (options.safeguard != OmniSafeguard::kLogs) {
     std::set<int> fit_logs;  // a segment is a piece of one log: its blocks' numbers say which
@@ -1154,6 +1155,7 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     say(6, "intervals' safeguard");
     report->safeguard = FitIntervalSafeguard(*model, views, noise_options, crossed);
     model->observer.interval_scale = report->safeguard.Scales();
+    for (OmniSpreadBudget& b : report->spread_budget) b.scale = model->observer.IntervalScaleAt(b.frames)[0];
   }
   // The inputs of the fit, which a growth over left-out logs measures distances from
   // (taken last: the held-out blocks above lie within the fit's reach and read none).
@@ -1437,20 +1439,21 @@ void SummariseFit(const OmniIdentificationProblem& problem, const std::vector<Se
 }
 
 // Where the identified model's predicted spread comes from on the validation logs, at
-// the calibration's horizons, pooled (analysis/omni_spread_budget.h).
-std::vector<OmniSpreadBudget> SpreadBudgetOn(const OmniModel& model, const std::vector<OmniLog>& validation,
-                                             const OmniIdentificationReport& report,
-                                             const OmniIdentificationOptions& options) {
+// the calibration's horizons, pooled (analysis/omni_spread_budget.h), into the report
+// (in place of the held-out blocks' the noise step left there).
+void SpreadBudgetOn(const OmniModel& model, const std::vector<OmniLog>& validation,
+                    const OmniIdentificationOptions& options, OmniIdentificationReport* report) {
   constexpr int kBudgetStride = 4;  // as compare's calibration
   std::vector<int> horizons;
-  for (const OmniCalibration& c : report.calibration) horizons.push_back(c.frames);
+  for (const OmniCalibration& c : report->calibration) horizons.push_back(c.frames);
   std::vector<std::vector<OmniSpreadBudget>> per_log;
   for (const OmniLog& log : validation) {
     per_log.emplace_back();
     OmniLogPredictiveErrors(model, log, options.backend, horizons, kBudgetStride, &per_log.back());
     if (per_log.back().empty()) per_log.pop_back();  // too short for the longest horizon
   }
-  return PoolSpreadBudgets(per_log);
+  report->spread_budget = PoolSpreadBudgets(per_log);
+  report->spread_budget_on = "validation logs";
 }
 
 }  // namespace
@@ -1518,7 +1521,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   say(7, "held-out gaps");                                                                // step 7
   report.held_out = HeldOutGaps(segments, nominal, model, false, options, &report);
   if (!validation.empty()) report.validation = HeldOutGaps(segments, nominal, model, true, options, &report);
-  if (!validation.empty() && !report.calibration.empty()) report.spread_budget = SpreadBudgetOn(model, validation, report, options);
+  if (!validation.empty() && !report.calibration.empty()) SpreadBudgetOn(model, validation, options, &report);
   std::vector<std::vector<char>> fit_rows;
   for (const OmniLog& log : logs) {
     fit_rows.emplace_back(log.rows.size());

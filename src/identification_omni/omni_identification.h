@@ -170,9 +170,12 @@ struct OmniIdentificationReport {
   // The same by quarter of the log's turn rate over each prediction, per horizon
   // (analysis/omni_calibration.h, CalibrateRowsByTurnRate).
   std::vector<std::array<OmniTurnQuarter, 4>> calibration_by_turn_rate;
-  // With validation logs: where the predicted position spread comes from there, per
-  // horizon of the calibration, pooled over the logs (analysis/omni_spread_budget.h).
+  // Where the predicted position spread comes from, per horizon of the calibration
+  // (analysis/omni_spread_budget.h): on the validation logs, pooled, where there are
+  // any; else on the calibration's held-out rows (each half with the other half's noise
+  // where the noise was fitted on them); `spread_budget_on` says which.
   std::vector<OmniSpreadBudget> spread_budget;
+  std::string spread_budget_on;
   // The intervals' safeguard fitted after it (its scales in the model's observer where
   // kept); the calibration above is the covariance's before it.
   OmniIntervalSafeguard safeguard;

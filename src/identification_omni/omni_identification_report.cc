@@ -321,7 +321,10 @@ std::string FormatOmniIdentificationJson(const OmniIdentificationReport& r) {
   }
   if (!r.calibration_by_distance.empty()) j["calibration_by_distance"] = DistanceCalibrationJson(r.calibration_by_distance);
   if (!r.calibration_by_turn_rate.empty()) j["calibration_by_turn_rate"] = TurnRateCalibrationJson(r.calibration_by_turn_rate);
-  if (!r.spread_budget.empty()) j["spread_budget"] = SpreadBudgetJson(r.spread_budget);
+  if (!r.spread_budget.empty()) {
+    j["spread_budget_on"] = r.spread_budget_on;
+    j["spread_budget"] = SpreadBudgetJson(r.spread_budget);
+  }
   if (!r.safeguard.on.empty()) j["intervals_safeguard"] = SafeguardJson(r.safeguard, r.frame_period);
   j["noise_floor"] = r.noise_floor;
   j["collinearity_index"] = Finite(r.collinearity);
@@ -419,8 +422,8 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
       << FormatTurnRateCalibrationTable(r.calibration_by_turn_rate);
   }
   if (!r.spread_budget.empty()) {
-    s << "where the predicted position spread comes from on the validation logs (RMS, mm; the parts add in squares "
-         "to the filter's spread; measured / predicted near 1 when calibrated):\n"
+    s << "where the predicted position spread comes from on the " << r.spread_budget_on
+      << " (RMS, mm; the parts add in squares to the filter's spread; measured / predicted near 1 when calibrated):\n"
       << FormatSpreadBudgets(r.spread_budget);
   }
   if (!r.safeguard.on.empty()) {
@@ -527,7 +530,8 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
       << HtmlEscape(FormatTurnRateCalibrationTable(r.calibration_by_turn_rate)) << "</pre>\n";
   }
   if (!r.spread_budget.empty()) {
-    h << "<p>Where the predicted position spread comes from on the validation logs: the start estimate carried on, "
+    h << "<p>Where the predicted position spread comes from on the " << HtmlEscape(r.spread_budget_on)
+      << ": the start estimate carried on, "
          "the process noise, the driving noise, the drift and the camera (RMS, mm; they add in squares), beside the "
          "measured error.</p>\n<pre>"
       << HtmlEscape(FormatSpreadBudgets(r.spread_budget)) << "</pre>\n";

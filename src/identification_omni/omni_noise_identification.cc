@@ -97,14 +97,18 @@ struct RowSelection {
 // Replays every stretch of the kind once (in parallel) at the longest horizon, the
 // others on the way, predicting only from frames the selection scores, and gathers the
 // rows per horizon in stretch order.
+// With `budgets`, each stretch's spread budget per horizon over the same rows
+// (analysis/omni_spread_budget.h) is appended to it.
 std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
-                                 const OmniNoiseOptions& options, RowSelection selection) {
+                                 const OmniNoiseOptions& options, RowSelection selection,
+                                 std::vector<std::vector<OmniSpreadBudget>>* budgets = nullptr) {
   bool any_validation = false;
   for (const OmniBlockedStretch& s : stretches) any_validation = any_validation || s.validation;
   const bool held_out = selection.rows != Rows::kFit;
   const bool validation_only = selection.rows == Rows::kReport && any_validation;
   const int longest = *std::max_element(options.horizons.begin(), options.horizons.end());
   std::vector<std::vector<HorizonRows>> per(stretches.size(), std::vector<HorizonRows>(options.horizons.size()));
+  std::vector<std::vector<OmniSpreadBudget>> per_budget(stretches.size());
   ParallelFor(static_cast<int>(stretches.size()), options.threads, [&](int k) {
     const OmniBlockedStretch& s = stretches[static_cast<std::size_t>(k)];
     if (s.validation != validation_only) return;
@@ -133,6 +137,7 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
       return reach;
     };
     o.covariance = true;
+    o.covariance_parts = budgets != nullptr;
     for (int h : options.horizons)
       if (h != longest) o.also.push_back(h);
     const OmniReplayResult r = ReplayOmniLog(model, *s.log, o);
@@ -141,11 +146,15 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
       const int h = options.horizons[q];
       const OmniReplayResult& at = h == longest ? r : r.also[a++];
       HorizonRows& out = per[static_cast<std::size_t>(k)][q];
-      for (std::size_t row = 0; row < s.log->rows.size(); ++row) {
-        if (!PredictedAndMeasured(*s.log, at, row) || s.log->FrameIndex(row) < warm + h) continue;
-        if (!ScoredInBlocks(s, row, held_out, h)) continue;
+      // PredictedAndMeasured is SpreadBudgetOf's own test; the rest chooses the rows.
+      auto scored = [&](std::size_t row) {
+        if (s.log->FrameIndex(row) < warm + h || !ScoredInBlocks(s, row, held_out, h)) return false;
         // With blocks, the prediction ends and starts in them too.
-        if (selection.blocks && (!in_selection(row) || !is_selected(s.log->FrameIndex(row) - h))) continue;
+        return !selection.blocks || (in_selection(row) && is_selected(s.log->FrameIndex(row) - h));
+      };
+      if (budgets) per_budget[static_cast<std::size_t>(k)].push_back(SpreadBudgetOf(*s.log, at, h, scored));
+      for (std::size_t row = 0; row < s.log->rows.size(); ++row) {
+        if (!PredictedAndMeasured(*s.log, at, row) || !scored(row)) continue;
         out.rows.push_back(PredictiveErrorAt(*s.log, at, row));
         // Only the calibration splits rows by turn rate: the searches' rows go without.
         if (selection.rows == Rows::kReport) out.rows.back().turn_rate = MeasuredTurnRate(*s.log, row, h);
@@ -153,6 +162,10 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
       }
     }
   });
+  if (budgets) {
+    for (std::vector<OmniSpreadBudget>& b : per_budget)
+      if (!b.empty()) budgets->push_back(std::move(b));
+  }
   std::vector<HorizonRows> out(options.horizons.size());
   for (const auto& stretch : per) {
     for (std::size_t q = 0; q < out.size(); ++q) {
@@ -535,7 +548,8 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed,
                                                std::vector<OmniDistanceCalibration>* by_distance,
-                                               std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate) {
+                                               std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate,
+                                               std::vector<OmniSpreadBudget>* budget) {
   if (std::string why; !options.IsValid(&why)) throw InputError(why);
   OmniNoiseOptions scoring = options;
   scoring.stride = options.score_stride;
@@ -543,12 +557,15 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
   for (const OmniBlockedStretch& s : stretches) any_validation = any_validation || s.validation;
   const std::vector<HorizonRows> fit = Collect(model, stretches, scoring, {Rows::kFit});
   std::vector<HorizonRows> held;
+  // The held-out blocks' budgets, per stretch (and half): none on validation logs.
+  std::vector<std::vector<OmniSpreadBudget>> budgets;
+  std::vector<std::vector<OmniSpreadBudget>>* on_blocks = budget && !any_validation ? &budgets : nullptr;
   if (crossed && !any_validation) {
     held.resize(options.horizons.size());
     for (int k = 0; k < 2; ++k) {
       const OmniCrossedNoise& other = (*crossed)[static_cast<std::size_t>(1 - k)];
-      const std::vector<HorizonRows> half =
-          Collect(other.model, stretches, scoring, {Rows::kReport, &(*crossed)[static_cast<std::size_t>(k)].blocks});
+      const std::vector<HorizonRows> half = Collect(
+          other.model, stretches, scoring, {Rows::kReport, &(*crossed)[static_cast<std::size_t>(k)].blocks}, on_blocks);
       for (std::size_t q = 0; q < held.size(); ++q)
         held[q].rows.insert(held[q].rows.end(), half[q].rows.begin(), half[q].rows.end());
     }
@@ -557,8 +574,9 @@ std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std
     measured.observer.seen_inputs = SeenInputsOfFitBlocks(model, stretches, options);
     held = Collect(measured, stretches, scoring, {Rows::kReport});
   } else {
-    held = Collect(model, stretches, scoring, {Rows::kReport});
+    held = Collect(model, stretches, scoring, {Rows::kReport}, on_blocks);
   }
+  if (budget) *budget = PoolSpreadBudgets(budgets);
   const double period = stretches.empty() ? 0 : stretches.front().log->frame_period;
   std::vector<std::vector<PredictiveError>> rows;
   for (const HorizonRows& h : held) rows.push_back(h.rows);

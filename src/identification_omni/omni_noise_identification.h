@@ -42,6 +42,7 @@
 
 #include "analysis/omni_calibration.h"
 #include "analysis/omni_interval_scale.h"
+#include "analysis/omni_spread_budget.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
@@ -140,12 +141,16 @@ double HeldOutLogScore(const OmniModel& model, const std::vector<OmniBlockedStre
 // range's baseline fitted on its rows): where the intervals can be relied on; `model`'s
 // interval_scale must then grow with no distance (its seen inputs are replaced). With
 // `by_turn_rate`, the same rows by quarter of their measured turn rate
-// (CalibrateRowsByTurnRate).
+// (CalibrateRowsByTurnRate). With `budget` and no validation logs, the spread budget of
+// the same held-out rows per horizon, pooled (analysis/omni_spread_budget.h; each half
+// with the other half's noise, as the calibration; the scale left at 1); with validation
+// logs it is left empty.
 std::vector<OmniCalibration> CalibrateOnBlocks(const OmniModel& model, const std::vector<OmniBlockedStretch>& stretches,
                                                const OmniNoiseOptions& options,
                                                const std::array<OmniCrossedNoise, 2>* crossed = nullptr,
                                                std::vector<OmniDistanceCalibration>* by_distance = nullptr,
-                                               std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate = nullptr);
+                                               std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate = nullptr,
+                                               std::vector<OmniSpreadBudget>* budget = nullptr);
 
 // The seen inputs (robots/omni/omni_seen_inputs.h) of `model` on the fit blocks of
 // `stretches` (validation logs left out): each fit row's frame as the observer saw it.

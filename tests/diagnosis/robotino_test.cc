@@ -144,6 +144,7 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
   // most of it and the intervals are too wide (measured 3.8 against 6.5 mm; the slip
   // 5.8; docs/identification.md, "Where the spread comes from").
   ASSERT_EQ(report.spread_budget.size(), report.calibration.size());
+  EXPECT_EQ(report.spread_budget_on, "validation logs");
   for (const OmniSpreadBudget& b : report.spread_budget) {
     EXPECT_GT(b.rows, 200) << b.frames;
     if (b.frames != 16) continue;

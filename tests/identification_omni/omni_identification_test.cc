@@ -194,6 +194,13 @@ TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
   ExpectDeterminedOrHeld(report);
   ExpectIdentifiedBestAtEveryHorizon(report);
   EXPECT_EQ(identified.Validate(), "");
+  // Without a validation log the spread's budget is the held-out blocks', on the
+  // calibration's rows (issue 64).
+  ASSERT_FALSE(report.calibration.empty());
+  ASSERT_EQ(report.spread_budget.size(), report.calibration.size());
+  EXPECT_EQ(report.spread_budget_on.rfind("held-out blocks", 0), 0u) << report.spread_budget_on;
+  for (std::size_t q = 0; q < report.calibration.size(); ++q)
+    EXPECT_EQ(report.spread_budget[q].rows, report.calibration[q].rows) << report.calibration[q].frames << " frames";
 }
 
 // A robot that wanders (tests/estimation/wandering_plant.h: a kinematic robot with a
