@@ -1155,7 +1155,6 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
     say(6, "intervals' safeguard");
     report->safeguard = FitIntervalSafeguard(*model, views, noise_options, crossed);
     model->observer.interval_scale = report->safeguard.Scales();
-    for (OmniSpreadBudget& b : report->spread_budget) b.scale = model->observer.IntervalScaleAt(b.frames)[0];
   }
   // The inputs of the fit, which a growth over left-out logs measures distances from
   // (taken last: the held-out blocks above lie within the fit's reach and read none).
@@ -1438,11 +1437,17 @@ void SummariseFit(const OmniIdentificationProblem& problem, const std::vector<Se
   }
 }
 
-// Where the identified model's predicted spread comes from on the validation logs, at
-// the calibration's horizons, pooled (analysis/omni_spread_budget.h), into the report
-// (in place of the held-out blocks' the noise step left there).
+// Where the identified model's predicted spread comes from (analysis/omni_spread_budget.h),
+// at the calibration's horizons: on the validation logs, pooled, where there are any
+// (the noise step left none); else the held-out blocks' that the noise step left, given
+// the final model's safeguard scale (a left-out logs' safeguard replaces the blocks').
 void SpreadBudgetOn(const OmniModel& model, const std::vector<OmniLog>& validation,
                     const OmniIdentificationOptions& options, OmniIdentificationReport* report) {
+  if (validation.empty()) {
+    for (OmniSpreadBudget& b : report->spread_budget) b.scale = model.observer.IntervalScaleAt(b.frames)[0];
+    return;
+  }
+  if (report->calibration.empty()) return;
   constexpr int kBudgetStride = 4;  // as compare's calibration
   std::vector<int> horizons;
   for (const OmniCalibration& c : report->calibration) horizons.push_back(c.frames);
@@ -1453,7 +1458,7 @@ void SpreadBudgetOn(const OmniModel& model, const std::vector<OmniLog>& validati
     if (per_log.back().empty()) per_log.pop_back();  // too short for the longest horizon
   }
   report->spread_budget = PoolSpreadBudgets(per_log);
-  report->spread_budget_on = "validation logs";
+  report->spread_budget_on = report->spread_budget.empty() ? "" : "validation logs";
 }
 
 }  // namespace
@@ -1521,7 +1526,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   say(7, "held-out gaps");                                                                // step 7
   report.held_out = HeldOutGaps(segments, nominal, model, false, options, &report);
   if (!validation.empty()) report.validation = HeldOutGaps(segments, nominal, model, true, options, &report);
-  if (!validation.empty() && !report.calibration.empty()) SpreadBudgetOn(model, validation, options, &report);
+  SpreadBudgetOn(model, validation, options, &report);
   std::vector<std::vector<char>> fit_rows;
   for (const OmniLog& log : logs) {
     fit_rows.emplace_back(log.rows.size());
