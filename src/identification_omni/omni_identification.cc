@@ -1139,7 +1139,8 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance,
                                           &report->calibration_by_turn_rate, &report->spread_budget);
-  if (!report->spread_budget.empty()) report->spread_budget_on = crossed ? "held-out blocks, each half with the noise fitted on the other" : "held-out blocks";
+  if (!report->spread_budget.empty())
+    report->spread_budget_on = crossed ? "held-out blocks, each half with the noise fitted on the other" : "held-out blocks";
   // (Under --safeguard logs the left-out logs check them.)
   if (options.safeguard != OmniSafeguard::kLogs) {
     std::set<int> fit_logs;  // a segment is a piece of one log: its blocks' numbers say which
