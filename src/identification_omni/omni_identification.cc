@@ -133,6 +133,9 @@ const std::vector<ParamSpec>& Specs() {
   return specs;
 }
 
+// True where parameter p is among the fit's free ones.
+bool IsFree(const std::vector<int>& free, int p) { return std::find(free.begin(), free.end(), p) != free.end(); }
+
 // Which of parameters that trade against each other is held at its value (larger:
 // sooner; identification/identifiability.h): the controller's loop gain and ramp before the
 // lag they mimic, the filter's overall trust before the driving noise's spreads, and the
@@ -600,7 +603,7 @@ void LinearStart(const std::vector<OmniLog>& logs, double delay, const std::func
     return Eigen::VectorXd(A.colPivHouseholderQr().solve(b));
   };
   auto set = [&](int p, double value) {
-    if (std::find(free.begin(), free.end(), p) == free.end()) return;  // held at the model's value
+    if (!IsFree(free, p)) return;  // held at the model's value
     if (std::isfinite(value)) (*v)[static_cast<std::size_t>(p)] = std::clamp(value, Specs()[p].lower, Specs()[p].upper);
   };
   const Eigen::VectorXd fx = fit(0, {0, 1}), fy = fit(1, {1, 0}), fw = fit(2, {2, 0, 1});
@@ -664,8 +667,7 @@ void ChooseLagStructures(const OmniIdentificationProblem& lookahead, const std::
   bool any_lag = false;
   for (int a = 0; a < 3; ++a) {
     const int p = kLagX + a;
-    any_lag = any_lag || (std::find(free.begin(), free.end(), p) != free.end() &&
-                          (*v)[static_cast<std::size_t>(p)] > 1.05 * Specs()[p].lower);
+    any_lag = any_lag || (IsFree(free, p) && (*v)[static_cast<std::size_t>(p)] > 1.05 * Specs()[p].lower);
   }
   if (!any_lag) {
     (*notes)[kFieldFrame] = (*notes)[kBraking] = "not tried: the fit found no lag";
@@ -901,12 +903,12 @@ void RestartLagsAtTheirCeiling(const OmniIdentificationProblem& problem, const O
   for (int a = 0; a < 3; ++a) {
     const int lag = kLagX + a;
     const double at = (*v)[static_cast<std::size_t>(lag)];
-    if (std::find(free.begin(), free.end(), lag) == free.end() || at < 0.9 * Specs()[lag].upper) continue;
+    if (!IsFree(free, lag) || at < 0.9 * Specs()[lag].upper) continue;
     std::array<double, kNumParams> trial = *v;
     trial[static_cast<std::size_t>(lag)] = kStartLag;
     trial[static_cast<std::size_t>(kLoopX + a)] = 1;
     for (int p : kInto[static_cast<std::size_t>(a)]) {
-      if (p >= 0 && std::find(free.begin(), free.end(), p) != free.end()) trial[static_cast<std::size_t>(p)] = 0;
+      if (p >= 0 && IsFree(free, p)) trial[static_cast<std::size_t>(p)] = 0;
     }
     try {
       const SolveResult other = Solve(problem, trial, free, options.max_delay, options.max_iterations, false);
