@@ -173,16 +173,22 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
     for (std::size_t e = 1; e < rmse.size(); ++e)
       EXPECT_NEAR(rmse[e], rmse[0], 0.05 * rmse[0]) << log.path << ": " << AvailableOmniEngines()[e];
   }
-  // The diagnosis of two held-out runs against the identified model (issue 63): the
-  // wander drawn from identify's driving noise (7.3 mm half a second ahead) is twice the
-  // model's own error on the runs' fit rows (3.7 mm; the noise is fitted on 4- and
-  // 8-frame predictions, all that the 0.5 s blocks of 10 s runs hold): the floor is held
-  // at that error and the report says the noise is wider than the robot wanders. Before,
-  // the floor (7.3 mm) stood at twice the test rows' gap itself (3.5 mm).
-  {
-    const DiagnosisReport diagnosis = DiagnoseOmni(identified, {held[1], held[3]}, DiagnosisOptions{});
+  // The diagnosis of two held-out runs against the identified model (issue 63): the noise
+  // floor is never above the model's own error on the runs' fit rows. Where the model's
+  // driving noise says the robot wanders more than it does, the floor drawn with it is
+  // held at that error and the report says so. Identify's noise sits on that edge here:
+  // whether its growth with acceleration is kept turns on the last digits of its
+  // arithmetic (kept, the wander drawn half a second ahead is 7.3 mm against the model's
+  // own 3.7 mm; not kept, measured with the engine's stages turned rather than their
+  // sines taken, 3.9 against 3.8: docs/benchmarks.md), so the note is checked on the
+  // same model with its driving noise doubled.
+  for (const double noise_factor : {1.0, 2.0}) {
+    OmniModel model = identified;
+    for (double& sd : model.driving_noise.sd) sd *= noise_factor;
+    const DiagnosisReport diagnosis = DiagnoseOmni(model, {held[1], held[3]}, DiagnosisOptions{});
     SCOPED_TRACE(FormatDiagnosisTable(diagnosis));
-    EXPECT_LE(diagnosis.noise_floor, diagnosis.fit_gap_before * (1 + 1e-12));
+    EXPECT_LE(diagnosis.noise_floor, diagnosis.fit_gap_before * (1 + 1e-12)) << noise_factor;
+    if (noise_factor == 1.0) continue;
     EXPECT_TRUE(std::any_of(diagnosis.notes.begin(), diagnosis.notes.end(), [](const std::string& n) {
       return n.find("this robot wanders less than the noise says") != std::string::npos;
     }));

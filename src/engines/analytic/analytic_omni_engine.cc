@@ -28,6 +28,7 @@ struct AnalyticRobot {
   // the grip; fixed for a model, so the derivative spends no trigonometry on them.
   struct Wheel {
     double c, s, roller_limit, grip;
+    double per_grip_squared;  // 1 / grip^2 (0 without grip), multiplied where a division costs more
   };
   std::vector<Wheel> wheels;
 
@@ -40,9 +41,11 @@ struct AnalyticRobot {
     x.setZero();
     torques.setZero(m.num_wheels());
     wrench.setZero();
-    for (int i = 0; i < m.num_wheels(); ++i)
-      wheels.push_back({std::cos(m.wheel_angles[i]), std::sin(m.wheel_angles[i]),
-                        m.roller_friction * m.wheel_load[i], m.wheel_friction * m.wheel_load[i]});
+    for (int i = 0; i < m.num_wheels(); ++i) {
+      const double grip = m.wheel_friction * m.wheel_load[i];
+      wheels.push_back({std::cos(m.wheel_angles[i]), std::sin(m.wheel_angles[i]), m.roller_friction * m.wheel_load[i],
+                        grip, grip > 0 ? 1 / (grip * grip) : 0});
+    }
   }
 
   void SetTorques(const Eigen::VectorXd& t) {
@@ -83,17 +86,18 @@ struct AnalyticRobot {
   // dw_i/dt) / r with dw/dt = J dv/dt; across it the rollers' friction.
   double GripNeeded(const Eigen::Matrix<double, 6, 1>& s, const Eigen::Matrix<double, 6, 1>& ds) const {
     const auto& j = kin.wheels_from_body();
-    double worst = 0;
+    const double per_radius = 1 / model.wheel_radius;
+    double worst = 0;  // the largest (force / grip)^2, its root taken once
     for (int i = 0; i < model.num_wheels(); ++i) {
       const Wheel& wheel = wheels[static_cast<std::size_t>(i)];
       if (wheel.grip <= 0) continue;
       const double spin = j(i, 0) * ds[3] + j(i, 1) * ds[4] + j(i, 2) * ds[5];
-      const double rolling = (torques[i] - model.wheel_spin_inertia * spin) / model.wheel_radius;
+      const double rolling = (torques[i] - model.wheel_spin_inertia * spin) * per_radius;
       const double slip = wheel.c * s[3] + wheel.s * s[4];
       const double across = wheel.roller_limit * std::clamp(slip / kRollerSlipScale, -1.0, 1.0);
-      worst = std::max(worst, std::sqrt(rolling * rolling + across * across) / wheel.grip);
+      worst = std::max(worst, (rolling * rolling + across * across) * wheel.per_grip_squared);
     }
-    return worst;
+    return std::sqrt(worst);
   }
 };
 
