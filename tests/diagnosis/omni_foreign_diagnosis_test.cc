@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <string>
 
@@ -57,7 +59,11 @@ std::vector<Change> Changes() {
 // close at least 80 % of the way to the clean log's gap; the speed limit is named
 // (v_max 0.57) and takes the gap below the clean log's; the grip limit is named and
 // closes 74 % (a_max 2.2 for 2); the motor lag is named a time_delay (its look-alike, docs/diagnose.md);
-// the drift per metre is carried by the observer's drift state and removes 5 %. Until
+// the drift per metre is carried by the observer's drift state and removes 5 %. The
+// count is one draw (docs/diagnose.md, "That count is one draw"): the same
+// identification with its arithmetic's last digits moved, and the new recordings of
+// seeds 6 to 8, name 4 to 8 and close 3 to 7. This seed and model came first; their
+// 6 and 6 are the best of the model's four seeds (4, 4 and 5 on the others). Until
 // a selection block counted as changed only where its error moved by 1 % (issue 63), the
 // speed limit's 44 % of the selection rows' error, in the two blocks it acted on, was
 // "2 of the 4 blocks it changed" and it went unnamed. Until
@@ -66,23 +72,25 @@ std::vector<Change> Changes() {
 // an identified model's effects were candidates as changes, three of these (delay,
 // scale, couplings) could not be named at all. About 3.5 minutes on 2 cores: one
 // identification and nine diagnoses of 60 fps logs.
-TEST(ForeignOmniDiagnosis, NamesWhatChangedOnARobotIdentifiedBeforeAndWrittenApart) {
-  const testing::WanderingPlant before = RobotAsIdentified();
-  OmniModel identified;
-  IdentifyOmni(testing::Omni4(), {testing::RecordWanderingPlant(before, 40, 4).log}, {}, OmniIdentificationOptions{},
-               &identified);
-  double clean_gap = 0;
+// How many changes one new recording's diagnoses name right, and how many of those close
+// 70 % of the way to the unchanged robot's gap on the same recording's seed.
+struct Count {
   int named = 0, closed = 0;
+};
+
+Count DiagnoseEveryChange(const OmniModel& identified, const testing::WanderingPlant& before, std::uint64_t seed) {
+  double clean_gap = 0;
+  Count count;
   for (const Change& c : Changes()) {
     testing::WanderingPlant after = before;
     c.make(&after);
     const DiagnosisReport report =
-        DiagnoseOmni(identified, {testing::RecordWanderingPlant(after, 30, 5).log}, DiagnosisOptions{});
-    SCOPED_TRACE(c.label + "\n" + FormatDiagnosisTable(report));
+        DiagnoseOmni(identified, {testing::RecordWanderingPlant(after, 30, seed).log}, DiagnosisOptions{});
+    SCOPED_TRACE(c.label + ", seed " + std::to_string(seed) + "\n" + FormatDiagnosisTable(report));
     std::string names;
     for (const DiagnosedEffect& e : report.effects) names += (names.empty() ? "" : ", ") + e.name;
-    std::printf("%-28s named: %-28s test-row gap %.1f -> %.1f mm\n", c.label.c_str(), names.empty() ? "nothing" : names.c_str(),
-                1000 * report.gap_before, 1000 * report.gap_after);
+    std::printf("seed %d: %-28s named: %-28s test-row gap %.1f -> %.1f mm\n", static_cast<int>(seed), c.label.c_str(),
+                names.empty() ? "nothing" : names.c_str(), 1000 * report.gap_before, 1000 * report.gap_after);
     if (c.expected.empty()) {
       EXPECT_TRUE(report.effects.empty());
       EXPECT_EQ(report.gap_after, report.gap_before);
@@ -96,11 +104,29 @@ TEST(ForeignOmniDiagnosis, NamesWhatChangedOnARobotIdentifiedBeforeAndWrittenApa
     }
     const bool right = std::any_of(report.effects.begin(), report.effects.end(),
                                    [&](const DiagnosedEffect& e) { return e.name == c.expected; });
-    named += right;
-    closed += right && report.gap_before - report.gap_after >= 0.7 * (report.gap_before - clean_gap);
+    count.named += right;
+    count.closed += right && report.gap_before - report.gap_after >= 0.7 * (report.gap_before - clean_gap);
   }
-  EXPECT_GE(named, 6);
-  EXPECT_GE(closed, 6);
+  std::printf("seed %d: %d of %zu changes named, %d closed by 70 %%\n", static_cast<int>(seed), count.named,
+              Changes().size() - 1, count.closed);
+  return count;
+}
+
+// The new recording of seed 5 is held to six named and six closed. With
+// TWINSIM_FOREIGN_OMNI_SEEDS=N the recordings of seeds 6 to N are diagnosed as well and
+// their counts printed, not held (docs/diagnose.md, "That count is one draw": about 3
+// minutes a seed on 2 cores); their unchanged robots must still name nothing.
+TEST(ForeignOmniDiagnosis, NamesWhatChangedOnARobotIdentifiedBeforeAndWrittenApart) {
+  const testing::WanderingPlant before = RobotAsIdentified();
+  OmniModel identified;
+  IdentifyOmni(testing::Omni4(), {testing::RecordWanderingPlant(before, 40, 4).log}, {}, OmniIdentificationOptions{},
+               &identified);
+  const Count count = DiagnoseEveryChange(identified, before, 5);
+  EXPECT_GE(count.named, 6);
+  EXPECT_GE(count.closed, 6);
+  if (const char* last = std::getenv("TWINSIM_FOREIGN_OMNI_SEEDS")) {
+    for (int seed = 6; seed <= std::atoi(last); ++seed) DiagnoseEveryChange(identified, before, static_cast<std::uint64_t>(seed));
+  }
 }
 
 }  // namespace
