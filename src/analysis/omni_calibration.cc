@@ -262,10 +262,9 @@ std::vector<std::array<OmniTurnQuarter, 4>> CalibrateRowsByTurnRate(const std::v
   return out;
 }
 
-std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniModel& model, const OmniLog& log,
-                                                                  const std::string& backend,
-                                                                  const std::vector<int>& horizons, int stride,
-                                                                  std::vector<OmniSpreadBudget>* budgets) {
+std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(
+    const OmniModel& model, const OmniLog& log, const std::string& backend, const std::vector<int>& horizons, int stride,
+    std::vector<OmniSpreadBudget>* budgets, const std::vector<std::array<OmniModel, 2>>& parameter_shifts) {
   std::vector<std::vector<PredictiveError>> out(horizons.size());
   if (budgets) budgets->clear();
   if (horizons.empty()) return out;
@@ -279,6 +278,8 @@ std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniMode
   o.covariance_parts = budgets != nullptr;
   o.stride = stride;
   o.stride_origin = 0;
+  o.parameter_shifts = parameter_shifts;
+  o.parameter_backend = model.fitted_on.empty() ? "analytic" : model.fitted_on;
   const OmniReplayResult r = ReplayOmniLog(model, log, o);
   for (std::size_t q = 0; q < horizons.size(); ++q) {
     const OmniReplayResult& at = q + 1 == horizons.size() ? r : r.also[q];

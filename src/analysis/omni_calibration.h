@@ -163,11 +163,14 @@ std::vector<std::array<OmniTurnQuarter, 4>> CalibrateRowsByTurnRate(const std::v
 // increasing) from every `stride`-th frame counted from the log's first (the same rows
 // for every model), with their covariances: one list per horizon, all empty where the
 // log is too short for the longest. With `budgets`, each horizon's spread budget of the
-// same rows into it (analysis/omni_spread_budget.h). Throws as ReplayOmniLog.
-std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(const OmniModel& model, const OmniLog& log,
-                                                                  const std::string& backend,
-                                                                  const std::vector<int>& horizons, int stride,
-                                                                  std::vector<OmniSpreadBudget>* budgets = nullptr);
+// same rows into it (analysis/omni_spread_budget.h). With `parameter_shifts`, the
+// parameters' own uncertainty in every covariance (OmniReplayOptions::parameter_shifts,
+// replayed on the engine the model was fitted on, else the analytic). Throws as
+// ReplayOmniLog.
+std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(
+    const OmniModel& model, const OmniLog& log, const std::string& backend, const std::vector<int>& horizons, int stride,
+    std::vector<OmniSpreadBudget>* budgets = nullptr,
+    const std::vector<std::array<OmniModel, 2>>& parameter_shifts = {});
 
 // The negative log density (nats) of one row's pose under its distribution (its Gaussian,
 // or the Student t of a covariance estimated from draws); infinity for a covariance that

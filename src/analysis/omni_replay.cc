@@ -9,6 +9,7 @@
 #include "backends/omni_backend_factory.h"
 #include "core/covariance_root.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/rng.h"
 #include "learning/omni_predictor.h"
 #include "robots/omni/omni_driving_noise.h"
@@ -94,9 +95,11 @@ void AddFrameAt(OmniObserver* observer, const OmniLog& log, const std::map<int, 
 }
 
 // Row `at` of *result from frame j (1..K) of `prediction`, its heading moved by `shift`
-// onto the log's branch, with its covariance where the result keeps them.
+// onto the log's branch, with its covariance where the result keeps them, the
+// parameters' part (`parameter_parts`' row `at`, where given) added to it.
 void PutPrediction(const OmniPrediction& prediction, int j, std::size_t at, double shift,
-                   const std::function<void(std::size_t, const Pose2&)>& check, OmniReplayResult* result) {
+                   const std::function<void(std::size_t, const Pose2&)>& check,
+                   const std::vector<Eigen::Matrix3d>* parameter_parts, OmniReplayResult* result) {
   Pose2 p = prediction.pose[static_cast<std::size_t>(j - 1)];
   check(at, p);
   p.theta += shift;
@@ -108,6 +111,10 @@ void PutPrediction(const OmniPrediction& prediction, int j, std::size_t at, doub
   if (!prediction.input_distance.empty()) {
     result->input_distance.resize(result->pose.size(), 0.0);
     result->input_distance[at] = prediction.input_distance[static_cast<std::size_t>(j - 1)];
+  }
+  if (parameter_parts && !result->parameter_covariance.empty()) {
+    result->parameter_covariance[at] = (*parameter_parts)[at];
+    result->covariance[at] += (*parameter_parts)[at];
   }
 }
 
@@ -125,13 +132,15 @@ void RecordInput(const OmniObserver& observer, std::size_t row, OmniReplayResult
 }
 
 // The observer's replay (OmniReplayOptions::state kObserver): the filter runs along the
-// log; each prediction (or the stretch's free run) starts from its estimate.
+// log; each prediction (or the stretch's free run) starts from its estimate. `parameter
+// parts`: per horizon (K, then `also`'s) each row's parameters' part, or null.
 void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                     const std::function<void(int, int)>& progress, std::size_t stretch_first, std::size_t stretch_last,
                     const std::map<int, std::size_t>& row_of_frame, const std::vector<Twist2>& command_at,
                     const std::function<void(std::size_t, const Pose2&)>& check, std::unique_ptr<OmniBackend> backend,
-                    OmniReplayResult* out) {
+                    const std::vector<std::vector<Eigen::Matrix3d>>* parameter_parts, OmniReplayResult* out) {
   OmniObserver observer(model, std::move(backend), options.observer);
+  auto parts_of = [&](std::size_t h) { return parameter_parts ? &(*parameter_parts)[h] : nullptr; };
   const int k = options.horizon;
   const bool with_covariance = options.covariance || options.samples > 0;
   Rng draws = Rng::Derived(options.seed, 0x73616d70);  // "samp": the samples' own stream
@@ -191,12 +200,13 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     for (std::size_t a = 0; a < options.also.size(); ++a) {
       if (options.also[a] > reach) continue;
       auto at = row_of_frame.find(f + options.also[a]);
-      if (at != row_of_frame.end()) PutPrediction(prediction, options.also[a], at->second, shift, check, &out->also[a]);
+      if (at != row_of_frame.end())
+        PutPrediction(prediction, options.also[a], at->second, shift, check, parts_of(a + 1), &out->also[a]);
     }
     if (target == row_of_frame.end()) continue;
-    PutPrediction(prediction, k, target->second, shift, check, out);
+    PutPrediction(prediction, k, target->second, shift, check, parts_of(0), out);
     if (options.samples > 0)
-      DrawSamples(out->pose[target->second], prediction.pose_covariance.back(), options.samples, &draws,
+      DrawSamples(out->pose[target->second], out->covariance[target->second], options.samples, &draws,
                   &out->samples[target->second]);
   }
   out->measurement_covariance = observer.measurement_covariance();
@@ -423,6 +433,43 @@ void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOpt
 
 OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
                         const std::function<void(int, int)>& progress, std::size_t stretch_first,
+                        std::size_t stretch_last);
+
+// The parameters' part of each predicted row's covariance, per horizon (K, then
+// `also`'s): the shifted models' predictions (OmniReplayOptions::parameter_shifts, each
+// replayed on its own thread, the mean only), sum_l d_l d_l^T with d_l half the
+// difference of pair l's (the heading's wrapped).
+std::vector<std::vector<Eigen::Matrix3d>> ParameterParts(const OmniLog& log, const OmniReplayOptions& options) {
+  OmniReplayOptions mean = options;
+  mean.samples = 0;
+  mean.covariance = mean.covariance_parts = mean.features = false;
+  mean.parameter_shifts.clear();
+  if (!options.parameter_backend.empty()) mean.backend = options.parameter_backend;
+  const int n = 2 * static_cast<int>(options.parameter_shifts.size());
+  std::vector<OmniReplayResult> runs(static_cast<std::size_t>(n));
+  ParallelFor(n, 0, [&](int i) {
+    runs[static_cast<std::size_t>(i)] =
+        Replay(options.parameter_shifts[static_cast<std::size_t>(i / 2)][static_cast<std::size_t>(i % 2)], log, mean, {}, 0, 0);
+  });
+  std::vector<std::vector<Eigen::Matrix3d>> out(1 + options.also.size(),
+                                                std::vector<Eigen::Matrix3d>(log.rows.size(), Eigen::Matrix3d::Zero()));
+  for (std::size_t h = 0; h < out.size(); ++h) {
+    for (int l = 0; l < n / 2; ++l) {
+      const OmniReplayResult& plus = h == 0 ? runs[2 * l] : runs[2 * l].also[h - 1];
+      const OmniReplayResult& minus = h == 0 ? runs[2 * l + 1] : runs[2 * l + 1].also[h - 1];
+      for (std::size_t i = 0; i < log.rows.size(); ++i) {
+        if (!plus.predicted[i] || !minus.predicted[i]) continue;
+        const Eigen::Vector3d d(0.5 * (plus.pose[i].x - minus.pose[i].x), 0.5 * (plus.pose[i].y - minus.pose[i].y),
+                                0.5 * std::remainder(plus.pose[i].theta - minus.pose[i].theta, 2 * M_PI));
+        out[h][i] += d * d.transpose();
+      }
+    }
+  }
+  return out;
+}
+
+OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniReplayOptions& options,
+                        const std::function<void(int, int)>& progress, std::size_t stretch_first,
                         std::size_t stretch_last) {
   if (std::string problem; !options.IsValid(&problem)) throw InputError(problem);
 
@@ -461,9 +508,16 @@ OmniReplayResult Replay(const OmniModel& model, const OmniLog& log, const OmniRe
   }
 
   if (options.state == OmniReplayState::kObserver && backend->has_velocity_state()) {
-    SizeResult(log, options, OmniReplayStateName(OmniReplayState::kObserver), options.covariance || options.samples > 0, &out);
+    const bool covariance = options.covariance || options.samples > 0;
+    SizeResult(log, options, OmniReplayStateName(OmniReplayState::kObserver), covariance, &out);
+    std::vector<std::vector<Eigen::Matrix3d>> parts;
+    if (covariance && !options.parameter_shifts.empty() && stretch_first >= stretch_last) {
+      parts = ParameterParts(log, options);
+      out.parameter_covariance.assign(log.rows.size(), Eigen::Matrix3d::Zero());
+      for (OmniReplayResult& a : out.also) a.parameter_covariance = out.parameter_covariance;
+    }
     ObserverReplay(model, log, options, progress, stretch_first, stretch_last, tl.row_of_frame, tl.command_at, check,
-                   std::move(backend), &out);
+                   std::move(backend), parts.empty() ? nullptr : &parts, &out);
     HoldUnpredictedSamples(options.samples, &out);
     return out;
   }

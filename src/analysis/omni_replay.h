@@ -75,6 +75,18 @@ struct OmniReplayOptions {
   // Shorter horizons (each 1..K-1) predicted from the same start frames: one K-frame
   // prediction gives them all (OmniReplayResult::also, in this order).
   std::vector<int> also;
+  // The parameters' own uncertainty: the model moved either way along each direction of
+  // its parameters' covariance (ParameterShiftedModels,
+  // identification_omni/omni_identification.h). With the covariance or samples on the
+  // observer's state, each is replayed alike (its mean only), and each predicted row's
+  // covariance gains the parameters' part, sum_l d_l d_l^T, d_l half the difference of
+  // pair l's predictions (OmniReplayResult::parameter_covariance; not scaled by the
+  // model's intervals' safeguard, which was fitted without it). Empty: none. They are
+  // replayed on `parameter_backend` ("": `backend`): the engine the covariance was
+  // fitted on, where the other engines' replays would cost an engine's time for a
+  // second-order difference.
+  std::vector<std::array<OmniModel, 2>> parameter_shifts;
+  std::string parameter_backend;
   // The observer's state (K >= 1; `reach` 0 predicts nothing): each row's input
   // (OmniObserver::InputFeature) after its frame, into OmniReplayResult::input_feature
   // (the seen inputs of identify's fit).
@@ -117,6 +129,10 @@ struct OmniReplayResult {
   // (estimation/omni_observer.h's OmniCovariancePart), zero where not predicted; their sum
   // is the covariance before the model's intervals' safeguard scales it.
   std::vector<OmniCovarianceParts> covariance_parts;
+  // With OmniReplayOptions::parameter_shifts (and the covariance or samples on the
+  // observer's state): per row the parameters' part of `covariance` (included there),
+  // zero where not predicted; else empty.
+  std::vector<Eigen::Matrix3d> parameter_covariance;
   // How many draws each row's covariance was estimated from (the samples' mean square
   // about the prediction); 0: it is the filter's own, known (the observer's).
   int covariance_draws = 0;

@@ -18,7 +18,7 @@ namespace twinsim {
 
 // One horizon's budget over the rows predicted and measured. Every number is the square
 // root of a mean over the rows of the trace of a position block (x, y; m), so they add in
-// squares: sum_i parts_i^2 + camera^2 = predicted^2. A calibrated model has measured near
+// squares: sum_i parts_i^2 + parameters^2 + camera^2 = predicted^2. A calibrated model has measured near
 // predicted (times the model's safeguard scale at K, where it has one: `scale`).
 struct OmniSpreadBudget {
   int frames = 0;        // K
@@ -29,6 +29,9 @@ struct OmniSpreadBudget {
   std::array<double, kCovarianceParts> parts{};  // m, sqrt(mean tr P_i,xy)
   double camera = 0;     // m, sqrt(tr R_xy)
   double scale = 1;      // the model's safeguard's position scale at K (observer.interval_scale)
+  // m, sqrt(mean tr Σ_θ,xy): the parameters' own uncertainty where the replay drew it
+  // (OmniReplayResult::parameter_covariance; in `predicted`, not scaled), else 0.
+  double parameters = 0;
 };
 
 // The budget of `result` (a replay with covariance_parts) on `log` at `frames` ahead,

@@ -476,6 +476,10 @@ struct SolveResult {
   std::vector<double> standard_error;  // per free parameter, physical units; NaN: undetermined or held
   std::vector<HeldBack> held;          // with `covariance`: what the logs do not determine
   double collinearity = 1;             // with `covariance`: the index of the determined set
+  // With `covariance`: the determined parameters (Param) and their covariance, physical
+  // units (the delta method, as the standard errors).
+  std::vector<int> covariance_of;
+  Eigen::MatrixXd covariance;
   int iterations = 0;
   double cost = 0;
   std::size_t rows = 0;
@@ -548,12 +552,17 @@ SolveResult Solve(const OmniIdentificationProblem& problem, const std::array<dou
   for (std::size_t k = 0; k < residual.size(); k += 3) forward.push_back(residual[k]);
   const double correlation = std::max(1, CorrelationLength(forward, 200));
   const double scale = ss / dof * correlation;
+  Eigen::VectorXd slope(static_cast<long>(id.kept.size()));
   for (std::size_t k = 0; k < id.kept.size(); ++k) {
     const auto col = static_cast<std::size_t>(id.kept[k]);
     const double var = c(static_cast<long>(k), static_cast<long>(k)) * scale;
     const double v = out.values[static_cast<std::size_t>(free[col])];
-    out.standard_error[col] = std::sqrt(std::max(0.0, var)) * CoordinateSlope(free[col], v, max_delay);  // delta method
+    slope[static_cast<long>(k)] = CoordinateSlope(free[col], v, max_delay);  // the delta method
+    out.standard_error[col] = std::sqrt(std::max(0.0, var)) * slope[static_cast<long>(k)];
+    out.covariance_of.push_back(free[col]);
   }
+  out.covariance = slope.asDiagonal() * (c * scale) * slope.asDiagonal();
+  out.covariance = 0.5 * (out.covariance + out.covariance.transpose()).eval();
   return out;
 }
 
@@ -1082,6 +1091,26 @@ void StandardErrors(const OmniIdentificationProblem& problem, const OmniIdentifi
   }
 }
 
+// The covariance of the response's parameters the fit determined, for the model file
+// (observer.parameter_covariance): the driving noise and the filter's trust, which
+// spread the predictions themselves, and a speed limit found off, left out.
+OmniObserverModel::ParameterCovariance ParameterCovarianceOf(const FitState& fit) {
+  std::vector<long> rows;
+  OmniObserverModel::ParameterCovariance out;
+  for (std::size_t k = 0; k < fit.solved.covariance_of.size(); ++k) {
+    const int p = fit.solved.covariance_of[k];
+    const double var = fit.solved.covariance(static_cast<long>(k), static_cast<long>(k));
+    if ((p >= kNoiseX && p <= kProcessScale) || fit.v[static_cast<std::size_t>(p)] == 0 || !(var > 0)) continue;
+    rows.push_back(static_cast<long>(k));
+    out.parameters.push_back(Specs()[p].name);
+  }
+  out.matrix.resize(static_cast<long>(rows.size()), static_cast<long>(rows.size()));
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = 0; j < rows.size(); ++j)
+      out.matrix(static_cast<long>(i), static_cast<long>(j)) = fit.solved.covariance(rows[i], rows[j]);
+  return out;
+}
+
 // A note where the calibration (on the validation logs where `validated`, else the
 // held-out blocks) had too few rows at a horizon to check the intervals:
 // short runs (the Robotino's 10 s) leave no held-out block long enough for a prediction
@@ -1466,6 +1495,50 @@ void SpreadBudgetOn(const OmniModel& model, const std::vector<OmniLog>& validati
 
 }  // namespace
 
+std::vector<std::array<OmniModel, 2>> ParameterShiftedModels(const OmniModel& model, double frame_period) {
+  const OmniObserverModel::ParameterCovariance& pc = model.observer.parameter_covariance;
+  if (pc.empty()) return {};
+  const std::array<double, kNumParams> v = ValuesOf(model, frame_period);
+  std::vector<int> param;
+  Eigen::VectorXd slope(static_cast<long>(pc.parameters.size()));
+  for (const std::string& name : pc.parameters) {
+    int p = 0;
+    while (p < kNumParams && Specs()[p].name != name) ++p;
+    if (p == kNumParams || (p >= kNoiseX && p <= kProcessScale) || p == kFieldFrame) {
+      throw InputError(SourceLocation{model.source_path, 0},
+                       "observer.parameter_covariance names '" + name +
+                           "', which is not one of the response's parameters identify fits (delay, forward.gain, ...)");
+    }
+    param.push_back(p);
+    const double s = CoordinateSlope(p, v[static_cast<std::size_t>(p)], Specs()[p].upper);
+    slope[static_cast<long>(param.size() - 1)] = std::abs(s) > 1e-12 ? s : 1e-12;
+  }
+  // In coordinates (the delta method backwards), then its principal directions.
+  const Eigen::VectorXd inverse = slope.cwiseInverse();
+  const Eigen::MatrixXd c = inverse.asDiagonal() * pc.matrix * inverse.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (c + c.transpose()));
+  std::vector<std::array<OmniModel, 2>> out;
+  const long k = c.rows();
+  for (long l = k - 1; l >= 0; --l) {  // eigenvalues ascend
+    const double lambda = eig.eigenvalues()[l];
+    if (!(lambda > 1e-9 * eig.eigenvalues()[k - 1])) break;
+    const Eigen::VectorXd step = std::sqrt(lambda) * eig.eigenvectors().col(l);
+    std::array<OmniModel, 2> pair;
+    for (int side = 0; side < 2; ++side) {
+      std::array<double, kNumParams> w = v;
+      for (std::size_t i = 0; i < param.size(); ++i) {
+        const auto p = static_cast<std::size_t>(param[i]);
+        const double x = ToCoordinate(param[i], v[p], Specs()[p].upper);
+        w[p] = FromCoordinate(param[i], x + (side == 0 ? 1 : -1) * step[static_cast<long>(i)], Specs()[p].upper);
+      }
+      pair[static_cast<std::size_t>(side)] = WithValues(model, w, frame_period, false);
+      pair[static_cast<std::size_t>(side)].observer.parameter_covariance = {};
+    }
+    out.push_back(std::move(pair));
+  }
+  return out;
+}
+
 OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vector<OmniLog>& logs,
                                       const std::vector<OmniLog>& validation, const OmniIdentificationOptions& options,
                                       OmniModel* identified,
@@ -1519,6 +1592,7 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   FitTogether(problem, segments, options, &fit, &report);                                 // step 6
   StandardErrors(problem, options, &fit, &report);
   OmniModel model = problem.Build(fit.v, false);
+  model.observer.parameter_covariance = ParameterCovarianceOf(fit);
   IdentifyNoise(segments, options, say, &model, &report);
   SafeguardOnLeftOutLogs(nominal, logs, options, say, &model, &report);
   model.fitted_on = options.backend;  // the engines part near the wheels' grip: replay on this one

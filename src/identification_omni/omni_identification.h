@@ -202,6 +202,15 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
 OmniGap OmniHeldOutGap(const OmniModel& model, const std::vector<OmniLog>& logs, const OmniIdentificationOptions& options,
                        const std::string& name, double radius);
 
+// The model moved one standard deviation either way along each principal direction of
+// its observer.parameter_covariance (identify's parameters), in identify's coordinates
+// so that every parameter stays in its range: pairs {plus, minus}, the widest direction
+// first; directions under 1e-9 of the widest's variance left out. Replayed beside the
+// model, half their predictions' difference is a direction's share of the spread the
+// parameters make (OmniReplayOptions::parameter_shifts). None without a covariance.
+// Throws InputError (naming the model's file) for a parameter identify does not fit.
+std::vector<std::array<OmniModel, 2>> ParameterShiftedModels(const OmniModel& model, double frame_period);
+
 // The report as JSON, a plain-text table, and a self-contained HTML page.
 std::string FormatOmniIdentificationJson(const OmniIdentificationReport& report);
 std::string FormatOmniIdentificationTable(const OmniIdentificationReport& report);

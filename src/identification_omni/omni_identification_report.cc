@@ -178,6 +178,7 @@ nlohmann::json SpreadBudgetJson(const std::vector<OmniSpreadBudget>& budgets) {
                         {"measured", b.measured}, {"predicted", b.predicted}, {"scale", b.scale}};
     for (int p = 0; p < kCovarianceParts; ++p) j[kOmniCovariancePartKeys[p]] = b.parts[static_cast<std::size_t>(p)];
     j["camera"] = b.camera;
+    if (b.parameters > 0) j["parameters"] = b.parameters;
     out.push_back(j);
   }
   return out;

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -127,6 +129,27 @@ void ExpectDeterminedOrHeld(const OmniIdentificationReport& report) {
   for (const std::string& n : report.notes) EXPECT_EQ(n.find("covariance is singular"), std::string::npos) << n;
 }
 
+// The model file's covariance of the response's parameters (issue 64, the parameters'
+// own uncertainty in the predictions) is the one the report's standard errors come
+// from: its diagonal is their squares, it holds every determined response parameter
+// and no noise (which spreads the predictions itself), and it is positive definite.
+void ExpectCovarianceOfTheStandardErrors(const OmniIdentificationReport& report, const OmniModel& identified) {
+  const OmniObserverModel::ParameterCovariance& pc = identified.observer.parameter_covariance;
+  ASSERT_FALSE(pc.empty());
+  std::size_t determined = 0;
+  for (const IdentifiedParameter& p : report.parameters) {
+    const bool noise = p.name.rfind("driving_noise.", 0) == 0 || p.name == "process_noise.scale";
+    if (!p.estimated || p.held || noise || p.value == 0 || !std::isfinite(p.standard_error)) continue;
+    ++determined;
+    const auto at = std::find(pc.parameters.begin(), pc.parameters.end(), p.name);
+    ASSERT_NE(at, pc.parameters.end()) << p.name;
+    const long i = at - pc.parameters.begin();
+    EXPECT_NEAR(std::sqrt(pc.matrix(i, i)), p.standard_error, 1e-9 * p.standard_error) << p.name;
+  }
+  EXPECT_EQ(pc.parameters.size(), determined);
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(pc.matrix).info(), Eigen::Success);
+}
+
 class OpenWorldPlant : public ::testing::TestWithParam<OpenWorldCase> {};
 
 TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
@@ -192,6 +215,7 @@ TEST_P(OpenWorldPlant, IdentifiedModelReachesThePlantsOwnGap) {
   // Every estimated parameter has a standard error, or is held with the partners it
   // trades with named; and the model file runs everywhere.
   ExpectDeterminedOrHeld(report);
+  ExpectCovarianceOfTheStandardErrors(report, identified);
   ExpectIdentifiedBestAtEveryHorizon(report);
   EXPECT_EQ(identified.Validate(), "");
   // Without a validation log the spread's budget is the held-out blocks', on the

@@ -34,6 +34,11 @@ OmniLog ReadOmniLogSayingHoles(const std::string& path, const OmniLogSelector& s
 // value goes into Scene::driving_noise, which MakeSimulation applies.
 void AddDrivingNoiseOption(CLI::App* cmd, std::string* value);
 
+// --parameter-uncertainty on|off: whether an omni model's parameters' covariance
+// (observer.parameter_covariance, identify's) spreads its predictions besides its noise
+// (analysis/omni_replay.h, OmniReplayOptions::parameter_shifts).
+void AddParameterUncertaintyOption(CLI::App* cmd, std::string* value);
+
 // --cutoff auto|HZ: the low-pass cut-off for an arm log's qd/qdd derived from q
 // (robots/arm/arm_log.h); auto (the default) chooses it from the logs
 // (analysis/derivative_cutoff.h).

@@ -18,6 +18,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "engines/omni_engine.h"
+#include "identification_omni/omni_identification.h"
 #include "io/csv_table.h"
 #include "io/output_files.h"
 #include "io/printf_number.h"
@@ -117,6 +118,7 @@ struct CompareCliOptions {
   std::vector<std::string> predictors;
   double plot_seconds = 8;  // s of the log drawn in paths.png
   std::vector<double> horizons;  // arm: s, the simulation windows (0: the free run); empty: the default
+  std::string parameter_uncertainty = "on";  // omni: the calibration with the parameters' covariance too
   bool quiet = false;
   OmniLogSelector select;  // omni logs holding several robots
 };
@@ -298,14 +300,14 @@ std::string FormatSpreadBudgetCsv(
   std::ostringstream s;
   s << "source,backend,horizon_frames,seconds,rows,measured,predicted,scale";
   for (const char* key : kOmniCovariancePartKeys) s << "," << key;
-  s << ",camera\n";
+  s << ",camera,parameters\n";
   for (const auto& [source, rows] : budgets) {
     for (const OmniSpreadBudget& b : rows) {
       s << source->label << "," << source->backend << "," << b.frames << "," << FormatCsvNumber(b.seconds) << ","
         << b.rows << "," << FormatCsvNumber(b.measured) << "," << FormatCsvNumber(b.predicted) << ","
         << FormatCsvNumber(b.scale);
       for (double p : b.parts) s << "," << FormatCsvNumber(p);
-      s << "," << FormatCsvNumber(b.camera) << "\n";
+      s << "," << FormatCsvNumber(b.camera) << "," << FormatCsvNumber(b.parameters) << "\n";
     }
   }
   return s.str();
@@ -368,7 +370,7 @@ struct SourceCalibrations {
 // knows the inputs its fit saw, the physics sources' split by how far from them; and
 // every source's by quarter of the log's turn rate.
 SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& compare,
-                                    Progress* progress) {
+                                    const std::vector<std::array<OmniModel, 2>>& parameter_shifts, Progress* progress) {
   SourceCalibrations out;
   for (const CompareSource& s : compare.sources) {
     if (s.backend == "learned") {
@@ -385,7 +387,8 @@ SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, 
     progress->Update(0, 1, s.label + ", calibration");
     const std::vector<int> horizons{4, 16, 63};
     std::vector<OmniSpreadBudget> budgets;
-    const auto rows = OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride, &budgets);
+    const auto rows =
+        OmniLogPredictiveErrors(model, log, s.backend, horizons, kCalibrationStride, &budgets, parameter_shifts);
     out.whole.emplace_back(&s, CalibrateRows(rows, horizons, log.frame_period));
     out.budgets.emplace_back(&s, std::move(budgets));
     out.by_turn_rate.push_back({&s, CalibrateRowsByTurnRate(rows, horizons, log.frame_period)});
@@ -450,7 +453,11 @@ int Compare(const CompareCliOptions& options) {
   const OmniCompareResult result = CompareOmniLog(
       model, log, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
 
-  const SourceCalibrations calibrations = CalibrateSources(model, log, compare, &progress);
+  const SourceCalibrations calibrations = CalibrateSources(
+      model, log, compare,
+      options.parameter_uncertainty == "on" ? ParameterShiftedModels(model, log.frame_period)
+                                            : std::vector<std::array<OmniModel, 2>>{},
+      &progress);
   const auto& calibration = calibrations.whole;
   const auto& by_distance = calibrations.by_distance;
   progress.Finish();
@@ -543,6 +550,7 @@ void AddCompareCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--plot-seconds", options->plot_seconds, "Seconds of the log drawn in paths.png")
       ->capture_default_str()
       ->check(PositiveNumber());
+  AddParameterUncertaintyOption(cmd, &options->parameter_uncertainty);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Compare(*options); });

@@ -107,6 +107,15 @@ void AddDrivingNoiseOption(CLI::App* cmd, std::string* value) {
       ->capture_default_str();
 }
 
+void AddParameterUncertaintyOption(CLI::App* cmd, std::string* value) {
+  cmd->add_option("--parameter-uncertainty", *value,
+                  "Omni: on: the spread the model's identified parameters leave (observer.parameter_covariance, "
+                  "written by identify) widens each prediction's covariance and samples beside the noise; off: the "
+                  "noise alone")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+}
+
 void AddDerivativeCutoffOption(CLI::App* cmd, std::string* value) {
   cmd->add_option("--cutoff", *value,
                   "Arm: Hz, low-pass cut-off for qd/qdd derived from q, or auto: the lowest from 10 Hz up in octaves "

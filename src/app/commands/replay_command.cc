@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "identification/wls_identification.h"
+#include "identification_omni/omni_identification.h"
 #include "io/output_files.h"
 #include "io/printf_number.h"
 #include "io/yaml_extends.h"
@@ -39,6 +40,7 @@ struct ReplayOptions {
   std::string cutoff = "10";  // arms: Hz, or auto (AddDerivativeCutoffOption)
   int samples = 0;             // omni: draws per row (0: the mean only)
   long long seed = 1;          // their stream
+  std::string parameter_uncertainty = "on";  // omni, with samples: the parameters' covariance too
   bool quiet = false;
   OmniLogSelector select;  // omni logs holding several robots
 };
@@ -141,6 +143,10 @@ int Replay(const ReplayOptions& options) {
   replay.state = options.state;
   replay.samples = options.samples;
   replay.seed = static_cast<std::uint64_t>(options.seed);
+  if (options.samples > 0 && options.parameter_uncertainty == "on") {
+    replay.parameter_shifts = ParameterShiftedModels(model, log.frame_period);
+    replay.parameter_backend = model.fitted_on.empty() ? "analytic" : model.fitted_on;
+  }
   if (std::string why; !replay.IsValid(&why)) throw InputError(why);
   if (!options.predictor.empty())
     replay.backend_options.predictor = std::make_shared<OmniPredictor>(OmniPredictor::Load(options.predictor));
@@ -239,6 +245,7 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
                   "(the predictor's where it has one, else the model's)")
       ->check(NonNegativeNumber());
   cmd->add_option("--seed", options->seed, "The samples' random seed")->capture_default_str()->check(NonNegativeNumber());
+  AddParameterUncertaintyOption(cmd, &options->parameter_uncertainty);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Replay(*options); });

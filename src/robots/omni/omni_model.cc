@@ -128,6 +128,20 @@ std::string OmniModel::Validate() const {
   }
   if (!seen.empty() && !(seen.scale > 0 && std::isfinite(seen.scale)))
     out << "observer seen_inputs: the scale must be positive\n";
+  const OmniObserverModel::ParameterCovariance& pc = observer.parameter_covariance;
+  if (!pc.empty()) {
+    const long k = static_cast<long>(pc.parameters.size());
+    if (pc.matrix.rows() != k || pc.matrix.cols() != k || !pc.matrix.allFinite()) {
+      out << "observer parameter_covariance: the matrix must be " << k << " x " << k << " finite numbers, one row per parameter\n";
+    } else if ((pc.matrix.diagonal().array() <= 0).any() ||
+               (pc.matrix - pc.matrix.transpose()).cwiseAbs().maxCoeff() > 1e-9 * pc.matrix.diagonal().maxCoeff()) {
+      out << "observer parameter_covariance: the matrix must be symmetric with a positive diagonal\n";
+    }
+    for (long i = 0; i < k; ++i)
+      for (long j = 0; j < i; ++j)
+        if (pc.parameters[static_cast<std::size_t>(i)] == pc.parameters[static_cast<std::size_t>(j)])
+          out << "observer parameter_covariance: '" << pc.parameters[static_cast<std::size_t>(i)] << "' is listed twice\n";
+  }
   if (!motor_strength.empty() && static_cast<int>(motor_strength.size()) != n)
     out << "motor strength lists " << motor_strength.size() << " values for " << n << " wheels\n";
   if (n >= 3) {

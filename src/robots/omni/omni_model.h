@@ -133,6 +133,18 @@ struct OmniObserverModel {
   // The inputs identify's fit saw, which a growth measures distances from; empty when
   // no scale grows.
   OmniSeenInputs seen_inputs;
+  // The covariance of the response's parameters identify estimated (docs/identification.md,
+  // "The parameters' own uncertainty"): `parameters` by identify's names and in its units
+  // (delay in s, forward.gain, forward.lag in s, turn_coupling.forward, ...), `matrix` their
+  // covariance, symmetric with positive diagonal. The replay's predictions add the spread
+  // the parameters make (OmniReplayOptions::parameter_shifts). Empty: none.
+  struct ParameterCovariance {
+    std::vector<std::string> parameters;
+    Eigen::MatrixXd matrix;
+    bool empty() const { return parameters.empty(); }
+  };
+  ParameterCovariance parameter_covariance;
+  static constexpr int kMaxCovarianceParameters = 64;
 };
 
 struct OmniModel {

@@ -73,6 +73,47 @@ void ReadSeenInputs(YamlMap& observer, OmniSeenInputs* out) {
   m.Finish();
 }
 
+// observer.parameter_covariance: {parameters: [names], matrix: [[...], ...]}; the names
+// are identify's, which the replay checks where it uses them; the shape by Validate.
+void ReadParameterCovariance(YamlMap& observer, OmniObserverModel::ParameterCovariance* out) {
+  YamlMap m(observer.Child("parameter_covariance"), observer.path(), "observer.parameter_covariance", observer.errors());
+  if (!m.valid()) return;
+  constexpr int kMost = OmniObserverModel::kMaxCovarianceParameters;
+  const YAML::Node names = m.Child("parameters");
+  if (!names.IsSequence() || names.size() == 0 || names.size() > static_cast<std::size_t>(kMost)) {
+    m.Error("parameters", "must be a list of 1 to " + std::to_string(kMost) + " parameter names (identify's)");
+  } else {
+    for (const YAML::Node& n : names) {
+      if (!n.IsScalar() || n.Scalar().empty()) {
+        m.Error("parameters", "must be a list of parameter names (identify's, e.g. delay, forward.gain)");
+        out->parameters.clear();
+        break;
+      }
+      out->parameters.push_back(n.Scalar());
+    }
+  }
+  const YAML::Node rows = m.Child("matrix");
+  const std::size_t k = out->parameters.size();
+  if (!rows.IsSequence() || (k > 0 && rows.size() != k)) {
+    m.Error("matrix", "must be a list of " + std::to_string(k) + " rows, one per parameter");
+  } else if (k > 0) {
+    out->matrix.resize(static_cast<long>(k), static_cast<long>(k));
+    for (std::size_t i = 0; i < k; ++i) {
+      const std::string label = "observer.parameter_covariance.matrix[" + std::to_string(i) + "]";
+      if (!rows[i].IsSequence() || rows[i].size() != k) {
+        m.Error("matrix", label + " must be a list of " + std::to_string(k) + " numbers");
+        out->matrix.resize(0, 0);
+        break;
+      }
+      for (std::size_t j = 0; j < k; ++j) {
+        const std::optional<double> v = ReadNumber(rows[i][j], observer.path(), label, observer.errors());
+        out->matrix(static_cast<long>(i), static_cast<long>(j)) = v.value_or(std::nan(""));
+      }
+    }
+  }
+  m.Finish();
+}
+
 OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, int depth);
 
 YAML::Node Resolve(const YAML::Node& root, const std::string& path, int depth) {
@@ -191,6 +232,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
     ReadSubsection(o, "measurement_noise", "observer.measurement_noise", &model);
     if (o.Has("interval_scale")) ReadIntervalScales(o, "interval_scale", true, &model.observer.interval_scale);
     if (o.Has("seen_inputs")) ReadSeenInputs(o, &model.observer.seen_inputs);
+    if (o.Has("parameter_covariance")) ReadParameterCovariance(o, &model.observer.parameter_covariance);
     o.Finish();
   }
   top.Finish();

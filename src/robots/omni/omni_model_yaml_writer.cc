@@ -146,7 +146,8 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
   }
   const OmniObserverModel& o = model.observer;
   if (o.process_noise != defaults.observer.process_noise || o.measurement_noise_xy > 0 ||
-      o.measurement_noise_theta > 0 || !o.interval_scale.empty() || !o.seen_inputs.empty()) {
+      o.measurement_noise_theta > 0 || !o.interval_scale.empty() || !o.seen_inputs.empty() ||
+      !o.parameter_covariance.empty()) {
     s << "observer:\n";
     line("  process_noise", FlowMap("observer.process_noise", model), "m/s and rad/s per sqrt(s): the model's own errors", 46);
     if (o.measurement_noise_xy > 0 || o.measurement_noise_theta > 0)
@@ -169,6 +170,18 @@ std::string FormatOmniModelYaml(const OmniModel& model, const std::string& comme
       for (const Eigen::VectorXd& u : o.seen_inputs.points) {
         s << "      - [";
         for (long j = 0; j < u.size(); ++j) s << (j ? ", " : "") << YamlNumber(u[j]);
+        s << "]\n";
+      }
+    }
+    if (!o.parameter_covariance.empty()) {
+      const OmniObserverModel::ParameterCovariance& pc = o.parameter_covariance;
+      s << "  parameter_covariance:  # identify's estimate of the response's parameters: their covariance (its names and units)\n";
+      s << "    parameters: [";
+      for (std::size_t i = 0; i < pc.parameters.size(); ++i) s << (i ? ", " : "") << pc.parameters[i];
+      s << "]\n    matrix:\n";
+      for (long i = 0; i < pc.matrix.rows(); ++i) {
+        s << "      - [";
+        for (long j = 0; j < pc.matrix.cols(); ++j) s << (j ? ", " : "") << YamlNumber(pc.matrix(i, j));
         s << "]\n";
       }
     }

@@ -270,6 +270,36 @@ TEST(OmniModelYamlWriter, AGrowthOutOfTheFitsReachRoundTripsWithItsSeenInputs) {
             std::string::npos);
 }
 
+// Issue 64: identify's covariance of the response's parameters round-trips bit for bit,
+// and a malformed one is refused where it is written.
+TEST(OmniModelYamlWriter, TheParametersCovarianceRoundTripsAndAMalformedOneIsRefused) {
+  OmniModel m = testing::Omni4();
+  Eigen::MatrixXd c(2, 2);
+  c << 3.4778147306033741e-05, 9.4025384716445016e-08, 9.4025384716445016e-08, 9.8787006134324031e-06;
+  m.observer.parameter_covariance = {{"forward.gain", "delay"}, c};
+  const std::string text = FormatOmniModelYaml(m);
+  EXPECT_NE(text.find("parameters: [forward.gain, delay]"), std::string::npos) << text;
+  const OmniModel back = RoundTrip(m);
+  EXPECT_EQ(back.observer.parameter_covariance.parameters, m.observer.parameter_covariance.parameters);
+  EXPECT_EQ(back.observer.parameter_covariance.matrix, c);
+  EXPECT_EQ(FormatOmniModelYaml(back), text);
+
+  EXPECT_NE(Refused("observer: {parameter_covariance: {parameters: [delay], matrix: [[1e-6, 0]]}}\n").find("1 numbers"),
+            std::string::npos);
+  EXPECT_NE(Refused("observer: {parameter_covariance: {parameters: [a, b], matrix: [[1, 0.5], [0.4, 1]]}}\n")
+                .find("symmetric"),
+            std::string::npos);
+  EXPECT_NE(Refused("observer: {parameter_covariance: {parameters: [a], matrix: [[-1]]}}\n").find("positive diagonal"),
+            std::string::npos);
+  EXPECT_NE(Refused("observer: {parameter_covariance: {parameters: [a, a], matrix: [[1, 0], [0, 1]]}}\n")
+                .find("listed twice"),
+            std::string::npos);
+  EXPECT_NE(Refused("observer: {parameter_covariance: {parameters: [a], matrix: [[x]]}}\n").find("bad.yaml:3:"),
+            std::string::npos);
+  EXPECT_NE(Refused("observer: {parameter_covariance: {parameters: [], matrix: []}}\n").find("bad.yaml:3:"),
+            std::string::npos);
+}
+
 // Issue 63: a fitted model names the engine it was fitted on, and commands replay it
 // there unless told otherwise, saying so when told.
 TEST(OmniModelYamlWriter, TheEngineAModelWasFittedOnRoundTripsAndChoosesTheReplaysEngine) {
