@@ -1385,6 +1385,9 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
     *repaired = repaired_model;
     // Its response (the refit, the effects) was fitted on this engine.
     if (options.refit_model || !selection.effects.empty()) repaired->fitted_on = options.backend;
+    // The parameters' covariance is identify's of the model it fitted: with effects added
+    // (and refitted beside them) it describes another model, and is left out.
+    if (!selection.effects.empty()) repaired->observer.parameter_covariance = {};
   }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

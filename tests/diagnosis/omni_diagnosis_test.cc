@@ -122,14 +122,18 @@ INSTANTIATE_TEST_SUITE_P(HiddenEffects, OmniDiagnosisCase, ::testing::ValuesIn(O
 // per-axis scales, a coupling). A robot that changed since is named by a change of those
 // numbers, refitted from the model's own (before, the model's effects were never
 // candidates and a longer delay or a worn wheel went unexplained); the same robot
-// unchanged names nothing. 30 s of the analytic robot at 30 fps each.
+// unchanged names nothing. 30 s of the analytic robot at 30 fps each. The covariance
+// identify wrote of the model's parameters is kept where nothing changed and left out of
+// a repaired model, which it no longer describes.
 TEST(OmniDiagnosis, NamesAChangeOfAnEffectTheModelAlreadyHas) {
   const std::string identified = "extends: " + testing::SourcePath("models/omni4.yaml") +
                                  "\nname: identified\neffects:\n"
                                  "  turn_coupling: {sideways: 0.3}\n";
   const std::string delay = "  time_delay: {delay: 0.03}\n";
   const std::string scales = "  velocity_scale: {forward: 0.8, sideways: 0.7, turn: 0.9}\n";
-  const OmniModel given = LoadOmniModelFromString(identified + delay + scales, "given.yaml");
+  const std::string covariance =
+      "observer: {parameter_covariance: {parameters: [delay, forward.gain], matrix: [[4e-6, 0], [0, 1e-4]]}}\n";
+  const OmniModel given = LoadOmniModelFromString(identified + delay + scales + covariance, "given.yaml");
   struct Case {
     std::string plant_effects, name, key;
     double value;
@@ -141,8 +145,11 @@ TEST(OmniDiagnosis, NamesAChangeOfAnEffectTheModelAlreadyHas) {
   };
   for (const Case& c : cases) {
     const OmniModel plant = LoadOmniModelFromString(identified + c.plant_effects, "plant.yaml");
-    const DiagnosisReport report = DiagnoseOmni(given, {testing::RecordOmniPlant(plant, 30, 5)}, DiagnosisOptions{});
+    OmniModel repaired;
+    const DiagnosisReport report =
+        DiagnoseOmni(given, {testing::RecordOmniPlant(plant, 30, 5)}, DiagnosisOptions{}, &repaired);
     SCOPED_TRACE(FormatDiagnosisTable(report));
+    EXPECT_EQ(repaired.observer.parameter_covariance.empty(), !c.name.empty());
     if (c.name.empty()) {
       EXPECT_TRUE(report.effects.empty());
       for (const char* kept : {"time_delay", "velocity_scale", "turn_coupling"}) {
