@@ -1500,8 +1500,10 @@ std::vector<std::array<OmniModel, 2>> ParameterShiftedModels(const OmniModel& mo
   if (pc.empty()) return {};
   const std::array<double, kNumParams> v = ValuesOf(model, frame_period);
   std::vector<int> param;
-  Eigen::VectorXd slope(static_cast<long>(pc.parameters.size()));
-  for (const std::string& name : pc.parameters) {
+  std::vector<long> rows;  // of pc.matrix, the parameters the model has within their range
+  std::vector<double> slopes;
+  for (std::size_t k = 0; k < pc.parameters.size(); ++k) {
+    const std::string& name = pc.parameters[k];
     int p = 0;
     while (p < kNumParams && Specs()[p].name != name) ++p;
     if (p == kNumParams || (p >= kNoiseX && p <= kProcessScale) || p == kFieldFrame) {
@@ -1509,13 +1511,20 @@ std::vector<std::array<OmniModel, 2>> ParameterShiftedModels(const OmniModel& mo
                        "observer.parameter_covariance names '" + name +
                            "', which is not one of the response's parameters identify fits (delay, forward.gain, ...)");
     }
+    // A limit the model has off (0: no speed limit, no ramp) has no spread to move.
+    const double value = v[static_cast<std::size_t>(p)];
+    if (value < Specs()[p].lower || value > Specs()[p].upper) continue;
     param.push_back(p);
-    const double s = CoordinateSlope(p, v[static_cast<std::size_t>(p)], Specs()[p].upper);
-    slope[static_cast<long>(param.size() - 1)] = std::abs(s) > 1e-12 ? s : 1e-12;
+    rows.push_back(static_cast<long>(k));
+    const double s = CoordinateSlope(p, value, Specs()[p].upper);
+    slopes.push_back(std::abs(s) > 1e-12 ? s : 1e-12);
   }
+  if (param.empty()) return {};
   // In coordinates (the delta method backwards), then its principal directions.
-  const Eigen::VectorXd inverse = slope.cwiseInverse();
-  const Eigen::MatrixXd c = inverse.asDiagonal() * pc.matrix * inverse.asDiagonal();
+  Eigen::MatrixXd c(static_cast<long>(rows.size()), static_cast<long>(rows.size()));
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = 0; j < rows.size(); ++j)
+      c(static_cast<long>(i), static_cast<long>(j)) = pc.matrix(rows[i], rows[j]) / (slopes[i] * slopes[j]);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (c + c.transpose()));
   std::vector<std::array<OmniModel, 2>> out;
   const long k = c.rows();

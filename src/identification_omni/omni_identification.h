@@ -207,7 +207,8 @@ OmniGap OmniHeldOutGap(const OmniModel& model, const std::vector<OmniLog>& logs,
 // so that every parameter stays in its range: pairs {plus, minus}, the widest direction
 // first; directions under 1e-9 of the widest's variance left out. Replayed beside the
 // model, half their predictions' difference is a direction's share of the spread the
-// parameters make (OmniReplayOptions::parameter_shifts). None without a covariance.
+// parameters make (OmniReplayOptions::parameter_shifts). None without a covariance. A
+// limit the model has off (a speed limit or ramp of 0) is left out with its rows.
 // Throws InputError (naming the model's file) for a parameter identify does not fit.
 std::vector<std::array<OmniModel, 2>> ParameterShiftedModels(const OmniModel& model, double frame_period);
 

@@ -118,8 +118,8 @@ TEST(ParameterUncertainty, AGainsSpreadMovesASteadyDrivesPredictionAlongItsHeadi
             RobotFrameVariances(without.covariance[at], theta)[0] + 0.5 * std::pow(kSigma * reach, 2));
 }
 
-// Every direction of a covariance is replayed, the widest first; one identify does not
-// fit is refused with the model's file named.
+// Every direction of a covariance is replayed, the widest first; a limit the model has
+// off is left out; a parameter identify does not fit is refused with the model's file named.
 TEST(ParameterUncertainty, ShiftsFollowTheCovariancesDirectionsAndRefuseUnknownNames) {
   OmniModel model = testing::Omni4();
   model.source_path = "robot.yaml";
@@ -141,6 +141,15 @@ TEST(ParameterUncertainty, ShiftsFollowTheCovariancesDirectionsAndRefuseUnknownN
   const auto& widest = shifts[0][0].effects.axis_scale;
   const auto& other = shifts[1][0].effects.axis_scale;
   EXPECT_GT(std::hypot(widest[0] - 1, widest[1] - 1), std::hypot(other[0] - 1, other[1] - 1));
+
+  // A speed limit the model has off has no spread: left out, the gains' directions stay.
+  Eigen::MatrixXd with_limit = Eigen::MatrixXd::Identity(3, 3) * 1e-4;
+  with_limit.topLeftCorner<2, 2>() = c;
+  ASSERT_EQ(model.effects.v_max, 0);
+  model.observer.parameter_covariance = {{"forward.gain", "sideways.gain", "velocity_saturation.v_max"}, with_limit};
+  const auto without_limit = ParameterShiftedModels(model, 1.0 / 30);
+  ASSERT_EQ(without_limit.size(), 2u);
+  for (const auto& pair : without_limit) EXPECT_EQ(pair[0].effects.v_max, 0);
 
   model.observer.parameter_covariance = {{"driving_noise.forward"}, Eigen::MatrixXd::Constant(1, 1, 1e-4)};
   try {
