@@ -1308,6 +1308,15 @@ void FreeRunPaths(const OmniProblem& problem, const OmniModel& nominal_model, co
   report->paths = {measured, nominal_path, repaired_path};
 }
 
+// The model diagnose writes: its response (the refit, the effects) fitted on `backend`
+// where it refitted or added effects; identify's covariance of the parameters left out
+// where effects were added (and refitted beside them): it describes another model.
+OmniModel WrittenModel(OmniModel repaired, bool refit, bool added, const std::string& backend) {
+  if (refit || added) repaired.fitted_on = backend;
+  if (added) repaired.observer.parameter_covariance = {};
+  return repaired;
+}
+
 }  // namespace
 
 DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>& logs, const DiagnosisOptions& asked,
@@ -1381,14 +1390,7 @@ DiagnosisReport DiagnoseOmni(const OmniModel& model, const std::vector<OmniLog>&
   report.caution = WorseThanGiven(report, kWorseTolerance);
   if (progress) progress("changes part way");
   report.changes = FindOmniResponseChanges(model, logs, options.backend, {}, &report.notes);
-  if (repaired) {
-    *repaired = repaired_model;
-    // Its response (the refit, the effects) was fitted on this engine.
-    if (options.refit_model || !selection.effects.empty()) repaired->fitted_on = options.backend;
-    // The parameters' covariance is identify's of the model it fitted: with effects added
-    // (and refitted beside them) it describes another model, and is left out.
-    if (!selection.effects.empty()) repaired->observer.parameter_covariance = {};
-  }
+  if (repaired) *repaired = WrittenModel(repaired_model, options.refit_model, !selection.effects.empty(), options.backend);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

@@ -1166,8 +1166,10 @@ void IdentifyNoise(const std::vector<Segment>& segments, const OmniIdentificatio
       for (OmniCrossedNoise& c : report->noise.crossed) c.model.driving_noise.drift = report->drift.drift;
     }
   }
-  // A noise fitted on the held-out blocks is calibrated there only across the halves.
+  // A noise fitted on the held-out blocks is calibrated there only across the halves; the
+  // validation logs with the parameters' uncertainty too, as compare does.
   const std::array<OmniCrossedNoise, 2>* crossed = report->noise.kept ? &report->noise.crossed : nullptr;
+  noise_options.parameter_shifts = ParameterShiftedModels(*model, segments.front().log.frame_period);
   report->calibration = CalibrateOnBlocks(*model, views, noise_options, crossed, &report->calibration_by_distance,
                                           &report->calibration_by_turn_rate, &report->spread_budget);
   if (!report->spread_budget.empty())
@@ -1486,7 +1488,8 @@ void SpreadBudgetOn(const OmniModel& model, const std::vector<OmniLog>& validati
   std::vector<std::vector<OmniSpreadBudget>> per_log;
   for (const OmniLog& log : validation) {
     per_log.emplace_back();
-    OmniLogPredictiveErrors(model, log, options.backend, horizons, kBudgetStride, &per_log.back());
+    OmniLogPredictiveErrors(model, log, options.backend, horizons, kBudgetStride, &per_log.back(),
+                            ParameterShiftedModels(model, log.frame_period));
     if (per_log.back().empty()) per_log.pop_back();  // too short for the longest horizon
   }
   report->spread_budget = PoolSpreadBudgets(per_log);

@@ -138,6 +138,7 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
     };
     o.covariance = true;
     o.covariance_parts = budgets != nullptr;
+    if (validation_only) o.parameter_shifts = options.parameter_shifts;
     for (int h : options.horizons)
       if (h != longest) o.also.push_back(h);
     const OmniReplayResult r = ReplayOmniLog(model, *s.log, o);

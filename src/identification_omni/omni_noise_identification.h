@@ -77,6 +77,10 @@ struct OmniNoiseOptions {
   // of it for each half's refit under the whole fit's growths).
   int max_evaluations = 150;
   int threads = 0;           // 0 = one per core; results do not depend on it
+  // The validation logs' calibration with the parameters' own uncertainty too
+  // (OmniReplayOptions::parameter_shifts, on `backend`), as `compare` reports it; the
+  // held-out blocks' (the noise's fit and its checks) without.
+  std::vector<std::array<OmniModel, 2>> parameter_shifts;
 
   bool IsValid(std::string* why) const;
 };
