@@ -460,7 +460,7 @@ std::vector<std::vector<Eigen::Matrix3d>> ParameterParts(const OmniLog& log, con
       for (std::size_t i = 0; i < log.rows.size(); ++i) {
         if (!plus.predicted[i] || !minus.predicted[i]) continue;
         const Eigen::Vector3d d(0.5 * (plus.pose[i].x - minus.pose[i].x), 0.5 * (plus.pose[i].y - minus.pose[i].y),
-                                0.5 * std::remainder(plus.pose[i].theta - minus.pose[i].theta, 2 * M_PI));
+                                0.5 * WrapAngle(plus.pose[i].theta - minus.pose[i].theta));
         out[h][i] += d * d.transpose();
       }
     }
