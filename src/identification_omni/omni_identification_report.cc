@@ -533,8 +533,8 @@ std::string FormatOmniIdentificationHtml(const OmniIdentificationReport& r, Rend
   if (!r.spread_budget.empty()) {
     h << "<p>Where the predicted position spread comes from on the " << HtmlEscape(r.spread_budget_on)
       << ": the start estimate carried on, "
-         "the process noise, the driving noise, the drift and the camera (RMS, mm; they add in squares), beside the "
-         "measured error.</p>\n<pre>"
+         "the process noise, the driving noise, the drift, the camera and, on validation logs, the parameters' own "
+         "uncertainty (RMS, mm; they add in squares), beside the measured error.</p>\n<pre>"
       << HtmlEscape(FormatSpreadBudgets(r.spread_budget)) << "</pre>\n";
   }
   if (!r.safeguard.on.empty()) {
