@@ -279,7 +279,7 @@ std::vector<std::vector<PredictiveError>> OmniLogPredictiveErrors(
   o.stride = stride;
   o.stride_origin = 0;
   o.parameter_shifts = parameter_shifts;
-  o.parameter_backend = model.fitted_on.empty() ? "analytic" : model.fitted_on;
+  o.parameter_backend = ReplayEngineFor(model, "", "analytic");
   const OmniReplayResult r = ReplayOmniLog(model, log, o);
   for (std::size_t q = 0; q < horizons.size(); ++q) {
     const OmniReplayResult& at = q + 1 == horizons.size() ? r : r.also[q];

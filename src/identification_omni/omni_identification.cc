@@ -1104,10 +1104,7 @@ OmniObserverModel::ParameterCovariance ParameterCovarianceOf(const FitState& fit
     rows.push_back(static_cast<long>(k));
     out.parameters.push_back(Specs()[p].name);
   }
-  out.matrix.resize(static_cast<long>(rows.size()), static_cast<long>(rows.size()));
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    for (std::size_t j = 0; j < rows.size(); ++j)
-      out.matrix(static_cast<long>(i), static_cast<long>(j)) = fit.solved.covariance(rows[i], rows[j]);
+  out.matrix = fit.solved.covariance(rows, rows);
   return out;
 }
 
@@ -1524,10 +1521,9 @@ std::vector<std::array<OmniModel, 2>> ParameterShiftedModels(const OmniModel& mo
   }
   if (param.empty()) return {};
   // In coordinates (the delta method backwards), then its principal directions.
-  Eigen::MatrixXd c(static_cast<long>(rows.size()), static_cast<long>(rows.size()));
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    for (std::size_t j = 0; j < rows.size(); ++j)
-      c(static_cast<long>(i), static_cast<long>(j)) = pc.matrix(rows[i], rows[j]) / (slopes[i] * slopes[j]);
+  Eigen::MatrixXd c = pc.matrix(rows, rows);
+  for (long i = 0; i < c.rows(); ++i)
+    for (long j = 0; j < c.cols(); ++j) c(i, j) /= slopes[static_cast<std::size_t>(i)] * slopes[static_cast<std::size_t>(j)];
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (c + c.transpose()));
   std::vector<std::array<OmniModel, 2>> out;
   const long k = c.rows();

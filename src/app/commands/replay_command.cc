@@ -145,7 +145,7 @@ int Replay(const ReplayOptions& options) {
   replay.seed = static_cast<std::uint64_t>(options.seed);
   if (options.samples > 0 && options.parameter_uncertainty == "on") {
     replay.parameter_shifts = ParameterShiftedModels(model, log.frame_period);
-    replay.parameter_backend = model.fitted_on.empty() ? "analytic" : model.fitted_on;
+    replay.parameter_backend = ReplayEngineFor(model, "", "analytic");
   }
   if (std::string why; !replay.IsValid(&why)) throw InputError(why);
   if (!options.predictor.empty())
