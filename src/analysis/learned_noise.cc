@@ -92,6 +92,7 @@ std::vector<std::vector<std::vector<PredictiveError>>> SampledRowsByLog(const Om
     o.horizon = horizons.back();
     o.also.assign(horizons.begin(), horizons.end() - 1);
     o.samples = options.samples;
+    o.parameter_draws = options.parameter_draws;
     o.seed = options.seed + 0x9e3779b97f4a7c15ULL * l;  // each log draws its own
     o.stride = stride;
     const OmniReplayResult r = ReplayOmniLog(model, log, o);

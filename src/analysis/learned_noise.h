@@ -47,6 +47,10 @@ struct LearnedNoiseOptions {
   int max_starts = 150;
   std::uint64_t seed = 1;                // of the rollouts' draws
   int max_evaluations = 90;              // of the cost, besides the start's; the growths get half as many more
+  // Each rollout draws the predictor's weights from their own uncertainty first, where it
+  // carries one (OmniReplayOptions::parameter_draws): the noise is then fitted as what
+  // the weights' uncertainty leaves.
+  bool parameter_draws = true;
 };
 
 struct LearnedNoiseFit {

@@ -323,6 +323,7 @@ class TrackerSamples {
     std::vector<std::vector<Pose2>> draws(horizons.size());
     for (int m = 0; m < n; ++m) {
       backend.Restore(saved);
+      if (options_.parameter_draws) backend.DrawParameters(&rng_);
       std::array<double, 3> slip{};
       for (int j = f; j < f + k; ++j) {
         const Twist2 before = backend.velocity(0);
@@ -336,6 +337,7 @@ class TrackerSamples {
         }
       }
     }
+    if (options_.parameter_draws) backend.DrawParameters(nullptr);  // the estimate again
     for (std::size_t h = 0; h < horizons.size(); ++h) {
       if (draws[h].empty()) continue;
       OmniReplayResult& r = h + 1 == horizons.size() ? *out : out->also[h];

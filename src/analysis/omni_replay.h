@@ -87,6 +87,11 @@ struct OmniReplayOptions {
   // second-order difference.
   std::vector<std::array<OmniModel, 2>> parameter_shifts;
   std::string parameter_backend;
+  // The tracker's samples (the learned backend's): each rollout first draws the
+  // backend's parameters from their own uncertainty (OmniBackend::DrawParameters: a
+  // linear predictor's weights, docs/learning.md "The weights' own uncertainty"), where
+  // its model carries one; the prediction itself stays the estimate's.
+  bool parameter_draws = true;
   // The observer's state (K >= 1; `reach` 0 predicts nothing): each row's input
   // (OmniObserver::InputFeature) after its frame, into OmniReplayResult::input_feature
   // (the seen inputs of identify's fit).

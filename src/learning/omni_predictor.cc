@@ -82,142 +82,6 @@ double PositionRmse(const Eigen::MatrixXd& predicted, const Eigen::MatrixXd& tru
 
 }  // namespace
 
-Eigen::Vector3d OmniPredictor::PredictDelta(const double* inputs) const {
-  const long n = info_.layout.num_inputs();
-  const Eigen::Map<const Eigen::VectorXd> x(inputs, n);
-  if (info_.kind == "mlp") return mlp_.Predict(x) - mlp_at_rest_;
-  // No member scratch: one predictor is shared by the threads of an ensemble (run
-  // --samples --jobs) and by robots of one field.
-  return weights_ * (x - input_mean_).cwiseQuotient(input_scale_) + bias_;
-}
-
-namespace {
-
-// Room for a predictor's inputs: on the stack for the usual sizes.
-class InputBuffer {
- public:
-  explicit InputBuffer(int size) {
-    if (size > kOnStack) big_.resize(static_cast<std::size_t>(size));
-  }
-  double* data() { return big_.empty() ? small_ : big_.data(); }
-
- private:
-  static constexpr int kOnStack = 256;
-  double small_[kOnStack];
-  std::vector<double> big_;
-};
-
-}  // namespace
-
-Pose2 BoundStep(const OmniPredictorInfo& info, const Pose2& from, const Pose2& to, bool* bounded) {
-  if (!(info.max_step > 0)) return to;  // no bounds known
-  Eigen::Vector3d d = EncodeDelta(from, to);
-  const double step = std::hypot(d[0], d[1]), step_limit = kBoundFactor * info.max_step;
-  const double turn_limit = kBoundFactor * std::max(info.max_turn, 1e-6);
-  bool changed = false;
-  if (!(step <= step_limit)) {  // NaN too
-    const double k = std::isfinite(step) ? step_limit / step : 0;
-    d[0] = std::isfinite(step) ? d[0] * k : 0;
-    d[1] = std::isfinite(step) ? d[1] * k : 0;
-    changed = true;
-  }
-  if (!(std::abs(d[2]) <= turn_limit)) {
-    d[2] = std::isfinite(d[2]) ? std::clamp(d[2], -turn_limit, turn_limit) : 0;
-    changed = true;
-  }
-  if (!changed) return to;
-  if (bounded) *bounded = true;
-  return ApplyDelta(from, d);
-}
-
-bool InputsSeen(const OmniPredictorInfo& info, const double* inputs) {
-  for (std::size_t i = 0; i < info.input_low.size(); ++i) {
-    const double margin = kInputMargin * (info.input_high[i] - info.input_low[i]) + 1e-9;
-    if (!(inputs[i] >= info.input_low[i] - margin && inputs[i] <= info.input_high[i] + margin)) return false;
-  }
-  return true;
-}
-
-Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, bool* unseen) const {
-  if (residual())
-    throw std::logic_error("OmniPredictor::Predict: a residual predictor needs its nominal model's track");
-  InputBuffer x(info_.layout.num_inputs());
-  EncodeInputs(info_.layout, poses, commands, x.data());
-  if (unseen) *unseen = !InputsSeen(info_, x.data());
-  return ApplyDelta(poses[info_.layout.history - 1], PredictDelta(x.data()));
-}
-
-NominalOmniTrack OmniPredictor::MakeNominalTrack(const OmniModel& model) const {
-  if (!residual()) throw std::logic_error("OmniPredictor::MakeNominalTrack: not a residual predictor");
-  return NominalOmniTrack(model, info_.nominal_engine, info_.frame_rate, info_.nominal_substeps,
-                          info_.layout.nominal_errors, info_.nominal_state);
-}
-
-Pose2 OmniPredictor::Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity,
-                               const Pose2& nominal_end, const std::vector<Eigen::Vector3d>& errors,
-                               bool* unseen) const {
-  InputBuffer x(info_.layout.num_inputs());
-  const Eigen::Vector3d nominal =
-      EncodeResidualInputs(info_.layout, poses, commands, nominal_end, nominal_velocity, errors, x.data());
-  if (unseen) *unseen = !InputsSeen(info_, x.data());
-  return ApplyDelta(poses[info_.layout.history - 1], nominal + PredictDelta(x.data()));
-}
-
-Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen) const {
-  if (!residual()) return Predict(poses, commands, unseen);
-  const FeatureLayout& layout = info_.layout;
-  const Twist2 velocity = track->velocity();
-  const Pose2 end = track->Lookahead(commands + layout.history - 1, layout.horizon);
-  return Corrected(poses, commands, velocity, end, track->errors(), unseen);
-}
-
-Pose2 OmniPredictor::Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen) const {
-  const FeatureLayout& layout = info_.layout;
-  if (layout.horizon != 1) throw std::logic_error("OmniPredictor::Step: a 1-frame predictor is needed");
-  if (!residual()) return Predict(poses, commands, unseen);
-  const Twist2 velocity = track->velocity();
-  const std::vector<Eigen::Vector3d> errors = track->errors();  // before the step shifts them
-  const Pose2 end = track->Step(commands[layout.history - 1]);
-  const Pose2 next = Corrected(poses, commands, velocity, end, errors, unseen);
-  // A prediction the nominal model cannot be put at (not finite, or faster than any
-  // robot: 50 m/s, 1000 rad/s) has run away; say so before an engine chokes on it.
-  const Pose2& now = poses[layout.history - 1];
-  const double dt = 1.0 / info_.frame_rate;
-  if (!IsFinite(next) || std::hypot(next.x - now.x, next.y - now.y) > 50 * dt || std::abs(next.theta - now.theta) > 1000 * dt) {
-    std::ostringstream msg;
-    msg << "the residual predictor ran away in one frame from x = " << now.x << " m, y = " << now.y
-        << " m, theta = " << now.theta << " rad to x = " << next.x << " m, y = " << next.y << " m, theta = " << next.theta
-        << " rad (its nominal model predicted x = " << end.x << " m, y = " << end.y << " m)";
-    throw CheckFailed(msg.str());
-  }
-  track->Follow(next);
-  return next;
-}
-
-void OmniPredictor::CheckUse(const OmniModel& model, double frame_rate, int horizon, const std::string& use) const {
-  const SourceLocation where{path_};
-  if (info_.model_name != model.name)
-    throw InputError(where, "predictor was trained for model '" + info_.model_name + "', not '" + model.name +
-                                "' (" + use + ")");
-  if (std::abs(info_.frame_rate - frame_rate) > kSameCameraRate * frame_rate) {
-    std::ostringstream msg;
-    msg << "predictor was trained at " << info_.frame_rate << " fps, " << use << " runs at " << frame_rate << " fps";
-    throw InputError(where, msg.str());
-  }
-  if (info_.layout.horizon != horizon)
-    throw InputError(where, "predictor predicts " + std::to_string(info_.layout.horizon) + " frame(s) ahead, " + use +
-                                " needs " + std::to_string(horizon));
-  const int delay = model.command_delay_frames + model.vision_delay_frames;
-  if (info_.layout.command_lag != delay)
-    throw InputError(where, "predictor assumes a delay of " + std::to_string(info_.layout.command_lag) +
-                                " frames, model '" + model.name + "' has " + std::to_string(delay));
-  if (residual() && NominalModelFingerprint(model) != info_.nominal_fingerprint)
-    throw InputError(where, "residual predictor was trained over another version of model '" + model.name +
-                                "' (its parameters or effects differ; fingerprint " + info_.nominal_fingerprint +
-                                ", this model's " + NominalModelFingerprint(model) + "): train it again over this one (" +
-                                use + ")");
-}
-
 namespace {
 
 // The first frame of a log of `frames` frames that validates (the last `fraction` of them).
@@ -629,6 +493,19 @@ OmniRolloutCheck CheckCorrectionsByRollouts(const OmniPredictorInfo& info, const
   return check;
 }
 
+// A predictor's weights' own uncertainty (RidgeWeightDirections) from its training rows
+// (x: what the weights multiply, y: the targets, in the units the weights predict), in
+// blocks of a second of frames (the driving noise's correlation is far shorter): the
+// directions holding 95 % of the covariance's trace, at most 16, each drawn once per
+// rollout by the learned backend. Only a one-frame predictor drives rollouts.
+RidgeWeightUncertainty WeightUncertainty(const OmniPredictorInfo& info, const Eigen::MatrixXd& x,
+                                         const Eigen::MatrixXd& y, const Eigen::VectorXd& scale,
+                                         const Eigen::MatrixXd& weights, const std::vector<double>& ridges) {
+  if (info.layout.horizon != 1) return {};
+  const int block_rows = std::max(2, static_cast<int>(std::lround(info.frame_rate)));
+  return RidgeWeightDirections(x, y, scale, weights, ridges, block_rows, 0.95, 16);
+}
+
 // A residual predictor's ridge regression on scaled inputs, closed form, through the
 // origin, fitted on `data`, each output (forward, sideways, turn) with a ridge of
 // `ridges` or none chosen by cross-validation over `folds` of `all` by the
@@ -659,7 +536,9 @@ OmniPredictor FitResidualChoosingRidge(const OmniPredictorInfo& info, const Omni
     if (std::isinf(r[static_cast<std::size_t>(j)])) continue;  // no correction
     weights.row(j) = FitRidge(data.x, data.y.col(j), r[static_cast<std::size_t>(j)], &scale).transpose();  // same scale
   }
-  return MakeLinearPredictor(info, Eigen::VectorXd::Zero(n), scale, weights, Eigen::Vector3d::Zero());
+  OmniPredictor p = MakeLinearPredictor(info, Eigen::VectorXd::Zero(n), scale, weights, Eigen::Vector3d::Zero());
+  p.SetWeightUncertainty(WeightUncertainty(info, data.x, data.y, scale, weights.transpose(), r));
+  return p;
 }
 
 // Fits the predictor on `data`. Linear: ridge regression on scaled inputs, closed form,
@@ -678,13 +557,18 @@ OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& dat
   if (options.kind == "linear") {
     Eigen::VectorXd scale;
     const Eigen::MatrixXd w = FitRidge(data.x, data.y, options.ridge, &scale);  // in x 3
-    return MakeLinearPredictor(info, Eigen::VectorXd::Zero(w.rows()), scale, w.transpose(), Eigen::Vector3d::Zero());
+    OmniPredictor p =
+        MakeLinearPredictor(info, Eigen::VectorXd::Zero(w.rows()), scale, w.transpose(), Eigen::Vector3d::Zero());
+    p.SetWeightUncertainty(WeightUncertainty(info, data.x, data.y, scale, w, std::vector<double>(3, options.ridge)));
+    return p;
   }
   const long rest = std::max<long>(1, data.rows() / 50);
   Eigen::MatrixXd x(data.rows() + rest, data.x.cols());
   Eigen::MatrixXd y(x.rows(), 3);
   x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols());
   y << data.y, Eigen::MatrixXd::Zero(rest, 3);
+  // No weights' uncertainty for a network: its output layer's (the last-layer Laplace
+  // approximation) was measured and made held-out rows worse (docs/learning.md).
   return MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp, progress, mlp_report));
 }
 

@@ -31,6 +31,7 @@
 #include "learning/mlp.h"
 #include "learning/omni_features.h"
 #include "learning/omni_residual.h"
+#include "learning/predictor_file.h"
 #include "robots/omni/omni_log.h"
 #include "robots/omni/omni_model.h"
 
@@ -137,6 +138,18 @@ class OmniPredictor {
     info_.interval_scale = std::move(scales);
   }
 
+  // A linear one-frame predictor's weights' own uncertainty (learning/predictor_file.h's
+  // RidgeWeightDirections: the fit's covariance from its residuals summed over blocks of a
+  // second), as principal directions on the scaled inputs; none for a network, for
+  // weights fitted elsewhere and for files from before (docs/learning.md, "The weights'
+  // own uncertainty").
+  const RidgeWeightUncertainty& weight_uncertainty() const { return weight_uncertainty_; }
+  void SetWeightUncertainty(RidgeWeightUncertainty u) { weight_uncertainty_ = std::move(u); }
+  // Moves this predictor's weights to a draw from `estimate`'s uncertainty: estimate's
+  // weights plus sum_l z_l D_l (z: one number per direction). `estimate` is the
+  // predictor this one was copied from; the learned backend draws once per rollout.
+  void DrawWeights(const OmniPredictor& estimate, const Eigen::VectorXd& z);
+
   // Writes the file atomically.
   void Save(const std::string& path) const;
   // Reads and checks a file; throws InputError "path:line: what is wrong".
@@ -155,6 +168,7 @@ class OmniPredictor {
   Eigen::VectorXd input_mean_, input_scale_;  // in
   Eigen::MatrixXd weights_;                   // 3 x in
   Eigen::Vector3d bias_ = Eigen::Vector3d::Zero();
+  RidgeWeightUncertainty weight_uncertainty_;  // directions 3 x in, like weights_
   // A residual predictor's pose: the nominal model's prediction `nominal_end` of the pose
   // H frames after poses[history - 1], corrected; `nominal_velocity` and `errors` are the
   // model's at poses[history - 1].

@@ -76,6 +76,21 @@ void OmniPredictor::Save(const std::string& path) const {
     }
     out << YAML::EndSeq;
   }
+  const RidgeWeightUncertainty& u = weight_uncertainty_;
+  if (!u.directions.empty()) {
+    out << YAML::Key << "weight_uncertainty" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "blocks" << YAML::Value << u.blocks;
+    out << YAML::Key << "share" << YAML::Value << u.share;
+    out << YAML::Key << "count" << YAML::Value << static_cast<int>(u.directions.size());
+    // Direction l is row l: its outputs' rows one after another (3 x inputs numbers).
+    Eigen::MatrixXd rows(static_cast<long>(u.directions.size()), u.directions.front().size());
+    for (std::size_t l = 0; l < u.directions.size(); ++l) {
+      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> d = u.directions[l];
+      rows.row(static_cast<long>(l)) = Eigen::Map<const Eigen::RowVectorXd>(d.data(), d.size());
+    }
+    EmitMatrix(out, "directions", rows);
+    out << YAML::EndMap;
+  }
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
   WritePredictorFile(out, path);
 }
@@ -105,6 +120,33 @@ void ReadIntervalScale(YamlMap* top, OmniPredictorInfo* info) {
   if (!top->Has("interval_scale")) return;
   ReadIntervalScales(*top, "interval_scale", false, &info->interval_scale);
   if (!info->has_driving_noise) top->Error("interval_scale", "scales the driving noise's intervals: give driving_noise too");
+}
+
+// A linear one-frame predictor's weights' own uncertainty, where the file has it (train's;
+// files from before, networks and weights fitted elsewhere have none).
+RidgeWeightUncertainty ReadWeightUncertainty(YamlMap* top, const std::string& path, ErrorList* errors,
+                                             const OmniPredictorInfo& info) {
+  RidgeWeightUncertainty u;
+  if (!top->Has("weight_uncertainty")) return u;
+  if (info.kind != "linear" || info.layout.horizon != 1) {
+    top->Child("weight_uncertainty");  // asked for: the error below is the one to report
+    top->Error("weight_uncertainty", "only a linear predictor of one frame ahead carries its weights' uncertainty");
+    return u;
+  }
+  YamlMap m(top->Child("weight_uncertainty"), path, "weight_uncertainty", errors);
+  m.Require("blocks", &u.blocks, InRange(2, 100000000));
+  m.Require("share", &u.share, InRange(1e-6, 1));
+  int count = 0;
+  m.Require("count", &count, InRange(1, 1000));
+  const int in = info.layout.num_inputs(), out = FeatureLayout::kNumOutputs;
+  const Eigen::MatrixXd rows = count > 0 ? ReadMatrix(m, "directions", count, out * in) : Eigen::MatrixXd();
+  for (long l = 0; l < rows.rows(); ++l) {
+    const Eigen::RowVectorXd r = rows.row(l);
+    u.directions.push_back(Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        r.data(), out, in));
+  }
+  m.Finish();
+  return u;
 }
 
 }  // namespace
@@ -169,6 +211,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   }
   ReadDrivingNoise(&top, path, &errors, &info);
   ReadIntervalScale(&top, &info);
+  RidgeWeightUncertainty uncertainty = ReadWeightUncertainty(&top, path, &errors, info);
   errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();
@@ -179,6 +222,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
                         ? MakeLinearPredictor(info, linear.input_mean, linear.input_scale, linear.weights,
                                               Eigen::Vector3d(linear.bias))
                         : MakeMlpPredictor(info, std::move(mlp));
+  p.weight_uncertainty_ = std::move(uncertainty);
   p.path_ = path;
   return p;
 }

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -204,6 +205,55 @@ Eigen::MatrixXd FitRidge(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, dou
   gram.diagonal().array() += ridge * static_cast<double>(z.rows());
   if (scale) *scale = s;
   return gram.ldlt().solve(z.transpose() * y);
+}
+
+RidgeWeightUncertainty RidgeWeightDirections(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
+                                             const Eigen::VectorXd& scale, const Eigen::MatrixXd& weights,
+                                             const std::vector<double>& ridges, int block_rows, double share,
+                                             int max_directions) {
+  RidgeWeightUncertainty out;
+  const long n = x.rows(), in = x.cols(), outputs = y.cols();
+  if (block_rows < 1) throw std::invalid_argument("RidgeWeightDirections: block_rows must be positive");
+  const long blocks = (n + block_rows - 1) / block_rows;
+  if (blocks < 2) return out;  // one block says nothing of its own scatter
+  const Eigen::MatrixXd z = x.array().rowwise() / scale.transpose().array();
+  const Eigen::MatrixXd r = y - z * weights;
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(outputs * in, blocks);  // column b: u_b
+  const Eigen::MatrixXd gram = z.transpose() * z;
+  for (long j = 0; j < outputs; ++j) {
+    const double ridge = ridges[static_cast<std::size_t>(j)];
+    if (std::isinf(ridge)) continue;  // fixed at zero
+    Eigen::MatrixXd scores(in, blocks);
+    for (long b = 0; b < blocks; ++b) {
+      const long from = b * block_rows, rows = std::min<long>(block_rows, n - from);
+      scores.col(b) = z.middleRows(from, rows).transpose() * r.col(j).segment(from, rows);
+    }
+    Eigen::MatrixXd g = gram;
+    g.diagonal().array() += ridge * static_cast<double>(n);
+    u.middleRows(j * in, in) = g.ldlt().solve(scores);
+  }
+  const Eigen::MatrixXd cov = u * u.transpose() * (static_cast<double>(blocks) / static_cast<double>(blocks - 1));
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cov);
+  const double trace = eig.eigenvalues().cwiseMax(0.0).sum();
+  out.blocks = static_cast<int>(blocks);
+  if (!(trace > 0)) return out;
+  double held = 0;
+  for (long l = eig.eigenvalues().size() - 1; l >= 0; --l) {  // largest first
+    if (held >= share * trace || static_cast<int>(out.directions.size()) >= max_directions) break;
+    const double value = std::max(0.0, eig.eigenvalues()[l]);
+    if (value <= 0) break;
+    Eigen::VectorXd v = eig.eigenvectors().col(l) * std::sqrt(value);
+    // A sign of its own (the solver's is arbitrary): the largest entry positive.
+    Eigen::Index top = 0;
+    v.cwiseAbs().maxCoeff(&top);
+    if (v[top] < 0) v = -v;
+    Eigen::MatrixXd d(outputs, in);
+    for (long j = 0; j < outputs; ++j) d.row(j) = v.segment(j * in, in).transpose();
+    out.directions.push_back(std::move(d));
+    held += value;
+  }
+  out.share = held / trace;
+  return out;
 }
 
 }  // namespace twinsim

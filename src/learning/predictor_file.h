@@ -103,4 +103,26 @@ void ReadPredictorModel(YamlMap& top, const std::string& kind, int inputs, int o
 // Predict with y = ((x / scale) W). Closed form (LDLT of the normal equations).
 Eigen::MatrixXd FitRidge(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, double ridge, Eigen::VectorXd* scale);
 
+// How uncertain ridge weights fitted on (x, y) are, from the data themselves: the
+// residuals' scores summed over blocks of `block_rows` consecutive rows (the
+// cluster-robust, "sandwich" covariance, so that residuals correlated within a block
+// count once, not as independent rows), per output j with its ridge:
+//   u_b = vec_j( G_j^-1 Z_b^T r_{b,j} ),  G_j = Z^T Z + ridge_j N I,
+//   Cov(vec W) = B / (B - 1) sum_b u_b u_b^T   (B blocks).
+// An infinite ridge is an output fixed at zero (a residual predictor without that
+// correction): its weights are certain. Returned as the covariance's leading principal
+// directions, each scaled by its standard deviation (outputs x inputs, on the scaled
+// inputs, like the weights), until they hold `share` of its trace or `max_directions`:
+// weights drawn as W + sum_l z_l D_l, z ~ N(0, I), have that covariance. `weights` is
+// in x out (FitRidge's), `scale` FitRidge's.
+struct RidgeWeightUncertainty {
+  std::vector<Eigen::MatrixXd> directions;  // each out x in
+  int blocks = 0;                           // B
+  double share = 0;                         // of the covariance's trace the directions hold
+};
+RidgeWeightUncertainty RidgeWeightDirections(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y,
+                                             const Eigen::VectorXd& scale, const Eigen::MatrixXd& weights,
+                                             const std::vector<double>& ridges, int block_rows, double share,
+                                             int max_directions);
+
 }  // namespace twinsim

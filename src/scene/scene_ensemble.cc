@@ -55,6 +55,7 @@ OmniEnsemble RunOmniEnsemble(const Scene& scene, const std::string& backend, con
     }
     Simulation sim = MakeSimulation(scene, backend, backend_options);
     sim.SetDrivingNoiseSample(scene.seed, static_cast<std::uint64_t>(k));
+    if (options.parameter_draws && k > 0) sim.DrawModelParameters(scene.seed, static_cast<std::uint64_t>(k));
     SimulationResult r = sim.Run(frames);
     out.paths[static_cast<std::size_t>(k)] = first_path(r);
     if (k == 0) first[0] = std::move(r);

@@ -63,6 +63,13 @@ class GroupedOmniBackend final : public OmniBackend {
     return total;
   }
 
+  // Every group draws (or goes back to its estimate); true when any does.
+  bool DrawParameters(Rng* rng) override {
+    bool any = false;
+    for (OmniBackendGroup& g : groups_) any = g.backend->DrawParameters(rng) || any;
+    return any;
+  }
+
   // The robots' states in field order (each as its own backend saves it).
   OmniBackendState Save() const override;
   // Throws std::invalid_argument for a state of another number of robots (and as the

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/pose.h"
+#include "core/rng.h"
 #include "engines/omni_engine.h"
 #include "robots/omni/omni_model.h"
 #include "robots/omni/onboard_controller.h"
@@ -119,6 +120,16 @@ class OmniBackend {
   // Physics: the engine's grip check since construction (engines/omni_engine.h;
   // only the analytic engine, which cannot slip, checks); empty for learned backends.
   virtual GripCheck grip() const { return {}; }
+
+  // Moves the model's parameters to a draw from their own uncertainty, for everything
+  // simulated until the next call; a null `rng` moves them back to the estimate. Only a
+  // backend whose model carries that uncertainty overrides it (the learned backend with a
+  // predictor that has its weights' directions, learning/omni_predictor.h); the others
+  // draw nothing. Returns whether the backend draws. Save and Restore leave the draw.
+  virtual bool DrawParameters(Rng* rng) {
+    static_cast<void>(rng);
+    return false;
+  }
 
   // Saves and restores everything that changes: restoring a saved state and stepping
   // gives the same result as stepping from where it was saved.

@@ -294,6 +294,11 @@ void Simulation::SetDrivingNoiseSample(std::uint64_t seed, std::uint64_t sample)
   state_.drive_rng = Rng::Derived(seed, 0x64726976 + (sample << 32));  // "driv", sample 0 the constructor's
 }
 
+void Simulation::DrawModelParameters(std::uint64_t seed, std::uint64_t sample) {
+  Rng rng = Rng::Derived(seed, 0x70617261 + (sample << 32));  // "para"
+  backend_->DrawParameters(&rng);
+}
+
 void Simulation::Slip(const std::vector<Twist2>& velocity_before) {
   const double dt = backend_->timing().frame_dt();
   for (int i = 0; i < num_robots(); ++i) {

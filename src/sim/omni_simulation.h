@@ -260,6 +260,10 @@ class Simulation {
   // seeded `seed` (the constructor's): a stream of its own per sample, sample 0 the
   // constructor's. The camera's draws and everything else stay as they were.
   void SetDrivingNoiseSample(std::uint64_t seed, std::uint64_t sample);
+  // Moves the backend's parameters to a draw from their own uncertainty for the rest of
+  // the run (OmniBackend::DrawParameters), from a stream of its own per sample of the run
+  // seeded `seed`; nothing where the backend's model carries none.
+  void DrawModelParameters(std::uint64_t seed, std::uint64_t sample);
 
   // The whole state: the loop's, the backend's and every robot's behaviour (a copy of
   // each command source, so a go-to-pose source's target and the commands it remembers

@@ -368,9 +368,13 @@ struct SourceCalibrations {
 // learned one whose predictor has a driving noise (its sampled rollouts), 4, 16 and 63
 // frames ahead (analysis/omni_calibration.h, analysis/learned_noise.h); where the model
 // knows the inputs its fit saw, the physics sources' split by how far from them; and
-// every source's by quarter of the log's turn rate.
+// every source's by quarter of the log's turn rate. With `parameter_uncertainty`, the
+// model's parameters' own uncertainty widens them (ParameterShiftedModels; a linear
+// predictor's weights drawn per rollout).
 SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, const OmniCompareOptions& compare,
-                                    const std::vector<std::array<OmniModel, 2>>& parameter_shifts, Progress* progress) {
+                                    bool parameter_uncertainty, Progress* progress) {
+  const std::vector<std::array<OmniModel, 2>> parameter_shifts =
+      parameter_uncertainty ? ParameterShiftedModels(model, log.frame_period) : std::vector<std::array<OmniModel, 2>>{};
   SourceCalibrations out;
   for (const CompareSource& s : compare.sources) {
     if (s.backend == "learned") {
@@ -379,6 +383,7 @@ SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, 
       progress->Update(0, 1, s.label + ", calibration");
       LearnedNoiseOptions sampled;
       sampled.stride = kCalibrationStride;
+      sampled.parameter_draws = parameter_uncertainty;
       out.by_turn_rate.push_back({&s, {}});
       out.whole.emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled, &out.by_turn_rate.back().quarters));
       continue;
@@ -453,11 +458,8 @@ int Compare(const CompareCliOptions& options) {
   const OmniCompareResult result = CompareOmniLog(
       model, log, compare, [&](long done, long total, const std::string& what) { progress.Update(done, total, what); });
 
-  const SourceCalibrations calibrations = CalibrateSources(
-      model, log, compare,
-      options.parameter_uncertainty == "on" ? ParameterShiftedModels(model, log.frame_period)
-                                            : std::vector<std::array<OmniModel, 2>>{},
-      &progress);
+  const SourceCalibrations calibrations =
+      CalibrateSources(model, log, compare, options.parameter_uncertainty == "on", &progress);
   const auto& calibration = calibrations.whole;
   const auto& by_distance = calibrations.by_distance;
   progress.Finish();

@@ -143,6 +143,7 @@ int Replay(const ReplayOptions& options) {
   replay.state = options.state;
   replay.samples = options.samples;
   replay.seed = static_cast<std::uint64_t>(options.seed);
+  replay.parameter_draws = options.parameter_uncertainty == "on";  // a linear predictor's weights
   if (options.samples > 0 && options.parameter_uncertainty == "on") {
     replay.parameter_shifts = ParameterShiftedModels(model, log.frame_period);
     replay.parameter_backend = ReplayEngineFor(model, "", "analytic");

@@ -28,6 +28,7 @@ struct RunOptions {
   std::string commands;   // a recorded match to replay (commands.csv)
   std::string driving_noise = "model";  // on | off | model: every robot's driving_noise.simulated
   int samples = 0;  // > 0: an ensemble of this many rollouts under the driving noise
+  std::string parameter_uncertainty = "on";  // samples 1..: a linear predictor's weights drawn too
   int jobs = 0;     // the ensemble's threads (0: one per core)
   bool quiet = false;
 };
@@ -75,6 +76,7 @@ int RunEnsemble(const Scene& scene, const std::string& backend, const RunOptions
   OmniEnsembleOptions ensemble_options;
   ensemble_options.samples = options.samples;
   ensemble_options.jobs = options.jobs;
+  ensemble_options.parameter_draws = options.parameter_uncertainty == "on";
   const OmniEnsemble ensemble = RunOmniEnsemble(scene, backend, options.predictor, ensemble_options, [&](int done, int total) {
     progress.Update(done, total, std::to_string(done) + "/" + std::to_string(total) + " samples");
   });
@@ -185,6 +187,7 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
                   "Replay a recorded match: every robot sends its rows of this file (commands.csv of\n"
                   "twinsim serve; docs/serve.md), for as many frames as it holds");
   AddDrivingNoiseOption(cmd, &options->driving_noise);
+  AddParameterUncertaintyOption(cmd, &options->parameter_uncertainty);
   cmd->add_option("--samples", options->samples,
                   "Omni: N rollouts that differ only in the robots' driving noise: sample 0's files as a plain run,\n"
                   "samples.csv (t,sample,x,y,theta: the first robot's true pose) and fan.png")

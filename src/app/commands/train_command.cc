@@ -39,6 +39,7 @@ struct TrainCliOptions {
   bool quiet = false;
   bool no_noise = false;   // omni, one frame ahead: skip the driving noise's fit
   bool no_safeguard = false;  // omni, with the noise: skip its intervals' safeguard
+  bool no_weight_uncertainty = false;  // omni, linear, one frame ahead: write none (the noise fitted alone)
   OmniLogSelector select;  // omni logs holding several robots
 };
 
@@ -171,6 +172,7 @@ int Train(const TrainCliOptions& options) {
       std::fprintf(stderr, "train: note: %s gave no complete window and was left out\n", log.path.c_str());
   }
   OmniPredictor written = predictor;
+  if (options.no_weight_uncertainty) written.SetWeightUncertainty({});  // before the noise: fitted without it
   const LearnedUncertainty uncertainty = FitLearnedUncertainty(model, logs, train, options, &written);
   OutputFiles files;
   written.Save(options.out);
@@ -181,6 +183,11 @@ int Train(const TrainCliOptions& options) {
                                             : "";
     std::printf("%s predictor of %s%s, %d frame(s) ahead at %g fps: %s\n", what.c_str(), model.name.c_str(),
                 over.c_str(), train.horizon, predictor.info().frame_rate, summary.BriefReport().c_str());
+    if (const RidgeWeightUncertainty& u = written.weight_uncertainty(); !u.directions.empty()) {
+      std::printf("weights' own uncertainty: %zu directions holding %.1f %% of the fit's covariance, from its residuals "
+                  "in %d blocks of a second (each sampled rollout draws them; docs/learning.md)\n",
+                  u.directions.size(), 100 * u.share, u.blocks);
+    }
     if (const auto& noise = uncertainty.noise) std::printf("on the held-out rows, %s", FormatLearnedNoiseFit(*noise).c_str());
     if (const OmniIntervalSafeguard& safeguard = uncertainty.safeguard; !safeguard.on.empty()) {
       std::printf("intervals' safeguard (a conformal scale of the rollouts' spread, fitted on the %s; each fold with "
@@ -264,6 +271,9 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
   cmd->add_flag("--no-safeguard", options->no_safeguard,
                 "Omni, with the driving noise: do not fit its intervals' safeguard (a conformal scale of the rollouts' "
                 "spread per horizon, on the held-out rows; docs/learning.md)");
+  cmd->add_flag("--no-weight-uncertainty", options->no_weight_uncertainty,
+                "Omni, linear, one frame ahead: do not write the weights' own uncertainty (weight_uncertainty, "
+                "drawn once per sampled rollout; docs/learning.md); the driving noise is then fitted without it");
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Train(*options); });

@@ -12,7 +12,7 @@ class LearnedOmniBackend final : public OmniBackend {
  public:
   LearnedOmniBackend(const std::vector<OmniModel>& robots, const FrameTiming& timing,
                      std::shared_ptr<const OmniPredictor> predictor)
-      : timing_(timing), predictor_(std::move(predictor)), layout_(predictor_->info().layout) {
+      : timing_(timing), predictor_(std::move(predictor)), current_(predictor_.get()), layout_(predictor_->info().layout) {
     robots_.resize(robots.size());
     for (std::size_t i = 0; i < robots.size(); ++i) {
       predictor_->CheckUse(robots[i], timing.frame_rate, 1, "the learned backend");
@@ -63,9 +63,9 @@ class LearnedOmniBackend final : public OmniBackend {
       bool unseen = false;
       const Pose2 predicted =
           tracks_.empty()
-              ? predictor_->Predict(s.pose_history.data(), s.command_history.data(), &unseen)
-              : predictor_->Step(s.pose_history.data(), s.command_history.data(), &tracks_[static_cast<std::size_t>(i)],
-                                 &unseen);
+              ? current_->Predict(s.pose_history.data(), s.command_history.data(), &unseen)
+              : current_->Step(s.pose_history.data(), s.command_history.data(), &tracks_[static_cast<std::size_t>(i)],
+                               &unseen);
       unseen_steps_ += unseen ? 1 : 0;
       // A predictor outside what it learned (speeds, inputs) is held to the robot's
       // bounds seen in training instead of running away (learning/omni_predictor.h).
@@ -93,6 +93,21 @@ class LearnedOmniBackend final : public OmniBackend {
     return out;
   }
 
+  bool DrawParameters(Rng* rng) override {
+    const int directions = static_cast<int>(predictor_->weight_uncertainty().directions.size());
+    if (directions == 0) return false;
+    if (!rng) {
+      current_ = predictor_.get();
+      return true;
+    }
+    if (!drawn_) drawn_ = std::make_unique<OmniPredictor>(*predictor_);
+    Eigen::VectorXd z(directions);
+    for (int l = 0; l < directions; ++l) z[l] = rng->Gaussian();
+    drawn_->DrawWeights(*predictor_, z);
+    current_ = drawn_.get();
+    return true;
+  }
+
   long bounded_steps() const override { return bounded_steps_; }
   long unseen_input_steps() const override { return unseen_steps_; }
 
@@ -118,6 +133,10 @@ class LearnedOmniBackend final : public OmniBackend {
 
   FrameTiming timing_;
   std::shared_ptr<const OmniPredictor> predictor_;
+  // The predictor stepping the robots: predictor_, or drawn_ after DrawParameters drew its
+  // weights (a copy made on the first draw, its weights moved on each).
+  const OmniPredictor* current_;
+  std::unique_ptr<OmniPredictor> drawn_;
   FeatureLayout layout_;
   std::vector<OmniRobotState> robots_;
   std::vector<NominalOmniTrack> tracks_;  // a residual predictor's nominal model per robot; empty otherwise
