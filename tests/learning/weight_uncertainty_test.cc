@@ -94,7 +94,11 @@ TEST(RidgeWeightUncertainty, BlocksCountResidualsCorrelatedWithinThemOnce) {
 // Too few rows for two blocks: nothing to say, no directions.
 TEST(RidgeWeightUncertainty, OneBlockGivesNoDirections) {
   Rng rng(3);
-  Eigen::MatrixXd x = Eigen::MatrixXd::Random(50, 3), y = Eigen::MatrixXd::Random(50, 1);
+  Eigen::MatrixXd x(50, 3), y(50, 1);
+  for (long i = 0; i < 50; ++i) {
+    for (long k = 0; k < 3; ++k) x(i, k) = rng.Gaussian();
+    y(i, 0) = rng.Gaussian();
+  }
   Eigen::VectorXd scale;
   const Eigen::MatrixXd w = FitRidge(x, y, 1e-3, &scale);
   const RidgeWeightUncertainty u = RidgeWeightDirections(x, y, scale, w, {1e-3}, 60, 0.95, 16);
