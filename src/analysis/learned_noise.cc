@@ -242,13 +242,16 @@ OmniIntervalSafeguard FitLearnedIntervalSafeguard(const OmniModel& model, const 
 
 std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
                                                      const OmniLog& log, const LearnedNoiseOptions& options,
-                                                     std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate) {
+                                                     std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate,
+                                                     std::vector<OmniDistanceCalibration>* by_distance) {
   const std::vector<int> horizons = Sorted(options.horizons);
   const OmniDrivingNoise& noise = LearnedDrivingNoise(model, &predictor);
   LearnedNoiseOptions every = options;  // a calibration scores every stride-th frame
   every.max_starts = std::numeric_limits<int>::max();
   const std::vector<std::vector<PredictiveError>> rows = SampledRows(model, predictor, noise, {log}, every, horizons);
   if (by_turn_rate) *by_turn_rate = CalibrateRowsByTurnRate(rows, horizons, log.frame_period);
+  if (by_distance && !predictor.info().input_low.empty())
+    *by_distance = CalibrateRowsByDistance(rows, horizons, log.frame_period);
   return CalibrationOf(rows, horizons, log.frame_period);
 }
 

@@ -90,10 +90,14 @@ OmniIntervalSafeguard FitLearnedIntervalSafeguard(const OmniModel& model, const 
 // `log` at each horizon, from `samples` rollouts per start at every `stride`-th frame
 // (max_starts does not apply; `compare`); the constant spread is fitted on the same rows
 // (a baseline with hindsight). With `by_turn_rate`, the same rows by quarter of their
-// measured turn rate (CalibrateRowsByTurnRate).
+// measured turn rate (CalibrateRowsByTurnRate); with `by_distance` and a predictor that
+// knows its training inputs' ranges, by how far beyond them each prediction's inputs
+// went (CalibrateRowsByDistance over OmniBackend::TakeInputExcess: below 0.25 of the
+// ranges' span the learned backend counts a step as seen; empty otherwise).
 std::vector<OmniCalibration> CalibrateLearnedOmniLog(const OmniModel& model, const OmniPredictor& predictor,
                                                      const OmniLog& log, const LearnedNoiseOptions& options = {},
-                                                     std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate = nullptr);
+                                                     std::vector<std::array<OmniTurnQuarter, 4>>* by_turn_rate = nullptr,
+                                                     std::vector<OmniDistanceCalibration>* by_distance = nullptr);
 
 // One line per horizon: coverage of the 50 % and 90 % ellipses, energy score against
 // the constant spread.

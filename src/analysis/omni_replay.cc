@@ -272,6 +272,13 @@ Timeline MakeTimeline(const OmniLog& log, int delay) {
 
 using PoseCheck = std::function<void(std::size_t, const Pose2&)>;
 
+// A learned prediction's distance from its training inputs (OmniBackend::TakeInputExcess)
+// as row `row`'s input_distance.
+void SetInputDistance(std::size_t row, double excess, OmniReplayResult* out) {
+  out->input_distance.resize(out->pose.size(), 0.0);
+  out->input_distance[row] = excess;
+}
+
 // Steps the backend freely from frame `from` to frame `to`, each pose at a logged frame
 // stored (theta kept on the log's unwrapped branch from `theta`).
 void FreeRun(OmniBackend& backend, const Timeline& tl, int from, int to, double theta, const PoseCheck& check,
@@ -413,18 +420,23 @@ void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOpt
       const OmniBackendState saved = backend.Save();
       // Keep theta on the log's unwrapped branch.
       const double from = log.rows[measured->second].pose.theta;
+      // A learned backend's inputs: how far beyond its training the prediction went.
+      double excess = backend.TakeInputExcess();  // the count starts here
       for (int j = f; j < f + k; ++j) {
         backend.StepFrame({tl.Delayed(j)});
+        if (excess >= 0) excess = std::max(excess, backend.TakeInputExcess());
         for (std::size_t a = 0; a < options.also.size(); ++a) {
           if (j + 1 != f + options.also[a]) continue;
           auto at = tl.row_of_frame.find(j + 1);
           if (at == tl.row_of_frame.end()) continue;
           out->also[a].pose[at->second] = PredictedPose(backend, at->second, from, check);
           out->also[a].predicted[at->second] = true;
+          if (excess >= 0) SetInputDistance(at->second, excess, &out->also[a]);
         }
       }
       out->pose[target->second] = PredictedPose(backend, target->second, from, check);
       out->predicted[target->second] = true;
+      if (excess >= 0) SetInputDistance(target->second, excess, out);
       if (samples) samples->Draw(backend, saved, tl, f, from, check, out);
       backend.Restore(saved);
     }

@@ -90,6 +90,11 @@ inline constexpr double kInputMargin = 0.25;
 // True when every input lies within `info`'s training range widened by kInputMargin of
 // its span (true when the range is unknown).
 bool InputsSeen(const OmniPredictorInfo& info, const double* inputs);
+// How far the inputs lie beyond `info`'s training range: the largest over the inputs of
+// the distance outside [low, high] over the span high - low (an input whose range has no
+// span counts as 1 once it leaves it by more than 1e-9); 0 inside, and where the range is
+// unknown. A window beyond kInputMargin is one InputsSeen calls unseen.
+double InputExcess(const OmniPredictorInfo& info, const double* inputs);
 
 // The pose H frames after `from` that `to` predicts, held to `info`'s bounds: a
 // translation longer than kBoundFactor * max_step is shortened along its direction, a
@@ -108,18 +113,21 @@ class OmniPredictor {
   // The pose H frames after poses.back(), from `history` poses and num_commands()
   // acting commands (omni_features.h). Throws std::logic_error for a residual predictor,
   // which needs its track (below). With `unseen`, sets it to whether the inputs left the
-  // training range (InputsSeen); so do the calls below.
-  Pose2 Predict(const Pose2* poses, const Twist2* commands, bool* unseen = nullptr) const;
+  // training range (InputsSeen), with `excess` to how far (InputExcess); so do the calls
+  // below.
+  Pose2 Predict(const Pose2* poses, const Twist2* commands, bool* unseen = nullptr, double* excess = nullptr) const;
 
   // Residual predictors: the model they correct, ready to be carried along the poses
   // (Reset, then Step and Correct each frame). `model` must have passed CheckUse().
   NominalOmniTrack MakeNominalTrack(const OmniModel& model) const;
   // The pose H frames after poses.back(), `track` standing at that pose (corrected to
   // it); the track is left as it was.
-  Pose2 Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen = nullptr) const;
+  Pose2 Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen = nullptr,
+                double* excess = nullptr) const;
   // H = 1 on its own: the next pose, and `track` moved on to it (stepped and corrected),
   // ready for the next call. Throws CheckFailed when the nominal model runs away.
-  Pose2 Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen = nullptr) const;
+  Pose2 Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen = nullptr,
+             double* excess = nullptr) const;
 
   // Throws InputError naming the file when the predictor was trained for another
   // robot model, frame rate (more than 1 % off) or horizon, or (residual) over a model
@@ -173,7 +181,7 @@ class OmniPredictor {
   // H frames after poses[history - 1], corrected; `nominal_velocity` and `errors` are the
   // model's at poses[history - 1].
   Pose2 Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity, const Pose2& nominal_end,
-                  const std::vector<Eigen::Vector3d>& errors, bool* unseen) const;
+                  const std::vector<Eigen::Vector3d>& errors, bool* unseen, double* excess) const;
 
   Mlp mlp_;
   Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs

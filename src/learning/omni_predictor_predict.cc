@@ -5,6 +5,7 @@
 #include "learning/omni_predictor.h"
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -79,12 +80,34 @@ bool InputsSeen(const OmniPredictorInfo& info, const double* inputs) {
   return true;
 }
 
-Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, bool* unseen) const {
+double InputExcess(const OmniPredictorInfo& info, const double* inputs) {
+  double largest = 0;
+  for (std::size_t i = 0; i < info.input_low.size(); ++i) {
+    const double x = inputs[i], low = info.input_low[i], high = info.input_high[i], span = high - low;
+    if (x >= low && x <= high) continue;  // inside (a NaN is not)
+    const double out = std::max(low - x, x - high);
+    const double e = std::isnan(x) ? 1.0 : span > 0 ? out / span : out > 1e-9 ? 1.0 : 0.0;
+    largest = std::max(largest, e);
+  }
+  return largest;
+}
+
+namespace {
+
+// Whether the inputs `x` left the training range, and how far, where asked.
+void CheckInputs(const OmniPredictorInfo& info, const double* x, bool* unseen, double* excess) {
+  if (unseen) *unseen = !InputsSeen(info, x);
+  if (excess) *excess = InputExcess(info, x);
+}
+
+}  // namespace
+
+Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, bool* unseen, double* excess) const {
   if (residual())
     throw std::logic_error("OmniPredictor::Predict: a residual predictor needs its nominal model's track");
   InputBuffer x(info_.layout.num_inputs());
   EncodeInputs(info_.layout, poses, commands, x.data());
-  if (unseen) *unseen = !InputsSeen(info_, x.data());
+  CheckInputs(info_, x.data(), unseen, excess);
   return ApplyDelta(poses[info_.layout.history - 1], PredictDelta(x.data()));
 }
 
@@ -96,30 +119,32 @@ NominalOmniTrack OmniPredictor::MakeNominalTrack(const OmniModel& model) const {
 
 Pose2 OmniPredictor::Corrected(const Pose2* poses, const Twist2* commands, const Twist2& nominal_velocity,
                                const Pose2& nominal_end, const std::vector<Eigen::Vector3d>& errors,
-                               bool* unseen) const {
+                               bool* unseen, double* excess) const {
   InputBuffer x(info_.layout.num_inputs());
   const Eigen::Vector3d nominal =
       EncodeResidualInputs(info_.layout, poses, commands, nominal_end, nominal_velocity, errors, x.data());
-  if (unseen) *unseen = !InputsSeen(info_, x.data());
+  CheckInputs(info_, x.data(), unseen, excess);
   return ApplyDelta(poses[info_.layout.history - 1], nominal + PredictDelta(x.data()));
 }
 
-Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen) const {
-  if (!residual()) return Predict(poses, commands, unseen);
+Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen,
+                             double* excess) const {
+  if (!residual()) return Predict(poses, commands, unseen, excess);
   const FeatureLayout& layout = info_.layout;
   const Twist2 velocity = track->velocity();
   const Pose2 end = track->Lookahead(commands + layout.history - 1, layout.horizon);
-  return Corrected(poses, commands, velocity, end, track->errors(), unseen);
+  return Corrected(poses, commands, velocity, end, track->errors(), unseen, excess);
 }
 
-Pose2 OmniPredictor::Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen) const {
+Pose2 OmniPredictor::Step(const Pose2* poses, const Twist2* commands, NominalOmniTrack* track, bool* unseen,
+                          double* excess) const {
   const FeatureLayout& layout = info_.layout;
   if (layout.horizon != 1) throw std::logic_error("OmniPredictor::Step: a 1-frame predictor is needed");
-  if (!residual()) return Predict(poses, commands, unseen);
+  if (!residual()) return Predict(poses, commands, unseen, excess);
   const Twist2 velocity = track->velocity();
   const std::vector<Eigen::Vector3d> errors = track->errors();  // before the step shifts them
   const Pose2 end = track->Step(commands[layout.history - 1]);
-  const Pose2 next = Corrected(poses, commands, velocity, end, errors, unseen);
+  const Pose2 next = Corrected(poses, commands, velocity, end, errors, unseen, excess);
   // A prediction the nominal model cannot be put at (not finite, or faster than any
   // robot: 50 m/s, 1000 rad/s) has run away; say so before an engine chokes on it.
   const Pose2& now = poses[layout.history - 1];

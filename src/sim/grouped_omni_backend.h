@@ -19,6 +19,7 @@
 //   GroupedOmniBackend backend(std::move(groups), {"blue0", "yellow0", "blue1"});
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -61,6 +62,13 @@ class GroupedOmniBackend final : public OmniBackend {
     GripCheck total;
     for (const OmniBackendGroup& g : groups_) total += g.backend->grip();
     return total;
+  }
+
+  // The largest over the groups that measure it (-1 where none does).
+  double TakeInputExcess() override {
+    double largest = -1;
+    for (OmniBackendGroup& g : groups_) largest = std::max(largest, g.backend->TakeInputExcess());
+    return largest;
   }
 
   // Every group draws (or goes back to its estimate); true when any does.

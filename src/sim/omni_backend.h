@@ -117,6 +117,11 @@ class OmniBackend {
   // Steps whose inputs a learned backend's predictor never saw the like of in training
   // (learning/omni_predictor.h, InputsSeen), counted the same way; 0 for physics.
   virtual long unseen_input_steps() const { return 0; }
+  // A learned backend: how far beyond its predictor's training range the inputs of its
+  // steps since the last call went at most (learning/omni_predictor.h, InputExcess: 1 is
+  // the range's span), the count starting again; -1 where the backend does not measure it
+  // (physics, a predictor without ranges). Save and Restore leave it.
+  virtual double TakeInputExcess() { return -1; }
   // Physics: the engine's grip check since construction (engines/omni_engine.h;
   // only the analytic engine, which cannot slip, checks); empty for learned backends.
   virtual GripCheck grip() const { return {}; }

@@ -184,6 +184,66 @@ std::string LoadError(const std::string& path) {
 // per horizon, refuses them without a driving noise to scale or with a growth, and the
 // learned backend's sampled rollouts spread about the prediction by exactly them, the
 // same draws otherwise.
+// A learned prediction's distance from the predictor's training (OmniBackend::
+// TakeInputExcess, the largest InputExcess of its rollout's steps): a linear predictor
+// trained on a robot driven slowly, its log replayed, goes nowhere beyond its range
+// (every row below 0.25, where the backend counts nothing unseen); a robot driven four
+// times as fast takes most 1 s predictions beyond a whole span. A longer prediction from
+// the same start went at least as far as a shorter one, and the calibration by distance
+// splits the same rows the whole calibration scores.
+TEST(LearnedInputDistance, PredictionsAreScoredByHowFarTheirInputsWentBeyondTraining) {
+  const OmniModel m = testing::Omni4();
+  const OmniLog slow = testing::RecordLog(m, testing::RandomDrive(0.5, 0.5, 2.0), 40, 21, "analytic", "slow.csv");
+  const OmniLog fast = testing::RecordLog(m, testing::RandomDrive(2.0, 2.0, 2.0), 20, 22, "analytic", "fast.csv");
+  OmniPredictor p = TrainOmniPredictor(m, {slow}, OmniTrainOptions{});
+  OmniDrivingNoise n;
+  n.sd = {0.02, 0.02, 0.1};
+  n.correlation_time = 0.05;
+  n.simulated = true;
+  p.SetDrivingNoise(n);
+  ASSERT_FALSE(p.info().input_low.empty());
+
+  OmniReplayOptions o;
+  o.backend = "learned";
+  o.backend_options.predictor = std::make_shared<const OmniPredictor>(p);
+  o.horizon = 30;
+  o.also = {3};
+  const OmniReplayResult own = ReplayOmniLog(m, slow, o);
+  const OmniReplayResult far = ReplayOmniLog(m, fast, o);
+  ASSERT_EQ(far.input_distance.size(), fast.rows.size());
+  ASSERT_EQ(far.also[0].input_distance.size(), fast.rows.size());
+  int own_rows = 0, beyond = 0, far_rows = 0;
+  double own_largest = 0;
+  for (std::size_t i = 0; i < slow.rows.size(); ++i) {
+    if (!own.predicted[i]) continue;
+    ++own_rows;
+    own_largest = std::max(own_largest, own.input_distance[i]);
+  }
+  for (std::size_t i = 0; i < fast.rows.size(); ++i) {
+    if (!far.predicted[i]) continue;
+    ++far_rows;
+    beyond += far.input_distance[i] > 1;
+    // The same start 27 frames earlier predicted 3 frames: no farther than its 30.
+    if (i >= 27 && far.also[0].predicted[i - 27])
+      EXPECT_LE(far.also[0].input_distance[i - 27], far.input_distance[i]) << i;
+  }
+  ASSERT_GT(own_rows, 500);
+  EXPECT_LT(own_largest, 0.25);  // its own log holds nothing unseen (the backend's own rule)
+  EXPECT_GT(beyond, far_rows / 2);
+
+  std::vector<OmniDistanceCalibration> by_distance;
+  LearnedNoiseOptions every;
+  every.stride = 8;
+  const std::vector<OmniCalibration> whole = CalibrateLearnedOmniLog(m, p, fast, every, nullptr, &by_distance);
+  ASSERT_EQ(by_distance.size(), 3u);
+  for (std::size_t h = 0; h < whole.size(); ++h) {
+    int split = 0;
+    for (const OmniDistanceCalibration& d : by_distance) split += d.calibration[h].rows;
+    EXPECT_EQ(split, whole[h].rows) << whole[h].frames;
+  }
+  EXPECT_GT(by_distance.back().calibration.back().rows, whole.back().rows / 2);  // 63 frames: mostly beyond 1
+}
+
 TEST(LearnedIntervalSafeguard, TheFileCarriesItAndTheRolloutsSpreadByIt) {
   Trained t = TrainOnWanderingPlant(20);
   OmniDrivingNoise n;

@@ -385,7 +385,10 @@ SourceCalibrations CalibrateSources(const OmniModel& model, const OmniLog& log, 
       sampled.stride = kCalibrationStride;
       sampled.parameter_draws = parameter_uncertainty;
       out.by_turn_rate.push_back({&s, {}});
-      out.whole.emplace_back(&s, CalibrateLearnedOmniLog(model, *predictor, log, sampled, &out.by_turn_rate.back().quarters));
+      std::vector<OmniDistanceCalibration> by_distance;
+      out.whole.emplace_back(
+          &s, CalibrateLearnedOmniLog(model, *predictor, log, sampled, &out.by_turn_rate.back().quarters, &by_distance));
+      for (OmniDistanceCalibration& d : by_distance) out.by_distance.push_back({&s, d.from, d.to, std::move(d.calibration)});
       continue;
     }
     if (!IsKnownEngine(s.backend)) continue;
@@ -426,6 +429,13 @@ void PrintCalibrations(const OmniModel& model, const SourceCalibrations& c) {
   for (const DistanceCalibration& d : c.by_distance) {
     if (std::none_of(d.calibration.begin(), d.calibration.end(), [](const OmniCalibration& k) { return k.rows > 0; }))
       continue;
+    if (d.source->backend == "learned") {
+      std::printf("the same, %s, predictions whose inputs went %s beyond its training range (1 is the range's span; "
+                  "beyond 0.25 the learned backend counts a step as unseen):\n%s\n",
+                  d.source->label.c_str(), CalibrationDistanceRange(d.from, d.to).c_str(),
+                  FormatCalibrationTable(d.calibration).c_str());
+      continue;
+    }
     std::printf("the same, %s, predictions whose inputs lie %s from those %s's fit saw (observer.seen_inputs; 1 "
                 "is a typical command's size):\n%s\n",
                 d.source->label.c_str(), CalibrationDistanceRange(d.from, d.to).c_str(), model.name.c_str(),

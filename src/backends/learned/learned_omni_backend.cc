@@ -1,5 +1,6 @@
 #include "backends/learned/learned_omni_backend.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -61,12 +62,14 @@ class LearnedOmniBackend final : public OmniBackend {
       s.command_history.erase(s.command_history.begin());
       s.command_history.push_back(commands[static_cast<std::size_t>(i)]);
       bool unseen = false;
+      double excess = 0;
       const Pose2 predicted =
           tracks_.empty()
-              ? current_->Predict(s.pose_history.data(), s.command_history.data(), &unseen)
+              ? current_->Predict(s.pose_history.data(), s.command_history.data(), &unseen, &excess)
               : current_->Step(s.pose_history.data(), s.command_history.data(), &tracks_[static_cast<std::size_t>(i)],
-                               &unseen);
+                               &unseen, &excess);
       unseen_steps_ += unseen ? 1 : 0;
+      largest_excess_ = std::max(largest_excess_, excess);
       // A predictor outside what it learned (speeds, inputs) is held to the robot's
       // bounds seen in training instead of running away (learning/omni_predictor.h).
       bool bounded = false;
@@ -108,6 +111,13 @@ class LearnedOmniBackend final : public OmniBackend {
     return true;
   }
 
+  double TakeInputExcess() override {
+    if (predictor_->info().input_low.empty()) return -1;  // no ranges to measure against
+    const double largest = largest_excess_;
+    largest_excess_ = 0;
+    return largest;
+  }
+
   long bounded_steps() const override { return bounded_steps_; }
   long unseen_input_steps() const override { return unseen_steps_; }
 
@@ -142,6 +152,7 @@ class LearnedOmniBackend final : public OmniBackend {
   std::vector<NominalOmniTrack> tracks_;  // a residual predictor's nominal model per robot; empty otherwise
   long bounded_steps_ = 0;
   long unseen_steps_ = 0;  // steps whose inputs left the training range
+  double largest_excess_ = 0;  // since the last TakeInputExcess
 };
 
 }  // namespace
