@@ -92,8 +92,10 @@ inline constexpr double kInputMargin = 0.25;
 bool InputsSeen(const OmniPredictorInfo& info, const double* inputs);
 // How far the inputs lie beyond `info`'s training range: the largest over the inputs of
 // the distance outside [low, high] over the span high - low (an input whose range has no
-// span counts as 1 once it leaves it by more than 1e-9); 0 inside, and where the range is
-// unknown. A window beyond kInputMargin is one InputsSeen calls unseen.
+// span, or a NaN, counts as 1 once it leaves it by more than 1e-9; at most
+// kLargestInputExcess); 0 inside, and where the range is unknown. A window beyond
+// kInputMargin is one InputsSeen calls unseen.
+inline constexpr double kLargestInputExcess = 1e9;
 double InputExcess(const OmniPredictorInfo& info, const double* inputs);
 
 // The pose H frames after `from` that `to` predicts, held to `info`'s bounds: a

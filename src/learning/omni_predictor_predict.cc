@@ -87,7 +87,7 @@ double InputExcess(const OmniPredictorInfo& info, const double* inputs) {
     if (x >= low && x <= high) continue;  // inside (a NaN is not)
     const double out = std::max(low - x, x - high);
     const double e = std::isnan(x) ? 1.0 : span > 0 ? out / span : out > 1e-9 ? 1.0 : 0.0;
-    largest = std::max(largest, e);
+    largest = std::max(largest, std::min(e, kLargestInputExcess));  // an infinite input: far, but a number
   }
   return largest;
 }
