@@ -72,35 +72,42 @@ Pose2 BoundStep(const OmniPredictorInfo& info, const Pose2& from, const Pose2& t
   return ApplyDelta(from, d);
 }
 
-bool InputsSeen(const OmniPredictorInfo& info, const double* inputs) {
-  for (std::size_t i = 0; i < info.input_low.size(); ++i) {
-    const double margin = kInputMargin * (info.input_high[i] - info.input_low[i]) + 1e-9;
-    if (!(inputs[i] >= info.input_low[i] - margin && inputs[i] <= info.input_high[i] + margin)) return false;
-  }
-  return true;
-}
+namespace {
 
-double InputExcess(const OmniPredictorInfo& info, const double* inputs) {
-  double largest = 0;
+// One pass over the inputs against `info`'s training range: whether every one lies within
+// it widened by kInputMargin of its span (InputsSeen), and how far beyond it they went at
+// most (InputExcess).
+struct InputReach {
+  bool seen = true;
+  double excess = 0;
+};
+InputReach ReachOf(const OmniPredictorInfo& info, const double* inputs) {
+  InputReach r;
   for (std::size_t i = 0; i < info.input_low.size(); ++i) {
     const double x = inputs[i], low = info.input_low[i], high = info.input_high[i], span = high - low;
     if (x >= low && x <= high) continue;  // inside (a NaN is not)
+    const double margin = kInputMargin * span + 1e-9;
+    if (!(x >= low - margin && x <= high + margin)) r.seen = false;
     const double out = std::max(low - x, x - high);
     const double e = std::isnan(x) ? 1.0 : span > 0 ? out / span : out > 1e-9 ? 1.0 : 0.0;
-    largest = std::max(largest, std::min(e, kLargestInputExcess));  // an infinite input: far, but a number
+    r.excess = std::max(r.excess, std::min(e, kLargestInputExcess));  // an infinite input: far, but a number
   }
-  return largest;
+  return r;
 }
-
-namespace {
 
 // Whether the inputs `x` left the training range, and how far, where asked.
 void CheckInputs(const OmniPredictorInfo& info, const double* x, bool* unseen, double* excess) {
-  if (unseen) *unseen = !InputsSeen(info, x);
-  if (excess) *excess = InputExcess(info, x);
+  if (!unseen && !excess) return;
+  const InputReach r = ReachOf(info, x);
+  if (unseen) *unseen = !r.seen;
+  if (excess) *excess = r.excess;
 }
 
 }  // namespace
+
+bool InputsSeen(const OmniPredictorInfo& info, const double* inputs) { return ReachOf(info, inputs).seen; }
+
+double InputExcess(const OmniPredictorInfo& info, const double* inputs) { return ReachOf(info, inputs).excess; }
 
 Pose2 OmniPredictor::Predict(const Pose2* poses, const Twist2* commands, bool* unseen, double* excess) const {
   if (residual())
