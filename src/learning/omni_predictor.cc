@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/rng.h"
 #include "io/yaml_reader.h"
 #include "learning/cross_validated_ridge.h"
 #include "learning/predictor_file.h"
@@ -541,6 +542,39 @@ OmniPredictor FitResidualChoosingRidge(const OmniPredictorInfo& info, const Omni
   return p;
 }
 
+// Rows of training windows that make a second of log, the block a bootstrap draws whole.
+int BlockRows(const OmniPredictorInfo& info) { return std::max(1, static_cast<int>(std::lround(info.frame_rate))); }
+
+// Members 1.. of a network's ensemble (OmniTrainOptions::members): each from its own
+// start (the seed plus its number) on a block bootstrap of the training windows (blocks
+// of `block_rows` drawn with replacement until as many rows; the rest rows added as for
+// the first), early-stopped on the same held-out windows.
+std::vector<Mlp> TrainEnsembleMembers(const OmniDataset& data, long rest, const OmniDataset& validation,
+                                      const OmniTrainOptions& options, int block_rows,
+                                      const std::function<void(int, int, double)>& progress) {
+  std::vector<Mlp> members;
+  const long n = data.rows(), blocks = (n + block_rows - 1) / block_rows;
+  for (int m = 1; m < options.members; ++m) {
+    MlpOptions o = options.mlp;
+    o.seed = options.mlp.seed + static_cast<std::uint64_t>(m);
+    Rng rng(o.seed ^ 0x5bd1e995u);
+    Eigen::MatrixXd x(n + rest, data.x.cols()), y(n + rest, 3);
+    long row = 0;
+    while (row < n) {
+      const long from = static_cast<long>(rng.Index(static_cast<std::uint64_t>(blocks))) * block_rows;
+      const long take = std::min({static_cast<long>(block_rows), n - from, n - row});
+      x.middleRows(row, take) = data.x.middleRows(from, take);
+      y.middleRows(row, take) = data.y.middleRows(from, take);
+      row += take;
+    }
+    x.bottomRows(rest).setZero();
+    y.bottomRows(rest).setZero();
+    std::string report;
+    members.push_back(TrainMlpHoldingOut(x, y, validation.x, validation.y, o, progress, &report));
+  }
+  return members;
+}
+
 // Fits the predictor on `data`. Linear: ridge regression on scaled inputs, closed form,
 // through the origin (all-zero inputs are a robot at rest with zero commands, which must
 // stay at rest), a residual one's ridges chosen by FitResidualChoosingRidge (*chosen_ridge;
@@ -568,8 +602,12 @@ OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& dat
   x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols());
   y << data.y, Eigen::MatrixXd::Zero(rest, 3);
   // No weights' uncertainty for a network: its output layer's (the last-layer Laplace
-  // approximation) was measured and made held-out rows worse (docs/learning.md).
-  return MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp, progress, mlp_report));
+  // approximation) was measured and made held-out rows worse (docs/learning.md). An
+  // ensemble instead, where asked for.
+  OmniPredictor p =
+      MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp, progress, mlp_report));
+  p.SetEnsemble(TrainEnsembleMembers(data, rest, validation, options, BlockRows(info), progress));
+  return p;
 }
 
 // The 1-frame predictor on its own for `rollout_frames` from the held-out windows: the

@@ -98,6 +98,9 @@ bool InputsSeen(const OmniPredictorInfo& info, const double* inputs);
 inline constexpr double kLargestInputExcess = 1e9;
 double InputExcess(const OmniPredictorInfo& info, const double* inputs);
 
+// The most networks an ensemble holds (OmniTrainOptions::members).
+inline constexpr int kMostEnsembleMembers = 32;
+
 // The pose H frames after `from` that `to` predicts, held to `info`'s bounds: a
 // translation longer than kBoundFactor * max_step is shortened along its direction, a
 // turn beyond kBoundFactor * max_turn clipped. Sets *bounded when it changed anything.
@@ -159,6 +162,13 @@ class OmniPredictor {
   // weights plus sum_l z_l D_l (z: one number per direction). `estimate` is the
   // predictor this one was copied from; the learned backend draws once per rollout.
   void DrawWeights(const OmniPredictor& estimate, const Eigen::VectorXd& z);
+  // A network's further members (OmniTrainOptions::members; the network itself is member
+  // 0), empty for a linear predictor and a network alone.
+  const std::vector<Mlp>& ensemble() const { return ensemble_; }
+  void SetEnsemble(std::vector<Mlp> members);
+  // Moves this predictor's network to `estimate`'s member k (0: its own network), as
+  // DrawWeights does for a linear predictor's weights.
+  void DrawMember(const OmniPredictor& estimate, int k);
 
   // Writes the file atomically.
   void Save(const std::string& path) const;
@@ -187,6 +197,7 @@ class OmniPredictor {
 
   Mlp mlp_;
   Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs
+  std::vector<Mlp> ensemble_;  // members 1.. (OmniTrainOptions::members)
 };
 
 // The rows of each log a predictor is validated on: its last `fraction` of frames, as
@@ -232,6 +243,12 @@ struct OmniTrainOptions {
   // sees no held-out row while a residual's nominal track runs along the whole log.
   std::vector<std::vector<char>> sample_rows;
   MlpOptions mlp;
+  // A network: how many networks to train, the first on the training windows as they are,
+  // each further one from its own start on a block bootstrap of them (whole seconds drawn
+  // with replacement). The first predicts; sampled rollouts each draw one of them, so that
+  // the networks' disagreement (largest where the inputs leave the training's) widens the
+  // intervals (docs/learning.md, "An ensemble of networks"). 1: the network alone.
+  int members = 1;
 
   // True when usable; else says why in *why.
   bool IsValid(std::string* why) const;

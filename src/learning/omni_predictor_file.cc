@@ -16,6 +16,38 @@
 
 namespace twinsim {
 
+namespace {
+
+// What a predictor knows of its own uncertainty: a linear one's weights' directions, a
+// network's further members (the network under mlp: is member 0).
+void EmitUncertainty(YAML::Emitter& out, const RidgeWeightUncertainty& u, const std::vector<Mlp>& ensemble) {
+  if (!u.directions.empty()) {
+    out << YAML::Key << "weight_uncertainty" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "blocks" << YAML::Value << u.blocks;
+    out << YAML::Key << "share" << YAML::Value << u.share;
+    out << YAML::Key << "count" << YAML::Value << static_cast<int>(u.directions.size());
+    // Direction l is row l: its outputs' rows one after another (3 x inputs numbers).
+    Eigen::MatrixXd rows(static_cast<long>(u.directions.size()), u.directions.front().size());
+    for (std::size_t l = 0; l < u.directions.size(); ++l) {
+      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> d = u.directions[l];
+      rows.row(static_cast<long>(l)) = Eigen::Map<const Eigen::RowVectorXd>(d.data(), d.size());
+    }
+    EmitMatrix(out, "directions", rows);
+    out << YAML::EndMap;
+  }
+  if (!ensemble.empty()) {  // members 1..; the network below is member 0
+    out << YAML::Key << "ensemble" << YAML::Value << YAML::BeginSeq;
+    for (const Mlp& member : ensemble) {
+      out << YAML::BeginMap;
+      EmitMlp(out, member);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+}
+
+}  // namespace
+
 void OmniPredictor::Save(const std::string& path) const {
   YAML::Emitter out;
   BeginPredictorFile(out, residual() ? kResidualPredictorFormatVersion : kPredictorFormatVersion);
@@ -76,21 +108,7 @@ void OmniPredictor::Save(const std::string& path) const {
     }
     out << YAML::EndSeq;
   }
-  const RidgeWeightUncertainty& u = weight_uncertainty_;
-  if (!u.directions.empty()) {
-    out << YAML::Key << "weight_uncertainty" << YAML::Value << YAML::BeginMap;
-    out << YAML::Key << "blocks" << YAML::Value << u.blocks;
-    out << YAML::Key << "share" << YAML::Value << u.share;
-    out << YAML::Key << "count" << YAML::Value << static_cast<int>(u.directions.size());
-    // Direction l is row l: its outputs' rows one after another (3 x inputs numbers).
-    Eigen::MatrixXd rows(static_cast<long>(u.directions.size()), u.directions.front().size());
-    for (std::size_t l = 0; l < u.directions.size(); ++l) {
-      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> d = u.directions[l];
-      rows.row(static_cast<long>(l)) = Eigen::Map<const Eigen::RowVectorXd>(d.data(), d.size());
-    }
-    EmitMatrix(out, "directions", rows);
-    out << YAML::EndMap;
-  }
+  EmitUncertainty(out, weight_uncertainty_, ensemble_);
   EmitPredictorModel(out, info_.kind, input_mean_, input_scale_, weights_, bias_, mlp_);
   WritePredictorFile(out, path);
 }
@@ -147,6 +165,26 @@ RidgeWeightUncertainty ReadWeightUncertainty(YamlMap* top, const std::string& pa
   }
   m.Finish();
   return u;
+}
+
+// A network's further members (`train --members`), where the file has them.
+std::vector<Mlp> ReadEnsemble(YamlMap* top, const std::string& path, ErrorList* errors, const OmniPredictorInfo& info) {
+  std::vector<Mlp> members;
+  if (!top->Has("ensemble")) return members;
+  const YAML::Node list = top->Child("ensemble");
+  if (info.kind != "mlp" || info.layout.horizon != 1) {
+    top->Error("ensemble", "only a network (kind mlp) of one frame ahead has an ensemble");
+    return members;
+  }
+  if (!list.IsSequence() || list.size() < 1 || list.size() >= static_cast<std::size_t>(kMostEnsembleMembers)) {
+    top->Error("ensemble", "must be a list of 1 to " + std::to_string(kMostEnsembleMembers - 1) + " networks");
+    return members;
+  }
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    YamlMap m(list[i], path, "ensemble member " + std::to_string(i + 1), errors);
+    members.push_back(ReadMlp(m, info.layout.num_inputs(), FeatureLayout::kNumOutputs, path, errors));
+  }
+  return members;
 }
 
 }  // namespace
@@ -213,6 +251,8 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
   ReadIntervalScale(&top, &info);
   RidgeWeightUncertainty uncertainty = ReadWeightUncertainty(&top, path, &errors, info);
   errors.ThrowIfAny();
+  std::vector<Mlp> ensemble = ReadEnsemble(&top, path, &errors, info);
+  errors.ThrowIfAny();
 
   const int in = info.layout.num_inputs();
   LinearPredictorParameters linear;
@@ -223,6 +263,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
                                               Eigen::Vector3d(linear.bias))
                         : MakeMlpPredictor(info, std::move(mlp));
   p.weight_uncertainty_ = std::move(uncertainty);
+  p.ensemble_ = std::move(ensemble);
   p.path_ = path;
   return p;
 }

@@ -33,6 +33,22 @@ void OmniPredictor::DrawWeights(const OmniPredictor& estimate, const Eigen::Vect
   for (std::size_t l = 0; l < d.size(); ++l) weights_ += z[static_cast<long>(l)] * d[l];
 }
 
+void OmniPredictor::SetEnsemble(std::vector<Mlp> members) {
+  if (!members.empty() && info_.kind != "mlp") throw std::invalid_argument("SetEnsemble: only a network has members");
+  ensemble_ = std::move(members);
+}
+
+void OmniPredictor::DrawMember(const OmniPredictor& estimate, int k) {
+  if (k < 0 || k > static_cast<int>(estimate.ensemble_.size())) throw std::invalid_argument("DrawMember: no such member");
+  if (k == 0) {
+    mlp_ = estimate.mlp_;
+    mlp_at_rest_ = estimate.mlp_at_rest_;
+  } else {
+    mlp_ = estimate.ensemble_[static_cast<std::size_t>(k - 1)];
+    mlp_at_rest_ = mlp_.Predict(Eigen::VectorXd::Zero(info_.layout.num_inputs()));
+  }
+}
+
 namespace {
 
 // Room for a predictor's inputs: on the stack for the usual sizes.

@@ -28,6 +28,10 @@ bool OmniTrainOptions::IsValid(std::string* why) const {
     if (nominal_errors < 0 || nominal_errors > 30)
       return fail("nominal errors must be 0 to 30 frames, got " + std::to_string(nominal_errors));
   }
+  if (members < 1 || members > kMostEnsembleMembers)
+    return fail("--members must be 1 to " + std::to_string(kMostEnsembleMembers) + ", got " + std::to_string(members));
+  if (members > 1 && kind != "mlp") return fail("--members is for --kind mlp (a linear predictor has its weights' uncertainty)");
+  if (members > 1 && horizon != 1) return fail("--members is for a predictor of one frame ahead (--horizon 1)");
   if (kind == "mlp") return mlp.IsValid(why);
   return true;
 }

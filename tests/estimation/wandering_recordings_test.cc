@@ -1,7 +1,7 @@
 // The wandering plant's recordings as log files, for studies run through the command
-// line (scripts/fit-horizon-study): not a test of its own, so disabled; run with
-//   TWINSIM_STUDY_DIR=DIR build/twinsim_tests --gtest_also_run_disabled_tests \
-//     --gtest_filter='WanderingRecordings.*'
+// line (docs/benchmarks.md, "identify's last digits again"): not a test of its own, so
+// disabled; run with TWINSIM_STUDY_DIR=DIR build/twinsim_tests
+// --gtest_also_run_disabled_tests --gtest_filter='WanderingRecordings.*'
 #include <cstdlib>
 #include <string>
 

@@ -14,6 +14,7 @@
 #include "backends/learned/learned_omni_backend.h"
 #include "core/error.h"
 #include "core/rng.h"
+#include "learning/learned_draws_util.h"
 #include "learning/omni_predictor.h"
 #include "learning/predictor_file.h"
 #include "test_util.h"
@@ -208,40 +209,19 @@ TEST_F(LearnedWeightDraws, DrawnWeightsScatterAsTheDirectionsSay) {
 // draws they all fall on the prediction. The prediction itself stays the estimate's,
 // bit for bit.
 TEST_F(LearnedWeightDraws, SampledRolloutsSpreadByTheWeightsAlone) {
-  OmniPredictor p = *predictor_;
-  OmniDrivingNoise quiet;
-  quiet.sd = {1e-9, 1e-9, 1e-9};
-  quiet.correlation_time = 0.05;
-  quiet.simulated = true;
-  p.SetDrivingNoise(quiet);
-  OmniReplayOptions o;
-  o.backend = "learned";
-  o.backend_options.predictor = std::make_shared<const OmniPredictor>(p);
-  o.horizon = 30;
+  OmniReplayOptions o = testing::QuietLearnedReplay(*predictor_, 30, 16, 10);
   o.also = {3};
-  o.samples = 16;
-  o.stride = 10;
-  const OmniReplayResult drawn = ReplayOmniLog(testing::Omni4(), *log_, o);
-  o.parameter_draws = false;
-  const OmniReplayResult fixed = ReplayOmniLog(testing::Omni4(), *log_, o);
-  double spread_drawn = 0, spread_short = 0, spread_fixed = 0;
-  int rows = 0;
-  for (std::size_t i = 0; i < log_->rows.size(); ++i) {
-    if (!drawn.predicted[i] || drawn.samples[i].empty()) continue;
-    ASSERT_EQ(drawn.pose[i].x, fixed.pose[i].x) << i;
-    ASSERT_EQ(drawn.pose[i].y, fixed.pose[i].y) << i;
-    spread_drawn += drawn.covariance[i].topLeftCorner<2, 2>().trace();
-    spread_fixed += fixed.covariance[i].topLeftCorner<2, 2>().trace();
-    ++rows;
-  }
+  OmniReplayResult drawn;
+  const testing::DrawnSpread spread = testing::SpreadWithAndWithoutDraws(*log_, o, &drawn);
+  double spread_short = 0;
   for (std::size_t i = 0; i < log_->rows.size(); ++i)
     if (drawn.also[0].predicted[i] && drawn.also[0].covariance.size() > i)
       spread_short += drawn.also[0].covariance[i].topLeftCorner<2, 2>().trace();
-  ASSERT_GT(rows, 50);
-  const double rms_drawn = std::sqrt(spread_drawn / rows), rms_fixed = std::sqrt(spread_fixed / rows);
-  EXPECT_GT(rms_drawn, 1e-4);        // m: the weights' own spread a second ahead
-  EXPECT_LT(rms_fixed, 1e-3 * rms_drawn);
-  EXPECT_GT(spread_drawn, 4 * spread_short);
+  ASSERT_GT(spread.rows, 50);
+  EXPECT_EQ(spread.moved_predictions, 0);
+  EXPECT_GT(spread.drawn, 1e-4);  // m: the weights' own spread a second ahead
+  EXPECT_LT(spread.fixed, 1e-3 * spread.drawn);
+  EXPECT_GT(spread.drawn * spread.drawn * spread.rows, 4 * spread_short);
 }
 
 // A file whose directions do not match the layout, or that gives them to a predictor of

@@ -63,6 +63,7 @@ int TrainArm(const TrainCliOptions& options) {
   if (options.nominal_engine || options.nominal_substeps || options.nominal_state)
     throw InputError("--nominal-engine, --nominal-substeps and --nominal-state are for omni robots (an arm's nominal "
                      "step runs on the analytic model)");
+  if (options.train.members != 1) throw InputError("--members is for omni robots");
   if (std::string problem; !train.IsValid(&problem)) throw InputError(problem);
 
   const std::string what = (train.residual ? "residual " : "") + train.kind;
@@ -188,6 +189,11 @@ int Train(const TrainCliOptions& options) {
                   "in %d blocks of a second (each sampled rollout draws them; docs/learning.md)\n",
                   u.directions.size(), 100 * u.share, u.blocks);
     }
+    if (const std::size_t more = written.ensemble().size(); more > 0) {
+      std::printf("an ensemble of %zu networks, the first on the training windows, the others each on a bootstrap of "
+                  "them by the second (each sampled rollout draws one; docs/learning.md)\n",
+                  more + 1);
+    }
     if (const auto& noise = uncertainty.noise) std::printf("on the held-out rows, %s", FormatLearnedNoiseFit(*noise).c_str());
     if (const OmniIntervalSafeguard& safeguard = uncertainty.safeguard; !safeguard.on.empty()) {
       std::printf("intervals' safeguard (a conformal scale of the rollouts' spread, fitted on the %s; each fold with "
@@ -197,6 +203,24 @@ int Train(const TrainCliOptions& options) {
     files.PrintWrote();
   }
   return kExitOk;
+}
+
+// The options of what a predictor knows of its own uncertainty: its driving noise, the
+// intervals' safeguard, a linear predictor's weights' directions, a network's ensemble.
+void AddUncertaintyOptions(CLI::App* cmd, TrainCliOptions* options) {
+  cmd->add_flag("--no-noise", options->no_noise,
+                "Omni, one frame ahead: do not fit the learned backend's driving noise on the held-out rows "
+                "(docs/learning.md); the predictor then draws the model's");
+  cmd->add_flag("--no-safeguard", options->no_safeguard,
+                "Omni, with the driving noise: do not fit its intervals' safeguard (a conformal scale of the rollouts' "
+                "spread per horizon, on the held-out rows; docs/learning.md)");
+  cmd->add_flag("--no-weight-uncertainty", options->no_weight_uncertainty,
+                "Omni, linear, one frame ahead: do not write the weights' own uncertainty (weight_uncertainty, "
+                "drawn once per sampled rollout; docs/learning.md); the driving noise is then fitted without it");
+  cmd->add_option("--members", options->train.members,
+                  "Omni, --kind mlp, one frame ahead: train this many networks, the others each on a bootstrap of "
+                  "the training windows by the second; each sampled rollout draws one (docs/learning.md)")
+      ->capture_default_str();
 }
 
 }  // namespace
@@ -265,15 +289,7 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       ->expected(1, 8);
   cmd->add_option("--patience", options->train.mlp.patience, "Epochs without held-out improvement before stopping")
       ->capture_default_str();
-  cmd->add_flag("--no-noise", options->no_noise,
-                "Omni, one frame ahead: do not fit the learned backend's driving noise on the held-out rows "
-                "(docs/learning.md); the predictor then draws the model's");
-  cmd->add_flag("--no-safeguard", options->no_safeguard,
-                "Omni, with the driving noise: do not fit its intervals' safeguard (a conformal scale of the rollouts' "
-                "spread per horizon, on the held-out rows; docs/learning.md)");
-  cmd->add_flag("--no-weight-uncertainty", options->no_weight_uncertainty,
-                "Omni, linear, one frame ahead: do not write the weights' own uncertainty (weight_uncertainty, "
-                "drawn once per sampled rollout; docs/learning.md); the driving noise is then fitted without it");
+  AddUncertaintyOptions(cmd, options.get());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   AddLogSelectorOptions(cmd, &options->select);
   cmd->callback([options, exit_code] { *exit_code = Train(*options); });

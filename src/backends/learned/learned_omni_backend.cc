@@ -96,17 +96,24 @@ class LearnedOmniBackend final : public OmniBackend {
     return out;
   }
 
+  // A linear predictor's weights drawn from their uncertainty, or one of a network's
+  // ensemble (each member as likely).
   bool DrawParameters(Rng* rng) override {
     const int directions = static_cast<int>(predictor_->weight_uncertainty().directions.size());
-    if (directions == 0) return false;
+    const int members = static_cast<int>(predictor_->ensemble().size()) + 1;
+    if (directions == 0 && members == 1) return false;
     if (!rng) {
       current_ = predictor_.get();
       return true;
     }
     if (!drawn_) drawn_ = std::make_unique<OmniPredictor>(*predictor_);
-    Eigen::VectorXd z(directions);
-    for (int l = 0; l < directions; ++l) z[l] = rng->Gaussian();
-    drawn_->DrawWeights(*predictor_, z);
+    if (directions > 0) {
+      Eigen::VectorXd z(directions);
+      for (int l = 0; l < directions; ++l) z[l] = rng->Gaussian();
+      drawn_->DrawWeights(*predictor_, z);
+    } else {
+      drawn_->DrawMember(*predictor_, static_cast<int>(rng->Index(static_cast<std::uint64_t>(members))));
+    }
     current_ = drawn_.get();
     return true;
   }
