@@ -89,7 +89,8 @@ struct OmniReplayOptions {
   std::string parameter_backend;
   // The tracker's samples (the learned backend's): each rollout first draws the
   // backend's parameters from their own uncertainty (OmniBackend::DrawParameters: a
-  // linear predictor's weights, docs/learning.md "The weights' own uncertainty"), where
+  // linear predictor's weights, docs/learning.md "The weights' own uncertainty", or one
+  // of a network's ensemble), where
   // its model carries one; the prediction itself stays the estimate's.
   bool parameter_draws = true;
   // The observer's state (K >= 1; `reach` 0 predicts nothing): each row's input

@@ -157,7 +157,7 @@ class OmniPredictor {
   // weights fitted elsewhere and for files from before (docs/learning.md, "The weights'
   // own uncertainty").
   const RidgeWeightUncertainty& weight_uncertainty() const { return weight_uncertainty_; }
-  void SetWeightUncertainty(RidgeWeightUncertainty u) { weight_uncertainty_ = std::move(u); }
+  void SetWeightUncertainty(RidgeWeightUncertainty u);
   // Moves this predictor's weights to a draw from `estimate`'s uncertainty: estimate's
   // weights plus sum_l z_l D_l (z: one number per direction). `estimate` is the
   // predictor this one was copied from; the learned backend draws once per rollout.

@@ -33,6 +33,12 @@ void OmniPredictor::DrawWeights(const OmniPredictor& estimate, const Eigen::Vect
   for (std::size_t l = 0; l < d.size(); ++l) weights_ += z[static_cast<long>(l)] * d[l];
 }
 
+void OmniPredictor::SetWeightUncertainty(RidgeWeightUncertainty u) {
+  if (!u.directions.empty() && info_.kind != "linear")
+    throw std::invalid_argument("SetWeightUncertainty: only a linear predictor has weights' directions");
+  weight_uncertainty_ = std::move(u);
+}
+
 void OmniPredictor::SetEnsemble(std::vector<Mlp> members) {
   if (!members.empty() && info_.kind != "mlp") throw std::invalid_argument("SetEnsemble: only a network has members");
   ensemble_ = std::move(members);

@@ -1,6 +1,7 @@
 #include "learning/predictor_file.h"
 
 #include <cmath>
+#include <cstdint>
 
 #include <yaml-cpp/yaml.h>
 
@@ -90,8 +91,16 @@ Eigen::VectorXd ReadVector(YamlMap& m, const std::string& key, int size) {
 }
 
 Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int cols) {
+  // More numbers than a file of a predictor holds (a network's layer sizes multiply): a
+  // corrupt file, refused before the product overflows an int or asks for gigabytes.
+  const std::int64_t size = static_cast<std::int64_t>(rows) * cols;
+  if (rows < 0 || cols < 0 || size > kMostMatrixNumbers) {
+    m.Error(key, "a matrix of " + std::to_string(rows) + " x " + std::to_string(cols) + " is more than " +
+                     std::to_string(kMostMatrixNumbers) + " numbers");
+    return Eigen::MatrixXd();
+  }
   std::vector<double> v;
-  if (!m.Require(key, &v, rows * cols)) return Eigen::MatrixXd::Zero(rows, cols);
+  if (!m.Require(key, &v, static_cast<int>(size))) return Eigen::MatrixXd::Zero(rows, cols);
   // Stored row by row.
   return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(v.data(), rows, cols);
 }

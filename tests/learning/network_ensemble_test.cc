@@ -142,6 +142,12 @@ TEST_F(NetworkEnsemble, MalformedEnsemblesAndOptionsAreInputErrors) {
   const std::size_t layers = wrong_layers.find("layers:", at);
   wrong_layers.replace(layers, wrong_layers.find('\n', layers) - layers, "layers: [42, 16, 4]");
   refused(wrong_layers, "must run from 42 inputs to 3 outputs");
+  // Layers whose sizes multiply past an int (and past any real network) are refused, not
+  // read past their numbers or allocated.
+  std::string huge = text;
+  const std::size_t first = huge.find("layers:", at);
+  huge.replace(first, huge.find('\n', first) - first, "layers: [42, 46341, 46341, 3]");
+  refused(huge, "more than 4000000 numbers");
   std::string linear = text;
   linear.replace(linear.find("kind: mlp"), 9, "kind: linear");
   refused(linear, "only a network");
