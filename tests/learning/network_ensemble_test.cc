@@ -116,6 +116,26 @@ TEST_F(NetworkEnsemble, SampledRolloutsSpreadByTheMembersAlone) {
   EXPECT_LT(spread.fixed, 1e-3 * spread.drawn);
 }
 
+// A residual network (the correction of the model's own prediction) takes an ensemble as
+// well: its members correct the same physics, and its sampled rollouts spread by them.
+TEST_F(NetworkEnsemble, AResidualNetworkHasOneToo) {
+  OmniTrainOptions o;
+  o.kind = "mlp";
+  o.residual = true;
+  o.mlp.hidden = {16};
+  o.mlp.max_epochs = 40;
+  o.members = 2;
+  const OmniPredictor residual = TrainOmniPredictor(testing::Omni4(), {*log_}, o);
+  ASSERT_TRUE(residual.residual());
+  ASSERT_EQ(residual.ensemble().size(), 1u);
+  const testing::DrawnSpread spread =
+      testing::SpreadWithAndWithoutDraws(*log_, testing::QuietLearnedReplay(residual, 30, 12, 10));
+  ASSERT_GT(spread.rows, 20);
+  EXPECT_EQ(spread.moved_predictions, 0);
+  EXPECT_GT(spread.drawn, 1e-4);
+  EXPECT_LT(spread.fixed, 1e-3 * spread.drawn);
+}
+
 // An ensemble is a network's, of one frame ahead, of 1 to 31 further members, each a
 // network of the file's layout: anything else is refused at its file, and train refuses
 // --members for a linear predictor and beyond 32.
