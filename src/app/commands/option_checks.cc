@@ -111,7 +111,8 @@ void AddParameterUncertaintyOption(CLI::App* cmd, std::string* value) {
   cmd->add_option("--parameter-uncertainty", *value,
                   "Omni: on: the spread the model's identified parameters leave (observer.parameter_covariance, "
                   "written by identify; on the learned backend a linear predictor's weight_uncertainty or a network's "
-                  "ensemble, written by train) widens each prediction's covariance and samples beside the noise; off: the noise alone")
+                  "ensemble, written by train) widens each prediction's covariance and samples beside the noise; off: "
+                  "the noise alone")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
 }
