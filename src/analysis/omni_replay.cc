@@ -420,8 +420,10 @@ void TrackerReplay(OmniBackend& backend, const OmniLog& log, const OmniReplayOpt
       const OmniBackendState saved = backend.Save();
       // Keep theta on the log's unwrapped branch.
       const double from = log.rows[measured->second].pose.theta;
-      // A learned backend's inputs: how far beyond its training the prediction went.
-      double excess = backend.TakeInputExcess();  // the count starts here
+      // A learned backend's inputs: how far beyond its training the prediction went. The
+      // count starts again here: the tracking steps and the previous prediction's sampled
+      // rollouts since the last take are not this prediction's.
+      double excess = backend.TakeInputExcess() >= 0 ? 0 : -1;
       for (int j = f; j < f + k; ++j) {
         backend.StepFrame({tl.Delayed(j)});
         if (excess >= 0) excess = std::max(excess, backend.TakeInputExcess());

@@ -143,7 +143,9 @@ struct OmniReplayResult {
   // about the prediction); 0: it is the filter's own, known (the observer's).
   int covariance_draws = 0;
   // With the covariance and a model with observer.seen_inputs: per row its prediction's
-  // mean distance from them (OmniPrediction::input_distance), 0 where not predicted;
+  // mean distance from them (OmniPrediction::input_distance); on the learned backend with
+  // a predictor that knows its training ranges, how far beyond them the prediction's own
+  // steps' inputs went at most (OmniBackend::TakeInputExcess); 0 where not predicted;
   // else empty.
   std::vector<double> input_distance;
   // With OmniReplayOptions::features: per row its frame's input; else empty.

@@ -130,8 +130,8 @@ class OmniBackend {
   // simulated until the next call; a null `rng` moves them back to the estimate. Only a
   // backend whose model carries that uncertainty overrides it (the learned backend with a
   // linear predictor that has its weights' directions or a network with an ensemble,
-  // learning/omni_predictor.h); the others
-  // draw nothing. Returns whether the backend draws. Save and Restore leave the draw.
+  // learning/omni_predictor.h); the others draw nothing. Returns whether the backend
+  // draws. Save and Restore leave the draw.
   virtual bool DrawParameters(Rng* rng) {
     static_cast<void>(rng);
     return false;

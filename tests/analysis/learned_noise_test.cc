@@ -181,10 +181,6 @@ std::string LoadError(const std::string& path) {
   return "";
 }
 
-// The intervals' safeguard in the predictor file (issue 64): the file carries the scales
-// per horizon, refuses them without a driving noise to scale or with a growth, and the
-// learned backend's sampled rollouts spread about the prediction by exactly them, the
-// same draws otherwise.
 // A learned prediction's distance from the predictor's training (OmniBackend::
 // TakeInputExcess, the largest InputExcess of its rollout's steps): a linear predictor
 // trained on a robot driven slowly, its log replayed, goes nowhere beyond its range
@@ -252,6 +248,10 @@ TEST(LearnedInputDistance, PredictionsAreScoredByHowFarTheirInputsWentBeyondTrai
   EXPECT_GT(by_distance.back().calibration.back().rows, whole.back().rows / 2);  // 63 frames: mostly beyond 1
 }
 
+// The intervals' safeguard in the predictor file (issue 64): the file carries the scales
+// per horizon, refuses them without a driving noise to scale or with a growth, and the
+// learned backend's sampled rollouts spread about the prediction by exactly them, the
+// same draws otherwise.
 TEST(LearnedIntervalSafeguard, TheFileCarriesItAndTheRolloutsSpreadByIt) {
   Trained t = TrainOnWanderingPlant(20);
   OmniDrivingNoise n;
