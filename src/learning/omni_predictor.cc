@@ -545,10 +545,20 @@ OmniPredictor FitResidualChoosingRidge(const OmniPredictorInfo& info, const Omni
 // Rows of training windows that make a second of log, the block a bootstrap draws whole.
 int BlockRows(const OmniPredictorInfo& info) { return std::max(1, static_cast<int>(std::lround(info.frame_rate))); }
 
+// `x` and `y` with `rest` rows of standing still appended (all-zero inputs, no motion):
+// what a network learns beside the logs, whose rest holds only under camera noise.
+std::pair<Eigen::MatrixXd, Eigen::MatrixXd> WithRestRows(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y, long rest) {
+  Eigen::MatrixXd xr(x.rows() + rest, x.cols()), yr(y.rows() + rest, y.cols());
+  xr << x, Eigen::MatrixXd::Zero(rest, x.cols());
+  yr << y, Eigen::MatrixXd::Zero(rest, y.cols());
+  return {std::move(xr), std::move(yr)};
+}
+
 // Members 1.. of a network's ensemble (OmniTrainOptions::members): each from its own
 // start (the seed plus its number) on a block bootstrap of the training windows (blocks
 // of `block_rows` drawn with replacement until as many rows; the rest rows added as for
-// the first), early-stopped on the same held-out windows.
+// the first), early-stopped on the same held-out windows. `progress` is told each
+// member's epochs as its share of the whole ensemble's, the first member's included.
 std::vector<Mlp> TrainEnsembleMembers(const OmniDataset& data, long rest, const OmniDataset& validation,
                                       const OmniTrainOptions& options, int block_rows,
                                       const std::function<void(int, int, double)>& progress) {
@@ -558,7 +568,7 @@ std::vector<Mlp> TrainEnsembleMembers(const OmniDataset& data, long rest, const 
     MlpOptions o = options.mlp;
     o.seed = options.mlp.seed + static_cast<std::uint64_t>(m);
     Rng rng(o.seed ^ 0x5bd1e995u);
-    Eigen::MatrixXd x(n + rest, data.x.cols()), y(n + rest, 3);
+    Eigen::MatrixXd x(n, data.x.cols()), y(n, 3);
     long row = 0;
     while (row < n) {
       const long from = static_cast<long>(rng.Index(static_cast<std::uint64_t>(blocks))) * block_rows;
@@ -567,10 +577,14 @@ std::vector<Mlp> TrainEnsembleMembers(const OmniDataset& data, long rest, const 
       y.middleRows(row, take) = data.y.middleRows(from, take);
       row += take;
     }
-    x.bottomRows(rest).setZero();
-    y.bottomRows(rest).setZero();
+    const auto [xr, yr] = WithRestRows(x, y, rest);
+    std::function<void(int, int, double)> share;
+    if (progress)
+      share = [&progress, m, &options](int epoch, int epochs, double loss) {
+        progress(m * epochs + epoch, options.members * epochs, loss);
+      };
     std::string report;
-    members.push_back(TrainMlpHoldingOut(x, y, validation.x, validation.y, o, progress, &report));
+    members.push_back(TrainMlpHoldingOut(xr, yr, validation.x, validation.y, o, share, &report));
   }
   return members;
 }
@@ -597,15 +611,17 @@ OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& dat
     return p;
   }
   const long rest = std::max<long>(1, data.rows() / 50);
-  Eigen::MatrixXd x(data.rows() + rest, data.x.cols());
-  Eigen::MatrixXd y(x.rows(), 3);
-  x << data.x, Eigen::MatrixXd::Zero(rest, data.x.cols());
-  y << data.y, Eigen::MatrixXd::Zero(rest, 3);
+  const auto [x, y] = WithRestRows(data.x, data.y, rest);
+  std::function<void(int, int, double)> first = progress;
+  if (progress && options.members > 1)
+    first = [&progress, &options](int epoch, int epochs, double loss) {
+      progress(epoch, options.members * epochs, loss);
+    };
   // No weights' uncertainty for a network: its output layer's (the last-layer Laplace
   // approximation) was measured and made held-out rows worse (docs/learning.md). An
   // ensemble instead, where asked for.
   OmniPredictor p =
-      MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp, progress, mlp_report));
+      MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp, first, mlp_report));
   p.SetEnsemble(TrainEnsembleMembers(data, rest, validation, options, BlockRows(info), progress));
   return p;
 }

@@ -198,6 +198,7 @@ class OmniPredictor {
   Mlp mlp_;
   Eigen::Vector3d mlp_at_rest_ = Eigen::Vector3d::Zero();  // the network's output for all-zero inputs
   std::vector<Mlp> ensemble_;  // members 1.. (OmniTrainOptions::members)
+  std::vector<Eigen::Vector3d> ensemble_at_rest_;  // each member's output for all-zero inputs
 };
 
 // The rows of each log a predictor is validated on: its last `fraction` of frames, as

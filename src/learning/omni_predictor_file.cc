@@ -263,7 +263,7 @@ OmniPredictor OmniPredictor::Load(const std::string& path) {
                                               Eigen::Vector3d(linear.bias))
                         : MakeMlpPredictor(info, std::move(mlp));
   p.weight_uncertainty_ = std::move(uncertainty);
-  p.ensemble_ = std::move(ensemble);
+  p.SetEnsemble(std::move(ensemble));
   p.path_ = path;
   return p;
 }

@@ -42,6 +42,9 @@ void OmniPredictor::SetWeightUncertainty(RidgeWeightUncertainty u) {
 void OmniPredictor::SetEnsemble(std::vector<Mlp> members) {
   if (!members.empty() && info_.kind != "mlp") throw std::invalid_argument("SetEnsemble: only a network has members");
   ensemble_ = std::move(members);
+  ensemble_at_rest_.clear();
+  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(info_.layout.num_inputs());
+  for (const Mlp& member : ensemble_) ensemble_at_rest_.push_back(member.Predict(rest));
 }
 
 void OmniPredictor::DrawMember(const OmniPredictor& estimate, int k) {
@@ -51,7 +54,7 @@ void OmniPredictor::DrawMember(const OmniPredictor& estimate, int k) {
     mlp_at_rest_ = estimate.mlp_at_rest_;
   } else {
     mlp_ = estimate.ensemble_[static_cast<std::size_t>(k - 1)];
-    mlp_at_rest_ = mlp_.Predict(Eigen::VectorXd::Zero(info_.layout.num_inputs()));
+    mlp_at_rest_ = estimate.ensemble_at_rest_[static_cast<std::size_t>(k - 1)];
   }
 }
 

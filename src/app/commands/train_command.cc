@@ -3,6 +3,7 @@
 // (arms also: --history N)
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <optional>
 
@@ -129,6 +130,21 @@ LearnedUncertainty FitLearnedUncertainty(const OmniModel& model, const std::vect
   return out;
 }
 
+// The training's progress per epoch; an ensemble's members come one after another, their
+// epochs counted as one run and the detail naming the member.
+std::function<void(int, int, double)> EpochProgress(Progress* progress, const OmniTrainOptions& train) {
+  return [progress, members = train.members, per = std::max(1, train.mlp.max_epochs)](int epoch, int epochs,
+                                                                                      double validation_mse) {
+    char detail[80];
+    if (members > 1)
+      std::snprintf(detail, sizeof detail, "network %d of %d, epoch %d, validation mse %.4f", (epoch - 1) / per + 1,
+                    members, (epoch - 1) % per + 1, validation_mse);
+    else
+      std::snprintf(detail, sizeof detail, "epoch %d, validation mse %.4f", epoch, validation_mse);
+    progress->Update(epoch, epochs, detail);
+  };
+}
+
 int Train(const TrainCliOptions& options) {
   if (ModelFileRobot(options.model) == RobotKind::kArm) return TrainArm(options);
   if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
@@ -158,12 +174,7 @@ int Train(const TrainCliOptions& options) {
   const std::string what = (train.residual ? "residual " : "") + train.kind;
   Progress progress("train " + what, !options.quiet);
   OmniTrainSummary summary;
-  const OmniPredictor predictor = TrainOmniPredictor(
-      model, logs, train, &summary, [&](int epoch, int epochs, double validation_mse) {
-        char detail[64];
-        std::snprintf(detail, sizeof detail, "epoch %d, validation mse %.4f", epoch, validation_mse);
-        progress.Update(epoch, epochs, detail);
-      });
+  const OmniPredictor predictor = TrainOmniPredictor(model, logs, train, &summary, EpochProgress(&progress, train));
   progress.Finish();
   // Logs are pooled: one too short or too lossy to fill a window adds none. Said even
   // with --quiet: the predictor did not learn from it.
