@@ -401,7 +401,11 @@ std::string FormatOmniIdentificationTable(const OmniIdentificationReport& r) {
     for (const OmniNoiseParameter& p : r.noise.parameters) {
       std::snprintf(line, sizeof line, "  %-22s %12s -> %12s +- %-10s %s", p.name.c_str(), Number(p.start).c_str(),
                     Number(p.value).c_str(), Number(p.standard_error, "%.2g").c_str(), p.unit.c_str());
-      s << line << NoiseBoundNote(p) << "\n";
+      s << line << NoiseBoundNote(p);
+      // The search moves the process noise by a factor on what the response's fit left.
+      if (p.name == "process_noise_scale")
+        s << "  (a factor on the 4-frame fit's; the table's process_noise.scale is the product)";
+      s << "\n";
     }
   }
   if (r.drift_identified)
