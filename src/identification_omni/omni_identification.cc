@@ -44,6 +44,7 @@ enum Param {
   kLoopX, kLoopY, kLoopW,
   kNoiseX, kNoiseY, kNoiseW, kNoiseTime, kProcessScale,
   kBraking, kFieldFrame,
+  kTurn3S, kTurn3C,
   kNumParams
 };
 
@@ -122,6 +123,8 @@ std::vector<ParamSpec> MakeSpecs() {
       EffectNumber("lag.braking", "motor_lag", "braking", "x", "the lags' time constants while slowing down, relative to speeding up", 0.1, 10, true),
       // A choice, never fitted: 0 the lag acts in the robot's frame, 1 in the field's.
       EffectNumber("lag.field_frame", "motor_lag", "field_frame", "", "1: the lagged velocity keeps its direction in the field while the robot turns; 0: it turns with the robot", 0, 1, false),
+      EffectNumber("turn_coupling.third_sin", "turn_coupling", "third_sin", "rad/s per m/s", "turn rate per m/s of translation command times sin 3 of its direction (three wheels)", -5, 5, false),
+      EffectNumber("turn_coupling.third_cos", "turn_coupling", "third_cos", "rad/s per m/s", "turn rate per m/s of translation command times cos 3 of its direction (three wheels)", -5, 5, false),
   };
   if (specs.size() != kNumParams) throw std::logic_error("identify's parameter table is out of step with Param");
   return specs;
@@ -646,13 +649,16 @@ double ProfileDelay(const OmniIdentificationProblem& problem, std::array<double,
   return best;
 }
 
-// The held-out blocks' position RMSE (m) at the options' horizon, predicted from every
+// The held-out blocks' position RMSE (m) at the options' horizon, or with `pose` their
+// pose's, sqrt(dx² + dy² + (r dθ)²) with r the chassis radius; predicted from every
 // options.stride-th frame; infinity where the model diverges.
 double HeldOutRmse(const OmniIdentificationProblem& problem, const std::vector<Segment>& segments,
-                   const OmniIdentificationOptions& options, const std::array<double, kNumParams>& v) {
+                   const OmniIdentificationOptions& options, const std::array<double, kNumParams>& v,
+                   bool pose = false) {
   try {
     const OmniModel model = problem.Build(v);
-    return ScoreHeldOut(segments, &model, false, options, model.chassis_radius, options.stride).PositionRmse();
+    const HorizonSum sum = ScoreHeldOut(segments, &model, false, options, model.chassis_radius, options.stride);
+    return pose ? sum.PoseRms() : sum.PositionRmse();
   } catch (const CheckFailed&) {
     return std::numeric_limits<double>::infinity();
   }
@@ -822,6 +828,7 @@ struct FitState {
   std::set<int> held;                        // held at the fit's value (collinear or flat)
   SolveResult solved;                        // the last solve, with its standard errors
   std::vector<double> speeds, turns;         // m/s, rad/s: the fit rows' commanded speed and turn rate, sorted
+  std::string turn_harmonics_note;           // why the turn's third harmonic is free, where it is
 };
 
 void CheckFramePeriods(const std::vector<OmniLog>& logs, const std::vector<OmniLog>& validation) {
@@ -893,7 +900,9 @@ std::array<bool, 3> ChooseFreeParameters(const std::vector<OmniLog>& logs, const
       fit->pruned[p] = "the open-loop tracker (--state tracker) has no observer";
   }
   for (int p = 0; p < kNumParams; ++p)
-    if (p != kVMax && p != kWMax && p != kBraking && p != kFieldFrame && !fit->pruned.count(p)) fit->free.push_back(p);
+    if (p != kVMax && p != kWMax && p != kBraking && p != kFieldFrame && p != kTurn3S && p != kTurn3C &&
+        !fit->pruned.count(p))
+      fit->free.push_back(p);
   for (const auto& [p, why] : fit->pruned) fit->v[static_cast<std::size_t>(p)] = fit->nominal[static_cast<std::size_t>(p)];
   return excited;
 }
@@ -1021,6 +1030,88 @@ void FitSpeedLimits(const OmniIdentificationProblem& lookahead, const std::vecto
       base_cost = best_cost;
     }
   }
+}
+
+// Step 5b, three-wheel robots: a turn that varies with the direction the robot drives
+// in, v (s sin 3φ + c cos 3φ) (turn_coupling's third_sin and third_cos; omni_effects.h).
+// Three wheels 120° apart turn the robot by the sum of their own losses, which repeats
+// every 120° of direction; the axis couplings (v sin φ, v cos φ) hold only its first
+// harmonic. Tried where the fit rows' commands tell the four apart (TurnHarmonicsExcited:
+// logs driving only along the robot's axes cannot, sin 3φ = −sin φ there), fitted alone
+// from none, and kept free for the final fit where the held-out blocks ask for it as for
+// the lag's structures; the verdict goes into `notes`.
+// The smallest share of the largest singular value the four unit columns vx, vy, v sin
+// 3φ, v cos 3φ must keep: below, the directions driven alias the harmonic.
+constexpr double kHarmonicsConditioning = 1.0 / 30;
+
+bool TurnHarmonicsExcited(const std::vector<OmniLog>& logs, const InFit& in_fit) {
+  std::vector<std::array<double, 4>> rows;
+  for (const OmniLog& log : logs) {
+    for (std::size_t i = 0; i < log.rows.size(); ++i) {
+      const Twist2& c = log.rows[i].command;
+      const double v2 = c.vx * c.vx + c.vy * c.vy;
+      if (!in_fit(log, i) || v2 < 1e-4) continue;  // under 1 cm/s: no direction
+      rows.push_back({c.vx, c.vy, c.vy * (3 * c.vx * c.vx - c.vy * c.vy) / v2, c.vx * (c.vx * c.vx - 3 * c.vy * c.vy) / v2});
+    }
+  }
+  if (rows.size() < 8) return false;
+  Eigen::MatrixXd x(static_cast<long>(rows.size()), 4);
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    for (int k = 0; k < 4; ++k) x(static_cast<long>(r), k) = rows[r][static_cast<std::size_t>(k)];
+  // A column nearly zero (an axis never driven, or directions 60° apart from an axis,
+  // where sin 3φ vanishes) leaves the harmonic aliased; the rest scaled to unit length.
+  const Eigen::VectorXd norms = x.colwise().norm();
+  if (norms.minCoeff() < 1e-3 * norms.maxCoeff()) return false;
+  for (int k = 0; k < 4; ++k) x.col(k) /= norms(k);
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(x).singularValues();
+  return sv(3) > kHarmonicsConditioning * sv(0);
+}
+
+void ChooseTurnByDirection(const OmniIdentificationProblem& problem, const OmniIdentificationProblem& lookahead,
+                           const std::vector<Segment>& segments, const std::vector<OmniLog>& logs, const InFit& in_fit,
+                           const OmniIdentificationOptions& options, const OmniIdentificationOptions& ahead,
+                           FitState* fit, int* iterations) {
+  std::map<int, std::string>& notes = fit->pruned;
+  if (problem.Build(fit->v).num_wheels() != 3) return;  // not reported: a three-wheel robot's structure
+  if (!options.turn_harmonics) {
+    notes[kTurn3S] = notes[kTurn3C] = "not tried (--no-turn-harmonics)";
+    return;
+  }
+  if (!TurnHarmonicsExcited(logs, in_fit)) {
+    notes[kTurn3S] = notes[kTurn3C] =
+        "not tried: the fit blocks drive in too few directions to tell it from the axis couplings";
+    return;
+  }
+  std::array<double, kNumParams> trial = fit->v;
+  trial[kTurn3S] = trial[kTurn3C] = 0;
+  try {
+    const SolveResult solved = Solve(problem, trial, {kTurn3S, kTurn3C}, options.max_delay, options.max_iterations, false);
+    *iterations += solved.iterations;
+    trial = solved.values;
+  } catch (const CheckFailed&) {
+    notes[kTurn3S] = notes[kTurn3C] = "not chosen: the model diverges with it";
+    return;
+  }
+  // Judged by the pose (the heading at the chassis' rim beside the position): a turn
+  // rate shows in the heading a quarter second ahead long before in the position.
+  const double k_now = HeldOutRmse(lookahead, segments, options, fit->v, true);
+  const double l_now = HeldOutRmse(lookahead, segments, ahead, fit->v, true);
+  const double k_with = HeldOutRmse(lookahead, segments, options, trial, true);
+  const double l_with = HeldOutRmse(lookahead, segments, ahead, trial, true);
+  const bool keep = l_with < (1 - kStructureGain) * l_now && k_with < (1 + kStructureTolerance) * k_now;
+  char numbers[200];
+  std::snprintf(numbers, sizeof numbers,
+                "pose %.3g mm at %d frames and %.3g mm at %d with it, %.3g and %.3g mm without (s %.3g, c %.3g)",
+                1e3 * l_with, ahead.horizon, 1e3 * k_with, options.horizon, 1e3 * l_now, 1e3 * k_now,
+                trial[kTurn3S], trial[kTurn3C]);
+  if (!keep) {
+    notes[kTurn3S] = notes[kTurn3C] = std::string("not chosen on the held-out blocks: ") + numbers;
+    return;
+  }
+  fit->v = trial;
+  fit->free.push_back(kTurn3S);
+  fit->free.push_back(kTurn3C);
+  fit->turn_harmonics_note = std::string("chosen on the held-out blocks: ") + numbers;
 }
 
 // Step 6: all together, kept only where it does not predict the held-out blocks worse
@@ -1292,9 +1383,13 @@ void CheckLogCount(const std::vector<OmniLog>& logs, const OmniIdentificationOpt
 // has none; the noise identified for predictions ahead replaces the fit's (the filter's
 // tuning).
 void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentificationReport* report) {
-  for (int p : {kDelay, kGainX, kGainY, kGainW, kLagX, kLagY, kLagW, kBraking, kFieldFrame, kLoopX, kLoopY, kLoopW,
-                kSlewX, kSlewY, kSlewW, kTurnX, kTurnY, kCrossYX, kCrossXY, kVMax, kWMax, kNoiseX, kNoiseY, kNoiseW,
-                kNoiseTime, kProcessScale}) {
+  std::vector<int> listed = {kDelay, kGainX, kGainY, kGainW, kLagX, kLagY, kLagW, kBraking, kFieldFrame,
+                             kLoopX, kLoopY, kLoopW, kSlewX, kSlewY, kSlewW, kTurnX, kTurnY, kCrossYX, kCrossXY,
+                             kVMax, kWMax, kNoiseX, kNoiseY, kNoiseW, kNoiseTime, kProcessScale};
+  // The turn's third harmonic is a three-wheel robot's (ChooseTurnByDirection).
+  if (model.num_wheels() == 3)
+    listed.insert(std::find(listed.begin(), listed.end(), kCrossYX), {kTurn3S, kTurn3C});
+  for (int p : listed) {
     IdentifiedParameter q;
     const ParamSpec& s = Specs()[p];
     q.name = s.name;
@@ -1308,6 +1403,7 @@ void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentific
     q.held = fit.held.count(p) > 0;
     if (fit.chosen.count(p)) q.estimated = q.held = true;  // a structure: chosen, then held
     if (fit.pruned.count(p)) q.note = fit.pruned.at(p);
+    if (q.estimated && (p == kTurn3S || p == kTurn3C)) q.note = fit.turn_harmonics_note;
     if (q.estimated && !q.held) {
       q.standard_error = fit.solved.standard_error[static_cast<std::size_t>(it - fit.free.begin())];
       if (!std::isfinite(q.standard_error)) q.note = "not determined by these logs alone (the fit's covariance is singular)";
@@ -1591,11 +1687,12 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   FitDelayAndResponse(problem, logs, in_fit, options, period, say, &fit, &report);       // steps 1-3
   say(3, "speed limits");
   FitSpeedLimits(lookahead, logs, in_fit, &fit);                                          // step 4
-  // 5. Structures the held-out blocks choose: the lag held in the field frame rather than
-  // the robot's, then braking at its own time constants. Each is fitted with the rest and
-  // kept where it predicts the held-out blocks at least kStructureGain better.
+  // 5. Structures the held-out blocks choose, each kept where it predicts them at least
+  // kStructureGain better: the lag held in the field frame rather than the robot's,
+  // braking at its own time constants, and a three-wheel robot's turn by direction.
   say(4, "lag structures");
   ChooseLagStructures(lookahead, segments, options, ahead, excited[2], fit.free, &fit.v, &fit.pruned, &fit.chosen);
+  ChooseTurnByDirection(problem, lookahead, segments, logs, in_fit, options, ahead, &fit, &report.solver_iterations);
   say(5, "final fit and standard errors");
   FitTogether(problem, segments, options, &fit, &report);                                 // step 6
   StandardErrors(problem, options, &fit, &report);
@@ -1607,7 +1704,6 @@ OmniIdentificationReport IdentifyOmni(const OmniModel& nominal, const std::vecto
   if (identified) *identified = model;
   ReportParameters(fit, model, &report);
   NoteUndetermined(fit, &report);
-
   say(7, "held-out gaps");                                                                // step 7
   report.held_out = HeldOutGaps(segments, nominal, model, false, options, &report);
   if (!validation.empty()) report.validation = HeldOutGaps(segments, nominal, model, true, options, &report);

@@ -66,6 +66,10 @@ struct OmniIdentificationOptions {
   // predictions 0.5 and 1 s ahead (omni_drift_identification.h), kept where it takes 5 %
   // off them and the held-out blocks are no worse.
   bool drift = true;
+  // A three-wheel robot's turn by the direction it drives in (turn_coupling's third_sin
+  // and third_cos), tried where the fit logs drive in enough directions and kept where
+  // the held-out blocks' poses ask for it.
+  bool turn_harmonics = true;
   // With the observer's state, the intervals' safeguard (analysis/omni_interval_scale.h)
   // fitted on: kBlocks, the two halves of the held-out blocks; kLogs, each fit log
   // predicted by the model identified on the others (identification once more per log;

@@ -266,8 +266,9 @@ bool MlpOptions::IsValid(std::string* why) const {
                          " (must be 1 to 4096)");
     }
   }
-  if (max_epochs < 1)
-    problems.push_back("max_epochs is " + std::to_string(max_epochs) + " (must be >= 1)");
+  // At most a million: an ensemble's progress counts its members' epochs as one int.
+  if (max_epochs < 1 || max_epochs > 1000000)
+    problems.push_back("max_epochs is " + std::to_string(max_epochs) + " (must be 1 to 1000000)");
   if (batch_size < 0) {
     problems.push_back("batch_size is " + std::to_string(batch_size) +
                        " (must be >= 0; 0 = full batch)");

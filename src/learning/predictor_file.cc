@@ -95,6 +95,7 @@ Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int col
   // corrupt file, refused before the product overflows an int or asks for gigabytes.
   const std::int64_t size = static_cast<std::int64_t>(rows) * cols;
   if (rows < 0 || cols < 0 || size > kMostMatrixNumbers) {
+    m.Has(key);  // known: said once, as too large, not again as unknown
     m.Error(key, "a matrix of " + std::to_string(rows) + " x " + std::to_string(cols) + " is more than " +
                      std::to_string(kMostMatrixNumbers) + " numbers");
     return Eigen::MatrixXd();
@@ -261,7 +262,7 @@ RidgeWeightUncertainty RidgeWeightDirections(const Eigen::MatrixXd& x, const Eig
     out.directions.push_back(std::move(d));
     held += value;
   }
-  out.share = held / trace;
+  out.share = std::min(1.0, held / trace);  // summed in another order than trace: never past 1
   return out;
 }
 

@@ -63,8 +63,9 @@ void WritePredictorFile(YAML::Emitter& out, const std::string& path);
 // Reads a flow sequence of exactly `size` numbers under `key` (zeros after an error,
 // which goes into the map's error list).
 Eigen::VectorXd ReadVector(YamlMap& m, const std::string& key, int size);
-// The most numbers ReadMatrix reads into one matrix (a network of 2000 x 2000 layers).
-inline constexpr std::int64_t kMostMatrixNumbers = 4000000;
+// The most numbers ReadMatrix reads into one matrix: a layer of the widest network train
+// makes (4096 x 4096, MlpOptions::IsValid).
+inline constexpr std::int64_t kMostMatrixNumbers = 4096 * 4096;
 // Reads a rows x cols matrix stored row by row under `key` (an error for more than
 // kMostMatrixNumbers numbers).
 Eigen::MatrixXd ReadMatrix(YamlMap& m, const std::string& key, int rows, int cols);

@@ -1,12 +1,13 @@
-// An ensemble of an omni scene: N rollouts that differ only in the robots' driving noise
-// (`twinsim run SCENE --samples N`; docs/models.md, "Driving noise in the simulation").
+// An ensemble of an omni scene: N rollouts that differ in the robots' driving noise (and
+// a learned robot's drawn predictor) (`twinsim run SCENE --samples N`; docs/models.md,
+// "Driving noise in the simulation").
 //
 // Sample k draws the slip from a stream of its own (Simulation::SetDrivingNoiseSample);
 // the scene's seed, its commands, the camera's draws stay the same, so the spread of the
 // samples' paths is what the robot's wander alone does to the scene (closed-loop
-// behaviours react to it, as on the field). On the learned backend with a linear
-// predictor that carries its weights' uncertainty, samples 1.. also each draw the
-// weights once (OmniEnsembleOptions::parameter_draws). Sample 0 is the plain run. Samples run in
+// behaviours react to it, as on the field). On the learned backend with a predictor that
+// carries its own uncertainty (a linear one's weights, a network's ensemble), samples 1..
+// also each draw it once (OmniEnsembleOptions::parameter_draws). Sample 0 is the plain run. Samples run in
 // parallel; the result does not depend on the thread count.
 //
 //   OmniEnsemble e = RunOmniEnsemble(scene, "analytic", "", {100, 0});
@@ -28,8 +29,8 @@ struct OmniEnsembleOptions {
   int samples = 1;  // N >= 1
   int jobs = 0;     // threads; 0 = one per core
   // Samples 1.. also draw the backend's parameters from their own uncertainty, once for
-  // the run (Simulation::DrawModelParameters: a linear predictor's weights on the learned
-  // backend); sample 0 stays the plain run.
+  // the run (Simulation::DrawModelParameters: a linear predictor's weights or one of a
+  // network's ensemble on the learned backend); sample 0 stays the plain run.
   bool parameter_draws = true;
 };
 

@@ -139,7 +139,8 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
     const Twist2 a = c;
     c = Twist2{fx.axis_scale[0] * a.vx + fx.forward_per_sideways * a.vy,
                fx.axis_scale[1] * a.vy + fx.sideways_per_forward * a.vx,
-               fx.axis_scale[2] * a.omega + fx.turn_per_forward * a.vx + fx.turn_per_sideways * a.vy};
+               fx.axis_scale[2] * a.omega + fx.turn_per_forward * a.vx + fx.turn_per_sideways * a.vy +
+                   fx.TurnByDirection(a.vx, a.vy)};
   }
   // hypot only near or over the limit (the squares' test is safe by far more than
   // their rounding): the same bytes as hypot every step, at a fraction of its cost.

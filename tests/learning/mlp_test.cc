@@ -323,7 +323,8 @@ TEST(Mlp, InvalidOptionsThrow) {
          o.hidden = {16, 0};
        },
        "hidden[1] is 0 (must be 1 to 4096)"},
-      {[](MlpOptions& o) { o.max_epochs = 0; }, "max_epochs is 0 (must be >= 1)"},
+      {[](MlpOptions& o) { o.max_epochs = 0; }, "max_epochs is 0 (must be 1 to 1000000)"},
+      {[](MlpOptions& o) { o.max_epochs = 1000001; }, "max_epochs is 1000001 (must be 1 to 1000000)"},
       {[](MlpOptions& o) { o.batch_size = -1; }, "batch_size is -1 (must be >= 0"},
       {[](MlpOptions& o) { o.learning_rate = 0; }, "learning_rate is 0 (must be > 0)"},
       {[](MlpOptions& o) { o.learning_rate = std::nan(""); }, "learning_rate is nan"},
@@ -347,7 +348,7 @@ TEST(Mlp, InvalidOptionsThrow) {
   two.max_epochs = 0;
   two.patience = 0;
   EXPECT_FALSE(two.IsValid(&why));
-  EXPECT_EQ(why, "max_epochs is 0 (must be >= 1); patience is 0 (must be >= 1)");
+  EXPECT_EQ(why, "max_epochs is 0 (must be 1 to 1000000); patience is 0 (must be >= 1)");
 }
 
 TEST(Mlp, BadDataThrows) {

@@ -153,6 +153,7 @@ TEST_F(NetworkEnsemble, MalformedEnsemblesAndOptionsAreInputErrors) {
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find("bad.pred:"), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find("unknown"), std::string::npos) << "said twice: " << e.what();
     }
   };
   const std::size_t at = text.find("ensemble:");
@@ -167,7 +168,7 @@ TEST_F(NetworkEnsemble, MalformedEnsemblesAndOptionsAreInputErrors) {
   std::string huge = text;
   const std::size_t first = huge.find("layers:", at);
   huge.replace(first, huge.find('\n', first) - first, "layers: [42, 46341, 46341, 3]");
-  refused(huge, "more than 4000000 numbers");
+  refused(huge, "more than 16777216 numbers");
   std::string linear = text;
   linear.replace(linear.find("kind: mlp"), 9, "kind: linear");
   refused(linear, "only a network");

@@ -36,8 +36,9 @@ void AddDrivingNoiseOption(CLI::App* cmd, std::string* value);
 
 // --parameter-uncertainty on|off: whether an omni model's parameters' covariance
 // (observer.parameter_covariance, identify's) spreads its predictions besides its noise
-// (analysis/omni_replay.h, OmniReplayOptions::parameter_shifts).
-void AddParameterUncertaintyOption(CLI::App* cmd, std::string* value);
+// (analysis/omni_replay.h, OmniReplayOptions::parameter_shifts); `run`'s help (with --samples) says
+// what its samples draw.
+void AddParameterUncertaintyOption(CLI::App* cmd, std::string* value, bool run = false);
 
 // --cutoff auto|HZ: the low-pass cut-off for an arm log's qd/qdd derived from q
 // (robots/arm/arm_log.h); auto (the default) chooses it from the logs

@@ -191,7 +191,7 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
                                                  std::vector<ArmOutputErrorOptions>* stages) {
   for (const char* omni_only :
        {"--held-out", "--block", "--horizon", "--backend", "--stride", "--max-delay", "--robot", "--team", "--state",
-        "--no-noise", "--no-drift", "--safeguard"}) {
+        "--no-noise", "--no-drift", "--no-turn-harmonics", "--safeguard"}) {
     if (std::find(options.given.begin(), options.given.end(), omni_only) != options.given.end())
       throw InputError(std::string(omni_only) + " is for omni robots; " + options.model + " is an arm");
   }
@@ -461,6 +461,10 @@ void AddIdentifyCommand(CLI::App& app, int* exit_code) {
                 "Omni: no drift; without it a slow slip beside the driving noise (a run's own drift, which the observer "
                 "learns and carries ahead) is fitted on the predictions 0.5 and 1 s ahead and kept where it takes 5 % "
                 "off them and the held-out blocks are no worse");
+  cmd->add_flag("!--no-turn-harmonics", options->omni.turn_harmonics,
+                "Omni, three wheels: no turn by direction; without it, where the fit logs drive in enough directions, a "
+                "turn of v (s sin 3φ + c cos 3φ) (turn_coupling's third_sin and third_cos) is fitted and kept where the "
+                "held-out blocks' poses a quarter second ahead come 1 % nearer");
   cmd->add_option("--safeguard", options->omni.safeguard,
                   "Omni: the intervals' conformal scale per horizon, fitted on the two halves of the held-out blocks "
                   "(blocks), and with logs a growth on top with the distance of a prediction's inputs from those the "

@@ -107,12 +107,16 @@ void AddDrivingNoiseOption(CLI::App* cmd, std::string* value) {
       ->capture_default_str();
 }
 
-void AddParameterUncertaintyOption(CLI::App* cmd, std::string* value) {
+void AddParameterUncertaintyOption(CLI::App* cmd, std::string* value, bool run) {
   cmd->add_option("--parameter-uncertainty", *value,
-                  "Omni: on: the spread the model's identified parameters leave (observer.parameter_covariance, "
-                  "written by identify; on the learned backend a linear predictor's weight_uncertainty or a network's "
-                  "ensemble, written by train) widens each prediction's covariance and samples beside the noise; off: "
-                  "the noise alone")
+                  run ? "Omni, with --samples: on: samples 1.. of a learned robot each draw its predictor's own "
+                        "uncertainty once (a linear predictor's weight_uncertainty or one network of its ensemble, "
+                        "written by train) beside the driving noise; a physics robot draws the noise alone; off: the "
+                        "noise alone"
+                      : "Omni: on: the spread the model's identified parameters leave (observer.parameter_covariance, "
+                        "written by identify; on the learned backend a linear predictor's weight_uncertainty or a "
+                        "network's ensemble, written by train) widens each prediction's covariance and samples beside "
+                        "the noise; off: the noise alone")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
 }

@@ -187,7 +187,7 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
                   "Replay a recorded match: every robot sends its rows of this file (commands.csv of\n"
                   "twinsim serve; docs/serve.md), for as many frames as it holds");
   AddDrivingNoiseOption(cmd, &options->driving_noise);
-  AddParameterUncertaintyOption(cmd, &options->parameter_uncertainty);
+  AddParameterUncertaintyOption(cmd, &options->parameter_uncertainty, true);
   cmd->add_option("--samples", options->samples,
                   "Omni: N rollouts that differ only in the robots' driving noise: sample 0's files as a plain run,\n"
                   "samples.csv (t,sample,x,y,theta: the first robot's true pose) and fan.png")

@@ -45,7 +45,11 @@ std::vector<OmniEffectSpec> MakeOmniEffectSpecs() {
        {{"rate", -10, 10, false, 0, false, false, TWINSIM_OMNI_NUMBER(rotation_drift), -10, 10, false}}},
       {"turn_coupling", "rad/s per m/s", "forward, sideways or both", "sideways",
        {{"forward", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_forward), -20, 20, false},
-        {"sideways", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_sideways), -20, 20, false}}},
+        {"sideways", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_sideways), -20, 20, false},
+        // A three-wheel robot's turn that varies with the direction it drives in (issue
+        // 64): identify's, not searched by the diagnosis.
+        {"third_sin", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_third_sin)},
+        {"third_cos", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_third_cos)}}},
       {"cross_coupling", "m/s per m/s", "sideways_per_forward, forward_per_sideways or both", "sideways_per_forward",
        {{"sideways_per_forward", -2, 2, false, 0, false, false, TWINSIM_OMNI_NUMBER(sideways_per_forward), -2, 2,
          false},

@@ -57,6 +57,11 @@ struct OmniEffects {
   double rotation_drift = 0;  // rad/m; 0 = off
   double turn_per_forward = 0;      // rad/s per m/s (turn_coupling `forward`); 0 = off
   double turn_per_sideways = 0;     // rad/s per m/s (turn_coupling `sideways`); 0 = off
+  // rad/s per m/s (turn_coupling `third_sin`, `third_cos`): a turn of v (s sin 3φ + c cos
+  // 3φ), v and φ the commanded translation's speed and direction in the robot's frame;
+  // 0 = off (TurnByDirection)
+  double turn_third_sin = 0;
+  double turn_third_cos = 0;
   double sideways_per_forward = 0;  // m/s per m/s (cross_coupling); 0 = off
   double forward_per_sideways = 0;  // m/s per m/s (cross_coupling); 0 = off
 
@@ -68,7 +73,16 @@ struct OmniEffects {
   // True when the per-axis scales or a coupling change the command.
   bool MapsCommand() const {
     return axis_scale != std::array<double, 3>{1, 1, 1} || turn_per_forward != 0 || turn_per_sideways != 0 ||
-           sideways_per_forward != 0 || forward_per_sideways != 0;
+           sideways_per_forward != 0 || forward_per_sideways != 0 || turn_third_sin != 0 || turn_third_cos != 0;
+  }
+  // The turn (rad/s) that turn_coupling's third harmonic adds to a command of (vx, vy):
+  // v sin 3φ = vy (3 vx² − vy²) / v² and v cos 3φ = vx (vx² − 3 vy²) / v², no
+  // trigonometry, 0 at rest.
+  double TurnByDirection(double vx, double vy) const {
+    if (turn_third_sin == 0 && turn_third_cos == 0) return 0;
+    const double v2 = vx * vx + vy * vy;
+    if (v2 == 0) return 0;
+    return (turn_third_sin * vy * (3 * vx * vx - vy * vy) + turn_third_cos * vx * (vx * vx - 3 * vy * vy)) / v2;
   }
 
   // Names (contract vocabulary) of the effects that are on.

@@ -133,6 +133,33 @@ TEST(OmniEffects, PerAxisScaleAndTurnCouplingOnEveryEngine) {
   }
 }
 
+// A three-wheel robot's turn by the direction it drives in (turn_coupling's third
+// harmonic): v (s sin 3φ + c cos 3φ) on top of the axis couplings, the same every 120°
+// of direction, on every engine alike; the closed form's turn within 0.03 rad/s.
+TEST(OmniEffects, TheTurnsThirdHarmonicRepeatsEveryHundredAndTwentyDegreesOnEveryEngine) {
+  const OmniModel m = LoadOmniModelFromString("extends: " + testing::SourcePath("models/omni3.yaml") +
+                                                  "\nname: fx\neffects: {turn_coupling: {sideways: 0.3, "
+                                                  "third_sin: -0.6, third_cos: 0.4}}\n",
+                                              "fx.yaml");
+  EXPECT_EQ(m.effects.Active(), std::vector<std::string>{"turn_coupling"});
+  const double v = 0.5;
+  for (const std::string& backend : AvailableOmniBackends()) {
+    if (backend == "learned") continue;
+    SCOPED_TRACE(backend);
+    for (double deg : {10.0, 130.0, 250.0, 75.0}) {
+      const double phi = deg * M_PI / 180;
+      const Twist2 c{v * std::cos(phi), v * std::sin(phi), 0};
+      const Twist2 w = SteadyVelocity(m, c, backend);
+      EXPECT_NEAR(w.omega, 0.3 * c.vy + v * (-0.6 * std::sin(3 * phi) + 0.4 * std::cos(3 * phi)), 0.03) << deg;
+    }
+  }
+  // 10, 130 and 250 degrees share the harmonic; only the axis coupling tells them apart.
+  OmniEffects fx = m.effects;
+  EXPECT_NEAR(fx.TurnByDirection(v * std::cos(0.3), v * std::sin(0.3)),
+              fx.TurnByDirection(v * std::cos(0.3 + 2 * M_PI / 3), v * std::sin(0.3 + 2 * M_PI / 3)), 1e-12);
+  EXPECT_EQ(fx.TurnByDirection(0, 0), 0);
+}
+
 TEST(OmniEffects, PerAxisLagSlowsOnlyItsAxis) {
   const OmniModel m = With("motor_lag: {sideways: 0.3}");
   const auto slow = ForwardStep(m);
@@ -275,6 +302,8 @@ TEST(OmniEffects, TheTableHoldsTheVocabularysKeysRangesAndUnits) {
       {"rotation_drift", "rate", -10, 10, false, 0},
       {"turn_coupling", "forward", -20, 20, false, 0},
       {"turn_coupling", "sideways", -20, 20, false, 0},
+      {"turn_coupling", "third_sin", -20, 20, false, 0},
+      {"turn_coupling", "third_cos", -20, 20, false, 0},
       {"cross_coupling", "sideways_per_forward", -2, 2, false, 0},
       {"cross_coupling", "forward_per_sideways", -2, 2, false, 0},
   };
