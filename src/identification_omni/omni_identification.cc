@@ -145,7 +145,9 @@ bool IsFree(const std::vector<int>& free, int p) { return std::find(free.begin()
 // delay and the gains last, as the quantities a user reads first.
 double HoldPreference(int p) {
   if (p >= kLoopX && p <= kLoopW) return 2;
-  if ((p >= kSlewX && p <= kSlewW) || p == kProcessScale) return 1.5;
+  // The turn's third harmonic, a structure the held-out blocks chose, before the axis
+  // couplings it may trade with.
+  if ((p >= kSlewX && p <= kSlewW) || p == kProcessScale || p == kTurn3S || p == kTurn3C) return 1.5;
   if (p == kDelay || (p >= kGainX && p <= kGainW)) return 0.5;
   return 1;
 }
@@ -846,7 +848,8 @@ void CheckFramePeriods(const std::vector<OmniLog>& logs, const std::vector<OmniL
 }
 
 // The start: the model's values; a lag to move from; no limits (added below if reached);
-// the lag's structures off, whatever the given model has (the logs choose them, step 5).
+// the lag's structures and a three-wheel robot's turn by direction off, whatever the
+// given model has (the logs choose them, step 5).
 std::array<double, kNumParams> StartValues(const OmniModel& nominal, double period) {
   std::array<double, kNumParams> v = ValuesOf(nominal, period);
   for (int a = 0; a < 3; ++a) {
@@ -858,6 +861,7 @@ std::array<double, kNumParams> StartValues(const OmniModel& nominal, double peri
   }
   v[kBraking] = 1;
   v[kFieldFrame] = 0;
+  if (nominal.num_wheels() == 3) v[kTurn3S] = v[kTurn3C] = 0;
   return v;
 }
 
@@ -1032,7 +1036,7 @@ void FitSpeedLimits(const OmniIdentificationProblem& lookahead, const std::vecto
   }
 }
 
-// Step 5b, three-wheel robots: a turn that varies with the direction the robot drives
+// Step 5, after the lag's structures, three-wheel robots: a turn that varies with the direction the robot drives
 // in, v (s sin 3φ + c cos 3φ) (turn_coupling's third_sin and third_cos; omni_effects.h).
 // Three wheels 120° apart turn the robot by the sum of their own losses, which repeats
 // every 120° of direction; the axis couplings (v sin φ, v cos φ) hold only its first
@@ -1403,7 +1407,7 @@ void ReportParameters(const FitState& fit, const OmniModel& model, OmniIdentific
     q.held = fit.held.count(p) > 0;
     if (fit.chosen.count(p)) q.estimated = q.held = true;  // a structure: chosen, then held
     if (fit.pruned.count(p)) q.note = fit.pruned.at(p);
-    if (q.estimated && (p == kTurn3S || p == kTurn3C)) q.note = fit.turn_harmonics_note;
+    if (q.estimated && (p == kTurn3S || p == kTurn3C) && q.note.empty()) q.note = fit.turn_harmonics_note;
     if (q.estimated && !q.held) {
       q.standard_error = fit.solved.standard_error[static_cast<std::size_t>(it - fit.free.begin())];
       if (!std::isfinite(q.standard_error)) q.note = "not determined by these logs alone (the fit's covariance is singular)";

@@ -426,6 +426,10 @@ TEST(IdentifyCli, BadOptionsAreExitTwo) {
                                   "/m.yaml --safeguard logs");
   EXPECT_EQ(arm_safeguard.exit_code, 2);
   EXPECT_NE(arm_safeguard.err.find("--safeguard is for omni robots"), std::string::npos) << arm_safeguard.err;
+  auto arm_harmonics = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
+                                  "/m.yaml --no-turn-harmonics");
+  EXPECT_EQ(arm_harmonics.exit_code, 2);
+  EXPECT_NE(arm_harmonics.err.find("--no-turn-harmonics is for omni robots"), std::string::npos) << arm_harmonics.err;
   // Pre-sliding is fitted by output error, as one of two models.
   auto presliding_alone = RunTwinsim("identify --model " + model + " --log " + log + " --out " + dir +
                                      "/m.yaml --presliding maxwell");

@@ -394,12 +394,10 @@ TEST(OpenWorldWandering, RealLikeRobotLagInTheFieldFrameBrakingAndASecondSession
 INSTANTIATE_TEST_SUITE_P(Identification, OpenWorldPlant, ::testing::ValuesIn(Cases()),
                          [](const auto& info) { return info.param.label; });
 
-// A robot that stood still (or the wrong --robot): nothing of its response is in the
-// log. Refused with a message that says so, never an abort inside the solver.
 // A three-wheel robot that turns by the direction it drives in (turn_coupling's third
 // harmonic, docs/identification.md, "A turn by direction"), played by ODE with camera
 // noise, driven at random for 30 s: identify (analytic, from omni3 without it) finds
-// the harmonic within 20 % and keeps it; on the same robot without it the harmonic is
+// each coefficient within 0.1 rad/s per m/s and keeps them; on the same robot without it the harmonic is
 // tried and comes out near none (under 0.1 rad/s per m/s) whether kept or not.
 TEST(OmniIdentification, AThreeWheelRobotsTurnByDirectionIsFoundAndNoneWhereItHasNone) {
   const OmniModel nominal = LoadOmniModel(testing::SourcePath("models/omni3.yaml"));
@@ -439,6 +437,8 @@ TEST(OmniIdentification, AThreeWheelRobotsTurnByDirectionIsFoundAndNoneWhereItHa
   }
 }
 
+// A robot that stood still (or the wrong --robot): nothing of its response is in the
+// log. Refused with a message that says so, never an abort inside the solver.
 TEST(OmniIdentification, RefusesALogWhereNothingMoves) {
   std::vector<OmniLogRow> rows;
   for (int i = 0; i < 1200; ++i) {

@@ -189,7 +189,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   AddDrivingNoiseOption(cmd, &options->driving_noise);
   AddParameterUncertaintyOption(cmd, &options->parameter_uncertainty, true);
   cmd->add_option("--samples", options->samples,
-                  "Omni: N rollouts that differ only in the robots' driving noise: sample 0's files as a plain run,\n"
+                  "Omni: N rollouts that differ in the robots' driving noise (and a learned robot's drawn predictor,\n"
+                  "--parameter-uncertainty): sample 0's files as a plain run,\n"
                   "samples.csv (t,sample,x,y,theta: the first robot's true pose) and fan.png")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--jobs", options->jobs, "Threads for --samples (0: one per core); the files do not depend on it")

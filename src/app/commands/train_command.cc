@@ -294,7 +294,9 @@ void AddTrainCommand(CLI::App& app, int* exit_code) {
       ->default_str("auto");
   cmd->add_option("--seed", options->train.mlp.seed, "Seed of the neural net's initialisation and batches")
       ->capture_default_str();
-  cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training")->capture_default_str();
+  cmd->add_option("--epochs", options->train.mlp.max_epochs, "Most epochs of neural-net training (1 to 1000000)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
   cmd->add_option("--hidden", options->train.mlp.hidden, "Hidden layer widths of the neural net (e.g. --hidden 64 64)")
       ->capture_default_str()
       ->expected(1, 8);

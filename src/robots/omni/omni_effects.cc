@@ -43,7 +43,7 @@ std::vector<OmniEffectSpec> MakeOmniEffectSpecs() {
         {"turn", 0.02, 5, false, 1, false, false, TWINSIM_OMNI_AXIS(axis_scale, 2)}}},
       {"rotation_drift", "rad per metre", "", "rate",
        {{"rate", -10, 10, false, 0, false, false, TWINSIM_OMNI_NUMBER(rotation_drift), -10, 10, false}}},
-      {"turn_coupling", "rad/s per m/s", "forward, sideways or both", "sideways",
+      {"turn_coupling", "rad/s per m/s", "forward, sideways, third_sin or third_cos (any of them)", "sideways",
        {{"forward", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_forward), -20, 20, false},
         {"sideways", -20, 20, false, 0, false, false, TWINSIM_OMNI_NUMBER(turn_per_sideways), -20, 20, false},
         // A three-wheel robot's turn that varies with the direction it drives in (issue
