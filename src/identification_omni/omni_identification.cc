@@ -1036,14 +1036,15 @@ void FitSpeedLimits(const OmniIdentificationProblem& lookahead, const std::vecto
   }
 }
 
-// Step 5, after the lag's structures, three-wheel robots: a turn that varies with the direction the robot drives
-// in, v (s sin 3φ + c cos 3φ) (turn_coupling's third_sin and third_cos; omni_effects.h).
-// Three wheels 120° apart turn the robot by the sum of their own losses, which repeats
-// every 120° of direction; the axis couplings (v sin φ, v cos φ) hold only its first
-// harmonic. Tried where the fit rows' commands tell the four apart (TurnHarmonicsExcited:
-// logs driving only along the robot's axes cannot, sin 3φ = −sin φ there), fitted alone
-// from none, and kept free for the final fit where the held-out blocks ask for it as for
-// the lag's structures; the verdict goes into `notes`.
+// Step 5, after the lag's structures, three-wheel robots: a turn that varies with the
+// direction the robot drives in, v (s sin 3φ + c cos 3φ) (turn_coupling's third_sin and
+// third_cos; omni_effects.h). Three wheels 120° apart turn the robot by the sum of their
+// own losses: where the wheels lose alike that sum repeats every 120° of direction (the
+// third harmonic), where they differ it has a first harmonic too, which the axis
+// couplings (v cos φ, v sin φ) hold. Tried where the fit rows' commands tell the four
+// apart (TurnHarmonicsExcited: logs driving only along the robot's axes cannot, sin 3φ =
+// −sin φ there), fitted alone from none, and kept free for the final fit where the
+// held-out blocks ask for it as for the lag's structures; the verdict goes into the notes.
 // The smallest share of the largest singular value the four unit columns vx, vy, v sin
 // 3φ, v cos 3φ must keep: below, the directions driven alias the harmonic.
 constexpr double kHarmonicsConditioning = 1.0 / 30;
@@ -1055,7 +1056,8 @@ bool TurnHarmonicsExcited(const std::vector<OmniLog>& logs, const InFit& in_fit)
       const Twist2& c = log.rows[i].command;
       const double v2 = c.vx * c.vx + c.vy * c.vy;
       if (!in_fit(log, i) || v2 < 1e-4) continue;  // under 1 cm/s: no direction
-      rows.push_back({c.vx, c.vy, c.vy * (3 * c.vx * c.vx - c.vy * c.vy) / v2, c.vx * (c.vx * c.vx - 3 * c.vy * c.vy) / v2});
+      rows.push_back(
+          {c.vx, c.vy, c.vy * (3 * c.vx * c.vx - c.vy * c.vy) / v2, c.vx * (c.vx * c.vx - 3 * c.vy * c.vy) / v2});
     }
   }
   if (rows.size() < 8) return false;
@@ -1089,7 +1091,8 @@ void ChooseTurnByDirection(const OmniIdentificationProblem& problem, const OmniI
   std::array<double, kNumParams> trial = fit->v;
   trial[kTurn3S] = trial[kTurn3C] = 0;
   try {
-    const SolveResult solved = Solve(problem, trial, {kTurn3S, kTurn3C}, options.max_delay, options.max_iterations, false);
+    const SolveResult solved =
+        Solve(problem, trial, {kTurn3S, kTurn3C}, options.max_delay, options.max_iterations, false);
     *iterations += solved.iterations;
     trial = solved.values;
   } catch (const CheckFailed&) {
