@@ -330,6 +330,7 @@ class OmniIdentificationProblem {
 
   double frame_period() const { return frame_period_; }
   int evaluations() const { return evaluations_; }
+  const OmniModel& nominal() const { return nominal_; }
 
   // The model in the fit's form (every delay in the effect), or as written.
   OmniModel Build(const std::array<double, kNumParams>& v, bool all_in_effect = true) const {
@@ -1050,20 +1051,20 @@ void FitSpeedLimits(const OmniIdentificationProblem& lookahead, const std::vecto
 constexpr double kHarmonicsConditioning = 1.0 / 30;
 
 bool TurnHarmonicsExcited(const std::vector<OmniLog>& logs, const InFit& in_fit) {
-  std::vector<std::array<double, 4>> rows;
+  // The effect's own harmonics: v sin 3φ and v cos 3φ are its turn at a unit coefficient.
+  OmniEffects sin3, cos3;
+  sin3.turn_third_sin = cos3.turn_third_cos = 1;
+  std::vector<double> rows;  // vx, vy, v sin 3φ, v cos 3φ per fit row
   for (const OmniLog& log : logs) {
     for (std::size_t i = 0; i < log.rows.size(); ++i) {
       const Twist2& c = log.rows[i].command;
-      const double v2 = c.vx * c.vx + c.vy * c.vy;
-      if (!in_fit(log, i) || v2 < 1e-4) continue;  // under 1 cm/s: no direction
-      rows.push_back(
-          {c.vx, c.vy, c.vy * (3 * c.vx * c.vx - c.vy * c.vy) / v2, c.vx * (c.vx * c.vx - 3 * c.vy * c.vy) / v2});
+      if (!in_fit(log, i) || c.vx * c.vx + c.vy * c.vy < 1e-4) continue;  // under 1 cm/s: no direction
+      rows.insert(rows.end(), {c.vx, c.vy, sin3.TurnByDirection(c.vx, c.vy), cos3.TurnByDirection(c.vx, c.vy)});
     }
   }
-  if (rows.size() < 8) return false;
-  Eigen::MatrixXd x(static_cast<long>(rows.size()), 4);
-  for (std::size_t r = 0; r < rows.size(); ++r)
-    for (int k = 0; k < 4; ++k) x(static_cast<long>(r), k) = rows[r][static_cast<std::size_t>(k)];
+  const long n = static_cast<long>(rows.size() / 4);
+  if (n < 8) return false;
+  Eigen::MatrixXd x = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>>(rows.data(), n, 4);
   // A column nearly zero (an axis never driven, or directions 60° apart from an axis,
   // where sin 3φ vanishes) leaves the harmonic aliased; the rest scaled to unit length.
   const Eigen::VectorXd norms = x.colwise().norm();
@@ -1078,7 +1079,7 @@ void ChooseTurnByDirection(const OmniIdentificationProblem& problem, const OmniI
                            const OmniIdentificationOptions& options, const OmniIdentificationOptions& ahead,
                            FitState* fit, int* iterations) {
   std::map<int, std::string>& notes = fit->pruned;
-  if (problem.Build(fit->v).num_wheels() != 3) return;  // not reported: a three-wheel robot's structure
+  if (problem.nominal().num_wheels() != 3) return;  // not reported: a three-wheel robot's structure
   if (!options.turn_harmonics) {
     notes[kTurn3S] = notes[kTurn3C] = "not tried (--no-turn-harmonics)";
     return;

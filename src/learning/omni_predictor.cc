@@ -554,6 +554,16 @@ std::pair<Eigen::MatrixXd, Eigen::MatrixXd> WithRestRows(const Eigen::MatrixXd& 
   return {std::move(xr), std::move(yr)};
 }
 
+// `progress` told member `m`'s epochs (0 the first) as its share of the whole ensemble's
+// of `members`; empty where `progress` is.
+std::function<void(int, int, double)> MemberProgress(const std::function<void(int, int, double)>& progress, int m,
+                                                     int members) {
+  if (!progress) return {};
+  return [&progress, m, members](int epoch, int epochs, double loss) {
+    progress(m * epochs + epoch, members * epochs, loss);
+  };
+}
+
 // Members 1.. of a network's ensemble (OmniTrainOptions::members): each from its own
 // start (the seed plus its number) on a block bootstrap of the training windows (blocks
 // of `block_rows` drawn with replacement until as many rows; the rest rows added as for
@@ -578,13 +588,9 @@ std::vector<Mlp> TrainEnsembleMembers(const OmniDataset& data, long rest, const 
       row += take;
     }
     const auto [xr, yr] = WithRestRows(x, y, rest);
-    std::function<void(int, int, double)> share;
-    if (progress)
-      share = [&progress, m, &options](int epoch, int epochs, double loss) {
-        progress(m * epochs + epoch, options.members * epochs, loss);
-      };
     std::string report;
-    members.push_back(TrainMlpHoldingOut(xr, yr, validation.x, validation.y, o, share, &report));
+    members.push_back(TrainMlpHoldingOut(xr, yr, validation.x, validation.y, o,
+                                         MemberProgress(progress, m, options.members), &report));
   }
   return members;
 }
@@ -612,16 +618,12 @@ OmniPredictor FitPredictor(const OmniPredictorInfo& info, const OmniDataset& dat
   }
   const long rest = std::max<long>(1, data.rows() / 50);
   const auto [x, y] = WithRestRows(data.x, data.y, rest);
-  std::function<void(int, int, double)> first = progress;
-  if (progress && options.members > 1)
-    first = [&progress, &options](int epoch, int epochs, double loss) {
-      progress(epoch, options.members * epochs, loss);
-    };
   // No weights' uncertainty for a network: its output layer's (the last-layer Laplace
   // approximation) was measured and made held-out rows worse (docs/learning.md). An
   // ensemble instead, where asked for.
   OmniPredictor p =
-      MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp, first, mlp_report));
+      MakeMlpPredictor(info, TrainMlpHoldingOut(x, y, validation.x, validation.y, options.mlp,
+                                               MemberProgress(progress, 0, options.members), mlp_report));
   p.SetEnsemble(TrainEnsembleMembers(data, rest, validation, options, BlockRows(info), progress));
   return p;
 }
