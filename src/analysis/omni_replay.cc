@@ -124,11 +124,14 @@ double UnwrapShift(const OmniLog& log, std::size_t row, const OmniObserver& obse
   return d - WrapAngle(d);
 }
 
-// Row `row`'s input as the observer saw it (OmniReplayOptions::features), once started.
+// Row `row`'s input as the observer saw it and its estimated body velocity
+// (OmniReplayOptions::features), once started.
 void RecordInput(const OmniObserver& observer, std::size_t row, OmniReplayResult* out) {
   if (!observer.started()) return;
   out->input_feature.resize(out->pose.size());
+  out->estimated_velocity.resize(out->pose.size());
   out->input_feature[row] = observer.InputFeature();
+  out->estimated_velocity[row] = observer.Estimate().velocity;
 }
 
 // The observer's replay (OmniReplayOptions::state kObserver): the filter runs along the

@@ -95,7 +95,8 @@ struct OmniReplayOptions {
   bool parameter_draws = true;
   // The observer's state (K >= 1; `reach` 0 predicts nothing): each row's input
   // (OmniObserver::InputFeature) after its frame, into OmniReplayResult::input_feature
-  // (the seen inputs of identify's fit).
+  // (the seen inputs of identify's fit), and the estimate's body velocity into
+  // OmniReplayResult::estimated_velocity (identify's report plots it).
   bool features = false;
 
   // True when usable; else says why in *why.
@@ -148,8 +149,11 @@ struct OmniReplayResult {
   // steps' inputs went at most (OmniBackend::TakeInputExcess); 0 where not predicted;
   // else empty.
   std::vector<double> input_distance;
-  // With OmniReplayOptions::features: per row its frame's input; else empty.
+  // With OmniReplayOptions::features: per row its frame's input (empty before the
+  // observer started) and the estimate's body velocity after the frame (robot frame,
+  // the model's plus the slip and drift; zero before the start); else empty.
   std::vector<Eigen::VectorXd> input_feature;
+  std::vector<Twist2> estimated_velocity;
   // With OmniReplayOptions::also: one result per shorter horizon, in its order (the same
   // fields; their own `also` empty).
   std::vector<OmniReplayResult> also;

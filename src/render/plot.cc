@@ -50,6 +50,19 @@ void CheckSize(int width, int height) {
                      " px is outside 240..8192 x 180..8192");
 }
 
+// `step` (a 1, 2 or 5 x 10^n), made finer (5 -> 2 -> 1 -> 0.5) until [lo, hi] holds at
+// least two ticks: an axis with one labelled value has no scale. Where 70 px between
+// ticks asks a step just over 2 x 10^n, 5 x 10^n can leave a range of twice that with
+// 0 alone (a turn rate of +-4.5 mrad/s on a 290 px axis).
+double StepWithTwoTicks(double lo, double hi, double step) {
+  for (int k = 0; k < 6 && Ticks(lo, hi, step).size() < 2; ++k) {
+    const double e = std::pow(10.0, std::floor(std::log10(step) + 1e-9));
+    const double m = step / e;  // 1, 2 or 5
+    step = m > 4 ? 2 * e : m > 1.5 ? e : 0.5 * e;
+  }
+  return step;
+}
+
 PlotLayout LayoutChart(const Chart& c, bool legend_outside) {
   CheckSize(c.width, c.height);
   PlotLayout L;
@@ -84,8 +97,9 @@ PlotLayout LayoutChart(const Chart& c, bool legend_outside) {
     L.view = v;
     const double x_scale = area.width() / (v.x_max - v.x_min);   // px per unit
     const double y_scale = area.height() / (v.y_max - v.y_min);
-    L.x_step = NiceStep(95 / x_scale);
-    L.y_step = c.equal_aspect ? L.x_step : NiceStep(70 / y_scale);
+    L.x_step = StepWithTwoTicks(v.x_min, v.x_max, NiceStep(95 / x_scale));
+    L.y_step = StepWithTwoTicks(v.y_min, v.y_max, c.equal_aspect ? L.x_step : NiceStep(70 / y_scale));
+    if (c.equal_aspect) L.x_step = L.y_step;  // no coarser than x's: both axes keep two ticks
 
     double new_y_w = 0;
     for (double t : Ticks(v.y_min, v.y_max, L.y_step))

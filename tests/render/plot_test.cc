@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "io/png_image.h"
 #include "render/pixel_util.h"
+#include "render/plot_style.h"
 #include "test_util.h"
 
 namespace twinsim {
@@ -56,6 +57,46 @@ TEST(Plot, NiceStepsAreOneTwoFiveTimesAPowerOfTen) {
   EXPECT_DOUBLE_EQ(NiceStep(3), 5);
   EXPECT_DOUBLE_EQ(NiceStep(6), 10);
   EXPECT_DOUBLE_EQ(NiceStep(1500), 2000);
+}
+
+// An axis with one labelled value has no scale: before StepWithTwoTicks, a turn rate of
+// +-4.5 mrad/s on identify's 420 px velocity plot showed "0" alone (70 px between ticks
+// asked for just over 0.002, so 0.005, and the view held only -0.0049 to 0.0049).
+TEST(Plot, EveryAxisOfASeriesOrPathPlotShowsAtLeastTwoTicks) {
+  int checked = 0;
+  for (int height : {180, 300, 420, 480}) {
+    for (int k = 0; k <= 60; ++k) {
+      const double amplitude = 1e-3 * std::pow(10.0, k / 30.0);  // 1 to 100 mrad/s, dense in between
+      SeriesPlot plot;
+      plot.title = "turn: velocity over the first stretch of the log";
+      plot.y_label = "turn velocity [rad/s]";
+      plot.x_label = "t [s]";
+      plot.height = height;
+      PlotSeries s;
+      s.name = "measured";
+      for (int i = 0; i <= 300; ++i) {
+        s.x.push_back(0.5 + i / 32.0);
+        s.y.push_back(amplitude * std::sin(i * 0.37));
+      }
+      plot.series.push_back(s);
+      const PlotLayout L = LayoutSeriesPlot(plot);
+      EXPECT_GE(plot_style::Ticks(L.view.y_min, L.view.y_max, L.y_step).size(), 2u) << amplitude << " at " << height << " px";
+      EXPECT_GE(plot_style::Ticks(L.view.x_min, L.view.x_max, L.x_step).size(), 2u) << amplitude << " at " << height << " px";
+      EXPECT_DOUBLE_EQ(NiceStep(L.y_step), L.y_step);  // still 1, 2 or 5 x 10^n
+      // The ticks stay readable: 20 px apart; 10 (a 13 px label's digits) on the smallest plot's 54 px axis.
+      const double px = L.y_step / (L.view.y_max - L.view.y_min) * L.plot_area.height();
+      EXPECT_GE(px, L.plot_area.height() >= 100 ? 20 : 10) << amplitude << " at " << height << " px";
+      PathPlot path;
+      path.paths.push_back(Line("a", 0, 0, 20 * amplitude, 3 * amplitude));
+      path.height = height;
+      const PlotLayout P = LayoutPathPlot(path);
+      EXPECT_GE(plot_style::Ticks(P.view.y_min, P.view.y_max, P.y_step).size(), 2u) << amplitude << " at " << height << " px";
+      EXPECT_GE(plot_style::Ticks(P.view.x_min, P.view.x_max, P.x_step).size(), 2u) << amplitude << " at " << height << " px";
+      EXPECT_DOUBLE_EQ(P.x_step, P.y_step);  // equal aspect: one step
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 244);
 }
 
 TEST(Plot, PaletteAndStylesDiffer) {
