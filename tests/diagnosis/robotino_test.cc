@@ -131,6 +131,12 @@ TEST(Robotino, IdentifiedOnFourRunsOfAFloorPredictsFourOthers) {
       EXPECT_EQ(p.bound, "lower");
     }
   }
+  // The four axis runs alias a three-wheel robot's turn by direction onto its couplings:
+  // the report says its turn between them is not checked (issue 64: on the runs 30
+  // degrees from them the heading's 90 % intervals held 37 % at 63 frames).
+  EXPECT_TRUE(std::any_of(report.notes.begin(), report.notes.end(), [](const std::string& n) {
+    return n.find("too few directions to tell its turn by direction") != std::string::npos;
+  }));
   // The validation runs' calibration split by distance from the fit's inputs (issue 64):
   // every row in one range (measured: all 0.25 to 1, the runs 30 degrees from the fit's).
   ASSERT_EQ(report.calibration_by_distance.size(), kCalibrationDistances.size() - 1);

@@ -424,6 +424,7 @@ TEST(OmniIdentification, AThreeWheelRobotsTurnByDirectionIsFoundAndNoneWhereItHa
     ::testing::Test::RecordProperty(which + "_third_sin", std::to_string(identified.effects.turn_third_sin));
     ::testing::Test::RecordProperty(which + "_third_cos", std::to_string(identified.effects.turn_third_cos));
     ::testing::Test::RecordProperty(which + "_note", s.note);
+    for (const std::string& n : report.notes) EXPECT_EQ(n.find("too few directions"), std::string::npos) << n;
     if (turns) {
       EXPECT_TRUE(s.estimated && c.estimated) << s.note;
       EXPECT_NEAR(identified.effects.turn_third_sin, -0.5, 0.1);
