@@ -13,6 +13,7 @@
 #include "analysis/fixed_step_cost.h"
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
+#include "core/samples.h"
 #include "sim/arm_simulation.h"
 
 namespace twinsim {
@@ -61,7 +62,7 @@ class ShootingProblem {
       split.first = std::max(log.edge_samples, ArmModelAtLogPeriod(start, log.sample_period).delay_samples);
       split.last = log.rows() - 1 - log.edge_samples;
       split.cut = split.first + static_cast<int>(kFitShare * (split.last - split.first));
-      const int length = std::max(1, static_cast<int>(std::lround(options.segment / log.sample_period)));
+      const int length = std::max(1, SamplesIn(options.segment, log.sample_period));
       if (split.cut - split.first < 2 * length || split.last - split.cut < 2) {
         char what[160];
         std::snprintf(what, sizeof what,

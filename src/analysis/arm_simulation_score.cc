@@ -8,6 +8,7 @@
 
 #include "backends/arm_backend_factory.h"
 #include "core/error.h"
+#include "core/samples.h"
 #include "io/csv_table.h"
 #include "sim/arm_simulation.h"
 
@@ -166,7 +167,7 @@ std::vector<int> ArmSimulationWindows(const ArmModel& model, const ArmLog& log, 
                                       const std::function<bool(int row)>& scored) {
   const int first = std::max(log.edge_samples, model.delay_samples);
   const int last = log.rows() - 1 - log.edge_samples;
-  *length = horizon > 0 ? std::max(1, static_cast<int>(std::lround(horizon / log.sample_period))) : last - first;
+  *length = horizon > 0 ? std::max(1, SamplesIn(horizon, log.sample_period)) : last - first;
   std::vector<int> starts;
   if (last - first < 2) return starts;
   if (!scored || horizon == 0) {

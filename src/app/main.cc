@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <string>
 #include <glog/logging.h>
 
 #include "app/commands/commands.h"
@@ -34,7 +35,21 @@ int main(int argc, char** argv) {
   AddDiagnoseCommand(app, &exit_code);
   AddBatchCommand(app, &exit_code);
   AddServeCommand(app, &exit_code);
-  CheckNumberOptions(&app);
+  CheckOptionValues(&app);
+  // CLI11 says only "A subcommand is required" of a word that names none.
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::string names;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      known = known || sub->check_name(argv[1]);
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::fprintf(stderr, "unknown command '%s' (the commands: %s); run 'twinsim --help'\n",
+                   PrintableText(argv[1]).c_str(), names.c_str());
+      return kExitBadInput;
+    }
+  }
   InstallInterruptHandlers();
   try {
     // A command's files appear together when it returns, or not at all (an error, Ctrl-C).

@@ -207,6 +207,16 @@ void CheckSweepJobLoads(const Sweep& sweep, const SweepJob& job) {
     throw InputError(where, "job " + job.id + " (the first) does not load with the sweep's parameters" +
                                 (keys.empty() ? std::string() : " (it sets " + keys + ")") + ":\n" + e.what());
   }
+  // A log the jobs replay is read whole too: a bad cell fails the sweep once, with its
+  // file and line, rather than every job.
+  const JobInputs in = ReadInputs(job);
+  if (!in.log.empty() && !in.model.empty()) {
+    if (ModelFileRobot(in.model) == RobotKind::kArm) {
+      ReadArmLog(in.log);
+    } else {
+      ReadOmniLog(in.log);
+    }
+  }
 }
 
 JobResult RunSweepJob(const Sweep& sweep, const SweepJob& job, const std::string& folder) {

@@ -35,6 +35,19 @@ void CreateFolders(const fs::path& folder, OutputTransaction* transaction) {
 
 }  // namespace
 
+void CheckFileCanBeWritten(const std::string& path) {
+  const fs::path target(path);
+  std::error_code ec;
+  if (fs::is_directory(target, ec)) {
+    throw InputError(SourceLocation{path}, "cannot write the file: a folder of that name is in the way");
+  }
+  for (fs::path p = target.parent_path(); !p.empty(); p = p.parent_path()) {
+    if (fs::exists(p, ec) && !fs::is_directory(p, ec))
+      throw InputError(SourceLocation{p.string()}, "cannot create folder: a file of that name is in the way");
+    if (p == p.parent_path()) break;
+  }
+}
+
 void WriteFileAtomically(const std::string& path, const std::string& content) {
   const fs::path target(path);
   OutputTransaction* transaction = OutputTransaction::Current();

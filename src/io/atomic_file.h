@@ -10,4 +10,9 @@ namespace twinsim {
 // InputError when the folder cannot be created or written.
 void WriteFileAtomically(const std::string& path, const std::string& content);
 
+// Throws the InputError WriteFileAtomically(path, ...) would where a folder stands at
+// `path` or a file where a folder of its path belongs; writes nothing. For commands
+// that compute for minutes before they write.
+void CheckFileCanBeWritten(const std::string& path);
+
 }  // namespace twinsim

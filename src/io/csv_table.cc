@@ -20,15 +20,48 @@ struct Field {
   int column = 1;    // 1-based character column where the text starts
 };
 
-std::vector<Field> SplitFields(const std::string& line) {
+// The fields of one line. A field may be quoted as RFC 4180 writes it ("a note, with a
+// comma", "" for a quote inside), so that a logger's text columns pass; a quoted field
+// cannot hold a line break (lines are read one by one) and is refused where it runs
+// past the line's end. Throws InputError at `path`:`line_no`.
+std::vector<Field> SplitFields(const std::string& line, const std::string& path, int line_no) {
   std::vector<Field> out;
   std::size_t start = 0;
+  auto blank = [](char c) { return c == ' ' || c == '\t'; };
   while (true) {
+    std::size_t a = start;
+    while (a < line.size() && blank(line[a])) ++a;
+    if (a < line.size() && line[a] == '"') {
+      std::string text;
+      std::size_t i = a + 1;
+      for (;; ++i) {
+        if (i >= line.size())
+          throw InputError(SourceLocation{path, line_no, static_cast<int>(a) + 1},
+                           "a quoted field runs past the line's end (a line break inside quotes is not read)");
+        if (line[i] != '"') {
+          text += line[i];
+        } else if (i + 1 < line.size() && line[i + 1] == '"') {
+          text += '"';
+          ++i;
+        } else {
+          break;
+        }
+      }
+      std::size_t after = i + 1;
+      while (after < line.size() && blank(line[after])) ++after;
+      if (after < line.size() && line[after] != ',')
+        throw InputError(SourceLocation{path, line_no, static_cast<int>(after) + 1},
+                         "text after a quoted field's closing quote");
+      out.push_back(Field{text, static_cast<int>(a) + 1});
+      if (after >= line.size()) break;
+      start = after + 1;
+      continue;
+    }
     const std::size_t comma = line.find(',', start);
     const std::size_t stop = comma == std::string::npos ? line.size() : comma;
-    std::size_t a = start, b = stop;
-    while (a < b && (line[a] == ' ' || line[a] == '\t')) ++a;
-    while (b > a && (line[b - 1] == ' ' || line[b - 1] == '\t')) --b;
+    std::size_t b = stop;
+    while (b > a && blank(line[b - 1])) --b;
+    if (a > b) a = b;
     out.push_back(Field{line.substr(a, b - a), static_cast<int>(a) + 1});
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -136,7 +169,7 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
-    const std::vector<Field> fields = SplitFields(line);
+    const std::vector<Field> fields = SplitFields(line, path, line_no);
     if (!have_header) {
       for (const Field& f : fields) {
         if (f.text.empty())

@@ -59,7 +59,8 @@ inline constexpr std::uintmax_t kMaxCsvBytes = std::uintmax_t{1} << 30;
 // Reads a CSV table. Throws InputError "path:line:column: ..." on a missing file, an
 // empty file, or a row with the wrong number of fields; text, NaN or infinity where a
 // number belongs is reported by RequireColumn(). Blank lines are skipped; a trailing
-// '\r' is ignored.
+// '\r' is ignored. A field may be quoted as RFC 4180 writes it ("a, b"; "" for a quote),
+// but not across a line break.
 CsvTable ReadCsvTable(const std::string& path);
 CsvTable ParseCsvTable(const std::string& text, const std::string& path);
 

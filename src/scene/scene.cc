@@ -13,6 +13,7 @@
 #include "core/math_constants.h"
 #include "io/input_file.h"
 #include "io/yaml_reader.h"
+#include "robots/omni/omni_log.h"
 
 namespace twinsim {
 namespace {
@@ -22,6 +23,14 @@ namespace fs = std::filesystem;
 bool ReadTwist(YamlMap& m, const std::string& key, Twist2* out) {
   std::vector<double> v;
   if (!m.Get(key, &v, 3)) return false;
+  // A command the scene's own log could not hold (omni_log.h) is a typo.
+  if (std::abs(v[0]) > kMaxSpeedCommand || std::abs(v[1]) > kMaxSpeedCommand || std::abs(v[2]) > kMaxTurnCommand) {
+    std::ostringstream msg;
+    msg << "must be at most " << kMaxSpeedCommand << " m/s (vx, vy) and " << kMaxTurnCommand << " rad/s (omega), got [" << v[0]
+        << ", " << v[1] << ", " << v[2] << "]";
+    m.Error(key, msg.str());
+    return false;
+  }
   *out = Twist2{v[0], v[1], v[2]};
   return true;
 }
@@ -55,7 +64,7 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     }
   } else if (type == "test_drive") {
     m.Get("start", &spec->start, NonNegative());
-    m.Get("speed", &spec->speed, Positive());
+    m.Get("speed", &spec->speed, Positive(kMaxSpeedCommand));
     m.Get("direction_deg", &spec->direction_deg, InRange(-360, 360));
     m.Get("drive_time", &spec->drive_time, Positive());
   } else if (type == "figure_eight") {
@@ -64,8 +73,8 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     m.Get("period", &spec->period, Positive());
     m.Get("laps", &spec->laps, InRange(1, 1000));
   } else if (type == "random") {
-    m.Get("max_speed", &spec->max_speed, Positive());
-    m.Get("max_omega", &spec->max_omega, NonNegative());
+    m.Get("max_speed", &spec->max_speed, Positive(kMaxSpeedCommand));
+    m.Get("max_omega", &spec->max_omega, NonNegative(kMaxTurnCommand));
     m.Get("min_segment", &spec->min_segment, Positive());
     m.Get("max_segment", &spec->max_segment, Positive());
     m.Get("rest_probability", &spec->rest_probability, InRange(0, 1));
@@ -81,8 +90,8 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     }
     m.Get("robot", &spec->log_robot);
   } else if (type == "go_to_pose") {
-    m.Get("max_speed", &spec->max_speed, Positive());
-    m.Get("max_omega", &spec->max_omega, Positive());
+    m.Get("max_speed", &spec->max_speed, Positive(kMaxSpeedCommand));
+    m.Get("max_omega", &spec->max_omega, Positive(kMaxTurnCommand));
     m.Get("max_accel", &spec->max_accel, Positive());
     m.Get("gain", &spec->gain, Positive());
     m.Get("position_tolerance", &spec->position_tolerance, Positive());

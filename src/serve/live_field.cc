@@ -159,8 +159,10 @@ bool ServeOptions::IsValid(std::string* why) const {
   if (cpu < -1 || cpu >= CPU_SETSIZE) return fail("--cpu " + std::to_string(cpu) + " is not a CPU number");
   if ((realtime_priority > 0 || cpu >= 0) && lockstep)
     return fail("--realtime-priority and --cpu apply to real time, not --lockstep");
-  for (int port : {control_port, blue_port, yellow_port})
-    if (port < 0 || port > 65535) return fail("port " + std::to_string(port) + " is not in 0..65535");
+  for (const auto& [name, port] : {std::pair<const char*, int>{"--control-port", control_port},
+                                   {"--blue-port", blue_port},
+                                   {"--yellow-port", yellow_port}})
+    if (port < 0 || port > 65535) return fail(std::string(name) + " " + std::to_string(port) + " is not in 0..65535");
   if (grsim_port < -1 || grsim_port > 65535) return fail("--grsim-port " + std::to_string(grsim_port) + " is not in 0..65535");
   if (grsim_port > 0 && (grsim_port == control_port || grsim_port == blue_port || grsim_port == yellow_port))
     return fail("--grsim-port must differ from the control, blue and yellow ports");

@@ -800,6 +800,10 @@ std::vector<BadInputCase> Cases() {
        "train --model {src}/models/rrr.yaml --log {d}/log.csv --kind linear --horizon 1 --history 0 --out {d}/p.pred", 2, "--history", "p.pred"},
       {"train_out_is_a_directory", {OmniLogFile(600), {"p.pred", kFolder}},
        "train --model {src}/models/omni4.yaml --log {d}/log.csv --kind linear --horizon 1 --out {d}/p.pred", 2, "{d}/p.pred", ""},
+      // Said before the training, not after it (2026-12-07).
+      {"train_out_parent_is_a_file", {OmniLogFile(600), {"f", std::string("x\n")}},
+       "train --model {src}/models/omni4.yaml --log {d}/log.csv --kind mlp --horizon 1 --out {d}/f/p.pred", 2,
+       "{d}/f: cannot create folder", "", 2},
       {"train_log_times_x1000", {{"log.csv", (std::string(kOmniHeader) + OmniRows(600, 1.0 / 30, 1000))}},
        "train --model {src}/models/omni4.yaml --log {d}/log.csv --kind linear --horizon 1 --out {d}/p.pred", 2, "{d}/log.csv:", "p.pred", 5.0, ""},
       {"identify_log_nan", {{"log.csv", (std::string(kArmHeader) + ArmRows(10, 3, 0.001) + std::string("0.01,0,nan,0,0,0,0\n"))}},
@@ -1072,6 +1076,36 @@ std::vector<BadInputCase> Cases() {
        "batch {d}/s.yaml --out {d}/out --jobs 0 --quiet", 0, "", ""},
       {"batch_out_is_a_file", {{"s.yaml", std::string(kSweep)}, {"out", std::string("x\n")}},
        "batch {d}/s.yaml --out {d}/out", 2, "{d}/out", ""},
+      // Found by a sweep of every command (2026-12-07): an empty --out wrote model.yaml and
+      // the reports into the file system's root; a word that names no command; a replay
+      // over its own log; a sample count that ran out of memory (exit 3); seconds that
+      // wrapped round an int (a hang, a window of 1e300 s taken); a shared log read by
+      // every job but never checked; a scene asking for commands its log cannot hold.
+      {"identify_out_empty", {OmniLogFile(600)},
+       "identify --model {src}/models/omni4.yaml --log {d}/log.csv --out \"\"", 2, "--out", "", 20, "must not be empty"},
+      {"diagnose_out_empty", {OmniLogFile(600)},
+       "diagnose --model {src}/models/omni4.yaml --log {d}/log.csv --out \"\"", 2, "--out", "", 20, "must not be empty"},
+      {"unknown_command", {}, "frobnicate --out {d}/o", 2, "unknown command 'frobnicate'", "o"},
+      {"replay_out_is_its_log", {OmniLogFile(120)},
+       "replay --model {src}/models/omni4.yaml --log {d}/log.csv --backend analytic --out {d}/log.csv", 2,
+       "is the log being replayed", ""},
+      {"replay_samples_two_billion", {OmniLogFile(120)},
+       "replay --model {src}/models/omni4.yaml --log {d}/log.csv --backend analytic --out {d}/o.csv --samples 2000000000",
+       2, "--samples", "o.csv"},
+      {"scene_test_drive_speed_1e9", {{"s.yaml", Replace(std::string(kOmniScene), {{"speed: 1.0", "speed: 1e9"}}, false)}},
+       "run {d}/s.yaml --out {d}/out", 2, "{d}/s.yaml:#:", "out", 20, "must be at most 100"},
+      {"scene_sequence_command_1e9", {{"s.yaml", Replace(std::string(kOmniScene), {{"      type: test_drive\n      start: 0.2\n      speed: 1.0\n      direction_deg: 45\n      drive_time: 0.5\n", "      type: sequence\n      segments:\n        - {duration: 1, command: [1e9, 0, 0]}\n"}}, false)}},
+       "run {d}/s.yaml --out {d}/out", 2, "{d}/s.yaml:#:", "out", 20, "must be at most 100 m/s"},
+      {"arm_compare_horizon_1e17", {ArmLogFile()},
+       "compare --model {src}/models/rrr.yaml --log {d}/log.csv --horizon 1e17 --out {d}/out", 2,
+       "too few for a simulation window of", "out"},
+      {"arm_identify_segment_1e15", {{"log.csv", std::string(kArmHeader) + ArmRows(4000, 3, 0.001)}},
+       "identify --model {src}/models/rrr.yaml --log {d}/log.csv --output-error run --segment 1e15 --out {d}/m.yaml", 2,
+       "{d}/log.csv:1:", "m.yaml", 20, "two segments of 1e+15 s"},
+      {"batch_shared_log_nan", {{"s.yaml", std::string("name: sw\nseed: 1\ncommand: replay\nfixed:\n  model: {src}/models/omni4.yaml\n  log: {d}/log.csv\n")}, {"log.csv", std::string(kOmniHeader) + OmniRows(3, 1.0 / 30, 1) + std::string("0.1,nan,0,0,0.5,0.1,0.2\n")}},
+       "batch {d}/s.yaml --out {d}/out", 2, "{d}/log.csv:#:", "out"},
+      {"tune_pid_learned_backend", {},
+       "tune-pid {src}/scenes/tune_pid_zeros.yaml --backend learned --out {d}/out", 2, "ode, bullet or analytic", "out"},
   };
 }
 

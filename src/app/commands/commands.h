@@ -16,9 +16,10 @@ CLI::Validator NonNegativeNumber();
 // An enum option's words, word k onto the enumerator of value k; any other word refused
 // ("must be a, b or c, got 'd'").
 CLI::Validator EnumWords(const std::vector<std::string>& words);
-// Every number option is finite, and an unsigned one (a seed) is not negative; applied to
-// all options of `app` and its subcommands by main().
-void CheckNumberOptions(CLI::App* app);
+// Every number option is finite, an unsigned one (a seed) is not negative, and a text
+// option (a path, a name) is not empty; applied to all options of `app` and its
+// subcommands by main().
+void CheckOptionValues(CLI::App* app);
 
 // --robot ID and --team TEAM: which robot of an omni log holding several to read
 // (robots/omni/omni_log.h).

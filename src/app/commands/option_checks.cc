@@ -60,7 +60,7 @@ CLI::Validator NonNegativeNumber() {
       "NONNEGATIVE", "non-negative");
 }
 
-void CheckNumberOptions(CLI::App* app) {
+void CheckOptionValues(CLI::App* app) {
   for (CLI::Option* opt : app->get_options()) {
     const std::string type = opt->get_type_name();
     // Validators append their names to the type ("FLOAT:POSITIVE").
@@ -73,6 +73,12 @@ void CheckNumberOptions(CLI::App* app) {
             return {};
           },
           "", "finite"));
+    } else if (type.rfind("TEXT", 0) == 0) {
+      // No option means an empty text: an empty --out would name the current folder or
+      // the file system's root, an empty --log no file.
+      opt->check(CLI::Validator(
+          [](std::string& text) -> std::string { return text.empty() ? "must not be empty" : std::string(); }, "",
+          "not empty"));
     } else if (type.rfind("UINT", 0) == 0) {
       // CLI11 wraps "-1" round to 2^64 - 1 for an unsigned option.
       opt->check(CLI::Validator(
@@ -82,7 +88,7 @@ void CheckNumberOptions(CLI::App* app) {
           "", "unsigned"));
     }
   }
-  for (CLI::App* sub : app->get_subcommands({})) CheckNumberOptions(sub);
+  for (CLI::App* sub : app->get_subcommands({})) CheckOptionValues(sub);
 }
 
 void AddLogSelectorOptions(CLI::App* cmd, OmniLogSelector* select) {

@@ -131,6 +131,10 @@ std::string EngineAgainstItsFit(const OmniModel& model, const OmniLog& log, cons
 
 int Replay(const ReplayOptions& options) {
   // Check everything before writing anything.
+  std::error_code same_error;
+  if (std::filesystem::equivalent(options.out, options.log, same_error))
+    throw InputError("--out " + options.out + " is the log being replayed (--log " + options.log +
+                     "): the replay would overwrite it; give another file");
   if (ModelFileRobot(options.model) == RobotKind::kArm) return ReplayArm(options);
   const OmniModel model = LoadOmniModel(options.model);
   const OmniLog log = ReadOmniLogSayingHoles(options.log, options.select);
@@ -243,8 +247,8 @@ void AddReplayCommand(CLI::App& app, int* exit_code) {
                   "Omni: N draws per row, written as t,sample,x,y,theta. The observer's state: from its prediction "
                   "(its mean and covariance: the estimate's uncertainty, the driving noise and the process noise). "
                   "The tracker's (the learned backend's): N rollouts, each under its own draw of the driving noise "
-                  "(the predictor's where it has one, else the model's)")
-      ->check(NonNegativeNumber());
+                  "(the predictor's where it has one, else the model's); at most 10000")
+      ->check(CLI::Range(0, 10000));
   cmd->add_option("--seed", options->seed, "The samples' random seed")->capture_default_str()->check(NonNegativeNumber());
   AddParameterUncertaintyOption(cmd, &options->parameter_uncertainty);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");

@@ -191,8 +191,8 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--samples", options->samples,
                   "Omni: N rollouts that differ in the robots' driving noise (and a learned robot's drawn predictor,\n"
                   "--parameter-uncertainty): sample 0's files as a plain run,\n"
-                  "samples.csv (t,sample,x,y,theta: the first robot's true pose) and fan.png")
-      ->check(CLI::NonNegativeNumber);
+                  "samples.csv (t,sample,x,y,theta: the first robot's true pose) and fan.png; at most 10000")
+      ->check(CLI::Range(0, 10000));
   cmd->add_option("--jobs", options->jobs, "Threads for --samples (0: one per core); the files do not depend on it")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");

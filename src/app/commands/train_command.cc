@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "engines/omni_engine.h"
+#include "io/atomic_file.h"
 #include "io/output_files.h"
 #include "io/yaml_extends.h"
 #include "learning/arm_predictor.h"
@@ -146,6 +147,7 @@ std::function<void(int, int, double)> EpochProgress(Progress* progress, const Om
 }
 
 int Train(const TrainCliOptions& options) {
+  CheckFileCanBeWritten(options.out);  // before minutes of training, not after
   if (ModelFileRobot(options.model) == RobotKind::kArm) return TrainArm(options);
   if (options.history_given) throw InputError("--history is for arm models only (the omni layout is fixed)");
   if ((options.nominal_errors || options.nominal_engine || options.nominal_substeps || options.nominal_state) &&

@@ -118,6 +118,12 @@ int TunePidCommand(const TunePidCliOptions& options) {
   std::string why;
   if (!tuning.IsValid(&why)) throw InputError(SourceLocation{options.scene}, "tune_pid: " + why);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
+  // A learned robot's predictor stands for the robot with its controller: it has no
+  // PID parameters to tune.
+  if (backend == "learned")
+    throw InputError(options.backend.empty() ? SourceLocation{options.scene} : SourceLocation{},
+                     "tune-pid tunes the on-board controller, which the physics engines simulate and a learned "
+                     "predictor does not: use --backend ode, bullet or analytic");
   const TestRunEvaluator evaluator(scene, backend, tuning.weights);
 
   Progress progress("tune-pid " + scene.name, !options.quiet);

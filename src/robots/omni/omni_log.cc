@@ -30,8 +30,6 @@ constexpr double kMaxFramePeriod = 1.0;   // s (1 Hz)
 constexpr double kMaxFrames = 1e7;        // frames spanned by one log (3.8 days at 30 fps)
 constexpr double kMaxPosition = 1e4;      // m from the field's origin
 constexpr double kMaxAngle = 1e6;         // rad, unwrapped
-constexpr double kMaxSpeedCommand = 100;  // m/s
-constexpr double kMaxTurnCommand = 1000;  // rad/s
 
 // Refuses a row whose numbers no robot on a field produces.
 void CheckRowRange(const OmniLogRow& row, const SourceLocation& where) {

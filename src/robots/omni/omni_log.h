@@ -100,6 +100,11 @@ OmniTypicalMotion TypicalMotionOf(const std::vector<const OmniLog*>& logs);
 // Rows [first, last) of `log` as a log of their own (path, robot and frame period kept).
 OmniLog SliceOmniLog(const OmniLog& log, std::size_t first, std::size_t last);
 
+// The largest commands a log may hold (|vx_cmd|, |vy_cmd|; |omega_cmd|): beyond them a
+// row is refused as no robot on a field's, and a scene may not ask for more.
+inline constexpr double kMaxSpeedCommand = 100;  // m/s
+inline constexpr double kMaxTurnCommand = 1000;  // rad/s
+
 // The CSV text of a log (header and rows).
 std::string FormatOmniLog(const std::vector<OmniLogRow>& rows);
 // The log's header line, and one row's line (a row without a measurement has empty

@@ -53,6 +53,25 @@ TEST(OmniLog, ExtraTextColumnsAreIgnored) {
             "log.csv:3:8: column 'y': expected a number, got 'zero'");
 }
 
+// A logger that quotes its text as RFC 4180 does: a note holding a comma or a quote,
+// quoted column names, a quoted robot id. A quote left open, or text after one, is
+// refused with its place.
+TEST(OmniLog, QuotedFieldsAreReadAsRfc4180WritesThem) {
+  const std::string csv = "\"robot\",\"t\",x,y,theta,vx_cmd,vy_cmd,omega_cmd,\"note\"\n"
+                          "\"blue0\",0,0,0,0,0,0,0,\"start, slowly\"\n"
+                          "blue0,0.0333333,0.01,0,0,0,0,0, \"a \"\"quoted\"\" word\" \n"
+                          "\"blue0\",\"0.0666667\",0.02,0,0,1,0,0,\"\"\n";
+  const OmniLog log = ParseOmniLog(csv, "log.csv");
+  ASSERT_EQ(log.rows.size(), 3u);
+  EXPECT_EQ(log.rows[2].t, 0.0666667);
+  EXPECT_EQ(log.rows[2].pose.x, 0.02);
+  EXPECT_EQ(log.rows[2].command.vx, 1);
+  EXPECT_EQ(ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,0,0,0,0,0,\"0\n"),
+            "log.csv:3:15: a quoted field runs past the line's end (a line break inside quotes is not read)");
+  EXPECT_EQ(ErrorOf(std::string(kHeader) + "0,0,0,0,0,0,0\n0.1,\"0\"1,0,0,0,0,0\n"),
+            "log.csv:3:8: text after a quoted field's closing quote");
+}
+
 TEST(OmniLog, MissingColumn) {
   const std::string e = ErrorOf("t,x,y,theta,vx_cmd,vy_cmd\n0,0,0,0,0,0\n0.1,0,0,0,0,0\n");
   EXPECT_NE(e.find("log.csv:1: missing column 'omega_cmd' (have: t, x, y, theta, vx_cmd, vy_cmd)"), std::string::npos) << e;
