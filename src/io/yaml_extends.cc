@@ -30,6 +30,20 @@ RobotKind ParseRobotKind(const YAML::Node& robot, const SourceLocation& where, c
                               (robot.IsScalar() ? robot.Scalar() : std::string("a non-scalar")) + "'");
 }
 
+void RequireModelKind(const YAML::Node& root, const std::string& path, RobotKind wanted) {
+  if (!root.IsMap()) return;
+  const YAML::Node robot = root["robot"];
+  const bool says = robot && robot.IsScalar();
+  const bool omni = says ? robot.Scalar() == "omni" : static_cast<bool>(root["wheels"]);
+  const bool arm = says && robot.Scalar() == "arm";
+  if (wanted == RobotKind::kArm ? !omni : !arm) return;
+  const SourceLocation where =
+      says ? SourceLocation{path, robot.Mark().line + 1, robot.Mark().column + 1} : SourceLocation{path};
+  throw InputError(where, wanted == RobotKind::kArm
+                              ? "an omni robot's model, where an arm's is needed (a URDF, or YAML with robot: arm)"
+                              : "an arm's model, where an omni robot's is needed (YAML with wheels, robot: omni)");
+}
+
 RobotKind ModelFileRobot(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });

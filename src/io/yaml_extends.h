@@ -28,6 +28,12 @@ YAML::Node ResolveExtends(const YAML::Node& root, const std::string& path, int d
 // `robot` is neither arm nor omni.
 RobotKind ModelFileRobot(const std::string& path);
 
+// Throws one InputError, at the file's `robot` key, where a model file's resolved `root`
+// is the other kind's than `wanted` (`robot: omni`, or none and an omni robot's
+// `wheels`, where an arm's is wanted; `robot: arm` where an omni robot's is): the model
+// reader's own checks would list every key of the other schema instead.
+void RequireModelKind(const YAML::Node& root, const std::string& path, RobotKind wanted);
+
 // A `robot:` value: arm or omni; InputError at `where` (the key's place) for anything else,
 // `what` saying what the file is ("a model", "a scene").
 RobotKind ParseRobotKind(const YAML::Node& robot, const SourceLocation& where, const std::string& what);

@@ -1012,8 +1012,9 @@ std::vector<BadInputCase> Cases() {
        "excite --model {src}/models/rrr.yaml --out {d}/out --starts 1 --iterations 5 --samples 2000000000", 2, "--samples", "out"},
       {"excite_starts_zero", {},
        "excite --model {src}/models/rrr.yaml --out {d}/out --starts 0 --iterations 5", 2, "--starts", "out"},
-      {"excite_threads_zero", {},
-       "excite --model {src}/models/rrr.yaml --out {d}/out --starts 1 --iterations 5 --threads 0", 2, "--threads", "out"},
+      // 0 is one thread per core, as for every other command (2026-12-07).
+      {"excite_threads_negative", {},
+       "excite --model {src}/models/rrr.yaml --out {d}/out --starts 1 --iterations 5 --threads -1", 2, "--threads", "out"},
       {"excite_acceleration_limit_negative", {},
        "excite --model {src}/models/rrr.yaml --out {d}/out --starts 1 --iterations 5 --acceleration-limit -1", 2, "--acceleration-limit", "out"},
       {"excite_acceleration_limit_two_for_three_joints", {},

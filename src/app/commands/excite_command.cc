@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <thread>
 
 #include "app/commands/commands.h"
 #include "core/error.h"
@@ -104,8 +105,19 @@ std::unique_ptr<ArmModel> CheckExciteOptions(const ArmModel& model, ExciteCliOpt
       options->acceleration_limits.assign(static_cast<std::size_t>(n), options->acceleration_limits[0]);
     options->design.acceleration_limits = options->acceleration_limits;
   }
+  if (options->design.threads == 0) options->design.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::string invalid;
-  if (!options->design.IsValid(&invalid)) throw InputError("excite: " + invalid);
+  if (!options->design.IsValid(&invalid)) {
+    // Said by the option's name, where the design's field has one.
+    for (const auto& [field, option] : {std::pair<const char*, const char*>{"samples_per_period", "--samples"},
+                                        {"max_iterations", "--iterations"},
+                                        {"position_margin", "--position-margin"},
+                                        {"torque_fraction", "--torque-fraction"},
+                                        {"starts", "--starts"}}) {
+      if (invalid.rfind(field, 0) == 0) invalid = option + invalid.substr(std::string(field).size());
+    }
+    throw InputError("excite: " + invalid);
+  }
   ResolveExcitationLimits(model, options->design);
   std::unique_ptr<ArmModel> plant;
   if (!options->plant.empty()) {
@@ -257,8 +269,10 @@ void AddExciteCommand(CLI::App& app, int* exit_code) {
   cmd->add_option("--samples", options->design.samples_per_period, "Regressor samples per period in the criterion")
       ->capture_default_str()
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--threads", options->design.threads, "Threads for the starts (the result does not depend on it)")
-      ->capture_default_str();
+  cmd->add_option("--threads", options->design.threads,
+                  "Threads for the starts, 0: one per core (the result does not depend on it)")
+      ->capture_default_str()
+      ->check(NonNegativeNumber());
   cmd->add_option("--acceleration-limit", options->acceleration_limits,
                   "Acceleration limit [rad/s^2]: one for all joints or one per joint (default 20)")
       ->expected(1, 64);

@@ -85,7 +85,8 @@ bool EndsWithYaml(const std::string& path) {
 // the model there and the reports into --report DIR when given.
 int IdentifyOmniCli(const IdentifyCliOptions& options) {
   for (const char* arm_only : {"--offsets", "--unweighted", "--cutoff", "--decimate", "--max-condition",
-                               "--output-error", "--stribeck", "--presliding", "--segment", "--position-friction"}) {
+                               "--output-error", "--stribeck", "--presliding", "--segment", "--position-friction",
+                               "--position-torque"}) {
     if (std::find(options.given.begin(), options.given.end(), arm_only) != options.given.end())
       throw InputError(std::string(arm_only) + " is for arms; " + options.model + " is an omni robot");
   }

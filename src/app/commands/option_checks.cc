@@ -1,8 +1,10 @@
 // The checks every command's options share, and the reading of arm logs at the cut-off
 // --cutoff names (commands.h).
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <string>
 
@@ -79,11 +81,28 @@ void CheckOptionValues(CLI::App* app) {
       opt->check(CLI::Validator(
           [](std::string& text) -> std::string { return text.empty() ? "must not be empty" : std::string(); }, "",
           "not empty"));
-    } else if (type.rfind("UINT", 0) == 0) {
-      // CLI11 wraps "-1" round to 2^64 - 1 for an unsigned option.
+    } else if (type.rfind("INT", 0) == 0) {
+      // CLI11 holds a whole number beyond a long long's range at its end (a seed of 10^20
+      // ran as 2^63 - 1); an int option's own range is its check's.
       opt->check(CLI::Validator(
           [](std::string& text) -> std::string {
-            return text.find('-') == std::string::npos ? std::string() : "must not be negative, got " + text;
+            long long v = 0;
+            const char* begin = text.data() + (text.rfind('+', 0) == 0 ? 1 : 0);
+            const std::from_chars_result read = std::from_chars(begin, text.data() + text.size(), v);
+            if (read.ec == std::errc::result_out_of_range) return "must be within +-9223372036854775807, got " + text;
+            return std::string();
+          },
+          "", "whole"));
+    } else if (type.rfind("UINT", 0) == 0) {
+      // CLI11 wraps "-1" round to 2^64 - 1 for an unsigned option, and holds a number
+      // beyond 2^64 - 1 there.
+      opt->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            if (text.find('-') != std::string::npos) return "must not be negative, got " + text;
+            std::uint64_t v = 0;
+            const std::from_chars_result read = std::from_chars(text.data(), text.data() + text.size(), v);
+            if (read.ec == std::errc::result_out_of_range) return "must be at most 18446744073709551615, got " + text;
+            return std::string();
           },
           "", "unsigned"));
     }

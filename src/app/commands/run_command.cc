@@ -194,7 +194,7 @@ void AddRunCommand(CLI::App& app, int* exit_code) {
                   "samples.csv (t,sample,x,y,theta: the first robot's true pose) and fan.png; at most 10000")
       ->check(CLI::Range(0, 10000));
   cmd->add_option("--jobs", options->jobs, "Threads for --samples (0: one per core); the files do not depend on it")
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
   cmd->add_flag("--quiet,-q", options->quiet, "No progress and no summary");
   cmd->callback([options, exit_code] { *exit_code = Run(*options); });
 }

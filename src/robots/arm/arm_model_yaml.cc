@@ -140,6 +140,7 @@ ArmModel ReadArmModel(const YAML::Node& file_root, const std::string& path, int 
   ArmModel model;
   model.source_path = path;
   const YAML::Node root = Resolve(file_root, path, depth);
+  RequireModelKind(root, path, RobotKind::kArm);
   YamlMap top(root, path, "", &errors);
   std::string kind = "arm";
   top.Get("robot", &kind, {"arm"});

@@ -127,6 +127,7 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
   OmniModel model;
   model.source_path = path;
   const YAML::Node root = Resolve(file_root, path, depth);
+  RequireModelKind(root, path, RobotKind::kOmni);
   YamlMap top(root, path, "", &errors);
   std::string kind = "omni";
   top.Get("robot", &kind, {"omni"});
