@@ -53,7 +53,7 @@ void CheckSize(int width, int height) {
 // `step` (a 1, 2 or 5 x 10^n), made finer (5 -> 2 -> 1 -> 0.5) until [lo, hi] holds at
 // least two ticks: an axis with one labelled value has no scale. Where 70 px between
 // ticks asks a step just over 2 x 10^n, 5 x 10^n can leave a range of twice that with
-// 0 alone (a turn rate of +-4.5 mrad/s on a 290 px axis).
+// 0 alone (a turn rate of +-0.42 rad/s on a 290 px axis: a step of 0.5).
 double StepWithTwoTicks(double lo, double hi, double step) {
   for (int k = 0; k < 6 && Ticks(lo, hi, step).size() < 2; ++k) {
     const double e = std::pow(10.0, std::floor(std::log10(step) + 1e-9));

@@ -59,9 +59,10 @@ TEST(Plot, NiceStepsAreOneTwoFiveTimesAPowerOfTen) {
   EXPECT_DOUBLE_EQ(NiceStep(1500), 2000);
 }
 
-// An axis with one labelled value has no scale: before StepWithTwoTicks, a turn rate of
-// +-4.5 mrad/s on identify's 420 px velocity plot showed "0" alone (70 px between ticks
-// asked for just over 0.002, so 0.005, and the view held only -0.0049 to 0.0049).
+// An axis with one labelled value has no scale: before StepWithTwoTicks, the Robotino's
+// turn rate of +-0.42 rad/s on identify's 420 px velocity plot showed "0" alone (70 px
+// between ticks asked for just over 0.2, so 0.5, and the view held -0.44 to 0.44). The
+// same falls at every decade: amplitudes from 1 to 100 mrad/s.
 TEST(Plot, EveryAxisOfASeriesOrPathPlotShowsAtLeastTwoTicks) {
   int checked = 0;
   for (int height : {180, 300, 420, 480}) {
