@@ -1,5 +1,6 @@
 #include "batch/batch_job.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -176,8 +177,8 @@ std::string OneLine(std::string s) {
 }  // namespace
 
 void CheckSweepJobLoads(const Sweep& sweep, const SweepJob& job) {
+  const JobInputs in = ReadInputs(job);
   try {
-    const JobInputs in = ReadInputs(job);
     if (!in.scene.empty()) {
       if (SceneRobotKind(in.scene) == RobotKind::kArm) {
         LoadArmScene(in.scene, in.scene_overrides);
@@ -207,10 +208,12 @@ void CheckSweepJobLoads(const Sweep& sweep, const SweepJob& job) {
     throw InputError(where, "job " + job.id + " (the first) does not load with the sweep's parameters" +
                                 (keys.empty() ? std::string() : " (it sets " + keys + ")") + ":\n" + e.what());
   }
-  // A log the jobs replay is read whole too: a bad cell fails the sweep once, with its
-  // file and line, rather than every job.
-  const JobInputs in = ReadInputs(job);
-  if (!in.log.empty() && !in.model.empty()) {
+  // A log every job replays (a fixed one) is read whole too: a bad cell fails the sweep
+  // once, with its file and line, rather than every job. A swept log is each job's own
+  // and fails alone, as other swept values do.
+  const bool shared = std::any_of(sweep.fixed.begin(), sweep.fixed.end(),
+                                  [](const SweepParameter& p) { return p.name == "log"; });
+  if (shared && !in.log.empty() && !in.model.empty()) {
     if (ModelFileRobot(in.model) == RobotKind::kArm) {
       ReadArmLog(in.log);
     } else {

@@ -779,7 +779,8 @@ OmniIdentificationSeries MakeSeries(const OmniLog& log, const OmniModel& nominal
   // A model's velocity at row i, or nothing where it has none.
   auto model = [&](const OmniReplayResult& r, std::size_t i) -> std::optional<std::array<double, 3>> {
     if (o.features) {
-      if (i >= r.input_feature.size() || r.input_feature[i].size() == 0) return std::nullopt;
+      // After the warm-up (predicted), as the tracker's: not the filter settling.
+      if (!r.predicted[i] || i >= r.input_feature.size() || r.input_feature[i].size() == 0) return std::nullopt;
       const Twist2& v = r.estimated_velocity[i];
       return std::array<double, 3>{v.vx, v.vy, v.omega};
     }

@@ -16,52 +16,58 @@ namespace twinsim {
 namespace {
 
 struct Field {
-  std::string text;  // trimmed
+  std::string text;  // trimmed, quotes removed
   int column = 1;    // 1-based character column where the text starts
 };
 
 // The fields of one line. A field may be quoted as RFC 4180 writes it ("a note, with a
-// comma", "" for a quote inside), so that a logger's text columns pass; a quoted field
-// cannot hold a line break (lines are read one by one) and is refused where it runs
-// past the line's end. Throws InputError at `path`:`line_no`.
-std::vector<Field> SplitFields(const std::string& line, const std::string& path, int line_no) {
+// comma", "" for a quote inside), so that a logger's text columns pass; as Python's
+// csv module reads them, text after the closing quote joins the field ("Fast" run is
+// Fast run), and a quote that does not open a field (5", it's) is a character. A quote
+// left open to the line's end (a line break inside quotes, which lines read one by one
+// cannot follow) reads the field as if unquoted, quote and all: nothing a reader that
+// split at every comma took is refused.
+std::vector<Field> SplitFields(const std::string& line) {
   std::vector<Field> out;
   std::size_t start = 0;
   auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  auto trim = [&](std::string text) {
+    std::size_t a = 0, b = text.size();
+    while (a < b && blank(text[a])) ++a;
+    while (b > a && blank(text[b - 1])) --b;
+    return text.substr(a, b - a);
+  };
   while (true) {
     std::size_t a = start;
     while (a < line.size() && blank(line[a])) ++a;
-    if (a < line.size() && line[a] == '"') {
+    const std::size_t close = a < line.size() && line[a] == '"' ? line.find('"', a + 1) : std::string::npos;
+    if (close != std::string::npos) {
       std::string text;
       std::size_t i = a + 1;
-      for (;; ++i) {
-        if (i >= line.size())
-          throw InputError(SourceLocation{path, line_no, static_cast<int>(a) + 1},
-                           "a quoted field runs past the line's end (a line break inside quotes is not read)");
+      while (i < line.size()) {  // inside the quotes; `""` is a quote
         if (line[i] != '"') {
-          text += line[i];
+          text += line[i++];
         } else if (i + 1 < line.size() && line[i + 1] == '"') {
           text += '"';
-          ++i;
+          i += 2;
         } else {
           break;
         }
       }
-      std::size_t after = i + 1;
-      while (after < line.size() && blank(line[after])) ++after;
-      if (after < line.size() && line[after] != ',')
-        throw InputError(SourceLocation{path, line_no, static_cast<int>(after) + 1},
-                         "text after a quoted field's closing quote");
-      out.push_back(Field{text, static_cast<int>(a) + 1});
-      if (after >= line.size()) break;
-      start = after + 1;
-      continue;
+      if (i < line.size()) {  // closed: the rest up to the next comma joins the field
+        const std::size_t comma = line.find(',', i + 1);
+        text += line.substr(i + 1, (comma == std::string::npos ? line.size() : comma) - (i + 1));
+        out.push_back(Field{trim(text), static_cast<int>(a) + 1});
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+        continue;
+      }
+      // Open to the line's end ("" pairs only): read as unquoted below.
     }
     const std::size_t comma = line.find(',', start);
     const std::size_t stop = comma == std::string::npos ? line.size() : comma;
     std::size_t b = stop;
     while (b > a && blank(line[b - 1])) --b;
-    if (a > b) a = b;
     out.push_back(Field{line.substr(a, b - a), static_cast<int>(a) + 1});
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -169,7 +175,7 @@ CsvTable ParseCsvTable(const std::string& text, const std::string& path) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos) continue;
-    const std::vector<Field> fields = SplitFields(line, path, line_no);
+    const std::vector<Field> fields = SplitFields(line);
     if (!have_header) {
       for (const Field& f : fields) {
         if (f.text.empty())

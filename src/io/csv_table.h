@@ -60,7 +60,7 @@ inline constexpr std::uintmax_t kMaxCsvBytes = std::uintmax_t{1} << 30;
 // empty file, or a row with the wrong number of fields; text, NaN or infinity where a
 // number belongs is reported by RequireColumn(). Blank lines are skipped; a trailing
 // '\r' is ignored. A field may be quoted as RFC 4180 writes it ("a, b"; "" for a quote),
-// but not across a line break.
+// but not across a line break (a quote left open reads as a character).
 CsvTable ReadCsvTable(const std::string& path);
 CsvTable ParseCsvTable(const std::string& text, const std::string& path);
 

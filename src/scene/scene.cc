@@ -72,6 +72,14 @@ void ReadCommands(const YAML::Node& node, const std::string& path, const std::st
     m.Get("size", &spec->size, Positive());
     m.Get("period", &spec->period, Positive());
     m.Get("laps", &spec->laps, InRange(1, 1000));
+    // Its field velocity (a w cos wt, a w cos 2wt), w = 2 pi / period, peaks at sqrt(2) a w.
+    const double peak = std::sqrt(2.0) * spec->size * 2 * kPi / spec->period;
+    if (peak > kMaxSpeedCommand) {
+      std::ostringstream msg;
+      msg << "size " << spec->size << " m in a period of " << spec->period << " s asks up to " << peak
+          << " m/s; a command may be at most " << kMaxSpeedCommand << " m/s";
+      m.Error("size", msg.str());
+    }
   } else if (type == "random") {
     m.Get("max_speed", &spec->max_speed, Positive(kMaxSpeedCommand));
     m.Get("max_omega", &spec->max_omega, NonNegative(kMaxTurnCommand));

@@ -1105,6 +1105,12 @@ std::vector<BadInputCase> Cases() {
        "{d}/log.csv:1:", "m.yaml", 20, "two segments of 1e+15 s"},
       {"batch_shared_log_nan", {{"s.yaml", std::string("name: sw\nseed: 1\ncommand: replay\nfixed:\n  model: {src}/models/omni4.yaml\n  log: {d}/log.csv\n")}, {"log.csv", std::string(kOmniHeader) + OmniRows(3, 1.0 / 30, 1) + std::string("0.1,nan,0,0,0.5,0.1,0.2\n")}},
        "batch {d}/s.yaml --out {d}/out", 2, "{d}/log.csv:#:", "out"},
+      {"scene_figure_eight_1000_m", {{"s.yaml", Replace(std::string(kOmniScene), {{"      type: test_drive\n      start: 0.2\n      speed: 1.0\n      direction_deg: 45\n      drive_time: 0.5\n", "      type: figure_eight\n      size: 1000\n      period: 0.5\n"}}, false)}},
+       "run {d}/s.yaml --out {d}/out", 2, "{d}/s.yaml:#:", "out", 20, "a command may be at most 100 m/s"},
+      {"run_seed_hex_beyond_2_63", {}, "run {src}/scenes/drive45.yaml --seed 0x100000000000000000 --out {d}/out", 2,
+       "--seed", "out"},
+      {"excite_seed_plus_beyond_2_64", {},
+       "excite --model {src}/models/rrr.yaml --seed +100000000000000000000 --out {d}/out", 2, "--seed", "out"},
       {"tune_pid_learned_backend", {},
        "tune-pid {src}/scenes/tune_pid_zeros.yaml --backend learned --out {d}/out", 2, "ode, bullet or analytic", "out"},
   };

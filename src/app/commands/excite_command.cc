@@ -113,7 +113,9 @@ std::unique_ptr<ArmModel> CheckExciteOptions(const ArmModel& model, ExciteCliOpt
                                         {"max_iterations", "--iterations"},
                                         {"position_margin", "--position-margin"},
                                         {"torque_fraction", "--torque-fraction"},
-                                        {"starts", "--starts"}}) {
+                                        {"starts", "--starts"},
+                                        {"harmonics", "--harmonics"},
+                                        {"fundamental", "--fundamental"}}) {
       if (invalid.rfind(field, 0) == 0) invalid = option + invalid.substr(std::string(field).size());
     }
     throw InputError("excite: " + invalid);

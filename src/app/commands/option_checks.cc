@@ -1,7 +1,7 @@
 // The checks every command's options share, and the reading of arm logs at the cut-off
 // --cutoff names (commands.h).
 #include <algorithm>
-#include <charconv>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
@@ -81,30 +81,27 @@ void CheckOptionValues(CLI::App* app) {
       opt->check(CLI::Validator(
           [](std::string& text) -> std::string { return text.empty() ? "must not be empty" : std::string(); }, "",
           "not empty"));
-    } else if (type.rfind("INT", 0) == 0) {
-      // CLI11 holds a whole number beyond a long long's range at its end (a seed of 10^20
-      // ran as 2^63 - 1); an int option's own range is its check's.
+    } else if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0) {
+      // CLI11 holds a whole number beyond its type's range at the range's end (a seed of
+      // 10^20 ran as 2^63 - 1) and wraps "-1" round to 2^64 - 1 for an unsigned one. Read
+      // as CLI11 reads it (strtoll / strtoull, base 0: 0x.. too), then judged.
+      const bool is_unsigned = type.rfind("UINT", 0) == 0;
       opt->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            long long v = 0;
-            const char* begin = text.data() + (text.rfind('+', 0) == 0 ? 1 : 0);
-            const std::from_chars_result read = std::from_chars(begin, text.data() + text.size(), v);
-            if (read.ec == std::errc::result_out_of_range) return "must be within +-9223372036854775807, got " + text;
+          [is_unsigned](std::string& text) -> std::string {
+            if (is_unsigned && text.find('-') != std::string::npos) return "must not be negative, got " + text;
+            errno = 0;
+            char* end = nullptr;
+            if (is_unsigned) {
+              std::strtoull(text.c_str(), &end, 0);
+            } else {
+              std::strtoll(text.c_str(), &end, 0);
+            }
+            if (errno == ERANGE)
+              return std::string("must be within ") + (is_unsigned ? "0 to 18446744073709551615" : "+-9223372036854775807") +
+                     ", got " + text;
             return std::string();
           },
           "", "whole"));
-    } else if (type.rfind("UINT", 0) == 0) {
-      // CLI11 wraps "-1" round to 2^64 - 1 for an unsigned option, and holds a number
-      // beyond 2^64 - 1 there.
-      opt->check(CLI::Validator(
-          [](std::string& text) -> std::string {
-            if (text.find('-') != std::string::npos) return "must not be negative, got " + text;
-            std::uint64_t v = 0;
-            const std::from_chars_result read = std::from_chars(text.data(), text.data() + text.size(), v);
-            if (read.ec == std::errc::result_out_of_range) return "must be at most 18446744073709551615, got " + text;
-            return std::string();
-          },
-          "", "unsigned"));
     }
   }
   for (CLI::App* sub : app->get_subcommands({})) CheckOptionValues(sub);

@@ -1,5 +1,6 @@
 // `twinsim tune-pid SCENE.yaml --out DIR [--backend B] [--iterations N] [--start model|zeros]
 //                  [--threads N] [--seed N] [--baselines]`
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -119,11 +120,13 @@ int TunePidCommand(const TunePidCliOptions& options) {
   if (!tuning.IsValid(&why)) throw InputError(SourceLocation{options.scene}, "tune_pid: " + why);
   const std::string backend = options.backend.empty() ? scene.backend : options.backend;
   // A learned robot's predictor stands for the robot with its controller: it has no
-  // PID parameters to tune.
-  if (backend == "learned")
-    throw InputError(options.backend.empty() ? SourceLocation{options.scene} : SourceLocation{},
+  // PID parameters to tune (on the field's backend or a robot's own).
+  const std::vector<std::string> backends = RobotBackends(scene, backend);
+  if (std::find(backends.begin(), backends.end(), "learned") != backends.end())
+    throw InputError(backend == "learned" && !options.backend.empty() ? SourceLocation{} : SourceLocation{options.scene},
                      "tune-pid tunes the on-board controller, which the physics engines simulate and a learned "
-                     "predictor does not: use --backend ode, bullet or analytic");
+                     "predictor does not: use --backend ode, bullet or analytic, and no robot's own 'backend: "
+                     "learned'");
   const TestRunEvaluator evaluator(scene, backend, tuning.weights);
 
   Progress progress("tune-pid " + scene.name, !options.quiet);
