@@ -214,7 +214,7 @@ LearningFilter FitPlantLearningFilter(const ClosedLoopFrf& frf, int joint, const
                                       double viscous, const PlantFitOptions& options) {
   CheckJoint(frf, joint);
   std::string why;
-  if (!options.IsValid(&why)) throw InputError("FitPlantLearningFilter: " + why);
+  if (!options.IsValid(&why)) throw InputError("the learning filter's fit: " + why);
   const Eigen::VectorXcd ps = frf.Nominal(joint);
   const std::vector<Eigen::Index> lines =
       LinesInBand(frf, options.f_min, options.f_max, frf.WorstCoherence(joint), options.min_coherence);
@@ -227,7 +227,7 @@ LearningFilter FitPlantLearningFilter(const ClosedLoopFrf& frf, int joint, const
     std::ostringstream msg;
     msg << "fewer than " << needed << " measured lines in [" << options.f_min << ", " << options.f_max
         << "] Hz with coherence >= " << options.min_coherence << " for a model of order " << options.order;
-    throw InputError("FitPlantLearningFilter: " + msg.str());
+    throw InputError("the learning filter's fit: " + msg.str());
   }
   const auto rows = static_cast<Eigen::Index>(2 * lines.size());
   LearningFilter best;

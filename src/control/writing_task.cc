@@ -96,12 +96,12 @@ struct ArmGeometry {
 
 ArmGeometry Geometry(const ArmModel& model, const Eigen::Vector3d& tool) {
   if (model.dof() != 3) {
-    throw InputError("WaistShoulderElbowIk: '" + model.name + "' has " + std::to_string(model.dof()) +
+    throw InputError("the writing task: '" + model.name + "' has " + std::to_string(model.dof()) +
                      " joints, a waist-shoulder-elbow arm has 3");
   }
   for (const ArmJoint& j : model.joints) {
     if (j.type != JointType::kRevolute) {
-      throw InputError("WaistShoulderElbowIk: joint '" + j.name + "' of '" + model.name +
+      throw InputError("the writing task: joint '" + j.name + "' of '" + model.name +
                        "' is not revolute");
     }
   }
@@ -112,7 +112,7 @@ ArmGeometry Geometry(const ArmModel& model, const Eigen::Vector3d& tool) {
   g.l1 = (elbow - g.shoulder).norm();
   g.l2 = (frames[2] * tool - elbow).norm();
   if (g.l1 <= 0 || g.l2 <= 0) {
-    throw InputError("WaistShoulderElbowIk: '" + model.name + "' has a zero-length upper arm or forearm");
+    throw InputError("the writing task: '" + model.name + "' has a zero-length upper arm or forearm");
   }
   return g;
 }
@@ -241,13 +241,13 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
   const ArmGeometry g = Geometry(model, tool);
   const double r = std::hypot(point.x(), point.y());
   if (r < 1e-9) {
-    throw InputError("WaistShoulderElbowIk: point " + Vec(point) + " is on the waist axis (singular)");
+    throw InputError("the writing task: point " + Vec(point) + " is on the waist axis (singular)");
   }
   const double zp = point.z() - g.shoulder.z();
   const double c = (r * r + zp * zp - g.l1 * g.l1 - g.l2 * g.l2) / (2 * g.l1 * g.l2);
   if (c > 1 + 1e-12 || c < -1 - 1e-12) {
     std::ostringstream out;
-    out << "WaistShoulderElbowIk: point " << Vec(point) << " is out of reach of '" << model.name << "' (distance "
+    out << "the writing task: point " << Vec(point) << " is out of reach of '" << model.name << "' (distance "
         << std::hypot(r, zp) << " m from the shoulder, reach " << std::abs(g.l1 - g.l2) << " to " << g.l1 + g.l2
         << " m)";
     throw InputError(out.str());
@@ -258,7 +258,7 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
   q(1) = std::atan2(zp, r) - std::atan2(g.l2 * std::sin(q(2)), g.l1 + g.l2 * std::cos(q(2)));
   const Eigen::Vector3d reached = ToolPoint(model, q, tool);
   if ((reached - point).norm() > 1e-9) {
-    throw InputError("WaistShoulderElbowIk: '" + model.name +
+    throw InputError("the writing task: '" + model.name +
                      "' is not a waist-shoulder-elbow arm stretched along +x at q = 0 (the closed form "
                      "reaches " + Vec(reached) + " instead of " + Vec(point) + ")");
   }
@@ -266,7 +266,7 @@ Eigen::VectorXd WaistShoulderElbowIk(const ArmModel& model, const Eigen::Vector3
     const ArmJoint& j = model.joints[i];
     if (q(i) < j.lower || q(i) > j.upper) {
       std::ostringstream out;
-      out << "WaistShoulderElbowIk: point " << Vec(point) << " needs joint '" << j.name << "' at " << q(i)
+      out << "the writing task: point " << Vec(point) << " needs joint '" << j.name << "' at " << q(i)
           << " rad, beyond its limits [" << j.lower << ", " << j.upper << "]";
       throw InputError(out.str());
     }

@@ -1110,6 +1110,18 @@ double CheckOmniInputs(const OmniModel& model, const std::vector<OmniLog>& logs,
   const double block = HeldOutBlockSeconds(options.block_seconds, durations);
   const int first_predicted = model.command_delay_frames + model.vision_delay_frames + kWarmUpFrames + options.horizon;
   for (const OmniLog& log : logs) {
+    // Said of the horizon, not of the blocks it leaves no room for.
+    const int frames = log.FrameIndex(log.rows.size() - 1) + 1;
+    if (first_predicted >= frames) {
+      char msg[256];
+      std::snprintf(msg, sizeof msg,
+                    "--horizon %d frames (%.3g s), after the delays and the filter's %d warm-up frames, is longer than "
+                    "the log's %d frames",
+                    options.horizon, options.horizon * log.frame_period, kWarmUpFrames, frames);
+      throw InputError(SourceLocation{log.path, 1}, msg);
+    }
+  }
+  for (const OmniLog& log : logs) {
     std::vector<double> t;
     for (const OmniLogRow& r : log.rows) t.push_back(r.t);
     CheckLogHoldsOut(t, static_cast<std::size_t>(std::max(first_predicted, 0)), block, options.held_out, log.path);

@@ -413,14 +413,25 @@ ArmModel ReadUrdf(const std::string& xml, const std::string& path) {
   }
   errors.ThrowIfAny();
   if (model.joints.empty()) throw InputError(SourceLocation{path}, "the URDF has no revolute, continuous or prismatic joint");
-  // The model's own checks, each with the line of the link it names.
+  // The model's own checks, each with the line of the link or joint element it names.
   const std::string problems = model.Validate();
   if (!problems.empty()) {
     static const std::regex kLink(R"re(link '([^']*)')re");
+    static const std::regex kJoint(R"re(^joint \d+ '([^']*)')re");
     std::istringstream text(problems);
     std::string line;
     while (std::getline(text, line)) {
       std::smatch m;
+      // A link's problem ("joint 1 'j1', link 'l1': ...") at the link's element.
+      if (!std::regex_search(line, kLink) && std::regex_search(line, m, kJoint)) {
+        const char* sub = line.find("limit") != std::string::npos      ? "limit"
+                          : line.find("axis") != std::string::npos     ? "axis"
+                          : line.find("origin") != std::string::npos   ? "origin"
+                          : line.find("friction") != std::string::npos ? "dynamics"
+                                                                       : "joint";
+        errors.Add(SourceLocation{path, lines.SubLine("joint", m[1].str(), sub)}, line);
+        continue;
+      }
       if (!std::regex_search(line, m, kLink)) {
         errors.Add(SourceLocation{path}, line);
         continue;

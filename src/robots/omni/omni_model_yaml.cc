@@ -162,6 +162,18 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
         for (double a : angles_deg) model.wheel_angles.push_back(a * kPi / 180.0);
         if (angles_deg.size() < 3 || angles_deg.size() > 8)
           w.Error(f.key, "an omni robot has 3 to 8 wheels, got " + std::to_string(angles_deg.size()));
+        // Two wheels on one spot, said here with the list's line (OmniModel::Validate
+        // says it too, of a model built in code), the first pair only.
+        bool said = false;
+        for (std::size_t i = 0; i < angles_deg.size() && !said; ++i) {
+          for (std::size_t j = i + 1; j < angles_deg.size() && !said; ++j) {
+            if (std::abs(std::remainder((angles_deg[i] - angles_deg[j]) * kPi / 180.0, 2 * kPi)) < 1e-3) {
+              w.Error(f.key, "wheels " + std::to_string(i + 1) + " and " + std::to_string(j + 1) +
+                                 " are at the same angle");
+              said = true;
+            }
+          }
+        }
       }
     });
     w.Finish();
