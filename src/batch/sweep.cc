@@ -232,6 +232,9 @@ Sweep ReadSweep(const std::string& path, int depth) {
       if (depth >= 8) throw InputError(where, "'extends' nested more than 8 deep (a cycle?)");
       fs::path p(base);
       if (p.is_relative()) p = fs::path(path).parent_path() / p;
+      std::error_code missing;
+      if (!fs::exists(p, missing))
+        throw InputError(where, "'extends': no sweep file " + p.lexically_normal().string());
       sweep = ReadSweep(p.lexically_normal().string(), depth + 1);
     }
   }

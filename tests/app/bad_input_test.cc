@@ -1119,6 +1119,8 @@ std::vector<BadInputCase> Cases() {
        "effort limit must not be negative"},
       {"diagnose_horizon_longer_than_the_log", {OmniLogFile(600)},
        "diagnose --model {src}/models/omni4.yaml --log {d}/log.csv --horizon 100000 --out {d}/out", 2, "--horizon", "out"},
+      {"batch_sweep_extends_missing", {{"s.yaml", (std::string(kSweep) + std::string("extends: nothere.yaml\n"))}},
+       "batch {d}/s.yaml --out {d}/out", 2, "{d}/s.yaml:9:", "out", 20, "no sweep file"},
       {"tune_pid_learned_backend", {},
        "tune-pid {src}/scenes/tune_pid_zeros.yaml --backend learned --out {d}/out", 2, "ode, bullet or analytic", "out"},
   };
