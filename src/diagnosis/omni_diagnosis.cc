@@ -1120,8 +1120,6 @@ double CheckOmniInputs(const OmniModel& model, const std::vector<OmniLog>& logs,
                     options.horizon, options.horizon * log.frame_period, kWarmUpFrames, frames);
       throw InputError(SourceLocation{log.path, 1}, msg);
     }
-  }
-  for (const OmniLog& log : logs) {
     std::vector<double> t;
     for (const OmniLogRow& r : log.rows) t.push_back(r.t);
     CheckLogHoldsOut(t, static_cast<std::size_t>(std::max(first_predicted, 0)), block, options.held_out, log.path);

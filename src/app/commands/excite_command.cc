@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <thread>
 
 #include "app/commands/commands.h"
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/progress.h"
 #include "identification/batch_adaptive.h"
 #include "identification/excitation_design.h"
@@ -105,7 +105,7 @@ std::unique_ptr<ArmModel> CheckExciteOptions(const ArmModel& model, ExciteCliOpt
       options->acceleration_limits.assign(static_cast<std::size_t>(n), options->acceleration_limits[0]);
     options->design.acceleration_limits = options->acceleration_limits;
   }
-  if (options->design.threads == 0) options->design.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  options->design.threads = ResolveThreadCount(options->design.threads);  // 0: one per core
   std::string invalid;
   if (!options->design.IsValid(&invalid)) {
     // Said by the option's name, where the design's field has one.

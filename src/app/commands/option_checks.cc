@@ -4,7 +4,6 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstdint>
 #include <cstdlib>
 #include <string>
 
@@ -90,11 +89,10 @@ void CheckOptionValues(CLI::App* app) {
           [is_unsigned](std::string& text) -> std::string {
             if (is_unsigned && text.find('-') != std::string::npos) return "must not be negative, got " + text;
             errno = 0;
-            char* end = nullptr;
             if (is_unsigned) {
-              std::strtoull(text.c_str(), &end, 0);
+              std::strtoull(text.c_str(), nullptr, 0);
             } else {
-              std::strtoll(text.c_str(), &end, 0);
+              std::strtoll(text.c_str(), nullptr, 0);
             }
             if (errno == ERANGE)
               return std::string("must be within ") + (is_unsigned ? "0 to 18446744073709551615" : "+-9223372036854775807") +

@@ -85,13 +85,15 @@ Eigen::Matrix3d OmniModel::RigidBodyMass() const {
   return mass;
 }
 
+bool SameWheelAngle(double a, double b) { return std::abs(std::remainder(a - b, 2 * kPi)) < 1e-3; }
+
 std::string OmniModel::Validate() const {
   std::ostringstream out;
   const int n = num_wheels();
   if (n < 3) out << "an omni robot needs at least 3 wheels, got " << n << "\n";
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {
-      if (std::abs(std::remainder(wheel_angles[i] - wheel_angles[j], 2 * kPi)) < 1e-3)
+      if (SameWheelAngle(wheel_angles[i], wheel_angles[j]))
         out << "wheels " << i + 1 << " and " << j + 1 << " are at the same angle\n";
     }
   }

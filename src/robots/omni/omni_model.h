@@ -260,6 +260,10 @@ struct OmniModel {
   std::string Validate() const;
 };
 
+// True where two wheel angles (rad) put the wheels on one spot (within 1 mrad, any turn
+// apart): OmniModel::Validate's test, and the model file reader's with its line.
+bool SameWheelAngle(double a, double b);
+
 // Loads and validates an omni model; throws InputError with "path:line:col: ..." lines.
 OmniModel LoadOmniModel(const std::string& path);
 // As LoadOmniModel, with `overrides` laid over the file's keys (io/yaml_overrides.h)

@@ -165,9 +165,10 @@ OmniModel ReadOmniModel(const YAML::Node& file_root, const std::string& path, in
         // Two wheels on one spot, said here with the list's line (OmniModel::Validate
         // says it too, of a model built in code), the first pair only.
         bool said = false;
-        for (std::size_t i = 0; i < angles_deg.size() && !said; ++i) {
-          for (std::size_t j = i + 1; j < angles_deg.size() && !said; ++j) {
-            if (std::abs(std::remainder((angles_deg[i] - angles_deg[j]) * kPi / 180.0, 2 * kPi)) < 1e-3) {
+        const std::vector<double>& angles = model.wheel_angles;
+        for (std::size_t i = 0; i < angles.size() && !said; ++i) {
+          for (std::size_t j = i + 1; j < angles.size() && !said; ++j) {
+            if (SameWheelAngle(angles[i], angles[j])) {
               w.Error(f.key, "wheels " + std::to_string(i + 1) + " and " + std::to_string(j + 1) +
                                  " are at the same angle");
               said = true;
