@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "analysis/arm_fit_coordinates.h"
 #include "analysis/arm_replay.h"
@@ -29,6 +31,13 @@ bool ArmOutputErrorOptions::IsValid(std::string* why) const {
   if (!whole_run && (!std::isfinite(horizon) || horizon <= 0)) {
     *why = "the output-error horizon must be a positive number of seconds";
     return false;
+  }
+  for (double h : also_horizons) {
+    if (whole_run || !std::isfinite(h) || h <= 0) {
+      *why = whole_run ? "whole runs take no window lengths beside them"
+                       : "the output-error horizon must be a positive number of seconds";
+      return false;
+    }
   }
   if (whole_run && (!std::isfinite(segment) || segment <= 0)) {
     *why = "the shooting segments must be a positive number of seconds";
@@ -65,6 +74,26 @@ constexpr double kStep = 1e-3;
 // place (measured on a plant without it: 3 % from fitting the engines' differences).
 constexpr double kLowSpeedGain = 0.1;
 
+// One window length's windows over the logs: per log the fit and held-out windows' first
+// rows and their length, the simulated fit rows, the constant-velocity baseline's RMSE on
+// them per joint and each joint's residual weight.
+struct WindowSet {
+  std::vector<std::vector<int>> fit, check;
+  std::vector<int> lengths;
+  int fit_windows = 0, check_windows = 0;
+  std::size_t rows = 0;
+  Eigen::VectorXd constant_velocity, weight;
+};
+
+// True when a window from row s simulating `length` rows shares a simulated row with one
+// of `stretches` (first row, rows simulated after it). Sharing only a first row (one
+// window's logged start the other's last row) is no overlap: a start is no score.
+bool Overlaps(int s, int length, const std::vector<std::pair<int, int>>& stretches) {
+  for (const auto& [first, rows] : stretches)
+    if (s < first + rows && first < s + length) return true;
+  return false;
+}
+
 // The fit's data; its coordinates are ArmFitCoordinates'.
 class OutputErrorProblem {
  public:
@@ -74,46 +103,61 @@ class OutputErrorProblem {
         options_(options),
         n_(start.dof()),
         coordinates_(start, logs, options.offsets, options.stribeck, options.presliding) {
-    Eigen::ArrayXd velocity2 = Eigen::ArrayXd::Zero(n_), torque_error2 = velocity2;
-    double rows = 0;
+    std::vector<double> horizons{options_.horizon};
+    horizons.insert(horizons.end(), options_.also_horizons.begin(), options_.also_horizons.end());
+    longest_ = static_cast<std::size_t>(std::max_element(horizons.begin(), horizons.end()) - horizons.begin());
+    sets_.resize(horizons.size());
+    // The longest set first: its every fourth window (counted over the logs) is held out,
+    // and the other sets' windows that overlap those are held out with it.
+    std::vector<std::vector<std::pair<int, int>>> held(logs_.size());
+    std::vector<std::size_t> order{longest_};
+    for (std::size_t k = 0; k < sets_.size(); ++k)
+      if (k != longest_) order.push_back(k);
     int window = 0;
-    for (const ArmLog& log : logs_) {
-      CheckArmLogMatchesModel(log, start_);
-      int length = 0;
-      const std::vector<int> starts =
-          ArmSimulationWindows(ArmModelAtLogPeriod(start_, log.sample_period), log, options_.horizon, &length);
-      fit_.emplace_back();
-      check_.emplace_back();
-      lengths_.push_back(length);
-      for (int s : starts) {
-        // Every fourth window is held out of the fit: the check the refinement must pass.
-        if (window++ % 4 == 3) {
-          check_.back().push_back(s);
-          continue;
+    for (std::size_t k : order) {
+      WindowSet& set = sets_[k];
+      Eigen::ArrayXd velocity2 = Eigen::ArrayXd::Zero(n_);
+      for (std::size_t l = 0; l < logs_.size(); ++l) {
+        const ArmLog& log = logs_[l];
+        if (k == longest_) CheckArmLogMatchesModel(log, start_);
+        int length = 0;
+        const std::vector<int> starts =
+            ArmSimulationWindows(ArmModelAtLogPeriod(start_, log.sample_period), log, horizons[k], &length);
+        set.fit.emplace_back();
+        set.check.emplace_back();
+        set.lengths.push_back(length);
+        for (int s : starts) {
+          const bool check = k == longest_ ? window++ % 4 == 3 : Overlaps(s, length, held[l]);
+          if (check) {
+            if (k == longest_) held[l].emplace_back(s, length);
+            set.check.back().push_back(s);
+            ++set.check_windows;
+            continue;
+          }
+          set.fit.back().push_back(s);
+          ++set.fit_windows;
+          for (int r = 0; r < length; ++r)
+            velocity2 += (ConstantVelocityQ(log, s, r + 1) - log.q.row(s + 1 + r)).array().square().transpose();
+          set.rows += static_cast<std::size_t>(length);
         }
-        fit_.back().push_back(s);
-        for (int r = 0; r < length; ++r)
-          velocity2 += (ConstantVelocityQ(log, s, r + 1) - log.q.row(s + 1 + r)).array().square().transpose();
-        rows += length;
       }
-      torque_rows_ += static_cast<std::size_t>(log.rows() - 2 * log.edge_samples);
+      if (k == longest_ && window < 4) {
+        throw InputError(SourceLocation{logs_.empty() ? std::string("(no log)") : logs_.front().path, 1},
+                         "the logs are too short for the output-error fit: it needs at least 4 windows of the horizon "
+                         "(one held out), they hold " + std::to_string(window));
+      }
+      const double rows = static_cast<double>(set.rows);
+      set.constant_velocity = (velocity2 / rows).sqrt().matrix();
+      // Each block's residuals scaled so that its squares start near 1 per joint: the
+      // simulation's by the constant-velocity baseline, the torques' by the start's error.
+      set.weight = (set.constant_velocity.array().max(1e-12) * std::sqrt(rows)).inverse().matrix();
     }
+    Eigen::ArrayXd torque_error2 = Eigen::ArrayXd::Zero(n_);
+    for (const ArmLog& log : logs_) torque_rows_ += static_cast<std::size_t>(log.rows() - 2 * log.edge_samples);
     const Eigen::VectorXd rest_speed = ArmRestSpeeds(logs_, options_.rest_share);
     for (const ArmLog& log : logs_) rest_.push_back(ArmRestRows(log, rest_speed));
     for (std::size_t k = 0; k < logs_.size(); ++k)
       TorqueErrors(start_, k, [&](int j, double e) { torque_error2[j] += e * e; });
-    if (window < 4) {
-      throw InputError(SourceLocation{logs_.empty() ? std::string("(no log)") : logs_.front().path, 1},
-                       "the logs are too short for the output-error fit: it needs at least 4 windows of the horizon "
-                       "(one held out), they hold " + std::to_string(window));
-    }
-    fit_windows_ = window - window / 4;
-    check_windows_ = window / 4;
-    simulated_rows_ = static_cast<std::size_t>(rows);
-    constant_velocity_ = (velocity2 / rows).sqrt().matrix();
-    // Each block's residuals scaled so that its squares start near 1 per joint: the
-    // simulation's by the constant-velocity baseline, the torques' by the start's error.
-    weight_ = (constant_velocity_.array().max(1e-12) * std::sqrt(rows)).inverse().matrix();
     const double torque_rows = static_cast<double>(std::max<std::size_t>(torque_rows_, 1));
     const Eigen::ArrayXd torque_rmse = (torque_error2 / torque_rows).sqrt().max(1e-12);
     torque_weight_ = (std::sqrt(options_.torque_weight) / (torque_rmse * std::sqrt(torque_rows))).matrix();
@@ -122,22 +166,29 @@ class OutputErrorProblem {
   const ArmFitCoordinates& coordinates() const { return coordinates_; }
   int parameters() const { return coordinates_.parameters(); }
   // The fit's residuals: the simulated rows' position errors, then the torque rows'.
-  std::size_t residuals() const { return (simulated_rows_ + torque_rows_) * static_cast<std::size_t>(n_); }
-  int fit_windows() const { return fit_windows_; }
-  int check_windows() const { return check_windows_; }
-  const Eigen::VectorXd& constant_velocity() const { return constant_velocity_; }
+  std::size_t residuals() const {
+    std::size_t rows = torque_rows_;
+    for (const WindowSet& set : sets_) rows += set.rows;
+    return rows * static_cast<std::size_t>(n_);
+  }
+  // `horizon`'s windows (the first set): what the summary reports.
+  int fit_windows() const { return sets_.front().fit_windows; }
+  int check_windows() const { return sets_.front().check_windows; }
+  const Eigen::VectorXd& constant_velocity() const { return sets_.front().constant_velocity; }
 
   // The model for coordinates x (0: the start, frictions raised to their floors).
   ArmModel Apply(const double* x) const { return coordinates_.Apply(x); }
 
-  // The fit's weighted residuals: the position errors of every fit window of every log,
-  // row by row, joint by joint; then the torque errors of every log's rows.
+  // The fit's weighted residuals: the position errors of every fit window of every set
+  // and log, row by row, joint by joint; then the torque errors of every log's rows.
   void Residual(const ArmModel& model, double* out) const {
     std::size_t i = 0;
-    SimulateWindows(model, false, [&](const ArmLog& log, int s, const Eigen::MatrixXd& q) {
-      for (Eigen::Index r = 0; r < q.rows(); ++r)
-        for (int j = 0; j < n_; ++j) out[i++] = (q(r, j) - log.q(s + 1 + r, j)) * weight_[j];
-    });
+    for (const WindowSet& set : sets_) {
+      SimulateWindows(set, model, false, [&](const ArmLog& log, int s, const Eigen::MatrixXd& q) {
+        for (Eigen::Index r = 0; r < q.rows(); ++r)
+          for (int j = 0; j < n_; ++j) out[i++] = (q(r, j) - log.q(s + 1 + r, j)) * set.weight[j];
+      });
+    }
     for (std::size_t k = 0; k < logs_.size(); ++k)
       TorqueErrors(model, k, [&](int j, double e) { out[i++] = e * torque_weight_[j]; });
   }
@@ -153,54 +204,65 @@ class OutputErrorProblem {
       for (int j = 0; j < n_; ++j) visit(j, rest_[k](r, j) ? 0.0 : tau(r, j) - log.tau(r, j));
   }
 
-  // Each residual's cluster for the standard errors: a stretch of its log as long as a
-  // window (numbered from 0 over the logs), holding the simulated rows of the fit window
-  // that starts in it and the torque rows in it. In Residual's order.
+  // Each residual's cluster for the standard errors: a stretch of its log as long as the
+  // longest set's window (numbered from 0 over the logs), holding the simulated rows of
+  // the fit windows that start in it and the torque rows in it. In Residual's order.
   std::vector<int> Clusters() const {
     std::vector<int> out, first;
     out.reserve(residuals());
+    const std::vector<int>& stretch = sets_[longest_].lengths;
     int stretches = 0;
     for (std::size_t l = 0; l < logs_.size(); ++l) {
       first.push_back(stretches);
-      stretches += logs_[l].rows() / lengths_[l] + 1;
+      stretches += logs_[l].rows() / stretch[l] + 1;
     }
-    for (std::size_t l = 0; l < logs_.size(); ++l)
-      for (int s : fit_[l]) out.insert(out.end(), static_cast<std::size_t>(lengths_[l] * n_), first[l] + s / lengths_[l]);
+    for (const WindowSet& set : sets_)
+      for (std::size_t l = 0; l < logs_.size(); ++l)
+        for (int s : set.fit[l])
+          out.insert(out.end(), static_cast<std::size_t>(set.lengths[l] * n_), first[l] + s / stretch[l]);
     for (std::size_t l = 0; l < logs_.size(); ++l)
       for (int r = logs_[l].edge_samples; r < logs_[l].rows() - logs_[l].edge_samples; ++r)
-        out.insert(out.end(), static_cast<std::size_t>(n_), first[l] + r / lengths_[l]);
+        out.insert(out.end(), static_cast<std::size_t>(n_), first[l] + r / stretch[l]);
     return out;
   }
 
-  // Per joint, the position RMSE of the fit windows (`check` false) or the held-out ones.
+  // Per joint, the position RMSE of `horizon`'s fit windows (`check` false) or its
+  // held-out ones.
   Eigen::VectorXd SimulationRmse(const ArmModel& model, bool check) const {
+    return SimulationRmse(sets_.front(), model, check);
+  }
+
+  // The cost the decisions compare: over every set, each joint's RMSE on the fit windows
+  // (`check` false) or the held-out ones against the constant-velocity baseline, squared.
+  double Cost(const ArmModel& model, bool check) const {
+    double cost = 0;
+    for (const WindowSet& set : sets_)
+      cost += (SimulationRmse(set, model, check).array() / set.constant_velocity.array().max(1e-12)).square().sum();
+    return cost;
+  }
+
+ private:
+  Eigen::VectorXd SimulationRmse(const WindowSet& set, const ArmModel& model, bool check) const {
     Eigen::ArrayXd squares = Eigen::ArrayXd::Zero(n_);
     double rows = 0;
-    SimulateWindows(model, check, [&](const ArmLog& log, int s, const Eigen::MatrixXd& q) {
+    SimulateWindows(set, model, check, [&](const ArmLog& log, int s, const Eigen::MatrixXd& q) {
       squares += (q - log.q.middleRows(s + 1, q.rows())).array().square().colwise().sum().transpose();
       rows += static_cast<double>(q.rows());
     });
     return (squares / std::max(1.0, rows)).sqrt().matrix();
   }
 
-  // The held-out windows' error `rmse` (SimulationRmse(model, true)), each joint's against
-  // the constant-velocity baseline.
-  double CheckCost(const Eigen::VectorXd& rmse) const {
-    return (rmse.array() / constant_velocity_.array().max(1e-12)).square().sum();
-  }
-
- private:
-  // Simulates `model` over the fit windows (or, with `check`, the held-out ones) of every
-  // log, calling each(log, first row, the simulated q of the rows after it).
+  // Simulates `model` over the set's fit windows (or, with `check`, the held-out ones) of
+  // every log, calling each(log, first row, the simulated q of the rows after it).
   template <typename Each>
-  void SimulateWindows(const ArmModel& model, bool check, const Each& each) const {
+  void SimulateWindows(const WindowSet& set, const ArmModel& model, bool check, const Each& each) const {
     Eigen::MatrixXd q;
     for (std::size_t l = 0; l < logs_.size(); ++l) {
       const ArmLog& log = logs_[l];
       const ArmModel at = ArmModelAtLogPeriod(model, log.sample_period);
       ArmSimulation sim(at, MakeArmBackend(options_.backend, at));
-      for (int s : (check ? check_ : fit_)[l]) {
-        SimulateArmFromLog(&sim, log, s, lengths_[l], &q, true);
+      for (int s : (check ? set.check : set.fit)[l]) {
+        SimulateArmFromLog(&sim, log, s, set.lengths[l], &q, true);
         each(log, s, q);
       }
     }
@@ -210,12 +272,11 @@ class OutputErrorProblem {
   const std::vector<ArmLog>& logs_;
   ArmOutputErrorOptions options_;
   int n_;
-  std::vector<std::vector<int>> fit_, check_;  // per log, the windows' first rows
-  std::vector<int> lengths_;                   // per log, the windows' rows
-  int fit_windows_ = 0, check_windows_ = 0;
-  std::size_t simulated_rows_ = 0, torque_rows_ = 0;
+  std::vector<WindowSet> sets_;  // `horizon`'s first, then also_horizons'
+  std::size_t longest_ = 0;      // the set whose windows decide what is held out
+  std::size_t torque_rows_ = 0;
   ArmFitCoordinates coordinates_;
-  Eigen::VectorXd constant_velocity_, weight_, torque_weight_;
+  Eigen::VectorXd torque_weight_;
   std::vector<Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic>> rest_;  // per log: rows at rest, not scored
 };
 
@@ -259,6 +320,7 @@ ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErr
                                 const ArmOutputErrorOptions& options) {
   ArmOutputErrorSummary s;
   s.horizon = options.horizon;
+  s.also_horizons = options.also_horizons;
   s.fit_windows = plain.fit_windows();
   s.check_windows = plain.check_windows();
   s.rmse_before = plain.SimulationRmse(floor, false);
@@ -328,7 +390,7 @@ double ArmOutputErrorStartCost(const ArmModel& model, const std::vector<ArmLog>&
   windows.presliding = ArmPresliding::kNone;
   const OutputErrorProblem problem(model, logs, windows);
   const std::vector<double> x(static_cast<std::size_t>(problem.parameters()), 0.0);
-  return problem.CheckCost(problem.SimulationRmse(problem.Apply(x.data()), false));
+  return problem.Cost(problem.Apply(x.data()), false);
 }
 
 ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
@@ -350,7 +412,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   // Kept only where the held-out windows get better.
   const Eigen::VectorXd check_before = plain.SimulationRmse(floor, true);
   Eigen::VectorXd check_after = plain.SimulationRmse(fitted, true);
-  const bool kept = plain.CheckCost(check_after) < plain.CheckCost(check_before);
+  const bool kept = plain.Cost(fitted, true) < plain.Cost(floor, true);
   const OutputErrorProblem* final_problem = &plain;
 
   // Friction that holds at low speed: fitted from where a kept plain refinement ended (a
@@ -371,7 +433,7 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     const int y_iterations = Solve(*low_speed, options, &y, &y_bound, &y_se);
     with = low_speed->Apply(y.data());
     const Eigen::VectorXd check_with = low_speed->SimulationRmse(with, true);
-    stribeck_kept = low_speed->CheckCost(check_with) < (1 - kLowSpeedGain) * plain.CheckCost(check_plain);
+    stribeck_kept = low_speed->Cost(with, true) < (1 - kLowSpeedGain) * plain.Cost(fitted, true);
     low_speed_at_bound = low_speed->coordinates().Names(y_bound);
     if (stribeck_kept) {
       x = std::move(y);
@@ -437,7 +499,46 @@ std::string StandardErrorTable(const ArmOutputErrorSummary& s) {
   return text;
 }
 
+// With whole_run: the fit's first line and its per-joint table of free runs and values.
+std::string WholeRunTable(const ArmOutputErrorSummary& s) {
+  std::string text;
+  char line[320];
+  const int n = static_cast<int>(s.scale.size());
+  std::snprintf(line, sizeof line,
+                "output error over whole runs: each log's first three quarters fitted by multiple shooting (%d "
+                "segments of %g s; largest defect left %.3g of the spread of q), its last quarter held out and "
+                "simulated free; %d iterations\n",
+                s.segments, s.segment, s.largest_defect, s.iterations);
+  text += line;
+  std::snprintf(line, sizeof line, "%-6s %35s %35s %8s %23s %23s %23s\n", "joint", "fitted part's free run (fit %)",
+                "held-out quarter's free run (fit %)", "scale k", "viscous", "Coulomb", "offset tau0");
+  text += line;
+  const auto fit = [](double rmse, double spread) { return spread > 0 ? 100 * (1 - rmse / spread) : 0.0; };
+  for (int j = 0; j < n; ++j) {
+    std::snprintf(line, sizeof line,
+                  "%-6d %9.4g (%5.1f) -> %9.4g (%5.1f)  %9.4g (%5.1f) -> %9.4g (%5.1f) %8.4g %10.4g -> %10.4g "
+                  "%10.4g -> %10.4g %10.4g -> %10.4g\n",
+                  j + 1, s.rmse_before[j], fit(s.rmse_before[j], s.spread_fit[j]), s.rmse_after[j],
+                  fit(s.rmse_after[j], s.spread_fit[j]), s.check_before[j], fit(s.check_before[j], s.spread_check[j]),
+                  s.check_after[j], fit(s.check_after[j], s.spread_check[j]), s.scale[j], s.viscous_before[j],
+                  s.viscous_after[j], s.coulomb_before[j], s.coulomb_after[j], s.offset_before[j], s.offset_after[j]);
+    text += line;
+  }
+  return text;
+}
+
 }  // namespace
+
+std::string OutputErrorWindowLengths(double horizon, const std::vector<double>& also) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", horizon);
+  std::string out = text;
+  for (std::size_t k = 0; k < also.size(); ++k) {
+    std::snprintf(text, sizeof text, "%s%g", k + 1 == also.size() ? " and " : ", ", also[k]);
+    out += text;
+  }
+  return out;
+}
 
 std::string FormatArmOutputErrorCsv(const std::vector<ArmOutputErrorSummary>& stages) {
   using Kind = ArmFitCoordinates::Kind;
@@ -471,32 +572,17 @@ std::string ArmOutputErrorSummary::FullReport() const {
   char line[320];
   const int n = static_cast<int>(scale.size());
   if (whole_run) {
-    std::snprintf(line, sizeof line,
-                  "output error over whole runs: each log's first three quarters fitted by multiple shooting (%d "
-                  "segments of %g s; largest defect left %.3g of the spread of q), its last quarter held out and "
-                  "simulated free; %d iterations\n",
-                  segments, segment, largest_defect, iterations);
-    text += line;
-    std::snprintf(line, sizeof line, "%-6s %35s %35s %8s %23s %23s %23s\n", "joint", "fitted part's free run (fit %)",
-                  "held-out quarter's free run (fit %)", "scale k", "viscous", "Coulomb", "offset tau0");
-    text += line;
-    const auto fit = [](double rmse, double spread) { return spread > 0 ? 100 * (1 - rmse / spread) : 0.0; };
-    for (int j = 0; j < n; ++j) {
-      std::snprintf(line, sizeof line,
-                    "%-6d %9.4g (%5.1f) -> %9.4g (%5.1f)  %9.4g (%5.1f) -> %9.4g (%5.1f) %8.4g %10.4g -> %10.4g "
-                    "%10.4g -> %10.4g %10.4g -> %10.4g\n",
-                    j + 1, rmse_before[j], fit(rmse_before[j], spread_fit[j]), rmse_after[j],
-                    fit(rmse_after[j], spread_fit[j]), check_before[j], fit(check_before[j], spread_check[j]),
-                    check_after[j], fit(check_after[j], spread_check[j]), scale[j], viscous_before[j],
-                    viscous_after[j], coulomb_before[j], coulomb_after[j], offset_before[j], offset_after[j]);
-      text += line;
-    }
+    text += WholeRunTable(*this);
   } else {
     std::snprintf(line, sizeof line,
                   "output error: windows of %g s simulated from the logged torques, %d fitted and %d held out; %d "
                   "iterations\n",
                   horizon, fit_windows, check_windows, iterations);
     text += line;
+    if (!also_horizons.empty())
+      text += "  windows of " + OutputErrorWindowLengths(horizon, also_horizons) +
+              " s fitted at once (each length's squared errors over its constant-velocity baseline's, summed; held "
+              "out by the longest windows' every fourth; the RMSE below is the first length's)\n";
     std::snprintf(line, sizeof line, "%-6s %27s %27s %11s %8s %23s %23s %23s\n", "joint", "fit windows' RMSE",
                   "held-out windows' RMSE", "const. vel.", "scale k", "viscous", "Coulomb", "offset tau0");
     text += line;

@@ -57,6 +57,12 @@ namespace twinsim {
 
 struct ArmOutputErrorOptions {
   double horizon = 0.1;       // s: the simulated windows' length (> 0; not used with whole_run)
+  // s: windows of these lengths fitted at once beside `horizon`'s (each set weighted to
+  // start near 1 per joint, so every horizon counts alike), and held out by the longest
+  // set's every fourth window: a shorter window is held out where it overlaps one of
+  // those. The summary's RMSE is `horizon`'s windows'; the keep decisions sum every set's
+  // held-out cost. Empty: `horizon` alone.
+  std::vector<double> also_horizons;
   bool whole_run = false;     // fit each log's free run by multiple shooting instead of windows
   double segment = 2.0;       // s: whole_run's shooting segments (> 0)
   int max_iterations = 30;    // Levenberg-Marquardt iterations
@@ -83,6 +89,7 @@ struct ArmOutputErrorOptions {
 
 struct ArmOutputErrorSummary {
   double horizon = 0;
+  std::vector<double> also_horizons;  // the windows fitted beside `horizon`'s (ArmOutputErrorOptions)
   // With whole_run: the segments' length and count, the windows then being the logs'
   // fitted three quarters and held-out quarters simulated free; each joint's spread of
   // q about its mean there (fit = 100 (1 - RMSE / spread)); the largest continuity
@@ -123,6 +130,9 @@ struct ArmOutputErrorSummary {
   // whether it was kept.
   std::string FullReport() const;
 };
+
+// "0.1", "0.1 and 1", "0.1, 0.5 and 1": a stage's window lengths in seconds, as %g prints them.
+std::string OutputErrorWindowLengths(double horizon, const std::vector<double>& also);
 
 // output_error.csv: stage,joint,coordinate,value,standard_error, a row per stage (1, 2, ...
 // of a continuation), joint and fitted coordinate (ArmFitCoordinates::Key: scale,

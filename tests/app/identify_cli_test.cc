@@ -264,6 +264,19 @@ TEST(IdentifyCli, OutputErrorRefinesTheEstimateAndSimulatesAllThreeModels) {
             std::string::npos)
       << two_yaml;
 
+  // Windows of two lengths at once: one stage, both named in its report and model file.
+  auto both = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir +
+                         "/both.yaml --output-error 0.1+0.2 --threads 2");
+  ASSERT_EQ(both.exit_code, 0) << both.err;
+  EXPECT_NE(both.out.find("output error: windows of 0.1 s simulated from the logged torques, 54 fitted and 18 held out; "),
+            std::string::npos)
+      << both.out;
+  EXPECT_NE(both.out.find("\n  windows of 0.1 and 0.2 s fitted at once (each length's squared errors"), std::string::npos)
+      << both.out;
+  EXPECT_EQ(both.out.find("stage 1 of"), std::string::npos) << both.out;
+  const std::string both_yaml = testing::ReadText(dir + "/both.yaml");
+  EXPECT_NE(both_yaml.find("windows of 0.1 and 0.2 s"), std::string::npos) << both_yaml;
+
   auto negative = RunTwinsim("identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir +
                              "/n.yaml --output-error -1");
   EXPECT_EQ(negative.exit_code, 2);
@@ -311,7 +324,11 @@ TEST(IdentifyCli, OutputErrorOverWholeRunsRefusesWhatIsNoHorizon) {
   const std::string log = WriteLog(dir, "run.csv", -1, 4);
   const std::string base = "identify --model " + SourcePath("models/rrr.yaml") + " --log " + log + " --out " + dir;
   for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
-           {"--output-error runs", "--output-error runs: give the windows' length in seconds, or run for whole runs"},
+           {"--output-error runs", "--output-error runs: give the windows' length in seconds (0.1, or 0.1+1 for both "
+                                   "at once), or run for whole runs"},
+           {"--output-error 0.1+", "--output-error 0.1+: give the windows' length in seconds"},
+           {"--output-error 0.1+0", "--output-error 0.1+0: each length fitted at once must be above 0 s"},
+           {"--output-error run+1", "--output-error run+1: give the windows' length in seconds"},
            {"--output-error 0.1s", "--output-error 0.1s: give the windows' length in seconds"},
            {"--output-error 0.1,,1", "--output-error : give the windows' length in seconds"},
            {"--output-error 0.1,0", "--output-error 0.1,0: 0 (none) cannot be a stage of a continuation"},

@@ -139,8 +139,9 @@ int IdentifyOmniCli(const IdentifyCliOptions& options) {
 // 0 sets none; a negative horizon reaches ArmOutputErrorOptions::IsValid's refusal).
 bool RefinesByOutputError(const ArmOutputErrorOptions& o) { return o.whole_run || o.horizon != 0; }
 
-// One stage's seconds ("0": none); InputError for what is no number.
-double ParseOutputErrorHorizon(const std::string& text) {
+// One stage's seconds ("0": none), `text` of the stage `item`; InputError for what is no
+// number.
+double ParseOutputErrorHorizon(const std::string& text, const std::string& item) {
   std::size_t used = 0;
   double seconds = 0;
   try {
@@ -149,7 +150,8 @@ double ParseOutputErrorHorizon(const std::string& text) {
     used = 0;
   }
   if (used == 0 || used != text.size())
-    throw InputError("--output-error " + text + ": give the windows' length in seconds, or run for whole runs");
+    throw InputError("--output-error " + item + ": give the windows' length in seconds (0.1, or 0.1+1 for both at "
+                     "once), or run for whole runs");
   return seconds;
 }
 
@@ -165,7 +167,17 @@ std::vector<ArmOutputErrorOptions> ParseOutputErrorStages(const std::string& tex
     const std::string item = text.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
     ArmOutputErrorOptions stage = base;
     stage.whole_run = item == "run";
-    stage.horizon = stage.whole_run ? 0 : ParseOutputErrorHorizon(item);
+    // "0.1+1": windows of 0.1 s and of 1 s fitted at once.
+    const std::size_t plus = item.find('+');
+    stage.horizon = stage.whole_run ? 0 : ParseOutputErrorHorizon(item.substr(0, plus), item);
+    for (std::size_t at = plus; at != std::string::npos;) {
+      const std::size_t next = item.find('+', at + 1);
+      const double seconds =
+          ParseOutputErrorHorizon(item.substr(at + 1, next == std::string::npos ? std::string::npos : next - at - 1), item);
+      if (!(seconds > 0)) throw InputError("--output-error " + item + ": each length fitted at once must be above 0 s");
+      stage.also_horizons.push_back(seconds);
+      at = next;
+    }
     std::string why;
     if (!RefinesByOutputError(stage))
       throw InputError("--output-error " + text + ": 0 (none) cannot be a stage of a continuation");
@@ -237,11 +249,12 @@ std::string RefinementComment(const ArmOutputErrorSummary& refinement, const std
                                     "held-out quarters were simulated no better",
                   refinement.segment);
   } else {
+    const std::string lengths = OutputErrorWindowLengths(refinement.horizon, refinement.also_horizons);
     std::snprintf(refined, sizeof refined,
-                  refinement.kept ? "\nrefined by output error: windows of %g s simulated from the logs' torques"
-                                  : "\noutput error on windows of %g s tried and not kept: the held-out windows "
+                  refinement.kept ? "\nrefined by output error: windows of %s s simulated from the logs' torques%s"
+                                  : "\noutput error on windows of %s s%s tried and not kept: the held-out windows "
                                     "were simulated no better",
-                  refinement.horizon);
+                  lengths.c_str(), refinement.also_horizons.empty() ? "" : " (fitted at once)");
   }
   std::string comment = refined;
   if (refinement.stribeck_tried) {
@@ -382,7 +395,9 @@ void AddArmIdentifyOptions(CLI::App* cmd, IdentifyCliOptions* options) {
   cmd->add_option("--output-error", options->output_error,
                   "s: refine the estimate by output error, on windows of this length simulated from the logs' "
                   "torques (link inertial scales, friction, offsets); run: on each log's free run, by multiple "
-                  "shooting, its last quarter held out; a list (0.1,0.5,1) refines stage after stage, each from "
+                  "shooting, its last quarter held out; 0.1+1 fits windows of both lengths at once (one model for "
+                  "the short horizon and the long, each length weighed alike); a list (0.1,0.5,1) refines stage "
+                  "after stage, each from "
                   "where the last ended and kept by its own held-out windows; the first from the least squares' "
                   "estimate, or from the a-priori model (with the estimated offsets) where that simulates its fit "
                   "windows better; 0 = off")
