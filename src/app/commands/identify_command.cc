@@ -241,22 +241,24 @@ WlsIdentificationOptions CheckArmIdentifyOptions(const IdentifyCliOptions& optio
 
 // One output-error stage's lines of the model file's comment; `presliding` the option's text.
 std::string RefinementComment(const ArmOutputErrorSummary& refinement, const std::string& presliding) {
-  char refined[200];
+  std::string comment;
   if (refinement.whole_run) {
+    char refined[200];
     std::snprintf(refined, sizeof refined,
                   refinement.kept ? "\nrefined by output error over whole runs: multiple shooting, segments of %g s"
                                   : "\noutput error over whole runs (segments of %g s) tried and not kept: the "
                                     "held-out quarters were simulated no better",
                   refinement.segment);
+    comment = refined;
   } else {
+    // Any number of lengths (0.1+0.2+...): built, not printed into a fixed buffer.
     const std::string lengths = OutputErrorWindowLengths(refinement.horizon, refinement.also_horizons);
-    std::snprintf(refined, sizeof refined,
-                  refinement.kept ? "\nrefined by output error: windows of %s s simulated from the logs' torques%s"
-                                  : "\noutput error on windows of %s s%s tried and not kept: the held-out windows "
-                                    "were simulated no better",
-                  lengths.c_str(), refinement.also_horizons.empty() ? "" : " (fitted at once)");
+    const std::string at_once = refinement.also_horizons.empty() ? "" : " (fitted at once)";
+    comment = refinement.kept ? "\nrefined by output error: windows of " + lengths + " s simulated from the logs' "
+                                "torques" + at_once
+                              : "\noutput error on windows of " + lengths + " s" + at_once +
+                                    " tried and not kept: the held-out windows were simulated no better";
   }
-  std::string comment = refined;
   if (refinement.stribeck_tried) {
     const std::string kind =
         presliding.empty()
