@@ -85,13 +85,18 @@ struct WindowSet {
   Eigen::VectorXd constant_velocity, weight;
 };
 
-// True when a window from row s simulating `length` rows shares a simulated row with one
-// of `stretches` (first row, rows simulated after it). Sharing only a first row (one
-// window's logged start the other's last row) is no overlap: a start is no score.
-bool Overlaps(int s, int length, const std::vector<std::pair<int, int>>& stretches) {
-  for (const auto& [first, rows] : stretches)
-    if (s < first + rows && first < s + length) return true;
-  return false;
+// Where a window from row s simulating `length` rows lies against the held-out
+// `stretches` (first row, rows simulated after it): wholly inside one (held out with it),
+// apart from all (fitted), or across an edge (neither: its rows on one side are held out,
+// on the other fitted by the longer windows). Sharing only a first row (one window's
+// logged start the other's last row) is not meeting: a start is no score.
+enum class Against { kApart, kInside, kAcross };
+Against Place(int s, int length, const std::vector<std::pair<int, int>>& stretches) {
+  for (const auto& [first, rows] : stretches) {
+    if (!(s < first + rows && first < s + length)) continue;
+    return first <= s && s + length <= first + rows ? Against::kInside : Against::kAcross;
+  }
+  return Against::kApart;
 }
 
 // The fit's data; its coordinates are ArmFitCoordinates'.
@@ -127,7 +132,9 @@ class OutputErrorProblem {
         set.check.emplace_back();
         set.lengths.push_back(length);
         for (int s : starts) {
-          const bool check = k == longest_ ? window++ % 4 == 3 : Overlaps(s, length, held[l]);
+          const Against place = k == longest_ ? Against::kApart : Place(s, length, held[l]);
+          if (place == Against::kAcross) continue;
+          const bool check = k == longest_ ? window++ % 4 == 3 : place == Against::kInside;
           if (check) {
             if (k == longest_) held[l].emplace_back(s, length);
             set.check.back().push_back(s);
@@ -141,10 +148,15 @@ class OutputErrorProblem {
           set.rows += static_cast<std::size_t>(length);
         }
       }
-      if (k == longest_ && window < 4) {
+      if ((k == longest_ && window < 4) || set.rows == 0) {
+        char seconds[32];
+        std::snprintf(seconds, sizeof seconds, "%g", horizons[k]);
         throw InputError(SourceLocation{logs_.empty() ? std::string("(no log)") : logs_.front().path, 1},
-                         "the logs are too short for the output-error fit: it needs at least 4 windows of the horizon "
-                         "(one held out), they hold " + std::to_string(window));
+                         k == longest_ ? "the logs are too short for the output-error fit: it needs at least 4 windows "
+                                         "of the horizon (one held out), they hold " + std::to_string(window) +
+                                             (sets_.size() > 1 ? std::string(" of ") + seconds + " s" : "")
+                                       : std::string("the logs hold no window of ") + seconds +
+                                             " s outside the held-out longer ones to fit");
       }
       const double rows = static_cast<double>(set.rows);
       set.constant_velocity = (velocity2 / rows).sqrt().matrix();
@@ -226,18 +238,20 @@ class OutputErrorProblem {
     return out;
   }
 
-  // Per joint, the position RMSE of `horizon`'s fit windows (`check` false) or its
-  // held-out ones.
-  Eigen::VectorXd SimulationRmse(const ArmModel& model, bool check) const {
-    return SimulationRmse(sets_.front(), model, check);
+  // Per length (`horizon`'s first) and joint, the position RMSE of the fit windows
+  // (`check` false) or the held-out ones.
+  std::vector<Eigen::VectorXd> SimulationRmse(const ArmModel& model, bool check) const {
+    std::vector<Eigen::VectorXd> out;
+    for (const WindowSet& set : sets_) out.push_back(SimulationRmse(set, model, check));
+    return out;
   }
 
-  // The cost the decisions compare: over every set, each joint's RMSE on the fit windows
-  // (`check` false) or the held-out ones against the constant-velocity baseline, squared.
-  double Cost(const ArmModel& model, bool check) const {
+  // The cost the decisions compare: over every length, each joint's RMSE (SimulationRmse)
+  // against the constant-velocity baseline, squared.
+  double Cost(const std::vector<Eigen::VectorXd>& rmse) const {
     double cost = 0;
-    for (const WindowSet& set : sets_)
-      cost += (SimulationRmse(set, model, check).array() / set.constant_velocity.array().max(1e-12)).square().sum();
+    for (std::size_t k = 0; k < sets_.size(); ++k)
+      cost += (rmse[k].array() / sets_[k].constant_velocity.array().max(1e-12)).square().sum();
     return cost;
   }
 
@@ -323,8 +337,8 @@ ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErr
   s.also_horizons = options.also_horizons;
   s.fit_windows = plain.fit_windows();
   s.check_windows = plain.check_windows();
-  s.rmse_before = plain.SimulationRmse(floor, false);
-  s.rmse_after = plain.SimulationRmse(fitted, false);
+  s.rmse_before = plain.SimulationRmse(floor, false).front();
+  s.rmse_after = plain.SimulationRmse(fitted, false).front();
   s.constant_velocity = plain.constant_velocity();
   SummariseArmFit(used.coordinates(), start, fitted, x, at_bound, se, &s);
   return s;
@@ -390,7 +404,7 @@ double ArmOutputErrorStartCost(const ArmModel& model, const std::vector<ArmLog>&
   windows.presliding = ArmPresliding::kNone;
   const OutputErrorProblem problem(model, logs, windows);
   const std::vector<double> x(static_cast<std::size_t>(problem.parameters()), 0.0);
-  return problem.Cost(problem.Apply(x.data()), false);
+  return problem.Cost(problem.SimulationRmse(problem.Apply(x.data()), false));
 }
 
 ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>& logs,
@@ -410,16 +424,16 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
   int iterations = Solve(plain, plain_options, &x, &at_bound, &se);
   ArmModel fitted = plain.Apply(x.data());
   // Kept only where the held-out windows get better.
-  const Eigen::VectorXd check_before = plain.SimulationRmse(floor, true);
-  Eigen::VectorXd check_after = plain.SimulationRmse(fitted, true);
-  const bool kept = plain.Cost(fitted, true) < plain.Cost(floor, true);
+  const std::vector<Eigen::VectorXd> check_before = plain.SimulationRmse(floor, true);
+  std::vector<Eigen::VectorXd> check_after = plain.SimulationRmse(fitted, true);
+  const bool kept = plain.Cost(check_after) < plain.Cost(check_before);
   const OutputErrorProblem* final_problem = &plain;
 
   // Friction that holds at low speed: fitted from where a kept plain refinement ended (a
   // refinement not kept returns the start, so a fit on top of it could not be used), and
   // kept where it simulates the held-out windows better still.
   std::unique_ptr<OutputErrorProblem> low_speed;
-  const Eigen::VectorXd check_plain = check_after;
+  const std::vector<Eigen::VectorXd> check_plain = check_after;
   const bool stribeck_tried = options.stribeck && kept;
   bool stribeck_kept = false;
   ArmModel with;  // the low-speed fit, kept or not
@@ -432,8 +446,8 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     std::vector<double> y_se;
     const int y_iterations = Solve(*low_speed, options, &y, &y_bound, &y_se);
     with = low_speed->Apply(y.data());
-    const Eigen::VectorXd check_with = low_speed->SimulationRmse(with, true);
-    stribeck_kept = low_speed->Cost(with, true) < (1 - kLowSpeedGain) * plain.Cost(fitted, true);
+    const std::vector<Eigen::VectorXd> check_with = low_speed->SimulationRmse(with, true);
+    stribeck_kept = low_speed->Cost(check_with) < (1 - kLowSpeedGain) * plain.Cost(check_plain);
     low_speed_at_bound = low_speed->coordinates().Names(y_bound);
     if (stribeck_kept) {
       x = std::move(y);
@@ -450,10 +464,10 @@ ArmModel RefineArmByOutputError(const ArmModel& start, const std::vector<ArmLog>
     *summary = Summarise(plain, *final_problem, start, floor, fitted, x, at_bound, se, options);
     summary->iterations = iterations;
     summary->kept = kept;
-    SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain, summary);
+    SummariseLowSpeedFriction(with, stribeck_tried, stribeck_kept, check_plain.front(), summary);
     summary->low_speed_at_bound = std::move(low_speed_at_bound);
-    summary->check_before = check_before;
-    summary->check_after = check_after;
+    summary->check_before = check_before.front();
+    summary->check_after = check_after.front();
   }
   if (!kept) return start;
   return fitted;
@@ -581,8 +595,9 @@ std::string ArmOutputErrorSummary::FullReport() const {
     text += line;
     if (!also_horizons.empty())
       text += "  windows of " + OutputErrorWindowLengths(horizon, also_horizons) +
-              " s fitted at once (each length's squared errors over its constant-velocity baseline's, summed; held "
-              "out by the longest windows' every fourth; the RMSE below is the first length's)\n";
+              " s fitted at once (each length's squared errors over its constant-velocity baseline's, summed in "
+              "the fit and in the decisions to keep; held out by the longest windows' every fourth; the RMSE below "
+              "is the first length's)\n";
     std::snprintf(line, sizeof line, "%-6s %27s %27s %11s %8s %23s %23s %23s\n", "joint", "fit windows' RMSE",
                   "held-out windows' RMSE", "const. vel.", "scale k", "viscous", "Coulomb", "offset tau0");
     text += line;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "analysis/arm_simulation_score.h"
 #include "identification/synthetic_arm_data.h"
 #include "robots/arm/arm_model_yaml_writer.h"
 #include "test_util.h"
@@ -96,9 +97,23 @@ TEST(ArmIdentification, OutputErrorStartsFromTheDataSheetWhereItSimulatesBetter)
             FormatArmModelYaml(RefineArmByOutputError(told.inverse_dynamics, {coarse}, stage), ""));
 }
 
+// The windows of `short_s` seconds a fit at once with `long_s` holds out: those wholly
+// inside one of the long windows held out (every fourth), written apart from the fit's code.
+int HeldOutShortWindows(const ArmModel& model, const ArmLog& log, double short_s, double long_s) {
+  const ArmModel at = ArmModelAtLogPeriod(model, log.sample_period);
+  int short_rows = 0, long_rows = 0;
+  const std::vector<int> shorts = ArmSimulationWindows(at, log, short_s, &short_rows);
+  const std::vector<int> longs = ArmSimulationWindows(at, log, long_s, &long_rows);
+  int held = 0;
+  for (int s : shorts)
+    for (std::size_t k = 3; k < longs.size(); k += 4)
+      held += longs[k] <= s && s + short_rows <= longs[k] + long_rows;
+  return held;
+}
+
 // Windows of two lengths fitted at once (`--output-error 0.1+0.5`): one model for the short
-// horizon and the long. From a data sheet 15 % light with 30 % too little viscous
-// friction, the fit simulates another log's windows of either length within 10 % of the
+// horizon and the long. From a data sheet whose links the truth makes 15 % heavier and
+// whose viscous friction 30 % larger, the fit simulates another log's windows of either length within 10 % of the
 // cost a fit on that length alone reaches there (measured 7.1 % and 7.9 % above it), far
 // below the start's (0.57 -> 0.0037 and 2.24 -> 0.0023; the fits alone 0.0034 and
 // 0.0022), finds the viscous friction within 10 % (4.0 % at worst), and holds out every
@@ -114,8 +129,8 @@ TEST(ArmIdentification, WindowsOfTwoLengthsFittedAtOnce) {
   EXPECT_TRUE(summary.kept);
   EXPECT_NE(summary.FullReport().find("windows of 0.1 and 0.5 s fitted at once"), std::string::npos) << summary.FullReport();
   // Each held-out 0.5 s window covers five 0.1 s windows, and only those are held out.
-  EXPECT_GT(summary.check_windows, 0);
-  EXPECT_EQ(summary.check_windows % 5, 0);
+  EXPECT_EQ(summary.check_windows, HeldOutShortWindows(c.a_priori, c.fit, 0.1, 0.5));
+  EXPECT_EQ(summary.check_windows, 10);
   for (double horizon : {0.1, 0.5}) {
     SCOPED_TRACE(horizon);
     ArmOutputErrorOptions one = both;
@@ -128,6 +143,20 @@ TEST(ArmIdentification, WindowsOfTwoLengthsFittedAtOnce) {
     EXPECT_LT(fitted, 1.1 * ArmOutputErrorStartCost(alone, {c.held_out}, one));
   }
   for (int j = 0; j < 3; ++j) EXPECT_NEAR(refined.joints[j].viscous, c.truth.joints[j].viscous, 0.1 * c.truth.joints[j].viscous);
+
+  // Lengths that do not divide (0.15 s is 75 rows, 0.5 s 250): a short window across the
+  // edge of a held-out long one is neither fitted nor held out, so no held-out row of
+  // either length is fitted at the other.
+  ArmOutputErrorOptions across = both;
+  across.horizon = 0.15;
+  ArmOutputErrorSummary apart;
+  RefineArmByOutputError(c.a_priori, {c.fit}, across, &apart);
+  int rows = 0;
+  const int shorts = static_cast<int>(
+      ArmSimulationWindows(ArmModelAtLogPeriod(c.a_priori, c.fit.sample_period), c.fit, 0.15, &rows).size());
+  EXPECT_EQ(apart.check_windows, HeldOutShortWindows(c.a_priori, c.fit, 0.15, 0.5));
+  EXPECT_GT(apart.check_windows, 0);
+  EXPECT_LT(apart.fit_windows + apart.check_windows, shorts);
 }
 
 }  // namespace

@@ -328,6 +328,7 @@ TEST(IdentifyCli, OutputErrorOverWholeRunsRefusesWhatIsNoHorizon) {
                                    "at once), or run for whole runs"},
            {"--output-error 0.1+", "--output-error 0.1+: give the windows' length in seconds"},
            {"--output-error 0.1+0", "--output-error 0.1+0: each length fitted at once must be above 0 s"},
+           {"--output-error 0+1", "--output-error 0+1: each length fitted at once must be above 0 s"},
            {"--output-error run+1", "--output-error run+1: give the windows' length in seconds"},
            {"--output-error 0.1s", "--output-error 0.1s: give the windows' length in seconds"},
            {"--output-error 0.1,,1", "--output-error : give the windows' length in seconds"},

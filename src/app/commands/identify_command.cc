@@ -170,6 +170,8 @@ std::vector<ArmOutputErrorOptions> ParseOutputErrorStages(const std::string& tex
     // "0.1+1": windows of 0.1 s and of 1 s fitted at once.
     const std::size_t plus = item.find('+');
     stage.horizon = stage.whole_run ? 0 : ParseOutputErrorHorizon(item.substr(0, plus), item);
+    if (plus != std::string::npos && !(stage.horizon > 0))
+      throw InputError("--output-error " + item + ": each length fitted at once must be above 0 s");
     for (std::size_t at = plus; at != std::string::npos;) {
       const std::size_t next = item.find('+', at + 1);
       const double seconds =
