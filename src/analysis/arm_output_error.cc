@@ -113,7 +113,8 @@ class OutputErrorProblem {
     longest_ = static_cast<std::size_t>(std::max_element(horizons.begin(), horizons.end()) - horizons.begin());
     sets_.resize(horizons.size());
     // The longest set first: its every fourth window (counted over the logs) is held out,
-    // and the other sets' windows that overlap those are held out with it.
+    // the other sets' windows wholly inside those with them, and those across their edges
+    // neither fitted nor held out (Place).
     std::vector<std::vector<std::pair<int, int>>> held(logs_.size());
     std::vector<std::size_t> order{longest_};
     for (std::size_t k = 0; k < sets_.size(); ++k)
@@ -149,12 +150,11 @@ class OutputErrorProblem {
         }
       }
       if ((k == longest_ && window < 4) || set.rows == 0) {
-        char seconds[32];
-        std::snprintf(seconds, sizeof seconds, "%g", horizons[k]);
+        const std::string seconds = OutputErrorWindowLengths(horizons[k], {});
         throw InputError(SourceLocation{logs_.empty() ? std::string("(no log)") : logs_.front().path, 1},
                          k == longest_ ? "the logs are too short for the output-error fit: it needs at least 4 windows "
                                          "of the horizon (one held out), they hold " + std::to_string(window) +
-                                             (sets_.size() > 1 ? std::string(" of ") + seconds + " s" : "")
+                                             (sets_.size() > 1 ? " of " + seconds + " s" : "")
                                        : std::string("the logs hold no window of ") + seconds +
                                              " s outside the held-out longer ones to fit");
       }
@@ -187,6 +187,10 @@ class OutputErrorProblem {
   int fit_windows() const { return sets_.front().fit_windows; }
   int check_windows() const { return sets_.front().check_windows; }
   const Eigen::VectorXd& constant_velocity() const { return sets_.front().constant_velocity; }
+  // Per joint, the position RMSE of `horizon`'s fit windows (`check` false) or held-out ones.
+  Eigen::VectorXd FirstSimulationRmse(const ArmModel& model, bool check) const {
+    return SimulationRmse(sets_.front(), model, check);
+  }
 
   // The model for coordinates x (0: the start, frictions raised to their floors).
   ArmModel Apply(const double* x) const { return coordinates_.Apply(x); }
@@ -337,8 +341,8 @@ ArmOutputErrorSummary Summarise(const OutputErrorProblem& plain, const OutputErr
   s.also_horizons = options.also_horizons;
   s.fit_windows = plain.fit_windows();
   s.check_windows = plain.check_windows();
-  s.rmse_before = plain.SimulationRmse(floor, false).front();
-  s.rmse_after = plain.SimulationRmse(fitted, false).front();
+  s.rmse_before = plain.FirstSimulationRmse(floor, false);
+  s.rmse_after = plain.FirstSimulationRmse(fitted, false);
   s.constant_velocity = plain.constant_velocity();
   SummariseArmFit(used.coordinates(), start, fitted, x, at_bound, se, &s);
   return s;

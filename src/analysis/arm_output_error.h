@@ -59,9 +59,10 @@ struct ArmOutputErrorOptions {
   double horizon = 0.1;       // s: the simulated windows' length (> 0; not used with whole_run)
   // s: windows of these lengths fitted at once beside `horizon`'s (each set weighted to
   // start near 1 per joint, so every horizon counts alike), and held out by the longest
-  // set's every fourth window: a shorter window is held out where it overlaps one of
-  // those. The summary's RMSE is `horizon`'s windows'; the keep decisions sum every set's
-  // held-out cost. Empty: `horizon` alone.
+  // set's every fourth window: a shorter window is held out where it lies wholly inside
+  // one of those, and neither fitted nor held out where it crosses one's edge. The
+  // summary's RMSE is `horizon`'s windows'; the keep decisions sum every set's held-out
+  // cost. Empty: `horizon` alone.
   std::vector<double> also_horizons;
   bool whole_run = false;     // fit each log's free run by multiple shooting instead of windows
   double segment = 2.0;       // s: whole_run's shooting segments (> 0)
