@@ -243,9 +243,20 @@ class OmniProblem : public DiagnosisProblem {
   int ChunkRows() const override { return chunk_rows_; }
   const std::vector<OmniLogData>& data() const { return data_; }
 
+  // The model with `effects` set; a key an effect the model has does not give keeps the
+  // model's number (a change that adds motor_lag's lag in series keeps its own lags).
   OmniModel Build(const std::vector<TrialEffect>& effects) const {
     OmniModel m = nominal_;
-    for (const TrialEffect& e : effects) SetOmniEffect(e.name, e.parameters, &m.effects);
+    for (const TrialEffect& e : effects) {
+      const auto it = own_.find(e.name);
+      if (it == own_.end()) {
+        SetOmniEffect(e.name, e.parameters, &m.effects);
+        continue;
+      }
+      std::map<std::string, double> p = e.parameters;
+      p.insert(it->second.begin(), it->second.end());
+      SetOmniEffect(e.name, p, &m.effects);
+    }
     return m;
   }
 
@@ -407,6 +418,9 @@ class OmniProblem : public DiagnosisProblem {
 };
 
 std::map<std::string, double> OmniProblem::ChangeStart(const std::string& name, std::map<std::string, double> present) {
+  // A robot that lags longer than the model: a lag come in series with its own, one
+  // number on top of the model's lags (Build keeps them).
+  if (name == "motor_lag") return {{"series", 0.0}};
   const char* keys[2] = {nullptr, nullptr};
   if (name == "velocity_scale") keys[0] = "scale";
   if (name == "turn_coupling") keys[0] = "forward", keys[1] = "sideways";
@@ -435,21 +449,7 @@ void OmniProblem::ChangeGuess(std::vector<TrialEffect>* effects, int i) const {
   if (e.name == "velocity_scale") {
     for (double f : {0.5, 0.7, 0.85, 1.15, 1.4}) scaled({"scale"}, f);
   } else if (e.name == "motor_lag") {
-    for (double f : {0.4, 0.63, 1.6, 2.5}) scaled({"time_constant", "forward", "sideways", "turn"}, f);
-    // A lag come in series with the model's adds its time constant to each axis's (one
-    // lag of the sum keeps the pair's mean delay), on an axis without a lag of its own
-    // too: the model's per-axis lags, scaled, cannot reach an axis that had none.
-    for (double by : {0.05, 0.15, 0.3}) {
-      std::map<std::string, double> p = e.parameters;
-      const bool per_axis = p.count("forward") || p.count("sideways") || p.count("turn");
-      const double common = p.count("time_constant") ? p["time_constant"] : 0.0;
-      if (!per_axis) {
-        p["time_constant"] = common + by;
-      } else {
-        for (const char* axis : kOmniAxisNames) p[axis] = (p.count(axis) ? p[axis] : common) + by;
-      }
-      grid.push_back(p);
-    }
+    for (double tau : {0.02, 0.05, 0.1, 0.15, 0.25, 0.4}) grid.push_back({{"series", tau}});
   } else if (e.name == "velocity_saturation") {
     for (double f : {0.6, 0.8, 1.25}) scaled({"v_max", "w_max"}, f);
   } else if (e.name == "traction_limit") {
@@ -721,8 +721,15 @@ std::string OmniProblem::Signature(const TrialEffect& e) const {
     for (const char* axis : kOmniAxisNames) {
       if (p.count(axis)) lags += (lags.empty() ? "" : ", ") + ms(p.at(axis)) + " ms " + axis;
     }
-    std::snprintf(buf, sizeof buf, "steps in the command are followed with a time constant of %s, rounded rather than shifted",
-                  lags.c_str());
+    if (lags.empty() && p.count("series")) {
+      std::snprintf(buf, sizeof buf,
+                    "steps in the command pass a further lag of %s ms before the model's own, the rise S-shaped rather than shifted",
+                    ms(p.at("series")).c_str());
+    } else {
+      if (p.count("series")) lags += (lags.empty() ? "" : ", ") + ms(p.at("series")) + " ms in series";
+      std::snprintf(buf, sizeof buf, "steps in the command are followed with a time constant of %s, rounded rather than shifted",
+                    lags.c_str());
+    }
   } else if (e.name == "traction_limit") {
     std::snprintf(buf, sizeof buf, "the robot accelerates at most %s m/s² where the controller's slew allows %s m/s²: the wheels slip",
                   FormatParameter(p.at("a_max")).c_str(), FormatParameter(nominal_.controller.forward.slew_rate).c_str());

@@ -35,12 +35,13 @@ NewtonianOmniBackend::NewtonianOmniBackend(std::unique_ptr<OmniEngine> engine,
     const double ratio = physics_rate / m.controller.rate_hz;
     r.ticks_per_control = std::max(1, static_cast<int>(std::lround(ratio)));
     r.index = static_cast<int>(robots_.size());
+    auto share = [&](double t) { return t > 0 ? 1 - std::exp(-timing_.physics_dt() / t) : 0.0; };
     for (int a = 0; a < 3; ++a) {
       const double tau = m.effects.LagOf(a);
-      auto share = [&](double t) { return t > 0 ? 1 - std::exp(-timing_.physics_dt() / t) : 0.0; };
       r.lag_share[static_cast<std::size_t>(a)] = share(tau);
       r.lag_share_braking[static_cast<std::size_t>(a)] = share(tau * m.effects.lag_braking);
     }
+    r.series_share = share(m.effects.lag_series);
     robots_.push_back(std::move(r));
   }
   for (int i = 0; i < num_robots(); ++i) Reset(i, Pose2{}, Twist2{});
@@ -60,6 +61,7 @@ void NewtonianOmniBackend::Reset(int robot, const Pose2& pose, const Twist2& vel
   r.state.clock = 0;
   r.state.received.clear();
   r.state.acting = velocity;
+  r.state.series_lagged = velocity;
   r.state.lagged = velocity;
   r.state.gripped = velocity;
   engine_->SetWheelTorques(robot, Eigen::VectorXd::Zero(r.model.num_wheels()));
@@ -152,23 +154,7 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
     }
   }
   if (fx.w_max > 0) c.omega = std::clamp(c.omega, -fx.w_max, fx.w_max);
-  if (fx.AnyLag()) {
-    if (fx.lag_field_frame) {
-      // The lagged translation keeps its direction in the field: in the robot's frame it
-      // turns against the robot's own turn over the step.
-      const double turn = -engine_->GetVelocity(r.index).omega * dt;
-      const double cs = std::cos(turn), sn = std::sin(turn);
-      s.lagged = Twist2{cs * s.lagged.vx - sn * s.lagged.vy, sn * s.lagged.vx + cs * s.lagged.vy, s.lagged.omega};
-    }
-    auto follow = [&](int axis, double lagged, double target) {
-      // Slowing down (the set-point moves towards zero) at braking times the time constant.
-      const bool braking = (target - lagged) * lagged < 0;
-      const double share = (braking ? r.lag_share_braking : r.lag_share)[static_cast<std::size_t>(axis)];
-      return share > 0 ? lagged + share * (target - lagged) : target;
-    };
-    s.lagged = Twist2{follow(0, s.lagged.vx, c.vx), follow(1, s.lagged.vy, c.vy), follow(2, s.lagged.omega, c.omega)};
-    c = s.lagged;
-  }
+  if (fx.AnyLag()) c = Lagged(r, c, dt);
   if (fx.a_max > 0) {
     // traction_limit: a slipping robot's wheels spin up to what the motors are driven
     // to while the body follows at the grip's acceleration, so the loop, reading the
@@ -185,6 +171,34 @@ Twist2 NewtonianOmniBackend::EffectiveCommand(Robot& r, const Twist2& received, 
   }
   s.gripped = c;
   return c;
+}
+
+Twist2 NewtonianOmniBackend::Lagged(Robot& r, Twist2 c, double dt) {
+  const OmniEffects& fx = r.model.effects;
+  OmniRobotState& s = r.state;
+  if (r.series_share > 0) {
+    // A lag in series before the axes' own: the command filtered once more, per axis
+    // in the robot's frame.
+    const double k = r.series_share;
+    Twist2& u = s.series_lagged;
+    u = Twist2{u.vx + k * (c.vx - u.vx), u.vy + k * (c.vy - u.vy), u.omega + k * (c.omega - u.omega)};
+    c = u;
+  }
+  if (fx.lag_field_frame) {
+    // The lagged translation keeps its direction in the field: in the robot's frame it
+    // turns against the robot's own turn over the step.
+    const double turn = -engine_->GetVelocity(r.index).omega * dt;
+    const double cs = std::cos(turn), sn = std::sin(turn);
+    s.lagged = Twist2{cs * s.lagged.vx - sn * s.lagged.vy, sn * s.lagged.vx + cs * s.lagged.vy, s.lagged.omega};
+  }
+  auto follow = [&](int axis, double lagged, double target) {
+    // Slowing down (the set-point moves towards zero) at braking times the time constant.
+    const bool braking = (target - lagged) * lagged < 0;
+    const double share = (braking ? r.lag_share_braking : r.lag_share)[static_cast<std::size_t>(axis)];
+    return share > 0 ? lagged + share * (target - lagged) : target;
+  };
+  s.lagged = Twist2{follow(0, s.lagged.vx, c.vx), follow(1, s.lagged.vy, c.vy), follow(2, s.lagged.omega, c.omega)};
+  return s.lagged;
 }
 
 void NewtonianOmniBackend::SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const {

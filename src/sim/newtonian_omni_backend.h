@@ -54,12 +54,16 @@ class NewtonianOmniBackend final : public OmniBackend {
     // motor_lag's share of the way to its target per physics step, 1 - exp(-dt / tau),
     // per axis, accelerating and braking; 0 where the time constant is 0 (no lag).
     std::array<double, 3> lag_share{}, lag_share_braking{};
+    double series_share = 0;  // the same for motor_lag's lag in series (`series`)
   };
 
   // The command the firmware acts on at this physics step, after time_delay,
   // velocity_saturation, motor_lag (its braking and field frame included) and
   // traction_limit.
   Twist2 EffectiveCommand(Robot& r, const Twist2& received, bool new_frame, double dt);
+  // `c` through motor_lag: its lag in series, then each axis's (braking and field frame
+  // included); the lags' states move on by the physics step dt.
+  Twist2 Lagged(Robot& r, Twist2 c, double dt);
   // The encoder speeds the firmware believes (velocity_scale, rotation_drift).
   void SeenWheelSpeeds(Robot& r, Eigen::VectorXd* speeds) const;
   // Net wheel torques after traction_limit's force cap and the motors.

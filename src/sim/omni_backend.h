@@ -53,6 +53,7 @@ struct OmniRobotState {
   double clock = 0;                                  // s since Reset
   std::vector<std::pair<double, Twist2>> received;   // (s, command) not yet acting (time_delay)
   Twist2 acting;                                     // the command the firmware acts on
+  Twist2 series_lagged;                              // after motor_lag's lag in series (`series`)
   Twist2 lagged;                                     // after motor_lag
   Twist2 gripped;                                    // after traction_limit: the set-point the grip lets the body follow
 

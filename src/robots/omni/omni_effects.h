@@ -51,6 +51,9 @@ struct OmniEffects {
   std::array<double, 3> axis_lag{0, 0, 0};  // s, motor_lag's forward, sideways, turn where > 0 (over motor_lag)
   double lag_braking = 1;     // motor_lag's `braking`: time constants times this while slowing down; 1 = as accelerating
   bool lag_field_frame = false;  // motor_lag's `field_frame`: the lagged translation is held in the field frame
+  // s, motor_lag's `series`: a first-order lag every axis's command passes through before
+  // the lags above (a motor lag in series with the robot's own response); 0 = none.
+  double lag_series = 0;
   double a_max = 0;           // m/s^2; 0 = off (traction_limit)
   double velocity_scale = 1;  // 1 = off (at the encoders, every axis)
   std::array<double, 3> axis_scale{1, 1, 1};  // velocity_scale's forward, sideways, turn (on the command); 1 = off
@@ -69,7 +72,7 @@ struct OmniEffects {
   double LagOf(int axis) const {
     return axis_lag[static_cast<std::size_t>(axis)] > 0 ? axis_lag[static_cast<std::size_t>(axis)] : motor_lag;
   }
-  bool AnyLag() const { return LagOf(0) > 0 || LagOf(1) > 0 || LagOf(2) > 0; }
+  bool AnyLag() const { return LagOf(0) > 0 || LagOf(1) > 0 || LagOf(2) > 0 || lag_series > 0; }
   // True when the per-axis scales or a coupling change the command.
   bool MapsCommand() const {
     return axis_scale != std::array<double, 3>{1, 1, 1} || turn_per_forward != 0 || turn_per_sideways != 0 ||

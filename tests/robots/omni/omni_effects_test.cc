@@ -111,6 +111,39 @@ TEST(OmniEffects, MotorLagSlowsTheResponse) {
   EXPECT_NEAR(lag[59].truth_velocity.vx, 0.2, 0.004);
 }
 
+// The loop's set-point (forward) after each of `frames` frames of a `speed` m/s forward
+// command from rest.
+std::vector<double> ForwardSetPoints(const OmniModel& m, double speed, int frames) {
+  const std::unique_ptr<OmniBackend> backend = MakeOmniBackend("analytic", {m}, FieldModel{}, FrameTiming{});
+  backend->Reset(0, Pose2{}, Twist2{});
+  std::vector<double> out;
+  for (int k = 0; k < frames; ++k) {
+    backend->StepFrame({Twist2{speed, 0, 0}});
+    out.push_back(backend->Save().robots[0].controller.axes[0].setpoint);
+  }
+  return out;
+}
+
+// motor_lag's `series`: a first-order lag before the axes' own. Alone it is the lag of
+// `time_constant`, to the bit; before a lag of its own the set-point follows a step as
+// two lags in series do, 1 - (a e^(-t/a) - b e^(-t/b)) / (a - b), within the physics
+// step's discretisation (each stage exact for an input held over the step).
+TEST(OmniEffects, MotorLagInSeriesIsASecondLagBeforeTheAxes) {
+  const std::vector<double> series = ForwardSetPoints(With("motor_lag: {series: 0.15}"), 0.2, 30);
+  const std::vector<double> single = ForwardSetPoints(With("motor_lag: {time_constant: 0.15}"), 0.2, 30);
+  EXPECT_EQ(series, single);
+  const double a = 0.15, b = 0.1, period = FrameTiming{}.frame_dt();
+  const std::vector<double> both = ForwardSetPoints(With("motor_lag: {forward: 0.1, series: 0.15}"), 0.2, 30);
+  for (int k = 2; k < 30; k += 3) {
+    const double t = (k + 1) * period;
+    const double expected = 0.2 * (1 - (a * std::exp(-t / a) - b * std::exp(-t / b)) / (a - b));
+    EXPECT_NEAR(both[static_cast<std::size_t>(k)], expected, 0.01 * 0.2) << "frame " << k;
+  }
+  // Slower than either lag alone: at 0.1 s the single 0.15 s lag is at 49 % of the step,
+  // the pair at 20 %.
+  EXPECT_LT(both[2], 0.6 * single[2]);
+}
+
 TEST(OmniEffects, TimeDelayShiftsTheResponse) {
   const auto plain = ForwardStep(testing::Omni4());
   const auto late = ForwardStep(With("time_delay: {delay: 0.2}"));  // six frames at 30 fps
@@ -293,6 +326,7 @@ TEST(OmniEffects, TheTableHoldsTheVocabularysKeysRangesAndUnits) {
       {"motor_lag", "forward", 0, 10, false, 0},
       {"motor_lag", "sideways", 0, 10, false, 0},
       {"motor_lag", "turn", 0, 10, false, 0},
+      {"motor_lag", "series", 0, 10, false, 0},
       {"motor_lag", "braking", 0.05, 20, false, 1},
       {"motor_lag", "field_frame", 0, 1, false, 0},
       {"velocity_scale", "scale", 0.2, 5, false, 1},
