@@ -377,7 +377,9 @@ class OmniProblem : public DiagnosisProblem {
 
   // The start of a change of effect `name`, which the model has with `present`: its
   // numbers, and what the fit moves besides them: velocity_scale's `scale` on top of
-  // per-axis scales (a wheel radius that changed), both keys of a coupling.
+  // per-axis scales (a wheel radius that changed), both keys of a coupling; for
+  // motor_lag a lag in series alone (Build keeps the model's own lags), which ChangeGuess
+  // may trade for the model's lags scaled down.
   static std::map<std::string, double> ChangeStart(const std::string& name, std::map<std::string, double> present);
   // Whether `e` is a change candidate as Candidates made it, not yet fitted.
   bool AtChangeStart(const TrialEffect& e) const {
@@ -449,7 +451,18 @@ void OmniProblem::ChangeGuess(std::vector<TrialEffect>* effects, int i) const {
   if (e.name == "velocity_scale") {
     for (double f : {0.5, 0.7, 0.85, 1.15, 1.4}) scaled({"scale"}, f);
   } else if (e.name == "motor_lag") {
+    // Longer: a lag come in series with the model's (one number). Shorter, which no lag
+    // in series makes: the model's own lags scaled down (its per-axis numbers, then
+    // refined as they are).
     for (double tau : {0.02, 0.05, 0.1, 0.15, 0.25, 0.4}) grid.push_back({{"series", tau}});
+    const auto own = own_.find("motor_lag");
+    for (double f : {0.4, 0.63}) {
+      std::map<std::string, double> p;
+      for (const auto& [key, value] : own->second) {
+        if (key == "time_constant" || key == "forward" || key == "sideways" || key == "turn") p[key] = f * value;
+      }
+      if (!p.empty()) grid.push_back(p);
+    }
   } else if (e.name == "velocity_saturation") {
     for (double f : {0.6, 0.8, 1.25}) scaled({"v_max", "w_max"}, f);
   } else if (e.name == "traction_limit") {
