@@ -422,7 +422,7 @@ class OmniProblem : public DiagnosisProblem {
 std::map<std::string, double> OmniProblem::ChangeStart(const std::string& name, std::map<std::string, double> present) {
   // A robot that lags longer than the model: a lag come in series with its own, one
   // number on top of the model's lags (Build keeps them).
-  if (name == "motor_lag") return {{"series", 0.0}};
+  if (name == "motor_lag") return {{"series", present.count("series") ? present.at("series") : 0.0}};
   const char* keys[2] = {nullptr, nullptr};
   if (name == "velocity_scale") keys[0] = "scale";
   if (name == "turn_coupling") keys[0] = "forward", keys[1] = "sideways";
@@ -454,11 +454,12 @@ void OmniProblem::ChangeGuess(std::vector<TrialEffect>* effects, int i) const {
     // Longer: a lag come in series with the model's (one number). Shorter, which no lag
     // in series makes: the model's own lags scaled down (its per-axis numbers, then
     // refined as they are).
-    for (double tau : {0.02, 0.05, 0.1, 0.15, 0.25, 0.4}) grid.push_back({{"series", tau}});
-    const auto own = own_.find("motor_lag");
+    const std::map<std::string, double>& own = own_.at("motor_lag");
+    const double series = own.count("series") ? own.at("series") : 0.0;
+    for (double tau : {0.02, 0.05, 0.1, 0.15, 0.25, 0.4}) grid.push_back({{"series", series + tau}});
     for (double f : {0.4, 0.63}) {
       std::map<std::string, double> p;
-      for (const auto& [key, value] : own->second) {
+      for (const auto& [key, value] : own) {
         if (key == "time_constant" || key == "forward" || key == "sideways" || key == "turn") p[key] = f * value;
       }
       if (!p.empty()) grid.push_back(p);
@@ -736,7 +737,7 @@ std::string OmniProblem::Signature(const TrialEffect& e) const {
     }
     if (lags.empty() && p.count("series")) {
       std::snprintf(buf, sizeof buf,
-                    "steps in the command pass a further lag of %s ms before the model's own, the rise S-shaped rather than shifted",
+                    "steps in the command pass a lag of %s ms in series before the model's own, the rise S-shaped rather than shifted",
                     ms(p.at("series")).c_str());
     } else {
       if (p.count("series")) lags += (lags.empty() ? "" : ", ") + ms(p.at("series")) + " ms in series";

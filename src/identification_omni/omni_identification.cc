@@ -196,6 +196,7 @@ OmniModel WithValues(OmniModel m, const std::array<double, kNumParams>& v, doubl
   OmniEffects& fx = m.effects;
   for (int a = 0; a < 3; ++a) fx.axis_lag[static_cast<std::size_t>(a)] = v[static_cast<std::size_t>(kLagX + a)];
   fx.motor_lag = 0;
+  fx.lag_series = 0;  // a given lag in series is folded into the per-axis lags (StartValues)
   for (double& q : m.observer.process_noise) q *= v[kProcessScale];
   PidGains* gains[3] = {&m.controller.forward, &m.controller.sideways, &m.controller.rotation};
   for (int a = 0; a < 3; ++a) {
@@ -866,13 +867,15 @@ void CheckFramePeriods(const std::vector<OmniLog>& logs, const std::vector<OmniL
   }
 }
 
-// The start: the model's values; a lag to move from; no limits (added below if reached);
-// the lag's structures and a three-wheel robot's turn by direction off, whatever the
-// given model has (the logs choose them, step 5).
+// The start: the model's values; a lag to move from (a given lag in series added to
+// each axis's: one lag of the sum keeps the pair's mean delay); no limits (added below if
+// reached); the lag's structures and a three-wheel robot's turn by direction off,
+// whatever the given model has (the logs choose them, step 5).
 std::array<double, kNumParams> StartValues(const OmniModel& nominal, double period) {
   std::array<double, kNumParams> v = ValuesOf(nominal, period);
   for (int a = 0; a < 3; ++a) {
     double& lag = v[static_cast<std::size_t>(kLagX + a)];
+    lag += nominal.effects.lag_series;
     if (lag <= 0) lag = kStartLag;
   }
   for (int p : {kSlewX, kSlewY, kSlewW}) {

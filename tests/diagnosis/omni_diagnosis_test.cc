@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -170,6 +171,11 @@ TEST(OmniDiagnosis, NamesAChangeOfAnEffectTheModelAlreadyHas) {
     ASSERT_EQ(report.effects.size(), 1u);
     EXPECT_EQ(report.effects[0].name, c.name);
     EXPECT_NEAR(report.effects[0].parameters.at(c.key), c.value, 0.1 * c.value);
+    if (c.key == "series") {
+      // A lag in series keeps the model's own lags: the repaired model holds both.
+      EXPECT_EQ(repaired.effects.axis_lag, (std::array<double, 3>{0.08, 0.1, 0.06}));
+      EXPECT_NEAR(repaired.effects.lag_series, 0.15, 0.015);
+    }
     EXPECT_LT(report.gap_after, 0.5 * report.gap_before);
     EXPECT_NE(report.effects[0].evidence.find("(a change: the model had"), std::string::npos) << report.effects[0].evidence;
   }

@@ -11,7 +11,10 @@
 //                       (or per axis); `braking` times as long (or short) when the set-point
 //                       moves towards zero on an axis; with `field_frame: 1` the lagged
 //                       velocity keeps its direction in the field while the robot turns
-//                       under it (momentum), so a spinning robot's path bends against the spin
+//                       under it (momentum), so a spinning robot's path bends against the spin;
+//                       `series`: one more first-order lag before those, on every axis alike,
+//                       in the robot's frame and the same both ways (a lag come on top of the
+//                       robot's own response)
 //   traction_limit      the wheels slip beyond a_max (m/s^2) of translational acceleration:
 //                       the body follows at a_max while the wheels spin up, so the loop,
 //                       reading the wheels, sees its target approached at that pace;
@@ -30,7 +33,8 @@
 // `time_delay`; mapped by the per-axis scales and the couplings,
 //   [vx', vy', w'] = [[sx, kxy, 0], [kyx, sy, 0], [kwx, kwy, sw]] [vx, vy, w];
 // clipped by velocity_saturation (so v_max and w_max are what the robot reaches);
-// through motor_lag per axis; its translation ramped by traction_limit. velocity_scale's
+// through motor_lag's lag in series, then its lag per axis; its translation ramped by
+// traction_limit. velocity_scale's
 // `scale` and rotation_drift act on the encoder readings.
 #pragma once
 
