@@ -248,13 +248,8 @@ class OmniProblem : public DiagnosisProblem {
   OmniModel Build(const std::vector<TrialEffect>& effects) const {
     OmniModel m = nominal_;
     for (const TrialEffect& e : effects) {
-      const auto it = own_.find(e.name);
-      if (it == own_.end()) {
-        SetOmniEffect(e.name, e.parameters, &m.effects);
-        continue;
-      }
       std::map<std::string, double> p = e.parameters;
-      p.insert(it->second.begin(), it->second.end());
+      if (const auto it = own_.find(e.name); it != own_.end()) p.insert(it->second.begin(), it->second.end());
       SetOmniEffect(e.name, p, &m.effects);
     }
     return m;

@@ -34,8 +34,7 @@
 //   [vx', vy', w'] = [[sx, kxy, 0], [kyx, sy, 0], [kwx, kwy, sw]] [vx, vy, w];
 // clipped by velocity_saturation (so v_max and w_max are what the robot reaches);
 // through motor_lag's lag in series, then its lag per axis; its translation ramped by
-// traction_limit. velocity_scale's
-// `scale` and rotation_drift act on the encoder readings.
+// traction_limit. velocity_scale's `scale` and rotation_drift act on the encoder readings.
 #pragma once
 
 #include <array>
