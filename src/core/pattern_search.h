@@ -11,6 +11,12 @@
 // the path and the result are the same, but the cost is not computed again (a seventh of
 // identify's noise searches on a minute of log).
 //
+// With `min_gain` > 0 a trial moves the search only where it lowers the cost by more
+// than that (a sufficient decrease): a cost that is a mean over N rows of a log density
+// tells little apart below a tenth of a nat in all, so min_gain = 0.1 / N spares the
+// search the polls that polish digits the rows cannot tell apart. Too coarse a gain
+// stops it early along a ridge it would climb in small steps.
+//
 //   double best = cost(start);
 //   int evaluations = 1;
 //   auto v = PatternSearch<Values>(cost, clamp, start, 4, 80, &best, &evaluations);
@@ -24,7 +30,7 @@ namespace twinsim {
 
 template <class V>
 V PatternSearch(const std::function<double(const V&)>& cost, const std::function<V(V)>& clamp, V v, int first, int last,
-                int budget, double* best, int* evaluations) {
+                int budget, double* best, int* evaluations, double min_gain = 0) {
   // Every trial's cost, by its exact coordinates: a poll back to a point already
   // evaluated (the one a move came from) counts as an evaluation, as it always has, but
   // is not computed again.
@@ -46,7 +52,7 @@ V PatternSearch(const std::function<double(const V&)>& cost, const std::function
             const double c = known != seen.end() ? known->second : cost(trial);
             if (known == seen.end()) seen.emplace(trial, c);
             ++*evaluations;
-            if (c >= *best) break;
+            if (c >= *best - min_gain) break;
             *best = c, v = trial, moved = paid = true;
           }
           if (paid) break;
@@ -59,8 +65,8 @@ V PatternSearch(const std::function<double(const V&)>& cost, const std::function
 
 template <class V>
 V PatternSearch(const std::function<double(const V&)>& cost, const std::function<V(V)>& clamp, V v, int coordinates,
-                int budget, double* best, int* evaluations) {
-  return PatternSearch<V>(cost, clamp, v, 0, coordinates, budget, best, evaluations);
+                int budget, double* best, int* evaluations, double min_gain = 0) {
+  return PatternSearch<V>(cost, clamp, v, 0, coordinates, budget, best, evaluations, min_gain);
 }
 
 }  // namespace twinsim

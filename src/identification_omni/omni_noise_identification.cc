@@ -177,6 +177,18 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
   return out;
 }
 
+// The least gain a search's move must bring (PatternSearch's min_gain):
+// options.resolution_nats over one horizon's rows, the cost being a mean per row averaged
+// over the horizons; 0 without rows.
+double MinGain(const std::vector<HorizonRows>& rows, const OmniNoiseOptions& options) {
+  int n = 0, horizons = 0;
+  for (const HorizonRows& h : rows) {
+    n += static_cast<int>(h.rows.size());
+    horizons += !h.rows.empty();
+  }
+  return n > 0 ? options.resolution_nats * horizons / n : 0;
+}
+
 // The cost: the mean negative log density per horizon, averaged over the horizons that
 // have rows (each horizon weighs the same, however many rows it has).
 double Cost(const std::vector<HorizonRows>& rows) {
@@ -335,14 +347,17 @@ NoiseFit FitNoise(const CollectNoise& collect, const NoiseValues& start, const s
                   const OmniNoiseOptions& options, int* evaluations) {
   const std::function<double(const NoiseValues&)> cost = [&](const NoiseValues& x) { return Cost(collect(x, blocks)); };
   NoiseFit f;
-  f.start_cost = f.flat_cost = cost(start);
+  const std::vector<HorizonRows> at_start = collect(start, blocks);
+  f.start_cost = f.flat_cost = Cost(at_start);
+  const double gain = MinGain(at_start, options);
   ++*evaluations;
   int used = 1;
-  f.flat = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, options.max_evaluations, &f.flat_cost, &used);
+  f.flat = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, options.max_evaluations, &f.flat_cost, &used, gain);
   f.grow_cost = f.flat_cost;
   *evaluations += used - 1;
   used = 0;
-  f.grow = PatternSearch<NoiseValues>(cost, Clamped, f.flat, kNoiseParams, options.max_evaluations, &f.grow_cost, &used);
+  f.grow = PatternSearch<NoiseValues>(cost, Clamped, f.flat, kNoiseParams, options.max_evaluations, &f.grow_cost, &used,
+                                      gain);
   *evaluations += used;
   return f;
 }
@@ -406,9 +421,11 @@ std::array<NoiseValues, 2> HalvesWithTheWholeGrowth(const OmniModel& model, cons
     };
     NoiseValues start = fits[1 + h].grow;
     for (int i = kPerSpeed; i < kNoiseParams; ++i) start[static_cast<std::size_t>(i)] = fits[0].grow[static_cast<std::size_t>(i)];
-    double best = cost(start);
+    const std::vector<HorizonRows> at_start = CollectHeldOut(model, start, typical, stretches, one, &halves[h]);
+    double best = Cost(at_start);
     used[h] = 1;
-    out[h] = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, 1 + options.max_evaluations / 2, &best, &used[h]);
+    out[h] = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, 1 + options.max_evaluations / 2, &best, &used[h],
+                                        MinGain(at_start, options));
   });
   *evaluations += used[0] + used[1];
   return out;
@@ -457,6 +474,7 @@ bool OmniNoiseOptions::IsValid(std::string* why) const {
     if (h < 1) return fail("a horizon must be 1 frame or more, got " + std::to_string(h));
   if (stride < 1 || score_stride < 1) return fail("strides must be 1 or more");
   if (max_evaluations < 1) return fail("max_evaluations must be 1 or more");
+  if (!(resolution_nats >= 0)) return fail("resolution_nats must be 0 or more");
   return true;
 }
 
