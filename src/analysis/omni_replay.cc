@@ -134,6 +134,15 @@ void RecordInput(const OmniObserver& observer, std::size_t row, OmniReplayResult
   out->estimated_velocity[row] = observer.Estimate().velocity;
 }
 
+// The last frame the observer's replay filters: with `reach` (and no `features` to
+// record), the last frame a prediction starts from (each runs the model on by itself).
+int LastFrameToFilter(const OmniReplayOptions& options, int last_frame) {
+  if (!options.reach || options.features) return last_frame;
+  int f = last_frame;
+  while (f >= 0 && options.reach(f) <= 0) --f;
+  return f;
+}
+
 // The observer's replay (OmniReplayOptions::state kObserver): the filter runs along the
 // log; each prediction (or the stretch's free run) starts from its estimate. `parameter
 // parts`: per horizon (K, then `also`'s) each row's parameters' part, or null.
@@ -153,9 +162,9 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     return std::vector<Twist2>(command_at.begin() + std::min(f + 1, last_frame + 1),
                                command_at.begin() + std::min(until, last_frame) + 1);
   };
-  auto unwrap_shift = [&](std::size_t row) { return UnwrapShift(log, row, observer); };
+  const int end_frame = stretch ? last_frame : LastFrameToFilter(options, last_frame);
   int start_frame = -1;
-  for (int f = 0; f <= last_frame; ++f) {
+  for (int f = 0; f <= end_frame; ++f) {
     if (progress && f % 64 == 0) progress(f, last_frame);
     auto here = row_of_frame.find(f);
     std::optional<Pose2> camera;
@@ -173,7 +182,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
       }
       // The free run: no more corrections from the measurement.
       const int end_frame = log.FrameIndex(stretch_last - 1);
-      const double shift = unwrap_shift(row);
+      const double shift = UnwrapShift(log, row, observer);
       const OmniPrediction run = observer.PredictAhead(end_frame - f, planned(f, end_frame));
       for (int j = 1; j <= end_frame - f; ++j) {
         auto it = row_of_frame.find(f + j);
@@ -199,7 +208,7 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     if (!any) continue;
     const OmniPrediction prediction =
         observer.PredictAhead(reach, planned(f, f + reach), with_covariance, options.covariance_parts);
-    const double shift = unwrap_shift(row);
+    const double shift = UnwrapShift(log, row, observer);
     for (std::size_t a = 0; a < options.also.size(); ++a) {
       if (options.also[a] > reach) continue;
       auto at = row_of_frame.find(f + options.also[a]);

@@ -49,7 +49,9 @@ struct OmniReplayOptions {
   // Where set, how many frames ahead the prediction from each frame on the stride (its
   // index from the log's first frame) must reach: none where 0, only the horizons up to
   // it (K and `also`) where less than K. Fits that score some blocks only predict nothing
-  // they throw away. The tracker predicts all K wherever it is not 0.
+  // they throw away. The tracker predicts all K wherever it is not 0. Without
+  // `features`, the observer's filter stops at the last frame a prediction starts from
+  // (`grip` counts the steps until then).
   std::function<int(int)> reach;
   // How the start state is estimated (see above). The learned backend always uses the
   // tracker.

@@ -76,5 +76,39 @@ TEST_F(OmniReplayTest, FreeRunFromTheFirstRowFollowsTheSameModel) {
   EXPECT_LT(PositionRmse(log, r), 0.01);
 }
 
+// With `reach`, the observer predicts only from the frames it names and its filter stops
+// at the last of them; every prediction it makes is the full replay's, to the bit, pose
+// and covariance (the noise fit's evaluations rely on it: docs/identification.md).
+TEST_F(OmniReplayTest, TheObserverWithAReachPredictsWhatTheFullReplayDoes) {
+  OmniModel noisy = testing::Omni4();  // the camera's noise on: the filter's gain matters
+  const OmniLog log = RecordReplayLog(noisy, 12);
+  options.state = OmniReplayState::kObserver;
+  options.horizon = 16;
+  options.also = {4};
+  options.covariance = true;
+  const OmniReplayResult full = ReplayOmniLog(noisy, log, options);
+  const int first = 200, last = 260;  // frames a prediction starts from, 4 or 16 ahead
+  options.reach = [&](int frame) { return frame >= first && frame < last ? (frame % 2 ? 4 : 16) : 0; };
+  const OmniReplayResult part = ReplayOmniLog(noisy, log, options);
+  int compared = 0;
+  for (std::size_t row = 0; row < log.rows.size(); ++row) {
+    const int frame = log.FrameIndex(row);
+    const bool in_reach = frame >= first + 4 && frame < last + 16;
+    EXPECT_TRUE(!part.predicted[row] || in_reach) << row;
+    EXPECT_TRUE(!part.also[0].predicted[row] || (frame >= first + 4 && frame < last + 4)) << row;
+    // Every start within the reach predicts, the last one too.
+    const int from16 = frame - 16, from4 = frame - 4;
+    if (from16 >= first && from16 < last && from16 % 2 == 0) EXPECT_TRUE(part.predicted[row]) << row;
+    if (from4 >= first && from4 < last) EXPECT_TRUE(part.also[0].predicted[row]) << row;
+    if (!part.predicted[row]) continue;
+    ASSERT_TRUE(full.predicted[row]) << row;
+    EXPECT_EQ(part.pose[row].x, full.pose[row].x) << row;
+    EXPECT_EQ(part.pose[row].theta, full.pose[row].theta) << row;
+    EXPECT_EQ(part.covariance[row], full.covariance[row]) << row;
+    ++compared;
+  }
+  EXPECT_GT(compared, 20);
+}
+
 }  // namespace
 }  // namespace twinsim
