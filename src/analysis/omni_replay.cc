@@ -135,7 +135,9 @@ void RecordInput(const OmniObserver& observer, std::size_t row, OmniReplayResult
 }
 
 // The last frame the observer's replay filters: with `reach` (and no `features` to
-// record), the last frame a prediction starts from (each runs the model on by itself).
+// record), the last frame `reach` names (a prediction starts there or earlier, each
+// running the model on by itself). A filter that would diverge only after it goes
+// unseen: its predictions are the same.
 int LastFrameToFilter(const OmniReplayOptions& options, int last_frame) {
   if (!options.reach || options.features) return last_frame;
   int f = last_frame;
@@ -162,9 +164,9 @@ void ObserverReplay(const OmniModel& model, const OmniLog& log, const OmniReplay
     return std::vector<Twist2>(command_at.begin() + std::min(f + 1, last_frame + 1),
                                command_at.begin() + std::min(until, last_frame) + 1);
   };
-  const int end_frame = stretch ? last_frame : LastFrameToFilter(options, last_frame);
+  const int filter_until = stretch ? last_frame : LastFrameToFilter(options, last_frame);
   int start_frame = -1;
-  for (int f = 0; f <= end_frame; ++f) {
+  for (int f = 0; f <= filter_until; ++f) {
     if (progress && f % 64 == 0) progress(f, last_frame);
     auto here = row_of_frame.find(f);
     std::optional<Pose2> camera;

@@ -50,8 +50,8 @@ struct OmniReplayOptions {
   // index from the log's first frame) must reach: none where 0, only the horizons up to
   // it (K and `also`) where less than K. Fits that score some blocks only predict nothing
   // they throw away. The tracker predicts all K wherever it is not 0. Without
-  // `features`, the observer's filter stops at the last frame a prediction starts from
-  // (`grip` counts the steps until then).
+  // `features`, the observer's filter stops at the last frame `reach` names (`grip`
+  // counts the steps until then; a divergence after it goes unseen).
   std::function<int(int)> reach;
   // How the start state is estimated (see above). The learned backend always uses the
   // tracker.

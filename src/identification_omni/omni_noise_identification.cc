@@ -178,8 +178,9 @@ std::vector<HorizonRows> Collect(const OmniModel& model, const std::vector<OmniB
 }
 
 // The least gain a search's move must bring (PatternSearch's min_gain):
-// options.resolution_nats over one horizon's rows, the cost being a mean per row averaged
-// over the horizons; 0 without rows.
+// options.resolution_nats over the average horizon's rows (the cost is a mean per row
+// averaged over the horizons: the gain is resolution_nats H / N over N rows on H); 0
+// without rows.
 double MinGain(const std::vector<HorizonRows>& rows, const OmniNoiseOptions& options) {
   int n = 0, horizons = 0;
   for (const HorizonRows& h : rows) {

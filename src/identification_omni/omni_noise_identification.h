@@ -76,9 +76,9 @@ struct OmniNoiseOptions {
   // Of the likelihood, per search (without and with growth, on all and on each half; half
   // of it for each half's refit under the whole fit's growths).
   int max_evaluations = 150;
-  // A search moves only where the log likelihood of one horizon's rows gains more than
-  // this (nats; 0: every gain, as until 2026-12-07). 0.5 stopped the searches short on a
-  // ridge (docs/identification.md, "The driving noise for predictions ahead").
+  // A search moves only where the log likelihood of the average horizon's rows gains
+  // more than this (nats; 0: every gain, as until 2026-12-07). 0.5 stopped the searches
+  // short on a ridge (docs/identification.md, "The driving noise for predictions ahead").
   double resolution_nats = 0.1;
   int threads = 0;           // 0 = one per core; results do not depend on it
   // The validation logs' calibration with the parameters' own uncertainty too

@@ -89,7 +89,14 @@ TEST_F(OmniReplayTest, TheObserverWithAReachPredictsWhatTheFullReplayDoes) {
   const OmniReplayResult full = ReplayOmniLog(noisy, log, options);
   const int first = 200, last = 260;  // frames a prediction starts from, 4 or 16 ahead
   options.reach = [&](int frame) { return frame >= first && frame < last ? (frame % 2 ? 4 : 16) : 0; };
-  const OmniReplayResult part = ReplayOmniLog(noisy, log, options);
+  std::vector<int> reported;  // the frames the replay's progress names: the filter's
+  const OmniReplayResult part =
+      ReplayOmniLog(noisy, log, options, [&](int frame, int) { reported.push_back(frame); });
+  // The filter stopped at the last frame `reach` names (progress every 64th frame, then
+  // the log's last): nothing between.
+  const int last_frame = log.FrameIndex(log.rows.size() - 1);
+  ASSERT_GT(last_frame, last + 64);
+  for (int frame : reported) EXPECT_TRUE(frame < last || frame == last_frame) << frame;
   int compared = 0;
   for (std::size_t row = 0; row < log.rows.size(); ++row) {
     const int frame = log.FrameIndex(row);
@@ -100,14 +107,19 @@ TEST_F(OmniReplayTest, TheObserverWithAReachPredictsWhatTheFullReplayDoes) {
     const int from16 = frame - 16, from4 = frame - 4;
     if (from16 >= first && from16 < last && from16 % 2 == 0) EXPECT_TRUE(part.predicted[row]) << row;
     if (from4 >= first && from4 < last) EXPECT_TRUE(part.also[0].predicted[row]) << row;
-    if (!part.predicted[row]) continue;
-    ASSERT_TRUE(full.predicted[row]) << row;
-    EXPECT_EQ(part.pose[row].x, full.pose[row].x) << row;
-    EXPECT_EQ(part.pose[row].theta, full.pose[row].theta) << row;
-    EXPECT_EQ(part.covariance[row], full.covariance[row]) << row;
-    ++compared;
+    for (int h = 0; h < 2; ++h) {
+      const OmniReplayResult& a = h == 0 ? part : part.also[0];
+      const OmniReplayResult& b = h == 0 ? full : full.also[0];
+      if (!a.predicted[row]) continue;
+      ASSERT_TRUE(b.predicted[row]) << row;
+      EXPECT_EQ(a.pose[row].x, b.pose[row].x) << row;
+      EXPECT_EQ(a.pose[row].y, b.pose[row].y) << row;
+      EXPECT_EQ(a.pose[row].theta, b.pose[row].theta) << row;
+      EXPECT_EQ(a.covariance[row], b.covariance[row]) << row;
+      ++compared;
+    }
   }
-  EXPECT_GT(compared, 20);
+  EXPECT_GT(compared, 80);  // 30 rows 16 frames ahead, 60 at 4
 }
 
 }  // namespace

@@ -96,12 +96,12 @@ std::vector<testing::PooledCalibration> CalibrateOnUnseenMinutes(
   return pooled;
 }
 
-// Measured (the noise fitted on the held-out blocks, 2026-11-30): forward 0.154 m/s,
-// sideways 0.101, turn 0.775 rad/s, 0.228 s (truth 0.137, 0.093, 0.71, 0.23 s: within
-// 12, 9, 9 and 1 %); a growth with speed and acceleration fitted but not kept (each
-// half of the held-out blocks scored the other's worse). Over eight unseen minutes the
-// 50 % ellipses hold 53 / 51 / 50 % and the 90 % ones 90 / 89 / 89 % at 4, 16 and 63
-// frames, headings 90-91 %, a single minute's shares 1-4 % apart. Fitted on the fit
+// Measured (the noise fitted on the held-out blocks, its searches' tenth of a nat,
+// 2026-12-07): forward 0.154 m/s, sideways 0.101, turn 0.846 rad/s, 0.228 s (truth 0.137,
+// 0.093, 0.71, 0.23 s: within 12, 9, 19 and 1 %); a growth with speed and acceleration
+// fitted but not kept (each half of the held-out blocks scored the other's worse). Over
+// eight unseen minutes the 50 % ellipses hold 53 / 51 / 52 % and the 90 % ones 90 / 90 /
+// 90 % at 4, 16 and 63 frames, headings 92-93 %, a single minute's shares 1-4 % apart. Fitted on the fit
 // blocks as before, this minute's fit held the bands too but other minutes' did not
 // (84-86 % at 16 and 63 frames); fitted on the held-out blocks, DISABLED_FittedOnOtherMinutes
 // below measures them (docs/identification.md).
@@ -185,9 +185,9 @@ TEST(DrivingNoiseIdentification, ASpreadGrowingWithSpeedIsSelected) {
 // turns were its worst covered): identify selects a spread growing with turn rate, which
 // scores the held-out blocks better than none (each half's fit on the other half), and
 // its fan beats a constant spread fitted on each unseen minute itself at every horizon.
-// Measured (2026-12-03): 3.0 per rad/s, no growth with speed or acceleration; over eight
-// unseen minutes energy scores 2.5 / 4.8 / 5.4 % under the constant spread's at 4 / 16 /
-// 63 frames, the 50 % ellipses holding 57 / 51 / 48 % and the 90 % ones 92 / 88 / 87 %
+// Measured (2026-12-07): 3.0 per rad/s, 0.19 per m/s, none with acceleration; over eight
+// unseen minutes energy scores 2.4 / 4.8 / 5.5 % under the constant spread's at 4 / 16 /
+// 63 frames, the 50 % ellipses holding 57.8 / 51 / 48 % and the 90 % ones 92 / 89 / 87 %
 // (the plant's spread changes with the turn rate in steps the model's line only
 // follows on average, so the 50 % band is 50 +- 8 here).
 TEST(DrivingNoiseIdentification, ASpreadGrowingWithTurnRateIsSelected) {
