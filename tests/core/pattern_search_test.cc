@@ -61,5 +61,38 @@ TEST(PatternSearch, StaysWithinItsClampAndItsBudget) {
   EXPECT_EQ(evaluations, 7);
 }
 
+// With a min_gain, a move must lower the cost by more than it: along a gentle slope
+// (0.01 per unit, 0.007 a step of ln 2) the search stays where every gain is smaller,
+// and walks on where the gain allows; on the bowl it still reaches the floor, within
+// the precision the gain leaves it.
+TEST(PatternSearch, AMinGainStopsMovesThatGainLess) {
+  const std::function<Point(Point)> clamp = [](Point p) {
+    p[0] = std::max(p[0], -10.0);
+    return p;
+  };
+  const std::function<double(const Point&)> slope = [](const Point& p) { return 0.01 * p[0] + p[1] * p[1]; };
+  double best = slope({0, 0});
+  int evaluations = 1;
+  Point found = PatternSearch<Point>(slope, clamp, {0, 0}, 2, 500, &best, &evaluations, 0.01);
+  EXPECT_EQ(found[0], 0.0);  // every step (ln 2 at most) gains 0.0069 or less: below 0.01
+  best = slope({0, 0});
+  evaluations = 1;
+  found = PatternSearch<Point>(slope, clamp, {0, 0}, 2, 500, &best, &evaluations, 0.005);
+  EXPECT_LT(found[0], -1.0);  // each step of ln 2 gains 0.0069: it walks
+  best = slope({0, 0});
+  evaluations = 1;
+  found = PatternSearch<Point>(slope, clamp, {0, 0}, 2, 500, &best, &evaluations);
+  EXPECT_EQ(found[0], -10.0);  // every gain: down to the clamp
+
+  Bowl bowl;
+  const std::function<double(const Point&)> cost = [&](const Point& p) { return bowl(p); };
+  const std::function<Point(Point)> none = [](Point p) { return p; };
+  best = cost({0, 0});
+  evaluations = 1;
+  const Point floor = PatternSearch<Point>(cost, none, {0, 0}, 2, 500, &best, &evaluations, 1e-3);
+  EXPECT_NEAR(floor[0], 0.3, 0.1);
+  EXPECT_NEAR(floor[1], -0.2, 0.1);
+}
+
 }  // namespace
 }  // namespace twinsim
