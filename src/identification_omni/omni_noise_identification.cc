@@ -417,12 +417,11 @@ std::array<NoiseValues, 2> HalvesWithTheWholeGrowth(const OmniModel& model, cons
     const std::size_t h = static_cast<std::size_t>(k);
     OmniNoiseOptions one = options;
     one.threads = 1;
-    const std::function<double(const NoiseValues&)> cost = [&](const NoiseValues& x) {
-      return Cost(CollectHeldOut(model, x, typical, stretches, one, &halves[h]));
-    };
+    const auto rows = [&](const NoiseValues& x) { return CollectHeldOut(model, x, typical, stretches, one, &halves[h]); };
+    const std::function<double(const NoiseValues&)> cost = [&](const NoiseValues& x) { return Cost(rows(x)); };
     NoiseValues start = fits[1 + h].grow;
     for (int i = kPerSpeed; i < kNoiseParams; ++i) start[static_cast<std::size_t>(i)] = fits[0].grow[static_cast<std::size_t>(i)];
-    const std::vector<HorizonRows> at_start = CollectHeldOut(model, start, typical, stretches, one, &halves[h]);
+    const std::vector<HorizonRows> at_start = rows(start);
     double best = Cost(at_start);
     used[h] = 1;
     out[h] = PatternSearch<NoiseValues>(cost, Clamped, start, kPerSpeed, 1 + options.max_evaluations / 2, &best, &used[h],
