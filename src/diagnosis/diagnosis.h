@@ -90,6 +90,10 @@ struct DiagnosisCandidate {
   // Selection blocks whose squared error it changed, and of those the ones it lowered:
   // the 25 % rule (a large share removed, significant or not) asks for most of them.
   int blocks_changed = 0, blocks_improved = 0;
+  // A test that fits nothing (DiagnosisProblem::StateTest), where the problem has one
+  // for it: its two-sided p (NaN: none) and its finding in words.
+  double state_p_value = std::numeric_limits<double>::quiet_NaN();
+  std::string state_test;
   bool selected = false;
   std::string harm;                          // the joint or axis it makes significantly worse, if any: not added
   std::string veto;                          // passed on the selection rows but made the test rows worse: not added

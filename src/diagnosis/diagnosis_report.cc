@@ -234,7 +234,16 @@ std::string DiagnosisMethod(const DiagnosisReport& r) {
     text += buf;
   }
   std::snprintf(buf, sizeof buf, ", or when its RMS stands more than %.3g times its noise floor.", r.floor_ratio);
-  return text + buf;
+  text += buf;
+  if (r.robot == "omni") {
+    text +=
+        " A rotation_drift, whose turn the observer takes into its estimate within frames, is also tested on the "
+        "estimate itself: its turn rate regressed on the speed beside the turn commands and the forward and sideways "
+        "speeds, over the fit and selection blocks (the speed's coefficient tested two-sided with a delete-one-block "
+        "jackknife's standard error); the smaller of its two p-values, doubled, is the one corrected, and a drift "
+        "that test carries need only leave the selection rows no worse.";
+  }
+  return text;
 }
 
 std::string FormatDiagnosisJson(const DiagnosisReport& r) {
@@ -317,6 +326,10 @@ std::string FormatDiagnosisJson(const DiagnosisReport& r) {
     x["information_gain"] = std::isfinite(c.information_gain) ? ordered_json(c.information_gain) : ordered_json(nullptr);
     x["blocks_changed"] = c.blocks_changed;
     x["blocks_improved"] = c.blocks_improved;
+    if (!std::isnan(c.state_p_value)) {
+      x["state_test"] = c.state_test;
+      x["state_p_value"] = c.state_p_value;
+    }
     x["selected"] = c.selected;
     if (!c.harm.empty()) x["harm"] = c.harm;
     if (!c.veto.empty()) x["veto"] = c.veto;

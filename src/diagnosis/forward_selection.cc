@@ -169,6 +169,10 @@ std::string PValue(double p) {
   return buf;
 }
 
+// True where a candidate's state test (DiagnosisProblem::StateTest), not its selection
+// rows, is what makes it significant.
+bool CarriedByState(const DiagnosisCandidate& c) { return !std::isnan(c.state_p_value) && c.state_p_value < c.p_value; }
+
 // Whose squared error a share is of: the selection rows', or those of the one joint an
 // effect was scored on (ChannelOf).
 const char* ScoredRows(bool own_channel) { return own_channel ? "its joint's selection rows'" : "the selection rows'"; }
@@ -184,15 +188,24 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
   }
   std::sort(others.begin(), others.end(),
             [](const DiagnosisCandidate* a, const DiagnosisCandidate* b) { return a->reduction > b->reduction; });
-  char head[256];
-  std::snprintf(head, sizeof head, "it removed %s of %s squared error (t = %.1f, %s; %s)",
-                Percent(best.reduction).c_str(), ScoredRows(own_channel),
-                best.t_statistic, PValue(best.p_value).c_str(),
-                best.significant ? ("significant after Holm's correction over " + std::to_string(tested) + " candidates").c_str()
-                                 : ("a quarter and more on fit and selection rows alike, lower in " +
-                                    std::to_string(best.blocks_improved) + " of the " +
-                                    std::to_string(best.blocks_changed) + " selection blocks it changed")
-                                       .c_str());
+  char head[512];
+  if (CarriedByState(best)) {
+    std::snprintf(head, sizeof head,
+                  "%s (%s; significant after Holm's correction over %d candidates); it removed %s of %s squared "
+                  "error (t = %.1f)",
+                  best.state_test.c_str(), PValue(best.state_p_value).c_str(), tested, Percent(best.reduction).c_str(),
+                  ScoredRows(own_channel), best.t_statistic);
+  } else {
+    std::snprintf(head, sizeof head, "it removed %s of %s squared error (t = %.1f, %s; %s)",
+                  Percent(best.reduction).c_str(), ScoredRows(own_channel), best.t_statistic,
+                  PValue(best.p_value).c_str(),
+                  best.significant
+                      ? ("significant after Holm's correction over " + std::to_string(tested) + " candidates").c_str()
+                      : ("a quarter and more on fit and selection rows alike, lower in " +
+                         std::to_string(best.blocks_improved) + " of the " + std::to_string(best.blocks_changed) +
+                         " selection blocks it changed")
+                            .c_str());
+  }
   std::string s = head;
   const std::size_t shown = std::min<std::size_t>(2, others.size());
   for (std::size_t k = 0; k < shown; ++k) {
@@ -259,6 +272,9 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
   std::vector<TrialEffect> trial = *base.current;
   trial.push_back(candidate);
   try {
+    const StateEvidence state = problem.StateTest(candidate, *base.current);
+    c.state_p_value = state.p;
+    c.state_test = state.what;
     trial = problem.Fit(trial, {static_cast<int>(trial.size()) - 1});
     SquaredResiduals r = problem.Evaluate(trial);
     const int parameters = static_cast<int>(trial.back().parameters.size());
@@ -322,8 +338,12 @@ std::vector<std::size_t> PassingOrder(const DiagnosisOptions& options, std::vect
   std::vector<double> p;
   *tested = 0;
   for (const CandidateTrial& t : *trials) {
-    p.push_back(t.candidate.note.empty() ? t.candidate.p_value : std::numeric_limits<double>::quiet_NaN());
-    *tested += t.candidate.note.empty() ? 1 : 0;
+    const DiagnosisCandidate& c = t.candidate;
+    // With a state test beside the selection rows' the smaller p counts, doubled
+    // (Bonferroni over the candidate's two tests).
+    const double own = std::isnan(c.state_p_value) ? c.p_value : std::min(1.0, 2 * std::min(c.p_value, c.state_p_value));
+    p.push_back(c.note.empty() ? own : std::numeric_limits<double>::quiet_NaN());
+    *tested += c.note.empty() ? 1 : 0;
   }
   const std::vector<bool> significant = HolmReject(p, options.alpha);
   std::vector<std::size_t> order;
@@ -332,8 +352,11 @@ std::vector<std::size_t> PassingOrder(const DiagnosisOptions& options, std::vect
     c.significant = significant[k];
     const bool strong = c.reduction >= kStrongReduction && (*trials)[k].fit_reduction >= kStrongReduction &&
                         c.t_statistic > 0 && MostBlocksImprove(c.blocks_changed, c.blocks_improved);
-    if (c.note.empty() && !(*trials)[k].harms && c.reduction >= options.min_improvement && c.information_gain > 0 &&
-        (significant[k] || strong))
+    // By the selection rows: a share removed that earns its parameters. By the state
+    // test: the selection rows not made worse (their noise may hide what the state shows).
+    const bool earns = c.reduction >= options.min_improvement && c.information_gain > 0;
+    const bool by_state = CarriedByState(c) && c.reduction > 0;
+    if (c.note.empty() && !(*trials)[k].harms && ((earns && (significant[k] || strong)) || (by_state && significant[k])))
       order.push_back(k);
   }
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -416,10 +439,13 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
     const bool own = OnlyChannelChanged(rw, *r, channel);
     const Score keep = Compare(rw, *r, base.bandwidth, static_cast<int>((*current)[m].parameters.size()),
                                EffectiveRows(rw.selection, base.bandwidth), own ? channel : -1);
-    const bool earns = keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
-                       (keep.test.p <= options.alpha ||
-                        (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&
-                         MostBlocksImprove(keep.blocks_changed, keep.blocks_improved)));
+    // An effect its state test carried earns its place by that test, the others held.
+    const StateEvidence state = problem.StateTest((*current)[m], without);
+    const bool earns = (keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
+                        (keep.test.p <= options.alpha ||
+                         (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&
+                          MostBlocksImprove(keep.blocks_changed, keep.blocks_improved)))) ||
+                       (state.p <= options.alpha && keep.reduction > 0);
     if (!earns && (weakest == current->size() || keep.test.p > weakest_score.test.p)) {
       weakest = m;
       weakest_score = keep;

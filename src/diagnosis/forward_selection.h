@@ -10,7 +10,9 @@
 //      information criterion that counts its parameters;
 //   2. the candidates significant after Holm's correction over the round, removing at
 //      least min_improvement, earning their parameters, and making no joint or axis
-//      significantly worse, compete on the criterion;
+//      significantly worse, compete on the criterion (a candidate the problem also
+//      tests on its state, StateTest, may pass by that test: then the selection rows
+//      must only not get worse);
 //      the best is added and all added effects refitted together;
 //   3. a backward step takes out an effect added earlier that no longer earns its place;
 //   4. until none passes or max_effects are in.
@@ -19,6 +21,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -59,6 +62,12 @@ struct TestResiduals {
   int step = 1;         // rows between the samples the whiteness tests use (a filter's span, a prediction's overlap)
   double rate = 1;      // rows per second
   std::string learner;  // what the learned residual is, in words
+};
+
+// Evidence for a candidate that needs no fit (DiagnosisProblem::StateTest).
+struct StateEvidence {
+  double p = std::numeric_limits<double>::quiet_NaN();  // two-sided; NaN: no such test
+  std::string what;  // the finding in words, with its numbers
 };
 
 class DiagnosisProblem {
@@ -111,6 +120,15 @@ class DiagnosisProblem {
   // stands for something else (a torque limit under most commands fits a model that
   // needs too little torque on its joint; issue 41, the KUKA's joint 5).
   virtual std::vector<std::string> MustBeDetermined(const TrialEffect& effect) const { return {}; }
+  // A test of `candidate` on the rows before the test rows that fits nothing: for an
+  // effect whose trace a state estimate absorbs within frames (the omni observer learns a
+  // drift's turn, so the predictions from it hardly show the drift), the estimate's own
+  // dependence on what drives the effect, with the model as `current` makes it. Its p
+  // stands beside the selection rows' (Bonferroni over the two); where it carries the
+  // candidate, the selection rows must still not get worse. NaN p: none for it.
+  virtual StateEvidence StateTest(const TrialEffect& candidate, const std::vector<TrialEffect>& current) const {
+    return {};
+  }
   // True for a parameter of `effect` that follows from the others (a flag, or a damping
   // set from a stiffness): it gets no standard error and is not varied for them.
   virtual bool Derived(const TrialEffect& effect, const std::string& key) const { return false; }

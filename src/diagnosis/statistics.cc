@@ -1,10 +1,12 @@
 #include "diagnosis/statistics.h"
 
+#include <Eigen/Dense>
 #include <unsupported/Eigen/SpecialFunctions>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
 
 #include "diagnosis/diagnosis.h"
@@ -114,6 +116,52 @@ void AccountForBlocks(const std::vector<double>& x, const std::vector<int>& bloc
     test->t = test->mean / test->standard_error;
     test->p = StudentTUpperTail(test->t, test->df);
   }
+}
+
+BlockCoefficientTest TestBlockCoefficient(const std::vector<std::vector<double>>& x, const std::vector<double>& y,
+                                          const std::vector<int>& block, int column) {
+  BlockCoefficientTest out;
+  if (x.empty() || x.size() != y.size() || x.size() != block.size()) return out;
+  const long k = static_cast<long>(x.front().size());
+  if (column < 0 || column >= k) return out;
+  // The normal equations per block: each block's coefficients are the whole's minus its own.
+  std::map<int, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> parts;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(k, k);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(k);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Eigen::Map<const Eigen::VectorXd> row(x[i].data(), k);
+    auto [it, fresh] = parts.try_emplace(block[i], Eigen::MatrixXd::Zero(k, k), Eigen::VectorXd::Zero(k));
+    it->second.first.selfadjointView<Eigen::Lower>().rankUpdate(row);
+    it->second.second += y[i] * row;
+  }
+  for (const auto& [id, part] : parts) {
+    a += part.first;
+    b += part.second;
+  }
+  const double nb = static_cast<double>(parts.size());
+  if (parts.size() < 3) return out;
+  auto solve = [&](const Eigen::MatrixXd& m, const Eigen::VectorXd& v, double* c) {
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(m);  // reads the lower triangle, the one filled
+    if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-12) return false;
+    *c = ldlt.solve(v)(column);
+    return std::isfinite(*c);
+  };
+  if (!solve(a, b, &out.value)) return out;
+  std::vector<double> left_out;
+  for (const auto& [id, part] : parts) {
+    double c = 0;
+    if (!solve(a - part.first, b - part.second, &c)) return out;
+    left_out.push_back(c);
+  }
+  const double mean = MeanOf(left_out);
+  double ss = 0;
+  for (double c : left_out) ss += (c - mean) * (c - mean);
+  out.standard_error = std::sqrt((nb - 1) / nb * ss);
+  out.blocks = static_cast<int>(parts.size());
+  if (!(out.standard_error > 0)) return out;
+  out.t = out.value / out.standard_error;
+  out.p = std::min(1.0, 2 * StudentTUpperTail(std::abs(out.t), nb - 1));
+  return out;
 }
 
 std::vector<bool> HolmReject(const std::vector<double>& p, double alpha) {

@@ -7,6 +7,7 @@
 //   Whiteness w = LjungBox(residual, 20, 4);          // every 4th row, lags 1..20
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,23 @@ LongRunTest LongRunMeanTest(const std::vector<double>& x, int min_bandwidth);
 // robust one, sqrt(B / (B - 1) sum_b (sum_{i in b} (x_i - mean))^2) / n), the degrees of
 // freedom at most B - 1, and t and p follow. Nothing changes with fewer than 2 blocks.
 void AccountForBlocks(const std::vector<double>& x, const std::vector<int>& block, LongRunTest* test);
+
+// One coefficient of a least-squares fit y ~ x tested against zero with the rows'
+// blocks as the evidence (rows of a block need not be consecutive): its standard error
+// is the delete-one-block jackknife's, sqrt((B - 1) / B sum_b (c_(-b) - mean c_(-b))^2),
+// so rows correlated within a block count as one piece of evidence, as in
+// AccountForBlocks. Two-sided p with B - 1 degrees of freedom; p NaN (and blocks 0)
+// where fewer than 3 blocks hold rows or the fit leaves the coefficient undetermined.
+struct BlockCoefficientTest {
+  double value = 0;           // the coefficient, from every row
+  double standard_error = 0;  // the jackknife's
+  double t = 0;
+  double p = std::numeric_limits<double>::quiet_NaN();
+  int blocks = 0;
+};
+// x: one row of regressors per y (all of one length), column: the coefficient tested.
+BlockCoefficientTest TestBlockCoefficient(const std::vector<std::vector<double>>& x, const std::vector<double>& y,
+                                          const std::vector<int>& block, int column);
 
 // Holm's step-down procedure: which of the hypotheses with these p-values are rejected
 // at family-wise level alpha. NaN p-values are never rejected and do not count.

@@ -105,8 +105,12 @@ TEST_F(OmniReplayTest, TheObserverWithAReachPredictsWhatTheFullReplayDoes) {
     EXPECT_TRUE(!part.also[0].predicted[row] || (frame >= first + 4 && frame < last + 4)) << row;
     // Every start within the reach predicts, the last one too.
     const int from16 = frame - 16, from4 = frame - 4;
-    if (from16 >= first && from16 < last && from16 % 2 == 0) EXPECT_TRUE(part.predicted[row]) << row;
-    if (from4 >= first && from4 < last) EXPECT_TRUE(part.also[0].predicted[row]) << row;
+    if (from16 >= first && from16 < last && from16 % 2 == 0) {
+      EXPECT_TRUE(part.predicted[row]) << row;
+    }
+    if (from4 >= first && from4 < last) {
+      EXPECT_TRUE(part.also[0].predicted[row]) << row;
+    }
     for (int h = 0; h < 2; ++h) {
       const OmniReplayResult& a = h == 0 ? part : part.also[0];
       const OmniReplayResult& b = h == 0 ? full : full.also[0];

@@ -60,10 +60,13 @@ std::vector<Change> Changes() {
 // (v_max 0.57) and takes the gap below the clean log's; the grip limit is named and
 // closes 74 % (a_max 2.2 for 2); the motor lag is named motor_lag, a lag of 0.17 s in
 // series with the model's own (series 0.166 for 0.15), and takes the gap below the
-// clean log's; the drift per metre is not named (docs/diagnose.md, "What is left"). The
+// clean log's; the drift per metre passes its state test (docs/diagnose.md, section 3,
+// "A drift the filter learns"; t = 5.8) but is not kept here: its fitted rate (0.50 for
+// 0.8) made the written model predict the selection rows worse a second ahead. The
 // count is one draw (docs/diagnose.md, "That count is one draw"): the new recordings of
-// seeds 6 to 8 name 4, 4 and 6, all closed. This seed and model came first; their 7
-// and 7 are the best of the model's four seeds. Until the change of an identified
+// seeds 6 to 8 name 5, 4 and 7, all closed, the drift on 6 and 8 (4, 4 and 6 before the
+// state test, 2026-12-08). This seed and model came first; their 7 and 7 are the best of
+// the model's four seeds with seed 8's. Until the change of an identified
 // model's lag was a lag in series with it (one number, motor_lag's `series`), rather
 // than its per-axis lags grown (three), the lag was named a time_delay here (6 and 6):
 // on seeds 5 to 8 it was named right on 2 of 4, now on 4 of 4. Until
@@ -129,6 +132,39 @@ TEST(ForeignOmniDiagnosis, NamesWhatChangedOnARobotIdentifiedBeforeAndWrittenApa
   EXPECT_GE(count.closed, 7);
   if (const char* last = std::getenv("TWINSIM_FOREIGN_OMNI_SEEDS")) {
     for (int seed = 6; seed <= std::atoi(last); ++seed) DiagnoseEveryChange(identified, before, static_cast<std::uint64_t>(seed));
+  }
+}
+
+// A drift the observer learns (docs/diagnose.md, section 3, "A drift the filter
+// learns"): the robot written apart turns 0.8 rad per metre driven, diagnosed against
+// the nearest twinsim model written from its numbers (ResemblingModel: its gains, lags,
+// delay and driving noise; no drift). Half a second ahead the predictions from the
+// observer's estimate hardly show the drift: the selection rows alone do not make it
+// significant (p 0.096, where Holm's first step over 8 candidates asks for 0.006). The
+// estimate's own turn rate grows with the speed (p 3e-5): the state test names it, the
+// fit finds the rate (0.844), and the test rows' gap falls (48.2 -> 46.6 mm). Measured
+// 2026-12-08 on seeds 5 to 8: named on 6 and 8; on 5 it passed but the written model
+// predicted the selection rows worse a second ahead, on 7 the fitted rate made them 5 %
+// worse; the undrifting robot named nothing on any of the four. One round, about 20 s.
+TEST(ForeignOmniDiagnosis, ADriftTheObserverLearnsIsNamedByItsStateTest) {
+  testing::WanderingPlant plant = RobotAsIdentified();
+  const OmniModel model = testing::ResemblingModel(testing::Omni4(), plant);
+  plant.turn_per_metre = 0.8;
+  DiagnosisOptions options;
+  options.max_effects = 1;
+  const DiagnosisReport report = DiagnoseOmni(model, {testing::RecordWanderingPlant(plant, 30, 6).log}, options);
+  SCOPED_TRACE(FormatDiagnosisTable(report));
+  ASSERT_EQ(report.effects.size(), 1u);
+  EXPECT_EQ(report.effects[0].name, "rotation_drift");
+  EXPECT_NEAR(report.effects[0].parameters.at("rate"), 0.8, 0.25);
+  EXPECT_NE(report.effects[0].evidence.find("the observer's turn rate grew with the speed"), std::string::npos)
+      << report.effects[0].evidence;
+  EXPECT_LT(report.gap_after, report.gap_before);
+  for (const DiagnosisCandidate& c : report.candidates) {
+    if (c.name != "rotation_drift") continue;
+    EXPECT_GT(c.p_value, 0.05 / 8);  // the selection rows alone would not name it
+    EXPECT_LT(c.state_p_value, 1e-3);
+    EXPECT_TRUE(c.selected);
   }
 }
 
