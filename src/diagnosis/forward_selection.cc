@@ -189,7 +189,7 @@ std::string RoundEvidence(const std::vector<DiagnosisCandidate>& round, const Di
   std::sort(others.begin(), others.end(),
             [](const DiagnosisCandidate* a, const DiagnosisCandidate* b) { return a->reduction > b->reduction; });
   char head[512];
-  if (CarriedByState(best)) {
+  if (CarriedByState(best) && best.significant) {
     std::snprintf(head, sizeof head,
                   "%s (%s; significant after Holm's correction over %d candidates); it removed %s of %s squared "
                   "error (t = %.1f)",
@@ -225,6 +225,17 @@ double Mean(const std::vector<double>& v) {
 }
 
 namespace {
+
+// The problem's state test of `fitted` against `others` (DiagnosisProblem::StateTest);
+// none where it fails (a replay that diverges): the selection rows then decide alone.
+StateEvidence TryStateTest(const DiagnosisProblem& problem, const TrialEffect& fitted,
+                           const std::vector<TrialEffect>& others) {
+  try {
+    return problem.StateTest(fitted, others);
+  } catch (const std::exception&) {
+    return {};
+  }
+}
 
 // One candidate of a round, fitted beside the effects added so far and scored.
 struct CandidateTrial {
@@ -272,9 +283,6 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
   std::vector<TrialEffect> trial = *base.current;
   trial.push_back(candidate);
   try {
-    const StateEvidence state = problem.StateTest(candidate, *base.current);
-    c.state_p_value = state.p;
-    c.state_test = state.what;
     trial = problem.Fit(trial, {static_cast<int>(trial.size()) - 1});
     SquaredResiduals r = problem.Evaluate(trial);
     const int parameters = static_cast<int>(trial.back().parameters.size());
@@ -304,6 +312,9 @@ CandidateTrial TryCandidate(const RoundBase& base, const TrialEffect& candidate)
     out.own_channel = own;
     out.rank_gain = own ? Compare(*base.residuals, r, base.bandwidth, parameters, base.effective_rows).information_gain
                         : s.information_gain;
+    const StateEvidence state = TryStateTest(problem, trial.back(), *base.current);
+    c.state_p_value = state.p;
+    c.state_test = state.what;
     c.parameters = trial.back().parameters;
     c.fit_gap = problem.Gap(Mean(r.fit));
     c.held_out_gap = problem.Gap(Mean(r.selection));
@@ -440,7 +451,7 @@ void BackwardStep(const RoundBase& base, const DiagnosisCandidate& winner, std::
     const Score keep = Compare(rw, *r, base.bandwidth, static_cast<int>((*current)[m].parameters.size()),
                                EffectiveRows(rw.selection, base.bandwidth), own ? channel : -1);
     // An effect its state test carried earns its place by that test, the others held.
-    const StateEvidence state = problem.StateTest((*current)[m], without);
+    const StateEvidence state = TryStateTest(problem, (*current)[m], without);
     const bool earns = (keep.reduction >= options.min_improvement && keep.information_gain > 0 &&
                         (keep.test.p <= options.alpha ||
                          (keep.reduction >= kStrongReduction && keep.fit_reduction >= kStrongReduction &&

@@ -67,7 +67,8 @@ struct TestResiduals {
 // Evidence for a candidate that needs no fit (DiagnosisProblem::StateTest).
 struct StateEvidence {
   double p = std::numeric_limits<double>::quiet_NaN();  // two-sided; NaN: no such test
-  std::string what;  // the finding in words, with its numbers
+  double estimate = 0;  // the dependence found, in the effect's own units: its sign is the effect's
+  std::string what;     // the finding in words, with its numbers
 };
 
 class DiagnosisProblem {
@@ -120,12 +121,13 @@ class DiagnosisProblem {
   // stands for something else (a torque limit under most commands fits a model that
   // needs too little torque on its joint; issue 41, the KUKA's joint 5).
   virtual std::vector<std::string> MustBeDetermined(const TrialEffect& effect) const { return {}; }
-  // A test of `candidate` on the rows before the test rows that fits nothing: for an
+  // A test of `candidate` (as fitted) on the rows before the test rows that fits nothing: for an
   // effect whose trace a state estimate absorbs within frames (the omni observer learns a
   // drift's turn, so the predictions from it hardly show the drift), the estimate's own
   // dependence on what drives the effect, with the model as `current` makes it. Its p
   // stands beside the selection rows' (Bonferroni over the two); where it carries the
-  // candidate, the selection rows must still not get worse. NaN p: none for it.
+  // candidate, the selection rows must still not get worse and the effect's fitted
+  // change must have the estimate's sign. NaN p: none for it.
   virtual StateEvidence StateTest(const TrialEffect& candidate, const std::vector<TrialEffect>& current) const {
     return {};
   }

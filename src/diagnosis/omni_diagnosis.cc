@@ -50,8 +50,8 @@ constexpr OmniReplayState kReportState = OmniReplayState::kObserver;
 
 constexpr int kFitStride = 4;     // fits predict from every fourth frame (consecutive predictions overlap)
 // rotation_drift's state test: the turn commands of this long after the delay explain
-// the estimated turn rate (the response's lag; the wandering plant's is 0.06 s, a
-// 0.15 s lag in series on top is a quarter second's 92 %).
+// the estimated turn rate (a robot's turn lags by tens of milliseconds; a lag in series
+// of 0.15 s on top still has 92 % of a step within a quarter second).
 constexpr double kDriftTestLagSeconds = 0.25;
 constexpr int kMaxCeresIterations = 8;
 constexpr double kOmniReversalWindow = 0.1;  // s
@@ -724,38 +724,51 @@ void OmniProblem::StepDelay(std::vector<TrialEffect>* effects, int i) const {
 
 // rotation_drift's test on the observer's own estimate (docs/diagnose.md, "A drift the
 // filter learns"). The filter takes a drift's turn into its velocity within frames, so
-// the predictions from it hardly show the drift (on a robot written apart, identified,
-// then drifting 0.8 rad/m: 7 % of the selection rows' error at most), while the estimate
-// itself turns with the speed. The estimated turn rate, less the drift the model already
-// has, is regressed on what the commands explain (the turn command of each frame from
-// now back through the delay and kDriftTestLagSeconds, the estimated forward and
-// sideways speeds for the couplings) and on the speed |v|: the speed's coefficient is a
-// drift per metre the model lacks, tested over the fit and selection blocks
-// (TestBlockCoefficient; the test rows stay unseen).
+// the predictions from it hardly show the drift, while the estimate itself turns with
+// the speed. The estimated turn rate, less the drift the model already has, is
+// regressed on what else turns the robot (the turn command of each frame from now back
+// through the model's whole delay and kDriftTestLagSeconds, the estimated forward and
+// sideways speeds for the couplings, v sin 3φ and v cos 3φ for a three-wheel robot's
+// turn by direction) and on the speed |v|: the speed's coefficient is a drift per metre
+// the model lacks, tested over the fit and selection blocks (TestBlockCoefficient; the
+// test rows stay unseen). A row counts once the filter has run a whole lag window.
 StateEvidence OmniProblem::StateTest(const TrialEffect& candidate, const std::vector<TrialEffect>& current) const {
   if (candidate.name != "rotation_drift") return {};
   const OmniModel model = Build(current);
-  const std::size_t lags = static_cast<std::size_t>(model.command_delay_frames + model.vision_delay_frames) +
-                           static_cast<std::size_t>(std::ceil(kDriftTestLagSeconds / frame_period_));
+  const int lags = static_cast<int>(std::ceil((model.TotalDelaySeconds(frame_period_) + kDriftTestLagSeconds) / frame_period_));
+  OmniEffects sin3, cos3;  // the turn by direction's harmonics at a unit coefficient
+  sin3.turn_third_sin = cos3.turn_third_cos = 1;
   std::vector<std::vector<double>> x;
   std::vector<double> y;
   std::vector<int> block;
   for (const OmniLogData& d : data_) {
+    const OmniLog& log = *d.log;
     OmniReplayOptions o;
     o.backend = options_.backend;
     o.horizon = 1;
     o.state = kDiagnosisState;
     o.features = true;
-    const OmniReplayResult r = ReplayOmniLog(model, *d.log, o);
-    const std::vector<OmniLogRow>& rows = d.log->rows;
-    for (std::size_t i = lags; i < rows.size(); ++i) {
-      if (!rows[i].measured || r.input_feature[i].size() == 0) continue;  // no camera pose, or before the filter's start
+    o.reach = [](int) { return 0; };  // the filter's estimate alone, no prediction
+    const OmniReplayResult r = ReplayOmniLog(model, log, o);
+    // The command of every frame (a frame the logger never wrote holds the one before).
+    const int first_frame = log.FrameIndex(0);
+    std::vector<double> turn_command(static_cast<std::size_t>(log.FrameIndex(log.rows.size() - 1) - first_frame + 1));
+    for (std::size_t i = 0, f = 0; f < turn_command.size(); ++f) {
+      while (i + 1 < log.rows.size() && log.FrameIndex(i + 1) - first_frame <= static_cast<int>(f)) ++i;
+      turn_command[f] = log.rows[i].command.omega;
+    }
+    int started = -1;  // the frame the filter's estimate starts at
+    for (std::size_t i = 0; i < log.rows.size() && i < r.input_feature.size() && i < r.estimated_velocity.size(); ++i) {
+      if (r.input_feature[i].size() == 0) continue;  // before the filter's start
+      const int frame = log.FrameIndex(i) - first_frame;
+      if (started < 0) started = frame;
+      if (frame - lags < started || !log.rows[i].measured) continue;
       if (d.kind[i] != RowKind::kFit && d.kind[i] != RowKind::kSelection) continue;
       const Twist2& v = r.estimated_velocity[i];
       const double speed = std::hypot(v.vx, v.vy);
       std::vector<double> row = {1.0};
-      for (std::size_t j = 0; j <= lags; ++j) row.push_back(rows[i - j].command.omega);
-      row.insert(row.end(), {v.vx, v.vy, speed});
+      for (int j = 0; j <= lags; ++j) row.push_back(turn_command[static_cast<std::size_t>(frame - j)]);
+      row.insert(row.end(), {v.vx, v.vy, sin3.TurnByDirection(v.vx, v.vy), cos3.TurnByDirection(v.vx, v.vy), speed});
       x.push_back(std::move(row));
       y.push_back(v.omega - model.effects.rotation_drift * speed);
       block.push_back(d.block[i]);
@@ -763,12 +776,16 @@ StateEvidence OmniProblem::StateTest(const TrialEffect& candidate, const std::ve
   }
   if (x.empty()) return {};
   const BlockCoefficientTest test = TestBlockCoefficient(x, y, block, static_cast<int>(x.front().size()) - 1);
+  // A fit that moved the drift against what the estimate shows is not what the test found.
+  const auto rate = candidate.parameters.find("rate");
+  if (rate != candidate.parameters.end() && (rate->second - model.effects.rotation_drift) * test.value <= 0) return {};
   StateEvidence out;
   out.p = test.p;
+  out.estimate = test.value;
   char what[240];
   std::snprintf(what, sizeof what,
-                "the observer's turn rate grew with the speed at %s rad/m beyond what the commands explain (t = %.1f "
-                "over %d fit and selection blocks)",
+                "the observer's turn rate changed with the speed by %s rad/m beyond what the commands and the model's "
+                "couplings explain (t = %.1f over %d fit and selection blocks)",
                 FormatParameter(test.value).c_str(), test.t, test.blocks);
   out.what = what;
   return out;

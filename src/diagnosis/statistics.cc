@@ -124,6 +124,9 @@ BlockCoefficientTest TestBlockCoefficient(const std::vector<std::vector<double>>
   if (x.empty() || x.size() != y.size() || x.size() != block.size()) return out;
   const long k = static_cast<long>(x.front().size());
   if (column < 0 || column >= k) return out;
+  for (const std::vector<double>& row : x) {
+    if (static_cast<long>(row.size()) != k) return out;
+  }
   // The normal equations per block: each block's coefficients are the whole's minus its own.
   std::map<int, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> parts;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(k, k);
@@ -140,10 +143,27 @@ BlockCoefficientTest TestBlockCoefficient(const std::vector<std::vector<double>>
   }
   const double nb = static_cast<double>(parts.size());
   if (parts.size() < 3) return out;
-  auto solve = [&](const Eigen::MatrixXd& m, const Eigen::VectorXd& v, double* c) {
+  // Columns that are zero on every row of a fit (a log never commanded to turn, or a
+  // block left out that held all of a column's rows) carry nothing there: left out, so
+  // that they do not make the rest look singular.
+  auto solve = [&](const Eigen::MatrixXd& full, const Eigen::VectorXd& full_v, double* c) {
+    std::vector<long> kept;
+    long at = -1;
+    for (long j = 0; j < k; ++j) {
+      if (full(j, j) <= 1e-12 * a(j, j) && j != column) continue;  // zero there, or rounding's rest of it
+      if (j == column) at = static_cast<long>(kept.size());
+      kept.push_back(j);
+    }
+    const long n = static_cast<long>(kept.size());
+    Eigen::MatrixXd m(n, n);
+    Eigen::VectorXd v(n);
+    for (long r = 0; r < n; ++r) {
+      v(r) = full_v(kept[static_cast<std::size_t>(r)]);
+      for (long q = 0; q <= r; ++q) m(r, q) = full(kept[static_cast<std::size_t>(r)], kept[static_cast<std::size_t>(q)]);
+    }
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(m);  // reads the lower triangle, the one filled
     if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-12) return false;
-    *c = ldlt.solve(v)(column);
+    *c = ldlt.solve(v)(at);
     return std::isfinite(*c);
   };
   if (!solve(a, b, &out.value)) return out;
@@ -157,8 +177,8 @@ BlockCoefficientTest TestBlockCoefficient(const std::vector<std::vector<double>>
   double ss = 0;
   for (double c : left_out) ss += (c - mean) * (c - mean);
   out.standard_error = std::sqrt((nb - 1) / nb * ss);
-  out.blocks = static_cast<int>(parts.size());
   if (!(out.standard_error > 0)) return out;
+  out.blocks = static_cast<int>(parts.size());
   out.t = out.value / out.standard_error;
   out.p = std::min(1.0, 2 * StudentTUpperTail(std::abs(out.t), nb - 1));
   return out;

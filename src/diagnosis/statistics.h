@@ -54,8 +54,10 @@ void AccountForBlocks(const std::vector<double>& x, const std::vector<int>& bloc
 // blocks as the evidence (rows of a block need not be consecutive): its standard error
 // is the delete-one-block jackknife's, sqrt((B - 1) / B sum_b (c_(-b) - mean c_(-b))^2),
 // so rows correlated within a block count as one piece of evidence, as in
-// AccountForBlocks. Two-sided p with B - 1 degrees of freedom; p NaN (and blocks 0)
-// where fewer than 3 blocks hold rows or the fit leaves the coefficient undetermined.
+// AccountForBlocks. Two-sided p with B - 1 degrees of freedom. A column zero on every
+// row of a fit (the whole's or one without a block) is left out of that fit. p NaN (and
+// blocks 0) where fewer than 3 blocks hold rows, the rows differ in length, or a fit
+// leaves the coefficient undetermined.
 struct BlockCoefficientTest {
   double value = 0;           // the coefficient, from every row
   double standard_error = 0;  // the jackknife's

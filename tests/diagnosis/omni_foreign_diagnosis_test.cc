@@ -157,7 +157,7 @@ TEST(ForeignOmniDiagnosis, ADriftTheObserverLearnsIsNamedByItsStateTest) {
   ASSERT_EQ(report.effects.size(), 1u);
   EXPECT_EQ(report.effects[0].name, "rotation_drift");
   EXPECT_NEAR(report.effects[0].parameters.at("rate"), 0.8, 0.25);
-  EXPECT_NE(report.effects[0].evidence.find("the observer's turn rate grew with the speed"), std::string::npos)
+  EXPECT_NE(report.effects[0].evidence.find("the observer's turn rate changed with the speed"), std::string::npos)
       << report.effects[0].evidence;
   EXPECT_LT(report.gap_after, report.gap_before);
   for (const DiagnosisCandidate& c : report.candidates) {

@@ -166,8 +166,9 @@ TEST(DiagnosisStatistics, ABlockCoefficientKeepsItsLevelOnCorrelatedRows) {
   EXPECT_GE(found, 240);           // 80 % and more
 }
 
-// Nothing to test: under three blocks, a column out of range, or a coefficient the
-// rows do not determine (a regressor that repeats another).
+// Nothing to test: under three blocks, a column out of range, rows of different
+// lengths, or a coefficient the rows do not determine (a regressor that repeats
+// another). A column zero on every row (a command never given) is left out instead.
 TEST(DiagnosisStatistics, ABlockCoefficientNeedsThreeBlocksAndADeterminedFit) {
   std::vector<std::vector<double>> x;
   std::vector<double> y;
@@ -188,6 +189,13 @@ TEST(DiagnosisStatistics, ABlockCoefficientNeedsThreeBlocksAndADeterminedFit) {
   EXPECT_FALSE(std::isnan(ok.p));
   EXPECT_NEAR(ok.t, ok.value / ok.standard_error, 1e-12);
   EXPECT_TRUE(std::isnan(TestBlockCoefficient(x, y, block, 3).p));  // no such column
+  std::vector<std::vector<double>> with_zero = x;
+  for (auto& row : with_zero) row.push_back(0.0);
+  const BlockCoefficientTest zero = TestBlockCoefficient(with_zero, y, block, 1);
+  EXPECT_NEAR(zero.value, ok.value, 1e-12 * std::abs(ok.value));
+  EXPECT_NEAR(zero.p, ok.p, 1e-9);
+  with_zero.back().pop_back();
+  EXPECT_TRUE(std::isnan(TestBlockCoefficient(with_zero, y, block, 1).p));  // one row short
 }
 
 TEST(DiagnosisStatistics, LjungBoxTellsWhiteFromCorrelated) {
