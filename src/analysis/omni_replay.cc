@@ -276,11 +276,7 @@ Timeline MakeTimeline(const OmniLog& log, int delay) {
   const std::size_t n = log.rows.size();
   for (std::size_t i = 0; i < n; ++i) tl.row_of_frame[log.FrameIndex(i)] = i;
   tl.last_frame = log.FrameIndex(n - 1);
-  tl.command_at.resize(static_cast<std::size_t>(tl.last_frame) + 1);
-  for (int f = 0, row = 0; f <= tl.last_frame; ++f) {
-    while (static_cast<std::size_t>(row + 1) < n && log.FrameIndex(static_cast<std::size_t>(row + 1)) <= f) ++row;
-    tl.command_at[static_cast<std::size_t>(f)] = log.rows[static_cast<std::size_t>(row)].command;
-  }
+  tl.command_at = log.CommandAtEveryFrame();
   return tl;
 }
 

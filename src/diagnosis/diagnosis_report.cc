@@ -239,9 +239,10 @@ std::string DiagnosisMethod(const DiagnosisReport& r) {
     text +=
         " A rotation_drift, whose turn the observer takes into its estimate within frames, is also tested on the "
         "estimate itself: its turn rate regressed on the speed beside the turn commands, the forward and sideways "
-        "speeds and the turn by direction's third harmonics, over the fit and selection blocks (the speed's coefficient tested two-sided with a delete-one-block "
-        "jackknife's standard error); the smaller of its two p-values, doubled, is the one corrected, and a drift "
-        "that test carries need only leave the selection rows no worse.";
+        "speeds and the turn by direction's third harmonics, over the fit and selection blocks (the speed's "
+        "coefficient tested two-sided with a delete-one-block jackknife's standard error); the smaller of its two "
+        "p-values, doubled, is the one corrected, and a drift that test carries need only leave the selection rows "
+        "no worse.";
   }
   return text;
 }

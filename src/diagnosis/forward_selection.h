@@ -67,8 +67,7 @@ struct TestResiduals {
 // Evidence for a candidate that needs no fit (DiagnosisProblem::StateTest).
 struct StateEvidence {
   double p = std::numeric_limits<double>::quiet_NaN();  // two-sided; NaN: no such test
-  double estimate = 0;  // the dependence found, in the effect's own units: its sign is the effect's
-  std::string what;     // the finding in words, with its numbers
+  std::string what;  // the finding in words, with its numbers
 };
 
 class DiagnosisProblem {

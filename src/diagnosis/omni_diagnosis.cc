@@ -750,24 +750,18 @@ StateEvidence OmniProblem::StateTest(const TrialEffect& candidate, const std::ve
     o.features = true;
     o.reach = [](int) { return 0; };  // the filter's estimate alone, no prediction
     const OmniReplayResult r = ReplayOmniLog(model, log, o);
-    // The command of every frame (a frame the logger never wrote holds the one before).
-    const int first_frame = log.FrameIndex(0);
-    std::vector<double> turn_command(static_cast<std::size_t>(log.FrameIndex(log.rows.size() - 1) - first_frame + 1));
-    for (std::size_t i = 0, f = 0; f < turn_command.size(); ++f) {
-      while (i + 1 < log.rows.size() && log.FrameIndex(i + 1) - first_frame <= static_cast<int>(f)) ++i;
-      turn_command[f] = log.rows[i].command.omega;
-    }
+    const std::vector<Twist2> command = log.CommandAtEveryFrame();  // a frame the logger never wrote holds the one before
     int started = -1;  // the frame the filter's estimate starts at
     for (std::size_t i = 0; i < log.rows.size() && i < r.input_feature.size() && i < r.estimated_velocity.size(); ++i) {
       if (r.input_feature[i].size() == 0) continue;  // before the filter's start
-      const int frame = log.FrameIndex(i) - first_frame;
+      const int frame = log.FrameIndex(i);
       if (started < 0) started = frame;
       if (frame - lags < started || !log.rows[i].measured) continue;
       if (d.kind[i] != RowKind::kFit && d.kind[i] != RowKind::kSelection) continue;
       const Twist2& v = r.estimated_velocity[i];
       const double speed = std::hypot(v.vx, v.vy);
       std::vector<double> row = {1.0};
-      for (int j = 0; j <= lags; ++j) row.push_back(turn_command[static_cast<std::size_t>(frame - j)]);
+      for (int j = 0; j <= lags; ++j) row.push_back(command[static_cast<std::size_t>(frame - j)].omega);
       row.insert(row.end(), {v.vx, v.vy, sin3.TurnByDirection(v.vx, v.vy), cos3.TurnByDirection(v.vx, v.vy), speed});
       x.push_back(std::move(row));
       y.push_back(v.omega - model.effects.rotation_drift * speed);
@@ -781,7 +775,6 @@ StateEvidence OmniProblem::StateTest(const TrialEffect& candidate, const std::ve
   if (rate != candidate.parameters.end() && (rate->second - model.effects.rotation_drift) * test.value <= 0) return {};
   StateEvidence out;
   out.p = test.p;
-  out.estimate = test.value;
   char what[240];
   std::snprintf(what, sizeof what,
                 "the observer's turn rate changed with the speed by %s rad/m beyond what the commands and the model's "

@@ -330,6 +330,16 @@ int OmniLog::FrameIndex(std::size_t row) const {
   return static_cast<int>(std::lround((rows[row].t - rows[0].t) / frame_period));
 }
 
+std::vector<Twist2> OmniLog::CommandAtEveryFrame() const {
+  if (rows.empty()) return {};
+  std::vector<Twist2> out(static_cast<std::size_t>(FrameIndex(rows.size() - 1)) + 1);
+  for (std::size_t f = 0, row = 0; f < out.size(); ++f) {
+    while (row + 1 < rows.size() && FrameIndex(row + 1) <= static_cast<int>(f)) ++row;
+    out[f] = rows[row].command;
+  }
+  return out;
+}
+
 OmniLog ReadOmniLog(const std::string& path, const OmniLogSelector& select) {
   return OmniLogFromTable(ReadCsvTable(path), select);
 }

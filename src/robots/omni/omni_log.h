@@ -63,6 +63,9 @@ struct OmniLog {
 
   // The frame index of row i counted from row 0 (dropped frames and holes leave gaps).
   int FrameIndex(std::size_t row) const;
+  // The command in force at every frame from row 0's to the last row's, indexed by
+  // FrameIndex: a frame without a row holds the row's before it.
+  std::vector<Twist2> CommandAtEveryFrame() const;
   // Rows with a new measurement.
   int num_measured() const;
 };
